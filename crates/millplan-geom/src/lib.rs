@@ -1,0 +1,17 @@
+//! Geometry shared by every millplan crate: f64 vectors and frames, one tolerance
+//! policy, bounding boxes, indexed triangle meshes and the STL reader.
+//!
+//! Units inside millplan are millimetres and radians; conversions happen only at
+//! front and back ends.
+
+pub mod aabb;
+pub mod analytic;
+pub mod frame;
+pub mod mesh;
+pub mod stl;
+pub mod tol;
+
+pub use aabb::Aabb;
+pub use frame::Frame;
+pub use glam::{DMat3, DVec2, DVec3};
+pub use mesh::TriMesh;

@@ -1,0 +1,441 @@
+//! STL reading (binary and ASCII) into a welded [`TriMesh`], with a report of
+//! everything suspicious the file holds.
+//!
+//! Binary or ASCII is decided by size arithmetic (`84 + 50·n == length`), never by
+//! the word `solid`: binary files often start with it. Stored normals are not
+//! trusted; facet normals come from the vertex order, and the stored ones are only
+//! compared against them.
+
+use crate::mesh::{EdgeReport, TriMesh};
+use glam::DVec3;
+use std::fmt;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StlFormat {
+    Binary,
+    Ascii,
+}
+
+/// What the file held besides the triangles.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StlReport {
+    pub format: StlFormat,
+    /// Binary: the 80-byte header (up to the first NUL); ASCII: the first solid's name.
+    pub header: String,
+    pub facets_in_file: usize,
+    /// Facets dropped for zero area or repeated vertices.
+    pub degenerate: usize,
+    /// Stored normals that are all zero.
+    pub zero_normals: usize,
+    /// Stored normals pointing against the normal from the vertex order.
+    pub flipped_normals: usize,
+    pub edges: EdgeReport,
+    /// Bytes after the last facet of a binary file.
+    pub trailing_bytes: usize,
+    /// Number of `solid` blocks in an ASCII file.
+    pub solids: usize,
+}
+
+/// Where an STL is malformed and what is wrong.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub struct StlError {
+    pub location: StlLocation,
+    pub message: String,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StlLocation {
+    /// ASCII: 1-based line and column.
+    Text { line: u32, col: u32 },
+    /// Binary: 0-based byte offset.
+    Byte(u64),
+}
+
+impl fmt::Display for StlError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.location {
+            StlLocation::Text { line, col } => write!(f, "{line}:{col}: {}", self.message),
+            StlLocation::Byte(b) => write!(f, "byte {b}: {}", self.message),
+        }
+    }
+}
+
+/// Normal comparison counters.
+#[derive(Default)]
+struct NormalCheck {
+    zero: usize,
+    flipped: usize,
+}
+
+impl NormalCheck {
+    #[inline]
+    fn check(&mut self, stored: DVec3, tri: &[DVec3; 3]) {
+        if stored == DVec3::ZERO {
+            self.zero += 1;
+        } else if stored.dot((tri[1] - tri[0]).cross(tri[2] - tri[0])) < 0.0 {
+            self.flipped += 1;
+        }
+    }
+}
+
+/// Reads an STL file's bytes.
+pub fn read_stl(bytes: &[u8]) -> Result<(TriMesh, StlReport), StlError> {
+    if bytes.is_empty() {
+        return Err(StlError {
+            location: StlLocation::Byte(0),
+            message: "empty file".into(),
+        });
+    }
+    if bytes.len() >= 84 {
+        let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
+        if 84 + 50 * n == bytes.len() as u64 {
+            return read_binary(bytes, n as usize, 0);
+        }
+    }
+    if looks_ascii(bytes) {
+        return read_ascii(bytes);
+    }
+    if bytes.len() < 84 {
+        return Err(StlError {
+            location: StlLocation::Byte(bytes.len() as u64),
+            message: format!(
+                "file ends after {} bytes: too short for a binary STL (84-byte header) and not ASCII STL",
+                bytes.len()
+            ),
+        });
+    }
+    let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
+    let need = 84 + 50 * n;
+    let have = bytes.len() as u64;
+    if have > need {
+        // Tolerated: extra bytes after the declared facets (seen from some exporters).
+        return read_binary(bytes, n as usize, (have - need) as usize);
+    }
+    Err(StlError {
+        location: StlLocation::Byte(80),
+        message: format!(
+            "binary STL header declares {n} facets ({need} bytes) but the file has {have} bytes: \
+             truncated file or wrong facet count"
+        ),
+    })
+}
+
+fn looks_ascii(bytes: &[u8]) -> bool {
+    let start = bytes
+        .iter()
+        .position(|b| !b.is_ascii_whitespace())
+        .unwrap_or(bytes.len());
+    let head = &bytes[start..];
+    head.len() >= 5
+        && head[..5].eq_ignore_ascii_case(b"solid")
+        && !bytes[..bytes.len().min(4096)].contains(&0)
+}
+
+fn header_text(h: &[u8]) -> String {
+    let end = h.iter().position(|&b| b == 0).unwrap_or(h.len());
+    String::from_utf8_lossy(&h[..end]).trim().to_string()
+}
+
+fn read_binary(bytes: &[u8], n: usize, trailing: usize) -> Result<(TriMesh, StlReport), StlError> {
+    let mut soup: Vec<[DVec3; 3]> = Vec::with_capacity(n);
+    let mut normals = NormalCheck::default();
+    let body = &bytes[84..84 + 50 * n];
+    #[inline]
+    fn f(b: &[u8], at: usize) -> f64 {
+        f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]) as f64
+    }
+    for (i, rec) in body.chunks_exact(50).enumerate() {
+        let v = |k: usize| DVec3::new(f(rec, 12 * k), f(rec, 12 * k + 4), f(rec, 12 * k + 8));
+        let tri = [v(1), v(2), v(3)];
+        if !tri.iter().all(|p| p.is_finite()) {
+            return Err(StlError {
+                location: StlLocation::Byte((84 + 50 * i) as u64),
+                message: format!("facet {} has a non-finite coordinate", i + 1),
+            });
+        }
+        normals.check(v(0), &tri);
+        soup.push(tri);
+    }
+    let (mesh, weld) = TriMesh::from_soup(&soup);
+    drop(soup);
+    let edges = mesh.edge_report();
+    let report = StlReport {
+        format: StlFormat::Binary,
+        header: header_text(&bytes[..80]),
+        facets_in_file: n,
+        degenerate: weld.degenerate,
+        zero_normals: normals.zero,
+        flipped_normals: normals.flipped,
+        edges,
+        trailing_bytes: trailing,
+        solids: 1,
+    };
+    Ok((mesh, report))
+}
+
+/// Whitespace tokenizer over ASCII STL that tracks line and column.
+struct Tokens<'a> {
+    b: &'a [u8],
+    pos: usize,
+    line: u32,
+    line_start: usize,
+}
+
+impl<'a> Tokens<'a> {
+    /// Next token with its (line, col), or `None` at end of input.
+    fn next(&mut self) -> Option<(&'a [u8], u32, u32)> {
+        while self.pos < self.b.len() && self.b[self.pos].is_ascii_whitespace() {
+            if self.b[self.pos] == b'\n' {
+                self.line += 1;
+                self.line_start = self.pos + 1;
+            }
+            self.pos += 1;
+        }
+        if self.pos >= self.b.len() {
+            return None;
+        }
+        let s = self.pos;
+        while self.pos < self.b.len() && !self.b[self.pos].is_ascii_whitespace() {
+            self.pos += 1;
+        }
+        Some((
+            &self.b[s..self.pos],
+            self.line,
+            (s - self.line_start + 1) as u32,
+        ))
+    }
+
+    /// The rest of the current line (solid names may contain spaces).
+    fn rest_of_line(&mut self) -> &'a [u8] {
+        let s = self.pos;
+        while self.pos < self.b.len() && self.b[self.pos] != b'\n' {
+            self.pos += 1;
+        }
+        &self.b[s..self.pos]
+    }
+
+    fn here(&self) -> StlLocation {
+        StlLocation::Text {
+            line: self.line,
+            col: (self.pos - self.line_start + 1) as u32,
+        }
+    }
+}
+
+fn read_ascii(bytes: &[u8]) -> Result<(TriMesh, StlReport), StlError> {
+    let mut t = Tokens {
+        b: bytes,
+        pos: 0,
+        line: 1,
+        line_start: 0,
+    };
+    let err = |line: u32, col: u32, message: String| StlError {
+        location: StlLocation::Text { line, col },
+        message,
+    };
+    let expect = |t: &mut Tokens, word: &str| -> Result<(), StlError> {
+        match t.next() {
+            Some((tok, _, _)) if tok.eq_ignore_ascii_case(word.as_bytes()) => Ok(()),
+            Some((tok, l, c)) => Err(err(
+                l,
+                c,
+                format!(
+                    "expected `{word}`, found `{}`",
+                    String::from_utf8_lossy(tok)
+                ),
+            )),
+            None => Err(StlError {
+                location: t.here(),
+                message: format!("file ends where `{word}` was expected"),
+            }),
+        }
+    };
+    let number = |t: &mut Tokens| -> Result<f64, StlError> {
+        match t.next() {
+            Some((tok, l, c)) => match fast_float2::parse::<f64, _>(tok) {
+                Ok(v) if v.is_finite() => Ok(v),
+                _ => Err(err(
+                    l,
+                    c,
+                    format!(
+                        "expected a number, found `{}`",
+                        String::from_utf8_lossy(tok)
+                    ),
+                )),
+            },
+            None => Err(StlError {
+                location: t.here(),
+                message: "file ends where a number was expected".into(),
+            }),
+        }
+    };
+    let mut soup: Vec<[DVec3; 3]> = Vec::new();
+    let mut normals = NormalCheck::default();
+    let mut header = String::new();
+    let mut solids = 0;
+    loop {
+        match t.next() {
+            None => break,
+            Some((tok, _, _)) if tok.eq_ignore_ascii_case(b"solid") => {
+                let name = String::from_utf8_lossy(t.rest_of_line()).trim().to_string();
+                if solids == 0 {
+                    header = name;
+                }
+                solids += 1;
+            }
+            Some((tok, l, c)) => {
+                return Err(err(
+                    l,
+                    c,
+                    format!("expected `solid`, found `{}`", String::from_utf8_lossy(tok)),
+                ))
+            }
+        }
+        loop {
+            match t.next() {
+                Some((tok, _, _)) if tok.eq_ignore_ascii_case(b"endsolid") => {
+                    t.rest_of_line();
+                    break;
+                }
+                Some((tok, _, _)) if tok.eq_ignore_ascii_case(b"facet") => {
+                    expect(&mut t, "normal")?;
+                    let n = DVec3::new(number(&mut t)?, number(&mut t)?, number(&mut t)?);
+                    expect(&mut t, "outer")?;
+                    expect(&mut t, "loop")?;
+                    let mut tri = [DVec3::ZERO; 3];
+                    for p in &mut tri {
+                        expect(&mut t, "vertex")?;
+                        *p = DVec3::new(number(&mut t)?, number(&mut t)?, number(&mut t)?);
+                    }
+                    expect(&mut t, "endloop")?;
+                    expect(&mut t, "endfacet")?;
+                    normals.check(n, &tri);
+                    soup.push(tri);
+                }
+                Some((tok, l, c)) => {
+                    return Err(err(
+                        l,
+                        c,
+                        format!(
+                            "expected `facet` or `endsolid`, found `{}`",
+                            String::from_utf8_lossy(tok)
+                        ),
+                    ))
+                }
+                None => {
+                    return Err(StlError {
+                        location: t.here(),
+                        message: "file ends inside a solid (no `endsolid`)".into(),
+                    })
+                }
+            }
+        }
+    }
+    let facets = soup.len();
+    let (mesh, weld) = TriMesh::from_soup(&soup);
+    drop(soup);
+    let edges = mesh.edge_report();
+    Ok((
+        mesh,
+        StlReport {
+            format: StlFormat::Ascii,
+            header,
+            facets_in_file: facets,
+            degenerate: weld.degenerate,
+            zero_normals: normals.zero,
+            flipped_normals: normals.flipped,
+            edges,
+            trailing_bytes: 0,
+            solids,
+        },
+    ))
+}
+
+/// Writes a mesh as binary STL (normals from the vertex order).
+pub fn write_binary_stl(mesh: &TriMesh, header: &str, out: &mut Vec<u8>) {
+    let mut h = [0u8; 80];
+    let hb = header.as_bytes();
+    let n = hb.len().min(80);
+    h[..n].copy_from_slice(&hb[..n]);
+    out.reserve(84 + 50 * mesh.len());
+    out.extend_from_slice(&h);
+    out.extend_from_slice(&(mesh.len() as u32).to_le_bytes());
+    for t in 0..mesh.len() {
+        let nrm = mesh.facet_normal(t);
+        for v in std::iter::once(nrm).chain(mesh.corners(t)) {
+            for c in [v.x, v.y, v.z] {
+                out.extend_from_slice(&(c as f32).to_le_bytes());
+            }
+        }
+        out.extend_from_slice(&[0, 0]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tetra() -> TriMesh {
+        let v = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
+        TriMesh {
+            vertices: v,
+            triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+        }
+    }
+
+    #[test]
+    fn binary_with_solid_header_is_binary() {
+        let mut b = Vec::new();
+        write_binary_stl(&tetra(), "solid SLUMOLD", &mut b);
+        let (m, r) = read_stl(&b).expect("reads");
+        assert_eq!(r.format, StlFormat::Binary);
+        assert_eq!(r.header, "solid SLUMOLD");
+        assert_eq!(m.len(), 4);
+        assert_eq!(r.edges.open, 0);
+        assert_eq!(r.flipped_normals, 0);
+    }
+
+    #[test]
+    fn wrong_count_is_located_error() {
+        let mut b = Vec::new();
+        write_binary_stl(&tetra(), "x", &mut b);
+        b[80] = 9;
+        let e = read_stl(&b).expect_err("must fail");
+        assert_eq!(e.location, StlLocation::Byte(80));
+        assert!(e.message.contains("declares 9 facets"), "{e}");
+    }
+
+    #[test]
+    fn trailing_bytes_tolerated_and_reported() {
+        let mut b = Vec::new();
+        write_binary_stl(&tetra(), "x", &mut b);
+        b.extend_from_slice(&[0; 7]);
+        let (_, r) = read_stl(&b).expect("reads");
+        assert_eq!(r.trailing_bytes, 7);
+    }
+
+    #[test]
+    fn ascii_zero_normals_two_solids_and_errors() {
+        let src = "solid a b\r\n facet normal 0 0 0\n outer loop\n vertex 0 0 0\n vertex 1 0 0\n vertex 0 1 0\n endloop\n endfacet\nendsolid other\n\
+                   solid c\nfacet normal 0 0 -1e0 outer loop vertex 0 0 0 vertex 0 1 0 vertex 1 0 0 endloop endfacet endsolid\n";
+        let (m, r) = read_stl(src.as_bytes()).expect("reads");
+        assert_eq!(
+            (r.format, r.solids, r.zero_normals, r.flipped_normals),
+            (StlFormat::Ascii, 2, 1, 0)
+        );
+        assert_eq!(r.header, "a b");
+        assert_eq!(m.len(), 2);
+        let bad =
+            "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1x 0\n";
+        let e = read_stl(bad.as_bytes()).expect_err("fails");
+        assert_eq!(e.location, StlLocation::Text { line: 6, col: 10 });
+        let e = read_stl(b"solid x\nfacet normal 0 0 1\n").expect_err("fails");
+        assert!(e.message.contains("file ends"), "{e}");
+    }
+
+    #[test]
+    fn garbage_and_empty() {
+        assert!(read_stl(b"").is_err());
+        assert!(read_stl(b"hello").is_err());
+    }
+}

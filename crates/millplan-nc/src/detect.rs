@@ -1,0 +1,164 @@
+//! Format and dialect detection from the content (never from the file name), and
+//! one reader front that dispatches to the right front end.
+
+use crate::apt::AptReader;
+use crate::diag::{ParseError, Parsed};
+use crate::gcode::heidenhain::HeidenhainReader;
+use crate::gcode::GcodeReader;
+use crate::ir::Dialect;
+use crate::ReadOptions;
+
+/// Guesses the dialect from the first part of a file (a few kB are plenty).
+pub fn detect(head: &str) -> Dialect {
+    let mut apt = 0i32;
+    let mut gcode = 0i32;
+    let mut heidenhain = 0i32;
+    let (mut nx, mut catia, mut sw) = (0, 0, 0);
+    let (mut sinumerik, mut linuxcnc) = (0, 0);
+    for line in head.lines().take(400) {
+        let t = line.trim();
+        if t.is_empty() {
+            continue;
+        }
+        let up = t.to_ascii_uppercase();
+        if up.starts_with("$$*CATIA") || up.contains("CATIA") && up.starts_with("$$") {
+            catia += 3;
+        }
+        if up.starts_with("$$") {
+            apt += 1;
+            continue;
+        }
+        let body = up
+            .trim_start_matches(|c: char| c.is_ascii_digit())
+            .trim_start();
+        if up.as_bytes()[0].is_ascii_digit()
+            && (body.starts_with("BEGIN PGM")
+                || body.starts_with("L ")
+                || body.starts_with("TOOL CALL")
+                || body.starts_with("CC ")
+                || body.starts_with("CYCL DEF")
+                || body.starts_with("BLK FORM"))
+        {
+            heidenhain += 3;
+            continue;
+        }
+        let major = up.split('/').next().unwrap_or("").trim();
+        let has_slash = up.contains('/');
+        match major {
+            "GOTO" | "FEDRAT" | "CUTTER" | "SPINDL" | "LOADTL" | "CIRCLE" | "COOLNT" | "FROM"
+            | "GODLTA" | "TLAXIS" | "UNITS" | "CUTCOM" | "CYCLE" | "SELECT" | "LOAD" | "INDIRV"
+            | "TOOLNO"
+                if has_slash =>
+            {
+                apt += 3
+            }
+            "TOOL PATH" | "TLDATA" | "MSYS" | "PAINT" | "KNOT" | "CNTRL" | "NURBS" if has_slash => {
+                apt += 3;
+                nx += 2;
+            }
+            "CSYS" | "TRNTYP" | "UNIT" | "INSERT" if has_slash => {
+                apt += 3;
+                sw += 2;
+            }
+            m if m.starts_with("CSI_") => {
+                apt += 3;
+                sw += 2;
+            }
+            "RAPID" | "MULTAX" | "FINI" | "END-OF-PATH" => apt += 1,
+            _ => {}
+        }
+        if up.starts_with("PARTNO") || up.starts_with("PPRINT") || up.starts_with("MULTAX") {
+            apt += 2;
+        }
+        let g = up
+            .trim_start_matches('N')
+            .trim_start_matches(|c: char| c.is_ascii_digit())
+            .trim_start();
+        if g.starts_with('G')
+            || g.starts_with('X')
+            || g.starts_with('Y')
+            || g.starts_with('Z')
+            || g.starts_with('M')
+            || g.starts_with('T')
+            || g.starts_with('S')
+            || g.starts_with('(')
+            || g.starts_with('%')
+        {
+            gcode += 1;
+        }
+        for m in [
+            "G710", "G700", "G70 ", "G71 ", "TRAORI", "TRAFOOF", "CYCLE8", "SUPA", "T=\"", "MSG(",
+            "DEF REAL", "G642", "COMPCAD", "COMPOF", "SOFT", "FNORM",
+        ] {
+            if up.contains(m) {
+                sinumerik += 2;
+            }
+        }
+        if up.starts_with(';') {
+            sinumerik += 1;
+            linuxcnc += 1;
+        }
+        for m in ["(MSG,", "(DEBUG,", "#<", " SUB", "ENDSUB", "G64 P", "G61.1"] {
+            if up.contains(m) {
+                linuxcnc += 2;
+            }
+        }
+        if up.starts_with('O') && up.contains("SUB") {
+            linuxcnc += 2;
+        }
+    }
+    if heidenhain > apt && heidenhain >= gcode {
+        return Dialect::Heidenhain;
+    }
+    if apt > 0 && apt >= gcode {
+        return if nx > 0 && nx >= sw {
+            Dialect::AptNx
+        } else if catia > 0 {
+            Dialect::AptCatia
+        } else if sw > 0 {
+            Dialect::AptSolidworks
+        } else {
+            Dialect::AptIso
+        };
+    }
+    if sinumerik > 2 && sinumerik > linuxcnc {
+        Dialect::Sinumerik
+    } else if linuxcnc > 2 {
+        Dialect::LinuxCnc
+    } else {
+        Dialect::Fanuc
+    }
+}
+
+/// A reader for any format: feed lines, then finish.
+pub enum Reader {
+    Apt(Box<AptReader>),
+    Gcode(Box<GcodeReader>),
+    Heidenhain(Box<HeidenhainReader>),
+}
+
+impl Reader {
+    pub fn new(dialect: Dialect, opts: ReadOptions) -> Reader {
+        match dialect {
+            d if d.is_apt() => Reader::Apt(Box::new(AptReader::new(d, opts))),
+            Dialect::Heidenhain => Reader::Heidenhain(Box::new(HeidenhainReader::new(opts))),
+            d => Reader::Gcode(Box::new(GcodeReader::new(d, opts))),
+        }
+    }
+
+    pub fn line(&mut self, line: &str) -> Result<(), ParseError> {
+        match self {
+            Reader::Apt(r) => r.line(line),
+            Reader::Gcode(r) => r.line(line),
+            Reader::Heidenhain(r) => r.line(line),
+        }
+    }
+
+    pub fn finish(self) -> Result<Parsed, ParseError> {
+        match self {
+            Reader::Apt(r) => r.finish(),
+            Reader::Gcode(r) => r.finish(),
+            Reader::Heidenhain(r) => r.finish(),
+        }
+    }
+}

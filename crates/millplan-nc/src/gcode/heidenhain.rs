@@ -1,0 +1,790 @@
+//! Heidenhain plain-language (Klartext) reader: `BEGIN PGM`, `TOOL DEF`/`TOOL CALL`,
+//! `L` lines with `FMAX`, `CC`/`C` and `CR` arcs, `CYCL DEF 1` pecking with `M99`,
+//! `~` continuations. Everything else is kept verbatim.
+
+use crate::diag::{parse_num, Diags, ParseError, Parsed};
+use crate::ir::*;
+use crate::ReadOptions;
+use millplan_geom::DVec3;
+use std::collections::BTreeMap;
+
+pub struct HeidenhainReader {
+    opts: ReadOptions,
+    program: Program,
+    ops: Vec<Operation>,
+    op: Operation,
+    diags: Diags,
+    line_no: u32,
+    cont: Option<(String, u32)>,
+    saw_content: bool,
+    scale: f64,
+    unit: Option<(LengthUnit, UnitsOrigin)>,
+    pos: DVec3,
+    known: bool,
+    rotary: [Option<f64>; 3],
+    feed: f64,
+    feed_seen: bool,
+    feed_missing_reported: bool,
+    spindle: f64,
+    spindle_on: bool,
+    pole: Option<([Option<f64>; 3], u32)>,
+    pole_named: [bool; 3],
+    tool_radius: BTreeMap<String, f64>,
+    cycle: Cycle,
+    cycle_index: Option<u32>,
+    /// Q parameters of the current 200-series cycle definition.
+    cycle_q: Option<BTreeMap<u32, f64>>,
+    pub motion_blocks: usize,
+}
+
+impl HeidenhainReader {
+    pub fn new(opts: ReadOptions) -> HeidenhainReader {
+        let unit = opts.units.map(|u| (u, UnitsOrigin::Override));
+        HeidenhainReader {
+            opts,
+            program: Program::new(Dialect::Heidenhain),
+            ops: Vec::new(),
+            op: Operation::default(),
+            diags: Diags::default(),
+            line_no: 0,
+            cont: None,
+            saw_content: false,
+            scale: unit.map(|(u, _)| u.mm()).unwrap_or(1.0),
+            unit,
+            pos: DVec3::ZERO,
+            known: false,
+            rotary: [None; 3],
+            feed: 0.0,
+            feed_seen: false,
+            feed_missing_reported: false,
+            spindle: 0.0,
+            spindle_on: false,
+            pole: None,
+            pole_named: [false; 3],
+            tool_radius: BTreeMap::new(),
+            cycle: Cycle {
+                name: "CYCL 1".into(),
+                bottom: 0.0,
+                clearance: 0.0,
+                retract: 0.0,
+                feed: 0.0,
+                peck: None,
+                dwell: None,
+                line: 0,
+            },
+            cycle_index: None,
+            cycle_q: None,
+            motion_blocks: 0,
+        }
+    }
+
+    pub fn line(&mut self, raw: &str) -> Result<(), ParseError> {
+        self.line_no += 1;
+        let ln = self.line_no;
+        let raw = raw.strip_suffix('\r').unwrap_or(raw);
+        let (content, comment) = match raw.find(';') {
+            Some(i) => (&raw[..i], Some(raw[i + 1..].trim())),
+            None => (raw, None),
+        };
+        let content = content.trim_end();
+        if let Some(body) = content.strip_suffix('~') {
+            match &mut self.cont {
+                Some((b, _)) => {
+                    b.push(' ');
+                    b.push_str(body.trim());
+                }
+                None => self.cont = Some((body.to_string(), ln)),
+            }
+            return Ok(());
+        }
+        let (text, first) = match self.cont.take() {
+            Some((mut b, f)) => {
+                b.push(' ');
+                b.push_str(content.trim());
+                (b, f)
+            }
+            None => (content.to_string(), ln),
+        };
+        if let Some(c) = comment.filter(|c| !c.is_empty()) {
+            self.saw_content = true;
+            self.op.push_event(ln, EventKind::Comment(c.to_string()));
+        }
+        let t = text.trim();
+        if t.is_empty() {
+            return Ok(());
+        }
+        self.saw_content = true;
+        // Strip the block number.
+        let body = t
+            .trim_start_matches(|c: char| c.is_ascii_digit())
+            .trim_start();
+        let col0 = (t.len() - body.len() + 1 + (text.len() - text.trim_start().len())) as u32;
+        if body.is_empty() {
+            return Ok(());
+        }
+        self.block(body, first, col0)
+    }
+
+    fn block(&mut self, body: &str, ln: u32, col0: u32) -> Result<(), ParseError> {
+        let up = body.to_ascii_uppercase();
+        let words: Vec<&str> = up.split_whitespace().collect();
+        match words[0] {
+            "BEGIN" | "END" if words.get(1) == Some(&"PGM") => {
+                if words[0] == "BEGIN" {
+                    if let Some(name) = words.get(2) {
+                        self.program.name =
+                            Some(body.split_whitespace().nth(2).unwrap_or(name).to_string());
+                    }
+                    match words.last() {
+                        Some(&"MM") => self.set_unit(LengthUnit::Mm),
+                        Some(&"IN") | Some(&"INCH") => self.set_unit(LengthUnit::Inch),
+                        _ => {}
+                    }
+                }
+                Ok(())
+            }
+            "TOOL" if words.get(1) == Some(&"DEF") => {
+                if let (Some(n), Some(r)) = (
+                    words.get(2),
+                    words
+                        .iter()
+                        .find_map(|w| w.strip_prefix('R').and_then(parse_num)),
+                ) {
+                    self.tool_radius.insert(n.to_string(), r * self.scale);
+                }
+                self.passthrough("TOOL DEF", body, ln);
+                Ok(())
+            }
+            "TOOL" if words.get(1) == Some(&"CALL") => {
+                let id = words.get(2).copied().unwrap_or("");
+                let name_orig = body
+                    .split_whitespace()
+                    .nth(2)
+                    .unwrap_or("")
+                    .trim_matches('"')
+                    .to_string();
+                let number = id.parse::<u32>().ok();
+                let radius = self.tool_radius.get(id).copied().filter(|r| *r > 0.0);
+                for w in &words[3..] {
+                    if let Some(s) = w.strip_prefix('S').and_then(parse_num) {
+                        self.spindle = s;
+                    }
+                    if let Some(f) = w.strip_prefix('F').and_then(parse_num) {
+                        self.feed = f * self.scale;
+                        self.feed_seen = f > 0.0;
+                    }
+                }
+                if !self.op.moves.is_empty() {
+                    let prev = std::mem::take(&mut self.op);
+                    self.op.start = prev.moves.last().map(|m| m.end);
+                    self.ops.push(prev);
+                    self.cycle_index = None;
+                }
+                let name = if number.is_none() {
+                    Some(name_orig)
+                } else {
+                    None
+                };
+                self.op.tool = Some(Tool {
+                    number,
+                    name,
+                    cutter: radius.map(|r| Cutter::flat(2.0 * r)),
+                    line: ln,
+                });
+                Ok(())
+            }
+            "L" => self.linear(body, &words[1..], ln, col0),
+            "CC" => {
+                // Coordinates a CC does not name keep the previous pole's.
+                let mut p = self.pole.map(|(p, _)| p).unwrap_or([None; 3]);
+                self.pole_named = [false; 3];
+                for w in &words[1..] {
+                    if let Some((k, v, inc)) = coord(w) {
+                        let base = if inc { self.pos[k] } else { 0.0 };
+                        p[k] = Some(base + v * self.scale);
+                        self.pole_named[k] = true;
+                    }
+                }
+                self.pole = Some((p, ln));
+                Ok(())
+            }
+            "C" | "CR" => self.arc(&words, ln, col0),
+            "CT" | "LP" | "CP" | "RND" | "CHF" | "CTP" => Err(ParseError::new(
+                ln,
+                col0,
+                format!(
+                    "`{}` contour elements are not supported; post the program with L/C/CR only",
+                    words[0]
+                ),
+            )),
+            "CYCL" => self.cycle_def(&words, body, ln),
+            "M99" => self.cycle_call(ln, col0),
+            "BLK" | "LBL" | "CALL" | "PLANE" | "STOP" | "FUNCTION" | "FN" | "TCH" | "PGM" => {
+                self.passthrough(words[0], body, ln);
+                Ok(())
+            }
+            w if w.starts_with('M')
+                && w[1..].chars().all(|c| c.is_ascii_digit())
+                && w.len() > 1 =>
+            {
+                self.m_words(&words, ln);
+                Ok(())
+            }
+            w if coord(w).is_some()
+                || w.starts_with("R0")
+                || w.starts_with("RL")
+                || w.starts_with("RR")
+                || w.starts_with('F') =>
+            {
+                // Positioning block without `L` (seen in NX posts: `Y3.3465 R0 F MAX M99`).
+                self.linear(body, &words, ln, col0)
+            }
+            w if w.starts_with('Q') => {
+                self.q_params(&words);
+                self.passthrough("Q", body, ln);
+                Ok(())
+            }
+            w if w.starts_with('S') && parse_num(&w[1..]).is_some() => {
+                self.spindle = parse_num(&w[1..]).unwrap_or(self.spindle);
+                if !self.m_words(&words, ln) && self.spindle_on {
+                    self.op.push_event(
+                        ln,
+                        EventKind::Spindle {
+                            rpm: self.spindle,
+                            dir: SpindleDir::Cw,
+                        },
+                    );
+                }
+                Ok(())
+            }
+            _ => {
+                self.diags.warn(
+                    "unknown-word",
+                    ln,
+                    col0,
+                    format!("`{}` kept verbatim", words[0]),
+                );
+                self.passthrough(words[0], body, ln);
+                Ok(())
+            }
+        }
+    }
+
+    fn set_unit(&mut self, u: LengthUnit) {
+        if !matches!(self.unit, Some((_, UnitsOrigin::Override))) {
+            self.unit = Some((u, UnitsOrigin::Declared));
+            self.scale = u.mm();
+        }
+    }
+
+    fn passthrough(&mut self, word: &str, text: &str, ln: u32) {
+        self.op.push_event(
+            ln,
+            EventKind::Passthrough {
+                word: word.to_string(),
+                text: text.trim().to_string(),
+            },
+        );
+    }
+
+    /// Handles M words; returns whether the block calls the cycle (M99).
+    fn m_words(&mut self, words: &[&str], ln: u32) -> bool {
+        let mut cycle_call = false;
+        for w in words {
+            let Some(m) = w.strip_prefix('M') else {
+                continue;
+            };
+            if m.is_empty() {
+                continue;
+            }
+            match m.parse::<u32>() {
+                Ok(3) => {
+                    self.spindle_on = true;
+                    self.op.push_event(
+                        ln,
+                        EventKind::Spindle {
+                            rpm: self.spindle,
+                            dir: SpindleDir::Cw,
+                        },
+                    );
+                }
+                Ok(4) => {
+                    self.spindle_on = true;
+                    self.op.push_event(
+                        ln,
+                        EventKind::Spindle {
+                            rpm: self.spindle,
+                            dir: SpindleDir::Ccw,
+                        },
+                    );
+                }
+                Ok(5) => {
+                    self.spindle_on = false;
+                    self.op.push_event(
+                        ln,
+                        EventKind::Spindle {
+                            rpm: 0.0,
+                            dir: SpindleDir::Off,
+                        },
+                    );
+                }
+                Ok(8) => self.op.push_event(ln, EventKind::Coolant(Coolant::Flood)),
+                Ok(9) => self.op.push_event(ln, EventKind::Coolant(Coolant::Off)),
+                Ok(0) => self.op.push_event(ln, EventKind::Stop { optional: false }),
+                Ok(1) => self.op.push_event(ln, EventKind::Stop { optional: true }),
+                Ok(6) | Ok(2) | Ok(30) => {}
+                Ok(99) => cycle_call = true,
+                _ => self.passthrough(w, w, ln),
+            }
+        }
+        cycle_call
+    }
+
+    fn linear(&mut self, body: &str, words: &[&str], ln: u32, col0: u32) -> Result<(), ParseError> {
+        let mut end = self.pos;
+        let mut any = false;
+        let mut rapid = false;
+        let mut machine = false;
+        let mut rot = [None; 3];
+        for (k, w) in words.iter().enumerate() {
+            if let Some((axis, v, inc)) = coord(w) {
+                let v = v * self.scale;
+                end[axis] = if inc { end[axis] + v } else { v };
+                any = true;
+            } else if let Some(r) = rotary(w) {
+                rot[r.0] = Some(r.1.to_radians());
+                any = true;
+            } else if *w == "FMAX" || (*w == "F" && words.get(k + 1) == Some(&"MAX")) {
+                rapid = true;
+            } else if *w == "MAX" || *w == "R0" || *w == "FAUTO" {
+            } else if *w == "RL" || *w == "RR" {
+                self.op.push_event(
+                    ln,
+                    EventKind::CutCom(if *w == "RL" {
+                        CutCom::Left
+                    } else {
+                        CutCom::Right
+                    }),
+                );
+            } else if let Some(f) = w.strip_prefix('F') {
+                let f = parse_num(f)
+                    .ok_or_else(|| ParseError::new(ln, col0, format!("`{w}` is not a feed")))?;
+                if f <= 0.0 {
+                    return Err(ParseError::new(
+                        ln,
+                        col0,
+                        format!("feed {w} is not positive"),
+                    ));
+                }
+                self.feed = f * self.scale;
+                self.feed_seen = true;
+            } else if let Some(sv) = w.strip_prefix('S').and_then(parse_num) {
+                // NX posts put S in L blocks; the control takes it as a speed change.
+                self.spindle = sv;
+            } else if *w == "M91" || *w == "M92" {
+                machine = true;
+            } else if w.starts_with('M') {
+            } else {
+                return Err(ParseError::new(
+                    ln,
+                    col0,
+                    format!("`{w}` is not a word of an L block"),
+                ));
+            }
+        }
+        let cycle_call = self.m_words(words, ln);
+        if machine {
+            self.passthrough("L", body, ln);
+            return Ok(());
+        }
+        if any {
+            for (k, r) in rot.iter().enumerate() {
+                if r.is_some() {
+                    self.rotary[k] = *r;
+                }
+            }
+            let orient = if self.rotary.iter().any(Option::is_some) {
+                self.op.intern_orient(Orient::Rotary(self.rotary))
+            } else {
+                NO_ORIENT
+            };
+            let mut m = Move::linear(end, self.feed);
+            m.line = ln;
+            m.orient = orient;
+            m.spindle = if self.spindle_on { self.spindle } else { 0.0 };
+            if rapid {
+                m.kind = MoveKind::Rapid;
+                m.feed = 0.0;
+            }
+            self.push_move(m, ln);
+        }
+        if cycle_call {
+            self.cycle_call(ln, col0)?;
+        }
+        Ok(())
+    }
+
+    fn arc(&mut self, words: &[&str], ln: u32, col0: u32) -> Result<(), ParseError> {
+        let start = self.pos;
+        let mut given = [None; 3];
+        let mut ccw = None;
+        let mut radius = None;
+        for w in &words[1..] {
+            if let Some((k, v, inc)) = coord(w) {
+                let v = v * self.scale;
+                given[k] = Some(if inc { start[k] + v } else { v });
+            } else if *w == "DR+" {
+                ccw = Some(true);
+            } else if *w == "DR-" {
+                ccw = Some(false);
+            } else if let Some(r) = w.strip_prefix('R').and_then(parse_num) {
+                radius = Some(r * self.scale);
+            } else if let Some(f) = w.strip_prefix('F').and_then(parse_num) {
+                self.feed = f * self.scale;
+                self.feed_seen = f > 0.0;
+            }
+        }
+        self.m_words(words, ln);
+        let ccw = ccw.ok_or_else(|| ParseError::new(ln, col0, "arc without DR+ or DR-"))?;
+        let mut end = start;
+        for k in 0..3 {
+            if let Some(v) = given[k] {
+                end[k] = v;
+            }
+        }
+        let (normal_axis, centre) = if words[0] == "CR" {
+            let r = radius.ok_or_else(|| ParseError::new(ln, col0, "CR without R"))?;
+            let n = DVec3::Z;
+            let normal = if ccw { n } else { -n };
+            let chord = DVec3::new(end.x - start.x, end.y - start.y, 0.0);
+            let half = chord.length() / 2.0;
+            if half < 1e-9 || half > r.abs() + 1e-6 {
+                return Err(ParseError::new(
+                    ln,
+                    col0,
+                    "CR radius does not fit the chord",
+                ));
+            }
+            let h = (r * r - half * half).max(0.0).sqrt();
+            let perp = normal.cross(chord).normalize();
+            let mid = DVec3::new(start.x, start.y, start.z) + chord * 0.5;
+            (
+                n,
+                if r > 0.0 {
+                    mid + perp * h
+                } else {
+                    mid - perp * h
+                },
+            )
+        } else {
+            let (p, pole_line) = self
+                .pole
+                .ok_or_else(|| ParseError::new(ln, col0, "C without a preceding CC"))?;
+            // The plane is the pair of axes the CC block names; failing that (a CC
+            // naming three axes, or a start point on the centre in the named plane),
+            // the first of XY, ZX, YZ in which the start point is off the centre.
+            let planes = [(2usize, 0usize, 1usize), (1, 2, 0), (0, 1, 2)];
+            let named: Vec<_> = planes
+                .iter()
+                .copied()
+                .filter(|(n, a, b)| {
+                    self.pole_named[*a] && self.pole_named[*b] && !self.pole_named[*n]
+                })
+                .collect();
+            let mut choice = None;
+            for (nax, a, b) in named.into_iter().chain(planes) {
+                if let (Some(ca), Some(cb)) = (p[a], p[b]) {
+                    let off = ((start[a] - ca).powi(2) + (start[b] - cb).powi(2)).sqrt();
+                    if off > 1e-9 {
+                        choice = Some((nax, a, b));
+                        break;
+                    }
+                }
+            }
+            let (nax, a, b) = choice.ok_or_else(|| {
+                ParseError::new(
+                    ln,
+                    col0,
+                    format!("arc start lies on the CC of line {pole_line}"),
+                )
+            })?;
+            let named_plane = self.pole_named[a] && self.pole_named[b] && !self.pole_named[nax];
+            if !named_plane {
+                self.diags.note("arc-plane", ln, col0, format!("the arc about the CC of line {pole_line} is taken in the plane normal to {}", ["X", "Y", "Z"][nax]));
+            }
+            let mut c = start;
+            c[a] = p[a].unwrap_or(0.0);
+            c[b] = p[b].unwrap_or(0.0);
+            let mut n = DVec3::ZERO;
+            n[nax] = 1.0;
+            (n, c)
+        };
+        let normal = if ccw { normal_axis } else { -normal_axis };
+        let full = (start - end).length() < 1e-9;
+        let arc = Arc::from_points(start, end, centre, normal, full)
+            .ok_or_else(|| ParseError::new(ln, col0, "arc start lies on its centre"))?;
+        let mut m = Move::linear(end, self.feed);
+        m.kind = MoveKind::Arc;
+        m.aux = self.op.arcs.len() as u32;
+        m.line = ln;
+        m.spindle = if self.spindle_on { self.spindle } else { 0.0 };
+        self.op.arcs.push(arc);
+        self.push_move(m, ln);
+        Ok(())
+    }
+
+    fn cycle_def(&mut self, words: &[&str], body: &str, ln: u32) -> Result<(), ParseError> {
+        // CYCL DEF 1.0 PECKING / 1.1 SET UP s / 1.2 DEPTH d / 1.3 PECKG q / 1.4 DWELL t / 1.5 F f
+        let num = |w: Option<&&str>| w.and_then(|w| parse_num(w));
+        if let Some(n) = words
+            .get(2)
+            .and_then(|w| w.parse::<u32>().ok())
+            .filter(|n| *n >= 200)
+        {
+            // 200-series cycles take Q parameters, on this and the following lines.
+            self.cycle = Cycle {
+                name: format!("CYCL {n} {}", words.get(3).copied().unwrap_or("")),
+                line: ln,
+                ..self.cycle.clone()
+            };
+            self.cycle_index = None;
+            self.cycle_q = Some(BTreeMap::new());
+            self.q_params(words);
+            self.passthrough("CYCL", body, ln);
+            return Ok(());
+        }
+        if words.get(2).map(|w| w.contains('.')).unwrap_or(false)
+            && words.get(2).map(|w| w.starts_with("1.")).unwrap_or(false)
+        {
+            self.cycle_q = None;
+        }
+        match words.get(2).copied() {
+            Some("1.0") => {
+                self.cycle = Cycle {
+                    name: "CYCL 1 PECKING".into(),
+                    line: ln,
+                    ..self.cycle.clone()
+                };
+                self.cycle_index = None;
+            }
+            Some("1.1") => {
+                self.cycle.clearance = num(words.last()).unwrap_or(0.0).abs() * self.scale
+            }
+            Some("1.2") => self.cycle.bottom = -num(words.last()).unwrap_or(0.0).abs() * self.scale,
+            Some("1.3") => {
+                self.cycle.peck = num(words.last())
+                    .filter(|q| *q > 0.0)
+                    .map(|q| q * self.scale)
+            }
+            Some("1.4") => self.cycle.dwell = num(words.last()).filter(|t| *t > 0.0),
+            Some("1.5") => {
+                if let Some(f) = words
+                    .last()
+                    .and_then(|w| w.strip_prefix('F'))
+                    .and_then(parse_num)
+                {
+                    self.cycle.feed = f * self.scale;
+                }
+            }
+            _ => {}
+        }
+        self.passthrough("CYCL", body, ln);
+        Ok(())
+    }
+
+    fn q_params(&mut self, words: &[&str]) {
+        let Some(q) = self.cycle_q.as_mut() else {
+            return;
+        };
+        for w in words {
+            if let Some((k, v)) = w.strip_prefix('Q').and_then(|r| r.split_once('=')) {
+                if let (Ok(k), Some(v)) = (k.parse::<u32>(), parse_num(v)) {
+                    q.insert(k, v);
+                }
+            }
+        }
+    }
+
+    fn cycle_call(&mut self, ln: u32, col0: u32) -> Result<(), ParseError> {
+        if self.cycle.line == 0 {
+            return Err(ParseError::new(ln, col0, "M99 without a CYCL DEF"));
+        }
+        if let Some(q) = &self.cycle_q {
+            // Q200 set-up clearance, Q201 depth, Q206 plunge feed, Q203 surface,
+            // Q204 second set-up clearance, Q202 plunge depth, Q211 dwell.
+            let (Some(depth), Some(surface)) = (q.get(&201), q.get(&203)) else {
+                self.diags.warn(
+                    "unknown-word",
+                    ln,
+                    col0,
+                    format!(
+                        "{} call kept verbatim: no Q201/Q203, its motion is not simulated",
+                        self.cycle.name
+                    ),
+                );
+                self.passthrough("M99", "M99", ln);
+                return Ok(());
+            };
+            let s = self.scale;
+            let idx = match self.cycle_index {
+                Some(i) => i,
+                None => {
+                    let feed = q.get(&206).map(|f| f * s).filter(|f| *f > 0.0).unwrap_or(
+                        if self.feed_seen {
+                            self.feed
+                        } else {
+                            self.opts.default_feed
+                        },
+                    );
+                    let c = Cycle {
+                        name: self.cycle.name.clone(),
+                        bottom: -depth.abs() * s,
+                        clearance: q.get(&200).copied().unwrap_or(0.0).abs() * s,
+                        retract: q.get(&204).copied().unwrap_or(0.0).abs() * s,
+                        feed,
+                        peck: q.get(&202).map(|p| p.abs() * s).filter(|p| *p > 0.0),
+                        dwell: q.get(&211).copied().filter(|t| *t > 0.0),
+                        line: self.cycle.line,
+                    };
+                    self.op.cycles.push(c);
+                    let i = (self.op.cycles.len() - 1) as u32;
+                    self.cycle_index = Some(i);
+                    i
+                }
+            };
+            let mut m = Move::rapid(DVec3::new(self.pos.x, self.pos.y, surface * s));
+            m.kind = MoveKind::Cycle;
+            m.aux = idx;
+            m.line = ln;
+            m.spindle = if self.spindle_on { self.spindle } else { 0.0 };
+            let back = self.pos;
+            self.push_move(m, ln);
+            // The control returns to where it stood (2nd set-up clearance at most).
+            self.pos = back;
+            return Ok(());
+        }
+        let idx = match self.cycle_index {
+            Some(i) => i,
+            None => {
+                let mut c = self.cycle.clone();
+                if c.feed <= 0.0 {
+                    c.feed = if self.feed_seen {
+                        self.feed
+                    } else {
+                        self.opts.default_feed
+                    };
+                }
+                // Cycle 1 starts at set-up clearance above the surface; depths count from the surface.
+                c.bottom -= c.clearance;
+                c.retract = 0.0;
+                c.clearance = 0.0;
+                self.op.cycles.push(c);
+                let i = (self.op.cycles.len() - 1) as u32;
+                self.cycle_index = Some(i);
+                i
+            }
+        };
+        let mut m = Move::rapid(self.pos);
+        m.kind = MoveKind::Cycle;
+        m.aux = idx;
+        m.line = ln;
+        m.spindle = if self.spindle_on { self.spindle } else { 0.0 };
+        // A cycle at the position the previous block reached replaces that rapid.
+        self.push_move(m, ln);
+        Ok(())
+    }
+
+    fn push_move(&mut self, mut m: Move, ln: u32) {
+        self.motion_blocks += 1;
+        if m.is_cutting() && !self.feed_seen {
+            m.feed = self.opts.default_feed;
+            if !self.feed_missing_reported {
+                self.feed_missing_reported = true;
+                self.diags.warn(
+                    "feed-missing",
+                    ln,
+                    1,
+                    format!(
+                        "cutting move before any F: using {} mm/min",
+                        self.opts.default_feed
+                    ),
+                );
+            }
+        }
+        if m.is_cutting() && self.op.tool.is_none() {
+            self.op.tool = Some(Tool {
+                number: None,
+                name: None,
+                cutter: None,
+                line: ln,
+            });
+            self.diags.warn(
+                "tool-missing",
+                ln,
+                1,
+                "cutting move before any TOOL CALL: tool unknown",
+            );
+        }
+        if self.op.moves.is_empty() && self.op.start.is_none() && self.known {
+            self.op.start = Some(self.pos);
+        }
+        self.op.moves.push(m);
+        self.pos = m.end;
+        self.known = true;
+    }
+
+    pub fn finish(mut self) -> Result<Parsed, ParseError> {
+        if let Some((_, l)) = self.cont {
+            return Err(ParseError::new(l, 1, "file ends inside a `~` continuation"));
+        }
+        if !self.saw_content {
+            return Err(ParseError::new(1, 1, "empty file: no Heidenhain blocks"));
+        }
+        self.ops.push(std::mem::take(&mut self.op));
+        self.ops
+            .retain(|o| !(o.moves.is_empty() && o.events.is_empty() && o.tool.is_none()));
+        let (u, origin) = match self.unit {
+            Some(x) => x,
+            None => {
+                self.diags.warn(
+                    "units-assumed",
+                    0,
+                    0,
+                    "no BEGIN PGM unit: millimetres assumed (override with --units)",
+                );
+                (LengthUnit::Mm, UnitsOrigin::Assumed)
+            }
+        };
+        self.program.units = Units { source: u, origin };
+        self.program.operations = self.ops;
+        Ok(Parsed {
+            program: self.program,
+            diagnostics: self.diags.finish(),
+        })
+    }
+}
+
+/// `X+1.5` → (0, 1.5, false); `IY-2` → (1, -2, true).
+fn coord(w: &str) -> Option<(usize, f64, bool)> {
+    let (inc, w) = match w.strip_prefix('I') {
+        Some(rest) if rest.starts_with(['X', 'Y', 'Z']) => (true, rest),
+        _ => (false, w),
+    };
+    let axis = match w.as_bytes().first()? {
+        b'X' => 0,
+        b'Y' => 1,
+        b'Z' => 2,
+        _ => return None,
+    };
+    parse_num(&w[1..]).map(|v| (axis, v, inc))
+}
+
+fn rotary(w: &str) -> Option<(usize, f64)> {
+    let axis = match w.as_bytes().first()? {
+        b'A' => 0,
+        b'B' => 1,
+        b'C' => 2,
+        _ => return None,
+    };
+    parse_num(&w[1..]).map(|v| (axis, v))
+}

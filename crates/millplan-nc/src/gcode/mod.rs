@@ -1,0 +1,1280 @@
+//! G-code readers: ISO 6983 / Fanuc-style (Haas, Mori Seiki, Röders), Siemens
+//! Sinumerik 840D and LinuxCNC in this module; Heidenhain plain language in
+//! [`heidenhain`].
+//!
+//! The reader keeps the modal state (motion group, plane, G90/G91, units, feed mode,
+//! feed, spindle, rotary axes, canned cycle) and turns each block into at most one
+//! move plus events. Words it does not model are kept as pass-through events; those
+//! it does not know at all also become diagnostics with their line and column.
+
+pub mod expr;
+pub mod heidenhain;
+
+use crate::diag::{parse_num, Diags, ParseError, Parsed};
+use crate::ir::*;
+use crate::ReadOptions;
+use millplan_geom::DVec3;
+use std::collections::BTreeMap;
+
+/// One lexical item of a block.
+#[derive(Clone, Debug, PartialEq)]
+enum Tok {
+    /// Address letter and value: `X-1.5`, `G43.4`, `N10`.
+    Word(char, f64),
+    /// `NAME=value` (Sinumerik `X=_X_HOME`, `CR=5`, `A3=.5`, `_camtolerance=.02`, `T="EM10"`).
+    Assign(String, String),
+    /// `NAME(args)` (Sinumerik `CYCLE832(...)`, `MSG("...")`).
+    Call(String, String),
+    /// A bare keyword (`TRAORI`, `SUPA`, `G64` is a Word).
+    Keyword(String),
+}
+
+struct Lexed {
+    toks: Vec<(Tok, u32)>,
+    comments: Vec<String>,
+}
+
+/// Splits a block into tokens and comments. `(..)` comments may nest (some posts
+/// write `(#508= (NAME))`); `;` comments run to the end of the line.
+fn lex(line: &str, ln: u32) -> Result<Lexed, ParseError> {
+    let b = line.as_bytes();
+    let mut i = 0;
+    let mut toks = Vec::with_capacity(8);
+    let mut comments = Vec::new();
+    while i < b.len() {
+        let c = b[i];
+        let col = (i + 1) as u32;
+        if c.is_ascii_whitespace() || c == b',' {
+            // Commas separate names in `DEF REAL _A, _B`.
+            i += 1;
+            continue;
+        }
+        match c {
+            b'(' => {
+                let mut depth = 0;
+                let s = i;
+                while i < b.len() {
+                    match b[i] {
+                        b'(' => depth += 1,
+                        b')' => {
+                            depth -= 1;
+                            if depth == 0 {
+                                i += 1;
+                                break;
+                            }
+                        }
+                        _ => {}
+                    }
+                    i += 1;
+                }
+                let inner = line[s..i]
+                    .trim_start_matches('(')
+                    .trim_end_matches(')')
+                    .trim();
+                comments.push(inner.to_string());
+                continue;
+            }
+            b')' => {
+                // A stray closing parenthesis after a nested comment.
+                i += 1;
+                continue;
+            }
+            b';' => {
+                comments.push(line[i + 1..].trim().to_string());
+                break;
+            }
+            b'%' => {
+                i += 1;
+                continue;
+            }
+            b'/' if toks.is_empty() => {
+                // Block delete: the block still runs unless the operator switches it off.
+                i += 1;
+                continue;
+            }
+            _ => {}
+        }
+        if c.is_ascii_alphabetic() || c == b'_' || c == b'#' || c == b'$' {
+            // Address letter followed directly by a number?
+            let next = b.get(i + 1).copied().unwrap_or(b' ');
+            if c.is_ascii_alphabetic()
+                && (next.is_ascii_digit() || matches!(next, b'-' | b'+' | b'.'))
+            {
+                let s = i + 1;
+                let mut j = s;
+                if j < b.len() && matches!(b[j], b'-' | b'+') {
+                    j += 1;
+                }
+                while j < b.len() && (b[j].is_ascii_digit() || b[j] == b'.') {
+                    j += 1;
+                }
+                // `A3=..`, `R1=..`: an identifier being assigned, not a word.
+                let mut k = j;
+                while k < b.len() && b[k] == b' ' {
+                    k += 1;
+                }
+                if k < b.len() && b[k] == b'=' && !(j < b.len() && b[j].is_ascii_alphabetic()) {
+                    let name = line[i..j].to_ascii_uppercase();
+                    let (val, end) = assign_value(line, k + 1);
+                    toks.push((Tok::Assign(name, val), col));
+                    i = end;
+                    continue;
+                }
+                let num = &line[s..j];
+                match parse_num(num) {
+                    Some(v) => toks.push((Tok::Word(c.to_ascii_uppercase() as char, v), col)),
+                    None => {
+                        return Err(ParseError::new(
+                            ln,
+                            col,
+                            format!("`{}` is not a number after `{}`", num, c as char),
+                        ))
+                    }
+                }
+                i = j;
+                continue;
+            }
+            let s = i;
+            let mut j = i + 1;
+            while j < b.len() && (b[j].is_ascii_alphanumeric() || b[j] == b'_' || b[j] == b'.') {
+                j += 1;
+            }
+            let name = line[s..j].to_ascii_uppercase();
+            let mut k = j;
+            while k < b.len() && b[k] == b' ' {
+                k += 1;
+            }
+            if k < b.len() && b[k] == b'=' {
+                let (val, end) = assign_value(line, k + 1);
+                toks.push((Tok::Assign(name, val), col));
+                i = end;
+            } else if k < b.len() && b[k] == b'(' {
+                let mut depth = 0;
+                let mut e = k;
+                let mut in_str = false;
+                while e < b.len() {
+                    match b[e] {
+                        b'"' => in_str = !in_str,
+                        b'(' if !in_str => depth += 1,
+                        b')' if !in_str => {
+                            depth -= 1;
+                            if depth == 0 {
+                                break;
+                            }
+                        }
+                        _ => {}
+                    }
+                    e += 1;
+                }
+                if e >= b.len() {
+                    return Err(ParseError::new(
+                        ln,
+                        col,
+                        format!("`{name}(` has no closing parenthesis"),
+                    ));
+                }
+                toks.push((Tok::Call(name, line[k + 1..e].to_string()), col));
+                i = e + 1;
+            } else {
+                toks.push((Tok::Keyword(name), col));
+                i = j;
+            }
+            continue;
+        }
+        if c == b'[' {
+            return Err(ParseError::new(
+                ln,
+                col,
+                "bracketed macro expressions are not supported",
+            ));
+        }
+        let mut e = i;
+        while e < b.len() && !b[e].is_ascii_whitespace() {
+            e += 1;
+        }
+        return Err(ParseError::new(
+            ln,
+            col,
+            format!("unexpected `{}`", &line[i..e]),
+        ));
+    }
+    Ok(Lexed { toks, comments })
+}
+
+/// The value text of an assignment: a quoted string or everything up to white space.
+fn assign_value(line: &str, from: usize) -> (String, usize) {
+    let b = line.as_bytes();
+    let mut i = from;
+    while i < b.len() && b[i] == b' ' {
+        i += 1;
+    }
+    if i < b.len() && b[i] == b'"' {
+        let s = i + 1;
+        let mut e = s;
+        while e < b.len() && b[e] != b'"' {
+            e += 1;
+        }
+        return (line[s..e].to_string(), (e + 1).min(b.len()));
+    }
+    let s = i;
+    let mut depth = 0i32;
+    while i < b.len() {
+        match b[i] {
+            b'(' => depth += 1,
+            b')' => depth -= 1,
+            b' ' | b'\t' | b';' if depth <= 0 => break,
+            _ => {}
+        }
+        i += 1;
+    }
+    (line[s..i].to_string(), i)
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Motion {
+    Rapid,
+    Linear,
+    Cw,
+    Ccw,
+    /// A canned cycle (G73, G81–G89) is active: positions are hole positions.
+    Cycle,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Plane {
+    Xy,
+    Zx,
+    Yz,
+}
+
+impl Plane {
+    fn normal(self) -> DVec3 {
+        match self {
+            Plane::Xy => DVec3::Z,
+            Plane::Zx => DVec3::Y,
+            Plane::Yz => DVec3::X,
+        }
+    }
+}
+
+struct CycleState {
+    name: String,
+    r: f64,
+    z: f64,
+    q: Option<f64>,
+    p: Option<f64>,
+    initial_z: f64,
+    return_initial: bool,
+    index: Option<u32>,
+}
+
+/// Incremental G-code reader (Fanuc, Sinumerik, LinuxCNC).
+pub struct GcodeReader {
+    opts: ReadOptions,
+    dialect: Dialect,
+    program: Program,
+    ops: Vec<Operation>,
+    op: Operation,
+    diags: Diags,
+    vars: BTreeMap<String, f64>,
+    line_no: u32,
+    saw_content: bool,
+    /// mm per program unit right now.
+    scale: f64,
+    unit: Option<(LengthUnit, UnitsOrigin)>,
+    motion: Motion,
+    plane: Plane,
+    absolute: bool,
+    feed_mode: FeedMode,
+    feed: f64,
+    feed_seen: bool,
+    feed_missing_reported: bool,
+    spindle: f64,
+    spindle_dir: SpindleDir,
+    pos: DVec3,
+    pos_known: [bool; 3],
+    rotary: [Option<f64>; 3],
+    vector: Option<DVec3>,
+    tcp_vectors: bool,
+    selected_tool: Option<(Option<u32>, Option<String>, u32)>,
+    cycle: Option<CycleState>,
+    return_initial: bool,
+    pub blocks: usize,
+    pub motion_blocks: usize,
+}
+
+/// Words every reader understands without comment; the rest of the G and M codes
+/// are kept verbatim.
+const KNOWN_KEYWORDS: &[&str] = &[
+    "TRAORI",
+    "TRAFOOF",
+    "SUPA",
+    "MCALL",
+    "ROT",
+    "TRANS",
+    "AROT",
+    "ATRANS",
+    "SCALE",
+    "ASCALE",
+    "MIRROR",
+    "AMIRROR",
+    "COMPOF",
+    "COMPON",
+    "COMPCAD",
+    "COMPCURV",
+    "FNORM",
+    "FFWON",
+    "FFWOF",
+    "SOFT",
+    "BRISK",
+    "G64",
+    "G60",
+    "G601",
+    "G602",
+    "CFC",
+    "CFTCP",
+    "CFIN",
+    "ORIWKS",
+    "ORIMKS",
+    "ORIAXES",
+    "ORIVECT",
+    "ORICONO",
+    "UPATH",
+    "SPATH",
+    "M17",
+    "RET",
+    "STOPRE",
+    "ENDPROGRAM",
+    "ORIRESET",
+    "CUT2D",
+    "CUT3DC",
+    "CUT3DF",
+    "CUT3DFF",
+    "DIAMOF",
+    "DIAMON",
+    "BSPLINE",
+    "POLY",
+    "TRANSMIT",
+    "TRACYL",
+    "ASPLINE",
+    "CSPLINE",
+    "DEF",
+    "REAL",
+    "INT",
+    "STRING",
+    "BOOL",
+    "AXIS",
+    "FRAME",
+    "CHAR",
+    "G40",
+    "G500",
+    "IF",
+    "ELSE",
+    "ENDIF",
+    "GOTOF",
+    "GOTOB",
+    "LOOP",
+    "ENDLOOP",
+];
+
+impl GcodeReader {
+    pub fn new(dialect: Dialect, opts: ReadOptions) -> GcodeReader {
+        let unit = opts.units.map(|u| (u, UnitsOrigin::Override));
+        GcodeReader {
+            opts,
+            dialect,
+            program: Program::new(dialect),
+            ops: Vec::new(),
+            op: Operation::default(),
+            diags: Diags::default(),
+            vars: BTreeMap::new(),
+            line_no: 0,
+            saw_content: false,
+            scale: unit.map(|(u, _)| u.mm()).unwrap_or(1.0),
+            unit,
+            motion: Motion::Rapid,
+            plane: Plane::Xy,
+            absolute: true,
+            feed_mode: FeedMode::PerMinute,
+            feed: 0.0,
+            feed_seen: false,
+            feed_missing_reported: false,
+            spindle: 0.0,
+            spindle_dir: SpindleDir::Off,
+            pos: DVec3::ZERO,
+            pos_known: [false; 3],
+            rotary: [None; 3],
+            vector: None,
+            tcp_vectors: false,
+            selected_tool: None,
+            cycle: None,
+            return_initial: true,
+            blocks: 0,
+            motion_blocks: 0,
+        }
+    }
+
+    fn set_unit(&mut self, u: LengthUnit, ln: u32) {
+        match self.unit {
+            Some((_, UnitsOrigin::Override)) => {}
+            Some((have, _)) if have != u && self.op.moves.len() + self.ops.len() > 0 => {
+                self.diags.warn(
+                    "units-change",
+                    ln,
+                    1,
+                    format!("unit changes to {u:?} in mid-program"),
+                );
+                self.unit = Some((u, UnitsOrigin::Declared));
+                self.scale = u.mm();
+            }
+            _ => {
+                self.unit = Some((u, UnitsOrigin::Declared));
+                self.scale = u.mm();
+            }
+        }
+    }
+
+    fn value(&self, text: &str, ln: u32, col: u32) -> Result<f64, ParseError> {
+        expr::eval(text, &self.vars).map_err(|e| ParseError::new(ln, col, format!("`{text}`: {e}")))
+    }
+
+    /// Feeds one physical line.
+    pub fn line(&mut self, raw: &str) -> Result<(), ParseError> {
+        self.line_no += 1;
+        let ln = self.line_no;
+        let raw = raw.strip_suffix('\r').unwrap_or(raw);
+        if raw.trim().is_empty() {
+            return Ok(());
+        }
+        // Fanuc program number line `O0001` or Haas' `O ENTER ...` prompt.
+        let t = raw.trim_start();
+        if (t.starts_with('O') || t.starts_with('o'))
+            && t.as_bytes()
+                .get(1)
+                .map(|c| c.is_ascii_digit() || *c == b' ')
+                .unwrap_or(true)
+            && self.op.moves.is_empty()
+            && self.ops.is_empty()
+        {
+            let name = t[1..].trim();
+            if self.program.name.is_none() && !name.is_empty() {
+                self.program.name = Some(name.to_string());
+            }
+            self.saw_content = true;
+            return Ok(());
+        }
+        let lexed = lex(raw, ln)?;
+        self.saw_content = true;
+        for c in lexed.comments {
+            if !c.is_empty() {
+                self.op.push_event(ln, EventKind::Comment(c));
+            }
+        }
+        if lexed.toks.is_empty() {
+            return Ok(());
+        }
+        self.blocks += 1;
+        self.block(&lexed.toks, ln)
+    }
+
+    fn block(&mut self, toks: &[(Tok, u32)], ln: u32) -> Result<(), ParseError> {
+        // Frame-changing blocks carry angles and offsets in their X/Y/Z words.
+        if let Some((Tok::Keyword(k), _)) = toks.iter().find(|(t, _)| matches!(t, Tok::Keyword(_)))
+        {
+            if matches!(
+                k.as_str(),
+                "ROT" | "AROT" | "TRANS" | "ATRANS" | "SCALE" | "ASCALE" | "MIRROR" | "AMIRROR"
+            ) {
+                let has_values = toks.len() > 1;
+                if has_values && k != "TRANS"
+                    || toks
+                        .iter()
+                        .any(|(t, _)| matches!(t, Tok::Word(_, v) if *v != 0.0))
+                {
+                    self.diags.warn(
+                        "frame-change",
+                        ln,
+                        1,
+                        format!("`{k}` changes the programmable frame; it is kept verbatim and not applied to positions"),
+                    );
+                }
+                self.passthrough(k, &block_text(toks), ln);
+                return Ok(());
+            }
+            if k == "DEF" {
+                for (t, _) in toks {
+                    if let Tok::Assign(n, v) = t {
+                        if let Ok(x) = expr::eval(v, &self.vars) {
+                            self.vars.insert(n.clone(), x);
+                        }
+                    } else if let Tok::Keyword(n) = t {
+                        if !matches!(
+                            n.as_str(),
+                            "DEF" | "REAL" | "INT" | "BOOL" | "STRING" | "CHAR" | "AXIS" | "FRAME"
+                        ) {
+                            self.vars
+                                .entry(n.trim_end_matches(',').to_string())
+                                .or_insert(0.0);
+                        }
+                    }
+                }
+                self.passthrough("DEF", &block_text(toks), ln);
+                return Ok(());
+            }
+        }
+        // SUPA / G53 / G28 / G30 blocks move in machine coordinates: kept verbatim.
+        let machine_coords = toks.iter().any(|(t, _)| match t {
+            Tok::Keyword(k) => k == "SUPA",
+            Tok::Word('G', g) => matches!(*g as i64, 53 | 28 | 30) && g.fract() == 0.0,
+            _ => false,
+        });
+        let mut xyz: [Option<f64>; 3] = [None; 3];
+        let mut ijk: [Option<f64>; 3] = [None; 3];
+        let mut vec3: [Option<f64>; 3] = [None; 3];
+        let mut rot: [Option<f64>; 3] = [None; 3];
+        let mut radius: Option<f64> = None;
+        let mut q: Option<f64> = None;
+        let mut p: Option<f64> = None;
+        let mut r_word: Option<f64> = None;
+        let mut motion_word = false;
+        let mut new_cycle: Option<String> = None;
+        let mut tool_change = false;
+        let mut spindle_event = false;
+        let mut keep: Vec<String> = Vec::new();
+        let mut dwell = false;
+        let mut cutcom = None;
+        let mut coolant = None;
+        let mut stop = None;
+        for (tok, col) in toks {
+            let col = *col;
+            match tok {
+                Tok::Word(letter, v) => {
+                    let v = *v;
+                    match letter {
+                        'N' => {}
+                        'G' => {
+                            let code = (v * 10.0).round() as i64;
+                            match code {
+                                0 => {
+                                    self.motion = Motion::Rapid;
+                                    motion_word = true;
+                                }
+                                10 => {
+                                    self.motion = Motion::Linear;
+                                    motion_word = true;
+                                }
+                                20 => {
+                                    self.motion = Motion::Cw;
+                                    motion_word = true;
+                                }
+                                30 => {
+                                    self.motion = Motion::Ccw;
+                                    motion_word = true;
+                                }
+                                40 => dwell = true,
+                                170 => self.plane = Plane::Xy,
+                                180 => self.plane = Plane::Zx,
+                                190 => self.plane = Plane::Yz,
+                                200 | 700 | 7000 => self.set_unit(LengthUnit::Inch, ln),
+                                210 | 710 | 7100 => self.set_unit(LengthUnit::Mm, ln),
+                                900 => self.absolute = true,
+                                910 => self.absolute = false,
+                                930 => self.feed_mode = FeedMode::InverseTime,
+                                940 => self.feed_mode = FeedMode::PerMinute,
+                                950 => self.feed_mode = FeedMode::PerRev,
+                                400 => cutcom = Some(CutCom::Off),
+                                410 => cutcom = Some(CutCom::Left),
+                                420 => cutcom = Some(CutCom::Right),
+                                800 => {
+                                    self.cycle = None;
+                                    if self.motion == Motion::Cycle {
+                                        self.motion = Motion::Rapid;
+                                    }
+                                }
+                                730 | 740 | 760 | 810 | 820 | 830 | 840 | 850 | 860 | 870 | 880
+                                | 890 => {
+                                    new_cycle = Some(format!("G{}", code / 10));
+                                    motion_word = true;
+                                }
+                                980 => self.return_initial = true,
+                                990 => self.return_initial = false,
+                                435 => {
+                                    self.tcp_vectors = true;
+                                    keep.push(fmt_word('G', v));
+                                }
+                                434 | 491 => {
+                                    self.tcp_vectors = false;
+                                    keep.push(fmt_word('G', v));
+                                }
+                                530 | 280 | 300 => keep.push(fmt_word('G', v)),
+                                _ => {
+                                    // Modal codes every control has (offsets, path modes, planes
+                                    // for TCP); kept verbatim without a note.
+                                    const KNOWN: &[i64] = &[
+                                        50, 51, 90, 150, 160, 430, 431, 490, 531, 610, 611, 640,
+                                        641, 642, 680, 682, 690, 600, 6010, 6020, 6420, 6450, 1530,
+                                        5000, 1000,
+                                    ];
+                                    if !(KNOWN.contains(&code)
+                                        || (540..=599).contains(&code)
+                                        || (5050..=5990).contains(&code))
+                                    {
+                                        self.diags.note(
+                                            "unknown-word",
+                                            ln,
+                                            col,
+                                            format!("G{} kept verbatim", fmt_num(v)),
+                                        );
+                                    }
+                                    keep.push(fmt_word('G', v));
+                                }
+                            }
+                        }
+                        'X' | 'Y' | 'Z' => xyz[axis_index(*letter)] = Some(v),
+                        'I' | 'J' | 'K' => ijk[axis_index(*letter)] = Some(v),
+                        'A' | 'B' | 'C' => rot[(*letter as u8 - b'A') as usize] = Some(v),
+                        'F' => {
+                            if v <= 0.0 && self.feed_mode != FeedMode::InverseTime {
+                                return Err(ParseError::new(
+                                    ln,
+                                    col,
+                                    format!("feed F{} is not positive", fmt_num(v)),
+                                ));
+                            }
+                            self.feed = match self.feed_mode {
+                                FeedMode::InverseTime => v,
+                                _ => v * self.scale,
+                            };
+                            self.feed_seen = v > 0.0;
+                        }
+                        'S' => {
+                            if v < 0.0 {
+                                return Err(ParseError::new(ln, col, "negative spindle speed"));
+                            }
+                            self.spindle = v;
+                            spindle_event = true;
+                        }
+                        'T' => {
+                            if v < 0.0 || v.fract() != 0.0 {
+                                // `T9.` pre-selects tool 9; `T1.5` is not a tool number.
+                                if v.fract() != 0.0 {
+                                    return Err(ParseError::new(
+                                        ln,
+                                        col,
+                                        format!("tool number T{} is not whole", fmt_num(v)),
+                                    ));
+                                }
+                            }
+                            self.selected_tool = Some((Some(v as u32), None, ln));
+                        }
+                        'M' => {
+                            let m = v as i64;
+                            match (m, v.fract() == 0.0) {
+                                (3, true) => {
+                                    self.spindle_dir = SpindleDir::Cw;
+                                    spindle_event = true;
+                                }
+                                (4, true) => {
+                                    self.spindle_dir = SpindleDir::Ccw;
+                                    spindle_event = true;
+                                }
+                                (5, true) => {
+                                    self.spindle_dir = SpindleDir::Off;
+                                    spindle_event = true;
+                                }
+                                (6, true) => tool_change = true,
+                                (7, true) => coolant = Some(Coolant::Mist),
+                                (8, true) => coolant = Some(Coolant::Flood),
+                                (9, true) => coolant = Some(Coolant::Off),
+                                (0, true) => stop = Some(false),
+                                (1, true) => stop = Some(true),
+                                (2, true) | (30, true) | (17, true) => {}
+                                _ => keep.push(fmt_word('M', v)),
+                            }
+                        }
+                        'R' => r_word = Some(v),
+                        'Q' => q = Some(v),
+                        'P' => p = Some(v),
+                        'U' | 'V' | 'W' => {
+                            if dwell && *letter == 'U' {
+                                p = Some(v * 1000.0);
+                            } else {
+                                keep.push(fmt_word(*letter, v));
+                            }
+                        }
+                        'H' | 'D' | 'E' | 'L' | 'O' => keep.push(fmt_word(*letter, v)),
+                        _ => {
+                            self.diags.warn(
+                                "unknown-word",
+                                ln,
+                                col,
+                                format!("word `{}` kept verbatim", fmt_word(*letter, v)),
+                            );
+                            keep.push(fmt_word(*letter, v));
+                        }
+                    }
+                }
+                Tok::Assign(name, val) => match name.as_str() {
+                    "X" | "Y" | "Z" => {
+                        xyz[axis_index(name.chars().next().unwrap_or('X'))] =
+                            Some(self.value(val, ln, col)?)
+                    }
+                    "I" | "J" | "K" => {
+                        ijk[axis_index(name.chars().next().unwrap_or('I'))] =
+                            Some(self.value(val, ln, col)?)
+                    }
+                    "A" | "B" | "C" => {
+                        rot[(name.as_bytes()[0] - b'A') as usize] = Some(self.value(val, ln, col)?);
+                    }
+                    "A3" | "B3" | "C3" => {
+                        vec3[(name.as_bytes()[0] - b'A') as usize] = Some(self.value(val, ln, col)?)
+                    }
+                    "CR" => radius = Some(self.value(val, ln, col)?),
+                    "F" => {
+                        let v = self.value(val, ln, col)?;
+                        self.feed = v * self.scale;
+                        self.feed_seen = v > 0.0;
+                    }
+                    "S" => {
+                        self.spindle = self.value(val, ln, col)?;
+                        spindle_event = true;
+                    }
+                    "T" => {
+                        self.selected_tool =
+                            Some((val.trim().parse::<u32>().ok(), Some(val.clone()), ln));
+                    }
+                    _ => {
+                        // Variable assignment (`_camtolerance=.02`, `R1=5`).
+                        match expr::eval(val, &self.vars) {
+                            Ok(x) => {
+                                self.vars.insert(name.clone(), x);
+                            }
+                            Err(_) => self.diags.note(
+                                "unknown-word",
+                                ln,
+                                col,
+                                format!("assignment `{name}={val}` kept verbatim"),
+                            ),
+                        }
+                        keep.push(format!("{name}={val}"));
+                    }
+                },
+                Tok::Call(name, args) => {
+                    if name == "MSG" {
+                        let text = args.trim().trim_matches('"').to_string();
+                        self.op.push_event(ln, EventKind::Comment(text));
+                    } else {
+                        if !matches!(
+                            name.as_str(),
+                            "CYCLE800" | "CYCLE832" | "CYCLE832_" | "G642" | "G645"
+                        ) {
+                            self.diags.warn(
+                                "unknown-word",
+                                ln,
+                                col,
+                                format!(
+                                    "call `{name}(...)` kept verbatim; its motion is not simulated"
+                                ),
+                            );
+                        }
+                        keep.push(format!("{name}({args})"));
+                    }
+                }
+                Tok::Keyword(k) => {
+                    if !KNOWN_KEYWORDS.contains(&k.as_str()) {
+                        self.diags
+                            .warn("unknown-word", ln, col, format!("`{k}` kept verbatim"));
+                    }
+                    keep.push(k.clone());
+                }
+            }
+        }
+        if let Some(c) = cutcom {
+            self.op.push_event(ln, EventKind::CutCom(c));
+        }
+        if tool_change {
+            self.tool_change(ln);
+        }
+        if spindle_event {
+            let rpm = if self.spindle_dir == SpindleDir::Off {
+                0.0
+            } else {
+                self.spindle
+            };
+            self.op.push_event(
+                ln,
+                EventKind::Spindle {
+                    rpm,
+                    dir: self.spindle_dir,
+                },
+            );
+        }
+        if let Some(c) = coolant {
+            self.op.push_event(ln, EventKind::Coolant(c));
+        }
+        if let Some(optional) = stop {
+            self.op.push_event(ln, EventKind::Stop { optional });
+        }
+        if dwell {
+            // Fanuc P is milliseconds; X/U seconds.
+            let secs = p.map(|ms| ms / 1000.0).or(xyz[0]).unwrap_or(0.0);
+            self.op.push_event(ln, EventKind::Dwell(secs));
+            if !keep.is_empty() {
+                let text = keep.join(" ");
+                self.passthrough(&keep[0], &text, ln);
+            }
+            return Ok(());
+        }
+        if machine_coords {
+            let text = block_text(toks);
+            self.passthrough("SUPA", &text, ln);
+            return Ok(());
+        }
+        if !keep.is_empty() {
+            let text = keep.join(" ");
+            self.passthrough(&keep[0].clone(), &text, ln);
+        }
+        if let Some(name) = new_cycle {
+            self.motion = Motion::Cycle;
+            let initial_z = self.pos.z;
+            self.cycle = Some(CycleState {
+                name,
+                r: f64::NAN,
+                z: f64::NAN,
+                q: None,
+                p: None,
+                initial_z,
+                return_initial: self.return_initial,
+                index: None,
+            });
+        }
+        let has_xyz = xyz.iter().any(Option::is_some);
+        let has_rot = rot.iter().any(Option::is_some);
+        let has_vec = vec3.iter().any(Option::is_some);
+        if self.motion == Motion::Cycle {
+            if let Some(cs) = &mut self.cycle {
+                let s = self.scale;
+                if let Some(r) = r_word {
+                    cs.r = r * s;
+                    cs.index = None;
+                }
+                if let Some(z) = xyz[2] {
+                    cs.z = z * s;
+                    cs.index = None;
+                }
+                if let Some(qv) = q {
+                    cs.q = Some(qv * s);
+                    cs.index = None;
+                }
+                if let Some(pv) = p {
+                    cs.p = Some(pv / 1000.0);
+                    cs.index = None;
+                }
+            }
+            if !has_xyz && !motion_word {
+                return Ok(());
+            }
+            return self.cycle_point(xyz, ln);
+        }
+        if !(has_xyz || has_rot || has_vec) {
+            if motion_word && (ijk.iter().any(Option::is_some) || radius.is_some()) {
+                return Err(ParseError::new(ln, 1, "arc without an end point"));
+            }
+            return Ok(());
+        }
+        self.motion_blocks += 1;
+        let start = self.pos;
+        let mut end = self.pos;
+        for k in 0..3 {
+            if let Some(v) = xyz[k] {
+                let v = v * self.scale;
+                end[k] = if self.absolute { v } else { end[k] + v };
+                self.pos_known[k] = true;
+            }
+        }
+        if has_rot {
+            for k in 0..3 {
+                if let Some(v) = rot[k] {
+                    let v = v.to_radians();
+                    self.rotary[k] = Some(if self.absolute {
+                        v
+                    } else {
+                        self.rotary[k].unwrap_or(0.0) + v
+                    });
+                }
+            }
+        }
+        if self.tcp_vectors
+            && matches!(self.motion, Motion::Rapid | Motion::Linear)
+            && ijk.iter().any(Option::is_some)
+        {
+            vec3 = ijk;
+            ijk = [None; 3];
+        }
+        if vec3.iter().any(Option::is_some) {
+            let old = self.vector.unwrap_or(DVec3::Z);
+            let v = DVec3::new(
+                vec3[0].unwrap_or(old.x),
+                vec3[1].unwrap_or(old.y),
+                vec3[2].unwrap_or(old.z),
+            );
+            let v = v
+                .try_normalize()
+                .ok_or_else(|| ParseError::new(ln, 1, "tool vector has zero length"))?;
+            self.vector = Some(v);
+        }
+        let orient = if let Some(v) = self.vector {
+            self.op.intern_orient(Orient::Vector(v))
+        } else if self.rotary.iter().any(Option::is_some) {
+            self.op.intern_orient(Orient::Rotary(self.rotary))
+        } else {
+            NO_ORIENT
+        };
+        let mut m = Move {
+            end,
+            feed: self.feed,
+            spindle: if self.spindle_dir == SpindleDir::Off {
+                0.0
+            } else {
+                self.spindle
+            },
+            line: ln,
+            orient,
+            aux: 0,
+            kind: MoveKind::Linear,
+            feed_mode: self.feed_mode,
+        };
+        match self.motion {
+            Motion::Rapid => {
+                m.kind = MoveKind::Rapid;
+                m.feed = 0.0;
+            }
+            Motion::Linear => {}
+            Motion::Cw | Motion::Ccw => {
+                let arc = self.arc(start, end, ijk, radius.or(r_word), ln)?;
+                m.kind = MoveKind::Arc;
+                m.aux = self.op.arcs.len() as u32;
+                self.op.arcs.push(arc);
+            }
+            Motion::Cycle => unreachable!("handled above"),
+        }
+        self.push_move(m, ln);
+        Ok(())
+    }
+
+    fn arc(
+        &mut self,
+        start: DVec3,
+        end: DVec3,
+        ijk: [Option<f64>; 3],
+        r: Option<f64>,
+        ln: u32,
+    ) -> Result<Arc, ParseError> {
+        let n = self.plane.normal();
+        let normal = if self.motion == Motion::Ccw { n } else { -n };
+        let centre = if ijk.iter().any(Option::is_some) {
+            let off = DVec3::new(
+                ijk[0].unwrap_or(0.0),
+                ijk[1].unwrap_or(0.0),
+                ijk[2].unwrap_or(0.0),
+            ) * self.scale;
+            // Keep the centre in the plane of the start point.
+            let c = start + off;
+            c - n * (c - start).dot(n)
+        } else if let Some(r) = r {
+            let r = r * self.scale;
+            let a = start - n * start.dot(n);
+            let b = end - n * start.dot(n) - n * (end - start).dot(n);
+            let chord = b - a;
+            let half = chord.length() / 2.0;
+            if half < 1e-9 {
+                return Err(ParseError::new(
+                    ln,
+                    1,
+                    "a radius arc cannot be a full circle; use I/J/K",
+                ));
+            }
+            if half > r.abs() + 1e-6 {
+                return Err(ParseError::new(
+                    ln,
+                    1,
+                    format!(
+                        "arc radius {:.4} is shorter than half the chord {:.4}",
+                        r.abs(),
+                        half
+                    ),
+                ));
+            }
+            let h = (r * r - half * half).max(0.0).sqrt();
+            let mid = a + chord * 0.5;
+            let perp = normal.cross(chord).normalize();
+            // Positive R: the short way (≤ 180°); negative: the long way.
+            if r > 0.0 {
+                mid + perp * h
+            } else {
+                mid - perp * h
+            }
+        } else {
+            return Err(ParseError::new(ln, 1, "arc needs I/J/K or R"));
+        };
+        let full = (start - end).length() < 1e-9;
+        let arc = Arc::from_points(start, end, centre, normal, full)
+            .ok_or_else(|| ParseError::new(ln, 1, "arc start lies on its centre"))?;
+        let r_end = {
+            let d = end - centre;
+            (d - n * d.dot(n)).length()
+        };
+        if (r_end - arc.radius).abs() > 2e-3_f64.max(1e-4 * arc.radius) {
+            self.diags.warn(
+                "arc-radius",
+                ln,
+                1,
+                format!(
+                    "arc end is {:.4} mm from the centre, its start {:.4} mm",
+                    r_end, arc.radius
+                ),
+            );
+        }
+        Ok(arc)
+    }
+
+    fn cycle_point(&mut self, xyz: [Option<f64>; 3], ln: u32) -> Result<(), ParseError> {
+        let Some(cs) = &mut self.cycle else {
+            return Err(ParseError::new(
+                ln,
+                1,
+                "hole position without an active cycle",
+            ));
+        };
+        if !self.absolute {
+            return Err(ParseError::new(
+                ln,
+                1,
+                "canned cycles in incremental mode (G91) are not supported",
+            ));
+        }
+        if cs.r.is_nan() || cs.z.is_nan() {
+            return Err(ParseError::new(ln, 1, format!("{} needs R and Z", cs.name)));
+        }
+        let s = self.scale;
+        let x = xyz[0].map(|v| v * s).unwrap_or(self.pos.x);
+        let y = xyz[1].map(|v| v * s).unwrap_or(self.pos.y);
+        let idx = match cs.index {
+            Some(i) => i,
+            None => {
+                let retract = if cs.return_initial {
+                    cs.initial_z - cs.r
+                } else {
+                    0.0
+                };
+                let feed = if self.feed_seen {
+                    self.feed
+                } else {
+                    self.opts.default_feed
+                };
+                let cy = Cycle {
+                    name: cs.name.clone(),
+                    bottom: cs.z - cs.r,
+                    clearance: 0.0,
+                    retract: retract.max(0.0),
+                    feed,
+                    peck: cs.q,
+                    dwell: cs.p,
+                    line: ln,
+                };
+                self.op.cycles.push(cy);
+                let i = (self.op.cycles.len() - 1) as u32;
+                cs.index = Some(i);
+                i
+            }
+        };
+        let end = DVec3::new(x, y, cs.r);
+        let top = if cs.return_initial {
+            cs.initial_z
+        } else {
+            cs.r
+        };
+        self.motion_blocks += 1;
+        let m = Move {
+            end,
+            feed: 0.0,
+            spindle: self.spindle,
+            line: ln,
+            orient: NO_ORIENT,
+            aux: idx,
+            kind: MoveKind::Cycle,
+            feed_mode: FeedMode::PerMinute,
+        };
+        self.push_move(m, ln);
+        // After the hole the tool stands at the return plane.
+        self.pos = DVec3::new(x, y, top);
+        Ok(())
+    }
+
+    fn push_move(&mut self, mut m: Move, ln: u32) {
+        if m.is_cutting() && !self.feed_seen {
+            m.feed = self.opts.default_feed;
+            m.feed_mode = FeedMode::PerMinute;
+            if !self.feed_missing_reported {
+                self.feed_missing_reported = true;
+                self.diags.warn(
+                    "feed-missing",
+                    ln,
+                    1,
+                    format!(
+                        "cutting move before any F word: using {} mm/min (set with --feed)",
+                        self.opts.default_feed
+                    ),
+                );
+            }
+        }
+        if m.is_cutting() && self.op.tool.is_none() {
+            let (number, name, tl) = self.selected_tool.clone().unwrap_or((None, None, ln));
+            self.op.tool = Some(Tool {
+                number,
+                name,
+                cutter: None,
+                line: tl,
+            });
+            self.diags.warn(
+                "tool-missing",
+                ln,
+                1,
+                "cutting move before any tool change (M6): tool unknown",
+            );
+        }
+        if self.op.moves.is_empty() && self.op.start.is_none() && self.pos_known.iter().all(|k| *k)
+        {
+            self.op.start = Some(self.pos);
+        }
+        self.op.moves.push(m);
+        self.pos = m.end;
+        self.pos_known = [true; 3];
+    }
+
+    fn tool_change(&mut self, ln: u32) {
+        let (number, name, tl) = self.selected_tool.clone().unwrap_or((None, None, ln));
+        if !self.op.moves.is_empty() {
+            let prev = std::mem::take(&mut self.op);
+            self.op.start = prev.moves.last().map(|m| m.end);
+            self.ops.push(prev);
+            self.cycle = None;
+        }
+        self.op.tool = Some(Tool {
+            number,
+            name: name.clone(),
+            cutter: None,
+            line: tl,
+        });
+        if let Some(n) = name {
+            self.op.name.get_or_insert(n);
+        }
+    }
+
+    fn passthrough(&mut self, word: &str, text: &str, ln: u32) {
+        self.op.push_event(
+            ln,
+            EventKind::Passthrough {
+                word: word.to_string(),
+                text: text.to_string(),
+            },
+        );
+    }
+
+    pub fn finish(mut self) -> Result<Parsed, ParseError> {
+        if !self.saw_content {
+            return Err(ParseError::new(1, 1, "empty file: no G-code blocks"));
+        }
+        self.ops.push(std::mem::take(&mut self.op));
+        self.ops
+            .retain(|o| !(o.moves.is_empty() && o.events.is_empty() && o.tool.is_none()));
+        let (u, origin) = match self.unit {
+            Some(x) => x,
+            None => {
+                self.diags.warn("units-assumed", 0, 0, "no unit word (G20/G21, G70/G71, G700/G710): millimetres assumed (override with --units)");
+                (LengthUnit::Mm, UnitsOrigin::Assumed)
+            }
+        };
+        self.program.units = Units { source: u, origin };
+        self.program.operations = self.ops;
+        let _ = self.dialect;
+        Ok(Parsed {
+            program: self.program,
+            diagnostics: self.diags.finish(),
+        })
+    }
+}
+
+fn axis_index(c: char) -> usize {
+    match c {
+        'X' | 'I' => 0,
+        'Y' | 'J' => 1,
+        _ => 2,
+    }
+}
+
+pub(crate) fn fmt_num(v: f64) -> String {
+    if v.fract() == 0.0 && v.abs() < 1e15 {
+        format!("{}", v as i64)
+    } else {
+        let s = format!("{v:.6}");
+        s.trim_end_matches('0').to_string()
+    }
+}
+
+fn fmt_word(c: char, v: f64) -> String {
+    format!("{c}{}", fmt_num(v))
+}
+
+fn block_text(toks: &[(Tok, u32)]) -> String {
+    toks.iter()
+        .filter(|(t, _)| !matches!(t, Tok::Word('N', _)))
+        .map(|(t, _)| match t {
+            Tok::Word(c, v) => fmt_word(*c, *v),
+            Tok::Assign(n, v) => format!("{n}={v}"),
+            Tok::Call(n, a) => format!("{n}({a})"),
+            Tok::Keyword(k) => k.clone(),
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lexes_packed_fanuc_sinumerik_and_comments() {
+        let l = lex("G0X0.000Y0.000S15000M3", 1).expect("lex");
+        assert_eq!(l.toks.len(), 5);
+        let l = lex(
+            "N330 G0 X-75. Y34.99 Z=_Z_HOME T=\"PLAN_D50\" CYCLE832(_camtolerance,1,1) ; note",
+            1,
+        )
+        .expect("lex");
+        assert_eq!(l.comments, vec!["note".to_string()]);
+        assert!(l
+            .toks
+            .iter()
+            .any(|(t, _)| *t == Tok::Assign("Z".into(), "_Z_HOME".into())));
+        assert!(l
+            .toks
+            .iter()
+            .any(|(t, _)| *t == Tok::Assign("T".into(), "PLAN_D50".into())));
+        assert!(l
+            .toks
+            .iter()
+            .any(|(t, _)| matches!(t, Tok::Call(n, _) if n == "CYCLE832")));
+        let l = lex("(#508= (MILL_.25_PROFILE         ))", 1).expect("lex");
+        assert_eq!(l.toks.len(), 0);
+        assert_eq!(l.comments.len(), 1);
+        let l = lex("N10 A3=0.5 B3=0 C3=.866", 1).expect("lex");
+        assert_eq!(l.toks[1].0, Tok::Assign("A3".into(), "0.5".into()));
+    }
+
+    #[test]
+    fn letters_in_numbers_are_located() {
+        let e = lex("G1 X1.2.5 Y3", 7).expect_err("bad number");
+        assert_eq!((e.line, e.col), (7, 5));
+    }
+}

@@ -1,0 +1,315 @@
+//! APT/CL back end (ISO 4343 style): `CUTTER/` with seven values, `LOADTL/`,
+//! `FEDRAT/f,MMPM`, `RAPID`, `MULTAX/ON` with six-value GOTOs, seven-value `CIRCLE/`,
+//! `CYCLE/…`/`CYCLE/OFF`, frames as NX-style `MSYS/`. Reading the output again gives
+//! the same moves.
+
+use super::{NumFmt, WriteError};
+use crate::ir::*;
+
+const COORD: NumFmt = NumFmt {
+    decimals: 6,
+    trailing_point: false,
+    plus: false,
+    no_leading_zero: false,
+};
+const VECT: NumFmt = NumFmt {
+    decimals: 9,
+    trailing_point: false,
+    plus: false,
+    no_leading_zero: false,
+};
+
+fn num(out: &mut Vec<u8>, f: NumFmt, v: f64) {
+    f.push(out, v);
+}
+
+fn list(out: &mut Vec<u8>, major: &str, vals: &[(f64, NumFmt)]) {
+    out.extend_from_slice(major.as_bytes());
+    out.push(b'/');
+    for (i, (v, f)) in vals.iter().enumerate() {
+        if i > 0 {
+            out.push(b',');
+        }
+        num(out, *f, *v);
+    }
+    out.push(b'\n');
+}
+
+fn text_line(out: &mut Vec<u8>, s: &str) {
+    out.extend_from_slice(s.as_bytes());
+    out.push(b'\n');
+}
+
+/// Writes the program as APT/CL in millimetres.
+pub fn write_apt(p: &Program, out: &mut Vec<u8>) -> Result<(), WriteError> {
+    out.reserve(p.move_count() * 36 + 1024);
+    text_line(
+        out,
+        &format!("PARTNO {}", p.name.as_deref().unwrap_or("MILLPLAN")),
+    );
+    text_line(out, "UNITS/MM");
+    let mut multax = false;
+    for op in &p.operations {
+        if let Some(n) = &op.name {
+            text_line(out, &format!("PPRINT OPERATION NAME : {n}"));
+        }
+        if let Some(t) = &op.tool {
+            if let Some(c) = &t.cutter {
+                list(
+                    out,
+                    "CUTTER",
+                    &[
+                        (c.d, COORD),
+                        (c.r, COORD),
+                        (c.e, COORD),
+                        (c.f, COORD),
+                        (c.alpha.to_degrees(), COORD),
+                        (c.beta.to_degrees(), COORD),
+                        (c.h, COORD),
+                    ],
+                );
+            }
+            if let Some(n) = t.number {
+                text_line(out, &format!("LOADTL/{n}"));
+            }
+            if let Some(n) = &t.name {
+                text_line(out, &format!("PPRINT TOOL NAME : {n}"));
+            }
+        }
+        if let Some(f) = &op.frame {
+            let (o, x, y) = (f.origin, f.rot.x_axis, f.rot.y_axis);
+            list(
+                out,
+                "MSYS",
+                &[
+                    (o.x, COORD),
+                    (o.y, COORD),
+                    (o.z, COORD),
+                    (x.x, VECT),
+                    (x.y, VECT),
+                    (x.z, VECT),
+                    (y.x, VECT),
+                    (y.y, VECT),
+                    (y.z, VECT),
+                ],
+            );
+        } else if p.operations.len() > 1 {
+            // Make the frame explicit so a frame of an earlier operation does not carry over.
+            list(
+                out,
+                "MSYS",
+                &[
+                    (0.0, COORD),
+                    (0.0, COORD),
+                    (0.0, COORD),
+                    (1.0, VECT),
+                    (0.0, VECT),
+                    (0.0, VECT),
+                    (0.0, VECT),
+                    (1.0, VECT),
+                    (0.0, VECT),
+                ],
+            );
+        }
+        if let Some(s) = op.start {
+            list(out, "FROM", &[(s.x, COORD), (s.y, COORD), (s.z, COORD)]);
+        }
+        let mut feed: Option<(f64, FeedMode)> = None;
+        let mut spindle: Option<f64> = None;
+        let mut cycle: Option<u32> = None;
+        let mut ev = 0;
+        for (i, m) in op.moves.iter().enumerate() {
+            while ev < op.events.len() && op.events[ev].at as usize <= i {
+                let e = &op.events[ev];
+                ev += 1;
+                match &e.kind {
+                    EventKind::Comment(t) => text_line(out, &format!("PPRINT {t}")),
+                    EventKind::Insert(t) => text_line(out, &format!("INSERT/{t}")),
+                    EventKind::Spindle { rpm, dir } => {
+                        match dir {
+                            SpindleDir::Off => text_line(out, "SPINDL/OFF"),
+                            d => {
+                                out.extend_from_slice(b"SPINDL/");
+                                num(out, COORD, *rpm);
+                                text_line(
+                                    out,
+                                    if *d == SpindleDir::Ccw {
+                                        ",RPM,CCLW"
+                                    } else {
+                                        ",RPM,CLW"
+                                    },
+                                );
+                            }
+                        }
+                        spindle = Some(*rpm);
+                    }
+                    EventKind::Coolant(c) => text_line(
+                        out,
+                        match c {
+                            Coolant::Off => "COOLNT/OFF",
+                            Coolant::Flood => "COOLNT/FLOOD",
+                            Coolant::Mist => "COOLNT/MIST",
+                            Coolant::Through => "COOLNT/THRU",
+                            Coolant::Air => "COOLNT/AIR",
+                        },
+                    ),
+                    EventKind::CutCom(c) => text_line(
+                        out,
+                        match c {
+                            CutCom::Off => "CUTCOM/OFF",
+                            CutCom::Left => "CUTCOM/LEFT",
+                            CutCom::Right => "CUTCOM/RIGHT",
+                        },
+                    ),
+                    EventKind::Stop { optional } => {
+                        text_line(out, if *optional { "OPSTOP" } else { "STOP" })
+                    }
+                    EventKind::Dwell(t) => list(out, "DELAY", &[(*t, COORD)]),
+                    EventKind::Passthrough { text, .. } => {
+                        if p.dialect.is_apt() {
+                            text_line(out, text);
+                        } else {
+                            text_line(out, &format!("PPRINT {text}"));
+                        }
+                    }
+                }
+            }
+            if m.spindle > 0.0 && spindle != Some(m.spindle) && m.is_cutting() {
+                out.extend_from_slice(b"SPINDL/");
+                num(out, COORD, m.spindle);
+                text_line(out, ",RPM,CLW");
+                spindle = Some(m.spindle);
+            }
+            if m.kind == MoveKind::Cycle {
+                if cycle != Some(m.aux) {
+                    let c = op.cycles.get(m.aux as usize).ok_or_else(|| WriteError {
+                        message: "cycle index out of range".into(),
+                    })?;
+                    out.extend_from_slice(
+                        format!("CYCLE/{},FEDTO,", c.name.replace(',', " ")).as_bytes(),
+                    );
+                    num(out, COORD, -c.bottom);
+                    out.extend_from_slice(b",RAPTO,");
+                    num(out, COORD, c.clearance);
+                    out.extend_from_slice(b",RTRCTO,");
+                    num(out, COORD, c.retract);
+                    out.extend_from_slice(b",MMPM,");
+                    num(out, COORD, c.feed);
+                    if let Some(q) = c.peck {
+                        out.extend_from_slice(b",STEP,");
+                        num(out, COORD, q);
+                    }
+                    if let Some(t) = c.dwell {
+                        out.extend_from_slice(b",DWELL,");
+                        num(out, COORD, t);
+                    }
+                    out.push(b'\n');
+                    cycle = Some(m.aux);
+                }
+            } else if cycle.is_some() {
+                text_line(out, "CYCLE/OFF");
+                cycle = None;
+            }
+            match m.kind {
+                MoveKind::Rapid => text_line(out, "RAPID"),
+                MoveKind::Linear | MoveKind::Arc => {
+                    if feed != Some((m.feed, m.feed_mode)) {
+                        out.extend_from_slice(b"FEDRAT/");
+                        num(out, COORD, m.feed);
+                        text_line(
+                            out,
+                            match m.feed_mode {
+                                FeedMode::PerMinute => ",MMPM",
+                                FeedMode::PerRev => ",MMPR",
+                                FeedMode::InverseTime => ",INVERS",
+                            },
+                        );
+                        feed = Some((m.feed, m.feed_mode));
+                    }
+                    if m.kind == MoveKind::Arc {
+                        let a = op.arcs.get(m.aux as usize).ok_or_else(|| WriteError {
+                            message: "arc index out of range".into(),
+                        })?;
+                        list(
+                            out,
+                            "CIRCLE",
+                            &[
+                                (a.centre.x, COORD),
+                                (a.centre.y, COORD),
+                                (a.centre.z, COORD),
+                                (a.normal.x, VECT),
+                                (a.normal.y, VECT),
+                                (a.normal.z, VECT),
+                                (a.radius, COORD),
+                            ],
+                        );
+                    }
+                }
+                MoveKind::Cycle => {}
+            }
+            let e = m.end;
+            match op.orient(m) {
+                Some(Orient::Vector(v)) => {
+                    if !multax {
+                        text_line(out, "MULTAX/ON");
+                        multax = true;
+                    }
+                    list(
+                        out,
+                        "GOTO",
+                        &[
+                            (e.x, COORD),
+                            (e.y, COORD),
+                            (e.z, COORD),
+                            (v.x, VECT),
+                            (v.y, VECT),
+                            (v.z, VECT),
+                        ],
+                    );
+                }
+                Some(Orient::Rotary(r)) => {
+                    let f = |x: Option<f64>| {
+                        x.map(|v| format!("{:.4}", v.to_degrees()))
+                            .unwrap_or("-".into())
+                    };
+                    text_line(
+                        out,
+                        &format!(
+                            "PPRINT MACHINE ANGLES A {} B {} C {}",
+                            f(r[0]),
+                            f(r[1]),
+                            f(r[2])
+                        ),
+                    );
+                    list(out, "GOTO", &[(e.x, COORD), (e.y, COORD), (e.z, COORD)]);
+                }
+                None => {
+                    if multax {
+                        text_line(out, "MULTAX/OFF");
+                        multax = false;
+                    }
+                    list(out, "GOTO", &[(e.x, COORD), (e.y, COORD), (e.z, COORD)]);
+                }
+            }
+        }
+        if cycle.is_some() {
+            text_line(out, "CYCLE/OFF");
+        }
+        for e in &op.events[ev..] {
+            match &e.kind {
+                EventKind::Comment(t) => text_line(out, &format!("PPRINT {t}")),
+                EventKind::Insert(t) => text_line(out, &format!("INSERT/{t}")),
+                EventKind::Spindle {
+                    dir: SpindleDir::Off,
+                    ..
+                } => text_line(out, "SPINDL/OFF"),
+                EventKind::Coolant(Coolant::Off) => text_line(out, "COOLNT/OFF"),
+                EventKind::Passthrough { text, .. } if p.dialect.is_apt() => text_line(out, text),
+                EventKind::Passthrough { text, .. } => text_line(out, &format!("PPRINT {text}")),
+                _ => {}
+            }
+        }
+    }
+    text_line(out, "FINI");
+    Ok(())
+}

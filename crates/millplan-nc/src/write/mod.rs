@@ -1,0 +1,161 @@
+//! Back ends: G-code dialects and APT/CL. Writers produce bytes; the binary puts
+//! them in files (through a temporary file and a rename).
+
+pub mod apt;
+pub mod gcode;
+
+use crate::ir::*;
+use millplan_geom::DVec3;
+
+/// Something the target cannot express, which stops writing.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{message}")]
+pub struct WriteError {
+    pub message: String,
+}
+
+/// Fast fixed-decimal number formatting with trailing zeros removed
+/// (`12.5`, `-0.25`, `3`), the inner loop of every writer.
+#[derive(Clone, Copy, Debug)]
+pub struct NumFmt {
+    pub decimals: u32,
+    /// Keep a trailing decimal point on whole numbers (`3.`), as Fanuc wants.
+    pub trailing_point: bool,
+    /// Write `+` on positive numbers (Heidenhain).
+    pub plus: bool,
+    /// Drop the leading zero (`.5`).
+    pub no_leading_zero: bool,
+}
+
+impl NumFmt {
+    pub fn push(&self, out: &mut Vec<u8>, v: f64) {
+        let scale = 10u64.pow(self.decimals) as f64;
+        let r = (v * scale).round();
+        if !r.is_finite() || r.abs() >= 9.0e18 {
+            out.extend_from_slice(format!("{v}").as_bytes());
+            return;
+        }
+        let neg = r < 0.0;
+        let mut n = r.abs() as u64;
+        let div = 10u64.pow(self.decimals);
+        let int = n / div;
+        n %= div;
+        if neg && (int != 0 || n != 0) {
+            out.push(b'-');
+        } else if self.plus {
+            out.push(b'+');
+        }
+        if int != 0 || !self.no_leading_zero || n == 0 {
+            let mut buf = itoa_buf(int);
+            out.append(&mut buf);
+        }
+        let mut d = self.decimals;
+        let mut frac = n;
+        while d > 0 && frac % 10 == 0 {
+            frac /= 10;
+            d -= 1;
+        }
+        if d > 0 {
+            out.push(b'.');
+            let s = frac;
+            let mut digits = [b'0'; 20];
+            let mut x = s;
+            for k in (0..d as usize).rev() {
+                digits[k] = b'0' + (x % 10) as u8;
+                x /= 10;
+            }
+            out.extend_from_slice(&digits[..d as usize]);
+        } else if self.trailing_point {
+            out.push(b'.');
+        }
+    }
+}
+
+fn itoa_buf(mut v: u64) -> Vec<u8> {
+    if v == 0 {
+        return vec![b'0'];
+    }
+    let mut b = Vec::with_capacity(20);
+    while v > 0 {
+        b.push(b'0' + (v % 10) as u8);
+        v /= 10;
+    }
+    b.reverse();
+    b
+}
+
+/// Is this arc in a principal plane (normal along ±X, ±Y or ±Z)? Returns the axis index.
+pub fn principal_plane(a: &Arc) -> Option<usize> {
+    let n = a.normal.abs();
+    (0..3).find(|&k| (n[k] - 1.0).abs() < 1e-9)
+}
+
+/// Points (after the start) that follow an arc within `tol`.
+pub fn arc_points(a: &Arc, start: DVec3, end: DVec3, tol: f64) -> Vec<DVec3> {
+    let step = if a.radius > tol {
+        2.0 * (1.0 - tol / a.radius).acos()
+    } else {
+        a.sweep
+    };
+    let n = ((a.sweep / step.max(1e-6)).ceil() as usize).clamp(1, 100_000);
+    (1..=n)
+        .map(|k| {
+            if k == n {
+                end
+            } else {
+                a.point_at(start, end, k as f64 / n as f64)
+            }
+        })
+        .collect()
+}
+
+/// Explicit moves (rapid, feed down with pecks, rapid out) for one hole of a cycle,
+/// along the tool axis `axis` from the cycle point `p`.
+pub fn cycle_moves(c: &Cycle, p: DVec3, axis: DVec3) -> Vec<(MoveKind, DVec3, f64)> {
+    let at = |h: f64| p + axis * h;
+    let mut v = vec![(MoveKind::Rapid, at(c.clearance.max(c.bottom)), 0.0)];
+    let total = c.clearance - c.bottom;
+    match c.peck {
+        Some(q) if q > 0.0 && q < total => {
+            let mut depth = c.clearance;
+            while depth - q > c.bottom + 1e-9 {
+                depth -= q;
+                v.push((MoveKind::Linear, at(depth), c.feed));
+                v.push((MoveKind::Rapid, at(c.clearance), 0.0));
+                v.push((MoveKind::Rapid, at(depth + 0.5_f64.min(q / 2.0)), 0.0));
+            }
+            v.push((MoveKind::Linear, at(c.bottom), c.feed));
+        }
+        _ => v.push((MoveKind::Linear, at(c.bottom), c.feed)),
+    }
+    v.push((MoveKind::Rapid, at(c.retract.max(c.clearance)), 0.0));
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn f(v: f64, decimals: u32, tp: bool, plus: bool, nlz: bool) -> String {
+        let mut o = Vec::new();
+        NumFmt {
+            decimals,
+            trailing_point: tp,
+            plus,
+            no_leading_zero: nlz,
+        }
+        .push(&mut o, v);
+        String::from_utf8(o).expect("ascii")
+    }
+
+    #[test]
+    fn formats_numbers() {
+        assert_eq!(f(12.5, 4, false, false, false), "12.5");
+        assert_eq!(f(-0.25, 4, false, false, true), "-.25");
+        assert_eq!(f(3.0, 4, true, false, false), "3.");
+        assert_eq!(f(-0.00001, 4, false, false, false), "0");
+        assert_eq!(f(1.23456789, 4, false, true, false), "+1.2346");
+        assert_eq!(f(-120.2591, 4, false, false, false), "-120.2591");
+        assert_eq!(f(0.0, 3, true, false, true), "0.");
+    }
+}

@@ -1,0 +1,218 @@
+//! `millplan inspect`: what a file holds.
+
+use crate::cmd::{print_diagnostics, read_options, UnitArg};
+use crate::error::{CliResult, EXIT_OK};
+use crate::io::{read_any, Input};
+use millplan_geom::Aabb;
+use millplan_nc::stats::summarize;
+use millplan_nc::{Dialect, Program};
+use serde_json::{json, Value};
+use std::path::PathBuf;
+
+/// Print what a file holds: format and dialect, units, tools, moves, bounds,
+/// path lengths and estimated time (programs); triangles, defects and bounds (STL).
+///
+/// The format is detected from the content, not the file name.
+#[derive(clap::Args)]
+pub struct Args {
+    /// APT/CL, G-code (Fanuc, Sinumerik, LinuxCNC, Heidenhain) or STL file.
+    pub file: PathBuf,
+    /// Print a machine-readable JSON summary on standard output.
+    #[arg(long)]
+    pub json: bool,
+    /// Print the program's IR, one line per move and event.
+    #[arg(long)]
+    pub ir: bool,
+    /// Unit of the source when the file does not say (or says wrongly).
+    #[arg(long, value_enum)]
+    pub units: Option<UnitArg>,
+    /// Rapid traverse rate for the time estimate, mm/min.
+    #[arg(long, default_value_t = 15000.0)]
+    pub rapid_rate: f64,
+    /// Do not print reader diagnostics.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+fn bounds_json(b: &Aabb) -> Value {
+    if b.is_empty() {
+        return Value::Null;
+    }
+    json!({ "min": [b.min.x, b.min.y, b.min.z], "max": [b.max.x, b.max.y, b.max.z] })
+}
+
+fn format_name(d: Dialect) -> &'static str {
+    if d.is_apt() {
+        "apt"
+    } else {
+        "gcode"
+    }
+}
+
+fn program_json(p: &Program, diags: usize, rapid_rate: f64) -> Value {
+    let s = summarize(p, rapid_rate);
+    let tools: Vec<Value> = p
+        .operations
+        .iter()
+        .filter_map(|o| o.tool.as_ref())
+        .map(|t| {
+            json!({
+                "number": t.number,
+                "name": t.name,
+                "cutter": t.cutter.map(|c| json!({
+                    "kind": c.kind, "d": c.d, "r": c.r, "e": c.e, "f": c.f,
+                    "alpha_deg": c.alpha.to_degrees(), "beta_deg": c.beta.to_degrees(), "h": c.h
+                })),
+                "line": t.line,
+            })
+        })
+        .collect();
+    json!({
+        "format": format_name(p.dialect),
+        "dialect": p.dialect.name(),
+        "name": p.name,
+        "units": match p.units.source { millplan_nc::LengthUnit::Mm => "mm", millplan_nc::LengthUnit::Inch => "inch" },
+        "units_origin": p.units.origin,
+        "operations": p.operations.len(),
+        "tools": tools,
+        "moves": { "rapid": s.moves.rapid, "linear": s.moves.linear, "arc": s.moves.arc, "cycle": s.moves.cycle,
+                   "total": p.move_count(), "five_axis": s.five_axis_moves },
+        "bounds": bounds_json(&s.bounds),
+        "length_mm": { "cutting": s.cutting_mm, "rapid": s.rapid_mm },
+        "time_s": s.time_s,
+        "diagnostics": diags,
+    })
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    let input = read_any(&a.file, read_options(a.units, None))?;
+    match input {
+        Input::Program(parsed) => {
+            print_diagnostics(&a.file, &parsed.diagnostics, a.quiet || a.json);
+            let p = &parsed.program;
+            if a.ir {
+                print!("{}", millplan_nc::text::print(p));
+                return Ok(EXIT_OK);
+            }
+            let j = program_json(p, parsed.diagnostics.len(), a.rapid_rate);
+            if a.json {
+                println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+            } else {
+                print_program(&a.file, p, &j);
+            }
+        }
+        Input::Mesh(mesh, r) => {
+            let b = mesh.bounds();
+            let size = b.size();
+            let guess = if size.max_element() < 30.0 {
+                "inch (guess: the part is under 30 units across)"
+            } else {
+                "mm"
+            };
+            let j = json!({
+                "format": "stl",
+                "encoding": match r.format { millplan_geom::stl::StlFormat::Binary => "binary", _ => "ascii" },
+                "header": r.header,
+                "triangles": mesh.len(),
+                "facets_in_file": r.facets_in_file,
+                "vertices": mesh.vertices.len(),
+                "degenerate": r.degenerate,
+                "open_edges": r.edges.open,
+                "non_manifold_edges": r.edges.non_manifold,
+                "zero_normals": r.zero_normals,
+                "flipped_normals": r.flipped_normals,
+                "trailing_bytes": r.trailing_bytes,
+                "bounds": bounds_json(&b),
+                "units_guess": if size.max_element() < 30.0 { "inch" } else { "mm" },
+            });
+            if a.json {
+                println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+            } else {
+                println!(
+                    "{}: STL ({}), header \"{}\"",
+                    a.file.display(),
+                    j["encoding"].as_str().unwrap_or(""),
+                    r.header
+                );
+                println!(
+                    "  triangles      {} ({} in file, {} degenerate dropped)",
+                    mesh.len(),
+                    r.facets_in_file,
+                    r.degenerate
+                );
+                println!("  vertices       {} after welding", mesh.vertices.len());
+                println!(
+                    "  open edges     {}   non-manifold edges {}",
+                    r.edges.open, r.edges.non_manifold
+                );
+                println!(
+                    "  stored normals {} zero, {} against the vertex order",
+                    r.zero_normals, r.flipped_normals
+                );
+                if r.trailing_bytes > 0 {
+                    println!("  trailing bytes {} after the last facet", r.trailing_bytes);
+                }
+                println!("  bounds         {:.4} .. {:.4}", b.min, b.max);
+                println!(
+                    "  size           {:.4} x {:.4} x {:.4}",
+                    size.x, size.y, size.z
+                );
+                println!("  units          {guess}");
+            }
+        }
+    }
+    Ok(EXIT_OK)
+}
+
+fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
+    println!(
+        "{}: {} ({})",
+        path.display(),
+        j["format"].as_str().unwrap_or(""),
+        p.dialect.name()
+    );
+    println!("  units       {:?} ({:?})", p.units.source, p.units.origin);
+    println!("  operations  {}", p.operations.len());
+    for (i, op) in p.operations.iter().enumerate() {
+        let t = op.tool.as_ref();
+        let tool = match t {
+            Some(t) => {
+                let mut s = format!("T{}", t.number.map(|n| n.to_string()).unwrap_or("?".into()));
+                if let Some(n) = &t.name {
+                    s += &format!(" {n}");
+                }
+                if let Some(c) = &t.cutter {
+                    s += &format!(" {:?} D{:.3} R{:.3}", c.kind, c.d, c.r);
+                }
+                s
+            }
+            None => "no tool".into(),
+        };
+        println!(
+            "    {i:>3} {:<24} {:>8} moves  {tool}",
+            op.name.as_deref().unwrap_or("-"),
+            op.moves.len()
+        );
+    }
+    let m = &j["moves"];
+    println!(
+        "  moves       {} rapid, {} linear, {} arc, {} cycle ({} five-axis)",
+        m["rapid"], m["linear"], m["arc"], m["cycle"], m["five_axis"]
+    );
+    if let Some(b) = j["bounds"].as_object() {
+        println!("  bounds      {} .. {}", b["min"], b["max"]);
+    }
+    println!(
+        "  length      {:.1} mm cutting, {:.1} mm rapid",
+        j["length_mm"]["cutting"].as_f64().unwrap_or(0.0),
+        j["length_mm"]["rapid"].as_f64().unwrap_or(0.0)
+    );
+    let t = j["time_s"].as_f64().unwrap_or(0.0);
+    println!(
+        "  time        {:.0} s ({}:{:02}:{:02}) at programmed feeds",
+        t,
+        (t / 3600.0) as u64,
+        ((t / 60.0) as u64) % 60,
+        (t as u64) % 60
+    );
+}

@@ -1,0 +1,53 @@
+//! Exit codes and the error type every command returns.
+//!
+//! | code | meaning |
+//! |---|---|
+//! | 0 | success |
+//! | 1 | internal failure (a bug, or the system refused: disk full, permission) |
+//! | 2 | bad input or bad arguments: the message says file, line and column |
+//! | 3 | the check ran and found problems (gouges, limits) |
+
+use std::fmt;
+
+pub const EXIT_OK: i32 = 0;
+pub const EXIT_INTERNAL: i32 = 1;
+pub const EXIT_BAD_INPUT: i32 = 2;
+#[allow(dead_code)]
+pub const EXIT_FINDINGS: i32 = 3;
+
+/// A failure with the exit code it maps to.
+#[derive(Debug)]
+pub struct CliError {
+    pub code: i32,
+    pub message: String,
+}
+
+impl CliError {
+    pub fn input(message: impl Into<String>) -> CliError {
+        CliError {
+            code: EXIT_BAD_INPUT,
+            message: message.into(),
+        }
+    }
+
+    pub fn internal(message: impl Into<String>) -> CliError {
+        CliError {
+            code: EXIT_INTERNAL,
+            message: message.into(),
+        }
+    }
+}
+
+impl fmt::Display for CliError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl From<anyhow::Error> for CliError {
+    fn from(e: anyhow::Error) -> Self {
+        CliError::internal(format!("{e:#}"))
+    }
+}
+
+pub type CliResult<T> = Result<T, CliError>;

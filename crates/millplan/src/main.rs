@@ -1,0 +1,58 @@
+//! `millplan`: the command-line front of the planner. The only crate that touches
+//! files, the environment, the terminal and exit codes.
+
+mod cmd;
+mod error;
+mod io;
+mod progress;
+
+use clap::{Parser, Subcommand};
+use error::{EXIT_BAD_INPUT, EXIT_OK};
+
+/// Model-based planner and optimiser for milling NC programs.
+///
+/// millplan reads the toolpath a CAM system wrote (APT/CL or G-code) and the part
+/// (STL), simulates what the machine will do and writes a better NC program.
+///
+/// Exit codes: 0 success; 1 internal failure; 2 bad input or arguments (the
+/// message names file:line:col); 3 a check ran and found problems.
+#[derive(Parser)]
+#[command(name = "millplan", version, about, long_about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    Inspect(cmd::inspect::Args),
+    Convert(cmd::convert::Args),
+    Demo(cmd::demo::Args),
+}
+
+fn main() {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() {
+                EXIT_BAD_INPUT
+            } else {
+                EXIT_OK
+            };
+            let _ = e.print();
+            std::process::exit(code);
+        }
+    };
+    let r = match cli.command {
+        Command::Inspect(a) => cmd::inspect::run(a),
+        Command::Convert(a) => cmd::convert::run(a),
+        Command::Demo(a) => cmd::demo::run(a),
+    };
+    match r {
+        Ok(code) => std::process::exit(code),
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(e.code);
+        }
+    }
+}

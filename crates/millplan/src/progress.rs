@@ -1,0 +1,18 @@
+//! Progress bars (indicatif) for work that can take longer than a second; they draw
+//! on standard error only when it is a terminal.
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// A byte-count bar, shown only for inputs large enough to take a while.
+pub fn bytes(total: u64, what: &str) -> ProgressBar {
+    if total < 32 << 20 {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(total);
+    if let Ok(style) = ProgressStyle::with_template("{msg} [{bar:30}] {bytes}/{total_bytes} {eta}")
+    {
+        bar.set_style(style);
+    }
+    bar.set_message(what.to_string());
+    bar
+}
