@@ -123,7 +123,7 @@ pub fn detect(head: &str) -> Dialect {
     }
     if sinumerik > 2 && sinumerik > linuxcnc {
         Dialect::Sinumerik
-    } else if linuxcnc > 2 {
+    } else if linuxcnc >= 2 {
         Dialect::LinuxCnc
     } else {
         Dialect::Fanuc

@@ -740,7 +740,7 @@ impl AptReader {
                 let b = end - c.centre;
                 (b - c.axis * b.dot(c.axis)).length()
             };
-            let tol = 1e-3_f64.max(1e-5 * arc.radius);
+            let tol = crate::verify::ARC_TOL + 1e-4 * arc.radius;
             if (r_end - arc.radius).abs() > tol {
                 self.diags.warn(
                     "arc-radius",
@@ -786,6 +786,20 @@ impl AptReader {
                     ),
                 );
             }
+        }
+        if m.is_cutting() && self.op.tool.is_none() {
+            self.op.tool = Some(Tool {
+                number: None,
+                name: None,
+                cutter: None,
+                line: ln,
+            });
+            self.diags.warn(
+                "tool-missing",
+                ln,
+                1,
+                "cutting move before any CUTTER, TLDATA or LOADTL: tool unknown",
+            );
         }
         if self.op.moves.is_empty() && self.op.start.is_none() {
             self.op.start = self.pos;
@@ -964,7 +978,7 @@ impl AptReader {
     }
 
     fn check_cutter(&self, c: &Cutter, ln: u32, col: u32) -> Result<(), ParseError> {
-        if !(c.d > 0.0) || c.r < 0.0 || c.r > c.d / 2.0 + 1e-9 || c.h < 0.0 {
+        if !(c.d > 0.0) || c.r < 0.0 || c.r > c.d / 2.0 + 1e-5 * c.d.max(1.0) || c.h < 0.0 {
             return Err(ParseError::new(
                 ln,
                 col,

@@ -22,6 +22,7 @@ pub struct HeidenhainReader {
     pos: DVec3,
     known: bool,
     rotary: [Option<f64>; 3],
+    vector: Option<DVec3>,
     feed: f64,
     feed_seen: bool,
     feed_missing_reported: bool,
@@ -54,6 +55,7 @@ impl HeidenhainReader {
             pos: DVec3::ZERO,
             known: false,
             rotary: [None; 3],
+            vector: None,
             feed: 0.0,
             feed_seen: false,
             feed_missing_reported: false,
@@ -82,12 +84,18 @@ impl HeidenhainReader {
         self.line_no += 1;
         let ln = self.line_no;
         let raw = raw.strip_suffix('\r').unwrap_or(raw);
+        // `~` continues a block on the next line; it may stand after a comment.
+        let (raw, continued) = match raw.trim_end().strip_suffix('~') {
+            Some(r) => (r, true),
+            None => (raw, false),
+        };
         let (content, comment) = match raw.find(';') {
             Some(i) => (&raw[..i], Some(raw[i + 1..].trim())),
             None => (raw, None),
         };
         let content = content.trim_end();
-        if let Some(body) = content.strip_suffix('~') {
+        if continued {
+            let body = content;
             match &mut self.cont {
                 Some((b, _)) => {
                     b.push(' ');
@@ -193,7 +201,7 @@ impl HeidenhainReader {
                 });
                 Ok(())
             }
-            "L" => self.linear(body, &words[1..], ln, col0),
+            "L" | "LN" => self.linear(body, &words[1..], ln, col0),
             "CC" => {
                 // Coordinates a CC does not name keep the previous pole's.
                 let mut p = self.pole.map(|(p, _)| p).unwrap_or([None; 3]);
@@ -346,8 +354,17 @@ impl HeidenhainReader {
         let mut rapid = false;
         let mut machine = false;
         let mut rot = [None; 3];
+        let mut tvec: [Option<f64>; 3] = [None; 3];
         for (k, w) in words.iter().enumerate() {
-            if let Some((axis, v, inc)) = coord(w) {
+            if let Some(t) = ["TX", "TY", "TZ"].iter().position(|p| w.starts_with(p)) {
+                tvec[t] =
+                    Some(parse_num(&w[2..]).ok_or_else(|| {
+                        ParseError::new(ln, col0, format!("`{w}` is not a number"))
+                    })?);
+                any = true;
+            } else if ["NX", "NY", "NZ"].iter().any(|p| w.starts_with(p)) {
+                // Surface normal of 3D radius compensation: not a tool position.
+            } else if let Some((axis, v, inc)) = coord(w) {
                 let v = v * self.scale;
                 end[axis] = if inc { end[axis] + v } else { v };
                 any = true;
@@ -403,7 +420,20 @@ impl HeidenhainReader {
                     self.rotary[k] = *r;
                 }
             }
-            let orient = if self.rotary.iter().any(Option::is_some) {
+            if tvec.iter().any(Option::is_some) {
+                let old = self.vector.unwrap_or(DVec3::Z);
+                let v = DVec3::new(
+                    tvec[0].unwrap_or(old.x),
+                    tvec[1].unwrap_or(old.y),
+                    tvec[2].unwrap_or(old.z),
+                );
+                self.vector = Some(v.try_normalize().ok_or_else(|| {
+                    ParseError::new(ln, col0, "tool vector TX TY TZ has zero length")
+                })?);
+            }
+            let orient = if let Some(v) = self.vector {
+                self.op.intern_orient(Orient::Vector(v))
+            } else if self.rotary.iter().any(Option::is_some) {
                 self.op.intern_orient(Orient::Rotary(self.rotary))
             } else {
                 NO_ORIENT

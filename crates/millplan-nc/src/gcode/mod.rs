@@ -29,6 +29,7 @@ enum Tok {
     Keyword(String),
 }
 
+#[derive(Debug)]
 struct Lexed {
     toks: Vec<(Tok, u32)>,
     comments: Vec<String>,
@@ -1006,7 +1007,8 @@ impl GcodeReader {
                 ));
             }
             let h = (r * r - half * half).max(0.0).sqrt();
-            let mid = a + chord * 0.5;
+            // Back into the plane of the start point.
+            let mid = a + chord * 0.5 + n * start.dot(n);
             let perp = normal.cross(chord).normalize();
             // Positive R: the short way (≤ 180°); negative: the long way.
             if r > 0.0 {
@@ -1024,7 +1026,7 @@ impl GcodeReader {
             let d = end - centre;
             (d - n * d.dot(n)).length()
         };
-        if (r_end - arc.radius).abs() > 2e-3_f64.max(1e-4 * arc.radius) {
+        if (r_end - arc.radius).abs() > crate::verify::ARC_TOL + 1e-4 * arc.radius {
             self.diags.warn(
                 "arc-radius",
                 ln,
@@ -1275,6 +1277,6 @@ mod tests {
     #[test]
     fn letters_in_numbers_are_located() {
         let e = lex("G1 X1.2.5 Y3", 7).expect_err("bad number");
-        assert_eq!((e.line, e.col), (7, 5));
+        assert_eq!((e.line, e.col), (7, 4));
     }
 }
