@@ -84,6 +84,110 @@ impl TriMesh {
         )
     }
 
+    /// Welds a single-precision soup (binary STL) by exact match on the f32 bit
+    /// patterns, with the same result as [`TriMesh::from_soup`]. The corners are
+    /// split by hash into shards welded in parallel, then numbered in file order.
+    pub fn from_f32_soup(soup: &[[[f32; 3]; 3]]) -> (TriMesh, WeldReport) {
+        use std::hash::{BuildHasher, Hash, Hasher};
+        const SHARD_BITS: u32 = 5;
+        const SHARDS: usize = 1 << SHARD_BITS;
+        #[inline]
+        fn key(p: &[f32; 3]) -> [u32; 3] {
+            [
+                (p[0] + 0.0).to_bits(),
+                (p[1] + 0.0).to_bits(),
+                (p[2] + 0.0).to_bits(),
+            ]
+        }
+        let corners: Vec<[u32; 3]> = soup
+            .par_iter()
+            .flat_map_iter(|t| t.iter().map(key))
+            .collect();
+        let hasher = rustc_hash::FxBuildHasher;
+        let shard_of = |k: &[u32; 3]| {
+            let mut h = hasher.build_hasher();
+            k.hash(&mut h);
+            (h.finish() >> (64 - SHARD_BITS)) as usize
+        };
+        let shard: Vec<u8> = corners.par_iter().map(|k| shard_of(k) as u8).collect();
+        let mut lists: Vec<Vec<u32>> = (0..SHARDS)
+            .map(|_| Vec::with_capacity(corners.len() / SHARDS + 16))
+            .collect();
+        for (i, s) in shard.iter().enumerate() {
+            lists[*s as usize].push(i as u32);
+        }
+        // Weld each shard on its own: local ids in the order corners appear.
+        let local: Vec<(Vec<u32>, Vec<u32>)> = lists
+            .par_iter()
+            .map(|list| {
+                let mut map: FxHashMap<[u32; 3], u32> = FxHashMap::default();
+                map.reserve(list.len() / 4);
+                let mut ids = Vec::with_capacity(list.len());
+                let mut firsts = Vec::new();
+                for &i in list {
+                    let next = firsts.len() as u32;
+                    let id = *map.entry(corners[i as usize]).or_insert_with(|| {
+                        firsts.push(i);
+                        next
+                    });
+                    ids.push(id);
+                }
+                (ids, firsts)
+            })
+            .collect();
+        drop(lists);
+        // Number vertices globally in order of first appearance.
+        let mut global: Vec<Vec<u32>> =
+            local.iter().map(|(_, f)| vec![u32::MAX; f.len()]).collect();
+        let mut cursor = [0usize; SHARDS];
+        let mut vertices: Vec<DVec3> = Vec::with_capacity(soup.len() / 2 + 16);
+        let mut corner_id = vec![0u32; corners.len()];
+        for (i, k) in corners.iter().enumerate() {
+            let s = shard[i] as usize;
+            let l = local[s].0[cursor[s]] as usize;
+            cursor[s] += 1;
+            if global[s][l] == u32::MAX {
+                global[s][l] = vertices.len() as u32;
+                vertices.push(DVec3::new(
+                    f32::from_bits(k[0]) as f64,
+                    f32::from_bits(k[1]) as f64,
+                    f32::from_bits(k[2]) as f64,
+                ));
+            }
+            corner_id[i] = global[s][l];
+        }
+        let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(soup.len());
+        let mut degenerate = 0;
+        for c in corner_id.chunks_exact(3) {
+            let idx = [c[0], c[1], c[2]];
+            if idx[0] == idx[1] || idx[1] == idx[2] || idx[0] == idx[2] {
+                degenerate += 1;
+                continue;
+            }
+            let (a, b, cc) = (
+                vertices[c[0] as usize],
+                vertices[c[1] as usize],
+                vertices[c[2] as usize],
+            );
+            if (b - a).cross(cc - a).length_squared() == 0.0 {
+                degenerate += 1;
+                continue;
+            }
+            triangles.push(idx);
+        }
+        let report = WeldReport {
+            degenerate,
+            vertices: vertices.len(),
+        };
+        (
+            TriMesh {
+                vertices,
+                triangles,
+            },
+            report,
+        )
+    }
+
     pub fn len(&self) -> usize {
         self.triangles.len()
     }
@@ -201,6 +305,21 @@ mod tests {
         crate::assert_near!(m.area(), 6.0, 1e-12);
         // Outward normals: the bottom face points down.
         crate::assert_near!(m.facet_normal(0), DVec3::new(0., 0., -1.), 1e-12);
+    }
+
+    #[test]
+    fn f32_weld_matches_f64_weld() {
+        let soup = cube_soup();
+        let s32: Vec<[[f32; 3]; 3]> = soup
+            .iter()
+            .map(|t| t.map(|p| [p.x as f32, p.y as f32, p.z as f32]))
+            .collect();
+        let (a, ra) = TriMesh::from_soup(&soup);
+        let (b, rb) = TriMesh::from_f32_soup(&s32);
+        assert_eq!(
+            (ra, a.triangles.clone(), a.vertices.clone()),
+            (rb, b.triangles, b.vertices)
+        );
     }
 
     #[test]

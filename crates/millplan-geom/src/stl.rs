@@ -137,26 +137,27 @@ fn header_text(h: &[u8]) -> String {
 }
 
 fn read_binary(bytes: &[u8], n: usize, trailing: usize) -> Result<(TriMesh, StlReport), StlError> {
-    let mut soup: Vec<[DVec3; 3]> = Vec::with_capacity(n);
+    let mut soup: Vec<[[f32; 3]; 3]> = Vec::with_capacity(n);
     let mut normals = NormalCheck::default();
     let body = &bytes[84..84 + 50 * n];
     #[inline]
-    fn f(b: &[u8], at: usize) -> f64 {
-        f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]) as f64
+    fn f(b: &[u8], at: usize) -> f32 {
+        f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
     }
     for (i, rec) in body.chunks_exact(50).enumerate() {
-        let v = |k: usize| DVec3::new(f(rec, 12 * k), f(rec, 12 * k + 4), f(rec, 12 * k + 8));
+        let v = |k: usize| [f(rec, 12 * k), f(rec, 12 * k + 4), f(rec, 12 * k + 8)];
         let tri = [v(1), v(2), v(3)];
-        if !tri.iter().all(|p| p.is_finite()) {
+        if !tri.iter().flatten().all(|c| c.is_finite()) {
             return Err(StlError {
                 location: StlLocation::Byte((84 + 50 * i) as u64),
                 message: format!("facet {} has a non-finite coordinate", i + 1),
             });
         }
-        normals.check(v(0), &tri);
+        let d = |p: [f32; 3]| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+        normals.check(d(v(0)), &[d(tri[0]), d(tri[1]), d(tri[2])]);
         soup.push(tri);
     }
-    let (mesh, weld) = TriMesh::from_soup(&soup);
+    let (mesh, weld) = TriMesh::from_f32_soup(&soup);
     drop(soup);
     let edges = mesh.edge_report();
     let report = StlReport {

@@ -91,9 +91,8 @@ pub fn verify(p: &Program) -> Result<(), Vec<Violation>> {
                         bad(Some(i), "arc without a known start point".into());
                         continue;
                     };
-                    if !(a.radius > 0.0)
-                        || !(a.sweep > 0.0 && a.sweep <= std::f64::consts::TAU + 1e-9)
-                    {
+                    let sweep_ok = a.sweep > 0.0 && a.sweep <= std::f64::consts::TAU + 1e-9;
+                    if !(a.radius > 0.0 && sweep_ok) {
                         bad(
                             Some(i),
                             format!("arc radius {} sweep {}", a.radius, a.sweep),
@@ -123,10 +122,8 @@ pub fn verify(p: &Program) -> Result<(), Vec<Violation>> {
                         bad(Some(i), "arc sweep does not reach its end point".into());
                     }
                 }
-                MoveKind::Cycle => {
-                    if op.cycles.get(m.aux as usize).is_none() {
-                        bad(Some(i), "cycle index out of range".into());
-                    }
+                MoveKind::Cycle if op.cycles.get(m.aux as usize).is_none() => {
+                    bad(Some(i), "cycle index out of range".into());
                 }
                 _ => {}
             }

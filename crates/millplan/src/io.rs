@@ -111,7 +111,7 @@ pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
         }
         line_no += 1;
         done += n as u64;
-        if line_no % 65536 == 0 {
+        if line_no.is_multiple_of(65536) {
             bar.set_position(done);
         }
         if buf.last() == Some(&b'\n') {

@@ -894,13 +894,13 @@ impl GcodeReader {
             }
         }
         if has_rot {
-            for k in 0..3 {
-                if let Some(v) = rot[k] {
+            for (slot, r) in self.rotary.iter_mut().zip(rot) {
+                if let Some(v) = r {
                     let v = v.to_radians();
-                    self.rotary[k] = Some(if self.absolute {
+                    *slot = Some(if self.absolute {
                         v
                     } else {
-                        self.rotary[k].unwrap_or(0.0) + v
+                        slot.unwrap_or(0.0) + v
                     });
                 }
             }

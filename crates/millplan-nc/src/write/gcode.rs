@@ -400,10 +400,9 @@ impl W<'_> {
                     }
                 }
             }
-            Some(Orient::Vector(v)) if is_5axis(op) => {
-                if self.vec != Some(*v) {
-                    let f = self.vecf;
-                    match self.o.dialect {
+            Some(Orient::Vector(v)) if is_5axis(op) && self.vec != Some(*v) => {
+                let f = self.vecf;
+                match self.o.dialect {
                         Dialect::Sinumerik => {
                             self.word("A3=", v.x, f);
                             self.word("B3=", v.y, f);
@@ -428,8 +427,7 @@ impl W<'_> {
                             self.word("K", v.z, f);
                         }
                     }
-                    self.vec = Some(*v);
-                }
+                self.vec = Some(*v);
             }
             _ => {}
         }

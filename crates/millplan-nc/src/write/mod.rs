@@ -51,7 +51,7 @@ impl NumFmt {
         }
         let mut d = self.decimals;
         let mut frac = n;
-        while d > 0 && frac % 10 == 0 {
+        while d > 0 && frac.is_multiple_of(10) {
             frac /= 10;
             d -= 1;
         }

@@ -25,12 +25,12 @@ impl From<UnitArg> for LengthUnit {
 
 /// Reader options from the common flags.
 pub fn read_options(units: Option<UnitArg>, feed: Option<f64>) -> ReadOptions {
-    let mut o = ReadOptions::default();
-    o.units = units.map(Into::into);
-    if let Some(f) = feed {
-        o.default_feed = f;
+    let d = ReadOptions::default();
+    ReadOptions {
+        units: units.map(Into::into),
+        default_feed: feed.unwrap_or(d.default_feed),
+        ..d
     }
-    o
 }
 
 /// Prints a program's diagnostics to standard error, prefixed with the file name.

@@ -1,0 +1,22 @@
+//! Writes the benchmark inputs to a folder: `big.apt` (1,000,000 GOTOs) and
+//! `big.stl` (2,000,000 triangles), for whole-command timing and peak memory
+//! (`/usr/bin/time -v millplan inspect big.apt`).
+
+fn main() {
+    let dir = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "bench-inputs".into());
+    let dir = std::path::Path::new(&dir);
+    if let Err(e) = std::fs::create_dir_all(dir)
+        .and_then(|_| std::fs::write(dir.join("big.apt"), millplan_bench::big_apt(1_000_000)))
+        .and_then(|_| std::fs::write(dir.join("big.stl"), millplan_bench::big_stl(2_000_000)))
+    {
+        eprintln!("error: {}: {e}", dir.display());
+        std::process::exit(1);
+    }
+    println!(
+        "wrote {}/big.apt and {}/big.stl",
+        dir.display(),
+        dir.display()
+    );
+}

@@ -1,0 +1,65 @@
+//! Realistic large inputs for benchmarks: a finishing-path APT file of n GOTOs
+//! over the demo surface, a binary STL of a finely tessellated surface, and the
+//! same path as an in-memory program.
+
+use millplan_geom::analytic::{tessellate, DemoSurface, HeightField};
+use millplan_geom::stl::write_binary_stl;
+use millplan_nc::{Cutter, Dialect, Move, Operation, Program, Tool};
+use std::fmt::Write;
+
+/// Tool-tip points of a zig-zag raster with `n` points over the 60 mm demo surface.
+fn raster_points(n: usize) -> impl Iterator<Item = (f64, f64, f64)> {
+    let s = DemoSurface::default();
+    let per_row = 2000usize;
+    (0..n).map(move |i| {
+        let row = i / per_row;
+        let k = i % per_row;
+        let k = if row % 2 == 0 { k } else { per_row - 1 - k };
+        let x = 60.0 * k as f64 / per_row as f64;
+        let y = (row as f64 * 0.03) % 60.0;
+        (x, y, s.z(x, y))
+    })
+}
+
+/// An ISO APT file with `n` GOTO records (about 28 bytes each).
+pub fn big_apt(n: usize) -> String {
+    let mut s = String::with_capacity(n * 30 + 256);
+    s.push_str("PARTNO BENCH\nUNITS/MM\nCUTTER/10,5,0,5,0,0,50\nLOADTL/1\nSPINDL/8000,RPM,CLW\nFEDRAT/2000,MMPM\n");
+    for (x, y, z) in raster_points(n) {
+        let _ = writeln!(s, "GOTO/{x:.4},{y:.4},{z:.4}");
+    }
+    s.push_str("FINI\n");
+    s
+}
+
+/// A binary STL of the demo surface with about `triangles` facets.
+pub fn big_stl(triangles: usize) -> Vec<u8> {
+    let cells = ((triangles / 2) as f64).sqrt().round().max(1.0);
+    let mesh = tessellate(&DemoSurface::default(), 60.0 / cells);
+    let mut out = Vec::new();
+    write_binary_stl(&mesh, "solid millplan bench", &mut out);
+    out
+}
+
+/// The raster as a program with `n` linear moves, for writer benchmarks.
+pub fn big_program(n: usize) -> Program {
+    let mut op = Operation {
+        tool: Some(Tool {
+            number: Some(1),
+            name: None,
+            cutter: Some(Cutter::ball(10.0)),
+            line: 0,
+        }),
+        ..Operation::default()
+    };
+    op.moves.reserve(n);
+    for (i, (x, y, z)) in raster_points(n).enumerate() {
+        // Spindle varies per point, as after constant-cutting-speed control.
+        let mut m = Move::linear(millplan_geom::DVec3::new(x, y, z), 2000.0);
+        m.spindle = 6000.0 + (i % 97) as f64 * 10.0;
+        op.moves.push(m);
+    }
+    let mut p = Program::new(Dialect::AptIso);
+    p.operations.push(op);
+    p
+}

@@ -1,0 +1,269 @@
+//! The CLI through the real binary: exit codes, JSON keys, atomic outputs.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_millplan"))
+}
+
+fn data_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data")
+}
+
+fn golden(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../millplan-nc/tests/golden")
+        .join(name)
+}
+
+fn json(args: &[&str]) -> serde_json::Value {
+    let out = bin().args(args).output().expect("runs");
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("json")
+}
+
+#[test]
+fn inspect_json_on_every_shared_file() {
+    let Ok(dirs) = std::fs::read_dir(data_dir()) else {
+        eprintln!("skipped: shared/data not present");
+        return;
+    };
+    let mut n = 0;
+    for d in dirs.flatten() {
+        for f in std::fs::read_dir(d.path()).expect("dir").flatten() {
+            let p = f.path();
+            let name = p
+                .file_name()
+                .and_then(|s| s.to_str())
+                .unwrap_or("")
+                .to_string();
+            // Documentation, the CAMotics project file, tool lists and KRL robot
+            // programs (read by the robot issue) are not NC programs or meshes.
+            if name == "PROVENANCE.md"
+                || name.ends_with(".camotics")
+                || name.ends_with(".csv")
+                || name.ends_with(".txt") && name.contains("Tool_List")
+                || name.ends_with(".SRC")
+            {
+                continue;
+            }
+            let j = json(&["inspect", "--json", p.to_str().expect("utf8")]);
+            n += 1;
+            if j["format"] == "stl" {
+                for k in ["triangles", "degenerate", "open_edges", "bounds"] {
+                    assert!(!j[k].is_null(), "{name}: {k}");
+                }
+            } else {
+                for k in [
+                    "format",
+                    "units",
+                    "tools",
+                    "moves",
+                    "bounds",
+                    "length_mm",
+                    "time_s",
+                ] {
+                    assert!(!j[k].is_null(), "{name}: {k}");
+                }
+                for k in ["rapid", "linear", "arc"] {
+                    assert!(j["moves"][k].is_u64(), "{name}: moves.{k}");
+                }
+                assert!(
+                    j["length_mm"]["cutting"].is_number() && j["length_mm"]["rapid"].is_number()
+                );
+            }
+        }
+    }
+    assert!(n >= 25, "{n} files inspected");
+}
+
+#[test]
+fn inspect_counts_the_interface_glue_pair() {
+    let apt = data_dir().join("swcam-apt-stl-pairs/Interface-glue.apt");
+    if !apt.exists() {
+        return;
+    }
+    let j = json(&["inspect", "--json", apt.to_str().expect("utf8")]);
+    let m = &j["moves"];
+    let total = m["rapid"].as_u64().unwrap_or(0)
+        + m["linear"].as_u64().unwrap_or(0)
+        + m["arc"].as_u64().unwrap_or(0)
+        + m["cycle"].as_u64().unwrap_or(0);
+    assert_eq!(total, 6311);
+    assert_eq!(m["arc"], 50);
+    let stl = data_dir().join("swcam-apt-stl-pairs/Interface-glue.STL");
+    let j = json(&["inspect", "--json", stl.to_str().expect("utf8")]);
+    assert_eq!(
+        (j["encoding"].as_str(), j["triangles"].as_u64()),
+        (Some("binary"), Some(1652))
+    );
+    // formats.md: bbox [10,10,-30]..[125,125,-1] (single-precision file).
+    let want = [[10.0, 10.0, -30.0], [125.0, 125.0, -1.0]];
+    for (k, w) in ["min", "max"].iter().zip(want) {
+        for (a, b) in j["bounds"][k].as_array().expect("bounds").iter().zip(w) {
+            assert!(
+                (a.as_f64().unwrap_or(f64::NAN) - b).abs() < 1e-4,
+                "{k}: {a} vs {b}"
+            );
+        }
+    }
+}
+
+fn fails_with_2(args: &[&str], needle: &str) {
+    let out = bin().args(args).output().expect("runs");
+    assert_eq!(out.status.code(), Some(2), "{args:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(needle), "{args:?}: {err}");
+}
+
+#[test]
+fn bad_inputs_exit_2_with_location_and_leave_no_output() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let w = |name: &str, bytes: &[u8]| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, bytes).expect("write");
+        p
+    };
+    let truncated = w("t.apt", b"UNITS/MM\nFEDRAT/100,MMPM\nGOTO/1,2\n");
+    let letters = w("l.nc", b"G21\nT1 M6\nG1 X1..2 F100\n");
+    let empty = w("e.apt", b"");
+    let mut stl = vec![0u8; 84 + 50];
+    stl[80] = 7; // claims 7 facets, holds 1
+    let stl = w("bad.stl", &stl);
+    let out = dir.path().join("out.nc");
+    let o = out.to_str().expect("utf8");
+    fails_with_2(
+        &[
+            "convert",
+            truncated.to_str().expect("utf8"),
+            "--to",
+            "fanuc",
+            "-o",
+            o,
+        ],
+        "t.apt:3:6:",
+    );
+    fails_with_2(
+        &[
+            "convert",
+            letters.to_str().expect("utf8"),
+            "--to",
+            "fanuc",
+            "-o",
+            o,
+        ],
+        "l.nc:3:",
+    );
+    fails_with_2(&["inspect", empty.to_str().expect("utf8")], "e.apt:1:1:");
+    fails_with_2(
+        &["inspect", stl.to_str().expect("utf8")],
+        "bad.stl:byte 80:",
+    );
+    fails_with_2(
+        &[
+            "inspect",
+            dir.path().join("missing.apt").to_str().expect("utf8"),
+        ],
+        "cannot open",
+    );
+    fails_with_2(&["convert", "--bogus"], "");
+    assert!(!out.exists(), "a failed run left an output");
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .expect("dir")
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().starts_with(".millplan"))
+        .collect();
+    assert!(leftovers.is_empty());
+}
+
+#[test]
+fn convert_refuses_to_overwrite_its_input_and_round_trips() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let src = dir.path().join("in.apt");
+    std::fs::copy(golden("solidworks.apt"), &src).expect("copy");
+    let before = std::fs::read(&src).expect("read");
+    let s = src.to_str().expect("utf8");
+    fails_with_2(
+        &["convert", s, "--to", "apt", "-o", s],
+        "refusing to overwrite",
+    );
+    assert_eq!(
+        std::fs::read(&src).expect("read"),
+        before,
+        "input untouched"
+    );
+    for (to, ext) in [
+        ("fanuc", "nc"),
+        ("sinumerik", "mpf"),
+        ("heidenhain", "h"),
+        ("linuxcnc", "ngc"),
+        ("apt", "apt"),
+    ] {
+        let out = dir.path().join(format!("out.{ext}"));
+        let st = bin()
+            .args(["convert", s, "--to", to, "-o", out.to_str().expect("utf8")])
+            .status()
+            .expect("runs");
+        assert!(st.success(), "{to}");
+        let j = json(&["inspect", "--json", out.to_str().expect("utf8")]);
+        assert_eq!(j["units"], "mm", "{to}");
+        assert!(j["moves"]["linear"].as_u64().unwrap_or(0) >= 1, "{to}");
+    }
+}
+
+#[test]
+fn demo_runs_and_its_outputs_read() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("demo");
+    let st = bin()
+        .args(["demo", "-o", out.to_str().expect("utf8")])
+        .status()
+        .expect("runs");
+    assert!(st.success());
+    let stl = json(&[
+        "inspect",
+        "--json",
+        out.join("part.stl").to_str().expect("utf8"),
+    ]);
+    assert_eq!(stl["triangles"], 28800);
+    let apt = json(&[
+        "inspect",
+        "--json",
+        out.join("finish.apt").to_str().expect("utf8"),
+    ]);
+    for f in [
+        "finish_fanuc.nc",
+        "finish_sinumerik.mpf",
+        "finish_heidenhain.h",
+        "finish_linuxcnc.ngc",
+    ] {
+        let g = json(&["inspect", "--json", out.join(f).to_str().expect("utf8")]);
+        assert_eq!(g["moves"]["linear"], apt["moves"]["linear"], "{f}");
+    }
+}
+
+#[test]
+fn help_explains_every_command() {
+    for c in ["inspect", "convert", "demo"] {
+        let out = bin().args([c, "--help"]).output().expect("runs");
+        assert!(out.status.success());
+        assert!(String::from_utf8_lossy(&out.stdout).len() > 200, "{c}");
+    }
+}
+
+#[test]
+fn crate_dependencies_point_one_way() {
+    // ARCHITECTURE.md: geom <- nc <- binary; libraries never depend on the binary.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let deps =
+        |c: &str| std::fs::read_to_string(root.join(c).join("Cargo.toml")).expect("manifest");
+    let geom = deps("millplan-geom");
+    assert!(!geom.contains("millplan-nc") && !geom.contains("millplan.workspace"));
+    let nc = deps("millplan-nc");
+    assert!(nc.contains("millplan-geom") && !nc.contains("clap") && !nc.contains("tempfile"));
+}
