@@ -88,7 +88,7 @@ impl TriMesh {
     /// patterns, with the same result as [`TriMesh::from_soup`]. The corners are
     /// split by hash into shards welded in parallel, then numbered in file order.
     pub fn from_f32_soup(soup: &[[[f32; 3]; 3]]) -> (TriMesh, WeldReport) {
-        use std::hash::{BuildHasher, Hash, Hasher};
+        use std::hash::BuildHasher;
         const SHARD_BITS: u32 = 5;
         const SHARDS: usize = 1 << SHARD_BITS;
         #[inline]
@@ -104,11 +104,7 @@ impl TriMesh {
             .flat_map_iter(|t| t.iter().map(key))
             .collect();
         let hasher = rustc_hash::FxBuildHasher;
-        let shard_of = |k: &[u32; 3]| {
-            let mut h = hasher.build_hasher();
-            k.hash(&mut h);
-            (h.finish() >> (64 - SHARD_BITS)) as usize
-        };
+        let shard_of = |k: &[u32; 3]| (hasher.hash_one(k) >> (64 - SHARD_BITS)) as usize;
         let shard: Vec<u8> = corners.par_iter().map(|k| shard_of(k) as u8).collect();
         let mut lists: Vec<Vec<u32>> = (0..SHARDS)
             .map(|_| Vec::with_capacity(corners.len() / SHARDS + 16))
