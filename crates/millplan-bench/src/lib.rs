@@ -14,7 +14,11 @@ fn raster_points(n: usize) -> impl Iterator<Item = (f64, f64, f64)> {
     (0..n).map(move |i| {
         let row = i / per_row;
         let k = i % per_row;
-        let k = if row % 2 == 0 { k } else { per_row - 1 - k };
+        let k = if row.is_multiple_of(2) {
+            k
+        } else {
+            per_row - 1 - k
+        };
         let x = 60.0 * k as f64 / per_row as f64;
         let y = (row as f64 * 0.03) % 60.0;
         (x, y, s.z(x, y))
