@@ -521,16 +521,27 @@ impl HeidenhainReader {
                     self.pole_named[*a] && self.pole_named[*b] && !self.pole_named[*n]
                 })
                 .collect();
-            let mut choice = None;
+            // Among those, the plane in which start and end are equally far from
+            // the centre (NX writes CC X.. Y.. Z.. for arcs in the ZX and YZ planes).
+            let mut choice: Option<((usize, usize, usize), f64)> = None;
             for (nax, a, b) in named.into_iter().chain(planes) {
                 if let (Some(ca), Some(cb)) = (p[a], p[b]) {
-                    let off = ((start[a] - ca).powi(2) + (start[b] - cb).powi(2)).sqrt();
-                    if off > 1e-9 {
-                        choice = Some((nax, a, b));
+                    let rs = ((start[a] - ca).powi(2) + (start[b] - cb).powi(2)).sqrt();
+                    let re = ((end[a] - ca).powi(2) + (end[b] - cb).powi(2)).sqrt();
+                    if rs <= 1e-9 {
+                        continue;
+                    }
+                    let miss = (rs - re).abs();
+                    if miss <= crate::verify::ARC_TOL + 1e-4 * rs {
+                        choice = Some(((nax, a, b), miss));
                         break;
+                    }
+                    if choice.map(|(_, m)| miss < m).unwrap_or(true) {
+                        choice = Some(((nax, a, b), miss));
                     }
                 }
             }
+            let choice = choice.map(|(c, _)| c);
             let (nax, a, b) = choice.ok_or_else(|| {
                 ParseError::new(
                     ln,
