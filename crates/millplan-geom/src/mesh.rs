@@ -85,24 +85,22 @@ impl TriMesh {
     }
 
     /// Welds a single-precision soup (binary STL) by exact match on the f32 bit
-    /// patterns, with the same result as [`TriMesh::from_soup`]. The corners are
-    /// split by hash into shards welded in parallel, then numbered in file order.
+    /// patterns, with the same result as [`TriMesh::from_soup`].
     pub fn from_f32_soup(soup: &[[[f32; 3]; 3]]) -> (TriMesh, WeldReport) {
+        let corners: Vec<[u32; 3]> = soup
+            .par_iter()
+            .flat_map_iter(|t| t.iter().map(|p| p.map(|c| (c + 0.0).to_bits())))
+            .collect();
+        TriMesh::from_f32_corners(corners)
+    }
+
+    /// Welds triangle corners given as f32 bit patterns (three corners per
+    /// triangle; `-0.0` already folded to `+0.0`). The corners are split by hash
+    /// into shards welded in parallel, then vertices are numbered in file order.
+    pub fn from_f32_corners(corners: Vec<[u32; 3]>) -> (TriMesh, WeldReport) {
         use std::hash::BuildHasher;
         const SHARD_BITS: u32 = 5;
         const SHARDS: usize = 1 << SHARD_BITS;
-        #[inline]
-        fn key(p: &[f32; 3]) -> [u32; 3] {
-            [
-                (p[0] + 0.0).to_bits(),
-                (p[1] + 0.0).to_bits(),
-                (p[2] + 0.0).to_bits(),
-            ]
-        }
-        let corners: Vec<[u32; 3]> = soup
-            .par_iter()
-            .flat_map_iter(|t| t.iter().map(key))
-            .collect();
         let hasher = rustc_hash::FxBuildHasher;
         let shard_of = |k: &[u32; 3]| (hasher.hash_one(k) >> (64 - SHARD_BITS)) as usize;
         let shard: Vec<u8> = corners.par_iter().map(|k| shard_of(k) as u8).collect();
@@ -136,7 +134,7 @@ impl TriMesh {
         let mut global: Vec<Vec<u32>> =
             local.iter().map(|(_, f)| vec![u32::MAX; f.len()]).collect();
         let mut cursor = [0usize; SHARDS];
-        let mut vertices: Vec<DVec3> = Vec::with_capacity(soup.len() / 2 + 16);
+        let mut vertices: Vec<DVec3> = Vec::with_capacity(corners.len() / 6 + 16);
         let mut corner_id = vec![0u32; corners.len()];
         for (i, k) in corners.iter().enumerate() {
             let s = shard[i] as usize;
@@ -152,7 +150,11 @@ impl TriMesh {
             }
             corner_id[i] = global[s][l];
         }
-        let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(soup.len());
+        drop(local);
+        drop(global);
+        drop(shard);
+        drop(corners);
+        let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(corner_id.len() / 3);
         let mut degenerate = 0;
         for c in corner_id.chunks_exact(3) {
             let idx = [c[0], c[1], c[2]];

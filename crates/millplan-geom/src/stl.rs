@@ -137,7 +137,7 @@ fn header_text(h: &[u8]) -> String {
 }
 
 fn read_binary(bytes: &[u8], n: usize, trailing: usize) -> Result<(TriMesh, StlReport), StlError> {
-    let mut soup: Vec<[[f32; 3]; 3]> = Vec::with_capacity(n);
+    let mut corners: Vec<[u32; 3]> = Vec::with_capacity(3 * n);
     let mut normals = NormalCheck::default();
     let body = &bytes[84..84 + 50 * n];
     #[inline]
@@ -155,10 +155,10 @@ fn read_binary(bytes: &[u8], n: usize, trailing: usize) -> Result<(TriMesh, StlR
         }
         let d = |p: [f32; 3]| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
         normals.check(d(v(0)), &[d(tri[0]), d(tri[1]), d(tri[2])]);
-        soup.push(tri);
+        // -0.0 and +0.0 are one coordinate.
+        corners.extend(tri.iter().map(|p| p.map(|c| (c + 0.0).to_bits())));
     }
-    let (mesh, weld) = TriMesh::from_f32_soup(&soup);
-    drop(soup);
+    let (mesh, weld) = TriMesh::from_f32_corners(corners);
     let edges = mesh.edge_report();
     let report = StlReport {
         format: StlFormat::Binary,
