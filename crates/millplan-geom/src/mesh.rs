@@ -49,8 +49,7 @@ impl TriMesh {
         let mut map: FxHashMap<[u64; 3], u32> = FxHashMap::default();
         map.reserve(soup.len() / 2 + 16);
         let mut vertices: Vec<DVec3> = Vec::with_capacity(soup.len() / 2 + 16);
-        let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(soup.len());
-        let mut degenerate = 0;
+        let mut corner_tris: Vec<[u32; 3]> = Vec::with_capacity(soup.len());
         for tri in soup {
             let mut idx = [0u32; 3];
             for (slot, p) in idx.iter_mut().zip(tri) {
@@ -60,19 +59,29 @@ impl TriMesh {
                     next
                 });
             }
-            if idx[0] == idx[1] || idx[1] == idx[2] || idx[0] == idx[2] {
-                degenerate += 1;
-                continue;
-            }
-            let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-            if n.length_squared() == 0.0 {
-                degenerate += 1;
-                continue;
-            }
-            triangles.push(idx);
+            corner_tris.push(idx);
         }
+        Self::assemble(vertices, corner_tris)
+    }
+
+    /// The mesh from welded vertices and corner indices, dropping degenerate
+    /// facets (repeated vertex or zero area).
+    fn assemble(vertices: Vec<DVec3>, corner_tris: Vec<[u32; 3]>) -> (TriMesh, WeldReport) {
+        let mut triangles = corner_tris;
+        let before = triangles.len();
+        triangles.retain(|&[a, b, c]| {
+            if a == b || b == c || a == c {
+                return false;
+            }
+            let (pa, pb, pc) = (
+                vertices[a as usize],
+                vertices[b as usize],
+                vertices[c as usize],
+            );
+            (pb - pa).cross(pc - pa).length_squared() != 0.0
+        });
         let report = WeldReport {
-            degenerate,
+            degenerate: before - triangles.len(),
             vertices: vertices.len(),
         };
         (
@@ -154,36 +163,12 @@ impl TriMesh {
         drop(global);
         drop(shard);
         drop(corners);
-        let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(corner_id.len() / 3);
-        let mut degenerate = 0;
-        for c in corner_id.chunks_exact(3) {
-            let idx = [c[0], c[1], c[2]];
-            if idx[0] == idx[1] || idx[1] == idx[2] || idx[0] == idx[2] {
-                degenerate += 1;
-                continue;
-            }
-            let (a, b, cc) = (
-                vertices[c[0] as usize],
-                vertices[c[1] as usize],
-                vertices[c[2] as usize],
-            );
-            if (b - a).cross(cc - a).length_squared() == 0.0 {
-                degenerate += 1;
-                continue;
-            }
-            triangles.push(idx);
-        }
-        let report = WeldReport {
-            degenerate,
-            vertices: vertices.len(),
-        };
-        (
-            TriMesh {
-                vertices,
-                triangles,
-            },
-            report,
-        )
+        let corner_tris: Vec<[u32; 3]> = corner_id
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        drop(corner_id);
+        Self::assemble(vertices, corner_tris)
     }
 
     pub fn len(&self) -> usize {
