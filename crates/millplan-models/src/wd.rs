@@ -1,0 +1,600 @@
+//! Working diameter of a ball-end mill in 3-axis finishing (paper 000, theses 1–4;
+//! spec `working-diameter.md` §1, a reconstruction that is the contract here).
+//!
+//! In the local frame of the contact point — feed direction t, uncut side s,
+//! surface normal n — a ball direction d = (d_t, d_s, d_n) is engaged when
+//!
+//! - (E1) it lies in the stock layer of thickness ap: d_n ≤ −cos θ, cos θ = 1 − 2ap/D;
+//! - (E2) it is on the leading half: d_t ≥ 0;
+//! - (E3) the neighbouring pass at distance ae on side −s did not remove it:
+//!   2R·ae·d_s + ae² − R²·d_t² ≥ 0 (and its mirror when both neighbours are cut).
+//!
+//! The working diameter is the tool diameter at the highest engaged point:
+//! h* = max d·k over E, D_w = D·√(1 − h*²) (D when h* ≥ 0). The maximum of the
+//! linear objective lies on the boundary of E, made of the cap rim (B1), the front
+//! great circle (B2) and the curve where E3 is tight (B3); B1 and B2 are solved in
+//! closed form and B3 by sampling plus golden-section refinement
+//! ([`working_diameter`]). [`brute_force`] samples the cap and is the test reference.
+
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// Which side of the feed the not-yet-machined material is on, seen from outside
+/// the material. With M3, uncut material on the right is climb (down) milling.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Side {
+    Left,
+    Right,
+}
+
+/// Which neighbouring passes are already machined.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Neighbour {
+    /// First or isolated pass (ae = ∞).
+    None,
+    /// A machined pass at distance `ae` (mm, along the surface) on the side
+    /// opposite the uncut side.
+    One(f64),
+    /// Both sides machined at distance `ae` (a pass filled in between two others).
+    Both(f64),
+}
+
+/// One evaluation case, in mm and radians.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Case {
+    /// Ball diameter.
+    pub d: f64,
+    /// Stock thickness along the normal.
+    pub ap: f64,
+    pub neighbour: Neighbour,
+    /// Surface inclination α = arccos(n·k), 0 ≤ α < π/2.
+    pub alpha: f64,
+    /// Feed direction relative to the uphill direction, 0 = uphill, ±π = downhill,
+    /// positive counter-clockwise seen from outside the material.
+    pub af: f64,
+    /// Uncut side.
+    pub side: Side,
+}
+
+impl Case {
+    /// Components (k_t, k_s, k_n) of the tool axis in the local frame.
+    pub fn axis_local(&self) -> (f64, f64, f64) {
+        let (sa, ca) = self.alpha.sin_cos();
+        let (sf, cf) = self.af.sin_cos();
+        let ks = match self.side {
+            Side::Left => -sa * sf,
+            Side::Right => sa * sf,
+        };
+        (sa * cf, ks, ca)
+    }
+}
+
+/// Diameter at the contact point, D·sin α: the lower bound of the working diameter.
+pub fn contact_diameter(d: f64, alpha: f64) -> f64 {
+    d * alpha.sin().abs()
+}
+
+/// h* → D_w.
+fn diameter_from_height(d: f64, h: f64) -> f64 {
+    if h >= 0.0 {
+        d
+    } else {
+        d * (1.0 - h * h).max(0.0).sqrt()
+    }
+}
+
+/// The highest engaged point's height h* = max d·k over the engagement region.
+pub fn highest_point(c: &Case) -> f64 {
+    let r = c.d / 2.0;
+    let cos_t = 1.0 - 2.0 * c.ap / c.d;
+    if cos_t <= 0.0 {
+        // ap ≥ D/2: the engaged zone reaches the equator (O7).
+        return 0.0;
+    }
+    let sin_t = (1.0 - cos_t * cos_t).sqrt();
+    let (kt, ks, kn) = c.axis_local();
+    let (ae, both) = match c.neighbour {
+        Neighbour::None => (f64::INFINITY, false),
+        Neighbour::One(a) => (a, false),
+        Neighbour::Both(a) => (a, true),
+    };
+    let mut best = f64::NEG_INFINITY;
+
+    // B1, the cap rim: d = (sinθ cosψ, sinθ sinψ, −cosθ), ψ ∈ [−π/2, π/2] (E2);
+    // E3 on the rim is sinψ ≥ σ = 1 − ae/(R sinθ) (mirror: sinψ ≤ −σ).
+    let sigma = if ae.is_finite() {
+        1.0 - ae / (r * sin_t)
+    } else {
+        f64::NEG_INFINITY
+    };
+    let lo = if sigma > -1.0 {
+        sigma.min(1.0).asin()
+    } else {
+        -FRAC_PI_2
+    };
+    let hi = if both && sigma > -1.0 {
+        (-sigma).max(-1.0).asin()
+    } else {
+        FRAC_PI_2
+    };
+    if sigma <= 1.0 && lo <= hi {
+        let g = |psi: f64| sin_t * (kt * psi.cos() + ks * psi.sin()) - cos_t * kn;
+        let peak = ks.atan2(kt);
+        let mut m = g(lo).max(g(hi));
+        if peak >= lo && peak <= hi {
+            m = m.max(g(peak));
+        }
+        best = best.max(m);
+    }
+
+    // B2, the front great circle: d = (0, sinφ, −cosφ), |φ| ≤ θ (E1),
+    // E3: sinφ ≥ −ae/D (mirror: sinφ ≤ ae/D).
+    let theta = cos_t.acos();
+    let eps = if ae.is_finite() {
+        (ae / c.d).min(1.0).asin()
+    } else {
+        FRAC_PI_2
+    };
+    let (p0, p1) = (-theta.min(eps), if both { theta.min(eps) } else { theta });
+    let g2 = |phi: f64| ks * phi.sin() - kn * phi.cos();
+    let mut m2 = g2(p0).max(g2(p1));
+    let peak2 = ks.atan2(-kn);
+    if peak2 >= p0 && peak2 <= p1 {
+        m2 = m2.max(g2(peak2));
+    }
+    best = best.max(m2);
+
+    // B3, E3 tight: d_s = (R²x² − ae²)/(2R·ae), d_t = x ≥ 0, inside the cap while
+    // x² + d_s² ≤ sin²θ (monotone in x), and with both neighbours while d_s ≤ 0.
+    if ae.is_finite() && ae / c.d <= sin_t {
+        let a = (r / (2.0 * ae)).powi(2);
+        let q = (ae / c.d).powi(2) - sin_t * sin_t;
+        // a·X² + X/2 + q = 0, X = x².
+        let xx = (-0.5 + (0.25 - 4.0 * a * q).max(0.0).sqrt()) / (2.0 * a);
+        let mut xmax = xx.max(0.0).sqrt();
+        if both {
+            xmax = xmax.min(ae / r);
+        }
+        let h3 = |x: f64| {
+            let ds = (r * r * x * x - ae * ae) / (2.0 * r * ae);
+            let dn = -(1.0 - x * x - ds * ds).max(0.0).sqrt();
+            kt * x + ks * ds + kn * dn
+        };
+        let (mut m3, _) = maximize_1d(&h3, 0.0, xmax);
+        if both {
+            // The mirror curve gives the mirror values: d_s → −d_s.
+            let h3m = |x: f64| {
+                let ds = -(r * r * x * x - ae * ae) / (2.0 * r * ae);
+                let dn = -(1.0 - x * x - ds * ds).max(0.0).sqrt();
+                kt * x + ks * ds + kn * dn
+            };
+            m3 = m3.max(maximize_1d(&h3m, 0.0, xmax).0);
+        }
+        best = best.max(m3);
+    }
+    best
+}
+
+/// Maximum of a smooth function on [a, b]: a coarse scan, then golden-section
+/// refinement around the best sample (the objective has at most a few extrema).
+fn maximize_1d(f: &impl Fn(f64) -> f64, a: f64, b: f64) -> (f64, f64) {
+    const SCAN: usize = 24;
+    if b <= a {
+        return (f(a), a);
+    }
+    let step = (b - a) / SCAN as f64;
+    let mut best = (f(a), a);
+    for i in 1..=SCAN {
+        let x = a + step * i as f64;
+        let v = f(x);
+        if v > best.0 {
+            best = (v, x);
+        }
+    }
+    let (mut lo, mut hi) = ((best.1 - step).max(a), (best.1 + step).min(b));
+    let g = 0.618_033_988_749_894_9;
+    let mut x1 = hi - g * (hi - lo);
+    let mut x2 = lo + g * (hi - lo);
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    for _ in 0..40 {
+        if f1 < f2 {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + g * (hi - lo);
+            f2 = f(x2);
+        } else {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - g * (hi - lo);
+            f1 = f(x1);
+        }
+        if hi - lo < 1e-12 {
+            break;
+        }
+    }
+    for (v, x) in [(f1, x1), (f2, x2)] {
+        if v > best.0 {
+            best = (v, x);
+        }
+    }
+    best
+}
+
+/// Working diameter D_w (mm) by the boundary method.
+pub fn working_diameter(c: &Case) -> f64 {
+    diameter_from_height(c.d, highest_point(c))
+}
+
+/// Spindle speed (1/min) for cutting speed `vc` (m/min) at diameter `dw` (mm).
+pub fn spindle_speed(vc: f64, dw: f64) -> f64 {
+    1000.0 * vc / (PI * dw)
+}
+
+/// Reference: samples the cap in polar coordinates (ρ ∈ [0, θ], ψ ∈ [−π, π)) on an
+/// `nr` × `npsi` grid, keeps samples in E, then refines around the best few on a
+/// finer local grid. Slow; for tests. Underestimates by at most the grid error.
+pub fn brute_force(c: &Case, nr: usize, npsi: usize) -> f64 {
+    let cos_t = 1.0 - 2.0 * c.ap / c.d;
+    if cos_t <= 0.0 {
+        return c.d;
+    }
+    let theta = cos_t.acos();
+    let r = c.d / 2.0;
+    let (kt, ks, kn) = c.axis_local();
+    let (ae, both) = match c.neighbour {
+        Neighbour::None => (f64::INFINITY, false),
+        Neighbour::One(a) => (a, false),
+        Neighbour::Both(a) => (a, true),
+    };
+    let eval = |rho: f64, psi: f64| -> Option<f64> {
+        let (sr, cr) = rho.sin_cos();
+        let (sp, cp) = psi.sin_cos();
+        let (x, y, z) = (sr * cp, sr * sp, -cr);
+        // cos(π/2) is not exactly 0 in floating point; the E2 boundary belongs to E.
+        if x < -1e-12 {
+            return None;
+        }
+        let x = x.max(0.0);
+        if ae.is_finite() {
+            let e3 = |y: f64| 2.0 * r * ae * y + ae * ae - r * r * x * x >= 0.0;
+            if !e3(y) || (both && !e3(-y)) {
+                return None;
+            }
+        }
+        Some(kt * x + ks * y + kn * z)
+    };
+    // A first pass finds how far from the contact point E reaches (a thin region,
+    // such as the lens between two machined neighbours, needs the rows there).
+    let dp = 2.0 * PI / npsi as f64;
+    let mut reach: f64 = 0.0;
+    for i in 0..=nr {
+        let rho = theta * i as f64 / nr as f64;
+        if (0..npsi).any(|j| eval(rho, -PI + dp * j as f64).is_some()) {
+            reach = rho;
+        }
+    }
+    let extent = (reach + 2.0 * theta / nr as f64).min(theta);
+    let mut top: Vec<(f64, f64, f64)> = Vec::new();
+    let dr = extent / nr as f64;
+    for i in 0..=nr {
+        let rho = dr * i as f64;
+        for j in 0..npsi {
+            let psi = -PI + dp * j as f64;
+            if let Some(h) = eval(rho, psi) {
+                if top.len() < 8 || h > top[top.len() - 1].0 {
+                    top.push((h, rho, psi));
+                    top.sort_by(|a, b| b.0.total_cmp(&a.0));
+                    top.truncate(8);
+                }
+            }
+        }
+    }
+    let mut best = top.first().map(|t| t.0).unwrap_or(-1.0);
+    for &(_, rho, psi) in &top {
+        for i in 0..=60 {
+            let rr = (rho - dr + 2.0 * dr * i as f64 / 60.0).clamp(0.0, theta);
+            for j in 0..=60 {
+                let pp = psi - dp + 2.0 * dp * j as f64 / 60.0;
+                if let Some(h) = eval(rr, pp) {
+                    best = best.max(h);
+                }
+            }
+        }
+    }
+    diameter_from_height(c.d, best)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn case(d: f64, ap: f64, ae: Option<f64>, alpha_deg: f64, af_deg: f64, side: Side) -> Case {
+        Case {
+            d,
+            ap,
+            neighbour: ae.map(Neighbour::One).unwrap_or(Neighbour::None),
+            alpha: alpha_deg.to_radians(),
+            af: af_deg.to_radians(),
+            side,
+        }
+    }
+
+    /// Spec `working-diameter.md` §2.3, the oracle table (D, ap, ae, α°, A_f°, side,
+    /// D_w mm, n at vc = 63 m/min).
+    const ORACLE: &[(f64, f64, Option<f64>, f64, f64, Side, f64, f64)] = &[
+        (10.0, 0.3, Some(0.25), 0.0, 0.0, Side::Left, 3.4117, 5878.0),
+        (10.0, 0.3, Some(0.25), 10.0, 0.0, Side::Left, 4.4638, 4492.0),
+        (
+            10.0,
+            0.3,
+            Some(0.25),
+            10.0,
+            90.0,
+            Side::Left,
+            2.1651,
+            9262.0,
+        ),
+        (
+            10.0,
+            0.3,
+            Some(0.25),
+            10.0,
+            90.0,
+            Side::Right,
+            4.9922,
+            4017.0,
+        ),
+        (
+            10.0,
+            0.3,
+            Some(0.25),
+            10.0,
+            180.0,
+            Side::Left,
+            3.7821,
+            5302.0,
+        ),
+        (10.0, 0.3, Some(0.25), 20.0, 0.0, Side::Left, 5.6877, 3526.0),
+        (
+            10.0,
+            0.3,
+            Some(0.25),
+            20.0,
+            45.0,
+            Side::Left,
+            4.1301,
+            4855.0,
+        ),
+        (
+            10.0,
+            0.3,
+            Some(0.25),
+            20.0,
+            45.0,
+            Side::Right,
+            6.3818,
+            3142.0,
+        ),
+        (
+            10.0,
+            0.3,
+            Some(0.25),
+            20.0,
+            90.0,
+            Side::Left,
+            3.6541,
+            5488.0,
+        ),
+        (
+            10.0,
+            0.3,
+            Some(0.25),
+            20.0,
+            135.0,
+            Side::Left,
+            3.5896,
+            5587.0,
+        ),
+        (
+            10.0,
+            0.3,
+            Some(0.25),
+            20.0,
+            135.0,
+            Side::Right,
+            5.9893,
+            3348.0,
+        ),
+        (
+            10.0,
+            0.3,
+            Some(0.25),
+            30.0,
+            60.0,
+            Side::Left,
+            5.2502,
+            3820.0,
+        ),
+        (
+            10.0,
+            0.3,
+            Some(0.25),
+            45.0,
+            90.0,
+            Side::Left,
+            7.2456,
+            2768.0,
+        ),
+        (10.0, 0.3, Some(0.25), 60.0, 0.0, Side::Left, 9.4876, 2114.0),
+        (
+            10.0,
+            0.3,
+            Some(0.25),
+            9.75,
+            107.0,
+            Side::Left,
+            1.9300,
+            10391.0,
+        ),
+        (6.0, 0.2, Some(0.3), 25.0, 30.0, Side::Left, 3.5216, 5694.0),
+        (
+            6.0,
+            0.2,
+            Some(0.3),
+            25.0,
+            120.0,
+            Side::Right,
+            4.1979,
+            4777.0,
+        ),
+        (
+            12.0,
+            0.5,
+            Some(0.4),
+            40.0,
+            150.0,
+            Side::Left,
+            7.8700,
+            2548.0,
+        ),
+        (
+            12.0,
+            0.5,
+            Some(0.4),
+            10.0,
+            120.0,
+            Side::Left,
+            3.2408,
+            6188.0,
+        ),
+        (10.0, 0.3, None, 20.0, 0.0, Side::Left, 6.4210, 3123.0),
+        (10.0, 0.3, None, 20.0, 135.0, Side::Left, 5.9893, 3348.0),
+        (10.0, 0.3, None, 20.0, 180.0, Side::Left, 4.6879, 4278.0),
+    ];
+
+    #[test]
+    fn oracle_table_section_2_3() {
+        for &(d, ap, ae, a, f, side, dw, n) in ORACLE {
+            let c = case(d, ap, ae, a, f, side);
+            let got = working_diameter(&c);
+            assert!((got - dw).abs() < 6e-5, "{c:?}: {got:.5} vs {dw}");
+            assert!((spindle_speed(63.0, got) - n).abs() <= 1.0, "{c:?}: n");
+        }
+    }
+
+    #[test]
+    fn ae_table_section_2_3() {
+        let aes = [0.05, 0.1, 0.25, 0.5, 1.0, 2.0, 3.4];
+        let rows: [(f64, f64, [f64; 8]); 3] = [
+            (
+                20.0,
+                0.0,
+                [
+                    5.1819, 5.3643, 5.6877, 5.9897, 6.2940, 6.4210, 6.4210, 6.4210,
+                ],
+            ),
+            (
+                20.0,
+                90.0,
+                [
+                    3.4671, 3.5140, 3.6541, 3.8858, 4.3428, 5.2305, 6.4114, 6.4210,
+                ],
+            ),
+            (
+                10.0,
+                90.0,
+                [
+                    1.8239, 1.9151, 2.1651, 2.5249, 3.1154, 4.0231, 4.9851, 4.9922,
+                ],
+            ),
+        ];
+        for (a, f, want) in rows {
+            for (k, ae) in aes.iter().chain([f64::INFINITY].iter()).enumerate() {
+                let c = case(10.0, 0.3, ae.is_finite().then_some(*ae), a, f, Side::Left);
+                let got = working_diameter(&c);
+                assert!(
+                    (got - want[k]).abs() < 6e-5,
+                    "α {a} A_f {f} ae {ae}: {got:.5} vs {}",
+                    want[k]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn closed_forms_o1_to_o7() {
+        let (d, ap): (f64, f64) = (10.0, 0.3);
+        let theta = (1.0 - 2.0 * ap / d).acos();
+        // O1: flat, any feed, any side, any ae.
+        for f in [0.0, 37.0, 90.0, 180.0, -120.0] {
+            for ae in [Some(0.1), Some(1.0), None] {
+                let got = working_diameter(&case(d, ap, ae, 0.0, f, Side::Right));
+                assert!((got - 2.0 * (ap * (d - ap)).sqrt()).abs() < 1e-9);
+            }
+        }
+        // O2: no neighbour.
+        for a in [5.0, 20.0, 45.0, 80.0] {
+            for f in [0.0, 30.0, 90.0, 120.0, 180.0, -150.0] {
+                let (ar, fr) = (f64::to_radians(a), f64::to_radians(f));
+                let m = if fr.abs() <= FRAC_PI_2 + 1e-12 {
+                    1.0
+                } else {
+                    fr.sin().abs()
+                };
+                let cc = (theta.cos() * ar.cos() - theta.sin() * ar.sin() * m).max(0.0);
+                let want = d * (1.0 - cc * cc).sqrt();
+                let got = working_diameter(&case(d, ap, None, a, f, Side::Left));
+                assert!(
+                    (got - want).abs() < 1e-9,
+                    "O2 α {a} A_f {f}: {got} vs {want}"
+                );
+            }
+        }
+        // O3: downhill, any ae and side.
+        for a in [10.0, 20.0, 40.0] {
+            let want = d * (1.0 - (f64::to_radians(a).cos() * theta.cos()).powi(2)).sqrt();
+            for ae in [Some(0.05), Some(0.5), None] {
+                for s in [Side::Left, Side::Right] {
+                    let got = working_diameter(&case(d, ap, ae, a, 180.0, s));
+                    assert!((got - want).abs() < 1e-9, "O3 α {a}: {got} vs {want}");
+                }
+            }
+        }
+        // O4: contour feed, uncut side uphill.
+        for a in [5.0, 20.0, 70.0] {
+            let want = d * (f64::to_radians(a) + theta).min(FRAC_PI_2).sin();
+            for ae in [0.1, 0.25, 2.0] {
+                let g1 = working_diameter(&case(d, ap, Some(ae), a, 90.0, Side::Right));
+                let g2 = working_diameter(&case(d, ap, Some(ae), a, -90.0, Side::Left));
+                assert!(
+                    (g1 - want).abs() < 1e-9 && (g2 - want).abs() < 1e-9,
+                    "O4 α {a} ae {ae}"
+                );
+            }
+        }
+        // O5: contour feed, uncut side downhill, the cusp point (valid for α ≳ 11° here).
+        let ae = 0.25;
+        let eps = (ae / d).asin();
+        for a in [15.0, 25.0, 40.0] {
+            let want = d * (f64::to_radians(a) + eps).sin();
+            let got = working_diameter(&case(d, ap, Some(ae), a, 90.0, Side::Left));
+            assert!((got - want).abs() < 1e-9, "O5 α {a}: {got} vs {want}");
+        }
+        // O7: ap ≥ D/2.
+        assert_eq!(
+            working_diameter(&case(d, 5.0, Some(0.3), 10.0, 45.0, Side::Left)),
+            d
+        );
+        assert_eq!(
+            working_diameter(&case(d, 0.3, None, 89.0, 0.0, Side::Left)),
+            d
+        );
+    }
+
+    #[test]
+    fn contact_diameter_is_d_sin_alpha() {
+        assert!((contact_diameter(10.0, 30f64.to_radians()) - 5.0).abs() < 1e-12);
+    }
+}
