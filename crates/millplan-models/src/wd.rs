@@ -323,7 +323,10 @@ mod tests {
 
     /// Spec `working-diameter.md` §2.3, the oracle table (D, ap, ae, α°, A_f°, side,
     /// D_w mm, n at vc = 63 m/min).
-    const ORACLE: &[(f64, f64, Option<f64>, f64, f64, Side, f64, f64)] = &[
+    /// D, ap, ae, α°, A_f°, uncut side, D_w (mm), n (1/min).
+    type Row = (f64, f64, Option<f64>, f64, f64, Side, f64, f64);
+
+    const ORACLE: &[Row] = &[
         (10.0, 0.3, Some(0.25), 0.0, 0.0, Side::Left, 3.4117, 5878.0),
         (10.0, 0.3, Some(0.25), 10.0, 0.0, Side::Left, 4.4638, 4492.0),
         (
