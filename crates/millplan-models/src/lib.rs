@@ -1,7 +1,10 @@
 //! Process models: what happens between the cutter and the part.
 //!
+//! - [`contact`]: where a ball touches the part at each tool position (BVH closest
+//!   point, normals, feed direction, uncut side and stepover from the path).
 //! - [`wd`]: the engagement region of a ball-end mill on a locally planar surface
 //!   and its working diameter (spec `working-diameter.md` §1–2), with the
 //!   brute-force sampler the tests use as reference.
 
+pub mod contact;
 pub mod wd;

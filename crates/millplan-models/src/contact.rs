@@ -1,0 +1,501 @@
+//! Where a ball-end mill touches the part at each tool position, and the local
+//! quantities the working-diameter model needs there: contact point and normal,
+//! inclination, feed direction, uncut side and actual stepover (spec
+//! `working-diameter.md` §1.1, §1.4 and §5).
+
+use crate::wd::{self, Case, Neighbour, Side};
+use millplan_geom::bvh::{vertex_normals, Bvh};
+use millplan_geom::{DVec3, TriMesh};
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
+
+/// Which point of the tool the CL points are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Convention {
+    /// The tool tip (ISO CLDATA; nearly every CAM system by default).
+    Tip,
+    /// The ball centre.
+    Centre,
+}
+
+/// Which normal is used at the contact point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum NormalMode {
+    /// Angle-weighted vertex normals interpolated at the contact point (default:
+    /// a tessellated free-form surface should not step from facet to facet).
+    Smooth,
+    /// The normal of the facet that holds the contact point (true creases).
+    Facet,
+    /// The direction from the contact point to the ball centre.
+    Ball,
+}
+
+/// The part surface prepared for contact queries.
+pub struct Surface<'a> {
+    pub mesh: &'a TriMesh,
+    pub bvh: Bvh,
+    pub vertex_normals: Vec<DVec3>,
+}
+
+impl<'a> Surface<'a> {
+    pub fn new(mesh: &'a TriMesh) -> Surface<'a> {
+        let (bvh, vertex_normals) = rayon::join(|| Bvh::build(mesh), || vertex_normals(mesh));
+        Surface {
+            mesh,
+            bvh,
+            vertex_normals,
+        }
+    }
+}
+
+/// One tool position to analyse.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathPoint {
+    /// CL point as read.
+    pub cl: DVec3,
+    /// Unit tool axis (from the tip up the spindle).
+    pub axis: DVec3,
+    /// Pass number: points of one pass are cut one after another without a link.
+    pub pass: u32,
+}
+
+/// Settings of the analysis.
+#[derive(Clone, Copy, Debug)]
+pub struct Params {
+    /// Ball diameter, mm.
+    pub d: f64,
+    /// Stock thickness along the normal, mm.
+    pub ap: f64,
+    pub convention: Convention,
+    pub normals: NormalMode,
+    /// |centre-to-mesh distance − R| beyond this flags the point, mm.
+    pub gap_tol: f64,
+    /// How far to look sideways for neighbouring passes, mm.
+    pub neighbour_search: f64,
+    /// Turns sharper than this (radians) are corners: both directions are evaluated
+    /// and the larger working diameter kept.
+    pub corner_angle: f64,
+    /// Use the paper's nearest-in-centre facet instead of the exact contact
+    /// (for comparison only).
+    pub nearest_incentre: bool,
+}
+
+impl Params {
+    pub fn new(d: f64, ap: f64) -> Params {
+        Params {
+            d,
+            ap,
+            convention: Convention::Tip,
+            normals: NormalMode::Smooth,
+            gap_tol: 0.02,
+            neighbour_search: 0.6 * d,
+            corner_angle: 45f64.to_radians(),
+            nearest_incentre: false,
+        }
+    }
+}
+
+/// Everything known about one tool position.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointResult {
+    pub centre: DVec3,
+    /// Contact point on the mesh.
+    pub contact: DVec3,
+    /// Unit surface normal at the contact point.
+    pub normal: DVec3,
+    /// Centre-to-mesh distance minus R (negative: the ball is inside the part).
+    pub gap: f64,
+    /// No surface within reach of the ball.
+    pub no_contact: bool,
+    /// Inclination α, radians.
+    pub inclination: f64,
+    /// Unit feed direction in the tangent plane (zero when the point does not move).
+    pub feed_dir: DVec3,
+    /// Feed direction relative to uphill, radians.
+    pub feed_angle: f64,
+    pub side: Side,
+    pub neighbour: Neighbour,
+    pub corner: bool,
+    /// Working diameter, mm.
+    pub dw: f64,
+}
+
+impl PointResult {
+    pub fn ae(&self) -> Option<f64> {
+        match self.neighbour {
+            Neighbour::None => None,
+            Neighbour::One(a) | Neighbour::Both(a) => Some(a),
+        }
+    }
+}
+
+/// Ball centre of a CL point.
+pub fn centre(p: &PathPoint, conv: Convention, r: f64) -> DVec3 {
+    match conv {
+        Convention::Tip => p.cl + p.axis * r,
+        Convention::Centre => p.cl,
+    }
+}
+
+/// What the convention check found: the median |distance − R| under each reading.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ConventionCheck {
+    pub chosen: Convention,
+    pub median_gap_tip: f64,
+    pub median_gap_centre: f64,
+    pub sampled: usize,
+}
+
+/// Decides tip or centre from the data: with the right reading the centre-to-mesh
+/// distance is about R at nearly every point (formats.md §2.4).
+pub fn detect_convention(s: &Surface, points: &[PathPoint], r: f64) -> ConventionCheck {
+    let step = (points.len() / 400).max(1);
+    let sample: Vec<&PathPoint> = points.iter().step_by(step).collect();
+    let median = |conv: Convention| {
+        let mut g: Vec<f64> = sample
+            .par_iter()
+            .map(|p| {
+                let c = centre(p, conv, r);
+                s.bvh
+                    .closest(s.mesh, c, 4.0 * r)
+                    .map(|h| (h.distance - r).abs())
+                    .unwrap_or(f64::INFINITY)
+            })
+            .collect();
+        g.sort_by(f64::total_cmp);
+        g.get(g.len() / 2).copied().unwrap_or(f64::INFINITY)
+    };
+    let (tip, cen) = (median(Convention::Tip), median(Convention::Centre));
+    ConventionCheck {
+        chosen: if cen < tip {
+            Convention::Centre
+        } else {
+            Convention::Tip
+        },
+        median_gap_tip: tip,
+        median_gap_centre: cen,
+        sampled: sample.len(),
+    }
+}
+
+/// Triangle in-centres, for the paper's nearest-in-centre mapping.
+struct Incentres {
+    cells: FxHashMap<(i64, i64, i64), Vec<u32>>,
+    pts: Vec<DVec3>,
+    cell: f64,
+}
+
+impl Incentres {
+    fn new(mesh: &TriMesh) -> Incentres {
+        let pts: Vec<DVec3> = (0..mesh.len())
+            .map(|t| {
+                let [a, b, c] = mesh.corners(t);
+                let (la, lb, lc) = ((b - c).length(), (c - a).length(), (a - b).length());
+                (a * la + b * lb + c * lc) / (la + lb + lc)
+            })
+            .collect();
+        let bb = mesh.bounds();
+        let cell = (bb.diagonal() / (mesh.len() as f64).cbrt().max(1.0)).max(1e-6);
+        let mut cells: FxHashMap<(i64, i64, i64), Vec<u32>> = FxHashMap::default();
+        for (i, p) in pts.iter().enumerate() {
+            cells.entry(key(*p, cell)).or_default().push(i as u32);
+        }
+        Incentres { cells, pts, cell }
+    }
+
+    fn nearest(&self, p: DVec3) -> Option<u32> {
+        let k = key(p, self.cell);
+        let mut best: Option<(f64, u32)> = None;
+        for ring in 0..64i64 {
+            for dx in -ring..=ring {
+                for dy in -ring..=ring {
+                    for dz in -ring..=ring {
+                        if dx.abs().max(dy.abs()).max(dz.abs()) != ring {
+                            continue;
+                        }
+                        if let Some(v) = self.cells.get(&(k.0 + dx, k.1 + dy, k.2 + dz)) {
+                            for &i in v {
+                                let d = (self.pts[i as usize] - p).length_squared();
+                                if best.map(|b| d < b.0).unwrap_or(true) {
+                                    best = Some((d, i));
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            // Anything outside ring r is at least r·cell away.
+            if let Some((d, i)) = best {
+                if d.sqrt() <= ring as f64 * self.cell {
+                    return Some(i);
+                }
+            }
+        }
+        best.map(|b| b.1)
+    }
+}
+
+fn key(p: DVec3, cell: f64) -> (i64, i64, i64) {
+    (
+        (p.x / cell).floor() as i64,
+        (p.y / cell).floor() as i64,
+        (p.z / cell).floor() as i64,
+    )
+}
+
+/// Analyses every point of a path. Points are in cutting order; neighbouring passes
+/// count as machined when they come earlier in that order.
+pub fn analyse(s: &Surface, points: &[PathPoint], p: &Params) -> Vec<PointResult> {
+    let r = p.d / 2.0;
+    let centres: Vec<DVec3> = points.iter().map(|q| centre(q, p.convention, r)).collect();
+    let incentres = p.nearest_incentre.then(|| Incentres::new(s.mesh));
+    // Contact and normal.
+    let contacts: Vec<(DVec3, DVec3, f64, bool)> = centres
+        .par_iter()
+        .zip(points.par_iter())
+        .map(|(c, q)| {
+            if let Some(ic) = &incentres {
+                // The paper: the facet whose in-centre is nearest to the tool position.
+                let t = ic.nearest(q.cl).unwrap_or(0) as usize;
+                let n = orient_up(s.mesh.facet_normal(t), q.axis);
+                let [a, b, cc] = s.mesh.corners(t);
+                let (pt, _) = millplan_geom::bvh::closest_on_triangle(*c, a, b, cc);
+                return (pt, n, (pt - *c).length() - r, false);
+            }
+            match s.bvh.closest(s.mesh, *c, 3.0 * r + p.ap + 1.0) {
+                Some(h) => {
+                    let n = match p.normals {
+                        NormalMode::Facet => s.mesh.facet_normal(h.triangle as usize),
+                        NormalMode::Ball => (*c - h.point).normalize_or_zero(),
+                        NormalMode::Smooth => {
+                            let t = s.mesh.triangles[h.triangle as usize];
+                            let vn = &s.vertex_normals;
+                            (vn[t[0] as usize] * h.bary[0]
+                                + vn[t[1] as usize] * h.bary[1]
+                                + vn[t[2] as usize] * h.bary[2])
+                                .normalize_or_zero()
+                        }
+                    };
+                    let n = if n == DVec3::ZERO {
+                        (*c - h.point).normalize_or_zero()
+                    } else {
+                        n
+                    };
+                    (h.point, orient_up(n, q.axis), h.distance - r, false)
+                }
+                None => (*c - q.axis * r, q.axis, f64::INFINITY, true),
+            }
+        })
+        .collect();
+    let search = stepover_search_radius(&centres, points, p.neighbour_search);
+    let grid = NeighbourGrid::new(&centres, search);
+    (0..points.len())
+        .into_par_iter()
+        .map(|i| {
+            let (contact, n, gap, no_contact) = contacts[i];
+            let k = points[i].axis;
+            let inclination = n.dot(k).clamp(-1.0, 1.0).acos();
+            let (t_in, t_out) = feed_directions(&centres, points, i);
+            let project = |t: DVec3| (t - n * t.dot(n)).normalize_or_zero();
+            let (t_in, t_out) = (project(t_in), project(t_out));
+            let central = (t_in + t_out).normalize_or_zero();
+            let t = if central == DVec3::ZERO {
+                if t_out != DVec3::ZERO {
+                    t_out
+                } else {
+                    t_in
+                }
+            } else {
+                central
+            };
+            let corner = t_in != DVec3::ZERO
+                && t_out != DVec3::ZERO
+                && t_in.angle_between(t_out) > p.corner_angle;
+            let eval = |t: DVec3| {
+                let (af, side, neighbour) = local_case(&grid, &centres, points, i, n, k, t, search);
+                let c = Case {
+                    d: p.d,
+                    ap: p.ap,
+                    neighbour,
+                    alpha: inclination,
+                    af,
+                    side,
+                };
+                (wd::working_diameter(&c), af, side, neighbour, t)
+            };
+            let mut best = eval(t);
+            if corner {
+                for dir in [t_in, t_out] {
+                    let e = eval(dir);
+                    if e.0 > best.0 {
+                        best = e;
+                    }
+                }
+            }
+            let (dw, feed_angle, side, neighbour, feed_dir) = best;
+            PointResult {
+                centre: centres[i],
+                contact,
+                normal: n,
+                gap,
+                no_contact,
+                inclination,
+                feed_dir,
+                feed_angle,
+                side,
+                neighbour,
+                corner,
+                dw,
+            }
+        })
+        .collect()
+}
+
+/// The sideways search radius: 1.6 × the median distance from a point to the
+/// nearest point of another pass (the stepover the CAM system used), at most `max`.
+/// Keeps the neighbour search cheap on fine rasters.
+fn stepover_search_radius(c: &[DVec3], pts: &[PathPoint], max: f64) -> f64 {
+    if c.len() < 3 {
+        return max;
+    }
+    let grid = NeighbourGrid::new(c, max);
+    let step = (c.len() / 300).max(1);
+    let mut d: Vec<f64> = (0..c.len())
+        .step_by(step)
+        .filter_map(|i| {
+            let mut best = f64::INFINITY;
+            grid.for_each_near(c[i], |j| {
+                if pts[j].pass != pts[i].pass {
+                    best = best.min((c[j] - c[i]).length());
+                }
+            });
+            best.is_finite().then_some(best)
+        })
+        .collect();
+    if d.is_empty() {
+        return max;
+    }
+    d.sort_by(f64::total_cmp);
+    (1.6 * d[d.len() / 2]).clamp(1e-3, max)
+}
+
+fn orient_up(n: DVec3, k: DVec3) -> DVec3 {
+    if n.dot(k) < 0.0 {
+        -n
+    } else {
+        n
+    }
+}
+
+/// Incoming and outgoing directions at point i, skipping zero-length steps and
+/// staying inside the pass.
+fn feed_directions(c: &[DVec3], pts: &[PathPoint], i: usize) -> (DVec3, DVec3) {
+    let pass = pts[i].pass;
+    let mut t_in = DVec3::ZERO;
+    let mut j = i;
+    while j > 0 && pts[j - 1].pass == pass {
+        j -= 1;
+        let v = c[i] - c[j];
+        if v.length() > 1e-6 {
+            t_in = v.normalize();
+            break;
+        }
+    }
+    let mut t_out = DVec3::ZERO;
+    let mut j = i;
+    while j + 1 < pts.len() && pts[j + 1].pass == pass {
+        j += 1;
+        let v = c[j] - c[i];
+        if v.length() > 1e-6 {
+            t_out = v.normalize();
+            break;
+        }
+    }
+    (t_in, t_out)
+}
+
+/// Feed angle, uncut side and neighbour for feed direction t at point i.
+#[allow(clippy::too_many_arguments)]
+fn local_case(
+    grid: &NeighbourGrid,
+    c: &[DVec3],
+    pts: &[PathPoint],
+    i: usize,
+    n: DVec3,
+    k: DVec3,
+    t: DVec3,
+    search: f64,
+) -> (f64, Side, Neighbour) {
+    let up = k - n * n.dot(k);
+    let af = if up.length() < 1e-9 || t == DVec3::ZERO {
+        0.0
+    } else {
+        let u = up.normalize();
+        let w = n.cross(u);
+        t.dot(w).atan2(t.dot(u))
+    };
+    if t == DVec3::ZERO {
+        return (af, Side::Left, Neighbour::None);
+    }
+    let left = n.cross(t);
+    let (mut l_best, mut r_best) = (f64::INFINITY, f64::INFINITY);
+    grid.for_each_near(c[i], |j| {
+        // Only passes machined before this one count.
+        if j >= i || pts[j].pass == pts[i].pass {
+            return;
+        }
+        let v = c[j] - c[i];
+        let v = v - n * v.dot(n);
+        let lat = v.dot(left);
+        let along = v.dot(t);
+        if lat.abs() > search || along.abs() > lat.abs().max(1e-9) {
+            return;
+        }
+        if lat > 1e-6 {
+            l_best = l_best.min(lat);
+        } else if lat < -1e-6 {
+            r_best = r_best.min(-lat);
+        }
+    });
+    match (l_best.is_finite(), r_best.is_finite()) {
+        (false, false) => (af, Side::Left, Neighbour::None),
+        // Machined on the left: the uncut material is on the right.
+        (true, false) => (af, Side::Right, Neighbour::One(l_best)),
+        (false, true) => (af, Side::Left, Neighbour::One(r_best)),
+        (true, true) => (af, Side::Left, Neighbour::Both(l_best.min(r_best))),
+    }
+}
+
+/// Uniform grid over ball centres for the sideways neighbour search.
+struct NeighbourGrid {
+    cell: f64,
+    cells: FxHashMap<(i64, i64, i64), Vec<u32>>,
+}
+
+impl NeighbourGrid {
+    fn new(c: &[DVec3], cell: f64) -> NeighbourGrid {
+        let cell = cell.max(1e-3);
+        let mut cells: FxHashMap<(i64, i64, i64), Vec<u32>> = FxHashMap::default();
+        for (i, p) in c.iter().enumerate() {
+            cells.entry(key(*p, cell)).or_default().push(i as u32);
+        }
+        NeighbourGrid { cell, cells }
+    }
+
+    fn for_each_near(&self, p: DVec3, mut f: impl FnMut(usize)) {
+        let k = key(p, self.cell);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(v) = self.cells.get(&(k.0 + dx, k.1 + dy, k.2 + dz)) {
+                        for &j in v {
+                            f(j as usize);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
