@@ -5,6 +5,8 @@
 //! - [`wd`]: the engagement region of a ball-end mill on a locally planar surface
 //!   and its working diameter (spec `working-diameter.md` §1–2), with the
 //!   brute-force sampler the tests use as reference.
+//! - [`regression`]: the least-squares surrogate of thesis 2.
 
 pub mod contact;
+pub mod regression;
 pub mod wd;

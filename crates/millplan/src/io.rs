@@ -156,6 +156,14 @@ pub fn write_atomic(path: &Path, bytes: &[u8], inputs: &[&Path]) -> CliResult<()
                 dir.display()
             ))
         })?;
+    // Temporary files are created private; an output is an ordinary file.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let _ = tmp
+            .as_file()
+            .set_permissions(std::fs::Permissions::from_mode(0o644));
+    }
     tmp.write_all(bytes)
         .and_then(|_| tmp.as_file().sync_all())
         .map_err(|e| CliError::internal(format!("{}: write failed: {e}", path.display())))?;

@@ -28,6 +28,8 @@ enum Command {
     Inspect(cmd::inspect::Args),
     Convert(cmd::convert::Args),
     Demo(cmd::demo::Args),
+    Wd(cmd::wd::Args),
+    Speed(cmd::speed::Args),
 }
 
 fn main() {
@@ -47,6 +49,8 @@ fn main() {
         Command::Inspect(a) => cmd::inspect::run(a),
         Command::Convert(a) => cmd::convert::run(a),
         Command::Demo(a) => cmd::demo::run(a),
+        Command::Wd(a) => cmd::wd::run(a),
+        Command::Speed(a) => cmd::speed::run(a),
     };
     match r {
         Ok(code) => std::process::exit(code),

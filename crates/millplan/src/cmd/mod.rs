@@ -3,6 +3,8 @@
 pub mod convert;
 pub mod demo;
 pub mod inspect;
+pub mod speed;
+pub mod wd;
 
 use clap::ValueEnum;
 use millplan_nc::{LengthUnit, ReadOptions};

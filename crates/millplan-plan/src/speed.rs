@@ -1,0 +1,523 @@
+//! Constant-cutting-speed spindle control for ball-end finishing (paper 000,
+//! thesis 3; spec `working-diameter.md` §3.3–3.4 and §5.7).
+//!
+//! For every cutting point of every ball-end operation: the working diameter D_w
+//! from the contact analysis, the spindle speed n = 1000·vc/(π·D_w), clamped to the
+//! machine's range; an S word only when the speed moves by more than a threshold;
+//! then a forward–backward rate limit so consecutive speeds differ by at most the
+//! spindle's acceleration times the block time; finally the feed F = n·z·fz (or the
+//! programmed feed). Only spindle speeds and feeds change: positions never do.
+
+use millplan_geom::{DVec3, TriMesh};
+use millplan_models::contact::{
+    self, Convention, ConventionCheck, NormalMode, PathPoint, PointResult, Surface,
+};
+use millplan_models::wd::{Neighbour, Side};
+use millplan_nc::{CutterKind, EventKind, FeedMode, MoveKind, Program};
+
+use crate::machine::Machine;
+
+/// How the feed follows the spindle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FeedCoupling {
+    /// F = n·z·fz: constant chip load (default).
+    ChipLoad,
+    /// Keep the programmed feed.
+    Programmed,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct SpeedParams {
+    /// Cutting speed, m/min.
+    pub vc: f64,
+    /// Feed per tooth, mm.
+    pub fz: f64,
+    pub flutes: u32,
+    /// Stock thickness along the normal, mm.
+    pub ap: f64,
+    pub feed: FeedCoupling,
+    /// Write a new S only when the speed changes by more than this, 1/min.
+    pub s_threshold: f64,
+    /// Tip or centre; `None` detects it from the data.
+    pub convention: Option<Convention>,
+    pub normals: NormalMode,
+    /// Flag points whose centre-to-mesh distance differs from R by more than this, mm.
+    pub gap_tol: f64,
+    /// Use the paper's nearest-in-centre facet (comparison only).
+    pub nearest_incentre: bool,
+}
+
+impl SpeedParams {
+    pub fn new(vc: f64, fz: f64, flutes: u32, ap: f64) -> SpeedParams {
+        SpeedParams {
+            vc,
+            fz,
+            flutes,
+            ap,
+            feed: FeedCoupling::ChipLoad,
+            s_threshold: 1.0,
+            convention: None,
+            normals: NormalMode::Smooth,
+            gap_tol: 0.02,
+            nearest_incentre: false,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SpeedError {
+    #[error("the program has no ball-end operation (CUTTER/d,d/2,0,d/2 or TLDATA/MILL,d,d/2): nothing to control")]
+    NoBallOperation,
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// One row of the per-point table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointRow {
+    /// Operation and move index in the program.
+    pub op: usize,
+    pub mv: usize,
+    pub line: u32,
+    pub cl: DVec3,
+    pub r: PointResult,
+    /// Spindle speed for constant vc before any limit.
+    pub n_target: f64,
+    /// Spindle speed written.
+    pub n: f64,
+    /// Feed written, mm/min.
+    pub feed: f64,
+    /// Path length from the previous cutting point, mm.
+    pub ds: f64,
+    /// Time from the previous cutting point, s.
+    pub dt: f64,
+    pub clamped: bool,
+    pub rate_limited: bool,
+    pub held: bool,
+    pub gap_flag: bool,
+}
+
+/// Range, mean and standard deviation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Stats {
+    pub min: f64,
+    pub max: f64,
+    pub mean: f64,
+    pub std: f64,
+}
+
+impl Stats {
+    pub fn of(v: impl Iterator<Item = f64> + Clone) -> Stats {
+        let n = v.clone().count();
+        if n == 0 {
+            return Stats::default();
+        }
+        let mean = v.clone().sum::<f64>() / n as f64;
+        let var = v.clone().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n as f64;
+        Stats {
+            min: v.clone().fold(f64::INFINITY, f64::min),
+            max: v.fold(f64::NEG_INFINITY, f64::max),
+            mean,
+            std: var.sqrt(),
+        }
+    }
+}
+
+/// The dynamic-load indicators of spec §3.4 over a sequence of spindle speeds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Indicators {
+    /// Σ|n_{i+1} − n_i|, 1/min.
+    pub total_variation: f64,
+    /// max |Δn| between successive points, 1/min.
+    pub max_step: f64,
+    /// max and mean |Δn|/Δt, 1/min per second.
+    pub max_accel: f64,
+    pub mean_accel: f64,
+    /// Σ n_i·Δs_i, (1/min)·mm.
+    pub speed_integral: f64,
+}
+
+impl Indicators {
+    pub fn of(n: &[f64], ds: &[f64], dt: &[f64]) -> Indicators {
+        let mut r = Indicators::default();
+        let mut acc_sum = 0.0;
+        let mut acc_n = 0;
+        for i in 0..n.len() {
+            r.speed_integral += n[i] * ds[i];
+            if i > 0 {
+                let d = (n[i] - n[i - 1]).abs();
+                r.total_variation += d;
+                r.max_step = r.max_step.max(d);
+                if dt[i] > 0.0 {
+                    let a = d / dt[i];
+                    r.max_accel = r.max_accel.max(a);
+                    acc_sum += a;
+                    acc_n += 1;
+                }
+            }
+        }
+        r.mean_accel = if acc_n > 0 {
+            acc_sum / acc_n as f64
+        } else {
+            0.0
+        };
+        r
+    }
+}
+
+/// What the pass did, for the JSON summary and the report.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Summary {
+    pub points: usize,
+    pub operations: usize,
+    pub convention: Convention,
+    pub convention_check: Option<ConventionCheck>,
+    pub clamped: usize,
+    pub rate_limited: usize,
+    pub held: usize,
+    pub feed_clamped: usize,
+    pub gap_flagged: usize,
+    pub no_contact: usize,
+    pub corners: usize,
+    pub first_pass_points: usize,
+    pub d_w: Stats,
+    pub spindle: Stats,
+    /// Spindle speed the program had (the constant one), 1/min.
+    pub constant_spindle: f64,
+    /// Cutting speed the surface sees at the constant spindle speed, m/min.
+    pub vc_constant: Stats,
+    /// Cutting speed with control, m/min.
+    pub vc_controlled: Stats,
+    /// Indicators at the constant spindle speed are all zero but the integral.
+    pub indicators: Indicators,
+    /// Indicators of the target speeds before machine limits.
+    pub indicators_target: Indicators,
+}
+
+pub struct SpeedResult {
+    pub program: Program,
+    pub rows: Vec<PointRow>,
+    pub summary: Summary,
+}
+
+fn is_ball(op: &millplan_nc::Operation) -> Option<f64> {
+    let c = op.tool.as_ref()?.cutter?;
+    (c.kind == CutterKind::Ball).then_some(c.d)
+}
+
+/// Applies spindle control to every ball-end operation.
+pub fn apply(
+    program: &Program,
+    mesh: &TriMesh,
+    m: &Machine,
+    p: &SpeedParams,
+) -> Result<SpeedResult, SpeedError> {
+    if !(p.vc > 0.0 && p.fz > 0.0 && p.flutes > 0 && p.ap > 0.0) {
+        return Err(SpeedError::Invalid(
+            "vc, fz, flutes and ap must be positive".into(),
+        ));
+    }
+    m.validate()
+        .map_err(|e| SpeedError::Invalid(e.to_string()))?;
+    let surface = Surface::new(mesh);
+    let mut out = program.clone();
+    let mut rows: Vec<PointRow> = Vec::new();
+    let mut check = None;
+    let mut convention = p.convention.unwrap_or(Convention::Tip);
+    let mut ops = 0;
+    let mut constant = Vec::new();
+    let mut feed_clamped_total = 0;
+    for (oi, op) in program.operations.iter().enumerate() {
+        let Some(d) = is_ball(op) else { continue };
+        ops += 1;
+        // Cutting points, with their passes (split at links and sharp reversals).
+        let mut pts = Vec::new();
+        let mut idx = Vec::new();
+        let mut pass = 0u32;
+        let mut prev_dir: Option<DVec3> = None;
+        for (i, mv) in op.moves.iter().enumerate() {
+            if !mv.is_cutting() {
+                if prev_dir.is_some() || !pts.is_empty() {
+                    pass += 1;
+                }
+                prev_dir = None;
+                continue;
+            }
+            let axis = op.axis(mv).unwrap_or(DVec3::Z);
+            let (cl, axis) = match &op.frame {
+                Some(f) => (f.to_parent(mv.end), f.dir_to_parent(axis)),
+                None => (mv.end, axis),
+            };
+            if let Some(s) = op.move_start(i) {
+                let dir = (mv.end - s).normalize_or_zero();
+                if let Some(pd) = prev_dir {
+                    if dir != DVec3::ZERO && pd.dot(dir) < 0.5 {
+                        pass += 1;
+                    }
+                }
+                if dir != DVec3::ZERO {
+                    prev_dir = Some(dir);
+                }
+            }
+            pts.push(PathPoint { cl, axis, pass });
+            idx.push(i);
+        }
+        if pts.is_empty() {
+            continue;
+        }
+        if p.convention.is_none() && check.is_none() {
+            let c = contact::detect_convention(&surface, &pts, d / 2.0);
+            convention = c.chosen;
+            check = Some(c);
+        }
+        let mut cp = contact::Params::new(d, p.ap);
+        cp.convention = convention;
+        cp.normals = p.normals;
+        cp.gap_tol = p.gap_tol;
+        cp.nearest_incentre = p.nearest_incentre;
+        let res = contact::analyse(&surface, &pts, &cp);
+        let programmed = op
+            .moves
+            .iter()
+            .find(|mv| mv.spindle > 0.0)
+            .map(|mv| mv.spindle)
+            .unwrap_or(0.0);
+        // Targets, machine range, threshold.
+        let target: Vec<f64> = res
+            .iter()
+            .map(|r| millplan_models::wd::spindle_speed(p.vc, r.dw))
+            .collect();
+        let clamp = |n: f64| n.clamp(m.spindle_min, m.spindle_max);
+        let mut n: Vec<f64> = Vec::with_capacity(target.len());
+        let mut held = vec![false; target.len()];
+        for (k, t) in target.iter().enumerate() {
+            let c = clamp(*t);
+            match n.last() {
+                Some(&last) if (c - last).abs() <= p.s_threshold => {
+                    n.push(last);
+                    held[k] = c != last;
+                }
+                _ => n.push(c),
+            }
+        }
+        // Block times between cutting points need the feeds, which depend on n.
+        let len_between = |k: usize| -> (f64, f64) {
+            // (cutting length of the move into point k, time of non-cutting moves before it at rapid)
+            let i = idx[k];
+            let mv = &op.moves[i];
+            let len = match (mv.kind, op.move_start(i)) {
+                (MoveKind::Arc, Some(s)) => op
+                    .arcs
+                    .get(mv.aux as usize)
+                    .map(|a| a.length(s, mv.end))
+                    .unwrap_or(0.0),
+                (_, Some(s)) => (mv.end - s).length(),
+                _ => 0.0,
+            };
+            let lo = if k == 0 { i } else { idx[k - 1] + 1 };
+            let mut rapid_s = 0.0;
+            for j in lo..i {
+                if let Some(s) = op.move_start(j) {
+                    rapid_s += (op.moves[j].end - s).length() / m.rapid * 60.0;
+                }
+            }
+            (len, rapid_s)
+        };
+        let geo: Vec<(f64, f64)> = (0..idx.len()).map(len_between).collect();
+        let feed_of = |k: usize, n: f64| -> (f64, bool) {
+            let mv = &op.moves[idx[k]];
+            let f = match p.feed {
+                FeedCoupling::ChipLoad => n * p.flutes as f64 * p.fz,
+                FeedCoupling::Programmed => {
+                    if mv.feed_mode == FeedMode::PerMinute {
+                        mv.feed
+                    } else {
+                        return (mv.feed, false);
+                    }
+                }
+            };
+            let c = f.clamp(m.feed_min, m.feed_max);
+            (c, c != f)
+        };
+        let mut dt = vec![0.0; n.len()];
+        let before_limit = n.clone();
+        for _ in 0..3 {
+            for k in 0..n.len() {
+                let (f, _) = feed_of(k, n[k]);
+                dt[k] = geo[k].0 / f * 60.0 + geo[k].1;
+            }
+            rate_limit(&mut n, &dt, m.spindle_accel);
+        }
+        for k in 0..n.len() {
+            let (f, _) = feed_of(k, n[k]);
+            dt[k] = geo[k].0 / f * 60.0 + geo[k].1;
+        }
+        // Write back.
+        let o = &mut out.operations[oi];
+        let mut feed_clamped = Vec::with_capacity(n.len());
+        for (k, &i) in idx.iter().enumerate() {
+            let (f, fc) = feed_of(k, n[k]);
+            feed_clamped.push(fc);
+            let mv = &mut o.moves[i];
+            mv.spindle = n[k];
+            if p.feed == FeedCoupling::ChipLoad {
+                mv.feed = f;
+                mv.feed_mode = FeedMode::PerMinute;
+            }
+        }
+        // Non-cutting moves keep the speed of the cutting point before them (the
+        // first one's before the first cut), so the spindle does not change on rapids.
+        let mut cur = n[0];
+        let mut next_k = 0;
+        for (i, mv) in o.moves.iter_mut().enumerate() {
+            if next_k < idx.len() && idx[next_k] == i {
+                cur = n[next_k];
+                next_k += 1;
+            } else if mv.spindle > 0.0 || mv.kind == MoveKind::Rapid {
+                mv.spindle = cur;
+            }
+        }
+        // The spindle start takes the first controlled speed.
+        for e in o.events.iter_mut() {
+            if let EventKind::Spindle { rpm, dir } = &mut e.kind {
+                if *dir != millplan_nc::SpindleDir::Off && e.at as usize <= idx[0] {
+                    *rpm = n[0];
+                }
+            }
+        }
+        for (k, r) in res.into_iter().enumerate() {
+            let i = idx[k];
+            let t_clamped = clamp(target[k]);
+            rows.push(PointRow {
+                op: oi,
+                mv: i,
+                line: op.moves[i].line,
+                cl: op.moves[i].end,
+                n_target: target[k],
+                n: n[k],
+                feed: feed_of(k, n[k]).0,
+                ds: geo[k].0,
+                dt: dt[k],
+                clamped: t_clamped != target[k],
+                rate_limited: (n[k] - before_limit[k]).abs() > 1e-9,
+                held: held[k],
+                gap_flag: r.no_contact || r.gap.abs() > p.gap_tol,
+                r,
+            });
+        }
+        constant.push((programmed, rows.len()));
+        feed_clamped_total += feed_clamped.iter().filter(|x| **x).count();
+    }
+    if ops == 0 {
+        return Err(SpeedError::NoBallOperation);
+    }
+    let summary = summarize(&rows, convention, check, ops, &constant, feed_clamped_total);
+    Ok(SpeedResult {
+        program: out,
+        rows,
+        summary,
+    })
+}
+
+/// Limits |n_k − n_{k−1}| to `accel`·dt_k: a forward pass, then a backward pass
+/// that guarantees the bound for every pair.
+pub fn rate_limit(n: &mut [f64], dt: &[f64], accel: f64) {
+    for k in 1..n.len() {
+        let lim = accel * dt[k];
+        n[k] = n[k].clamp(n[k - 1] - lim, n[k - 1] + lim);
+    }
+    for k in (0..n.len().saturating_sub(1)).rev() {
+        let lim = accel * dt[k + 1];
+        n[k] = n[k].clamp(n[k + 1] - lim, n[k + 1] + lim);
+    }
+}
+
+fn summarize(
+    rows: &[PointRow],
+    convention: Convention,
+    check: Option<ConventionCheck>,
+    ops: usize,
+    constant: &[(f64, usize)],
+    feed_clamped: usize,
+) -> Summary {
+    let n0 = constant
+        .iter()
+        .map(|c| c.0)
+        .find(|v| *v > 0.0)
+        .unwrap_or(0.0);
+    let n: Vec<f64> = rows.iter().map(|r| r.n).collect();
+    let nt: Vec<f64> = rows.iter().map(|r| r.n_target).collect();
+    let ds: Vec<f64> = rows.iter().map(|r| r.ds).collect();
+    let dt: Vec<f64> = rows.iter().map(|r| r.dt).collect();
+    let pi = std::f64::consts::PI;
+    Summary {
+        points: rows.len(),
+        operations: ops,
+        convention,
+        convention_check: check,
+        clamped: rows.iter().filter(|r| r.clamped).count(),
+        rate_limited: rows.iter().filter(|r| r.rate_limited).count(),
+        held: rows.iter().filter(|r| r.held).count(),
+        feed_clamped,
+        gap_flagged: rows.iter().filter(|r| r.gap_flag).count(),
+        no_contact: rows.iter().filter(|r| r.r.no_contact).count(),
+        corners: rows.iter().filter(|r| r.r.corner).count(),
+        first_pass_points: rows
+            .iter()
+            .filter(|r| r.r.neighbour == Neighbour::None)
+            .count(),
+        d_w: Stats::of(rows.iter().map(|r| r.r.dw)),
+        spindle: Stats::of(n.iter().copied()),
+        constant_spindle: n0,
+        vc_constant: Stats::of(rows.iter().map(|r| pi * r.r.dw * n0 / 1000.0)),
+        vc_controlled: Stats::of(rows.iter().map(|r| pi * r.r.dw * r.n / 1000.0)),
+        indicators: Indicators::of(&n, &ds, &dt),
+        indicators_target: Indicators::of(&nt, &ds, &dt),
+    }
+}
+
+/// Text of the uncut side for tables.
+pub fn side_name(r: &PointResult) -> &'static str {
+    match (r.neighbour, r.side) {
+        (Neighbour::None, _) => "none",
+        (Neighbour::Both(_), _) => "both",
+        (_, Side::Left) => "left",
+        (_, Side::Right) => "right",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn rate_limit_bounds_every_step(v in proptest::collection::vec((500.0..20000.0f64, 0.001..0.5f64), 2..200), a in 100.0..20000.0f64) {
+            let (mut n, dt): (Vec<f64>, Vec<f64>) = v.into_iter().unzip();
+            let orig = n.clone();
+            rate_limit(&mut n, &dt, a);
+            for k in 1..n.len() {
+                prop_assert!((n[k] - n[k - 1]).abs() <= a * dt[k] + 1e-6);
+            }
+            // Values stay inside the range of the input.
+            let (lo, hi) = orig.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
+            prop_assert!(n.iter().all(|x| *x >= lo - 1e-9 && *x <= hi + 1e-9));
+        }
+    }
+
+    #[test]
+    fn indicators_by_hand() {
+        let i = Indicators::of(
+            &[1000.0, 1100.0, 1050.0],
+            &[0.0, 1.0, 2.0],
+            &[0.0, 0.5, 0.25],
+        );
+        assert_eq!(i.total_variation, 150.0);
+        assert_eq!(i.max_step, 100.0);
+        assert_eq!(i.max_accel, 200.0);
+        assert_eq!(i.mean_accel, 200.0);
+        assert_eq!(i.speed_integral, 1100.0 + 2100.0);
+    }
+}

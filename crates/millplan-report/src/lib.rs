@@ -1,0 +1,6 @@
+//! Tables and reports: the per-point CSV, SVG plots and self-contained HTML pages
+//! (no network: everything inline).
+
+pub mod html;
+pub mod svg;
+pub mod table;

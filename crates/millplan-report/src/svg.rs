@@ -1,0 +1,456 @@
+//! Small, dependency-free SVG plots: line plots, histograms and a top-view map
+//! coloured by a value. Large series are thinned to a few thousand points.
+
+use std::fmt::Write;
+
+const W: f64 = 760.0;
+const H: f64 = 300.0;
+const ML: f64 = 64.0;
+const MR: f64 = 16.0;
+const MT: f64 = 28.0;
+const MB: f64 = 44.0;
+
+/// A series: name, colour and (x, y) points.
+pub struct Series<'a> {
+    pub name: &'a str,
+    pub color: &'a str,
+    pub points: Vec<(f64, f64)>,
+}
+
+fn nice_step(span: f64, target: usize) -> f64 {
+    if !(span > 0.0) {
+        return 1.0;
+    }
+    let raw = span / target as f64;
+    let mag = 10f64.powf(raw.log10().floor());
+    let n = raw / mag;
+    let m = if n < 1.5 {
+        1.0
+    } else if n < 3.5 {
+        2.0
+    } else if n < 7.5 {
+        5.0
+    } else {
+        10.0
+    };
+    m * mag
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+struct Frame {
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+}
+
+impl Frame {
+    fn px(&self, x: f64) -> f64 {
+        ML + (x - self.x0) / (self.x1 - self.x0).max(1e-12) * (W - ML - MR)
+    }
+    fn py(&self, y: f64) -> f64 {
+        H - MB - (y - self.y0) / (self.y1 - self.y0).max(1e-12) * (H - MT - MB)
+    }
+}
+
+fn axes(s: &mut String, f: &Frame, title: &str, xlabel: &str, ylabel: &str) {
+    let _ = write!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {W} {H}" width="{W}" height="{H}" font-family="sans-serif" font-size="11">"#
+    );
+    let _ = write!(
+        s,
+        r#"<rect x="0" y="0" width="{W}" height="{H}" fill="white"/>"#
+    );
+    let _ = write!(
+        s,
+        r#"<text x="{}" y="16" font-size="13" font-weight="bold">{}</text>"#,
+        ML,
+        esc(title)
+    );
+    let xs = nice_step(f.x1 - f.x0, 8);
+    let mut x = (f.x0 / xs).ceil() * xs;
+    while x <= f.x1 + 1e-9 {
+        let p = f.px(x);
+        let _ = write!(
+            s,
+            r##"<line x1="{p:.1}" y1="{}" x2="{p:.1}" y2="{}" stroke="#eee"/><text x="{p:.1}" y="{}" text-anchor="middle">{}</text>"##,
+            MT,
+            H - MB,
+            H - MB + 14.0,
+            fmt_tick(x, xs)
+        );
+        x += xs;
+    }
+    let ys = nice_step(f.y1 - f.y0, 6);
+    let mut y = (f.y0 / ys).ceil() * ys;
+    while y <= f.y1 + 1e-9 {
+        let p = f.py(y);
+        let _ = write!(
+            s,
+            r##"<line x1="{ML}" y1="{p:.1}" x2="{}" y2="{p:.1}" stroke="#eee"/><text x="{}" y="{:.1}" text-anchor="end">{}</text>"##,
+            W - MR,
+            ML - 4.0,
+            p + 4.0,
+            fmt_tick(y, ys)
+        );
+        y += ys;
+    }
+    let _ = write!(
+        s,
+        r##"<rect x="{ML}" y="{MT}" width="{}" height="{}" fill="none" stroke="#444"/>"##,
+        W - ML - MR,
+        H - MT - MB
+    );
+    let _ = write!(
+        s,
+        r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
+        (ML + W - MR) / 2.0,
+        H - 8.0,
+        esc(xlabel)
+    );
+    let _ = write!(
+        s,
+        r#"<text transform="translate(14,{}) rotate(-90)" text-anchor="middle">{}</text>"#,
+        (MT + H - MB) / 2.0,
+        esc(ylabel)
+    );
+}
+
+fn fmt_tick(v: f64, step: f64) -> String {
+    if step >= 1.0 {
+        format!("{:.0}", v)
+    } else {
+        let d = (-step.log10().floor()) as usize;
+        format!("{:.*}", d, v)
+    }
+}
+
+fn thin(points: &[(f64, f64)], max: usize) -> Vec<(f64, f64)> {
+    if points.len() <= max {
+        return points.to_vec();
+    }
+    // Keep the min and max of each bucket so spikes stay visible.
+    let bucket = points.len().div_ceil(max / 2);
+    let mut out = Vec::with_capacity(max + 2);
+    for c in points.chunks(bucket) {
+        let lo = c.iter().min_by(|a, b| a.1.total_cmp(&b.1)).copied();
+        let hi = c.iter().max_by(|a, b| a.1.total_cmp(&b.1)).copied();
+        if let (Some(lo), Some(hi)) = (lo, hi) {
+            if lo.0 <= hi.0 {
+                out.push(lo);
+                out.push(hi);
+            } else {
+                out.push(hi);
+                out.push(lo);
+            }
+        }
+    }
+    out
+}
+
+fn bounds<'a>(pts: impl Iterator<Item = &'a (f64, f64)>) -> Frame {
+    let mut f = Frame {
+        x0: f64::INFINITY,
+        x1: f64::NEG_INFINITY,
+        y0: f64::INFINITY,
+        y1: f64::NEG_INFINITY,
+    };
+    for (x, y) in pts {
+        if x.is_finite() && y.is_finite() {
+            f.x0 = f.x0.min(*x);
+            f.x1 = f.x1.max(*x);
+            f.y0 = f.y0.min(*y);
+            f.y1 = f.y1.max(*y);
+        }
+    }
+    if !f.x0.is_finite() {
+        return Frame {
+            x0: 0.0,
+            x1: 1.0,
+            y0: 0.0,
+            y1: 1.0,
+        };
+    }
+    let pad = ((f.y1 - f.y0) * 0.05).max(1e-9);
+    Frame {
+        y0: f.y0 - pad,
+        y1: f.y1 + pad,
+        ..f
+    }
+}
+
+/// Line plot of one or more series.
+pub fn line_plot(title: &str, xlabel: &str, ylabel: &str, series: &[Series]) -> String {
+    let f = bounds(series.iter().flat_map(|s| s.points.iter()));
+    let mut s = String::new();
+    axes(&mut s, &f, title, xlabel, ylabel);
+    for (k, se) in series.iter().enumerate() {
+        let pts = thin(&se.points, 4000);
+        let mut d = String::with_capacity(pts.len() * 14);
+        for (i, (x, y)) in pts.iter().enumerate() {
+            let _ = write!(
+                d,
+                "{}{:.1},{:.1}",
+                if i == 0 { "M" } else { "L" },
+                f.px(*x),
+                f.py(*y)
+            );
+        }
+        let _ = write!(
+            s,
+            r#"<path d="{d}" fill="none" stroke="{}" stroke-width="1"/>"#,
+            se.color
+        );
+        let ly = MT + 14.0 + 14.0 * k as f64;
+        let _ = write!(
+            s,
+            r#"<rect x="{}" y="{}" width="10" height="10" fill="{}"/><text x="{}" y="{}">{}</text>"#,
+            W - MR - 170.0,
+            ly - 9.0,
+            se.color,
+            W - MR - 156.0,
+            ly,
+            esc(se.name)
+        );
+    }
+    s.push_str("</svg>");
+    s
+}
+
+/// Scatter plot (for value against position).
+pub fn scatter(
+    title: &str,
+    xlabel: &str,
+    ylabel: &str,
+    color: &str,
+    points: &[(f64, f64)],
+) -> String {
+    let f = bounds(points.iter());
+    let mut s = String::new();
+    axes(&mut s, &f, title, xlabel, ylabel);
+    let step = (points.len() / 6000).max(1);
+    for (x, y) in points.iter().step_by(step) {
+        let _ = write!(
+            s,
+            r#"<circle cx="{:.1}" cy="{:.1}" r="1.2" fill="{color}" fill-opacity="0.5"/>"#,
+            f.px(*x),
+            f.py(*y)
+        );
+    }
+    s.push_str("</svg>");
+    s
+}
+
+/// Overlaid histograms of several samples on common bins.
+pub fn histogram(
+    title: &str,
+    xlabel: &str,
+    bins: usize,
+    series: &[(&str, &str, Vec<f64>)],
+) -> String {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (_, _, v) in series {
+        for x in v.iter().filter(|x| x.is_finite()) {
+            lo = lo.min(*x);
+            hi = hi.max(*x);
+        }
+    }
+    if !lo.is_finite() {
+        lo = 0.0;
+        hi = 1.0;
+    }
+    if hi - lo < 1e-9 {
+        lo -= 0.5;
+        hi += 0.5;
+    }
+    let w = (hi - lo) / bins as f64;
+    let counts: Vec<Vec<usize>> = series
+        .iter()
+        .map(|(_, _, v)| {
+            let mut c = vec![0usize; bins];
+            for x in v.iter().filter(|x| x.is_finite()) {
+                c[(((x - lo) / w) as usize).min(bins - 1)] += 1;
+            }
+            c
+        })
+        .collect();
+    let ymax = counts.iter().flatten().copied().max().unwrap_or(1) as f64;
+    let f = Frame {
+        x0: lo,
+        x1: hi,
+        y0: 0.0,
+        y1: ymax * 1.05,
+    };
+    let mut s = String::new();
+    axes(&mut s, &f, title, xlabel, "points");
+    for (k, ((name, color, _), c)) in series.iter().zip(&counts).enumerate() {
+        for (b, n) in c.iter().enumerate() {
+            if *n == 0 {
+                continue;
+            }
+            let x0 = f.px(lo + w * b as f64);
+            let x1 = f.px(lo + w * (b + 1) as f64);
+            let y = f.py(*n as f64);
+            let _ = write!(
+                s,
+                r#"<rect x="{x0:.1}" y="{y:.1}" width="{:.1}" height="{:.1}" fill="{color}" fill-opacity="0.55"/>"#,
+                (x1 - x0 - 0.5).max(0.5),
+                f.py(0.0) - y
+            );
+        }
+        let ly = MT + 14.0 + 14.0 * k as f64;
+        let _ = write!(
+            s,
+            r#"<rect x="{}" y="{}" width="10" height="10" fill="{color}"/><text x="{}" y="{}">{}</text>"#,
+            W - MR - 220.0,
+            ly - 9.0,
+            W - MR - 206.0,
+            ly,
+            esc(name)
+        );
+    }
+    s.push_str("</svg>");
+    s
+}
+
+/// Colour of t ∈ [0, 1] on a blue–green–yellow–red scale.
+pub fn colormap(t: f64) -> String {
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let stops = [
+        (0.0, (49, 54, 149)),
+        (0.35, (69, 170, 140)),
+        (0.65, (240, 220, 60)),
+        (1.0, (215, 48, 39)),
+    ];
+    for w in stops.windows(2) {
+        let ((t0, c0), (t1, c1)) = (w[0], w[1]);
+        if t <= t1 {
+            let u = (t - t0) / (t1 - t0);
+            let l = |a: i32, b: i32| (a as f64 + (b - a) as f64 * u).round() as i32;
+            return format!("rgb({},{},{})", l(c0.0, c1.0), l(c0.1, c1.1), l(c0.2, c1.2));
+        }
+    }
+    "rgb(215,48,39)".into()
+}
+
+/// Top view (X right, Y up) of points coloured by a value, with a colour bar.
+pub fn map(title: &str, label: &str, points: &[(f64, f64, f64)]) -> String {
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    let (mut v0, mut v1) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (x, y, v) in points {
+        x0 = x0.min(*x);
+        x1 = x1.max(*x);
+        y0 = y0.min(*y);
+        y1 = y1.max(*y);
+        if v.is_finite() {
+            v0 = v0.min(*v);
+            v1 = v1.max(*v);
+        }
+    }
+    let side = 520.0;
+    let span = (x1 - x0).max(y1 - y0).max(1e-9);
+    let (sx, sy) = (
+        |x: f64| 40.0 + (x - x0) / span * side,
+        |y: f64| 40.0 + side - (y - y0) / span * side,
+    );
+    let mut s = String::new();
+    let _ = write!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 720 620" width="720" height="620" font-family="sans-serif" font-size="11"><rect width="720" height="620" fill="white"/>"#
+    );
+    let _ = write!(
+        s,
+        r#"<text x="40" y="22" font-size="13" font-weight="bold">{}</text>"#,
+        esc(title)
+    );
+    let step = (points.len() / 20000).max(1);
+    for (x, y, v) in points.iter().step_by(step) {
+        let t = (v - v0) / (v1 - v0).max(1e-12);
+        let _ = write!(
+            s,
+            r#"<circle cx="{:.1}" cy="{:.1}" r="1.4" fill="{}"/>"#,
+            sx(*x),
+            sy(*y),
+            colormap(t)
+        );
+    }
+    for k in 0..50 {
+        let t = k as f64 / 49.0;
+        let _ = write!(
+            s,
+            r#"<rect x="620" y="{:.1}" width="18" height="11" fill="{}"/>"#,
+            40.0 + side - (k as f64 + 1.0) * side / 50.0,
+            colormap(t)
+        );
+    }
+    let _ = write!(
+        s,
+        r#"<text x="642" y="{:.1}">{v1:.3}</text><text x="642" y="{:.1}">{v0:.3}</text><text x="610" y="32">{}</text>"#,
+        48.0,
+        40.0 + side,
+        esc(label)
+    );
+    let _ = write!(
+        s,
+        r#"<text x="40" y="{}">X {x0:.1} … {x1:.1} mm, Y {y0:.1} … {y1:.1} mm</text>"#,
+        40.0 + side + 22.0
+    );
+    s.push_str("</svg>");
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plots_are_well_formed_svg() {
+        let pts: Vec<(f64, f64)> = (0..10000)
+            .map(|i| (i as f64, (i as f64 * 0.01).sin()))
+            .collect();
+        for svg in [
+            line_plot(
+                "t",
+                "x",
+                "y",
+                &[Series {
+                    name: "a",
+                    color: "#1f77b4",
+                    points: pts.clone(),
+                }],
+            ),
+            scatter("t", "x", "y", "#000", &pts),
+            histogram(
+                "h",
+                "x",
+                20,
+                &[("a", "#f00", pts.iter().map(|p| p.1).collect())],
+            ),
+            map(
+                "m",
+                "v",
+                &pts.iter().map(|p| (p.0, p.1, p.1)).collect::<Vec<_>>(),
+            ),
+        ] {
+            assert!(svg.starts_with("<svg") && svg.ends_with("</svg>"));
+            assert!(!svg.contains("NaN") && !svg.contains("inf"));
+        }
+        assert_eq!(nice_step(10.0, 5), 2.0);
+        assert_eq!(colormap(0.0), "rgb(49,54,149)");
+    }
+}

@@ -1,0 +1,213 @@
+//! `millplan speed`: constant-cutting-speed spindle control for ball-end finishing.
+
+use crate::cmd::{print_diagnostics, read_options, UnitArg};
+use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::io::{read_mesh, read_program, write_atomic};
+use clap::ValueEnum;
+use millplan_models::contact::{Convention, NormalMode};
+use millplan_nc::write::gcode::{write_gcode, GcodeOptions};
+use millplan_nc::Dialect;
+use millplan_plan::machine::Machine;
+use millplan_plan::speed::{apply, FeedCoupling, SpeedParams};
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum ConventionArg {
+    Auto,
+    Tip,
+    Centre,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum NormalArg {
+    Smooth,
+    Facet,
+    Ball,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum TargetArg {
+    Fanuc,
+    Sinumerik,
+    Heidenhain,
+    Linuxcnc,
+    Apt,
+}
+
+/// Set the spindle speed per block so the cutting speed stays constant
+/// (paper 000, thesis 3).
+///
+/// For every cutting point of every ball-end operation millplan finds where the
+/// ball touches the part (STL), the surface inclination, the feed direction and
+/// which side is already machined, computes the working diameter D_w and sets
+/// n = 1000·vc/(π·D_w), within the machine's spindle range and acceleration.
+/// By default the feed follows, F = n·z·fz, so the chip load stays constant.
+/// Only speeds and feeds change, never positions.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Toolpath: APT/CL or G-code with a ball-end tool.
+    pub path: PathBuf,
+    /// Part surface (STL) in the same coordinates as the toolpath.
+    #[arg(long)]
+    pub stl: PathBuf,
+    /// Cutting speed, m/min.
+    #[arg(long)]
+    pub vc: f64,
+    /// Feed per tooth, mm.
+    #[arg(long)]
+    pub fz: f64,
+    /// Number of flutes.
+    #[arg(long, default_value_t = 2)]
+    pub flutes: u32,
+    /// Stock thickness along the surface normal (finishing allowance), mm.
+    #[arg(long)]
+    pub ap: f64,
+    /// Machine description (TOML: spindle_min, spindle_max, spindle_accel,
+    /// feed_min, feed_max, rapid, dialect); a typical HSC machine by default.
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
+    /// Output program.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Output dialect (default: the machine's, else the input's).
+    #[arg(long, value_enum)]
+    pub to: Option<TargetArg>,
+    /// Keep the programmed feed instead of F = n·z·fz.
+    #[arg(long)]
+    pub keep_feed: bool,
+    /// Write a new S only when the speed changes by more than this, 1/min.
+    #[arg(long, default_value_t = 1.0)]
+    pub s_threshold: f64,
+    /// Which tool point the CL points are.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub convention: ConventionArg,
+    /// Normals at the contact point.
+    #[arg(long, value_enum, default_value = "smooth")]
+    pub normals: NormalArg,
+    /// Use the paper's nearest-in-centre facet mapping (comparison only).
+    #[arg(long)]
+    pub nearest_incentre: bool,
+    /// Per-point table (CSV).
+    #[arg(long)]
+    pub table: Option<PathBuf>,
+    /// Report (self-contained HTML with SVG plots).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Print a JSON summary on standard output.
+    #[arg(long)]
+    pub json: bool,
+    /// Unit of the toolpath when the file does not say.
+    #[arg(long, value_enum)]
+    pub units: Option<UnitArg>,
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    let machine = match &a.machine {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .map_err(|e| CliError::input(format!("{}: cannot read: {e}", p.display())))?;
+            Machine::from_toml(&text)
+                .map_err(|e| CliError::input(format!("{}: {e}", p.display())))?
+        }
+        None => Machine::default(),
+    };
+    let parsed = read_program(&a.path, read_options(a.units, None))?;
+    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    let (mesh, _) = read_mesh(&a.stl)?;
+    let mut p = SpeedParams::new(a.vc, a.fz, a.flutes, a.ap);
+    p.feed = if a.keep_feed {
+        FeedCoupling::Programmed
+    } else {
+        FeedCoupling::ChipLoad
+    };
+    p.s_threshold = a.s_threshold.max(0.0);
+    p.convention = match a.convention {
+        ConventionArg::Auto => None,
+        ConventionArg::Tip => Some(Convention::Tip),
+        ConventionArg::Centre => Some(Convention::Centre),
+    };
+    p.normals = match a.normals {
+        NormalArg::Smooth => NormalMode::Smooth,
+        NormalArg::Facet => NormalMode::Facet,
+        NormalArg::Ball => NormalMode::Ball,
+    };
+    p.nearest_incentre = a.nearest_incentre;
+    let res = apply(&parsed.program, &mesh, &machine, &p)
+        .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
+    let dialect = match a.to {
+        Some(TargetArg::Fanuc) => Dialect::Fanuc,
+        Some(TargetArg::Sinumerik) => Dialect::Sinumerik,
+        Some(TargetArg::Heidenhain) => Dialect::Heidenhain,
+        Some(TargetArg::Linuxcnc) => Dialect::LinuxCnc,
+        Some(TargetArg::Apt) => Dialect::AptIso,
+        None => machine.dialect_enum().unwrap_or(parsed.program.dialect),
+    };
+    let mut out = Vec::new();
+    if dialect.is_apt() {
+        millplan_nc::write::apt::write_apt(&res.program, &mut out)
+            .map_err(|e| CliError::input(e.to_string()))?;
+    } else {
+        write_gcode(&res.program, GcodeOptions::new(dialect), &mut out)
+            .map_err(|e| CliError::input(e.to_string()))?;
+    }
+    let inputs = [a.path.as_path(), a.stl.as_path()];
+    write_atomic(&a.output, &out, &inputs)?;
+    if let Some(t) = &a.table {
+        write_atomic(
+            t,
+            millplan_report::table::points_csv(&res.rows).as_bytes(),
+            &inputs,
+        )?;
+    }
+    if let Some(r) = &a.report {
+        let title = format!(
+            "millplan speed: {}",
+            a.path
+                .file_name()
+                .map(|f| f.to_string_lossy())
+                .unwrap_or_default()
+        );
+        write_atomic(
+            r,
+            millplan_report::html::speed_report(&title, &res.summary, &res.rows, a.vc).as_bytes(),
+            &inputs,
+        )?;
+    }
+    let s = &res.summary;
+    if a.json {
+        let mut j = serde_json::to_value(s).unwrap_or_default();
+        j["output"] = serde_json::json!(a.output.display().to_string());
+        j["dialect"] = serde_json::json!(dialect.name());
+        j["machine"] = serde_json::to_value(&machine).unwrap_or_default();
+        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+    } else {
+        println!(
+            "{} cutting points in {} ball-end operation(s), CL points read as {:?}",
+            s.points, s.operations, s.convention
+        );
+        println!(
+            "  D_w        {:.3} … {:.3} mm (mean {:.3})",
+            s.d_w.min, s.d_w.max, s.d_w.mean
+        );
+        println!(
+            "  spindle    {:.0} … {:.0} 1/min",
+            s.spindle.min, s.spindle.max
+        );
+        println!(
+            "  vc         {:.1} … {:.1} m/min with control; {:.1} … {:.1} at constant {:.0} 1/min",
+            s.vc_controlled.min,
+            s.vc_controlled.max,
+            s.vc_constant.min,
+            s.vc_constant.max,
+            s.constant_spindle
+        );
+        println!("  limits     {} clamped, {} rate-limited, {} held under the S threshold, {} feeds clamped", s.clamped, s.rate_limited, s.held, s.feed_clamped);
+        if s.gap_flagged > 0 {
+            println!("  warning    {} points are not R from the surface (gouge, wrong convention or a different part)", s.gap_flagged);
+        }
+        println!("  wrote      {} ({})", a.output.display(), dialect.name());
+    }
+    Ok(EXIT_OK)
+}

@@ -1,0 +1,107 @@
+//! `millplan wd`: the working diameter of one case.
+
+use crate::error::{CliError, CliResult, EXIT_OK};
+use clap::ValueEnum;
+use millplan_models::wd::{self, Case, Neighbour, Side};
+use serde_json::json;
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum SideArg {
+    Left,
+    Right,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum ModelArg {
+    /// The geometric engagement model (exact).
+    Geometric,
+    /// The fitted least-squares surrogate (fast, approximate).
+    Regression,
+}
+
+/// Working diameter of a ball-end mill for one case (paper 000; spec
+/// working-diameter.md §1): the tool diameter at the highest engaged point of the
+/// ball on a locally planar surface.
+///
+/// Angles in degrees: --alpha is the surface inclination (0 = flat); --af the feed
+/// direction relative to uphill (0 = straight uphill, 180 = downhill, positive
+/// counter-clockwise seen from outside the material); --side the side of the feed
+/// the uncut material is on (with M3, right = climb milling). Without --ae there is
+/// no neighbouring pass (first or isolated pass).
+#[derive(clap::Args)]
+pub struct Args {
+    /// Ball diameter, mm.
+    #[arg(long)]
+    pub d: f64,
+    /// Stock thickness along the surface normal, mm.
+    #[arg(long)]
+    pub ap: f64,
+    /// Distance to the already machined neighbouring pass, mm.
+    #[arg(long)]
+    pub ae: Option<f64>,
+    /// Both neighbouring passes are already machined (needs --ae).
+    #[arg(long)]
+    pub both: bool,
+    /// Surface inclination, degrees.
+    #[arg(long, allow_hyphen_values = true)]
+    pub alpha: f64,
+    /// Feed direction relative to uphill, degrees.
+    #[arg(long, allow_hyphen_values = true)]
+    pub af: f64,
+    /// Side of the feed the uncut material is on.
+    #[arg(long, value_enum, default_value = "left")]
+    pub side: SideArg,
+    /// Cutting speed, m/min: also print the spindle speed for it.
+    #[arg(long)]
+    pub vc: Option<f64>,
+    #[arg(long, value_enum, default_value = "geometric")]
+    pub model: ModelArg,
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    if !(a.d > 0.0) || !(a.ap > 0.0) || a.ae.map(|x| !(x > 0.0)).unwrap_or(false) {
+        return Err(CliError::input("--d, --ap and --ae must be positive"));
+    }
+    if !(0.0..90.0).contains(&a.alpha) {
+        return Err(CliError::input("--alpha must be in [0, 90) degrees"));
+    }
+    if a.both && a.ae.is_none() {
+        return Err(CliError::input("--both needs --ae"));
+    }
+    let neighbour = match (a.ae, a.both) {
+        (None, _) => Neighbour::None,
+        (Some(x), false) => Neighbour::One(x),
+        (Some(x), true) => Neighbour::Both(x),
+    };
+    let af = (a.af + 180.0).rem_euclid(360.0) - 180.0;
+    let c = Case {
+        d: a.d,
+        ap: a.ap,
+        neighbour,
+        alpha: a.alpha.to_radians(),
+        af: af.to_radians(),
+        side: match a.side {
+            SideArg::Left => Side::Left,
+            SideArg::Right => Side::Right,
+        },
+    };
+    let dw = match a.model {
+        ModelArg::Geometric => wd::working_diameter(&c),
+        ModelArg::Regression => millplan_models::regression::Surrogate::standard().predict(&c),
+    };
+    let dcc = wd::contact_diameter(a.d, c.alpha);
+    let n = a.vc.map(|vc| wd::spindle_speed(vc, dw));
+    if a.json {
+        let j = json!({ "d_w": dw, "d_cc": dcc, "n": n, "model": format!("{:?}", a.model).to_lowercase() });
+        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+    } else {
+        println!("D_w  {dw:.4} mm  (working diameter, highest engaged point)");
+        println!("D_cc {dcc:.4} mm  (diameter at the contact point)");
+        if let Some(n) = n {
+            println!("n    {n:.0} 1/min for vc = {} m/min", a.vc.unwrap_or(0.0));
+        }
+    }
+    Ok(EXIT_OK)
+}
