@@ -80,6 +80,8 @@ pub struct PointRow {
     pub op: usize,
     pub mv: usize,
     pub line: u32,
+    /// Ball diameter of the operation, mm.
+    pub d: f64,
     pub cl: DVec3,
     pub r: PointResult,
     /// Spindle speed for constant vc before any limit.
@@ -342,12 +344,21 @@ pub fn apply(
         };
         let mut dt = vec![0.0; n.len()];
         let before_limit = n.clone();
-        for _ in 0..3 {
+        // The block time depends on the speed through the feed: iterate until the
+        // limited speeds satisfy the bound with their own block times.
+        for _ in 0..50 {
             for k in 0..n.len() {
                 let (f, _) = feed_of(k, n[k]);
                 dt[k] = geo[k].0 / f * 60.0 + geo[k].1;
             }
-            rate_limit(&mut n, &dt, m.spindle_accel);
+            let ok = (1..n.len())
+                .all(|k| (n[k] - n[k - 1]).abs() <= m.spindle_accel * dt[k] * (1.0 + 1e-12) + 1e-9);
+            if ok {
+                break;
+            }
+            // Aim slightly inside the bound so the next feeds cannot push it over.
+            let shrunk: Vec<f64> = dt.iter().map(|t| t * 0.999).collect();
+            rate_limit(&mut n, &shrunk, m.spindle_accel);
         }
         for k in 0..n.len() {
             let (f, _) = feed_of(k, n[k]);
@@ -393,6 +404,7 @@ pub fn apply(
                 op: oi,
                 mv: i,
                 line: op.moves[i].line,
+                d,
                 cl: op.moves[i].end,
                 n_target: target[k],
                 n: n[k],

@@ -1,0 +1,183 @@
+//! `millplan speed` end to end: the program re-reads, every S is inside the machine
+//! range, S changes respect the spindle acceleration, and n·π·D_w/1000 = vc wherever
+//! no limit acted; on the bundled free-form case and on SOLIDWORKS CAM's
+//! Interface-glue pair (14 mm ball-end operation).
+
+use millplan_nc::{parse_program, MoveKind, ReadOptions};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_millplan"))
+}
+
+const MACHINE: &str = "spindle_min = 1000\nspindle_max = 12000\nspindle_accel = 4000\nfeed_min = 10\nfeed_max = 8000\nrapid = 20000\n";
+
+struct Run {
+    json: serde_json::Value,
+    program: millplan_nc::Program,
+    table: Vec<Vec<String>>,
+    header: Vec<String>,
+}
+
+fn run(path: &Path, stl: &Path, dir: &Path, extra: &[&str]) -> Run {
+    let machine = dir.join("m.toml");
+    std::fs::write(&machine, MACHINE).expect("write");
+    let out = dir.join("out.apt");
+    let table = dir.join("points.csv");
+    let o = bin()
+        .args([
+            "speed",
+            path.to_str().expect("utf8"),
+            "--stl",
+            stl.to_str().expect("utf8"),
+        ])
+        .args([
+            "--vc", "63", "--fz", "0.125", "--flutes", "2", "--ap", "0.3", "--json", "-q",
+        ])
+        .args(["--machine", machine.to_str().expect("utf8"), "--to", "apt"])
+        .args([
+            "-o",
+            out.to_str().expect("utf8"),
+            "--table",
+            table.to_str().expect("utf8"),
+        ])
+        .args(extra)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let text = std::fs::read_to_string(&out).expect("output");
+    let program = parse_program(&text, ReadOptions::default())
+        .expect("output re-reads")
+        .program;
+    millplan_nc::verify::verify(&program).expect("output verifies");
+    let csv = std::fs::read_to_string(&table).expect("table");
+    let mut lines = csv.lines();
+    let header: Vec<String> = lines
+        .next()
+        .expect("header")
+        .split(',')
+        .map(String::from)
+        .collect();
+    let table = lines
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    Run {
+        json,
+        program,
+        table,
+        header,
+    }
+}
+
+fn check(r: &Run) {
+    // Every S within the machine's range, and changes within its acceleration.
+    let mut prev: Option<(f64, f64)> = None; // (spindle, time so far in s)
+    let mut t = 0.0;
+    for op in &r.program.operations {
+        for (i, m) in op.moves.iter().enumerate() {
+            let len = op
+                .move_start(i)
+                .map(|s| (m.end - s).length())
+                .unwrap_or(0.0);
+            t += match m.kind {
+                MoveKind::Rapid | MoveKind::Cycle => len / 20000.0 * 60.0,
+                _ => len / m.feed * 60.0,
+            };
+            if m.is_cutting() && m.spindle > 0.0 {
+                assert!(
+                    (1000.0 - 1e-6..=12000.0 + 1e-6).contains(&m.spindle),
+                    "S {} outside the range",
+                    m.spindle
+                );
+                if let Some((s0, t0)) = prev {
+                    // 1e-3 s: the APT output rounds positions to 1 µm.
+                    assert!(
+                        (m.spindle - s0).abs() <= 4000.0 * (t - t0 + 1e-3) + 1e-6,
+                        "ΔS {} in {} s",
+                        m.spindle - s0,
+                        t - t0
+                    );
+                }
+                prev = Some((m.spindle, t));
+            }
+        }
+    }
+    // n·π·D_w/1000 = vc where no limit acted.
+    let col = |n: &str| r.header.iter().position(|h| h == n).expect("column");
+    let (dw, n, cl, rl, held) = (
+        col("d_w"),
+        col("n"),
+        col("clamped"),
+        col("rate_limited"),
+        col("held"),
+    );
+    let mut exact = 0;
+    for row in &r.table {
+        if row[cl] == "0" && row[rl] == "0" && row[held] == "0" {
+            let v = std::f64::consts::PI
+                * row[dw].parse::<f64>().expect("d_w")
+                * row[n].parse::<f64>().expect("n")
+                / 1000.0;
+            // Table values are printed to 4 and 1 decimals.
+            assert!((v - 63.0).abs() < 0.02, "vc {v} on an unlimited row");
+            exact += 1;
+        }
+    }
+    assert!(exact > 0, "no unlimited rows");
+    assert_eq!(
+        r.table.len() as u64,
+        r.json["points"].as_u64().expect("points")
+    );
+}
+
+#[test]
+fn speed_on_the_generated_free_form_case() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let st = bin()
+        .args(["demo", "-o", dir.path().join("d").to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    assert!(st.status.success());
+    let d = dir.path().join("d");
+    let r = run(&d.join("finish.apt"), &d.join("part.stl"), dir.path(), &[]);
+    check(&r);
+    assert_eq!(r.json["convention"], "tip");
+    assert_eq!(r.json["gap_flagged"], 0);
+    // Control evens out the cutting speed.
+    assert!(r.json["vc_controlled"]["std"].as_f64() < r.json["vc_constant"]["std"].as_f64());
+}
+
+#[test]
+fn speed_on_interface_glue() {
+    let root =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/swcam-apt-stl-pairs");
+    let (apt, stl) = (
+        root.join("Interface-glue.apt"),
+        root.join("Interface-glue.STL"),
+    );
+    if !apt.exists() || !stl.exists() {
+        eprintln!("skipped: shared/data not present");
+        return;
+    }
+    let dir = tempfile::tempdir().expect("tmp");
+    let r = run(&apt, &stl, dir.path(), &[]);
+    check(&r);
+    // The 14 mm ball-end operation: formats.md counts 6 187 GOTOs in its 40 levels.
+    assert_eq!(r.json["operations"], 1);
+    let pts = r.json["points"].as_u64().expect("points");
+    assert!((5000..=6187).contains(&pts), "{pts} cutting points");
+    assert_eq!(
+        r.json["convention"], "tip",
+        "SOLIDWORKS CAM writes tool tips"
+    );
+    // Only the ball operation changes: the flat and drill operations keep their speeds.
+    let src = parse_program(
+        &std::fs::read_to_string(&apt).expect("read"),
+        ReadOptions::default(),
+    )
+    .expect("reads")
+    .program;
+    assert_eq!(src.move_count(), r.program.move_count());
+}
