@@ -23,6 +23,8 @@ pub struct Raster {
     pub spindle: f64,
     /// Clearance height above the highest surface point for rapids, mm.
     pub clearance: f64,
+    /// Feed direction of the passes, degrees from +X (counter-clockwise seen from +Z).
+    pub angle_deg: f64,
 }
 
 impl Default for Raster {
@@ -35,6 +37,7 @@ impl Default for Raster {
             feed: 1500.0,
             spindle: 6000.0,
             clearance: 5.0,
+            angle_deg: 0.0,
         }
     }
 }
@@ -45,26 +48,37 @@ pub fn raster(surface: &dyn HeightField, r: &Raster) -> (Program, Vec<Option<DVe
     let (lo, hi) = surface.domain();
     let (x0, x1) = (lo.x + r.margin, hi.x - r.margin);
     let (y0, y1) = (lo.y + r.margin, hi.y - r.margin);
-    let nx = ((x1 - x0) / r.step).round().max(1.0) as usize;
-    let ny = ((y1 - y0) / r.stepover).round().max(0.0) as usize;
-    // Highest tip height for the clearance plane.
+    // Passes along direction `dir`, stepping along `perp`, clipped to the domain.
+    let (sa, ca) = r.angle_deg.to_radians().sin_cos();
+    let (dir, perp) = (
+        millplan_geom::DVec2::new(ca, sa),
+        millplan_geom::DVec2::new(-sa, ca),
+    );
+    let centre = millplan_geom::DVec2::new((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    let half = ((x1 - x0).hypot(y1 - y0)) / 2.0;
+    let inside = |q: millplan_geom::DVec2| {
+        q.x >= x0 - 1e-9 && q.x <= x1 + 1e-9 && q.y >= y0 - 1e-9 && q.y <= y1 + 1e-9
+    };
+    let lines = (half / r.stepover).floor() as i64;
+    let steps = (2.0 * half / r.step).ceil() as i64;
     let mut ztop = f64::NEG_INFINITY;
     let tip = |x: f64, y: f64| {
         let p = surface.point(x, y);
         let n = surface.normal(x, y);
         (p + n * rad - DVec3::Z * rad, p)
     };
-    let mut rows = Vec::with_capacity(ny + 1);
-    for j in 0..=ny {
-        let y = if ny == 0 {
-            y0
-        } else {
-            y0 + (y1 - y0) * j as f64 / ny as f64
-        };
-        let mut row: Vec<(DVec3, DVec3)> = (0..=nx)
-            .map(|i| tip(x0 + (x1 - x0) * i as f64 / nx as f64, y))
+    let mut rows: Vec<Vec<(DVec3, DVec3)>> = Vec::new();
+    for j in -lines..=lines {
+        let base = centre + perp * (r.stepover * j as f64);
+        let mut row: Vec<(DVec3, DVec3)> = (0..=steps)
+            .map(|i| base + dir * (-half + r.step * i as f64))
+            .filter(|q| inside(*q))
+            .map(|q| tip(q.x, q.y))
             .collect();
-        if j % 2 == 1 {
+        if row.len() < 2 {
+            continue;
+        }
+        if rows.len() % 2 == 1 {
             row.reverse();
         }
         for (t, _) in &row {

@@ -30,6 +30,9 @@ enum Command {
     Demo(cmd::demo::Args),
     Wd(cmd::wd::Args),
     Speed(cmd::speed::Args),
+    Directions(cmd::directions::Args),
+    #[command(name = "wd-sweep")]
+    WdSweep(cmd::sweep::Args),
 }
 
 fn main() {
@@ -51,6 +54,8 @@ fn main() {
         Command::Demo(a) => cmd::demo::run(a),
         Command::Wd(a) => cmd::wd::run(a),
         Command::Speed(a) => cmd::speed::run(a),
+        Command::WdSweep(a) => cmd::sweep::run(a),
+        Command::Directions(a) => cmd::directions::run(a),
     };
     match r {
         Ok(code) => std::process::exit(code),

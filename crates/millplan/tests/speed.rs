@@ -181,3 +181,55 @@ fn speed_on_interface_glue() {
     .program;
     assert_eq!(src.move_count(), r.program.move_count());
 }
+
+#[test]
+fn directions_ranks_rasters_of_one_surface() {
+    use millplan_geom::analytic::{tessellate, DemoSurface};
+    use millplan_nc::generate::{raster, Raster};
+    let dir = tempfile::tempdir().expect("tmp");
+    let s = DemoSurface::default();
+    let mut stl = Vec::new();
+    millplan_geom::stl::write_binary_stl(&tessellate(&s, 1.0), "part", &mut stl);
+    let stl_path = dir.path().join("part.stl");
+    std::fs::write(&stl_path, stl).expect("write");
+    let mut paths = Vec::new();
+    for angle in [0.0, 45.0, 90.0] {
+        let (p, _) = raster(
+            &s,
+            &Raster {
+                angle_deg: angle,
+                stepover: 2.0,
+                step: 1.0,
+                ..Raster::default()
+            },
+        );
+        let mut out = Vec::new();
+        millplan_nc::write::apt::write_apt(&p, &mut out).expect("apt");
+        let path = dir.path().join(format!("raster_{angle}.apt"));
+        std::fs::write(&path, out).expect("write");
+        paths.push(path);
+    }
+    let o = bin()
+        .args([
+            "directions",
+            "--stl",
+            stl_path.to_str().expect("utf8"),
+            "--json",
+        ])
+        .args(paths.iter().map(|p| p.to_str().expect("utf8")))
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let c = j["candidates"].as_array().expect("candidates");
+    assert_eq!(c.len(), 3);
+    let tv: Vec<f64> = c
+        .iter()
+        .map(|x| x["indicators"]["total_variation"].as_f64().expect("tv"))
+        .collect();
+    assert!(
+        tv.windows(2).all(|w| w[0] <= w[1]),
+        "ranked ascending: {tv:?}"
+    );
+    assert!(tv[0] > 0.0);
+}

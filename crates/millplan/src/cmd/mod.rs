@@ -2,8 +2,10 @@
 
 pub mod convert;
 pub mod demo;
+pub mod directions;
 pub mod inspect;
 pub mod speed;
+pub mod sweep;
 pub mod wd;
 
 use clap::ValueEnum;
