@@ -67,3 +67,22 @@ pub fn big_program(n: usize) -> Program {
     p.operations.push(op);
     p
 }
+
+/// A ball-end (D10) raster over the demo surface with about `n` points, as APT.
+pub fn ball_raster_apt(n: usize) -> String {
+    use millplan_nc::generate::{raster, Raster};
+    // rows × points per row ≈ n on the 56 mm square inside the margin.
+    let spacing = 56.0 / (n as f64).sqrt();
+    let (p, _) = raster(
+        &DemoSurface::default(),
+        &Raster {
+            step: spacing,
+            stepover: spacing,
+            ..Raster::default()
+        },
+    );
+    let mut out = Vec::new();
+    // Writing to memory cannot fail.
+    let _ = millplan_nc::write::apt::write_apt(&p, &mut out);
+    String::from_utf8(out).unwrap_or_default()
+}

@@ -4,7 +4,7 @@
 use crate::{Aabb, TriMesh};
 use glam::DVec3;
 
-const LEAF: usize = 4;
+const LEAF: usize = 8;
 
 #[derive(Clone, Copy, Debug)]
 struct Node {
@@ -31,6 +31,8 @@ pub struct Closest {
 pub struct Bvh {
     nodes: Vec<Node>,
     order: Vec<u32>,
+    /// Triangle corners in `order`, contiguous: the queries read them leaf by leaf.
+    tris: Vec<[DVec3; 3]>,
 }
 
 impl Bvh {
@@ -55,7 +57,8 @@ impl Bvh {
         if n > 0 {
             Self::split(&mut nodes, 0, &mut order, 0, &centroids, &boxes);
         }
-        Bvh { nodes, order }
+        let tris = order.iter().map(|&t| mesh.corners(t as usize)).collect();
+        Bvh { nodes, order, tris }
     }
 
     fn split(
@@ -119,11 +122,38 @@ impl Bvh {
 
     /// The closest point of the mesh to `p` within `max_dist`, if any.
     pub fn closest(&self, mesh: &TriMesh, p: DVec3, max_dist: f64) -> Option<Closest> {
+        self.closest_near(mesh, p, max_dist, None)
+    }
+
+    /// As [`Bvh::closest`], starting from the distance to triangle `hint` (for
+    /// example the previous point's contact along a path): a tight first bound
+    /// prunes almost the whole tree. The result is the same with or without it.
+    pub fn closest_near(
+        &self,
+        mesh: &TriMesh,
+        p: DVec3,
+        max_dist: f64,
+        hint: Option<u32>,
+    ) -> Option<Closest> {
         if self.order.is_empty() {
             return None;
         }
         let mut best: Option<Closest> = None;
         let mut best_d2 = max_dist * max_dist;
+        if let Some(t) = hint.filter(|t| (*t as usize) < mesh.len()) {
+            let [a, b, c] = mesh.corners(t as usize);
+            let (q, bary) = closest_on_triangle(p, a, b, c);
+            let d2 = (q - p).length_squared();
+            if d2 <= best_d2 {
+                best_d2 = d2;
+                best = Some(Closest {
+                    point: q,
+                    distance: d2.sqrt(),
+                    triangle: t,
+                    bary,
+                });
+            }
+        }
         let mut stack: [u32; 64] = [0; 64];
         let mut sp = 1;
         while sp > 0 {
@@ -133,16 +163,23 @@ impl Bvh {
                 continue;
             }
             if node.count > 0 {
-                for &t in &self.order[node.first as usize..(node.first + node.count) as usize] {
-                    let [a, b, c] = mesh.corners(t as usize);
-                    let (q, bary) = closest_on_triangle(p, a, b, c);
+                let range = node.first as usize..(node.first + node.count) as usize;
+                for (k, [a, b, c]) in self.tris[range.clone()].iter().enumerate() {
+                    // Cheap bound first: the distance to the triangle's plane.
+                    let nrm = (*b - *a).cross(*c - *a);
+                    let h = nrm.dot(p - *a);
+                    if h * h > best_d2 * nrm.length_squared() {
+                        continue;
+                    }
+                    let (q, bary) = closest_on_triangle(p, *a, *b, *c);
                     let d2 = (q - p).length_squared();
                     if d2 <= best_d2 {
                         best_d2 = d2;
+                        let triangle = self.order[range.start + k];
                         best = Some(Closest {
                             point: q,
                             distance: d2.sqrt(),
-                            triangle: t,
+                            triangle,
                             bary,
                         });
                     }
@@ -292,6 +329,8 @@ mod tests {
             let p = DVec3::new(x, y, z);
             let c = bvh.closest(&m, p, f64::INFINITY).expect("hit");
             prop_assert!((c.distance - brute(&m, p)).abs() < 1e-12);
+            let h = bvh.closest_near(&m, p, f64::INFINITY, Some(((x * 7.0).abs() as u32) % m.len() as u32)).expect("hit");
+            prop_assert!((h.distance - c.distance).abs() < 1e-12);
             let [a, b, cc] = m.corners(c.triangle as usize);
             let q = a * c.bary[0] + b * c.bary[1] + cc * c.bary[2];
             prop_assert!((q - c.point).length() < 1e-9);

@@ -251,11 +251,10 @@ pub fn analyse(s: &Surface, points: &[PathPoint], p: &Params) -> Vec<PointResult
     let r = p.d / 2.0;
     let centres: Vec<DVec3> = points.iter().map(|q| centre(q, p.convention, r)).collect();
     let incentres = p.nearest_incentre.then(|| Incentres::new(s.mesh));
-    // Contact and normal.
-    let contacts: Vec<(DVec3, DVec3, f64, bool)> = centres
-        .par_iter()
-        .zip(points.par_iter())
-        .map(|(c, q)| {
+    // Contact and normal: chunks of consecutive points in parallel, each point
+    // starting its search from the previous point's contact triangle.
+    let contact_of =
+        |c: &DVec3, q: &PathPoint, hint: &mut Option<u32>| -> (DVec3, DVec3, f64, bool) {
             if let Some(ic) = &incentres {
                 // The paper: the facet whose in-centre is nearest to the tool position.
                 let t = ic.nearest(q.cl).unwrap_or(0) as usize;
@@ -264,8 +263,9 @@ pub fn analyse(s: &Surface, points: &[PathPoint], p: &Params) -> Vec<PointResult
                 let (pt, _) = millplan_geom::bvh::closest_on_triangle(*c, a, b, cc);
                 return (pt, n, (pt - *c).length() - r, false);
             }
-            match s.bvh.closest(s.mesh, *c, 3.0 * r + p.ap + 1.0) {
+            match s.bvh.closest_near(s.mesh, *c, 3.0 * r + p.ap + 1.0, *hint) {
                 Some(h) => {
+                    *hint = Some(h.triangle);
                     let n = match p.normals {
                         NormalMode::Facet => s.mesh.facet_normal(h.triangle as usize),
                         NormalMode::Ball => (*c - h.point).normalize_or_zero(),
@@ -287,6 +287,16 @@ pub fn analyse(s: &Surface, points: &[PathPoint], p: &Params) -> Vec<PointResult
                 }
                 None => (*c - q.axis * r, q.axis, f64::INFINITY, true),
             }
+        };
+    let contacts: Vec<(DVec3, DVec3, f64, bool)> = centres
+        .par_chunks(2048)
+        .zip(points.par_chunks(2048))
+        .flat_map_iter(|(cs, qs)| {
+            let mut hint = None;
+            cs.iter()
+                .zip(qs)
+                .map(|(c, q)| contact_of(c, q, &mut hint))
+                .collect::<Vec<_>>()
         })
         .collect();
     let search = stepover_search_radius(&centres, points, p.neighbour_search);

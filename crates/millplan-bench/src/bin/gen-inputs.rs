@@ -1,6 +1,7 @@
-//! Writes the benchmark inputs to a folder: `big.apt` (1,000,000 GOTOs) and
-//! `big.stl` (2,000,000 triangles), for whole-command timing and peak memory
-//! (`/usr/bin/time -v millplan inspect big.apt`).
+//! Writes the benchmark inputs to a folder: `big.apt` (1,000,000 GOTOs),
+//! `big.stl` (2,000,000 triangles of the demo surface) and `raster_1m.apt` (a D10
+//! ball-end raster of about 1,000,000 points over that surface), for whole-command
+//! timing and peak memory (`/usr/bin/time -v millplan speed ...`).
 
 fn main() {
     let dir = std::env::args()
@@ -10,6 +11,12 @@ fn main() {
     if let Err(e) = std::fs::create_dir_all(dir)
         .and_then(|_| std::fs::write(dir.join("big.apt"), millplan_bench::big_apt(1_000_000)))
         .and_then(|_| std::fs::write(dir.join("big.stl"), millplan_bench::big_stl(2_000_000)))
+        .and_then(|_| {
+            std::fs::write(
+                dir.join("raster_1m.apt"),
+                millplan_bench::ball_raster_apt(1_000_000),
+            )
+        })
     {
         eprintln!("error: {}: {e}", dir.display());
         std::process::exit(1);
