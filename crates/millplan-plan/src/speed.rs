@@ -201,6 +201,8 @@ pub struct SpeedResult {
     pub program: Program,
     pub rows: Vec<PointRow>,
     pub summary: Summary,
+    /// Wall time of each phase (name, seconds), for `--timings`.
+    pub timings: Vec<(&'static str, f64)>,
 }
 
 fn is_ball(op: &millplan_nc::Operation) -> Option<f64> {
@@ -222,7 +224,14 @@ pub fn apply(
     }
     m.validate()
         .map_err(|e| SpeedError::Invalid(e.to_string()))?;
+    let mut timings = Vec::new();
+    let mut clock = std::time::Instant::now();
+    let mut lap = |name: &'static str, timings: &mut Vec<(&'static str, f64)>| {
+        timings.push((name, clock.elapsed().as_secs_f64()));
+        clock = std::time::Instant::now();
+    };
     let surface = Surface::new(mesh);
+    lap("surface (BVH, vertex normals)", &mut timings);
     let mut out = program.clone();
     let mut rows: Vec<PointRow> = Vec::new();
     let mut check = None;
@@ -278,7 +287,9 @@ pub fn apply(
         cp.normals = p.normals;
         cp.gap_tol = p.gap_tol;
         cp.nearest_incentre = p.nearest_incentre;
+        lap("points and convention", &mut timings);
         let res = contact::analyse(&surface, &pts, &cp);
+        lap("contact and working diameter", &mut timings);
         let programmed = op
             .moves
             .iter()
@@ -419,6 +430,7 @@ pub fn apply(
             });
         }
         constant.push((programmed, rows.len()));
+        lap("spindle limits and feeds", &mut timings);
         feed_clamped_total += feed_clamped.iter().filter(|x| **x).count();
     }
     if ops == 0 {
@@ -429,6 +441,7 @@ pub fn apply(
         program: out,
         rows,
         summary,
+        timings,
     })
 }
 

@@ -99,6 +99,9 @@ pub struct Args {
     /// Unit of the toolpath when the file does not say.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
+    /// Print the wall time of each phase on standard error.
+    #[arg(long)]
+    pub timings: bool,
     #[arg(long, short)]
     pub quiet: bool,
 }
@@ -113,9 +116,12 @@ pub fn run(a: Args) -> CliResult<i32> {
         }
         None => Machine::default(),
     };
+    let t0 = std::time::Instant::now();
     let parsed = read_program(&a.path, read_options(a.units, None))?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    let t_read = t0.elapsed().as_secs_f64();
     let (mesh, _) = read_mesh(&a.stl)?;
+    let t_mesh = t0.elapsed().as_secs_f64() - t_read;
     let mut p = SpeedParams::new(a.vc, a.fz, a.flutes, a.ap);
     p.feed = if a.keep_feed {
         FeedCoupling::Programmed
@@ -154,6 +160,17 @@ pub fn run(a: Args) -> CliResult<i32> {
     }
     let inputs = [a.path.as_path(), a.stl.as_path()];
     write_atomic(&a.output, &out, &inputs)?;
+    if a.timings {
+        eprintln!("{:>8.3} s  read toolpath", t_read);
+        eprintln!("{:>8.3} s  read STL", t_mesh);
+        for (name, t) in &res.timings {
+            eprintln!("{t:>8.3} s  {name}");
+        }
+        eprintln!(
+            "{:>8.3} s  total until the program is written",
+            t0.elapsed().as_secs_f64()
+        );
+    }
     if let Some(t) = &a.table {
         write_atomic(
             t,
