@@ -72,32 +72,25 @@ pub struct Bvh {
 impl Bvh {
     pub fn build(mesh: &TriMesh) -> Bvh {
         let n = mesh.len();
-        let tri: Vec<[DVec3; 3]> = (0..n).into_par_iter().map(|t| mesh.corners(t)).collect();
-        let cen: Vec<DVec3> = tri
-            .par_iter()
-            .map(|[a, b, c]| (*a + *b + *c) / 3.0)
-            .collect();
-        let boxes: Vec<Aabb> = tri
-            .par_iter()
-            .map(|t| Aabb::from_points(t.iter()))
-            .collect();
-        let area_n: Vec<DVec3> = tri
-            .par_iter()
-            .map(|[a, b, c]| (*b - *a).cross(*c - *a))
+        let cen: Vec<DVec3> = (0..n)
+            .into_par_iter()
+            .map(|t| {
+                let [a, b, c] = mesh.corners(t);
+                (a + b + c) / 3.0
+            })
             .collect();
         let mut order: Vec<u32> = (0..n as u32).collect();
-        let ctx = Ctx {
-            cen: &cen,
-            boxes: &boxes,
-            tri: &tri,
-            area_n: &area_n,
-        };
+        let ctx = Ctx { cen: &cen, mesh };
         let nodes = if n > 0 {
             ctx.build(&mut order, 0, 0)
         } else {
             vec![Node::EMPTY]
         };
-        let tris = order.par_iter().map(|&t| tri[t as usize]).collect();
+        drop(cen);
+        let tris = order
+            .par_iter()
+            .map(|&t| mesh.corners(t as usize))
+            .collect();
         Bvh { nodes, order, tris }
     }
 
@@ -189,9 +182,7 @@ impl Bvh {
 /// Per-triangle data the build reads.
 struct Ctx<'a> {
     cen: &'a [DVec3],
-    boxes: &'a [Aabb],
-    tri: &'a [[DVec3; 3]],
-    area_n: &'a [DVec3],
+    mesh: &'a TriMesh,
 }
 
 /// Halves at least this large are built in parallel.
@@ -213,8 +204,11 @@ impl Ctx<'_> {
         let mut bbox = Aabb::EMPTY;
         let mut nsum = DVec3::ZERO;
         for &t in order {
-            bbox = bbox.union(&self.boxes[t as usize]);
-            nsum += self.area_n[t as usize];
+            let [a, b, c] = self.mesh.corners(t as usize);
+            bbox.extend(a);
+            bbox.extend(b);
+            bbox.extend(c);
+            nsum += (b - a).cross(c - a);
         }
         let mut node = Node {
             bbox,
@@ -226,7 +220,7 @@ impl Ctx<'_> {
             node.axes = [n, u, n.cross(u)];
             let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
             for &t in order {
-                for c in &self.tri[t as usize] {
+                for c in &self.mesh.corners(t as usize) {
                     for k in 0..3 {
                         let x = node.axes[k].dot(*c);
                         lo[k] = lo[k].min(x);

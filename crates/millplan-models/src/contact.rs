@@ -480,27 +480,56 @@ fn local_case(
 
 /// Uniform grid over ball centres for the sideways neighbour search.
 struct NeighbourGrid {
+    /// Cell edge: twice the search radius, so the 2×2×2 cells on the point's side
+    /// of its own cell cover the whole search sphere.
     cell: f64,
-    cells: FxHashMap<(i64, i64, i64), Vec<u32>>,
+    /// Point indices sorted by cell; `cells` maps a cell to its run in `sorted`.
+    sorted: Vec<u32>,
+    cells: FxHashMap<(i64, i64, i64), (u32, u32)>,
 }
 
 impl NeighbourGrid {
-    fn new(c: &[DVec3], cell: f64) -> NeighbourGrid {
-        let cell = cell.max(1e-3);
-        let mut cells: FxHashMap<(i64, i64, i64), Vec<u32>> = FxHashMap::default();
-        for (i, p) in c.iter().enumerate() {
-            cells.entry(key(*p, cell)).or_default().push(i as u32);
+    fn new(c: &[DVec3], radius: f64) -> NeighbourGrid {
+        let cell = 2.0 * radius.max(1e-3);
+        let mut keyed: Vec<((i64, i64, i64), u32)> = c
+            .par_iter()
+            .enumerate()
+            .map(|(i, p)| (key(*p, cell), i as u32))
+            .collect();
+        keyed.par_sort_unstable();
+        let mut cells: FxHashMap<(i64, i64, i64), (u32, u32)> = FxHashMap::default();
+        let mut i = 0;
+        while i < keyed.len() {
+            let mut j = i + 1;
+            while j < keyed.len() && keyed[j].0 == keyed[i].0 {
+                j += 1;
+            }
+            cells.insert(keyed[i].0, (i as u32, (j - i) as u32));
+            i = j;
         }
-        NeighbourGrid { cell, cells }
+        NeighbourGrid {
+            cell,
+            sorted: keyed.into_iter().map(|(_, i)| i).collect(),
+            cells,
+        }
     }
 
+    /// Calls `f` for every point within the search radius of `p` (and some more).
     fn for_each_near(&self, p: DVec3, mut f: impl FnMut(usize)) {
         let k = key(p, self.cell);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    if let Some(v) = self.cells.get(&(k.0 + dx, k.1 + dy, k.2 + dz)) {
-                        for &j in v {
+        let side = |v: f64, k: i64| {
+            if v / self.cell - k as f64 >= 0.5 {
+                1
+            } else {
+                -1
+            }
+        };
+        let (sx, sy, sz) = (side(p.x, k.0), side(p.y, k.1), side(p.z, k.2));
+        for dx in [0, sx] {
+            for dy in [0, sy] {
+                for dz in [0, sz] {
+                    if let Some(&(start, len)) = self.cells.get(&(k.0 + dx, k.1 + dy, k.2 + dz)) {
+                        for &j in &self.sorted[start as usize..(start + len) as usize] {
                             f(j as usize);
                         }
                     }

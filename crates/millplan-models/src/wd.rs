@@ -196,7 +196,7 @@ fn maximize_1d(f: &impl Fn(f64) -> f64, a: f64, b: f64) -> (f64, f64) {
     let mut x1 = hi - g * (hi - lo);
     let mut x2 = lo + g * (hi - lo);
     let (mut f1, mut f2) = (f(x1), f(x2));
-    for _ in 0..40 {
+    for _ in 0..34 {
         if f1 < f2 {
             lo = x1;
             x1 = x2;

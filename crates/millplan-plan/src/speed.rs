@@ -233,7 +233,13 @@ pub fn apply(
     let surface = Surface::new(mesh);
     lap("surface (BVH, vertex normals)", &mut timings);
     let mut out = program.clone();
-    let mut rows: Vec<PointRow> = Vec::new();
+    let cutting: usize = program
+        .operations
+        .iter()
+        .filter(|o| is_ball(o).is_some())
+        .map(|o| o.moves.len())
+        .sum();
+    let mut rows: Vec<PointRow> = Vec::with_capacity(cutting);
     let mut check = None;
     let mut convention = p.convention.unwrap_or(Convention::Tip);
     let mut ops = 0;
