@@ -249,7 +249,15 @@ fn demo_runs_and_its_outputs_read() {
 
 #[test]
 fn help_explains_every_command() {
-    for c in ["inspect", "convert", "demo"] {
+    for c in [
+        "inspect",
+        "convert",
+        "demo",
+        "wd",
+        "wd-sweep",
+        "speed",
+        "directions",
+    ] {
         let out = bin().args([c, "--help"]).output().expect("runs");
         assert!(out.status.success());
         assert!(String::from_utf8_lossy(&out.stdout).len() > 200, "{c}");
@@ -266,4 +274,29 @@ fn crate_dependencies_point_one_way() {
     assert!(!geom.contains("millplan-nc") && !geom.contains("millplan.workspace"));
     let nc = deps("millplan-nc");
     assert!(nc.contains("millplan-geom") && !nc.contains("clap") && !nc.contains("tempfile"));
+    let models = deps("millplan-models");
+    assert!(!models.contains("millplan-nc") && !models.contains("millplan-plan"));
+    let plan = deps("millplan-plan");
+    assert!(!plan.contains("millplan-report") && !plan.contains("clap"));
+    let report = deps("millplan-report");
+    assert!(!report.contains("clap") && !report.contains("tempfile"));
+}
+
+#[test]
+fn wd_prints_the_oracle_value() {
+    // working-diameter.md §2.3: D 10, ap 0.3, ae 0.25, α 20°, A_f 45°, left → 4.1301 mm.
+    let j = json(&[
+        "wd", "--d", "10", "--ap", "0.3", "--ae", "0.25", "--alpha", "20", "--af", "45", "--side",
+        "left", "--json",
+    ]);
+    assert!((j["d_w"].as_f64().expect("d_w") - 4.1301).abs() < 1e-4);
+    // No --ae: no neighbouring pass (O2 row: 6.4210 mm).
+    let j = json(&[
+        "wd", "--d", "10", "--ap", "0.3", "--alpha", "20", "--af", "0", "--json",
+    ]);
+    assert!((j["d_w"].as_f64().expect("d_w") - 6.4210).abs() < 1e-4);
+    fails_with_2(
+        &["wd", "--d", "10", "--ap=-1", "--alpha", "20", "--af", "0"],
+        "positive",
+    );
 }
