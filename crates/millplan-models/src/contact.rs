@@ -363,29 +363,53 @@ pub fn analyse(s: &Surface, points: &[PathPoint], p: &Params) -> Vec<PointResult
         .collect()
 }
 
-/// The sideways search radius: 1.6 × the median distance from a point to the
-/// nearest point of another pass (the stepover the CAM system used), at most `max`.
-/// Keeps the neighbour search cheap on fine rasters.
+/// The sideways search radius: 1.6 × the median distance from a sample of points
+/// to the nearest point of the passes cut just before and after theirs (the
+/// stepover the CAM system used), at most `max`. Keeps the neighbour search cheap
+/// on fine rasters.
 fn stepover_search_radius(c: &[DVec3], pts: &[PathPoint], max: f64) -> f64 {
     if c.len() < 3 {
         return max;
     }
-    let grid = NeighbourGrid::new(c, max);
+    // Index ranges of the passes (points of a pass are consecutive).
+    let mut ranges: Vec<(usize, usize)> = Vec::new();
+    let mut start = 0;
+    for i in 1..=pts.len() {
+        if i == pts.len() || pts[i].pass != pts[start].pass {
+            ranges.push((start, i));
+            start = i;
+        }
+    }
+    let pass_of = |i: usize| ranges.partition_point(|r| r.1 <= i);
+    // The nearest point of the passes cut just before and after: the stepover.
     let step = (c.len() / 300).max(1);
     let mut d: Vec<f64> = (0..c.len())
         .step_by(step)
         .filter_map(|i| {
+            let k = pass_of(i);
             let mut best = f64::INFINITY;
-            grid.for_each_near(c[i], |j| {
-                if pts[j].pass != pts[i].pass {
-                    best = best.min((c[j] - c[i]).length());
+            // Skip link moves between passes (passes of one or two points).
+            for dir in [-1i64, 1] {
+                let mut kk = k as i64 + dir;
+                for _ in 0..4 {
+                    let Some(&(a, b)) = usize::try_from(kk).ok().and_then(|x| ranges.get(x)) else {
+                        break;
+                    };
+                    if b - a >= 3 {
+                        for j in a..b {
+                            best = best.min((c[j] - c[i]).length());
+                        }
+                        break;
+                    }
+                    kk += dir;
                 }
-            });
+            }
             best.is_finite().then_some(best)
         })
         .collect();
     if d.is_empty() {
-        return max;
+        // A single pass: there is no neighbour to find.
+        return 1e-3;
     }
     d.sort_by(f64::total_cmp);
     (1.6 * d[d.len() / 2]).clamp(1e-3, max)
