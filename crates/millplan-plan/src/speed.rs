@@ -46,6 +46,9 @@ pub struct SpeedParams {
     pub gap_tol: f64,
     /// Use the paper's nearest-in-centre facet (comparison only).
     pub nearest_incentre: bool,
+    /// Ball diameter for operations whose tool has no geometry (G-code programs
+    /// name tools by number only), mm.
+    pub ball_d: Option<f64>,
 }
 
 impl SpeedParams {
@@ -61,13 +64,14 @@ impl SpeedParams {
             normals: NormalMode::Smooth,
             gap_tol: 0.02,
             nearest_incentre: false,
+            ball_d: None,
         }
     }
 }
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum SpeedError {
-    #[error("the program has no ball-end operation (CUTTER/d,d/2,0,d/2 or TLDATA/MILL,d,d/2): nothing to control")]
+    #[error("the program has no ball-end operation (CUTTER/d,d/2,0,d/2 or TLDATA/MILL,d,d/2; for G-code name the ball with --ball-d): nothing to control")]
     NoBallOperation,
     #[error("{0}")]
     Invalid(String),
@@ -205,9 +209,13 @@ pub struct SpeedResult {
     pub timings: Vec<(&'static str, f64)>,
 }
 
-fn is_ball(op: &millplan_nc::Operation) -> Option<f64> {
-    let c = op.tool.as_ref()?.cutter?;
-    (c.kind == CutterKind::Ball).then_some(c.d)
+/// The ball diameter of a ball-end operation: from its tool, or `fallback` when
+/// the tool carries no geometry.
+fn is_ball(op: &millplan_nc::Operation, fallback: Option<f64>) -> Option<f64> {
+    match op.tool.as_ref()?.cutter {
+        Some(c) => (c.kind == CutterKind::Ball).then_some(c.d),
+        None => fallback,
+    }
 }
 
 /// Applies spindle control to every ball-end operation.
@@ -217,7 +225,9 @@ pub fn apply(
     m: &Machine,
     p: &SpeedParams,
 ) -> Result<SpeedResult, SpeedError> {
-    if !(p.vc > 0.0 && p.fz > 0.0 && p.flutes > 0 && p.ap > 0.0) {
+    if !(p.vc > 0.0 && p.fz > 0.0 && p.flutes > 0 && p.ap > 0.0)
+        || p.ball_d.map(|d| !(d > 0.0)).unwrap_or(false)
+    {
         return Err(SpeedError::Invalid(
             "vc, fz, flutes and ap must be positive".into(),
         ));
@@ -236,7 +246,7 @@ pub fn apply(
     let cutting: usize = program
         .operations
         .iter()
-        .filter(|o| is_ball(o).is_some())
+        .filter(|o| is_ball(o, p.ball_d).is_some())
         .map(|o| o.moves.len())
         .sum();
     let mut rows: Vec<PointRow> = Vec::with_capacity(cutting);
@@ -246,7 +256,9 @@ pub fn apply(
     let mut constant = Vec::new();
     let mut feed_clamped_total = 0;
     for (oi, op) in program.operations.iter().enumerate() {
-        let Some(d) = is_ball(op) else { continue };
+        let Some(d) = is_ball(op, p.ball_d) else {
+            continue;
+        };
         ops += 1;
         // Cutting points, with their passes (split at links and sharp reversals).
         let mut pts = Vec::new();

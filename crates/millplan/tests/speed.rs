@@ -233,3 +233,55 @@ fn directions_ranks_rasters_of_one_surface() {
     );
     assert!(tv[0] > 0.0);
 }
+
+#[test]
+fn speed_reads_gcode_with_a_declared_ball() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let d = dir.path().join("d");
+    let st = bin()
+        .args(["demo", "-o", d.to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    assert!(st.status.success());
+    let common = ["--vc", "63", "--fz", "0.125", "--ap", "0.3", "--json", "-q"];
+    let nc = d.join("finish_fanuc.nc");
+    let out = dir.path().join("o.nc");
+    // G-code names tools by number only: without --ball-d there is nothing to control.
+    let o = bin()
+        .args([
+            "speed",
+            nc.to_str().expect("utf8"),
+            "--stl",
+            d.join("part.stl").to_str().expect("utf8"),
+            "-o",
+            out.to_str().expect("utf8"),
+        ])
+        .args(common)
+        .output()
+        .expect("runs");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!out.exists());
+    let o = bin()
+        .args([
+            "speed",
+            nc.to_str().expect("utf8"),
+            "--stl",
+            d.join("part.stl").to_str().expect("utf8"),
+            "-o",
+            out.to_str().expect("utf8"),
+        ])
+        .args(common)
+        .args(["--ball-d", "10"])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(j["dialect"], "fanuc");
+    assert!(j["points"].as_u64().expect("points") > 6000);
+    let back = parse_program(
+        &std::fs::read_to_string(&out).expect("read"),
+        ReadOptions::default(),
+    )
+    .expect("re-reads");
+    millplan_nc::verify::verify(&back.program).expect("verifies");
+}

@@ -72,6 +72,10 @@ pub struct Args {
     /// Output dialect (default: the machine's, else the input's).
     #[arg(long, value_enum)]
     pub to: Option<TargetArg>,
+    /// Ball diameter (mm) for operations whose tool has no geometry, as in
+    /// G-code programs that call tools by number only.
+    #[arg(long)]
+    pub ball_d: Option<f64>,
     /// Keep the programmed feed instead of F = n·z·fz.
     #[arg(long)]
     pub keep_feed: bool,
@@ -140,6 +144,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         NormalArg::Ball => NormalMode::Ball,
     };
     p.nearest_incentre = a.nearest_incentre;
+    p.ball_d = a.ball_d;
     let res = apply(&parsed.program, &mesh, &machine, &p)
         .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
     let dialect = match a.to {
