@@ -232,6 +232,64 @@ pub fn spindle_speed(vc: f64, dw: f64) -> f64 {
     1000.0 * vc / (PI * dw)
 }
 
+/// How [`mean_diameter`] weights the engaged region.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeanWeighting {
+    /// By area of the engaged ball surface.
+    Area,
+    /// By area times the local uncut chip thickness, which grows like d·t
+    /// (zero on the E2 boundary).
+    ChipThickness,
+}
+
+/// D_mean (spec §1.3): the tool diameter averaged over the engaged region E, by
+/// area or by chip thickness, on an `n` × 4`n` polar grid of the cap.
+pub fn mean_diameter(c: &Case, weighting: MeanWeighting, n: usize) -> f64 {
+    let cos_t = (1.0 - 2.0 * c.ap / c.d).max(-1.0);
+    let theta = cos_t.acos();
+    let r = c.d / 2.0;
+    let (kt, ks, kn) = c.axis_local();
+    let (ae, both) = match c.neighbour {
+        Neighbour::None => (f64::INFINITY, false),
+        Neighbour::One(a) => (a, false),
+        Neighbour::Both(a) => (a, true),
+    };
+    let (np, nr) = (4 * n.max(8), n.max(8));
+    let (mut wsum, mut dsum) = (0.0, 0.0);
+    for i in 0..nr {
+        let rho = theta * (i as f64 + 0.5) / nr as f64;
+        let (sr, cr) = rho.sin_cos();
+        for j in 0..np {
+            let psi = -PI + 2.0 * PI * (j as f64 + 0.5) / np as f64;
+            let (sp, cp) = psi.sin_cos();
+            let (x, y, z) = (sr * cp, sr * sp, -cr);
+            if x < 0.0 {
+                continue;
+            }
+            if ae.is_finite() {
+                let e3 = |y: f64| 2.0 * r * ae * y + ae * ae - r * r * x * x >= 0.0;
+                if !e3(y) || (both && !e3(-y)) {
+                    continue;
+                }
+            }
+            let h = (kt * x + ks * y + kn * z).clamp(-1.0, 1.0);
+            let w = sr
+                * if weighting == MeanWeighting::ChipThickness {
+                    x
+                } else {
+                    1.0
+                };
+            wsum += w;
+            dsum += w * c.d * (1.0 - h * h).sqrt();
+        }
+    }
+    if wsum > 0.0 {
+        dsum / wsum
+    } else {
+        contact_diameter(c.d, c.alpha)
+    }
+}
+
 /// Reference: samples the cap in polar coordinates (ρ ∈ [0, θ], ψ ∈ [−π, π)) on an
 /// `nr` × `npsi` grid, keeps samples in E, then refines around the best few on a
 /// finer local grid. Slow; for tests. Underestimates by at most the grid error.
@@ -594,6 +652,25 @@ mod tests {
             working_diameter(&case(d, 0.3, None, 89.0, 0.0, Side::Left)),
             d
         );
+    }
+
+    #[test]
+    fn mean_diameter_on_a_flat_cap_and_its_bounds() {
+        // Flat, no neighbour: D_mean by area = D(θ/2 − sin 2θ/4)/(1 − cos θ).
+        let c = case(10.0, 0.3, None, 0.0, 0.0, Side::Left);
+        let th = (1.0f64 - 0.06).acos();
+        let want = 10.0 * (th / 2.0 - (2.0 * th).sin() / 4.0) / (1.0 - th.cos());
+        assert!((mean_diameter(&c, MeanWeighting::Area, 400) - want).abs() < 1e-3);
+        for &(d, ap, ae, a, f, side, _, _) in ORACLE {
+            let c = case(d, ap, ae, a, f, side);
+            for w in [MeanWeighting::Area, MeanWeighting::ChipThickness] {
+                let m = mean_diameter(&c, w, 200);
+                assert!(
+                    m <= working_diameter(&c) + 1e-9 && m >= contact_diameter(d, c.alpha) - 0.05,
+                    "{c:?} {w:?} {m}"
+                );
+            }
+        }
     }
 
     #[test]

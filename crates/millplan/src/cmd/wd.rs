@@ -92,13 +92,19 @@ pub fn run(a: Args) -> CliResult<i32> {
         ModelArg::Regression => millplan_models::regression::Surrogate::standard().predict(&c),
     };
     let dcc = wd::contact_diameter(a.d, c.alpha);
+    let d_mean_area = wd::mean_diameter(&c, wd::MeanWeighting::Area, 300);
+    let d_mean_chip = wd::mean_diameter(&c, wd::MeanWeighting::ChipThickness, 300);
     let n = a.vc.map(|vc| wd::spindle_speed(vc, dw));
     if a.json {
-        let j = json!({ "d_w": dw, "d_cc": dcc, "n": n, "model": format!("{:?}", a.model).to_lowercase() });
+        let j = json!({
+            "d_w": dw, "d_cc": dcc, "d_mean_area": d_mean_area, "d_mean_chip": d_mean_chip,
+            "n": n, "model": format!("{:?}", a.model).to_lowercase()
+        });
         println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
         println!("D_w  {dw:.4} mm  (working diameter, highest engaged point)");
         println!("D_cc {dcc:.4} mm  (diameter at the contact point)");
+        println!("D_mean {d_mean_area:.4} mm by area, {d_mean_chip:.4} mm by chip thickness (over the engaged region)");
         if let Some(n) = n {
             println!("n    {n:.0} 1/min for vc = {} m/min", a.vc.unwrap_or(0.0));
         }
