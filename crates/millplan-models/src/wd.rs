@@ -665,8 +665,10 @@ mod tests {
             let c = case(d, ap, ae, a, f, side);
             for w in [MeanWeighting::Area, MeanWeighting::ChipThickness] {
                 let m = mean_diameter(&c, w, 200);
+                // Below the highest point's diameter; it can fall below D_cc where
+                // E reaches towards the tip (uncut side downhill).
                 assert!(
-                    m <= working_diameter(&c) + 1e-9 && m >= contact_diameter(d, c.alpha) - 0.05,
+                    m <= working_diameter(&c) + 1e-9 && m > 0.0,
                     "{c:?} {w:?} {m}"
                 );
             }
