@@ -57,6 +57,30 @@ pub struct Case {
 }
 
 impl Case {
+    /// Distance to the machined neighbour (∞ without one) and whether both sides
+    /// are machined.
+    pub fn neighbour_ae(&self) -> (f64, bool) {
+        match self.neighbour {
+            Neighbour::None => (f64::INFINITY, false),
+            Neighbour::One(a) => (a, false),
+            Neighbour::Both(a) => (a, true),
+        }
+    }
+
+    /// E2 and E3 for a ball direction with components x = d·t, y = d·s.
+    pub fn leading_and_uncut(&self, x: f64, y: f64) -> bool {
+        if x < 0.0 {
+            return false;
+        }
+        let (ae, both) = self.neighbour_ae();
+        if !ae.is_finite() {
+            return true;
+        }
+        let r = self.d / 2.0;
+        let e3 = |y: f64| 2.0 * r * ae * y + ae * ae - r * r * x * x >= 0.0;
+        e3(y) && (!both || e3(-y))
+    }
+
     /// Components (k_t, k_s, k_n) of the tool axis in the local frame.
     pub fn axis_local(&self) -> (f64, f64, f64) {
         let (sa, ca) = self.alpha.sin_cos();
@@ -93,11 +117,7 @@ pub fn highest_point(c: &Case) -> f64 {
     }
     let sin_t = (1.0 - cos_t * cos_t).sqrt();
     let (kt, ks, kn) = c.axis_local();
-    let (ae, both) = match c.neighbour {
-        Neighbour::None => (f64::INFINITY, false),
-        Neighbour::One(a) => (a, false),
-        Neighbour::Both(a) => (a, true),
-    };
+    let (ae, both) = c.neighbour_ae();
     let mut best = f64::NEG_INFINITY;
 
     // B1, the cap rim: d = (sinθ cosψ, sinθ sinψ, −cosθ), ψ ∈ [−π/2, π/2] (E2);
@@ -247,13 +267,7 @@ pub enum MeanWeighting {
 pub fn mean_diameter(c: &Case, weighting: MeanWeighting, n: usize) -> f64 {
     let cos_t = (1.0 - 2.0 * c.ap / c.d).max(-1.0);
     let theta = cos_t.acos();
-    let r = c.d / 2.0;
     let (kt, ks, kn) = c.axis_local();
-    let (ae, both) = match c.neighbour {
-        Neighbour::None => (f64::INFINITY, false),
-        Neighbour::One(a) => (a, false),
-        Neighbour::Both(a) => (a, true),
-    };
     let (np, nr) = (4 * n.max(8), n.max(8));
     let (mut wsum, mut dsum) = (0.0, 0.0);
     for i in 0..nr {
@@ -263,14 +277,8 @@ pub fn mean_diameter(c: &Case, weighting: MeanWeighting, n: usize) -> f64 {
             let psi = -PI + 2.0 * PI * (j as f64 + 0.5) / np as f64;
             let (sp, cp) = psi.sin_cos();
             let (x, y, z) = (sr * cp, sr * sp, -cr);
-            if x < 0.0 {
+            if !c.leading_and_uncut(x, y) {
                 continue;
-            }
-            if ae.is_finite() {
-                let e3 = |y: f64| 2.0 * r * ae * y + ae * ae - r * r * x * x >= 0.0;
-                if !e3(y) || (both && !e3(-y)) {
-                    continue;
-                }
             }
             let h = (kt * x + ks * y + kn * z).clamp(-1.0, 1.0);
             let w = sr
@@ -299,13 +307,7 @@ pub fn brute_force(c: &Case, nr: usize, npsi: usize) -> f64 {
         return c.d;
     }
     let theta = cos_t.acos();
-    let r = c.d / 2.0;
     let (kt, ks, kn) = c.axis_local();
-    let (ae, both) = match c.neighbour {
-        Neighbour::None => (f64::INFINITY, false),
-        Neighbour::One(a) => (a, false),
-        Neighbour::Both(a) => (a, true),
-    };
     let eval = |rho: f64, psi: f64| -> Option<f64> {
         let (sr, cr) = rho.sin_cos();
         let (sp, cp) = psi.sin_cos();
@@ -315,11 +317,8 @@ pub fn brute_force(c: &Case, nr: usize, npsi: usize) -> f64 {
             return None;
         }
         let x = x.max(0.0);
-        if ae.is_finite() {
-            let e3 = |y: f64| 2.0 * r * ae * y + ae * ae - r * r * x * x >= 0.0;
-            if !e3(y) || (both && !e3(-y)) {
-                return None;
-            }
+        if !c.leading_and_uncut(x, y) {
+            return None;
         }
         Some(kt * x + ks * y + kn * z)
     };

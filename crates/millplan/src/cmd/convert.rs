@@ -1,21 +1,11 @@
 //! `millplan convert`: read a program in any supported format, write it in another.
 
-use crate::cmd::{print_diagnostics, read_options, UnitArg};
+use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_program, write_atomic};
-use clap::ValueEnum;
-use millplan_nc::write::gcode::{write_gcode, GcodeOptions};
+use millplan_nc::write::gcode::GcodeOptions;
 use millplan_nc::{Dialect, LengthUnit};
 use std::path::PathBuf;
-
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum Target {
-    Fanuc,
-    Sinumerik,
-    Heidenhain,
-    Linuxcnc,
-    Apt,
-}
 
 /// Convert an NC program (APT/CL or G-code) to another dialect.
 ///
@@ -32,7 +22,7 @@ pub struct Args {
     pub output: PathBuf,
     /// Target dialect.
     #[arg(long, value_enum)]
-    pub to: Target,
+    pub to: TargetArg,
     /// Unit of the source when the file does not say.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
@@ -54,24 +44,12 @@ pub fn run(a: Args) -> CliResult<i32> {
     let parsed = read_program(&a.input, read_options(a.units, a.feed))?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet);
     let p = parsed.program;
-    let mut out = Vec::new();
-    let dialect = match a.to {
-        Target::Fanuc => Dialect::Fanuc,
-        Target::Sinumerik => Dialect::Sinumerik,
-        Target::Heidenhain => Dialect::Heidenhain,
-        Target::Linuxcnc => Dialect::LinuxCnc,
-        Target::Apt => Dialect::AptIso,
-    };
-    if dialect.is_apt() {
-        millplan_nc::write::apt::write_apt(&p, &mut out)
-            .map_err(|e| CliError::input(format!("{}: {e}", a.input.display())))?;
-    } else {
-        let mut o = GcodeOptions::new(dialect);
-        o.unit = LengthUnit::from(a.out_units);
-        o.line_numbers = a.line_numbers;
-        write_gcode(&p, o, &mut out)
-            .map_err(|e| CliError::input(format!("{}: {e}", a.input.display())))?;
-    }
+    let dialect: Dialect = a.to.into();
+    let mut o = GcodeOptions::new(dialect);
+    o.unit = LengthUnit::from(a.out_units);
+    o.line_numbers = a.line_numbers;
+    let out = write_program(&p, dialect, o)
+        .map_err(|e| CliError::input(format!("{}: {e}", a.input.display())))?;
     write_atomic(&a.output, &out, &[&a.input])?;
     eprintln!(
         "wrote {} ({} moves, {})",

@@ -11,6 +11,48 @@ pub mod wd;
 use clap::ValueEnum;
 use millplan_nc::{LengthUnit, ReadOptions};
 
+/// Output dialect, shared by the writing commands.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum TargetArg {
+    Fanuc,
+    Sinumerik,
+    Heidenhain,
+    Linuxcnc,
+    Apt,
+}
+
+impl From<TargetArg> for millplan_nc::Dialect {
+    fn from(t: TargetArg) -> Self {
+        use millplan_nc::Dialect;
+        match t {
+            TargetArg::Fanuc => Dialect::Fanuc,
+            TargetArg::Sinumerik => Dialect::Sinumerik,
+            TargetArg::Heidenhain => Dialect::Heidenhain,
+            TargetArg::Linuxcnc => Dialect::LinuxCnc,
+            TargetArg::Apt => Dialect::AptIso,
+        }
+    }
+}
+
+/// Writes a program in a dialect (APT or G-code).
+pub fn write_program(
+    p: &millplan_nc::Program,
+    dialect: millplan_nc::Dialect,
+    o: millplan_nc::write::gcode::GcodeOptions,
+) -> Result<Vec<u8>, millplan_nc::write::WriteError> {
+    let mut out = Vec::new();
+    if dialect.is_apt() {
+        millplan_nc::write::apt::write_apt(p, &mut out)?;
+    } else {
+        millplan_nc::write::gcode::write_gcode(
+            p,
+            millplan_nc::write::gcode::GcodeOptions { dialect, ..o },
+            &mut out,
+        )?;
+    }
+    Ok(out)
+}
+
 /// Source unit override shared by the reading commands.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum UnitArg {

@@ -1,12 +1,11 @@
 //! `millplan speed`: constant-cutting-speed spindle control for ball-end finishing.
 
-use crate::cmd::{print_diagnostics, read_options, UnitArg};
+use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_mesh, read_program, write_atomic};
 use clap::ValueEnum;
 use millplan_models::contact::{Convention, NormalMode};
-use millplan_nc::write::gcode::{write_gcode, GcodeOptions};
-use millplan_nc::Dialect;
+use millplan_nc::write::gcode::GcodeOptions;
 use millplan_plan::machine::Machine;
 use millplan_plan::speed::{apply, FeedCoupling, SpeedParams};
 use std::path::PathBuf;
@@ -23,15 +22,6 @@ pub enum NormalArg {
     Smooth,
     Facet,
     Ball,
-}
-
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum TargetArg {
-    Fanuc,
-    Sinumerik,
-    Heidenhain,
-    Linuxcnc,
-    Apt,
 }
 
 /// Set the spindle speed per block so the cutting speed stays constant
@@ -148,21 +138,11 @@ pub fn run(a: Args) -> CliResult<i32> {
     let res = apply(&parsed.program, &mesh, &machine, &p)
         .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
     let dialect = match a.to {
-        Some(TargetArg::Fanuc) => Dialect::Fanuc,
-        Some(TargetArg::Sinumerik) => Dialect::Sinumerik,
-        Some(TargetArg::Heidenhain) => Dialect::Heidenhain,
-        Some(TargetArg::Linuxcnc) => Dialect::LinuxCnc,
-        Some(TargetArg::Apt) => Dialect::AptIso,
+        Some(t) => t.into(),
         None => machine.dialect_enum().unwrap_or(parsed.program.dialect),
     };
-    let mut out = Vec::new();
-    if dialect.is_apt() {
-        millplan_nc::write::apt::write_apt(&res.program, &mut out)
-            .map_err(|e| CliError::input(e.to_string()))?;
-    } else {
-        write_gcode(&res.program, GcodeOptions::new(dialect), &mut out)
-            .map_err(|e| CliError::input(e.to_string()))?;
-    }
+    let out = write_program(&res.program, dialect, GcodeOptions::new(dialect))
+        .map_err(|e| CliError::input(e.to_string()))?;
     let inputs = [a.path.as_path(), a.stl.as_path()];
     write_atomic(&a.output, &out, &inputs)?;
     if a.timings {
