@@ -109,10 +109,15 @@ pub struct Check {
     pub d2: f64,
 }
 
+/// `d2` within [min, max] (1 nm slack for decimal inputs).
+pub fn within(d2: f64, min: f64, max: f64) -> bool {
+    d2 >= min - 1e-9 && d2 <= max + 1e-9
+}
+
 pub fn check(thread: &str, class: &str, d2: f64) -> Result<Check, ThreadError> {
     let (min, max) = limits(thread, class)?;
     Ok(Check {
-        ok: d2 >= min - 1e-9 && d2 <= max + 1e-9,
+        ok: within(d2, min, max),
         min,
         max,
         d2,
