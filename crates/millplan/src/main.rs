@@ -31,6 +31,8 @@ enum Command {
     Wd(cmd::wd::Args),
     Speed(cmd::speed::Args),
     Directions(cmd::directions::Args),
+    Tool(cmd::tool::Args),
+    Thread(cmd::thread::Args),
     #[command(name = "wd-sweep")]
     WdSweep(cmd::sweep::Args),
 }
@@ -56,6 +58,8 @@ fn main() {
         Command::Speed(a) => cmd::speed::run(a),
         Command::WdSweep(a) => cmd::sweep::run(a),
         Command::Directions(a) => cmd::directions::run(a),
+        Command::Tool(a) => cmd::tool::run(a),
+        Command::Thread(a) => cmd::thread::run(a),
     };
     match r {
         Ok(code) => std::process::exit(code),

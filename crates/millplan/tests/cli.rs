@@ -278,6 +278,8 @@ fn crate_dependencies_point_one_way() {
     assert!(!models.contains("millplan-nc") && !models.contains("millplan-plan"));
     let plan = deps("millplan-plan");
     assert!(!plan.contains("millplan-report") && !plan.contains("clap"));
+    let tooldb = deps("millplan-tooldb");
+    assert!(!tooldb.contains("millplan-nc") && !tooldb.contains("clap"));
     let report = deps("millplan-report");
     assert!(!report.contains("clap") && !report.contains("tempfile"));
 }

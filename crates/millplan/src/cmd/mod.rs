@@ -6,6 +6,8 @@ pub mod directions;
 pub mod inspect;
 pub mod speed;
 pub mod sweep;
+pub mod thread;
+pub mod tool;
 pub mod wd;
 
 use clap::ValueEnum;

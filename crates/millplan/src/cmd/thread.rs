@@ -1,0 +1,59 @@
+//! `millplan thread`: ISO metric thread checks.
+
+use crate::error::{CliError, CliResult, EXIT_OK};
+use clap::Subcommand;
+use millplan_tooldb::thread::{check, parse_designation, pitch_diameter};
+use serde_json::json;
+
+/// ISO metric threads: is a measured pitch diameter within its tolerance class
+/// (ISO 965-1 tabulated limits)?
+#[derive(clap::Args)]
+pub struct Args {
+    #[command(subcommand)]
+    pub command: ThreadCommand,
+}
+
+#[derive(Subcommand)]
+pub enum ThreadCommand {
+    /// Check a measured pitch diameter D2 against the class limits.
+    Check {
+        /// Thread, e.g. M20x1.
+        thread: String,
+        /// Tolerance class, e.g. 6H (internal) or 6g (external).
+        #[arg(long)]
+        class: String,
+        /// Measured pitch diameter, mm.
+        #[arg(long)]
+        d2: f64,
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    match a.command {
+        ThreadCommand::Check {
+            thread,
+            class,
+            d2,
+            json,
+        } => {
+            let c = check(&thread, &class, d2).map_err(|e| CliError::input(e.to_string()))?;
+            let (d, p) = parse_designation(&thread).map_err(|e| CliError::input(e.to_string()))?;
+            if json {
+                let j = json!({ "ok": c.ok, "min": c.min, "max": c.max, "d2": d2, "basic_d2": pitch_diameter(d, p) });
+                println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+            } else {
+                let verdict = if c.ok {
+                    "OK".to_string()
+                } else if d2 < c.min {
+                    format!("REJECT: {:.4} mm under the minimum", c.min - d2)
+                } else {
+                    format!("REJECT: {:.4} mm over the maximum", d2 - c.max)
+                };
+                println!("{thread}-{class}: D2 {d2:.4} mm, limits {:.3} … {:.3} mm (basic {:.4}): {verdict}", c.min, c.max, pitch_diameter(d, p));
+            }
+        }
+    }
+    Ok(EXIT_OK)
+}

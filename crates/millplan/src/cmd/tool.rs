@@ -1,0 +1,446 @@
+//! `millplan tool`: the tool library and thread-mill active control.
+
+use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::io::write_atomic;
+use clap::{Subcommand, ValueEnum};
+use millplan_tooldb::control::{record, Kind, Measurement, Settings};
+use millplan_tooldb::cycles::{self, CycleOptions, Measure};
+use millplan_tooldb::db::{DbError, ToolDb, ToolRecord};
+use millplan_tooldb::thread::pz;
+use serde_json::json;
+use std::path::PathBuf;
+
+/// The tool library and thread-mill control, for the tool room.
+///
+/// A typical session: register a tool with its tolerances and insert data
+/// (`add`), enter the presetter values (`preset`), generate the measuring
+/// program for the control (`cycle`), record the laser's first measurement
+/// (`measure --first`) and, after each job, the inspection (`measure`). millplan
+/// decides: within tolerance it updates DR/DL; worn beyond RTOL/LTOL it locks the
+/// tool and names the sister tool; broken beyond RBREAK/LBREAK it also locks the
+/// pallet. Every decision is logged with its reason (`log`).
+///
+/// The library is one SQLite file: --db, else $MILLPLAN_DB, else
+/// ~/.local/share/millplan/tools.db. It is created on first use.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Tool library file.
+    #[arg(long, global = true)]
+    pub db: Option<PathBuf>,
+    /// Print JSON on standard output.
+    #[arg(long, global = true)]
+    pub json: bool,
+    #[command(subcommand)]
+    pub command: ToolCommand,
+}
+
+#[derive(Subcommand)]
+pub enum ToolCommand {
+    /// Register a tool, or change one (values not given stay as they are).
+    Add(AddArgs),
+    /// Enter the presetter's length and radius for a tool.
+    Preset {
+        number: u32,
+        /// Length, mm.
+        #[arg(long)]
+        l: f64,
+        /// Radius, mm.
+        #[arg(long)]
+        r: f64,
+    },
+    /// Record a laser measurement and let millplan decide (wear, worn, broken).
+    Measure(MeasureArgs),
+    /// List the tools, or show one.
+    Show { number: Option<u32> },
+    /// The decision log (all tools, or one).
+    Log { number: Option<u32> },
+    /// Import tools from CSV or JSON (all or nothing).
+    Import { file: PathBuf },
+    /// Export the library.
+    Export {
+        #[arg(long, value_enum, default_value = "csv")]
+        format: ExportFormat,
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// PZ: the laser's axial measuring point on a thread-mill insert, from
+    /// the insert length INSL and the pitch TP (ISO 13399).
+    Pz {
+        #[arg(long)]
+        insl: f64,
+        #[arg(long)]
+        tp: f64,
+    },
+    /// Write the NC program that measures a tool on the machine's laser.
+    Cycle(CycleArgs),
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum ExportFormat {
+    Csv,
+    Json,
+    /// Heidenhain TOOL.T-style table.
+    ToolT,
+}
+
+#[derive(clap::Args)]
+pub struct AddArgs {
+    pub number: u32,
+    #[arg(long)]
+    pub name: Option<String>,
+    /// mill, ball, thread-mill, drill, …
+    #[arg(long)]
+    pub kind: Option<String>,
+    #[arg(long)]
+    pub l: Option<f64>,
+    #[arg(long)]
+    pub r: Option<f64>,
+    /// Wear tolerances (length, radius), mm.
+    #[arg(long)]
+    pub ltol: Option<f64>,
+    #[arg(long)]
+    pub rtol: Option<f64>,
+    /// Breakage limits (length, radius), mm.
+    #[arg(long)]
+    pub lbreak: Option<f64>,
+    #[arg(long)]
+    pub rbreak: Option<f64>,
+    /// Replacement (sister) tool number.
+    #[arg(long)]
+    pub sister: Option<u32>,
+    /// Tool life, minutes.
+    #[arg(long)]
+    pub life: Option<f64>,
+    /// Insert length INSL (thread mills), mm.
+    #[arg(long)]
+    pub insl: Option<f64>,
+    /// Insert thread pitch TP, mm.
+    #[arg(long)]
+    pub tp: Option<f64>,
+    /// Any ISO 13399 property, SYMBOL=VALUE (repeatable).
+    #[arg(long = "iso", value_parser = parse_kv)]
+    pub iso: Vec<(String, String)>,
+}
+
+fn parse_kv(s: &str) -> Result<(String, String), String> {
+    s.split_once('=')
+        .map(|(k, v)| (k.trim().to_ascii_uppercase(), v.trim().to_string()))
+        .filter(|(k, _)| !k.is_empty())
+        .ok_or_else(|| format!("`{s}`: write SYMBOL=VALUE"))
+}
+
+#[derive(clap::Args)]
+pub struct MeasureArgs {
+    pub number: u32,
+    /// The first measurement on the machine (compared with the presetter).
+    #[arg(long)]
+    pub first: bool,
+    /// Measured length, mm.
+    #[arg(long)]
+    pub l: Option<f64>,
+    /// Measured radius, mm.
+    #[arg(long)]
+    pub r: Option<f64>,
+    /// Measured radii of the single teeth, mm (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    pub teeth: Option<Vec<f64>>,
+    /// Axial measuring point used, mm (defaults to the PZ of the insert data).
+    #[arg(long)]
+    pub pz: Option<f64>,
+    /// Setup tolerance between presetter and first measurement, mm.
+    #[arg(long, default_value_t = 0.02)]
+    pub dset: f64,
+    /// Pallet in the machine (locked when the tool breaks).
+    #[arg(long)]
+    pub pallet: Option<String>,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum Control {
+    Heidenhain,
+    Fanuc,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum MeasureArg {
+    Length,
+    Radius,
+    Both,
+}
+
+#[derive(clap::Args)]
+pub struct CycleArgs {
+    pub number: u32,
+    #[arg(long, value_enum, default_value = "heidenhain")]
+    pub control: Control,
+    /// First measurement instead of an inspection.
+    #[arg(long)]
+    pub first: bool,
+    #[arg(long, value_enum, default_value = "both")]
+    pub measure: MeasureArg,
+    /// Clearance height above the laser, mm.
+    #[arg(long, default_value_t = 100.0)]
+    pub clearance: f64,
+    /// Measure every tooth.
+    #[arg(long)]
+    pub per_tooth: bool,
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// The library's default location.
+pub fn default_db() -> PathBuf {
+    if let Some(p) = std::env::var_os("MILLPLAN_DB") {
+        return PathBuf::from(p);
+    }
+    let base = std::env::var_os("XDG_DATA_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/share")))
+        .unwrap_or_else(|| PathBuf::from("."));
+    base.join("millplan").join("tools.db")
+}
+
+fn db_err(path: &std::path::Path, e: DbError) -> CliError {
+    match e {
+        DbError::Sql(_) => CliError::internal(format!("{}: {e}", path.display())),
+        _ => CliError::input(format!("{}: {e}", path.display())),
+    }
+}
+
+fn insert_pz(t: &ToolRecord) -> Option<f64> {
+    let g = |k: &str| t.iso.get(k).and_then(|v| v.parse::<f64>().ok());
+    pz(g("INSL")?, g("TP")?).ok()
+}
+
+fn print(json_out: bool, j: serde_json::Value, text: String) {
+    if json_out {
+        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+    } else {
+        println!("{text}");
+    }
+}
+
+fn describe(t: &ToolRecord) -> String {
+    format!(
+        "T{:<5} {:<28} {:<12} L {:>9.4} R {:>8.4} DL {:+.4} DR {:+.4} tol L {:.3}/{:.3} R {:.3}/{:.3}{}{}",
+        t.number,
+        t.name,
+        t.kind,
+        t.l,
+        t.r,
+        t.dl,
+        t.dr,
+        t.ltol,
+        t.lbreak,
+        t.rtol,
+        t.rbreak,
+        t.sister.map(|s| format!(" sister T{s}")).unwrap_or_default(),
+        if t.locked { "  LOCKED" } else { "" }
+    )
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    // PZ needs no library.
+    if let ToolCommand::Pz { insl, tp } = a.command {
+        let v = pz(insl, tp).map_err(|e| CliError::input(e.to_string()))?;
+        print(
+            a.json,
+            json!({ "pz": v, "insl": insl, "tp": tp }),
+            format!("PZ = {v:.3} mm (INSL {insl}, TP {tp})"),
+        );
+        return Ok(EXIT_OK);
+    }
+    let path = a.db.clone().unwrap_or_else(default_db);
+    let mut db = ToolDb::open(&path).map_err(|e| db_err(&path, e))?;
+    match a.command {
+        ToolCommand::Pz { .. } => unreachable!("handled above"),
+        ToolCommand::Add(x) => {
+            let mut t = db
+                .tool(x.number)
+                .unwrap_or_else(|_| ToolRecord::new(x.number, ""));
+            if let Some(v) = x.name {
+                t.name = v;
+            }
+            if let Some(v) = x.kind {
+                t.kind = v;
+            }
+            for (slot, v) in [
+                (&mut t.l, x.l),
+                (&mut t.r, x.r),
+                (&mut t.ltol, x.ltol),
+                (&mut t.rtol, x.rtol),
+                (&mut t.lbreak, x.lbreak),
+                (&mut t.rbreak, x.rbreak),
+            ] {
+                if let Some(v) = v {
+                    *slot = v;
+                }
+            }
+            if x.sister.is_some() {
+                t.sister = x.sister;
+            }
+            if x.life.is_some() {
+                t.life_min = x.life;
+            }
+            if let Some(v) = x.insl {
+                t.iso.insert("INSL".into(), v.to_string());
+            }
+            if let Some(v) = x.tp {
+                t.iso.insert("TP".into(), v.to_string());
+            }
+            for (k, v) in x.iso {
+                t.iso.insert(k, v);
+            }
+            if let (Some(l), Some(p)) = (t.iso.get("INSL"), t.iso.get("TP")) {
+                let (l, p) = (l.parse::<f64>(), p.parse::<f64>());
+                if let (Ok(l), Ok(p)) = (l, p) {
+                    pz(l, p).map_err(|e| CliError::input(format!("insert data: {e}")))?;
+                }
+            }
+            db.put_tool(&t).map_err(|e| db_err(&path, e))?;
+            print(
+                a.json,
+                serde_json::to_value(&t).unwrap_or_default(),
+                format!("saved {}", describe(&t)),
+            );
+        }
+        ToolCommand::Preset { number, l, r } => {
+            db.record_presetter(number, l, r)
+                .map_err(|e| db_err(&path, e))?;
+            let t = db.tool(number).map_err(|e| db_err(&path, e))?;
+            print(
+                a.json,
+                serde_json::to_value(&t).unwrap_or_default(),
+                format!("presetter values recorded: {}", describe(&t)),
+            );
+        }
+        ToolCommand::Measure(x) => {
+            let t = db.tool(x.number).map_err(|e| db_err(&path, e))?;
+            let m = Measurement {
+                tool: x.number,
+                kind: if x.first {
+                    Kind::First
+                } else {
+                    Kind::Inspection
+                },
+                l: x.l,
+                r: x.r,
+                per_tooth: x.teeth,
+                pz: x.pz.or_else(|| insert_pz(&t)),
+            };
+            let o = record(
+                &mut db,
+                &m,
+                &Settings {
+                    dset: x.dset,
+                    pallet: x.pallet,
+                },
+            )
+            .map_err(|e| db_err(&path, e))?;
+            print(
+                a.json,
+                serde_json::to_value(&o).unwrap_or_default(),
+                format!(
+                    "{}: {}{}",
+                    o.decision.to_uppercase(),
+                    o.reason,
+                    o.switch_to
+                        .map(|n| format!("\nnext: use T{n}"))
+                        .unwrap_or_default()
+                ),
+            );
+        }
+        ToolCommand::Show { number } => {
+            let tools = match number {
+                Some(n) => vec![db.tool(n).map_err(|e| db_err(&path, e))?],
+                None => db.tools().map_err(|e| db_err(&path, e))?,
+            };
+            let text = if tools.is_empty() {
+                format!("{}: no tools yet", path.display())
+            } else {
+                tools.iter().map(describe).collect::<Vec<_>>().join("\n")
+            };
+            print(
+                a.json,
+                serde_json::to_value(&tools).unwrap_or_default(),
+                text,
+            );
+        }
+        ToolCommand::Log { number } => {
+            let ev = db.events(number).map_err(|e| db_err(&path, e))?;
+            let text = ev
+                .iter()
+                .map(|e| {
+                    format!(
+                        "{} T{} {}: {}",
+                        e.time,
+                        e.tool.map(|t| t.to_string()).unwrap_or("-".into()),
+                        e.decision,
+                        e.reason
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join("\n");
+            print(a.json, serde_json::to_value(&ev).unwrap_or_default(), text);
+        }
+        ToolCommand::Import { file } => {
+            let text = std::fs::read_to_string(&file)
+                .map_err(|e| CliError::input(format!("{}: {e}", file.display())))?;
+            let is_json = text.trim_start().starts_with('[');
+            let n = if is_json {
+                db.import_json(&text)
+            } else {
+                db.import_csv(&text)
+            }
+            .map_err(|e| CliError::input(format!("{}:{e}", file.display())))?;
+            print(
+                a.json,
+                json!({ "imported": n }),
+                format!("imported {n} tools into {}", path.display()),
+            );
+        }
+        ToolCommand::Export { format, output } => {
+            let text = match format {
+                ExportFormat::Csv => db.export_csv(),
+                ExportFormat::Json => db.export_json(),
+                ExportFormat::ToolT => db.export_tool_t(),
+            }
+            .map_err(|e| db_err(&path, e))?;
+            write_atomic(&output, text.as_bytes(), &[path.as_path()])?;
+            print(
+                a.json,
+                json!({ "output": output.display().to_string() }),
+                format!("wrote {}", output.display()),
+            );
+        }
+        ToolCommand::Cycle(x) => {
+            let t = db.tool(x.number).map_err(|e| db_err(&path, e))?;
+            let o = CycleOptions {
+                kind: if x.first {
+                    Kind::First
+                } else {
+                    Kind::Inspection
+                },
+                measure: match x.measure {
+                    MeasureArg::Length => Measure::Length,
+                    MeasureArg::Radius => Measure::Radius,
+                    MeasureArg::Both => Measure::Both,
+                },
+                clearance: x.clearance,
+                per_tooth: x.per_tooth,
+                pz: insert_pz(&t),
+            };
+            let text = match x.control {
+                Control::Heidenhain => cycles::heidenhain(&t, &o),
+                Control::Fanuc => cycles::fanuc(&t, &o),
+            };
+            write_atomic(&x.output, text.as_bytes(), &[path.as_path()])?;
+            print(
+                a.json,
+                json!({ "output": x.output.display().to_string(), "pz": o.pz }),
+                format!("wrote {}", x.output.display()),
+            );
+        }
+    }
+    Ok(EXIT_OK)
+}
