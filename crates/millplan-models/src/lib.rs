@@ -1,5 +1,6 @@
 //! Process models: what happens between the cutter and the part.
 //!
+//! - [`cutter`]: cutter shapes by their profile h(r) (flat, ball, bull, cone).
 //! - [`contact`]: where a ball touches the part at each tool position (BVH closest
 //!   point, normals, feed direction, uncut side and stepover from the path).
 //! - [`wd`]: the engagement region of a ball-end mill on a locally planar surface
@@ -8,5 +9,6 @@
 //! - [`regression`]: the least-squares surrogate of thesis 2.
 
 pub mod contact;
+pub mod cutter;
 pub mod regression;
 pub mod wd;
