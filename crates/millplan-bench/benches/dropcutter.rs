@@ -11,7 +11,14 @@ use std::hint::black_box;
 
 fn points(n: usize) -> Vec<DVec2> {
     let side = (n as f64).sqrt().ceil() as usize;
-    (0..n).map(|i| DVec2::new(2.0 + 56.0 * (i % side) as f64 / side as f64, 2.0 + 56.0 * (i / side) as f64 / side as f64)).collect()
+    (0..n)
+        .map(|i| {
+            DVec2::new(
+                2.0 + 56.0 * (i % side) as f64 / side as f64,
+                2.0 + 56.0 * (i / side) as f64 / side as f64,
+            )
+        })
+        .collect()
 }
 
 fn drop(c: &mut Criterion) {
@@ -22,10 +29,14 @@ fn drop(c: &mut Criterion) {
     g.throughput(Throughput::Elements(pts.len() as u64));
     let small = tessellate(&DemoSurface::default(), 0.5);
     let dm = DropMesh::new(&small);
-    g.bench_function("28,800 triangles, 100k points", |b| b.iter(|| black_box(dm.drop_many(&ball, &pts).len())));
+    g.bench_function("28,800 triangles, 100k points", |b| {
+        b.iter(|| black_box(dm.drop_many(&ball, &pts).len()))
+    });
     let big = tessellate(&DemoSurface::default(), 60.0 / 1000.0);
     let dm = DropMesh::new(&big);
-    g.bench_function("2,000,000 triangles, 100k points", |b| b.iter(|| black_box(dm.drop_many(&ball, &pts).len())));
+    g.bench_function("2,000,000 triangles, 100k points", |b| {
+        b.iter(|| black_box(dm.drop_many(&ball, &pts).len()))
+    });
     g.finish();
 }
 

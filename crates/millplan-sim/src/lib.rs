@@ -3,3 +3,12 @@
 //! ([`gouge`]) and finishing rasters made of drop-cutter points ([`raster`]).
 
 pub mod dropcutter;
+pub mod gouge;
+pub mod raster;
+
+use millplan_models::cutter::Shape;
+
+/// The cutter shape of an IR tool, when its geometry is known.
+pub fn shape_of(c: &millplan_nc::Cutter) -> Option<Shape> {
+    Shape::from_iso(c.d, c.r, c.alpha)
+}

@@ -12,7 +12,6 @@ use std::fmt;
 pub const EXIT_OK: i32 = 0;
 pub const EXIT_INTERNAL: i32 = 1;
 pub const EXIT_BAD_INPUT: i32 = 2;
-#[allow(dead_code)]
 pub const EXIT_FINDINGS: i32 = 3;
 
 /// A failure with the exit code it maps to.

@@ -31,6 +31,8 @@ enum Command {
     Wd(cmd::wd::Args),
     Speed(cmd::speed::Args),
     Directions(cmd::directions::Args),
+    Gouge(cmd::gouge::Args),
+    Raster(cmd::raster::Args),
     Tool(cmd::tool::Args),
     Thread(cmd::thread::Args),
     #[command(name = "wd-sweep")]
@@ -58,6 +60,8 @@ fn main() {
         Command::Speed(a) => cmd::speed::run(a),
         Command::WdSweep(a) => cmd::sweep::run(a),
         Command::Directions(a) => cmd::directions::run(a),
+        Command::Gouge(a) => cmd::gouge::run(a),
+        Command::Raster(a) => cmd::raster::run(a),
         Command::Tool(a) => cmd::tool::run(a),
         Command::Thread(a) => cmd::thread::run(a),
     };

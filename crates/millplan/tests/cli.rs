@@ -280,6 +280,8 @@ fn crate_dependencies_point_one_way() {
     assert!(!plan.contains("millplan-report") && !plan.contains("clap"));
     let tooldb = deps("millplan-tooldb");
     assert!(!tooldb.contains("millplan-nc") && !tooldb.contains("clap"));
+    let sim = deps("millplan-sim");
+    assert!(!sim.contains("millplan-plan") && !sim.contains("clap"));
     let report = deps("millplan-report");
     assert!(!report.contains("clap") && !report.contains("tempfile"));
 }

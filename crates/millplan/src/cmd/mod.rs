@@ -3,7 +3,9 @@
 pub mod convert;
 pub mod demo;
 pub mod directions;
+pub mod gouge;
 pub mod inspect;
+pub mod raster;
 pub mod speed;
 pub mod sweep;
 pub mod thread;

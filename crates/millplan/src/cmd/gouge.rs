@@ -1,0 +1,109 @@
+//! `millplan gouge`: does the program cut into the part?
+
+use crate::cmd::{print_diagnostics, read_options, UnitArg};
+use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::io::{read_mesh, read_program};
+use millplan_models::cutter::Shape;
+use millplan_sim::dropcutter::DropMesh;
+use millplan_sim::gouge::{check, GougeParams};
+use std::path::PathBuf;
+
+/// Check a program for gouges: every cutting move (and with --rapids every
+/// rapid) is sampled at --step and the tool tip compared with the height at which
+/// the cutter would touch the part there (drop-cutter, exact for flat, ball,
+/// bull and cone cutters). Deeper than --tol is a gouge.
+///
+/// Exit code 0 when clean, 3 when gouges were found. Moves whose tool axis is
+/// not +Z (5-axis) and canned cycles are counted as skipped.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Program (APT/CL or G-code).
+    pub path: PathBuf,
+    /// Part surface (STL).
+    #[arg(long)]
+    pub stl: PathBuf,
+    /// Depth that counts as a gouge, mm.
+    #[arg(long, default_value_t = 0.005)]
+    pub tol: f64,
+    /// Sampling step along the moves, mm.
+    #[arg(long, default_value_t = 0.1)]
+    pub step: f64,
+    /// Check rapid moves too.
+    #[arg(long)]
+    pub rapids: bool,
+    /// Cutter for operations whose tool has no geometry: ball:D, flat:D, bull:D:R, cone:D:ANGLE.
+    #[arg(long)]
+    pub tool: Option<String>,
+    #[arg(long, value_enum)]
+    pub units: Option<UnitArg>,
+    #[arg(long)]
+    pub json: bool,
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    if !(a.tol >= 0.0) || !(a.step > 0.0) {
+        return Err(CliError::input(
+            "--tol must not be negative and --step must be positive",
+        ));
+    }
+    let fallback = match &a.tool {
+        Some(s) => Some(Shape::parse(s).map_err(CliError::input)?),
+        None => None,
+    };
+    let parsed = read_program(&a.path, read_options(a.units, None))?;
+    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    let (mesh, _) = read_mesh(&a.stl)?;
+    let part = DropMesh::new(&mesh);
+    let g = GougeParams {
+        step: a.step,
+        tol: a.tol,
+        rapids: a.rapids,
+    };
+    let shape = |op: &millplan_nc::Operation| match op.tool.as_ref().and_then(|t| t.cutter) {
+        Some(c) => millplan_sim::shape_of(&c),
+        None => fallback,
+    };
+    let rep = check(&parsed.program, &part, shape, &g);
+    if a.json {
+        let mut j = serde_json::to_value(&rep).unwrap_or_default();
+        j["clean"] = serde_json::json!(rep.gouges.is_empty());
+        j["tol"] = serde_json::json!(a.tol);
+        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+    } else {
+        for gg in &rep.gouges {
+            println!(
+                "{}:{}: gouge {:.4} mm deep at X{:.4} Y{:.4} Z{:.4} (operation {}, move {})",
+                a.path.display(),
+                gg.line,
+                gg.depth,
+                gg.at[0],
+                gg.at[1],
+                gg.at[2],
+                gg.operation,
+                gg.mv
+            );
+        }
+        println!(
+            "{} moves checked at {} points, {} skipped: {}",
+            rep.moves_checked,
+            rep.points_checked,
+            rep.moves_skipped,
+            if rep.gouges.is_empty() {
+                "clean".to_string()
+            } else {
+                format!(
+                    "{} gouging moves, deepest {:.4} mm",
+                    rep.gouges.len(),
+                    rep.max_depth
+                )
+            }
+        );
+    }
+    Ok(if rep.gouges.is_empty() {
+        EXIT_OK
+    } else {
+        EXIT_FINDINGS
+    })
+}
