@@ -70,6 +70,28 @@ pub fn drop_triangle(shape: &Shape, c: DVec2, tri: &[DVec3; 3]) -> Option<(f64, 
     best
 }
 
+/// An upper bound of the triangle's drop: the best of its plane over the whole
+/// disc, and its highest vertex less the profile at its nearest point.
+#[inline]
+fn triangle_bound(shape: &Shape, c: DVec2, t: &[DVec3; 3]) -> f64 {
+    let zmax = t[0].z.max(t[1].z).max(t[2].z);
+    let lo = xy(t[0]).min(xy(t[1])).min(xy(t[2]));
+    let hi = xy(t[0]).max(xy(t[1])).max(xy(t[2]));
+    let d = (lo - c).max(c - hi).max(DVec2::ZERO).length();
+    if d > shape.radius() {
+        return f64::NEG_INFINITY;
+    }
+    let mut b = zmax - shape.height(d);
+    let n = (t[1] - t[0]).cross(t[2] - t[0]);
+    if n.z.abs() > 1e-12 * n.length() {
+        let g = DVec2::new(-n.x / n.z, -n.y / n.z);
+        let s = g.length();
+        let r = shape.contact_radius(s);
+        b = b.min(t[0].z + g.dot(c - xy(t[0])) + r * s - shape.height(r));
+    }
+    b
+}
+
 /// Is q inside the triangle's xy projection (boundary included)?
 fn inside(q: DVec2, t: &[DVec3; 3]) -> bool {
     let (a, b, c) = (xy(t[0]), xy(t[1]), xy(t[2]));
@@ -192,6 +214,8 @@ pub struct DropMesh {
     nodes: Vec<Node>,
     order: Vec<u32>,
     tris: Vec<[DVec3; 3]>,
+    /// Position of each triangle in `tris`.
+    pos: Vec<u32>,
 }
 
 const LEAF: usize = 8;
@@ -213,7 +237,16 @@ impl DropMesh {
             Self::split(mesh, &cen, &mut nodes, 0, &mut order, 0);
         }
         let tris = order.iter().map(|&t| mesh.corners(t as usize)).collect();
-        DropMesh { nodes, order, tris }
+        let mut pos = vec![0u32; n];
+        for (k, &t) in order.iter().enumerate() {
+            pos[t as usize] = k as u32;
+        }
+        DropMesh {
+            nodes,
+            order,
+            tris,
+            pos,
+        }
     }
 
     fn leaf_bounds(mesh: &TriMesh, order: &[u32], first: usize) -> Node {
@@ -287,10 +320,28 @@ impl DropMesh {
 
     /// The drop at (x, y), or `None` when no triangle lies under the cutter.
     pub fn drop(&self, shape: &Shape, c: DVec2) -> Option<Drop> {
+        self.drop_near(shape, c, None)
+    }
+
+    /// As [`DropMesh::drop`], first trying triangle `hint` (for example the
+    /// previous point's contact): its drop is a lower bound that prunes most of the
+    /// tree. The result does not depend on the hint.
+    pub fn drop_near(&self, shape: &Shape, c: DVec2, hint: Option<u32>) -> Option<Drop> {
         if self.nodes.is_empty() {
             return None;
         }
         let mut best: Option<Drop> = None;
+        if let Some(t) = hint.filter(|t| (*t as usize) < self.pos.len()) {
+            if let Some((z, contact)) =
+                drop_triangle(shape, c, &self.tris[self.pos[t as usize] as usize])
+            {
+                best = Some(Drop {
+                    z,
+                    contact,
+                    triangle: t,
+                });
+            }
+        }
         let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
         let b0 = self.bound(&self.nodes[0], shape, c);
         if b0 == f64::NEG_INFINITY {
@@ -305,6 +356,11 @@ impl DropMesh {
             if n.count > 0 {
                 let range = n.first as usize..(n.first + n.count) as usize;
                 for (k, t) in self.tris[range.clone()].iter().enumerate() {
+                    if let Some(b) = best {
+                        if triangle_bound(shape, c, t) <= b.z {
+                            continue;
+                        }
+                    }
                     if let Some((z, contact)) = drop_triangle(shape, c, t) {
                         if best.map(|b| z > b.z).unwrap_or(true) {
                             best = Some(Drop {
@@ -339,7 +395,21 @@ impl DropMesh {
 
     /// Drops at many points, in parallel.
     pub fn drop_many(&self, shape: &Shape, pts: &[DVec2]) -> Vec<Option<Drop>> {
-        pts.par_iter().map(|p| self.drop(shape, *p)).collect()
+        // Neighbouring points touch nearby triangles: each chunk warm-starts from
+        // the previous point's contact.
+        pts.par_chunks(1024)
+            .flat_map_iter(|chunk| {
+                let mut hint = None;
+                chunk
+                    .iter()
+                    .map(|p| {
+                        let d = self.drop_near(shape, *p, hint);
+                        hint = d.map(|d| d.triangle);
+                        d
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect()
     }
 }
 

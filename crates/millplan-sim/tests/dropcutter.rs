@@ -52,10 +52,14 @@ proptest! {
         let dm = DropMesh::new(&mesh);
         let sh = shapes()[k];
         let c = DVec2::new(x, y);
-        match (dm.drop(&sh, c), drop_brute(&sh, &mesh, c)) {
-            (Some(a), Some(b)) => prop_assert!((a.z - b.z).abs() < 1e-12, "{:?} vs {:?}", a, b),
-            (None, None) => {}
-            (a, b) => prop_assert!(false, "{:?} vs {:?}", a, b),
+        let brute = drop_brute(&sh, &mesh, c);
+        // With and without a warm-start hint (any triangle, even a far one).
+        for got in [dm.drop(&sh, c), dm.drop_near(&sh, c, Some((seed % mesh.len() as u64) as u32))] {
+            match (got, brute) {
+                (Some(a), Some(b)) => prop_assert!((a.z - b.z).abs() < 1e-12, "{:?} vs {:?}", a, b),
+                (None, None) => {}
+                (a, b) => prop_assert!(false, "{:?} vs {:?}", a, b),
+            }
         }
     }
 }
