@@ -63,9 +63,14 @@ fn along(
 ) -> Vec<Option<DVec3>> {
     let n = (((b - a).length() / step).ceil() as usize).max(1);
     let base: Vec<DVec2> = (0..=n).map(|k| a.lerp(b, k as f64 / n as f64)).collect();
+    let mut hint = None;
     let z: Vec<Option<f64>> = base
         .iter()
-        .map(|p| part.drop(sh, *p).map(|d| d.z))
+        .map(|p| {
+            let d = part.drop_near(sh, *p, hint);
+            hint = d.map(|d| d.triangle);
+            d.map(|d| d.z)
+        })
         .collect();
     let mut out: Vec<Option<DVec3>> = Vec::with_capacity(base.len());
     for k in 0..base.len() {
