@@ -285,3 +285,39 @@ fn speed_reads_gcode_with_a_declared_ball() {
     .expect("re-reads");
     millplan_nc::verify::verify(&back.program).expect("verifies");
 }
+
+#[test]
+fn directions_generates_raster_candidates_from_angles() {
+    use millplan_geom::analytic::{tessellate, DemoSurface};
+    let dir = tempfile::tempdir().expect("tmp");
+    let mut stl = Vec::new();
+    millplan_geom::stl::write_binary_stl(
+        &tessellate(&DemoSurface::default(), 1.0),
+        "part",
+        &mut stl,
+    );
+    let stl_path = dir.path().join("part.stl");
+    std::fs::write(&stl_path, stl).expect("write");
+    let o = bin()
+        .args([
+            "directions",
+            "--stl",
+            stl_path.to_str().expect("utf8"),
+            "--angles",
+            "0,45,90",
+            "--stepover",
+            "3",
+            "--step",
+            "1",
+            "--json",
+        ])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let c = j["candidates"].as_array().expect("candidates");
+    assert_eq!(c.len(), 3);
+    assert!(c
+        .iter()
+        .all(|x| x["path"].as_str().expect("name").starts_with("raster ")));
+}

@@ -26,11 +26,26 @@ pub enum RankBy {
 /// five feed directions) under spindle control and rank them by the dynamic-load
 /// indicators: the milling direction whose spindle speed changes least is the
 /// one thesis 3 recommends.
+///
+/// Give the candidate paths, or let millplan make drop-cutter rasters with
+/// --angles (with --tool, --stepover and --step).
 #[derive(clap::Args)]
 pub struct Args {
     /// Candidate paths (APT/CL or G-code) with a ball-end tool.
-    #[arg(required = true)]
+    #[arg(required_unless_present = "angles")]
     pub paths: Vec<PathBuf>,
+    /// Generate raster candidates at these feed directions, degrees.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub angles: Vec<f64>,
+    /// Ball for generated rasters, e.g. ball:10.
+    #[arg(long, default_value = "ball:10")]
+    pub tool: String,
+    /// Stepover of generated rasters, mm.
+    #[arg(long, default_value_t = 1.0)]
+    pub stepover: f64,
+    /// Point spacing of generated rasters, mm.
+    #[arg(long, default_value_t = 0.5)]
+    pub step: f64,
     #[arg(long)]
     pub stl: PathBuf,
     #[arg(long, default_value_t = 63.0)]
@@ -74,6 +89,24 @@ pub fn run(a: Args) -> CliResult<i32> {
     let (mesh, _) = read_mesh(&a.stl)?;
     let params = SpeedParams::new(a.vc, a.fz, a.flutes, a.ap);
     let mut results = Vec::new();
+    if !a.angles.is_empty() {
+        let shape = millplan_models::cutter::Shape::parse(&a.tool).map_err(CliError::input)?;
+        if !(a.stepover > 0.0 && a.step > 0.0) {
+            return Err(CliError::input("--stepover and --step must be positive"));
+        }
+        let part = millplan_sim::dropcutter::DropMesh::new(&mesh);
+        let bounds = mesh.bounds();
+        for &angle in &a.angles {
+            let mut rp = millplan_sim::raster::RasterParams::new(shape);
+            rp.angle_deg = angle;
+            rp.stepover = a.stepover;
+            rp.step = a.step;
+            let prog = millplan_sim::raster::raster(&part, &bounds, &rp);
+            let r = apply(&prog, &mesh, &machine, &params)
+                .map_err(|e| CliError::input(format!("raster at {angle}°: {e}")))?;
+            results.push((PathBuf::from(format!("raster {angle}°")), r.summary));
+        }
+    }
     for p in &a.paths {
         let parsed = read_program(p, read_options(a.units, None))?;
         let r = apply(&parsed.program, &mesh, &machine, &params)
