@@ -247,7 +247,14 @@ fn key(p: DVec3, cell: f64) -> (i64, i64, i64) {
 
 /// Analyses every point of a path. Points are in cutting order; neighbouring passes
 /// count as machined when they come earlier in that order.
-pub fn analyse(s: &Surface, points: &[PathPoint], p: &Params) -> Vec<PointResult> {
+/// Ball centres and contacts of every point: (centre, contact, unit normal, gap,
+/// no contact). The first half of [`analyse`], reused by passes that evaluate the
+/// working diameter for other orders of the same points.
+pub fn locate(
+    s: &Surface,
+    points: &[PathPoint],
+    p: &Params,
+) -> (Vec<DVec3>, Vec<(DVec3, DVec3, f64, bool)>) {
     let r = p.d / 2.0;
     let centres: Vec<DVec3> = points.iter().map(|q| centre(q, p.convention, r)).collect();
     let incentres = p.nearest_incentre.then(|| Incentres::new(s.mesh));
@@ -299,6 +306,11 @@ pub fn analyse(s: &Surface, points: &[PathPoint], p: &Params) -> Vec<PointResult
                 .collect::<Vec<_>>()
         })
         .collect();
+    (centres, contacts)
+}
+
+pub fn analyse(s: &Surface, points: &[PathPoint], p: &Params) -> Vec<PointResult> {
+    let (centres, contacts) = locate(s, points, p);
     let search = stepover_search_radius(&centres, points, p.neighbour_search);
     let grid = NeighbourGrid::new(&centres, search);
     (0..points.len())
@@ -367,7 +379,7 @@ pub fn analyse(s: &Surface, points: &[PathPoint], p: &Params) -> Vec<PointResult
 /// to the nearest point of the passes cut just before and after theirs (the
 /// stepover the CAM system used), at most `max`. Keeps the neighbour search cheap
 /// on fine rasters.
-fn stepover_search_radius(c: &[DVec3], pts: &[PathPoint], max: f64) -> f64 {
+pub fn stepover_search_radius(c: &[DVec3], pts: &[PathPoint], max: f64) -> f64 {
     if c.len() < 3 {
         return max;
     }
@@ -462,43 +474,83 @@ fn local_case(
     t: DVec3,
     search: f64,
 ) -> (f64, Side, Neighbour) {
+    let mut side = SideFinder::new(c[i], n, t, search);
+    grid.for_each_near(c[i], |j| {
+        // Only passes machined before this one count.
+        if j < i && pts[j].pass != pts[i].pass {
+            side.machined(c[j]);
+        }
+    });
+    (feed_angle(n, k, t), side.result().0, side.result().1)
+}
+
+/// Feed direction t relative to uphill at a point with normal n, tool axis k
+/// (radians; 0 when the surface is flat or the point does not move).
+pub fn feed_angle(n: DVec3, k: DVec3, t: DVec3) -> f64 {
     let up = k - n * n.dot(k);
-    let af = if up.length() < 1e-9 || t == DVec3::ZERO {
+    if up.length() < 1e-9 || t == DVec3::ZERO {
         0.0
     } else {
         let u = up.normalize();
-        let w = n.cross(u);
-        t.dot(w).atan2(t.dot(u))
-    };
-    if t == DVec3::ZERO {
-        return (af, Side::Left, Neighbour::None);
+        t.dot(n.cross(u)).atan2(t.dot(u))
     }
-    let left = n.cross(t);
-    let (mut l_best, mut r_best) = (f64::INFINITY, f64::INFINITY);
-    grid.for_each_near(c[i], |j| {
-        // Only passes machined before this one count.
-        if j >= i || pts[j].pass == pts[i].pass {
+}
+
+/// Finds the uncut side and the stepover at a ball centre from the machined
+/// centres around it: a machined point beside the feed direction (more sideways
+/// than along) within `search` marks that side as cut.
+pub struct SideFinder {
+    at: DVec3,
+    n: DVec3,
+    t: DVec3,
+    left: DVec3,
+    search: f64,
+    l_best: f64,
+    r_best: f64,
+}
+
+impl SideFinder {
+    pub fn new(at: DVec3, n: DVec3, t: DVec3, search: f64) -> SideFinder {
+        SideFinder {
+            at,
+            n,
+            t,
+            left: n.cross(t),
+            search,
+            l_best: f64::INFINITY,
+            r_best: f64::INFINITY,
+        }
+    }
+
+    /// A machined ball centre nearby.
+    #[inline]
+    pub fn machined(&mut self, c: DVec3) {
+        if self.t == DVec3::ZERO {
             return;
         }
-        let v = c[j] - c[i];
-        let v = v - n * v.dot(n);
-        let lat = v.dot(left);
-        let along = v.dot(t);
-        if lat.abs() > search || along.abs() > lat.abs().max(1e-9) {
+        let v = c - self.at;
+        let v = v - self.n * v.dot(self.n);
+        let lat = v.dot(self.left);
+        let along = v.dot(self.t);
+        if lat.abs() > self.search || along.abs() > lat.abs().max(1e-9) {
             return;
         }
         if lat > 1e-6 {
-            l_best = l_best.min(lat);
+            self.l_best = self.l_best.min(lat);
         } else if lat < -1e-6 {
-            r_best = r_best.min(-lat);
+            self.r_best = self.r_best.min(-lat);
         }
-    });
-    match (l_best.is_finite(), r_best.is_finite()) {
-        (false, false) => (af, Side::Left, Neighbour::None),
-        // Machined on the left: the uncut material is on the right.
-        (true, false) => (af, Side::Right, Neighbour::One(l_best)),
-        (false, true) => (af, Side::Left, Neighbour::One(r_best)),
-        (true, true) => (af, Side::Left, Neighbour::Both(l_best.min(r_best))),
+    }
+
+    /// Uncut side and neighbour.
+    pub fn result(&self) -> (Side, Neighbour) {
+        match (self.l_best.is_finite(), self.r_best.is_finite()) {
+            (false, false) => (Side::Left, Neighbour::None),
+            // Machined on the left: the uncut material is on the right.
+            (true, false) => (Side::Right, Neighbour::One(self.l_best)),
+            (false, true) => (Side::Left, Neighbour::One(self.r_best)),
+            (true, true) => (Side::Left, Neighbour::Both(self.l_best.min(self.r_best))),
+        }
     }
 }
 
