@@ -3,6 +3,8 @@
 //! | pass | needs | changes |
 //! |---|---|---|
 //! | [`speed`] | part mesh, ball-end tool, cutting data, machine | *how* (spindle speed and feed per block), never *what* is cut |
+//! | [`reorder`] | part mesh, 3-axis ball-end operations | the *order* of the cutting points and the links between them (every point is still cut) |
 
 pub mod machine;
+pub mod reorder;
 pub mod speed;

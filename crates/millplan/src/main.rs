@@ -33,6 +33,7 @@ enum Command {
     Directions(cmd::directions::Args),
     Gouge(cmd::gouge::Args),
     Raster(cmd::raster::Args),
+    Reorder(cmd::reorder::Args),
     Tool(cmd::tool::Args),
     Thread(cmd::thread::Args),
     #[command(name = "wd-sweep")]
@@ -62,6 +63,7 @@ fn main() {
         Command::Directions(a) => cmd::directions::run(a),
         Command::Gouge(a) => cmd::gouge::run(a),
         Command::Raster(a) => cmd::raster::run(a),
+        Command::Reorder(a) => cmd::reorder::run(a),
         Command::Tool(a) => cmd::tool::run(a),
         Command::Thread(a) => cmd::thread::run(a),
     };

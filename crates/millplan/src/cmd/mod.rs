@@ -6,6 +6,7 @@ pub mod directions;
 pub mod gouge;
 pub mod inspect;
 pub mod raster;
+pub mod reorder;
 pub mod speed;
 pub mod sweep;
 pub mod thread;

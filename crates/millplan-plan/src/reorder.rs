@@ -1,0 +1,743 @@
+//! Reordering the points of a ball-end finishing path so the working diameter
+//! changes as little as possible between successive points (paper 000, thesis 5;
+//! spec `working-diameter.md` §4.4 and §5.8), with safe links.
+//!
+//! - [`Method::Paper`]: the paper's greedy search. Start on the border of the point
+//!   set; candidates are the unvisited points within a radius grown ×1.5 until at
+//!   least `n_min` are found; visited points are tabu; the candidate with the
+//!   smallest |ΔD_w| wins, ties continue in the current feed direction. Each
+//!   candidate's D_w is evaluated for the direction it would be cut in and the
+//!   material already cut around it (not reused from the original order).
+//! - [`Method::Optimised`]: passes of the original path are kept as units and their
+//!   order and directions improved by 2-opt from the original order on the cost
+//!   w₁·|Δn| + w₂·link length + w₃·direction change (radians) at the joints, so the
+//!   result is never worse than the original on that cost.
+//!
+//! Links: a move between successive points is made directly only when the
+//! drop-cutter check along it finds no gouge; otherwise the tool retracts to a
+//! clearance height, rapids across and plunges at the plunge feed.
+
+use millplan_geom::{DVec2, DVec3, TriMesh};
+use millplan_models::contact::{self, feed_angle, PathPoint, SideFinder, Surface};
+use millplan_models::cutter::Shape;
+use millplan_models::wd::{self, Case};
+use millplan_nc::{EventKind, Move, MoveKind, Operation, Program};
+use millplan_sim::dropcutter::DropMesh;
+use rustc_hash::{FxHashMap, FxHashSet};
+
+/// Where the paper's search starts, among the points on the border (convex hull)
+/// of the point set seen from above.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Start {
+    Lowest,
+    Highest,
+    /// A given point (index into the cutting points).
+    Index(usize),
+    /// A border point chosen with this seed.
+    Random(u64),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    Paper,
+    Optimised,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct ReorderParams {
+    pub method: Method,
+    pub start: Start,
+    /// Stock thickness along the normal, mm.
+    pub ap: f64,
+    /// Cutting speed, m/min (for the |Δn| cost of the optimised method).
+    pub vc: f64,
+    /// Minimum number of candidates.
+    pub n_min: usize,
+    /// Initial search radius, mm (`None`: 1.5 × the median point spacing).
+    pub radius: Option<f64>,
+    /// D_w differences closer than this are ties, mm.
+    pub tie: f64,
+    /// Cost weights: |Δn| (per 1/min), link length (per mm), direction change (per radian).
+    pub weights: [f64; 3],
+    /// 2-opt budget: passes over the sequence.
+    pub iterations: usize,
+    /// Clearance above the part for retracts, mm.
+    pub clearance: f64,
+    /// Feed of plunges after a retract, as a fraction of the cutting feed.
+    pub plunge_factor: f64,
+    /// Gouge tolerance of direct links, mm.
+    pub gouge_tol: f64,
+}
+
+impl ReorderParams {
+    pub fn new(method: Method) -> ReorderParams {
+        ReorderParams {
+            method,
+            start: Start::Lowest,
+            ap: 0.3,
+            vc: 63.0,
+            n_min: 4,
+            radius: None,
+            tie: 1e-3,
+            weights: [1.0, 10.0, 100.0],
+            iterations: 20,
+            clearance: 5.0,
+            plunge_factor: 0.5,
+            gouge_tol: 0.005,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ReorderError {
+    #[error("the program has no 3-axis ball-end operation to reorder")]
+    NoBallOperation,
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// How much each cost term changed (optimised method), and what the links did.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ReorderStats {
+    pub points: usize,
+    pub passes: usize,
+    /// Cost terms at the joints of the original and the reordered sequence.
+    pub cost_original: [f64; 3],
+    pub cost_reordered: [f64; 3],
+    pub direct_links: usize,
+    pub retracts: usize,
+}
+
+/// The reordered program (only ball-end operations change) and statistics.
+pub struct Reordered {
+    pub program: Program,
+    pub stats: ReorderStats,
+}
+
+/// The cutting points of an operation, their move indices and pass numbers.
+fn cutting_points(op: &Operation) -> (Vec<PathPoint>, Vec<usize>) {
+    let mut pts = Vec::new();
+    let mut idx = Vec::new();
+    let mut pass = 0u32;
+    let mut prev_dir: Option<DVec3> = None;
+    for (i, m) in op.moves.iter().enumerate() {
+        if !m.is_cutting() {
+            if !pts.is_empty() {
+                pass += 1;
+            }
+            prev_dir = None;
+            continue;
+        }
+        if let Some(s) = op.move_start(i) {
+            let d = (m.end - s).normalize_or_zero();
+            if let Some(pd) = prev_dir {
+                if d != DVec3::ZERO && pd.dot(d) < 0.5 {
+                    pass += 1;
+                }
+            }
+            if d != DVec3::ZERO {
+                prev_dir = Some(d);
+            }
+        }
+        pts.push(PathPoint {
+            cl: m.end,
+            axis: DVec3::Z,
+            pass,
+        });
+        idx.push(i);
+    }
+    (pts, idx)
+}
+
+fn xy(v: DVec3) -> DVec2 {
+    DVec2::new(v.x, v.y)
+}
+
+/// Indices of the convex hull of the points seen from above (monotone chain).
+fn hull(points: &[DVec3]) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..points.len()).collect();
+    idx.sort_by(|&a, &b| {
+        points[a]
+            .x
+            .total_cmp(&points[b].x)
+            .then(points[a].y.total_cmp(&points[b].y))
+    });
+    let cross = |o: usize, a: usize, b: usize| {
+        (xy(points[a]) - xy(points[o])).perp_dot(xy(points[b]) - xy(points[o]))
+    };
+    let mut h: Vec<usize> = Vec::new();
+    for pass in 0..2 {
+        let start = h.len();
+        let iter: Box<dyn Iterator<Item = &usize>> = if pass == 0 {
+            Box::new(idx.iter())
+        } else {
+            Box::new(idx.iter().rev())
+        };
+        for &p in iter {
+            while h.len() >= start + 2 && cross(h[h.len() - 2], h[h.len() - 1], p) <= 0.0 {
+                h.pop();
+            }
+            h.push(p);
+        }
+        h.pop();
+    }
+    if h.is_empty() && !points.is_empty() {
+        h.push(0);
+    }
+    h
+}
+
+/// Unvisited points in an XY grid, removable in O(1).
+struct Unvisited {
+    cell: f64,
+    cells: FxHashMap<(i64, i64), Vec<u32>>,
+    slot: Vec<u32>,
+    gone: Vec<bool>,
+    occupied: FxHashSet<(i64, i64)>,
+}
+
+impl Unvisited {
+    fn key(&self, p: DVec2) -> (i64, i64) {
+        (
+            (p.x / self.cell).floor() as i64,
+            (p.y / self.cell).floor() as i64,
+        )
+    }
+
+    fn new(points: &[DVec3], cell: f64) -> Unvisited {
+        let mut u = Unvisited {
+            cell,
+            cells: FxHashMap::default(),
+            slot: vec![0; points.len()],
+            gone: vec![false; points.len()],
+            occupied: FxHashSet::default(),
+        };
+        for (i, p) in points.iter().enumerate() {
+            let k = u.key(xy(*p));
+            let v = u.cells.entry(k).or_default();
+            u.slot[i] = v.len() as u32;
+            v.push(i as u32);
+            u.occupied.insert(k);
+        }
+        u
+    }
+
+    fn remove(&mut self, i: usize, p: DVec2) {
+        if std::mem::replace(&mut self.gone[i], true) {
+            return;
+        }
+        let k = self.key(p);
+        if let Some(v) = self.cells.get_mut(&k) {
+            let s = self.slot[i] as usize;
+            let last = *v.last().unwrap_or(&(i as u32));
+            v.swap_remove(s);
+            if s < v.len() {
+                self.slot[last as usize] = s as u32;
+            }
+            if v.is_empty() {
+                self.occupied.remove(&k);
+            }
+        }
+    }
+
+    /// Unvisited points within `r` of p.
+    fn within(&self, points: &[DVec3], p: DVec2, r: f64, out: &mut Vec<u32>) {
+        out.clear();
+        let k = self.key(p);
+        let span = (r / self.cell).ceil() as i64;
+        let cells = (2 * span + 1) * (2 * span + 1);
+        let mut visit = |v: &Vec<u32>| {
+            for &j in v {
+                if (xy(points[j as usize]) - p).length() <= r {
+                    out.push(j);
+                }
+            }
+        };
+        if cells as usize > self.occupied.len() {
+            for c in &self.occupied {
+                if (c.0 - k.0).abs() <= span && (c.1 - k.1).abs() <= span {
+                    if let Some(v) = self.cells.get(c) {
+                        visit(v);
+                    }
+                }
+            }
+        } else {
+            for dx in -span..=span {
+                for dy in -span..=span {
+                    if let Some(v) = self.cells.get(&(k.0 + dx, k.1 + dy)) {
+                        visit(v);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The paper's search: the order of the points (indices).
+#[allow(clippy::too_many_arguments)]
+fn paper_search(
+    centres: &[DVec3],
+    normals: &[DVec3],
+    d: f64,
+    p: &ReorderParams,
+    side_search: f64,
+    spacing: f64,
+) -> Vec<usize> {
+    let n = centres.len();
+    let border = hull(centres);
+    let start = match p.start {
+        Start::Lowest => *border
+            .iter()
+            .min_by(|a, b| centres[**a].z.total_cmp(&centres[**b].z))
+            .unwrap_or(&0),
+        Start::Highest => *border
+            .iter()
+            .max_by(|a, b| centres[**a].z.total_cmp(&centres[**b].z))
+            .unwrap_or(&0),
+        Start::Index(i) => i.min(n - 1),
+        Start::Random(seed) => {
+            border[(seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407)
+                >> 33) as usize
+                % border.len()]
+        }
+    };
+    let r0 = p.radius.unwrap_or(1.5 * spacing).max(1e-6);
+    let mut unv = Unvisited::new(centres, r0);
+    // Machined centres, for the uncut side of candidates.
+    let mut machined: FxHashMap<(i64, i64), Vec<u32>> = FxHashMap::default();
+    let mkey = |q: DVec3| {
+        (
+            (q.x / side_search).floor() as i64,
+            (q.y / side_search).floor() as i64,
+        )
+    };
+    let eval = |j: usize, t: DVec3, machined: &FxHashMap<(i64, i64), Vec<u32>>| -> f64 {
+        let nj = normals[j];
+        let t = (t - nj * t.dot(nj)).normalize_or_zero();
+        let mut sf = SideFinder::new(centres[j], nj, t, side_search);
+        let k = mkey(centres[j]);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                if let Some(v) = machined.get(&(k.0 + dx, k.1 + dy)) {
+                    for &m in v {
+                        sf.machined(centres[m as usize]);
+                    }
+                }
+            }
+        }
+        let (side, neighbour) = sf.result();
+        let alpha = nj.dot(DVec3::Z).clamp(-1.0, 1.0).acos();
+        wd::working_diameter(&Case {
+            d,
+            ap: p.ap,
+            neighbour,
+            alpha,
+            af: feed_angle(nj, DVec3::Z, t),
+            side,
+        })
+    };
+    let mut order = Vec::with_capacity(n);
+    let mut cur = start;
+    let mut cur_dir = DVec3::ZERO;
+    let mut cur_dw = eval(cur, DVec3::X, &machined);
+    let mut cand = Vec::new();
+    loop {
+        order.push(cur);
+        unv.remove(cur, xy(centres[cur]));
+        machined
+            .entry(mkey(centres[cur]))
+            .or_default()
+            .push(cur as u32);
+        if order.len() == n {
+            break;
+        }
+        let mut r = r0;
+        loop {
+            unv.within(centres, xy(centres[cur]), r, &mut cand);
+            if cand.len() >= p.n_min.min(n - order.len()) {
+                break;
+            }
+            r *= 1.5;
+        }
+        let mut best: Option<(usize, f64, f64, DVec3)> = None;
+        for &j in &cand {
+            let j = j as usize;
+            let step = centres[j] - centres[cur];
+            let dir = step.normalize_or_zero();
+            let dw = eval(j, dir, &machined);
+            let diff = (dw - cur_dw).abs();
+            let straight = dir.dot(cur_dir);
+            let better = match best {
+                None => true,
+                Some((_, bd, bs, _)) => {
+                    diff < bd - p.tie || ((diff - bd).abs() <= p.tie && straight > bs)
+                }
+            };
+            if better {
+                best = Some((j, diff, straight, dir));
+            }
+        }
+        let (j, _, _, dir) = best.unwrap_or((cand[0] as usize, 0.0, 0.0, DVec3::ZERO));
+        cur_dw = eval(j, dir, &machined);
+        cur_dir = dir;
+        cur = j;
+    }
+    order
+}
+
+/// The optimised method: passes as units, 2-opt from the original order.
+fn optimised(
+    centres: &[DVec3],
+    dw: &[f64],
+    passes: &[(usize, usize)],
+    p: &ReorderParams,
+) -> (Vec<(usize, bool)>, [f64; 3], [f64; 3]) {
+    let nspeed = |i: usize| 1000.0 * p.vc / (std::f64::consts::PI * dw[i].max(1e-6));
+    // Ends of a pass in a direction: (first point, second, second last, last).
+    let ends = |(a, b): (usize, usize), rev: bool| if rev { (b - 1, a) } else { (a, b - 1) };
+    let dir_at = |from: usize, to: usize| (centres[to] - centres[from]).normalize_or_zero();
+    let joint = |x: (usize, bool), y: (usize, bool)| -> [f64; 3] {
+        let (_, xl) = ends(passes[x.0], x.1);
+        let (yf, _) = ends(passes[y.0], y.1);
+        let dn = (nspeed(xl) - nspeed(yf)).abs();
+        let link = (centres[yf] - centres[xl]).length();
+        // Direction at the end of x vs the start of y.
+        let (xa, xb) = passes[x.0];
+        let dx = if xb - xa >= 2 {
+            if x.1 {
+                dir_at(xa + 1, xa)
+            } else {
+                dir_at(xb - 2, xb - 1)
+            }
+        } else {
+            DVec3::ZERO
+        };
+        let (ya, yb) = passes[y.0];
+        let dy = if yb - ya >= 2 {
+            if y.1 {
+                dir_at(yb - 1, yb - 2)
+            } else {
+                dir_at(ya, ya + 1)
+            }
+        } else {
+            DVec3::ZERO
+        };
+        let turn = if dx == DVec3::ZERO || dy == DVec3::ZERO {
+            0.0
+        } else {
+            dx.dot(dy).clamp(-1.0, 1.0).acos()
+        };
+        [dn, link, turn]
+    };
+    let cost_terms = |seq: &[(usize, bool)]| {
+        let mut t = [0.0; 3];
+        for w in seq.windows(2) {
+            let j = joint(w[0], w[1]);
+            for k in 0..3 {
+                t[k] += j[k];
+            }
+        }
+        t
+    };
+    let weighted = |t: [f64; 3]| p.weights[0] * t[0] + p.weights[1] * t[1] + p.weights[2] * t[2];
+    let mut seq: Vec<(usize, bool)> = (0..passes.len()).map(|i| (i, false)).collect();
+    let original = cost_terms(&seq);
+    let jc = |a: (usize, bool), b: (usize, bool)| {
+        let j = joint(a, b);
+        p.weights[0] * j[0] + p.weights[1] * j[1] + p.weights[2] * j[2]
+    };
+    // 2-opt: reverse seq[i..=k] (the passes' order and their directions).
+    for _ in 0..p.iterations {
+        let mut improved = false;
+        for i in 1..seq.len() {
+            for k in i..seq.len() {
+                let before = jc(seq[i - 1], seq[i])
+                    + if k + 1 < seq.len() {
+                        jc(seq[k], seq[k + 1])
+                    } else {
+                        0.0
+                    };
+                let (ri, rk) = ((seq[k].0, !seq[k].1), (seq[i].0, !seq[i].1));
+                let after = jc(seq[i - 1], ri)
+                    + if k + 1 < seq.len() {
+                        jc(rk, seq[k + 1])
+                    } else {
+                        0.0
+                    };
+                // Reversing a segment keeps its inner joints (each reversed) — the
+                // direction-change term is symmetric, |Δn| and link length too.
+                if after < before - 1e-9 {
+                    seq[i..=k].reverse();
+                    for s in &mut seq[i..=k] {
+                        s.1 = !s.1;
+                    }
+                    improved = true;
+                }
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
+    let reordered = cost_terms(&seq);
+    debug_assert!(weighted(reordered) <= weighted(original) + 1e-6);
+    (seq, original, reordered)
+}
+
+/// Reorders every 3-axis ball-end operation of a program.
+pub fn reorder(
+    program: &Program,
+    mesh: &TriMesh,
+    p: &ReorderParams,
+) -> Result<Reordered, ReorderError> {
+    if !(p.ap > 0.0 && p.vc > 0.0 && p.n_min >= 1 && p.tie >= 0.0 && p.plunge_factor > 0.0) {
+        return Err(ReorderError::Invalid(
+            "ap, vc, plunge factor must be positive, n_min ≥ 1".into(),
+        ));
+    }
+    let surface = Surface::new(mesh);
+    let part = DropMesh::new(mesh);
+    let mut out = program.clone();
+    let mut stats = ReorderStats::default();
+    let mut any = false;
+    for (oi, op) in program.operations.iter().enumerate() {
+        let Some(c) = op
+            .tool
+            .as_ref()
+            .and_then(|t| t.cutter)
+            .filter(|c| c.kind == millplan_nc::CutterKind::Ball)
+        else {
+            continue;
+        };
+        if op.frame.is_some()
+            || op.orients.iter().any(
+                |o| !matches!(o, millplan_nc::Orient::Vector(v) if (*v - DVec3::Z).length() < 1e-9),
+            )
+        {
+            continue;
+        }
+        let (pts, idx) = cutting_points(op);
+        if pts.len() < 2 {
+            continue;
+        }
+        any = true;
+        let mut cp = contact::Params::new(c.d, p.ap);
+        cp.convention = contact::detect_convention(&surface, &pts, c.d / 2.0).chosen;
+        let (centres, located) = contact::locate(&surface, &pts, &cp);
+        let normals: Vec<DVec3> = located.iter().map(|l| l.1).collect();
+        let mut spacing: Vec<f64> = pts
+            .windows(2)
+            .filter(|w| w[0].pass == w[1].pass)
+            .map(|w| (w[1].cl - w[0].cl).length())
+            .filter(|d| *d > 1e-9)
+            .collect();
+        spacing.sort_by(f64::total_cmp);
+        let spacing = spacing.get(spacing.len() / 2).copied().unwrap_or(1.0);
+        let side_search = contact::stepover_search_radius(&centres, &pts, 0.6 * c.d);
+        let order: Vec<usize> = match p.method {
+            Method::Paper => paper_search(&centres, &normals, c.d, p, side_search, spacing),
+            Method::Optimised => {
+                let res = contact::analyse(&surface, &pts, &cp);
+                let dw: Vec<f64> = res.iter().map(|r| r.dw).collect();
+                let mut passes = Vec::new();
+                let mut a = 0;
+                for i in 1..=pts.len() {
+                    if i == pts.len() || pts[i].pass != pts[a].pass {
+                        passes.push((a, i));
+                        a = i;
+                    }
+                }
+                let (seq, before, after) = optimised(&centres, &dw, &passes, p);
+                stats.passes += passes.len();
+                for k in 0..3 {
+                    stats.cost_original[k] += before[k];
+                    stats.cost_reordered[k] += after[k];
+                }
+                seq.iter()
+                    .flat_map(|&(pi, rev)| {
+                        let (a, b) = passes[pi];
+                        let v: Vec<usize> = if rev {
+                            (a..b).rev().collect()
+                        } else {
+                            (a..b).collect()
+                        };
+                        v
+                    })
+                    .collect()
+            }
+        };
+        stats.points += order.len();
+        // Rebuild the operation: cutting points in the new order, safe links.
+        let shape = Shape::Ball { radius: c.d / 2.0 };
+        let top = pts
+            .iter()
+            .map(|q| q.cl.z)
+            .fold(f64::NEG_INFINITY, f64::max)
+            .max(mesh.bounds().max.z);
+        let safe = top + p.clearance;
+        let feed_of = |k: usize| op.moves[idx[k]].feed;
+        let spindle = op.moves[idx[0]].spindle;
+        let mut moves: Vec<Move> = Vec::with_capacity(order.len() * 2);
+        let tmpl = op.moves[idx[0]];
+        let mut prev: Option<DVec3> = None;
+        for &k in &order {
+            let q = pts[k].cl;
+            let line = op.moves[idx[k]].line;
+            let cut = Move {
+                end: q,
+                line,
+                kind: MoveKind::Linear,
+                feed: feed_of(k),
+                spindle,
+                ..tmpl
+            };
+            match prev {
+                None => {
+                    moves.push(Move {
+                        end: DVec3::new(q.x, q.y, safe),
+                        kind: MoveKind::Rapid,
+                        feed: 0.0,
+                        line,
+                        aux: 0,
+                        ..tmpl
+                    });
+                    moves.push(Move {
+                        feed: feed_of(k) * p.plunge_factor,
+                        ..cut
+                    });
+                }
+                Some(a) if link_is_clean(&part, &shape, a, q, p.gouge_tol) => {
+                    stats.direct_links += 1;
+                    moves.push(cut);
+                }
+                Some(a) => {
+                    stats.retracts += 1;
+                    moves.push(Move {
+                        end: DVec3::new(a.x, a.y, safe),
+                        kind: MoveKind::Rapid,
+                        feed: 0.0,
+                        line,
+                        aux: 0,
+                        ..tmpl
+                    });
+                    moves.push(Move {
+                        end: DVec3::new(q.x, q.y, safe),
+                        kind: MoveKind::Rapid,
+                        feed: 0.0,
+                        line,
+                        aux: 0,
+                        ..tmpl
+                    });
+                    moves.push(Move {
+                        feed: feed_of(k) * p.plunge_factor,
+                        ..cut
+                    });
+                }
+            }
+            prev = Some(q);
+        }
+        if let Some(a) = prev {
+            moves.push(Move {
+                end: DVec3::new(a.x, a.y, safe),
+                kind: MoveKind::Rapid,
+                feed: 0.0,
+                aux: 0,
+                ..tmpl
+            });
+        }
+        let o = &mut out.operations[oi];
+        // Events keep their order; those between moves move to the start, the
+        // trailing ones stay at the end.
+        let n_old = o.moves.len() as u32;
+        let n_new = moves.len() as u32;
+        for e in &mut o.events {
+            e.at = if e.at >= n_old { n_new } else { 0 };
+        }
+        o.events.sort_by_key(|e| e.at);
+        o.events.insert(
+            0,
+            millplan_nc::Event {
+                at: 0,
+                line: 0,
+                kind: EventKind::Comment(format!(
+                    "points reordered by millplan ({:?} method)",
+                    p.method
+                )),
+            },
+        );
+        o.moves = moves;
+        o.arcs.clear();
+        o.cycles.clear();
+        o.start = None;
+    }
+    if !any {
+        return Err(ReorderError::NoBallOperation);
+    }
+    Ok(Reordered {
+        program: out,
+        stats,
+    })
+}
+
+/// A straight move from a to b is clean when the tool tip never dips below the
+/// drop-cutter height along it (sampled every 0.05 mm).
+fn link_is_clean(part: &DropMesh, shape: &Shape, a: DVec3, b: DVec3, tol: f64) -> bool {
+    let n = (((b - a).length() / 0.05).ceil() as usize).max(1);
+    let mut hint = None;
+    (0..=n).all(|k| {
+        let q = a.lerp(b, k as f64 / n as f64);
+        match part.drop_near(shape, xy(q), hint) {
+            Some(d) => {
+                hint = Some(d.triangle);
+                d.z - q.z <= tol
+            }
+            None => true,
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hull_of_a_square_with_inner_points() {
+        let pts: Vec<DVec3> = [
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (0.0, 1.0),
+            (0.5, 0.5),
+            (0.2, 0.7),
+        ]
+        .iter()
+        .map(|(x, y)| DVec3::new(*x, *y, 0.0))
+        .collect();
+        let mut h = hull(&pts);
+        h.sort();
+        assert_eq!(h, vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn unvisited_grid_removes_and_finds() {
+        let pts: Vec<DVec3> = (0..100)
+            .map(|i| DVec3::new((i % 10) as f64, (i / 10) as f64, 0.0))
+            .collect();
+        let mut u = Unvisited::new(&pts, 1.5);
+        let mut out = Vec::new();
+        u.within(&pts, DVec2::new(0.0, 0.0), 1.0, &mut out);
+        out.sort();
+        assert_eq!(out, vec![0, 1, 10]);
+        u.remove(1, DVec2::new(1.0, 0.0));
+        u.within(&pts, DVec2::new(0.0, 0.0), 1.0, &mut out);
+        out.sort();
+        assert_eq!(out, vec![0, 10]);
+        for i in 0..100 {
+            u.remove(i, xy(pts[i]));
+        }
+        u.within(&pts, DVec2::new(5.0, 5.0), 100.0, &mut out);
+        assert!(out.is_empty());
+    }
+}

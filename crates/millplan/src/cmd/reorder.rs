@@ -1,0 +1,205 @@
+//! `millplan reorder`: reorder finishing points so the working diameter changes
+//! least between successive points (paper 000, thesis 5), with safe links.
+
+use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
+use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::io::{read_mesh, read_program, write_atomic};
+use clap::ValueEnum;
+use millplan_nc::write::gcode::GcodeOptions;
+use millplan_nc::Program;
+use millplan_plan::machine::Machine;
+use millplan_plan::reorder::{reorder, Method, ReorderParams, Start};
+use millplan_plan::speed::{apply, SpeedParams};
+use serde_json::json;
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum MethodArg {
+    /// The paper's greedy search over single points.
+    Paper,
+    /// Passes kept as units, improved by 2-opt on |Δn|, link length and turns.
+    Optimised,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum StartArg {
+    Lowest,
+    Highest,
+    Random,
+}
+
+/// Reorder the points of 3-axis ball-end finishing operations so the working
+/// diameter, and with it the spindle speed for constant cutting speed, changes
+/// as little as possible between successive points (paper 000, thesis 5).
+///
+/// Every cutting point is kept; links between points that are not neighbours
+/// are direct only when the drop-cutter check proves them gouge-free, otherwise
+/// the tool retracts, rapids and plunges. Spindle control (as `millplan speed`)
+/// is applied to the result unless --no-speed. The JSON summary compares the
+/// original and the reordered order.
+#[derive(clap::Args)]
+pub struct Args {
+    pub path: PathBuf,
+    #[arg(long)]
+    pub stl: PathBuf,
+    #[arg(long, value_enum, default_value = "paper")]
+    pub method: MethodArg,
+    /// Start of the paper's search, among the border points.
+    #[arg(long, value_enum, default_value = "lowest")]
+    pub start: StartArg,
+    /// Start at this cutting point (index) instead.
+    #[arg(long)]
+    pub start_index: Option<usize>,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Minimum number of candidates of the paper's search.
+    #[arg(long, default_value_t = 4)]
+    pub n_min: usize,
+    #[arg(long, default_value_t = 63.0)]
+    pub vc: f64,
+    #[arg(long, default_value_t = 0.125)]
+    pub fz: f64,
+    #[arg(long, default_value_t = 2)]
+    pub flutes: u32,
+    #[arg(long, default_value_t = 0.3)]
+    pub ap: f64,
+    /// Write the reordered points without spindle control.
+    #[arg(long)]
+    pub no_speed: bool,
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
+    #[arg(long, value_enum)]
+    pub to: Option<TargetArg>,
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[arg(long, value_enum)]
+    pub units: Option<UnitArg>,
+    #[arg(long)]
+    pub json: bool,
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Indicators of an order, from the spindle pass's per-point rows.
+fn indicators(
+    p: &Program,
+    mesh: &millplan_geom::TriMesh,
+    m: &Machine,
+    sp: &SpeedParams,
+) -> Result<serde_json::Value, CliError> {
+    let r = apply(p, mesh, m, sp).map_err(|e| CliError::input(e.to_string()))?;
+    let dw: Vec<f64> = r.rows.iter().map(|x| x.r.dw).collect();
+    let n: Vec<f64> = r.rows.iter().map(|x| x.n_target).collect();
+    let steps = |v: &[f64]| -> (f64, f64) {
+        let d: Vec<f64> = v.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+        (
+            d.iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min)
+                .min(f64::MAX),
+            d.iter().copied().fold(0.0, f64::max),
+        )
+    };
+    let (dw_min, dw_max) = steps(&dw);
+    let (n_min, n_max) = steps(&n);
+    let s = millplan_nc::stats::summarize(p, m.rapid);
+    let links: f64 = p
+        .operations
+        .iter()
+        .flat_map(|o| o.moves.iter().enumerate().map(move |(i, mv)| (o, i, mv)))
+        .filter(|(_, _, mv)| mv.kind == millplan_nc::MoveKind::Rapid)
+        .filter_map(|(o, i, mv)| o.move_start(i).map(|st| (mv.end - st).length()))
+        .sum();
+    let retracts = p
+        .moves()
+        .filter(|mv| mv.kind == millplan_nc::MoveKind::Rapid)
+        .count();
+    Ok(json!({
+        "delta_d_w": { "min": dw_min, "max": dw_max },
+        "delta_n": { "min": n_min, "max": n_max },
+        "total_variation_n": r.summary.indicators_target.total_variation,
+        "cutting_mm": s.cutting_mm,
+        "link_mm": links,
+        "rapids": retracts,
+        "time_s": s.time_s,
+        "points": r.rows.len(),
+    }))
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    let machine = match &a.machine {
+        Some(p) => Machine::from_toml(
+            &std::fs::read_to_string(p)
+                .map_err(|e| CliError::input(format!("{}: {e}", p.display())))?,
+        )
+        .map_err(|e| CliError::input(format!("{}: {e}", p.display())))?,
+        None => Machine::default(),
+    };
+    let parsed = read_program(&a.path, read_options(a.units, None))?;
+    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    let (mesh, _) = read_mesh(&a.stl)?;
+    let mut rp = ReorderParams::new(match a.method {
+        MethodArg::Paper => Method::Paper,
+        MethodArg::Optimised => Method::Optimised,
+    });
+    rp.start = match (a.start_index, a.start) {
+        (Some(i), _) => Start::Index(i),
+        (None, StartArg::Lowest) => Start::Lowest,
+        (None, StartArg::Highest) => Start::Highest,
+        (None, StartArg::Random) => Start::Random(a.seed),
+    };
+    rp.n_min = a.n_min;
+    rp.ap = a.ap;
+    rp.vc = a.vc;
+    let res = reorder(&parsed.program, &mesh, &rp)
+        .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
+    let sp = SpeedParams::new(a.vc, a.fz, a.flutes, a.ap);
+    let before = indicators(&parsed.program, &mesh, &machine, &sp)?;
+    let after = indicators(&res.program, &mesh, &machine, &sp)?;
+    let program = if a.no_speed {
+        res.program
+    } else {
+        apply(&res.program, &mesh, &machine, &sp)
+            .map_err(|e| CliError::input(e.to_string()))?
+            .program
+    };
+    let dialect = a.to.map(Into::into).unwrap_or(parsed.program.dialect);
+    let out = write_program(&program, dialect, GcodeOptions::new(dialect))
+        .map_err(|e| CliError::input(e.to_string()))?;
+    write_atomic(&a.output, &out, &[a.path.as_path(), a.stl.as_path()])?;
+    let j = json!({ "method": format!("{:?}", a.method).to_lowercase(), "original": before, "reordered": after, "stats": res.stats, "output": a.output.display().to_string() });
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+    } else {
+        let row = |k: &str, f: &dyn Fn(&serde_json::Value) -> String| {
+            println!("  {k:<28} {:>16} {:>16}", f(&before), f(&after))
+        };
+        println!("  {:<28} {:>16} {:>16}", "", "original", "reordered");
+        row("successive |ΔD_w| max (mm)", &|v| {
+            format!("{:.4}", v["delta_d_w"]["max"].as_f64().unwrap_or(0.0))
+        });
+        row("successive |Δn| max (1/min)", &|v| {
+            format!("{:.0}", v["delta_n"]["max"].as_f64().unwrap_or(0.0))
+        });
+        row("Σ|Δn| (1/min)", &|v| {
+            format!("{:.0}", v["total_variation_n"].as_f64().unwrap_or(0.0))
+        });
+        row("cutting length (mm)", &|v| {
+            format!("{:.0}", v["cutting_mm"].as_f64().unwrap_or(0.0))
+        });
+        row("rapid length (mm)", &|v| {
+            format!("{:.0}", v["link_mm"].as_f64().unwrap_or(0.0))
+        });
+        row("rapid moves", &|v| format!("{}", v["rapids"]));
+        row("estimated time (s)", &|v| {
+            format!("{:.0}", v["time_s"].as_f64().unwrap_or(0.0))
+        });
+        println!(
+            "  {} direct links, {} retracts; wrote {}",
+            res.stats.direct_links,
+            res.stats.retracts,
+            a.output.display()
+        );
+    }
+    Ok(EXIT_OK)
+}
