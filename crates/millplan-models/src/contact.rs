@@ -247,14 +247,13 @@ fn key(p: DVec3, cell: f64) -> (i64, i64, i64) {
 
 /// Analyses every point of a path. Points are in cutting order; neighbouring passes
 /// count as machined when they come earlier in that order.
+/// Contact point, unit normal, gap (centre-to-mesh distance − R), no contact.
+pub type Located = (DVec3, DVec3, f64, bool);
+
 /// Ball centres and contacts of every point: (centre, contact, unit normal, gap,
 /// no contact). The first half of [`analyse`], reused by passes that evaluate the
 /// working diameter for other orders of the same points.
-pub fn locate(
-    s: &Surface,
-    points: &[PathPoint],
-    p: &Params,
-) -> (Vec<DVec3>, Vec<(DVec3, DVec3, f64, bool)>) {
+pub fn locate(s: &Surface, points: &[PathPoint], p: &Params) -> (Vec<DVec3>, Vec<Located>) {
     let r = p.d / 2.0;
     let centres: Vec<DVec3> = points.iter().map(|q| centre(q, p.convention, r)).collect();
     let incentres = p.nearest_incentre.then(|| Incentres::new(s.mesh));

@@ -112,6 +112,15 @@ pub struct ReorderStats {
 pub struct Reordered {
     pub program: Program,
     pub stats: ReorderStats,
+    /// D_w along the original and the new order (all reordered operations, in
+    /// sequence), evaluated by the same rule: arrival direction and material cut
+    /// so far.
+    pub dw_original: Vec<f64>,
+    pub dw_reordered: Vec<f64>,
+    /// Whether the step into each position is a jump (a retract and plunge, or a
+    /// long direct link), where the spindle has time to change speed.
+    pub jump_original: Vec<bool>,
+    pub jump_reordered: Vec<bool>,
 }
 
 /// The cutting points of an operation, their move indices and pass numbers.
@@ -273,6 +282,98 @@ impl Unvisited {
     }
 }
 
+/// The working diameter of a point for a given arrival direction and the points
+/// machined so far (the material state the order creates).
+struct Evaluator<'a> {
+    centres: &'a [DVec3],
+    normals: &'a [DVec3],
+    d: f64,
+    ap: f64,
+    side_search: f64,
+    machined: FxHashMap<(i64, i64), Vec<u32>>,
+}
+
+impl Evaluator<'_> {
+    fn key(&self, q: DVec3) -> (i64, i64) {
+        (
+            (q.x / self.side_search).floor() as i64,
+            (q.y / self.side_search).floor() as i64,
+        )
+    }
+
+    fn mark(&mut self, j: usize) {
+        let k = self.key(self.centres[j]);
+        self.machined.entry(k).or_default().push(j as u32);
+    }
+
+    fn dw(&self, j: usize, dir: DVec3) -> f64 {
+        let nj = self.normals[j];
+        let t = (dir - nj * dir.dot(nj)).normalize_or_zero();
+        let mut sf = SideFinder::new(self.centres[j], nj, t, self.side_search);
+        let k = self.key(self.centres[j]);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                if let Some(v) = self.machined.get(&(k.0 + dx, k.1 + dy)) {
+                    for &m in v {
+                        sf.machined(self.centres[m as usize]);
+                    }
+                }
+            }
+        }
+        let (side, neighbour) = sf.result();
+        let alpha = nj.dot(DVec3::Z).clamp(-1.0, 1.0).acos();
+        wd::working_diameter(&Case {
+            d: self.d,
+            ap: self.ap,
+            neighbour,
+            alpha,
+            af: feed_angle(nj, DVec3::Z, t),
+            side,
+        })
+    }
+}
+
+/// D_w along an order: each point cut in the direction it is reached from the
+/// previous one, with the points before it machined — the rule the paper search
+/// applies to its candidates. A point reached by a jump (farther than `jump`:
+/// the tool retracts and plunges there) is cut in the direction it leaves in.
+/// Returns D_w per position and whether the step into it was a jump.
+fn sequence_dw(
+    centres: &[DVec3],
+    normals: &[DVec3],
+    d: f64,
+    ap: f64,
+    side_search: f64,
+    order: &[usize],
+    jump: f64,
+) -> (Vec<f64>, Vec<bool>) {
+    let mut ev = Evaluator {
+        centres,
+        normals,
+        d,
+        ap,
+        side_search,
+        machined: FxHashMap::default(),
+    };
+    let mut out = Vec::with_capacity(order.len());
+    let mut jumps = Vec::with_capacity(order.len());
+    for k in 0..order.len() {
+        let j = order[k];
+        let from_prev = (k > 0).then(|| centres[j] - centres[order[k - 1]]);
+        let is_jump = from_prev.map(|v| v.length() > jump).unwrap_or(true);
+        let dir = match from_prev {
+            Some(v) if !is_jump => v,
+            _ if k + 1 < order.len() => centres[order[k + 1]] - centres[j],
+            Some(v) => v,
+            None => DVec3::X,
+        };
+        out.push(ev.dw(j, dir.normalize_or_zero()));
+        jumps.push(is_jump && k > 0);
+        ev.mark(j);
+    }
+    (out, jumps)
+}
+
 /// The paper's search: the order of the points (indices).
 #[allow(clippy::too_many_arguments)]
 fn paper_search(
@@ -305,51 +406,23 @@ fn paper_search(
     };
     let r0 = p.radius.unwrap_or(1.5 * spacing).max(1e-6);
     let mut unv = Unvisited::new(centres, r0);
-    // Machined centres, for the uncut side of candidates.
-    let mut machined: FxHashMap<(i64, i64), Vec<u32>> = FxHashMap::default();
-    let mkey = |q: DVec3| {
-        (
-            (q.x / side_search).floor() as i64,
-            (q.y / side_search).floor() as i64,
-        )
-    };
-    let eval = |j: usize, t: DVec3, machined: &FxHashMap<(i64, i64), Vec<u32>>| -> f64 {
-        let nj = normals[j];
-        let t = (t - nj * t.dot(nj)).normalize_or_zero();
-        let mut sf = SideFinder::new(centres[j], nj, t, side_search);
-        let k = mkey(centres[j]);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                if let Some(v) = machined.get(&(k.0 + dx, k.1 + dy)) {
-                    for &m in v {
-                        sf.machined(centres[m as usize]);
-                    }
-                }
-            }
-        }
-        let (side, neighbour) = sf.result();
-        let alpha = nj.dot(DVec3::Z).clamp(-1.0, 1.0).acos();
-        wd::working_diameter(&Case {
-            d,
-            ap: p.ap,
-            neighbour,
-            alpha,
-            af: feed_angle(nj, DVec3::Z, t),
-            side,
-        })
+    let mut ev = Evaluator {
+        centres,
+        normals,
+        d,
+        ap: p.ap,
+        side_search,
+        machined: FxHashMap::default(),
     };
     let mut order = Vec::with_capacity(n);
     let mut cur = start;
     let mut cur_dir = DVec3::ZERO;
-    let mut cur_dw = eval(cur, DVec3::X, &machined);
+    let mut cur_dw = ev.dw(cur, DVec3::X);
     let mut cand = Vec::new();
     loop {
         order.push(cur);
         unv.remove(cur, xy(centres[cur]));
-        machined
-            .entry(mkey(centres[cur]))
-            .or_default()
-            .push(cur as u32);
+        ev.mark(cur);
         if order.len() == n {
             break;
         }
@@ -361,26 +434,25 @@ fn paper_search(
             }
             r *= 1.5;
         }
-        let mut best: Option<(usize, f64, f64, DVec3)> = None;
+        let mut best: Option<(usize, f64, f64, DVec3, f64)> = None;
         for &j in &cand {
             let j = j as usize;
-            let step = centres[j] - centres[cur];
-            let dir = step.normalize_or_zero();
-            let dw = eval(j, dir, &machined);
+            let dir = (centres[j] - centres[cur]).normalize_or_zero();
+            let dw = ev.dw(j, dir);
             let diff = (dw - cur_dw).abs();
             let straight = dir.dot(cur_dir);
             let better = match best {
                 None => true,
-                Some((_, bd, bs, _)) => {
+                Some((_, bd, bs, _, _)) => {
                     diff < bd - p.tie || ((diff - bd).abs() <= p.tie && straight > bs)
                 }
             };
             if better {
-                best = Some((j, diff, straight, dir));
+                best = Some((j, diff, straight, dir, dw));
             }
         }
-        let (j, _, _, dir) = best.unwrap_or((cand[0] as usize, 0.0, 0.0, DVec3::ZERO));
-        cur_dw = eval(j, dir, &machined);
+        let (j, _, _, dir, dw) = best.unwrap_or((cand[0] as usize, 0.0, 0.0, DVec3::ZERO, cur_dw));
+        cur_dw = dw;
         cur_dir = dir;
         cur = j;
     }
@@ -501,6 +573,8 @@ pub fn reorder(
     let part = DropMesh::new(mesh);
     let mut out = program.clone();
     let mut stats = ReorderStats::default();
+    let (mut dw_original, mut dw_reordered) = (Vec::new(), Vec::new());
+    let (mut jump_original, mut jump_reordered) = (Vec::new(), Vec::new());
     let mut any = false;
     for (oi, op) in program.operations.iter().enumerate() {
         let Some(c) = op
@@ -569,6 +643,14 @@ pub fn reorder(
             }
         };
         stats.points += order.len();
+        let identity: Vec<usize> = (0..pts.len()).collect();
+        let jump = 3.0 * spacing.max(side_search / 1.6);
+        let (a, b) = sequence_dw(&centres, &normals, c.d, p.ap, side_search, &identity, jump);
+        dw_original.extend(a);
+        jump_original.extend(b);
+        let (a, b) = sequence_dw(&centres, &normals, c.d, p.ap, side_search, &order, jump);
+        dw_reordered.extend(a);
+        jump_reordered.extend(b);
         // Rebuild the operation: cutting points in the new order, safe links.
         let shape = Shape::Ball { radius: c.d / 2.0 };
         let top = pts
@@ -678,6 +760,10 @@ pub fn reorder(
     Ok(Reordered {
         program: out,
         stats,
+        dw_original,
+        dw_reordered,
+        jump_original,
+        jump_reordered,
     })
 }
 
@@ -734,8 +820,8 @@ mod tests {
         u.within(&pts, DVec2::new(0.0, 0.0), 1.0, &mut out);
         out.sort();
         assert_eq!(out, vec![0, 10]);
-        for i in 0..100 {
-            u.remove(i, xy(pts[i]));
+        for (i, p) in pts.iter().enumerate() {
+            u.remove(i, xy(*p));
         }
         u.within(&pts, DVec2::new(5.0, 5.0), 100.0, &mut out);
         assert!(out.is_empty());

@@ -80,50 +80,50 @@ pub struct Args {
     pub quiet: bool,
 }
 
-/// Indicators of an order, from the spindle pass's per-point rows.
+/// Indicators of an order: successive changes of D_w (evaluated for the direction
+/// each point is reached from and the material cut before it) and of the spindle
+/// speed for constant cutting speed, plus path figures.
 fn indicators(
     p: &Program,
-    mesh: &millplan_geom::TriMesh,
-    m: &Machine,
-    sp: &SpeedParams,
-) -> Result<serde_json::Value, CliError> {
-    let r = apply(p, mesh, m, sp).map_err(|e| CliError::input(e.to_string()))?;
-    let dw: Vec<f64> = r.rows.iter().map(|x| x.r.dw).collect();
-    let n: Vec<f64> = r.rows.iter().map(|x| x.n_target).collect();
-    let steps = |v: &[f64]| -> (f64, f64) {
-        let d: Vec<f64> = v.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    dw: &[f64],
+    jump: &[bool],
+    vc: f64,
+    rapid_rate: f64,
+) -> serde_json::Value {
+    let n: Vec<f64> = dw
+        .iter()
+        .map(|d| millplan_models::wd::spindle_speed(vc, *d))
+        .collect();
+    // Changes between points cut one after the other; steps across jumps
+    // (retract and plunge) are reported apart: the spindle has time there.
+    let steps = |v: &[f64], across: bool| -> (f64, f64, f64) {
+        let d: Vec<f64> = (1..v.len())
+            .filter(|&k| jump[k] == across)
+            .map(|k| (v[k] - v[k - 1]).abs())
+            .collect();
+        let min = d.iter().copied().fold(f64::INFINITY, f64::min);
         (
-            d.iter()
-                .copied()
-                .fold(f64::INFINITY, f64::min)
-                .min(f64::MAX),
+            if min.is_finite() { min } else { 0.0 },
             d.iter().copied().fold(0.0, f64::max),
+            d.iter().sum(),
         )
     };
-    let (dw_min, dw_max) = steps(&dw);
-    let (n_min, n_max) = steps(&n);
-    let s = millplan_nc::stats::summarize(p, m.rapid);
-    let links: f64 = p
-        .operations
-        .iter()
-        .flat_map(|o| o.moves.iter().enumerate().map(move |(i, mv)| (o, i, mv)))
-        .filter(|(_, _, mv)| mv.kind == millplan_nc::MoveKind::Rapid)
-        .filter_map(|(o, i, mv)| o.move_start(i).map(|st| (mv.end - st).length()))
-        .sum();
-    let retracts = p
-        .moves()
-        .filter(|mv| mv.kind == millplan_nc::MoveKind::Rapid)
-        .count();
-    Ok(json!({
-        "delta_d_w": { "min": dw_min, "max": dw_max },
+    let (dw_min, dw_max, _) = steps(dw, false);
+    let (n_min, n_max, tv) = steps(&n, false);
+    let (_, dw_jump_max, _) = steps(dw, true);
+    let jumps = jump.iter().filter(|j| **j).count();
+    let s = millplan_nc::stats::summarize(p, rapid_rate);
+    json!({
+        "delta_d_w": { "min": dw_min, "max": dw_max, "max_across_jumps": dw_jump_max },
+        "jumps": jumps,
         "delta_n": { "min": n_min, "max": n_max },
-        "total_variation_n": r.summary.indicators_target.total_variation,
+        "total_variation_n": tv,
         "cutting_mm": s.cutting_mm,
-        "link_mm": links,
-        "rapids": retracts,
+        "link_mm": s.rapid_mm,
+        "rapids": s.moves.rapid,
         "time_s": s.time_s,
-        "points": r.rows.len(),
-    }))
+        "points": dw.len(),
+    })
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -154,8 +154,20 @@ pub fn run(a: Args) -> CliResult<i32> {
     let res = reorder(&parsed.program, &mesh, &rp)
         .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
     let sp = SpeedParams::new(a.vc, a.fz, a.flutes, a.ap);
-    let before = indicators(&parsed.program, &mesh, &machine, &sp)?;
-    let after = indicators(&res.program, &mesh, &machine, &sp)?;
+    let before = indicators(
+        &parsed.program,
+        &res.dw_original,
+        &res.jump_original,
+        a.vc,
+        machine.rapid,
+    );
+    let after = indicators(
+        &res.program,
+        &res.dw_reordered,
+        &res.jump_reordered,
+        a.vc,
+        machine.rapid,
+    );
     let program = if a.no_speed {
         res.program
     } else {

@@ -1,0 +1,129 @@
+//! `millplan reorder`: every cutting point kept exactly once, no gouging link,
+//! the optimised method never worse than the original on its documented cost.
+
+use millplan_nc::{parse_program, MoveKind, ReadOptions};
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_millplan"))
+}
+
+fn cutting_points(path: &Path) -> BTreeMap<[i64; 3], usize> {
+    let p = parse_program(
+        &std::fs::read_to_string(path).expect("read"),
+        ReadOptions::default(),
+    )
+    .expect("reads")
+    .program;
+    millplan_nc::verify::verify(&p).expect("verifies");
+    let mut m = BTreeMap::new();
+    for op in &p.operations {
+        for mv in &op.moves {
+            if mv.kind == MoveKind::Linear {
+                *m.entry(mv.end.to_array().map(|v| (v * 1e4).round() as i64))
+                    .or_insert(0) += 1;
+            }
+        }
+    }
+    m
+}
+
+#[test]
+fn reordered_paths_keep_every_point_and_never_gouge() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let d = dir.path().join("demo");
+    assert!(bin()
+        .args(["demo", "-o", d.to_str().expect("utf8")])
+        .output()
+        .expect("runs")
+        .status
+        .success());
+    let stl = d.join("part.stl");
+    let path = dir.path().join("raster.apt");
+    let o = bin()
+        .args([
+            "raster",
+            "--stl",
+            stl.to_str().expect("utf8"),
+            "--tool",
+            "ball:10",
+            "--stepover",
+            "1",
+            "--step",
+            "0.5",
+            "--boundary",
+            "18",
+            "--tol",
+            "0",
+        ])
+        .args(["-o", path.to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let original = cutting_points(&path);
+    for method in ["paper", "optimised"] {
+        let out = dir.path().join(format!("{method}.apt"));
+        let o = bin()
+            .args([
+                "reorder",
+                path.to_str().expect("utf8"),
+                "--stl",
+                stl.to_str().expect("utf8"),
+                "--method",
+                method,
+                "--no-speed",
+                "--json",
+            ])
+            .args(["-o", out.to_str().expect("utf8")])
+            .output()
+            .expect("runs");
+        assert!(
+            o.status.success(),
+            "{method}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+        // A permutation: every cutting point of the original, once (plunges end
+        // on a cutting point too, so the set of end points is compared).
+        let got = cutting_points(&out);
+        assert_eq!(
+            got.keys().collect::<Vec<_>>(),
+            original.keys().collect::<Vec<_>>(),
+            "{method}: points lost or added"
+        );
+        assert_eq!(j["reordered"]["points"], j["original"]["points"]);
+        // No link gouges the part.
+        let g = bin()
+            .args([
+                "gouge",
+                "--json",
+                "-q",
+                "--stl",
+                stl.to_str().expect("utf8"),
+                out.to_str().expect("utf8"),
+            ])
+            .output()
+            .expect("runs");
+        assert_eq!(
+            g.status.code(),
+            Some(0),
+            "{method}: {}",
+            String::from_utf8_lossy(&g.stdout)
+        );
+        if method == "optimised" {
+            let w = [1.0, 10.0, 100.0];
+            let cost = |k: &str| -> f64 {
+                (0..3)
+                    .map(|i| w[i] * j["stats"][k][i].as_f64().expect("term"))
+                    .sum()
+            };
+            assert!(
+                cost("cost_reordered") <= cost("cost_original") + 1e-6,
+                "{}",
+                j["stats"]
+            );
+        }
+    }
+}
