@@ -123,6 +123,31 @@ impl Shape {
         }
     }
 
+    /// Slope h'(r) of the profile (r < R; for the cone's tip, 0 is a valid
+    /// subgradient at r = 0).
+    #[inline]
+    pub fn slope(&self, r: f64) -> f64 {
+        match *self {
+            Shape::Flat { .. } => 0.0,
+            Shape::Ball { radius } => r / (radius * radius - r * r).max(1e-300).sqrt(),
+            Shape::Bull { radius, corner } => {
+                let u = r - (radius - corner);
+                if u <= 0.0 {
+                    0.0
+                } else {
+                    u / (corner * corner - u * u).max(1e-300).sqrt()
+                }
+            }
+            Shape::Cone { alpha, .. } => {
+                if r > 0.0 {
+                    alpha.tan()
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+
     /// The radius r* ∈ [0, R] maximising r·s − h(r): where a plane rising with
     /// slope s touches the cutter (the profile's slope equals s, or the rim).
     #[inline]

@@ -88,6 +88,24 @@ fn triangle_bound(shape: &Shape, c: DVec2, t: &[DVec3; 3]) -> f64 {
         let s = g.length();
         let r = shape.contact_radius(s);
         b = b.min(t[0].z + g.dot(c - xy(t[0])) + r * s - shape.height(r));
+        // f(q) = plane(q) − h(|q − c|) is concave on the plane: its tangent at a
+        // vertex inside the disc bounds it over the whole triangle, which is tight
+        // for the small facets of a fine mesh.
+        let radius = shape.radius();
+        for (k, v) in t.iter().enumerate() {
+            let off = xy(*v) - c;
+            let rv = off.length();
+            if rv < 0.999 * radius {
+                let radial = if rv > 0.0 { off / rv } else { DVec2::ZERO };
+                let grad = g - radial * shape.slope(rv);
+                let fv = v.z - shape.height(rv);
+                let rise = (1..3)
+                    .map(|m| grad.dot(xy(t[(k + m) % 3]) - xy(*v)))
+                    .fold(0.0, f64::max);
+                b = b.min(fv + rise);
+                break;
+            }
+        }
     }
     b
 }
@@ -218,7 +236,7 @@ pub struct DropMesh {
     pos: Vec<u32>,
 }
 
-const LEAF: usize = 8;
+const LEAF: usize = 4;
 
 impl DropMesh {
     pub fn new(mesh: &TriMesh) -> DropMesh {
