@@ -204,6 +204,14 @@ mod tests {
                 assert!(r * s - sh.height(r) >= best - 1e-9, "{sh:?} s {s}");
             }
         }
+        // The slope is the profile's derivative.
+        for sh in [b, t, c, Shape::Flat { radius: 5.0 }] {
+            for r in [0.5, 2.0, 4.2, 4.9] {
+                let e = 1e-6;
+                let fd = (sh.height(r + e) - sh.height(r - e)) / (2.0 * e);
+                assert!((sh.slope(r) - fd).abs() < 1e-5, "{sh:?} r {r}");
+            }
+        }
         assert_eq!(
             Shape::from_iso(10.0, 5.0, 0.0),
             Some(Shape::Ball { radius: 5.0 })
