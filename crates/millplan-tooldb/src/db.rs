@@ -345,6 +345,39 @@ impl ToolDb {
         Ok(())
     }
 
+    /// Records the insert mounted on a tool (thread mills): its catalogue
+    /// designation and the ISO 13399 INSL and TP the PZ comes from; they also
+    /// become the tool's INSL and TP properties.
+    pub fn add_insert(
+        &mut self,
+        number: u32,
+        designation: &str,
+        insl: f64,
+        tp: f64,
+    ) -> Result<f64, DbError> {
+        let pz = crate::thread::pz(insl, tp).map_err(|e| DbError::Invalid(e.to_string()))?;
+        let tx = self.conn.transaction()?;
+        let mut t = get_tool(&tx, number)?.ok_or(DbError::UnknownTool(number))?;
+        tx.execute(
+            "INSERT INTO inserts (tool, designation, insl, tp) VALUES (?1, ?2, ?3, ?4)",
+            params![number, designation, insl, tp],
+        )?;
+        t.iso.insert("INSL".into(), insl.to_string());
+        t.iso.insert("TP".into(), tp.to_string());
+        put_tool_tx(&tx, &t)?;
+        tx.commit()?;
+        Ok(pz)
+    }
+
+    /// Inserts mounted on a tool, newest last: (designation, INSL, TP).
+    pub fn inserts(&self, number: u32) -> Result<Vec<(String, f64, f64)>, DbError> {
+        let mut st = self
+            .conn
+            .prepare("SELECT designation, insl, tp FROM inserts WHERE tool = ?1 ORDER BY id")?;
+        let rows = st.query_map([number], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)))?;
+        Ok(rows.collect::<Result<_, _>>()?)
+    }
+
     pub fn latest_presetter(&self, number: u32) -> Result<Option<(f64, f64)>, DbError> {
         Ok(self
             .conn
@@ -731,6 +764,33 @@ mod tests {
         assert!(db.import_json("[{\"numbr\": 4}").is_err());
         assert_eq!(db.tools().expect("tools").len(), 1);
         assert!(matches!(db.tool(9), Err(DbError::UnknownTool(9))));
+    }
+
+    #[test]
+    fn inserts_carry_the_pz_data() {
+        let mut db = ToolDb::memory().expect("db");
+        db.put_tool(&ToolRecord::new(5, "thread mill"))
+            .expect("put");
+        // Paper 002: ISCAR MT LNHU 1403 I1.00 on the MTE D13.7: INSL 14.0, TP 1.0, PZ 0.50.
+        let pz = db
+            .add_insert(5, "MT LNHU 1403 I1.00 ISO IC908", 14.0, 1.0)
+            .expect("insert");
+        assert!((pz - 0.5).abs() < 1e-12);
+        assert_eq!(
+            db.inserts(5).expect("inserts"),
+            vec![("MT LNHU 1403 I1.00 ISO IC908".to_string(), 14.0, 1.0)]
+        );
+        assert_eq!(
+            db.tool(5)
+                .expect("tool")
+                .iso
+                .get("INSL")
+                .map(String::as_str),
+            Some("14")
+        );
+        assert!(db.add_insert(5, "bad", 14.0, -1.0).is_err());
+        assert!(db.add_insert(9, "none", 14.0, 1.0).is_err());
+        assert_eq!(db.inserts(5).expect("inserts").len(), 1);
     }
 
     #[test]

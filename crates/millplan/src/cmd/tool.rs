@@ -38,6 +38,16 @@ pub struct Args {
 pub enum ToolCommand {
     /// Register a tool, or change one (values not given stay as they are).
     Add(AddArgs),
+    /// Record the insert mounted on a thread mill (designation, INSL, TP).
+    Insert {
+        number: u32,
+        /// Catalogue designation, e.g. "MT LNHU 1403 I1.00 ISO IC908".
+        designation: String,
+        #[arg(long)]
+        insl: f64,
+        #[arg(long)]
+        tp: f64,
+    },
     /// Enter the presetter's length and radius for a tool.
     Preset {
         number: u32,
@@ -302,6 +312,21 @@ pub fn run(a: Args) -> CliResult<i32> {
                 a.json,
                 serde_json::to_value(&t).unwrap_or_default(),
                 format!("saved {}", describe(&t)),
+            );
+        }
+        ToolCommand::Insert {
+            number,
+            designation,
+            insl,
+            tp,
+        } => {
+            let pz = db
+                .add_insert(number, &designation, insl, tp)
+                .map_err(|e| db_err(&path, e))?;
+            print(
+                a.json,
+                json!({ "tool": number, "designation": designation, "insl": insl, "tp": tp, "pz": pz }),
+                format!("T{number}: insert {designation}, PZ {pz:.3} mm"),
             );
         }
         ToolCommand::Preset { number, l, r } => {
