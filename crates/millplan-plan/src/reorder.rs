@@ -663,8 +663,23 @@ pub fn reorder(
         let spindle = op.moves[idx[0]].spindle;
         let mut moves: Vec<Move> = Vec::with_capacity(order.len() * 2);
         let tmpl = op.moves[idx[0]];
+        // Every link is checked for gouges (even one between neighbouring points
+        // can cut into a concave region), in parallel.
+        let clean: Vec<bool> = {
+            use rayon::prelude::*;
+            (0..order.len())
+                .into_par_iter()
+                .map(|m| {
+                    if m == 0 {
+                        return true;
+                    }
+                    let (a, q) = (pts[order[m - 1]].cl, pts[order[m]].cl);
+                    link_is_clean(&part, &shape, a, q, p.gouge_tol)
+                })
+                .collect()
+        };
         let mut prev: Option<DVec3> = None;
-        for &k in &order {
+        for (m, &k) in order.iter().enumerate() {
             let q = pts[k].cl;
             let line = op.moves[idx[k]].line;
             let cut = Move {
@@ -690,7 +705,7 @@ pub fn reorder(
                         ..cut
                     });
                 }
-                Some(a) if link_is_clean(&part, &shape, a, q, p.gouge_tol) => {
+                Some(_) if clean[m] => {
                     stats.direct_links += 1;
                     moves.push(cut);
                 }
@@ -768,11 +783,12 @@ pub fn reorder(
 }
 
 /// A straight move from a to b is clean when the tool tip never dips below the
-/// drop-cutter height along it (sampled every 0.05 mm).
+/// drop-cutter height along it (sampled every 0.05 mm; the ends are points of
+/// the original path and are not checked again).
 fn link_is_clean(part: &DropMesh, shape: &Shape, a: DVec3, b: DVec3, tol: f64) -> bool {
-    let n = (((b - a).length() / 0.05).ceil() as usize).max(1);
+    let n = (((b - a).length() / 0.05).ceil() as usize).max(2);
     let mut hint = None;
-    (0..=n).all(|k| {
+    (1..n).all(|k| {
         let q = a.lerp(b, k as f64 / n as f64);
         match part.drop_near(shape, xy(q), hint) {
             Some(d) => {
