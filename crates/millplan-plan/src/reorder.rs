@@ -663,8 +663,9 @@ pub fn reorder(
         let spindle = op.moves[idx[0]].spindle;
         let mut moves: Vec<Move> = Vec::with_capacity(order.len() * 2);
         let tmpl = op.moves[idx[0]];
-        // Every link is checked for gouges (even one between neighbouring points
-        // can cut into a concave region), in parallel.
+        // Every new link is checked for gouges (even one between neighbouring
+        // points can cut into a concave region), in parallel; a link that
+        // retraces a move of the original path (either way) is that move.
         let clean: Vec<bool> = {
             use rayon::prelude::*;
             (0..order.len())
@@ -673,8 +674,11 @@ pub fn reorder(
                     if m == 0 {
                         return true;
                     }
-                    let (a, q) = (pts[order[m - 1]].cl, pts[order[m]].cl);
-                    link_is_clean(&part, &shape, a, q, p.gouge_tol)
+                    let (i, j) = (order[m - 1], order[m]);
+                    if i.abs_diff(j) == 1 && pts[i].pass == pts[j].pass {
+                        return true;
+                    }
+                    link_is_clean(&part, &shape, pts[i].cl, pts[j].cl, p.gouge_tol)
                 })
                 .collect()
         };
