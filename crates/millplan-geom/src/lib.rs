@@ -9,6 +9,7 @@ pub mod analytic;
 pub mod bvh;
 pub mod frame;
 pub mod mesh;
+pub mod optimize;
 pub mod stl;
 pub mod tol;
 

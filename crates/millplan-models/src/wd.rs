@@ -211,33 +211,15 @@ fn maximize_1d(f: &impl Fn(f64) -> f64, a: f64, b: f64) -> (f64, f64) {
             best = (v, x);
         }
     }
-    let (mut lo, mut hi) = ((best.1 - step).max(a), (best.1 + step).min(b));
-    let g = 0.618_033_988_749_894_9;
-    let mut x1 = hi - g * (hi - lo);
-    let mut x2 = lo + g * (hi - lo);
-    let (mut f1, mut f2) = (f(x1), f(x2));
-    for _ in 0..34 {
-        if f1 < f2 {
-            lo = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = lo + g * (hi - lo);
-            f2 = f(x2);
-        } else {
-            hi = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = hi - g * (hi - lo);
-            f1 = f(x1);
-        }
-        if hi - lo < 1e-12 {
-            break;
-        }
-    }
-    for (v, x) in [(f1, x1), (f2, x2)] {
-        if v > best.0 {
-            best = (v, x);
-        }
+    let (x, v) = millplan_geom::optimize::golden_max(
+        f,
+        (best.1 - step).max(a),
+        (best.1 + step).min(b),
+        1e-12,
+        34,
+    );
+    if v > best.0 {
+        best = (v, x);
     }
     best
 }

@@ -165,37 +165,10 @@ fn drop_edge(shape: &Shape, c: DVec2, a: DVec3, b: DVec3) -> Option<(f64, DVec3)
                 lo
             }
         }
-        Shape::Bull { .. } => golden_max(&g, lo, hi),
+        Shape::Bull { .. } => millplan_geom::optimize::golden_max(&g, lo, hi, 1e-12, 80).0,
     };
     let q = xy(a) + dir * (t0 + u);
     Some((g(u), DVec3::new(q.x, q.y, z_at(u))))
-}
-
-/// Maximum of a concave function on [lo, hi] by golden-section search.
-fn golden_max(g: &impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
-    let k = 0.618_033_988_749_894_9;
-    let mut x1 = hi - k * (hi - lo);
-    let mut x2 = lo + k * (hi - lo);
-    let (mut f1, mut f2) = (g(x1), g(x2));
-    for _ in 0..80 {
-        if hi - lo < 1e-12 {
-            break;
-        }
-        if f1 < f2 {
-            lo = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = lo + k * (hi - lo);
-            f2 = g(x2);
-        } else {
-            hi = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = hi - k * (hi - lo);
-            f1 = g(x1);
-        }
-    }
-    0.5 * (lo + hi)
 }
 
 /// Reference: every triangle, no pruning.
