@@ -5,7 +5,6 @@ use crate::cmd::{read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_mesh, read_program};
 use clap::ValueEnum;
-use millplan_plan::machine::Machine;
 use millplan_plan::speed::{apply, SpeedParams, Summary};
 use serde_json::json;
 use std::path::PathBuf;
@@ -78,14 +77,7 @@ fn key(s: &Summary, by: RankBy) -> f64 {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let machine = match &a.machine {
-        Some(p) => Machine::from_toml(
-            &std::fs::read_to_string(p)
-                .map_err(|e| CliError::input(format!("{}: {e}", p.display())))?,
-        )
-        .map_err(|e| CliError::input(format!("{}: {e}", p.display())))?,
-        None => Machine::default(),
-    };
+    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let (mesh, _) = read_mesh(&a.stl)?;
     let params = SpeedParams::new(a.vc, a.fz, a.flutes, a.ap);
     let mut results = Vec::new();

@@ -93,3 +93,19 @@ pub fn print_diagnostics(path: &std::path::Path, diags: &[millplan_nc::Diagnosti
         eprintln!("{}:{d}", path.display());
     }
 }
+
+/// The machine from `--machine FILE`, or the built-in default.
+pub fn load_machine(
+    path: Option<&std::path::Path>,
+) -> crate::error::CliResult<millplan_plan::machine::Machine> {
+    use crate::error::CliError;
+    match path {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .map_err(|e| CliError::input(format!("{}: cannot read: {e}", p.display())))?;
+            millplan_plan::machine::Machine::from_toml(&text)
+                .map_err(|e| CliError::input(format!("{}: {e}", p.display())))
+        }
+        None => Ok(millplan_plan::machine::Machine::default()),
+    }
+}

@@ -7,7 +7,6 @@ use crate::io::{read_mesh, read_program, write_atomic};
 use clap::ValueEnum;
 use millplan_nc::write::gcode::GcodeOptions;
 use millplan_nc::Program;
-use millplan_plan::machine::Machine;
 use millplan_plan::reorder::{reorder, Method, ReorderParams, Start};
 use millplan_plan::speed::{apply, SpeedParams};
 use serde_json::json;
@@ -127,14 +126,7 @@ fn indicators(
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let machine = match &a.machine {
-        Some(p) => Machine::from_toml(
-            &std::fs::read_to_string(p)
-                .map_err(|e| CliError::input(format!("{}: {e}", p.display())))?,
-        )
-        .map_err(|e| CliError::input(format!("{}: {e}", p.display())))?,
-        None => Machine::default(),
-    };
+    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let parsed = read_program(&a.path, read_options(a.units, None))?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let (mesh, _) = read_mesh(&a.stl)?;

@@ -6,7 +6,6 @@ use crate::io::{read_mesh, read_program, write_atomic};
 use clap::ValueEnum;
 use millplan_models::contact::{Convention, NormalMode};
 use millplan_nc::write::gcode::GcodeOptions;
-use millplan_plan::machine::Machine;
 use millplan_plan::speed::{apply, FeedCoupling, SpeedParams};
 use std::path::PathBuf;
 
@@ -101,15 +100,7 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let machine = match &a.machine {
-        Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .map_err(|e| CliError::input(format!("{}: cannot read: {e}", p.display())))?;
-            Machine::from_toml(&text)
-                .map_err(|e| CliError::input(format!("{}: {e}", p.display())))?
-        }
-        None => Machine::default(),
-    };
+    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let t0 = std::time::Instant::now();
     let parsed = read_program(&a.path, read_options(a.units, None))?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
