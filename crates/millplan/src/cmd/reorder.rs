@@ -54,6 +54,9 @@ pub struct Args {
     /// Minimum number of candidates of the paper's search.
     #[arg(long, default_value_t = 4)]
     pub n_min: usize,
+    /// D_w differences within this are ties, broken by continuing straight, mm.
+    #[arg(long, default_value_t = 0.001)]
+    pub tie: f64,
     #[arg(long, default_value_t = 63.0)]
     pub vc: f64,
     #[arg(long, default_value_t = 0.125)]
@@ -141,6 +144,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         (None, StartArg::Random) => Start::Random(a.seed),
     };
     rp.n_min = a.n_min;
+    rp.tie = a.tie;
     rp.ap = a.ap;
     rp.vc = a.vc;
     let res = reorder(&parsed.program, &mesh, &rp)
