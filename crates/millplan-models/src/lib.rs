@@ -6,9 +6,12 @@
 //! - [`wd`]: the engagement region of a ball-end mill on a locally planar surface
 //!   and its working diameter (spec `working-diameter.md` §1–2), with the
 //!   brute-force sampler the tests use as reference.
+//! - [`kinematics`]: forward/inverse kinematics of 5-axis machines (spec
+//!   `kinematics-access-tools.md` §1).
 //! - [`regression`]: the least-squares surrogate of thesis 2.
 
 pub mod contact;
 pub mod cutter;
+pub mod kinematics;
 pub mod regression;
 pub mod wd;
