@@ -2,7 +2,7 @@
 //! and the per-triangle geometry the queries return.
 
 use crate::{Aabb, TriMesh};
-use glam::DVec3;
+use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
 const LEAF: usize = 8;
@@ -67,6 +67,19 @@ pub struct Bvh {
     order: Vec<u32>,
     /// Triangle corners in `order`, contiguous: the queries read them leaf by leaf.
     tris: Vec<[DVec3; 3]>,
+    /// The same tree with only what a ray needs (a third of a node's bytes).
+    slim: Vec<SlimNode>,
+}
+
+/// A ray-traversal node: the box in single precision (SIMD lanes), widened so
+/// that it still holds everything the double-precision box holds.
+#[derive(Clone, Copy, Debug)]
+struct SlimNode {
+    min: Vec3A,
+    max: Vec3A,
+    first: u32,
+    right: u32,
+    count: u32,
 }
 
 impl Bvh {
@@ -91,7 +104,23 @@ impl Bvh {
             .par_iter()
             .map(|&t| mesh.corners(t as usize))
             .collect();
-        Bvh { nodes, order, tris }
+        let pad = 1e-5 * nodes[0].bbox.diagonal().max(1e-9);
+        let slim = nodes
+            .iter()
+            .map(|n| SlimNode {
+                min: (n.bbox.min - pad).as_vec3().into(),
+                max: (n.bbox.max + pad).as_vec3().into(),
+                first: n.first,
+                right: n.right,
+                count: n.count,
+            })
+            .collect();
+        Bvh {
+            nodes,
+            order,
+            tris,
+            slim,
+        }
     }
 
     pub fn bounds(&self) -> Aabb {
@@ -177,6 +206,86 @@ impl Bvh {
         }
         best
     }
+}
+
+impl Bvh {
+    /// Whether the ray `origin + s·dir`, `0 < s < max_s`, hits any triangle other
+    /// than `skip` (an any-hit occlusion query: it stops at the first hit).
+    /// Triangles are hit from both sides; `dir` need not be unit.
+    pub fn occluded(&self, origin: DVec3, dir: DVec3, max_s: f64, skip: Option<u32>) -> bool {
+        if self.order.is_empty() {
+            return false;
+        }
+        // A zero component becomes a tiny one: its slab is then [-huge, huge] from
+        // inside and empty from outside, with no 0·∞ = NaN on the slab faces.
+        let nz = |x: f64| if x == 0.0 { 1e-300 } else { x };
+        let inv = DVec3::new(nz(dir.x), nz(dir.y), nz(dir.z)).recip();
+        // Clamped so that a zero slab width times the inverse stays 0, never NaN.
+        let inv32 = Vec3A::from(inv.clamp(DVec3::splat(-1e30), DVec3::splat(1e30)).as_vec3());
+        let o32 = Vec3A::from(origin.as_vec3());
+        let max32 = max_s as f32;
+        let mut stack: [u32; 64] = [0; 64];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.slim[stack[sp] as usize];
+            if !ray_box(node.min, node.max, o32, inv32, max32) {
+                continue;
+            }
+            if node.count > 0 {
+                let range = node.first as usize..(node.first + node.count) as usize;
+                for (k, [a, b, c]) in self.tris[range.clone()].iter().enumerate() {
+                    if skip == Some(self.order[range.start + k]) {
+                        continue;
+                    }
+                    if let Some(s) = ray_triangle(origin, dir, *a, *b, *c) {
+                        if s > 0.0 && s < max_s {
+                            return true;
+                        }
+                    }
+                }
+            } else if sp + 2 <= stack.len() {
+                stack[sp] = node.first;
+                stack[sp + 1] = node.right;
+                sp += 2;
+            }
+        }
+        false
+    }
+}
+
+/// Slab test: whether the ray meets the box for some 0 ≤ s ≤ max_s.
+#[inline]
+fn ray_box(min: Vec3A, max: Vec3A, o: Vec3A, inv: Vec3A, max_s: f32) -> bool {
+    let t1 = (min - o) * inv;
+    let t2 = (max - o) * inv;
+    let lo = t1.min(t2).max_element().max(0.0);
+    let hi = t1.max(t2).min_element().min(max_s);
+    lo <= hi
+}
+
+/// Möller–Trumbore: the ray parameter s of the hit with triangle abc, if any.
+#[inline]
+pub fn ray_triangle(o: DVec3, d: DVec3, a: DVec3, b: DVec3, c: DVec3) -> Option<f64> {
+    let e1 = b - a;
+    let e2 = c - a;
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-300 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let t = o - a;
+    let u = t.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = t.cross(e1);
+    let v = d.dot(q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    Some(e2.dot(q) * inv)
 }
 
 /// Per-triangle data the build reads.
@@ -388,6 +497,29 @@ mod tests {
                 (closest_on_triangle(p, a, b, c).0 - p).length()
             })
             .fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn occlusion_agrees_with_brute_force() {
+        let mesh = tessellate(&DemoSurface::default(), 1.0);
+        let bvh = Bvh::build(&mesh);
+        let mut n = 0;
+        for i in 0..400 {
+            let f = i as f64;
+            let o = DVec3::new((f * 7.3) % 60.0, (f * 3.1) % 60.0, 2.0 + (f * 1.7) % 15.0);
+            let d = DVec3::new(
+                (f * 0.37).sin(),
+                (f * 0.91).cos(),
+                -0.2 - (f * 0.13).sin().abs(),
+            );
+            let brute = (0..mesh.len()).any(|t| {
+                let [a, b, c] = mesh.corners(t);
+                ray_triangle(o, d, a, b, c).is_some_and(|s| s > 0.0 && s < 1e9)
+            });
+            assert_eq!(bvh.occluded(o, d, 1e9, None), brute, "ray {i}");
+            n += brute as usize;
+        }
+        assert!(n > 50 && n < 350, "both outcomes exercised: {n}");
     }
 
     #[test]

@@ -296,6 +296,16 @@ impl Kinematics {
         }
     }
 
+    /// Whether some inverse solution of the unit tool axis `k` lies inside the
+    /// rotary limits (angles may be wound by whole turns to get there).
+    pub fn reaches(&self, k: DVec3) -> bool {
+        let fits =
+            |axis: &RotaryAxis, deg: f64| (-2..=2).any(|w| axis.allows(deg + 360.0 * w as f64));
+        self.orientation_ik(k, 0.0)
+            .iter()
+            .any(|&(f, s)| fits(&self.first, f) && fits(&self.second, s))
+    }
+
     /// The joint solutions for a tip and tool axis that lie within the rotary
     /// limits; the rotary angle of unlimited axes is taken nearest `near`.
     pub fn inverse(&self, tip: DVec3, k: DVec3, near: f64) -> Vec<Joints> {

@@ -1,7 +1,9 @@
 //! Simulation against the part: drop-cutter of flat, ball, bull and cone cutters
 //! on triangle meshes ([`dropcutter`]), the gouge check of a program
-//! ([`gouge`]) and finishing rasters made of drop-cutter points ([`raster`]).
+//! ([`gouge`]), finishing rasters made of drop-cutter points ([`raster`]) and
+//! tool-direction accessibility on a spherical map ([`access`]).
 
+pub mod access;
 pub mod dropcutter;
 pub mod gouge;
 pub mod raster;

@@ -1,0 +1,49 @@
+//! Line-of-sight accessibility of a part on a spherical map, timed:
+//! `cargo run --release -p millplan-bench --example access_map -- [PART.stl] [latlon|icosphere]`
+//! Without a part it uses the demo surface tessellated to about 100,000
+//! triangles; the default grid is the 1,280-cell icosphere.
+
+use millplan_geom::analytic::{tessellate, DemoSurface};
+use millplan_geom::bvh::Bvh;
+use millplan_sim::access::{best_pole, visibility, Icosphere, LatLon, SphereGrid};
+use std::time::Instant;
+
+fn main() {
+    let a: Vec<String> = std::env::args().skip(1).collect();
+    let mesh = match a
+        .first()
+        .filter(|s| s.ends_with(".stl") || s.ends_with(".STL"))
+    {
+        Some(path) => {
+            let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+            millplan_geom::stl::read_stl(&bytes)
+                .unwrap_or_else(|e| panic!("{path}: {e}"))
+                .0
+        }
+        None => tessellate(&DemoSurface::default(), 0.27),
+    };
+    let grid: Box<dyn SphereGrid> = if a.iter().any(|s| s == "latlon") {
+        Box::new(LatLon::PAPER)
+    } else {
+        Box::new(Icosphere::new(3))
+    };
+    let t = Instant::now();
+    let bvh = Bvh::build(&mesh);
+    let build = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let vis = visibility(&mesh, &bvh, grid.as_ref(), 0.0);
+    let secs = t.elapsed().as_secs_f64();
+    let rays = mesh.len() * grid.len();
+    let visible: usize = (0..vis.len()).map(|i| vis.count(i)).sum();
+    let t = Instant::now();
+    let pole = best_pole(&vis, grid.as_ref());
+    let search = t.elapsed().as_secs_f64();
+    println!(
+        "{} triangles, {}: BVH {build:.2} s, visibility {secs:.2} s ({:.1}M direction tests/s, {:.1} % visible), best pole {:.2} s: {pole:?}",
+        mesh.len(),
+        grid.name(),
+        rays as f64 / secs / 1e6,
+        100.0 * visible as f64 / rays as f64,
+        search
+    );
+}

@@ -1,0 +1,813 @@
+//! Tool-direction accessibility on a spherical map (paper 004, spec
+//! `kinematics-access-tools.md` §3): sphere grids, each facet's point visibility
+//! cone (PVC) as a bitset of grid cells, the directions a five-axis machine can
+//! reach (its FTM) and whether every facet keeps one of them.
+//!
+//! Line-of-sight mode: a direction is visible from a facet when it leaves the
+//! facet's outer side (optionally by a minimum clearance angle) and the ray from
+//! the facet's centroid along it meets no other triangle.
+
+use millplan_geom::bvh::Bvh;
+use millplan_geom::{DMat3, DVec3, TriMesh};
+use millplan_models::kinematics::Kinematics;
+use rayon::prelude::*;
+use std::f64::consts::{PI, TAU};
+
+/// A partition of the unit sphere into cells, each with a centre direction.
+pub trait SphereGrid: Sync {
+    fn len(&self) -> usize;
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Unit centre direction of a cell.
+    fn direction(&self, cell: usize) -> DVec3;
+    /// Solid angle of a cell, steradians.
+    fn area(&self, cell: usize) -> f64;
+    /// The cell that contains a unit direction.
+    fn cell_of(&self, d: DVec3) -> usize;
+    fn name(&self) -> String;
+}
+
+fn sph(theta: f64, phi: f64) -> DVec3 {
+    DVec3::new(
+        theta.sin() * phi.cos(),
+        theta.sin() * phi.sin(),
+        theta.cos(),
+    )
+}
+
+/// Latitude-longitude grid: `bands` polar bands × `sectors` azimuth sectors, each
+/// (θ, φ) rectangle split into two triangles along its diagonal in the (θ, φ)
+/// plane. 20 × 30 × 2 = 1200 cells is the paper's map.
+#[derive(Clone, Copy, Debug)]
+pub struct LatLon {
+    pub bands: usize,
+    pub sectors: usize,
+}
+
+impl LatLon {
+    pub const PAPER: LatLon = LatLon {
+        bands: 20,
+        sectors: 30,
+    };
+
+    fn steps(&self) -> (f64, f64) {
+        (PI / self.bands as f64, TAU / self.sectors as f64)
+    }
+}
+
+impl SphereGrid for LatLon {
+    fn len(&self) -> usize {
+        2 * self.bands * self.sectors
+    }
+
+    fn direction(&self, cell: usize) -> DVec3 {
+        let (dt, dp) = self.steps();
+        let (q, t) = (cell / 2, cell % 2);
+        let (i, j) = (q / self.sectors, q % self.sectors);
+        // Centroid in the (θ, φ) plane: (1/3, 1/3) of the lower, (2/3, 2/3) of the upper triangle.
+        let f = if t == 0 { 1.0 / 3.0 } else { 2.0 / 3.0 };
+        sph((i as f64 + f) * dt, (j as f64 + f) * dp)
+    }
+
+    fn area(&self, cell: usize) -> f64 {
+        let (dt, dp) = self.steps();
+        let (q, t) = (cell / 2, cell % 2);
+        let a = (q / self.sectors) as f64 * dt;
+        // ∫∫ sin θ dθ dφ over the triangle u + v ≤ 1 (or ≥ 1) of the rectangle.
+        let i0 = (a.cos() - (a + dt).cos()) / dt;
+        let i1 = -(a + dt).cos() / dt + ((a + dt).sin() - a.sin()) / (dt * dt);
+        dt * dp * if t == 0 { i0 - i1 } else { i1 }
+    }
+
+    fn cell_of(&self, d: DVec3) -> usize {
+        let (dt, dp) = self.steps();
+        let theta = d.z.clamp(-1.0, 1.0).acos();
+        let phi = d.y.atan2(d.x).rem_euclid(TAU);
+        let i = ((theta / dt) as usize).min(self.bands - 1);
+        let j = ((phi / dp) as usize).min(self.sectors - 1);
+        let u = theta / dt - i as f64;
+        let v = phi / dp - j as f64;
+        2 * (i * self.sectors + j) + usize::from(u + v > 1.0)
+    }
+
+    fn name(&self) -> String {
+        format!("latlon {}x{}x2", self.bands, self.sectors)
+    }
+}
+
+/// Geodesic icosphere: the icosahedron's faces split `level` times into four,
+/// projected onto the sphere; 20·4^level near-uniform triangular cells (1280 at level 3).
+#[derive(Clone, Debug)]
+pub struct Icosphere {
+    tris: Vec<[DVec3; 3]>,
+    centres: Vec<DVec3>,
+}
+
+impl Icosphere {
+    pub fn new(level: u32) -> Icosphere {
+        let g = (1.0 + 5f64.sqrt()) / 2.0;
+        let v = [
+            [-1.0, g, 0.0],
+            [1.0, g, 0.0],
+            [-1.0, -g, 0.0],
+            [1.0, -g, 0.0],
+            [0.0, -1.0, g],
+            [0.0, 1.0, g],
+            [0.0, -1.0, -g],
+            [0.0, 1.0, -g],
+            [g, 0.0, -1.0],
+            [g, 0.0, 1.0],
+            [-g, 0.0, -1.0],
+            [-g, 0.0, 1.0],
+        ]
+        .map(|p| DVec3::from_array(p).normalize());
+        const F: [[usize; 3]; 20] = [
+            [0, 11, 5],
+            [0, 5, 1],
+            [0, 1, 7],
+            [0, 7, 10],
+            [0, 10, 11],
+            [1, 5, 9],
+            [5, 11, 4],
+            [11, 10, 2],
+            [10, 7, 6],
+            [7, 1, 8],
+            [3, 9, 4],
+            [3, 4, 2],
+            [3, 2, 6],
+            [3, 6, 8],
+            [3, 8, 9],
+            [4, 9, 5],
+            [2, 4, 11],
+            [6, 2, 10],
+            [8, 6, 7],
+            [9, 8, 1],
+        ];
+        let mut tris: Vec<[DVec3; 3]> = F.iter().map(|f| f.map(|i| v[i])).collect();
+        for _ in 0..level {
+            tris = tris
+                .iter()
+                .flat_map(|&[a, b, c]| {
+                    let (ab, bc, ca) = (
+                        (a + b).normalize(),
+                        (b + c).normalize(),
+                        (c + a).normalize(),
+                    );
+                    [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
+                })
+                .collect();
+        }
+        let centres = tris
+            .iter()
+            .map(|[a, b, c]| (*a + *b + *c).normalize())
+            .collect();
+        Icosphere { tris, centres }
+    }
+}
+
+impl SphereGrid for Icosphere {
+    fn len(&self) -> usize {
+        self.tris.len()
+    }
+
+    fn direction(&self, cell: usize) -> DVec3 {
+        self.centres[cell]
+    }
+
+    fn area(&self, cell: usize) -> f64 {
+        // Van Oosterom–Strackee solid angle of a spherical triangle.
+        let [a, b, c] = self.tris[cell];
+        let num = a.dot(b.cross(c)).abs();
+        let den = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
+        2.0 * num.atan2(den)
+    }
+
+    fn cell_of(&self, d: DVec3) -> usize {
+        // The cell whose three great-circle edges all have d on their inner side;
+        // the nearest centre when rounding leaves d on no cell.
+        let inside = |&[a, b, c]: &[DVec3; 3]| {
+            let e = -1e-12;
+            a.cross(b).dot(d) >= e
+                && b.cross(c).dot(d) >= e
+                && c.cross(a).dot(d) >= e
+                && (a + b + c).dot(d) > 0.0
+        };
+        self.tris.iter().position(inside).unwrap_or_else(|| {
+            (0..self.centres.len())
+                .max_by(|&i, &j| self.centres[i].dot(d).total_cmp(&self.centres[j].dot(d)))
+                .unwrap_or(0)
+        })
+    }
+
+    fn name(&self) -> String {
+        format!("icosphere {}", self.tris.len())
+    }
+}
+
+/// One bitset of grid cells per facet.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellSets {
+    pub cells: usize,
+    words: usize,
+    bits: Vec<u64>,
+}
+
+impl CellSets {
+    pub fn new(sets: usize, cells: usize) -> CellSets {
+        let words = cells.div_ceil(64);
+        CellSets {
+            cells,
+            words,
+            bits: vec![0; sets * words],
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.bits.len().checked_div(self.words).unwrap_or(0)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    pub fn set(&self, i: usize) -> &[u64] {
+        &self.bits[i * self.words..(i + 1) * self.words]
+    }
+
+    pub fn contains(&self, i: usize, cell: usize) -> bool {
+        self.set(i)[cell / 64] >> (cell % 64) & 1 == 1
+    }
+
+    pub fn count(&self, i: usize) -> usize {
+        self.set(i).iter().map(|w| w.count_ones() as usize).sum()
+    }
+
+    pub fn cells_of(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        (0..self.cells).filter(move |&c| self.contains(i, c))
+    }
+}
+
+/// One cell bitset over a grid (for example a machine's reachable directions).
+pub fn cell_mask(grid: &dyn SphereGrid, keep: impl Fn(DVec3) -> bool) -> Vec<u64> {
+    let mut m = vec![0u64; grid.len().div_ceil(64)];
+    for c in 0..grid.len() {
+        if keep(grid.direction(c)) {
+            m[c / 64] |= 1 << (c % 64);
+        }
+    }
+    m
+}
+
+/// Line-of-sight point visibility cones of all facets. A direction d is in
+/// facet t's cone when d·n_t > sin(clearance) and the ray from t's centroid
+/// (lifted by a hair along n_t) along d meets no other triangle. Zero-area
+/// facets get an empty cone.
+pub fn visibility(
+    mesh: &TriMesh,
+    bvh: &Bvh,
+    grid: &dyn SphereGrid,
+    clearance_deg: f64,
+) -> CellSets {
+    let cells = grid.len();
+    let dirs: Vec<DVec3> = (0..cells).map(|c| grid.direction(c)).collect();
+    let min_dot = clearance_deg.to_radians().sin();
+    let lift = 1e-7 * mesh.bounds().diagonal().max(1e-9);
+    let mut out = CellSets::new(mesh.len(), cells);
+    let words = out.words;
+    out.bits
+        .par_chunks_mut(words.max(1))
+        .enumerate()
+        .for_each(|(t, set)| {
+            let n = mesh.facet_normal(t);
+            if n == DVec3::ZERO {
+                return;
+            }
+            let [a, b, c] = mesh.corners(t);
+            let p = (a + b + c) / 3.0 + n * lift;
+            for (k, d) in dirs.iter().enumerate() {
+                if d.dot(n) > min_dot && !bvh.occluded(p, *d, f64::INFINITY, Some(t as u32)) {
+                    set[k / 64] |= 1 << (k % 64);
+                }
+            }
+        });
+    out
+}
+
+/// The directions, in part coordinates, that a machine reaches with the part
+/// clamped in setup `setup` (part frame → table frame): cell d is reachable when
+/// `setup·d` has an inverse-kinematics solution inside the rotary limits.
+pub fn reachable(grid: &dyn SphereGrid, machine: &Kinematics, setup: DMat3) -> Vec<u64> {
+    cell_mask(grid, |d| machine.reaches(setup * d))
+}
+
+/// Facets whose cone has no cell in `mask` (unreachable; facets with empty cones included).
+pub fn unreachable(vis: &CellSets, mask: &[u64]) -> Vec<usize> {
+    (0..vis.len())
+        .filter(|&i| vis.set(i).iter().zip(mask).all(|(a, b)| a & b == 0))
+        .collect()
+}
+
+/// Per facet, the smallest angle (degrees) between `pole` and a direction of
+/// its cone: the tilt a C,A or B,C machine with unlimited C needs there (either
+/// tilt sign). `None` for an empty cone.
+pub fn required_tilt(vis: &CellSets, grid: &dyn SphereGrid, pole: DVec3) -> Vec<Option<f64>> {
+    let cos: Vec<f64> = (0..grid.len())
+        .map(|c| grid.direction(c).dot(pole))
+        .collect();
+    (0..vis.len())
+        .into_par_iter()
+        .map(|i| {
+            vis.cells_of(i)
+                .map(|c| cos[c])
+                .max_by(f64::total_cmp)
+                .map(|m| m.clamp(-1.0, 1.0).acos().to_degrees())
+        })
+        .collect()
+}
+
+/// The best pole among the grid's cell directions for a machine whose C axis is
+/// unlimited: the one minimising the largest required tilt over the facets with
+/// a non-empty cone, refined by a local search on the sphere. Returns the pole
+/// and that tilt in degrees.
+pub fn best_pole(vis: &CellSets, grid: &dyn SphereGrid) -> Option<(DVec3, f64)> {
+    let live: Vec<usize> = (0..vis.len()).filter(|&i| vis.count(i) > 0).collect();
+    if live.is_empty() {
+        return None;
+    }
+    // Facets with the same cone need the same tilt: evaluate each cone once.
+    let mut cones: Vec<&[u64]> = live.iter().map(|&i| vis.set(i)).collect();
+    cones.sort_unstable();
+    cones.dedup();
+    let dirs: Vec<DVec3> = (0..grid.len()).map(|c| grid.direction(c)).collect();
+    let worst = |pole: DVec3, bound: f64| -> f64 {
+        // Largest over cones of the smallest angle to the pole; stops once above
+        // `bound`. Cells are visited nearest the pole first, so a cone usually
+        // answers at its first few cells.
+        let mut by_angle: Vec<(f64, usize)> = dirs
+            .iter()
+            .enumerate()
+            .map(|(c, d)| (d.dot(pole).clamp(-1.0, 1.0).acos(), c))
+            .collect();
+        by_angle.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        let mut w: f64 = 0.0;
+        for cone in &cones {
+            let first = by_angle
+                .iter()
+                .find(|&&(ang, c)| ang > bound || cone[c / 64] >> (c % 64) & 1 == 1);
+            let ang = first.map_or(f64::INFINITY, |f| f.0);
+            w = w.max(ang);
+            if w > bound {
+                return w;
+            }
+        }
+        w
+    };
+    // Ties (common: many poles see every facet) go to the pole nearest +Z, the
+    // orientation the part was programmed in.
+    let better = |a: (DVec3, f64), b: (DVec3, f64)| {
+        if (a.1 - b.1).abs() > 1e-12 {
+            a.1 < b.1
+        } else {
+            a.0.z > b.0.z
+        }
+    };
+    let bound = std::sync::Mutex::new(f64::INFINITY);
+    let (mut pole, mut tilt) = dirs
+        .par_iter()
+        .map(|&d| {
+            let b = *bound.lock().unwrap_or_else(|e| e.into_inner());
+            let w = worst(d, b + 1e-9);
+            let mut g = bound.lock().unwrap_or_else(|e| e.into_inner());
+            *g = g.min(w);
+            (d, w)
+        })
+        .reduce_with(|a, b| if better(a, b) { a } else { b })?;
+    // Pattern search around the best grid pole with a shrinking step.
+    let mut step = (4.0 * PI / grid.len() as f64).sqrt();
+    while step > 1e-4 {
+        let (u, v) = (pole.any_orthonormal_pair().0, pole.any_orthonormal_pair().1);
+        let mut moved = false;
+        for k in 0..8 {
+            let a = k as f64 * TAU / 8.0;
+            let cand = (pole + (u * a.cos() + v * a.sin()) * step.tan()).normalize();
+            let w = worst(cand, tilt + 1e-9);
+            if better((cand, w), (pole, tilt)) && w <= tilt {
+                (pole, tilt, moved) = (cand, w, true);
+            }
+        }
+        if !moved {
+            step *= 0.5;
+        }
+    }
+    Some((pole, tilt.to_degrees()))
+}
+
+/// A rotation taking `pole` to +Z (the setup that puts the pole on the C axis).
+pub fn setup_for_pole(pole: DVec3) -> DMat3 {
+    let w = pole.normalize();
+    let (u, mut v) = w.any_orthonormal_pair();
+    if u.cross(v).dot(w) < 0.0 {
+        v = -v;
+    }
+    DMat3::from_cols(u, v, w).transpose()
+}
+
+/// The smallest arc (start, length in degrees) of the circle that covers all
+/// angles; `None` for no angles.
+pub fn min_arc(angles: &[f64]) -> Option<(f64, f64)> {
+    let mut a: Vec<f64> = angles.iter().map(|x| x.rem_euclid(360.0)).collect();
+    a.sort_by(f64::total_cmp);
+    let n = a.len();
+    if n == 0 {
+        return None;
+    }
+    // The arc leaves out the largest gap between neighbours.
+    let (gap, start) = (0..n)
+        .map(|i| {
+            let next = if i + 1 < n { a[i + 1] } else { a[0] + 360.0 };
+            (next - a[i], a[(i + 1) % n])
+        })
+        .max_by(|x, y| x.0.total_cmp(&y.0))?;
+    Some((start, 360.0 - gap))
+}
+
+/// The length (degrees) of the smallest circular window that holds at least one
+/// angle of every set (spec §3.2 step 3): a sliding window over the merged sorted
+/// angles, unrolled once around the circle. `None` when a set is empty.
+pub fn min_window(sets: &[Vec<f64>]) -> Option<f64> {
+    if sets.is_empty() {
+        return Some(0.0);
+    }
+    if sets.iter().any(|s| s.is_empty()) {
+        return None;
+    }
+    let mut ev: Vec<(f64, usize)> = sets
+        .iter()
+        .enumerate()
+        .flat_map(|(k, s)| s.iter().map(move |&a| (a.rem_euclid(360.0), k)))
+        .collect();
+    ev.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let n = ev.len();
+    let all: Vec<(f64, usize)> = ev
+        .iter()
+        .copied()
+        .chain(ev.iter().map(|&(a, k)| (a + 360.0, k)))
+        .collect();
+    let mut have = vec![0usize; sets.len()];
+    let mut covered = 0;
+    let mut best = f64::INFINITY;
+    let mut lo = 0;
+    for hi in 0..all.len() {
+        let k = all[hi].1;
+        if have[k] == 0 {
+            covered += 1;
+        }
+        have[k] += 1;
+        while covered == sets.len() {
+            if lo < n {
+                best = best.min(all[hi].0 - all[lo].0);
+            }
+            let k = all[lo].1;
+            have[k] -= 1;
+            if have[k] == 0 {
+                covered -= 1;
+            }
+            lo += 1;
+        }
+    }
+    Some(best)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use millplan_models::kinematics::{KinKind, RotaryAxis};
+
+    /// Two triangles of the planar quad abcd, wound so that they face `n`.
+    fn quad(soup: &mut Vec<[DVec3; 3]>, q: [[f64; 3]; 4], n: DVec3) {
+        let [a, b, c, d] = q.map(DVec3::from_array);
+        if (b - a).cross(c - a).dot(n) > 0.0 {
+            soup.extend([[a, b, c], [a, c, d]]);
+        } else {
+            soup.extend([[a, c, b], [a, d, c]]);
+        }
+    }
+
+    fn mesh(soup: &[[DVec3; 3]]) -> (TriMesh, Bvh) {
+        let m = TriMesh::from_soup(soup).0;
+        let b = Bvh::build(&m);
+        (m, b)
+    }
+
+    /// A 40 mm cube standing on the table: five faces, no bottom.
+    fn cube() -> Vec<[DVec3; 3]> {
+        let s = 40.0;
+        let mut t = Vec::new();
+        quad(
+            &mut t,
+            [[0.0, 0.0, s], [s, 0.0, s], [s, s, s], [0.0, s, s]],
+            DVec3::Z,
+        );
+        quad(
+            &mut t,
+            [[s, 0.0, 0.0], [s, s, 0.0], [s, s, s], [s, 0.0, s]],
+            DVec3::X,
+        );
+        quad(
+            &mut t,
+            [[0.0, 0.0, 0.0], [0.0, s, 0.0], [0.0, s, s], [0.0, 0.0, s]],
+            -DVec3::X,
+        );
+        quad(
+            &mut t,
+            [[0.0, s, 0.0], [s, s, 0.0], [s, s, s], [0.0, s, s]],
+            DVec3::Y,
+        );
+        quad(
+            &mut t,
+            [[0.0, 0.0, 0.0], [s, 0.0, 0.0], [s, 0.0, s], [0.0, 0.0, s]],
+            -DVec3::Y,
+        );
+        t
+    }
+
+    fn table_ac(a: (f64, f64)) -> Kinematics {
+        let mut k = Kinematics::new(KinKind::TableAc);
+        k.first = RotaryAxis {
+            min: Some(a.0),
+            max: Some(a.1),
+            sign: 1.0,
+        };
+        k
+    }
+
+    #[test]
+    fn grids_tile_the_sphere() {
+        // Spec §5 counts: UV 20×30×2 = 1200, icosphere level 3 = 1280.
+        let grids: [Box<dyn SphereGrid>; 3] = [
+            Box::new(LatLon::PAPER),
+            Box::new(Icosphere::new(3)),
+            Box::new(Icosphere::new(1)),
+        ];
+        assert_eq!(
+            (grids[0].len(), grids[1].len(), grids[2].len()),
+            (1200, 1280, 80)
+        );
+        for g in &grids {
+            let total: f64 = (0..g.len()).map(|c| g.area(c)).sum();
+            assert!((total - 4.0 * PI).abs() < 1e-9, "{}: {total}", g.name());
+            for c in 0..g.len() {
+                assert!((g.direction(c).length() - 1.0).abs() < 1e-12);
+                assert_eq!(g.cell_of(g.direction(c)), c, "{} cell {c}", g.name());
+            }
+        }
+        // A brute-force solid angle of one lat-long cell: count fine samples in it.
+        let g = LatLon::PAPER;
+        let n = 400;
+        let mut hits = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                let th = (i as f64 + 0.5) / n as f64 * PI / 20.0 * 2.0;
+                let ph = (j as f64 + 0.5) / n as f64 * TAU / 30.0 * 2.0;
+                if g.cell_of(sph(th, ph)) == 2 * (30 + 1) + 1 {
+                    hits += th.sin() * (PI / 20.0 * 2.0 / n as f64) * (TAU / 30.0 * 2.0 / n as f64);
+                }
+            }
+        }
+        assert!(
+            (hits - g.area(63)).abs() < 1e-3 * g.area(63),
+            "{hits} vs {}",
+            g.area(63)
+        );
+    }
+
+    #[test]
+    fn circle_window_oracles() {
+        // Spec §5 "Sphere algorithms".
+        let (start, len) = min_arc(&[10.0, 350.0, 20.0, 340.0]).expect("arc");
+        assert!((start - 340.0).abs() < 1e-12 && (len - 40.0).abs() < 1e-12);
+        let w =
+            min_window(&[vec![0.0, 90.0], vec![45.0, 180.0], vec![350.0, 100.0]]).expect("window");
+        assert!((w - 55.0).abs() < 1e-12, "{w}");
+        let w = min_window(&[
+            vec![10.0, 200.0],
+            vec![190.0, 20.0],
+            vec![100.0, 280.0],
+            vec![5.0],
+        ])
+        .expect("window");
+        assert!((w - 95.0).abs() < 1e-12, "{w}");
+        assert_eq!(min_window(&[vec![1.0], vec![]]), None);
+        // Brute force over window starts at every angle and all lengths.
+        let sets: Vec<Vec<f64>> = vec![
+            vec![33.0, 250.0],
+            vec![300.0],
+            vec![12.0, 170.0, 359.0],
+            vec![80.0, 90.0],
+        ];
+        let mut best = f64::INFINITY;
+        for s in sets.iter().flatten() {
+            let len = sets
+                .iter()
+                .map(|set| {
+                    set.iter()
+                        .map(|a| (a - s).rem_euclid(360.0))
+                        .fold(f64::INFINITY, f64::min)
+                })
+                .fold(0.0, f64::max);
+            best = best.min(len);
+        }
+        assert!((min_window(&sets).expect("w") - best).abs() < 1e-12);
+    }
+
+    #[test]
+    fn flat_plate_needs_only_the_cap_above_it() {
+        let mut t = Vec::new();
+        quad(
+            &mut t,
+            [
+                [0.0, 0.0, 0.0],
+                [100.0, 0.0, 0.0],
+                [100.0, 80.0, 0.0],
+                [0.0, 80.0, 0.0],
+            ],
+            DVec3::Z,
+        );
+        let (m, b) = mesh(&t);
+        for g in [&LatLon::PAPER as &dyn SphereGrid, &Icosphere::new(3)] {
+            let vis = visibility(&m, &b, g, 0.0);
+            for f in 0..m.len() {
+                for c in 0..g.len() {
+                    assert_eq!(
+                        vis.contains(f, c),
+                        g.direction(c).z > 0.0,
+                        "{} cell {c}",
+                        g.name()
+                    );
+                }
+            }
+            let (pole, tilt) = best_pole(&vis, g).expect("pole");
+            assert!(pole.z > 0.0 && tilt < 1e-3, "{pole} {tilt}");
+            assert!(
+                unreachable(&vis, &reachable(g, &table_ac((0.0, 10.0)), DMat3::IDENTITY))
+                    .is_empty(),
+                "one cell of tilt"
+            );
+        }
+    }
+
+    #[test]
+    fn cube_needs_a_tilt_near_ninety_degrees() {
+        let (m, b) = mesh(&cube());
+        // An 80° clearance keeps each face's cone within 10° of its normal.
+        let g = Icosphere::new(3);
+        let vis = visibility(&m, &b, &g, 80.0);
+        for f in 0..m.len() {
+            assert!(vis.count(f) > 0);
+            for c in vis.cells_of(f) {
+                assert!(g.direction(c).dot(m.facet_normal(f)) > 80f64.to_radians().sin());
+            }
+        }
+        let tilt = required_tilt(&vis, &g, DVec3::Z);
+        for (f, t) in tilt.iter().enumerate() {
+            let t = t.expect("cone");
+            if m.facet_normal(f).z > 0.5 {
+                assert!(t < 10.0, "top {t}");
+            } else {
+                assert!((80.0..90.0).contains(&t), "side {t}");
+            }
+        }
+        let reach = |k: &Kinematics| unreachable(&vis, &reachable(&g, k, DMat3::IDENTITY));
+        assert!(
+            reach(&table_ac((0.0, 95.0))).is_empty(),
+            "C,A with A up to 95° reaches all five faces"
+        );
+        assert_eq!(
+            reach(&table_ac((0.0, 60.0))).len(),
+            8,
+            "A up to 60°: the four walls are out of reach"
+        );
+        assert_eq!(reach(&table_ac((-60.0, 95.0))).len(), 0);
+        let mut ab = Kinematics::new(KinKind::TableAb);
+        ab.first = RotaryAxis {
+            min: Some(-95.0),
+            max: Some(95.0),
+            sign: 1.0,
+        };
+        ab.second = RotaryAxis {
+            min: Some(-95.0),
+            max: Some(95.0),
+            sign: 1.0,
+        };
+        assert!(reach(&ab).is_empty());
+        ab.second = RotaryAxis {
+            min: Some(-30.0),
+            max: Some(30.0),
+            sign: 1.0,
+        };
+        // B ±30° leaves the ±X walls (K_x = sin B) out.
+        let out = reach(&ab);
+        assert_eq!(out.len(), 4);
+        assert!(out.iter().all(|&f| m.facet_normal(f).x.abs() > 0.99));
+    }
+
+    #[test]
+    fn pocket_bottom_sees_out_through_its_opening_only() {
+        // A closed pocket 200 long (x), 10 wide (y), 20 deep, open at the top.
+        let (l, w, h) = (100.0, 5.0, 20.0);
+        let mut t = Vec::new();
+        quad(
+            &mut t,
+            [[-l, -w, 0.0], [l, -w, 0.0], [l, w, 0.0], [-l, w, 0.0]],
+            DVec3::Z,
+        );
+        quad(
+            &mut t,
+            [[-l, w, 0.0], [l, w, 0.0], [l, w, h], [-l, w, h]],
+            -DVec3::Y,
+        );
+        quad(
+            &mut t,
+            [[-l, -w, 0.0], [l, -w, 0.0], [l, -w, h], [-l, -w, h]],
+            DVec3::Y,
+        );
+        quad(
+            &mut t,
+            [[l, -w, 0.0], [l, w, 0.0], [l, w, h], [l, -w, h]],
+            -DVec3::X,
+        );
+        quad(
+            &mut t,
+            [[-l, -w, 0.0], [-l, w, 0.0], [-l, w, h], [-l, -w, h]],
+            DVec3::X,
+        );
+        let (m, b) = mesh(&t);
+        for g in [&LatLon::PAPER as &dyn SphereGrid, &Icosphere::new(3)] {
+            let vis = visibility(&m, &b, g, 0.0);
+            let mut seen = 0;
+            for f in (0..m.len()).filter(|&f| m.facet_normal(f).z > 0.5) {
+                let [a, bb, c] = m.corners(f);
+                let p = (a + bb + c) / 3.0;
+                for cell in 0..g.len() {
+                    let d = g.direction(cell);
+                    if d.z <= 0.0 {
+                        assert!(!vis.contains(f, cell));
+                        continue;
+                    }
+                    let e = p + d * (h / d.z);
+                    let (mx, my) = (l - e.x.abs(), w - e.y.abs());
+                    if mx.abs() < 1e-6 || my.abs() < 1e-6 {
+                        continue;
+                    }
+                    assert_eq!(
+                        vis.contains(f, cell),
+                        mx > 0.0 && my > 0.0,
+                        "{} facet {f} cell {cell} {d}",
+                        g.name()
+                    );
+                    seen += vis.contains(f, cell) as usize;
+                }
+            }
+            assert!(seen > 0, "{}", g.name());
+        }
+    }
+
+    #[test]
+    fn results_agree_across_grids_within_a_cell() {
+        let (m, b) = mesh(&cube());
+        let mut tilts = Vec::new();
+        for g in [
+            &LatLon::PAPER as &dyn SphereGrid,
+            &Icosphere::new(3),
+            &LatLon {
+                bands: 40,
+                sectors: 60,
+            },
+        ] {
+            let vis = visibility(&m, &b, g, 45.0);
+            let (pole, tilt) = best_pole(&vis, g).expect("pole");
+            assert!(pole.z > 0.0, "{}: {pole}", g.name());
+            tilts.push(tilt);
+        }
+        // The exact answer: the cone axes are +Z and the four wall normals, each
+        // cone a 45° cap, so the best pole is +Z with a tilt of 45°.
+        for t in &tilts {
+            assert!((t - 45.0).abs() < 9.0, "{tilts:?}");
+        }
+    }
+
+    #[test]
+    fn setup_rotation_puts_the_pole_on_z() {
+        for d in [
+            DVec3::X,
+            -DVec3::Z,
+            DVec3::new(0.3, -0.4, 0.5).normalize(),
+            DVec3::Z,
+        ] {
+            let r = setup_for_pole(d);
+            assert!((r * d - DVec3::Z).length() < 1e-12);
+            assert!((r.determinant() - 1.0).abs() < 1e-12);
+        }
+    }
+}
