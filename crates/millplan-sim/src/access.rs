@@ -235,6 +235,12 @@ impl CellSets {
         &self.bits[i * self.words..(i + 1) * self.words]
     }
 
+    /// Copies set `j` of `from` (over the same grid) into set `i`.
+    pub fn copy_from(&mut self, i: usize, from: &CellSets, j: usize) {
+        let w = self.words;
+        self.bits[i * w..(i + 1) * w].copy_from_slice(from.set(j));
+    }
+
     pub fn contains(&self, i: usize, cell: usize) -> bool {
         self.set(i)[cell / 64] >> (cell % 64) & 1 == 1
     }
@@ -244,7 +250,16 @@ impl CellSets {
     }
 
     pub fn cells_of(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
-        (0..self.cells).filter(move |&c| self.contains(i, c))
+        self.set(i).iter().enumerate().flat_map(|(k, &w)| {
+            let mut b = w;
+            std::iter::from_fn(move || {
+                (b != 0).then(|| {
+                    let c = k * 64 + b.trailing_zeros() as usize;
+                    b &= b - 1;
+                    c
+                })
+            })
+        })
     }
 }
 
@@ -340,6 +355,30 @@ pub fn best_pole(vis: &CellSets, grid: &dyn SphereGrid) -> Option<(DVec3, f64)> 
     cones.sort_unstable();
     cones.dedup();
     let dirs: Vec<DVec3> = (0..grid.len()).map(|c| grid.direction(c)).collect();
+    // Hard cones first, so that a pole worse than the best so far is found out
+    // after a few cones: order them by their angle to the mean direction.
+    let angle_to = |pole: DVec3, cone: &[u64]| {
+        let mut best = -1.0f64;
+        for (k, word) in cone.iter().enumerate() {
+            let mut b = *word;
+            while b != 0 {
+                best = best.max(dirs[k * 64 + b.trailing_zeros() as usize].dot(pole));
+                b &= b - 1;
+            }
+        }
+        best
+    };
+    let mean = cones
+        .iter()
+        .map(|c| {
+            (0..dirs.len())
+                .filter(|&k| c[k / 64] >> (k % 64) & 1 == 1)
+                .map(|k| dirs[k])
+                .sum::<DVec3>()
+        })
+        .sum::<DVec3>()
+        .normalize_or(DVec3::Z);
+    cones.sort_by_cached_key(|c| (angle_to(mean, c) * 1e9) as i64);
     let worst = |pole: DVec3, bound: f64| -> f64 {
         // Largest over cones of the smallest angle to the pole; stops once above
         // `bound`. Cells are visited nearest the pole first, so a cone usually

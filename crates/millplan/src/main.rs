@@ -34,6 +34,7 @@ enum Command {
     Gouge(cmd::gouge::Args),
     Raster(cmd::raster::Args),
     Reorder(cmd::reorder::Args),
+    Setup(cmd::setup::Args),
     Tool(cmd::tool::Args),
     Thread(cmd::thread::Args),
     #[command(name = "wd-sweep")]
@@ -64,6 +65,7 @@ fn main() {
         Command::Gouge(a) => cmd::gouge::run(a),
         Command::Raster(a) => cmd::raster::run(a),
         Command::Reorder(a) => cmd::reorder::run(a),
+        Command::Setup(a) => cmd::setup::run(a),
         Command::Tool(a) => cmd::tool::run(a),
         Command::Thread(a) => cmd::thread::run(a),
     };

@@ -257,6 +257,7 @@ fn help_explains_every_command() {
         "wd-sweep",
         "speed",
         "directions",
+        "setup",
     ] {
         let out = bin().args([c, "--help"]).output().expect("runs");
         assert!(out.status.success());

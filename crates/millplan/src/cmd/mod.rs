@@ -7,6 +7,7 @@ pub mod gouge;
 pub mod inspect;
 pub mod raster;
 pub mod reorder;
+pub mod setup;
 pub mod speed;
 pub mod sweep;
 pub mod thread;

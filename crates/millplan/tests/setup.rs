@@ -1,0 +1,259 @@
+//! `millplan setup` end to end: parts with known answers.
+
+use millplan_geom::{DMat3, DVec3, TriMesh};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_millplan"))
+}
+
+/// A 40 mm cube (closed, or without its bottom face), rotated by `r`, written as binary STL.
+fn cube(dir: &Path, name: &str, r: DMat3, bottom: bool) -> PathBuf {
+    let s = 40.0;
+    let faces: [(DVec3, [[f64; 3]; 4]); 6] = [
+        (
+            DVec3::Z,
+            [[0.0, 0.0, s], [s, 0.0, s], [s, s, s], [0.0, s, s]],
+        ),
+        (
+            -DVec3::Z,
+            [[0.0, 0.0, 0.0], [s, 0.0, 0.0], [s, s, 0.0], [0.0, s, 0.0]],
+        ),
+        (
+            DVec3::X,
+            [[s, 0.0, 0.0], [s, s, 0.0], [s, s, s], [s, 0.0, s]],
+        ),
+        (
+            -DVec3::X,
+            [[0.0, 0.0, 0.0], [0.0, s, 0.0], [0.0, s, s], [0.0, 0.0, s]],
+        ),
+        (
+            DVec3::Y,
+            [[0.0, s, 0.0], [s, s, 0.0], [s, s, s], [0.0, s, s]],
+        ),
+        (
+            -DVec3::Y,
+            [[0.0, 0.0, 0.0], [s, 0.0, 0.0], [s, 0.0, s], [0.0, 0.0, s]],
+        ),
+    ];
+    let mut soup = Vec::new();
+    for (n, q) in faces {
+        if n == -DVec3::Z && !bottom {
+            continue;
+        }
+        let [a, b, c, d] = q.map(|p| r * DVec3::from_array(p));
+        let n = r * n;
+        if (b - a).cross(c - a).dot(n) > 0.0 {
+            soup.extend([[a, b, c], [a, c, d]]);
+        } else {
+            soup.extend([[a, c, b], [a, d, c]]);
+        }
+    }
+    let mut bytes = Vec::new();
+    millplan_geom::stl::write_binary_stl(&TriMesh::from_soup(&soup).0, "cube", &mut bytes);
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).expect("write");
+    p
+}
+
+fn setup(stl: &Path, args: &[&str]) -> (Option<i32>, serde_json::Value) {
+    let o = bin()
+        .args([
+            "setup",
+            "--json",
+            "-q",
+            "--stl",
+            stl.to_str().expect("utf8"),
+        ])
+        .args(args)
+        .output()
+        .expect("runs");
+    (
+        o.status.code(),
+        serde_json::from_slice(&o.stdout).unwrap_or_default(),
+    )
+}
+
+fn f(v: &serde_json::Value) -> f64 {
+    v.as_f64().expect("number")
+}
+
+#[test]
+fn cube_on_a_ca_table_needs_a_tilt_near_ninety_degrees() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let p = cube(dir.path(), "cube.stl", DMat3::IDENTITY, true);
+    // An 80° clearance: each face is cut within 10° of its normal.
+    let common = ["--clearance", "80", "--ignore-bottom"];
+    let (code, j) = setup(
+        &p,
+        &[
+            &["--type", "ca", "--range1", "0,95", "--range2", "free"][..],
+            &common,
+        ]
+        .concat(),
+    );
+    assert_eq!(code, Some(0), "{j}");
+    assert_eq!(j["feasible"], true);
+    assert_eq!(j["ignored"], 2);
+    assert!(
+        (f(&j["setup"][2][2]) - 1.0).abs() < 1e-9,
+        "kept upright: {}",
+        j["setup"]
+    );
+    let a = &j["required"]["a"];
+    assert!(f(&a[0]) == 0.0 && (80.0..90.0).contains(&f(&a[1])), "{a}");
+    // Up to 60° of tilt the four walls are out of reach.
+    let (code, j) = setup(
+        &p,
+        &[&["--type", "ca", "--range1", "0,60"][..], &common].concat(),
+    );
+    assert_eq!(code, Some(3));
+    assert_eq!(j["feasible"], false);
+    assert_eq!(j["unreachable"].as_array().expect("list").len(), 8);
+    // Two tilting axes of ±95° reach everything; ±30° does not.
+    let (code, _) = setup(
+        &p,
+        &[
+            &["--type", "ab", "--range1", "-95,95", "--range2", "-95,95"][..],
+            &common,
+        ]
+        .concat(),
+    );
+    assert_eq!(code, Some(0));
+    let (code, _) = setup(
+        &p,
+        &[
+            &["--type", "ab", "--range1", "-30,30", "--range2", "-30,30"][..],
+            &common,
+        ]
+        .concat(),
+    );
+    assert_eq!(code, Some(3));
+    // Without --ignore-bottom the bottom face needs the tool from below.
+    let (code, j) = setup(
+        &p,
+        &["--type", "ca", "--range1", "0,95", "--clearance", "80"],
+    );
+    assert_eq!(
+        (code, j["feasible"].clone()),
+        (Some(3), serde_json::json!(false))
+    );
+}
+
+#[test]
+fn a_tilted_part_is_turned_back_upright() {
+    let dir = tempfile::tempdir().expect("tmp");
+    // An open box (five faces) lying in the file tilted 30° about X: as given,
+    // one wall needs 120° of tilt, more than the machine has.
+    let tilt = DMat3::from_rotation_x(30f64.to_radians());
+    let p = cube(dir.path(), "tilted.stl", tilt, false);
+    let out = dir.path().join("upright.stl");
+    let o = bin()
+        .args([
+            "setup",
+            "--json",
+            "-q",
+            "--stl",
+            p.to_str().expect("utf8"),
+            "--type",
+            "ca",
+            "--range1",
+            "-100,100",
+        ])
+        .args(["--clearance", "80", "-o", out.to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    // Every face keeps a direction within 10° of its normal; the best setup puts
+    // the cube's own axes along the table's, up or down.
+    assert_eq!(o.status.code(), Some(0), "{j}");
+    let s = DMat3::from_cols_array_2d(&[0, 1, 2].map(|i| [0, 1, 2].map(|k| f(&j["setup"][i][k]))))
+        .transpose();
+    let up = s * (tilt * DVec3::Z);
+    assert!(
+        up.z.abs() > 0.95 || up.x.abs() > 0.95 || up.y.abs() > 0.95,
+        "{up}"
+    );
+    assert!(f(&j["max_tilt_deg"]) < 100.0);
+    // The rotated part is written and reads back with all its facets.
+    let o = bin()
+        .args(["inspect", "--json", out.to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    assert!(o.status.success());
+    // It never overwrites its input.
+    let o = bin()
+        .args([
+            "setup",
+            "-q",
+            "--stl",
+            p.to_str().expect("utf8"),
+            "--type",
+            "ca",
+            "-o",
+            p.to_str().expect("utf8"),
+        ])
+        .output()
+        .expect("runs");
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn bad_ranges_are_rejected_with_exit_2() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let p = cube(dir.path(), "cube.stl", DMat3::IDENTITY, true);
+    for r in ["95,0", "abc", "1,2,3"] {
+        let o = bin()
+            .args([
+                "setup",
+                "--stl",
+                p.to_str().expect("utf8"),
+                "--type",
+                "ca",
+                "--range1",
+                r,
+            ])
+            .output()
+            .expect("runs");
+        assert_eq!(o.status.code(), Some(2), "{r}");
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains("--range1"),
+            "{r}"
+        );
+    }
+    let o = bin()
+        .args(["setup", "--stl", p.to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn moulds_from_the_shared_data_run_for_both_machine_types() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/stl-pitfalls-opencamlib/ktoolcor.stl");
+    if !p.exists() {
+        eprintln!("skipped: {} is absent", p.display());
+        return;
+    }
+    for args in [
+        ["--type", "ca", "--range1", "-30,110"],
+        ["--type", "ab", "--range1", "-120,120"],
+    ] {
+        let (code, j) = setup(
+            &p,
+            &[
+                &args[..],
+                &["--ignore-bottom", "--grid", "icosphere", "--cells", "320"],
+            ]
+            .concat(),
+        );
+        assert!(matches!(code, Some(0) | Some(3)), "{code:?}");
+        assert_eq!(j["cells"], 320);
+        assert_eq!(j["feasible"], code == Some(0));
+        let s = &j["setup"];
+        let m = DMat3::from_cols_array_2d(&[0, 1, 2].map(|i| [0, 1, 2].map(|k| f(&s[i][k]))));
+        assert!((m.determinant() - 1.0).abs() < 1e-9, "a rotation: {s}");
+    }
+}
