@@ -1,11 +1,14 @@
 //! Line-of-sight accessibility of a part on a spherical map, timed:
 //! `cargo run --release -p millplan-bench --example access_map -- [PART.stl] [latlon|icosphere]`
 //! Without a part it uses the demo surface tessellated to about 100,000
-//! triangles; the default grid is the 1,280-cell icosphere.
+//! triangles; the default grid is the 1,280-cell icosphere. With `tool` it also
+//! times tool mode (D10 ball, 40 mm reach, D40 × 60 mm holder).
 
 use millplan_geom::analytic::{tessellate, DemoSurface};
 use millplan_geom::bvh::Bvh;
-use millplan_sim::access::{best_pole, visibility, Icosphere, LatLon, SphereGrid};
+use millplan_sim::access::{
+    accessibility, best_pole, visibility, Icosphere, LatLon, SphereGrid, ToolModel,
+};
 use std::time::Instant;
 
 fn main() {
@@ -35,6 +38,23 @@ fn main() {
     let secs = t.elapsed().as_secs_f64();
     let rays = mesh.len() * grid.len();
     let visible: usize = (0..vis.len()).map(|i| vis.count(i)).sum();
+    if a.iter().any(|s| s == "tool") {
+        let tool = ToolModel {
+            radius: 5.0,
+            reach: 40.0,
+            holder_radius: 20.0,
+            holder_length: 60.0,
+        };
+        let t = Instant::now();
+        let acc = accessibility(&mesh, &bvh, grid.as_ref(), 0.0, &tool);
+        let secs = t.elapsed().as_secs_f64();
+        let free: usize = (0..acc.len()).map(|i| acc.count(i)).sum();
+        println!(
+            "tool mode: {secs:.2} s ({:.2}M direction tests/s, {:.1} % free)",
+            rays as f64 / secs / 1e6,
+            100.0 * free as f64 / rays as f64
+        );
+    }
     let t = Instant::now();
     let pole = best_pole(&vis, grid.as_ref());
     let search = t.elapsed().as_secs_f64();

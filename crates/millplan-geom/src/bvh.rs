@@ -254,6 +254,90 @@ impl Bvh {
     }
 }
 
+impl Bvh {
+    /// Whether any triangle other than `skip` comes closer than `radius` to the
+    /// segment ab (a capsule-versus-mesh collision test).
+    pub fn capsule_hits(&self, a: DVec3, b: DVec3, radius: f64, skip: Option<u32>) -> bool {
+        if self.order.is_empty() || radius <= 0.0 {
+            return false;
+        }
+        let dir = b - a;
+        let nz = |x: f64| if x == 0.0 { 1e-300 } else { x };
+        let inv = DVec3::new(nz(dir.x), nz(dir.y), nz(dir.z)).recip();
+        let inv32 = Vec3A::from(inv.clamp(DVec3::splat(-1e30), DVec3::splat(1e30)).as_vec3());
+        let o32 = Vec3A::from(a.as_vec3());
+        let pad = Vec3A::splat(radius as f32);
+        let r2 = radius * radius;
+        let mut stack: [u32; 64] = [0; 64];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.slim[stack[sp] as usize];
+            // The box grown by the radius holds every point within it of the node.
+            if !ray_box(node.min - pad, node.max + pad, o32, inv32, 1.0) {
+                continue;
+            }
+            if node.count > 0 {
+                let range = node.first as usize..(node.first + node.count) as usize;
+                for (k, [p, q, r]) in self.tris[range.clone()].iter().enumerate() {
+                    if skip == Some(self.order[range.start + k]) {
+                        continue;
+                    }
+                    if segment_triangle_dist2(a, b, *p, *q, *r) < r2 {
+                        return true;
+                    }
+                }
+            } else if sp + 2 <= stack.len() {
+                stack[sp] = node.first;
+                stack[sp + 1] = node.right;
+                sp += 2;
+            }
+        }
+        false
+    }
+}
+
+/// Squared distance between segment ab and triangle pqr.
+pub fn segment_triangle_dist2(a: DVec3, b: DVec3, p: DVec3, q: DVec3, r: DVec3) -> f64 {
+    if ray_triangle(a, b - a, p, q, r).is_some_and(|s| (0.0..=1.0).contains(&s)) {
+        return 0.0;
+    }
+    // Otherwise the minimum is at an end of the segment or on an edge.
+    let ends = [a, b].map(|x| (closest_on_triangle(x, p, q, r).0 - x).length_squared());
+    let edges = [(p, q), (q, r), (r, p)].map(|(u, v)| segment_segment_dist2(a, b, u, v));
+    ends.into_iter().chain(edges).fold(f64::INFINITY, f64::min)
+}
+
+/// Squared distance between segments ab and cd.
+pub fn segment_segment_dist2(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
+    let (u, v, w) = (b - a, d - c, a - c);
+    let (aa, bb, cc, dd, ee) = (u.dot(u), u.dot(v), v.dot(v), u.dot(w), v.dot(w));
+    let den = aa * cc - bb * bb;
+    // Closest points of the infinite lines, then clamped (and the other re-solved).
+    let mut s = if den > 1e-14 * aa * cc {
+        ((bb * ee - cc * dd) / den).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let mut t = if cc > 0.0 { (bb * s + ee) / cc } else { 0.0 };
+    if t < 0.0 {
+        t = 0.0;
+        s = if aa > 0.0 {
+            (-dd / aa).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+    } else if t > 1.0 {
+        t = 1.0;
+        s = if aa > 0.0 {
+            ((bb - dd) / aa).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+    }
+    (w + u * s - v * t).length_squared()
+}
+
 /// Slab test: whether the ray meets the box for some 0 ≤ s ≤ max_s.
 #[inline]
 fn ray_box(min: Vec3A, max: Vec3A, o: Vec3A, inv: Vec3A, max_s: f32) -> bool {
@@ -520,6 +604,52 @@ mod tests {
             n += brute as usize;
         }
         assert!(n > 50 && n < 350, "both outcomes exercised: {n}");
+    }
+
+    #[test]
+    fn capsule_test_agrees_with_sampled_distance() {
+        let mesh = tessellate(&DemoSurface::default(), 2.0);
+        let bvh = Bvh::build(&mesh);
+        let mut hits = 0;
+        for i in 0..200 {
+            let f = i as f64;
+            let a = DVec3::new((f * 7.3) % 60.0, (f * 3.1) % 60.0, 3.0 + (f * 1.7) % 10.0);
+            let b = a + DVec3::new((f * 0.37).sin(), (f * 0.91).cos(), (f * 0.13).sin()) * 15.0;
+            let r = 0.5 + (f * 0.7) % 3.0;
+            // Reference: the segment sampled finely, each sample's exact distance.
+            let d = (0..=2000)
+                .map(|k| {
+                    bvh.closest(&mesh, a + (b - a) * (k as f64 / 2000.0), f64::INFINITY)
+                        .expect("hit")
+                        .distance
+                })
+                .fold(f64::INFINITY, f64::min);
+            if (d - r).abs() < 0.02 {
+                continue;
+            }
+            assert_eq!(
+                bvh.capsule_hits(a, b, r, None),
+                d < r,
+                "segment {i}: distance {d}, radius {r}"
+            );
+            hits += (d < r) as usize;
+        }
+        assert!(hits > 20 && hits < 180, "{hits}");
+        // Segment-segment distance: skew lines, parallel and touching cases.
+        let d2 = segment_segment_dist2(
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::new(0.5, -1.0, 2.0),
+            DVec3::new(0.5, 1.0, 2.0),
+        );
+        assert!((d2 - 4.0).abs() < 1e-12);
+        let d2 = segment_segment_dist2(
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::new(2.0, 1.0, 0.0),
+            DVec3::new(3.0, 1.0, 0.0),
+        );
+        assert!((d2 - 2.0).abs() < 1e-12);
     }
 
     #[test]

@@ -309,6 +309,75 @@ pub fn visibility(
     out
 }
 
+/// A ball-end mill with its shank and holder as two coaxial cylinders (capsules)
+/// for accessibility in tool mode. Lengths are measured from the ball centre.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ToolModel {
+    /// Ball (and shank) radius, mm.
+    pub radius: f64,
+    /// From the ball centre to the holder's face, mm.
+    pub reach: f64,
+    /// Holder radius, mm (0: no holder).
+    pub holder_radius: f64,
+    /// Holder length beyond `reach`, mm.
+    pub holder_length: f64,
+}
+
+/// Tool-mode accessibility of all facets: direction d is in facet t's set when
+/// d·n_t > sin(clearance) and the tool with its ball touching t's centroid
+/// (ball centre on the facet normal) and its axis along d touches no part of
+/// the mesh except where the ball already touches (a tolerance of 0.1 % of the
+/// radius absorbs the tessellation).
+pub fn accessibility(
+    mesh: &TriMesh,
+    bvh: &Bvh,
+    grid: &dyn SphereGrid,
+    clearance_deg: f64,
+    tool: &ToolModel,
+) -> CellSets {
+    let cells = grid.len();
+    let dirs: Vec<DVec3> = (0..cells).map(|c| grid.direction(c)).collect();
+    let min_dot = clearance_deg.to_radians().sin();
+    let r = tool.radius;
+    let tol = 1e-3 * r + 1e-7 * mesh.bounds().diagonal();
+    let mut out = CellSets::new(mesh.len(), cells);
+    let words = out.words;
+    out.bits
+        .par_chunks_mut(words.max(1))
+        .enumerate()
+        .for_each(|(t, set)| {
+            let n = mesh.facet_normal(t);
+            if n == DVec3::ZERO {
+                return;
+            }
+            let [a, b, c] = mesh.corners(t);
+            let centre = (a + b + c) / 3.0 + n * r;
+            // The ball itself, whatever the direction.
+            if bvh.capsule_hits(centre, centre, r - tol, None) {
+                return;
+            }
+            for (k, d) in dirs.iter().enumerate() {
+                if d.dot(n) <= min_dot {
+                    continue;
+                }
+                let top = centre + *d * tool.reach;
+                let free = !bvh.capsule_hits(centre, top, r - tol, None)
+                    && (tool.holder_radius <= 0.0
+                        || tool.holder_length <= 0.0
+                        || !bvh.capsule_hits(
+                            top,
+                            top + *d * tool.holder_length,
+                            tool.holder_radius,
+                            None,
+                        ));
+                if free {
+                    set[k / 64] |= 1 << (k % 64);
+                }
+            }
+        });
+    out
+}
+
 /// The directions, in part coordinates, that a machine reaches with the part
 /// clamped in setup `setup` (part frame → table frame): cell d is reachable when
 /// `setup·d` has an inverse-kinematics solution inside the rotary limits.
@@ -809,6 +878,154 @@ mod tests {
                 }
             }
             assert!(seen > 0, "{}", g.name());
+        }
+    }
+
+    #[test]
+    fn a_tool_sees_less_of_a_pocket_bottom_than_a_ray() {
+        // The pocket of the line-of-sight test; a ball of radius 2 with a long
+        // shank: its axis must cross the top of the walls 2 mm inside them.
+        let (l, w, h, r) = (100.0, 5.0, 20.0, 2.0);
+        let mut t = Vec::new();
+        quad(
+            &mut t,
+            [[-l, -w, 0.0], [l, -w, 0.0], [l, w, 0.0], [-l, w, 0.0]],
+            DVec3::Z,
+        );
+        quad(
+            &mut t,
+            [[-l, w, 0.0], [l, w, 0.0], [l, w, h], [-l, w, h]],
+            -DVec3::Y,
+        );
+        quad(
+            &mut t,
+            [[-l, -w, 0.0], [l, -w, 0.0], [l, -w, h], [-l, -w, h]],
+            DVec3::Y,
+        );
+        quad(
+            &mut t,
+            [[l, -w, 0.0], [l, w, 0.0], [l, w, h], [l, -w, h]],
+            -DVec3::X,
+        );
+        quad(
+            &mut t,
+            [[-l, -w, 0.0], [-l, w, 0.0], [-l, w, h], [-l, -w, h]],
+            DVec3::X,
+        );
+        let (m, b) = mesh(&t);
+        let g = LatLon {
+            bands: 40,
+            sectors: 60,
+        };
+        let tool = ToolModel {
+            radius: r,
+            reach: 60.0,
+            holder_radius: 0.0,
+            holder_length: 0.0,
+        };
+        let acc = accessibility(&m, &b, &g, 0.0, &tool);
+        let vis = visibility(&m, &b, &g, 0.0);
+        let (mut yes, mut no) = (0, 0);
+        for f in (0..m.len()).filter(|&f| m.facet_normal(f).z > 0.5) {
+            let [a, bb, c] = m.corners(f);
+            let centre = (a + bb + c) / 3.0 + DVec3::Z * r;
+            for cell in 0..g.len() {
+                let d = g.direction(cell);
+                // Within its reach the tool's body holds the ray from the contact
+                // point, so it never sees more than that ray.
+                if d.z > 0.5 {
+                    assert!(
+                        !acc.contains(f, cell) || vis.contains(f, cell),
+                        "facet {f} cell {cell}"
+                    );
+                }
+                if (h - r) / d.z.max(1e-9) > tool.reach - 5.0 {
+                    continue; // the shank ends below the wall tops
+                }
+                // Where the axis crosses the wall tops, and how far inside it stays.
+                let e = centre + d * ((h - r) / d.z);
+                let inside_y = (w - r) - e.y.abs();
+                let inside_x = (l - r) - e.x.abs();
+                if inside_y > 0.5 && inside_x > 0.5 {
+                    assert!(acc.contains(f, cell), "facet {f} cell {cell} {d}");
+                    yes += 1;
+                } else if inside_y < -0.5 {
+                    assert!(!acc.contains(f, cell), "facet {f} cell {cell} {d}");
+                    no += 1;
+                }
+            }
+        }
+        assert!(yes > 10 && no > 100, "{yes} {no}");
+        // A holder wider than the pocket keeps out of it: a short reach then blocks everything.
+        let stub = ToolModel {
+            radius: r,
+            reach: 10.0,
+            holder_radius: 8.0,
+            holder_length: 40.0,
+        };
+        let acc = accessibility(&m, &b, &g, 0.0, &stub);
+        for f in (0..m.len()).filter(|&f| m.facet_normal(f).z > 0.5) {
+            assert_eq!(acc.count(f), 0);
+        }
+        // On an open plate every upward direction is free for a slim holder; a
+        // fat one (radius 10 at 30 mm) needs the axis 3 + 30·d_z ≥ 10 above it.
+        let mut t = Vec::new();
+        quad(
+            &mut t,
+            [
+                [0.0, 0.0, 0.0],
+                [100.0, 0.0, 0.0],
+                [100.0, 80.0, 0.0],
+                [0.0, 80.0, 0.0],
+            ],
+            DVec3::Z,
+        );
+        let (m, b) = mesh(&t);
+        let acc = accessibility(
+            &m,
+            &b,
+            &g,
+            0.0,
+            &ToolModel {
+                radius: 3.0,
+                reach: 30.0,
+                holder_radius: 2.5,
+                holder_length: 50.0,
+            },
+        );
+        for f in 0..m.len() {
+            assert_eq!(
+                acc.count(f),
+                (0..g.len()).filter(|&c| g.direction(c).z > 0.0).count()
+            );
+        }
+        let acc = accessibility(
+            &m,
+            &b,
+            &g,
+            0.0,
+            &ToolModel {
+                radius: 3.0,
+                reach: 30.0,
+                holder_radius: 10.0,
+                holder_length: 5.0,
+            },
+        );
+        for f in 0..m.len() {
+            let [a, bb, c] = m.corners(f);
+            let centre = (a + bb + c) / 3.0 + DVec3::Z * 3.0;
+            for cell in 0..g.len() {
+                let d = g.direction(cell);
+                let top = centre + d * 30.0;
+                let over = (0.0..100.0).contains(&top.x) && (0.0..80.0).contains(&top.y);
+                if d.z > 0.0 && over && (top.z - 10.0).abs() > 0.2 {
+                    assert_eq!(
+                        acc.contains(f, cell),
+                        top.z > 10.0,
+                        "facet {f} cell {cell} {d}"
+                    );
+                }
+            }
         }
     }
 

@@ -130,6 +130,16 @@ fn cube_on_a_ca_table_needs_a_tilt_near_ninety_degrees() {
         .concat(),
     );
     assert_eq!(code, Some(3));
+    // Tool mode: nothing of a convex cube is in the way of a D10 ball-end mill.
+    let (code, j) = setup(
+        &p,
+        &[
+            &["--type", "ca", "--range1", "0,95", "--tool", "10,50"][..],
+            &common,
+        ]
+        .concat(),
+    );
+    assert_eq!((code, j["mode"].as_str()), (Some(0), Some("tool")), "{j}");
     // Without --ignore-bottom the bottom face needs the tool from below.
     let (code, j) = setup(
         &p,
@@ -203,6 +213,22 @@ fn a_tilted_part_is_turned_back_upright() {
 fn bad_ranges_are_rejected_with_exit_2() {
     let dir = tempfile::tempdir().expect("tmp");
     let p = cube(dir.path(), "cube.stl", DMat3::IDENTITY, true);
+    for t in ["0,30", "10", "10,30,40", "-6,30"] {
+        let o = bin()
+            .args([
+                "setup",
+                "--stl",
+                p.to_str().expect("utf8"),
+                "--type",
+                "ca",
+                "--tool",
+                t,
+            ])
+            .output()
+            .expect("runs");
+        assert_eq!(o.status.code(), Some(2), "{t}");
+        assert!(String::from_utf8_lossy(&o.stderr).contains("--tool"), "{t}");
+    }
     for r in ["95,0", "abc", "1,2,3"] {
         let o = bin()
             .args([

@@ -14,7 +14,8 @@ use std::path::PathBuf;
 ///
 /// Every facet gets its visibility cone: the grid directions that leave its
 /// outer side by more than --clearance degrees and see no other part of the
-/// part. A setup is feasible when, with the part rotated by it, every facet
+/// part (with --tool: along which the ball-end mill, its shank and holder
+/// touch nothing but the facet). A setup is feasible when, with the part rotated by it, every facet
 /// keeps a direction the machine reaches within its rotary limits. The search
 /// tries the part as it lies in the file and the orientation that needs the
 /// least tilt (the pole every facet sees most nearly), each spun about the
@@ -52,6 +53,10 @@ pub struct Args {
     /// per 2 bands; icosphere: 20·4^k).
     #[arg(long, default_value_t = 1200)]
     pub cells: usize,
+    /// Tool mode: a ball-end mill D,REACH[,HOLDER_D,HOLDER_LENGTH] in mm (REACH
+    /// from the ball centre to the holder). Without it, line of sight.
+    #[arg(long, allow_hyphen_values = true)]
+    pub tool: Option<String>,
     /// A direction must leave the facet's surface by more than this, degrees.
     #[arg(long, default_value_t = 0.0)]
     pub clearance: f64,
@@ -81,6 +86,36 @@ pub enum GridArg {
     Latlon,
     /// Geodesic icosphere, near-uniform cells.
     Icosphere,
+}
+
+fn parse_tool(s: &str) -> CliResult<access::ToolModel> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| {
+            CliError::input(format!(
+                "--tool `{s}`: expected D,REACH[,HOLDER_D,HOLDER_LENGTH] in mm"
+            ))
+        })?;
+    let ok = v.iter().all(|x| x.is_finite() && *x >= 0.0) && v.first().is_some_and(|d| *d > 0.0);
+    match v[..] {
+        [d, reach] if ok => Ok(access::ToolModel {
+            radius: d / 2.0,
+            reach,
+            holder_radius: 0.0,
+            holder_length: 0.0,
+        }),
+        [d, reach, hd, hl] if ok => Ok(access::ToolModel {
+            radius: d / 2.0,
+            reach,
+            holder_radius: hd / 2.0,
+            holder_length: hl,
+        }),
+        _ => Err(CliError::input(format!(
+            "--tool `{s}`: expected D,REACH[,HOLDER_D,HOLDER_LENGTH], D > 0, none negative"
+        ))),
+    }
 }
 
 fn parse_range(s: &str, what: &str) -> CliResult<RotaryAxis> {
@@ -156,6 +191,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             Box::new(Icosphere::new(k))
         }
     };
+    let tool = a.tool.as_deref().map(parse_tool).transpose()?;
     let (mesh, _) = read_mesh(&a.stl)?;
     if mesh.is_empty() {
         return Err(CliError::input(format!(
@@ -169,7 +205,10 @@ pub fn run(a: Args) -> CliResult<i32> {
     );
     let t0 = std::time::Instant::now();
     let bvh = Bvh::build(&mesh);
-    let vis = access::visibility(&mesh, &bvh, grid.as_ref(), a.clearance);
+    let vis = match &tool {
+        Some(t) => access::accessibility(&mesh, &bvh, grid.as_ref(), a.clearance, t),
+        None => access::visibility(&mesh, &bvh, grid.as_ref(), a.clearance),
+    };
     bar.finish_and_clear();
     let areas: Vec<f64> = (0..mesh.len()).map(|t| facet_area(&mesh, t)).collect();
     let ignored = if a.ignore_bottom {
@@ -289,6 +328,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             "grid": grid.name(),
             "cells": grid.len(),
             "clearance_deg": a.clearance,
+            "mode": if tool.is_some() { "tool" } else { "line-of-sight" },
             "seconds": secs,
         });
         println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
