@@ -256,6 +256,41 @@ fn bad_ranges_are_rejected_with_exit_2() {
 }
 
 #[test]
+fn an_inside_out_part_is_turned_outward() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let p = cube(dir.path(), "cube.stl", DMat3::IDENTITY, true);
+    // The same cube with every facet wound the other way.
+    let mesh = millplan_geom::stl::read_stl(&std::fs::read(&p).expect("read"))
+        .expect("stl")
+        .0;
+    let mut inv = mesh.clone();
+    for t in &mut inv.triangles {
+        t.swap(1, 2);
+    }
+    let mut bytes = Vec::new();
+    millplan_geom::stl::write_binary_stl(&inv, "inside out", &mut bytes);
+    let q = dir.path().join("inside_out.stl");
+    std::fs::write(&q, bytes).expect("write");
+    let args = [
+        "--type",
+        "ca",
+        "--range1",
+        "0,95",
+        "--clearance",
+        "80",
+        "--ignore-bottom",
+    ];
+    let (c1, j1) = setup(&p, &args);
+    let (c2, j2) = setup(&q, &args);
+    assert_eq!((c1, c2), (Some(0), Some(0)));
+    assert_eq!(
+        (j1["flipped"].clone(), j2["flipped"].clone()),
+        (serde_json::json!(false), serde_json::json!(true))
+    );
+    assert_eq!(j1["max_tilt_deg"], j2["max_tilt_deg"]);
+}
+
+#[test]
 fn moulds_from_the_shared_data_run_for_both_machine_types() {
     let p = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../../shared/data/stl-pitfalls-opencamlib/ktoolcor.stl");

@@ -192,12 +192,25 @@ pub fn run(a: Args) -> CliResult<i32> {
         }
     };
     let tool = a.tool.as_deref().map(parse_tool).transpose()?;
-    let (mesh, _) = read_mesh(&a.stl)?;
+    let (mut mesh, _) = read_mesh(&a.stl)?;
     if mesh.is_empty() {
         return Err(CliError::input(format!(
             "{}: the part has no triangles",
             a.stl.display()
         )));
+    }
+    // A (nearly) closed part wound inside out would see only its own inside.
+    let flipped = wound_inward(&mesh);
+    if flipped {
+        for t in &mut mesh.triangles {
+            t.swap(1, 2);
+        }
+        if !a.quiet && !a.json {
+            eprintln!(
+                "{}: the facets are wound inward (negative volume); turned outward",
+                a.stl.display()
+            );
+        }
     }
     let bar = crate::progress::spinner(
         "visibility",
@@ -328,6 +341,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             "grid": grid.name(),
             "cells": grid.len(),
             "clearance_deg": a.clearance,
+            "flipped": flipped,
             "mode": if tool.is_some() { "tool" } else { "line-of-sight" },
             "seconds": secs,
         });
@@ -402,6 +416,23 @@ fn restrict(vis: &CellSets, keep: &[usize]) -> CellSets {
 fn facet_area(m: &TriMesh, t: usize) -> f64 {
     let [a, b, c] = m.corners(t);
     0.5 * (b - a).cross(c - a).length()
+}
+
+/// Whether a closed or nearly closed mesh (under 1 % open edges) encloses a
+/// negative volume, i.e. its triangles are wound clockwise seen from outside.
+fn wound_inward(m: &TriMesh) -> bool {
+    let e = m.edge_report();
+    if e.edges == 0 || e.open * 100 > e.edges {
+        return false;
+    }
+    let c = m.bounds().center();
+    let vol: f64 = (0..m.len())
+        .map(|t| {
+            let [a, b, d] = m.corners(t);
+            (a - c).dot((b - c).cross(d - c))
+        })
+        .sum();
+    vol < 0.0
 }
 
 /// Facets facing straight down at the lowest Z of the part: the face it stands on.
