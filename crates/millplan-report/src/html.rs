@@ -234,3 +234,36 @@ pub fn speed_report(title: &str, s: &Summary, rows: &[PointRow], vc: f64) -> Str
     );
     h
 }
+
+/// A plain report page: a title, an introduction, a summary table and figures
+/// (SVG with captions). No scripts, no network.
+pub fn simple_report(
+    title: &str,
+    intro: &str,
+    rows: &[(String, String)],
+    figures: &[(String, String)],
+) -> String {
+    let mut h = String::new();
+    let _ = write!(
+        h,
+        "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title><style>\
+         body{{font-family:sans-serif;margin:24px;max-width:1100px;color:#222}}\
+         table{{border-collapse:collapse;margin:8px 0 20px}}td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}\
+         td:first-child{{text-align:left}}figure{{margin:10px 0 24px}}</style></head><body><h1>{t}</h1><p>{i}</p><h2>Summary</h2><table>",
+        t = esc(title),
+        i = esc(intro)
+    );
+    for (k, v) in rows {
+        let _ = write!(h, "<tr><td>{}</td><td>{}</td></tr>", esc(k), esc(v));
+    }
+    h.push_str("</table>");
+    for (caption, svg) in figures {
+        let _ = write!(
+            h,
+            "<figure>{svg}<figcaption>{}</figcaption></figure>",
+            esc(caption)
+        );
+    }
+    h.push_str("</body></html>");
+    h
+}

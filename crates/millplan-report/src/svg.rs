@@ -414,9 +414,108 @@ pub fn map(title: &str, label: &str, points: &[(f64, f64, f64)]) -> String {
     s
 }
 
+/// How a direction shows on a sphere map.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DirClass {
+    /// Outside the machine's reach and not needed.
+    Out,
+    /// Reachable by the machine.
+    Reach,
+    /// Needed by some facet and reachable.
+    Used,
+    /// Needed by a facet that no reachable direction serves.
+    Missing,
+}
+
+/// The unit sphere of tool directions as two Lambert azimuthal equal-area discs
+/// (upper hemisphere left, lower right; X right, Y up in each), one dot per grid
+/// cell coloured by its class. Equal areas on the sphere stay equal on the page.
+pub fn sphere_map(title: &str, cells: &[([f64; 3], DirClass)]) -> String {
+    let (r0, cy) = (150.0, 200.0);
+    let centres = [190.0, 530.0];
+    let mut s = String::new();
+    let _ = write!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 720 420" width="720" height="420" font-family="sans-serif" font-size="11"><rect width="720" height="420" fill="white"/><text x="40" y="22" font-size="13" font-weight="bold">{}</text>"#,
+        esc(title)
+    );
+    for (k, cx) in centres.iter().enumerate() {
+        let _ = write!(
+            s,
+            r##"<circle cx="{cx}" cy="{cy}" r="{r0}" fill="#fafafa" stroke="#888"/><circle cx="{cx}" cy="{cy}" r="{:.1}" fill="none" stroke="#ccc" stroke-dasharray="3 3"/><text x="{}" y="{}" text-anchor="middle">{}</text>"##,
+            r0 * (2.0f64 * (1.0 - 45f64.to_radians().cos())).sqrt() / 2f64.sqrt(),
+            cx,
+            cy + r0 + 18.0,
+            if k == 0 {
+                "upper hemisphere (tool from above), 45° ring dashed"
+            } else {
+                "lower hemisphere (tool from below)"
+            }
+        );
+    }
+    for (d, class) in cells {
+        let [x, y, z] = *d;
+        let up = z >= 0.0;
+        // Lambert: radius √(2(1 − |z|)) reaches √2 at the equator.
+        let rho = (2.0 * (1.0 - z.abs())).max(0.0).sqrt() / 2f64.sqrt();
+        let h = (x * x + y * y).sqrt().max(1e-300);
+        let (px, py) = (
+            centres[usize::from(!up)] + r0 * rho * x / h,
+            cy - r0 * rho * y / h,
+        );
+        let (fill, rad) = match class {
+            DirClass::Out => ("#e4e4e4", 1.6),
+            DirClass::Reach => ("#9ecae1", 2.2),
+            DirClass::Used => ("#08519c", 3.0),
+            DirClass::Missing => ("#d62728", 3.2),
+        };
+        let _ = write!(
+            s,
+            r#"<circle cx="{px:.1}" cy="{py:.1}" r="{rad}" fill="{fill}"/>"#
+        );
+    }
+    let legend = [
+        ("#9ecae1", "reachable"),
+        ("#08519c", "used by a facet"),
+        ("#d62728", "needed, out of reach"),
+        ("#e4e4e4", "not reachable"),
+    ];
+    for (i, (c, t)) in legend.iter().enumerate() {
+        let x = 40.0 + 160.0 * i as f64;
+        let _ = write!(
+            s,
+            r#"<circle cx="{x}" cy="404" r="5" fill="{c}"/><text x="{}" y="408">{t}</text>"#,
+            x + 9.0
+        );
+    }
+    s.push_str("</svg>");
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sphere_map_puts_poles_at_the_centres_and_the_equator_on_the_rim() {
+        let svg = sphere_map(
+            "s",
+            &[
+                ([0.0, 0.0, 1.0], DirClass::Used),
+                ([1.0, 0.0, 0.0], DirClass::Reach),
+                ([0.0, 0.0, -1.0], DirClass::Missing),
+                ([0.0, -1.0, 0.0], DirClass::Out),
+            ],
+        );
+        assert!(
+            svg.contains(r##"cx="190.0" cy="200.0" r="3" fill="#08519c""##),
+            "{svg}"
+        );
+        assert!(svg.contains(r##"cx="340.0" cy="200.0" r="2.2""##), "{svg}");
+        assert!(svg.contains(r##"cx="530.0" cy="200.0" r="3.2""##), "{svg}");
+        assert!(svg.contains(r##"cx="190.0" cy="350.0" r="1.6""##), "{svg}");
+        assert!(svg.starts_with("<svg") && svg.ends_with("</svg>"));
+    }
 
     #[test]
     fn plots_are_well_formed_svg() {

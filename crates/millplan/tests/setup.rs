@@ -159,6 +159,7 @@ fn a_tilted_part_is_turned_back_upright() {
     let tilt = DMat3::from_rotation_x(30f64.to_radians());
     let p = cube(dir.path(), "tilted.stl", tilt, false);
     let out = dir.path().join("upright.stl");
+    let html = dir.path().join("setup.html");
     let o = bin()
         .args([
             "setup",
@@ -172,6 +173,7 @@ fn a_tilted_part_is_turned_back_upright() {
             "-100,100",
         ])
         .args(["--clearance", "80", "-o", out.to_str().expect("utf8")])
+        .args(["--report", html.to_str().expect("utf8")])
         .output()
         .expect("runs");
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
@@ -186,6 +188,9 @@ fn a_tilted_part_is_turned_back_upright() {
         "{up}"
     );
     assert!(f(&j["max_tilt_deg"]) < 100.0);
+    let page = std::fs::read_to_string(&html).expect("report");
+    assert_eq!(page.matches("<svg").count(), 2);
+    assert!(page.contains("feasible in one setup</td><td>yes"));
     // The rotated part is written and reads back with all its facets.
     let o = bin()
         .args(["inspect", "--json", out.to_str().expect("utf8")])

@@ -63,6 +63,9 @@ pub struct Args {
     /// Leave out the facets the part stands on (facing down at its lowest Z).
     #[arg(long)]
     pub ignore_bottom: bool,
+    /// Write an HTML report: the sphere map of directions and the part coloured by tilt.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
     /// Write the part rotated into the chosen setup (binary STL).
     #[arg(long, short)]
     pub output: Option<PathBuf>,
@@ -150,6 +153,10 @@ struct Candidate {
     required: Option<[(f64, f64); 2]>,
     /// The largest angle between the C axis (or the A=B=0 direction) and a facet's nearest direction.
     tilt: f64,
+    /// Per live facet, the reachable cell nearest the vertical, if any.
+    chosen: Vec<Option<usize>>,
+    /// The machine's reachable cells.
+    mask: Vec<u64>,
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -293,6 +300,19 @@ pub fn run(a: Args) -> CliResult<i32> {
         let mut bytes = Vec::new();
         millplan_geom::stl::write_binary_stl(&rotated, "millplan setup", &mut bytes);
         write_atomic(out, &bytes, &[a.stl.as_path()])?;
+    }
+    if let Some(path) = &a.report {
+        let html = report(
+            &a,
+            &mesh,
+            grid.as_ref(),
+            &vis,
+            &live,
+            &best,
+            inaccessible.len(),
+            &machine,
+        );
+        write_atomic(path, html.as_bytes(), &[a.stl.as_path()])?;
     }
     let rows = |m: DMat3| {
         [
@@ -494,12 +514,14 @@ fn evaluate(
     let mut first = (0.0f64, 0.0f64);
     let mut second = Vec::new();
     let mut tilt: f64 = 0.0;
+    let mut chosen = Vec::with_capacity(live.len());
     for &t in live {
         // The facet's reachable direction nearest the C axis (least tilt).
         let best = vis
             .cells_of(t)
             .filter(|&c| angles[c].is_some())
             .max_by(|&x, &y| cos[x].total_cmp(&cos[y]));
+        chosen.push(best);
         match best {
             None => unreachable.push(t),
             Some(c) => {
@@ -526,12 +548,152 @@ fn evaluate(
     } else {
         None
     };
-    let unreachable_area = unreachable.iter().map(|&t| areas[t]).sum();
+    // (+ 0.0: the empty float sum is −0.0.)
+    let unreachable_area = unreachable.iter().map(|&t| areas[t]).sum::<f64>() + 0.0;
     Candidate {
         setup,
         unreachable,
         unreachable_area,
         required,
         tilt,
+        chosen,
+        mask,
     }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn report(
+    a: &Args,
+    mesh: &TriMesh,
+    grid: &dyn SphereGrid,
+    vis: &CellSets,
+    live: &[usize],
+    best: &Candidate,
+    inaccessible: usize,
+    machine: &Kinematics,
+) -> String {
+    let feasible = best.unreachable.is_empty() && inaccessible == 0;
+    use millplan_report::svg::{map, sphere_map, DirClass};
+    let s = best.setup;
+    let mut class: Vec<DirClass> = (0..grid.len())
+        .map(|c| {
+            if best.mask[c / 64] >> (c % 64) & 1 == 1 {
+                DirClass::Reach
+            } else {
+                DirClass::Out
+            }
+        })
+        .collect();
+    for &t in &best.unreachable {
+        for c in vis.cells_of(t) {
+            class[c] = DirClass::Missing;
+        }
+    }
+    for c in best.chosen.iter().flatten() {
+        class[*c] = DirClass::Used;
+    }
+    let cells: Vec<([f64; 3], DirClass)> = (0..grid.len())
+        .map(|c| ((s * grid.direction(c)).to_array(), class[c]))
+        .collect();
+    let part: Vec<(f64, f64, f64)> = live
+        .iter()
+        .zip(&best.chosen)
+        .filter_map(|(&t, c)| {
+            let [p, q, r] = mesh.corners(t);
+            let m = s * ((p + q + r) / 3.0);
+            c.map(|c| {
+                (
+                    m.x,
+                    m.y,
+                    (s * grid.direction(c))
+                        .z
+                        .clamp(-1.0, 1.0)
+                        .acos()
+                        .to_degrees(),
+                )
+            })
+        })
+        .collect();
+    let range = |ax: &RotaryAxis| match (ax.min, ax.max) {
+        (None, None) => "free".to_string(),
+        (lo, hi) => format!(
+            "{} … {}",
+            lo.map_or("−∞".into(), |v| format!("{v}°")),
+            hi.map_or("∞".into(), |v| format!("{v}°"))
+        ),
+    };
+    let mut rows = vec![
+        ("part".to_string(), a.stl.display().to_string()),
+        ("facets".to_string(), mesh.len().to_string()),
+        (
+            "machine".to_string(),
+            format!(
+                "{:?}: first axis {}, second axis {}",
+                machine.kind,
+                range(&machine.first),
+                range(&machine.second)
+            ),
+        ),
+        (
+            "mode".to_string(),
+            if a.tool.is_some() {
+                format!("tool {}", a.tool.clone().unwrap_or_default())
+            } else {
+                "line of sight".to_string()
+            },
+        ),
+        (
+            "grid".to_string(),
+            format!(
+                "{} ({} cells), clearance {}°",
+                grid.name(),
+                grid.len(),
+                a.clearance
+            ),
+        ),
+        (
+            "feasible in one setup".to_string(),
+            if feasible {
+                "yes".to_string()
+            } else {
+                "no".to_string()
+            },
+        ),
+        ("largest tilt".to_string(), format!("{:.2}°", best.tilt)),
+        (
+            "facets out of reach".to_string(),
+            format!(
+                "{} ({:.2} mm²)",
+                best.unreachable.len(),
+                best.unreachable_area
+            ),
+        ),
+        (
+            "facets no direction sees".to_string(),
+            inaccessible.to_string(),
+        ),
+    ];
+    if let Some(r) = best.required {
+        rows.push((
+            "required ranges".to_string(),
+            format!(
+                "first {:.2}° … {:.2}°, second {:.2}° … {:.2}°",
+                r[0].0, r[0].1, r[1].0, r[1].1
+            ),
+        ));
+    }
+    let m = |i: usize| format!("[{:.6} {:.6} {:.6}]", s.row(i).x, s.row(i).y, s.row(i).z);
+    rows.push((
+        "setup rotation (part → table)".to_string(),
+        format!("{} {} {}", m(0), m(1), m(2)),
+    ));
+    millplan_report::html::simple_report(
+        "Setup and machinability",
+        "Tool directions each facet can be reached from, the directions the machine reaches with the part clamped in the chosen setup, and the tilt every facet needs.",
+        &rows,
+        &[
+            ("Tool directions in the table frame (equal-area projection). Dark blue: the direction each facet is cut from; red: directions facets need but the machine cannot reach.".to_string(), sphere_map("Directions", &cells)),
+            ("The part in the chosen setup seen from above, coloured by the tilt its facets need (degrees).".to_string(), map("Required tilt", "tilt °", &part)),
+        ],
+    )
 }
