@@ -6,6 +6,7 @@
 
 pub mod aabb;
 pub mod analytic;
+pub mod bezier;
 pub mod bvh;
 pub mod frame;
 pub mod mesh;

@@ -323,3 +323,54 @@ fn moulds_from_the_shared_data_run_for_both_machine_types() {
         assert!((m.determinant() - 1.0).abs() < 1e-9, "a rotation: {s}");
     }
 }
+
+#[test]
+fn the_bezier_vase_runs_end_to_end_for_both_machine_types() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let mesh = millplan_geom::bezier::tessellate_patches(&millplan_geom::bezier::vase(), 16);
+    let mut bytes = Vec::new();
+    millplan_geom::stl::write_binary_stl(&mesh, "vase", &mut bytes);
+    let p = dir.path().join("vase.stl");
+    std::fs::write(&p, bytes).expect("write");
+    let html = dir.path().join("vase.html");
+    let common = ["--ignore-bottom", "--report", html.to_str().expect("utf8")];
+    // The lowest row of belly facets rises 26.3° (profile (40,0)→(62,8), first
+    // 1/16): its normal is 153.7° from +Z, so no direction under 63.7° sees it.
+    let (code, j) = setup(
+        &p,
+        &[&["--type", "ca", "--range1", "-30,110"][..], &common].concat(),
+    );
+    assert_eq!(code, Some(0), "{j}");
+    let t = f(&j["max_tilt_deg"]);
+    assert!((63.7..75.0).contains(&t), "{t}");
+    assert!(f(&j["setup"][2][2]) > 0.99, "stays upright: {}", j["setup"]);
+    assert!(std::fs::read_to_string(&html)
+        .expect("report")
+        .contains("<svg"));
+    let (code, j) = setup(
+        &p,
+        &[&["--type", "ca", "--range1", "0,60"][..], &common].concat(),
+    );
+    assert_eq!(code, Some(3));
+    assert!(!j["unreachable"].as_array().expect("list").is_empty());
+    let (code, j) = setup(
+        &p,
+        &[
+            &[
+                "--type", "ab", "--range1", "-120,120", "--range2", "-120,120",
+            ][..],
+            &common,
+        ]
+        .concat(),
+    );
+    assert_eq!(code, Some(0), "{j}");
+    let (code, _) = setup(
+        &p,
+        &[
+            &["--type", "ab", "--range1", "-45,45", "--range2", "-45,45"][..],
+            &common,
+        ]
+        .concat(),
+    );
+    assert_eq!(code, Some(3));
+}

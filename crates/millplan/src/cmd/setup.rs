@@ -60,7 +60,9 @@ pub struct Args {
     /// A direction must leave the facet's surface by more than this, degrees.
     #[arg(long, default_value_t = 0.0)]
     pub clearance: f64,
-    /// Leave out the facets the part stands on (facing down at its lowest Z).
+    /// The part stands on its bottom face (the facets facing down at its lowest
+    /// Z): leave those out and keep that face on the table (the search then only
+    /// spins the part about the vertical).
     #[arg(long)]
     pub ignore_bottom: bool,
     /// Write an HTML report: the sphere map of directions and the part coloured by tilt.
@@ -244,8 +246,11 @@ pub fn run(a: Args) -> CliResult<i32> {
         .filter(|&t| !ignored[t] && areas[t] > 0.0 && vis.count(t) > 0)
         .collect();
     let mut poles = vec![DVec3::Z];
-    if let Some((p, _)) = access::best_pole(&restrict(&vis, &live), grid.as_ref()) {
-        poles.push(p);
+    // A part standing on its bottom face keeps it on the table: spins only.
+    if !a.ignore_bottom {
+        if let Some((p, _)) = access::best_pole(&restrict(&vis, &live), grid.as_ref()) {
+            poles.push(p);
+        }
     }
     let candidates: Vec<Candidate> = poles
         .iter()
