@@ -205,6 +205,98 @@ impl SphereGrid for Icosphere {
     }
 }
 
+/// HEALPix (Górski et al. 2005), ring ordering: 12·N² equal-area cells on 4N − 1
+/// rings of constant latitude. N = 10 gives 1200 cells of about 5.9°.
+#[derive(Clone, Copy, Debug)]
+pub struct Healpix {
+    pub nside: usize,
+}
+
+impl SphereGrid for Healpix {
+    fn len(&self) -> usize {
+        12 * self.nside * self.nside
+    }
+
+    fn direction(&self, cell: usize) -> DVec3 {
+        let n = self.nside as f64;
+        let ns = self.nside;
+        let npix = self.len();
+        let cap = 2 * ns * (ns - 1);
+        let (z, phi) = if cell < cap {
+            // North polar cap: ring i has 4i cells and starts at 2i(i − 1).
+            let i = ((1.0 + (1.0 + 2.0 * cell as f64).sqrt()) / 2.0).floor() as usize;
+            let i = if 2 * i * (i - 1) > cell { i - 1 } else { i };
+            let j = cell - 2 * i * (i - 1);
+            let i_f = i as f64;
+            (
+                1.0 - i_f * i_f / (3.0 * n * n),
+                (j as f64 + 0.5) * PI / (2.0 * i_f),
+            )
+        } else if cell < npix - cap {
+            let k = cell - cap;
+            let i = k / (4 * ns) + ns;
+            let j = k % (4 * ns);
+            // Rings alternate between cells starting at φ = 0 and half a cell off.
+            let s = ((i - ns + 1) % 2) as f64;
+            (
+                4.0 / 3.0 - 2.0 * i as f64 / (3.0 * n),
+                (j as f64 + 1.0 - s / 2.0) * PI / (2.0 * n),
+            )
+        } else {
+            // South polar cap, mirrored: ring i' from the south pole.
+            let k = npix - 1 - cell;
+            let i = ((1.0 + (1.0 + 2.0 * k as f64).sqrt()) / 2.0).floor() as usize;
+            let i = if 2 * i * (i - 1) > k { i - 1 } else { i };
+            let j = 4 * i - 1 - (k - 2 * i * (i - 1));
+            let i_f = i as f64;
+            (
+                -(1.0 - i_f * i_f / (3.0 * n * n)),
+                (j as f64 + 0.5) * PI / (2.0 * i_f),
+            )
+        };
+        let st = (1.0 - z * z).max(0.0).sqrt();
+        DVec3::new(st * phi.cos(), st * phi.sin(), z)
+    }
+
+    fn area(&self, _cell: usize) -> f64 {
+        4.0 * PI / self.len() as f64
+    }
+
+    fn cell_of(&self, d: DVec3) -> usize {
+        let ns = self.nside;
+        let n = ns as f64;
+        let z = d.z.clamp(-1.0, 1.0);
+        let za = z.abs();
+        let tt = (d.y.atan2(d.x).rem_euclid(TAU) / (PI / 2.0)).min(4.0 - 1e-15);
+        if za <= 2.0 / 3.0 {
+            let t1 = n * (0.5 + tt);
+            let t2 = n * z * 0.75;
+            let jp = (t1 - t2).floor() as i64;
+            let jm = (t1 + t2).floor() as i64;
+            let ir = ns as i64 + 1 + jp - jm; // 1 ..= 2N + 1, from z = 2/3 down
+            let kshift = 1 - (ir & 1);
+            let ip = ((jp + jm - ns as i64 + kshift + 1) / 2).rem_euclid(4 * ns as i64);
+            (2 * ns * (ns - 1)) + (ir as usize - 1) * 4 * ns + ip as usize
+        } else {
+            let tp = tt - tt.floor();
+            let tmp = n * (3.0 * (1.0 - za)).sqrt();
+            let jp = (tp * tmp).floor() as usize;
+            let jm = ((1.0 - tp) * tmp).floor() as usize;
+            let ir = (jp + jm + 1).min(ns); // ring from the nearer pole
+            let ip = ((tt * ir as f64).floor() as usize).min(4 * ir - 1);
+            if z > 0.0 {
+                2 * ir * (ir - 1) + ip
+            } else {
+                self.len() - 2 * ir * (ir + 1) + ip
+            }
+        }
+    }
+
+    fn name(&self) -> String {
+        format!("healpix N={} ({} cells)", self.nside, self.len())
+    }
+}
+
 /// One bitset of grid cells per facet.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CellSets {
@@ -691,6 +783,32 @@ mod tests {
     }
 
     #[test]
+    fn healpix_cells_have_equal_areas() {
+        // Spec §3.3: N_side = 10 gives 1200 equal cells of about 5.86°.
+        let g = Healpix { nside: 10 };
+        assert!((g.area(0).sqrt().to_degrees() - 5.86).abs() < 0.01);
+        // Uniform directions (a Fibonacci lattice) fall evenly into the cells.
+        let n = 600_000;
+        let mut count = vec![0usize; g.len()];
+        for i in 0..n {
+            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
+            let phi = i as f64 * PI * (3.0 - 5f64.sqrt());
+            let r = (1.0 - z * z).sqrt();
+            count[g.cell_of(DVec3::new(r * phi.cos(), r * phi.sin(), z))] += 1;
+        }
+        let mean = n as f64 / g.len() as f64;
+        for (c, k) in count.iter().enumerate() {
+            assert!(
+                (*k as f64 - mean).abs() < 0.05 * mean,
+                "cell {c}: {k} vs {mean}"
+            );
+        }
+        // The four cells round each pole come first and last.
+        assert!(g.cell_of(DVec3::new(1e-3, 1e-3, 1.0).normalize()) < 4);
+        assert!(g.cell_of(DVec3::new(1e-3, 1e-3, -1.0).normalize()) >= g.len() - 4);
+    }
+
+    #[test]
     fn circle_window_oracles() {
         // Spec §5 "Sphere algorithms".
         let (start, len) = min_arc(&[10.0, 350.0, 20.0, 340.0]).expect("arc");
@@ -851,7 +969,11 @@ mod tests {
             DVec3::X,
         );
         let (m, b) = mesh(&t);
-        for g in [&LatLon::PAPER as &dyn SphereGrid, &Icosphere::new(3)] {
+        for g in [
+            &LatLon::PAPER as &dyn SphereGrid,
+            &Icosphere::new(3),
+            &Healpix { nside: 10 },
+        ] {
             let vis = visibility(&m, &b, g, 0.0);
             let mut seen = 0;
             for f in (0..m.len()).filter(|&f| m.facet_normal(f).z > 0.5) {

@@ -50,7 +50,7 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = GridArg::Latlon)]
     pub grid: GridArg,
     /// Approximate number of grid cells (latlon: bands × sectors × 2 with 3 sectors
-    /// per 2 bands; icosphere: 20·4^k).
+    /// per 2 bands; icosphere: 20·4^k; healpix: 12·N²).
     #[arg(long, default_value_t = 1200)]
     pub cells: usize,
     /// Tool mode: a ball-end mill D,REACH[,HOLDER_D,HOLDER_LENGTH] in mm (REACH
@@ -91,6 +91,8 @@ pub enum GridArg {
     Latlon,
     /// Geodesic icosphere, near-uniform cells.
     Icosphere,
+    /// HEALPix, equal-area cells on rings of constant latitude.
+    Healpix,
 }
 
 fn parse_tool(s: &str) -> CliResult<access::ToolModel> {
@@ -195,6 +197,9 @@ pub fn run(a: Args) -> CliResult<i32> {
                 sectors: (b * 3).div_ceil(2),
             })
         }
+        GridArg::Healpix => Box::new(access::Healpix {
+            nside: ((a.cells as f64 / 12.0).sqrt().round() as usize).max(1),
+        }),
         GridArg::Icosphere => {
             let k = ((a.cells as f64 / 20.0).ln() / 4f64.ln()).round().max(0.0) as u32;
             Box::new(Icosphere::new(k))
