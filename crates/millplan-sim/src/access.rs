@@ -613,6 +613,140 @@ pub fn setup_for_pole(pole: DVec3) -> DMat3 {
     DMat3::from_cols(u, v, w).transpose()
 }
 
+/// Required rotary ranges of a tilt + rotary (C,A) machine: the tilt interval
+/// (degrees, holding 0) and the C window (start, length in degrees).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CaRanges {
+    pub tilt: (f64, f64),
+    pub c_start: f64,
+    pub c_len: f64,
+}
+
+impl CaRanges {
+    /// The spec's objective (tilt span + ε)(C span + ε), ε = 1°: never zero.
+    pub fn cost(&self) -> f64 {
+        (self.tilt.1 - self.tilt.0 + 1.0) * (self.c_len + 1.0)
+    }
+
+    /// Whether the direction (tilt, c) lies in these ranges.
+    pub fn holds(&self, tilt: f64, c: f64) -> bool {
+        tilt >= self.tilt.0 - 1e-9
+            && tilt <= self.tilt.1 + 1e-9
+            && (c - self.c_start).rem_euclid(360.0) <= self.c_len + 1e-9
+    }
+}
+
+/// The fast method ("minimally distanced points"): each facet is served by its
+/// candidate of least |tilt|; the ranges are then the span of those tilts (with
+/// 0) and the smallest arc of their C angles. Each facet's candidates are its
+/// (tilt, C) pairs in degrees. `None` when a facet has none.
+pub fn ca_ranges_fast(pairs: &[Vec<(f64, f64)>]) -> Option<CaRanges> {
+    let mut tilt = (0.0f64, 0.0f64);
+    let mut cs = Vec::with_capacity(pairs.len());
+    for p in pairs {
+        let &(a, c) = p.iter().min_by(|x, y| x.0.abs().total_cmp(&y.0.abs()))?;
+        tilt = (tilt.0.min(a), tilt.1.max(a));
+        cs.push(c);
+    }
+    let (c_start, c_len) = min_arc(&cs).unwrap_or((0.0, 0.0));
+    Some(CaRanges {
+        tilt,
+        c_start,
+        c_len,
+    })
+}
+
+/// The exact algorithm on the discretised data (spec §3.2): every tilt interval
+/// holding 0 between candidate tilts, and for each the smallest circular C
+/// window holding a candidate of every facet inside it; the least cost wins.
+/// O(K²·M log M) for K distinct tilts and M pairs: the reference for the fast method.
+pub fn ca_ranges_exact(pairs: &[Vec<(f64, f64)>]) -> Option<CaRanges> {
+    if pairs.iter().any(|p| p.is_empty()) {
+        return None;
+    }
+    let mut tilts: Vec<f64> = pairs.iter().flatten().map(|p| p.0).chain([0.0]).collect();
+    tilts.sort_by(f64::total_cmp);
+    tilts.dedup();
+    let los: Vec<f64> = tilts.iter().copied().filter(|&a| a <= 0.0).collect();
+    let his: Vec<f64> = tilts.iter().copied().filter(|&a| a >= 0.0).collect();
+    let mut best: Option<CaRanges> = None;
+    for &lo in los.iter().rev() {
+        for &hi in &his {
+            // A wider tilt span only pays when it narrows C; skip what cannot win.
+            if let Some(b) = best {
+                if (hi - lo + 1.0) * 1.0 >= b.cost() {
+                    break;
+                }
+            }
+            let sets: Vec<Vec<f64>> = pairs
+                .iter()
+                .map(|p| {
+                    p.iter()
+                        .filter(|q| q.0 >= lo && q.0 <= hi)
+                        .map(|q| q.1)
+                        .collect()
+                })
+                .collect();
+            if sets.iter().any(|s| s.is_empty()) {
+                continue;
+            }
+            let Some((c_start, c_len)) = min_window_at(&sets) else {
+                continue;
+            };
+            let cand = CaRanges {
+                tilt: (lo, hi),
+                c_start,
+                c_len,
+            };
+            if best.is_none_or(|b| cand.cost() < b.cost()) {
+                best = Some(cand);
+            }
+        }
+    }
+    best
+}
+
+/// As [`min_window`], with the window's start angle.
+fn min_window_at(sets: &[Vec<f64>]) -> Option<(f64, f64)> {
+    if sets.iter().any(|s| s.is_empty()) {
+        return None;
+    }
+    let mut ev: Vec<(f64, usize)> = sets
+        .iter()
+        .enumerate()
+        .flat_map(|(k, s)| s.iter().map(move |&a| (a.rem_euclid(360.0), k)))
+        .collect();
+    ev.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let n = ev.len();
+    let all: Vec<(f64, usize)> = ev
+        .iter()
+        .copied()
+        .chain(ev.iter().map(|&(a, k)| (a + 360.0, k)))
+        .collect();
+    let mut have = vec![0usize; sets.len()];
+    let (mut covered, mut lo) = (0, 0);
+    let mut best: Option<(f64, f64)> = None;
+    for hi in 0..all.len() {
+        let k = all[hi].1;
+        if have[k] == 0 {
+            covered += 1;
+        }
+        have[k] += 1;
+        while covered == sets.len() {
+            if lo < n && best.is_none_or(|b| all[hi].0 - all[lo].0 < b.1) {
+                best = Some((all[lo].0, all[hi].0 - all[lo].0));
+            }
+            let k = all[lo].1;
+            have[k] -= 1;
+            if have[k] == 0 {
+                covered -= 1;
+            }
+            lo += 1;
+        }
+    }
+    best
+}
+
 /// The smallest arc (start, length in degrees) of the circle that covers all
 /// angles; `None` for no angles.
 pub fn min_arc(angles: &[f64]) -> Option<(f64, f64)> {
@@ -639,44 +773,7 @@ pub fn min_window(sets: &[Vec<f64>]) -> Option<f64> {
     if sets.is_empty() {
         return Some(0.0);
     }
-    if sets.iter().any(|s| s.is_empty()) {
-        return None;
-    }
-    let mut ev: Vec<(f64, usize)> = sets
-        .iter()
-        .enumerate()
-        .flat_map(|(k, s)| s.iter().map(move |&a| (a.rem_euclid(360.0), k)))
-        .collect();
-    ev.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let n = ev.len();
-    let all: Vec<(f64, usize)> = ev
-        .iter()
-        .copied()
-        .chain(ev.iter().map(|&(a, k)| (a + 360.0, k)))
-        .collect();
-    let mut have = vec![0usize; sets.len()];
-    let mut covered = 0;
-    let mut best = f64::INFINITY;
-    let mut lo = 0;
-    for hi in 0..all.len() {
-        let k = all[hi].1;
-        if have[k] == 0 {
-            covered += 1;
-        }
-        have[k] += 1;
-        while covered == sets.len() {
-            if lo < n {
-                best = best.min(all[hi].0 - all[lo].0);
-            }
-            let k = all[lo].1;
-            have[k] -= 1;
-            if have[k] == 0 {
-                covered -= 1;
-            }
-            lo += 1;
-        }
-    }
-    Some(best)
+    min_window_at(sets).map(|w| w.1)
 }
 
 #[cfg(test)]
@@ -845,6 +942,53 @@ mod tests {
             best = best.min(len);
         }
         assert!((min_window(&sets).expect("w") - best).abs() < 1e-12);
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+
+        /// The fast method never calls a machine sufficient that the exact test
+        /// (some candidate of every facet inside the ranges) rejects, and the
+        /// exact ranges never cost more than the fast ones.
+        #[test]
+        fn fast_ranges_are_never_optimistic(
+            seed in proptest::collection::vec(proptest::collection::vec((-9i32..=12, 0i32..36), 1..6), 1..8),
+            box_lo in -90.0..0.0f64, box_hi in 0.0..110.0f64, c0 in 0.0..360.0f64, clen in 0.0..360.0f64,
+        ) {
+            let pairs: Vec<Vec<(f64, f64)>> = seed.iter().map(|f| f.iter().map(|&(a, c)| (a as f64 * 10.0, c as f64 * 10.0)).collect()).collect();
+            let fast = ca_ranges_fast(&pairs).expect("fast");
+            let exact = ca_ranges_exact(&pairs).expect("exact");
+            proptest::prop_assert!(exact.cost() <= fast.cost() + 1e-9, "{:?} vs {:?}", exact, fast);
+            // Both answers serve every facet.
+            for r in [fast, exact] {
+                proptest::prop_assert!(pairs.iter().all(|p| p.iter().any(|&(a, c)| r.holds(a, c))), "{:?}", r);
+            }
+            // A machine box: the fast method's "fits" implies the exact test's.
+            let machine = CaRanges { tilt: (box_lo, box_hi), c_start: c0, c_len: clen };
+            let inside = |r: &CaRanges| machine.tilt.0 <= r.tilt.0 && r.tilt.1 <= machine.tilt.1
+                && (r.c_len <= 1e-9 && machine.holds(0.0, r.c_start) || (r.c_start - machine.c_start).rem_euclid(360.0) + r.c_len <= machine.c_len + 1e-9);
+            let exact_ok = pairs.iter().all(|p| p.iter().any(|&(a, c)| machine.holds(a, c)));
+            if inside(&fast) {
+                proptest::prop_assert!(exact_ok);
+            }
+            // Brute force on the cost: no (tilt interval, C window) from the data does better.
+            let mut best = f64::INFINITY;
+            let tilts: Vec<f64> = pairs.iter().flatten().map(|p| p.0).chain([0.0]).collect();
+            let cs: Vec<f64> = pairs.iter().flatten().map(|p| p.1).collect();
+            for &lo in tilts.iter().filter(|&&a| a <= 0.0) {
+                for &hi in tilts.iter().filter(|&&a| a >= 0.0) {
+                    for &s in &cs {
+                        for &e in &cs {
+                            let r = CaRanges { tilt: (lo, hi), c_start: s, c_len: (e - s).rem_euclid(360.0) };
+                            if pairs.iter().all(|p| p.iter().any(|&(a, c)| r.holds(a, c))) {
+                                best = best.min(r.cost());
+                            }
+                        }
+                    }
+                }
+            }
+            proptest::prop_assert!((exact.cost() - best).abs() < 1e-9, "{} vs brute {}", exact.cost(), best);
+        }
     }
 
     #[test]

@@ -65,6 +65,11 @@ pub struct Args {
     /// spins the part about the vertical).
     #[arg(long)]
     pub ignore_bottom: bool,
+    /// Required ranges of a machine with a C axis by the exact window algorithm
+    /// (every tilt interval, the smallest C window for each) instead of the fast
+    /// nearest-direction method; slow on fine grids and large parts.
+    #[arg(long)]
+    pub exact: bool,
     /// Write an HTML report: the sphere map of directions and the part coloured by tilt.
     #[arg(long)]
     pub report: Option<PathBuf>,
@@ -301,6 +306,46 @@ pub fn run(a: Args) -> CliResult<i32> {
                 .unwrap_or(std::cmp::Ordering::Equal)
         })
         .ok_or_else(|| CliError::internal("no setup candidates"))?;
+    let mut best = best;
+    let c_axis = matches!(
+        machine.kind,
+        KinKind::TableAc | KinKind::TableBc | KinKind::HeadBc | KinKind::HeadBTableC
+    );
+    if a.exact && c_axis && best.unreachable.is_empty() {
+        let pairs: Vec<Vec<(f64, f64)>> = live
+            .iter()
+            .map(|&t| {
+                vis.cells_of(t)
+                    .flat_map(|c| machine.inverse(DVec3::ZERO, best.setup * grid.direction(c), 0.0))
+                    .map(|j| (j.first, j.second))
+                    .collect()
+            })
+            .collect();
+        let m: usize = pairs.iter().map(|p| p.len()).sum();
+        let mut tilts: Vec<i64> = pairs
+            .iter()
+            .flatten()
+            .map(|p| (p.0 * 1e6).round() as i64)
+            .collect();
+        tilts.sort_unstable();
+        tilts.dedup();
+        // K² interval scans over M pairs: refuse work of hours rather than hang.
+        let work = (tilts.len() as f64).powi(2) / 4.0 * m as f64;
+        if work > 2e10 {
+            return Err(CliError::input(format!(
+                "--exact would scan {} tilt intervals over {m} candidate directions; use a coarser --cells or drop --exact",
+                tilts.len().pow(2) / 4
+            )));
+        }
+        if let Some(r) = access::ca_ranges_exact(&pairs) {
+            let start = if r.c_start > 180.0 {
+                r.c_start - 360.0
+            } else {
+                r.c_start
+            };
+            best.required = Some([r.tilt, (start, start + r.c_len)]);
+        }
+    }
     let feasible = best.unreachable.is_empty() && inaccessible.is_empty();
     let secs = t0.elapsed().as_secs_f64();
     if let Some(out) = &a.output {
