@@ -338,12 +338,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             )));
         }
         if let Some(r) = access::ca_ranges_exact(&pairs) {
-            let start = if r.c_start > 180.0 {
-                r.c_start - 360.0
-            } else {
-                r.c_start
-            };
-            best.required = Some([r.tilt, (start, start + r.c_len)]);
+            best.required = Some([r.tilt, centred_window(r.c_start, r.c_len)]);
         }
     }
     let feasible = best.unreachable.is_empty() && inaccessible.is_empty();
@@ -533,6 +528,22 @@ fn glam_euler_zyx(r: DMat3) -> (f64, f64, f64) {
     }
 }
 
+/// Which of two IK branches a facet is cut with: on a machine with a C axis the
+/// one with the tilt positive (C turns instead), on an A,B table the one
+/// nearest home on both axes.
+fn branch_cost(kind: KinKind, (first, second): (f64, f64)) -> f64 {
+    match kind {
+        KinKind::TableAb => first.abs().max(second.abs()),
+        _ => first.abs() + if first < 0.0 { 1e3 } else { 0.0 },
+    }
+}
+
+/// A circular window as (from, to) degrees with its middle in (−180°, 180°].
+fn centred_window(start: f64, len: f64) -> (f64, f64) {
+    let mid = (start + len / 2.0 + 180.0).rem_euclid(360.0) - 180.0;
+    (mid - len / 2.0, mid + len / 2.0)
+}
+
 fn evaluate(
     setup: DMat3,
     machine: &Kinematics,
@@ -555,9 +566,7 @@ fn evaluate(
                 .into_iter()
                 .map(|j| (j.first, j.second))
                 .min_by(|x, y| {
-                    x.0.abs()
-                        .max(x.1.abs())
-                        .total_cmp(&y.0.abs().max(y.1.abs()))
+                    branch_cost(machine.kind, *x).total_cmp(&branch_cost(machine.kind, *y))
                 })
         })
         .collect();
@@ -592,8 +601,7 @@ fn evaluate(
             // A rotary C axis: the smallest arc of azimuths that serves every facet.
             KinKind::TableAc | KinKind::TableBc | KinKind::HeadBc | KinKind::HeadBTableC => {
                 let (start, len) = access::min_arc(&second).unwrap_or((0.0, 0.0));
-                let start = if start > 180.0 { start - 360.0 } else { start };
-                (start, start + len)
+                centred_window(start, len)
             }
             KinKind::TableAb => second
                 .iter()
