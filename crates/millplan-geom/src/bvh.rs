@@ -235,11 +235,9 @@ impl Bvh {
             if node.count > 0 {
                 let range = node.first as usize..(node.first + node.count) as usize;
                 for (k, [a, b, c]) in self.tris[range.clone()].iter().enumerate() {
-                    if skip == Some(self.order[range.start + k]) {
-                        continue;
-                    }
                     if let Some(s) = ray_triangle(origin, dir, *a, *b, *c) {
-                        if s > 0.0 && s < max_s {
+                        // The skipped triangle is looked up only on a hit.
+                        if s > 0.0 && s < max_s && skip != Some(self.order[range.start + k]) {
                             return true;
                         }
                     }

@@ -111,6 +111,13 @@ fn cube_on_a_ca_table_needs_a_tilt_near_ninety_degrees() {
     assert_eq!(code, Some(3));
     assert_eq!(j["feasible"], false);
     assert_eq!(j["unreachable"].as_array().expect("list").len(), 8);
+    // ... and the ranges that would do are reported: A up to the walls' 80-90°.
+    let w = &j["would_do"]["a"];
+    assert!(
+        f(&w[0]) == 0.0 && (80.0..90.0).contains(&f(&w[1])),
+        "{}",
+        j["would_do"]
+    );
     // Two tilting axes of ±95° reach everything; ±30° does not.
     let (code, _) = setup(
         &p,

@@ -307,6 +307,24 @@ pub fn run(a: Args) -> CliResult<i32> {
         })
         .ok_or_else(|| CliError::internal("no setup candidates"))?;
     let mut best = best;
+    // Out of this machine's reach: report what ranges would do, from the same
+    // setup on the same kind of machine with unlimited rotary axes.
+    let would_do = if best.unreachable.is_empty() {
+        None
+    } else {
+        let mut free = machine.clone();
+        free.first = RotaryAxis {
+            min: None,
+            max: None,
+            sign: machine.first.sign,
+        };
+        free.second = RotaryAxis {
+            min: None,
+            max: None,
+            sign: machine.second.sign,
+        };
+        evaluate(best.setup, &free, grid.as_ref(), &vis, &live, &areas).required
+    };
     let c_axis = matches!(
         machine.kind,
         KinKind::TableAc | KinKind::TableBc | KinKind::HeadBc | KinKind::HeadBTableC
@@ -401,6 +419,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             "setup": rows(best.setup),
             "euler_zyx_deg": euler,
             "required": req,
+            "would_do": would_do.map(|r| serde_json::json!({ names[0]: [r[0].0, r[0].1], names[1]: [r[1].0, r[1].1] })),
             "max_tilt_deg": best.tilt,
             "machine": { "kind": machine.kind, names[0]: limit(&machine.first), names[1]: limit(&machine.second) },
             "unreachable": best.unreachable.iter().map(|&t| serde_json::json!({"facet": t, "centroid": centroid(t)})).collect::<Vec<_>>(),
@@ -453,7 +472,18 @@ pub fn run(a: Args) -> CliResult<i32> {
                 r[1].1,
                 best.tilt
             ),
-            None => println!("required: some facets have no reachable direction"),
+            None => match would_do {
+                Some(r) => println!(
+                    "out of reach; ranges that would do in this setup: {} {:.2}..{:.2}°, {} {:.2}..{:.2}°",
+                    names[0].to_uppercase(),
+                    r[0].0,
+                    r[0].1,
+                    names[1].to_uppercase(),
+                    r[1].0,
+                    r[1].1
+                ),
+                None => println!("required: some facets have no reachable direction"),
+            },
         }
         if !best.unreachable.is_empty() {
             println!(
