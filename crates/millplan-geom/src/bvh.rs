@@ -213,75 +213,62 @@ impl Bvh {
     /// than `skip` (an any-hit occlusion query: it stops at the first hit).
     /// Triangles are hit from both sides; `dir` need not be unit.
     pub fn occluded(&self, origin: DVec3, dir: DVec3, max_s: f64, skip: Option<u32>) -> bool {
+        self.any_near_ray(origin, dir, max_s, 0.0, |k, [a, b, c]| {
+            // The skipped triangle is looked up only on a hit.
+            ray_triangle(origin, dir, *a, *b, *c).is_some_and(|s| s > 0.0 && s < max_s)
+                && skip != Some(self.order[k])
+        })
+    }
+
+    /// Whether any triangle other than `skip` comes closer than `radius` to the
+    /// segment ab (a capsule-versus-mesh collision test).
+    pub fn capsule_hits(&self, a: DVec3, b: DVec3, radius: f64, skip: Option<u32>) -> bool {
+        if radius <= 0.0 {
+            return false;
+        }
+        let r2 = radius * radius;
+        self.any_near_ray(a, b - a, 1.0, radius, |k, [p, q, r]| {
+            skip != Some(self.order[k]) && segment_triangle_dist2(a, b, *p, *q, *r) < r2
+        })
+    }
+
+    /// Any-hit traversal: calls `hit(position in order, corners)` for the
+    /// triangles of every leaf whose box, grown by `pad`, the ray
+    /// `origin + s·dir` (0 ≤ s ≤ max_s) meets, until `hit` says yes.
+    fn any_near_ray(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        max_s: f64,
+        pad: f64,
+        mut hit: impl FnMut(usize, &[DVec3; 3]) -> bool,
+    ) -> bool {
         if self.order.is_empty() {
             return false;
         }
         // A zero component becomes a tiny one: its slab is then [-huge, huge] from
-        // inside and empty from outside, with no 0·∞ = NaN on the slab faces.
+        // inside and empty from outside, with no 0·∞ = NaN on the slab faces;
+        // clamped so that a zero slab width times the inverse stays 0.
         let nz = |x: f64| if x == 0.0 { 1e-300 } else { x };
         let inv = DVec3::new(nz(dir.x), nz(dir.y), nz(dir.z)).recip();
-        // Clamped so that a zero slab width times the inverse stays 0, never NaN.
         let inv32 = Vec3A::from(inv.clamp(DVec3::splat(-1e30), DVec3::splat(1e30)).as_vec3());
         let o32 = Vec3A::from(origin.as_vec3());
-        let max32 = max_s as f32;
+        let (max32, pad32) = (max_s as f32, Vec3A::splat(pad as f32));
         let mut stack: [u32; 64] = [0; 64];
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;
             let node = &self.slim[stack[sp] as usize];
-            if !ray_box(node.min, node.max, o32, inv32, max32) {
+            if !ray_box(node.min - pad32, node.max + pad32, o32, inv32, max32) {
                 continue;
             }
             if node.count > 0 {
-                let range = node.first as usize..(node.first + node.count) as usize;
-                for (k, [a, b, c]) in self.tris[range.clone()].iter().enumerate() {
-                    if let Some(s) = ray_triangle(origin, dir, *a, *b, *c) {
-                        // The skipped triangle is looked up only on a hit.
-                        if s > 0.0 && s < max_s && skip != Some(self.order[range.start + k]) {
-                            return true;
-                        }
-                    }
-                }
-            } else if sp + 2 <= stack.len() {
-                stack[sp] = node.first;
-                stack[sp + 1] = node.right;
-                sp += 2;
-            }
-        }
-        false
-    }
-}
-
-impl Bvh {
-    /// Whether any triangle other than `skip` comes closer than `radius` to the
-    /// segment ab (a capsule-versus-mesh collision test).
-    pub fn capsule_hits(&self, a: DVec3, b: DVec3, radius: f64, skip: Option<u32>) -> bool {
-        if self.order.is_empty() || radius <= 0.0 {
-            return false;
-        }
-        let dir = b - a;
-        let nz = |x: f64| if x == 0.0 { 1e-300 } else { x };
-        let inv = DVec3::new(nz(dir.x), nz(dir.y), nz(dir.z)).recip();
-        let inv32 = Vec3A::from(inv.clamp(DVec3::splat(-1e30), DVec3::splat(1e30)).as_vec3());
-        let o32 = Vec3A::from(a.as_vec3());
-        let pad = Vec3A::splat(radius as f32);
-        let r2 = radius * radius;
-        let mut stack: [u32; 64] = [0; 64];
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let node = &self.slim[stack[sp] as usize];
-            // The box grown by the radius holds every point within it of the node.
-            if !ray_box(node.min - pad, node.max + pad, o32, inv32, 1.0) {
-                continue;
-            }
-            if node.count > 0 {
-                let range = node.first as usize..(node.first + node.count) as usize;
-                for (k, [p, q, r]) in self.tris[range.clone()].iter().enumerate() {
-                    if skip == Some(self.order[range.start + k]) {
-                        continue;
-                    }
-                    if segment_triangle_dist2(a, b, *p, *q, *r) < r2 {
+                let start = node.first as usize;
+                for (k, tri) in self.tris[start..start + node.count as usize]
+                    .iter()
+                    .enumerate()
+                {
+                    if hit(start + k, tri) {
                         return true;
                     }
                 }

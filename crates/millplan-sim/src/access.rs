@@ -376,10 +376,29 @@ pub fn visibility(
     grid: &dyn SphereGrid,
     clearance_deg: f64,
 ) -> CellSets {
+    let lift = 1e-7 * mesh.bounds().diagonal().max(1e-9);
+    cones(
+        mesh,
+        grid,
+        clearance_deg,
+        |_, _, _| true,
+        |t, p, n, d| !bvh.occluded(p + n * lift, d, f64::INFINITY, Some(t as u32)),
+    )
+}
+
+/// The cones of all facets: cell d is in facet t's cone when d·n_t >
+/// sin(clearance) and `free(t, centroid, n_t, d)`; a facet for which
+/// `usable(t, centroid, n_t)` is false, or with zero area, gets an empty cone.
+fn cones(
+    mesh: &TriMesh,
+    grid: &dyn SphereGrid,
+    clearance_deg: f64,
+    usable: impl Fn(usize, DVec3, DVec3) -> bool + Sync,
+    free: impl Fn(usize, DVec3, DVec3, DVec3) -> bool + Sync,
+) -> CellSets {
     let cells = grid.len();
     let dirs: Vec<DVec3> = (0..cells).map(|c| grid.direction(c)).collect();
     let min_dot = clearance_deg.to_radians().sin();
-    let lift = 1e-7 * mesh.bounds().diagonal().max(1e-9);
     let mut out = CellSets::new(mesh.len(), cells);
     let words = out.words;
     out.bits
@@ -387,13 +406,13 @@ pub fn visibility(
         .enumerate()
         .for_each(|(t, set)| {
             let n = mesh.facet_normal(t);
-            if n == DVec3::ZERO {
+            let [a, b, c] = mesh.corners(t);
+            let p = (a + b + c) / 3.0;
+            if n == DVec3::ZERO || !usable(t, p, n) {
                 return;
             }
-            let [a, b, c] = mesh.corners(t);
-            let p = (a + b + c) / 3.0 + n * lift;
             for (k, d) in dirs.iter().enumerate() {
-                if d.dot(n) > min_dot && !bvh.occluded(p, *d, f64::INFINITY, Some(t as u32)) {
+                if d.dot(n) > min_dot && free(t, p, n, *d) {
                     set[k / 64] |= 1 << (k % 64);
                 }
             }
@@ -427,47 +446,28 @@ pub fn accessibility(
     clearance_deg: f64,
     tool: &ToolModel,
 ) -> CellSets {
-    let cells = grid.len();
-    let dirs: Vec<DVec3> = (0..cells).map(|c| grid.direction(c)).collect();
-    let min_dot = clearance_deg.to_radians().sin();
     let r = tool.radius;
     let tol = 1e-3 * r + 1e-7 * mesh.bounds().diagonal();
-    let mut out = CellSets::new(mesh.len(), cells);
-    let words = out.words;
-    out.bits
-        .par_chunks_mut(words.max(1))
-        .enumerate()
-        .for_each(|(t, set)| {
-            let n = mesh.facet_normal(t);
-            if n == DVec3::ZERO {
-                return;
-            }
-            let [a, b, c] = mesh.corners(t);
-            let centre = (a + b + c) / 3.0 + n * r;
-            // The ball itself, whatever the direction.
-            if bvh.capsule_hits(centre, centre, r - tol, None) {
-                return;
-            }
-            for (k, d) in dirs.iter().enumerate() {
-                if d.dot(n) <= min_dot {
-                    continue;
-                }
-                let top = centre + *d * tool.reach;
-                let free = !bvh.capsule_hits(centre, top, r - tol, None)
-                    && (tool.holder_radius <= 0.0
-                        || tool.holder_length <= 0.0
-                        || !bvh.capsule_hits(
-                            top,
-                            top + *d * tool.holder_length,
-                            tool.holder_radius,
-                            None,
-                        ));
-                if free {
-                    set[k / 64] |= 1 << (k % 64);
-                }
-            }
-        });
-    out
+    cones(
+        mesh,
+        grid,
+        clearance_deg,
+        // The ball itself, whatever the direction.
+        |_, p, n| !bvh.capsule_hits(p + n * r, p + n * r, r - tol, None),
+        |_, p, n, d| {
+            let centre = p + n * r;
+            let top = centre + d * tool.reach;
+            !bvh.capsule_hits(centre, top, r - tol, None)
+                && (tool.holder_radius <= 0.0
+                    || tool.holder_length <= 0.0
+                    || !bvh.capsule_hits(
+                        top,
+                        top + d * tool.holder_length,
+                        tool.holder_radius,
+                        None,
+                    ))
+        },
+    )
 }
 
 /// The directions, in part coordinates, that a machine reaches with the part
@@ -829,6 +829,53 @@ mod tests {
         t
     }
 
+    /// A 100 × 80 mm plate facing +Z (two triangles).
+    fn plate() -> Vec<[DVec3; 3]> {
+        let mut t = Vec::new();
+        quad(
+            &mut t,
+            [
+                [0.0, 0.0, 0.0],
+                [100.0, 0.0, 0.0],
+                [100.0, 80.0, 0.0],
+                [0.0, 80.0, 0.0],
+            ],
+            DVec3::Z,
+        );
+        t
+    }
+
+    /// The inner faces of a closed pocket 2l long (x), 2w wide (y), h deep, open at the top.
+    fn pocket(l: f64, w: f64, h: f64) -> Vec<[DVec3; 3]> {
+        let mut t = Vec::new();
+        quad(
+            &mut t,
+            [[-l, -w, 0.0], [l, -w, 0.0], [l, w, 0.0], [-l, w, 0.0]],
+            DVec3::Z,
+        );
+        quad(
+            &mut t,
+            [[-l, w, 0.0], [l, w, 0.0], [l, w, h], [-l, w, h]],
+            -DVec3::Y,
+        );
+        quad(
+            &mut t,
+            [[-l, -w, 0.0], [l, -w, 0.0], [l, -w, h], [-l, -w, h]],
+            DVec3::Y,
+        );
+        quad(
+            &mut t,
+            [[l, -w, 0.0], [l, w, 0.0], [l, w, h], [l, -w, h]],
+            -DVec3::X,
+        );
+        quad(
+            &mut t,
+            [[-l, -w, 0.0], [-l, w, 0.0], [-l, w, h], [-l, -w, h]],
+            DVec3::X,
+        );
+        t
+    }
+
     fn table_ac(a: (f64, f64)) -> Kinematics {
         let mut k = Kinematics::new(KinKind::TableAc);
         k.first = RotaryAxis {
@@ -993,18 +1040,7 @@ mod tests {
 
     #[test]
     fn flat_plate_needs_only_the_cap_above_it() {
-        let mut t = Vec::new();
-        quad(
-            &mut t,
-            [
-                [0.0, 0.0, 0.0],
-                [100.0, 0.0, 0.0],
-                [100.0, 80.0, 0.0],
-                [0.0, 80.0, 0.0],
-            ],
-            DVec3::Z,
-        );
-        let (m, b) = mesh(&t);
+        let (m, b) = mesh(&plate());
         for g in [&LatLon::PAPER as &dyn SphereGrid, &Icosphere::new(3)] {
             let vis = visibility(&m, &b, g, 0.0);
             for f in 0..m.len() {
@@ -1086,32 +1122,7 @@ mod tests {
     fn pocket_bottom_sees_out_through_its_opening_only() {
         // A closed pocket 200 long (x), 10 wide (y), 20 deep, open at the top.
         let (l, w, h) = (100.0, 5.0, 20.0);
-        let mut t = Vec::new();
-        quad(
-            &mut t,
-            [[-l, -w, 0.0], [l, -w, 0.0], [l, w, 0.0], [-l, w, 0.0]],
-            DVec3::Z,
-        );
-        quad(
-            &mut t,
-            [[-l, w, 0.0], [l, w, 0.0], [l, w, h], [-l, w, h]],
-            -DVec3::Y,
-        );
-        quad(
-            &mut t,
-            [[-l, -w, 0.0], [l, -w, 0.0], [l, -w, h], [-l, -w, h]],
-            DVec3::Y,
-        );
-        quad(
-            &mut t,
-            [[l, -w, 0.0], [l, w, 0.0], [l, w, h], [l, -w, h]],
-            -DVec3::X,
-        );
-        quad(
-            &mut t,
-            [[-l, -w, 0.0], [-l, w, 0.0], [-l, w, h], [-l, -w, h]],
-            DVec3::X,
-        );
+        let t = pocket(l, w, h);
         let (m, b) = mesh(&t);
         for g in [
             &LatLon::PAPER as &dyn SphereGrid,
@@ -1152,32 +1163,7 @@ mod tests {
         // The pocket of the line-of-sight test; a ball of radius 2 with a long
         // shank: its axis must cross the top of the walls 2 mm inside them.
         let (l, w, h, r) = (100.0, 5.0, 20.0, 2.0);
-        let mut t = Vec::new();
-        quad(
-            &mut t,
-            [[-l, -w, 0.0], [l, -w, 0.0], [l, w, 0.0], [-l, w, 0.0]],
-            DVec3::Z,
-        );
-        quad(
-            &mut t,
-            [[-l, w, 0.0], [l, w, 0.0], [l, w, h], [-l, w, h]],
-            -DVec3::Y,
-        );
-        quad(
-            &mut t,
-            [[-l, -w, 0.0], [l, -w, 0.0], [l, -w, h], [-l, -w, h]],
-            DVec3::Y,
-        );
-        quad(
-            &mut t,
-            [[l, -w, 0.0], [l, w, 0.0], [l, w, h], [l, -w, h]],
-            -DVec3::X,
-        );
-        quad(
-            &mut t,
-            [[-l, -w, 0.0], [-l, w, 0.0], [-l, w, h], [-l, -w, h]],
-            DVec3::X,
-        );
+        let t = pocket(l, w, h);
         let (m, b) = mesh(&t);
         let g = LatLon {
             bands: 40,
@@ -1235,18 +1221,7 @@ mod tests {
         }
         // On an open plate every upward direction is free for a slim holder; a
         // fat one (radius 10 at 30 mm) needs the axis 3 + 30·d_z ≥ 10 above it.
-        let mut t = Vec::new();
-        quad(
-            &mut t,
-            [
-                [0.0, 0.0, 0.0],
-                [100.0, 0.0, 0.0],
-                [100.0, 80.0, 0.0],
-                [0.0, 80.0, 0.0],
-            ],
-            DVec3::Z,
-        );
-        let (m, b) = mesh(&t);
+        let (m, b) = mesh(&plate());
         let acc = accessibility(
             &m,
             &b,

@@ -75,6 +75,11 @@ fn setup(stl: &Path, args: &[&str]) -> (Option<i32>, serde_json::Value) {
     )
 }
 
+/// `setup` with the case's arguments followed by the test's common ones.
+fn setup2(stl: &Path, args: &[&str], common: &[&str]) -> (Option<i32>, serde_json::Value) {
+    setup(stl, &[args, common].concat())
+}
+
 fn f(v: &serde_json::Value) -> f64 {
     v.as_f64().expect("number")
 }
@@ -85,13 +90,10 @@ fn cube_on_a_ca_table_needs_a_tilt_near_ninety_degrees() {
     let p = cube(dir.path(), "cube.stl", DMat3::IDENTITY, true);
     // An 80° clearance: each face is cut within 10° of its normal.
     let common = ["--clearance", "80", "--ignore-bottom"];
-    let (code, j) = setup(
+    let (code, j) = setup2(
         &p,
-        &[
-            &["--type", "ca", "--range1", "0,95", "--range2", "free"][..],
-            &common,
-        ]
-        .concat(),
+        &["--type", "ca", "--range1", "0,95", "--range2", "free"],
+        &common,
     );
     assert_eq!(code, Some(0), "{j}");
     assert_eq!(j["feasible"], true);
@@ -104,10 +106,7 @@ fn cube_on_a_ca_table_needs_a_tilt_near_ninety_degrees() {
     let a = &j["required"]["a"];
     assert!(f(&a[0]) == 0.0 && (80.0..90.0).contains(&f(&a[1])), "{a}");
     // Up to 60° of tilt the four walls are out of reach.
-    let (code, j) = setup(
-        &p,
-        &[&["--type", "ca", "--range1", "0,60"][..], &common].concat(),
-    );
+    let (code, j) = setup2(&p, &["--type", "ca", "--range1", "0,60"], &common);
     assert_eq!(code, Some(3));
     assert_eq!(j["feasible"], false);
     assert_eq!(j["unreachable"].as_array().expect("list").len(), 8);
@@ -119,32 +118,23 @@ fn cube_on_a_ca_table_needs_a_tilt_near_ninety_degrees() {
         j["would_do"]
     );
     // Two tilting axes of ±95° reach everything; ±30° does not.
-    let (code, _) = setup(
+    let (code, _) = setup2(
         &p,
-        &[
-            &["--type", "ab", "--range1", "-95,95", "--range2", "-95,95"][..],
-            &common,
-        ]
-        .concat(),
+        &["--type", "ab", "--range1", "-95,95", "--range2", "-95,95"],
+        &common,
     );
     assert_eq!(code, Some(0));
-    let (code, _) = setup(
+    let (code, _) = setup2(
         &p,
-        &[
-            &["--type", "ab", "--range1", "-30,30", "--range2", "-30,30"][..],
-            &common,
-        ]
-        .concat(),
+        &["--type", "ab", "--range1", "-30,30", "--range2", "-30,30"],
+        &common,
     );
     assert_eq!(code, Some(3));
     // Tool mode: nothing of a convex cube is in the way of a D10 ball-end mill.
-    let (code, j) = setup(
+    let (code, j) = setup2(
         &p,
-        &[
-            &["--type", "ca", "--range1", "0,95", "--tool", "10,50"][..],
-            &common,
-        ]
-        .concat(),
+        &["--type", "ca", "--range1", "0,95", "--tool", "10,50"],
+        &common,
     );
     assert_eq!((code, j["mode"].as_str()), (Some(0), Some("tool")), "{j}");
     // Without --ignore-bottom the bottom face needs the tool from below.
@@ -225,7 +215,18 @@ fn a_tilted_part_is_turned_back_upright() {
 fn bad_ranges_are_rejected_with_exit_2() {
     let dir = tempfile::tempdir().expect("tmp");
     let p = cube(dir.path(), "cube.stl", DMat3::IDENTITY, true);
-    for t in ["0,30", "10", "10,30,40", "-6,30"] {
+    let bad = [
+        ("--tool", "0,30"),
+        ("--tool", "10"),
+        ("--tool", "10,30,40"),
+        ("--tool", "-6,30"),
+    ];
+    let bad = bad.into_iter().chain([
+        ("--range1", "95,0"),
+        ("--range1", "abc"),
+        ("--range1", "1,2,3"),
+    ]);
+    for (flag, v) in bad {
         let o = bin()
             .args([
                 "setup",
@@ -233,31 +234,15 @@ fn bad_ranges_are_rejected_with_exit_2() {
                 p.to_str().expect("utf8"),
                 "--type",
                 "ca",
-                "--tool",
-                t,
+                flag,
+                v,
             ])
             .output()
             .expect("runs");
-        assert_eq!(o.status.code(), Some(2), "{t}");
-        assert!(String::from_utf8_lossy(&o.stderr).contains("--tool"), "{t}");
-    }
-    for r in ["95,0", "abc", "1,2,3"] {
-        let o = bin()
-            .args([
-                "setup",
-                "--stl",
-                p.to_str().expect("utf8"),
-                "--type",
-                "ca",
-                "--range1",
-                r,
-            ])
-            .output()
-            .expect("runs");
-        assert_eq!(o.status.code(), Some(2), "{r}");
+        assert_eq!(o.status.code(), Some(2), "{flag} {v}");
         assert!(
-            String::from_utf8_lossy(&o.stderr).contains("--range1"),
-            "{r}"
+            String::from_utf8_lossy(&o.stderr).contains(flag),
+            "{flag} {v}"
         );
     }
     let o = bin()
@@ -343,10 +328,7 @@ fn the_bezier_vase_runs_end_to_end_for_both_machine_types() {
     let common = ["--ignore-bottom", "--report", html.to_str().expect("utf8")];
     // The lowest row of belly facets rises 26.3° (profile (40,0)→(62,8), first
     // 1/16): its normal is 153.7° from +Z, so no direction under 63.7° sees it.
-    let (code, j) = setup(
-        &p,
-        &[&["--type", "ca", "--range1", "-30,110"][..], &common].concat(),
-    );
+    let (code, j) = setup2(&p, &["--type", "ca", "--range1", "-30,110"], &common);
     assert_eq!(code, Some(0), "{j}");
     let t = f(&j["max_tilt_deg"]);
     assert!((63.7..75.0).contains(&t), "{t}");
@@ -354,30 +336,21 @@ fn the_bezier_vase_runs_end_to_end_for_both_machine_types() {
     assert!(std::fs::read_to_string(&html)
         .expect("report")
         .contains("<svg"));
-    let (code, j) = setup(
-        &p,
-        &[&["--type", "ca", "--range1", "0,60"][..], &common].concat(),
-    );
+    let (code, j) = setup2(&p, &["--type", "ca", "--range1", "0,60"], &common);
     assert_eq!(code, Some(3));
     assert!(!j["unreachable"].as_array().expect("list").is_empty());
-    let (code, j) = setup(
+    let (code, j) = setup2(
         &p,
         &[
-            &[
-                "--type", "ab", "--range1", "-120,120", "--range2", "-120,120",
-            ][..],
-            &common,
-        ]
-        .concat(),
+            "--type", "ab", "--range1", "-120,120", "--range2", "-120,120",
+        ],
+        &common,
     );
     assert_eq!(code, Some(0), "{j}");
-    let (code, _) = setup(
+    let (code, _) = setup2(
         &p,
-        &[
-            &["--type", "ab", "--range1", "-45,45", "--range2", "-45,45"][..],
-            &common,
-        ]
-        .concat(),
+        &["--type", "ab", "--range1", "-45,45", "--range2", "-45,45"],
+        &common,
     );
     assert_eq!(code, Some(3));
 }
