@@ -30,6 +30,7 @@ pub enum KinKind {
 
 /// One rotary axis: programmed-angle limits in degrees (`None`: unlimited) and sign.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RotaryAxis {
     #[serde(default)]
     pub min: Option<f64>,
@@ -495,6 +496,9 @@ mod tests {
             (KinKind::TableBc, -1.0, Some(110.0))
         );
         assert!(Kinematics::from_toml("kind = \"table-xy\"").is_err());
+        let e = Kinematics::from_toml("kind = \"table-ac\"\n[first]\nmin = -30\nsgn = 1\n")
+            .expect_err("a misspelt key");
+        assert!(e.contains("sgn") && e.contains("line 4"), "{e}");
         assert!(Kinematics::from_toml("kind = \"head-bc\"\n[first]\nsign = 2\n").is_err());
     }
 
