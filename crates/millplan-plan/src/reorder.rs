@@ -694,16 +694,18 @@ pub fn reorder(
                 spindle,
                 ..tmpl
             };
+            // A rapid at the safe height above a point.
+            let rapid_over = |at: DVec3| Move {
+                end: DVec3::new(at.x, at.y, safe),
+                kind: MoveKind::Rapid,
+                feed: 0.0,
+                line,
+                aux: 0,
+                ..tmpl
+            };
             match prev {
                 None => {
-                    moves.push(Move {
-                        end: DVec3::new(q.x, q.y, safe),
-                        kind: MoveKind::Rapid,
-                        feed: 0.0,
-                        line,
-                        aux: 0,
-                        ..tmpl
-                    });
+                    moves.push(rapid_over(q));
                     moves.push(Move {
                         feed: feed_of(k) * p.plunge_factor,
                         ..cut
@@ -715,22 +717,8 @@ pub fn reorder(
                 }
                 Some(a) => {
                     stats.retracts += 1;
-                    moves.push(Move {
-                        end: DVec3::new(a.x, a.y, safe),
-                        kind: MoveKind::Rapid,
-                        feed: 0.0,
-                        line,
-                        aux: 0,
-                        ..tmpl
-                    });
-                    moves.push(Move {
-                        end: DVec3::new(q.x, q.y, safe),
-                        kind: MoveKind::Rapid,
-                        feed: 0.0,
-                        line,
-                        aux: 0,
-                        ..tmpl
-                    });
+                    moves.push(rapid_over(a));
+                    moves.push(rapid_over(q));
                     moves.push(Move {
                         feed: feed_of(k) * p.plunge_factor,
                         ..cut

@@ -1,14 +1,11 @@
 //! `millplan reorder`: every cutting point kept exactly once, no gouging link,
 //! the optimised method never worse than the original on its documented cost.
 
+mod common;
+use common::bin;
 use millplan_nc::{parse_program, MoveKind, ReadOptions};
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::process::Command;
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_millplan"))
-}
 
 fn cutting_points(path: &Path) -> BTreeMap<[i64; 3], usize> {
     let p = parse_program(
@@ -33,22 +30,9 @@ fn cutting_points(path: &Path) -> BTreeMap<[i64; 3], usize> {
 #[test]
 fn reordered_paths_keep_every_point_and_never_gouge() {
     let dir = tempfile::tempdir().expect("tmp");
-    let d = dir.path().join("demo");
-    assert!(bin()
-        .args(["demo", "-o", d.to_str().expect("utf8")])
-        .output()
-        .expect("runs")
-        .status
-        .success());
-    let stl = d.join("part.stl");
-    let path = dir.path().join("raster.apt");
-    let o = bin()
-        .args([
-            "raster",
-            "--stl",
-            stl.to_str().expect("utf8"),
-            "--tool",
-            "ball:10",
+    let (stl, path) = common::demo_raster(
+        dir.path(),
+        &[
             "--stepover",
             "1",
             "--step",
@@ -57,11 +41,8 @@ fn reordered_paths_keep_every_point_and_never_gouge() {
             "18",
             "--tol",
             "0",
-        ])
-        .args(["-o", path.to_str().expect("utf8")])
-        .output()
-        .expect("runs");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        ],
+    );
     let original = cutting_points(&path);
     for method in ["paper", "optimised"] {
         let out = dir.path().join(format!("{method}.apt"));

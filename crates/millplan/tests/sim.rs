@@ -1,11 +1,8 @@
 //! `millplan raster` and `millplan gouge` end to end.
 
+mod common;
+use common::bin;
 use std::path::Path;
-use std::process::Command;
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_millplan"))
-}
 
 fn gouge(stl: &Path, path: &Path) -> (Option<i32>, serde_json::Value) {
     let o = bin()
@@ -28,33 +25,10 @@ fn gouge(stl: &Path, path: &Path) -> (Option<i32>, serde_json::Value) {
 #[test]
 fn raster_is_clean_and_a_planted_gouge_is_found() {
     let dir = tempfile::tempdir().expect("tmp");
-    let d = dir.path().join("demo");
-    assert!(bin()
-        .args(["demo", "-o", d.to_str().expect("utf8")])
-        .output()
-        .expect("runs")
-        .status
-        .success());
-    let stl = d.join("part.stl");
-    let apt = dir.path().join("raster.apt");
-    let o = bin()
-        .args([
-            "raster",
-            "--stl",
-            stl.to_str().expect("utf8"),
-            "--tool",
-            "ball:10",
-            "--angle",
-            "30",
-            "--stepover",
-            "1.5",
-            "--step",
-            "0.5",
-        ])
-        .args(["-o", apt.to_str().expect("utf8")])
-        .output()
-        .expect("runs");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (stl, apt) = common::demo_raster(
+        dir.path(),
+        &["--angle", "30", "--stepover", "1.5", "--step", "0.5"],
+    );
     let (code, j) = gouge(&stl, &apt);
     assert_eq!(code, Some(0), "{j}");
     assert_eq!(j["clean"], true);

@@ -5,7 +5,7 @@ use crate::cmd::{read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_mesh, read_program};
 use clap::ValueEnum;
-use millplan_plan::speed::{apply, SpeedParams, Summary};
+use millplan_plan::speed::{apply, Summary};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -47,14 +47,8 @@ pub struct Args {
     pub step: f64,
     #[arg(long)]
     pub stl: PathBuf,
-    #[arg(long, default_value_t = 63.0)]
-    pub vc: f64,
-    #[arg(long, default_value_t = 0.125)]
-    pub fz: f64,
-    #[arg(long, default_value_t = 2)]
-    pub flutes: u32,
-    #[arg(long, default_value_t = 0.3)]
-    pub ap: f64,
+    #[command(flatten)]
+    pub cut: super::CuttingData,
     #[arg(long)]
     pub machine: Option<PathBuf>,
     /// Indicator to rank by (smaller is better).
@@ -79,7 +73,7 @@ fn key(s: &Summary, by: RankBy) -> f64 {
 pub fn run(a: Args) -> CliResult<i32> {
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let (mesh, _) = read_mesh(&a.stl)?;
-    let params = SpeedParams::new(a.vc, a.fz, a.flutes, a.ap);
+    let params = a.cut.params();
     let mut results = Vec::new();
     if !a.angles.is_empty() {
         let shape = millplan_models::cutter::Shape::parse(&a.tool).map_err(CliError::input)?;

@@ -17,6 +17,30 @@ pub mod wd;
 use clap::ValueEnum;
 use millplan_nc::{LengthUnit, ReadOptions};
 
+/// Cutting data for the commands that evaluate spindle control along the way;
+/// the defaults are the paper's test conditions.
+#[derive(clap::Args, Clone, Copy, Debug)]
+pub struct CuttingData {
+    /// Cutting speed, m/min.
+    #[arg(long, default_value_t = 63.0)]
+    pub vc: f64,
+    /// Feed per tooth, mm.
+    #[arg(long, default_value_t = 0.125)]
+    pub fz: f64,
+    /// Number of flutes.
+    #[arg(long, default_value_t = 2)]
+    pub flutes: u32,
+    /// Stock thickness along the surface normal (finishing allowance), mm.
+    #[arg(long, default_value_t = 0.3)]
+    pub ap: f64,
+}
+
+impl CuttingData {
+    pub fn params(&self) -> millplan_plan::speed::SpeedParams {
+        millplan_plan::speed::SpeedParams::new(self.vc, self.fz, self.flutes, self.ap)
+    }
+}
+
 /// Output dialect, shared by the writing commands.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum TargetArg {

@@ -8,7 +8,7 @@ use clap::ValueEnum;
 use millplan_nc::write::gcode::GcodeOptions;
 use millplan_nc::Program;
 use millplan_plan::reorder::{reorder, Method, ReorderParams, Start};
-use millplan_plan::speed::{apply, SpeedParams};
+use millplan_plan::speed::apply;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -57,14 +57,8 @@ pub struct Args {
     /// D_w differences within this are ties, broken by continuing straight, mm.
     #[arg(long, default_value_t = 0.001)]
     pub tie: f64,
-    #[arg(long, default_value_t = 63.0)]
-    pub vc: f64,
-    #[arg(long, default_value_t = 0.125)]
-    pub fz: f64,
-    #[arg(long, default_value_t = 2)]
-    pub flutes: u32,
-    #[arg(long, default_value_t = 0.3)]
-    pub ap: f64,
+    #[command(flatten)]
+    pub cut: super::CuttingData,
     /// Write the reordered points without spindle control.
     #[arg(long)]
     pub no_speed: bool,
@@ -145,23 +139,23 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     rp.n_min = a.n_min;
     rp.tie = a.tie;
-    rp.ap = a.ap;
-    rp.vc = a.vc;
+    rp.ap = a.cut.ap;
+    rp.vc = a.cut.vc;
     let res = reorder(&parsed.program, &mesh, &rp)
         .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
-    let sp = SpeedParams::new(a.vc, a.fz, a.flutes, a.ap);
+    let sp = a.cut.params();
     let before = indicators(
         &parsed.program,
         &res.dw_original,
         &res.jump_original,
-        a.vc,
+        a.cut.vc,
         machine.rapid,
     );
     let after = indicators(
         &res.program,
         &res.dw_reordered,
         &res.jump_reordered,
-        a.vc,
+        a.cut.vc,
         machine.rapid,
     );
     let program = if a.no_speed {
