@@ -7,7 +7,13 @@
 //!   least `n_min` are found; visited points are tabu; the candidate with the
 //!   smallest |ΔD_w| wins, ties continue in the current feed direction. Each
 //!   candidate's D_w is evaluated for the direction it would be cut in and the
-//!   material already cut around it (not reused from the original order).
+//!   material already cut around it (not reused from the original order). Where
+//!   the tool has just plunged (the start, after a jump) it cuts in the
+//!   direction it leaves in, so the current point's D_w is taken for each
+//!   candidate's direction. An optional step guard (`max_step`) widens the
+//!   search at dead ends, where every candidate would change D_w by more than
+//!   the guard, up to `guard_reach` × the radius, preferring a retract to a
+//!   large step; without it the search is the published one.
 //! - [`Method::Optimised`]: passes of the original path are kept as units and their
 //!   order and directions improved by 2-opt from the original order on the cost
 //!   w₁·|Δn| + w₂·link length + w₃·direction change (radians) at the joints, so the
@@ -57,6 +63,11 @@ pub struct ReorderParams {
     pub radius: Option<f64>,
     /// D_w differences closer than this are ties, mm.
     pub tie: f64,
+    /// Step guard of the paper search (`None`: the search as published): when
+    /// every candidate changes D_w by more than this, mm, the search widens.
+    pub max_step: Option<f64>,
+    /// How far the step guard widens, as a multiple of the initial radius.
+    pub guard_reach: f64,
     /// Cost weights: |Δn| (per 1/min), link length (per mm), direction change (per radian).
     pub weights: [f64; 3],
     /// 2-opt budget: passes over the sequence.
@@ -79,6 +90,8 @@ impl ReorderParams {
             n_min: 4,
             radius: None,
             tie: 1e-3,
+            max_step: None,
+            guard_reach: 8.0,
             weights: [1.0, 10.0, 100.0],
             iterations: 20,
             clearance: 5.0,
@@ -249,6 +262,16 @@ impl Unvisited {
         }
     }
 
+    /// Appends the unvisited points farther than `r_in` and within `r` of p.
+    fn within_ring(&self, points: &[DVec3], p: DVec2, r_in: f64, r: f64, out: &mut Vec<u32>) {
+        let mut ring = Vec::new();
+        self.within(points, p, r, &mut ring);
+        out.extend(
+            ring.into_iter()
+                .filter(|&j| (xy(points[j as usize]) - p).length() > r_in),
+        );
+    }
+
     /// Unvisited points within `r` of p.
     fn within(&self, points: &[DVec3], p: DVec2, r: f64, out: &mut Vec<u32>) {
         out.clear();
@@ -383,6 +406,7 @@ fn paper_search(
     p: &ReorderParams,
     side_search: f64,
     spacing: f64,
+    jump: f64,
 ) -> Vec<usize> {
     let n = centres.len();
     let border = hull(centres);
@@ -417,7 +441,10 @@ fn paper_search(
     let mut order = Vec::with_capacity(n);
     let mut cur = start;
     let mut cur_dir = DVec3::ZERO;
-    let mut cur_dw = ev.dw(cur, DVec3::X);
+    // D_w at the current point; `None` where the tool has just plunged (at the
+    // start, after a jump): it then cuts in the direction it leaves in, so each
+    // candidate is compared with the current point's D_w for that direction.
+    let mut cur_dw: Option<f64> = None;
     let mut cand = Vec::new();
     loop {
         order.push(cur);
@@ -435,25 +462,38 @@ fn paper_search(
             r *= 1.5;
         }
         let mut best: Option<(usize, f64, f64, DVec3, f64)> = None;
-        for &j in &cand {
-            let j = j as usize;
-            let dir = (centres[j] - centres[cur]).normalize_or_zero();
-            let dw = ev.dw(j, dir);
-            let diff = (dw - cur_dw).abs();
-            let straight = dir.dot(cur_dir);
-            let better = match best {
-                None => true,
-                Some((_, bd, bs, _, _)) => {
-                    diff < bd - p.tie || ((diff - bd).abs() <= p.tie && straight > bs)
+        let mut seen = 0;
+        loop {
+            for &j in &cand[seen..] {
+                let j = j as usize;
+                let dir = (centres[j] - centres[cur]).normalize_or_zero();
+                let dw = ev.dw(j, dir);
+                let diff = (dw - cur_dw.unwrap_or_else(|| ev.dw(cur, dir))).abs();
+                let straight = dir.dot(cur_dir);
+                let better = match best {
+                    None => true,
+                    Some((_, bd, bs, _, _)) => {
+                        diff < bd - p.tie || ((diff - bd).abs() <= p.tie && straight > bs)
+                    }
+                };
+                if better {
+                    best = Some((j, diff, straight, dir, dw));
                 }
-            };
-            if better {
-                best = Some((j, diff, straight, dir, dw));
             }
+            // The step guard: a dead end (every candidate changes D_w by more
+            // than max_step) widens the search, up to `guard_reach` × the radius.
+            let stuck = matches!((best, p.max_step), (Some((_, bd, ..)), Some(m)) if bd > m);
+            if !stuck || r > p.guard_reach * r0 {
+                break;
+            }
+            r *= 1.5;
+            seen = cand.len();
+            unv.within_ring(centres, xy(centres[cur]), r / 1.5, r, &mut cand);
         }
-        let (j, _, _, dir, dw) = best.unwrap_or((cand[0] as usize, 0.0, 0.0, DVec3::ZERO, cur_dw));
-        cur_dw = dw;
-        cur_dir = dir;
+        let (j, _, _, dir, dw) = best.unwrap_or((cand[0] as usize, 0.0, 0.0, DVec3::ZERO, 0.0));
+        let jumped = (centres[j] - centres[cur]).length() > jump;
+        cur_dw = (!jumped).then_some(dw);
+        cur_dir = if jumped { DVec3::ZERO } else { dir };
         cur = j;
     }
     order
@@ -610,8 +650,10 @@ pub fn reorder(
         spacing.sort_by(f64::total_cmp);
         let spacing = spacing.get(spacing.len() / 2).copied().unwrap_or(1.0);
         let side_search = contact::stepover_search_radius(&centres, &pts, 0.6 * c.d);
+        // Steps longer than this retract and plunge: the spindle has time there.
+        let jump = 3.0 * spacing.max(side_search / 1.6);
         let order: Vec<usize> = match p.method {
-            Method::Paper => paper_search(&centres, &normals, c.d, p, side_search, spacing),
+            Method::Paper => paper_search(&centres, &normals, c.d, p, side_search, spacing, jump),
             Method::Optimised => {
                 let res = contact::analyse(&surface, &pts, &cp);
                 let dw: Vec<f64> = res.iter().map(|r| r.dw).collect();
@@ -644,7 +686,6 @@ pub fn reorder(
         };
         stats.points += order.len();
         let identity: Vec<usize> = (0..pts.len()).collect();
-        let jump = 3.0 * spacing.max(side_search / 1.6);
         let (a, b) = sequence_dw(&centres, &normals, c.d, p.ap, side_search, &identity, jump);
         dw_original.extend(a);
         jump_original.extend(b);

@@ -108,3 +108,54 @@ fn reordered_paths_keep_every_point_and_never_gouge() {
         }
     }
 }
+
+/// The reorder summary of `path` with `extra` options.
+fn summary(stl: &Path, path: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+    let o = bin()
+        .args(["reorder", path.to_str().expect("utf8"), "--stl"])
+        .arg(stl)
+        .args(["--ap", "0.3", "--vc", "63", "--fz", "0.125", "--json", "-o"])
+        .arg(out)
+        .args(extra)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).expect("json")
+}
+
+#[test]
+fn paper_search_lowers_the_largest_working_diameter_step() {
+    // Paper 000, thesis 5, test conditions: D10 ball, ap 0.3, ae 0.25, vc 63
+    // m/min, fz 0.125 mm; the free-form demo part, a zig-zag raster (its
+    // turnarounds switch between uphill and downhill cutting: the largest
+    // successive D_w changes of the original order, above 2 mm).
+    let dir = tempfile::tempdir().expect("tmp");
+    let (stl, path) = common::demo_raster(
+        dir.path(),
+        &[
+            "--stepover",
+            "0.25",
+            "--step",
+            "0.25",
+            "--boundary",
+            "24",
+            "--tol",
+            "0",
+        ],
+    );
+    let out = dir.path().join("paper.apt");
+    let max = |j: &serde_json::Value, k: &str| j[k]["delta_d_w"]["max"].as_f64().expect("max");
+    // The search with its step guard (the default, 0.5 mm) keeps every step
+    // between points cut one after the other within the guard here, where the
+    // original order has steps above 2 mm.
+    let j = summary(&stl, &path, &out, &[]);
+    assert!(max(&j, "original") > 2.0, "{j}");
+    assert!(max(&j, "reordered") <= 0.5 + 1e-9, "{j}");
+    assert!(max(&j, "reordered") < max(&j, "original"));
+    assert_eq!(j["reordered"]["points"], j["original"]["points"]);
+    // The published search alone still runs and keeps every point; it is
+    // greedy, so at dead ends it takes large steps (reported, not asserted).
+    let j0 = summary(&stl, &path, &out, &["--max-step", "0"]);
+    assert_eq!(j0["reordered"]["points"], j0["original"]["points"]);
+    assert!(max(&j0, "reordered") > 0.0);
+}

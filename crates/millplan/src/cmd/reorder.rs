@@ -57,6 +57,12 @@ pub struct Args {
     /// D_w differences within this are ties, broken by continuing straight, mm.
     #[arg(long, default_value_t = 0.001)]
     pub tie: f64,
+    /// Step guard of the paper search, mm: when every candidate would change
+    /// D_w by more than this, the search looks farther (up to 8 × its radius)
+    /// for one that does not, linking to it by a retract where it is not a
+    /// neighbour. 0 runs the search exactly as published.
+    #[arg(long, default_value_t = 0.5)]
+    pub max_step: f64,
     #[command(flatten)]
     pub cut: super::CuttingData,
     /// Write the reordered points without spindle control.
@@ -139,6 +145,10 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     rp.n_min = a.n_min;
     rp.tie = a.tie;
+    if !(a.max_step >= 0.0) {
+        return Err(CliError::input("--max-step must be ≥ 0 (mm)"));
+    }
+    rp.max_step = (a.max_step > 0.0).then_some(a.max_step);
     rp.ap = a.cut.ap;
     rp.vc = a.cut.vc;
     let res = reorder(&parsed.program, &mesh, &rp)
