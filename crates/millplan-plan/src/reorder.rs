@@ -820,16 +820,9 @@ pub fn reorder(
 /// the original path and are not checked again).
 fn link_is_clean(part: &DropMesh, shape: &Shape, a: DVec3, b: DVec3, tol: f64) -> bool {
     let n = (((b - a).length() / 0.05).ceil() as usize).max(2);
-    let mut hint = None;
     (1..n).all(|k| {
         let q = a.lerp(b, k as f64 / n as f64);
-        match part.drop_near(shape, xy(q), hint) {
-            Some(d) => {
-                hint = Some(d.triangle);
-                d.z - q.z <= tol
-            }
-            None => true,
-        }
+        !part.rises_above(shape, xy(q), q.z + tol)
     })
 }
 

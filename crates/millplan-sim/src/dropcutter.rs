@@ -70,10 +70,89 @@ pub fn drop_triangle(shape: &Shape, c: DVec2, tri: &[DVec3; 3]) -> Option<(f64, 
     best
 }
 
-/// An upper bound of the triangle's drop: the best of its plane over the whole
-/// disc, and its highest vertex less the profile at its nearest point.
+/// A triangle's plane as z = z0 + g·(x, y), with |g| and √(1 + |g|²)
+/// (`z0` = +∞ for a vertical facet).
+#[derive(Clone, Copy, Debug)]
+struct Plane {
+    z0: f64,
+    g: DVec2,
+    slope: f64,
+    secant: f64,
+}
+
+impl Plane {
+    const NONE: Plane = Plane {
+        z0: f64::INFINITY,
+        g: DVec2::ZERO,
+        slope: 0.0,
+        secant: 1.0,
+    };
+
+    fn new(z0: f64, g: DVec2) -> Plane {
+        Plane {
+            z0,
+            g,
+            slope: g.length(),
+            secant: (1.0 + g.length_squared()).sqrt(),
+        }
+    }
+
+    /// The plane of a triangle.
+    fn of(t: &[DVec3; 3]) -> Plane {
+        let n = (t[1] - t[0]).cross(t[2] - t[0]);
+        if n.z.abs() > 1e-12 * n.length() {
+            let g = DVec2::new(-n.x / n.z, -n.y / n.z);
+            Plane::new(t[0].z - g.dot(xy(t[0])), g)
+        } else {
+            Plane::NONE
+        }
+    }
+
+    /// Upper bound of the drop of the cutter at c on the part of the plane over
+    /// the box [lo, hi] (within the cutter's disc). f(q) = plane(q) − h(|q − c|)
+    /// is concave, so its tangent at any point p of the disc bounds it
+    /// everywhere; p is the cutter's contact with the whole plane, moved into
+    /// the box, which makes the bound tight for a small box off the contact.
+    #[inline]
+    fn drop_over_box(&self, shape: &Shape, c: DVec2, lo: DVec2, hi: DVec2) -> f64 {
+        let whole = self.drop(shape, c);
+        if self.slope == 0.0 {
+            return whole;
+        }
+        let star = c + self.g * (shape.contact_radius(self.slope) / self.slope);
+        let p = star.clamp(lo, hi);
+        if p == star {
+            return whole;
+        }
+        let off = p - c;
+        let rp = off.length();
+        if rp >= 0.999 * shape.radius() {
+            return whole;
+        }
+        let radial = if rp > 0.0 { off / rp } else { DVec2::ZERO };
+        let grad = self.g - radial * shape.slope(rp);
+        let rise = (grad * (lo - p)).max(grad * (hi - p));
+        whole.min(self.z0 + self.g.dot(p) - shape.height(rp) + rise.x + rise.y)
+    }
+
+    /// The drop of the cutter on the whole plane (the cutter resting on it).
+    #[inline]
+    fn drop(&self, shape: &Shape, c: DVec2) -> f64 {
+        let lift = match *shape {
+            Shape::Ball { radius } => radius * (self.secant - 1.0),
+            _ => {
+                let rc = shape.contact_radius(self.slope);
+                rc * self.slope - shape.height(rc)
+            }
+        };
+        self.z0 + self.g.dot(c) + lift
+    }
+}
+
+/// Cheap upper bound of the triangle's drop: its highest vertex less the
+/// profile at its box's nearest point (−∞ when out of reach).
 #[inline]
-fn triangle_bound(shape: &Shape, c: DVec2, t: &[DVec3; 3]) -> f64 {
+fn triangle_box_bound(shape: &Shape, c: DVec2, t: &[DVec3; 3]) -> f64 {
     let zmax = t[0].z.max(t[1].z).max(t[2].z);
     let lo = xy(t[0]).min(xy(t[1])).min(xy(t[2]));
     let hi = xy(t[0]).max(xy(t[1])).max(xy(t[2]));
@@ -81,33 +160,39 @@ fn triangle_bound(shape: &Shape, c: DVec2, t: &[DVec3; 3]) -> f64 {
     if d > shape.radius() {
         return f64::NEG_INFINITY;
     }
-    let mut b = zmax - shape.height(d);
-    let n = (t[1] - t[0]).cross(t[2] - t[0]);
-    if n.z.abs() > 1e-12 * n.length() {
-        let g = DVec2::new(-n.x / n.z, -n.y / n.z);
-        let s = g.length();
-        let r = shape.contact_radius(s);
-        b = b.min(t[0].z + g.dot(c - xy(t[0])) + r * s - shape.height(r));
-        // f(q) = plane(q) − h(|q − c|) is concave on the plane: its tangent at a
-        // vertex inside the disc bounds it over the whole triangle, which is tight
-        // for the small facets of a fine mesh.
-        let radius = shape.radius();
-        for (k, v) in t.iter().enumerate() {
-            let off = xy(*v) - c;
-            let rv = off.length();
-            if rv < 0.999 * radius {
-                let radial = if rv > 0.0 { off / rv } else { DVec2::ZERO };
-                let grad = g - radial * shape.slope(rv);
-                let fv = v.z - shape.height(rv);
-                let rise = (1..3)
-                    .map(|m| grad.dot(xy(t[(k + m) % 3]) - xy(*v)))
-                    .fold(0.0, f64::max);
-                b = b.min(fv + rise);
-                break;
-            }
+    zmax - shape.height(d)
+}
+
+/// Whether the triangle's drop may exceed `z`: cheap bounds first (box, then
+/// the plane over the whole disc), then the tangent of the concave function
+/// plane − profile at a vertex inside the disc, which bounds it over the whole
+/// triangle and is tight for the small facets of a fine mesh.
+#[inline]
+fn may_exceed(shape: &Shape, c: DVec2, t: &[DVec3; 3], plane: &Plane, z: f64) -> bool {
+    if triangle_box_bound(shape, c, t) <= z {
+        return false;
+    }
+    if plane.z0 == f64::INFINITY {
+        return true;
+    }
+    if plane.drop(shape, c) <= z {
+        return false;
+    }
+    let radius = shape.radius();
+    for (k, v) in t.iter().enumerate() {
+        let off = xy(*v) - c;
+        let rv = off.length();
+        if rv < 0.999 * radius {
+            let radial = if rv > 0.0 { off / rv } else { DVec2::ZERO };
+            let grad = plane.g - radial * shape.slope(rv);
+            let fv = v.z - shape.height(rv);
+            let rise = (1..3)
+                .map(|m| grad.dot(xy(t[(k + m) % 3]) - xy(*v)))
+                .fold(0.0, f64::max);
+            return fv + rise > z;
         }
     }
-    b
+    true
 }
 
 /// Is q inside the triangle's xy projection (boundary included)?
@@ -193,6 +278,10 @@ struct Node {
     min: DVec2,
     max: DVec2,
     zmax: f64,
+    /// A plane above all of the node's triangles, normal to their mean normal
+    /// (nearly tangent on a smooth patch); none (`z0` = +∞) when they face too
+    /// far sideways.
+    plane: Plane,
     /// Leaf: first index into `order`; inner: left child.
     first: u32,
     right: u32,
@@ -207,6 +296,8 @@ pub struct DropMesh {
     tris: Vec<[DVec3; 3]>,
     /// Position of each triangle in `tris`.
     pos: Vec<u32>,
+    /// The plane of each triangle of `tris`.
+    planes: Vec<Plane>,
 }
 
 const LEAF: usize = 4;
@@ -227,7 +318,8 @@ impl DropMesh {
             nodes.push(Self::leaf_bounds(mesh, &order, 0));
             Self::split(mesh, &cen, &mut nodes, 0, &mut order, 0);
         }
-        let tris = order.iter().map(|&t| mesh.corners(t as usize)).collect();
+        let tris: Vec<[DVec3; 3]> = order.iter().map(|&t| mesh.corners(t as usize)).collect();
+        let planes = tris.par_iter().map(Plane::of).collect();
         let mut pos = vec![0u32; n];
         for (k, &t) in order.iter().enumerate() {
             pos[t as usize] = k as u32;
@@ -237,6 +329,7 @@ impl DropMesh {
             order,
             tris,
             pos,
+            planes,
         }
     }
 
@@ -246,17 +339,35 @@ impl DropMesh {
             DVec2::splat(f64::NEG_INFINITY),
             f64::NEG_INFINITY,
         );
+        let mut nsum = DVec3::ZERO;
         for &t in order {
-            for v in mesh.corners(t as usize) {
+            let [a, b, c] = mesh.corners(t as usize);
+            for v in [a, b, c] {
                 min = min.min(xy(v));
                 max = max.max(xy(v));
                 zmax = zmax.max(v.z);
             }
+            let n = (b - a).cross(c - a);
+            // Each facet counts by its area, facing up.
+            nsum += if n.z < 0.0 { -n } else { n };
         }
+        let n = nsum.normalize_or_zero();
+        let plane = if n.z > 0.05 {
+            // Every vertex, hence every point, has n·v ≤ hi.
+            let hi = order
+                .iter()
+                .flat_map(|&t| mesh.corners(t as usize))
+                .map(|v| n.dot(v))
+                .fold(f64::NEG_INFINITY, f64::max);
+            Plane::new(hi / n.z, DVec2::new(-n.x / n.z, -n.y / n.z))
+        } else {
+            Plane::NONE
+        };
         Node {
             min,
             max,
             zmax,
+            plane,
             first: first as u32,
             right: 0,
             count: order.len() as u32,
@@ -303,10 +414,15 @@ impl DropMesh {
         let d = (n.min - c).max(c - n.max).max(DVec2::ZERO).length();
         let r = shape.radius();
         if d > r {
-            f64::NEG_INFINITY
-        } else {
-            n.zmax - shape.height(d)
+            return f64::NEG_INFINITY;
         }
+        let b = n.zmax - shape.height(d);
+        if n.plane.z0 == f64::INFINITY {
+            return b;
+        }
+        // Everything in the node lies below its upper plane over its box: the
+        // cutter resting on that is at least as high as on any of it.
+        b.min(n.plane.drop_over_box(shape, c, n.min, n.max))
     }
 
     /// The drop at (x, y), or `None` when no triangle lies under the cutter.
@@ -348,7 +464,7 @@ impl DropMesh {
                 let range = n.first as usize..(n.first + n.count) as usize;
                 for (k, t) in self.tris[range.clone()].iter().enumerate() {
                     if let Some(b) = best {
-                        if triangle_bound(shape, c, t) <= b.z {
+                        if !may_exceed(shape, c, t, &self.planes[range.start + k], b.z) {
                             continue;
                         }
                     }
@@ -382,6 +498,43 @@ impl DropMesh {
             }
         }
         best
+    }
+
+    /// Whether the drop at (x, y) is higher than `z`: the gouge question, which
+    /// needs no highest contact — nodes and triangles that cannot lift the
+    /// cutter above `z` are skipped and the first that does ends the search.
+    /// Same answer as `drop(shape, c).is_some_and(|d| d.z > z)`.
+    pub fn rises_above(&self, shape: &Shape, c: DVec2, z: f64) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let mut stack: [u32; 64] = [0; 64];
+        let mut sp = 0;
+        if self.bound(&self.nodes[0], shape, c) > z {
+            sp = 1;
+        }
+        while sp > 0 {
+            sp -= 1;
+            let n = &self.nodes[stack[sp] as usize];
+            if n.count > 0 {
+                let range = n.first as usize..(n.first + n.count) as usize;
+                for (t, plane) in self.tris[range.clone()].iter().zip(&self.planes[range]) {
+                    if may_exceed(shape, c, t, plane, z)
+                        && drop_triangle(shape, c, t).is_some_and(|(tz, _)| tz > z)
+                    {
+                        return true;
+                    }
+                }
+            } else {
+                for i in [n.first, n.right] {
+                    if self.bound(&self.nodes[i as usize], shape, c) > z && sp < stack.len() {
+                        stack[sp] = i;
+                        sp += 1;
+                    }
+                }
+            }
+        }
+        false
     }
 
     /// Drops at many points, in parallel.

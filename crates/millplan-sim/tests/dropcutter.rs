@@ -64,6 +64,35 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(40))]
+
+    /// A fine tessellation of a smooth surface, where the node bounds (upper
+    /// plane over the node's box) are tight and prune the most; and the gouge
+    /// question `rises_above` just below, at and just above the drop.
+    #[test]
+    fn smooth_surface_search_equals_brute_force(x in 0.0..59.0f64, y in 0.0..59.0f64, k in 0usize..4) {
+        use std::sync::OnceLock;
+        static PART: OnceLock<(TriMesh, DropMesh)> = OnceLock::new();
+        let (mesh, dm) = PART.get_or_init(|| {
+            let m = tessellate(&millplan_geom::analytic::DemoSurface::default(), 0.6);
+            let d = DropMesh::new(&m);
+            (m, d)
+        });
+        let sh = shapes()[k];
+        // A small patch of points: contacts anywhere on and between facets.
+        for i in 0..25 {
+            let c = DVec2::new(x + 0.11 * (i % 5) as f64, y + 0.13 * (i / 5) as f64);
+            let brute = drop_brute(&sh, mesh, c).expect("over the part");
+            let got = dm.drop(&sh, c).expect("over the part");
+            prop_assert!((got.z - brute.z).abs() < 1e-12, "{:?} vs {:?}", got, brute);
+            for dz in [-1e-6, 1e-6, 0.01] {
+                prop_assert_eq!(dm.rises_above(&sh, c, brute.z + dz), dz < 0.0);
+            }
+        }
+    }
+}
+
 /// A gently curved dome: curvature radius about 25 mm, smooth everywhere.
 struct Dome;
 impl HeightField for Dome {
