@@ -91,7 +91,7 @@ impl ReorderParams {
             radius: None,
             tie: 1e-3,
             max_step: None,
-            guard_reach: 8.0,
+            guard_reach: 32.0,
             weights: [1.0, 10.0, 100.0],
             iterations: 20,
             clearance: 5.0,
@@ -359,31 +359,23 @@ impl Evaluator<'_> {
 /// D_w along an order: each point cut in the direction it is reached from the
 /// previous one, with the points before it machined — the rule the paper search
 /// applies to its candidates. A point reached by a jump (farther than `jump`:
-/// the tool retracts and plunges there) is cut in the direction it leaves in.
-/// Returns D_w per position and whether the step into it was a jump.
+/// the tool retracts and plunges there), or with `retract` set, is cut in the
+/// direction it leaves in. Returns D_w per position and whether the step into
+/// it was a jump.
 fn sequence_dw(
-    centres: &[DVec3],
-    normals: &[DVec3],
-    d: f64,
-    ap: f64,
-    side_search: f64,
+    mut ev: Evaluator,
     order: &[usize],
     jump: f64,
+    retract: &[bool],
 ) -> (Vec<f64>, Vec<bool>) {
-    let mut ev = Evaluator {
-        centres,
-        normals,
-        d,
-        ap,
-        side_search,
-        machined: FxHashMap::default(),
-    };
+    let centres = ev.centres;
     let mut out = Vec::with_capacity(order.len());
     let mut jumps = Vec::with_capacity(order.len());
     for k in 0..order.len() {
         let j = order[k];
         let from_prev = (k > 0).then(|| centres[j] - centres[order[k - 1]]);
-        let is_jump = from_prev.map(|v| v.length() > jump).unwrap_or(true);
+        let is_jump = from_prev.map(|v| v.length() > jump).unwrap_or(true)
+            || retract.get(k).copied().unwrap_or(false);
         let dir = match from_prev {
             Some(v) if !is_jump => v,
             _ if k + 1 < order.len() => centres[order[k + 1]] - centres[j],
@@ -397,7 +389,9 @@ fn sequence_dw(
     (out, jumps)
 }
 
-/// The paper's search: the order of the points (indices).
+/// The paper's search: the order of the points (indices), and per position
+/// whether the step into it retracts (the step guard could not avoid a larger
+/// D_w change there: the spindle changes speed while the tool is clear).
 #[allow(clippy::too_many_arguments)]
 fn paper_search(
     centres: &[DVec3],
@@ -407,7 +401,7 @@ fn paper_search(
     side_search: f64,
     spacing: f64,
     jump: f64,
-) -> Vec<usize> {
+) -> (Vec<usize>, Vec<bool>) {
     let n = centres.len();
     let border = hull(centres);
     let start = match p.start {
@@ -439,6 +433,7 @@ fn paper_search(
         machined: FxHashMap::default(),
     };
     let mut order = Vec::with_capacity(n);
+    let mut retract = vec![false];
     let mut cur = start;
     let mut cur_dir = DVec3::ZERO;
     // D_w at the current point; `None` where the tool has just plunged (at the
@@ -490,13 +485,16 @@ fn paper_search(
             seen = cand.len();
             unv.within_ring(centres, xy(centres[cur]), r / 1.5, r, &mut cand);
         }
-        let (j, _, _, dir, dw) = best.unwrap_or((cand[0] as usize, 0.0, 0.0, DVec3::ZERO, 0.0));
-        let jumped = (centres[j] - centres[cur]).length() > jump;
+        let (j, diff, _, dir, dw) = best.unwrap_or((cand[0] as usize, 0.0, 0.0, DVec3::ZERO, 0.0));
+        let far = (centres[j] - centres[cur]).length() > jump;
+        let forced = !far && p.max_step.is_some_and(|m| diff > m);
+        let jumped = far || forced;
         cur_dw = (!jumped).then_some(dw);
         cur_dir = if jumped { DVec3::ZERO } else { dir };
         cur = j;
+        retract.push(forced);
     }
-    order
+    (order, retract)
 }
 
 /// The optimised method: passes as units, 2-opt from the original order.
@@ -652,7 +650,7 @@ pub fn reorder(
         let side_search = contact::stepover_search_radius(&centres, &pts, 0.6 * c.d);
         // Steps longer than this retract and plunge: the spindle has time there.
         let jump = 3.0 * spacing.max(side_search / 1.6);
-        let order: Vec<usize> = match p.method {
+        let (order, retract): (Vec<usize>, Vec<bool>) = match p.method {
             Method::Paper => paper_search(&centres, &normals, c.d, p, side_search, spacing, jump),
             Method::Optimised => {
                 let res = contact::analyse(&surface, &pts, &cp);
@@ -671,7 +669,8 @@ pub fn reorder(
                     stats.cost_original[k] += before[k];
                     stats.cost_reordered[k] += after[k];
                 }
-                seq.iter()
+                let order: Vec<usize> = seq
+                    .iter()
                     .flat_map(|&(pi, rev)| {
                         let (a, b) = passes[pi];
                         let v: Vec<usize> = if rev {
@@ -681,15 +680,24 @@ pub fn reorder(
                         };
                         v
                     })
-                    .collect()
+                    .collect();
+                (order, Vec::new())
             }
         };
         stats.points += order.len();
         let identity: Vec<usize> = (0..pts.len()).collect();
-        let (a, b) = sequence_dw(&centres, &normals, c.d, p.ap, side_search, &identity, jump);
+        let fresh = || Evaluator {
+            centres: &centres,
+            normals: &normals,
+            d: c.d,
+            ap: p.ap,
+            side_search,
+            machined: FxHashMap::default(),
+        };
+        let (a, b) = sequence_dw(fresh(), &identity, jump, &[]);
         dw_original.extend(a);
         jump_original.extend(b);
-        let (a, b) = sequence_dw(&centres, &normals, c.d, p.ap, side_search, &order, jump);
+        let (a, b) = sequence_dw(fresh(), &order, jump, &retract);
         dw_reordered.extend(a);
         jump_reordered.extend(b);
         // Rebuild the operation: cutting points in the new order, safe links.
@@ -714,6 +722,9 @@ pub fn reorder(
                 .map(|m| {
                     if m == 0 {
                         return true;
+                    }
+                    if retract.get(m).copied().unwrap_or(false) {
+                        return false;
                     }
                     let (i, j) = (order[m - 1], order[m]);
                     if i.abs_diff(j) == 1 && pts[i].pass == pts[j].pass {

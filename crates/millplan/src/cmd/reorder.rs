@@ -58,7 +58,7 @@ pub struct Args {
     #[arg(long, default_value_t = 0.001)]
     pub tie: f64,
     /// Step guard of the paper search, mm: when every candidate would change
-    /// D_w by more than this, the search looks farther (up to 8 × its radius)
+    /// D_w by more than this, the search looks farther (up to 32 × its radius)
     /// for one that does not, linking to it by a retract where it is not a
     /// neighbour. 0 runs the search exactly as published.
     #[arg(long, default_value_t = 0.5)]
