@@ -4,6 +4,7 @@
 use crate::{Aabb, TriMesh};
 use glam::{DVec3, Vec3A, Vec4};
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 const LEAF: usize = 8;
 
@@ -69,7 +70,7 @@ pub struct Bvh {
     tris: Vec<[DVec3; 3]>,
     /// The same tree for rays and capsules: four children per node, their boxes
     /// side by side in single precision so one SIMD step tests all four.
-    wide: Vec<WideNode>,
+    wide: OnceLock<Vec<WideNode>>,
 }
 
 /// A node of the ray tree: the boxes of up to four children (x, y and z of
@@ -181,19 +182,27 @@ impl Bvh {
             .par_iter()
             .map(|&t| mesh.corners(t as usize))
             .collect();
-        // The f32 boxes are widened by 1e-5 of the part's size (far more than
-        // the single-precision rounding of coordinates of that size).
-        let pad = 1e-5 * nodes[0].bbox.diagonal().max(1e-9);
-        let mut wide = Vec::with_capacity(nodes.len() + 1);
-        if n > 0 {
-            WideNode::collapse(&nodes, &tris, 0, pad, &mut wide);
-        }
         Bvh {
             nodes,
             order,
             tris,
-            wide,
+            wide: OnceLock::new(),
         }
+    }
+
+    /// The ray tree, built on the first ray or capsule query (closest-point
+    /// work never needs it).
+    fn wide(&self) -> &[WideNode] {
+        self.wide.get_or_init(|| {
+            // The f32 boxes are widened by 1e-5 of the part's size (far more
+            // than the single-precision rounding of coordinates of that size).
+            let pad = 1e-5 * self.nodes[0].bbox.diagonal().max(1e-9);
+            let mut wide = Vec::with_capacity(self.nodes.len() + 1);
+            if !self.order.is_empty() {
+                WideNode::collapse(&self.nodes, &self.tris, 0, pad, &mut wide);
+            }
+            wide
+        })
     }
 
     pub fn bounds(&self) -> Aabb {
@@ -328,11 +337,12 @@ impl Bvh {
         let o32 = Vec3A::from(origin.as_vec3());
         let [o, inv] = [o32, inv32].map(|v| [v.x, v.y, v.z].map(Vec4::splat));
         let (pad4, far) = (Vec4::splat(pad as f32), Vec4::splat(max_s as f32));
+        let wide = self.wide();
         let mut stack: [u32; 128] = [0; 128];
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;
-            let node = &self.wide[stack[sp] as usize];
+            let node = &wide[stack[sp] as usize];
             // The slab test of the four child boxes at once.
             let (mut lo, mut hi) = (Vec4::ZERO, far);
             for a in 0..3 {
