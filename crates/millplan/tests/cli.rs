@@ -172,6 +172,18 @@ fn bad_inputs_exit_2_with_location_and_leave_no_output() {
         "cannot open",
     );
     fails_with_2(&["convert", "--bogus"], "");
+    fails_with_2(
+        &[
+            "reorder",
+            truncated.to_str().expect("utf8"),
+            "--stl",
+            stl.to_str().expect("utf8"),
+            "--max-step=-1",
+            "-o",
+            o,
+        ],
+        "--max-step",
+    );
     assert!(!out.exists(), "a failed run left an output");
     let leftovers: Vec<_> = std::fs::read_dir(dir.path())
         .expect("dir")

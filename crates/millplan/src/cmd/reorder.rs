@@ -129,6 +129,9 @@ fn indicators(
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    if !(a.max_step >= 0.0) {
+        return Err(CliError::input("--max-step must be ≥ 0 (mm)"));
+    }
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let parsed = read_program(&a.path, read_options(a.units, None))?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
@@ -145,9 +148,6 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     rp.n_min = a.n_min;
     rp.tie = a.tie;
-    if !(a.max_step >= 0.0) {
-        return Err(CliError::input("--max-step must be ≥ 0 (mm)"));
-    }
     rp.max_step = (a.max_step > 0.0).then_some(a.max_step);
     rp.ap = a.cut.ap;
     rp.vc = a.cut.vc;
