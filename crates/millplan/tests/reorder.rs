@@ -148,8 +148,24 @@ fn paper_search_lowers_the_largest_working_diameter_step() {
     // The search with its step guard (the default, 0.5 mm) keeps every step
     // between points cut one after the other within the guard here, where the
     // original order has steps above 2 mm.
-    let j = summary(&stl, &path, &out, &[]);
+    let report = dir.path().join("reorder.html");
+    let j = summary(
+        &stl,
+        &path,
+        &out,
+        &["--report", report.to_str().expect("utf8")],
+    );
     assert!(max(&j, "original") > 2.0, "{j}");
+    // The report shows both orders: the summary as original → reordered, the
+    // plots with both series, both tours.
+    let html = std::fs::read_to_string(&report).expect("report written");
+    assert!(html.matches("<svg").count() >= 5, "five figures");
+    assert!(html.contains("Original order") && html.contains("Reordered"));
+    assert!(html.contains(&format!(
+        "{:.4} → {:.4}",
+        max(&j, "original"),
+        max(&j, "reordered")
+    )));
     assert!(max(&j, "reordered") <= 0.5 + 1e-9, "{j}");
     assert!(max(&j, "reordered") < max(&j, "original"));
     assert_eq!(j["reordered"]["points"], j["original"]["points"]);

@@ -74,6 +74,10 @@ pub struct Args {
     pub to: Option<TargetArg>,
     #[arg(short, long)]
     pub output: PathBuf,
+    /// HTML report: both orders side by side (D_w and spindle speed along the
+    /// path, the distribution of successive changes, the tour from above).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
     #[arg(long)]
@@ -168,6 +172,10 @@ pub fn run(a: Args) -> CliResult<i32> {
         a.cut.vc,
         machine.rapid,
     );
+    let html = a
+        .report
+        .as_ref()
+        .map(|_| report(&parsed.program, &res, &before, &after, a.cut.vc));
     let program = if a.no_speed {
         res.program
     } else {
@@ -179,6 +187,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     let out = write_program(&program, dialect, GcodeOptions::new(dialect))
         .map_err(|e| CliError::input(e.to_string()))?;
     write_atomic(&a.output, &out, &[a.path.as_path(), a.stl.as_path()])?;
+    if let (Some(path), Some(html)) = (&a.report, &html) {
+        write_atomic(path, html.as_bytes(), &[a.path.as_path(), a.stl.as_path()])?;
+    }
     let j = json!({ "method": format!("{:?}", a.method).to_lowercase(), "original": before, "reordered": after, "stats": res.stats, "output": a.output.display().to_string() });
     if a.json {
         println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
@@ -214,4 +225,140 @@ pub fn run(a: Args) -> CliResult<i32> {
         );
     }
     Ok(EXIT_OK)
+}
+
+/// The XY of the cutting moves of the ball-end operations, in program order.
+fn cutting_xy(p: &Program) -> Vec<(f64, f64)> {
+    p.operations
+        .iter()
+        .filter(|o| {
+            o.tool
+                .as_ref()
+                .and_then(|t| t.cutter)
+                .is_some_and(|c| c.kind == millplan_nc::CutterKind::Ball)
+        })
+        .flat_map(|o| o.moves.iter().filter(|m| m.is_cutting()))
+        .map(|m| (m.end.x, m.end.y))
+        .collect()
+}
+
+/// The HTML report: both orders side by side.
+fn report(
+    original: &Program,
+    res: &millplan_plan::reorder::Reordered,
+    before: &serde_json::Value,
+    after: &serde_json::Value,
+    vc: f64,
+) -> String {
+    use millplan_report::svg::{histogram, line_plot, map, Series};
+    let (blue, orange) = ("#1f77b4", "#ff7f0e");
+    let along = |v: &[f64], f: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
+        v.iter()
+            .enumerate()
+            .map(|(k, d)| (k as f64, f(*d)))
+            .collect()
+    };
+    let speed = |d: f64| millplan_models::wd::spindle_speed(vc, d);
+    // Successive changes between points cut one after the other.
+    let steps = |v: &[f64], jump: &[bool]| -> Vec<f64> {
+        (1..v.len())
+            .filter(|&k| !jump[k])
+            .map(|k| (v[k] - v[k - 1]).abs())
+            .collect()
+    };
+    let tour = |xy: Vec<(f64, f64)>| -> Vec<(f64, f64, f64)> {
+        let n = xy.len().max(1) as f64;
+        xy.into_iter()
+            .enumerate()
+            .map(|(k, (x, y))| (x, y, k as f64 / n))
+            .collect()
+    };
+    let num = |v: &serde_json::Value, path: &[&str], digits: usize| -> String {
+        let mut x = v;
+        for k in path {
+            x = &x[*k];
+        }
+        match x.as_f64() {
+            Some(f) => format!("{f:.digits$}"),
+            None => x.to_string(),
+        }
+    };
+    let rows: Vec<(String, String)> = [
+        ("successive |ΔD_w| max (mm)", &["delta_d_w", "max"][..], 4),
+        (
+            "|ΔD_w| max across jumps (mm)",
+            &["delta_d_w", "max_across_jumps"],
+            4,
+        ),
+        ("successive |Δn| max (1/min)", &["delta_n", "max"], 0),
+        ("Σ|Δn| (1/min)", &["total_variation_n"], 0),
+        ("jumps (retract or long link)", &["jumps"], 0),
+        ("cutting length (mm)", &["cutting_mm"], 0),
+        ("rapid length (mm)", &["link_mm"], 0),
+        ("estimated time (s)", &["time_s"], 0),
+    ]
+    .iter()
+    .map(|(k, path, digits)| {
+        (
+            k.to_string(),
+            format!(
+                "{} → {}",
+                num(before, path, *digits),
+                num(after, path, *digits)
+            ),
+        )
+    })
+    .collect();
+    let figures = vec![
+        (
+            "Working diameter at each cutting point, in cutting order: the original order (blue) and the reordered one (orange).".to_string(),
+            line_plot(
+                "Working diameter along the path",
+                "point in cutting order",
+                "D_w (mm)",
+                &[
+                    Series { name: "original", color: blue, points: along(&res.dw_original, &|d| d) },
+                    Series { name: "reordered", color: orange, points: along(&res.dw_reordered, &|d| d) },
+                ],
+            ),
+        ),
+        (
+            format!("Spindle speed for a constant cutting speed of {vc} m/min (before machine limits), in cutting order."),
+            line_plot(
+                "Spindle speed along the path",
+                "point in cutting order",
+                "n (1/min)",
+                &[
+                    Series { name: "original", color: blue, points: along(&res.dw_original, &speed) },
+                    Series { name: "reordered", color: orange, points: along(&res.dw_reordered, &speed) },
+                ],
+            ),
+        ),
+        (
+            "Change of working diameter between points cut one after the other (steps across a retract or long link left out: the spindle has time there).".to_string(),
+            histogram(
+                "Successive |ΔD_w|",
+                "|ΔD_w| (mm)",
+                40,
+                &[
+                    ("original", blue, steps(&res.dw_original, &res.jump_original)),
+                    ("reordered", orange, steps(&res.dw_reordered, &res.jump_reordered)),
+                ],
+            ),
+        ),
+        (
+            "The original order seen from above, coloured from the first cutting point (0) to the last (1).".to_string(),
+            map("Original order", "order", &tour(cutting_xy(original))),
+        ),
+        (
+            "The reordered path seen from above, coloured from the first cutting point (0) to the last (1).".to_string(),
+            map("Reordered", "order", &tour(cutting_xy(&res.program))),
+        ),
+    ];
+    millplan_report::html::simple_report(
+        "Toolpath reordering",
+        "Paper 000, thesis 5: cutting points reordered so the working diameter, and with it the spindle speed for a constant cutting speed, changes as little as possible between successive points. Original → reordered.",
+        &rows,
+        &figures,
+    )
 }
