@@ -295,7 +295,7 @@ impl Bvh {
     /// than `skip` (an any-hit occlusion query: it stops at the first hit).
     /// Triangles are hit from both sides; `dir` need not be unit.
     pub fn occluded(&self, origin: DVec3, dir: DVec3, max_s: f64, skip: Option<u32>) -> bool {
-        self.any_near_ray(origin, dir, max_s, 0.0, |k, [a, b, c]| {
+        self.any_near_ray(origin, dir, max_s, 0.0, None, |k, [a, b, c]| {
             // The skipped triangle is looked up only on a hit.
             ray_triangle(origin, dir, *a, *b, *c).is_some_and(|s| s > 0.0 && s < max_s)
                 && skip != Some(self.order[k])
@@ -305,12 +305,31 @@ impl Bvh {
     /// Whether any triangle other than `skip` comes closer than `radius` to the
     /// segment ab (a capsule-versus-mesh collision test).
     pub fn capsule_hits(&self, a: DVec3, b: DVec3, radius: f64, skip: Option<u32>) -> bool {
+        self.capsule_hits_above(a, b, radius, skip, None)
+    }
+
+    /// [`capsule_hits`](Self::capsule_hits) among the triangles that reach
+    /// above `above` = (n, h): those lying wholly in the half-space n·x ≤ h are
+    /// left out. A tool's shank capsule starting at the ball centre c, with
+    /// (d, d·c) for its axis d, leaves out exactly what only the ball could touch.
+    pub fn capsule_hits_above(
+        &self,
+        a: DVec3,
+        b: DVec3,
+        radius: f64,
+        skip: Option<u32>,
+        above: Option<(DVec3, f64)>,
+    ) -> bool {
         if radius <= 0.0 {
             return false;
         }
         let r2 = radius * radius;
-        self.any_near_ray(a, b - a, 1.0, radius, |k, [p, q, r]| {
-            skip != Some(self.order[k]) && segment_triangle_dist2(a, b, *p, *q, *r) < r2
+        let reaches = |t: &[DVec3; 3]| above.is_none_or(|(n, h)| t.iter().any(|v| n.dot(*v) > h));
+        self.any_near_ray(a, b - a, 1.0, radius, above, |k, t| {
+            let [p, q, r] = t;
+            skip != Some(self.order[k])
+                && reaches(t)
+                && segment_triangle_dist2(a, b, *p, *q, *r) < r2
         })
     }
 
@@ -323,6 +342,7 @@ impl Bvh {
         dir: DVec3,
         max_s: f64,
         pad: f64,
+        above: Option<(DVec3, f64)>,
         mut hit: impl FnMut(usize, &[DVec3; 3]) -> bool,
     ) -> bool {
         if self.order.is_empty() {
@@ -337,6 +357,19 @@ impl Bvh {
         let o32 = Vec3A::from(origin.as_vec3());
         let [o, inv] = [o32, inv32].map(|v| [v.x, v.y, v.z].map(Vec4::splat));
         let (pad4, far) = (Vec4::splat(pad as f32), Vec4::splat(max_s as f32));
+        // A box lies wholly in n·x ≤ h when its highest corner along n does; the
+        // margin covers the single-precision rounding of that test.
+        let cull = above.map(|(n, h)| {
+            let b = self.nodes[0].bbox;
+            let mag = b.min.abs().max(b.max.abs()).max_element() + h.abs();
+            let h32 = (h - 8.0 * f32::EPSILON as f64 * mag) as f32;
+            let n32 = n.as_vec3();
+            (
+                [n32.x, n32.y, n32.z].map(Vec4::splat),
+                [n32.x, n32.y, n32.z].map(|c| glam::BVec4A::splat(c > 0.0)),
+                Vec4::splat(h32),
+            )
+        });
         let wide = self.wide();
         let mut stack: [u32; 128] = [0; 128];
         let mut sp = 1;
@@ -352,6 +385,13 @@ impl Bvh {
                 hi = hi.min(t1.max(t2));
             }
             let mut mask = lo.cmple(hi).bitmask() & node.valid;
+            if let Some((n, up, h)) = &cull {
+                let mut top = Vec4::ZERO;
+                for a in 0..3 {
+                    top += Vec4::select(up[a], node.max[a], node.min[a]) * n[a];
+                }
+                mask &= top.cmpgt(*h).bitmask();
+            }
             while mask != 0 {
                 let lane = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
@@ -706,6 +746,46 @@ mod tests {
             n += brute as usize;
         }
         assert!(n > 50 && n < 350, "both outcomes exercised: {n}");
+    }
+
+    #[test]
+    fn capsule_test_above_a_plane_agrees_with_brute_force() {
+        // Only triangles reaching above the plane count; planes through the
+        // capsule, beside it and below the whole part.
+        let mesh = tessellate(&DemoSurface::default(), 1.5);
+        let bvh = Bvh::build(&mesh);
+        let (mut hits, mut culled) = (0, 0);
+        for i in 0..400 {
+            let f = i as f64;
+            let a = DVec3::new((f * 7.3) % 60.0, (f * 3.1) % 60.0, 2.0 + (f * 1.7) % 8.0);
+            let d = DVec3::new(
+                (f * 0.37).sin(),
+                (f * 0.91).cos(),
+                0.3 + (f * 0.13).sin().abs(),
+            )
+            .normalize();
+            let b = a + d * 20.0;
+            let r = 0.5 + (f * 0.7) % 4.0;
+            let n = if i % 3 == 0 {
+                d
+            } else {
+                DVec3::new(0.3, -0.2, 1.0).normalize()
+            };
+            let h = n.dot(a) - (f * 0.53) % 3.0;
+            let brute = (0..mesh.len()).any(|t| {
+                let [p, q, s] = mesh.corners(t);
+                [p, q, s].iter().any(|v| n.dot(*v) > h)
+                    && segment_triangle_dist2(a, b, p, q, s) < r * r
+            });
+            assert_eq!(
+                bvh.capsule_hits_above(a, b, r, None, Some((n, h))),
+                brute,
+                "capsule {i}"
+            );
+            hits += brute as usize;
+            culled += (bvh.capsule_hits(a, b, r, None) && !brute) as usize;
+        }
+        assert!(hits > 40 && culled > 10, "{hits} hits, {culled} only below");
     }
 
     #[test]

@@ -457,14 +457,19 @@ pub fn accessibility(
         |_, p, n, d| {
             let centre = p + n * r;
             let top = centre + d * tool.reach;
-            !bvh.capsule_hits(centre, top, r - tol, None)
-                && (tool.holder_radius <= 0.0
-                    || tool.holder_length <= 0.0
-                    || !bvh.capsule_hits(
+            // Behind the plane through the centre across the axis the shank
+            // reaches no farther than the ball, checked free above; nothing
+            // below the holder's lowest point can touch the holder.
+            let (hr, hl) = (tool.holder_radius, tool.holder_length);
+            !bvh.capsule_hits_above(centre, top, r - tol, None, Some((d, d.dot(centre))))
+                && (hr <= 0.0
+                    || hl <= 0.0
+                    || !bvh.capsule_hits_above(
                         top,
-                        top + d * tool.holder_length,
-                        tool.holder_radius,
+                        top + d * hl,
+                        hr,
                         None,
+                        Some((d, d.dot(top) - hr)),
                     ))
         },
     )
@@ -1155,6 +1160,62 @@ mod tests {
                 }
             }
             assert!(seen > 0, "{}", g.name());
+        }
+    }
+
+    #[test]
+    fn tool_mode_pruning_changes_no_answer() {
+        // The plain formulation (whole capsules, nothing left out) against
+        // `accessibility`, which leaves out what only the ball could touch: on a
+        // free-form surface and in the pocket, with and without a holder.
+        let surf = millplan_geom::analytic::tessellate(
+            &millplan_geom::analytic::DemoSurface::default(),
+            4.0,
+        );
+        let pocket_mesh = mesh(&pocket(30.0, 6.0, 12.0)).0;
+        let g = Icosphere::new(2);
+        for m in [surf, pocket_mesh] {
+            let b = Bvh::build(&m);
+            for tool in [
+                ToolModel {
+                    radius: 2.0,
+                    reach: 25.0,
+                    holder_radius: 0.0,
+                    holder_length: 0.0,
+                },
+                ToolModel {
+                    radius: 5.0,
+                    reach: 15.0,
+                    holder_radius: 9.0,
+                    holder_length: 30.0,
+                },
+            ] {
+                let r = tool.radius;
+                let tol = 1e-3 * r + 1e-7 * m.bounds().diagonal();
+                let plain = cones(
+                    &m,
+                    &g,
+                    0.0,
+                    |_, p, n| !b.capsule_hits(p + n * r, p + n * r, r - tol, None),
+                    |_, p, n, d| {
+                        let (c, top) = (p + n * r, p + n * r + d * tool.reach);
+                        !b.capsule_hits(c, top, r - tol, None)
+                            && (tool.holder_radius <= 0.0
+                                || !b.capsule_hits(
+                                    top,
+                                    top + d * tool.holder_length,
+                                    tool.holder_radius,
+                                    None,
+                                ))
+                    },
+                );
+                let fast = accessibility(&m, &b, &g, 0.0, &tool);
+                let total: usize = (0..m.len()).map(|f| plain.count(f)).sum();
+                assert!(total > 0);
+                for f in 0..m.len() {
+                    assert_eq!(fast.set(f), plain.set(f), "facet {f}, {tool:?}");
+                }
+            }
         }
     }
 
