@@ -325,9 +325,26 @@ impl Bvh {
         }
         let r2 = radius * radius;
         let reaches = |t: &[DVec3; 3]| above.is_none_or(|(n, h)| t.iter().any(|v| n.dot(*v) > h));
+        let (ab, ab2) = (b - a, (b - a).length_squared());
+        // Cheap first: the triangle's bounding sphere about its centroid.
+        let sphere_near = |[p, q, r]: &[DVec3; 3]| {
+            let c = (*p + *q + *r) / 3.0;
+            let rho2 = (*p - c)
+                .length_squared()
+                .max((*q - c).length_squared())
+                .max((*r - c).length_squared());
+            let s = if ab2 > 0.0 {
+                ((c - a).dot(ab) / ab2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let reach = radius + rho2.sqrt();
+            (a + ab * s - c).length_squared() < reach * reach * (1.0 + 1e-9)
+        };
         self.any_near_ray(a, b - a, 1.0, radius, above, |k, t| {
             let [p, q, r] = t;
             skip != Some(self.order[k])
+                && sphere_near(t)
                 && reaches(t)
                 && segment_triangle_dist2(a, b, *p, *q, *r) < r2
         })
@@ -370,6 +387,18 @@ impl Bvh {
                 Vec4::splat(h32),
             )
         });
+        // Capsules (pad > 0): each child box is also tested by its bounding
+        // sphere against the segment origin + s·dir, 0 ≤ s ≤ max_s — far tighter
+        // than the padded box for a wide capsule passing a box's corner.
+        let seg = (pad > 0.0).then(|| {
+            let d = (dir * max_s).as_vec3();
+            let len2 = d.length_squared().max(f32::MIN_POSITIVE);
+            (
+                [d.x, d.y, d.z].map(Vec4::splat),
+                Vec4::splat(1.0 / len2),
+                Vec4::splat(pad as f32),
+            )
+        });
         let wide = self.wide();
         let mut stack: [u32; 128] = [0; 128];
         let mut sp = 1;
@@ -385,6 +414,27 @@ impl Bvh {
                 hi = hi.min(t1.max(t2));
             }
             let mut mask = lo.cmple(hi).bitmask() & node.valid;
+            if let Some((d, inv_len2, r)) = &seg {
+                // Centre and half diagonal per lane; the nearest point of the
+                // segment to the centre.
+                let (mut t, mut e2) = (Vec4::ZERO, Vec4::ZERO);
+                let mut c = [Vec4::ZERO; 3];
+                for a in 0..3 {
+                    c[a] = (node.min[a] + node.max[a]) * 0.5 - o[a];
+                    let e = (node.max[a] - node.min[a]) * 0.5;
+                    e2 += e * e;
+                    t += c[a] * d[a];
+                }
+                let t = (t * *inv_len2).clamp(Vec4::ZERO, Vec4::ONE);
+                let mut dist2 = Vec4::ZERO;
+                for a in 0..3 {
+                    let g = d[a] * t - c[a];
+                    dist2 += g * g;
+                }
+                // A relative margin for single precision.
+                let reach = (*r + e2.sqrt()) * 1.0001 + Vec4::splat(1e-6);
+                mask &= dist2.cmplt(reach * reach).bitmask();
+            }
             if let Some((n, up, h)) = &cull {
                 let mut top = Vec4::ZERO;
                 for a in 0..3 {
