@@ -9,6 +9,9 @@ mod progress;
 use clap::{Parser, Subcommand};
 use error::{EXIT_BAD_INPUT, EXIT_OK};
 
+#[global_allocator]
+static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 /// Model-based planner and optimiser for milling NC programs.
 ///
 /// millplan reads the toolpath a CAM system wrote (APT/CL or G-code) and the part
