@@ -11,13 +11,6 @@ const LEAF: usize = 8;
 #[derive(Clone, Copy, Debug)]
 struct Node {
     bbox: Aabb,
-    /// An oriented box around the node's triangles: axes (first = the patch's mean
-    /// normal) and the extents along them. Thin in the normal direction for nearly
-    /// flat patches, it bounds the distance far better than the axis-aligned box
-    /// when a large ball hovers over a finely tessellated slope.
-    axes: [DVec3; 3],
-    lo: [f64; 3],
-    hi: [f64; 3],
     /// Leaf: first index into `order`; inner: index of the left child.
     first: u32,
     /// Inner: index of the right child.
@@ -29,25 +22,36 @@ struct Node {
 impl Node {
     const EMPTY: Node = Node {
         bbox: Aabb::EMPTY,
-        axes: [DVec3::Z, DVec3::X, DVec3::Y],
-        lo: [0.0; 3],
-        hi: [0.0; 3],
         first: 0,
         right: 0,
         count: 0,
     };
+}
 
-    /// Lower bound of the squared distance from `p` to anything in the node.
-    #[inline]
-    fn dist2(&self, p: DVec3) -> f64 {
-        let mut o = 0.0;
-        for k in 0..3 {
-            let x = self.axes[k].dot(p);
-            let d = (self.lo[k] - x).max(x - self.hi[k]).max(0.0);
-            o += d * d;
-        }
-        o.max(box_dist2(&self.bbox, p))
-    }
+/// A node of the closest-point tree: up to four children side by side in single
+/// precision, so one SIMD step bounds the distance to all four. Each child is an
+/// oriented box: for patches of up to `OBB_MAX` triangles its first axis is
+/// their mean normal, so the box is thin for a nearly flat patch and bounds the
+/// distance far better than an axis-aligned box when a large ball hovers over
+/// a finely tessellated slope; larger children keep their axis-aligned box.
+/// Coordinates are relative to the node's own `centre`, so single-precision
+/// rounding stays at the scale of the node. Leaves are children too (`count` >
+/// 0): their triangles are tested exactly.
+#[derive(Clone, Copy, Debug)]
+struct NearNode {
+    centre: DVec3,
+    /// Bounds |x − centre| over the node's children (the scale of rounding).
+    scale: f32,
+    /// `axes[k][c]`: component c of axis k, one lane per child.
+    axes: [[Vec4; 3]; 3],
+    lo: [Vec4; 3],
+    hi: [Vec4; 3],
+    /// Per child: a leaf's first position in `order`, or an inner node's index.
+    child: [u32; 4],
+    /// Per child: a leaf's triangle count (> 0), or 0 for an inner node.
+    count: [u32; 4],
+    /// Bit k set when child k exists.
+    valid: u32,
 }
 
 /// Closest point of a mesh to a query point.
@@ -60,16 +64,19 @@ pub struct Closest {
     pub bary: [f64; 3],
 }
 
-/// A BVH over the triangles of one mesh (built by median splits on the longest
-/// axis of the centroid bounds; leaves of up to four triangles).
+/// A BVH over the triangles of one mesh, built by median splits on the longest
+/// axis of the centroid bounds (leaves of up to eight triangles), with boxes
+/// merged from the leaves up. Closest-point queries walk a four-wide tree of
+/// oriented boxes collapsed from it; rays and capsules a four-wide tree of
+/// axis-aligned boxes built on first use.
 #[derive(Clone, Debug)]
 pub struct Bvh {
     nodes: Vec<Node>,
     order: Vec<u32>,
     /// Triangle corners in `order`, contiguous: the queries read them leaf by leaf.
     tris: Vec<[DVec3; 3]>,
-    /// The same tree for rays and capsules: four children per node, their boxes
-    /// side by side in single precision so one SIMD step tests all four.
+    /// The closest-point tree, root first.
+    near: Vec<NearNode>,
     wide: OnceLock<Vec<WideNode>>,
 }
 
@@ -182,10 +189,20 @@ impl Bvh {
             .par_iter()
             .map(|&t| mesh.corners(t as usize))
             .collect();
+        let near = if n > 0 {
+            NearBuild {
+                nodes: &nodes,
+                tris: &tris,
+            }
+            .tree()
+        } else {
+            Vec::new()
+        };
         Bvh {
             nodes,
             order,
             tris,
+            near,
             wide: OnceLock::new(),
         }
     }
@@ -243,46 +260,69 @@ impl Bvh {
                 });
             }
         }
-        let mut stack: [u32; 64] = [0; 64];
+        // Each entry keeps the lower bound computed when it was pushed, so a node's
+        // bound is evaluated once.
+        let above = |d2: f64| (d2 * (1.0 + 1e-6)) as f32;
+        let mut best32 = above(best_d2);
+        // Each entry keeps the lower bound computed when it was pushed.
+        let mut stack: [(u32, f32); 64] = [(0, 0.0); 64];
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;
-            let node = self.nodes[stack[sp] as usize];
-            if node.dist2(p) > best_d2 {
+            let (at, lower) = stack[sp];
+            if lower > best32 {
                 continue;
             }
-            if node.count > 0 {
-                let range = node.first as usize..(node.first + node.count) as usize;
-                for (k, [a, b, c]) in self.tris[range.clone()].iter().enumerate() {
+            let node = &self.near[at as usize];
+            let lower = node.lower_bounds(p);
+            let mut mask = lower.cmple(Vec4::splat(best32)).bitmask() & node.valid;
+            let lower = lower.to_array();
+            // The children left, nearest first.
+            let (mut lanes, mut m) = ([0usize; 4], 0);
+            while mask != 0 {
+                let l = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let mut j = m;
+                while j > 0 && lower[lanes[j - 1]] > lower[l] {
+                    lanes[j] = lanes[j - 1];
+                    j -= 1;
+                }
+                lanes[j] = l;
+                m += 1;
+            }
+            // Leaves at once, nearest first (each may lower the bound) ...
+            for &l in &lanes[..m] {
+                let count = node.count[l] as usize;
+                if count == 0 || lower[l] > best32 {
+                    continue;
+                }
+                let start = node.child[l] as usize;
+                for (k, [a, b, c]) in self.tris[start..start + count].iter().enumerate() {
                     // Cheap bound first: the distance to the triangle's plane.
                     let nrm = (*b - *a).cross(*c - *a);
                     let h = nrm.dot(p - *a);
                     if h * h > best_d2 * nrm.length_squared() {
                         continue;
                     }
-                    let (q, bary) = closest_on_triangle(p, *a, *b, *c);
-                    let d2 = (q - p).length_squared();
+                    let (pt, bary) = closest_on_triangle(p, *a, *b, *c);
+                    let d2 = (pt - p).length_squared();
                     if d2 <= best_d2 {
                         best_d2 = d2;
-                        let triangle = self.order[range.start + k];
+                        best32 = above(d2);
                         best = Some(Closest {
-                            point: q,
+                            point: pt,
                             distance: d2.sqrt(),
-                            triangle,
+                            triangle: self.order[start + k],
                             bary,
                         });
                     }
                 }
-            } else {
-                let (l, r) = (node.first, node.right);
-                let dl = self.nodes[l as usize].dist2(p);
-                let dr = self.nodes[r as usize].dist2(p);
-                // Nearer child last so it is popped first.
-                let (far, near) = if dl <= dr { (r, l) } else { (l, r) };
-                if sp + 2 <= stack.len() {
-                    stack[sp] = far;
-                    stack[sp + 1] = near;
-                    sp += 2;
+            }
+            // ... inner children on the stack, the nearest on top.
+            for &l in lanes[..m].iter().rev() {
+                if node.count[l] == 0 && lower[l] <= best32 && sp < stack.len() {
+                    stack[sp] = (node.child[l], lower[l]);
+                    sp += 1;
                 }
             }
         }
@@ -537,8 +577,6 @@ struct Ctx<'a> {
 
 /// Halves at least this large are built in parallel.
 const PAR_MIN: usize = 1 << 16;
-/// Nodes larger than this skip the oriented box (it rarely prunes up there).
-const OBB_MAX: usize = 1 << 15;
 
 impl Ctx<'_> {
     /// The node over `order` (positions `offset..` of the final order) and its
@@ -548,44 +586,6 @@ impl Ctx<'_> {
         nodes.push(Node::EMPTY);
         self.split(&mut nodes, 0, order, offset, depth);
         nodes
-    }
-
-    fn node(&self, order: &[u32]) -> Node {
-        let mut bbox = Aabb::EMPTY;
-        let mut nsum = DVec3::ZERO;
-        for &t in order {
-            let [a, b, c] = self.mesh.corners(t as usize);
-            bbox.extend(a);
-            bbox.extend(b);
-            bbox.extend(c);
-            nsum += (b - a).cross(c - a);
-        }
-        let mut node = Node {
-            bbox,
-            ..Node::EMPTY
-        };
-        if order.len() <= OBB_MAX {
-            let n = nsum.try_normalize().unwrap_or(DVec3::Z);
-            let u = n.any_orthonormal_vector();
-            node.axes = [n, u, n.cross(u)];
-            let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-            for &t in order {
-                for c in &self.mesh.corners(t as usize) {
-                    for k in 0..3 {
-                        let x = node.axes[k].dot(*c);
-                        lo[k] = lo[k].min(x);
-                        hi[k] = hi[k].max(x);
-                    }
-                }
-            }
-            node.lo = lo;
-            node.hi = hi;
-        } else {
-            // An unbounded oriented box: the AABB alone bounds these nodes.
-            node.lo = [f64::NEG_INFINITY; 3];
-            node.hi = [f64::INFINITY; 3];
-        }
-        node
     }
 
     /// The axis along which the centroids of `order` spread most.
@@ -604,6 +604,7 @@ impl Ctx<'_> {
         }
     }
 
+    /// Fills `nodes[at]` and its subtree; boxes are merged from the leaves up.
     fn split(
         &self,
         nodes: &mut Vec<Node>,
@@ -612,11 +613,20 @@ impl Ctx<'_> {
         offset: usize,
         depth: u32,
     ) {
-        let mut node = self.node(order);
         if order.len() <= LEAF {
-            node.first = offset as u32;
-            node.count = order.len() as u32;
-            nodes[at] = node;
+            let mut bbox = Aabb::EMPTY;
+            for &t in order.iter() {
+                self.mesh
+                    .corners(t as usize)
+                    .iter()
+                    .for_each(|c| bbox.extend(*c));
+            }
+            nodes[at] = Node {
+                bbox,
+                first: offset as u32,
+                right: 0,
+                count: order.len() as u32,
+            };
             return;
         }
         let axis = self.longest_axis(order);
@@ -626,16 +636,14 @@ impl Ctx<'_> {
             cen[*a as usize][axis].total_cmp(&cen[*b as usize][axis])
         });
         let (l, r) = order.split_at_mut(mid);
+        let (left, right);
         if mid >= PAR_MIN && depth < 8 {
             let (lv, rv) = rayon::join(
                 || self.build(l, offset, depth + 1),
                 || self.build(r, offset + mid, depth + 1),
             );
-            let left = nodes.len();
-            let right = left + lv.len();
-            node.first = left as u32;
-            node.right = right as u32;
-            nodes[at] = node;
+            left = nodes.len();
+            right = left + lv.len();
             for (sub, shift) in [(lv, left as u32), (rv, right as u32)] {
                 nodes.extend(sub.into_iter().map(|mut n| {
                     if n.count == 0 {
@@ -646,22 +654,169 @@ impl Ctx<'_> {
                 }));
             }
         } else {
-            let left = nodes.len();
+            left = nodes.len();
+            right = left + 1;
             nodes.push(Node::EMPTY);
             nodes.push(Node::EMPTY);
-            node.first = left as u32;
-            node.right = left as u32 + 1;
-            nodes[at] = node;
             self.split(nodes, left, l, offset, depth + 1);
-            self.split(nodes, left + 1, r, offset + mid, depth + 1);
+            self.split(nodes, right, r, offset + mid, depth + 1);
         }
+        nodes[at] = Node {
+            bbox: nodes[left].bbox.union(&nodes[right].bbox),
+            first: left as u32,
+            right: right as u32,
+            count: 0,
+        };
     }
 }
 
-#[inline]
-fn box_dist2(b: &Aabb, p: DVec3) -> f64 {
-    let d = (b.min - p).max(p - b.max).max(DVec3::ZERO);
-    d.length_squared()
+/// Children of at most this many triangles get an oriented box; larger ones
+/// keep their axis-aligned box (a mean normal means little over so large a patch).
+const OBB_MAX: usize = 1 << 15;
+
+/// Collapses the binary tree into the closest-point tree.
+struct NearBuild<'a> {
+    nodes: &'a [Node],
+    tris: &'a [[DVec3; 3]],
+}
+
+impl NearNode {
+    const EMPTY: NearNode = NearNode {
+        centre: DVec3::ZERO,
+        scale: 0.0,
+        axes: [[Vec4::ZERO; 3]; 3],
+        lo: [Vec4::ZERO; 3],
+        hi: [Vec4::ZERO; 3],
+        child: [0; 4],
+        count: [0; 4],
+        valid: 0,
+    };
+}
+
+impl NearNode {
+    /// Lower bounds of the squared distance from `p` to each child. Relative to
+    /// the node's centre in single precision; `err` covers the rounding of the
+    /// query point and of the projections, so no bound exceeds the true value.
+    #[inline]
+    fn lower_bounds(&self, p: DVec3) -> Vec4 {
+        let q = p - self.centre;
+        let err = Vec4::splat(16.0 * f32::EPSILON * (q.abs().max_element() as f32 + self.scale));
+        let q = q.as_vec3();
+        let q = [q.x, q.y, q.z].map(Vec4::splat);
+        let mut lower = Vec4::ZERO;
+        for k in 0..3 {
+            let ax = &self.axes[k];
+            let x = ax[0] * q[0] + ax[1] * q[1] + ax[2] * q[2];
+            let d = ((self.lo[k] - x).max(x - self.hi[k]) - err).max(Vec4::ZERO);
+            lower += d * d;
+        }
+        lower
+    }
+}
+
+impl NearBuild<'_> {
+    fn tree(&self) -> Vec<NearNode> {
+        let mut out = Vec::with_capacity(self.nodes.len() / 2 + 1);
+        self.collapse(0, &mut out);
+        out
+    }
+
+    /// Positions in `order` of the triangles below binary node `k`.
+    fn range(&self, k: usize) -> std::ops::Range<usize> {
+        let (mut a, mut b) = (k, k);
+        while self.nodes[a].count == 0 {
+            a = self.nodes[a].first as usize;
+        }
+        while self.nodes[b].count == 0 {
+            b = self.nodes[b].right as usize;
+        }
+        self.nodes[a].first as usize..(self.nodes[b].first + self.nodes[b].count) as usize
+    }
+
+    /// Puts binary node `k` in `lane` of `w` (whose centre and scale are set):
+    /// its oriented or axis-aligned box, widened by `pad`, and what it points to.
+    fn set(&self, w: &mut NearNode, lane: usize, k: usize, pad: f64, child: u32, count: u32) {
+        let tris = &self.tris[self.range(k)];
+        let axes = if tris.len() <= OBB_MAX {
+            let sum: DVec3 = tris.iter().map(|[a, b, c]| (*b - *a).cross(*c - *a)).sum();
+            let n = sum.try_normalize().unwrap_or(DVec3::Z);
+            let u = n.any_orthonormal_vector();
+            [n, u, n.cross(u)]
+        } else {
+            [DVec3::X, DVec3::Y, DVec3::Z]
+        };
+        // The axes as stored are the axes used: the query projects on them.
+        let axes = axes.map(|a| a.as_vec3());
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        if tris.len() <= OBB_MAX {
+            let axes = axes.map(|a| a.as_dvec3());
+            for t in tris {
+                for c in t {
+                    let x = *c - w.centre;
+                    for k in 0..3 {
+                        let y = axes[k].dot(x);
+                        lo[k] = lo[k].min(y);
+                        hi[k] = hi[k].max(y);
+                    }
+                }
+            }
+        } else {
+            let b = &self.nodes[k].bbox;
+            lo = (b.min - w.centre).to_array();
+            hi = (b.max - w.centre).to_array();
+        }
+        for a in 0..3 {
+            for (slot, v) in w.axes[a].iter_mut().zip(axes[a].to_array()) {
+                slot[lane] = v;
+            }
+            w.lo[a][lane] = (lo[a] - pad) as f32;
+            w.hi[a][lane] = (hi[a] + pad) as f32;
+        }
+        (w.child[lane], w.count[lane]) = (child, count);
+        w.valid |= 1 << lane;
+    }
+
+    /// The node over binary node `at` (two levels become one, opening the
+    /// largest inner child first) and its subtree; returns its index.
+    fn collapse(&self, at: usize, out: &mut Vec<NearNode>) -> u32 {
+        let me = out.len();
+        out.push(NearNode::EMPTY);
+        let nodes = self.nodes;
+        let b = &nodes[at].bbox;
+        let mut w = NearNode {
+            centre: b.center(),
+            scale: (0.5 * b.diagonal()) as f32,
+            ..NearNode::EMPTY
+        };
+        // Far more than the rounding of coordinates of this size to f32.
+        let pad = 4.0 * f32::EPSILON as f64 * (0.5 * b.diagonal()).max(1e-9);
+        if nodes[at].count > 0 {
+            // A mesh of one leaf.
+            self.set(&mut w, 0, at, pad, nodes[at].first, nodes[at].count);
+            out[me] = w;
+            return me as u32;
+        }
+        let mut kids = vec![nodes[at].first as usize, nodes[at].right as usize];
+        while kids.len() < 4 {
+            let size = |k: usize| nodes[k].bbox.size().element_sum();
+            let open = (0..kids.len())
+                .filter(|&i| nodes[kids[i]].count == 0)
+                .max_by(|&a, &b| size(kids[a]).total_cmp(&size(kids[b])));
+            let Some(i) = open else { break };
+            let k = kids.swap_remove(i);
+            kids.extend([nodes[k].first as usize, nodes[k].right as usize]);
+        }
+        for (lane, &k) in kids.iter().enumerate() {
+            if nodes[k].count > 0 {
+                self.set(&mut w, lane, k, pad, nodes[k].first, nodes[k].count);
+            } else {
+                let child = self.collapse(k, out);
+                self.set(&mut w, lane, k, pad, child, 0);
+            }
+        }
+        out[me] = w;
+        me as u32
+    }
 }
 
 /// Closest point on triangle (a, b, c) to p, with its barycentric coordinates
@@ -936,6 +1091,109 @@ mod tests {
             assert!(!std::mem::replace(&mut seen[t as usize], true));
         }
         assert!(seen.iter().all(|s| *s));
+    }
+
+    /// Positions in `order` of the triangles below lane `lane` of near node `at`.
+    fn lane_triangles(bvh: &Bvh, at: usize, lane: usize, out: &mut Vec<usize>) {
+        let n = &bvh.near[at];
+        if n.count[lane] > 0 {
+            out.extend(n.child[lane] as usize..(n.child[lane] + n.count[lane]) as usize);
+        } else {
+            let c = n.child[lane] as usize;
+            for l in 0..4 {
+                if bvh.near[c].valid & (1 << l) != 0 {
+                    lane_triangles(bvh, c, l, out);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn single_precision_bounds_never_exceed_the_distance() {
+        // Far from the origin, points exactly on the triangles (bound 0) and
+        // just above and below them: every child's bound stays at or below the
+        // true squared distance to its triangles.
+        let mut m = tessellate(&DemoSurface::default(), 0.5);
+        let off = DVec3::new(4817.25, -2903.5, 911.125);
+        m.vertices.iter_mut().for_each(|v| *v += off);
+        let bvh = Bvh::build(&m);
+        let mut seed = 3u64;
+        let mut checked = 0;
+        for at in (0..bvh.near.len()).step_by(7) {
+            for lane in 0..4 {
+                if bvh.near[at].valid & (1 << lane) == 0 {
+                    continue;
+                }
+                let mut tris = Vec::new();
+                lane_triangles(&bvh, at, lane, &mut tris);
+                for _ in 0..4 {
+                    seed = seed
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    let [a, b, c] = bvh.tris[tris[(seed >> 33) as usize % tris.len()]];
+                    let f = |k: u32| ((seed >> k) & 0x3ff) as f64 / 1023.0;
+                    let n = (b - a).cross(c - a).normalize();
+                    for p in [
+                        a,
+                        b,
+                        c,
+                        a + (b - a) * f(0) * 0.5 + (c - a) * f(10) * 0.5,
+                        a + n * 1e-4 * f(20),
+                        a - n * 0.01 * f(20),
+                    ] {
+                        let d2 = tris
+                            .iter()
+                            .map(|&t| {
+                                let [a, b, c] = bvh.tris[t];
+                                (closest_on_triangle(p, a, b, c).0 - p).length_squared()
+                            })
+                            .fold(f64::INFINITY, f64::min);
+                        let lb = bvh.near[at].lower_bounds(p)[lane] as f64;
+                        assert!(lb <= d2, "node {at} lane {lane}: bound {lb:e} > {d2:e}");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 1000);
+    }
+
+    #[test]
+    fn ball_centres_over_a_fine_mesh_far_from_the_origin_agree_with_brute_force() {
+        // The case the single-precision bounds must not spoil: ball centres at
+        // distance R along the normal of a finely tessellated surface, where
+        // many triangles are nearly as close as the nearest, and coordinates in
+        // the thousands of millimetres.
+        let mut m = tessellate(&DemoSurface::default(), 0.4);
+        let off = DVec3::new(4817.25, -2903.5, 911.125);
+        m.vertices.iter_mut().for_each(|v| *v += off);
+        let bvh = Bvh::build(&m);
+        let mut seed = 7u64;
+        let mut hint = None;
+        for _ in 0..150 {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let f = |k: u32| ((seed >> k) & 0xffff) as f64 / 65535.0;
+            let t = (seed >> 40) as usize % m.len();
+            let [a, b, c] = m.corners(t);
+            let (u, v) = (f(0), f(16));
+            let (u, v) = if u + v > 1.0 {
+                (1.0 - u, 1.0 - v)
+            } else {
+                (u, v)
+            };
+            let r = 0.5 + 5.5 * f(32);
+            let p = a + (b - a) * u + (c - a) * v + m.facet_normal(t) * r;
+            let want = brute(&m, p);
+            let got = bvh.closest_near(&m, p, 3.0 * r, hint).expect("hit");
+            hint = Some(got.triangle);
+            assert!(
+                (got.distance - want).abs() <= 1e-12 * want.max(1.0),
+                "{} vs {want}",
+                got.distance
+            );
+        }
     }
 
     proptest! {
