@@ -716,9 +716,77 @@ impl NearNode {
 
 impl NearBuild<'_> {
     fn tree(&self) -> Vec<NearNode> {
-        let mut out = Vec::with_capacity(self.nodes.len() / 2 + 1);
-        self.collapse(0, &mut out);
+        self.subtree(0)
+    }
+
+    /// The tree below binary node `at`, root first, child indices local to the
+    /// returned vector; large subtrees are collapsed in parallel.
+    fn subtree(&self, at: usize) -> Vec<NearNode> {
+        let nodes = self.nodes;
+        if nodes[at].count > 0 || self.range(at).len() < PAR_MIN {
+            let mut out = Vec::with_capacity(2 * self.range(at).len() / LEAF / 3 + 1);
+            self.collapse(at, &mut out);
+            return out;
+        }
+        let (mut w, pad) = self.start(at);
+        let kids = self.kids(at);
+        let subs: Vec<Option<Vec<NearNode>>> = kids
+            .par_iter()
+            .map(|&k| (nodes[k].count == 0).then(|| self.subtree(k)))
+            .collect();
+        let mut out = vec![NearNode::EMPTY];
+        for (lane, (&k, sub)) in kids.iter().zip(subs).enumerate() {
+            match sub {
+                None => self.set(&mut w, lane, k, pad, nodes[k].first, nodes[k].count),
+                Some(sub) => {
+                    let shift = out.len() as u32;
+                    self.set(&mut w, lane, k, pad, shift, 0);
+                    out.extend(sub.into_iter().map(|mut n| {
+                        for l in 0..4 {
+                            if n.valid & (1 << l) != 0 && n.count[l] == 0 {
+                                n.child[l] += shift;
+                            }
+                        }
+                        n
+                    }));
+                }
+            }
+        }
+        out[0] = w;
         out
+    }
+
+    /// A node over binary node `at` with its centre and scale set, and the
+    /// padding of its children's bounds: far more than the rounding of
+    /// coordinates of this size to f32.
+    fn start(&self, at: usize) -> (NearNode, f64) {
+        let b = &self.nodes[at].bbox;
+        let w = NearNode {
+            centre: b.center(),
+            scale: (0.5 * b.diagonal()) as f32,
+            ..NearNode::EMPTY
+        };
+        (
+            w,
+            4.0 * f32::EPSILON as f64 * (0.5 * b.diagonal()).max(1e-9),
+        )
+    }
+
+    /// Up to four binary nodes below the inner node `at`: two levels become
+    /// one, opening the largest inner child first.
+    fn kids(&self, at: usize) -> Vec<usize> {
+        let nodes = self.nodes;
+        let mut kids = vec![nodes[at].first as usize, nodes[at].right as usize];
+        while kids.len() < 4 {
+            let size = |k: usize| nodes[k].bbox.size().element_sum();
+            let open = (0..kids.len())
+                .filter(|&i| nodes[kids[i]].count == 0)
+                .max_by(|&a, &b| size(kids[a]).total_cmp(&size(kids[b])));
+            let Some(i) = open else { break };
+            let k = kids.swap_remove(i);
+            kids.extend([nodes[k].first as usize, nodes[k].right as usize]);
+        }
+        kids
     }
 
     /// Positions in `order` of the triangles below binary node `k`.
@@ -776,37 +844,20 @@ impl NearBuild<'_> {
         w.valid |= 1 << lane;
     }
 
-    /// The node over binary node `at` (two levels become one, opening the
-    /// largest inner child first) and its subtree; returns its index.
+    /// The node over binary node `at` and its subtree, appended to `out`;
+    /// returns its index.
     fn collapse(&self, at: usize, out: &mut Vec<NearNode>) -> u32 {
         let me = out.len();
         out.push(NearNode::EMPTY);
         let nodes = self.nodes;
-        let b = &nodes[at].bbox;
-        let mut w = NearNode {
-            centre: b.center(),
-            scale: (0.5 * b.diagonal()) as f32,
-            ..NearNode::EMPTY
-        };
-        // Far more than the rounding of coordinates of this size to f32.
-        let pad = 4.0 * f32::EPSILON as f64 * (0.5 * b.diagonal()).max(1e-9);
+        let (mut w, pad) = self.start(at);
         if nodes[at].count > 0 {
             // A mesh of one leaf.
             self.set(&mut w, 0, at, pad, nodes[at].first, nodes[at].count);
             out[me] = w;
             return me as u32;
         }
-        let mut kids = vec![nodes[at].first as usize, nodes[at].right as usize];
-        while kids.len() < 4 {
-            let size = |k: usize| nodes[k].bbox.size().element_sum();
-            let open = (0..kids.len())
-                .filter(|&i| nodes[kids[i]].count == 0)
-                .max_by(|&a, &b| size(kids[a]).total_cmp(&size(kids[b])));
-            let Some(i) = open else { break };
-            let k = kids.swap_remove(i);
-            kids.extend([nodes[k].first as usize, nodes[k].right as usize]);
-        }
-        for (lane, &k) in kids.iter().enumerate() {
+        for (lane, k) in self.kids(at).into_iter().enumerate() {
             if nodes[k].count > 0 {
                 self.set(&mut w, lane, k, pad, nodes[k].first, nodes[k].count);
             } else {
