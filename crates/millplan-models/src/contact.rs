@@ -100,7 +100,6 @@ impl Params {
 /// Everything known about one tool position.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PointResult {
-    pub centre: DVec3,
     /// Contact point on the mesh.
     pub contact: DVec3,
     /// Unit surface normal at the contact point.
@@ -111,8 +110,6 @@ pub struct PointResult {
     pub no_contact: bool,
     /// Inclination α, radians.
     pub inclination: f64,
-    /// Unit feed direction in the tangent plane (zero when the point does not move).
-    pub feed_dir: DVec3,
     /// Feed direction relative to uphill, radians.
     pub feed_angle: f64,
     pub side: Side,
@@ -294,21 +291,31 @@ pub fn locate(s: &Surface, points: &[PathPoint], p: &Params) -> (Vec<DVec3>, Vec
                 None => (*c - q.axis * r, q.axis, f64::INFINITY, true),
             }
         };
-    let contacts: Vec<(DVec3, DVec3, f64, bool)> = centres
-        .par_chunks(2048)
-        .zip(points.par_chunks(2048))
-        .flat_map_iter(|(cs, qs)| {
+    let mut contacts: Vec<Located> = vec![(DVec3::ZERO, DVec3::ZERO, 0.0, false); points.len()];
+    contacts
+        .par_chunks_mut(2048)
+        .zip(centres.par_chunks(2048).zip(points.par_chunks(2048)))
+        .for_each(|(out, (cs, qs))| {
             let mut hint = None;
-            cs.iter()
-                .zip(qs)
-                .map(|(c, q)| contact_of(c, q, &mut hint))
-                .collect::<Vec<_>>()
-        })
-        .collect();
+            for ((o, c), q) in out.iter_mut().zip(cs).zip(qs) {
+                *o = contact_of(c, q, &mut hint);
+            }
+        });
     (centres, contacts)
 }
 
 pub fn analyse(s: &Surface, points: &[PathPoint], p: &Params) -> Vec<PointResult> {
+    analyse_with(s, points, p, |r| r)
+}
+
+/// [`analyse`], each result passed through `wrap` as it is made (so a caller
+/// building larger rows fills them in one pass, without a second vector).
+pub fn analyse_with<T: Send>(
+    s: &Surface,
+    points: &[PathPoint],
+    p: &Params,
+    wrap: impl Fn(PointResult) -> T + Sync,
+) -> Vec<T> {
     let (centres, contacts) = locate(s, points, p);
     let search = stepover_search_radius(&centres, points, p.neighbour_search);
     let grid = NeighbourGrid::new(&centres, search);
@@ -344,7 +351,7 @@ pub fn analyse(s: &Surface, points: &[PathPoint], p: &Params) -> Vec<PointResult
                     af,
                     side,
                 };
-                (wd::working_diameter(&c), af, side, neighbour, t)
+                (wd::working_diameter(&c), af, side, neighbour)
             };
             let mut best = eval(t);
             if corner {
@@ -355,21 +362,19 @@ pub fn analyse(s: &Surface, points: &[PathPoint], p: &Params) -> Vec<PointResult
                     }
                 }
             }
-            let (dw, feed_angle, side, neighbour, feed_dir) = best;
-            PointResult {
-                centre: centres[i],
+            let (dw, feed_angle, side, neighbour) = best;
+            wrap(PointResult {
                 contact,
                 normal: n,
                 gap,
                 no_contact,
                 inclination,
-                feed_dir,
                 feed_angle,
                 side,
                 neighbour,
                 corner,
                 dw,
-            }
+            })
         })
         .collect()
 }

@@ -225,6 +225,16 @@ pub fn apply(
     m: &Machine,
     p: &SpeedParams,
 ) -> Result<SpeedResult, SpeedError> {
+    apply_owned(program.clone(), mesh, m, p)
+}
+
+/// [`apply`] to a program it may change in place (no copy of a large program).
+pub fn apply_owned(
+    program: Program,
+    mesh: &TriMesh,
+    m: &Machine,
+    p: &SpeedParams,
+) -> Result<SpeedResult, SpeedError> {
     if !(p.vc > 0.0 && p.fz > 0.0 && p.flutes > 0 && p.ap > 0.0)
         || p.ball_d.map(|d| !(d > 0.0)).unwrap_or(false)
     {
@@ -242,20 +252,15 @@ pub fn apply(
     };
     let surface = Surface::new(mesh);
     lap("surface (BVH, vertex normals)", &mut timings);
-    let mut out = program.clone();
-    let cutting: usize = program
-        .operations
-        .iter()
-        .filter(|o| is_ball(o, p.ball_d).is_some())
-        .map(|o| o.moves.len())
-        .sum();
-    let mut rows: Vec<PointRow> = Vec::with_capacity(cutting);
+    let mut out = program;
+    let mut rows: Vec<PointRow> = Vec::new();
     let mut check = None;
     let mut convention = p.convention.unwrap_or(Convention::Tip);
     let mut ops = 0;
     let mut constant = Vec::new();
     let mut feed_clamped_total = 0;
-    for (oi, op) in program.operations.iter().enumerate() {
+    for oi in 0..out.operations.len() {
+        let op = &out.operations[oi];
         let Some(d) = is_ball(op, p.ball_d) else {
             continue;
         };
@@ -306,7 +311,25 @@ pub fn apply(
         cp.gap_tol = p.gap_tol;
         cp.nearest_incentre = p.nearest_incentre;
         lap("points and convention", &mut timings);
-        let res = contact::analyse(&surface, &pts, &cp);
+        // The rows are made as the points are analysed, then completed below.
+        let mut op_rows = contact::analyse_with(&surface, &pts, &cp, |r| PointRow {
+            op: oi,
+            mv: 0,
+            line: 0,
+            d,
+            cl: DVec3::ZERO,
+            n_target: millplan_models::wd::spindle_speed(p.vc, r.dw),
+            n: 0.0,
+            feed: 0.0,
+            ds: 0.0,
+            dt: 0.0,
+            clamped: false,
+            rate_limited: false,
+            held: false,
+            gap_flag: r.no_contact || r.gap.abs() > p.gap_tol,
+            r,
+        });
+        drop(pts);
         lap("contact and working diameter", &mut timings);
         let programmed = op
             .moves
@@ -315,19 +338,15 @@ pub fn apply(
             .map(|mv| mv.spindle)
             .unwrap_or(0.0);
         // Targets, machine range, threshold.
-        let target: Vec<f64> = res
-            .iter()
-            .map(|r| millplan_models::wd::spindle_speed(p.vc, r.dw))
-            .collect();
         let clamp = |n: f64| n.clamp(m.spindle_min, m.spindle_max);
-        let mut n: Vec<f64> = Vec::with_capacity(target.len());
-        let mut held = vec![false; target.len()];
-        for (k, t) in target.iter().enumerate() {
-            let c = clamp(*t);
+        let mut n: Vec<f64> = Vec::with_capacity(op_rows.len());
+        for row in op_rows.iter_mut() {
+            let c = clamp(row.n_target);
+            row.clamped = c != row.n_target;
             match n.last() {
                 Some(&last) if (c - last).abs() <= p.s_threshold => {
                     n.push(last);
-                    held[k] = c != last;
+                    row.held = c != last;
                 }
                 _ => n.push(c),
             }
@@ -389,20 +408,29 @@ pub fn apply(
             let shrunk: Vec<f64> = dt.iter().map(|t| t * 0.999).collect();
             rate_limit(&mut n, &shrunk, m.spindle_accel);
         }
-        for k in 0..n.len() {
-            let (f, _) = feed_of(k, n[k]);
-            dt[k] = geo[k].0 / f * 60.0 + geo[k].1;
+        let mut feeds = Vec::with_capacity(n.len());
+        for (k, row) in op_rows.iter_mut().enumerate() {
+            let (f, fc) = feed_of(k, n[k]);
+            feed_clamped_total += fc as usize;
+            feeds.push(f);
+            let i = idx[k];
+            row.mv = i;
+            row.line = op.moves[i].line;
+            row.cl = op.moves[i].end;
+            row.n = n[k];
+            row.feed = f;
+            row.ds = geo[k].0;
+            row.dt = geo[k].0 / f * 60.0 + geo[k].1;
+            row.rate_limited = (n[k] - before_limit[k]).abs() > 1e-9;
         }
+        drop(geo);
         // Write back.
         let o = &mut out.operations[oi];
-        let mut feed_clamped = Vec::with_capacity(n.len());
         for (k, &i) in idx.iter().enumerate() {
-            let (f, fc) = feed_of(k, n[k]);
-            feed_clamped.push(fc);
             let mv = &mut o.moves[i];
             mv.spindle = n[k];
             if p.feed == FeedCoupling::ChipLoad {
-                mv.feed = f;
+                mv.feed = feeds[k];
                 mv.feed_mode = FeedMode::PerMinute;
             }
         }
@@ -426,30 +454,13 @@ pub fn apply(
                 }
             }
         }
-        for (k, r) in res.into_iter().enumerate() {
-            let i = idx[k];
-            let t_clamped = clamp(target[k]);
-            rows.push(PointRow {
-                op: oi,
-                mv: i,
-                line: op.moves[i].line,
-                d,
-                cl: op.moves[i].end,
-                n_target: target[k],
-                n: n[k],
-                feed: feed_of(k, n[k]).0,
-                ds: geo[k].0,
-                dt: dt[k],
-                clamped: t_clamped != target[k],
-                rate_limited: (n[k] - before_limit[k]).abs() > 1e-9,
-                held: held[k],
-                gap_flag: r.no_contact || r.gap.abs() > p.gap_tol,
-                r,
-            });
+        if rows.is_empty() {
+            rows = op_rows;
+        } else {
+            rows.append(&mut op_rows);
         }
         constant.push((programmed, rows.len()));
         lap("spindle limits and feeds", &mut timings);
-        feed_clamped_total += feed_clamped.iter().filter(|x| **x).count();
     }
     if ops == 0 {
         return Err(SpeedError::NoBallOperation);

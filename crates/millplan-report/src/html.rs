@@ -148,10 +148,7 @@ pub fn speed_report(title: &str, s: &Summary, rows: &[PointRow], vc: f64) -> Str
                 Series {
                     name: "D_cc = D·sin α",
                     color: "#aaa",
-                    points: idx(&|r| {
-                        r.r.dw
-                            .min(2.0 * r.r.centre.distance(r.r.contact) * r.r.inclination.sin())
-                    }),
+                    points: idx(&|r| r.r.dw.min(r.d * r.r.inclination.sin())),
                 },
             ],
         ),

@@ -6,7 +6,7 @@ use crate::io::{read_mesh, read_program, write_atomic};
 use clap::ValueEnum;
 use millplan_models::contact::{Convention, NormalMode};
 use millplan_nc::write::gcode::GcodeOptions;
-use millplan_plan::speed::{apply, FeedCoupling, SpeedParams};
+use millplan_plan::speed::{apply_owned, FeedCoupling, SpeedParams};
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -126,14 +126,16 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     p.nearest_incentre = a.nearest_incentre;
     p.ball_d = a.ball_d;
-    let res = apply(&parsed.program, &mesh, &machine, &p)
-        .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
     let dialect = match a.to {
         Some(t) => t.into(),
         None => machine.dialect_enum().unwrap_or(parsed.program.dialect),
     };
+    let res = apply_owned(parsed.program, &mesh, &machine, &p)
+        .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
+    let t_apply = t0.elapsed().as_secs_f64();
     let out = write_program(&res.program, dialect, GcodeOptions::new(dialect))
         .map_err(|e| CliError::input(e.to_string()))?;
+    let t_format = t0.elapsed().as_secs_f64();
     let inputs = [a.path.as_path(), a.stl.as_path()];
     write_atomic(&a.output, &out, &inputs)?;
     if a.timings {
@@ -142,6 +144,11 @@ pub fn run(a: Args) -> CliResult<i32> {
         for (name, t) in &res.timings {
             eprintln!("{t:>8.3} s  {name}");
         }
+        eprintln!("{:>8.3} s  program text", t_format - t_apply);
+        eprintln!(
+            "{:>8.3} s  file written and synced",
+            t0.elapsed().as_secs_f64() - t_format
+        );
         eprintln!(
             "{:>8.3} s  total until the program is written",
             t0.elapsed().as_secs_f64()
