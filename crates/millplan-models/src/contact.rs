@@ -318,7 +318,7 @@ pub fn analyse_with<T: Send>(
 ) -> Vec<T> {
     let (centres, contacts) = locate(s, points, p);
     let search = stepover_search_radius(&centres, points, p.neighbour_search);
-    let grid = NeighbourGrid::new(&centres, search);
+    let grid = NeighbourGrid::new(&centres, points, search);
     (0..points.len())
         .into_par_iter()
         .map(|i| {
@@ -479,10 +479,11 @@ fn local_case(
     search: f64,
 ) -> (f64, Side, Neighbour) {
     let mut side = SideFinder::new(c[i], n, t, search);
-    grid.for_each_near(c[i], |j| {
+    let pass = pts[i].pass;
+    grid.for_each_near(c[i], |e| {
         // Only passes machined before this one count.
-        if j < i && pts[j].pass != pts[i].pass {
-            side.machined(c[j]);
+        if (e.i as usize) < i && e.pass != pass {
+            side.machined(e.c);
         }
     });
     (feed_angle(n, k, t), side.result().0, side.result().1)
@@ -563,39 +564,86 @@ struct NeighbourGrid {
     /// Cell edge: twice the search radius, so the 2×2×2 cells on the point's side
     /// of its own cell cover the whole search sphere.
     cell: f64,
-    /// Point indices sorted by cell; `cells` maps a cell to its run in `sorted`.
-    sorted: Vec<u32>,
-    cells: FxHashMap<(i64, i64, i64), (u32, u32)>,
+    /// The lowest cell; keys count cells from it.
+    origin: (i64, i64, i64),
+    /// Whether cells might share a key (a grid over 2^21 cells along an axis);
+    /// candidates are then checked to be in the cells asked for.
+    aliased: bool,
+    /// The points sorted by cell, each with what the search reads, side by side;
+    /// `cells` maps a cell's key to its run.
+    entries: Vec<GridEntry>,
+    cells: FxHashMap<u64, (u32, u32)>,
 }
 
+#[derive(Clone, Copy, Debug)]
+struct GridEntry {
+    c: DVec3,
+    i: u32,
+    pass: u32,
+}
+
+const GRID_BITS: u32 = 21;
+
 impl NeighbourGrid {
-    fn new(c: &[DVec3], radius: f64) -> NeighbourGrid {
+    fn new(c: &[DVec3], pts: &[PathPoint], radius: f64) -> NeighbourGrid {
         let cell = 2.0 * radius.max(1e-3);
-        let mut keyed: Vec<((i64, i64, i64), u32)> = c
+        let (lo, hi) = c.iter().fold(
+            ((i64::MAX, i64::MAX, i64::MAX), (i64::MIN, i64::MIN, i64::MIN)),
+            |(lo, hi), p| {
+                let k = key(*p, cell);
+                (
+                    (lo.0.min(k.0), lo.1.min(k.1), lo.2.min(k.2)),
+                    (hi.0.max(k.0), hi.1.max(k.1), hi.2.max(k.2)),
+                )
+            },
+        );
+        let span = (hi.0.saturating_sub(lo.0))
+            .max(hi.1.saturating_sub(lo.1))
+            .max(hi.2.saturating_sub(lo.2));
+        let mut grid = NeighbourGrid {
+            cell,
+            origin: lo,
+            aliased: span >= (1 << GRID_BITS) - 2,
+            entries: Vec::new(),
+            cells: FxHashMap::default(),
+        };
+        let mut keyed: Vec<(u64, u32)> = c
             .par_iter()
             .enumerate()
-            .map(|(i, p)| (key(*p, cell), i as u32))
+            .map(|(i, p)| (grid.packed(key(*p, cell)), i as u32))
             .collect();
         keyed.par_sort_unstable();
-        let mut cells: FxHashMap<(i64, i64, i64), (u32, u32)> = FxHashMap::default();
         let mut i = 0;
         while i < keyed.len() {
             let mut j = i + 1;
             while j < keyed.len() && keyed[j].0 == keyed[i].0 {
                 j += 1;
             }
-            cells.insert(keyed[i].0, (i as u32, (j - i) as u32));
+            grid.cells.insert(keyed[i].0, (i as u32, (j - i) as u32));
             i = j;
         }
-        NeighbourGrid {
-            cell,
-            sorted: keyed.into_iter().map(|(_, i)| i).collect(),
-            cells,
-        }
+        grid.entries = keyed
+            .par_iter()
+            .map(|&(_, i)| GridEntry {
+                c: c[i as usize],
+                i,
+                pass: pts[i as usize].pass,
+            })
+            .collect();
+        grid
+    }
+
+    #[inline]
+    fn packed(&self, k: (i64, i64, i64)) -> u64 {
+        let m = (1u64 << GRID_BITS) - 1;
+        let f = |v: i64, o: i64| (v.wrapping_sub(o) as u64) & m;
+        f(k.0, self.origin.0) << (2 * GRID_BITS)
+            | f(k.1, self.origin.1) << GRID_BITS
+            | f(k.2, self.origin.2)
     }
 
     /// Calls `f` for every point within the search radius of `p` (and some more).
-    fn for_each_near(&self, p: DVec3, mut f: impl FnMut(usize)) {
+    fn for_each_near(&self, p: DVec3, mut f: impl FnMut(&GridEntry)) {
         let k = key(p, self.cell);
         let side = |v: f64, k: i64| {
             if v / self.cell - k as f64 >= 0.5 {
@@ -608,9 +656,12 @@ impl NeighbourGrid {
         for dx in [0, sx] {
             for dy in [0, sy] {
                 for dz in [0, sz] {
-                    if let Some(&(start, len)) = self.cells.get(&(k.0 + dx, k.1 + dy, k.2 + dz)) {
-                        for &j in &self.sorted[start as usize..(start + len) as usize] {
-                            f(j as usize);
+                    let want = (k.0 + dx, k.1 + dy, k.2 + dz);
+                    if let Some(&(start, len)) = self.cells.get(&self.packed(want)) {
+                        for e in &self.entries[start as usize..(start + len) as usize] {
+                            if !self.aliased || key(e.c, self.cell) == want {
+                                f(e);
+                            }
                         }
                     }
                 }
