@@ -588,7 +588,10 @@ impl NeighbourGrid {
     fn new(c: &[DVec3], pts: &[PathPoint], radius: f64) -> NeighbourGrid {
         let cell = 2.0 * radius.max(1e-3);
         let (lo, hi) = c.iter().fold(
-            ((i64::MAX, i64::MAX, i64::MAX), (i64::MIN, i64::MIN, i64::MIN)),
+            (
+                (i64::MAX, i64::MAX, i64::MAX),
+                (i64::MIN, i64::MIN, i64::MIN),
+            ),
             |(lo, hi), p| {
                 let k = key(*p, cell);
                 (

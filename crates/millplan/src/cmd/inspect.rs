@@ -104,6 +104,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         Input::Mesh(mesh, r) => {
             let b = mesh.bounds();
             let size = b.size();
+            let edges = mesh.edge_report();
             let guess = if size.max_element() < 30.0 {
                 "inch (guess: the part is under 30 units across)"
             } else {
@@ -117,8 +118,8 @@ pub fn run(a: Args) -> CliResult<i32> {
                 "facets_in_file": r.facets_in_file,
                 "vertices": mesh.vertices.len(),
                 "degenerate": r.degenerate,
-                "open_edges": r.edges.open,
-                "non_manifold_edges": r.edges.non_manifold,
+                "open_edges": edges.open,
+                "non_manifold_edges": edges.non_manifold,
                 "zero_normals": r.zero_normals,
                 "flipped_normals": r.flipped_normals,
                 "trailing_bytes": r.trailing_bytes,
@@ -143,7 +144,7 @@ pub fn run(a: Args) -> CliResult<i32> {
                 println!("  vertices       {} after welding", mesh.vertices.len());
                 println!(
                     "  open edges     {}   non-manifold edges {}",
-                    r.edges.open, r.edges.non_manifold
+                    edges.open, edges.non_manifold
                 );
                 println!(
                     "  stored normals {} zero, {} against the vertex order",
