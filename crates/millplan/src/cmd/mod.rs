@@ -70,7 +70,10 @@ pub fn write_program(
     dialect: millplan_nc::Dialect,
     o: millplan_nc::write::gcode::GcodeOptions,
 ) -> Result<Vec<u8>, millplan_nc::write::WriteError> {
-    let mut out = Vec::new();
+    // Room for a typical block per move up front: growing an 80 MB text by
+    // doubling copies it and faults in fresh pages each time.
+    let moves: usize = p.operations.iter().map(|o| o.moves.len()).sum();
+    let mut out = Vec::with_capacity(moves * 64 + 4096);
     if dialect.is_apt() {
         millplan_nc::write::apt::write_apt(p, &mut out)?;
     } else {
