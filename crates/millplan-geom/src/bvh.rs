@@ -178,12 +178,16 @@ impl Bvh {
             })
             .collect();
         let mut order: Vec<u32> = (0..n as u32).collect();
-        let ctx = Ctx { cen: &cen, mesh };
-        let nodes = if n > 0 {
-            ctx.build(&mut order, 0, 0)
-        } else {
-            vec![Node::EMPTY]
-        };
+        let sizes = subtree_sizes(n);
+        let mut nodes = vec![Node::EMPTY; sizes[&n]];
+        if n > 0 {
+            let ctx = Ctx {
+                cen: &cen,
+                mesh,
+                sizes: &sizes,
+            };
+            ctx.split(&mut nodes, 0, &mut order, 0, 0);
+        }
         drop(cen);
         let tris: Vec<[DVec3; 3]> = order
             .par_iter()
@@ -573,21 +577,35 @@ pub fn ray_triangle(o: DVec3, d: DVec3, a: DVec3, b: DVec3, c: DVec3) -> Option<
 struct Ctx<'a> {
     cen: &'a [DVec3],
     mesh: &'a TriMesh,
+    /// Subtree sizes by triangle count.
+    sizes: &'a rustc_hash::FxHashMap<usize, usize>,
 }
 
 /// Halves at least this large are built in parallel.
 const PAR_MIN: usize = 1 << 16;
 
-impl Ctx<'_> {
-    /// The node over `order` (positions `offset..` of the final order) and its
-    /// subtree, root first, child indices local to the returned vector.
-    fn build(&self, order: &mut [u32], offset: usize, depth: u32) -> Vec<Node> {
-        let mut nodes = Vec::with_capacity(2 * order.len() / LEAF + 2);
-        nodes.push(Node::EMPTY);
-        self.split(&mut nodes, 0, order, offset, depth);
-        nodes
+/// Nodes of the binary tree over `m` triangles, for `m` and every size its
+/// median splits lead to (sizes at one depth differ by at most one, so there
+/// are few).
+fn subtree_sizes(m: usize) -> rustc_hash::FxHashMap<usize, usize> {
+    fn go(m: usize, memo: &mut rustc_hash::FxHashMap<usize, usize>) -> usize {
+        if let Some(&c) = memo.get(&m) {
+            return c;
+        }
+        let c = if m <= LEAF {
+            1
+        } else {
+            1 + go(m / 2, memo) + go(m - m / 2, memo)
+        };
+        memo.insert(m, c);
+        c
     }
+    let mut memo = Default::default();
+    go(m, &mut memo);
+    memo
+}
 
+impl Ctx<'_> {
     /// The axis along which the centroids of `order` spread most.
     fn longest_axis(&self, order: &[u32]) -> usize {
         let mut cb = Aabb::EMPTY;
@@ -604,15 +622,12 @@ impl Ctx<'_> {
         }
     }
 
-    /// Fills `nodes[at]` and its subtree; boxes are merged from the leaves up.
-    fn split(
-        &self,
-        nodes: &mut Vec<Node>,
-        at: usize,
-        order: &mut [u32],
-        offset: usize,
-        depth: u32,
-    ) {
+    /// Fills `nodes` (exactly the subtree over `order`, its root first, at
+    /// global index `base`; the triangles at positions `base`.. of the final
+    /// order) depth first: the left subtree follows its parent. Boxes are
+    /// merged from the leaves up; large halves are built in parallel into
+    /// their own parts of the one vector.
+    fn split(&self, nodes: &mut [Node], base: usize, order: &mut [u32], offset: usize, depth: u32) {
         if order.len() <= LEAF {
             let mut bbox = Aabb::EMPTY;
             for &t in order.iter() {
@@ -621,7 +636,7 @@ impl Ctx<'_> {
                     .iter()
                     .for_each(|c| bbox.extend(*c));
             }
-            nodes[at] = Node {
+            nodes[0] = Node {
                 bbox,
                 first: offset as u32,
                 right: 0,
@@ -636,33 +651,20 @@ impl Ctx<'_> {
             cen[*a as usize][axis].total_cmp(&cen[*b as usize][axis])
         });
         let (l, r) = order.split_at_mut(mid);
-        let (left, right);
+        let (me, rest) = nodes.split_at_mut(1);
+        let (ln, rn) = rest.split_at_mut(self.sizes[&mid]);
+        let (left, right) = (base + 1, base + 1 + ln.len());
         if mid >= PAR_MIN && depth < 8 {
-            let (lv, rv) = rayon::join(
-                || self.build(l, offset, depth + 1),
-                || self.build(r, offset + mid, depth + 1),
+            rayon::join(
+                || self.split(ln, left, l, offset, depth + 1),
+                || self.split(rn, right, r, offset + mid, depth + 1),
             );
-            left = nodes.len();
-            right = left + lv.len();
-            for (sub, shift) in [(lv, left as u32), (rv, right as u32)] {
-                nodes.extend(sub.into_iter().map(|mut n| {
-                    if n.count == 0 {
-                        n.first += shift;
-                        n.right += shift;
-                    }
-                    n
-                }));
-            }
         } else {
-            left = nodes.len();
-            right = left + 1;
-            nodes.push(Node::EMPTY);
-            nodes.push(Node::EMPTY);
-            self.split(nodes, left, l, offset, depth + 1);
-            self.split(nodes, right, r, offset + mid, depth + 1);
+            self.split(ln, left, l, offset, depth + 1);
+            self.split(rn, right, r, offset + mid, depth + 1);
         }
-        nodes[at] = Node {
-            bbox: nodes[left].bbox.union(&nodes[right].bbox),
+        me[0] = Node {
+            bbox: ln[0].bbox.union(&rn[0].bbox),
             first: left as u32,
             right: right as u32,
             count: 0,
@@ -716,44 +718,49 @@ impl NearNode {
 
 impl NearBuild<'_> {
     fn tree(&self) -> Vec<NearNode> {
-        self.subtree(0)
+        let mut out = vec![NearNode::EMPTY; self.count(0)];
+        self.fill(0, &mut out, 0);
+        out
     }
 
-    /// The tree below binary node `at`, root first, child indices local to the
-    /// returned vector; large subtrees are collapsed in parallel.
-    fn subtree(&self, at: usize) -> Vec<NearNode> {
-        let nodes = self.nodes;
-        if nodes[at].count > 0 || self.range(at).len() < PAR_MIN {
-            let mut out = Vec::with_capacity(2 * self.range(at).len() / LEAF / 3 + 1);
-            self.collapse(at, &mut out);
-            return out;
+    /// Nodes of the closest-point tree over binary node `at`.
+    fn count(&self, at: usize) -> usize {
+        let (kids, n) = self.kids(at);
+        1 + kids[..n]
+            .iter()
+            .filter(|&&k| self.nodes[k].count == 0)
+            .map(|&k| self.count(k))
+            .sum::<usize>()
+    }
+
+    /// Fills `out` (exactly the tree over binary node `at`, its root first, at
+    /// global index `base`) depth first; large subtrees in parallel, each into
+    /// its own part of the one vector.
+    fn fill(&self, at: usize, out: &mut [NearNode], base: usize) {
+        if self.range(at).len() < PAR_MIN {
+            self.collapse(at, out, base, &mut 0);
+            return;
         }
+        let nodes = self.nodes;
         let (mut w, pad) = self.start(at);
-        let kids = self.kids(at);
-        let subs: Vec<Option<Vec<NearNode>>> = kids
-            .par_iter()
-            .map(|&k| (nodes[k].count == 0).then(|| self.subtree(k)))
-            .collect();
-        let mut out = vec![NearNode::EMPTY];
-        for (lane, (&k, sub)) in kids.iter().zip(subs).enumerate() {
-            match sub {
-                None => self.set(&mut w, lane, k, pad, nodes[k].first, nodes[k].count),
-                Some(sub) => {
-                    let shift = out.len() as u32;
-                    self.set(&mut w, lane, k, pad, shift, 0);
-                    out.extend(sub.into_iter().map(|mut n| {
-                        for l in 0..4 {
-                            if n.valid & (1 << l) != 0 && n.count[l] == 0 {
-                                n.child[l] += shift;
-                            }
-                        }
-                        n
-                    }));
-                }
+        let (kids, n) = self.kids(at);
+        let (me, mut rest) = out.split_at_mut(1);
+        let mut next = base + 1;
+        let mut jobs = Vec::new();
+        for (lane, &k) in kids[..n].iter().enumerate() {
+            if nodes[k].count > 0 {
+                self.set(&mut w, lane, k, pad, nodes[k].first, nodes[k].count);
+            } else {
+                let (part, tail) = std::mem::take(&mut rest).split_at_mut(self.count(k));
+                rest = tail;
+                self.set(&mut w, lane, k, pad, next as u32, 0);
+                next += part.len();
+                jobs.push((k, next - part.len(), part));
             }
         }
-        out[0] = w;
-        out
+        jobs.into_par_iter()
+            .for_each(|(k, b, part)| self.fill(k, part, b));
+        me[0] = w;
     }
 
     /// A node over binary node `at` with its centre and scale set, and the
@@ -772,21 +779,30 @@ impl NearBuild<'_> {
         )
     }
 
-    /// Up to four binary nodes below the inner node `at`: two levels become
-    /// one, opening the largest inner child first.
-    fn kids(&self, at: usize) -> Vec<usize> {
+    /// Up to four binary nodes below binary node `at`: two levels become one,
+    /// opening the largest inner child first (none below a leaf).
+    fn kids(&self, at: usize) -> ([usize; 4], usize) {
         let nodes = self.nodes;
-        let mut kids = vec![nodes[at].first as usize, nodes[at].right as usize];
-        while kids.len() < 4 {
+        let mut kids = [0usize; 4];
+        if nodes[at].count > 0 {
+            return (kids, 0);
+        }
+        kids[0] = nodes[at].first as usize;
+        kids[1] = nodes[at].right as usize;
+        let mut n = 2;
+        while n < 4 {
             let size = |k: usize| nodes[k].bbox.size().element_sum();
-            let open = (0..kids.len())
+            let open = (0..n)
                 .filter(|&i| nodes[kids[i]].count == 0)
                 .max_by(|&a, &b| size(kids[a]).total_cmp(&size(kids[b])));
             let Some(i) = open else { break };
-            let k = kids.swap_remove(i);
-            kids.extend([nodes[k].first as usize, nodes[k].right as usize]);
+            let k = kids[i];
+            kids[i] = kids[n - 1];
+            kids[n - 1] = nodes[k].first as usize;
+            kids[n] = nodes[k].right as usize;
+            n += 1;
         }
-        kids
+        (kids, n)
     }
 
     /// Positions in `order` of the triangles below binary node `k`.
@@ -844,29 +860,28 @@ impl NearBuild<'_> {
         w.valid |= 1 << lane;
     }
 
-    /// The node over binary node `at` and its subtree, appended to `out`;
-    /// returns its index.
-    fn collapse(&self, at: usize, out: &mut Vec<NearNode>) -> u32 {
-        let me = out.len();
-        out.push(NearNode::EMPTY);
+    /// The node over binary node `at` and its subtree, depth first from
+    /// `out[*next]` (`out[0]` is global index `base`); returns its global index.
+    fn collapse(&self, at: usize, out: &mut [NearNode], base: usize, next: &mut usize) -> u32 {
+        let me = *next;
+        *next += 1;
         let nodes = self.nodes;
         let (mut w, pad) = self.start(at);
         if nodes[at].count > 0 {
             // A mesh of one leaf.
             self.set(&mut w, 0, at, pad, nodes[at].first, nodes[at].count);
-            out[me] = w;
-            return me as u32;
         }
-        for (lane, k) in self.kids(at).into_iter().enumerate() {
+        let (kids, n) = self.kids(at);
+        for (lane, &k) in kids[..n].iter().enumerate() {
             if nodes[k].count > 0 {
                 self.set(&mut w, lane, k, pad, nodes[k].first, nodes[k].count);
             } else {
-                let child = self.collapse(k, out);
+                let child = self.collapse(k, out, base, next);
                 self.set(&mut w, lane, k, pad, child, 0);
             }
         }
         out[me] = w;
-        me as u32
+        (base + me) as u32
     }
 }
 
