@@ -26,6 +26,53 @@ fn main() {
     let t = Instant::now();
     let bvh = Bvh::build(&mesh);
     let build = t.elapsed().as_secs_f64();
+    if std::env::var_os("ANALYSE").is_some() {
+        use millplan_models::contact::{analyse, locate, Params, PathPoint, Surface};
+        let surface = Surface::new(&mesh);
+        // Passes split at links and reversals, as `millplan speed` does.
+        let mut pts: Vec<PathPoint> = Vec::new();
+        let (mut pass, mut prev) = (0u32, None::<glam::DVec3>);
+        for m in parsed
+            .program
+            .operations
+            .iter()
+            .flat_map(|o| o.moves.iter())
+        {
+            if !m.is_cutting() {
+                pass += 1;
+                continue;
+            }
+            if let (Some(a), Some(b)) = (prev, pts.last().map(|q| q.cl)) {
+                let d = (m.end - b).normalize_or_zero();
+                if d.dot(a) < 0.5 {
+                    pass += 1;
+                }
+            }
+            if let Some(b) = pts.last().map(|q| q.cl) {
+                prev = Some((m.end - b).normalize_or_zero());
+            }
+            pts.push(PathPoint {
+                cl: m.end,
+                axis: glam::DVec3::Z,
+                pass,
+            });
+        }
+        let p = Params::new(2.0 * r, 0.3);
+        for _ in 0..3 {
+            let t = Instant::now();
+            let l = locate(&surface, &pts, &p);
+            let tl = t.elapsed().as_secs_f64();
+            drop(l);
+            let t = Instant::now();
+            let a = analyse(&surface, &pts, &p);
+            println!(
+                "locate {tl:.3} s, analyse {:.3} s ({} points)",
+                t.elapsed().as_secs_f64(),
+                a.len()
+            );
+        }
+        return;
+    }
     for _ in 0..2 {
         let t = Instant::now();
         let mut hint = None;

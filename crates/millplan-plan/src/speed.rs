@@ -235,6 +235,22 @@ pub fn apply_owned(
     m: &Machine,
     p: &SpeedParams,
 ) -> Result<SpeedResult, SpeedError> {
+    let clock = std::time::Instant::now();
+    let surface = Surface::new(mesh);
+    let t = clock.elapsed().as_secs_f64();
+    let mut res = apply_on(program, &surface, m, p)?;
+    res.timings.insert(0, ("surface (BVH, vertex normals)", t));
+    Ok(res)
+}
+
+/// [`apply_owned`] on a surface prepared beforehand (for example while the
+/// program was being read).
+pub fn apply_on(
+    program: Program,
+    surface: &Surface,
+    m: &Machine,
+    p: &SpeedParams,
+) -> Result<SpeedResult, SpeedError> {
     if !(p.vc > 0.0 && p.fz > 0.0 && p.flutes > 0 && p.ap > 0.0)
         || p.ball_d.map(|d| !(d > 0.0)).unwrap_or(false)
     {
@@ -250,8 +266,6 @@ pub fn apply_owned(
         timings.push((name, clock.elapsed().as_secs_f64()));
         clock = std::time::Instant::now();
     };
-    let surface = Surface::new(mesh);
-    lap("surface (BVH, vertex normals)", &mut timings);
     let mut out = program;
     let mut rows: Vec<PointRow> = Vec::new();
     let mut check = None;
@@ -301,7 +315,7 @@ pub fn apply_owned(
             continue;
         }
         if p.convention.is_none() && check.is_none() {
-            let c = contact::detect_convention(&surface, &pts, d / 2.0);
+            let c = contact::detect_convention(surface, &pts, d / 2.0);
             convention = c.chosen;
             check = Some(c);
         }
@@ -312,7 +326,7 @@ pub fn apply_owned(
         cp.nearest_incentre = p.nearest_incentre;
         lap("points and convention", &mut timings);
         // The rows are made as the points are analysed, then completed below.
-        let mut op_rows = contact::analyse_with(&surface, &pts, &cp, |r| PointRow {
+        let mut op_rows = contact::analyse_with(surface, &pts, &cp, |r| PointRow {
             op: oi,
             mv: 0,
             line: 0,

@@ -4,9 +4,9 @@ use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, Unit
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_mesh, read_program, write_atomic};
 use clap::ValueEnum;
-use millplan_models::contact::{Convention, NormalMode};
+use millplan_models::contact::{Convention, NormalMode, Surface};
 use millplan_nc::write::gcode::GcodeOptions;
-use millplan_plan::speed::{apply_owned, FeedCoupling, SpeedParams};
+use millplan_plan::speed::{apply_on, FeedCoupling, SpeedParams};
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -102,11 +102,31 @@ pub struct Args {
 pub fn run(a: Args) -> CliResult<i32> {
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let t0 = std::time::Instant::now();
-    let parsed = read_program(&a.path, read_options(a.units, None))?;
+    // The program is read on its own thread while the STL is read and its
+    // search trees are built (a program error is still reported first).
+    let reader = {
+        let (path, opts) = (a.path.clone(), read_options(a.units, None));
+        std::thread::spawn(move || {
+            let parsed = read_program(&path, opts);
+            (parsed, t0.elapsed().as_secs_f64())
+        })
+    };
+    let join =
+        |r: std::thread::JoinHandle<_>| r.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+    let (mesh, _) = match read_mesh(&a.stl) {
+        Ok(m) => m,
+        Err(e) => {
+            let (parsed, _): (CliResult<_>, f64) = join(reader);
+            parsed?;
+            return Err(e);
+        }
+    };
+    let t_mesh = t0.elapsed().as_secs_f64();
+    let surface = Surface::new(&mesh);
+    let t_surface = t0.elapsed().as_secs_f64() - t_mesh;
+    let (parsed, t_read) = join(reader);
+    let parsed = parsed?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
-    let t_read = t0.elapsed().as_secs_f64();
-    let (mesh, _) = read_mesh(&a.stl)?;
-    let t_mesh = t0.elapsed().as_secs_f64() - t_read;
     let mut p = SpeedParams::new(a.vc, a.fz, a.flutes, a.ap);
     p.feed = if a.keep_feed {
         FeedCoupling::Programmed
@@ -130,7 +150,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         Some(t) => t.into(),
         None => machine.dialect_enum().unwrap_or(parsed.program.dialect),
     };
-    let res = apply_owned(parsed.program, &mesh, &machine, &p)
+    let res = apply_on(parsed.program, &surface, &machine, &p)
         .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
     let t_apply = t0.elapsed().as_secs_f64();
     let out = write_program(&res.program, dialect, GcodeOptions::new(dialect))
@@ -139,8 +159,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     let inputs = [a.path.as_path(), a.stl.as_path()];
     write_atomic(&a.output, &out, &inputs)?;
     if a.timings {
-        eprintln!("{:>8.3} s  read toolpath", t_read);
         eprintln!("{:>8.3} s  read STL", t_mesh);
+        eprintln!("{:>8.3} s  surface (BVH, vertex normals)", t_surface);
+        eprintln!("{:>8.3} s  read toolpath (beside the two above)", t_read);
         for (name, t) in &res.timings {
             eprintln!("{t:>8.3} s  {name}");
         }
