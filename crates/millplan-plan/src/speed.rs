@@ -114,18 +114,58 @@ pub struct Stats {
 }
 
 impl Stats {
-    pub fn of(v: impl Iterator<Item = f64> + Clone) -> Stats {
-        let n = v.clone().count();
-        if n == 0 {
+    /// One pass over the values (Welford's update for the variance): the
+    /// summary reads a million rows, and each extra pass costs a sweep of
+    /// them through memory.
+    pub fn of(v: impl Iterator<Item = f64>) -> Stats {
+        let mut acc = StatsAcc::default();
+        v.for_each(|x| acc.push(x));
+        acc.finish()
+    }
+}
+
+/// [`Stats`] gathered one value at a time.
+#[derive(Clone, Copy, Debug)]
+struct StatsAcc {
+    n: usize,
+    mean: f64,
+    m2: f64,
+    min: f64,
+    max: f64,
+}
+
+impl Default for StatsAcc {
+    fn default() -> StatsAcc {
+        StatsAcc {
+            n: 0,
+            mean: 0.0,
+            m2: 0.0,
+            min: f64::INFINITY,
+            max: f64::NEG_INFINITY,
+        }
+    }
+}
+
+impl StatsAcc {
+    #[inline]
+    fn push(&mut self, x: f64) {
+        self.n += 1;
+        let d = x - self.mean;
+        self.mean += d / self.n as f64;
+        self.m2 += d * (x - self.mean);
+        self.min = self.min.min(x);
+        self.max = self.max.max(x);
+    }
+
+    fn finish(&self) -> Stats {
+        if self.n == 0 {
             return Stats::default();
         }
-        let mean = v.clone().sum::<f64>() / n as f64;
-        let var = v.clone().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n as f64;
         Stats {
-            min: v.clone().fold(f64::INFINITY, f64::min),
-            max: v.fold(f64::NEG_INFINITY, f64::max),
-            mean,
-            std: var.sqrt(),
+            min: self.min,
+            max: self.max,
+            mean: self.mean,
+            std: (self.m2 / self.n as f64).sqrt(),
         }
     }
 }
@@ -146,29 +186,51 @@ pub struct Indicators {
 
 impl Indicators {
     pub fn of(n: &[f64], ds: &[f64], dt: &[f64]) -> Indicators {
-        let mut r = Indicators::default();
-        let mut acc_sum = 0.0;
-        let mut acc_n = 0;
+        let mut acc = IndicatorsAcc::default();
         for i in 0..n.len() {
-            r.speed_integral += n[i] * ds[i];
-            if i > 0 {
-                let d = (n[i] - n[i - 1]).abs();
-                r.total_variation += d;
-                r.max_step = r.max_step.max(d);
-                if dt[i] > 0.0 {
-                    let a = d / dt[i];
-                    r.max_accel = r.max_accel.max(a);
-                    acc_sum += a;
-                    acc_n += 1;
-                }
+            acc.push(n[i], ds[i], dt[i]);
+        }
+        acc.finish()
+    }
+}
+
+/// [`Indicators`] gathered one point at a time.
+#[derive(Clone, Copy, Debug, Default)]
+struct IndicatorsAcc {
+    r: Indicators,
+    prev: Option<f64>,
+    acc_sum: f64,
+    acc_n: usize,
+}
+
+impl IndicatorsAcc {
+    #[inline]
+    fn push(&mut self, n: f64, ds: f64, dt: f64) {
+        let r = &mut self.r;
+        r.speed_integral += n * ds;
+        if let Some(p) = self.prev {
+            let d = (n - p).abs();
+            r.total_variation += d;
+            r.max_step = r.max_step.max(d);
+            if dt > 0.0 {
+                let a = d / dt;
+                r.max_accel = r.max_accel.max(a);
+                self.acc_sum += a;
+                self.acc_n += 1;
             }
         }
-        r.mean_accel = if acc_n > 0 {
-            acc_sum / acc_n as f64
-        } else {
-            0.0
-        };
-        r
+        self.prev = Some(n);
+    }
+
+    fn finish(&self) -> Indicators {
+        Indicators {
+            mean_accel: if self.acc_n > 0 {
+                self.acc_sum / self.acc_n as f64
+            } else {
+                0.0
+            },
+            ..self.r
+        }
     }
 }
 
@@ -480,6 +542,7 @@ pub fn apply_on(
         return Err(SpeedError::NoBallOperation);
     }
     let summary = summarize(&rows, convention, check, ops, &constant, feed_clamped_total);
+    lap("summary", &mut timings);
     Ok(SpeedResult {
         program: out,
         rows,
@@ -514,34 +577,53 @@ fn summarize(
         .map(|c| c.0)
         .find(|v| *v > 0.0)
         .unwrap_or(0.0);
-    let n: Vec<f64> = rows.iter().map(|r| r.n).collect();
-    let nt: Vec<f64> = rows.iter().map(|r| r.n_target).collect();
-    let ds: Vec<f64> = rows.iter().map(|r| r.ds).collect();
-    let dt: Vec<f64> = rows.iter().map(|r| r.dt).collect();
+    // One pass over the rows.
     let pi = std::f64::consts::PI;
+    let mut counts = [0usize; 7];
+    let (mut dw, mut spindle) = (StatsAcc::default(), StatsAcc::default());
+    let (mut vc_constant, mut vc_controlled) = (StatsAcc::default(), StatsAcc::default());
+    let (mut ind, mut ind_target) = (IndicatorsAcc::default(), IndicatorsAcc::default());
+    for r in rows {
+        let flags = [
+            r.clamped,
+            r.rate_limited,
+            r.held,
+            r.gap_flag,
+            r.r.no_contact,
+            r.r.corner,
+            r.r.neighbour == Neighbour::None,
+        ];
+        for (c, f) in counts.iter_mut().zip(flags) {
+            *c += f as usize;
+        }
+        dw.push(r.r.dw);
+        spindle.push(r.n);
+        vc_constant.push(pi * r.r.dw * n0 / 1000.0);
+        vc_controlled.push(pi * r.r.dw * r.n / 1000.0);
+        ind.push(r.n, r.ds, r.dt);
+        ind_target.push(r.n_target, r.ds, r.dt);
+    }
+    let [clamped, rate_limited, held, gap_flagged, no_contact, corners, first_pass_points] = counts;
     Summary {
         points: rows.len(),
         operations: ops,
         convention,
         convention_check: check,
-        clamped: rows.iter().filter(|r| r.clamped).count(),
-        rate_limited: rows.iter().filter(|r| r.rate_limited).count(),
-        held: rows.iter().filter(|r| r.held).count(),
+        clamped,
+        rate_limited,
+        held,
         feed_clamped,
-        gap_flagged: rows.iter().filter(|r| r.gap_flag).count(),
-        no_contact: rows.iter().filter(|r| r.r.no_contact).count(),
-        corners: rows.iter().filter(|r| r.r.corner).count(),
-        first_pass_points: rows
-            .iter()
-            .filter(|r| r.r.neighbour == Neighbour::None)
-            .count(),
-        d_w: Stats::of(rows.iter().map(|r| r.r.dw)),
-        spindle: Stats::of(n.iter().copied()),
+        gap_flagged,
+        no_contact,
+        corners,
+        first_pass_points,
+        d_w: dw.finish(),
+        spindle: spindle.finish(),
         constant_spindle: n0,
-        vc_constant: Stats::of(rows.iter().map(|r| pi * r.r.dw * n0 / 1000.0)),
-        vc_controlled: Stats::of(rows.iter().map(|r| pi * r.r.dw * r.n / 1000.0)),
-        indicators: Indicators::of(&n, &ds, &dt),
-        indicators_target: Indicators::of(&nt, &ds, &dt),
+        vc_constant: vc_constant.finish(),
+        vc_controlled: vc_controlled.finish(),
+        indicators: ind.finish(),
+        indicators_target: ind_target.finish(),
     }
 }
 
@@ -573,6 +655,20 @@ mod tests {
             let (lo, hi) = orig.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
             prop_assert!(n.iter().all(|x| *x >= lo - 1e-9 && *x <= hi + 1e-9));
         }
+    }
+
+    #[test]
+    fn stats_in_one_pass_agree_with_two_passes() {
+        let v: Vec<f64> = (0..1000)
+            .map(|i| 5000.0 + 1e3 * ((i as f64) * 0.37).sin())
+            .collect();
+        let s = Stats::of(v.iter().copied());
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64;
+        assert!((s.mean - mean).abs() < 1e-9 && (s.std - var.sqrt()).abs() < 1e-9);
+        assert_eq!(s.min, v.iter().copied().fold(f64::INFINITY, f64::min));
+        assert_eq!(s.max, v.iter().copied().fold(f64::NEG_INFINITY, f64::max));
+        assert_eq!(Stats::of(std::iter::empty()), Stats::default());
     }
 
     #[test]
