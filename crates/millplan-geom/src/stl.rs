@@ -137,10 +137,19 @@ fn header_text(h: &[u8]) -> String {
 }
 
 fn read_binary(bytes: &[u8], n: usize, trailing: usize) -> Result<(TriMesh, StlReport), StlError> {
-    // Records are parsed in parallel blocks, each into its place in `corners`.
-    const BLOCK: usize = 1 << 14;
     let mut corners: Vec<[u32; 3]> = vec![[0; 3]; 3 * n];
-    let body = &bytes[84..84 + 50 * n];
+    let normals = parse_records(&bytes[84..84 + 50 * n], 0, &mut corners)?;
+    finish_binary(&bytes[..80], n, trailing, corners, normals)
+}
+
+/// Parses binary facet records (the first is facet `first`) into their
+/// corners' f32 bit patterns, in parallel blocks.
+fn parse_records(
+    body: &[u8],
+    first: usize,
+    corners: &mut [[u32; 3]],
+) -> Result<NormalCheck, StlError> {
+    const BLOCK: usize = 1 << 14;
     #[inline]
     fn f(b: &[u8], at: usize) -> f32 {
         f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
@@ -159,7 +168,7 @@ fn read_binary(bytes: &[u8], n: usize, trailing: usize) -> Result<(TriMesh, StlR
                 let v = |k: usize| [f(rec, 12 * k), f(rec, 12 * k + 4), f(rec, 12 * k + 8)];
                 let tri = [v(1), v(2), v(3)];
                 if !tri.iter().flatten().all(|c| c.is_finite()) {
-                    return (normals, Some(b * BLOCK + i));
+                    return (normals, Some(first + b * BLOCK + i));
                 }
                 let d = |p: [f32; 3]| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
                 normals.check(d(v(0)), &[d(tri[0]), d(tri[1]), d(tri[2])]);
@@ -177,16 +186,25 @@ fn read_binary(bytes: &[u8], n: usize, trailing: usize) -> Result<(TriMesh, StlR
             message: format!("facet {} has a non-finite coordinate", i + 1),
         });
     }
-    let normals = blocks
+    Ok(blocks
         .iter()
         .fold(NormalCheck::default(), |a, b| NormalCheck {
             zero: a.zero + b.0.zero,
             flipped: a.flipped + b.0.flipped,
-        });
+        }))
+}
+
+fn finish_binary(
+    header: &[u8],
+    n: usize,
+    trailing: usize,
+    corners: Vec<[u32; 3]>,
+    normals: NormalCheck,
+) -> Result<(TriMesh, StlReport), StlError> {
     let (mesh, weld) = TriMesh::from_f32_corners(corners);
     let report = StlReport {
         format: StlFormat::Binary,
-        header: header_text(&bytes[..80]),
+        header: header_text(header),
         facets_in_file: n,
         degenerate: weld.degenerate,
         zero_normals: normals.zero,
@@ -195,6 +213,44 @@ fn read_binary(bytes: &[u8], n: usize, trailing: usize) -> Result<(TriMesh, StlR
         solids: 1,
     };
     Ok((mesh, report))
+}
+
+/// Reads an STL of `len` bytes from `r`. A binary file whose size matches its
+/// facet count is parsed as it streams in (its bytes are never held whole);
+/// anything else is read whole and given to [`read_stl`].
+pub fn read_stl_from(
+    r: &mut impl std::io::Read,
+    len: u64,
+) -> Result<(TriMesh, StlReport), StlError> {
+    let io = |e: std::io::Error, at: u64| StlError {
+        location: StlLocation::Byte(at),
+        message: format!("read failed: {e}"),
+    };
+    let mut head = vec![0u8; len.min(84) as usize];
+    r.read_exact(&mut head).map_err(|e| io(e, 0))?;
+    if head.len() == 84 {
+        let n = u32::from_le_bytes([head[80], head[81], head[82], head[83]]) as u64;
+        if n > 0 && 84 + 50 * n == len {
+            const CHUNK: usize = 1 << 16;
+            let n = n as usize;
+            let mut corners: Vec<[u32; 3]> = vec![[0; 3]; 3 * n];
+            let mut buf = vec![0u8; 50 * CHUNK.min(n)];
+            let mut normals = NormalCheck::default();
+            for (c, out) in corners.chunks_mut(3 * CHUNK).enumerate() {
+                let recs = out.len() / 3;
+                let body = &mut buf[..50 * recs];
+                r.read_exact(body)
+                    .map_err(|e| io(e, 84 + 50 * (c * CHUNK) as u64))?;
+                let got = parse_records(body, c * CHUNK, out)?;
+                normals.zero += got.zero;
+                normals.flipped += got.flipped;
+            }
+            return finish_binary(&head[..80], n, 0, corners, normals);
+        }
+    }
+    let mut bytes = head;
+    r.read_to_end(&mut bytes).map_err(|e| io(e, 0))?;
+    read_stl(&bytes)
 }
 
 /// Whitespace tokenizer over ASCII STL that tracks line and column.
@@ -415,6 +471,39 @@ mod tests {
         assert_eq!(m.len(), 4);
         assert_eq!(m.edge_report().open, 0);
         assert_eq!(r.flipped_normals, 0);
+    }
+
+    #[test]
+    fn streamed_binary_reads_like_the_whole_file() {
+        // Over 65,536 facets: the stream is parsed in more than one chunk.
+        let m = crate::analytic::tessellate(&crate::analytic::DemoSurface::default(), 0.3);
+        assert!(m.len() > 1 << 16);
+        let mut b = Vec::new();
+        write_binary_stl(&m, "solid streamed", &mut b);
+        let whole = read_stl(&b).expect("reads");
+        let streamed = read_stl_from(&mut &b[..], b.len() as u64).expect("reads");
+        assert_eq!(streamed.0.vertices, whole.0.vertices);
+        assert_eq!(streamed.0.triangles, whole.0.triangles);
+        assert_eq!(streamed.1, whole.1);
+        // A bad coordinate in the second chunk is found at the same byte.
+        let at = 84 + 50 * 70_000 + 12 + 4;
+        b[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+        let e1 = read_stl(&b).expect_err("NaN");
+        let e2 = read_stl_from(&mut &b[..], b.len() as u64).expect_err("NaN");
+        assert_eq!(e1, e2);
+        assert_eq!(e2.location, StlLocation::Byte(84 + 50 * 70_000));
+        // A stream shorter than its length says fails with a location.
+        let e3 = read_stl_from(&mut &b[..b.len() - 10], b.len() as u64).expect_err("short");
+        assert!(matches!(e3.location, StlLocation::Byte(_)), "{e3:?}");
+        // ASCII goes the whole-file way.
+        let a = b"solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n";
+        assert_eq!(
+            read_stl_from(&mut &a[..], a.len() as u64)
+                .expect("ascii")
+                .0
+                .len(),
+            1
+        );
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! failed run leaves nothing half-written and never touches its inputs.
 
 use crate::error::{CliError, CliResult};
-use millplan_geom::stl::{read_stl, StlReport};
+use millplan_geom::stl::{read_stl_from, StlReport};
 use millplan_geom::TriMesh;
 use millplan_nc::detect::{detect, Reader};
 use millplan_nc::{Parsed, ReadOptions};
@@ -70,9 +70,11 @@ fn read_up_to(f: &mut File, buf: &mut [u8]) -> std::io::Result<usize> {
 
 /// Reads an STL mesh.
 pub fn read_mesh(path: &Path) -> CliResult<(TriMesh, StlReport)> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| CliError::input(format!("{}: cannot read: {e}", path.display())))?;
-    read_stl(&bytes).map_err(|e| CliError::input(format!("{}:{e}", path.display())))
+    let cannot =
+        |e: std::io::Error| CliError::input(format!("{}: cannot read: {e}", path.display()));
+    let mut f = File::open(path).map_err(cannot)?;
+    let len = f.metadata().map_err(cannot)?.len();
+    read_stl_from(&mut f, len).map_err(|e| CliError::input(format!("{}:{e}", path.display())))
 }
 
 /// Reads an APT/CL or G-code program line by line (the file is never held whole).

@@ -73,7 +73,7 @@ pub fn write_program(
     // Room for a typical block per move up front: growing an 80 MB text by
     // doubling copies it and faults in fresh pages each time.
     let moves: usize = p.operations.iter().map(|o| o.moves.len()).sum();
-    let mut out = Vec::with_capacity(moves * 64 + 4096);
+    let mut out = Vec::with_capacity(moves * 96 + 4096);
     if dialect.is_apt() {
         millplan_nc::write::apt::write_apt(p, &mut out)?;
     } else {
