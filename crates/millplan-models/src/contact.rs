@@ -251,57 +251,78 @@ pub type Located = (DVec3, DVec3, f64, bool);
 /// no contact). The first half of [`analyse`], reused by passes that evaluate the
 /// working diameter for other orders of the same points.
 pub fn locate(s: &Surface, points: &[PathPoint], p: &Params) -> (Vec<DVec3>, Vec<Located>) {
-    let r = p.d / 2.0;
-    let centres: Vec<DVec3> = points.iter().map(|q| centre(q, p.convention, r)).collect();
-    let incentres = p.nearest_incentre.then(|| Incentres::new(s.mesh));
-    // Contact and normal: chunks of consecutive points in parallel, each point
-    // starting its search from the previous point's contact triangle.
-    let contact_of =
-        |c: &DVec3, q: &PathPoint, hint: &mut Option<u32>| -> (DVec3, DVec3, f64, bool) {
-            if let Some(ic) = &incentres {
-                // The paper: the facet whose in-centre is nearest to the tool position.
-                let t = ic.nearest(q.cl).unwrap_or(0) as usize;
-                let n = orient_up(s.mesh.facet_normal(t), q.axis);
-                let [a, b, cc] = s.mesh.corners(t);
-                let (pt, _) = millplan_geom::bvh::closest_on_triangle(*c, a, b, cc);
-                return (pt, n, (pt - *c).length() - r, false);
-            }
-            match s.bvh.closest_near(s.mesh, *c, 3.0 * r + p.ap + 1.0, *hint) {
-                Some(h) => {
-                    *hint = Some(h.triangle);
-                    let n = match p.normals {
-                        NormalMode::Facet => s.mesh.facet_normal(h.triangle as usize),
-                        NormalMode::Ball => (*c - h.point).normalize_or_zero(),
-                        NormalMode::Smooth => {
-                            let t = s.mesh.triangles[h.triangle as usize];
-                            let vn = &s.vertex_normals;
-                            (vn[t[0] as usize] * h.bary[0]
-                                + vn[t[1] as usize] * h.bary[1]
-                                + vn[t[2] as usize] * h.bary[2])
-                                .normalize_or_zero()
-                        }
-                    };
-                    let n = if n == DVec3::ZERO {
-                        (*c - h.point).normalize_or_zero()
-                    } else {
-                        n
-                    };
-                    (h.point, orient_up(n, q.axis), h.distance - r, false)
-                }
-                None => (*c - q.axis * r, q.axis, f64::INFINITY, true),
-            }
-        };
-    let mut contacts: Vec<Located> = vec![(DVec3::ZERO, DVec3::ZERO, 0.0, false); points.len()];
-    contacts
-        .par_chunks_mut(2048)
-        .zip(centres.par_chunks(2048).zip(points.par_chunks(2048)))
-        .for_each(|(out, (cs, qs))| {
-            let mut hint = None;
-            for ((o, c), q) in out.iter_mut().zip(cs).zip(qs) {
-                *o = contact_of(c, q, &mut hint);
-            }
-        });
+    let centres: Vec<DVec3> = points
+        .iter()
+        .map(|q| centre(q, p.convention, p.d / 2.0))
+        .collect();
+    let loc = Locator::new(s, p);
+    // Consecutive points in parallel runs, each point starting its search from
+    // the previous point's contact triangle.
+    let contacts = (0..points.len())
+        .into_par_iter()
+        .with_min_len(1024)
+        .map_init(
+            || None,
+            |hint, i| loc.contact(&centres[i], &points[i], hint),
+        )
+        .collect();
     (centres, contacts)
+}
+
+/// Finds the contact point and normal of one ball centre.
+struct Locator<'a> {
+    s: &'a Surface<'a>,
+    p: &'a Params,
+    incentres: Option<Incentres>,
+}
+
+impl<'a> Locator<'a> {
+    fn new(s: &'a Surface<'a>, p: &'a Params) -> Locator<'a> {
+        Locator {
+            s,
+            p,
+            incentres: p.nearest_incentre.then(|| Incentres::new(s.mesh)),
+        }
+    }
+
+    /// The contact of centre `c` of point `q`; `hint` is the previous point's
+    /// contact triangle and becomes this one's.
+    #[inline]
+    fn contact(&self, c: &DVec3, q: &PathPoint, hint: &mut Option<u32>) -> Located {
+        let (s, p, r) = (self.s, self.p, self.p.d / 2.0);
+        if let Some(ic) = &self.incentres {
+            // The paper: the facet whose in-centre is nearest to the tool position.
+            let t = ic.nearest(q.cl).unwrap_or(0) as usize;
+            let n = orient_up(s.mesh.facet_normal(t), q.axis);
+            let [a, b, cc] = s.mesh.corners(t);
+            let (pt, _) = millplan_geom::bvh::closest_on_triangle(*c, a, b, cc);
+            return (pt, n, (pt - *c).length() - r, false);
+        }
+        match s.bvh.closest_near(s.mesh, *c, 3.0 * r + p.ap + 1.0, *hint) {
+            Some(h) => {
+                *hint = Some(h.triangle);
+                let n = match p.normals {
+                    NormalMode::Facet => s.mesh.facet_normal(h.triangle as usize),
+                    NormalMode::Ball => (*c - h.point).normalize_or_zero(),
+                    NormalMode::Smooth => {
+                        let t = s.mesh.triangles[h.triangle as usize];
+                        let vn = &s.vertex_normals;
+                        (vn[t[0] as usize] * h.bary[0]
+                            + vn[t[1] as usize] * h.bary[1]
+                            + vn[t[2] as usize] * h.bary[2])
+                            .normalize_or_zero()
+                    }
+                };
+                let n = if n == DVec3::ZERO {
+                    (*c - h.point).normalize_or_zero()
+                } else {
+                    n
+                };
+                (h.point, orient_up(n, q.axis), h.distance - r, false)
+            }
+            None => (*c - q.axis * r, q.axis, f64::INFINITY, true),
+        }
+    }
 }
 
 pub fn analyse(s: &Surface, points: &[PathPoint], p: &Params) -> Vec<PointResult> {
@@ -316,66 +337,77 @@ pub fn analyse_with<T: Send>(
     p: &Params,
     wrap: impl Fn(PointResult) -> T + Sync,
 ) -> Vec<T> {
-    let (centres, contacts) = locate(s, points, p);
+    let centres: Vec<DVec3> = points
+        .iter()
+        .map(|q| centre(q, p.convention, p.d / 2.0))
+        .collect();
     let search = stepover_search_radius(&centres, points, p.neighbour_search);
     let grid = NeighbourGrid::new(&centres, points, search);
+    let loc = Locator::new(s, p);
+    // Contact and working diameter in one pass over consecutive runs of points
+    // (each contact search starts from the previous point's triangle).
     (0..points.len())
         .into_par_iter()
-        .map(|i| {
-            let (contact, n, gap, no_contact) = contacts[i];
-            let k = points[i].axis;
-            let inclination = n.dot(k).clamp(-1.0, 1.0).acos();
-            let (t_in, t_out) = feed_directions(&centres, points, i);
-            let project = |t: DVec3| (t - n * t.dot(n)).normalize_or_zero();
-            let (t_in, t_out) = (project(t_in), project(t_out));
-            let central = (t_in + t_out).normalize_or_zero();
-            let t = if central == DVec3::ZERO {
-                if t_out != DVec3::ZERO {
-                    t_out
+        .with_min_len(1024)
+        .map_init(
+            || None,
+            |hint, i| {
+                let (contact, n, gap, no_contact) = loc.contact(&centres[i], &points[i], hint);
+                let k = points[i].axis;
+                let inclination = n.dot(k).clamp(-1.0, 1.0).acos();
+                let (t_in, t_out) = feed_directions(&centres, points, i);
+                let project = |t: DVec3| (t - n * t.dot(n)).normalize_or_zero();
+                let (t_in, t_out) = (project(t_in), project(t_out));
+                let central = (t_in + t_out).normalize_or_zero();
+                let t = if central == DVec3::ZERO {
+                    if t_out != DVec3::ZERO {
+                        t_out
+                    } else {
+                        t_in
+                    }
                 } else {
-                    t_in
-                }
-            } else {
-                central
-            };
-            let corner = t_in != DVec3::ZERO
-                && t_out != DVec3::ZERO
-                && t_in.angle_between(t_out) > p.corner_angle;
-            let eval = |t: DVec3| {
-                let (af, side, neighbour) = local_case(&grid, &centres, points, i, n, k, t, search);
-                let c = Case {
-                    d: p.d,
-                    ap: p.ap,
-                    neighbour,
-                    alpha: inclination,
-                    af,
-                    side,
+                    central
                 };
-                (wd::working_diameter(&c), af, side, neighbour)
-            };
-            let mut best = eval(t);
-            if corner {
-                for dir in [t_in, t_out] {
-                    let e = eval(dir);
-                    if e.0 > best.0 {
-                        best = e;
+                let corner = t_in != DVec3::ZERO
+                    && t_out != DVec3::ZERO
+                    && t_in.angle_between(t_out) > p.corner_angle;
+                let eval = |t: DVec3| {
+                    let (af, side, neighbour) =
+                        local_case(&grid, &centres, points, i, n, k, t, search);
+                    let c = Case {
+                        d: p.d,
+                        ap: p.ap,
+                        neighbour,
+                        alpha: inclination,
+                        af,
+                        side,
+                    };
+                    (wd::working_diameter(&c), af, side, neighbour)
+                };
+                let mut best = eval(t);
+                if corner {
+                    for dir in [t_in, t_out] {
+                        let e = eval(dir);
+                        if e.0 > best.0 {
+                            best = e;
+                        }
                     }
                 }
-            }
-            let (dw, feed_angle, side, neighbour) = best;
-            wrap(PointResult {
-                contact,
-                normal: n,
-                gap,
-                no_contact,
-                inclination,
-                feed_angle,
-                side,
-                neighbour,
-                corner,
-                dw,
-            })
-        })
+                let (dw, feed_angle, side, neighbour) = best;
+                wrap(PointResult {
+                    contact,
+                    normal: n,
+                    gap,
+                    no_contact,
+                    inclination,
+                    feed_angle,
+                    side,
+                    neighbour,
+                    corner,
+                    dw,
+                })
+            },
+        )
         .collect()
 }
 
