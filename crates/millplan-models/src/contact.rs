@@ -177,60 +177,33 @@ pub fn detect_convention(s: &Surface, points: &[PathPoint], r: f64) -> Conventio
     }
 }
 
-/// Triangle in-centres, for the paper's nearest-in-centre mapping.
+/// Triangle in-centres in a k-d tree, for the paper's nearest-in-centre mapping.
 struct Incentres {
-    cells: FxHashMap<(i64, i64, i64), Vec<u32>>,
-    pts: Vec<DVec3>,
-    cell: f64,
+    tree: kiddo::ImmutableKdTree<f64, 3>,
 }
 
 impl Incentres {
     fn new(mesh: &TriMesh) -> Incentres {
-        let pts: Vec<DVec3> = (0..mesh.len())
+        let pts: Vec<[f64; 3]> = (0..mesh.len())
+            .into_par_iter()
             .map(|t| {
                 let [a, b, c] = mesh.corners(t);
                 let (la, lb, lc) = ((b - c).length(), (c - a).length(), (a - b).length());
-                (a * la + b * lb + c * lc) / (la + lb + lc)
+                ((a * la + b * lb + c * lc) / (la + lb + lc)).to_array()
             })
             .collect();
-        let bb = mesh.bounds();
-        let cell = (bb.diagonal() / (mesh.len() as f64).cbrt().max(1.0)).max(1e-6);
-        let mut cells: FxHashMap<(i64, i64, i64), Vec<u32>> = FxHashMap::default();
-        for (i, p) in pts.iter().enumerate() {
-            cells.entry(key(*p, cell)).or_default().push(i as u32);
+        Incentres {
+            tree: kiddo::ImmutableKdTree::new_from_slice(&pts),
         }
-        Incentres { cells, pts, cell }
     }
 
+    /// The facet whose in-centre is nearest to `p` (none on an empty mesh).
     fn nearest(&self, p: DVec3) -> Option<u32> {
-        let k = key(p, self.cell);
-        let mut best: Option<(f64, u32)> = None;
-        for ring in 0..64i64 {
-            for dx in -ring..=ring {
-                for dy in -ring..=ring {
-                    for dz in -ring..=ring {
-                        if dx.abs().max(dy.abs()).max(dz.abs()) != ring {
-                            continue;
-                        }
-                        if let Some(v) = self.cells.get(&(k.0 + dx, k.1 + dy, k.2 + dz)) {
-                            for &i in v {
-                                let d = (self.pts[i as usize] - p).length_squared();
-                                if best.map(|b| d < b.0).unwrap_or(true) {
-                                    best = Some((d, i));
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-            // Anything outside ring r is at least r·cell away.
-            if let Some((d, i)) = best {
-                if d.sqrt() <= ring as f64 * self.cell {
-                    return Some(i);
-                }
-            }
-        }
-        best.map(|b| b.1)
+        (self.tree.size() > 0).then(|| {
+            self.tree
+                .nearest_one::<kiddo::SquaredEuclidean>(&p.to_array())
+                .item as u32
+        })
     }
 }
 
@@ -702,5 +675,43 @@ impl NeighbourGrid {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use millplan_geom::analytic::{tessellate, DemoSurface};
+
+    #[test]
+    fn nearest_incentre_agrees_with_brute_force() {
+        let m = tessellate(&DemoSurface::default(), 2.0);
+        let ic = Incentres::new(&m);
+        let incentre = |t: usize| {
+            let [a, b, c] = m.corners(t);
+            let (la, lb, lc) = ((b - c).length(), (c - a).length(), (a - b).length());
+            (a * la + b * lb + c * lc) / (la + lb + lc)
+        };
+        let mut seed = 11u64;
+        for _ in 0..300 {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let f = |k: u32| ((seed >> k) & 0xffff) as f64 / 65535.0;
+            let p = DVec3::new(
+                -20.0 + 100.0 * f(0),
+                -20.0 + 100.0 * f(16),
+                -10.0 + 40.0 * f(32),
+            );
+            let want = (0..m.len())
+                .map(|t| (incentre(t) - p).length_squared())
+                .fold(f64::INFINITY, f64::min);
+            let got = ic.nearest(p).expect("a facet") as usize;
+            assert!((incentre(got) - p).length_squared() <= want * (1.0 + 1e-12));
+        }
+        assert_eq!(
+            Incentres::new(&TriMesh::default()).nearest(DVec3::ZERO),
+            None
+        );
     }
 }
