@@ -317,6 +317,9 @@ pub fn analyse_with<T: Send>(
     let search = stepover_search_radius(&centres, points, p.neighbour_search);
     let grid = NeighbourGrid::new(&centres, points, search);
     let loc = Locator::new(s, p);
+    // The turn between unit directions exceeds the corner angle when the
+    // cosine falls below its cosine.
+    let cos_corner = p.corner_angle.cos();
     // Contact and working diameter in one pass over consecutive runs of points
     // (each contact search starts from the previous point's triangle).
     (0..points.len())
@@ -341,9 +344,8 @@ pub fn analyse_with<T: Send>(
                 } else {
                     central
                 };
-                let corner = t_in != DVec3::ZERO
-                    && t_out != DVec3::ZERO
-                    && t_in.angle_between(t_out) > p.corner_angle;
+                let corner =
+                    t_in != DVec3::ZERO && t_out != DVec3::ZERO && t_in.dot(t_out) < cos_corner;
                 let eval = |t: DVec3| {
                     let (af, side, neighbour) =
                         local_case(&grid, &centres, points, i, n, k, t, search);
