@@ -49,6 +49,9 @@ pub struct SpeedParams {
     /// Ball diameter for operations whose tool has no geometry (G-code programs
     /// name tools by number only), mm.
     pub ball_d: Option<f64>,
+    /// Keep a [`PointRow`] per cutting point (for tables and reports); without
+    /// it only the summary is made, in a fraction of the memory.
+    pub keep_rows: bool,
 }
 
 impl SpeedParams {
@@ -65,6 +68,7 @@ impl SpeedParams {
             gap_tol: 0.02,
             nearest_incentre: false,
             ball_d: None,
+            keep_rows: true,
         }
     }
 }
@@ -265,6 +269,7 @@ pub struct Summary {
 
 pub struct SpeedResult {
     pub program: Program,
+    /// One row per cutting point when [`SpeedParams::keep_rows`], else empty.
     pub rows: Vec<PointRow>,
     pub summary: Summary,
     /// Wall time of each phase (name, seconds), for `--timings`.
@@ -329,12 +334,21 @@ pub fn apply_on(
         clock = std::time::Instant::now();
     };
     let mut out = program;
+    // The constant speed the program ran at: the first ball-end operation's
+    // programmed spindle speed.
+    let n0 = out
+        .operations
+        .iter()
+        .filter(|o| is_ball(o, p.ball_d).is_some() && o.moves.iter().any(|mv| mv.is_cutting()))
+        .filter_map(|o| o.moves.iter().find(|mv| mv.spindle > 0.0))
+        .map(|mv| mv.spindle)
+        .next()
+        .unwrap_or(0.0);
     let mut rows: Vec<PointRow> = Vec::new();
+    let mut acc = SummaryAcc::new(n0);
     let mut check = None;
     let mut convention = p.convention.unwrap_or(Convention::Tip);
     let mut ops = 0;
-    let mut constant = Vec::new();
-    let mut feed_clamped_total = 0;
     for oi in 0..out.operations.len() {
         let op = &out.operations[oi];
         let Some(d) = is_ball(op, p.ball_d) else {
@@ -387,42 +401,41 @@ pub fn apply_on(
         cp.gap_tol = p.gap_tol;
         cp.nearest_incentre = p.nearest_incentre;
         lap("points and convention", &mut timings);
-        // The rows are made as the points are analysed, then completed below.
-        let mut op_rows = contact::analyse_with(surface, &pts, &cp, |r| PointRow {
-            op: oi,
-            mv: 0,
-            line: 0,
-            d,
-            cl: DVec3::ZERO,
-            n_target: millplan_models::wd::spindle_speed(p.vc, r.dw),
-            n: 0.0,
-            feed: 0.0,
-            ds: 0.0,
-            dt: 0.0,
-            clamped: false,
-            rate_limited: false,
-            held: false,
+        // The full results only when rows are kept; the control needs D_w and
+        // a few flags per point.
+        let lite = |r: &PointResult| Lite {
+            dw: r.dw,
             gap_flag: r.no_contact || r.gap.abs() > p.gap_tol,
-            r,
-        });
+            no_contact: r.no_contact,
+            corner: r.corner,
+            first_pass: r.neighbour == Neighbour::None,
+        };
+        let (full, lites) = if p.keep_rows {
+            let full = contact::analyse(surface, &pts, &cp);
+            let lites: Vec<Lite> = full.iter().map(lite).collect();
+            (full, lites)
+        } else {
+            (
+                Vec::new(),
+                contact::analyse_with(surface, &pts, &cp, |r| lite(&r)),
+            )
+        };
         drop(pts);
         lap("contact and working diameter", &mut timings);
-        let programmed = op
-            .moves
-            .iter()
-            .find(|mv| mv.spindle > 0.0)
-            .map(|mv| mv.spindle)
-            .unwrap_or(0.0);
         // Targets, machine range, threshold.
+        let target: Vec<f64> = lites
+            .iter()
+            .map(|l| millplan_models::wd::spindle_speed(p.vc, l.dw))
+            .collect();
         let clamp = |n: f64| n.clamp(m.spindle_min, m.spindle_max);
-        let mut n: Vec<f64> = Vec::with_capacity(op_rows.len());
-        for row in op_rows.iter_mut() {
-            let c = clamp(row.n_target);
-            row.clamped = c != row.n_target;
+        let mut n: Vec<f64> = Vec::with_capacity(target.len());
+        let mut held = vec![false; target.len()];
+        for (k, t) in target.iter().enumerate() {
+            let c = clamp(*t);
             match n.last() {
                 Some(&last) if (c - last).abs() <= p.s_threshold => {
                     n.push(last);
-                    row.held = c != last;
+                    held[k] = c != last;
                 }
                 _ => n.push(c),
             }
@@ -484,20 +497,45 @@ pub fn apply_on(
             let shrunk: Vec<f64> = dt.iter().map(|t| t * 0.999).collect();
             rate_limit(&mut n, &shrunk, m.spindle_accel);
         }
+        // The final feeds and block times; every point into the summary, and
+        // into a row when rows are kept.
         let mut feeds = Vec::with_capacity(n.len());
-        for (k, row) in op_rows.iter_mut().enumerate() {
+        if p.keep_rows {
+            rows.reserve(n.len());
+        }
+        let mut full = full.into_iter();
+        for k in 0..n.len() {
             let (f, fc) = feed_of(k, n[k]);
-            feed_clamped_total += fc as usize;
             feeds.push(f);
-            let i = idx[k];
-            row.mv = i;
-            row.line = op.moves[i].line;
-            row.cl = op.moves[i].end;
-            row.n = n[k];
-            row.feed = f;
-            row.ds = geo[k].0;
-            row.dt = geo[k].0 / f * 60.0 + geo[k].1;
-            row.rate_limited = (n[k] - before_limit[k]).abs() > 1e-9;
+            dt[k] = geo[k].0 / f * 60.0 + geo[k].1;
+            let l = &lites[k];
+            let flags = Flags {
+                clamped: clamp(target[k]) != target[k],
+                rate_limited: (n[k] - before_limit[k]).abs() > 1e-9,
+                held: held[k],
+                feed_clamped: fc,
+            };
+            acc.push(l, &flags, target[k], n[k], geo[k].0, dt[k]);
+            if let Some(r) = full.next() {
+                let i = idx[k];
+                rows.push(PointRow {
+                    op: oi,
+                    mv: i,
+                    line: op.moves[i].line,
+                    d,
+                    cl: op.moves[i].end,
+                    n_target: target[k],
+                    n: n[k],
+                    feed: f,
+                    ds: geo[k].0,
+                    dt: dt[k],
+                    clamped: flags.clamped,
+                    rate_limited: flags.rate_limited,
+                    held: flags.held,
+                    gap_flag: l.gap_flag,
+                    r,
+                });
+            }
         }
         drop(geo);
         // Write back.
@@ -530,19 +568,12 @@ pub fn apply_on(
                 }
             }
         }
-        if rows.is_empty() {
-            rows = op_rows;
-        } else {
-            rows.append(&mut op_rows);
-        }
-        constant.push((programmed, rows.len()));
         lap("spindle limits and feeds", &mut timings);
     }
     if ops == 0 {
         return Err(SpeedError::NoBallOperation);
     }
-    let summary = summarize(&rows, convention, check, ops, &constant, feed_clamped_total);
-    lap("summary", &mut timings);
+    let summary = acc.finish(convention, check, ops);
     Ok(SpeedResult {
         program: out,
         rows,
@@ -564,66 +595,108 @@ pub fn rate_limit(n: &mut [f64], dt: &[f64], accel: f64) {
     }
 }
 
-fn summarize(
-    rows: &[PointRow],
-    convention: Convention,
-    check: Option<ConventionCheck>,
-    ops: usize,
-    constant: &[(f64, usize)],
-    feed_clamped: usize,
-) -> Summary {
-    let n0 = constant
-        .iter()
-        .map(|c| c.0)
-        .find(|v| *v > 0.0)
-        .unwrap_or(0.0);
-    // One pass over the rows.
-    let pi = std::f64::consts::PI;
-    let mut counts = [0usize; 7];
-    let (mut dw, mut spindle) = (StatsAcc::default(), StatsAcc::default());
-    let (mut vc_constant, mut vc_controlled) = (StatsAcc::default(), StatsAcc::default());
-    let (mut ind, mut ind_target) = (IndicatorsAcc::default(), IndicatorsAcc::default());
-    for r in rows {
-        let flags = [
-            r.clamped,
-            r.rate_limited,
-            r.held,
-            r.gap_flag,
-            r.r.no_contact,
-            r.r.corner,
-            r.r.neighbour == Neighbour::None,
-        ];
-        for (c, f) in counts.iter_mut().zip(flags) {
-            *c += f as usize;
+/// What the summary reads of a point's contact analysis.
+#[derive(Clone, Copy, Debug)]
+struct Lite {
+    dw: f64,
+    gap_flag: bool,
+    no_contact: bool,
+    corner: bool,
+    first_pass: bool,
+}
+
+/// What the control did at a point.
+#[derive(Clone, Copy, Debug)]
+struct Flags {
+    clamped: bool,
+    rate_limited: bool,
+    held: bool,
+    feed_clamped: bool,
+}
+
+/// The summary, gathered one point at a time in cutting order.
+struct SummaryAcc {
+    n0: f64,
+    points: usize,
+    /// clamped, rate-limited, held, feed clamped, gap, no contact, corner, first pass.
+    counts: [usize; 8],
+    dw: StatsAcc,
+    spindle: StatsAcc,
+    vc_constant: StatsAcc,
+    vc_controlled: StatsAcc,
+    ind: IndicatorsAcc,
+    ind_target: IndicatorsAcc,
+}
+
+impl SummaryAcc {
+    fn new(n0: f64) -> SummaryAcc {
+        SummaryAcc {
+            n0,
+            points: 0,
+            counts: [0; 8],
+            dw: StatsAcc::default(),
+            spindle: StatsAcc::default(),
+            vc_constant: StatsAcc::default(),
+            vc_controlled: StatsAcc::default(),
+            ind: IndicatorsAcc::default(),
+            ind_target: IndicatorsAcc::default(),
         }
-        dw.push(r.r.dw);
-        spindle.push(r.n);
-        vc_constant.push(pi * r.r.dw * n0 / 1000.0);
-        vc_controlled.push(pi * r.r.dw * r.n / 1000.0);
-        ind.push(r.n, r.ds, r.dt);
-        ind_target.push(r.n_target, r.ds, r.dt);
     }
-    let [clamped, rate_limited, held, gap_flagged, no_contact, corners, first_pass_points] = counts;
-    Summary {
-        points: rows.len(),
-        operations: ops,
-        convention,
-        convention_check: check,
-        clamped,
-        rate_limited,
-        held,
-        feed_clamped,
-        gap_flagged,
-        no_contact,
-        corners,
-        first_pass_points,
-        d_w: dw.finish(),
-        spindle: spindle.finish(),
-        constant_spindle: n0,
-        vc_constant: vc_constant.finish(),
-        vc_controlled: vc_controlled.finish(),
-        indicators: ind.finish(),
-        indicators_target: ind_target.finish(),
+
+    #[inline]
+    fn push(&mut self, l: &Lite, f: &Flags, n_target: f64, n: f64, ds: f64, dt: f64) {
+        let pi = std::f64::consts::PI;
+        self.points += 1;
+        let flags = [
+            f.clamped,
+            f.rate_limited,
+            f.held,
+            f.feed_clamped,
+            l.gap_flag,
+            l.no_contact,
+            l.corner,
+            l.first_pass,
+        ];
+        for (c, x) in self.counts.iter_mut().zip(flags) {
+            *c += x as usize;
+        }
+        self.dw.push(l.dw);
+        self.spindle.push(n);
+        self.vc_constant.push(pi * l.dw * self.n0 / 1000.0);
+        self.vc_controlled.push(pi * l.dw * n / 1000.0);
+        self.ind.push(n, ds, dt);
+        self.ind_target.push(n_target, ds, dt);
+    }
+
+    fn finish(
+        &self,
+        convention: Convention,
+        check: Option<ConventionCheck>,
+        ops: usize,
+    ) -> Summary {
+        let [clamped, rate_limited, held, feed_clamped, gap_flagged, no_contact, corners, first_pass_points] =
+            self.counts;
+        Summary {
+            points: self.points,
+            operations: ops,
+            convention,
+            convention_check: check,
+            clamped,
+            rate_limited,
+            held,
+            feed_clamped,
+            gap_flagged,
+            no_contact,
+            corners,
+            first_pass_points,
+            d_w: self.dw.finish(),
+            spindle: self.spindle.finish(),
+            constant_spindle: self.n0,
+            vc_constant: self.vc_constant.finish(),
+            vc_controlled: self.vc_controlled.finish(),
+            indicators: self.ind.finish(),
+            indicators_target: self.ind_target.finish(),
+        }
     }
 }
 
@@ -655,6 +728,36 @@ mod tests {
             let (lo, hi) = orig.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
             prop_assert!(n.iter().all(|x| *x >= lo - 1e-9 && *x <= hi + 1e-9));
         }
+    }
+
+    #[test]
+    fn summary_and_program_do_not_depend_on_keeping_rows() {
+        use millplan_geom::analytic::{tessellate, DemoSurface};
+        use millplan_nc::generate::{raster, Raster};
+        let s = DemoSurface::default();
+        let mesh = tessellate(&s, 1.0);
+        let (prog, _) = raster(
+            &s,
+            &Raster {
+                stepover: 1.5,
+                step: 0.75,
+                ..Raster::default()
+            },
+        );
+        let mut p = SpeedParams::new(63.0, 0.125, 2, 0.3);
+        let with = apply(&prog, &mesh, &Machine::default(), &p).expect("applies");
+        p.keep_rows = false;
+        let without = apply(&prog, &mesh, &Machine::default(), &p).expect("applies");
+        assert_eq!(with.rows.len(), with.summary.points);
+        assert!(with.summary.points > 1000 && with.summary.rate_limited > 0);
+        assert!(without.rows.is_empty());
+        assert_eq!(with.summary, without.summary);
+        assert_eq!(with.program, without.program);
+        // The summary is that of the rows.
+        let mean = with.rows.iter().map(|r| r.r.dw).sum::<f64>() / with.rows.len() as f64;
+        assert!((with.summary.d_w.mean - mean).abs() < 1e-9);
+        let limited = with.rows.iter().filter(|r| r.rate_limited).count();
+        assert_eq!(with.summary.rate_limited, limited);
     }
 
     #[test]

@@ -36,8 +36,12 @@ pub struct CuttingData {
 }
 
 impl CuttingData {
+    /// Spindle-control settings for commands that read only the summary and
+    /// the program (no per-point rows).
     pub fn params(&self) -> millplan_plan::speed::SpeedParams {
-        millplan_plan::speed::SpeedParams::new(self.vc, self.fz, self.flutes, self.ap)
+        let mut p = millplan_plan::speed::SpeedParams::new(self.vc, self.fz, self.flutes, self.ap);
+        p.keep_rows = false;
+        p
     }
 }
 

@@ -146,6 +146,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     p.nearest_incentre = a.nearest_incentre;
     p.ball_d = a.ball_d;
+    p.keep_rows = a.table.is_some() || a.report.is_some();
     let dialect = match a.to {
         Some(t) => t.into(),
         None => machine.dialect_enum().unwrap_or(parsed.program.dialect),
