@@ -1174,15 +1174,29 @@ mod tests {
         }
     }
 
+    /// The demo surface tessellated at `step`, moved thousands of millimetres
+    /// from the origin (where single-precision rounding is largest).
+    fn far_mesh(step: f64) -> TriMesh {
+        let mut m = tessellate(&DemoSurface::default(), step);
+        let off = DVec3::new(4817.25, -2903.5, 911.125);
+        m.vertices.iter_mut().for_each(|v| *v += off);
+        m
+    }
+
+    /// The next value of a linear congruential sequence (deterministic tests).
+    fn lcg(seed: &mut u64) -> u64 {
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        *seed
+    }
+
     #[test]
     fn single_precision_bounds_never_exceed_the_distance() {
         // Far from the origin, points exactly on the triangles (bound 0) and
         // just above and below them: every child's bound stays at or below the
         // true squared distance to its triangles.
-        let mut m = tessellate(&DemoSurface::default(), 0.5);
-        let off = DVec3::new(4817.25, -2903.5, 911.125);
-        m.vertices.iter_mut().for_each(|v| *v += off);
-        let bvh = Bvh::build(&m);
+        let bvh = Bvh::build(&far_mesh(0.5));
         let mut seed = 3u64;
         let mut checked = 0;
         for at in (0..bvh.near.len()).step_by(7) {
@@ -1193,9 +1207,7 @@ mod tests {
                 let mut tris = Vec::new();
                 lane_triangles(&bvh, at, lane, &mut tris);
                 for _ in 0..4 {
-                    seed = seed
-                        .wrapping_mul(6364136223846793005)
-                        .wrapping_add(1442695040888963407);
+                    let seed = lcg(&mut seed);
                     let [a, b, c] = bvh.tris[tris[(seed >> 33) as usize % tris.len()]];
                     let f = |k: u32| ((seed >> k) & 0x3ff) as f64 / 1023.0;
                     let n = (b - a).cross(c - a).normalize();
@@ -1230,16 +1242,12 @@ mod tests {
         // distance R along the normal of a finely tessellated surface, where
         // many triangles are nearly as close as the nearest, and coordinates in
         // the thousands of millimetres.
-        let mut m = tessellate(&DemoSurface::default(), 0.4);
-        let off = DVec3::new(4817.25, -2903.5, 911.125);
-        m.vertices.iter_mut().for_each(|v| *v += off);
+        let m = far_mesh(0.4);
         let bvh = Bvh::build(&m);
         let mut seed = 7u64;
         let mut hint = None;
         for _ in 0..150 {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
+            let seed = lcg(&mut seed);
             let f = |k: u32| ((seed >> k) & 0xffff) as f64 / 65535.0;
             let t = (seed >> 40) as usize % m.len();
             let [a, b, c] = m.corners(t);
