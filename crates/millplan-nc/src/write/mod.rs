@@ -46,8 +46,7 @@ impl NumFmt {
             out.push(b'+');
         }
         if int != 0 || !self.no_leading_zero || n == 0 {
-            let mut buf = itoa_buf(int);
-            out.append(&mut buf);
+            push_uint(out, int);
         }
         let mut d = self.decimals;
         let mut frac = n;
@@ -71,17 +70,20 @@ impl NumFmt {
     }
 }
 
-fn itoa_buf(mut v: u64) -> Vec<u8> {
-    if v == 0 {
-        return vec![b'0'];
-    }
-    let mut b = Vec::with_capacity(20);
-    while v > 0 {
-        b.push(b'0' + (v % 10) as u8);
+/// Appends the decimal digits of `v` (no allocation: this runs for every
+/// number of every block).
+fn push_uint(out: &mut Vec<u8>, mut v: u64) {
+    let mut b = [0u8; 20];
+    let mut i = b.len();
+    loop {
+        i -= 1;
+        b[i] = b'0' + (v % 10) as u8;
         v /= 10;
+        if v == 0 {
+            break;
+        }
     }
-    b.reverse();
-    b
+    out.extend_from_slice(&b[i..]);
 }
 
 /// Is this arc in a principal plane (normal along ±X, ±Y or ±Z)? Returns the axis index.
