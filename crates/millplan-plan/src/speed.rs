@@ -484,18 +484,19 @@ pub fn apply_on(
         // The block time depends on the speed through the feed: iterate until the
         // limited speeds satisfy the bound with their own block times.
         for _ in 0..50 {
+            // Block times of these speeds, and whether the speeds respect them.
+            let mut ok = true;
             for k in 0..n.len() {
                 let (f, _) = feed_of(k, n[k]);
                 dt[k] = geo[k].0 / f * 60.0 + geo[k].1;
+                ok &= k == 0
+                    || (n[k] - n[k - 1]).abs() <= m.spindle_accel * dt[k] * (1.0 + 1e-12) + 1e-9;
             }
-            let ok = (1..n.len())
-                .all(|k| (n[k] - n[k - 1]).abs() <= m.spindle_accel * dt[k] * (1.0 + 1e-12) + 1e-9);
             if ok {
                 break;
             }
             // Aim slightly inside the bound so the next feeds cannot push it over.
-            let shrunk: Vec<f64> = dt.iter().map(|t| t * 0.999).collect();
-            rate_limit(&mut n, &shrunk, m.spindle_accel);
+            rate_limit_scaled(&mut n, &dt, 0.999, m.spindle_accel);
         }
         // The final feeds and block times; every point into the summary, and
         // into a row when rows are kept.
@@ -585,12 +586,17 @@ pub fn apply_on(
 /// Limits |n_k − n_{k−1}| to `accel`·dt_k: a forward pass, then a backward pass
 /// that guarantees the bound for every pair.
 pub fn rate_limit(n: &mut [f64], dt: &[f64], accel: f64) {
+    rate_limit_scaled(n, dt, 1.0, accel);
+}
+
+/// [`rate_limit`] with every block time multiplied by `scale` first.
+fn rate_limit_scaled(n: &mut [f64], dt: &[f64], scale: f64, accel: f64) {
     for k in 1..n.len() {
-        let lim = accel * dt[k];
+        let lim = accel * (dt[k] * scale);
         n[k] = n[k].clamp(n[k - 1] - lim, n[k - 1] + lim);
     }
     for k in (0..n.len().saturating_sub(1)).rev() {
-        let lim = accel * dt[k + 1];
+        let lim = accel * (dt[k + 1] * scale);
         n[k] = n[k].clamp(n[k + 1] - lim, n[k + 1] + lim);
     }
 }
