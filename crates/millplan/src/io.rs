@@ -137,6 +137,17 @@ pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder,
 /// flushed, then renamed over the target. Refuses to overwrite any of `inputs`.
 pub fn write_atomic(path: &Path, bytes: &[u8], inputs: &[&Path]) -> CliResult<()> {
+    write_atomic_with(path, inputs, |f| f.write_all(bytes))
+}
+
+/// [`write_atomic`] with the bytes written by `fill` (for outputs too large
+/// to build in memory first); the file is renamed into place only when `fill`
+/// succeeds.
+pub fn write_atomic_with(
+    path: &Path,
+    inputs: &[&Path],
+    fill: impl FnOnce(&mut File) -> std::io::Result<()>,
+) -> CliResult<()> {
     for i in inputs {
         if same_file(path, i) {
             return Err(CliError::input(format!(
@@ -166,7 +177,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8], inputs: &[&Path]) -> CliResult<()
             .as_file()
             .set_permissions(std::fs::Permissions::from_mode(0o644));
     }
-    tmp.write_all(bytes)
+    fill(tmp.as_file_mut())
         .and_then(|_| tmp.as_file().sync_all())
         .map_err(|e| CliError::internal(format!("{}: write failed: {e}", path.display())))?;
     tmp.persist(path).map_err(|e| {

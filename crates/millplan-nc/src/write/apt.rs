@@ -3,7 +3,7 @@
 //! `CYCLE/…`/`CYCLE/OFF`, frames as NX-style `MSYS/`. Reading the output again gives
 //! the same moves.
 
-use super::{NumFmt, WriteError};
+use super::{maybe_flush, room, NumFmt, Sink, WriteError};
 use crate::ir::*;
 
 const COORD: NumFmt = NumFmt {
@@ -42,7 +42,16 @@ fn text_line(out: &mut Vec<u8>, s: &str) {
 
 /// Writes the program as APT/CL in millimetres.
 pub fn write_apt(p: &Program, out: &mut Vec<u8>) -> Result<(), WriteError> {
-    out.reserve(p.move_count() * 36 + 1024);
+    write_apt_to(p, out, None)
+}
+
+/// [`write_apt`], handing the text to `sink` as it grows (see [`Sink`]).
+pub fn write_apt_to(
+    p: &Program,
+    out: &mut Vec<u8>,
+    mut sink: Option<Sink>,
+) -> Result<(), WriteError> {
+    out.reserve(room(p.move_count(), 36, &sink));
     text_line(
         out,
         &format!("PARTNO {}", p.name.as_deref().unwrap_or("MILLPLAN")),
@@ -119,6 +128,7 @@ pub fn write_apt(p: &Program, out: &mut Vec<u8>) -> Result<(), WriteError> {
         let mut cycle: Option<u32> = None;
         let mut ev = 0;
         for (i, m) in op.moves.iter().enumerate() {
+            maybe_flush(out, &mut sink)?;
             while ev < op.events.len() && op.events[ev].at as usize <= i {
                 let e = &op.events[ev];
                 ev += 1;

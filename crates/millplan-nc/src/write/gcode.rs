@@ -5,7 +5,9 @@
 //! `F` on a block wherever the IR changes them, and a footer. Arcs outside the
 //! principal planes and canned cycles are written as explicit lines.
 
-use super::{arc_points, cycle_moves, principal_plane, NumFmt, WriteError};
+use super::{
+    arc_points, cycle_moves, maybe_flush, principal_plane, room, NumFmt, Sink, WriteError,
+};
 use crate::ir::*;
 use millplan_geom::DVec3;
 
@@ -591,6 +593,16 @@ impl W<'_> {
 
 /// Writes a program as G-code of the chosen dialect.
 pub fn write_gcode(p: &Program, o: GcodeOptions, out: &mut Vec<u8>) -> Result<(), WriteError> {
+    write_gcode_to(p, o, out, None)
+}
+
+/// [`write_gcode`], handing the text to `sink` as it grows (see [`Sink`]).
+pub fn write_gcode_to(
+    p: &Program,
+    o: GcodeOptions,
+    out: &mut Vec<u8>,
+    mut sink: Option<Sink>,
+) -> Result<(), WriteError> {
     if p.dialect.is_apt()
         && !matches!(
             o.dialect,
@@ -647,7 +659,7 @@ pub fn write_gcode(p: &Program, o: GcodeOptions, out: &mut Vec<u8>) -> Result<()
         tool_number: None,
         fmax_last: false,
     };
-    w.out.reserve(p.move_count() * 32 + 1024);
+    w.out.reserve(room(p.move_count(), 32, &sink));
     w.header(p);
     for op in &p.operations {
         if let Some(n) = &op.name {
@@ -663,6 +675,7 @@ pub fn write_gcode(p: &Program, o: GcodeOptions, out: &mut Vec<u8>) -> Result<()
         w.tool_change(op, five)?;
         let mut ev = 0;
         for (i, m) in op.moves.iter().enumerate() {
+            maybe_flush(w.out, &mut sink)?;
             while ev < op.events.len() && op.events[ev].at as usize <= i {
                 w.event(&op.events[ev]);
                 ev += 1;

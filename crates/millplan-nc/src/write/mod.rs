@@ -14,6 +14,38 @@ pub struct WriteError {
     pub message: String,
 }
 
+/// Where finished text goes while a large program is written: about every
+/// [`FLUSH_AT`] bytes the writer hands its buffer's contents over and goes on
+/// in the same buffer, so a program of any size is written in a few
+/// megabytes. What is left at the end stays in the buffer for the caller.
+pub type Sink<'a> = &'a mut dyn FnMut(&[u8]) -> Result<(), WriteError>;
+
+/// Buffer size at which a writer with a [`Sink`] hands its text over.
+pub const FLUSH_AT: usize = 1 << 22;
+
+/// Hands `out` to `sink` once it holds [`FLUSH_AT`] bytes.
+#[inline]
+fn maybe_flush(out: &mut Vec<u8>, sink: &mut Option<Sink>) -> Result<(), WriteError> {
+    if let Some(s) = sink {
+        if out.len() >= FLUSH_AT {
+            s(out)?;
+            out.clear();
+        }
+    }
+    Ok(())
+}
+
+/// Room a writer reserves for `moves` moves of about `per` bytes each: all of
+/// it without a sink, a flush's worth with one.
+fn room(moves: usize, per: usize, sink: &Option<Sink>) -> usize {
+    let all = moves * per + 1024;
+    if sink.is_some() {
+        all.min(FLUSH_AT + (1 << 16))
+    } else {
+        all
+    }
+}
+
 /// Fast fixed-decimal number formatting with trailing zeros removed
 /// (`12.5`, `-0.25`, `3`), the inner loop of every writer.
 #[derive(Clone, Copy, Debug)]
@@ -137,6 +169,55 @@ pub fn cycle_moves(c: &Cycle, p: DVec3, axis: DVec3) -> Vec<(MoveKind, DVec3, f6
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn text_handed_to_a_sink_is_the_text_written_whole() {
+        use crate::generate::{raster, Raster};
+        use millplan_geom::analytic::DemoSurface;
+        // About 460,000 moves: several flushes in both writers.
+        let (p, _) = raster(
+            &DemoSurface::default(),
+            &Raster {
+                stepover: 0.25,
+                step: 0.03,
+                ..Raster::default()
+            },
+        );
+        assert!(p.move_count() > 400_000);
+        type Write = fn(&Program, &mut Vec<u8>, Option<Sink>) -> Result<(), WriteError>;
+        let writers: [Write; 2] = [
+            |p, out, sink| apt::write_apt_to(p, out, sink),
+            |p, out, sink| {
+                gcode::write_gcode_to(p, gcode::GcodeOptions::new(Dialect::Fanuc), out, sink)
+            },
+        ];
+        for w in writers {
+            let mut whole = Vec::new();
+            w(&p, &mut whole, None).expect("writes");
+            assert!(whole.len() > 2 * FLUSH_AT);
+            let (mut streamed, mut flushes) = (Vec::new(), 0);
+            let mut buf = Vec::new();
+            {
+                let mut sink = |b: &[u8]| {
+                    flushes += 1;
+                    streamed.extend_from_slice(b);
+                    Ok(())
+                };
+                w(&p, &mut buf, Some(&mut sink)).expect("writes");
+            }
+            streamed.extend_from_slice(&buf);
+            assert!(flushes >= 2 && buf.len() < FLUSH_AT + (1 << 16));
+            assert!(streamed == whole, "streamed text differs");
+            // A sink that fails stops the writer with its error.
+            let mut fail = |_: &[u8]| {
+                Err(WriteError {
+                    message: "disk full".into(),
+                })
+            };
+            let e = w(&p, &mut Vec::new(), Some(&mut fail)).expect_err("fails");
+            assert_eq!(e.message, "disk full");
+        }
+    }
 
     fn f(v: f64, decimals: u32, tp: bool, plus: bool, nlz: bool) -> String {
         let mut o = Vec::new();

@@ -78,16 +78,65 @@ pub fn write_program(
     // doubling copies it and faults in fresh pages each time.
     let moves: usize = p.operations.iter().map(|o| o.moves.len()).sum();
     let mut out = Vec::with_capacity(moves * 96 + 4096);
-    if dialect.is_apt() {
-        millplan_nc::write::apt::write_apt(p, &mut out)?;
-    } else {
-        millplan_nc::write::gcode::write_gcode(
-            p,
-            millplan_nc::write::gcode::GcodeOptions { dialect, ..o },
-            &mut out,
-        )?;
-    }
+    write_program_to(p, dialect, o, &mut out, None)?;
     Ok(out)
+}
+
+fn write_program_to(
+    p: &millplan_nc::Program,
+    dialect: millplan_nc::Dialect,
+    o: millplan_nc::write::gcode::GcodeOptions,
+    out: &mut Vec<u8>,
+    sink: Option<millplan_nc::write::Sink>,
+) -> Result<(), millplan_nc::write::WriteError> {
+    if dialect.is_apt() {
+        millplan_nc::write::apt::write_apt_to(p, out, sink)
+    } else {
+        let o = millplan_nc::write::gcode::GcodeOptions { dialect, ..o };
+        millplan_nc::write::gcode::write_gcode_to(p, o, out, sink)
+    }
+}
+
+/// Writes a program in a dialect straight into the file `path` (atomically,
+/// never over one of `inputs`), a few megabytes at a time: a large program is
+/// never held whole as text.
+pub fn write_program_file(
+    p: &millplan_nc::Program,
+    dialect: millplan_nc::Dialect,
+    o: millplan_nc::write::gcode::GcodeOptions,
+    path: &std::path::Path,
+    inputs: &[&std::path::Path],
+) -> crate::error::CliResult<()> {
+    use millplan_nc::write::WriteError;
+    use std::io::Write;
+    let mut failed: Option<WriteError> = None;
+    let written = crate::io::write_atomic_with(path, inputs, |f| {
+        let mut buf = Vec::new();
+        let mut io_error = None;
+        let r = {
+            let mut sink = |b: &[u8]| {
+                f.write_all(b).map_err(|e| {
+                    let message = e.to_string();
+                    io_error = Some(e);
+                    WriteError { message }
+                })
+            };
+            write_program_to(p, dialect, o, &mut buf, Some(&mut sink))
+        };
+        match (r, io_error) {
+            (Ok(()), _) => f.write_all(&buf),
+            (Err(_), Some(e)) => Err(e),
+            (Err(e), None) => {
+                failed = Some(e);
+                Err(std::io::Error::other("the program cannot be written"))
+            }
+        }
+    });
+    match failed {
+        // Something the target cannot express: the user's input, not the disk.
+        Some(e) => Err(crate::error::CliError::input(e.to_string())),
+        None => written,
+    }
 }
 
 /// Source unit override shared by the reading commands.
