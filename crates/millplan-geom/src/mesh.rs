@@ -32,6 +32,45 @@ pub struct EdgeReport {
     pub non_manifold: usize,
 }
 
+const SHARD_BITS: u32 = 5;
+/// Shards of the parallel weld.
+const SHARDS: usize = 1 << SHARD_BITS;
+/// Corners per block of the parallel weld: whole triangles.
+const BLOCK: usize = 3 << 16;
+/// Marks a shard-local vertex id at the corner where the vertex first appears.
+const FIRST: u32 = 1 << 31;
+
+/// One block's corners (f32 bit patterns) with their indices, by shard.
+type ShardLists = Vec<Vec<([u32; 3], u32)>>;
+
+#[inline]
+fn shard_of(k: &[u32; 3]) -> usize {
+    use std::hash::BuildHasher;
+    (rustc_hash::FxBuildHasher.hash_one(k) >> (64 - SHARD_BITS)) as usize
+}
+
+/// The corners of the weld with each shard's ids (in order of appearance).
+struct Walk<'a> {
+    corners: &'a [[u32; 3]],
+    /// Where each block's run starts in its shard's ids.
+    offset: &'a [[usize; SHARDS]],
+    ids: &'a [Vec<u32>],
+}
+
+impl Walk<'_> {
+    /// Calls `each(j, corner, shard, id)` for the corners of block b in order.
+    #[inline]
+    fn block(&self, b: usize, mut each: impl FnMut(usize, &[u32; 3], usize, u32)) {
+        let mut cursor = self.offset[b];
+        let end = ((b + 1) * BLOCK).min(self.corners.len());
+        for (j, k) in self.corners[b * BLOCK..end].iter().enumerate() {
+            let s = shard_of(k);
+            each(j, k, s, self.ids[s][cursor[s]]);
+            cursor[s] += 1;
+        }
+    }
+}
+
 impl TriMesh {
     /// Welds a triangle soup by exact coordinate match and drops degenerate facets.
     /// The first corner to carry a coordinate gives the vertex its index, so the
@@ -104,70 +143,125 @@ impl TriMesh {
     }
 
     /// Welds triangle corners given as f32 bit patterns (three corners per
-    /// triangle; `-0.0` already folded to `+0.0`). The corners are split by hash
-    /// into shards welded in parallel, then vertices are numbered in file order.
+    /// triangle; `-0.0` already folded to `+0.0`). Vertices are numbered in
+    /// order of first appearance. Every step runs in parallel: blocks of the
+    /// soup are split by hash into shards, each shard is welded on its own
+    /// (its blocks in file order), and the blocks then number the vertices they
+    /// see first from a running count.
     pub fn from_f32_corners(corners: Vec<[u32; 3]>) -> (TriMesh, WeldReport) {
-        use std::hash::BuildHasher;
-        const SHARD_BITS: u32 = 5;
-        const SHARDS: usize = 1 << SHARD_BITS;
-        let hasher = rustc_hash::FxBuildHasher;
-        let shard_of = |k: &[u32; 3]| (hasher.hash_one(k) >> (64 - SHARD_BITS)) as usize;
-        let shard: Vec<u8> = corners.par_iter().map(|k| shard_of(k) as u8).collect();
-        let mut lists: Vec<Vec<u32>> = (0..SHARDS)
-            .map(|_| Vec::with_capacity(corners.len() / SHARDS + 16))
-            .collect();
-        for (i, s) in shard.iter().enumerate() {
-            lists[*s as usize].push(i as u32);
-        }
-        // Weld each shard on its own: local ids in the order corners appear.
-        let local: Vec<(Vec<u32>, Vec<u32>)> = lists
-            .par_iter()
-            .map(|list| {
-                let mut map: FxHashMap<[u32; 3], u32> = FxHashMap::default();
-                map.reserve(list.len() / 4);
-                let mut ids = Vec::with_capacity(list.len());
-                let mut firsts = Vec::new();
-                for &i in list {
-                    let next = firsts.len() as u32;
-                    let id = *map.entry(corners[i as usize]).or_insert_with(|| {
-                        firsts.push(i);
-                        next
-                    });
-                    ids.push(id);
+        // Each block's corners by shard, with their indices, side by side.
+        let lists: Vec<ShardLists> = corners
+            .par_chunks(BLOCK)
+            .enumerate()
+            .map(|(b, block)| {
+                let mut l: ShardLists = (0..SHARDS)
+                    .map(|_| Vec::with_capacity(block.len() / SHARDS * 5 / 4 + 16))
+                    .collect();
+                for (j, k) in block.iter().enumerate() {
+                    l[shard_of(k)].push((*k, (b * BLOCK + j) as u32));
                 }
-                (ids, firsts)
+                l
             })
             .collect();
-        drop(lists);
-        // Number vertices globally in order of first appearance.
-        let mut global: Vec<Vec<u32>> =
-            local.iter().map(|(_, f)| vec![u32::MAX; f.len()]).collect();
-        let mut cursor = [0usize; SHARDS];
-        let mut vertices: Vec<DVec3> = Vec::with_capacity(corners.len() / 6 + 16);
-        let mut corner_id = vec![0u32; corners.len()];
-        for (i, k) in corners.iter().enumerate() {
-            let s = shard[i] as usize;
-            let l = local[s].0[cursor[s]] as usize;
-            cursor[s] += 1;
-            if global[s][l] == u32::MAX {
-                global[s][l] = vertices.len() as u32;
-                vertices.push(DVec3::new(
-                    f32::from_bits(k[0]) as f64,
-                    f32::from_bits(k[1]) as f64,
-                    f32::from_bits(k[2]) as f64,
-                ));
+        let blocks = lists.len();
+        // Where each block's run starts in its shard's ids.
+        let mut offset = vec![[0usize; SHARDS]; blocks + 1];
+        for b in 0..blocks {
+            for s in 0..SHARDS {
+                offset[b + 1][s] = offset[b][s] + lists[b][s].len();
             }
-            corner_id[i] = global[s][l];
         }
-        drop(local);
-        drop(global);
-        drop(shard);
-        drop(corners);
-        let corner_tris: Vec<[u32; 3]> = corner_id
-            .chunks_exact(3)
-            .map(|c| [c[0], c[1], c[2]])
+        // Weld each shard: local ids in order of appearance, marked FIRST where new.
+        let (ids, uniques): (Vec<Vec<u32>>, Vec<usize>) = (0..SHARDS)
+            .into_par_iter()
+            .map(|s| {
+                let n = offset[blocks][s];
+                let mut map: FxHashMap<[u32; 3], u32> = FxHashMap::default();
+                map.reserve(n / 4);
+                let mut ids = Vec::with_capacity(n);
+                for l in &lists {
+                    for (k, _) in &l[s] {
+                        let next = map.len() as u32;
+                        let id = *map.entry(*k).or_insert(next);
+                        ids.push(if id == next { id | FIRST } else { id });
+                    }
+                }
+                (ids, map.len())
+            })
+            .unzip();
+        drop(lists);
+        // Vertices first seen in each block, and the global number of its first.
+        let firsts: Vec<usize> = (0..blocks)
+            .into_par_iter()
+            .map(|b| {
+                (0..SHARDS)
+                    .map(|s| {
+                        ids[s][offset[b][s]..offset[b + 1][s]]
+                            .iter()
+                            .filter(|&&v| v & FIRST != 0)
+                            .count()
+                    })
+                    .sum()
+            })
             .collect();
-        drop(corner_id);
+        let mut base = vec![0usize; blocks + 1];
+        for b in 0..blocks {
+            base[b + 1] = base[b] + firsts[b];
+        }
+        // Each block walks its corners, numbering and placing the vertices it
+        // sees first.
+        let mut vertices = vec![DVec3::ZERO; base[blocks]];
+        let mut parts: Vec<&mut [DVec3]> = Vec::with_capacity(blocks);
+        let mut rest = vertices.as_mut_slice();
+        for f in &firsts {
+            let (part, tail) = std::mem::take(&mut rest).split_at_mut(*f);
+            parts.push(part);
+            rest = tail;
+        }
+        let walk = Walk {
+            corners: &corners,
+            offset: &offset,
+            ids: &ids,
+        };
+        let news: Vec<Vec<(u32, u32)>> = parts
+            .into_par_iter()
+            .enumerate()
+            .map(|(b, part)| {
+                let mut new = Vec::with_capacity(part.len());
+                let mut n = 0;
+                walk.block(b, |_, k, s, v| {
+                    if v & FIRST != 0 {
+                        part[n] = DVec3::new(
+                            f32::from_bits(k[0]) as f64,
+                            f32::from_bits(k[1]) as f64,
+                            f32::from_bits(k[2]) as f64,
+                        );
+                        new.push((s as u32, v & !FIRST));
+                        n += 1;
+                    }
+                });
+                new
+            })
+            .collect();
+        let mut global: Vec<Vec<u32>> = uniques.iter().map(|&n| vec![0u32; n]).collect();
+        for (b, new) in news.iter().enumerate() {
+            for (j, &(s, l)) in new.iter().enumerate() {
+                global[s as usize][l as usize] = (base[b] + j) as u32;
+            }
+        }
+        drop(news);
+        // Every corner's vertex number, block by block.
+        let mut corner_tris = vec![[0u32; 3]; corners.len() / 3];
+        corner_tris
+            .par_chunks_mut(BLOCK / 3)
+            .enumerate()
+            .for_each(|(b, tris)| {
+                walk.block(b, |j, _, s, v| {
+                    tris[j / 3][j % 3] = global[s][(v & !FIRST) as usize]
+                });
+            });
+        drop(ids);
+        drop(corners);
         Self::assemble(vertices, corner_tris)
     }
 
@@ -303,6 +397,44 @@ mod tests {
             (ra, a.triangles.clone(), a.vertices.clone()),
             (rb, b.triangles, b.vertices)
         );
+    }
+
+    /// A soup of several welding blocks, its triangles shuffled so vertices
+    /// first appear in one block and come back in others, with degenerate
+    /// triangles among them: the parallel weld numbers vertices as the serial one.
+    #[test]
+    fn f32_weld_of_many_blocks_matches_f64_weld() {
+        let n = 300;
+        let z = |i: usize, j: usize| ((i * 7 + j * 13) % 17) as f64 * 0.25;
+        let p = |i: usize, j: usize| DVec3::new(i as f64 * 0.5, j as f64 * 0.5, z(i, j));
+        let mut soup: Vec<[DVec3; 3]> = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                soup.push([p(i, j), p(i + 1, j), p(i + 1, j + 1)]);
+                soup.push([p(i, j), p(i + 1, j + 1), p(i, j + 1)]);
+                if (i + j) % 97 == 0 {
+                    soup.push([p(i, j), p(i, j), p(i + 1, j)]);
+                }
+            }
+        }
+        let mut state = 12345u64;
+        for k in (1..soup.len()).rev() {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            soup.swap(k, (state >> 33) as usize % (k + 1));
+        }
+        assert!(soup.len() * 3 > 2 * (3 << 16), "spans several blocks");
+        let s32: Vec<[[f32; 3]; 3]> = soup
+            .iter()
+            .map(|t| t.map(|p| [p.x as f32, p.y as f32, p.z as f32]))
+            .collect();
+        let (a, ra) = TriMesh::from_soup(&soup);
+        let (b, rb) = TriMesh::from_f32_soup(&s32);
+        assert!(ra.degenerate > 0);
+        assert_eq!(ra, rb);
+        assert!(a.triangles == b.triangles);
+        assert!(a.vertices == b.vertices);
     }
 
     #[test]
