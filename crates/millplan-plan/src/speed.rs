@@ -14,6 +14,7 @@ use millplan_models::contact::{
 };
 use millplan_models::wd::{Neighbour, Side};
 use millplan_nc::{CutterKind, EventKind, FeedMode, MoveKind, Program};
+use rayon::prelude::*;
 
 use crate::machine::Machine;
 
@@ -463,21 +464,36 @@ pub fn apply_on(
             }
             (len, rapid_s)
         };
-        let geo: Vec<(f64, f64)> = (0..idx.len()).map(len_between).collect();
+        let geo: Vec<(f64, f64)> = (0..idx.len()).into_par_iter().map(len_between).collect();
+        // The programmed feed and whether it is per minute, read once (the
+        // chip-load coupling needs neither).
+        let programmed: Vec<(f64, bool)> = if p.feed == FeedCoupling::Programmed {
+            idx.par_iter()
+                .map(|&i| {
+                    let mv = &op.moves[i];
+                    (mv.feed, mv.feed_mode == FeedMode::PerMinute)
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         let feed_of = |k: usize, n: f64| -> (f64, bool) {
-            let mv = &op.moves[idx[k]];
             let f = match p.feed {
                 FeedCoupling::ChipLoad => n * p.flutes as f64 * p.fz,
-                FeedCoupling::Programmed => {
-                    if mv.feed_mode == FeedMode::PerMinute {
-                        mv.feed
-                    } else {
-                        return (mv.feed, false);
-                    }
-                }
+                FeedCoupling::Programmed => match programmed[k] {
+                    (f, true) => f,
+                    (f, false) => return (f, false),
+                },
             };
             let c = f.clamp(m.feed_min, m.feed_max);
             (c, c != f)
+        };
+        // Block times of speeds n at their feeds.
+        let block_times = |n: &[f64], dt: &mut [f64]| {
+            dt.par_iter_mut().enumerate().for_each(|(k, t)| {
+                let (f, _) = feed_of(k, n[k]);
+                *t = geo[k].0 / f * 60.0 + geo[k].1;
+            });
         };
         let mut dt = vec![0.0; n.len()];
         let before_limit = n.clone();
@@ -485,13 +501,10 @@ pub fn apply_on(
         // limited speeds satisfy the bound with their own block times.
         for _ in 0..50 {
             // Block times of these speeds, and whether the speeds respect them.
-            let mut ok = true;
-            for k in 0..n.len() {
-                let (f, _) = feed_of(k, n[k]);
-                dt[k] = geo[k].0 / f * 60.0 + geo[k].1;
-                ok &= k == 0
-                    || (n[k] - n[k - 1]).abs() <= m.spindle_accel * dt[k] * (1.0 + 1e-12) + 1e-9;
-            }
+            block_times(&n, &mut dt);
+            let ok = (1..n.len())
+                .into_par_iter()
+                .all(|k| (n[k] - n[k - 1]).abs() <= m.spindle_accel * dt[k] * (1.0 + 1e-12) + 1e-9);
             if ok {
                 break;
             }
@@ -500,15 +513,17 @@ pub fn apply_on(
         }
         // The final feeds and block times; every point into the summary, and
         // into a row when rows are kept.
-        let mut feeds = Vec::with_capacity(n.len());
+        let (feeds, feed_clamped): (Vec<f64>, Vec<bool>) = (0..n.len())
+            .into_par_iter()
+            .map(|k| feed_of(k, n[k]))
+            .unzip();
+        block_times(&n, &mut dt);
         if p.keep_rows {
             rows.reserve(n.len());
         }
         let mut full = full.into_iter();
         for k in 0..n.len() {
-            let (f, fc) = feed_of(k, n[k]);
-            feeds.push(f);
-            dt[k] = geo[k].0 / f * 60.0 + geo[k].1;
+            let (f, fc) = (feeds[k], feed_clamped[k]);
             let l = &lites[k];
             let flags = Flags {
                 clamped: clamp(target[k]) != target[k],
