@@ -6,7 +6,8 @@
 //! principal planes and canned cycles are written as explicit lines.
 
 use super::{
-    arc_points, cycle_moves, maybe_flush, principal_plane, room, NumFmt, Sink, WriteError,
+    arc_points, cycle_moves, first_event_at, maybe_flush, principal_plane, room, write_runs,
+    NumFmt, Run, Sink, WriteError, PARALLEL_MIN,
 };
 use crate::ir::*;
 use millplan_geom::DVec3;
@@ -41,6 +42,14 @@ struct W<'a> {
     coord: NumFmt,
     vecf: NumFmt,
     feedf: NumFmt,
+    src_dialect: Dialect,
+    st: State,
+}
+
+/// Everything the writer remembers from block to block: what it writes next
+/// depends only on this, the options and the program.
+#[derive(Clone, Debug, PartialEq)]
+struct State {
     block_no: u64,
     pos: [Option<f64>; 3],
     rot: [Option<f64>; 3],
@@ -53,7 +62,6 @@ struct W<'a> {
     spindle_dir: SpindleDir,
     cutcom: CutCom,
     heidenhain_rl: &'static str,
-    src_dialect: Dialect,
     tool_number: Option<u32>,
     fmax_last: bool,
 }
@@ -72,13 +80,13 @@ impl W<'_> {
 
     fn start_block(&mut self) {
         if self.hh() {
-            let s = self.block_no.to_string();
+            let s = self.st.block_no.to_string();
             self.out.extend_from_slice(s.as_bytes());
             self.out.push(b' ');
-            self.block_no += 1;
+            self.st.block_no += 1;
         } else if self.o.line_numbers {
-            self.block_no += 10;
-            let s = format!("N{} ", self.block_no);
+            self.st.block_no += 10;
+            let s = format!("N{} ", self.st.block_no);
             self.out.extend_from_slice(s.as_bytes());
         }
     }
@@ -170,13 +178,13 @@ impl W<'_> {
                 ));
             }
         }
-        self.plane = Some(2);
+        self.st.plane = Some(2);
     }
 
     fn footer(&mut self, p: &Program) {
         match self.o.dialect {
             Dialect::Heidenhain => {
-                if self.spindle_running {
+                if self.st.spindle_running {
                     self.line("M5");
                 }
                 self.line("M30");
@@ -198,7 +206,7 @@ impl W<'_> {
                 self.line(&format!("END PGM {name} {unit}"));
             }
             _ => {
-                if self.spindle_running {
+                if self.st.spindle_running {
                     self.line("M5");
                 }
                 self.line("M30");
@@ -235,7 +243,7 @@ impl W<'_> {
                     .map(|s| format!(" S{}", crate::gcode::fmt_num((s * 1000.0).round() / 1000.0)))
                     .unwrap_or_default();
                 self.line(&format!("TOOL CALL {id} Z{s}"));
-                self.spindle = s0;
+                self.st.spindle = s0;
                 if five {
                     self.line("M128");
                 }
@@ -265,7 +273,7 @@ impl W<'_> {
                 } else {
                     self.line(&format!("G43 H{n}"));
                 }
-                self.tool_number = Some(n);
+                self.st.tool_number = Some(n);
             }
             (_, None, Some(nm)) => {
                 self.comment(&format!("load tool {nm}: the source names no tool number"));
@@ -274,11 +282,11 @@ impl W<'_> {
             (_, None, None) => self.comment("no tool call in the source program"),
         }
         // Positions are unknown to the control after a tool change.
-        self.pos = [None; 3];
-        self.rot = [None; 3];
-        self.vec = None;
-        self.motion = None;
-        self.feed = None;
+        self.st.pos = [None; 3];
+        self.st.rot = [None; 3];
+        self.st.vec = None;
+        self.st.motion = None;
+        self.st.feed = None;
         Ok(())
     }
 
@@ -289,7 +297,7 @@ impl W<'_> {
             SpindleDir::Off => "M5",
         };
         if self.hh() {
-            if dir != SpindleDir::Off && Some(rpm) != self.spindle && rpm > 0.0 {
+            if dir != SpindleDir::Off && Some(rpm) != self.st.spindle && rpm > 0.0 {
                 self.line(&format!("TOOL CALL S{}", crate::gcode::fmt_num(rpm)));
             }
             self.line(m);
@@ -309,9 +317,9 @@ impl W<'_> {
             self.out.extend_from_slice(m.as_bytes());
             self.end_block();
         }
-        self.spindle = Some(rpm);
-        self.spindle_running = dir != SpindleDir::Off;
-        self.spindle_dir = dir;
+        self.st.spindle = Some(rpm);
+        self.st.spindle_running = dir != SpindleDir::Off;
+        self.st.spindle_dir = dir;
     }
 
     fn event(&mut self, e: &Event) {
@@ -328,15 +336,16 @@ impl W<'_> {
                 self.line(m);
             }
             EventKind::CutCom(c) => {
-                self.cutcom = *c;
+                self.st.cutcom = *c;
                 if self.hh() {
-                    self.heidenhain_rl = match c {
+                    self.st.heidenhain_rl = match c {
                         CutCom::Left => " RL",
                         CutCom::Right => " RR",
                         CutCom::Off => " R0",
                     };
                 } else {
                     let d = self
+                        .st
                         .tool_number
                         .map(|n| format!(" D{n}"))
                         .unwrap_or_default();
@@ -377,10 +386,10 @@ impl W<'_> {
         for k in 0..3 {
             let v = end[k] * self.k;
             let r = (v * 1e4).round() / 1e4;
-            if force || self.pos[k] != Some(r) {
+            if force || self.st.pos[k] != Some(r) {
                 let f = self.coord;
                 self.word(names[k], v, f);
-                self.pos[k] = Some(r);
+                self.st.pos[k] = Some(r);
             }
         }
     }
@@ -391,18 +400,18 @@ impl W<'_> {
                 for (k, a) in r.iter().enumerate() {
                     if let Some(a) = a {
                         let deg = (a.to_degrees() * 1e4).round() / 1e4;
-                        if self.rot[k] != Some(deg) {
+                        if self.st.rot[k] != Some(deg) {
                             let f = NumFmt {
                                 decimals: 4,
                                 ..self.coord
                             };
                             self.word(["A", "B", "C"][k], deg, f);
-                            self.rot[k] = Some(deg);
+                            self.st.rot[k] = Some(deg);
                         }
                     }
                 }
             }
-            Some(Orient::Vector(v)) if is_5axis(op) && self.vec != Some(*v) => {
+            Some(Orient::Vector(v)) if is_5axis(op) && self.st.vec != Some(*v) => {
                 let f = self.vecf;
                 match self.o.dialect {
                         Dialect::Sinumerik => {
@@ -429,7 +438,7 @@ impl W<'_> {
                             self.word("K", v.z, f);
                         }
                     }
-                self.vec = Some(*v);
+                self.st.vec = Some(*v);
             }
             _ => {}
         }
@@ -437,7 +446,10 @@ impl W<'_> {
     }
 
     fn feed_spindle(&mut self, m: &Move, feed: f64) {
-        if !self.hh() && m.spindle > 0.0 && self.spindle_running && Some(m.spindle) != self.spindle
+        if !self.hh()
+            && m.spindle > 0.0
+            && self.st.spindle_running
+            && Some(m.spindle) != self.st.spindle
         {
             let f = NumFmt {
                 decimals: 1,
@@ -446,29 +458,29 @@ impl W<'_> {
                 no_leading_zero: false,
             };
             self.word("S", m.spindle, f);
-            self.spindle = Some(m.spindle);
+            self.st.spindle = Some(m.spindle);
         }
         let f = if m.feed_mode == FeedMode::InverseTime {
             feed
         } else {
             feed * self.k
         };
-        if self.feed != Some(f) || self.fmax_last {
+        if self.st.feed != Some(f) || self.st.fmax_last {
             let ff = self.feedf;
             self.word("F", f, ff);
-            self.feed = Some(f);
+            self.st.feed = Some(f);
         }
     }
 
     fn motion(&mut self, code: u8) {
-        if self.motion != Some(code) {
+        if self.st.motion != Some(code) {
             self.out.extend_from_slice(match code {
                 0 => b" G0".as_slice(),
                 1 => b" G1",
                 2 => b" G2",
                 _ => b" G3",
             });
-            self.motion = Some(code);
+            self.st.motion = Some(code);
         }
     }
 
@@ -481,13 +493,16 @@ impl W<'_> {
         feed: f64,
     ) -> Result<(), WriteError> {
         if self.hh() {
-            if !rapid && m.spindle > 0.0 && self.spindle_running && Some(m.spindle) != self.spindle
+            if !rapid
+                && m.spindle > 0.0
+                && self.st.spindle_running
+                && Some(m.spindle) != self.st.spindle
             {
                 self.line(&format!(
                     "TOOL CALL S{}",
                     crate::gcode::fmt_num((m.spindle * 10.0).round() / 10.0)
                 ));
-                self.spindle = Some(m.spindle);
+                self.st.spindle = Some(m.spindle);
             }
             self.start_block();
             let five_vec = matches!(op.orient(m), Some(Orient::Vector(_))) && is_5axis(op);
@@ -496,21 +511,21 @@ impl W<'_> {
             let start = self.out.len();
             self.coords(end, five_vec);
             if five_vec {
-                self.vec = None;
+                self.st.vec = None;
             }
             self.orient_words(op, m)?;
             if self.out.len() == start {
                 // Heidenhain needs at least one coordinate.
                 self.coords(end, true);
             }
-            let rl = std::mem::take(&mut self.heidenhain_rl);
+            let rl = std::mem::take(&mut self.st.heidenhain_rl);
             self.out.extend_from_slice(rl.as_bytes());
             if rapid {
                 self.out.extend_from_slice(b" FMAX");
-                self.fmax_last = true;
+                self.st.fmax_last = true;
             } else {
                 self.feed_spindle(m, feed);
-                self.fmax_last = false;
+                self.st.fmax_last = false;
             }
             self.end_block();
             return Ok(());
@@ -554,24 +569,24 @@ impl W<'_> {
                 self.word(names[axis], end[axis] * self.k, f);
             }
             for k in 0..3 {
-                self.pos[k] = Some(((end[k] * self.k) * 1e4).round() / 1e4);
+                self.st.pos[k] = Some(((end[k] * self.k) * 1e4).round() / 1e4);
             }
             self.out
                 .extend_from_slice(if ccw { b" DR+".as_slice() } else { b" DR-" });
             self.feed_spindle(m, m.feed);
-            self.fmax_last = false;
+            self.st.fmax_last = false;
             self.end_block();
             return;
         }
         self.start_block();
         let mark = self.out.len();
-        if self.plane != Some(axis) {
+        if self.st.plane != Some(axis) {
             self.out.extend_from_slice(match axis {
                 2 => b" G17".as_slice(),
                 1 => b" G18",
                 _ => b" G19",
             });
-            self.plane = Some(axis);
+            self.st.plane = Some(axis);
         }
         self.motion(if ccw { 3 } else { 2 });
         // End point always written in full so full circles are unambiguous.
@@ -589,6 +604,119 @@ impl W<'_> {
         }
         self.end_block();
     }
+    /// Move `i` of `op`, after the events due before it (`ev`: the next event).
+    fn write_move(&mut self, op: &Operation, i: usize, ev: &mut usize) -> Result<(), WriteError> {
+        let m = &op.moves[i];
+        while *ev < op.events.len() && op.events[*ev].at as usize <= i {
+            self.event(&op.events[*ev]);
+            *ev += 1;
+        }
+        if m.is_cutting() && !self.st.spindle_running && m.spindle > 0.0 {
+            self.spindle_block(m.spindle, SpindleDir::Cw);
+        }
+        let start = op.move_start(i);
+        match m.kind {
+            MoveKind::Rapid => self.linear_block(op, m, m.end, true, 0.0)?,
+            MoveKind::Linear => self.linear_block(op, m, m.end, false, m.feed)?,
+            MoveKind::Arc => {
+                let a = op.arcs.get(m.aux as usize).ok_or_else(|| WriteError {
+                    message: "arc index out of range".into(),
+                })?;
+                let s = start.ok_or_else(|| WriteError {
+                    message: format!("line {}: arc with unknown start", m.line),
+                })?;
+                match principal_plane(a) {
+                    Some(axis) => self.arc_block(m, a, s, axis),
+                    None => {
+                        for q in arc_points(a, s, m.end, self.o.chord_tol) {
+                            self.linear_block(op, m, q, false, m.feed)?;
+                        }
+                    }
+                }
+            }
+            MoveKind::Cycle => {
+                let c = op.cycles.get(m.aux as usize).ok_or_else(|| WriteError {
+                    message: "cycle index out of range".into(),
+                })?;
+                let axis = op.axis(m).unwrap_or(DVec3::Z);
+                self.comment(&format!("cycle {} at this hole, written as lines", c.name));
+                // Like the control's own cycle: across at the current height, then down.
+                let top = m.end + axis * c.retract.max(c.clearance);
+                let z = self.st.pos[2]
+                    .map(|z| z / self.k)
+                    .unwrap_or(top.z)
+                    .max(top.z);
+                self.linear_block(op, m, DVec3::new(m.end.x, m.end.y, z), true, 0.0)?;
+                for (kind, q, f) in cycle_moves(c, m.end, axis) {
+                    let mut mm = *m;
+                    mm.kind = kind;
+                    mm.feed = f;
+                    mm.feed_mode = FeedMode::PerMinute;
+                    self.linear_block(op, &mm, q, kind == MoveKind::Rapid, f)?;
+                }
+                if let Some(t) = c.dwell.filter(|t| *t > 0.0) {
+                    self.comment(&format!("dwell {t} s at the bottom is not written"));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether blocks carry numbers (which a block in the middle cannot know).
+    fn numbered(&self) -> bool {
+        self.hh() || self.o.line_numbers
+    }
+
+    /// A writer with these settings writing into `out` from state `st`.
+    fn fork<'b>(&self, out: &'b mut Vec<u8>, st: State) -> W<'b> {
+        W {
+            o: self.o,
+            out,
+            k: self.k,
+            coord: self.coord,
+            vecf: self.vecf,
+            feedf: self.feedf,
+            src_dialect: self.src_dialect,
+            st,
+        }
+    }
+}
+
+/// The moves of `op`; returns the next event. Long operations are written in
+/// parallel runs (see [`write_runs`]) unless blocks are numbered.
+fn write_moves(
+    w: &mut W,
+    op: &Operation,
+    sink: &mut Option<Sink>,
+    parallel: bool,
+) -> Result<usize, WriteError> {
+    let n = op.moves.len();
+    if !parallel || n < PARALLEL_MIN || w.numbered() {
+        let mut ev = 0;
+        for i in 0..n {
+            maybe_flush(w.out, sink)?;
+            w.write_move(op, i, &mut ev)?;
+        }
+        return Ok(ev);
+    }
+    // The settings, for the runs; the state and buffer stay with `w`.
+    let mut none = Vec::new();
+    let cfg = w.fork(&mut none, w.st.clone());
+    write_runs(n, &mut w.st, w.out, sink, |a, b, st| {
+        let mut text = Vec::with_capacity((b - a) * 48);
+        let mut rw = cfg.fork(&mut text, st);
+        let mut ev = first_event_at(&op.events, a);
+        let mut result = Ok(());
+        for i in a..b {
+            if let Err(e) = rw.write_move(op, i, &mut ev) {
+                result = Err(e);
+                break;
+            }
+        }
+        let end = rw.st;
+        Run { text, end, result }
+    })?;
+    Ok(first_event_at(&op.events, n))
 }
 
 /// Writes a program as G-code of the chosen dialect.
@@ -601,7 +729,19 @@ pub fn write_gcode_to(
     p: &Program,
     o: GcodeOptions,
     out: &mut Vec<u8>,
+    sink: Option<Sink>,
+) -> Result<(), WriteError> {
+    write_all(p, o, out, sink, true)
+}
+
+/// [`write_gcode_to`]; `parallel: false` writes every operation in one pass
+/// (the reference the parallel writer is tested against).
+pub(super) fn write_all(
+    p: &Program,
+    o: GcodeOptions,
+    out: &mut Vec<u8>,
     mut sink: Option<Sink>,
+    parallel: bool,
 ) -> Result<(), WriteError> {
     if p.dialect.is_apt()
         && !matches!(
@@ -643,21 +783,23 @@ pub fn write_gcode_to(
             plus: false,
             no_leading_zero: false,
         },
-        block_no: 0,
-        pos: [None; 3],
-        rot: [None; 3],
-        vec: None,
-        motion: None,
-        plane: None,
-        feed: None,
-        spindle: None,
-        spindle_running: false,
-        spindle_dir: SpindleDir::Off,
-        cutcom: CutCom::Off,
-        heidenhain_rl: "",
         src_dialect: p.dialect,
-        tool_number: None,
-        fmax_last: false,
+        st: State {
+            block_no: 0,
+            pos: [None; 3],
+            rot: [None; 3],
+            vec: None,
+            motion: None,
+            plane: None,
+            feed: None,
+            spindle: None,
+            spindle_running: false,
+            spindle_dir: SpindleDir::Off,
+            cutcom: CutCom::Off,
+            heidenhain_rl: "",
+            tool_number: None,
+            fmax_last: false,
+        },
     };
     w.out.reserve(room(p.move_count(), 32, &sink));
     w.header(p);
@@ -673,65 +815,13 @@ pub fn write_gcode_to(
         }
         let five = is_5axis(op);
         w.tool_change(op, five)?;
-        let mut ev = 0;
-        for (i, m) in op.moves.iter().enumerate() {
-            maybe_flush(w.out, &mut sink)?;
-            while ev < op.events.len() && op.events[ev].at as usize <= i {
-                w.event(&op.events[ev]);
-                ev += 1;
-            }
-            if m.is_cutting() && !w.spindle_running && m.spindle > 0.0 {
-                w.spindle_block(m.spindle, SpindleDir::Cw);
-            }
-            let start = op.move_start(i);
-            match m.kind {
-                MoveKind::Rapid => w.linear_block(op, m, m.end, true, 0.0)?,
-                MoveKind::Linear => w.linear_block(op, m, m.end, false, m.feed)?,
-                MoveKind::Arc => {
-                    let a = op.arcs.get(m.aux as usize).ok_or_else(|| WriteError {
-                        message: "arc index out of range".into(),
-                    })?;
-                    let s = start.ok_or_else(|| WriteError {
-                        message: format!("line {}: arc with unknown start", m.line),
-                    })?;
-                    match principal_plane(a) {
-                        Some(axis) => w.arc_block(m, a, s, axis),
-                        None => {
-                            for q in arc_points(a, s, m.end, o.chord_tol) {
-                                w.linear_block(op, m, q, false, m.feed)?;
-                            }
-                        }
-                    }
-                }
-                MoveKind::Cycle => {
-                    let c = op.cycles.get(m.aux as usize).ok_or_else(|| WriteError {
-                        message: "cycle index out of range".into(),
-                    })?;
-                    let axis = op.axis(m).unwrap_or(DVec3::Z);
-                    w.comment(&format!("cycle {} at this hole, written as lines", c.name));
-                    // Like the control's own cycle: across at the current height, then down.
-                    let top = m.end + axis * c.retract.max(c.clearance);
-                    let z = w.pos[2].map(|z| z / w.k).unwrap_or(top.z).max(top.z);
-                    w.linear_block(op, m, DVec3::new(m.end.x, m.end.y, z), true, 0.0)?;
-                    for (kind, q, f) in cycle_moves(c, m.end, axis) {
-                        let mut mm = *m;
-                        mm.kind = kind;
-                        mm.feed = f;
-                        mm.feed_mode = FeedMode::PerMinute;
-                        w.linear_block(op, &mm, q, kind == MoveKind::Rapid, f)?;
-                    }
-                    if let Some(t) = c.dwell.filter(|t| *t > 0.0) {
-                        w.comment(&format!("dwell {t} s at the bottom is not written"));
-                    }
-                }
-            }
-        }
+        let ev = write_moves(&mut w, op, &mut sink, parallel)?;
         for e in &op.events[ev..] {
             w.event(e);
         }
-        if w.cutcom != CutCom::Off && !w.hh() {
+        if w.st.cutcom != CutCom::Off && !w.hh() {
             w.line("G40");
-            w.cutcom = CutCom::Off;
+            w.st.cutcom = CutCom::Off;
         }
     }
     w.footer(p);

@@ -46,6 +46,87 @@ fn room(moves: usize, per: usize, sink: &Option<Sink>) -> usize {
     }
 }
 
+/// Moves per run of the parallel writers.
+const RUN: usize = 1 << 14;
+/// Runs written at once: a group's text is held until it is handed on.
+const GROUP: usize = 8;
+/// Moves written before a run to guess the state it starts from.
+const WARM: usize = 64;
+/// Operations with at least this many moves are written in parallel runs.
+pub(crate) const PARALLEL_MIN: usize = 2 * RUN;
+
+/// A run of moves written on its own: the text, the writer's state after it,
+/// and the first error if any.
+pub(crate) struct Run<S> {
+    pub text: Vec<u8>,
+    pub end: S,
+    pub result: Result<(), WriteError>,
+}
+
+/// Writes moves `0..n` in runs, in parallel, as one pass from state `st`
+/// would. `run(a, b, s)` writes moves `a..b` from writer state `s`. Each run
+/// but a group's first starts from the state that writing the few moves just
+/// before it gives; a run whose guessed start differs from the state the run
+/// before it actually ended in is written again from that state. The writer's
+/// output must depend only on its state and the moves. The text goes to
+/// `out` or, through it, to `sink`; `st` ends as the state after the last move.
+pub(crate) fn write_runs<S: Clone + PartialEq + Send + Sync>(
+    n: usize,
+    st: &mut S,
+    out: &mut Vec<u8>,
+    sink: &mut Option<Sink>,
+    run: impl Fn(usize, usize, S) -> Run<S> + Sync,
+) -> Result<(), WriteError> {
+    use rayon::prelude::*;
+    let mut a = 0;
+    while a < n {
+        let b = (a + RUN * GROUP).min(n);
+        let known = st.clone();
+        let starts: Vec<usize> = (a..b).step_by(RUN).collect();
+        let runs: Vec<(S, Run<S>)> = starts
+            .par_iter()
+            .map(|&s| {
+                let guess = if s == a {
+                    known.clone()
+                } else {
+                    run(s - WARM.min(s - a), s, known.clone()).end
+                };
+                (guess.clone(), run(s, (s + RUN).min(b), guess))
+            })
+            .collect();
+        for (&s, (guess, r)) in starts.iter().zip(runs) {
+            let r = if *st == guess {
+                r
+            } else {
+                run(s, (s + RUN).min(b), st.clone())
+            };
+            match sink {
+                Some(f) => {
+                    if !out.is_empty() {
+                        f(out)?;
+                        out.clear();
+                    }
+                    f(&r.text)?;
+                }
+                None => out.extend_from_slice(&r.text),
+            }
+            r.result?;
+            *st = r.end;
+        }
+        a = b;
+    }
+    Ok(())
+}
+
+/// The next event before move `i`: events are taken, in their order, before
+/// the first move at or after their position.
+pub(crate) fn first_event_at(events: &[Event], i: usize) -> usize {
+    events
+        .iter()
+        .position(|e| e.at as usize >= i)
+        .unwrap_or(events.len())
+}
+
 /// Fast fixed-decimal number formatting with trailing zeros removed
 /// (`12.5`, `-0.25`, `3`), the inner loop of every writer.
 #[derive(Clone, Copy, Debug)]
@@ -216,6 +297,154 @@ mod tests {
             };
             let e = w(&p, &mut Vec::new(), Some(&mut fail)).expect_err("fails");
             assert_eq!(e.message, "disk full");
+        }
+    }
+
+    /// Two long operations of every kind of move (rapids, lines with feeds and
+    /// speeds that change now and then, arcs in and out of the principal
+    /// planes, canned-cycle points, tool vectors in the second), with events
+    /// scattered through them, several just before a parallel run starts or
+    /// before the moves it guesses its start from.
+    fn varied_program(n: usize) -> Program {
+        let mut state = 7u64;
+        let mut rnd = move |m: u64| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) % m
+        };
+        let mut p = Program::new(Dialect::Fanuc);
+        for k in 0..2 {
+            let mut op = Operation {
+                name: Some(format!("OP{k}")),
+                tool: Some(Tool {
+                    number: Some(3 + k as u32),
+                    name: Some("BALL".into()),
+                    cutter: None,
+                    line: 0,
+                }),
+                cycles: vec![Cycle {
+                    name: "DRILL".into(),
+                    bottom: 2.0,
+                    clearance: 1.0,
+                    retract: 3.0,
+                    feed: 200.0,
+                    peck: None,
+                    dwell: None,
+                    line: 0,
+                }],
+                ..Operation::default()
+            };
+            if k == 1 {
+                op.orients = vec![
+                    Orient::Vector(DVec3::Z),
+                    Orient::Vector(DVec3::new(0.3, 0.0, 1.0).normalize()),
+                ];
+            }
+            let (mut at, mut feed, mut speed) = (DVec3::new(0.0, 0.0, 5.0), 1000.0, 6000.0);
+            for i in 0..n {
+                if rnd(60) == 0 {
+                    feed = [800.0, 1000.0, 1250.5][rnd(3) as usize];
+                }
+                if rnd(90) == 0 {
+                    speed = [5000.0, 6000.0, 7333.3][rnd(3) as usize];
+                }
+                // Coarse steps, so coordinates repeat and modal words are left out.
+                let step = DVec3::new(
+                    rnd(5) as f64 * 0.5 - 1.0,
+                    rnd(3) as f64 * 0.5 - 0.5,
+                    rnd(3) as f64 * 0.25 - 0.25,
+                );
+                let end = at + step;
+                let mut m = match rnd(20) {
+                    0 => Move::rapid(end + DVec3::Z * 3.0),
+                    1 | 2 => {
+                        let normal = if rnd(2) == 0 {
+                            DVec3::Z
+                        } else {
+                            DVec3::new(0.0, 0.6, 0.8)
+                        };
+                        let centre = at + DVec3::new(1.5, 0.0, 0.0);
+                        let e = at + DVec3::new(3.0, 0.0, 0.0);
+                        let arc = Arc::from_points(at, e, centre, normal, false).expect("arc");
+                        op.arcs.push(arc);
+                        let mut m = Move::linear(e, feed);
+                        m.kind = MoveKind::Arc;
+                        m.aux = op.arcs.len() as u32 - 1;
+                        m
+                    }
+                    3 => {
+                        let mut m = Move::linear(end, feed);
+                        m.kind = MoveKind::Cycle;
+                        m
+                    }
+                    _ => Move::linear(end, feed),
+                };
+                m.spindle = speed;
+                if k == 1 {
+                    m.orient = (rnd(50) == 0) as u32;
+                }
+                at = m.end;
+                op.moves.push(m);
+                if (i + 1) % (2 * RUN) == 0 {
+                    // Right before the first move of a run.
+                    op.events.push(Event {
+                        at: i as u32 + 1,
+                        line: 0,
+                        kind: EventKind::Coolant(Coolant::Mist),
+                    });
+                }
+                if rnd(2500) == 0 || (i % RUN == RUN - 3 * WARM / 2 && rnd(2) == 0) {
+                    let kind = match rnd(6) {
+                        0 => EventKind::Comment(format!("note {i}")),
+                        1 => EventKind::Spindle {
+                            rpm: 0.0,
+                            dir: SpindleDir::Off,
+                        },
+                        2 => EventKind::Spindle {
+                            rpm: 4500.0,
+                            dir: SpindleDir::Cw,
+                        },
+                        3 => EventKind::Coolant(Coolant::Flood),
+                        4 => EventKind::CutCom([CutCom::Left, CutCom::Off][rnd(2) as usize]),
+                        _ => EventKind::Stop { optional: true },
+                    };
+                    op.events.push(Event {
+                        at: i as u32 + 1,
+                        line: 0,
+                        kind,
+                    });
+                }
+            }
+            p.operations.push(op);
+        }
+        p
+    }
+
+    /// The parallel writers write the text a single pass writes.
+    #[test]
+    fn parallel_writers_write_what_one_pass_writes() {
+        let p = varied_program(5 * RUN + 777);
+        assert!(p.operations[0].moves.len() >= PARALLEL_MIN);
+        let mut one = Vec::new();
+        apt::write_all(&p, &mut one, None, false).expect("writes");
+        let mut par = Vec::new();
+        apt::write_all(&p, &mut par, None, true).expect("writes");
+        assert!(one.len() > 1 << 20);
+        assert!(par == one, "APT text differs");
+        // LinuxCNC stops at the first tool vector: the same error after the
+        // same text.
+        for d in [Dialect::Fanuc, Dialect::LinuxCnc, Dialect::Sinumerik] {
+            let mut o = gcode::GcodeOptions::new(d);
+            o.chord_tol = 0.01;
+            let mut one = Vec::new();
+            let r1 = gcode::write_all(&p, o, &mut one, None, false);
+            let mut par = Vec::new();
+            let r2 = gcode::write_all(&p, o, &mut par, None, true);
+            assert_eq!(r1, r2);
+            assert_eq!(r1.is_err(), d == Dialect::LinuxCnc);
+            assert!(one.len() > 1 << 20);
+            assert!(par == one, "{d:?} text differs");
         }
     }
 
