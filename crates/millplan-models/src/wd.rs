@@ -180,7 +180,14 @@ pub fn highest_point(c: &Case) -> f64 {
             let dn = -(1.0 - x * x - ds * ds).max(0.0).sqrt();
             kt * x + ks * ds + kn * dn
         };
-        let (mut m3, _) = maximize_1d(&h3, 0.0, xmax);
+        // d/dx: d_s' = R·x/ae, d_n' = (x + d_s·d_s')/(−d_n).
+        let dh3 = |x: f64| {
+            let ds = (r * r * x * x - ae * ae) / (2.0 * r * ae);
+            let dds = r * x / ae;
+            let g = (1.0 - x * x - ds * ds).max(1e-300);
+            kt + ks * dds + kn * (x + ds * dds) / g.sqrt()
+        };
+        let (mut m3, _) = maximize_1d(&h3, &dh3, 0.0, xmax);
         if both {
             // The mirror curve gives the mirror values: d_s → −d_s.
             let h3m = |x: f64| {
@@ -188,40 +195,91 @@ pub fn highest_point(c: &Case) -> f64 {
                 let dn = -(1.0 - x * x - ds * ds).max(0.0).sqrt();
                 kt * x + ks * ds + kn * dn
             };
-            m3 = m3.max(maximize_1d(&h3m, 0.0, xmax).0);
+            let dh3m = |x: f64| {
+                let ds = -(r * r * x * x - ae * ae) / (2.0 * r * ae);
+                let dds = -r * x / ae;
+                let g = (1.0 - x * x - ds * ds).max(1e-300);
+                kt + ks * dds + kn * (x + ds * dds) / g.sqrt()
+            };
+            m3 = m3.max(maximize_1d(&h3m, &dh3m, 0.0, xmax).0);
         }
         best = best.max(m3);
     }
     best
 }
 
-/// Maximum of a smooth function on [a, b]: a coarse scan, then golden-section
-/// refinement around the best sample (the objective has at most a few extrema).
-fn maximize_1d(f: &impl Fn(f64) -> f64, a: f64, b: f64) -> (f64, f64) {
+/// Maximum of a smooth function `f` on [a, b], given its derivative `df`: a
+/// coarse scan (the objective has at most a few extrema), then the root of the
+/// derivative around the best sample, or golden-section search where the
+/// derivative does not bracket one.
+fn maximize_1d(f: &impl Fn(f64) -> f64, df: &impl Fn(f64) -> f64, a: f64, b: f64) -> (f64, f64) {
     const SCAN: usize = 24;
     if b <= a {
         return (f(a), a);
     }
     let step = (b - a) / SCAN as f64;
-    let mut best = (f(a), a);
+    let (mut best, mut at) = ((f(a), a), 0);
     for i in 1..=SCAN {
-        let x = a + step * i as f64;
+        let x = if i == SCAN { b } else { a + step * i as f64 };
         let v = f(x);
         if v > best.0 {
-            best = (v, x);
+            (best, at) = ((v, x), i);
         }
     }
-    let (x, v) = millplan_geom::optimize::golden_max(
-        f,
-        (best.1 - step).max(a),
-        (best.1 + step).min(b),
-        1e-12,
-        34,
-    );
+    let (lo, hi) = ((best.1 - step).max(a), (best.1 + step).min(b));
+    let (dlo, dhi) = (df(lo), df(hi));
+    let (x, v) = if dlo > 0.0 && dhi < 0.0 {
+        let x = falling_root(df, (lo, dlo), (hi, dhi));
+        (x, f(x))
+    } else if (at == 0 && dlo <= 0.0) || (at == SCAN && dhi >= 0.0) {
+        // Falling away from an end of the interval: the end is the maximum.
+        return best;
+    } else {
+        millplan_geom::optimize::golden_max(f, lo, hi, 1e-12, 34)
+    };
     if v > best.0 {
         best = (v, x);
     }
     best
+}
+
+/// The root of `g` between `lo` and `hi`, given with g(lo) > 0 > g(hi) (where
+/// the function `g` is the derivative of has its maximum), by Illinois false
+/// position.
+fn falling_root(g: &impl Fn(f64) -> f64, lo: (f64, f64), hi: (f64, f64)) -> f64 {
+    let ((mut lo, mut glo), (mut hi, mut ghi)) = (lo, hi);
+    // Which end the last step moved (+1 low, −1 high): an end kept twice has
+    // its value halved, so both ends close in.
+    let mut moved = 0;
+    for _ in 0..64 {
+        let x = (lo * ghi - hi * glo) / (ghi - glo);
+        if !(x > lo && x < hi) || hi - lo < 1e-13 {
+            break;
+        }
+        let gx = g(x);
+        if gx > 0.0 {
+            lo = x;
+            glo = gx;
+            if moved == 1 {
+                ghi *= 0.5;
+            }
+            moved = 1;
+        } else if gx < 0.0 {
+            hi = x;
+            ghi = gx;
+            if moved == -1 {
+                glo *= 0.5;
+            }
+            moved = -1;
+        } else {
+            return x;
+        }
+    }
+    if glo < -ghi {
+        lo
+    } else {
+        hi
+    }
 }
 
 /// Working diameter D_w (mm) by the boundary method.
@@ -358,6 +416,58 @@ mod tests {
             af: af_deg.to_radians(),
             side,
         }
+    }
+
+    /// The scan-and-refine maximum agrees with a fine scan on functions with one
+    /// maximum inside, or near or at either end: a·sin(w·x + φ) + b·x over less
+    /// than half a period.
+    #[test]
+    fn maximum_in_one_dimension_agrees_with_a_fine_scan() {
+        let mut s = 99u64;
+        let mut r = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut inside, mut ends) = (0, 0);
+        for k in 0..1000 {
+            let (a, w, mut phi, b) = (0.5 + r(), 1.0 + 5.0 * r(), 6.3 * r(), 0.2 * r() - 0.1);
+            // Less than half a period: one maximum at most inside.
+            let hi = (0.1 + 1.5 * r()).min(3.0 / w);
+            // Every third: a peak within half a scan step of an end.
+            let near = hi / 48.0 * r();
+            match k % 6 {
+                0 => phi = std::f64::consts::FRAC_PI_2 - w * near,
+                3 => phi = std::f64::consts::FRAC_PI_2 - w * (hi - near),
+                _ => {}
+            }
+            let f = |x: f64| a * (w * x + phi).sin() + b * x;
+            let df = |x: f64| a * w * (w * x + phi).cos() + b;
+            let (v, x) = maximize_1d(&f, &df, 0.0, hi);
+            let n = 50_000;
+            let (fine, fx) = (0..=n)
+                .map(|i| hi * i as f64 / n as f64)
+                .map(|x| (f(x), x))
+                .fold(
+                    (f64::NEG_INFINITY, 0.0),
+                    |m, p| if p.0 > m.0 { p } else { m },
+                );
+            // The fine scan is within its step of the maximum: below it by
+            // at most max|f''|·step²/8.
+            let slack = a * w * w * (hi / n as f64).powi(2) / 8.0 + 1e-12;
+            assert!(v >= fine - 1e-12 && v <= fine + slack, "{v} vs {fine}");
+            assert!((f(x) - v).abs() < 1e-15);
+            if fx > 0.0 && fx < hi {
+                inside += 1;
+            } else {
+                ends += 1;
+            }
+        }
+        assert!(
+            inside > 150 && ends > 150,
+            "{inside} inside, {ends} at an end"
+        );
     }
 
     /// Spec `working-diameter.md` §2.3, the oracle table (D, ap, ae, α°, A_f°, side,
