@@ -487,9 +487,9 @@ fn local_case(
 ) -> (f64, Side, Neighbour) {
     let mut side = SideFinder::new(c[i], n, t, search);
     let pass = pts[i].pass;
-    grid.for_each_near(c[i], |e| {
-        // Only passes machined before this one count.
-        if (e.i as usize) < i && e.pass != pass {
+    // Only points machined before this one, of other passes, count.
+    grid.for_each_near(c[i], i as u32, |e| {
+        if e.pass != pass {
             side.machined(e.c);
         }
     });
@@ -576,7 +576,8 @@ struct NeighbourGrid {
     /// Whether cells might share a key (a grid over 2^21 cells along an axis);
     /// candidates are then checked to be in the cells asked for.
     aliased: bool,
-    /// The points sorted by cell, each with what the search reads, side by side;
+    /// The points sorted by cell and, within a cell, by index, each with what the
+    /// search reads, side by side;
     /// `cells` maps a cell's key to its run.
     entries: Vec<GridEntry>,
     cells: FxHashMap<u64, (u32, u32)>,
@@ -652,8 +653,9 @@ impl NeighbourGrid {
             | f(k.2, self.origin.2)
     }
 
-    /// Calls `f` for every point within the search radius of `p` (and some more).
-    fn for_each_near(&self, p: DVec3, mut f: impl FnMut(&GridEntry)) {
+    /// Calls `f` for every point before index `before` within the search radius
+    /// of `p` (and some more).
+    fn for_each_near(&self, p: DVec3, before: u32, mut f: impl FnMut(&GridEntry)) {
         let k = key(p, self.cell);
         let side = |v: f64, k: i64| {
             if v / self.cell - k as f64 >= 0.5 {
@@ -668,7 +670,12 @@ impl NeighbourGrid {
                 for dz in [0, sz] {
                     let want = (k.0 + dx, k.1 + dy, k.2 + dz);
                     if let Some(&(start, len)) = self.cells.get(&self.packed(want)) {
+                        // A cell's points are in path order: stop at the first
+                        // one not before.
                         for e in &self.entries[start as usize..(start + len) as usize] {
+                            if e.i >= before {
+                                break;
+                            }
                             if !self.aliased || key(e.c, self.cell) == want {
                                 f(e);
                             }
