@@ -16,7 +16,7 @@
 //! closed form and B3 by sampling plus golden-section refinement
 //! ([`working_diameter`]). [`brute_force`] samples the cap and is the test reference.
 
-use std::f64::consts::{FRAC_PI_2, PI};
+use std::f64::consts::PI;
 
 /// Which side of the feed the not-yet-machined material is on, seen from outside
 /// the material. With M3, uncut material on the right is climb (down) milling.
@@ -120,6 +120,11 @@ pub fn highest_point(c: &Case) -> f64 {
     let (ae, both) = c.neighbour_ae();
     let mut best = f64::NEG_INFINITY;
 
+    // Both boundary arcs below run over angles in [−π/2, π/2], so each angle
+    // is handled by its sine (the cosine is then √(1 − sin²) ≥ 0) and the
+    // angle order by the sine order, without inverse trigonometry.
+    let cos_of = |s: f64| (1.0 - s * s).max(0.0).sqrt();
+
     // B1, the cap rim: d = (sinθ cosψ, sinθ sinψ, −cosθ), ψ ∈ [−π/2, π/2] (E2);
     // E3 on the rim is sinψ ≥ σ = 1 − ae/(R sinθ) (mirror: sinψ ≤ −σ).
     let sigma = if ae.is_finite() {
@@ -127,40 +132,37 @@ pub fn highest_point(c: &Case) -> f64 {
     } else {
         f64::NEG_INFINITY
     };
-    let lo = if sigma > -1.0 {
-        sigma.min(1.0).asin()
+    // sin of the ends ψ_lo, ψ_hi.
+    let s_lo = if sigma > -1.0 { sigma.min(1.0) } else { -1.0 };
+    let s_hi = if both && sigma > -1.0 {
+        (-sigma).max(-1.0)
     } else {
-        -FRAC_PI_2
+        1.0
     };
-    let hi = if both && sigma > -1.0 {
-        (-sigma).max(-1.0).asin()
-    } else {
-        FRAC_PI_2
-    };
-    if sigma <= 1.0 && lo <= hi {
-        let g = |psi: f64| sin_t * (kt * psi.cos() + ks * psi.sin()) - cos_t * kn;
-        let peak = ks.atan2(kt);
-        let mut m = g(lo).max(g(hi));
-        if peak >= lo && peak <= hi {
-            m = m.max(g(peak));
+    if sigma <= 1.0 && s_lo <= s_hi {
+        let g = |s: f64| sin_t * (kt * cos_of(s) + ks * s) - cos_t * kn;
+        let mut m = g(s_lo).max(g(s_hi));
+        // The peak ψ* = atan2(k_s, k_t), where g = sinθ·|(k_t, k_s)| − cosθ·k_n.
+        let rho = kt.hypot(ks);
+        let s_peak = ks / rho;
+        if kt >= 0.0 && s_peak >= s_lo && s_peak <= s_hi {
+            m = m.max(sin_t * rho - cos_t * kn);
         }
         best = best.max(m);
     }
 
     // B2, the front great circle: d = (0, sinφ, −cosφ), |φ| ≤ θ (E1),
-    // E3: sinφ ≥ −ae/D (mirror: sinφ ≤ ae/D).
-    let theta = cos_t.acos();
-    let eps = if ae.is_finite() {
-        (ae / c.d).min(1.0).asin()
-    } else {
-        FRAC_PI_2
-    };
-    let (p0, p1) = (-theta.min(eps), if both { theta.min(eps) } else { theta });
-    let g2 = |phi: f64| ks * phi.sin() - kn * phi.cos();
-    let mut m2 = g2(p0).max(g2(p1));
-    let peak2 = ks.atan2(-kn);
-    if peak2 >= p0 && peak2 <= p1 {
-        m2 = m2.max(g2(peak2));
+    // E3: sinφ ≥ −ae/D (mirror: sinφ ≤ ae/D). θ < π/2 here.
+    let s_eps = if ae.is_finite() { ae / c.d } else { 1.0 };
+    let s_in = sin_t.min(s_eps);
+    let (s0, s1) = (-s_in, if both { s_in } else { sin_t });
+    let g2 = |s: f64| ks * s - kn * cos_of(s);
+    let mut m2 = g2(s0).max(g2(s1));
+    // The peak φ* = atan2(k_s, −k_n), where g2 = |(k_s, k_n)|.
+    let rho2 = ks.hypot(kn);
+    let s_peak2 = ks / rho2;
+    if -kn >= 0.0 && s_peak2 >= s0 && s_peak2 <= s1 {
+        m2 = m2.max(rho2);
     }
     best = best.max(m2);
 
