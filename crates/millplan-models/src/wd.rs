@@ -408,6 +408,7 @@ pub fn brute_force(c: &Case, nr: usize, npsi: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::FRAC_PI_2;
 
     fn case(d: f64, ap: f64, ae: Option<f64>, alpha_deg: f64, af_deg: f64, side: Side) -> Case {
         Case {
