@@ -723,14 +723,20 @@ impl NearBuild<'_> {
         out
     }
 
-    /// Nodes of the closest-point tree over binary node `at`.
+    /// Nodes of the closest-point tree over binary node `at` (large subtrees
+    /// counted in parallel).
     fn count(&self, at: usize) -> usize {
         let (kids, n) = self.kids(at);
-        1 + kids[..n]
-            .iter()
-            .filter(|&&k| self.nodes[k].count == 0)
-            .map(|&k| self.count(k))
-            .sum::<usize>()
+        let inner = kids[..n].iter().filter(|&&k| self.nodes[k].count == 0);
+        if self.range(at).len() >= PAR_MIN {
+            1 + inner
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .map(|&k| self.count(k))
+                .sum::<usize>()
+        } else {
+            1 + inner.map(|&k| self.count(k)).sum::<usize>()
+        }
     }
 
     /// Fills `out` (exactly the tree over binary node `at`, its root first, at

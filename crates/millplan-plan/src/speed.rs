@@ -357,8 +357,8 @@ pub fn apply_on(
         };
         ops += 1;
         // Cutting points, with their passes (split at links and sharp reversals).
-        let mut pts = Vec::new();
-        let mut idx = Vec::new();
+        let mut pts = Vec::with_capacity(op.moves.len());
+        let mut idx = Vec::with_capacity(op.moves.len());
         let mut pass = 0u32;
         let mut prev_dir: Option<DVec3> = None;
         for (i, mv) in op.moves.iter().enumerate() {
