@@ -217,6 +217,13 @@ fn key(p: DVec3, cell: f64) -> (i64, i64, i64) {
 
 /// Analyses every point of a path. Points are in cutting order; neighbouring passes
 /// count as machined when they come earlier in that order.
+/// Shortest run of consecutive points a thread analyses (each run's first
+/// contact search starts without a hint).
+const RUN_MIN: usize = 1024;
+/// Longest run: short enough that no thread is left with a long run at the end
+/// while the others wait.
+const RUN_MAX: usize = 8192;
+
 /// Contact point, unit normal, gap (centre-to-mesh distance − R), no contact.
 pub type Located = (DVec3, DVec3, f64, bool);
 
@@ -233,7 +240,8 @@ pub fn locate(s: &Surface, points: &[PathPoint], p: &Params) -> (Vec<DVec3>, Vec
     // the previous point's contact triangle.
     let contacts = (0..points.len())
         .into_par_iter()
-        .with_min_len(1024)
+        .with_min_len(RUN_MIN)
+        .with_max_len(RUN_MAX)
         .map_init(
             || None,
             |hint, i| loc.contact(&centres[i], &points[i], hint),
@@ -324,7 +332,8 @@ pub fn analyse_with<T: Send>(
     // (each contact search starts from the previous point's triangle).
     (0..points.len())
         .into_par_iter()
-        .with_min_len(1024)
+        .with_min_len(RUN_MIN)
+        .with_max_len(RUN_MAX)
         .map_init(
             || None,
             |hint, i| {
