@@ -40,8 +40,8 @@ const BLOCK: usize = 3 << 16;
 /// Marks a shard-local vertex id at the corner where the vertex first appears.
 const FIRST: u32 = 1 << 31;
 
-/// One block's corners (f32 bit patterns) with their indices, by shard.
-type ShardLists = Vec<Vec<([u32; 3], u32)>>;
+/// One block's corners (f32 bit patterns), by shard.
+type ShardLists = Vec<Vec<[u32; 3]>>;
 
 #[inline]
 fn shard_of(k: &[u32; 3]) -> usize {
@@ -149,16 +149,15 @@ impl TriMesh {
     /// (its blocks in file order), and the blocks then number the vertices they
     /// see first from a running count.
     pub fn from_f32_corners(corners: Vec<[u32; 3]>) -> (TriMesh, WeldReport) {
-        // Each block's corners by shard, with their indices, side by side.
+        // Each block's corners by shard, in order.
         let lists: Vec<ShardLists> = corners
             .par_chunks(BLOCK)
-            .enumerate()
-            .map(|(b, block)| {
+            .map(|block| {
                 let mut l: ShardLists = (0..SHARDS)
                     .map(|_| Vec::with_capacity(block.len() / SHARDS * 5 / 4 + 16))
                     .collect();
-                for (j, k) in block.iter().enumerate() {
-                    l[shard_of(k)].push((*k, (b * BLOCK + j) as u32));
+                for k in block {
+                    l[shard_of(k)].push(*k);
                 }
                 l
             })
@@ -180,7 +179,7 @@ impl TriMesh {
                 map.reserve(n / 4);
                 let mut ids = Vec::with_capacity(n);
                 for l in &lists {
-                    for (k, _) in &l[s] {
+                    for k in &l[s] {
                         let next = map.len() as u32;
                         let id = *map.entry(*k).or_insert(next);
                         ids.push(if id == next { id | FIRST } else { id });
