@@ -232,7 +232,7 @@ pub type Located = (DVec3, DVec3, f64, bool);
 /// working diameter for other orders of the same points.
 pub fn locate(s: &Surface, points: &[PathPoint], p: &Params) -> (Vec<DVec3>, Vec<Located>) {
     let centres: Vec<DVec3> = points
-        .iter()
+        .par_iter()
         .map(|q| centre(q, p.convention, p.d / 2.0))
         .collect();
     let loc = Locator::new(s, p);
@@ -319,7 +319,7 @@ pub fn analyse_with<T: Send>(
     wrap: impl Fn(PointResult) -> T + Sync,
 ) -> Vec<T> {
     let centres: Vec<DVec3> = points
-        .iter()
+        .par_iter()
         .map(|q| centre(q, p.convention, p.d / 2.0))
         .collect();
     let search = stepover_search_radius(&centres, points, p.neighbour_search);
@@ -604,19 +604,26 @@ const GRID_BITS: u32 = 21;
 impl NeighbourGrid {
     fn new(c: &[DVec3], pts: &[PathPoint], radius: f64) -> NeighbourGrid {
         let cell = 2.0 * radius.max(1e-3);
-        let (lo, hi) = c.iter().fold(
+        let empty = || {
             (
                 (i64::MAX, i64::MAX, i64::MAX),
                 (i64::MIN, i64::MIN, i64::MIN),
-            ),
-            |(lo, hi), p| {
+            )
+        };
+        type Span = ((i64, i64, i64), (i64, i64, i64));
+        let join = |(lo, hi): Span, (l, h): Span| {
+            (
+                (lo.0.min(l.0), lo.1.min(l.1), lo.2.min(l.2)),
+                (hi.0.max(h.0), hi.1.max(h.1), hi.2.max(h.2)),
+            )
+        };
+        let (lo, hi) = c
+            .par_iter()
+            .map(|p| {
                 let k = key(*p, cell);
-                (
-                    (lo.0.min(k.0), lo.1.min(k.1), lo.2.min(k.2)),
-                    (hi.0.max(k.0), hi.1.max(k.1), hi.2.max(k.2)),
-                )
-            },
-        );
+                (k, k)
+            })
+            .reduce(empty, join);
         let span = (hi.0.saturating_sub(lo.0))
             .max(hi.1.saturating_sub(lo.1))
             .max(hi.2.saturating_sub(lo.2));
@@ -633,14 +640,17 @@ impl NeighbourGrid {
             .map(|(i, p)| (grid.packed(key(*p, cell)), i as u32))
             .collect();
         keyed.par_sort_unstable();
-        let mut i = 0;
-        while i < keyed.len() {
-            let mut j = i + 1;
-            while j < keyed.len() && keyed[j].0 == keyed[i].0 {
-                j += 1;
-            }
-            grid.cells.insert(keyed[i].0, (i as u32, (j - i) as u32));
-            i = j;
+        // Where each cell's run starts, found in parallel; then the map.
+        let starts: Vec<u32> = (0..keyed.len())
+            .into_par_iter()
+            .filter(|&i| i == 0 || keyed[i].0 != keyed[i - 1].0)
+            .map(|i| i as u32)
+            .collect();
+        grid.cells.reserve(starts.len());
+        for (k, &i) in starts.iter().enumerate() {
+            let end = starts.get(k + 1).map_or(keyed.len(), |&e| e as usize);
+            grid.cells
+                .insert(keyed[i as usize].0, (i, (end - i as usize) as u32));
         }
         grid.entries = keyed
             .par_iter()
