@@ -54,6 +54,45 @@ struct NearNode {
     valid: u32,
 }
 
+/// The triangles' corners in tree order. In single precision when every
+/// vertex is a single-precision number, as in binary STL: half the memory of
+/// the tree's largest array, and every value read back exactly.
+#[derive(Clone, Debug)]
+enum Tris {
+    F32(Vec<[[f32; 3]; 3]>),
+    F64(Vec<[DVec3; 3]>),
+}
+
+impl Tris {
+    fn new(mesh: &TriMesh, order: &[u32]) -> Tris {
+        let exact = |v: &DVec3| v.to_array().iter().all(|&x| (x as f32) as f64 == x);
+        if mesh.vertices.par_iter().all(exact) {
+            Tris::F32(
+                order
+                    .par_iter()
+                    .map(|&t| mesh.corners(t as usize).map(|c| c.as_vec3().to_array()))
+                    .collect(),
+            )
+        } else {
+            Tris::F64(
+                order
+                    .par_iter()
+                    .map(|&t| mesh.corners(t as usize))
+                    .collect(),
+            )
+        }
+    }
+
+    /// The corners of the triangle at position `k` of the order.
+    #[inline(always)]
+    fn get(&self, k: usize) -> [DVec3; 3] {
+        match self {
+            Tris::F32(t) => t[k].map(|c| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)),
+            Tris::F64(t) => t[k],
+        }
+    }
+}
+
 /// Closest point of a mesh to a query point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Closest {
@@ -74,7 +113,7 @@ pub struct Bvh {
     nodes: Vec<Node>,
     order: Vec<u32>,
     /// Triangle corners in `order`, contiguous: the queries read them leaf by leaf.
-    tris: Vec<[DVec3; 3]>,
+    tris: Tris,
     /// The closest-point tree, root first.
     near: Vec<NearNode>,
     wide: OnceLock<Vec<WideNode>>,
@@ -121,13 +160,7 @@ impl WideNode {
     /// returns the index of its wide node. A leaf of several triangles gets a
     /// wide node of its own with a box per triangle (per pair above four):
     /// one SIMD box test then spares most exact triangle tests.
-    fn collapse(
-        nodes: &[Node],
-        tris: &[[DVec3; 3]],
-        at: usize,
-        pad: f64,
-        out: &mut Vec<WideNode>,
-    ) -> u32 {
+    fn collapse(nodes: &[Node], tris: &Tris, at: usize, pad: f64, out: &mut Vec<WideNode>) -> u32 {
         let me = out.len();
         out.push(WideNode::EMPTY);
         let node = &nodes[at];
@@ -137,8 +170,8 @@ impl WideNode {
             for (lane, start) in (first..first + count).step_by(per).enumerate() {
                 let end = (start + per).min(first + count);
                 let mut b = Aabb::EMPTY;
-                for t in &tris[start..end] {
-                    t.iter().for_each(|&c| b.extend(c));
+                for t in start..end {
+                    tris.get(t).iter().for_each(|&c| b.extend(c));
                 }
                 out[me].set(lane, &b, pad, start as u32, (end - start) as u32);
             }
@@ -189,10 +222,7 @@ impl Bvh {
             ctx.split(&mut nodes, 0, &mut order, 0, 0);
         }
         drop(cen);
-        let tris: Vec<[DVec3; 3]> = order
-            .par_iter()
-            .map(|&t| mesh.corners(t as usize))
-            .collect();
+        let tris = Tris::new(mesh, &order);
         let near = if n > 0 {
             NearBuild {
                 nodes: &nodes,
@@ -301,14 +331,15 @@ impl Bvh {
                     continue;
                 }
                 let start = node.child[l] as usize;
-                for (k, [a, b, c]) in self.tris[start..start + count].iter().enumerate() {
+                for k in start..start + count {
+                    let [a, b, c] = self.tris.get(k);
                     // Cheap bound first: the distance to the triangle's plane.
-                    let nrm = (*b - *a).cross(*c - *a);
-                    let h = nrm.dot(p - *a);
+                    let nrm = (b - a).cross(c - a);
+                    let h = nrm.dot(p - a);
                     if h * h > best_d2 * nrm.length_squared() {
                         continue;
                     }
-                    let (pt, bary) = closest_on_triangle(p, *a, *b, *c);
+                    let (pt, bary) = closest_on_triangle(p, a, b, c);
                     let d2 = (pt - p).length_squared();
                     if d2 <= best_d2 {
                         best_d2 = d2;
@@ -316,7 +347,7 @@ impl Bvh {
                         best = Some(Closest {
                             point: pt,
                             distance: d2.sqrt(),
-                            triangle: self.order[start + k],
+                            triangle: self.order[k],
                             bary,
                         });
                     }
@@ -492,8 +523,8 @@ impl Bvh {
                 let count = node.count[lane] as usize;
                 if count > 0 {
                     let start = node.child[lane] as usize;
-                    for (k, tri) in self.tris[start..start + count].iter().enumerate() {
-                        if hit(start + k, tri) {
+                    for k in start..start + count {
+                        if hit(k, &self.tris.get(k)) {
                             return true;
                         }
                     }
@@ -679,7 +710,7 @@ const OBB_MAX: usize = 1 << 15;
 /// Collapses the binary tree into the closest-point tree.
 struct NearBuild<'a> {
     nodes: &'a [Node],
-    tris: &'a [[DVec3; 3]],
+    tris: &'a Tris,
 }
 
 impl NearNode {
@@ -826,9 +857,11 @@ impl NearBuild<'_> {
     /// Puts binary node `k` in `lane` of `w` (whose centre and scale are set):
     /// its oriented or axis-aligned box, widened by `pad`, and what it points to.
     fn set(&self, w: &mut NearNode, lane: usize, k: usize, pad: f64, child: u32, count: u32) {
-        let tris = &self.tris[self.range(k)];
-        let axes = if tris.len() <= OBB_MAX {
-            let sum: DVec3 = tris.iter().map(|[a, b, c]| (*b - *a).cross(*c - *a)).sum();
+        let range = self.range(k);
+        let tris = || range.clone().map(|t| self.tris.get(t));
+        let obb = range.len() <= OBB_MAX;
+        let axes = if obb {
+            let sum: DVec3 = tris().map(|[a, b, c]| (b - a).cross(c - a)).sum();
             let n = sum.try_normalize().unwrap_or(DVec3::Z);
             let u = n.any_orthonormal_vector();
             [n, u, n.cross(u)]
@@ -838,11 +871,11 @@ impl NearBuild<'_> {
         // The axes as stored are the axes used: the query projects on them.
         let axes = axes.map(|a| a.as_vec3());
         let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-        if tris.len() <= OBB_MAX {
+        if obb {
             let axes = axes.map(|a| a.as_dvec3());
-            for t in tris {
+            for t in tris() {
                 for c in t {
-                    let x = *c - w.centre;
+                    let x = c - w.centre;
                     for k in 0..3 {
                         let y = axes[k].dot(x);
                         lo[k] = lo[k].min(y);
@@ -1165,6 +1198,40 @@ mod tests {
         assert!(seen.iter().all(|s| *s));
     }
 
+    /// A mesh of single-precision vertices (as read from binary STL) keeps its
+    /// triangles in single precision and answers exactly as the same mesh in
+    /// double precision does, to the bit; a mesh with one vertex that is not
+    /// a single-precision number keeps double precision.
+    #[test]
+    fn single_precision_storage_answers_exactly() {
+        let mut m = far_mesh(0.5);
+        m.vertices
+            .iter_mut()
+            .for_each(|v| *v = v.as_vec3().as_dvec3());
+        let bvh = Bvh::build(&m);
+        assert!(matches!(bvh.tris, Tris::F32(_)));
+        let mut m64 = m.clone();
+        m64.vertices[0].x += 1e-9;
+        let bvh64 = Bvh::build(&m64);
+        assert!(matches!(bvh64.tris, Tris::F64(_)));
+        let mut seed = 5u64;
+        let mut hint = None;
+        for _ in 0..300 {
+            let s = lcg(&mut seed);
+            let f = |k: u32| ((s >> k) & 0xffff) as f64 / 65535.0;
+            let p = DVec3::new(
+                4817.25 + 60.0 * f(0),
+                -2903.5 + 60.0 * f(16),
+                915.0 + 5.0 * f(32),
+            );
+            let c = bvh.closest_near(&m, p, f64::INFINITY, hint).expect("hit");
+            hint = Some(c.triangle);
+            assert_eq!(c.distance, brute(&m, p));
+            let [a, b, cc] = m.corners(c.triangle as usize);
+            assert_eq!(c.point, closest_on_triangle(p, a, b, cc).0);
+        }
+    }
+
     /// Positions in `order` of the triangles below lane `lane` of near node `at`.
     fn lane_triangles(bvh: &Bvh, at: usize, lane: usize, out: &mut Vec<usize>) {
         let n = &bvh.near[at];
@@ -1214,7 +1281,7 @@ mod tests {
                 lane_triangles(&bvh, at, lane, &mut tris);
                 for _ in 0..4 {
                     let seed = lcg(&mut seed);
-                    let [a, b, c] = bvh.tris[tris[(seed >> 33) as usize % tris.len()]];
+                    let [a, b, c] = bvh.tris.get(tris[(seed >> 33) as usize % tris.len()]);
                     let f = |k: u32| ((seed >> k) & 0x3ff) as f64 / 1023.0;
                     let n = (b - a).cross(c - a).normalize();
                     for p in [
@@ -1228,7 +1295,7 @@ mod tests {
                         let d2 = tris
                             .iter()
                             .map(|&t| {
-                                let [a, b, c] = bvh.tris[t];
+                                let [a, b, c] = bvh.tris.get(t);
                                 (closest_on_triangle(p, a, b, c).0 - p).length_squared()
                             })
                             .fold(f64::INFINITY, f64::min);
