@@ -138,7 +138,8 @@ pub(super) fn write_all(
         let n = op.moves.len();
         let ev = if parallel && n >= PARALLEL_MIN {
             write_runs(n, &mut st, out, &mut sink, |a, b, mut s| {
-                let mut text = Vec::with_capacity((b - a) * 48);
+                // GOTO with SPINDL and FEDRAT lines: under 96 bytes a move.
+                let mut text = Vec::with_capacity((b - a) * 96);
                 let mut ev = first_event_at(&op.events, a);
                 let mut result = Ok(());
                 for i in a..b {

@@ -703,7 +703,8 @@ fn write_moves(
     let mut none = Vec::new();
     let cfg = w.fork(&mut none, w.st.clone());
     write_runs(n, &mut w.st, w.out, sink, |a, b, st| {
-        let mut text = Vec::with_capacity((b - a) * 48);
+        // A block with S and F: under 64 bytes.
+        let mut text = Vec::with_capacity((b - a) * 64);
         let mut rw = cfg.fork(&mut text, st);
         let mut ev = first_event_at(&op.events, a);
         let mut result = Ok(());
