@@ -77,6 +77,20 @@ pub fn read_mesh(path: &Path) -> CliResult<(TriMesh, StlReport)> {
     read_stl_from(&mut f, len).map_err(|e| CliError::input(format!("{}:{e}", path.display())))
 }
 
+/// Reads the part for a command that works on its surface: an STL without a
+/// triangle (after degenerate ones are dropped) is refused, rather than every
+/// point coming out without contact.
+pub fn read_surface(path: &Path) -> CliResult<(TriMesh, StlReport)> {
+    let (mesh, report) = read_mesh(path)?;
+    if mesh.is_empty() {
+        return Err(CliError::input(format!(
+            "{}: no triangles: there is no part surface to work on",
+            path.display()
+        )));
+    }
+    Ok((mesh, report))
+}
+
 /// Reads an APT/CL or G-code program line by line (the file is never held whole).
 pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
     let f = open(path)?;

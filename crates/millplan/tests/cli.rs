@@ -135,6 +135,9 @@ fn bad_inputs_exit_2_with_location_and_leave_no_output() {
     let mut stl = vec![0u8; 84 + 50];
     stl[80] = 7; // claims 7 facets, holds 1
     let stl = w("bad.stl", &stl);
+    let mut no_facets = vec![0u8; 84];
+    no_facets[..5].copy_from_slice(b"solid");
+    let no_facets = w("none.stl", &no_facets);
     let out = dir.path().join("out.nc");
     let o = out.to_str().expect("utf8");
     fails_with_2(
@@ -184,6 +187,32 @@ fn bad_inputs_exit_2_with_location_and_leave_no_output() {
         ],
         "--max-step",
     );
+    // An STL without a triangle has no surface to control the spindle on.
+    let apt = w(
+        "ok.apt",
+        b"UNITS/MM\nCUTTER/10,5\nFEDRAT/100,MMPM\nGOTO/0,0,0\nGOTO/1,0,0\n",
+    );
+    for cmd in ["speed", "reorder", "directions"] {
+        let mut args = vec![
+            cmd,
+            "--stl",
+            no_facets.to_str().expect("utf8"),
+            apt.to_str().expect("utf8"),
+        ];
+        if cmd == "speed" {
+            args.extend(["--vc", "63", "--fz", "0.1", "--flutes", "2", "--ap", "0.3"]);
+        }
+        if cmd == "reorder" {
+            args.extend(["--ap", "0.3"]);
+        }
+        if cmd == "directions" {
+            args.extend(["--vc", "63", "--fz", "0.1", "--flutes", "2", "--ap", "0.3"]);
+        }
+        if cmd != "directions" {
+            args.extend(["-o", o]);
+        }
+        fails_with_2(&args, "none.stl: no triangles");
+    }
     assert!(!out.exists(), "a failed run left an output");
     let leftovers: Vec<_> = std::fs::read_dir(dir.path())
         .expect("dir")

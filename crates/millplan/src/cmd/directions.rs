@@ -3,7 +3,7 @@
 
 use crate::cmd::{read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::{read_mesh, read_program};
+use crate::io::{read_program, read_surface};
 use clap::ValueEnum;
 use millplan_plan::speed::{apply, Summary};
 use serde_json::json;
@@ -72,7 +72,7 @@ fn key(s: &Summary, by: RankBy) -> f64 {
 
 pub fn run(a: Args) -> CliResult<i32> {
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let (mesh, _) = read_mesh(&a.stl)?;
+    let (mesh, _) = read_surface(&a.stl)?;
     let params = a.cut.params();
     let mut results = Vec::new();
     if !a.angles.is_empty() {

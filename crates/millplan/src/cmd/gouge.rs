@@ -2,7 +2,7 @@
 
 use crate::cmd::{print_diagnostics, read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_mesh, read_program};
+use crate::io::{read_program, read_surface};
 use millplan_models::cutter::Shape;
 use millplan_sim::dropcutter::DropMesh;
 use millplan_sim::gouge::{check, GougeParams};
@@ -54,7 +54,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     let parsed = read_program(&a.path, read_options(a.units, None))?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
-    let (mesh, _) = read_mesh(&a.stl)?;
+    let (mesh, _) = read_surface(&a.stl)?;
     let part = DropMesh::new(&mesh);
     let g = GougeParams {
         step: a.step,

@@ -2,7 +2,7 @@
 
 use crate::cmd::{write_program, TargetArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::{read_mesh, write_atomic};
+use crate::io::{read_surface, write_atomic};
 use millplan_models::cutter::Shape;
 use millplan_nc::write::gcode::GcodeOptions;
 use millplan_sim::dropcutter::DropMesh;
@@ -64,7 +64,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             "--stepover, --step and --feed must be positive, --tol not negative",
         ));
     }
-    let (mesh, _) = read_mesh(&a.stl)?;
+    let (mesh, _) = read_surface(&a.stl)?;
     let part = DropMesh::new(&mesh);
     let mut p = RasterParams::new(shape);
     p.angle_deg = a.angle;

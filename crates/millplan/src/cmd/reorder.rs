@@ -3,7 +3,7 @@
 
 use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::{read_mesh, read_program, write_atomic};
+use crate::io::{read_program, read_surface, write_atomic};
 use clap::ValueEnum;
 use millplan_nc::write::gcode::GcodeOptions;
 use millplan_nc::Program;
@@ -139,7 +139,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let parsed = read_program(&a.path, read_options(a.units, None))?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
-    let (mesh, _) = read_mesh(&a.stl)?;
+    let (mesh, _) = read_surface(&a.stl)?;
     let mut rp = ReorderParams::new(match a.method {
         MethodArg::Paper => Method::Paper,
         MethodArg::Optimised => Method::Optimised,

@@ -2,7 +2,7 @@
 //! and how should the part be clamped?
 
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_mesh, write_atomic};
+use crate::io::{read_surface, write_atomic};
 use millplan_geom::bvh::Bvh;
 use millplan_geom::{DMat3, DVec3, TriMesh};
 use millplan_models::kinematics::{KinKind, Kinematics, RotaryAxis};
@@ -211,7 +211,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         }
     };
     let tool = a.tool.as_deref().map(parse_tool).transpose()?;
-    let (mut mesh, _) = read_mesh(&a.stl)?;
+    let (mut mesh, _) = read_surface(&a.stl)?;
     if mesh.is_empty() {
         return Err(CliError::input(format!(
             "{}: the part has no triangles",

@@ -2,7 +2,7 @@
 
 use crate::cmd::{print_diagnostics, read_options, write_program_file, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::{read_mesh, read_program, write_atomic};
+use crate::io::{read_program, read_surface, write_atomic};
 use clap::ValueEnum;
 use millplan_models::contact::{Convention, NormalMode, Surface};
 use millplan_nc::write::gcode::GcodeOptions;
@@ -113,7 +113,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     let join =
         |r: std::thread::JoinHandle<_>| r.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
-    let (mesh, _) = match read_mesh(&a.stl) {
+    let (mesh, _) = match read_surface(&a.stl) {
         Ok(m) => m,
         Err(e) => {
             let (parsed, _): (CliResult<_>, f64) = join(reader);
