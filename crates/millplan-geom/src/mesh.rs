@@ -383,15 +383,19 @@ mod tests {
         crate::assert_near!(m.facet_normal(0), DVec3::new(0., 0., -1.), 1e-12);
     }
 
-    #[test]
-    fn f32_weld_matches_f64_weld() {
-        let soup = cube_soup();
+    /// The soup welded in double precision, and in single precision as
+    /// binary STL holds it.
+    fn both_welds(soup: &[[DVec3; 3]]) -> ((TriMesh, WeldReport), (TriMesh, WeldReport)) {
         let s32: Vec<[[f32; 3]; 3]> = soup
             .iter()
             .map(|t| t.map(|p| [p.x as f32, p.y as f32, p.z as f32]))
             .collect();
-        let (a, ra) = TriMesh::from_soup(&soup);
-        let (b, rb) = TriMesh::from_f32_soup(&s32);
+        (TriMesh::from_soup(soup), TriMesh::from_f32_soup(&s32))
+    }
+
+    #[test]
+    fn f32_weld_matches_f64_weld() {
+        let ((a, ra), (b, rb)) = both_welds(&cube_soup());
         assert_eq!(
             (ra, a.triangles.clone(), a.vertices.clone()),
             (rb, b.triangles, b.vertices)
@@ -424,12 +428,7 @@ mod tests {
             soup.swap(k, (state >> 33) as usize % (k + 1));
         }
         assert!(soup.len() * 3 > 2 * (3 << 16), "spans several blocks");
-        let s32: Vec<[[f32; 3]; 3]> = soup
-            .iter()
-            .map(|t| t.map(|p| [p.x as f32, p.y as f32, p.z as f32]))
-            .collect();
-        let (a, ra) = TriMesh::from_soup(&soup);
-        let (b, rb) = TriMesh::from_f32_soup(&s32);
+        let ((a, ra), (b, rb)) = both_welds(&soup);
         assert!(ra.degenerate > 0);
         assert_eq!(ra, rb);
         assert!(a.triangles == b.triangles);
