@@ -106,11 +106,13 @@ pub struct Closest {
 /// A BVH over the triangles of one mesh, built by median splits on the longest
 /// axis of the centroid bounds (leaves of up to eight triangles), with boxes
 /// merged from the leaves up. Closest-point queries walk a four-wide tree of
-/// oriented boxes collapsed from it; rays and capsules a four-wide tree of
-/// axis-aligned boxes built on first use.
+/// oriented boxes collapsed from it (the binary tree is then dropped); rays
+/// and capsules a four-wide tree of axis-aligned boxes of the same shape,
+/// built on first use.
 #[derive(Clone, Debug)]
 pub struct Bvh {
-    nodes: Vec<Node>,
+    /// The box of the whole mesh.
+    bounds: Aabb,
     order: Vec<u32>,
     /// Triangle corners in `order`, contiguous: the queries read them leaf by leaf.
     tris: Tris,
@@ -155,48 +157,72 @@ impl WideNode {
         self.valid |= 1 << lane;
     }
 
-    /// Collapses the binary tree below the inner node `nodes[at]` into `out`
-    /// (two levels become one, opening the largest inner child first) and
-    /// returns the index of its wide node. A leaf of several triangles gets a
-    /// wide node of its own with a box per triangle (per pair above four):
-    /// one SIMD box test then spares most exact triangle tests.
-    fn collapse(nodes: &[Node], tris: &Tris, at: usize, pad: f64, out: &mut Vec<WideNode>) -> u32 {
+    /// The ray tree below closest-point node `at` (the same four-wide shape),
+    /// appended to `out`: its index and the box of its triangles. A leaf of
+    /// several triangles gets a wide node of its own with a box per triangle
+    /// (per pair above four): one SIMD box test then spares most exact
+    /// triangle tests.
+    fn from_near(
+        near: &[NearNode],
+        tris: &Tris,
+        at: usize,
+        pad: f64,
+        out: &mut Vec<WideNode>,
+    ) -> (u32, Aabb) {
         let me = out.len();
         out.push(WideNode::EMPTY);
-        let node = &nodes[at];
-        if node.count > 0 {
-            let (first, count) = (node.first as usize, node.count as usize);
-            let per = count.div_ceil(4);
-            for (lane, start) in (first..first + count).step_by(per).enumerate() {
-                let end = (start + per).min(first + count);
-                let mut b = Aabb::EMPTY;
-                for t in start..end {
-                    tris.get(t).iter().for_each(|&c| b.extend(c));
-                }
-                out[me].set(lane, &b, pad, start as u32, (end - start) as u32);
-            }
-            return me as u32;
-        }
-        let mut kids = vec![node.first as usize, node.right as usize];
-        while kids.len() < 4 {
-            let size = |k: usize| nodes[k].bbox.size().element_sum();
-            let open = (0..kids.len())
-                .filter(|&i| nodes[kids[i]].count == 0)
-                .max_by(|&a, &b| size(kids[a]).total_cmp(&size(kids[b])));
-            let Some(i) = open else { break };
-            let k = kids.swap_remove(i);
-            kids.extend([nodes[k].first as usize, nodes[k].right as usize]);
-        }
-        for (lane, &k) in kids.iter().enumerate() {
-            let n = &nodes[k];
-            if n.count == 1 {
-                out[me].set(lane, &n.bbox, pad, n.first, 1);
+        let node = &near[at];
+        let mut all = Aabb::EMPTY;
+        for lane in (0..4).filter(|l| node.valid & (1 << l) != 0) {
+            let (child, count) = (node.child[lane], node.count[lane] as usize);
+            let (child, b, count) = if count == 0 {
+                let (w, b) = Self::from_near(near, tris, child as usize, pad, out);
+                (w, b, 0)
+            } else if count == 1 {
+                (
+                    child,
+                    Self::bounds(tris, child as usize..child as usize + 1),
+                    1,
+                )
             } else {
-                let child = Self::collapse(nodes, tris, k, pad, out);
-                out[me].set(lane, &n.bbox, pad, child, 0);
-            }
+                let (w, b) = Self::leaf(tris, child as usize, count, pad, out);
+                (w, b, 0)
+            };
+            out[me].set(lane, &b, pad, child, count as u32);
+            all = all.union(&b);
         }
-        me as u32
+        (me as u32, all)
+    }
+
+    /// A wide node over the `count` triangles from position `first` of the
+    /// order, a box per triangle (per pair above four); its index and box.
+    fn leaf(
+        tris: &Tris,
+        first: usize,
+        count: usize,
+        pad: f64,
+        out: &mut Vec<WideNode>,
+    ) -> (u32, Aabb) {
+        let me = out.len();
+        out.push(WideNode::EMPTY);
+        let per = count.div_ceil(4);
+        let mut all = Aabb::EMPTY;
+        for (lane, start) in (first..first + count).step_by(per).enumerate() {
+            let end = (start + per).min(first + count);
+            let b = Self::bounds(tris, start..end);
+            out[me].set(lane, &b, pad, start as u32, (end - start) as u32);
+            all = all.union(&b);
+        }
+        (me as u32, all)
+    }
+
+    /// The box of the triangles at positions `range` of the order.
+    fn bounds(tris: &Tris, range: std::ops::Range<usize>) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for t in range {
+            tris.get(t).iter().for_each(|&c| b.extend(c));
+        }
+        b
     }
 }
 
@@ -233,7 +259,7 @@ impl Bvh {
             Vec::new()
         };
         Bvh {
-            nodes,
+            bounds: nodes[0].bbox,
             order,
             tris,
             near,
@@ -247,17 +273,17 @@ impl Bvh {
         self.wide.get_or_init(|| {
             // The f32 boxes are widened by 1e-5 of the part's size (far more
             // than the single-precision rounding of coordinates of that size).
-            let pad = 1e-5 * self.nodes[0].bbox.diagonal().max(1e-9);
-            let mut wide = Vec::with_capacity(self.nodes.len() + 1);
+            let pad = 1e-5 * self.bounds.diagonal().max(1e-9);
+            let mut wide = Vec::with_capacity(2 * self.near.len() + 1);
             if !self.order.is_empty() {
-                WideNode::collapse(&self.nodes, &self.tris, 0, pad, &mut wide);
+                WideNode::from_near(&self.near, &self.tris, 0, pad, &mut wide);
             }
             wide
         })
     }
 
     pub fn bounds(&self) -> Aabb {
-        self.nodes[0].bbox
+        self.bounds
     }
 
     /// The closest point of the mesh to `p` within `max_dist`, if any.
@@ -452,7 +478,7 @@ impl Bvh {
         // A box lies wholly in n·x ≤ h when its highest corner along n does; the
         // margin covers the single-precision rounding of that test.
         let cull = above.map(|(n, h)| {
-            let b = self.nodes[0].bbox;
+            let b = self.bounds;
             let mag = b.min.abs().max(b.max.abs()).max_element() + h.abs();
             let h32 = (h - 8.0 * f32::EPSILON as f64 * mag) as f32;
             let n32 = n.as_vec3();
