@@ -485,7 +485,7 @@ fn feed_directions(c: &[DVec3], pts: &[PathPoint], i: usize) -> (DVec3, DVec3) {
 /// Feed angle, uncut side and neighbour for feed direction t at point i.
 #[allow(clippy::too_many_arguments)]
 fn local_case(
-    grid: &NeighbourGrid,
+    grid: &NeighbourGrid<'_>,
     c: &[DVec3],
     pts: &[PathPoint],
     i: usize,
@@ -497,9 +497,9 @@ fn local_case(
     let mut side = SideFinder::new(c[i], n, t, search);
     let pass = pts[i].pass;
     // Only points machined before this one, of other passes, count.
-    grid.for_each_near(c[i], i as u32, |e| {
+    grid.for_each_near(c[i], i as u32, |c, e| {
         if e.pass != pass {
-            side.machined(e.c);
+            side.machined(c);
         }
     });
     (feed_angle(n, k, t), side.result().0, side.result().1)
@@ -576,7 +576,9 @@ impl SideFinder {
 }
 
 /// Uniform grid over ball centres for the sideways neighbour search.
-struct NeighbourGrid {
+struct NeighbourGrid<'a> {
+    /// The ball centres, by point index.
+    c: &'a [DVec3],
     /// Cell edge: twice the search radius, so the 2×2×2 cells on the point's side
     /// of its own cell cover the whole search sphere.
     cell: f64,
@@ -585,8 +587,8 @@ struct NeighbourGrid {
     /// Whether cells might share a key (a grid over 2^21 cells along an axis);
     /// candidates are then checked to be in the cells asked for.
     aliased: bool,
-    /// The points sorted by cell and, within a cell, by index, each with what the
-    /// search reads, side by side;
+    /// The points sorted by cell and, within a cell, by index, each with its
+    /// pass (the centre is read from `c`: a third of the memory);
     /// `cells` maps a cell's key to its run.
     entries: Vec<GridEntry>,
     cells: FxHashMap<u64, (u32, u32)>,
@@ -594,15 +596,14 @@ struct NeighbourGrid {
 
 #[derive(Clone, Copy, Debug)]
 struct GridEntry {
-    c: DVec3,
     i: u32,
     pass: u32,
 }
 
 const GRID_BITS: u32 = 21;
 
-impl NeighbourGrid {
-    fn new(c: &[DVec3], pts: &[PathPoint], radius: f64) -> NeighbourGrid {
+impl<'a> NeighbourGrid<'a> {
+    fn new(c: &'a [DVec3], pts: &[PathPoint], radius: f64) -> NeighbourGrid<'a> {
         let cell = 2.0 * radius.max(1e-3);
         let empty = || {
             (
@@ -628,6 +629,7 @@ impl NeighbourGrid {
             .max(hi.1.saturating_sub(lo.1))
             .max(hi.2.saturating_sub(lo.2));
         let mut grid = NeighbourGrid {
+            c,
             cell,
             origin: lo,
             aliased: span >= (1 << GRID_BITS) - 2,
@@ -655,7 +657,6 @@ impl NeighbourGrid {
         grid.entries = keyed
             .par_iter()
             .map(|&(_, i)| GridEntry {
-                c: c[i as usize],
                 i,
                 pass: pts[i as usize].pass,
             })
@@ -672,9 +673,9 @@ impl NeighbourGrid {
             | f(k.2, self.origin.2)
     }
 
-    /// Calls `f` for every point before index `before` within the search radius
-    /// of `p` (and some more).
-    fn for_each_near(&self, p: DVec3, before: u32, mut f: impl FnMut(&GridEntry)) {
+    /// Calls `f` with the centre and entry of every point before index `before`
+    /// within the search radius of `p` (and some more).
+    fn for_each_near(&self, p: DVec3, before: u32, mut f: impl FnMut(DVec3, &GridEntry)) {
         let k = key(p, self.cell);
         let side = |v: f64, k: i64| {
             if v / self.cell - k as f64 >= 0.5 {
@@ -695,8 +696,9 @@ impl NeighbourGrid {
                             if e.i >= before {
                                 break;
                             }
-                            if !self.aliased || key(e.c, self.cell) == want {
-                                f(e);
+                            let c = self.c[e.i as usize];
+                            if !self.aliased || key(c, self.cell) == want {
+                                f(c, e);
                             }
                         }
                     }
