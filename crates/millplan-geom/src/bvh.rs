@@ -83,6 +83,52 @@ impl Tris {
         }
     }
 
+    /// The least and greatest of `axes`·(x − `centre`) over the corners x of
+    /// the triangles at positions `range`. In single precision, four lanes at
+    /// a time: relative to `centre` rounded to f32 (the difference of two f32
+    /// numbers, rounded once), with the projection of that rounding added
+    /// back in f64. The rounding, a few units in the last place of the
+    /// distance from the centre, is within the padding the boxes get.
+    fn extents(
+        &self,
+        range: std::ops::Range<usize>,
+        centre: DVec3,
+        axes: [glam::Vec3; 3],
+    ) -> ([f64; 3], [f64; 3]) {
+        // Columns such that m · x = (axes[0]·x, axes[1]·x, axes[2]·x).
+        let m = glam::Mat3A::from_cols(axes[0].into(), axes[1].into(), axes[2].into()).transpose();
+        let c32 = centre.as_vec3();
+        let mut lo = Vec3A::splat(f32::INFINITY);
+        let mut hi = Vec3A::splat(f32::NEG_INFINITY);
+        match self {
+            Tris::F32(t) => {
+                let c = Vec3A::from(c32);
+                for tri in &t[range] {
+                    for p in tri {
+                        let y = m * (Vec3A::from_array(*p) - c);
+                        lo = lo.min(y);
+                        hi = hi.max(y);
+                    }
+                }
+            }
+            Tris::F64(t) => {
+                let c = c32.as_dvec3();
+                for tri in &t[range] {
+                    for p in tri {
+                        let y = m * Vec3A::from((*p - c).as_vec3());
+                        lo = lo.min(y);
+                        hi = hi.max(y);
+                    }
+                }
+            }
+        }
+        let shift = axes.map(|a| a.as_dvec3().dot(c32.as_dvec3() - centre));
+        (
+            [0, 1, 2].map(|k| lo[k] as f64 + shift[k]),
+            [0, 1, 2].map(|k| hi[k] as f64 + shift[k]),
+        )
+    }
+
     /// The corners of the triangle at position `k` of the order.
     #[inline(always)]
     fn get(&self, k: usize) -> [DVec3; 3] {
@@ -798,11 +844,11 @@ impl NearBuild<'_> {
 
     /// Fills `out` (exactly the tree over binary node `at`, its root first, at
     /// global index `base`) depth first; large subtrees in parallel, each into
-    /// its own part of the one vector.
-    fn fill(&self, at: usize, out: &mut [NearNode], base: usize) {
+    /// its own part of the one vector. Returns the sum of the triangles'
+    /// area-weighted normals below `at`.
+    fn fill(&self, at: usize, out: &mut [NearNode], base: usize) -> DVec3 {
         if self.range(at).len() < PAR_MIN {
-            self.collapse(at, out, base, &mut 0);
-            return;
+            return self.collapse(at, out, base, &mut 0).1;
         }
         let nodes = self.nodes;
         let (mut w, pad) = self.start(at);
@@ -810,25 +856,55 @@ impl NearBuild<'_> {
         let (me, mut rest) = out.split_at_mut(1);
         let mut next = base + 1;
         let mut jobs = Vec::new();
+        let mut sums = [DVec3::ZERO; 4];
         for (lane, &k) in kids[..n].iter().enumerate() {
             if nodes[k].count > 0 {
-                self.set(&mut w, lane, k, pad, nodes[k].first, nodes[k].count);
+                sums[lane] = self.leaf_sum(k);
             } else {
                 let (part, tail) = std::mem::take(&mut rest).split_at_mut(self.count(k));
                 rest = tail;
-                self.set(&mut w, lane, k, pad, next as u32, 0);
                 next += part.len();
-                jobs.push((k, next - part.len(), part));
+                jobs.push((lane, k, next - part.len(), part));
             }
         }
-        jobs.into_par_iter()
-            .for_each(|(k, b, part)| self.fill(k, part, b));
+        let inner: Vec<(usize, u32, DVec3)> = jobs
+            .into_par_iter()
+            .map(|(lane, k, b, part)| (lane, b as u32, self.fill(k, part, b)))
+            .collect();
+        for (lane, child, sum) in inner {
+            sums[lane] = sum;
+            self.set(&mut w, lane, kids[lane], pad, sum, child, 0);
+        }
+        for (lane, &k) in kids[..n].iter().enumerate() {
+            if nodes[k].count > 0 {
+                self.set(
+                    &mut w,
+                    lane,
+                    k,
+                    pad,
+                    sums[lane],
+                    nodes[k].first,
+                    nodes[k].count,
+                );
+            }
+        }
         me[0] = w;
+        sums.iter().sum()
+    }
+
+    /// The sum of the area-weighted normals of leaf `k`'s triangles.
+    fn leaf_sum(&self, k: usize) -> DVec3 {
+        self.range(k)
+            .map(|t| {
+                let [a, b, c] = self.tris.get(t);
+                (b - a).cross(c - a)
+            })
+            .sum()
     }
 
     /// A node over binary node `at` with its centre and scale set, and the
     /// padding of its children's bounds: far more than the rounding of
-    /// coordinates of this size to f32.
+    /// coordinates of this size to f32 and of the projections onto the axes.
     fn start(&self, at: usize) -> (NearNode, f64) {
         let b = &self.nodes[at].bbox;
         let w = NearNode {
@@ -838,7 +914,7 @@ impl NearBuild<'_> {
         };
         (
             w,
-            4.0 * f32::EPSILON as f64 * (0.5 * b.diagonal()).max(1e-9),
+            8.0 * f32::EPSILON as f64 * (0.5 * b.diagonal()).max(1e-9),
         )
     }
 
@@ -881,13 +957,23 @@ impl NearBuild<'_> {
     }
 
     /// Puts binary node `k` in `lane` of `w` (whose centre and scale are set):
-    /// its oriented or axis-aligned box, widened by `pad`, and what it points to.
-    fn set(&self, w: &mut NearNode, lane: usize, k: usize, pad: f64, child: u32, count: u32) {
+    /// its oriented box (about the mean normal of `sum`, the sum of its
+    /// triangles' area-weighted normals) or axis-aligned box, widened by
+    /// `pad`, and what it points to.
+    #[allow(clippy::too_many_arguments)]
+    fn set(
+        &self,
+        w: &mut NearNode,
+        lane: usize,
+        k: usize,
+        pad: f64,
+        sum: DVec3,
+        child: u32,
+        count: u32,
+    ) {
         let range = self.range(k);
-        let tris = || range.clone().map(|t| self.tris.get(t));
         let obb = range.len() <= OBB_MAX;
         let axes = if obb {
-            let sum: DVec3 = tris().map(|[a, b, c]| (b - a).cross(c - a)).sum();
             let n = sum.try_normalize().unwrap_or(DVec3::Z);
             let u = n.any_orthonormal_vector();
             [n, u, n.cross(u)]
@@ -896,24 +982,12 @@ impl NearBuild<'_> {
         };
         // The axes as stored are the axes used: the query projects on them.
         let axes = axes.map(|a| a.as_vec3());
-        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-        if obb {
-            let axes = axes.map(|a| a.as_dvec3());
-            for t in tris() {
-                for c in t {
-                    let x = c - w.centre;
-                    for k in 0..3 {
-                        let y = axes[k].dot(x);
-                        lo[k] = lo[k].min(y);
-                        hi[k] = hi[k].max(y);
-                    }
-                }
-            }
+        let (lo, hi) = if obb {
+            self.tris.extents(range, w.centre, axes)
         } else {
             let b = &self.nodes[k].bbox;
-            lo = (b.min - w.centre).to_array();
-            hi = (b.max - w.centre).to_array();
-        }
+            ((b.min - w.centre).to_array(), (b.max - w.centre).to_array())
+        };
         for a in 0..3 {
             for (slot, v) in w.axes[a].iter_mut().zip(axes[a].to_array()) {
                 slot[lane] = v;
@@ -926,27 +1000,38 @@ impl NearBuild<'_> {
     }
 
     /// The node over binary node `at` and its subtree, depth first from
-    /// `out[*next]` (`out[0]` is global index `base`); returns its global index.
-    fn collapse(&self, at: usize, out: &mut [NearNode], base: usize, next: &mut usize) -> u32 {
+    /// `out[*next]` (`out[0]` is global index `base`); returns its global index
+    /// and the sum of the area-weighted normals of its triangles.
+    fn collapse(
+        &self,
+        at: usize,
+        out: &mut [NearNode],
+        base: usize,
+        next: &mut usize,
+    ) -> (u32, DVec3) {
         let me = *next;
         *next += 1;
         let nodes = self.nodes;
         let (mut w, pad) = self.start(at);
+        let mut total = DVec3::ZERO;
         if nodes[at].count > 0 {
             // A mesh of one leaf.
-            self.set(&mut w, 0, at, pad, nodes[at].first, nodes[at].count);
+            total = self.leaf_sum(at);
+            self.set(&mut w, 0, at, pad, total, nodes[at].first, nodes[at].count);
         }
         let (kids, n) = self.kids(at);
         for (lane, &k) in kids[..n].iter().enumerate() {
-            if nodes[k].count > 0 {
-                self.set(&mut w, lane, k, pad, nodes[k].first, nodes[k].count);
+            let (child, count, sum) = if nodes[k].count > 0 {
+                (nodes[k].first, nodes[k].count, self.leaf_sum(k))
             } else {
-                let child = self.collapse(k, out, base, next);
-                self.set(&mut w, lane, k, pad, child, 0);
-            }
+                let (child, sum) = self.collapse(k, out, base, next);
+                (child, 0, sum)
+            };
+            self.set(&mut w, lane, k, pad, sum, child, count);
+            total += sum;
         }
         out[me] = w;
-        (base + me) as u32
+        ((base + me) as u32, total)
     }
 }
 
