@@ -356,38 +356,7 @@ pub fn apply_on(
             continue;
         };
         ops += 1;
-        // Cutting points, with their passes (split at links and sharp reversals).
-        let mut pts = Vec::with_capacity(op.moves.len());
-        let mut idx = Vec::with_capacity(op.moves.len());
-        let mut pass = 0u32;
-        let mut prev_dir: Option<DVec3> = None;
-        for (i, mv) in op.moves.iter().enumerate() {
-            if !mv.is_cutting() {
-                if prev_dir.is_some() || !pts.is_empty() {
-                    pass += 1;
-                }
-                prev_dir = None;
-                continue;
-            }
-            let axis = op.axis(mv).unwrap_or(DVec3::Z);
-            let (cl, axis) = match &op.frame {
-                Some(f) => (f.to_parent(mv.end), f.dir_to_parent(axis)),
-                None => (mv.end, axis),
-            };
-            if let Some(s) = op.move_start(i) {
-                let dir = (mv.end - s).normalize_or_zero();
-                if let Some(pd) = prev_dir {
-                    if dir != DVec3::ZERO && pd.dot(dir) < 0.5 {
-                        pass += 1;
-                    }
-                }
-                if dir != DVec3::ZERO {
-                    prev_dir = Some(dir);
-                }
-            }
-            pts.push(PathPoint { cl, axis, pass });
-            idx.push(i);
-        }
+        let (pts, idx) = cutting_points(op);
         if pts.is_empty() {
             continue;
         }
@@ -600,6 +569,99 @@ pub fn apply_on(
 
 /// Limits |n_k − n_{k−1}| to `accel`·dt_k: a forward pass, then a backward pass
 /// that guarantees the bound for every pair.
+/// Moves per part of the cutting-point scan.
+const SCAN_CHUNK: usize = 1 << 15;
+
+/// The cutting points of an operation and the indices of their moves, with
+/// their passes: a new pass after every link (non-cutting move) once cutting
+/// has begun, and at every reversal sharper than 60° within a pass.
+///
+/// Scanned in parallel parts: each part starts from the direction the moves
+/// before it leave (found by looking back over zero-length moves to the last
+/// link or real step), counts its cutting points and new passes, and then
+/// writes its points with the passes of the parts before it added.
+fn cutting_points(op: &millplan_nc::Operation) -> (Vec<PathPoint>, Vec<usize>) {
+    let moves = &op.moves;
+    let first_cut = moves.iter().position(|m| m.is_cutting());
+    let dir_of = |i: usize| {
+        op.move_start(i)
+            .map(|s| (moves[i].end - s).normalize_or_zero())
+            .filter(|d| *d != DVec3::ZERO)
+    };
+    // The direction of travel entering move `start`: none after a link.
+    let dir_before = |start: usize| {
+        (0..start)
+            .rev()
+            .map(|j| (moves[j].is_cutting(), j))
+            .take_while(|(cutting, _)| *cutting)
+            .find_map(|(_, j)| dir_of(j))
+    };
+    // Scans moves `range`: (cutting points, new passes); with `out`, writes
+    // the points, numbering passes from `pass`.
+    let scan = |range: std::ops::Range<usize>,
+                mut pass: u32,
+                mut out: Option<(&mut [PathPoint], &mut [usize])>| {
+        let mut prev_dir = dir_before(range.start);
+        let (mut count, pass0) = (0usize, pass);
+        for i in range {
+            let mv = &moves[i];
+            if !mv.is_cutting() {
+                if first_cut.is_some_and(|f| f < i) {
+                    pass += 1;
+                }
+                prev_dir = None;
+                continue;
+            }
+            let dir = dir_of(i);
+            if let (Some(pd), Some(d)) = (prev_dir, dir) {
+                if pd.dot(d) < 0.5 {
+                    pass += 1;
+                }
+            }
+            prev_dir = dir.or(prev_dir);
+            if let Some((pts, idx)) = out.as_mut() {
+                let axis = op.axis(mv).unwrap_or(DVec3::Z);
+                let (cl, axis) = match &op.frame {
+                    Some(f) => (f.to_parent(mv.end), f.dir_to_parent(axis)),
+                    None => (mv.end, axis),
+                };
+                pts[count] = PathPoint { cl, axis, pass };
+                idx[count] = i;
+            }
+            count += 1;
+        }
+        (count, pass - pass0)
+    };
+    let parts: Vec<std::ops::Range<usize>> = (0..moves.len())
+        .step_by(SCAN_CHUNK)
+        .map(|a| a..(a + SCAN_CHUNK).min(moves.len()))
+        .collect();
+    let counts: Vec<(usize, u32)> = parts.par_iter().map(|r| scan(r.clone(), 0, None)).collect();
+    let total: usize = counts.iter().map(|c| c.0).sum();
+    let blank = PathPoint {
+        cl: DVec3::ZERO,
+        axis: DVec3::Z,
+        pass: 0,
+    };
+    let mut pts = vec![blank; total];
+    let mut idx = vec![0usize; total];
+    // Each part's slice of the output and the pass it starts from.
+    let mut jobs = Vec::with_capacity(parts.len());
+    let (mut p_rest, mut i_rest) = (pts.as_mut_slice(), idx.as_mut_slice());
+    let mut pass = 0u32;
+    for (r, &(count, passes)) in parts.iter().zip(&counts) {
+        let (p, pr) = std::mem::take(&mut p_rest).split_at_mut(count);
+        let (i, ir) = std::mem::take(&mut i_rest).split_at_mut(count);
+        (p_rest, i_rest) = (pr, ir);
+        jobs.push((r.clone(), pass, p, i));
+        pass += passes;
+    }
+    jobs.into_par_iter().for_each(|(r, pass, p, i)| {
+        scan(r, pass, Some((p, i)));
+    });
+    (pts, idx)
+}
+
 pub fn rate_limit(n: &mut [f64], dt: &[f64], accel: f64) {
     rate_limit_scaled(n, dt, 1.0, accel);
 }
@@ -754,6 +816,110 @@ pub fn side_name(r: &PointResult) -> &'static str {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// The cutting-point scan in one sequential pass: the reference for the
+    /// parallel one.
+    fn cutting_points_in_one_pass(op: &millplan_nc::Operation) -> (Vec<PathPoint>, Vec<usize>) {
+        let (mut pts, mut idx) = (Vec::new(), Vec::new());
+        let mut pass = 0u32;
+        let mut prev_dir: Option<DVec3> = None;
+        for (i, mv) in op.moves.iter().enumerate() {
+            if !mv.is_cutting() {
+                if prev_dir.is_some() || !pts.is_empty() {
+                    pass += 1;
+                }
+                prev_dir = None;
+                continue;
+            }
+            if let Some(s) = op.move_start(i) {
+                let dir = (mv.end - s).normalize_or_zero();
+                if let Some(pd) = prev_dir {
+                    if dir != DVec3::ZERO && pd.dot(dir) < 0.5 {
+                        pass += 1;
+                    }
+                }
+                if dir != DVec3::ZERO {
+                    prev_dir = Some(dir);
+                }
+            }
+            pts.push(PathPoint {
+                cl: mv.end,
+                axis: DVec3::Z,
+                pass,
+            });
+            idx.push(i);
+        }
+        (pts, idx)
+    }
+
+    #[test]
+    fn parallel_cutting_point_scan_matches_one_pass() {
+        use millplan_nc::{Move, Operation};
+        // Several parts' worth of moves: rapids before the first cut, links,
+        // reversals, and runs of zero-length moves, some of them across the
+        // boundaries between parts (where a part must find the direction the
+        // moves before it leave).
+        let mut seed = 7u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            seed >> 33
+        };
+        let mut op = Operation {
+            start: Some(DVec3::new(0.0, 0.0, 50.0)),
+            ..Operation::default()
+        };
+        let mut p = DVec3::new(0.0, 0.0, 50.0);
+        op.moves.push(Move::rapid(p));
+        let mut dir = DVec3::X;
+        while op.moves.len() < 5 * SCAN_CHUNK {
+            let here = op.moves.len();
+            if here.is_multiple_of(SCAN_CHUNK) {
+                // A reversal as a part's first move.
+                dir = -dir;
+            }
+            match rnd() % 100 {
+                0 => {
+                    p += DVec3::new(0.0, 1.0, 5.0);
+                    op.moves.push(Move::rapid(p));
+                }
+                1 => dir = -dir,
+                2 => dir = DVec3::new(dir.y, -dir.x, 0.0),
+                3 => {
+                    // A long run of repeated points, placed across the next
+                    // boundary when it is near.
+                    let to_boundary = SCAN_CHUNK - here % SCAN_CHUNK;
+                    let across = to_boundary < 3000;
+                    let n = if across {
+                        to_boundary + 59
+                    } else {
+                        1 + rnd() as usize % 40
+                    };
+                    for _ in 0..n {
+                        op.moves.push(Move::linear(p, 500.0));
+                    }
+                    if across {
+                        // The first real step after them reverses.
+                        dir = -dir;
+                    }
+                }
+                _ => {}
+            }
+            p += dir * (0.1 + (rnd() % 7) as f64 * 0.01);
+            op.moves.push(Move::linear(p, 500.0));
+        }
+        // A link and a reversal exactly at part boundaries too.
+        op.moves[3 * SCAN_CHUNK] = Move::rapid(op.moves[3 * SCAN_CHUNK].end);
+        let want = cutting_points_in_one_pass(&op);
+        let got = cutting_points(&op);
+        assert_eq!(got.1, want.1);
+        assert_eq!(got.0.len(), want.0.len());
+        for (g, w) in got.0.iter().zip(&want.0) {
+            assert_eq!((g.cl, g.pass), (w.cl, w.pass));
+        }
+        assert!(want.0.last().is_some_and(|p| p.pass > 100));
+    }
 
     proptest! {
         #[test]
