@@ -1037,6 +1037,7 @@ impl NearBuild<'_> {
 
 /// Closest point on triangle (a, b, c) to p, with its barycentric coordinates
 /// (Ericson, Real-Time Collision Detection §5.1.5).
+#[inline(always)]
 pub fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> (DVec3, [f64; 3]) {
     let ab = b - a;
     let ac = c - a;
