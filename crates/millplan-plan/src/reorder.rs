@@ -24,10 +24,10 @@
 //! clearance height, rapids across and plunges at the plunge feed.
 
 use millplan_geom::{DVec2, DVec3, TriMesh};
-use millplan_models::contact::{self, feed_angle, PathPoint, SideFinder, Surface};
+use millplan_models::contact::{self, feed_angle, SideFinder, Surface};
 use millplan_models::cutter::Shape;
 use millplan_models::wd::{self, Case};
-use millplan_nc::{EventKind, Move, MoveKind, Operation, Program};
+use millplan_nc::{EventKind, Move, MoveKind, Program};
 use millplan_sim::dropcutter::DropMesh;
 use rustc_hash::{FxHashMap, FxHashSet};
 
@@ -134,41 +134,6 @@ pub struct Reordered {
     /// long direct link), where the spindle has time to change speed.
     pub jump_original: Vec<bool>,
     pub jump_reordered: Vec<bool>,
-}
-
-/// The cutting points of an operation, their move indices and pass numbers.
-fn cutting_points(op: &Operation) -> (Vec<PathPoint>, Vec<usize>) {
-    let mut pts = Vec::new();
-    let mut idx = Vec::new();
-    let mut pass = 0u32;
-    let mut prev_dir: Option<DVec3> = None;
-    for (i, m) in op.moves.iter().enumerate() {
-        if !m.is_cutting() {
-            if !pts.is_empty() {
-                pass += 1;
-            }
-            prev_dir = None;
-            continue;
-        }
-        if let Some(s) = op.move_start(i) {
-            let d = (m.end - s).normalize_or_zero();
-            if let Some(pd) = prev_dir {
-                if d != DVec3::ZERO && pd.dot(d) < 0.5 {
-                    pass += 1;
-                }
-            }
-            if d != DVec3::ZERO {
-                prev_dir = Some(d);
-            }
-        }
-        pts.push(PathPoint {
-            cl: m.end,
-            axis: DVec3::Z,
-            pass,
-        });
-        idx.push(i);
-    }
-    (pts, idx)
 }
 
 fn xy(v: DVec3) -> DVec2 {
@@ -630,7 +595,7 @@ pub fn reorder(
         {
             continue;
         }
-        let (pts, idx) = cutting_points(op);
+        let (pts, idx) = crate::speed::cutting_points(op);
         if pts.len() < 2 {
             continue;
         }

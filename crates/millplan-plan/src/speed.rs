@@ -572,15 +572,16 @@ pub fn apply_on(
 /// Moves per part of the cutting-point scan.
 const SCAN_CHUNK: usize = 1 << 15;
 
-/// The cutting points of an operation and the indices of their moves, with
-/// their passes: a new pass after every link (non-cutting move) once cutting
+/// The cutting points of an operation (in part coordinates, with the tool
+/// axis of their moves) and the indices of their moves, with their passes
+/// (`speed` and `reorder` both read paths this way): a new pass after every link (non-cutting move) once cutting
 /// has begun, and at every reversal sharper than 60° within a pass.
 ///
 /// Scanned in parallel parts: each part starts from the direction the moves
 /// before it leave (found by looking back over zero-length moves to the last
 /// link or real step), counts its cutting points and new passes, and then
 /// writes its points with the passes of the parts before it added.
-fn cutting_points(op: &millplan_nc::Operation) -> (Vec<PathPoint>, Vec<usize>) {
+pub(crate) fn cutting_points(op: &millplan_nc::Operation) -> (Vec<PathPoint>, Vec<usize>) {
     let moves = &op.moves;
     let first_cut = moves.iter().position(|m| m.is_cutting());
     let dir_of = |i: usize| {
