@@ -320,7 +320,9 @@ impl Bvh {
             // The f32 boxes are widened by 1e-5 of the part's size (far more
             // than the single-precision rounding of coordinates of that size).
             let pad = 1e-5 * self.bounds.diagonal().max(1e-9);
-            let mut wide = Vec::with_capacity(2 * self.near.len() + 1);
+            // A node per closest-point node, and one per leaf of several
+            // triangles (leaves hold four to eight).
+            let mut wide = Vec::with_capacity(self.near.len() + self.order.len() / 4 + 1);
             if !self.order.is_empty() {
                 WideNode::from_near(&self.near, &self.tris, 0, pad, &mut wide);
             }

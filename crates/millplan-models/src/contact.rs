@@ -497,9 +497,9 @@ fn local_case(
     let mut side = SideFinder::new(c[i], n, t, search);
     let pass = pts[i].pass;
     // Only points machined before this one, of other passes, count.
-    grid.for_each_near(c[i], i as u32, |c, e| {
+    grid.for_each_near(c[i], i as u32, |centre, e| {
         if e.pass != pass {
-            side.machined(c);
+            side.machined(centre);
         }
     });
     (feed_angle(n, k, t), side.result().0, side.result().1)
