@@ -567,15 +567,14 @@ pub fn apply_on(
     })
 }
 
-/// Limits |n_k − n_{k−1}| to `accel`·dt_k: a forward pass, then a backward pass
-/// that guarantees the bound for every pair.
 /// Moves per part of the cutting-point scan.
 const SCAN_CHUNK: usize = 1 << 15;
 
 /// The cutting points of an operation (in part coordinates, with the tool
 /// axis of their moves) and the indices of their moves, with their passes
-/// (`speed` and `reorder` both read paths this way): a new pass after every link (non-cutting move) once cutting
-/// has begun, and at every reversal sharper than 60° within a pass.
+/// (`speed` and `reorder` both read paths this way): a new pass after every
+/// link (non-cutting move) once cutting has begun, and at every reversal
+/// sharper than 60° within a pass.
 ///
 /// Scanned in parallel parts: each part starts from the direction the moves
 /// before it leave (found by looking back over zero-length moves to the last
@@ -644,7 +643,9 @@ pub(crate) fn cutting_points(op: &millplan_nc::Operation) -> (Vec<PathPoint>, Ve
         axis: DVec3::Z,
         pass: 0,
     };
-    let mut pts = vec![blank; total];
+    // Filled in parallel, so that fresh memory is first touched (and zeroed
+    // by the system) on every thread rather than on one.
+    let mut pts: Vec<PathPoint> = (0..total).into_par_iter().map(|_| blank).collect();
     let mut idx = vec![0usize; total];
     // Each part's slice of the output and the pass it starts from.
     let mut jobs = Vec::with_capacity(parts.len());
@@ -663,6 +664,8 @@ pub(crate) fn cutting_points(op: &millplan_nc::Operation) -> (Vec<PathPoint>, Ve
     (pts, idx)
 }
 
+/// Limits |n_k − n_{k−1}| to `accel`·dt_k: a forward pass, then a backward pass
+/// that guarantees the bound for every pair.
 pub fn rate_limit(n: &mut [f64], dt: &[f64], accel: f64) {
     rate_limit_scaled(n, dt, 1.0, accel);
 }
