@@ -28,6 +28,10 @@ pub struct ReadOptions {
     pub default_feed: f64,
     /// Chord tolerance (mm) for sampling splines into lines.
     pub chord_tol: f64,
+    /// About how many moves the program holds (0: unknown). A hint: the first
+    /// operation to get a move reserves room for them at once, instead of
+    /// growing (copying, and touching fresh memory) step by step.
+    pub expect_moves: usize,
 }
 
 impl Default for ReadOptions {
@@ -36,6 +40,7 @@ impl Default for ReadOptions {
             units: None,
             default_feed: 1000.0,
             chord_tol: 0.002,
+            expect_moves: 0,
         }
     }
 }

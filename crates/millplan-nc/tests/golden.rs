@@ -48,3 +48,45 @@ fn golden_inputs_print_their_expected_ir() {
     assert!(seen >= 8, "golden inputs missing");
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+#[test]
+fn the_move_count_hint_never_changes_what_is_read() {
+    // Every golden input (APT, G-code dialects, Heidenhain), read with no
+    // hint, a hint far too small, about right, and one too large to reserve:
+    // the same program each time.
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden");
+    let mut seen = 0;
+    for path in std::fs::read_dir(&dir)
+        .expect("golden dir")
+        .flatten()
+        .map(|e| e.path())
+    {
+        if path.extension().map(|e| e == "ir").unwrap_or(true) {
+            continue;
+        }
+        let src = std::fs::read_to_string(&path).expect("read");
+        let read = |expect_moves: usize| {
+            let opts = ReadOptions {
+                expect_moves,
+                ..ReadOptions::default()
+            };
+            parse_program(&src, opts).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        };
+        let plain = read(0);
+        for hint in [1, src.len() / 20, usize::MAX / 2] {
+            let hinted = read(hint);
+            assert_eq!(
+                hinted.program,
+                plain.program,
+                "{} with hint {hint}",
+                path.display()
+            );
+            assert_eq!(
+                format!("{:?}", hinted.diagnostics),
+                format!("{:?}", plain.diagnostics)
+            );
+        }
+        seen += 1;
+    }
+    assert!(seen >= 8, "only {seen} golden inputs");
+}

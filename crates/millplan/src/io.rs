@@ -112,6 +112,11 @@ pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
         )));
     }
     let dialect = detect(&String::from_utf8_lossy(head));
+    // A move takes a line of 20 bytes or more.
+    let opts = ReadOptions {
+        expect_moves: (size / 20) as usize,
+        ..opts
+    };
     let mut reader = Reader::new(dialect, opts);
     let bar = crate::progress::bytes(size, "reading");
     let mut buf = Vec::with_capacity(256);

@@ -804,6 +804,13 @@ impl AptReader {
         if self.op.moves.is_empty() && self.op.start.is_none() {
             self.op.start = self.pos;
         }
+        if self.op.moves.capacity() == 0 && self.opts.expect_moves > 0 {
+            // Room may be refused for a wild guess; the moves then grow as usual.
+            let _ = self
+                .op
+                .moves
+                .try_reserve_exact(std::mem::take(&mut self.opts.expect_moves));
+        }
         self.op.moves.push(m);
         self.pos = Some(end);
         Ok(())

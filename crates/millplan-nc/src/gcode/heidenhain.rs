@@ -769,6 +769,13 @@ impl HeidenhainReader {
         if self.op.moves.is_empty() && self.op.start.is_none() && self.known {
             self.op.start = Some(self.pos);
         }
+        if self.op.moves.capacity() == 0 && self.opts.expect_moves > 0 {
+            // Room may be refused for a wild guess; the moves then grow as usual.
+            let _ = self
+                .op
+                .moves
+                .try_reserve_exact(std::mem::take(&mut self.opts.expect_moves));
+        }
         self.op.moves.push(m);
         self.pos = m.end;
         self.known = true;
