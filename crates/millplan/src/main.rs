@@ -96,3 +96,17 @@ fn main() {
         }
     }
 }
+
+#[cfg(all(test, target_os = "linux"))]
+mod tests {
+    /// The kernel reports the process's huge-page setting in
+    /// /proc/self/status (Linux 5.0 and later; older kernels skip the check).
+    #[test]
+    fn the_process_asks_for_small_pages() {
+        super::small_pages_only();
+        let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+        if let Some(line) = status.lines().find(|l| l.starts_with("THP_enabled:")) {
+            assert_eq!(line.split_whitespace().nth(1), Some("0"), "{line}");
+        }
+    }
+}
