@@ -518,8 +518,10 @@ pub fn feed_angle(n: DVec3, k: DVec3, t: DVec3) -> f64 {
 }
 
 /// Finds the uncut side and the stepover at a ball centre from the machined
-/// centres around it: a machined point beside the feed direction (more sideways
-/// than along) within `search` marks that side as cut.
+/// centres around it: a machined centre within `search` of it (in space, so
+/// what counts never depends on how a search grid happens to fall) and beside
+/// the feed direction in the tangent plane (more sideways than along) marks
+/// that side as cut.
 pub struct SideFinder {
     at: DVec3,
     n: DVec3,
@@ -550,10 +552,13 @@ impl SideFinder {
             return;
         }
         let v = c - self.at;
+        if v.length_squared() > self.search * self.search {
+            return;
+        }
         let v = v - self.n * v.dot(self.n);
         let lat = v.dot(self.left);
         let along = v.dot(self.t);
-        if lat.abs() > self.search || along.abs() > lat.abs().max(1e-9) {
+        if along.abs() > lat.abs().max(1e-9) {
             return;
         }
         if lat > 1e-6 {

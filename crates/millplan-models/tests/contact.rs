@@ -149,3 +149,68 @@ fn working_diameter_along_the_raster_matches_the_model_with_exact_inputs() {
         "D_w with mesh normals vs exact normals: {worst} mm"
     );
 }
+
+#[test]
+fn sides_and_stepovers_do_not_depend_on_where_the_part_sits() {
+    // The same raster and part, moved: which machined centres count as
+    // neighbours must not depend on how the neighbour grid's cells fall.
+    // Passes bunch up and spread out (stepover 0.6 to 1.4 mm), so some
+    // machined centres lie beside the feed direction but outside the search
+    // radius, in cells the search happens to scan at one placement and not
+    // at another.
+    let s = DemoSurface::default();
+    let mesh = tessellate(&s, 0.5);
+    let (pts, _) = raster(&s, 10.0, 0.5, 1.0, Convention::Tip);
+    let rows = pts.iter().map(|q| q.pass).max().unwrap_or(0) + 1;
+    let spacing = |j: u32| 0.6 + 0.8 * ((j as f64 * 2.39).sin() * 0.5 + 0.5);
+    let mut y_of = vec![0.0; rows as usize];
+    for j in 1..rows as usize {
+        y_of[j] = y_of[j - 1] + spacing(j as u32);
+    }
+    // Re-place each pass at its own Y on the surface (the raster helper's rows
+    // are 1 mm apart); X and the pass numbers stay.
+    let r = 5.0;
+    let pts: Vec<PathPoint> = pts
+        .iter()
+        .map(|q| {
+            let (x, y) = (q.cl.x, 5.0 + y_of[q.pass as usize]);
+            let c = s.point(x, y) + s.normal(x, y) * r;
+            PathPoint {
+                cl: c - DVec3::Z * r,
+                ..*q
+            }
+        })
+        .filter(|q| q.cl.y < 54.0)
+        .collect();
+    let params = Params::new(10.0, 0.3);
+    let base = analyse(&Surface::new(&mesh), &pts, &params);
+    let mut checked = 0;
+    for o in [
+        DVec3::new(0.37, 0.61, 0.23),
+        DVec3::new(-1.13, 0.29, -0.71),
+        DVec3::new(0.05, -0.83, 1.41),
+    ] {
+        let mut moved_mesh = mesh.clone();
+        moved_mesh.map_vertices(|v| v + o);
+        let moved: Vec<PathPoint> = pts
+            .iter()
+            .map(|q| PathPoint { cl: q.cl + o, ..*q })
+            .collect();
+        let res = analyse(&Surface::new(&moved_mesh), &moved, &params);
+        for (k, (a, b)) in base.iter().zip(&res).enumerate() {
+            let ae = |n: Neighbour| match n {
+                Neighbour::None => None,
+                Neighbour::One(x) => Some((1, x)),
+                Neighbour::Both(x) => Some((2, x)),
+            };
+            match (ae(a.neighbour), ae(b.neighbour)) {
+                (None, None) => {}
+                (Some((ka, xa)), Some((kb, xb))) if ka == kb && (xa - xb).abs() < 1e-6 => {}
+                (x, y) => panic!("point {k} moved by {o}: neighbour {x:?} against {y:?}"),
+            }
+            assert_eq!(a.side, b.side, "point {k} moved by {o}");
+            checked += 1;
+        }
+    }
+    assert!(checked > 3000, "{checked} points compared");
+}
