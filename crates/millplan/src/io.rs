@@ -21,6 +21,20 @@ fn open(path: &Path) -> CliResult<File> {
     File::open(path).map_err(|e| CliError::input(format!("{}: cannot open: {e}", path.display())))
 }
 
+/// Asks the kernel to start reading all of `f` now, in large requests, ahead
+/// of the parse. A file not read for a while may have left the page cache
+/// (some VMs hand idle page cache back to the host after a minute); read
+/// on demand it then arrives a readahead window at a time, and the parse waits
+/// on every one. An advice only: a refusal changes nothing.
+fn prefetch(f: &File) {
+    #[cfg(target_os = "linux")]
+    {
+        let _ = rustix::fs::fadvise(f, 0, None, rustix::fs::Advice::WillNeed);
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = f;
+}
+
 /// Is this an STL (binary by size arithmetic, or ASCII `solid … facet`)?
 fn is_stl(path: &Path, head: &[u8]) -> bool {
     if let Ok(meta) = std::fs::metadata(path) {
@@ -73,6 +87,7 @@ pub fn read_mesh(path: &Path) -> CliResult<(TriMesh, StlReport)> {
     let cannot =
         |e: std::io::Error| CliError::input(format!("{}: cannot read: {e}", path.display()));
     let mut f = File::open(path).map_err(cannot)?;
+    prefetch(&f);
     let len = f.metadata().map_err(cannot)?.len();
     read_stl_from(&mut f, len).map_err(|e| CliError::input(format!("{}:{e}", path.display())))
 }
@@ -94,6 +109,7 @@ pub fn read_surface(path: &Path) -> CliResult<(TriMesh, StlReport)> {
 /// Reads an APT/CL or G-code program line by line (the file is never held whole).
 pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
     let f = open(path)?;
+    prefetch(&f);
     let size = f.metadata().map(|m| m.len()).unwrap_or(0);
     let mut r = BufReader::with_capacity(1 << 16, f);
     let head = r
