@@ -3,7 +3,8 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use millplan_nc::apt::AptReader;
-use millplan_nc::write::gcode::{write_gcode, GcodeOptions};
+use millplan_nc::write::gcode::write_gcode;
+use millplan_nc::write::{Target, WriteOptions};
 use millplan_nc::{Dialect, ReadOptions};
 use std::hint::black_box;
 
@@ -47,7 +48,7 @@ fn write(c: &mut Criterion) {
     g.bench_function("write 1M blocks fanuc", |b| {
         b.iter(|| {
             let mut out = Vec::new();
-            write_gcode(&p, GcodeOptions::new(Dialect::Fanuc), &mut out).expect("writes");
+            write_gcode(&p, WriteOptions::new(Target::Fanuc), &mut out).expect("writes");
             black_box(out.len())
         })
     });

@@ -83,6 +83,10 @@ pub fn ball_raster_apt(n: usize) -> String {
     );
     let mut out = Vec::new();
     // Writing to memory cannot fail.
-    let _ = millplan_nc::write::apt::write_apt(&p, &mut out);
+    let _ = millplan_nc::write::apt::write_apt(
+        &p,
+        millplan_nc::write::WriteOptions::new(millplan_nc::write::Target::Apt),
+        &mut out,
+    );
     String::from_utf8(out).unwrap_or_default()
 }

@@ -86,11 +86,13 @@ pub fn detect(head: &str) -> Dialect {
         {
             gcode += 1;
         }
+        // Words in comments say nothing about the dialect.
+        let code = strip_comments(&up);
         for m in [
             "G710", "G700", "G70 ", "G71 ", "TRAORI", "TRAFOOF", "CYCLE8", "SUPA", "T=\"", "MSG(",
             "DEF REAL", "G642", "COMPCAD", "COMPOF", "SOFT", "FNORM",
         ] {
-            if up.contains(m) {
+            if code.contains(m) {
                 sinumerik += 2;
             }
         }
@@ -98,12 +100,18 @@ pub fn detect(head: &str) -> Dialect {
             sinumerik += 1;
             linuxcnc += 1;
         }
-        for m in ["(MSG,", "(DEBUG,", "#<", " SUB", "ENDSUB", "G64 P", "G61.1"] {
+        // LinuxCNC's own comment directives are its words.
+        for m in ["(MSG,", "(DEBUG,"] {
             if up.contains(m) {
                 linuxcnc += 2;
             }
         }
-        if up.starts_with('O') && up.contains("SUB") {
+        for m in ["#<", " SUB", "ENDSUB", "G64 P", "G61.1"] {
+            if code.contains(m) {
+                linuxcnc += 2;
+            }
+        }
+        if code.starts_with('O') && code.contains("SUB") {
             linuxcnc += 2;
         }
     }
@@ -128,6 +136,22 @@ pub fn detect(head: &str) -> Dialect {
     } else {
         Dialect::Fanuc
     }
+}
+
+/// A G-code line without its `( )` and `;` comments.
+fn strip_comments(line: &str) -> String {
+    let mut out = String::with_capacity(line.len());
+    let mut depth = 0usize;
+    for c in line.chars() {
+        match c {
+            '(' => depth += 1,
+            ')' if depth > 0 => depth -= 1,
+            ';' if depth == 0 => break,
+            c if depth == 0 => out.push(c),
+            _ => {}
+        }
+    }
+    out
 }
 
 /// A reader for any format: feed lines, then finish.
@@ -160,5 +184,18 @@ impl Reader {
             Reader::Gcode(r) => r.finish(),
             Reader::Heidenhain(r) => r.finish(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn words_in_comments_do_not_decide_the_dialect() {
+        let fanuc = "%\nO0001\n(POST FOR TRAORI AND SUPA MACHINES, G710)\nG21 G90\nG0 X1 Y2 ; CYCLE832 here\nG1 Z-1 F100\nM30\n";
+        assert_eq!(detect(fanuc), Dialect::Fanuc);
+        let sinumerik = "N10 G710 G90\nN20 TRAORI\nN30 G0 X1\n";
+        assert_eq!(detect(sinumerik), Dialect::Sinumerik);
     }
 }

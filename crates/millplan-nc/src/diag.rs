@@ -9,11 +9,112 @@ pub enum Severity {
     Warning,
 }
 
-/// A finding with a stable code, e.g. `unknown-word`, `units-assumed`.
+/// The stable code of every finding millplan reports: one variant each, with a
+/// one-line explanation (`millplan explain CODE` prints it; the codes are
+/// listed in ARCHITECTURE.md). Codes are spelled in kebab case wherever they
+/// are printed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Code {
+    UnknownWord,
+    UnitsAssumed,
+    UnitsChange,
+    UnitsConflict,
+    FeedMissing,
+    ToolMissing,
+    ArcRadius,
+    ArcPlane,
+    RapidCircle,
+    ConstantSurfaceSpeed,
+    FrameChange,
+    ZeroIncrement,
+    LossyWord,
+    OpenMesh,
+    OffSurface,
+}
+
+impl Code {
+    pub const ALL: [Code; 15] = [
+        Code::UnknownWord,
+        Code::UnitsAssumed,
+        Code::UnitsChange,
+        Code::UnitsConflict,
+        Code::FeedMissing,
+        Code::ToolMissing,
+        Code::ArcRadius,
+        Code::ArcPlane,
+        Code::RapidCircle,
+        Code::ConstantSurfaceSpeed,
+        Code::FrameChange,
+        Code::ZeroIncrement,
+        Code::LossyWord,
+        Code::OpenMesh,
+        Code::OffSurface,
+    ];
+
+    /// The code as printed: `unknown-word`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Code::UnknownWord => "unknown-word",
+            Code::UnitsAssumed => "units-assumed",
+            Code::UnitsChange => "units-change",
+            Code::UnitsConflict => "units-conflict",
+            Code::FeedMissing => "feed-missing",
+            Code::ToolMissing => "tool-missing",
+            Code::ArcRadius => "arc-radius",
+            Code::ArcPlane => "arc-plane",
+            Code::RapidCircle => "rapid-circle",
+            Code::ConstantSurfaceSpeed => "constant-surface-speed",
+            Code::FrameChange => "frame-change",
+            Code::ZeroIncrement => "zero-increment",
+            Code::LossyWord => "lossy-word",
+            Code::OpenMesh => "open-mesh",
+            Code::OffSurface => "off-surface",
+        }
+    }
+
+    /// One line on what the finding means and what to do about it.
+    pub fn explain(self) -> &'static str {
+        match self {
+            Code::UnknownWord => "a word or record the reader does not model; it is kept verbatim and written unchanged into the same dialect, but another dialect refuses it (or, with --lossy, keeps it as a comment)",
+            Code::UnitsAssumed => "nothing in the file says mm or inch; millimetres were assumed (give --units when the file is in inches)",
+            Code::UnitsChange => "the program switches units in mid-program; later numbers are read in the new unit",
+            Code::UnitsConflict => "a feed word or a second unit statement disagrees with the file's unit; the first declared unit is used",
+            Code::FeedMissing => "a cutting move comes before any feed; the --feed value (1000 mm/min by default) is used for it",
+            Code::ToolMissing => "a cutting move comes before any tool definition or tool change; its tool is unknown",
+            Code::ArcRadius => "an arc's start and end lie at different distances from its centre (beyond 0.01 mm + 1e-4 r); the control may reject it",
+            Code::ArcPlane => "a Heidenhain C block's plane was not named by its CC block and was inferred from where start and end lie",
+            Code::RapidCircle => "RAPID stands before a CIRCLE end point; the move is made as a rapid straight line",
+            Code::ConstantSurfaceSpeed => "SPINDL gives a constant surface speed (SFM/SMM); its number is kept as a spindle speed",
+            Code::FrameChange => "a block changes the programmable frame (ROT, TRANS, ...); it is kept verbatim and later positions are read unchanged",
+            Code::ZeroIncrement => "an incremental (G91) move steps an axis whose position is unknown: a zero step moves nothing; another step is kept verbatim (with its G91) and the axis stays unknown",
+            Code::LossyWord => "with --lossy, a word the target dialect cannot express was written as a comment: the output does less than the source",
+            Code::OpenMesh => "the part mesh has open or non-manifold edges; checks against it can miss material at holes and seams",
+            Code::OffSurface => "tool positions do not touch the part surface within tolerance; the part may not match the program",
+        }
+    }
+
+    pub fn from_name(s: &str) -> Option<Code> {
+        Code::ALL.into_iter().find(|c| c.as_str() == s)
+    }
+}
+
+impl fmt::Display for Code {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl serde::Serialize for Code {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
+}
+
+/// A finding with a stable [`Code`].
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct Diagnostic {
     pub severity: Severity,
-    pub code: &'static str,
+    pub code: Code,
     /// 1-based line; 0 when the finding is about the whole file.
     pub line: u32,
     /// 1-based column; 0 when not known.
@@ -69,7 +170,7 @@ pub struct Parsed {
 #[derive(Debug, Default)]
 pub struct Diags {
     pub list: Vec<Diagnostic>,
-    counts: Vec<(&'static str, usize)>,
+    counts: Vec<(Code, usize)>,
 }
 
 const PER_CODE_LIMIT: usize = 50;
@@ -78,7 +179,7 @@ impl Diags {
     pub fn push(
         &mut self,
         severity: Severity,
-        code: &'static str,
+        code: Code,
         line: u32,
         col: u32,
         message: impl Into<String>,
@@ -104,11 +205,11 @@ impl Diags {
         }
     }
 
-    pub fn warn(&mut self, code: &'static str, line: u32, col: u32, message: impl Into<String>) {
+    pub fn warn(&mut self, code: Code, line: u32, col: u32, message: impl Into<String>) {
         self.push(Severity::Warning, code, line, col, message)
     }
 
-    pub fn note(&mut self, code: &'static str, line: u32, col: u32, message: impl Into<String>) {
+    pub fn note(&mut self, code: Code, line: u32, col: u32, message: impl Into<String>) {
         self.push(Severity::Note, code, line, col, message)
     }
 

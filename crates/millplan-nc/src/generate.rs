@@ -97,13 +97,7 @@ pub fn raster(surface: &dyn HeightField, r: &Raster) -> (Program, Vec<Option<DVe
         }),
         ..Operation::default()
     };
-    op.push_event(
-        0,
-        EventKind::Spindle {
-            rpm: r.spindle,
-            dir: SpindleDir::Cw,
-        },
-    );
+    op.push_event(0, EventKind::Spindle(SpindleDir::Cw));
     op.push_event(0, EventKind::Coolant(Coolant::Flood));
     let mut contacts = Vec::new();
     let mut push = |op: &mut Operation, m: Move, c: Option<DVec3>| {
@@ -137,7 +131,7 @@ pub fn raster(surface: &dyn HeightField, r: &Raster) -> (Program, Vec<Option<DVe
     if let Some(e) = op.events.last_mut() {
         e.at = n;
     }
-    let mut p = Program::new(Dialect::AptIso);
+    let mut p = Program::new(Dialect::Generated);
     p.name = Some("DEMO_FREEFORM".into());
     p.units = Units {
         source: LengthUnit::Mm,

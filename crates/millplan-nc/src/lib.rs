@@ -7,6 +7,7 @@
 pub mod apt;
 pub mod detect;
 pub mod diag;
+pub mod equiv;
 pub mod gcode;
 pub mod generate;
 pub mod ir;

@@ -1,7 +1,12 @@
 //! Summary figures of a program: move counts, path lengths, bounds, estimated time.
+//!
+//! A move from or to a position the program has not set (an unknown axis)
+//! has no known length: it is counted in `unknown_moves` and left out of
+//! lengths and times, never measured from a made-up origin.
 
 use crate::ir::*;
-use millplan_geom::Aabb;
+use crate::write::{cycle_moves, CycleStep};
+use millplan_geom::{Aabb, DVec3};
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct MoveCounts {
@@ -14,15 +19,34 @@ pub struct MoveCounts {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Summary {
     pub moves: MoveCounts,
-    /// Cutting (feed) path length, mm.
+    /// Cutting (feed) path length, mm (canned-cycle feeds included).
     pub cutting_mm: f64,
-    /// Rapid path length, mm (cycle positioning included).
+    /// Rapid path length, mm (cycle positioning and retracts included).
     pub rapid_mm: f64,
     /// Estimated time at programmed feeds and `rapid_rate`, seconds.
     pub time_s: f64,
-    /// Bounds of all positions, in the operations' own frames.
+    /// Bounds of all known positions (cycle depths included), in the
+    /// operations' own frames.
     pub bounds: Aabb,
     pub five_axis_moves: usize,
+    /// Moves whose length is unknown (from or to an unset axis): left out of
+    /// lengths and times.
+    pub unknown_moves: usize,
+}
+
+/// Feed time in minutes of a cutting stroke of length `len`.
+fn feed_minutes(len: f64, m: &Move) -> f64 {
+    match m.feed_mode {
+        FeedMode::PerMinute => len / m.feed,
+        FeedMode::PerRev => {
+            if m.spindle > 0.0 {
+                len / (m.feed * m.spindle)
+            } else {
+                0.0
+            }
+        }
+        FeedMode::InverseTime => 1.0 / m.feed,
+    }
 }
 
 /// Summarises a program; rapids are timed at `rapid_rate` mm/min.
@@ -34,67 +58,77 @@ pub fn summarize(p: &Program, rapid_rate: f64) -> Summary {
         time_s: 0.0,
         bounds: p.bounds(),
         five_axis_moves: 0,
+        unknown_moves: 0,
     };
     let mut minutes = 0.0;
     for op in &p.operations {
         for (i, m) in op.moves.iter().enumerate() {
-            let start = op.move_start(i);
-            if m.orient != NO_ORIENT {
-                if let Some(Orient::Vector(v)) = op.orients.get(m.orient as usize) {
-                    if (v.z - 1.0).abs() > 1e-9 {
-                        s.five_axis_moves += 1;
-                    }
-                } else if let Some(Orient::Rotary(r)) = op.orients.get(m.orient as usize) {
-                    if r.iter().flatten().any(|a| a.abs() > 1e-12) {
-                        s.five_axis_moves += 1;
-                    }
-                }
+            if op.orient(m).is_some_and(Orient::is_tilted) {
+                s.five_axis_moves += 1;
             }
-            let len = match (m.kind, start) {
-                (MoveKind::Arc, Some(st)) => op
-                    .arcs
-                    .get(m.aux as usize)
-                    .map(|a| a.length(st, m.end))
-                    .unwrap_or(0.0),
-                (_, Some(st)) => (m.end - st).length(),
-                (_, None) => 0.0,
-            };
+            let len = op.move_length(i);
             match m.kind {
-                MoveKind::Rapid => {
-                    s.moves.rapid += 1;
-                    s.rapid_mm += len;
-                    minutes += len / rapid_rate;
+                MoveKind::Rapid => s.moves.rapid += 1,
+                MoveKind::Linear => s.moves.linear += 1,
+                MoveKind::Arc(_) => s.moves.arc += 1,
+                MoveKind::Cycle(_) => s.moves.cycle += 1,
+            }
+            if let MoveKind::Cycle(_) = m.kind {
+                // Across to the hole at the height the tool stands, then the
+                // cycle's own strokes.
+                let (Some(c), Some(at)) = (op.cycle(m), known(m.end)) else {
+                    s.unknown_moves += 1;
+                    continue;
+                };
+                let axis = op.axis(m).unwrap_or(DVec3::Z);
+                let mut here = op.known_start(i);
+                if let Some(h) = here {
+                    let across = DVec3::new(at.x, at.y, h.z.max(at.z + c.retract.max(c.clearance)));
+                    let d = (across - h).length();
+                    s.rapid_mm += d;
+                    minutes += d / rapid_rate;
+                    here = Some(across);
+                } else {
+                    s.unknown_moves += 1;
                 }
-                MoveKind::Linear | MoveKind::Arc => {
-                    if m.kind == MoveKind::Arc {
-                        s.moves.arc += 1;
-                    } else {
-                        s.moves.linear += 1;
-                    }
-                    s.cutting_mm += len;
-                    minutes += match m.feed_mode {
-                        FeedMode::PerMinute => len / m.feed,
-                        FeedMode::PerRev => {
-                            if m.spindle > 0.0 {
-                                len / (m.feed * m.spindle)
-                            } else {
-                                0.0
-                            }
+                let steps = cycle_moves(c, at, axis).unwrap_or_else(|_| {
+                    // Too many pecks to spell out: the depth at feed, the way
+                    // back at rapid.
+                    vec![
+                        CycleStep::Rapid(at + axis * c.clearance),
+                        CycleStep::Feed(at + axis * c.bottom, c.feed),
+                        CycleStep::Rapid(at + axis * c.retract.max(c.clearance)),
+                    ]
+                });
+                for st in steps {
+                    match st {
+                        CycleStep::Rapid(q) => {
+                            let d = here.map_or(0.0, |h| (q - h).length());
+                            s.rapid_mm += d;
+                            minutes += d / rapid_rate;
+                            here = Some(q);
                         }
-                        FeedMode::InverseTime => 1.0 / m.feed,
-                    };
-                }
-                MoveKind::Cycle => {
-                    s.moves.cycle += 1;
-                    s.rapid_mm += len;
-                    minutes += len / rapid_rate;
-                    if let Some(c) = op.cycles.get(m.aux as usize) {
-                        let depth = (c.clearance - c.bottom).max(0.0);
-                        s.cutting_mm += depth;
-                        minutes += depth / c.feed + (c.retract - c.bottom).max(0.0) / rapid_rate;
-                        minutes += c.dwell.unwrap_or(0.0) / 60.0;
+                        CycleStep::Feed(q, f) => {
+                            let d = here.map_or(0.0, |h| (q - h).length());
+                            s.cutting_mm += d;
+                            minutes += d / f;
+                            here = Some(q);
+                        }
+                        CycleStep::Dwell(t) => minutes += t / 60.0,
                     }
                 }
+                continue;
+            }
+            let Some(len) = len else {
+                s.unknown_moves += 1;
+                continue;
+            };
+            if m.is_rapid() {
+                s.rapid_mm += len;
+                minutes += len / rapid_rate;
+            } else {
+                s.cutting_mm += len;
+                minutes += feed_minutes(len, m);
             }
         }
         for e in &op.events {
@@ -105,4 +139,47 @@ pub fn summarize(p: &Program, rapid_rate: f64) -> Summary {
     }
     s.time_s = minutes * 60.0;
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_phantom_move_from_the_origin_and_cycle_depths_count() {
+        let mut op = Operation::default();
+        // From an unknown start: no length.
+        op.moves.push(Move::rapid(DVec3::new(10.0, 0.0, 5.0)));
+        op.moves
+            .push(Move::linear(DVec3::new(10.0, 0.0, 0.0), 100.0));
+        let cy = op.push_cycle(Cycle {
+            name: "G81".into(),
+            bottom: -12.0,
+            clearance: 0.0,
+            retract: 3.0,
+            feed: 120.0,
+            peck: None,
+            peck_next: None,
+            dwell: None,
+            line: 3,
+        });
+        let mut c = Move::rapid(DVec3::new(20.0, 0.0, 2.0));
+        c.kind = MoveKind::Cycle(cy);
+        op.moves.push(c);
+        let mut p = Program::new(Dialect::Fanuc);
+        p.operations.push(op);
+        let s = summarize(&p, 6000.0);
+        assert_eq!(s.unknown_moves, 1);
+        // 5 mm down, then 12 mm into the hole.
+        assert!((s.cutting_mm - 17.0).abs() < 1e-9, "{}", s.cutting_mm);
+        // Across and up to the return plane (Z 5), down 3 to the R plane, out 15.
+        let across = (10.0f64).hypot(5.0);
+        assert!(
+            (s.rapid_mm - (across + 3.0 + 15.0)).abs() < 1e-9,
+            "{}",
+            s.rapid_mm
+        );
+        assert_eq!(s.bounds.min.z, -10.0);
+        assert_eq!(s.bounds.min.x, 10.0);
+    }
 }

@@ -30,6 +30,7 @@ pub fn scale_lengths(p: &mut Program, k: f64) {
             c.retract *= k;
             c.feed *= k;
             c.peck = c.peck.map(|q| q * k);
+            c.peck_next = c.peck_next.map(|q| q * k);
         }
     }
 }

@@ -1,5 +1,5 @@
 //! Golden tests: every input under `tests/golden/` is read and its IR printed; the
-//! print must equal the `.ir` file beside it. `UPDATE_GOLDEN=1 cargo test` rewrites
+//! print must equal the `.ir` file beside it and read back to the same program. `UPDATE_GOLDEN=1 cargo test` rewrites
 //! them after a deliberate change (review the diff).
 
 use millplan_nc::{parse_program, text, verify::verify, ReadOptions};
@@ -26,6 +26,9 @@ fn golden_inputs_print_their_expected_ir() {
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         verify(&parsed.program).unwrap_or_else(|v| panic!("{}: {v:?}", path.display()));
         let mut got = text::print(&parsed.program);
+        // The text form reads back to the same program.
+        let back = text::parse(&got).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert_eq!(back, parsed.program, "{}: text round trip", path.display());
         for d in &parsed.diagnostics {
             got.push_str(&format!("diagnostic {d}\n"));
         }

@@ -47,14 +47,16 @@ fn unknown_words_are_kept_and_reported() {
     assert!(p
         .diagnostics
         .iter()
-        .any(|d| d.code == "unknown-word" && d.line == 2));
-    assert!(p.program.operations[0].events.iter().any(|e| matches!(&e.kind, millplan_nc::EventKind::Passthrough { word, .. } if word == "FROBNICATE")));
+        .any(|d| d.code == millplan_nc::diag::Code::UnknownWord && d.line == 2));
+    assert!(p.program.operations[0].events.iter().any(
+        |e| matches!(&e.kind, millplan_nc::EventKind::Passthrough(p) if p.word == "FROBNICATE")
+    ));
     let g =
         parse_program("G21\nT1 M6\nG1 X1 F100 FOOBAR\n", ReadOptions::default()).expect("reads");
     assert!(
         g.diagnostics
             .iter()
-            .any(|d| d.code == "unknown-word" && d.line == 3 && d.col == 12),
+            .any(|d| d.code == millplan_nc::diag::Code::UnknownWord && d.line == 3 && d.col == 12),
         "{:?}",
         g.diagnostics
     );

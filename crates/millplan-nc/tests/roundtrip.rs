@@ -4,14 +4,15 @@
 
 use millplan_geom::DVec3;
 use millplan_nc::write::apt::write_apt;
-use millplan_nc::write::gcode::{write_gcode, GcodeOptions};
+use millplan_nc::write::gcode::write_gcode;
+use millplan_nc::write::{Target, WriteOptions};
 use millplan_nc::*;
 use proptest::prelude::*;
 use std::path::PathBuf;
 
 fn reread(p: &Program) -> Program {
     let mut out = Vec::new();
-    write_apt(p, &mut out).expect("write");
+    write_apt(p, WriteOptions::new(Target::Apt), &mut out).expect("write");
     let text = String::from_utf8(out).expect("utf8");
     let parsed =
         parse_program(&text, ReadOptions::default()).unwrap_or_else(|e| panic!("{e}\n{text}"));
@@ -33,9 +34,9 @@ fn assert_same_moves(a: &Program, b: &Program, tol: f64) {
         .collect();
     assert_eq!(ma.len(), mb.len(), "move count");
     for (i, ((oa, x), (ob, y))) in ma.iter().zip(&mb).enumerate() {
-        assert_eq!(x.kind, y.kind, "move {i} kind");
+        assert_eq!(x.kind.name(), y.kind.name(), "move {i} kind");
         assert!(
-            (x.end - y.end).length() <= tol,
+            (x.end - y.end).length() <= tol || x.end.is_nan() && y.end.is_nan(),
             "move {i}: {:?} vs {:?}",
             x.end,
             y.end
@@ -53,8 +54,7 @@ fn assert_same_moves(a: &Program, b: &Program, tol: f64) {
             (None, None) => {}
             (u, v) => panic!("move {i}: axis {u:?} vs {v:?}"),
         }
-        if x.kind == MoveKind::Arc {
-            let (p, q) = (oa.arcs[x.aux as usize], ob.arcs[y.aux as usize]);
+        if let (Some(p), Some(q)) = (oa.arc(x), ob.arc(y)) {
             assert!(
                 (p.centre - q.centre).length() <= tol && (p.sweep - q.sweep).abs() < 1e-6,
                 "move {i} arc"
@@ -122,7 +122,7 @@ fn program_strategy() -> impl Strategy<Value = Program> {
                     cutter: Some(Cutter::ball(d)),
                     line: 0,
                 }),
-                start: Some(DVec3::new(0.0, 0.0, 100.0)),
+                start: DVec3::new(0.0, 0.0, 100.0),
                 ..Operation::default()
             };
             let mut pos = DVec3::new(0.0, 0.0, 100.0);
@@ -148,14 +148,12 @@ fn program_strategy() -> impl Strategy<Value = Program> {
                         false,
                     ) {
                         m.end = e;
-                        m.kind = MoveKind::Arc;
-                        m.aux = op.arcs.len() as u32;
-                        op.arcs.push(a);
+                        m.kind = MoveKind::Arc(op.push_arc(a));
                     }
                 }
-                if five && m.kind != MoveKind::Arc {
+                if five && m.arc().is_none() {
                     let v = DVec3::new(t - 0.5, 0.3, 1.0).normalize();
-                    m.orient = op.intern_orient(Orient::Vector(v));
+                    m.orient = Some(op.intern_orient(Orient::vector(v)));
                 }
                 pos = m.end;
                 op.moves.push(m);
@@ -178,13 +176,13 @@ proptest! {
 
     #[test]
     fn gcode_dialects_read_back_their_output(p in program_strategy()) {
-        for d in [Dialect::Fanuc, Dialect::Sinumerik, Dialect::LinuxCnc, Dialect::Heidenhain] {
+        for d in [Target::Fanuc, Target::Sinumerik, Target::LinuxCnc, Target::Heidenhain] {
             let mut out = Vec::new();
-            match write_gcode(&p, GcodeOptions::new(d), &mut out) {
-                Ok(()) => {}
+            match write_gcode(&p, WriteOptions::new(d), &mut out) {
+                Ok(_) => {}
                 Err(e) => {
                     // Only LinuxCNC refuses, and only for tool vectors.
-                    prop_assert!(d == Dialect::LinuxCnc, "{}: {e}", d.name());
+                    prop_assert!(d == Target::LinuxCnc, "{}: {e}", d.name());
                     continue;
                 }
             }
@@ -195,7 +193,7 @@ proptest! {
             let b: Vec<_> = parsed.program.moves().collect();
             prop_assert_eq!(a.len(), b.len(), "{} move count\n{}", d.name(), text);
             for (x, y) in a.iter().zip(&b) {
-                prop_assert_eq!(x.kind, y.kind);
+                prop_assert_eq!(x.kind.name(), y.kind.name());
                 prop_assert!((x.end - y.end).length() < 2e-4, "{}: {:?} vs {:?}", d.name(), x.end, y.end);
                 if x.is_cutting() {
                     prop_assert!((x.feed - y.feed).abs() < 1e-3, "{} feed", d.name());

@@ -1,7 +1,7 @@
 //! What the machine can do: spindle and feed ranges, spindle acceleration, the
 //! control dialect. Read from TOML; a sensible default is built in.
 
-use millplan_nc::Dialect;
+use millplan_nc::write::Target;
 
 /// A machine description.
 ///
@@ -96,20 +96,21 @@ impl Machine {
         ok(self.rapid > 0.0, "rapid must be positive")?;
         if let Some(d) = &self.dialect {
             ok(
-                self.dialect_enum().is_some(),
+                self.target().is_some(),
                 &format!("unknown dialect `{d}` (fanuc, sinumerik, heidenhain, linuxcnc, apt)"),
             )?;
         }
         Ok(())
     }
 
-    pub fn dialect_enum(&self) -> Option<Dialect> {
+    /// The dialect the machine's control reads, when the file names it.
+    pub fn target(&self) -> Option<Target> {
         match self.dialect.as_deref()?.to_ascii_lowercase().as_str() {
-            "fanuc" | "iso" | "haas" => Some(Dialect::Fanuc),
-            "sinumerik" | "siemens" => Some(Dialect::Sinumerik),
-            "heidenhain" => Some(Dialect::Heidenhain),
-            "linuxcnc" => Some(Dialect::LinuxCnc),
-            "apt" => Some(Dialect::AptIso),
+            "fanuc" | "iso" | "haas" => Some(Target::Fanuc),
+            "sinumerik" | "siemens" => Some(Target::Sinumerik),
+            "heidenhain" => Some(Target::Heidenhain),
+            "linuxcnc" => Some(Target::LinuxCnc),
+            "apt" => Some(Target::Apt),
             _ => None,
         }
     }
@@ -122,7 +123,7 @@ mod tests {
     #[test]
     fn reads_and_validates() {
         let m = Machine::from_toml("spindle_min = 100\nspindle_max = 12000\nspindle_accel = 3000\nfeed_max = 10000\ndialect = \"heidenhain\"\n").expect("valid");
-        assert_eq!(m.dialect_enum(), Some(Dialect::Heidenhain));
+        assert_eq!(m.target(), Some(Target::Heidenhain));
         assert!(Machine::from_toml(
             "spindle_min = 100\nspindle_max = 50\nspindle_accel = 1\nfeed_max = 1\n"
         )

@@ -589,9 +589,10 @@ pub fn reorder(
             continue;
         };
         if op.frame.is_some()
-            || op.orients.iter().any(
-                |o| !matches!(o, millplan_nc::Orient::Vector(v) if (*v - DVec3::Z).length() < 1e-9),
-            )
+            || op
+                .orients
+                .iter()
+                .any(|o| o.axis.is_none_or(|v| (v - DVec3::Z).length() >= 1e-9))
         {
             continue;
         }
@@ -717,7 +718,6 @@ pub fn reorder(
                 kind: MoveKind::Rapid,
                 feed: 0.0,
                 line,
-                aux: 0,
                 ..tmpl
             };
             match prev {
@@ -749,7 +749,6 @@ pub fn reorder(
                 end: DVec3::new(a.x, a.y, safe),
                 kind: MoveKind::Rapid,
                 feed: 0.0,
-                aux: 0,
                 ..tmpl
             });
         }
@@ -776,7 +775,7 @@ pub fn reorder(
         o.moves = moves;
         o.arcs.clear();
         o.cycles.clear();
-        o.start = None;
+        o.start = millplan_nc::UNKNOWN;
     }
     if !any {
         return Err(ReorderError::NoBallOperation);

@@ -13,7 +13,7 @@ use millplan_models::contact::{
     self, Convention, ConventionCheck, NormalMode, PathPoint, PointResult, Surface,
 };
 use millplan_models::wd::{Neighbour, Side};
-use millplan_nc::{CutterKind, EventKind, FeedMode, MoveKind, Program};
+use millplan_nc::{CutterKind, FeedMode, Program};
 use rayon::prelude::*;
 
 use crate::machine::Machine;
@@ -413,23 +413,13 @@ pub fn apply_on(
         // Block times between cutting points need the feeds, which depend on n.
         let len_between = |k: usize| -> (f64, f64) {
             // (cutting length of the move into point k, time of non-cutting moves before it at rapid)
+            // Unknown lengths (from a position the program has not set) count 0.
             let i = idx[k];
-            let mv = &op.moves[i];
-            let len = match (mv.kind, op.move_start(i)) {
-                (MoveKind::Arc, Some(s)) => op
-                    .arcs
-                    .get(mv.aux as usize)
-                    .map(|a| a.length(s, mv.end))
-                    .unwrap_or(0.0),
-                (_, Some(s)) => (mv.end - s).length(),
-                _ => 0.0,
-            };
+            let len = op.move_length(i).unwrap_or(0.0);
             let lo = if k == 0 { i } else { idx[k - 1] + 1 };
             let mut rapid_s = 0.0;
             for j in lo..i {
-                if let Some(s) = op.move_start(j) {
-                    rapid_s += (op.moves[j].end - s).length() / m.rapid * 60.0;
-                }
+                rapid_s += op.move_length(j).unwrap_or(0.0) / m.rapid * 60.0;
             }
             (len, rapid_s)
         };
@@ -541,16 +531,8 @@ pub fn apply_on(
             if next_k < idx.len() && idx[next_k] == i {
                 cur = n[next_k];
                 next_k += 1;
-            } else if mv.spindle > 0.0 || mv.kind == MoveKind::Rapid {
+            } else if mv.spindle > 0.0 || mv.is_rapid() {
                 mv.spindle = cur;
-            }
-        }
-        // The spindle start takes the first controlled speed.
-        for e in o.events.iter_mut() {
-            if let EventKind::Spindle { rpm, dir } = &mut e.kind {
-                if *dir != millplan_nc::SpindleDir::Off && e.at as usize <= idx[0] {
-                    *rpm = n[0];
-                }
             }
         }
         lap("spindle limits and feeds", &mut timings);
@@ -582,17 +564,20 @@ const SCAN_CHUNK: usize = 1 << 15;
 /// writes its points with the passes of the parts before it added.
 pub(crate) fn cutting_points(op: &millplan_nc::Operation) -> (Vec<PathPoint>, Vec<usize>) {
     let moves = &op.moves;
-    let first_cut = moves.iter().position(|m| m.is_cutting());
+    let first_cut = moves.iter().position(|m| m.is_cutting() && !m.end.is_nan());
     let dir_of = |i: usize| {
-        op.move_start(i)
+        op.known_start(i)
             .map(|s| (moves[i].end - s).normalize_or_zero())
-            .filter(|d| *d != DVec3::ZERO)
+            .filter(|d| d.is_finite() && *d != DVec3::ZERO)
     };
+    // A cutting move to a position with an unknown axis cannot be analysed:
+    // it counts as a link.
+    let cuts = |m: &millplan_nc::Move| m.is_cutting() && !m.end.is_nan();
     // The direction of travel entering move `start`: none after a link.
     let dir_before = |start: usize| {
         (0..start)
             .rev()
-            .map(|j| (moves[j].is_cutting(), j))
+            .map(|j| (cuts(&moves[j]), j))
             .take_while(|(cutting, _)| *cutting)
             .find_map(|(_, j)| dir_of(j))
     };
@@ -605,7 +590,7 @@ pub(crate) fn cutting_points(op: &millplan_nc::Operation) -> (Vec<PathPoint>, Ve
         let (mut count, pass0) = (0usize, pass);
         for i in range {
             let mv = &moves[i];
-            if !mv.is_cutting() {
+            if !cuts(mv) {
                 if first_cut.is_some_and(|f| f < i) {
                     pass += 1;
                 }
@@ -835,7 +820,7 @@ mod tests {
                 prev_dir = None;
                 continue;
             }
-            if let Some(s) = op.move_start(i) {
+            if let Some(s) = op.known_start(i) {
                 let dir = (mv.end - s).normalize_or_zero();
                 if let Some(pd) = prev_dir {
                     if dir != DVec3::ZERO && pd.dot(dir) < 0.5 {
@@ -871,7 +856,7 @@ mod tests {
             seed >> 33
         };
         let mut op = Operation {
-            start: Some(DVec3::new(0.0, 0.0, 50.0)),
+            start: DVec3::new(0.0, 0.0, 50.0),
             ..Operation::default()
         };
         let mut p = DVec3::new(0.0, 0.0, 50.0);

@@ -5,7 +5,7 @@
 use crate::dropcutter::DropMesh;
 use millplan_geom::{DVec2, DVec3};
 use millplan_models::cutter::Shape;
-use millplan_nc::{MoveKind, Operation, Orient, Program};
+use millplan_nc::{known, MoveKind, Operation, Program};
 use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug)]
@@ -43,12 +43,33 @@ pub struct Gouge {
     pub depth: f64,
 }
 
+/// Why moves were left out of a check.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Skipped {
+    /// The operation's tool has no geometry and none was given.
+    pub no_tool: usize,
+    /// The tool is not along +Z (five-axis), or its axis is known only as
+    /// machine angles.
+    pub tilted: usize,
+    /// Canned-cycle holes.
+    pub cycles: usize,
+    /// From or to a position the program has not set.
+    pub unknown_position: usize,
+}
+
+impl Skipped {
+    pub fn total(&self) -> usize {
+        self.no_tool + self.tilted + self.cycles + self.unknown_position
+    }
+}
+
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct GougeReport {
     pub moves_checked: usize,
     pub points_checked: usize,
-    /// Moves left out: tool not along +Z (5-axis), canned cycles, unknown tool.
+    /// Moves left out, all reasons.
     pub moves_skipped: usize,
+    pub skipped: Skipped,
     pub gouges: Vec<Gouge>,
     pub max_depth: f64,
 }
@@ -65,52 +86,58 @@ pub fn check(
     // (operation, move, sample point, shape index)
     let mut samples: Vec<(u32, u32, DVec3, Shape)> = Vec::new();
     for (oi, op) in p.operations.iter().enumerate() {
+        let wanted = |k: MoveKind| match k {
+            MoveKind::Linear | MoveKind::Arc(_) => true,
+            MoveKind::Rapid => g.rapids,
+            MoveKind::Cycle(_) => false,
+        };
         let Some(sh) = shape(op) else {
-            rep.moves_skipped += op.moves.len();
+            rep.skipped.no_tool += op.moves.iter().filter(|m| wanted(m.kind)).count();
             continue;
         };
         let to_part = |v: DVec3| op.frame.map(|f| f.to_parent(v)).unwrap_or(v);
-        let axis_part = |m: &millplan_nc::Move| match op.orient(m) {
-            Some(Orient::Vector(v)) => op.frame.map(|f| f.dir_to_parent(*v)).unwrap_or(*v),
-            Some(Orient::Rotary(r)) if r.iter().flatten().any(|a| a.abs() > 1e-9) => DVec3::X,
-            _ => op
-                .frame
-                .map(|f| f.dir_to_parent(DVec3::Z))
-                .unwrap_or(DVec3::Z),
+        // The tool axis in part coordinates; `None` when only machine angles
+        // say where it points.
+        let axis_part = |m: &millplan_nc::Move| -> Option<DVec3> {
+            let a = match op.orient(m) {
+                Some(o) => match o.axis {
+                    Some(v) => v,
+                    None if o.is_tilted() => return None,
+                    None => DVec3::Z,
+                },
+                None => DVec3::Z,
+            };
+            Some(op.frame.map(|f| f.dir_to_parent(a)).unwrap_or(a))
         };
         for (i, m) in op.moves.iter().enumerate() {
-            let wanted = match m.kind {
-                MoveKind::Linear | MoveKind::Arc => true,
-                MoveKind::Rapid => g.rapids,
-                MoveKind::Cycle => false,
-            };
-            let Some(start) = op.move_start(i) else {
-                continue;
-            };
-            if !wanted {
-                if m.kind == MoveKind::Cycle {
-                    rep.moves_skipped += 1;
+            if !wanted(m.kind) {
+                if m.cycle().is_some() {
+                    rep.skipped.cycles += 1;
                 }
                 continue;
             }
-            if (axis_part(m) - DVec3::Z).length() > 1e-6 {
-                rep.moves_skipped += 1;
+            let (Some(start), Some(end)) = (op.known_start(i), known(m.end)) else {
+                rep.skipped.unknown_position += 1;
+                continue;
+            };
+            if axis_part(m).is_none_or(|a| (a - DVec3::Z).length() > 1e-6) {
+                rep.skipped.tilted += 1;
                 continue;
             }
             rep.moves_checked += 1;
-            let pts: Vec<DVec3> = match (m.kind, op.arcs.get(m.aux as usize)) {
-                (MoveKind::Arc, Some(a)) => {
-                    let len = a.length(start, m.end);
+            let pts: Vec<DVec3> = match op.arc(m) {
+                Some(a) => {
+                    let len = a.length(start, end);
                     let n = ((len / g.step).ceil() as usize).max(1);
                     (0..=n)
-                        .map(|k| a.point_at(start, m.end, k as f64 / n as f64))
+                        .map(|k| a.point_at(start, end, k as f64 / n as f64))
                         .collect()
                 }
-                _ => {
-                    let len = (m.end - start).length();
+                None => {
+                    let len = (end - start).length();
                     let n = ((len / g.step).ceil() as usize).max(1);
                     (0..=n)
-                        .map(|k| start.lerp(m.end, k as f64 / n as f64))
+                        .map(|k| start.lerp(end, k as f64 / n as f64))
                         .collect()
                 }
             };
@@ -120,6 +147,7 @@ pub fn check(
             );
         }
     }
+    rep.moves_skipped = rep.skipped.total();
     rep.points_checked = samples.len();
     let depths: Vec<f64> = samples
         .par_iter()

@@ -204,13 +204,7 @@ pub fn raster(part: &DropMesh, bounds: &Aabb, p: &RasterParams) -> Program {
         }),
         ..Operation::default()
     };
-    op.push_event(
-        0,
-        EventKind::Spindle {
-            rpm: p.spindle,
-            dir: SpindleDir::Cw,
-        },
-    );
+    op.push_event(0, EventKind::Spindle(SpindleDir::Cw));
     op.push_event(0, EventKind::Coolant(Coolant::Flood));
     let push = |op: &mut Operation, m: Move| {
         op.moves.push(Move {
@@ -270,7 +264,7 @@ pub fn raster(part: &DropMesh, bounds: &Aabb, p: &RasterParams) -> Program {
         line: 0,
         kind: EventKind::Coolant(Coolant::Off),
     });
-    let mut prog = Program::new(Dialect::AptIso);
+    let mut prog = Program::new(Dialect::Generated);
     prog.name = Some("MILLPLAN_RASTER".into());
     prog.units = Units {
         source: LengthUnit::Mm,

@@ -78,11 +78,11 @@ fn check(r: &Run) {
     for op in &r.program.operations {
         for (i, m) in op.moves.iter().enumerate() {
             let len = op
-                .move_start(i)
+                .known_start(i)
                 .map(|s| (m.end - s).length())
                 .unwrap_or(0.0);
             t += match m.kind {
-                MoveKind::Rapid | MoveKind::Cycle => len / 20000.0 * 60.0,
+                MoveKind::Rapid | MoveKind::Cycle(_) => len / 20000.0 * 60.0,
                 _ => len / m.feed * 60.0,
             };
             if m.is_cutting() && m.spindle > 0.0 {
@@ -204,7 +204,12 @@ fn directions_ranks_rasters_of_one_surface() {
             },
         );
         let mut out = Vec::new();
-        millplan_nc::write::apt::write_apt(&p, &mut out).expect("apt");
+        millplan_nc::write::apt::write_apt(
+            &p,
+            millplan_nc::write::WriteOptions::new(millplan_nc::write::Target::Apt),
+            &mut out,
+        )
+        .expect("apt");
         let path = dir.path().join(format!("raster_{angle}.apt"));
         std::fs::write(&path, out).expect("write");
         paths.push(path);

@@ -9,7 +9,7 @@
 
 pub mod nurbs;
 
-use crate::diag::{parse_num, Diags, ParseError, Parsed};
+use crate::diag::{parse_num, Code, Diags, ParseError, Parsed};
 use crate::ir::*;
 use crate::ReadOptions;
 use millplan_geom::{DVec3, Frame};
@@ -67,7 +67,7 @@ pub struct AptReader {
     pos: Option<DVec3>,
     circle: Option<PendingCircle>,
     nurbs: Option<PendingNurbs>,
-    cycle: Option<u32>,
+    cycle: Option<CycleId>,
     /// Continuation buffer: text of the logical line so far and its first line number.
     cont: Option<(String, u32)>,
     line_no: u32,
@@ -313,7 +313,7 @@ impl AptReader {
                     self.axis = Some(self.unit_axis(v[3], v[4], v[5], ln, s.args_col)?);
                 }
                 if self.op.moves.is_empty() {
-                    self.op.start = Some(p);
+                    self.op.start = p;
                 }
                 self.pos = Some(p);
                 Ok(())
@@ -553,7 +553,13 @@ impl AptReader {
                         return Ok(());
                     }
                 };
-                self.op.push_event(ln, EventKind::CutCom(c));
+                self.op.push_event(
+                    ln,
+                    EventKind::CutCom {
+                        side: c,
+                        register: None,
+                    },
+                );
                 Ok(())
             }
             "COOLNT" => {
@@ -595,11 +601,27 @@ impl AptReader {
             }
             "END" | "FINI" | "END-OF-PATH" => Ok(()),
             // Known post and display words, kept verbatim without a diagnostic.
-            "PAINT" | "SELECT" | "SELCTL" | "TRNTYP" | "MACHIN" | "SEQNO" | "OPSKIP" | "CLRSRF"
-            | "AUXFUN" | "PREFUN" | "RETRCT" | "CLAMP" | "ROTABL" | "ROTATE" | "ORIGIN"
-            | "PITCH" | "THREAD" | "MODE" | "OPERATION" | "DISPLY" | "LINTOL" | "INTOL"
-            | "OUTTOL" | "TOLER" | "CATIA0" | "TPRINT" | "TMARK" | "PLABEL" | "POSTN" | "INDEX"
-            | "COUPLE" | "LEADER" | "CLEARP" | "SAFETY" | "HEAD" | "ROTHED" => {
+            "SELECT" | "SELCTL" => {
+                let args = self.args(&s, ln)?;
+                let num = args
+                    .iter()
+                    .find_map(|(a, _)| if let Arg::Num(x) = a { Some(*x) } else { None });
+                let tool = args.first().is_some_and(
+                    |(a, _)| matches!(a, Arg::Word(w) if w.eq_ignore_ascii_case("TOOL")),
+                ) || major == "SELCTL";
+                match num {
+                    Some(n) if tool && n >= 0.0 && n.fract() == 0.0 => {
+                        self.op.push_event(ln, EventKind::ToolSelect(n as u32))
+                    }
+                    _ => self.passthrough(major, text, ln),
+                }
+                Ok(())
+            }
+            "PAINT" | "TRNTYP" | "MACHIN" | "SEQNO" | "OPSKIP" | "CLRSRF" | "AUXFUN" | "PREFUN"
+            | "RETRCT" | "CLAMP" | "ROTABL" | "ROTATE" | "ORIGIN" | "PITCH" | "THREAD" | "MODE"
+            | "OPERATION" | "DISPLY" | "LINTOL" | "INTOL" | "OUTTOL" | "TOLER" | "CATIA0"
+            | "TPRINT" | "TMARK" | "PLABEL" | "POSTN" | "INDEX" | "COUPLE" | "LEADER"
+            | "CLEARP" | "SAFETY" | "HEAD" | "ROTHED" => {
                 self.passthrough(major, text, ln);
                 Ok(())
             }
@@ -620,7 +642,7 @@ impl AptReader {
                     ));
                 }
                 self.diags.warn(
-                    "unknown-word",
+                    Code::UnknownWord,
                     ln,
                     1,
                     format!("unknown record `{major}` kept verbatim"),
@@ -632,12 +654,42 @@ impl AptReader {
     }
 
     fn passthrough(&mut self, word: &str, text: &str, ln: u32) {
+        // Hints to the CAM system's display or post that no machine acts on.
+        const INFO: &[&str] = &[
+            "PAINT",
+            "TRNTYP",
+            "MACHIN",
+            "CLRSRF",
+            "MODE",
+            "OPERATION",
+            "DISPLY",
+            "LINTOL",
+            "INTOL",
+            "OUTTOL",
+            "TOLER",
+            "CATIA0",
+            "TPRINT",
+            "TMARK",
+            "PLABEL",
+            "LEADER",
+            "SEQNO",
+        ];
+        // `CYCLE/INIT` marks where a cycle definition starts; the definition
+        // that follows says what the machine does.
+        let class = if INFO.contains(&word) || word.starts_with("CSI_") || word == "CYCLE/INIT" {
+            PassClass::Info
+        } else {
+            PassClass::Machine
+        };
         self.op.push_event(
             ln,
-            EventKind::Passthrough {
+            EventKind::Passthrough(Passthrough {
                 word: word.to_string(),
                 text: text.trim().to_string(),
-            },
+                class,
+                modal: false,
+                moves: false,
+            }),
         );
     }
 
@@ -701,17 +753,13 @@ impl AptReader {
     }
 
     fn emit_move(&mut self, end: DVec3, ln: u32) -> Result<(), ParseError> {
-        let orient = match self.axis {
-            Some(a) => self.op.intern_orient(Orient::Vector(a)),
-            None => NO_ORIENT,
-        };
+        let orient = self.axis.map(|a| self.op.intern_orient(Orient::vector(a)));
         let mut m = Move {
             end,
             feed: self.feed,
             spindle: self.spindle,
             line: ln,
             orient,
-            aux: 0,
             kind: MoveKind::Linear,
             feed_mode: self.feed_mode,
         };
@@ -721,7 +769,7 @@ impl AptReader {
             m.feed = 0.0;
             if self.circle.is_some() {
                 self.diags.warn(
-                    "rapid-circle",
+                    Code::RapidCircle,
                     ln,
                     1,
                     "RAPID before a CIRCLE end point: moved as a rapid line",
@@ -743,7 +791,7 @@ impl AptReader {
             let tol = crate::verify::ARC_TOL + 1e-4 * arc.radius;
             if (r_end - arc.radius).abs() > tol {
                 self.diags.warn(
-                    "arc-radius",
+                    Code::ArcRadius,
                     ln,
                     1,
                     format!(
@@ -755,7 +803,7 @@ impl AptReader {
             if let CircleLayout::WithRadius(r) = c.layout {
                 if (r - arc.radius).abs() > tol.max(1e-4 * r) {
                     self.diags.warn(
-                        "arc-radius",
+                        Code::ArcRadius,
                         c.line,
                         1,
                         format!(
@@ -765,19 +813,16 @@ impl AptReader {
                     );
                 }
             }
-            m.kind = MoveKind::Arc;
-            m.aux = self.op.arcs.len() as u32;
-            self.op.arcs.push(arc);
+            m.kind = MoveKind::Arc(self.op.push_arc(arc));
         } else if let Some(cy) = self.cycle {
-            m.kind = MoveKind::Cycle;
-            m.aux = cy;
+            m.kind = MoveKind::Cycle(cy);
         }
         if m.is_cutting() && !self.feed_seen {
             m.feed = self.opts.default_feed;
             if !self.feed_missing_reported {
                 self.feed_missing_reported = true;
                 self.diags.warn(
-                    "feed-missing",
+                    Code::FeedMissing,
                     ln,
                     1,
                     format!(
@@ -795,14 +840,14 @@ impl AptReader {
                 line: ln,
             });
             self.diags.warn(
-                "tool-missing",
+                Code::ToolMissing,
                 ln,
                 1,
                 "cutting move before any CUTTER, TLDATA or LOADTL: tool unknown",
             );
         }
-        if self.op.moves.is_empty() && self.op.start.is_none() {
-            self.op.start = self.pos;
+        if self.op.moves.is_empty() && self.op.start.is_nan() {
+            self.op.start = self.pos.unwrap_or(UNKNOWN);
         }
         if self.op.moves.capacity() == 0 && self.opts.expect_moves > 0 {
             // Room may be refused for a wild guess; the moves then grow as usual.
@@ -854,7 +899,7 @@ impl AptReader {
                     "INVERS" => mode = FeedMode::InverseTime,
                     _ => {
                         self.diags.warn(
-                            "unknown-word",
+                            Code::UnknownWord,
                             ln,
                             c,
                             format!("FEDRAT word `{w}` ignored"),
@@ -877,7 +922,7 @@ impl AptReader {
                 None => self.set_units(u, UnitsOrigin::InferredFromFeed, ln),
                 Some((have, _, _)) if have != u => {
                     self.diags.warn(
-                        "units-conflict",
+                        Code::UnitsConflict,
                         ln,
                         s.args_col,
                         format!("feed unit says {u:?} but the file's unit is {have:?}; the file's unit is used"),
@@ -906,28 +951,24 @@ impl AptReader {
                     "OFF" | "LOCK" => on = false,
                     "SFM" | "SMM" => {
                         self.diags.warn(
-                            "constant-surface-speed",
+                            Code::ConstantSurfaceSpeed,
                             ln,
                             c,
                             "constant surface speed spindle kept as its number",
                         );
                     }
-                    _ => {
-                        self.diags
-                            .warn("unknown-word", ln, c, format!("SPINDL word `{w}` ignored"))
-                    }
+                    _ => self.diags.warn(
+                        Code::UnknownWord,
+                        ln,
+                        c,
+                        format!("SPINDL word `{w}` ignored"),
+                    ),
                 },
             }
         }
         if !on {
             self.spindle = 0.0;
-            self.op.push_event(
-                ln,
-                EventKind::Spindle {
-                    rpm: 0.0,
-                    dir: SpindleDir::Off,
-                },
-            );
+            self.op.push_event(ln, EventKind::Spindle(SpindleDir::Off));
             return Ok(());
         }
         let rpm = rpm.unwrap_or(self.last_spindle_on);
@@ -940,7 +981,7 @@ impl AptReader {
         }
         self.spindle = rpm;
         self.last_spindle_on = rpm;
-        self.op.push_event(ln, EventKind::Spindle { rpm, dir });
+        self.op.push_event(ln, EventKind::Spindle(dir));
         Ok(())
     }
 
@@ -1028,7 +1069,7 @@ impl AptReader {
             Some((_, UnitsOrigin::Override, _)) => {}
             Some((have, _, first)) if have != u => {
                 self.diags.warn(
-                    "units-conflict",
+                    Code::UnitsConflict,
                     ln,
                     1,
                     format!(
@@ -1056,7 +1097,7 @@ impl AptReader {
                 return Ok(());
             }
             "INIT" | "ON" => {
-                self.passthrough("CYCLE", text, ln);
+                self.passthrough(&format!("CYCLE/{name}"), text, ln);
                 return Ok(());
             }
             _ => {}
@@ -1072,6 +1113,7 @@ impl AptReader {
                 self.opts.default_feed
             },
             peck: None,
+            peck_next: None,
             dwell: None,
             line: ln,
         };
@@ -1101,8 +1143,15 @@ impl AptReader {
                             }
                         }
                         "STEP" | "1STPECK" | "PECK" => cy.peck = Some(take(&mut i)?),
+                        "SUBPECK" | "STEP2" => cy.peck_next = Some(take(&mut i)?),
                         "DWELL" => cy.dwell = Some(take(&mut i)?),
                         _ => {
+                            self.diags.warn(
+                                Code::UnknownWord,
+                                ln,
+                                c,
+                                format!("CYCLE word `{w}` is not modelled: the cycle is spelled out without it"),
+                            );
                             if next.is_some() {
                                 i += 1;
                             }
@@ -1123,8 +1172,7 @@ impl AptReader {
                 "CYCLE feed is not positive",
             ));
         }
-        self.cycle = Some(self.op.cycles.len() as u32);
-        self.op.cycles.push(cy);
+        self.cycle = Some(self.op.push_cycle(cy));
         self.op
             .push_event(ln, EventKind::Comment(format!("cycle {}", text.trim())));
         Ok(())
@@ -1137,7 +1185,7 @@ impl AptReader {
         let prev = std::mem::take(&mut self.op);
         self.op.tool = prev.tool.clone();
         self.op.frame = if fresh_frame { None } else { prev.frame };
-        self.op.start = self.pos;
+        self.op.start = self.pos.unwrap_or(UNKNOWN);
         self.cycle = None;
         self.ops.push(prev);
     }
@@ -1170,7 +1218,7 @@ impl AptReader {
             Some((u, o, _)) => (u, o),
             None => {
                 self.diags.warn(
-                    "units-assumed",
+                    Code::UnitsAssumed,
                     0,
                     0,
                     "no unit statement or feed unit: millimetres assumed (override with --units)",

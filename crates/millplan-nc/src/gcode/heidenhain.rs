@@ -2,7 +2,7 @@
 //! `L` lines with `FMAX`, `CC`/`C` and `CR` arcs, `CYCL DEF 1` pecking with `M99`,
 //! `~` continuations. Everything else is kept verbatim.
 
-use crate::diag::{parse_num, Diags, ParseError, Parsed};
+use crate::diag::{parse_num, Code, Diags, ParseError, Parsed};
 use crate::ir::*;
 use crate::ReadOptions;
 use millplan_geom::DVec3;
@@ -19,8 +19,8 @@ pub struct HeidenhainReader {
     saw_content: bool,
     scale: f64,
     unit: Option<(LengthUnit, UnitsOrigin)>,
+    /// Tool-tip position; NaN on an axis the program has not set.
     pos: DVec3,
-    known: bool,
     rotary: [Option<f64>; 3],
     vector: Option<DVec3>,
     feed: f64,
@@ -28,11 +28,14 @@ pub struct HeidenhainReader {
     feed_missing_reported: bool,
     spindle: f64,
     spindle_on: bool,
+    feed_mode: FeedMode,
+    cutcom: CutCom,
+    tcp: bool,
     pole: Option<([Option<f64>; 3], u32)>,
     pole_named: [bool; 3],
     tool_radius: BTreeMap<String, f64>,
     cycle: Cycle,
-    cycle_index: Option<u32>,
+    cycle_index: Option<CycleId>,
     /// Q parameters of the current 200-series cycle definition.
     cycle_q: Option<BTreeMap<u32, f64>>,
     pub motion_blocks: usize,
@@ -52,8 +55,7 @@ impl HeidenhainReader {
             saw_content: false,
             scale: unit.map(|(u, _)| u.mm()).unwrap_or(1.0),
             unit,
-            pos: DVec3::ZERO,
-            known: false,
+            pos: UNKNOWN,
             rotary: [None; 3],
             vector: None,
             feed: 0.0,
@@ -61,6 +63,9 @@ impl HeidenhainReader {
             feed_missing_reported: false,
             spindle: 0.0,
             spindle_on: false,
+            feed_mode: FeedMode::PerMinute,
+            cutcom: CutCom::Off,
+            tcp: false,
             pole: None,
             pole_named: [false; 3],
             tool_radius: BTreeMap::new(),
@@ -71,6 +76,7 @@ impl HeidenhainReader {
                 retract: 0.0,
                 feed: 0.0,
                 peck: None,
+                peck_next: None,
                 dwell: None,
                 line: 0,
             },
@@ -152,19 +158,40 @@ impl HeidenhainReader {
                 Ok(())
             }
             "TOOL" if words.get(1) == Some(&"DEF") => {
-                if let (Some(n), Some(r)) = (
-                    words.get(2),
-                    words
-                        .iter()
-                        .find_map(|w| w.strip_prefix('R').and_then(parse_num)),
-                ) {
+                let radius = words
+                    .iter()
+                    .find_map(|w| w.strip_prefix('R').and_then(parse_num));
+                if let (Some(n), Some(r)) = (words.get(2), radius) {
                     self.tool_radius.insert(n.to_string(), r * self.scale);
                 }
-                self.passthrough("TOOL DEF", body, ln);
+                // Length and radius deltas of zero change nothing.
+                let zero = words.len() > 3
+                    && words[3..].iter().all(|w| {
+                        let v = w.strip_prefix('L').or(w.strip_prefix('R'));
+                        v.and_then(parse_num) == Some(0.0)
+                    });
+                match (
+                    words.get(2).and_then(|n| n.parse::<u32>().ok()),
+                    words.len(),
+                ) {
+                    // `TOOL DEF 9`: tool 9 made ready for the next call.
+                    (Some(n), 3) => self.op.push_event(ln, EventKind::ToolSelect(n)),
+                    _ => {
+                        let class = if zero {
+                            PassClass::Info
+                        } else {
+                            PassClass::Machine
+                        };
+                        self.passthrough("TOOL DEF", body, class, false, ln)
+                    }
+                }
                 Ok(())
             }
             "TOOL" if words.get(1) == Some(&"CALL") => {
                 let id = words.get(2).copied().unwrap_or("");
+                // A number or a quoted name calls a tool; `TOOL CALL Z S2000` or
+                // `TOOL CALL S2000` only changes the spindle speed (or feed).
+                let calls_tool = id.parse::<u32>().is_ok() || id.starts_with('"');
                 let name_orig = body
                     .split_whitespace()
                     .nth(2)
@@ -173,7 +200,8 @@ impl HeidenhainReader {
                     .to_string();
                 let number = id.parse::<u32>().ok();
                 let radius = self.tool_radius.get(id).copied().filter(|r| *r > 0.0);
-                for w in &words[3..] {
+                let from = if calls_tool { 3 } else { 2 };
+                for w in &words[from..] {
                     if let Some(s) = w.strip_prefix('S').and_then(parse_num) {
                         self.spindle = s;
                     }
@@ -182,12 +210,17 @@ impl HeidenhainReader {
                         self.feed_seen = f > 0.0;
                     }
                 }
+                if !calls_tool {
+                    return Ok(());
+                }
                 if !self.op.moves.is_empty() {
                     let prev = std::mem::take(&mut self.op);
-                    self.op.start = prev.moves.last().map(|m| m.end);
                     self.ops.push(prev);
                     self.cycle_index = None;
                 }
+                // The tool change may move every linear axis.
+                self.pos = UNKNOWN;
+                self.op.start = UNKNOWN;
                 let name = if number.is_none() {
                     Some(name_orig)
                 } else {
@@ -209,6 +242,15 @@ impl HeidenhainReader {
                 for w in &words[1..] {
                     if let Some((k, v, inc)) = coord(w) {
                         let base = if inc { self.pos[k] } else { 0.0 };
+                        if base.is_nan() {
+                            return Err(ParseError::new(
+                                ln,
+                                col0,
+                                format!(
+                                    "incremental `{w}` from a position the program has not set"
+                                ),
+                            ));
+                        }
                         p[k] = Some(base + v * self.scale);
                         self.pole_named[k] = true;
                     }
@@ -225,16 +267,26 @@ impl HeidenhainReader {
                     words[0]
                 ),
             )),
+            "CYCL" if words.get(1) == Some(&"CALL") && words.len() == 2 => {
+                self.cycle_call(ln, col0)
+            }
             "CYCL" => self.cycle_def(&words, body, ln),
             "M99" => self.cycle_call(ln, col0),
-            "BLK" | "LBL" | "CALL" | "PLANE" | "STOP" | "FUNCTION" | "FN" | "TCH" | "PGM" => {
-                self.passthrough(words[0], body, ln);
+            "STOP" if words.len() == 1 => {
+                self.op.push_event(ln, EventKind::Stop { optional: false });
                 Ok(())
             }
-            w if w.starts_with('M')
-                && w[1..].chars().all(|c| c.is_ascii_digit())
-                && w.len() > 1 =>
-            {
+            "BLK" => {
+                // The blank for the control's graphics.
+                self.passthrough(words[0], body, PassClass::Info, false, ln);
+                Ok(())
+            }
+            "LBL" | "CALL" | "PLANE" | "STOP" | "FUNCTION" | "FN" | "TCH" | "PGM" => {
+                let moves = words[0] == "PLANE";
+                self.passthrough(words[0], body, PassClass::Machine, moves, ln);
+                Ok(())
+            }
+            w if m_number(w).is_some() => {
                 self.m_words(&words, ln);
                 Ok(())
             }
@@ -249,30 +301,22 @@ impl HeidenhainReader {
             }
             w if w.starts_with('Q') => {
                 self.q_params(&words);
-                self.passthrough("Q", body, ln);
+                self.passthrough("Q", body, PassClass::Machine, false, ln);
                 Ok(())
             }
             w if w.starts_with('S') && parse_num(&w[1..]).is_some() => {
                 self.spindle = parse_num(&w[1..]).unwrap_or(self.spindle);
-                if !self.m_words(&words, ln) && self.spindle_on {
-                    self.op.push_event(
-                        ln,
-                        EventKind::Spindle {
-                            rpm: self.spindle,
-                            dir: SpindleDir::Cw,
-                        },
-                    );
-                }
+                self.m_words(&words, ln);
                 Ok(())
             }
             _ => {
                 self.diags.warn(
-                    "unknown-word",
+                    Code::UnknownWord,
                     ln,
                     col0,
                     format!("`{}` kept verbatim", words[0]),
                 );
-                self.passthrough(words[0], body, ln);
+                self.passthrough(words[0], body, PassClass::Machine, false, ln);
                 Ok(())
             }
         }
@@ -285,13 +329,16 @@ impl HeidenhainReader {
         }
     }
 
-    fn passthrough(&mut self, word: &str, text: &str, ln: u32) {
+    fn passthrough(&mut self, word: &str, text: &str, class: PassClass, moves: bool, ln: u32) {
         self.op.push_event(
             ln,
-            EventKind::Passthrough {
+            EventKind::Passthrough(Passthrough {
                 word: word.to_string(),
                 text: text.trim().to_string(),
-            },
+                class,
+                modal: false,
+                moves,
+            }),
         );
     }
 
@@ -299,50 +346,37 @@ impl HeidenhainReader {
     fn m_words(&mut self, words: &[&str], ln: u32) -> bool {
         let mut cycle_call = false;
         for w in words {
-            let Some(m) = w.strip_prefix('M') else {
+            let Some(m) = m_number(w) else {
                 continue;
             };
-            if m.is_empty() {
-                continue;
-            }
-            match m.parse::<u32>() {
-                Ok(3) => {
+            match m {
+                3 | 4 => {
                     self.spindle_on = true;
-                    self.op.push_event(
-                        ln,
-                        EventKind::Spindle {
-                            rpm: self.spindle,
-                            dir: SpindleDir::Cw,
-                        },
-                    );
+                    let dir = if m == 3 {
+                        SpindleDir::Cw
+                    } else {
+                        SpindleDir::Ccw
+                    };
+                    self.op.push_event(ln, EventKind::Spindle(dir));
                 }
-                Ok(4) => {
-                    self.spindle_on = true;
-                    self.op.push_event(
-                        ln,
-                        EventKind::Spindle {
-                            rpm: self.spindle,
-                            dir: SpindleDir::Ccw,
-                        },
-                    );
-                }
-                Ok(5) => {
+                5 => {
                     self.spindle_on = false;
-                    self.op.push_event(
-                        ln,
-                        EventKind::Spindle {
-                            rpm: 0.0,
-                            dir: SpindleDir::Off,
-                        },
-                    );
+                    self.op.push_event(ln, EventKind::Spindle(SpindleDir::Off));
                 }
-                Ok(8) => self.op.push_event(ln, EventKind::Coolant(Coolant::Flood)),
-                Ok(9) => self.op.push_event(ln, EventKind::Coolant(Coolant::Off)),
-                Ok(0) => self.op.push_event(ln, EventKind::Stop { optional: false }),
-                Ok(1) => self.op.push_event(ln, EventKind::Stop { optional: true }),
-                Ok(6) | Ok(2) | Ok(30) => {}
-                Ok(99) => cycle_call = true,
-                _ => self.passthrough(w, w, ln),
+                8 => self.op.push_event(ln, EventKind::Coolant(Coolant::Flood)),
+                9 => self.op.push_event(ln, EventKind::Coolant(Coolant::Off)),
+                0 => self.op.push_event(ln, EventKind::Stop { optional: false }),
+                1 => self.op.push_event(ln, EventKind::Stop { optional: true }),
+                128 | 129 => {
+                    self.tcp = m == 128;
+                    self.op.push_event(ln, EventKind::Tcp(m == 128));
+                }
+                // Tool change and program end: the writer writes its own.
+                6 | 2 | 30 => {}
+                99 => cycle_call = true,
+                // Machine-datum positioning: handled by the block.
+                91 | 92 => {}
+                _ => self.passthrough(w, w, PassClass::Machine, false, ln),
             }
         }
         cycle_call
@@ -350,11 +384,13 @@ impl HeidenhainReader {
 
     fn linear(&mut self, body: &str, words: &[&str], ln: u32, col0: u32) -> Result<(), ParseError> {
         let mut end = self.pos;
+        let mut named = [false; 3];
         let mut any = false;
         let mut rapid = false;
         let mut machine = false;
         let mut rot = [None; 3];
         let mut tvec: [Option<f64>; 3] = [None; 3];
+        let mut cutcom = None;
         for (k, w) in words.iter().enumerate() {
             if let Some(t) = ["TX", "TY", "TZ"].iter().position(|p| w.starts_with(p)) {
                 tvec[t] =
@@ -366,41 +402,65 @@ impl HeidenhainReader {
                 // Surface normal of 3D radius compensation: not a tool position.
             } else if let Some((axis, v, inc)) = coord(w) {
                 let v = v * self.scale;
-                end[axis] = if inc { end[axis] + v } else { v };
-                any = true;
+                named[axis] = true;
+                if !inc {
+                    end[axis] = v;
+                    any = true;
+                } else if !end[axis].is_nan() {
+                    end[axis] += v;
+                    any = true;
+                } else if v != 0.0 {
+                    return Err(ParseError::new(
+                        ln,
+                        col0,
+                        format!("incremental `{w}` from a position the program has not set"),
+                    ));
+                }
             } else if let Some(r) = rotary(w) {
                 rot[r.0] = Some(r.1.to_radians());
                 any = true;
             } else if *w == "FMAX" || (*w == "F" && words.get(k + 1) == Some(&"MAX")) {
                 rapid = true;
-            } else if *w == "MAX" || *w == "R0" || *w == "FAUTO" {
-            } else if *w == "RL" || *w == "RR" {
-                self.op.push_event(
-                    ln,
-                    EventKind::CutCom(if *w == "RL" {
-                        CutCom::Left
-                    } else {
-                        CutCom::Right
-                    }),
-                );
+            } else if *w == "MAX" || *w == "FAUTO" {
+            } else if *w == "R0" {
+                if self.cutcom != CutCom::Off {
+                    cutcom = Some(CutCom::Off);
+                }
+            } else if *w == "RL" {
+                cutcom = Some(CutCom::Left);
+            } else if *w == "RR" {
+                cutcom = Some(CutCom::Right);
             } else if let Some(f) = w.strip_prefix('F') {
-                let f = parse_num(f)
+                // F mm/min, FU mm per revolution, FT seconds for the block.
+                let (mode, text) = if let Some(t) = f.strip_prefix('U') {
+                    (FeedMode::PerRev, t)
+                } else if let Some(t) = f.strip_prefix('T') {
+                    (FeedMode::InverseTime, t)
+                } else {
+                    (FeedMode::PerMinute, f)
+                };
+                let f = parse_num(text)
                     .ok_or_else(|| ParseError::new(ln, col0, format!("`{w}` is not a feed")))?;
-                if f <= 0.0 {
+                if !(f > 0.0) {
                     return Err(ParseError::new(
                         ln,
                         col0,
                         format!("feed {w} is not positive"),
                     ));
                 }
-                self.feed = f * self.scale;
+                self.feed_mode = mode;
+                self.feed = match mode {
+                    FeedMode::InverseTime => 60.0 / f,
+                    _ => f * self.scale,
+                };
                 self.feed_seen = true;
             } else if let Some(sv) = w.strip_prefix('S').and_then(parse_num) {
                 // NX posts put S in L blocks; the control takes it as a speed change.
                 self.spindle = sv;
             } else if *w == "M91" || *w == "M92" {
                 machine = true;
-            } else if w.starts_with('M') {
+            } else if m_number(w).is_some() || *w == "M" {
+                // A bare `M` (NX posts write one) is no function at all.
             } else {
                 return Err(ParseError::new(
                     ln,
@@ -409,9 +469,30 @@ impl HeidenhainReader {
                 ));
             }
         }
+        if let Some(c) = cutcom {
+            self.cutcom = c;
+            self.op.push_event(
+                ln,
+                EventKind::CutCom {
+                    side: c,
+                    register: None,
+                },
+            );
+        }
         let cycle_call = self.m_words(words, ln);
         if machine {
-            self.passthrough("L", body, ln);
+            // Machine-datum coordinates: kept verbatim; its axes are unknown after.
+            for (k, named) in named.iter().enumerate() {
+                if *named {
+                    self.pos[k] = f64::NAN;
+                }
+            }
+            for (k, r) in rot.iter().enumerate() {
+                if r.is_some() {
+                    self.rotary[k] = None;
+                }
+            }
+            self.passthrough("L", body, PassClass::Machine, true, ln);
             return Ok(());
         }
         if any {
@@ -431,20 +512,16 @@ impl HeidenhainReader {
                     ParseError::new(ln, col0, "tool vector TX TY TZ has zero length")
                 })?);
             }
-            let orient = if let Some(v) = self.vector {
-                self.op.intern_orient(Orient::Vector(v))
-            } else if self.rotary.iter().any(Option::is_some) {
-                self.op.intern_orient(Orient::Rotary(self.rotary))
-            } else {
-                NO_ORIENT
-            };
+            let orient = self.current_orient();
             let mut m = Move::linear(end, self.feed);
             m.line = ln;
             m.orient = orient;
+            m.feed_mode = self.feed_mode;
             m.spindle = if self.spindle_on { self.spindle } else { 0.0 };
             if rapid {
                 m.kind = MoveKind::Rapid;
                 m.feed = 0.0;
+                m.feed_mode = FeedMode::PerMinute;
             }
             self.push_move(m, ln);
         }
@@ -482,6 +559,13 @@ impl HeidenhainReader {
                 end[k] = v;
             }
         }
+        let (Some(start), Some(end)) = (known(start), known(end)) else {
+            return Err(ParseError::new(
+                ln,
+                col0,
+                "arc from or to a position the program has not set (an axis is unknown)",
+            ));
+        };
         let (normal_axis, centre) = if words[0] == "CR" {
             let r = radius.ok_or_else(|| ParseError::new(ln, col0, "CR without R"))?;
             let n = DVec3::Z;
@@ -551,7 +635,7 @@ impl HeidenhainReader {
             })?;
             let named_plane = self.pole_named[a] && self.pole_named[b] && !self.pole_named[nax];
             if !named_plane {
-                self.diags.note("arc-plane", ln, col0, format!("the arc about the CC of line {pole_line} is taken in the plane normal to {}", ["X", "Y", "Z"][nax]));
+                self.diags.note(Code::ArcPlane, ln, col0, format!("the arc about the CC of line {pole_line} is taken in the plane normal to {}", ["X", "Y", "Z"][nax]));
             }
             let mut c = start;
             c[a] = p[a].unwrap_or(0.0);
@@ -565,11 +649,11 @@ impl HeidenhainReader {
         let arc = Arc::from_points(start, end, centre, normal, full)
             .ok_or_else(|| ParseError::new(ln, col0, "arc start lies on its centre"))?;
         let mut m = Move::linear(end, self.feed);
-        m.kind = MoveKind::Arc;
-        m.aux = self.op.arcs.len() as u32;
+        m.kind = MoveKind::Arc(self.op.push_arc(arc));
+        m.orient = self.current_orient();
         m.line = ln;
+        m.feed_mode = self.feed_mode;
         m.spindle = if self.spindle_on { self.spindle } else { 0.0 };
-        self.op.arcs.push(arc);
         self.push_move(m, ln);
         Ok(())
     }
@@ -577,6 +661,16 @@ impl HeidenhainReader {
     fn cycle_def(&mut self, words: &[&str], body: &str, ln: u32) -> Result<(), ParseError> {
         // CYCL DEF 1.0 PECKING / 1.1 SET UP s / 1.2 DEPTH d / 1.3 PECKG q / 1.4 DWELL t / 1.5 F f
         let num = |w: Option<&&str>| w.and_then(|w| parse_num(w));
+        // The drilling cycles are modelled through their calls (M99); their
+        // definitions need no words of their own in another dialect. Any other
+        // cycle (datum shift, working plane, tolerance) acts as it stands.
+        let number = words
+            .get(2)
+            .and_then(|w| w.split('.').next()?.parse::<u32>().ok());
+        if !matches!(number, Some(1 | 200..=209 | 240 | 241)) {
+            self.passthrough("CYCL", body, PassClass::Machine, false, ln);
+            return Ok(());
+        }
         if let Some(n) = words
             .get(2)
             .and_then(|w| w.parse::<u32>().ok())
@@ -591,7 +685,7 @@ impl HeidenhainReader {
             self.cycle_index = None;
             self.cycle_q = Some(BTreeMap::new());
             self.q_params(words);
-            self.passthrough("CYCL", body, ln);
+            self.passthrough("CYCL", body, PassClass::Info, false, ln);
             return Ok(());
         }
         if words.get(2).map(|w| w.contains('.')).unwrap_or(false)
@@ -629,7 +723,7 @@ impl HeidenhainReader {
             }
             _ => {}
         }
-        self.passthrough("CYCL", body, ln);
+        self.passthrough("CYCL", body, PassClass::Info, false, ln);
         Ok(())
     }
 
@@ -655,7 +749,7 @@ impl HeidenhainReader {
             // Q204 second set-up clearance, Q202 plunge depth, Q211 dwell.
             let (Some(depth), Some(surface)) = (q.get(&201), q.get(&203)) else {
                 self.diags.warn(
-                    "unknown-word",
+                    Code::UnknownWord,
                     ln,
                     col0,
                     format!(
@@ -663,7 +757,7 @@ impl HeidenhainReader {
                         self.cycle.name
                     ),
                 );
-                self.passthrough("M99", "M99", ln);
+                self.passthrough("M99", "M99", PassClass::Machine, false, ln);
                 return Ok(());
             };
             let s = self.scale;
@@ -684,18 +778,25 @@ impl HeidenhainReader {
                         retract: q.get(&204).copied().unwrap_or(0.0).abs() * s,
                         feed,
                         peck: q.get(&202).map(|p| p.abs() * s).filter(|p| *p > 0.0),
+                        peck_next: None,
                         dwell: q.get(&211).copied().filter(|t| *t > 0.0),
                         line: self.cycle.line,
                     };
-                    self.op.cycles.push(c);
-                    let i = (self.op.cycles.len() - 1) as u32;
+                    let i = self.op.push_cycle(c);
                     self.cycle_index = Some(i);
                     i
                 }
             };
+            if self.pos.x.is_nan() || self.pos.y.is_nan() {
+                return Err(ParseError::new(
+                    ln,
+                    col0,
+                    "cycle call at a position the program has not set",
+                ));
+            }
             let mut m = Move::rapid(DVec3::new(self.pos.x, self.pos.y, surface * s));
-            m.kind = MoveKind::Cycle;
-            m.aux = idx;
+            m.kind = MoveKind::Cycle(idx);
+            m.orient = self.current_orient();
             m.line = ln;
             m.spindle = if self.spindle_on { self.spindle } else { 0.0 };
             let back = self.pos;
@@ -719,20 +820,37 @@ impl HeidenhainReader {
                 c.bottom -= c.clearance;
                 c.retract = 0.0;
                 c.clearance = 0.0;
-                self.op.cycles.push(c);
-                let i = (self.op.cycles.len() - 1) as u32;
+                let i = self.op.push_cycle(c);
                 self.cycle_index = Some(i);
                 i
             }
         };
+        if known(self.pos).is_none() {
+            return Err(ParseError::new(
+                ln,
+                col0,
+                "cycle call at a position the program has not set",
+            ));
+        }
         let mut m = Move::rapid(self.pos);
-        m.kind = MoveKind::Cycle;
-        m.aux = idx;
+        m.kind = MoveKind::Cycle(idx);
+        m.orient = self.current_orient();
         m.line = ln;
         m.spindle = if self.spindle_on { self.spindle } else { 0.0 };
         // A cycle at the position the previous block reached replaces that rapid.
         self.push_move(m, ln);
         Ok(())
+    }
+
+    /// The tool orientation in effect: the last tool vector, else the rotary axes.
+    fn current_orient(&mut self) -> Option<OrientId> {
+        if let Some(v) = self.vector {
+            Some(self.op.intern_orient(Orient::vector(v)))
+        } else if self.rotary.iter().any(Option::is_some) {
+            Some(self.op.intern_orient(Orient::angles(self.rotary)))
+        } else {
+            None
+        }
     }
 
     fn push_move(&mut self, mut m: Move, ln: u32) {
@@ -742,7 +860,7 @@ impl HeidenhainReader {
             if !self.feed_missing_reported {
                 self.feed_missing_reported = true;
                 self.diags.warn(
-                    "feed-missing",
+                    Code::FeedMissing,
                     ln,
                     1,
                     format!(
@@ -760,14 +878,14 @@ impl HeidenhainReader {
                 line: ln,
             });
             self.diags.warn(
-                "tool-missing",
+                Code::ToolMissing,
                 ln,
                 1,
                 "cutting move before any TOOL CALL: tool unknown",
             );
         }
-        if self.op.moves.is_empty() && self.op.start.is_none() && self.known {
-            self.op.start = Some(self.pos);
+        if self.op.moves.is_empty() {
+            self.op.start = self.pos;
         }
         if self.op.moves.capacity() == 0 && self.opts.expect_moves > 0 {
             // Room may be refused for a wild guess; the moves then grow as usual.
@@ -778,7 +896,6 @@ impl HeidenhainReader {
         }
         self.op.moves.push(m);
         self.pos = m.end;
-        self.known = true;
     }
 
     pub fn finish(mut self) -> Result<Parsed, ParseError> {
@@ -795,7 +912,7 @@ impl HeidenhainReader {
             Some(x) => x,
             None => {
                 self.diags.warn(
-                    "units-assumed",
+                    Code::UnitsAssumed,
                     0,
                     0,
                     "no BEGIN PGM unit: millimetres assumed (override with --units)",
@@ -825,6 +942,14 @@ fn coord(w: &str) -> Option<(usize, f64, bool)> {
         _ => return None,
     };
     parse_num(&w[1..]).map(|v| (axis, v, inc))
+}
+
+/// `M3` → 3; not `MAX`.
+fn m_number(w: &str) -> Option<u32> {
+    let d = w.strip_prefix('M')?;
+    (!d.is_empty() && d.bytes().all(|c| c.is_ascii_digit()))
+        .then(|| d.parse().ok())
+        .flatten()
 }
 
 fn rotary(w: &str) -> Option<(usize, f64)> {

@@ -10,7 +10,7 @@
 pub mod expr;
 pub mod heidenhain;
 
-use crate::diag::{parse_num, Diags, ParseError, Parsed};
+use crate::diag::{parse_num, Code, Diags, ParseError, Parsed};
 use crate::ir::*;
 use crate::ReadOptions;
 use millplan_geom::DVec3;
@@ -266,7 +266,7 @@ struct CycleState {
     p: Option<f64>,
     initial_z: f64,
     return_initial: bool,
-    index: Option<u32>,
+    index: Option<CycleId>,
 }
 
 /// Incremental G-code reader (Fanuc, Sinumerik, LinuxCNC).
@@ -292,12 +292,17 @@ pub struct GcodeReader {
     feed_missing_reported: bool,
     spindle: f64,
     spindle_dir: SpindleDir,
+    /// Tool-tip position; NaN on an axis the program has not commanded since
+    /// the start, a tool change or a machine move.
     pos: DVec3,
-    pos_known: [bool; 3],
     rotary: [Option<f64>; 3],
     vector: Option<DVec3>,
+    tcp: bool,
     tcp_vectors: bool,
     selected_tool: Option<(Option<u32>, Option<String>, u32)>,
+    /// A tool-select event not yet followed by a move: an M6 right after it
+    /// takes it in (event index, moves of the operation then).
+    pending_select: Option<(usize, usize)>,
     cycle: Option<CycleState>,
     return_initial: bool,
     pub blocks: usize,
@@ -378,6 +383,41 @@ const KNOWN_KEYWORDS: &[&str] = &[
     "ENDLOOP",
 ];
 
+/// G codes (×10) that change the modal state a writer keeps: motion, plane,
+/// units, distance and feed mode, canned cycles.
+fn is_modal_g(code: i64) -> bool {
+    matches!(
+        code,
+        0 | 10 | 20 | 30 | 170 | 180 | 190 | 200 | 210 | 700 | 710 | 7000 | 7100 | 800
+            ..=890 | 730 | 740 | 760 | 900 | 910 | 930 | 940 | 950
+    )
+}
+
+/// The words of one block, gathered before they are interpreted.
+#[derive(Default)]
+struct Words {
+    /// G codes ×10 with their value and column.
+    g: Vec<(i64, f64, u32)>,
+    xyz: [Option<f64>; 3],
+    ijk: [Option<f64>; 3],
+    vec3: [Option<f64>; 3],
+    rot: [Option<f64>; 3],
+    cr: Option<f64>,
+    r: Option<f64>,
+    q: Option<f64>,
+    p: Option<f64>,
+    h: Option<f64>,
+    d: Option<f64>,
+    l: Option<f64>,
+    u: Option<f64>,
+    m: Vec<f64>,
+    /// Words nobody models, as written.
+    keep: Vec<String>,
+    keep_modal: bool,
+    /// A kept word acts on the machine (not only a variable assignment).
+    keep_machine: bool,
+}
+
 impl GcodeReader {
     pub fn new(dialect: Dialect, opts: ReadOptions) -> GcodeReader {
         let unit = opts.units.map(|u| (u, UnitsOrigin::Override));
@@ -402,12 +442,13 @@ impl GcodeReader {
             feed_missing_reported: false,
             spindle: 0.0,
             spindle_dir: SpindleDir::Off,
-            pos: DVec3::ZERO,
-            pos_known: [false; 3],
+            pos: UNKNOWN,
             rotary: [None; 3],
             vector: None,
+            tcp: false,
             tcp_vectors: false,
             selected_tool: None,
+            pending_select: None,
             cycle: None,
             return_initial: true,
             blocks: 0,
@@ -415,12 +456,16 @@ impl GcodeReader {
         }
     }
 
+    fn sinumerik(&self) -> bool {
+        self.dialect == Dialect::Sinumerik
+    }
+
     fn set_unit(&mut self, u: LengthUnit, ln: u32) {
         match self.unit {
             Some((_, UnitsOrigin::Override)) => {}
             Some((have, _)) if have != u && self.op.moves.len() + self.ops.len() > 0 => {
                 self.diags.warn(
-                    "units-change",
+                    Code::UnitsChange,
                     ln,
                     1,
                     format!("unit changes to {u:?} in mid-program"),
@@ -478,74 +523,81 @@ impl GcodeReader {
         self.block(&lexed.toks, ln)
     }
 
-    fn block(&mut self, toks: &[(Tok, u32)], ln: u32) -> Result<(), ParseError> {
-        // Frame-changing blocks carry angles and offsets in their X/Y/Z words.
-        if let Some((Tok::Keyword(k), _)) = toks.iter().find(|(t, _)| matches!(t, Tok::Keyword(_)))
-        {
-            if matches!(
-                k.as_str(),
-                "ROT" | "AROT" | "TRANS" | "ATRANS" | "SCALE" | "ASCALE" | "MIRROR" | "AMIRROR"
-            ) {
-                let has_values = toks.len() > 1;
-                if has_values && k != "TRANS"
-                    || toks
-                        .iter()
-                        .any(|(t, _)| matches!(t, Tok::Word(_, v) if *v != 0.0))
-                {
-                    self.diags.warn(
-                        "frame-change",
-                        ln,
-                        1,
-                        format!("`{k}` changes the programmable frame; it is kept verbatim and not applied to positions"),
-                    );
-                }
-                self.passthrough(k, &block_text(toks), ln);
-                return Ok(());
+    fn passthrough(
+        &mut self,
+        word: &str,
+        text: &str,
+        class: PassClass,
+        modal: bool,
+        moves: bool,
+        ln: u32,
+    ) {
+        self.op.push_event(
+            ln,
+            EventKind::Passthrough(Passthrough {
+                word: word.to_string(),
+                text: text.to_string(),
+                class,
+                modal,
+                moves,
+            }),
+        );
+    }
+
+    /// Blocks that are frame changes or declarations as a whole.
+    fn whole_block(&mut self, toks: &[(Tok, u32)], ln: u32) -> Option<()> {
+        let Some((Tok::Keyword(k), _)) = toks.iter().find(|(t, _)| matches!(t, Tok::Keyword(_)))
+        else {
+            return None;
+        };
+        if matches!(
+            k.as_str(),
+            "ROT" | "AROT" | "TRANS" | "ATRANS" | "SCALE" | "ASCALE" | "MIRROR" | "AMIRROR"
+        ) {
+            // Frame-changing blocks carry angles and offsets in their X/Y/Z words.
+            let has_values = toks.len() > 1;
+            if has_values && k != "TRANS"
+                || toks
+                    .iter()
+                    .any(|(t, _)| matches!(t, Tok::Word(_, v) if *v != 0.0))
+            {
+                self.diags.warn(
+                    Code::FrameChange,
+                    ln,
+                    1,
+                    format!("`{k}` changes the programmable frame; it is kept verbatim and not applied to positions"),
+                );
             }
-            if k == "DEF" {
-                for (t, _) in toks {
-                    if let Tok::Assign(n, v) = t {
-                        if let Ok(x) = expr::eval(v, &self.vars) {
-                            self.vars.insert(n.clone(), x);
-                        }
-                    } else if let Tok::Keyword(n) = t {
-                        if !matches!(
-                            n.as_str(),
-                            "DEF" | "REAL" | "INT" | "BOOL" | "STRING" | "CHAR" | "AXIS" | "FRAME"
-                        ) {
-                            self.vars
-                                .entry(n.trim_end_matches(',').to_string())
-                                .or_insert(0.0);
-                        }
+            let k = k.clone();
+            self.passthrough(&k, &block_text(toks), PassClass::Machine, false, false, ln);
+            return Some(());
+        }
+        if k == "DEF" {
+            for (t, _) in toks {
+                if let Tok::Assign(n, v) = t {
+                    if let Ok(x) = expr::eval(v, &self.vars) {
+                        self.vars.insert(n.clone(), x);
+                    }
+                } else if let Tok::Keyword(n) = t {
+                    if !matches!(
+                        n.as_str(),
+                        "DEF" | "REAL" | "INT" | "BOOL" | "STRING" | "CHAR" | "AXIS" | "FRAME"
+                    ) {
+                        self.vars
+                            .entry(n.trim_end_matches(',').to_string())
+                            .or_insert(0.0);
                     }
                 }
-                self.passthrough("DEF", &block_text(toks), ln);
-                return Ok(());
             }
+            self.passthrough("DEF", &block_text(toks), PassClass::Info, false, false, ln);
+            return Some(());
         }
-        // SUPA / G53 / G28 / G30 blocks move in machine coordinates: kept verbatim.
-        let machine_coords = toks.iter().any(|(t, _)| match t {
-            Tok::Keyword(k) => k == "SUPA",
-            Tok::Word('G', g) => matches!(*g as i64, 53 | 28 | 30) && g.fract() == 0.0,
-            _ => false,
-        });
-        let mut xyz: [Option<f64>; 3] = [None; 3];
-        let mut ijk: [Option<f64>; 3] = [None; 3];
-        let mut vec3: [Option<f64>; 3] = [None; 3];
-        let mut rot: [Option<f64>; 3] = [None; 3];
-        let mut radius: Option<f64> = None;
-        let mut q: Option<f64> = None;
-        let mut p: Option<f64> = None;
-        let mut r_word: Option<f64> = None;
-        let mut motion_word = false;
-        let mut new_cycle: Option<String> = None;
-        let mut tool_change = false;
-        let mut spindle_event = false;
-        let mut keep: Vec<String> = Vec::new();
-        let mut dwell = false;
-        let mut cutcom = None;
-        let mut coolant = None;
-        let mut stop = None;
+        None
+    }
+
+    /// Sorts the tokens of a block into words; assignments and calls are
+    /// evaluated or kept here.
+    fn gather(&mut self, toks: &[(Tok, u32)], ln: u32, w: &mut Words) -> Result<(), ParseError> {
         for (tok, col) in toks {
             let col = *col;
             match tok {
@@ -553,211 +605,115 @@ impl GcodeReader {
                     let v = *v;
                     match letter {
                         'N' => {}
-                        'G' => {
-                            let code = (v * 10.0).round() as i64;
-                            match code {
-                                0 => {
-                                    self.motion = Motion::Rapid;
-                                    motion_word = true;
-                                }
-                                10 => {
-                                    self.motion = Motion::Linear;
-                                    motion_word = true;
-                                }
-                                20 => {
-                                    self.motion = Motion::Cw;
-                                    motion_word = true;
-                                }
-                                30 => {
-                                    self.motion = Motion::Ccw;
-                                    motion_word = true;
-                                }
-                                40 => dwell = true,
-                                170 => self.plane = Plane::Xy,
-                                180 => self.plane = Plane::Zx,
-                                190 => self.plane = Plane::Yz,
-                                200 | 700 | 7000 => self.set_unit(LengthUnit::Inch, ln),
-                                210 | 710 | 7100 => self.set_unit(LengthUnit::Mm, ln),
-                                900 => self.absolute = true,
-                                910 => self.absolute = false,
-                                930 => self.feed_mode = FeedMode::InverseTime,
-                                940 => self.feed_mode = FeedMode::PerMinute,
-                                950 => self.feed_mode = FeedMode::PerRev,
-                                400 => cutcom = Some(CutCom::Off),
-                                410 => cutcom = Some(CutCom::Left),
-                                420 => cutcom = Some(CutCom::Right),
-                                800 => {
-                                    self.cycle = None;
-                                    if self.motion == Motion::Cycle {
-                                        self.motion = Motion::Rapid;
-                                    }
-                                }
-                                730 | 740 | 760 | 810 | 820 | 830 | 840 | 850 | 860 | 870 | 880
-                                | 890 => {
-                                    new_cycle = Some(format!("G{}", code / 10));
-                                    motion_word = true;
-                                }
-                                980 => self.return_initial = true,
-                                990 => self.return_initial = false,
-                                435 => {
-                                    self.tcp_vectors = true;
-                                    keep.push(fmt_word('G', v));
-                                }
-                                434 | 491 => {
-                                    self.tcp_vectors = false;
-                                    keep.push(fmt_word('G', v));
-                                }
-                                530 | 280 | 300 => keep.push(fmt_word('G', v)),
-                                _ => {
-                                    // Modal codes every control has (offsets, path modes, planes
-                                    // for TCP); kept verbatim without a note.
-                                    const KNOWN: &[i64] = &[
-                                        50, 51, 90, 150, 160, 430, 431, 490, 531, 610, 611, 640,
-                                        641, 642, 680, 682, 690, 600, 6010, 6020, 6420, 6450, 1530,
-                                        5000, 1000,
-                                    ];
-                                    if !(KNOWN.contains(&code)
-                                        || (540..=599).contains(&code)
-                                        || (5050..=5990).contains(&code))
-                                    {
-                                        self.diags.note(
-                                            "unknown-word",
-                                            ln,
-                                            col,
-                                            format!("G{} kept verbatim", fmt_num(v)),
-                                        );
-                                    }
-                                    keep.push(fmt_word('G', v));
-                                }
-                            }
-                        }
-                        'X' | 'Y' | 'Z' => xyz[axis_index(*letter)] = Some(v),
-                        'I' | 'J' | 'K' => ijk[axis_index(*letter)] = Some(v),
-                        'A' | 'B' | 'C' => rot[(*letter as u8 - b'A') as usize] = Some(v),
-                        'F' => {
-                            if v <= 0.0 && self.feed_mode != FeedMode::InverseTime {
-                                return Err(ParseError::new(
-                                    ln,
-                                    col,
-                                    format!("feed F{} is not positive", fmt_num(v)),
-                                ));
-                            }
-                            self.feed = match self.feed_mode {
-                                FeedMode::InverseTime => v,
-                                _ => v * self.scale,
-                            };
-                            self.feed_seen = v > 0.0;
-                        }
+                        'G' => w.g.push(((v * 10.0).round() as i64, v, col)),
+                        'X' | 'Y' | 'Z' => w.xyz[axis_index(*letter)] = Some(v),
+                        'I' | 'J' | 'K' => w.ijk[axis_index(*letter)] = Some(v),
+                        'A' | 'B' | 'C' => w.rot[(*letter as u8 - b'A') as usize] = Some(v),
+                        'F' => self.feed_word(v, ln, col)?,
                         'S' => {
                             if v < 0.0 {
                                 return Err(ParseError::new(ln, col, "negative spindle speed"));
                             }
                             self.spindle = v;
-                            spindle_event = true;
                         }
                         'T' => {
                             if v < 0.0 || v.fract() != 0.0 {
                                 // `T9.` pre-selects tool 9; `T1.5` is not a tool number.
-                                if v.fract() != 0.0 {
-                                    return Err(ParseError::new(
-                                        ln,
-                                        col,
-                                        format!("tool number T{} is not whole", fmt_num(v)),
-                                    ));
-                                }
+                                return Err(ParseError::new(
+                                    ln,
+                                    col,
+                                    format!("tool number T{} is not whole", fmt_num(v)),
+                                ));
                             }
                             self.selected_tool = Some((Some(v as u32), None, ln));
+                            self.select_event(EventKind::ToolSelect(v as u32), ln);
                         }
-                        'M' => {
-                            let m = v as i64;
-                            match (m, v.fract() == 0.0) {
-                                (3, true) => {
-                                    self.spindle_dir = SpindleDir::Cw;
-                                    spindle_event = true;
-                                }
-                                (4, true) => {
-                                    self.spindle_dir = SpindleDir::Ccw;
-                                    spindle_event = true;
-                                }
-                                (5, true) => {
-                                    self.spindle_dir = SpindleDir::Off;
-                                    spindle_event = true;
-                                }
-                                (6, true) => tool_change = true,
-                                (7, true) => coolant = Some(Coolant::Mist),
-                                (8, true) => coolant = Some(Coolant::Flood),
-                                (9, true) => coolant = Some(Coolant::Off),
-                                (0, true) => stop = Some(false),
-                                (1, true) => stop = Some(true),
-                                (2, true) | (30, true) | (17, true) => {}
-                                _ => keep.push(fmt_word('M', v)),
-                            }
+                        'M' => w.m.push(v),
+                        'R' => w.r = Some(v),
+                        'Q' => w.q = Some(v),
+                        'P' => w.p = Some(v),
+                        'H' => w.h = Some(v),
+                        'D' => w.d = Some(v),
+                        'L' => w.l = Some(v),
+                        'U' => w.u = Some(v),
+                        'V' | 'W' | 'E' | 'O' => {
+                            w.keep.push(fmt_word(*letter, v));
+                            w.keep_machine = true;
                         }
-                        'R' => r_word = Some(v),
-                        'Q' => q = Some(v),
-                        'P' => p = Some(v),
-                        'U' | 'V' | 'W' => {
-                            if dwell && *letter == 'U' {
-                                p = Some(v * 1000.0);
-                            } else {
-                                keep.push(fmt_word(*letter, v));
-                            }
-                        }
-                        'H' | 'D' | 'E' | 'L' | 'O' => keep.push(fmt_word(*letter, v)),
                         _ => {
                             self.diags.warn(
-                                "unknown-word",
+                                Code::UnknownWord,
                                 ln,
                                 col,
                                 format!("word `{}` kept verbatim", fmt_word(*letter, v)),
                             );
-                            keep.push(fmt_word(*letter, v));
+                            w.keep.push(fmt_word(*letter, v));
+                            w.keep_machine = true;
                         }
                     }
                 }
                 Tok::Assign(name, val) => match name.as_str() {
                     "X" | "Y" | "Z" => {
-                        xyz[axis_index(name.chars().next().unwrap_or('X'))] =
+                        w.xyz[axis_index(name.chars().next().unwrap_or('X'))] =
                             Some(self.value(val, ln, col)?)
                     }
                     "I" | "J" | "K" => {
-                        ijk[axis_index(name.chars().next().unwrap_or('I'))] =
+                        w.ijk[axis_index(name.chars().next().unwrap_or('I'))] =
                             Some(self.value(val, ln, col)?)
                     }
                     "A" | "B" | "C" => {
-                        rot[(name.as_bytes()[0] - b'A') as usize] = Some(self.value(val, ln, col)?);
+                        w.rot[(name.as_bytes()[0] - b'A') as usize] =
+                            Some(self.value(val, ln, col)?);
                     }
                     "A3" | "B3" | "C3" => {
-                        vec3[(name.as_bytes()[0] - b'A') as usize] = Some(self.value(val, ln, col)?)
+                        w.vec3[(name.as_bytes()[0] - b'A') as usize] =
+                            Some(self.value(val, ln, col)?)
                     }
-                    "CR" => radius = Some(self.value(val, ln, col)?),
+                    "CR" => w.cr = Some(self.value(val, ln, col)?),
                     "F" => {
                         let v = self.value(val, ln, col)?;
-                        self.feed = v * self.scale;
-                        self.feed_seen = v > 0.0;
+                        self.feed_word(v, ln, col)?;
                     }
                     "S" => {
-                        self.spindle = self.value(val, ln, col)?;
-                        spindle_event = true;
+                        let v = self.value(val, ln, col)?;
+                        if v < 0.0 {
+                            return Err(ParseError::new(ln, col, "negative spindle speed"));
+                        }
+                        self.spindle = v;
                     }
                     "T" => {
                         self.selected_tool =
                             Some((val.trim().parse::<u32>().ok(), Some(val.clone()), ln));
+                        let e = match val.trim().parse::<u32>() {
+                            Ok(n) => EventKind::ToolSelect(n),
+                            Err(_) => EventKind::Passthrough(Passthrough {
+                                word: "T".into(),
+                                text: format!("T=\"{val}\""),
+                                class: PassClass::Machine,
+                                modal: false,
+                                moves: false,
+                            }),
+                        };
+                        self.select_event(e, ln);
                     }
                     _ => {
-                        // Variable assignment (`_camtolerance=.02`, `R1=5`).
+                        // Variable assignment (`_camtolerance=.02`, `R1=5`): the
+                        // reader substitutes its value where it is used.
                         match expr::eval(val, &self.vars) {
                             Ok(x) => {
                                 self.vars.insert(name.clone(), x);
                             }
-                            Err(_) => self.diags.note(
-                                "unknown-word",
-                                ln,
-                                col,
-                                format!("assignment `{name}={val}` kept verbatim"),
-                            ),
+                            Err(_) => {
+                                self.diags.note(
+                                    Code::UnknownWord,
+                                    ln,
+                                    col,
+                                    format!("assignment `{name}={val}` kept verbatim"),
+                                );
+                                w.keep_machine = true;
+                            }
                         }
-                        keep.push(format!("{name}={val}"));
+                        w.keep.push(format!("{name}={val}"));
                     }
                 },
                 Tok::Call(name, args) => {
@@ -770,7 +726,7 @@ impl GcodeReader {
                             "CYCLE800" | "CYCLE832" | "CYCLE832_" | "G642" | "G645"
                         ) {
                             self.diags.warn(
-                                "unknown-word",
+                                Code::UnknownWord,
                                 ln,
                                 col,
                                 format!(
@@ -778,133 +734,487 @@ impl GcodeReader {
                                 ),
                             );
                         }
-                        keep.push(format!("{name}({args})"));
+                        w.keep.push(format!("{name}({args})"));
+                        w.keep_machine = true;
                     }
                 }
-                Tok::Keyword(k) => {
-                    if !KNOWN_KEYWORDS.contains(&k.as_str()) {
-                        self.diags
-                            .warn("unknown-word", ln, col, format!("`{k}` kept verbatim"));
+                Tok::Keyword(k) => match k.as_str() {
+                    "TRAORI" => self.tcp_event(true, ln),
+                    "TRAFOOF" => self.tcp_event(false, ln),
+                    _ => {
+                        if !KNOWN_KEYWORDS.contains(&k.as_str()) {
+                            self.diags.warn(
+                                Code::UnknownWord,
+                                ln,
+                                col,
+                                format!("`{k}` kept verbatim"),
+                            );
+                        }
+                        w.keep.push(k.clone());
+                        w.keep_machine = true;
                     }
-                    keep.push(k.clone());
+                },
+            }
+        }
+        Ok(())
+    }
+
+    fn feed_word(&mut self, v: f64, ln: u32, col: u32) -> Result<(), ParseError> {
+        if !(v > 0.0) {
+            return Err(ParseError::new(
+                ln,
+                col,
+                format!("feed F{} is not positive", fmt_num(v)),
+            ));
+        }
+        self.feed = match self.feed_mode {
+            FeedMode::InverseTime => v,
+            _ => v * self.scale,
+        };
+        self.feed_seen = true;
+        Ok(())
+    }
+
+    /// A tool selection; an M6 before the next move takes it in.
+    fn select_event(&mut self, e: EventKind, ln: u32) {
+        self.op.push_event(ln, e);
+        self.pending_select = Some((self.op.events.len() - 1, self.op.moves.len()));
+    }
+
+    fn tcp_event(&mut self, on: bool, ln: u32) {
+        self.tcp = on;
+        self.op.push_event(ln, EventKind::Tcp(on));
+    }
+
+    fn block(&mut self, toks: &[(Tok, u32)], ln: u32) -> Result<(), ParseError> {
+        if self.whole_block(toks, ln).is_some() {
+            return Ok(());
+        }
+        let mut w = Words::default();
+        self.gather(toks, ln, &mut w)?;
+        let mut motion_word = false;
+        let mut new_cycle: Option<String> = None;
+        let mut dwell = false;
+        // SUPA: this block in machine coordinates.
+        let mut machine: Option<u32> = toks
+            .iter()
+            .find(|(t, _)| matches!(t, Tok::Keyword(k) if k == "SUPA"))
+            .map(|(_, c)| *c);
+        let mut cutcom = None;
+        let mut tlc: Option<(i64, u32)> = None;
+        let mut offset: Option<WorkOffset> = None;
+        for &(code, v, col) in &w.g {
+            match code {
+                0 => {
+                    self.motion = Motion::Rapid;
+                    motion_word = true;
+                }
+                10 => {
+                    self.motion = Motion::Linear;
+                    motion_word = true;
+                }
+                20 => {
+                    self.motion = Motion::Cw;
+                    motion_word = true;
+                }
+                30 => {
+                    self.motion = Motion::Ccw;
+                    motion_word = true;
+                }
+                40 => dwell = true,
+                170 => self.plane = Plane::Xy,
+                180 => self.plane = Plane::Zx,
+                190 => self.plane = Plane::Yz,
+                200 | 700 | 7000 => self.set_unit(LengthUnit::Inch, ln),
+                210 | 710 | 7100 => self.set_unit(LengthUnit::Mm, ln),
+                900 => self.absolute = true,
+                910 => self.absolute = false,
+                930 => self.feed_mode = FeedMode::InverseTime,
+                940 => self.feed_mode = FeedMode::PerMinute,
+                950 => self.feed_mode = FeedMode::PerRev,
+                400 => cutcom = Some(CutCom::Off),
+                410 => cutcom = Some(CutCom::Left),
+                420 => cutcom = Some(CutCom::Right),
+                430 | 434 | 435 | 490 => tlc = Some((code, col)),
+                800 => {
+                    self.cycle = None;
+                    if self.motion == Motion::Cycle {
+                        self.motion = Motion::Rapid;
+                    }
+                }
+                730 | 740 | 760 | 810 | 820 | 830 | 840 | 850 | 860 | 870 | 880 | 890 => {
+                    new_cycle = Some(format!("G{}", code / 10));
+                    motion_word = true;
+                }
+                980 => self.return_initial = true,
+                990 => self.return_initial = false,
+                530 | 280 | 300 => machine = Some(col),
+                540..=590 if code % 10 == 0 && !(self.sinumerik() && code > 570) => {
+                    offset = Some(WorkOffset((code / 10 - 53) as u16))
+                }
+                541 if w.p.is_some_and(|p| p >= 1.0 && p.fract() == 0.0) => {
+                    offset = Some(WorkOffset(6 + w.p.take().unwrap_or(1.0) as u16));
+                }
+                5000 if self.sinumerik() => offset = Some(WorkOffset(0)),
+                5050..=5990 if self.sinumerik() && code % 10 == 0 => {
+                    offset = Some(WorkOffset((code / 10 - 500) as u16))
+                }
+                591..=593 if self.dialect == Dialect::LinuxCnc => {
+                    offset = Some(WorkOffset((code - 584) as u16))
+                }
+                _ => {
+                    // Modal codes every control has (offsets, path modes, planes
+                    // for TCP); kept verbatim without a note.
+                    const KNOWN: &[i64] = &[
+                        50, 51, 90, 150, 160, 431, 531, 541, 610, 611, 640, 641, 642, 680, 682,
+                        690, 600, 6010, 6020, 6420, 6450, 1530, 5000, 1000, 580, 590,
+                    ];
+                    if !(KNOWN.contains(&code) || (5050..=5990).contains(&code)) {
+                        self.diags.note(
+                            Code::UnknownWord,
+                            ln,
+                            col,
+                            format!("G{} kept verbatim", fmt_num(v)),
+                        );
+                    }
+                    w.keep.push(fmt_word('G', v));
+                    w.keep_modal |= is_modal_g(code);
+                    w.keep_machine = true;
                 }
             }
         }
-        if let Some(c) = cutcom {
-            self.op.push_event(ln, EventKind::CutCom(c));
+        if let Some(m) = machine {
+            return self.machine_block(toks, &w, ln, m);
+        }
+        // Tool length: G43 Hn, G43.4/G43.5 Hn (with TCP), G49; Sinumerik D.
+        if let Some((code, col)) = tlc {
+            let register = match w.h.take() {
+                Some(h) if h >= 0.0 && h.fract() == 0.0 => Some(h as u32),
+                Some(h) => {
+                    return Err(ParseError::new(
+                        ln,
+                        col,
+                        format!("H{} is not a register number", fmt_num(h)),
+                    ))
+                }
+                None => None,
+            };
+            match code {
+                490 => {
+                    if self.tcp {
+                        self.tcp_event(false, ln);
+                    }
+                    self.op
+                        .push_event(ln, EventKind::ToolLength(ToolLength::Off));
+                    self.tcp_vectors = false;
+                }
+                _ => {
+                    if code != 430 && !self.tcp {
+                        self.tcp_event(true, ln);
+                    }
+                    if code == 430 && self.tcp {
+                        self.tcp_event(false, ln);
+                    }
+                    self.tcp_vectors = code == 435;
+                    self.op
+                        .push_event(ln, EventKind::ToolLength(ToolLength::On { register }));
+                }
+            }
+        }
+        let d_register = |d: f64| (d >= 0.0 && d.fract() == 0.0).then_some(d as u32);
+        if self.sinumerik() {
+            if let Some(d) = w.d.take() {
+                let t = match d_register(d) {
+                    Some(0) => ToolLength::Off,
+                    Some(n) => ToolLength::On { register: Some(n) },
+                    None => {
+                        return Err(ParseError::new(
+                            ln,
+                            1,
+                            format!("D{} is not a register", fmt_num(d)),
+                        ))
+                    }
+                };
+                self.op.push_event(ln, EventKind::ToolLength(t));
+            }
+        }
+        if let Some(side) = cutcom {
+            let register = match side {
+                CutCom::Off => None,
+                _ => w.d.take().and_then(d_register),
+            };
+            self.op.push_event(ln, EventKind::CutCom { side, register });
+        }
+        if let Some(o) = offset {
+            self.op.push_event(ln, EventKind::WorkOffset(o));
+        }
+        let mut tool_change = false;
+        for &v in &w.m {
+            let e = match (v as i64, v.fract() == 0.0) {
+                (3, true) => {
+                    self.spindle_dir = SpindleDir::Cw;
+                    Some(EventKind::Spindle(SpindleDir::Cw))
+                }
+                (4, true) => {
+                    self.spindle_dir = SpindleDir::Ccw;
+                    Some(EventKind::Spindle(SpindleDir::Ccw))
+                }
+                (5, true) => {
+                    self.spindle_dir = SpindleDir::Off;
+                    Some(EventKind::Spindle(SpindleDir::Off))
+                }
+                (6, true) => {
+                    tool_change = true;
+                    None
+                }
+                (7, true) => Some(EventKind::Coolant(Coolant::Mist)),
+                (8, true) => Some(EventKind::Coolant(Coolant::Flood)),
+                (9, true) => Some(EventKind::Coolant(Coolant::Off)),
+                (0, true) => Some(EventKind::Stop { optional: false }),
+                (1, true) => Some(EventKind::Stop { optional: true }),
+                // Program ends: the writer ends its own program.
+                (2, true) | (30, true) | (17, true) => None,
+                _ => {
+                    w.keep.push(fmt_word('M', v));
+                    w.keep_machine = true;
+                    None
+                }
+            };
+            if let Some(e) = e {
+                self.op.push_event(ln, e);
+            }
         }
         if tool_change {
             self.tool_change(ln);
         }
-        if spindle_event {
-            let rpm = if self.spindle_dir == SpindleDir::Off {
-                0.0
-            } else {
-                self.spindle
-            };
-            self.op.push_event(
-                ln,
-                EventKind::Spindle {
-                    rpm,
-                    dir: self.spindle_dir,
-                },
-            );
-        }
-        if let Some(c) = coolant {
-            self.op.push_event(ln, EventKind::Coolant(c));
-        }
-        if let Some(optional) = stop {
-            self.op.push_event(ln, EventKind::Stop { optional });
-        }
         if dwell {
-            // Fanuc P is milliseconds; X/U seconds.
-            let secs = p.map(|ms| ms / 1000.0).or(xyz[0]).unwrap_or(0.0);
+            // Fanuc P is milliseconds; X/U seconds (Sinumerik F, seconds).
+            let secs =
+                w.p.take()
+                    .map(|ms| ms / 1000.0)
+                    .or(w.xyz[0].take())
+                    .or(w.u.take())
+                    .unwrap_or(0.0);
             self.op.push_event(ln, EventKind::Dwell(secs));
-            if !keep.is_empty() {
-                let text = keep.join(" ");
-                self.passthrough(&keep[0], &text, ln);
-            }
-            return Ok(());
-        }
-        if machine_coords {
-            let text = block_text(toks);
-            self.passthrough("SUPA", &text, ln);
-            return Ok(());
-        }
-        if !keep.is_empty() {
-            let text = keep.join(" ");
-            self.passthrough(&keep[0].clone(), &text, ln);
         }
         if let Some(name) = new_cycle {
             self.motion = Motion::Cycle;
-            let initial_z = self.pos.z;
             self.cycle = Some(CycleState {
                 name,
                 r: f64::NAN,
                 z: f64::NAN,
                 q: None,
                 p: None,
-                initial_z,
+                initial_z: self.pos.z,
                 return_initial: self.return_initial,
                 index: None,
             });
         }
-        let has_xyz = xyz.iter().any(Option::is_some);
-        let has_rot = rot.iter().any(Option::is_some);
-        let has_vec = vec3.iter().any(Option::is_some);
-        if self.motion == Motion::Cycle {
+        let in_cycle = self.motion == Motion::Cycle && !dwell;
+        let arc = matches!(self.motion, Motion::Cw | Motion::Ccw) && !dwell;
+        if in_cycle {
             if let Some(cs) = &mut self.cycle {
                 let s = self.scale;
-                if let Some(r) = r_word {
+                if let Some(r) = w.r.take() {
                     cs.r = r * s;
                     cs.index = None;
                 }
-                if let Some(z) = xyz[2] {
+                if let Some(z) = w.xyz[2] {
                     cs.z = z * s;
                     cs.index = None;
                 }
-                if let Some(qv) = q {
+                if let Some(qv) = w.q.take() {
                     cs.q = Some(qv * s);
                     cs.index = None;
                 }
-                if let Some(pv) = p {
+                if let Some(pv) = w.p.take() {
                     cs.p = Some(pv / 1000.0);
                     cs.index = None;
                 }
             }
+            if w.ijk[2].is_some() || w.l.is_some() {
+                return Err(ParseError::new(
+                    ln,
+                    1,
+                    "canned-cycle repeat counts (K, L) are not supported",
+                ));
+            }
+        }
+        // Whatever no model took is kept verbatim.
+        for (letter, v) in [
+            ('R', w.r),
+            ('Q', w.q),
+            ('P', w.p),
+            ('H', w.h),
+            ('D', w.d),
+            ('L', w.l),
+            ('U', w.u),
+        ] {
+            if let Some(v) = v {
+                if !(letter == 'R' && arc) {
+                    w.keep.push(fmt_word(letter, v));
+                    w.keep_machine = true;
+                }
+            }
+        }
+        if !w.keep.is_empty() {
+            let text = w.keep.join(" ");
+            let word = w.keep[0].clone();
+            let modal = w.keep_modal;
+            let class = if w.keep_machine {
+                PassClass::Machine
+            } else {
+                PassClass::Info
+            };
+            self.passthrough(&word, &text, class, modal, false, ln);
+        }
+        if dwell {
+            return Ok(());
+        }
+        let has_xyz = w.xyz.iter().any(Option::is_some);
+        if in_cycle {
             if !has_xyz && !motion_word {
                 return Ok(());
             }
-            return self.cycle_point(xyz, ln);
+            return self.cycle_point(w.xyz, ln);
         }
+        let has_rot = w.rot.iter().any(Option::is_some);
+        let has_vec = w.vec3.iter().any(Option::is_some);
         if !(has_xyz || has_rot || has_vec) {
-            if motion_word && (ijk.iter().any(Option::is_some) || radius.is_some()) {
+            if motion_word && (w.ijk.iter().any(Option::is_some) || w.cr.is_some() || w.r.is_some())
+            {
                 return Err(ParseError::new(ln, 1, "arc without an end point"));
             }
             return Ok(());
         }
+        self.motion_words(w, ln)
+    }
+
+    /// A block in machine coordinates or to a reference point (G28, G30, G53,
+    /// SUPA): kept verbatim; the axes it names are unknown afterwards.
+    fn machine_block(
+        &mut self,
+        toks: &[(Tok, u32)],
+        w: &Words,
+        ln: u32,
+        _col: u32,
+    ) -> Result<(), ParseError> {
+        // Its spindle, coolant and tool words are events of the same block.
+        for &v in &w.m {
+            let e = match v as i64 {
+                3 => Some(EventKind::Spindle(SpindleDir::Cw)),
+                4 => Some(EventKind::Spindle(SpindleDir::Ccw)),
+                5 => Some(EventKind::Spindle(SpindleDir::Off)),
+                8 => Some(EventKind::Coolant(Coolant::Flood)),
+                9 => Some(EventKind::Coolant(Coolant::Off)),
+                _ => None,
+            };
+            if let Some(EventKind::Spindle(d)) = e {
+                self.spindle_dir = d;
+            }
+            if let Some(e) = e {
+                self.op.push_event(ln, e);
+            }
+        }
+        if self.sinumerik() {
+            if let Some(d) = w.d {
+                let t = if d == 0.0 {
+                    ToolLength::Off
+                } else {
+                    ToolLength::On {
+                        register: Some(d as u32),
+                    }
+                };
+                self.op.push_event(ln, EventKind::ToolLength(t));
+            }
+        }
+        let text: Vec<String> = toks
+            .iter()
+            .filter(|(t, _)| match t {
+                Tok::Word(c, v) => {
+                    let event = matches!(c, 'N' | 'S' | 'T' | 'F')
+                        || *c == 'M' && matches!(*v as i64, 3 | 4 | 5 | 8 | 9)
+                        || *c == 'D' && self.sinumerik();
+                    !event
+                }
+                Tok::Assign(n, _) => !matches!(n.as_str(), "S" | "T" | "F"),
+                _ => true,
+            })
+            .map(|(t, _)| tok_text(t))
+            .collect();
+        for (k, v) in w.xyz.iter().enumerate() {
+            if v.is_some() {
+                self.pos[k] = f64::NAN;
+            }
+        }
+        for (k, v) in w.rot.iter().enumerate() {
+            if v.is_some() {
+                self.rotary[k] = None;
+            }
+        }
+        let word = if toks
+            .iter()
+            .any(|(t, _)| matches!(t, Tok::Keyword(k) if k == "SUPA"))
+        {
+            "SUPA".to_string()
+        } else {
+            w.g.iter()
+                .find(|g| matches!(g.0, 280 | 300 | 530))
+                .map(|g| fmt_word('G', g.1))
+                .unwrap_or_default()
+        };
+        let modal = w.g.iter().any(|g| is_modal_g(g.0));
+        self.passthrough(&word, &text.join(" "), PassClass::Machine, modal, true, ln);
+        Ok(())
+    }
+
+    /// The move of a block with axis words.
+    fn motion_words(&mut self, w: Words, ln: u32) -> Result<(), ParseError> {
+        // An incremental step from an axis the program has not set cannot be
+        // an absolute position: the block is kept as written (with its G91),
+        // and its axes stay unknown.
+        if !self.absolute {
+            let blind = (0..3).any(|k| w.xyz[k].is_some_and(|v| v != 0.0) && self.pos[k].is_nan())
+                || (0..3).any(|k| w.rot[k].is_some_and(|v| v != 0.0) && self.rotary[k].is_none());
+            if blind {
+                return self.blind_increment(&w, ln);
+            }
+        }
         self.motion_blocks += 1;
         let start = self.pos;
         let mut end = self.pos;
+        let mut moved = false;
         for k in 0..3 {
-            if let Some(v) = xyz[k] {
+            if let Some(v) = w.xyz[k] {
                 let v = v * self.scale;
-                end[k] = if self.absolute { v } else { end[k] + v };
-                self.pos_known[k] = true;
-            }
-        }
-        if has_rot {
-            for (slot, r) in self.rotary.iter_mut().zip(rot) {
-                if let Some(v) = r {
-                    let v = v.to_radians();
-                    *slot = Some(if self.absolute {
-                        v
-                    } else {
-                        slot.unwrap_or(0.0) + v
-                    });
+                if self.absolute {
+                    end[k] = v;
+                    moved = true;
+                } else if !end[k].is_nan() {
+                    end[k] += v;
+                    moved = true;
+                } else {
+                    self.zero_increment(["X", "Y", "Z"][k], ln);
                 }
             }
         }
+        let mut rotary = self.rotary;
+        for (k, r) in w.rot.iter().enumerate() {
+            if let Some(v) = r {
+                let v = v.to_radians();
+                if self.absolute {
+                    rotary[k] = Some(v);
+                    moved = true;
+                } else if let Some(old) = rotary[k] {
+                    rotary[k] = Some(old + v);
+                    moved = true;
+                } else {
+                    self.zero_increment(["A", "B", "C"][k], ln);
+                }
+            }
+        }
+        let mut ijk = w.ijk;
+        let mut vec3 = w.vec3;
         if self.tcp_vectors
             && matches!(self.motion, Motion::Rapid | Motion::Linear)
             && ijk.iter().any(Option::is_some)
@@ -923,14 +1233,14 @@ impl GcodeReader {
                 .try_normalize()
                 .ok_or_else(|| ParseError::new(ln, 1, "tool vector has zero length"))?;
             self.vector = Some(v);
+            moved = true;
         }
-        let orient = if let Some(v) = self.vector {
-            self.op.intern_orient(Orient::Vector(v))
-        } else if self.rotary.iter().any(Option::is_some) {
-            self.op.intern_orient(Orient::Rotary(self.rotary))
-        } else {
-            NO_ORIENT
-        };
+        if !moved {
+            // Only zero increments on unknown axes: nothing moves.
+            return Ok(());
+        }
+        self.rotary = rotary;
+        let orient = self.current_orient();
         let mut m = Move {
             end,
             feed: self.feed,
@@ -941,7 +1251,6 @@ impl GcodeReader {
             },
             line: ln,
             orient,
-            aux: 0,
             kind: MoveKind::Linear,
             feed_mode: self.feed_mode,
         };
@@ -952,14 +1261,83 @@ impl GcodeReader {
             }
             Motion::Linear => {}
             Motion::Cw | Motion::Ccw => {
-                let arc = self.arc(start, end, ijk, radius.or(r_word), ln)?;
-                m.kind = MoveKind::Arc;
-                m.aux = self.op.arcs.len() as u32;
-                self.op.arcs.push(arc);
+                let (Some(s), Some(e)) = (known(start), known(end)) else {
+                    return Err(ParseError::new(
+                        ln,
+                        1,
+                        "arc from or to a position the program has not set (an axis is unknown)",
+                    ));
+                };
+                let arc = self.arc(s, e, ijk, w.cr.or(w.r), ln)?;
+                m.kind = MoveKind::Arc(self.op.push_arc(arc));
             }
-            Motion::Cycle => unreachable!("handled above"),
+            Motion::Cycle => unreachable!("handled by the caller"),
         }
         self.push_move(m, ln);
+        Ok(())
+    }
+
+    /// The tool orientation in effect: the last tool vector, else the rotary axes.
+    fn current_orient(&mut self) -> Option<OrientId> {
+        if let Some(v) = self.vector {
+            Some(self.op.intern_orient(Orient::vector(v)))
+        } else if self.rotary.iter().any(Option::is_some) {
+            Some(self.op.intern_orient(Orient::angles(self.rotary)))
+        } else {
+            None
+        }
+    }
+
+    fn zero_increment(&mut self, axis: &str, ln: u32) {
+        self.diags.note(
+            Code::ZeroIncrement,
+            ln,
+            1,
+            format!("incremental {axis}0 from an unknown {axis} position: no motion"),
+        );
+    }
+
+    /// A G91 block that steps an axis whose position is unknown: kept verbatim
+    /// with its distance mode; the axes it steps stay unknown.
+    fn blind_increment(&mut self, w: &Words, ln: u32) -> Result<(), ParseError> {
+        let g = match self.motion {
+            Motion::Rapid => "G0",
+            Motion::Linear => "G1",
+            _ => {
+                return Err(ParseError::new(
+                    ln,
+                    1,
+                    "incremental arc from a position the program has not set",
+                ))
+            }
+        };
+        let mut text = vec!["G91".to_string(), g.to_string()];
+        for (k, v) in w.xyz.iter().enumerate() {
+            if let Some(v) = v {
+                text.push(fmt_word(['X', 'Y', 'Z'][k], *v));
+                self.pos[k] += v * self.scale;
+            }
+        }
+        for (k, v) in w.rot.iter().enumerate() {
+            if let Some(v) = v {
+                text.push(fmt_word(['A', 'B', 'C'][k], *v));
+                self.rotary[k] = self.rotary[k].map(|a| a + v.to_radians());
+            }
+        }
+        if g == "G1" {
+            let f = match self.feed_mode {
+                FeedMode::InverseTime => self.feed,
+                _ => self.feed / self.scale,
+            };
+            text.push(fmt_word('F', f));
+        }
+        self.diags.note(
+            Code::ZeroIncrement,
+            ln,
+            1,
+            "incremental step from an axis position the program has not set: kept verbatim, the axis stays unknown",
+        );
+        self.passthrough(g, &text.join(" "), PassClass::Machine, true, true, ln);
         Ok(())
     }
 
@@ -1028,7 +1406,7 @@ impl GcodeReader {
         };
         if (r_end - arc.radius).abs() > crate::verify::ARC_TOL + 1e-4 * arc.radius {
             self.diags.warn(
-                "arc-radius",
+                Code::ArcRadius,
                 ln,
                 1,
                 format!(
@@ -1061,6 +1439,23 @@ impl GcodeReader {
         let s = self.scale;
         let x = xyz[0].map(|v| v * s).unwrap_or(self.pos.x);
         let y = xyz[1].map(|v| v * s).unwrap_or(self.pos.y);
+        if x.is_nan() || y.is_nan() {
+            return Err(ParseError::new(
+                ln,
+                1,
+                "hole position with an X or Y the program has not set",
+            ));
+        }
+        if cs.return_initial && cs.initial_z.is_nan() {
+            return Err(ParseError::new(
+                ln,
+                1,
+                format!(
+                    "{} returns to its initial Z (G98), which the program has not set",
+                    cs.name
+                ),
+            ));
+        }
         let idx = match cs.index {
             Some(i) => i,
             None => {
@@ -1081,14 +1476,19 @@ impl GcodeReader {
                     retract: retract.max(0.0),
                     feed,
                     peck: cs.q,
+                    peck_next: None,
                     dwell: cs.p,
                     line: ln,
                 };
-                self.op.cycles.push(cy);
-                let i = (self.op.cycles.len() - 1) as u32;
-                cs.index = Some(i);
+                let i = self.op.push_cycle(cy);
+                if let Some(cs) = &mut self.cycle {
+                    cs.index = Some(i);
+                }
                 i
             }
+        };
+        let Some(cs) = &self.cycle else {
+            return Ok(());
         };
         let end = DVec3::new(x, y, cs.r);
         let top = if cs.return_initial {
@@ -1097,14 +1497,18 @@ impl GcodeReader {
             cs.r
         };
         self.motion_blocks += 1;
+        let orient = self.current_orient();
         let m = Move {
             end,
             feed: 0.0,
-            spindle: self.spindle,
+            spindle: if self.spindle_dir == SpindleDir::Off {
+                0.0
+            } else {
+                self.spindle
+            },
             line: ln,
-            orient: NO_ORIENT,
-            aux: idx,
-            kind: MoveKind::Cycle,
+            orient,
+            kind: MoveKind::Cycle(idx),
             feed_mode: FeedMode::PerMinute,
         };
         self.push_move(m, ln);
@@ -1120,7 +1524,7 @@ impl GcodeReader {
             if !self.feed_missing_reported {
                 self.feed_missing_reported = true;
                 self.diags.warn(
-                    "feed-missing",
+                    Code::FeedMissing,
                     ln,
                     1,
                     format!(
@@ -1139,15 +1543,14 @@ impl GcodeReader {
                 line: tl,
             });
             self.diags.warn(
-                "tool-missing",
+                Code::ToolMissing,
                 ln,
                 1,
                 "cutting move before any tool change (M6): tool unknown",
             );
         }
-        if self.op.moves.is_empty() && self.op.start.is_none() && self.pos_known.iter().all(|k| *k)
-        {
-            self.op.start = Some(self.pos);
+        if self.op.moves.is_empty() {
+            self.op.start = self.pos;
         }
         if self.op.moves.capacity() == 0 && self.opts.expect_moves > 0 {
             // Room may be refused for a wild guess; the moves then grow as usual.
@@ -1158,17 +1561,25 @@ impl GcodeReader {
         }
         self.op.moves.push(m);
         self.pos = m.end;
-        self.pos_known = [true; 3];
+        self.pending_select = None;
     }
 
     fn tool_change(&mut self, ln: u32) {
+        // A selection right before the change is the tool it takes in.
+        if let Some((ev, moves)) = self.pending_select.take() {
+            if moves == self.op.moves.len() && ev < self.op.events.len() {
+                self.op.events.remove(ev);
+            }
+        }
         let (number, name, tl) = self.selected_tool.clone().unwrap_or((None, None, ln));
         if !self.op.moves.is_empty() {
             let prev = std::mem::take(&mut self.op);
-            self.op.start = prev.moves.last().map(|m| m.end);
             self.ops.push(prev);
             self.cycle = None;
         }
+        // The change may move every linear axis.
+        self.pos = UNKNOWN;
+        self.op.start = UNKNOWN;
         self.op.tool = Some(Tool {
             number,
             name: name.clone(),
@@ -1178,16 +1589,6 @@ impl GcodeReader {
         if let Some(n) = name {
             self.op.name.get_or_insert(n);
         }
-    }
-
-    fn passthrough(&mut self, word: &str, text: &str, ln: u32) {
-        self.op.push_event(
-            ln,
-            EventKind::Passthrough {
-                word: word.to_string(),
-                text: text.to_string(),
-            },
-        );
     }
 
     pub fn finish(mut self) -> Result<Parsed, ParseError> {
@@ -1200,13 +1601,12 @@ impl GcodeReader {
         let (u, origin) = match self.unit {
             Some(x) => x,
             None => {
-                self.diags.warn("units-assumed", 0, 0, "no unit word (G20/G21, G70/G71, G700/G710): millimetres assumed (override with --units)");
+                self.diags.warn(Code::UnitsAssumed, 0, 0, "no unit word (G20/G21, G70/G71, G700/G710): millimetres assumed (override with --units)");
                 (LengthUnit::Mm, UnitsOrigin::Assumed)
             }
         };
         self.program.units = Units { source: u, origin };
         self.program.operations = self.ops;
-        let _ = self.dialect;
         Ok(Parsed {
             program: self.program,
             diagnostics: self.diags.finish(),
@@ -1235,15 +1635,19 @@ fn fmt_word(c: char, v: f64) -> String {
     format!("{c}{}", fmt_num(v))
 }
 
+fn tok_text(t: &Tok) -> String {
+    match t {
+        Tok::Word(c, v) => fmt_word(*c, *v),
+        Tok::Assign(n, v) => format!("{n}={v}"),
+        Tok::Call(n, a) => format!("{n}({a})"),
+        Tok::Keyword(k) => k.clone(),
+    }
+}
+
 fn block_text(toks: &[(Tok, u32)]) -> String {
     toks.iter()
         .filter(|(t, _)| !matches!(t, Tok::Word('N', _)))
-        .map(|(t, _)| match t {
-            Tok::Word(c, v) => fmt_word(*c, *v),
-            Tok::Assign(n, v) => format!("{n}={v}"),
-            Tok::Call(n, a) => format!("{n}({a})"),
-            Tok::Keyword(k) => k.clone(),
-        })
+        .map(|(t, _)| tok_text(t))
         .collect::<Vec<_>>()
         .join(" ")
 }

@@ -4,46 +4,44 @@
 //! tool change, spindle, then G0/G1/G2/G3 (or L/CC/C) with fixed decimals, `S` and
 //! `F` on a block wherever the IR changes them, and a footer. Arcs outside the
 //! principal planes and canned cycles are written as explicit lines.
+//!
+//! Every block must mean in the target what its source block meant:
+//! - only known axes are written, and only when they change: a move from an
+//!   unknown position names just the axes its source named;
+//! - the writer keeps the modal state of its own output (distance mode, motion,
+//!   plane, feed mode); a verbatim source block that changes modes or moves the
+//!   machine makes it state its modes and positions again;
+//! - feed modes are written as read: G93/G94/G95 (Heidenhain `FT`/`F`/`FU`);
+//! - events of one source block (tool-length and cutter compensation, work
+//!   offset, spindle, coolant, post words) stay in one output block, with the
+//!   move of that block when it has one;
+//! - a word the target cannot express is an error at its source line (with
+//!   `lossy`, a comment and a warning).
 
 use super::{
-    arc_points, cycle_moves, first_event_at, maybe_flush, principal_plane, room, write_runs,
-    NumFmt, Run, Sink, WriteError, PARALLEL_MIN,
+    arc_points, cycle_moves, first_event_at, lossy, maybe_flush, principal_plane, room, write_runs,
+    CycleStep, NumFmt, Run, Sink, Target, WriteError, WriteOptions, Written, PARALLEL_MIN,
 };
 use crate::ir::*;
 use millplan_geom::DVec3;
 
-/// Writer settings.
-#[derive(Clone, Copy, Debug)]
-pub struct GcodeOptions {
-    pub dialect: Dialect,
-    /// Output unit (values in the IR are mm).
-    pub unit: LengthUnit,
-    /// Block numbers (always on for Heidenhain).
-    pub line_numbers: bool,
-    /// Chord tolerance (mm) for arcs that must be written as lines.
-    pub chord_tol: f64,
-}
-
-impl GcodeOptions {
-    pub fn new(dialect: Dialect) -> GcodeOptions {
-        GcodeOptions {
-            dialect,
-            unit: LengthUnit::Mm,
-            line_numbers: false,
-            chord_tol: 0.001,
-        }
-    }
-}
-
 struct W<'a> {
-    o: GcodeOptions,
+    o: WriteOptions,
     out: &'a mut Vec<u8>,
     k: f64,
     coord: NumFmt,
     vecf: NumFmt,
     feedf: NumFmt,
-    src_dialect: Dialect,
+    spindlef: NumFmt,
+    source: Dialect,
+    /// The unit the source's verbatim words are written in.
+    source_unit: LengthUnit,
+    /// The writer adds tool-length compensation (and, five-axis, TCP) at tool
+    /// changes only when the source has none of its own.
+    auto_tlc: bool,
+    auto_tcp: bool,
     st: State,
+    warnings: Written,
 }
 
 /// Everything the writer remembers from block to block: what it writes next
@@ -56,26 +54,54 @@ struct State {
     vec: Option<DVec3>,
     motion: Option<u8>,
     plane: Option<usize>,
+    /// The output is known to be in absolute mode (G90).
+    absolute: bool,
+    feed_mode: Option<FeedMode>,
     feed: Option<f64>,
     spindle: Option<f64>,
     spindle_running: bool,
-    spindle_dir: SpindleDir,
     cutcom: CutCom,
     heidenhain_rl: &'static str,
     tool_number: Option<u32>,
+    /// Tool-length compensation on, with its register.
+    tlc: Option<Option<u32>>,
+    tcp: bool,
     fmax_last: bool,
+    /// The canned cycle the control has active (written as a cycle block).
+    cycle: Option<CycleId>,
 }
 
-fn is_5axis(op: &Operation) -> bool {
-    op.orients.iter().any(|o| match o {
-        Orient::Vector(v) => (v.z - 1.0).abs() > 1e-9,
-        Orient::Rotary(_) => false,
-    })
+/// Where a motion block started in the output.
+#[derive(Clone, Copy)]
+struct Block {
+    line: usize,
+    block_no: u64,
+    mark: usize,
+    absolute: bool,
+}
+
+/// What an event writes.
+enum Words {
+    /// Words that share a block with the other words (and the move) of the
+    /// same source block.
+    Block(String),
+    /// Lines of their own.
+    Lines(Vec<String>),
+    Comment(String),
+    Nothing,
+}
+
+fn word_plus(letter: &str, v: u32) -> String {
+    format!("{letter}{v}")
 }
 
 impl W<'_> {
+    fn target(&self) -> Target {
+        self.o.target
+    }
+
     fn hh(&self) -> bool {
-        self.o.dialect == Dialect::Heidenhain
+        self.o.target == Target::Heidenhain
     }
 
     fn start_block(&mut self) {
@@ -101,16 +127,15 @@ impl W<'_> {
         let clean: String = text
             .chars()
             .map(|c| {
-                if c == '(' || c == ')' || c == '\n' {
+                if c == '(' || c == ')' || c == '\n' || c == '\r' {
                     ' '
                 } else {
                     c
                 }
             })
             .collect();
-        match self.o.dialect {
-            Dialect::Sinumerik => self.line(&format!("; {clean}")),
-            Dialect::Heidenhain => self.line(&format!("; {clean}")),
+        match self.target() {
+            Target::Sinumerik | Target::Heidenhain => self.line(&format!("; {clean}")),
             _ => {
                 let t = format!("({})", clean.trim());
                 if self.o.line_numbers {
@@ -133,33 +158,30 @@ impl W<'_> {
         self.out.push(b'\n');
     }
 
+    fn spindle_text(&self, rpm: f64) -> String {
+        let mut b = Vec::new();
+        self.spindlef.push(&mut b, rpm);
+        String::from_utf8(b).unwrap_or_default()
+    }
+
     fn header(&mut self, p: &Program) {
-        let name = p.name.clone().unwrap_or_else(|| "MILLPLAN".to_string());
-        let name: String = name
-            .chars()
-            .filter(|c| c.is_ascii_alphanumeric() || *c == '_')
-            .collect::<String>();
-        let name = if name.is_empty() {
-            "MILLPLAN".to_string()
-        } else {
-            name
-        };
-        let inch = self.o.unit == LengthUnit::Inch;
-        match self.o.dialect {
-            Dialect::Heidenhain => {
+        let name = program_name(p);
+        let inch = self.o.unit() == LengthUnit::Inch;
+        match self.target() {
+            Target::Heidenhain => {
                 self.line(&format!(
                     "BEGIN PGM {name} {}",
                     if inch { "INCH" } else { "MM" }
                 ));
             }
-            Dialect::Sinumerik => {
+            Target::Sinumerik => {
                 self.comment(&format!("{name} - written by millplan"));
                 self.line(&format!(
                     "G17 {} G90 G94 G40 G64",
                     if inch { "G70" } else { "G71" }
                 ));
             }
-            Dialect::LinuxCnc => {
+            Target::LinuxCnc => {
                 self.out.extend_from_slice(b"%\n");
                 self.comment(&format!("{name} - written by millplan"));
                 self.line(&format!(
@@ -179,46 +201,54 @@ impl W<'_> {
             }
         }
         self.st.plane = Some(2);
+        self.st.absolute = true;
+        self.st.feed_mode = Some(FeedMode::PerMinute);
     }
 
     fn footer(&mut self, p: &Program) {
-        match self.o.dialect {
-            Dialect::Heidenhain => {
-                if self.st.spindle_running {
-                    self.line("M5");
-                }
-                self.line("M30");
-                let name = p.name.clone().unwrap_or_else(|| "MILLPLAN".to_string());
-                let name: String = name
-                    .chars()
-                    .filter(|c| c.is_ascii_alphanumeric() || *c == '_')
-                    .collect();
-                let name = if name.is_empty() {
-                    "MILLPLAN".to_string()
-                } else {
-                    name
-                };
-                let unit = if self.o.unit == LengthUnit::Inch {
+        if self.st.spindle_running {
+            self.line("M5");
+        }
+        self.line("M30");
+        match self.target() {
+            Target::Heidenhain => {
+                let unit = if self.o.unit() == LengthUnit::Inch {
                     "INCH"
                 } else {
                     "MM"
                 };
-                self.line(&format!("END PGM {name} {unit}"));
+                self.line(&format!("END PGM {} {unit}", program_name(p)));
             }
-            _ => {
-                if self.st.spindle_running {
-                    self.line("M5");
-                }
-                self.line("M30");
-                if self.o.dialect != Dialect::Sinumerik {
-                    self.out.extend_from_slice(b"%\n");
-                }
-            }
+            Target::Sinumerik => {}
+            _ => self.out.extend_from_slice(b"%\n"),
         }
     }
 
-    fn tool_change(&mut self, op: &Operation, five: bool) -> Result<(), WriteError> {
+    /// The words that make tool-length compensation (and TCP) what the state says.
+    fn tlc_words(&self, five_vectors: bool) -> String {
+        match (self.st.tlc, self.st.tcp) {
+            (Some(h), true) => {
+                let g = if five_vectors { "G43.5" } else { "G43.4" };
+                match h {
+                    Some(h) => format!("{g} H{h}"),
+                    None => g.to_string(),
+                }
+            }
+            (Some(h), false) => match h {
+                Some(h) => format!("G43 H{h}"),
+                None => "G43".to_string(),
+            },
+            (None, _) => "G49".to_string(),
+        }
+    }
+
+    fn tool_change(&mut self, op: &Operation) -> Result<(), WriteError> {
         let Some(t) = &op.tool else { return Ok(()) };
+        let five = op.is_five_axis();
+        let vectors = op
+            .orients
+            .iter()
+            .any(|o| o.axis.is_some() && !o.has_angles());
         if let Some(c) = &t.cutter {
             self.comment(&format!(
                 "TOOL {} {:?} D{:.3} R{:.3}",
@@ -229,8 +259,8 @@ impl W<'_> {
             ));
         }
         let s0 = op.moves.iter().find(|m| m.spindle > 0.0).map(|m| m.spindle);
-        match (self.o.dialect, t.number, &t.name) {
-            (Dialect::Heidenhain, n, name) => {
+        match (self.target(), t.number, &t.name) {
+            (Target::Heidenhain, n, name) => {
                 let id = match (n, name) {
                     (Some(n), _) => n.to_string(),
                     (None, Some(nm)) => format!("\"{nm}\""),
@@ -240,150 +270,400 @@ impl W<'_> {
                     }
                 };
                 let s = s0
-                    .map(|s| format!(" S{}", crate::gcode::fmt_num((s * 1000.0).round() / 1000.0)))
+                    .map(|s| format!(" S{}", self.spindle_text(s)))
                     .unwrap_or_default();
                 self.line(&format!("TOOL CALL {id} Z{s}"));
                 self.st.spindle = s0;
-                if five {
+                if five && self.auto_tcp {
                     self.line("M128");
+                    self.st.tcp = true;
                 }
             }
-            (Dialect::Sinumerik, n, name) => {
+            (Target::Sinumerik, n, name) => {
+                // A Sinumerik source called its tools as it did; another names
+                // them by number when it has one.
                 match (name, n) {
-                    (Some(nm), _) => self.line(&format!("T=\"{nm}\"")),
-                    (None, Some(n)) => self.line(&format!("T{n}")),
-                    (None, None) => {
+                    (Some(nm), _) if self.source == Dialect::Sinumerik || n.is_none() => {
+                        self.line(&format!("T=\"{nm}\""))
+                    }
+                    (_, Some(n)) => self.line(&format!("T{n}")),
+                    (_, None) => {
                         self.comment("no tool call in the source program");
                         return Ok(());
                     }
                 }
                 self.line("M6");
-                self.line("D1");
-                if five {
+                if self.auto_tlc {
+                    self.line("D1");
+                    self.st.tlc = Some(Some(1));
+                }
+                if five && self.auto_tcp {
                     self.line("TRAORI");
                     self.line("ORIWKS");
+                    self.st.tcp = true;
                 }
             }
-            (d, Some(n), _) => {
+            (target, Some(n), _) => {
                 self.line(&format!("T{n} M6"));
-                if d == Dialect::LinuxCnc {
-                    self.line(&format!("G43 H{n}"));
-                } else if five {
-                    self.line(&format!("G43.5 H{n}"));
-                } else {
-                    self.line(&format!("G43 H{n}"));
+                if self.auto_tlc {
+                    self.st.tlc = Some(Some(n));
+                    self.st.tcp = five && target == Target::Fanuc && self.auto_tcp;
+                    let w = self.tlc_words(vectors);
+                    self.line(&w);
                 }
                 self.st.tool_number = Some(n);
             }
-            (_, None, Some(nm)) => {
+            (target, None, Some(nm)) => {
+                lossy(
+                    self.o.lossy,
+                    &mut self.warnings,
+                    t.line,
+                    format!(
+                        "{} calls tools by number and the source names tool `{nm}` only",
+                        target.name()
+                    ),
+                )?;
                 self.comment(&format!("load tool {nm}: the source names no tool number"));
                 self.line("M0");
             }
             (_, None, None) => self.comment("no tool call in the source program"),
         }
-        // Positions are unknown to the control after a tool change.
+        // A tool change may move the linear axes; it leaves the rotary ones.
         self.st.pos = [None; 3];
-        self.st.rot = [None; 3];
-        self.st.vec = None;
         self.st.motion = None;
         self.st.feed = None;
         Ok(())
     }
 
-    fn spindle_block(&mut self, rpm: f64, dir: SpindleDir) {
-        let m = match dir {
-            SpindleDir::Cw => "M3",
-            SpindleDir::Ccw => "M4",
-            SpindleDir::Off => "M5",
-        };
-        if self.hh() {
-            if dir != SpindleDir::Off && Some(rpm) != self.st.spindle && rpm > 0.0 {
-                self.line(&format!("TOOL CALL S{}", crate::gcode::fmt_num(rpm)));
+    /// The words of an event, with the state it leaves; `next` is the move the
+    /// event precedes (its speed is the one a spindle start takes).
+    fn event_words(
+        &mut self,
+        op: &Operation,
+        e: &Event,
+        next: Option<&Move>,
+    ) -> Result<Words, WriteError> {
+        let hh = self.hh();
+        let target = self.target();
+        Ok(match &e.kind {
+            EventKind::Comment(t) => Words::Comment(t.clone()),
+            EventKind::Insert(t) => Words::Comment(format!("INSERT {t}")),
+            EventKind::Spindle(dir) => {
+                // The speed of the move it starts for (`S0 M3` stays S0).
+                let rpm = next.map(|m| m.spindle).or(self.st.spindle);
+                let m = match dir {
+                    SpindleDir::Cw => "M3",
+                    SpindleDir::Ccw => "M4",
+                    SpindleDir::Off => "M5",
+                };
+                self.st.spindle_running = *dir != SpindleDir::Off;
+                if *dir == SpindleDir::Off {
+                    return Ok(if hh {
+                        Words::Lines(vec!["M5".into()])
+                    } else {
+                        Words::Block("M5".into())
+                    });
+                }
+                if hh {
+                    let mut v = Vec::new();
+                    if let Some(r) = rpm.filter(|r| Some(*r) != self.st.spindle) {
+                        v.push(format!("TOOL CALL S{}", self.spindle_text(r)));
+                        self.st.spindle = Some(r);
+                    }
+                    v.push(m.into());
+                    Words::Lines(v)
+                } else {
+                    let s = match rpm {
+                        Some(r) => {
+                            self.st.spindle = Some(r);
+                            format!("S{} {m}", self.spindle_text(r))
+                        }
+                        None => m.to_string(),
+                    };
+                    Words::Block(s)
+                }
             }
-            self.line(m);
-        } else if dir == SpindleDir::Off {
-            self.line("M5");
-        } else {
-            self.start_block();
-            self.out.push(b'S');
-            NumFmt {
-                decimals: 1,
-                trailing_point: false,
-                plus: false,
-                no_leading_zero: false,
-            }
-            .push(self.out, rpm);
-            self.out.push(b' ');
-            self.out.extend_from_slice(m.as_bytes());
-            self.end_block();
-        }
-        self.st.spindle = Some(rpm);
-        self.st.spindle_running = dir != SpindleDir::Off;
-        self.st.spindle_dir = dir;
-    }
-
-    fn event(&mut self, e: &Event) {
-        match &e.kind {
-            EventKind::Comment(t) => self.comment(t),
-            EventKind::Insert(t) => self.comment(&format!("INSERT {t}")),
-            EventKind::Spindle { rpm, dir } => self.spindle_block(*rpm, *dir),
             EventKind::Coolant(c) => {
                 let m = match c {
                     Coolant::Off => "M9",
                     Coolant::Mist | Coolant::Air => "M7",
                     _ => "M8",
                 };
-                self.line(m);
+                if hh {
+                    Words::Lines(vec![m.into()])
+                } else {
+                    Words::Block(m.into())
+                }
             }
-            EventKind::CutCom(c) => {
-                self.st.cutcom = *c;
-                if self.hh() {
-                    self.st.heidenhain_rl = match c {
+            EventKind::CutCom { side, register } => {
+                self.st.cutcom = *side;
+                if hh {
+                    self.st.heidenhain_rl = match side {
                         CutCom::Left => " RL",
                         CutCom::Right => " RR",
                         CutCom::Off => " R0",
                     };
+                    Words::Nothing
                 } else {
-                    let d = self
-                        .st
-                        .tool_number
-                        .map(|n| format!(" D{n}"))
-                        .unwrap_or_default();
-                    match c {
-                        CutCom::Off => self.line("G40"),
-                        CutCom::Left => self.line(&format!("G41{d}")),
-                        CutCom::Right => self.line(&format!("G42{d}")),
+                    let d = match (target, register.or(self.st.tool_number)) {
+                        // Sinumerik takes the radius of the active D.
+                        (Target::Sinumerik, _) | (_, None) => String::new(),
+                        (_, Some(n)) => format!(" D{n}"),
+                    };
+                    Words::Block(match side {
+                        CutCom::Off => "G40".into(),
+                        CutCom::Left => format!("G41{d}"),
+                        CutCom::Right => format!("G42{d}"),
+                    })
+                }
+            }
+            EventKind::ToolLength(t) => {
+                let new = match t {
+                    ToolLength::Off => None,
+                    ToolLength::On { register } => Some(*register),
+                };
+                let was = self.st.tlc;
+                self.st.tlc = new;
+                match target {
+                    Target::Fanuc | Target::LinuxCnc => {
+                        if new.is_none() {
+                            self.st.tcp = false;
+                        }
+                        let vectors = op
+                            .orients
+                            .iter()
+                            .any(|o| o.axis.is_some() && !o.has_angles());
+                        Words::Block(self.tlc_words(vectors))
+                    }
+                    Target::Sinumerik => Words::Block(match new {
+                        Some(Some(n)) => word_plus("D", n),
+                        Some(None) => "D1".into(),
+                        None => "D0".into(),
+                    }),
+                    // Heidenhain and CL data compensate the called tool's length
+                    // always; only switching it off cannot be said.
+                    Target::Heidenhain | Target::Apt => {
+                        if new.is_none() && was.is_some() {
+                            lossy(
+                                self.o.lossy,
+                                &mut self.warnings,
+                                e.line,
+                                format!(
+                                    "{} cannot switch tool-length compensation off",
+                                    target.name()
+                                ),
+                            )?;
+                            Words::Comment("tool-length compensation off".into())
+                        } else {
+                            Words::Nothing
+                        }
                     }
                 }
             }
-            EventKind::Stop { optional } => self.line(match (optional, self.hh()) {
-                (false, true) => "STOP",
-                (true, true) => "M1",
-                (false, false) => "M0",
-                (true, false) => "M1",
-            }),
-            EventKind::Dwell(t) => match self.o.dialect {
-                Dialect::Heidenhain => {
-                    self.line("CYCL DEF 9.0 DWELL TIME");
-                    self.line(&format!("CYCL DEF 9.1 DWELL {t:.3}"));
+            EventKind::Tcp(on) => {
+                let was = self.st.tcp;
+                self.st.tcp = *on;
+                if was == *on {
+                    return Ok(Words::Nothing);
                 }
-                Dialect::Sinumerik => self.line(&format!("G4 F{t:.3}")),
-                Dialect::LinuxCnc => self.line(&format!("G4 P{t:.3}")),
-                _ => self.line(&format!("G4 P{}", (t * 1000.0).round() as i64)),
+                match target {
+                    Target::Fanuc => {
+                        if self.st.tlc.is_some() {
+                            let vectors = op
+                                .orients
+                                .iter()
+                                .any(|o| o.axis.is_some() && !o.has_angles());
+                            let w = if *on {
+                                self.tlc_words(vectors)
+                            } else {
+                                format!("G49 {}", self.tlc_words(vectors))
+                            };
+                            Words::Block(w)
+                        } else {
+                            // G43.4/G43.5 come with the next G43 H.
+                            Words::Nothing
+                        }
+                    }
+                    Target::Sinumerik => Words::Lines(vec![if *on {
+                        "TRAORI".into()
+                    } else {
+                        "TRAFOOF".into()
+                    }]),
+                    Target::Heidenhain => {
+                        Words::Lines(vec![if *on { "M128".into() } else { "M129".into() }])
+                    }
+                    Target::LinuxCnc => {
+                        lossy(
+                            self.o.lossy,
+                            &mut self.warnings,
+                            e.line,
+                            "LinuxCNC has no tool-centre-point control (G43.4/TRAORI/M128)"
+                                .to_string(),
+                        )?;
+                        Words::Comment(format!("TCP {}", if *on { "on" } else { "off" }))
+                    }
+                    Target::Apt => Words::Nothing,
+                }
+            }
+            EventKind::WorkOffset(WorkOffset(n)) => {
+                let n = *n;
+                let w = match (target, n) {
+                    (Target::Fanuc | Target::LinuxCnc, 1..=6) => Some(format!("G{}", 53 + n)),
+                    (Target::Fanuc, 7..) => Some(format!("G54.1 P{}", n - 6)),
+                    (Target::LinuxCnc, 7..=9) => Some(format!("G59.{}", n - 6)),
+                    (Target::Sinumerik, 0) => Some("G500".into()),
+                    (Target::Sinumerik, 1..=4) => Some(format!("G{}", 53 + n)),
+                    (Target::Sinumerik, 5..=99) => Some(format!("G5{n:02}")),
+                    _ => None,
+                };
+                match w {
+                    Some(w) => Words::Block(w),
+                    None if target == Target::Heidenhain => Words::Lines(vec![
+                        "CYCL DEF 247 DATUM SETTING ~".into(),
+                        format!("  Q339=+{n} ;DATUM NUMBER"),
+                    ]),
+                    None => {
+                        lossy(
+                            self.o.lossy,
+                            &mut self.warnings,
+                            e.line,
+                            format!("{} has no work offset number {n}", target.name()),
+                        )?;
+                        Words::Comment(format!("work offset {n}"))
+                    }
+                }
+            }
+            EventKind::ToolSelect(n) => match target {
+                Target::Heidenhain => Words::Lines(vec![format!("TOOL DEF {n}")]),
+                _ => Words::Block(word_plus("T", *n)),
             },
-            EventKind::Passthrough { text, .. } => {
-                if self.src_dialect == self.o.dialect {
-                    self.line(text);
+            EventKind::Stop { optional } => {
+                let m = match (optional, hh) {
+                    (false, true) => "STOP",
+                    (true, _) => "M1",
+                    (false, false) => "M0",
+                };
+                if hh {
+                    Words::Lines(vec![m.into()])
                 } else {
-                    self.comment(&format!("kept from source: {text}"));
+                    Words::Block(m.into())
                 }
+            }
+            EventKind::Dwell(t) => Words::Lines(match target {
+                Target::Heidenhain => vec![
+                    "CYCL DEF 9.0 DWELL TIME".into(),
+                    format!("CYCL DEF 9.1 DWELL {t:.3}"),
+                ],
+                Target::Sinumerik => vec![format!("G4 F{t:.3}")],
+                Target::LinuxCnc => vec![format!("G4 P{t:.3}")],
+                _ => vec![format!("G4 P{}", (t * 1000.0).round() as i64)],
+            }),
+            EventKind::Passthrough(p) => {
+                let same_unit = self.o.unit() == self.source_unit || super::unit_free(&p.text);
+                if super::copies_verbatim(self.source, target, p) && same_unit {
+                    if p.modal {
+                        self.st.motion = None;
+                        self.st.plane = None;
+                        self.st.absolute = false;
+                        self.st.feed_mode = None;
+                    }
+                    if p.moves {
+                        self.st.pos = [None; 3];
+                        self.st.rot = [None; 3];
+                        self.st.vec = None;
+                    }
+                    if hh {
+                        Words::Lines(vec![p.text.clone()])
+                    } else {
+                        Words::Block(p.text.clone())
+                    }
+                } else if p.class == PassClass::Info {
+                    Words::Comment(p.text.clone())
+                } else {
+                    let why = if super::copies_verbatim(self.source, target, p) {
+                        format!(
+                            "`{}` is copied as written, and its numbers are in {:?}: write the program in {:?} (--out-units)",
+                            p.text,
+                            self.source_unit,
+                            self.source_unit
+                        )
+                    } else {
+                        format!(
+                            "`{}` ({}) has no {} equivalent",
+                            p.text,
+                            self.source.name(),
+                            target.name()
+                        )
+                    };
+                    lossy(self.o.lossy, &mut self.warnings, e.line, why)?;
+                    if p.moves {
+                        self.st.pos = [None; 3];
+                        self.st.rot = [None; 3];
+                        self.st.vec = None;
+                    }
+                    Words::Comment(format!("not written: {}", p.text))
+                }
+            }
+        })
+    }
+
+    /// Writes the events due before move `i` (`None`: after the last move) and
+    /// returns the words that belong in that move's block.
+    fn events(&mut self, op: &Operation, i: usize, ev: &mut usize) -> Result<String, WriteError> {
+        let next = op.moves.get(i);
+        let mut pending = String::new();
+        let mut pending_line = 0u32;
+        while *ev < op.events.len() && op.events[*ev].at as usize <= i {
+            let e = &op.events[*ev];
+            *ev += 1;
+            if e.line != pending_line || e.line == 0 {
+                self.flush_words(&mut pending);
+            }
+            match self.event_words(op, e, next)? {
+                Words::Block(w) => {
+                    if !pending.is_empty() {
+                        pending.push(' ');
+                    }
+                    pending.push_str(&w);
+                    pending_line = e.line;
+                }
+                Words::Lines(v) => {
+                    self.flush_words(&mut pending);
+                    for l in v {
+                        self.line(&l);
+                    }
+                }
+                Words::Comment(c) => {
+                    self.flush_words(&mut pending);
+                    self.comment(&c);
+                }
+                Words::Nothing => {}
+            }
+        }
+        match next {
+            Some(m) if m.line != 0 && m.line == pending_line && !self.hh() => Ok(pending),
+            _ => {
+                self.flush_words(&mut pending);
+                Ok(String::new())
             }
         }
     }
 
+    fn flush_words(&mut self, pending: &mut String) {
+        if !pending.is_empty() {
+            let t = std::mem::take(pending);
+            self.line(&t);
+        }
+    }
+
+    /// Writes the known coordinates of `end` that differ from the state (all
+    /// known ones when `force`).
     fn coords(&mut self, end: DVec3, force: bool) {
         let names = ["X", "Y", "Z"];
         for k in 0..3 {
+            if end[k].is_nan() {
+                continue;
+            }
             let v = end[k] * self.k;
             let r = (v * 1e4).round() / 1e4;
             if force || self.st.pos[k] != Some(r) {
@@ -395,79 +675,110 @@ impl W<'_> {
     }
 
     fn orient_words(&mut self, op: &Operation, m: &Move) -> Result<(), WriteError> {
-        match op.orient(m) {
-            Some(Orient::Rotary(r)) => {
-                for (k, a) in r.iter().enumerate() {
-                    if let Some(a) = a {
-                        let deg = (a.to_degrees() * 1e4).round() / 1e4;
-                        if self.st.rot[k] != Some(deg) {
-                            let f = NumFmt {
-                                decimals: 4,
-                                ..self.coord
-                            };
-                            self.word(["A", "B", "C"][k], deg, f);
-                            self.st.rot[k] = Some(deg);
-                        }
+        let Some(o) = op.orient(m) else {
+            return Ok(());
+        };
+        if o.has_angles() {
+            for (k, a) in o.angles.iter().enumerate() {
+                if let Some(a) = a {
+                    let deg = (a.to_degrees() * 1e4).round() / 1e4;
+                    if self.st.rot[k] != Some(deg) {
+                        let f = NumFmt {
+                            decimals: 4,
+                            ..self.coord
+                        };
+                        self.word(["A", "B", "C"][k], deg, f);
+                        self.st.rot[k] = Some(deg);
                     }
                 }
             }
-            Some(Orient::Vector(v)) if is_5axis(op) && self.st.vec != Some(*v) => {
-                let f = self.vecf;
-                match self.o.dialect {
-                        Dialect::Sinumerik => {
-                            self.word("A3=", v.x, f);
-                            self.word("B3=", v.y, f);
-                            self.word("C3=", v.z, f);
-                        }
-                        Dialect::Heidenhain => {
-                            self.word("TX", v.x, f);
-                            self.word("TY", v.y, f);
-                            self.word("TZ", v.z, f);
-                        }
-                        Dialect::LinuxCnc => {
-                            return Err(WriteError {
-                                message: format!(
-                                    "line {}: LinuxCNC cannot take tool vectors; 5-axis output needs the machine's kinematics",
-                                    m.line
-                                ),
-                            })
-                        }
-                        _ => {
-                            self.word("I", v.x, f);
-                            self.word("J", v.y, f);
-                            self.word("K", v.z, f);
-                        }
-                    }
-                self.st.vec = Some(*v);
-            }
-            _ => {}
+            return Ok(());
         }
+        let Some(v) = o.axis else { return Ok(()) };
+        if !op.is_five_axis() || self.st.vec == Some(v) {
+            return Ok(());
+        }
+        let f = self.vecf;
+        match self.target() {
+            Target::Sinumerik => {
+                self.word("A3=", v.x, f);
+                self.word("B3=", v.y, f);
+                self.word("C3=", v.z, f);
+            }
+            Target::Heidenhain => {
+                self.word("TX", v.x, f);
+                self.word("TY", v.y, f);
+                self.word("TZ", v.z, f);
+            }
+            Target::LinuxCnc => {
+                lossy(
+                    self.o.lossy,
+                    &mut self.warnings,
+                    m.line,
+                    "LinuxCNC cannot take tool vectors; five-axis output needs the machine's kinematics (--machine)".to_string(),
+                )?;
+            }
+            _ => {
+                if !self.st.tcp {
+                    lossy(
+                        self.o.lossy,
+                        &mut self.warnings,
+                        m.line,
+                        "Fanuc takes tool vectors (I J K) only under G43.5 Hn, and no tool number or G43.5 came before".to_string(),
+                    )?;
+                    return Ok(());
+                }
+                self.word("I", v.x, f);
+                self.word("J", v.y, f);
+                self.word("K", v.z, f);
+            }
+        }
+        self.st.vec = Some(v);
         Ok(())
     }
 
-    fn feed_spindle(&mut self, m: &Move, feed: f64) {
+    /// The feed-mode G word when the mode changes (G-code dialects).
+    fn feed_mode_word(&mut self, mode: FeedMode) {
+        if self.st.feed_mode != Some(mode) {
+            self.out.extend_from_slice(match mode {
+                FeedMode::PerMinute => b" G94".as_slice(),
+                FeedMode::PerRev => b" G95",
+                FeedMode::InverseTime => b" G93",
+            });
+            self.st.feed_mode = Some(mode);
+            self.st.feed = None;
+        }
+    }
+
+    fn feed_spindle(&mut self, m: &Move, feed: f64, mode: FeedMode) {
         if !self.hh()
             && m.spindle > 0.0
             && self.st.spindle_running
             && Some(m.spindle) != self.st.spindle
         {
-            let f = NumFmt {
-                decimals: 1,
-                trailing_point: false,
-                plus: false,
-                no_leading_zero: false,
-            };
+            let f = self.spindlef;
             self.word("S", m.spindle, f);
             self.st.spindle = Some(m.spindle);
         }
-        let f = if m.feed_mode == FeedMode::InverseTime {
+        let f = if mode == FeedMode::InverseTime {
             feed
         } else {
             feed * self.k
         };
-        if self.st.feed != Some(f) || self.st.fmax_last {
+        // Inverse time: every block carries its own F.
+        if self.st.feed != Some(f) || self.st.fmax_last || mode == FeedMode::InverseTime {
             let ff = self.feedf;
-            self.word("F", f, ff);
+            if self.hh() {
+                match mode {
+                    FeedMode::PerMinute => self.word("F", f, ff),
+                    FeedMode::PerRev => self.word("FU", f, ff),
+                    // FT: the block's time in seconds.
+                    FeedMode::InverseTime => self.word("FT", 60.0 / f, ff),
+                }
+                self.st.feed_mode = Some(mode);
+            } else {
+                self.word("F", f, ff);
+            }
             self.st.feed = Some(f);
         }
     }
@@ -484,6 +795,44 @@ impl W<'_> {
         }
     }
 
+    /// Starts a G-code motion block with the words of its source block's events.
+    fn start_motion(&mut self, extra: &str) -> Block {
+        let line = self.out.len();
+        let block_no = self.st.block_no;
+        self.start_block();
+        let mark = self.out.len();
+        if !extra.is_empty() {
+            self.out.push(b' ');
+            self.out.extend_from_slice(extra.as_bytes());
+        }
+        Block {
+            line,
+            block_no,
+            mark,
+            absolute: self.st.absolute,
+        }
+    }
+
+    /// Ends a motion block; one that says nothing (a move to where the tool
+    /// already is, with nothing else) is not written.
+    fn finish_motion(&mut self, b: Block) {
+        if self.out.len() == b.mark {
+            self.out.truncate(b.line);
+            self.st.block_no = b.block_no;
+            return;
+        }
+        // A block with words states the distance mode the output needs.
+        if !b.absolute {
+            self.out.splice(b.mark..b.mark, b" G90".iter().copied());
+            self.st.absolute = true;
+        }
+        if self.out[b.mark..].first() == Some(&b' ') {
+            self.out.remove(b.mark);
+        }
+        self.end_block();
+    }
+
+    #[allow(clippy::too_many_arguments)]
     fn linear_block(
         &mut self,
         op: &Operation,
@@ -491,6 +840,8 @@ impl W<'_> {
         end: DVec3,
         rapid: bool,
         feed: f64,
+        mode: FeedMode,
+        extra: &str,
     ) -> Result<(), WriteError> {
         if self.hh() {
             if !rapid
@@ -498,14 +849,15 @@ impl W<'_> {
                 && self.st.spindle_running
                 && Some(m.spindle) != self.st.spindle
             {
-                self.line(&format!(
-                    "TOOL CALL S{}",
-                    crate::gcode::fmt_num((m.spindle * 10.0).round() / 10.0)
-                ));
+                let s = self.spindle_text(m.spindle);
+                self.line(&format!("TOOL CALL S{s}"));
                 self.st.spindle = Some(m.spindle);
             }
             self.start_block();
-            let five_vec = matches!(op.orient(m), Some(Orient::Vector(_))) && is_5axis(op);
+            let five_vec = op
+                .orient(m)
+                .is_some_and(|o| o.axis.is_some() && !o.has_angles())
+                && op.is_five_axis();
             self.out
                 .extend_from_slice(if five_vec { b"LN".as_slice() } else { b"L" });
             let start = self.out.len();
@@ -524,28 +876,33 @@ impl W<'_> {
                 self.out.extend_from_slice(b" FMAX");
                 self.st.fmax_last = true;
             } else {
-                self.feed_spindle(m, feed);
+                self.feed_spindle(m, feed, mode);
                 self.st.fmax_last = false;
             }
             self.end_block();
             return Ok(());
         }
-        self.start_block();
-        let mark = self.out.len();
+        let mark = self.start_motion(extra);
+        if !rapid {
+            self.feed_mode_word(mode);
+        }
         self.motion(if rapid { 0 } else { 1 });
         self.coords(end, false);
         self.orient_words(op, m)?;
-        if !rapid {
-            self.feed_spindle(m, feed);
+        if rapid {
+            if m.spindle > 0.0 && self.st.spindle_running && Some(m.spindle) != self.st.spindle {
+                let f = self.spindlef;
+                self.word("S", m.spindle, f);
+                self.st.spindle = Some(m.spindle);
+            }
+        } else {
+            self.feed_spindle(m, feed, mode);
         }
-        if self.out[mark..].first() == Some(&b' ') {
-            self.out.remove(mark);
-        }
-        self.end_block();
+        self.finish_motion(mark);
         Ok(())
     }
 
-    fn arc_block(&mut self, m: &Move, a: &Arc, start: DVec3, axis: usize) {
+    fn arc_block(&mut self, m: &Move, a: &Arc, start: DVec3, end: DVec3, axis: usize, extra: &str) {
         let ccw = a.normal[axis] > 0.0;
         if self.hh() {
             let (p, q) = match axis {
@@ -562,7 +919,6 @@ impl W<'_> {
             self.end_block();
             self.start_block();
             self.out.push(b'C');
-            let end = m.end;
             self.word(names[p], end[p] * self.k, f);
             self.word(names[q], end[q] * self.k, f);
             if (end[axis] - start[axis]).abs() > 1e-9 {
@@ -573,13 +929,12 @@ impl W<'_> {
             }
             self.out
                 .extend_from_slice(if ccw { b" DR+".as_slice() } else { b" DR-" });
-            self.feed_spindle(m, m.feed);
+            self.feed_spindle(m, m.feed, m.feed_mode);
             self.st.fmax_last = false;
             self.end_block();
             return;
         }
-        self.start_block();
-        let mark = self.out.len();
+        let mark = self.start_motion(extra);
         if self.st.plane != Some(axis) {
             self.out.extend_from_slice(match axis {
                 2 => b" G17".as_slice(),
@@ -588,9 +943,10 @@ impl W<'_> {
             });
             self.st.plane = Some(axis);
         }
+        self.feed_mode_word(m.feed_mode);
         self.motion(if ccw { 3 } else { 2 });
         // End point always written in full so full circles are unambiguous.
-        self.coords(m.end, true);
+        self.coords(end, true);
         let off = a.centre - start;
         let f = self.coord;
         for (k, l) in ["I", "J", "K"].iter().enumerate() {
@@ -598,47 +954,161 @@ impl W<'_> {
                 self.word(l, off[k] * self.k, f);
             }
         }
-        self.feed_spindle(m, m.feed);
-        if self.out[mark..].first() == Some(&b' ') {
-            self.out.remove(mark);
-        }
-        self.end_block();
+        self.feed_spindle(m, m.feed, m.feed_mode);
+        self.finish_motion(mark);
     }
+
+    /// Whether the control's own canned cycle can say what `c` says: a G-code
+    /// cycle (G73, G81…) into Fanuc or LinuxCNC along the program's Z (rotary
+    /// tables may stand anywhere), or a Heidenhain cycle, whose definition
+    /// was copied, called again.
+    fn native_cycle(&self, op: &Operation, m: &Move, c: &Cycle) -> bool {
+        let along_z = op.axis(m).is_none_or(|a| (a - DVec3::Z).length() < 1e-9);
+        let code = c.name.strip_prefix('G').and_then(|n| n.parse::<u32>().ok());
+        along_z
+            && match self.target() {
+                Target::Fanuc => matches!(code, Some(73 | 74 | 76 | 81..=89)),
+                Target::LinuxCnc => matches!(code, Some(73 | 81 | 82 | 83 | 85 | 89)),
+                Target::Heidenhain => self.source == Dialect::Heidenhain,
+                _ => false,
+            }
+    }
+
+    /// A hole of a canned cycle in the control's own words: the cycle block
+    /// at its first hole (from the level it returns to), the position alone
+    /// at the next.
+    fn cycle_block(&mut self, m: &Move, id: CycleId, c: &Cycle, extra: &str) {
+        if self.hh() {
+            // The tool stands over the hole; the copied definition is called.
+            self.line("CYCL CALL");
+            return;
+        }
+        let top = m.end.z + c.retract.max(0.0);
+        if self.st.cycle != Some(id) {
+            if self.st.cycle.is_some() {
+                self.line("G80");
+            }
+            // The control returns to the level the cycle starts from (G98).
+            let start_z = ((top * self.k) * 1e4).round() / 1e4;
+            if c.retract > 0.0 && self.st.pos[2] != Some(start_z) {
+                let mark = self.start_motion("");
+                self.motion(0);
+                self.coords(DVec3::new(f64::NAN, f64::NAN, top), false);
+                self.finish_motion(mark);
+            }
+        }
+        let mark = self.start_motion(extra);
+        if self.st.cycle != Some(id) {
+            self.feed_mode_word(FeedMode::PerMinute);
+            let code = if c.retract > 0.0 { " G98 " } else { " G99 " };
+            self.out.extend_from_slice(code.as_bytes());
+            self.out.extend_from_slice(c.name.as_bytes());
+            let f = self.coord;
+            let mut xy = m.end;
+            xy.z = f64::NAN;
+            self.coords(xy, true);
+            self.word("Z", (m.end.z + c.bottom) * self.k, f);
+            self.word("R", (m.end.z + c.clearance) * self.k, f);
+            if let Some(q) = c.peck {
+                self.word("Q", q * self.k, f);
+            }
+            if let Some(t) = c.dwell {
+                // Fanuc counts dwell in milliseconds, LinuxCNC in seconds.
+                let p = if self.target() == Target::Fanuc {
+                    (t * 1000.0).round()
+                } else {
+                    t
+                };
+                let pf = NumFmt { decimals: 3, ..f };
+                self.word("P", p, pf);
+            }
+            let ff = self.feedf;
+            self.word("F", c.feed * self.k, ff);
+            self.st.feed = None;
+            self.st.cycle = Some(id);
+            self.st.motion = None;
+        } else {
+            let mut xy = m.end;
+            xy.z = f64::NAN;
+            self.coords(xy, false);
+        }
+        self.finish_motion(mark);
+        self.st.pos[2] = Some(((top.max(m.end.z) * self.k) * 1e4).round() / 1e4);
+    }
+
     /// Move `i` of `op`, after the events due before it (`ev`: the next event).
     fn write_move(&mut self, op: &Operation, i: usize, ev: &mut usize) -> Result<(), WriteError> {
         let m = &op.moves[i];
-        while *ev < op.events.len() && op.events[*ev].at as usize <= i {
-            self.event(&op.events[*ev]);
-            *ev += 1;
+        if self.st.cycle.is_some() && m.cycle().is_none() {
+            self.line("G80");
+            self.st.cycle = None;
+            self.st.motion = None;
         }
+        let extra = self.events(op, i, ev)?;
         if m.is_cutting() && !self.st.spindle_running && m.spindle > 0.0 {
-            self.spindle_block(m.spindle, SpindleDir::Cw);
+            // The source cuts with the spindle stopped (a CL file that never
+            // starts it): start it, as every post does.
+            let s = self.spindle_text(m.spindle);
+            if self.hh() {
+                if Some(m.spindle) != self.st.spindle {
+                    self.line(&format!("TOOL CALL S{s}"));
+                }
+                self.line("M3");
+            } else {
+                self.line(&format!("S{s} M3"));
+            }
+            self.st.spindle = Some(m.spindle);
+            self.st.spindle_running = true;
         }
-        let start = op.move_start(i);
         match m.kind {
-            MoveKind::Rapid => self.linear_block(op, m, m.end, true, 0.0)?,
-            MoveKind::Linear => self.linear_block(op, m, m.end, false, m.feed)?,
-            MoveKind::Arc => {
-                let a = op.arcs.get(m.aux as usize).ok_or_else(|| WriteError {
-                    message: "arc index out of range".into(),
-                })?;
-                let s = start.ok_or_else(|| WriteError {
-                    message: format!("line {}: arc with unknown start", m.line),
-                })?;
+            MoveKind::Rapid => self.linear_block(op, m, m.end, true, 0.0, m.feed_mode, &extra)?,
+            MoveKind::Linear => {
+                self.linear_block(op, m, m.end, false, m.feed, m.feed_mode, &extra)?
+            }
+            MoveKind::Arc(id) => {
+                let a = op
+                    .arcs
+                    .get(id.index())
+                    .ok_or_else(|| WriteError::new(m.line, "arc id out of range"))?;
+                let (Some(s), Some(e)) = (op.known_start(i), known(m.end)) else {
+                    return Err(WriteError::new(
+                        m.line,
+                        "an arc from or to an unknown position cannot be written",
+                    ));
+                };
                 match principal_plane(a) {
-                    Some(axis) => self.arc_block(m, a, s, axis),
+                    Some(axis) => self.arc_block(m, a, s, e, axis, &extra),
                     None => {
-                        for q in arc_points(a, s, m.end, self.o.chord_tol) {
-                            self.linear_block(op, m, q, false, m.feed)?;
+                        // Each chord of an inverse-time arc takes its share of the time.
+                        let pts = arc_points(a, s, e, self.o.chord_tol);
+                        let share = pts.len() as f64;
+                        let mut extra = extra.as_str();
+                        for q in pts {
+                            let f = if m.feed_mode == FeedMode::InverseTime {
+                                m.feed * share
+                            } else {
+                                m.feed
+                            };
+                            self.linear_block(op, m, q, false, f, m.feed_mode, extra)?;
+                            extra = "";
                         }
                     }
                 }
             }
-            MoveKind::Cycle => {
-                let c = op.cycles.get(m.aux as usize).ok_or_else(|| WriteError {
-                    message: "cycle index out of range".into(),
-                })?;
+            MoveKind::Cycle(id) => {
+                let c = op
+                    .cycles
+                    .get(id.index())
+                    .ok_or_else(|| WriteError::new(m.line, "cycle id out of range"))?;
+                if self.native_cycle(op, m, c) {
+                    self.cycle_block(m, id, c, &extra);
+                    return Ok(());
+                }
                 let axis = op.axis(m).unwrap_or(DVec3::Z);
+                let steps = cycle_moves(c, m.end, axis)?;
+                if !extra.is_empty() {
+                    self.line(&extra);
+                }
                 self.comment(&format!("cycle {} at this hole, written as lines", c.name));
                 // Like the control's own cycle: across at the current height, then down.
                 let top = m.end + axis * c.retract.max(c.clearance);
@@ -646,16 +1116,29 @@ impl W<'_> {
                     .map(|z| z / self.k)
                     .unwrap_or(top.z)
                     .max(top.z);
-                self.linear_block(op, m, DVec3::new(m.end.x, m.end.y, z), true, 0.0)?;
-                for (kind, q, f) in cycle_moves(c, m.end, axis) {
-                    let mut mm = *m;
-                    mm.kind = kind;
-                    mm.feed = f;
-                    mm.feed_mode = FeedMode::PerMinute;
-                    self.linear_block(op, &mm, q, kind == MoveKind::Rapid, f)?;
-                }
-                if let Some(t) = c.dwell.filter(|t| *t > 0.0) {
-                    self.comment(&format!("dwell {t} s at the bottom is not written"));
+                let pm = FeedMode::PerMinute;
+                self.linear_block(op, m, DVec3::new(m.end.x, m.end.y, z), true, 0.0, pm, "")?;
+                for step in steps {
+                    match step {
+                        CycleStep::Rapid(q) => self.linear_block(op, m, q, true, 0.0, pm, "")?,
+                        CycleStep::Feed(q, f) => {
+                            let mut mm = *m;
+                            mm.kind = MoveKind::Linear;
+                            self.linear_block(op, &mm, q, false, f, pm, "")?
+                        }
+                        CycleStep::Dwell(t) => {
+                            let d = Event {
+                                at: i as u32,
+                                line: 0,
+                                kind: EventKind::Dwell(t),
+                            };
+                            if let Words::Lines(v) = self.event_words(op, &d, Some(m))? {
+                                for l in v {
+                                    self.line(&l);
+                                }
+                            }
+                        }
+                    }
                 }
             }
         }
@@ -676,9 +1159,29 @@ impl W<'_> {
             coord: self.coord,
             vecf: self.vecf,
             feedf: self.feedf,
-            src_dialect: self.src_dialect,
+            spindlef: self.spindlef,
+            source: self.source,
+            source_unit: self.source_unit,
+            auto_tlc: self.auto_tlc,
+            auto_tcp: self.auto_tcp,
             st,
+            warnings: Vec::new(),
         }
+    }
+}
+
+fn program_name(p: &Program) -> String {
+    let name: String = p
+        .name
+        .clone()
+        .unwrap_or_default()
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric() || *c == '_')
+        .collect();
+    if name.is_empty() {
+        "MILLPLAN".to_string()
+    } else {
+        name
     }
 }
 
@@ -702,7 +1205,8 @@ fn write_moves(
     // The settings, for the runs; the state and buffer stay with `w`.
     let mut none = Vec::new();
     let cfg = w.fork(&mut none, w.st.clone());
-    write_runs(n, &mut w.st, w.out, sink, |a, b, st| {
+    let mut warnings = Vec::new();
+    write_runs(n, &mut w.st, w.out, sink, &mut warnings, |a, b, st| {
         // A block with S and F: under 64 bytes.
         let mut text = Vec::with_capacity((b - a) * 64);
         let mut rw = cfg.fork(&mut text, st);
@@ -714,24 +1218,30 @@ fn write_moves(
                 break;
             }
         }
-        let end = rw.st;
-        Run { text, end, result }
+        let (end, warnings) = (rw.st, rw.warnings);
+        Run {
+            text,
+            end,
+            result,
+            warnings,
+        }
     })?;
+    w.warnings.extend(warnings);
     Ok(first_event_at(&op.events, n))
 }
 
-/// Writes a program as G-code of the chosen dialect.
-pub fn write_gcode(p: &Program, o: GcodeOptions, out: &mut Vec<u8>) -> Result<(), WriteError> {
+/// Writes a program as G-code of the chosen target.
+pub fn write_gcode(p: &Program, o: WriteOptions, out: &mut Vec<u8>) -> Result<Written, WriteError> {
     write_gcode_to(p, o, out, None)
 }
 
 /// [`write_gcode`], handing the text to `sink` as it grows (see [`Sink`]).
 pub fn write_gcode_to(
     p: &Program,
-    o: GcodeOptions,
+    o: WriteOptions,
     out: &mut Vec<u8>,
     sink: Option<Sink>,
-) -> Result<(), WriteError> {
+) -> Result<Written, WriteError> {
     write_all(p, o, out, sink, true)
 }
 
@@ -739,29 +1249,23 @@ pub fn write_gcode_to(
 /// (the reference the parallel writer is tested against).
 pub(super) fn write_all(
     p: &Program,
-    o: GcodeOptions,
+    o: WriteOptions,
     out: &mut Vec<u8>,
     mut sink: Option<Sink>,
     parallel: bool,
-) -> Result<(), WriteError> {
-    if p.dialect.is_apt()
-        && !matches!(
-            o.dialect,
-            Dialect::Fanuc | Dialect::LinuxCnc | Dialect::Sinumerik | Dialect::Heidenhain
-        )
-    {
-        return Err(WriteError {
-            message: "not a G-code dialect".into(),
-        });
+) -> Result<Written, WriteError> {
+    if !o.target.is_gcode() {
+        return Err(WriteError::new(0, "APT is written by the APT writer"));
     }
-    if o.dialect.is_apt() {
-        return Err(WriteError {
-            message: format!("{} is an APT dialect; use the APT writer", o.dialect.name()),
-        });
-    }
-    let k = 1.0 / o.unit.mm();
-    let decimals = if o.unit == LengthUnit::Inch { 5 } else { 4 };
-    let fanuc_point = matches!(o.dialect, Dialect::Fanuc);
+    let o = o.resolved(p);
+    let k = 1.0 / o.unit().mm();
+    let decimals = if o.unit() == LengthUnit::Inch { 5 } else { 4 };
+    let fanuc_point = o.target == Target::Fanuc;
+    let has = |f: fn(&EventKind) -> bool| {
+        p.operations
+            .iter()
+            .any(|op| op.events.iter().any(|e| f(&e.kind)))
+    };
     let mut w = W {
         o,
         out,
@@ -769,13 +1273,13 @@ pub(super) fn write_all(
         coord: NumFmt {
             decimals,
             trailing_point: fanuc_point,
-            plus: o.dialect == Dialect::Heidenhain,
+            plus: o.target == Target::Heidenhain,
             no_leading_zero: false,
         },
         vecf: NumFmt {
             decimals: 7,
             trailing_point: fanuc_point,
-            plus: o.dialect == Dialect::Heidenhain,
+            plus: o.target == Target::Heidenhain,
             no_leading_zero: false,
         },
         feedf: NumFmt {
@@ -784,7 +1288,16 @@ pub(super) fn write_all(
             plus: false,
             no_leading_zero: false,
         },
-        src_dialect: p.dialect,
+        spindlef: NumFmt {
+            decimals: o.spindle_decimals(),
+            trailing_point: false,
+            plus: false,
+            no_leading_zero: false,
+        },
+        source: p.source,
+        source_unit: p.units.source,
+        auto_tlc: !has(|k| matches!(k, EventKind::ToolLength(_))),
+        auto_tcp: !has(|k| matches!(k, EventKind::Tcp(_))),
         st: State {
             block_no: 0,
             pos: [None; 3],
@@ -792,15 +1305,20 @@ pub(super) fn write_all(
             vec: None,
             motion: None,
             plane: None,
+            absolute: false,
+            feed_mode: None,
             feed: None,
             spindle: None,
             spindle_running: false,
-            spindle_dir: SpindleDir::Off,
             cutcom: CutCom::Off,
             heidenhain_rl: "",
             tool_number: None,
+            tlc: None,
+            tcp: false,
             fmax_last: false,
+            cycle: None,
         },
+        warnings: Vec::new(),
     };
     w.out.reserve(room(p.move_count(), 32, &sink));
     w.header(p);
@@ -814,11 +1332,15 @@ pub(super) fn write_all(
                 f.origin.x, f.origin.y, f.origin.z, f.rot.x_axis.x, f.rot.x_axis.y, f.rot.x_axis.z, f.rot.y_axis.x, f.rot.y_axis.y, f.rot.y_axis.z
             ));
         }
-        let five = is_5axis(op);
-        w.tool_change(op, five)?;
-        let ev = write_moves(&mut w, op, &mut sink, parallel)?;
-        for e in &op.events[ev..] {
-            w.event(e);
+        w.tool_change(op)?;
+        let mut ev = write_moves(&mut w, op, &mut sink, parallel)?;
+        if w.st.cycle.take().is_some() {
+            w.line("G80");
+            w.st.motion = None;
+        }
+        let rest = w.events(op, op.moves.len(), &mut ev)?;
+        if !rest.is_empty() {
+            w.line(&rest);
         }
         if w.st.cutcom != CutCom::Off && !w.hh() {
             w.line("G40");
@@ -826,5 +1348,5 @@ pub(super) fn write_all(
         }
     }
     w.footer(p);
-    Ok(())
+    Ok(w.warnings)
 }

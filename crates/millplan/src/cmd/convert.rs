@@ -1,18 +1,23 @@
 //! `millplan convert`: read a program in any supported format, write it in another.
 
-use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
-use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::cmd::{print_diagnostics, read_options, target_for, write_program, TargetArg, UnitArg};
+use crate::error::{CliResult, EXIT_OK};
 use crate::io::{read_program, write_atomic};
-use millplan_nc::write::gcode::GcodeOptions;
-use millplan_nc::{Dialect, LengthUnit};
+use millplan_nc::write::WriteOptions;
+use millplan_nc::LengthUnit;
 use std::path::PathBuf;
 
 /// Convert an NC program (APT/CL or G-code) to another dialect.
 ///
-/// Moves, arcs, feeds, spindle speeds, coolant and comments are carried over;
-/// post words the target does not share become comments. Arcs outside the XY/ZX/YZ
-/// planes and canned cycles are written as straight lines. The output is written
-/// to a temporary file and renamed, so a failed run leaves nothing behind.
+/// Every block of the output means what its source block meant: moves, arcs,
+/// feeds and feed modes (G93/G94/G95), spindle, coolant, tool-length and
+/// cutter compensation, work offsets and comments are carried over; an axis
+/// the source never set is never written; words the source dialect keeps
+/// verbatim are copied into the same dialect, and a word another dialect
+/// cannot express stops the conversion at its line (--lossy: a comment and a
+/// warning instead). Arcs outside the XY/ZX/YZ planes and canned cycles are
+/// written as straight lines. The output is written to a temporary file and
+/// renamed, so a failed run leaves nothing behind.
 #[derive(clap::Args)]
 pub struct Args {
     /// Input program.
@@ -20,21 +25,27 @@ pub struct Args {
     /// Output file.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Target dialect.
+    /// Target dialect; default: from the output's extension (.nc Fanuc, .mpf
+    /// Sinumerik, .h Heidenhain, .ngc LinuxCNC, .apt/.cls APT), else the input's own.
     #[arg(long, value_enum)]
-    pub to: TargetArg,
+    pub to: Option<TargetArg>,
     /// Unit of the source when the file does not say.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
-    /// Unit of the output program.
-    #[arg(long, value_enum, default_value = "mm")]
-    pub out_units: UnitArg,
+    /// Unit of the output program (default: the unit of the source, so that
+    /// words copied as written keep their meaning).
+    #[arg(long, value_enum)]
+    pub out_units: Option<UnitArg>,
     /// Feed (mm/min) for cutting moves programmed before any feed.
     #[arg(long)]
     pub feed: Option<f64>,
     /// Write block numbers (always on for Heidenhain).
     #[arg(long)]
     pub line_numbers: bool,
+    /// Write words the target cannot express as comments (a warning each)
+    /// instead of refusing the conversion.
+    #[arg(long)]
+    pub lossy: bool,
     /// Do not print reader diagnostics.
     #[arg(long, short)]
     pub quiet: bool,
@@ -44,18 +55,18 @@ pub fn run(a: Args) -> CliResult<i32> {
     let parsed = read_program(&a.input, read_options(a.units, a.feed))?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet);
     let p = parsed.program;
-    let dialect: Dialect = a.to.into();
-    let mut o = GcodeOptions::new(dialect);
-    o.unit = LengthUnit::from(a.out_units);
+    let target = target_for(a.to, &a.output, p.source)?;
+    let mut o = WriteOptions::new(target);
+    o.unit = a.out_units.map(LengthUnit::from);
     o.line_numbers = a.line_numbers;
-    let out = write_program(&p, dialect, o)
-        .map_err(|e| CliError::input(format!("{}: {e}", a.input.display())))?;
+    o.lossy = a.lossy;
+    let out = write_program(&p, o, &a.input, a.quiet)?;
     write_atomic(&a.output, &out, &[&a.input])?;
     eprintln!(
         "wrote {} ({} moves, {})",
         a.output.display(),
         p.move_count(),
-        dialect.name()
+        target.name()
     );
     Ok(EXIT_OK)
 }

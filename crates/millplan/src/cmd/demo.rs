@@ -4,8 +4,7 @@ use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::write_atomic;
 use millplan_geom::analytic::{tessellate, DemoSurface};
 use millplan_nc::generate::{raster, Raster};
-use millplan_nc::write::gcode::{write_gcode, GcodeOptions};
-use millplan_nc::Dialect;
+use millplan_nc::write::{write_program, Target, WriteOptions};
 use millplan_plan::machine::Machine;
 use millplan_plan::speed::{apply, SpeedParams};
 use std::path::PathBuf;
@@ -35,17 +34,16 @@ pub fn run(a: Args) -> CliResult<i32> {
     let (program, _) = raster(&surface, &Raster::default());
     let mut written = vec![(a.output.join("part.stl"), stl)];
     let mut apt = Vec::new();
-    millplan_nc::write::apt::write_apt(&program, &mut apt)
+    millplan_nc::write::apt::write_apt(&program, WriteOptions::new(Target::Apt), &mut apt)
         .map_err(|e| CliError::internal(e.to_string()))?;
     written.push((a.output.join("finish.apt"), apt));
-    for (d, name) in [
-        (Dialect::Fanuc, "finish_fanuc.nc"),
-        (Dialect::Sinumerik, "finish_sinumerik.mpf"),
-        (Dialect::Heidenhain, "finish_heidenhain.h"),
-        (Dialect::LinuxCnc, "finish_linuxcnc.ngc"),
+    for (t, name) in [
+        (Target::Fanuc, "finish_fanuc.nc"),
+        (Target::Sinumerik, "finish_sinumerik.mpf"),
+        (Target::Heidenhain, "finish_heidenhain.h"),
+        (Target::LinuxCnc, "finish_linuxcnc.ngc"),
     ] {
-        let mut out = Vec::new();
-        write_gcode(&program, GcodeOptions::new(d), &mut out)
+        let (out, _) = write_program(&program, WriteOptions::new(t))
             .map_err(|e| CliError::internal(e.to_string()))?;
         written.push((a.output.join(name), out));
     }
@@ -53,13 +51,8 @@ pub fn run(a: Args) -> CliResult<i32> {
     let params = SpeedParams::new(63.0, 0.125, 2, 0.3);
     let res = apply(&program, &mesh, &Machine::default(), &params)
         .map_err(|e| CliError::internal(e.to_string()))?;
-    let mut controlled = Vec::new();
-    write_gcode(
-        &res.program,
-        GcodeOptions::new(Dialect::Fanuc),
-        &mut controlled,
-    )
-    .map_err(|e| CliError::internal(e.to_string()))?;
+    let (controlled, _) = write_program(&res.program, WriteOptions::new(Target::Fanuc))
+        .map_err(|e| CliError::internal(e.to_string()))?;
     written.push((a.output.join("finish_constant_vc_fanuc.nc"), controlled));
     written.push((
         a.output.join("points.csv"),

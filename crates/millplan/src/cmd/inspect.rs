@@ -68,8 +68,8 @@ fn program_json(p: &Program, diags: usize, rapid_rate: f64) -> Value {
         })
         .collect();
     json!({
-        "format": format_name(p.dialect),
-        "dialect": p.dialect.name(),
+        "format": format_name(p.source),
+        "dialect": p.source.name(),
         "name": p.name,
         "units": match p.units.source { millplan_nc::LengthUnit::Mm => "mm", millplan_nc::LengthUnit::Inch => "inch" },
         "units_origin": p.units.origin,
@@ -170,7 +170,7 @@ fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
         "{}: {} ({})",
         path.display(),
         j["format"].as_str().unwrap_or(""),
-        p.dialect.name()
+        p.source.name()
     );
     println!("  units       {:?} ({:?})", p.units.source, p.units.origin);
     println!("  operations  {}", p.operations.len());

@@ -15,6 +15,7 @@ pub mod tool;
 pub mod wd;
 
 use clap::ValueEnum;
+use millplan_nc::write::{Target, WriteOptions};
 use millplan_nc::{LengthUnit, ReadOptions};
 
 /// Cutting data for the commands that evaluate spindle control along the way;
@@ -55,61 +56,60 @@ pub enum TargetArg {
     Apt,
 }
 
-impl From<TargetArg> for millplan_nc::Dialect {
+impl From<TargetArg> for Target {
     fn from(t: TargetArg) -> Self {
-        use millplan_nc::Dialect;
         match t {
-            TargetArg::Fanuc => Dialect::Fanuc,
-            TargetArg::Sinumerik => Dialect::Sinumerik,
-            TargetArg::Heidenhain => Dialect::Heidenhain,
-            TargetArg::Linuxcnc => Dialect::LinuxCnc,
-            TargetArg::Apt => Dialect::AptIso,
+            TargetArg::Fanuc => Target::Fanuc,
+            TargetArg::Sinumerik => Target::Sinumerik,
+            TargetArg::Heidenhain => Target::Heidenhain,
+            TargetArg::Linuxcnc => Target::LinuxCnc,
+            TargetArg::Apt => Target::Apt,
         }
     }
 }
 
-/// Writes a program in a dialect (APT or G-code).
-pub fn write_program(
-    p: &millplan_nc::Program,
-    dialect: millplan_nc::Dialect,
-    o: millplan_nc::write::gcode::GcodeOptions,
-) -> Result<Vec<u8>, millplan_nc::write::WriteError> {
-    // Room for a typical block per move up front: growing an 80 MB text by
-    // doubling copies it and faults in fresh pages each time.
-    let moves: usize = p.operations.iter().map(|o| o.moves.len()).sum();
-    let mut out = Vec::with_capacity(moves * 96 + 4096);
-    write_program_to(p, dialect, o, &mut out, None)?;
-    Ok(out)
-}
-
-fn write_program_to(
-    p: &millplan_nc::Program,
-    dialect: millplan_nc::Dialect,
-    o: millplan_nc::write::gcode::GcodeOptions,
-    out: &mut Vec<u8>,
-    sink: Option<millplan_nc::write::Sink>,
-) -> Result<(), millplan_nc::write::WriteError> {
-    if dialect.is_apt() {
-        millplan_nc::write::apt::write_apt_to(p, out, sink)
-    } else {
-        let o = millplan_nc::write::gcode::GcodeOptions { dialect, ..o };
-        millplan_nc::write::gcode::write_gcode_to(p, o, out, sink)
+/// The dialect an output is written in: `--to`, else the output file's
+/// extension, else the source's own dialect. Never a silent default: a
+/// program whose target none of these names is refused.
+pub fn target_for(
+    to: Option<TargetArg>,
+    output: &std::path::Path,
+    source: millplan_nc::Dialect,
+) -> crate::error::CliResult<Target> {
+    if let Some(t) = to {
+        return Ok(t.into());
     }
+    if let Some(t) = output
+        .extension()
+        .and_then(|e| e.to_str())
+        .and_then(Target::from_extension)
+    {
+        return Ok(t);
+    }
+    Target::of(source).ok_or_else(|| {
+        crate::error::CliError::input(format!(
+            "{}: say which dialect to write with --to (the file name's extension names none)",
+            output.display()
+        ))
+    })
 }
 
-/// Writes a program in a dialect straight into the file `path` (atomically,
+/// Writes a program for `o.target` straight into the file `path` (atomically,
 /// never over one of `inputs`), a few megabytes at a time: a large program is
-/// never held whole as text.
+/// never held whole as text. Words written as comments under `--lossy` are
+/// printed as warnings located in `source`.
 pub fn write_program_file(
     p: &millplan_nc::Program,
-    dialect: millplan_nc::Dialect,
-    o: millplan_nc::write::gcode::GcodeOptions,
+    o: WriteOptions,
     path: &std::path::Path,
+    source: &std::path::Path,
     inputs: &[&std::path::Path],
+    quiet: bool,
 ) -> crate::error::CliResult<()> {
     use millplan_nc::write::WriteError;
     use std::io::Write;
     let mut failed: Option<WriteError> = None;
+    let mut warnings = Vec::new();
     let written = crate::io::write_atomic_with(path, inputs, |f| {
         let mut buf = Vec::new();
         let mut io_error = None;
@@ -118,13 +118,16 @@ pub fn write_program_file(
                 f.write_all(b).map_err(|e| {
                     let message = e.to_string();
                     io_error = Some(e);
-                    WriteError { message }
+                    WriteError::new(0, message)
                 })
             };
-            write_program_to(p, dialect, o, &mut buf, Some(&mut sink))
+            millplan_nc::write::write_program_to(p, o, &mut buf, Some(&mut sink))
         };
         match (r, io_error) {
-            (Ok(()), _) => f.write_all(&buf),
+            (Ok(w), _) => {
+                warnings = w;
+                f.write_all(&buf)
+            }
             (Err(_), Some(e)) => Err(e),
             (Err(e), None) => {
                 failed = Some(e);
@@ -134,9 +137,35 @@ pub fn write_program_file(
     });
     match failed {
         // Something the target cannot express: the user's input, not the disk.
-        Some(e) => Err(crate::error::CliError::input(e.to_string())),
-        None => written,
+        Some(e) => Err(crate::error::CliError::input(located(source, &e))),
+        None => {
+            print_diagnostics(source, &warnings, quiet);
+            written
+        }
     }
+}
+
+/// `file:line:col: message` for a writer's error at a source line.
+fn located(source: &std::path::Path, e: &millplan_nc::write::WriteError) -> String {
+    if e.line > 0 {
+        format!("{}:{}:1: {}", source.display(), e.line, e.message)
+    } else {
+        format!("{}: {}", source.display(), e.message)
+    }
+}
+
+/// Writes a program for `o.target` into memory; words written as comments
+/// under `--lossy` are printed as warnings located in `source`.
+pub fn write_program(
+    p: &millplan_nc::Program,
+    o: WriteOptions,
+    source: &std::path::Path,
+    quiet: bool,
+) -> crate::error::CliResult<Vec<u8>> {
+    let (out, warnings) = millplan_nc::write::write_program(p, o)
+        .map_err(|e| crate::error::CliError::input(located(source, &e)))?;
+    print_diagnostics(source, &warnings, quiet);
+    Ok(out)
 }
 
 /// Source unit override shared by the reading commands.

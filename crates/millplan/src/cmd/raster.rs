@@ -1,10 +1,10 @@
 //! `millplan raster`: a finishing raster over an STL part.
 
-use crate::cmd::{write_program, TargetArg};
+use crate::cmd::{target_for, write_program, TargetArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_surface, write_atomic};
 use millplan_models::cutter::Shape;
-use millplan_nc::write::gcode::GcodeOptions;
+use millplan_nc::write::WriteOptions;
 use millplan_sim::dropcutter::DropMesh;
 use millplan_sim::raster::{raster, RasterParams};
 use std::path::PathBuf;
@@ -50,7 +50,8 @@ pub struct Args {
     pub feed: f64,
     #[arg(long, default_value_t = 6000.0)]
     pub spindle: f64,
-    /// Output dialect (default APT/CL).
+    /// Output dialect; default: from the output's extension (.apt/.cls APT,
+    /// .nc Fanuc, .mpf Sinumerik, .h Heidenhain, .ngc LinuxCNC).
     #[arg(long, value_enum)]
     pub to: Option<TargetArg>,
     #[arg(short, long)]
@@ -83,9 +84,8 @@ pub fn run(a: Args) -> CliResult<i32> {
             a.stl.display()
         )));
     }
-    let dialect = a.to.map(Into::into).unwrap_or(millplan_nc::Dialect::AptIso);
-    let out = write_program(&prog, dialect, GcodeOptions::new(dialect))
-        .map_err(|e| CliError::input(e.to_string()))?;
+    let target = target_for(a.to, &a.output, millplan_nc::Dialect::Generated)?;
+    let out = write_program(&prog, WriteOptions::new(target), &a.stl, false)?;
     write_atomic(&a.output, &out, &[a.stl.as_path()])?;
     let s = millplan_nc::stats::summarize(&prog, 15000.0);
     println!(

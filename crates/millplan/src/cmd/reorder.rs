@@ -1,11 +1,11 @@
 //! `millplan reorder`: reorder finishing points so the working diameter changes
 //! least between successive points (paper 000, thesis 5), with safe links.
 
-use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
+use crate::cmd::{print_diagnostics, read_options, target_for, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_program, read_surface, write_atomic};
 use clap::ValueEnum;
-use millplan_nc::write::gcode::GcodeOptions;
+use millplan_nc::write::WriteOptions;
 use millplan_nc::Program;
 use millplan_plan::reorder::{reorder, Method, ReorderParams, Start};
 use millplan_plan::speed::apply;
@@ -183,9 +183,8 @@ pub fn run(a: Args) -> CliResult<i32> {
             .map_err(|e| CliError::input(e.to_string()))?
             .program
     };
-    let dialect = a.to.map(Into::into).unwrap_or(parsed.program.dialect);
-    let out = write_program(&program, dialect, GcodeOptions::new(dialect))
-        .map_err(|e| CliError::input(e.to_string()))?;
+    let target = target_for(a.to, &a.output, parsed.program.source)?;
+    let out = write_program(&program, WriteOptions::new(target), &a.path, a.quiet)?;
     write_atomic(&a.output, &out, &[a.path.as_path(), a.stl.as_path()])?;
     if let (Some(path), Some(html)) = (&a.report, &html) {
         write_atomic(path, html.as_bytes(), &[a.path.as_path(), a.stl.as_path()])?;

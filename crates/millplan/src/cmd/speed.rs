@@ -1,11 +1,13 @@
 //! `millplan speed`: constant-cutting-speed spindle control for ball-end finishing.
 
-use crate::cmd::{print_diagnostics, read_options, write_program_file, TargetArg, UnitArg};
+use crate::cmd::{
+    print_diagnostics, read_options, target_for, write_program_file, TargetArg, UnitArg,
+};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_program, read_surface, write_atomic};
 use clap::ValueEnum;
 use millplan_models::contact::{Convention, NormalMode, Surface};
-use millplan_nc::write::gcode::GcodeOptions;
+use millplan_nc::write::WriteOptions;
 use millplan_plan::speed::{apply_on, FeedCoupling, SpeedParams};
 use std::path::PathBuf;
 
@@ -147,9 +149,20 @@ pub fn run(a: Args) -> CliResult<i32> {
     p.nearest_incentre = a.nearest_incentre;
     p.ball_d = a.ball_d;
     p.keep_rows = a.table.is_some() || a.report.is_some();
-    let dialect = match a.to {
-        Some(t) => t.into(),
-        None => machine.dialect_enum().unwrap_or(parsed.program.dialect),
+    let target = match (a.to, machine.target()) {
+        (None, Some(t)) => {
+            let by_name = target_for(None, &a.output, parsed.program.source)?;
+            if by_name != t && a.output.extension().is_some() {
+                return Err(CliError::input(format!(
+                    "{}: the machine file says {} but the file name says {}: give --to",
+                    a.output.display(),
+                    t.name(),
+                    by_name.name()
+                )));
+            }
+            t
+        }
+        (to, _) => target_for(to, &a.output, parsed.program.source)?,
     };
     let res = apply_on(parsed.program, &surface, &machine, &p)
         .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
@@ -157,10 +170,11 @@ pub fn run(a: Args) -> CliResult<i32> {
     let inputs = [a.path.as_path(), a.stl.as_path()];
     write_program_file(
         &res.program,
-        dialect,
-        GcodeOptions::new(dialect),
+        WriteOptions::new(target),
         &a.output,
+        &a.path,
         &inputs,
+        a.quiet,
     )?;
     if a.timings {
         eprintln!("{:>8.3} s  read STL", t_mesh);
@@ -203,7 +217,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     if a.json {
         let mut j = serde_json::to_value(s).unwrap_or_default();
         j["output"] = serde_json::json!(a.output.display().to_string());
-        j["dialect"] = serde_json::json!(dialect.name());
+        j["dialect"] = serde_json::json!(target.name());
         j["machine"] = serde_json::to_value(&machine).unwrap_or_default();
         println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
@@ -231,7 +245,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         if s.gap_flagged > 0 {
             println!("  warning    {} points are not R from the surface (gouge, wrong convention or a different part)", s.gap_flagged);
         }
-        println!("  wrote      {} ({})", a.output.display(), dialect.name());
+        println!("  wrote      {} ({})", a.output.display(), target.name());
     }
     Ok(EXIT_OK)
 }

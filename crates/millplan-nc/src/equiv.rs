@@ -1,0 +1,403 @@
+//! Do two programs command the same thing? Both are run through the same
+//! interpreter: every move becomes the positions a control steps through
+//! (canned cycles spelled out, arcs kept as arcs), with its feed, feed mode,
+//! spindle speed and tool orientation; then the two step lists are walked
+//! side by side, axis by axis.
+//!
+//! The second program may take more steps where the first took one (an arc
+//! written as chords, a cycle spelled out as lines), but every extra step must
+//! lie on the first program's path, and every step of the first must be
+//! reached. An axis unknown in one must be unknown in the other: a writer
+//! that invents a position, drops a G90 or loses a rotary axis fails here.
+//!
+//! `millplan convert` runs this on every program it writes (re-read from its
+//! own output) and refuses to write one that differs.
+
+use crate::ir::*;
+use crate::write::{cycle_moves, CycleStep};
+use millplan_geom::DVec3;
+
+/// How close two programs must agree.
+#[derive(Clone, Copy, Debug)]
+pub struct Tolerance {
+    /// Positions, mm (output decimals round by up to half a unit of the last place).
+    pub position: f64,
+    /// Distance from the path for intermediate steps (arcs written as chords), mm.
+    pub chord: f64,
+    /// Rotary angles, radians.
+    pub angle: f64,
+    /// Tool axes (length of the difference of unit vectors).
+    pub axis: f64,
+    /// Feeds, relative.
+    pub feed: f64,
+    /// Spindle speeds, 1/min (Fanuc writes whole numbers).
+    pub spindle: f64,
+}
+
+impl Default for Tolerance {
+    fn default() -> Self {
+        Tolerance {
+            position: 2e-4,
+            chord: 0.002,
+            angle: 2e-6,
+            axis: 2e-6,
+            feed: 1e-3,
+            spindle: 0.51,
+        }
+    }
+}
+
+/// Where two programs part.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("line {line_a} against line {line_b}: {message}")]
+pub struct Mismatch {
+    /// Source line in the first program (0: generated or at its end).
+    pub line_a: u32,
+    /// Source line in the second.
+    pub line_b: u32,
+    pub message: String,
+}
+
+/// What the comparison walked through.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Walked {
+    /// Steps of the first program, all matched.
+    pub steps: usize,
+    /// Steps of the second that lay on the first's path between them.
+    pub intermediate: usize,
+    /// Zero-length steps of the first that the second leaves out.
+    pub skipped: usize,
+}
+
+/// The path a step takes to its end.
+#[derive(Clone, Copy, Debug)]
+enum Path {
+    Line,
+    Arc(Arc),
+}
+
+/// One position a control steps to.
+#[derive(Clone, Copy, Debug)]
+struct Step {
+    start: DVec3,
+    end: DVec3,
+    path: Path,
+    rapid: bool,
+    feed: f64,
+    mode: FeedMode,
+    spindle: f64,
+    angles: [Option<f64>; 3],
+    axis: Option<DVec3>,
+    tool: Option<u32>,
+    line: u32,
+}
+
+/// The steps of a program, in order.
+fn steps(p: &Program) -> Vec<Step> {
+    let mut out = Vec::with_capacity(p.move_count());
+    for op in &p.operations {
+        let tool = op.tool.as_ref().and_then(|t| t.number);
+        let mut cur = op.start;
+        for m in &op.moves {
+            let o = op.orient(m);
+            let base = Step {
+                start: cur,
+                end: m.end,
+                path: Path::Line,
+                rapid: m.is_rapid(),
+                feed: m.feed,
+                mode: m.feed_mode,
+                spindle: m.spindle,
+                angles: o.map(|o| o.angles).unwrap_or([None; 3]),
+                axis: o.and_then(|o| o.axis).filter(|_| op.is_five_axis()),
+                tool,
+                line: m.line,
+            };
+            match m.kind {
+                MoveKind::Arc(_) => {
+                    let path = op.arc(m).map_or(Path::Line, |a| Path::Arc(*a));
+                    out.push(Step { path, ..base });
+                    cur = m.end;
+                }
+                MoveKind::Cycle(_) => {
+                    let Some(c) = op.cycle(m) else { continue };
+                    // Across to the hole at the height the tool stands, then down.
+                    let axis = op.axis(m).unwrap_or(DVec3::Z);
+                    let top = m.end + axis * c.retract.max(c.clearance);
+                    let z = if cur.z.is_nan() {
+                        top.z
+                    } else {
+                        cur.z.max(top.z)
+                    };
+                    let across = DVec3::new(m.end.x, m.end.y, z);
+                    let mut push = |end: DVec3, rapid: bool, feed: f64| {
+                        out.push(Step {
+                            start: cur,
+                            end,
+                            rapid,
+                            feed,
+                            mode: FeedMode::PerMinute,
+                            ..base
+                        });
+                        cur = end;
+                    };
+                    push(across, true, 0.0);
+                    // A cycle that cannot be spelled out compares by its hole.
+                    let v =
+                        cycle_moves(c, m.end, axis).unwrap_or_else(|_| vec![CycleStep::Rapid(top)]);
+                    for s in v {
+                        match s {
+                            CycleStep::Rapid(q) => push(q, true, 0.0),
+                            CycleStep::Feed(q, f) => push(q, false, f),
+                            CycleStep::Dwell(_) => {}
+                        }
+                    }
+                }
+                _ => {
+                    out.push(base);
+                    cur = m.end;
+                }
+            }
+        }
+    }
+    out
+}
+
+fn close(a: DVec3, b: DVec3, tol: f64) -> bool {
+    (0..3).all(|k| {
+        (a[k].is_nan() && b[k].is_nan())
+            || (!a[k].is_nan() && !b[k].is_nan() && (a[k] - b[k]).abs() <= tol)
+    })
+}
+
+/// Distance of `q` from the path of `s`, when both are known.
+fn off_path(s: &Step, q: DVec3) -> Option<f64> {
+    let (a, b) = (known(s.start)?, known(s.end)?);
+    let q = known(q)?;
+    Some(match s.path {
+        Path::Line => {
+            let d = b - a;
+            let t = if d.length_squared() > 0.0 {
+                ((q - a).dot(d) / d.length_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (a + d * t - q).length()
+        }
+        Path::Arc(arc) => {
+            // Nearest of a fine sampling: the step ends are checked exactly.
+            let n = ((arc.sweep * arc.radius / 0.05).ceil() as usize).clamp(8, 20_000);
+            (0..=n)
+                .map(|k| (arc.point_at(a, b, k as f64 / n as f64) - q).length())
+                .fold(f64::INFINITY, f64::min)
+        }
+    })
+}
+
+fn same_attrs(a: &Step, b: &Step, tol: &Tolerance) -> Result<(), String> {
+    if a.rapid != b.rapid {
+        return Err(format!(
+            "{} against {}",
+            if a.rapid { "rapid" } else { "feed" },
+            if b.rapid { "rapid" } else { "feed" }
+        ));
+    }
+    if !a.rapid {
+        if a.mode != b.mode {
+            return Err(format!("feed mode {:?} against {:?}", a.mode, b.mode));
+        }
+        if (a.feed - b.feed).abs() > tol.feed * a.feed.abs().max(1.0) {
+            return Err(format!("feed {} against {}", a.feed, b.feed));
+        }
+        if (a.spindle - b.spindle).abs() > tol.spindle {
+            return Err(format!("spindle {} against {}", a.spindle, b.spindle));
+        }
+    }
+    for k in 0..3 {
+        match (a.angles[k], b.angles[k]) {
+            (None, None) => {}
+            (Some(x), Some(y)) if (x - y).abs() <= tol.angle => {}
+            (x, y) => {
+                return Err(format!(
+                    "{} axis {:?} against {:?} (degrees)",
+                    ["A", "B", "C"][k],
+                    x.map(f64::to_degrees),
+                    y.map(f64::to_degrees)
+                ))
+            }
+        }
+    }
+    match (a.axis, b.axis) {
+        (Some(u), Some(v)) if (u - v).length() > tol.axis => {
+            return Err(format!("tool axis {u:?} against {v:?}"))
+        }
+        (Some(_), None) | (None, Some(_)) if a.angles == [None; 3] && b.angles == [None; 3] => {
+            return Err("tool axis present in one only".into())
+        }
+        _ => {}
+    }
+    if a.tool != b.tool {
+        return Err(format!("tool {:?} against {:?}", a.tool, b.tool));
+    }
+    if let (Path::Arc(x), Path::Arc(y)) = (a.path, b.path) {
+        // Rounded end points turn a small arc's sweep by up to their error
+        // over its radius.
+        let sweep_tol = 1e-4_f64.max(8.0 * tol.position / x.radius.max(1e-9));
+        if (x.centre - y.centre).length() > tol.position * 4.0
+            || x.normal.dot(y.normal) < 0.999_999
+            || (x.sweep - y.sweep).abs() > sweep_tol
+        {
+            return Err("a different arc to the same end".into());
+        }
+    }
+    Ok(())
+}
+
+/// Compares what `a` and `b` command, step by step.
+pub fn compare(a: &Program, b: &Program, tol: &Tolerance) -> Result<Walked, Mismatch> {
+    let (sa, sb) = (steps(a), steps(b));
+    let mut w = Walked::default();
+    let mut j = 0;
+    let miss = |x: Option<&Step>, y: Option<&Step>, message: String| Mismatch {
+        line_a: x.map_or(0, |s| s.line),
+        line_b: y.map_or(0, |s| s.line),
+        message,
+    };
+    for s in &sa {
+        loop {
+            let Some(t) = sb.get(j) else {
+                if close(s.start, s.end, tol.position) {
+                    w.skipped += 1;
+                    break;
+                }
+                return Err(miss(
+                    Some(s),
+                    None,
+                    format!("the second program ends before the step to {:?}", s.end),
+                ));
+            };
+            if close(t.end, s.end, tol.position) {
+                same_attrs(s, t, tol).map_err(|m| miss(Some(s), Some(t), m))?;
+                w.steps += 1;
+                j += 1;
+                break;
+            }
+            // A zero-length step the second program leaves out.
+            if close(s.start, s.end, tol.position) && same_angles(s, t) {
+                w.skipped += 1;
+                break;
+            }
+            match off_path(s, t.end) {
+                Some(d) if d <= tol.chord + tol.position => {
+                    w.intermediate += 1;
+                    j += 1;
+                }
+                _ => {
+                    return Err(miss(
+                        Some(s),
+                        Some(t),
+                        format!("step to {} against {}", fmt(s.end), fmt(t.end)),
+                    ))
+                }
+            }
+        }
+    }
+    if let Some(t) = sb.get(j) {
+        return Err(miss(
+            None,
+            Some(t),
+            format!("the second program goes on to {}", fmt(t.end)),
+        ));
+    }
+    Ok(w)
+}
+
+fn same_angles(s: &Step, t: &Step) -> bool {
+    s.angles.iter().zip(&t.angles).all(|(x, y)| match (x, y) {
+        (Some(x), Some(y)) => (x - y).abs() < 1e-6,
+        _ => true,
+    })
+}
+
+fn fmt(p: DVec3) -> String {
+    let c = |v: f64| {
+        if v.is_nan() {
+            "?".to_string()
+        } else {
+            format!("{v:.4}")
+        }
+    };
+    format!("({}, {}, {})", c(p.x), c(p.y), c(p.z))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{parse_program, ReadOptions};
+
+    fn read(s: &str) -> Program {
+        parse_program(s, ReadOptions::default())
+            .expect("reads")
+            .program
+    }
+
+    #[test]
+    fn the_same_program_in_other_words_is_the_same() {
+        let a = read("G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\nX10\nG2 X20 Y0 I5 J0\nM30\n");
+        let b = read(
+            "G21\nT1 M6\nG90 G0 X0. Y0. Z5.\nG1 Z-1. F100.\nG1 X10.\nX10.\nG2 X20 Y0 R5\nM30\n",
+        );
+        let w = compare(&a, &b, &Tolerance::default()).expect("same");
+        assert_eq!((w.steps, w.intermediate), (4, 1));
+    }
+
+    #[test]
+    fn incremental_mode_left_on_is_caught() {
+        let a = read("G21 G90\nT1 M6\nG0 X10 Y10 Z5\nG1 X20 F100\n");
+        let b = read("G21 G90\nT1 M6\nG0 X10 Y10 Z5\nG91\nG1 X20 F100\n");
+        let e = compare(&a, &b, &Tolerance::default()).expect_err("differs");
+        assert_eq!((e.line_a, e.line_b), (4, 5));
+    }
+
+    #[test]
+    fn an_invented_position_is_caught() {
+        // The source never says where X and Y are; a writer that makes them 0 differs.
+        let a = read("G21 G90\nT1 M6\nG0 Z20\nG0 X5 Y5\n");
+        let b = read("G21 G90\nT1 M6\nG0 X0 Y0 Z20\nG0 X5 Y5\n");
+        assert!(compare(&a, &b, &Tolerance::default()).is_err());
+    }
+
+    #[test]
+    fn chords_on_the_arc_pass_and_off_it_fail() {
+        let a = read("G21 G90\nT1 M6\nG0 X10 Y0 Z0\nG3 X0 Y10 I-10 J0 F100\n");
+        let mut chords = String::from("G21 G90\nT1 M6\nG0 X10 Y0 Z0\nG1 F100\n");
+        for k in 1..=20 {
+            let t = std::f64::consts::FRAC_PI_2 * k as f64 / 20.0;
+            chords.push_str(&format!("X{:.5} Y{:.5}\n", 10.0 * t.cos(), 10.0 * t.sin()));
+        }
+        let w = compare(
+            &a,
+            &read(&chords),
+            &Tolerance {
+                chord: 0.2,
+                ..Tolerance::default()
+            },
+        )
+        .expect("chords of the arc");
+        assert_eq!(w.intermediate, 19);
+        let off = "G21 G90\nT1 M6\nG0 X10 Y0 Z0\nG1 X5 Y5 F100\nX0 Y10\n";
+        assert!(compare(&a, &read(off), &Tolerance::default()).is_err());
+    }
+
+    #[test]
+    fn feed_modes_and_rotary_axes_count() {
+        let a = read("G21 G90\nT1 M6\nG0 X0 Y0 Z5 B0\nG93 G1 X10 B30 F50\n");
+        let b = read("G21 G90\nT1 M6\nG0 X0 Y0 Z5 B0\nG94 G1 X10 B30 F50\n");
+        assert!(compare(&a, &b, &Tolerance::default())
+            .expect_err("G93 against G94")
+            .message
+            .contains("feed mode"));
+        let c = read("G21 G90\nT1 M6\nG0 X0 Y0 Z5 B0\nG93 G1 X10 F50\n");
+        assert!(compare(&a, &c, &Tolerance::default()).is_err());
+    }
+}
