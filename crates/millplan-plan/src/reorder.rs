@@ -23,8 +23,9 @@
 //! drop-cutter check along it finds no gouge; otherwise the tool retracts to a
 //! clearance height, rapids across and plunges at the plunge feed.
 
+use crate::pipeline::{Changes, Context, Need, Pass, PassError, PassInfo};
 use millplan_geom::{DVec2, DVec3, TriMesh};
-use millplan_models::contact::{self, feed_angle, SideFinder, Surface};
+use millplan_models::contact::{self, feed_angle, SideFinder};
 use millplan_models::cutter::Shape;
 use millplan_models::wd::{self, Case};
 use millplan_nc::{EventKind, Move, MoveKind, Program};
@@ -561,10 +562,167 @@ fn optimised(
     (seq, original, reordered)
 }
 
-/// Reorders every 3-axis ball-end operation of a program.
+/// The pass as the pipeline runs it.
+pub static INFO: PassInfo = PassInfo {
+    name: "reorder",
+    needs: &[Need::Part],
+    changes: Changes::Order,
+    does: "cutting points of 3-axis ball-end operations reordered for small working-diameter changes, links gouge-checked or retracted (paper 000, thesis 5)",
+};
+
+/// Reordering as a pass; what it did stays with it for the report.
+pub struct ReorderPass {
+    pub params: ReorderParams,
+    pub outcome: Option<Outcome>,
+}
+
+/// What a reordering did, beside the program.
+pub struct Outcome {
+    pub stats: ReorderStats,
+    pub dw_original: Vec<f64>,
+    pub dw_reordered: Vec<f64>,
+    pub jump_original: Vec<bool>,
+    pub jump_reordered: Vec<bool>,
+    /// The indicators of both orders.
+    pub before: OrderIndicators,
+    pub after: OrderIndicators,
+}
+
+impl ReorderPass {
+    pub fn new(params: ReorderParams) -> ReorderPass {
+        ReorderPass {
+            params,
+            outcome: None,
+        }
+    }
+}
+
+impl Pass for ReorderPass {
+    fn info(&self) -> &'static PassInfo {
+        &INFO
+    }
+
+    fn run(&mut self, program: &mut Program, cx: &Context) -> Result<(), PassError> {
+        let r = reorder_in(program, cx, &self.params).map_err(|e| PassError::Input {
+            pass: INFO.name,
+            message: e.to_string(),
+        })?;
+        let rapid = cx.machine.rapid;
+        let before = indicators(
+            program,
+            &r.dw_original,
+            &r.jump_original,
+            self.params.vc,
+            rapid,
+        );
+        let after = indicators(
+            &r.program,
+            &r.dw_reordered,
+            &r.jump_reordered,
+            self.params.vc,
+            rapid,
+        );
+        *program = r.program;
+        self.outcome = Some(Outcome {
+            stats: r.stats,
+            dw_original: r.dw_original,
+            dw_reordered: r.dw_reordered,
+            jump_original: r.jump_original,
+            jump_reordered: r.jump_reordered,
+            before,
+            after,
+        });
+        Ok(())
+    }
+}
+
+/// Range of the change of a quantity between successive points.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Steps {
+    pub min: f64,
+    pub max: f64,
+}
+
+/// What an order of cutting points costs: successive changes of D_w
+/// (evaluated for the direction each point is reached from and the material
+/// cut before it) and of the spindle speed for constant cutting speed, plus
+/// path figures.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct OrderIndicators {
+    /// |ΔD_w| between points cut one after the other, mm.
+    pub delta_d_w: Steps,
+    /// The largest |ΔD_w| across a jump (retract and plunge), mm.
+    pub delta_d_w_across_jumps: f64,
+    /// |Δn| between points cut one after the other, 1/min.
+    pub delta_n: Steps,
+    /// Σ|Δn| between points cut one after the other, 1/min.
+    pub total_variation_n: f64,
+    pub jumps: usize,
+    pub cutting_mm: f64,
+    pub link_mm: f64,
+    pub rapids: usize,
+    pub time_s: f64,
+    pub points: usize,
+}
+
+/// The indicators of program `p` whose cutting points have working diameters
+/// `dw` (in cutting order) and jumps `jump` before them.
+pub fn indicators(
+    p: &Program,
+    dw: &[f64],
+    jump: &[bool],
+    vc: f64,
+    rapid_rate: f64,
+) -> OrderIndicators {
+    let n: Vec<f64> = dw.iter().map(|d| wd::spindle_speed(vc, *d)).collect();
+    // Changes between points cut one after the other; steps across jumps
+    // (retract and plunge) are reported apart: the spindle has time there.
+    let steps = |v: &[f64], across: bool| -> (Steps, f64) {
+        let d: Vec<f64> = (1..v.len())
+            .filter(|&k| jump.get(k).copied().unwrap_or(false) == across)
+            .map(|k| (v[k] - v[k - 1]).abs())
+            .collect();
+        let min = d.iter().copied().fold(f64::INFINITY, f64::min);
+        (
+            Steps {
+                min: if min.is_finite() { min } else { 0.0 },
+                max: d.iter().copied().fold(0.0, f64::max),
+            },
+            d.iter().sum(),
+        )
+    };
+    let (delta_d_w, _) = steps(dw, false);
+    let (delta_n, total_variation_n) = steps(&n, false);
+    let (across, _) = steps(dw, true);
+    let s = millplan_nc::stats::summarize(p, rapid_rate);
+    OrderIndicators {
+        delta_d_w,
+        delta_d_w_across_jumps: across.max,
+        delta_n,
+        total_variation_n,
+        jumps: jump.iter().filter(|j| **j).count(),
+        cutting_mm: s.cutting_mm,
+        link_mm: s.rapid_mm,
+        rapids: s.moves.rapid,
+        time_s: s.time_s,
+        points: dw.len(),
+    }
+}
+
+/// Reorders every 3-axis ball-end operation of a program against `mesh`.
 pub fn reorder(
     program: &Program,
     mesh: &TriMesh,
+    p: &ReorderParams,
+) -> Result<Reordered, ReorderError> {
+    let cx = Context::new(crate::machine::Machine::default()).with_part(mesh);
+    reorder_in(program, &cx, p)
+}
+
+/// [`reorder`] with the part's analyses from a pipeline's context.
+pub fn reorder_in(
+    program: &Program,
+    cx: &Context,
     p: &ReorderParams,
 ) -> Result<Reordered, ReorderError> {
     if !(p.ap > 0.0 && p.vc > 0.0 && p.n_min >= 1 && p.tie >= 0.0 && p.plunge_factor > 0.0) {
@@ -572,8 +730,9 @@ pub fn reorder(
             "ap, vc, plunge factor must be positive, n_min ≥ 1".into(),
         ));
     }
-    let surface = Surface::new(mesh);
-    let part = DropMesh::new(mesh);
+    let (Some(mesh), Some(surface), Some(part)) = (cx.mesh(), cx.surface(), cx.drop_mesh()) else {
+        return Err(ReorderError::Invalid("the part surface is needed".into()));
+    };
     let mut out = program.clone();
     let mut stats = ReorderStats::default();
     let (mut dw_original, mut dw_reordered) = (Vec::new(), Vec::new());
@@ -588,7 +747,11 @@ pub fn reorder(
         else {
             continue;
         };
+        // Only 3-axis operations of straight moves: a reordered path links
+        // points by straight moves, which would cut arcs short.
         if op.frame.is_some()
+            || !op.arcs.is_empty()
+            || !op.cycles.is_empty()
             || op
                 .orients
                 .iter()
@@ -602,8 +765,8 @@ pub fn reorder(
         }
         any = true;
         let mut cp = contact::Params::new(c.d, p.ap);
-        cp.convention = contact::detect_convention(&surface, &pts, c.d / 2.0).chosen;
-        let (centres, located) = contact::locate(&surface, &pts, &cp);
+        cp.convention = contact::detect_convention(surface, &pts, c.d / 2.0).chosen;
+        let (centres, located) = contact::locate(surface, &pts, &cp);
         let normals: Vec<DVec3> = located.iter().map(|l| l.1).collect();
         let mut spacing: Vec<f64> = pts
             .windows(2)
@@ -619,7 +782,7 @@ pub fn reorder(
         let (order, retract): (Vec<usize>, Vec<bool>) = match p.method {
             Method::Paper => paper_search(&centres, &normals, c.d, p, side_search, spacing, jump),
             Method::Optimised => {
-                let res = contact::analyse(&surface, &pts, &cp);
+                let res = contact::analyse(surface, &pts, &cp);
                 let dw: Vec<f64> = res.iter().map(|r| r.dw).collect();
                 let mut passes = Vec::new();
                 let mut a = 0;
@@ -696,7 +859,7 @@ pub fn reorder(
                     if i.abs_diff(j) == 1 && pts[i].pass == pts[j].pass {
                         return true;
                     }
-                    link_is_clean(&part, &shape, pts[i].cl, pts[j].cl, p.gouge_tol)
+                    link_is_clean(part, &shape, pts[i].cl, pts[j].cl, p.gouge_tol)
                 })
                 .collect()
         };

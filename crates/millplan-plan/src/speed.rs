@@ -17,6 +17,7 @@ use millplan_nc::{CutterKind, FeedMode, Program};
 use rayon::prelude::*;
 
 use crate::machine::Machine;
+use crate::pipeline::{Changes, Context, Need, Pass, PassError, PassInfo};
 
 /// How the feed follows the spindle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -314,11 +315,80 @@ pub fn apply_owned(
 /// [`apply_owned`] on a surface prepared beforehand (for example while the
 /// program was being read).
 pub fn apply_on(
-    program: Program,
+    mut program: Program,
     surface: &Surface,
     m: &Machine,
     p: &SpeedParams,
 ) -> Result<SpeedResult, SpeedError> {
+    let (rows, summary, timings) = apply_in_place(&mut program, surface, m, p)?;
+    Ok(SpeedResult {
+        program,
+        rows,
+        summary,
+        timings,
+    })
+}
+
+/// The pass as the pipeline runs it.
+pub static INFO: PassInfo = PassInfo {
+    name: "speed",
+    needs: &[Need::Part, Need::Machine],
+    changes: Changes::How,
+    does: "spindle speed per block for a constant cutting speed, within the machine's range and acceleration; feeds follow (paper 000, thesis 3)",
+};
+
+/// Constant-cutting-speed spindle control as a pass; its table and summary
+/// stay with it for the report.
+pub struct SpeedPass {
+    pub params: SpeedParams,
+    /// One row per cutting point when [`SpeedParams::keep_rows`].
+    pub rows: Vec<PointRow>,
+    pub summary: Option<Summary>,
+}
+
+impl SpeedPass {
+    pub fn new(params: SpeedParams) -> SpeedPass {
+        SpeedPass {
+            params,
+            rows: Vec::new(),
+            summary: None,
+        }
+    }
+}
+
+impl Pass for SpeedPass {
+    fn info(&self) -> &'static PassInfo {
+        &INFO
+    }
+
+    fn run(&mut self, program: &mut Program, cx: &Context) -> Result<(), PassError> {
+        let surface = cx
+            .surface()
+            .ok_or(PassError::NeedsPart { pass: INFO.name })?;
+        let (rows, summary, timings) = apply_in_place(program, surface, &cx.machine, &self.params)
+            .map_err(|e| PassError::Input {
+                pass: INFO.name,
+                message: e.to_string(),
+            })?;
+        for (name, t) in timings {
+            cx.record(&format!("  {name}"), t);
+        }
+        self.rows = rows;
+        self.summary = Some(summary);
+        Ok(())
+    }
+}
+
+type Applied = (Vec<PointRow>, Summary, Vec<(&'static str, f64)>);
+
+/// Spindle control on `program` in place: its rows, summary and phase times.
+/// On an error the program is as it was.
+pub fn apply_in_place(
+    program: &mut Program,
+    surface: &Surface,
+    m: &Machine,
+    p: &SpeedParams,
+) -> Result<Applied, SpeedError> {
     if !(p.vc > 0.0 && p.fz > 0.0 && p.flutes > 0 && p.ap > 0.0)
         || p.ball_d.map(|d| !(d > 0.0)).unwrap_or(false)
     {
@@ -334,7 +404,7 @@ pub fn apply_on(
         timings.push((name, clock.elapsed().as_secs_f64()));
         clock = std::time::Instant::now();
     };
-    let mut out = program;
+    let out = program;
     // The constant speed the program ran at: the first ball-end operation's
     // programmed spindle speed.
     let n0 = out
@@ -541,12 +611,7 @@ pub fn apply_on(
         return Err(SpeedError::NoBallOperation);
     }
     let summary = acc.finish(convention, check, ops);
-    Ok(SpeedResult {
-        program: out,
-        rows,
-        summary,
-        timings,
-    })
+    Ok((rows, summary, timings))
 }
 
 /// Moves per part of the cutting-point scan.

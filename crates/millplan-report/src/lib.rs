@@ -2,5 +2,7 @@
 //! (no network: everything inline).
 
 pub mod html;
+pub mod reorder;
+pub mod setup;
 pub mod svg;
 pub mod table;

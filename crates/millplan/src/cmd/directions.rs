@@ -5,7 +5,8 @@ use crate::cmd::{read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_program, read_surface};
 use clap::ValueEnum;
-use millplan_plan::speed::{apply, Summary};
+use millplan_plan::directions::{rank, raster_candidates, Candidate, RankBy as By};
+use millplan_plan::pipeline::Context;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -60,70 +61,55 @@ pub struct Args {
     pub json: bool,
 }
 
-fn key(s: &Summary, by: RankBy) -> f64 {
-    let i = &s.indicators;
-    match by {
-        RankBy::Tv => i.total_variation,
-        RankBy::MaxStep => i.max_step,
-        RankBy::Accel => i.max_accel,
-        RankBy::Integral => i.speed_integral,
-    }
-}
-
 pub fn run(a: Args) -> CliResult<i32> {
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let (mesh, _) = read_surface(&a.stl)?;
-    let params = a.cut.params();
-    let mut results = Vec::new();
+    let cx = Context::new(machine).with_part(&mesh);
+    let mut candidates = Vec::new();
     if !a.angles.is_empty() {
         let shape = millplan_models::cutter::Shape::parse(&a.tool).map_err(CliError::input)?;
         if !(a.stepover > 0.0 && a.step > 0.0) {
             return Err(CliError::input("--stepover and --step must be positive"));
         }
-        let part = millplan_sim::dropcutter::DropMesh::new(&mesh);
-        let bounds = mesh.bounds();
-        for &angle in &a.angles {
-            let mut rp = millplan_sim::raster::RasterParams::new(shape);
-            rp.angle_deg = angle;
-            rp.stepover = a.stepover;
-            rp.step = a.step;
-            let prog = millplan_sim::raster::raster(&part, &bounds, &rp);
-            let r = apply(&prog, &mesh, &machine, &params)
-                .map_err(|e| CliError::input(format!("raster at {angle}°: {e}")))?;
-            results.push((PathBuf::from(format!("raster {angle}°")), r.summary));
-        }
+        candidates = raster_candidates(&cx, shape, &a.angles, a.stepover, a.step)
+            .map_err(|e| crate::cmd::pass_error(&a.stl, e))?;
     }
     for p in &a.paths {
         let parsed = read_program(p, read_options(a.units, None))?;
-        let r = apply(&parsed.program, &mesh, &machine, &params)
-            .map_err(|e| CliError::input(format!("{}: {e}", p.display())))?;
-        results.push((p.clone(), r.summary));
+        candidates.push(Candidate {
+            name: p.display().to_string(),
+            program: parsed.program,
+        });
     }
-    results.sort_by(|x, y| key(&x.1, a.by).total_cmp(&key(&y.1, a.by)));
+    let by = match a.by {
+        RankBy::Tv => By::TotalVariation,
+        RankBy::MaxStep => By::MaxStep,
+        RankBy::Accel => By::Accel,
+        RankBy::Integral => By::Integral,
+    };
+    let ranked = rank(candidates, &cx, &a.cut.params(), by)
+        .map_err(|e| crate::cmd::pass_error(&a.stl, e))?;
     if a.json {
-        let rows: Vec<_> = results
+        let rows: Vec<_> = ranked
             .iter()
-            .enumerate()
-            .map(|(rank, (p, s))| json!({ "rank": rank + 1, "path": p.display().to_string(), "indicators": s.indicators, "d_w": s.d_w, "vc_constant": s.vc_constant, "points": s.points }))
+            .map(|r| {
+                let s = &r.summary;
+                json!({ "rank": r.rank, "path": r.name, "indicators": s.indicators, "d_w": s.d_w, "vc_constant": s.vc_constant, "points": s.points })
+            })
             .collect();
-        println!(
-            "{}",
-            serde_json::to_string_pretty(
-                &json!({ "ranked_by": format!("{:?}", a.by), "candidates": rows })
-            )
-            .unwrap_or_default()
-        );
+        let j = json!({ "ranked_by": format!("{:?}", a.by), "candidates": rows });
+        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
         println!(
             "{:>4}  {:<40} {:>12} {:>10} {:>12} {:>12} {:>10}",
             "rank", "path", "Σ|Δn|", "max|Δn|", "max accel", "∫n ds", "σ(D_w)"
         );
-        for (rank, (p, s)) in results.iter().enumerate() {
-            let i = &s.indicators;
+        for r in &ranked {
+            let (i, s) = (&r.summary.indicators, &r.summary);
             println!(
                 "{:>4}  {:<40} {:>12.0} {:>10.0} {:>12.0} {:>12.4e} {:>10.3}",
-                rank + 1,
-                p.display().to_string(),
+                r.rank,
+                r.name,
                 i.total_variation,
                 i.max_step,
                 i.max_accel,

@@ -168,6 +168,19 @@ pub fn write_program(
     Ok(out)
 }
 
+/// A pass's failure as the command reports it: the input's fault (exit 2,
+/// naming the program) or a bug (exit 1).
+pub fn pass_error(
+    path: &std::path::Path,
+    e: millplan_plan::pipeline::PassError,
+) -> crate::error::CliError {
+    if e.is_input() {
+        crate::error::CliError::input(format!("{}: {e}", path.display()))
+    } else {
+        crate::error::CliError::internal(format!("{}: {e}", path.display()))
+    }
+}
+
 /// Source unit override shared by the reading commands.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum UnitArg {

@@ -7,8 +7,10 @@ use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_program, read_surface, write_atomic};
 use clap::ValueEnum;
 use millplan_models::contact::{Convention, NormalMode, Surface};
-use millplan_nc::write::WriteOptions;
-use millplan_plan::speed::{apply_on, FeedCoupling, SpeedParams};
+use millplan_nc::write::{Target, WriteOptions};
+use millplan_plan::machine::Machine;
+use millplan_plan::pipeline::{self, Context};
+use millplan_plan::speed::{FeedCoupling, SpeedParams, SpeedPass, Summary};
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -101,34 +103,23 @@ pub struct Args {
     pub quiet: bool,
 }
 
-pub fn run(a: Args) -> CliResult<i32> {
-    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let t0 = std::time::Instant::now();
-    // The program is read on its own thread while the STL is read and its
-    // search trees are built (a program error is still reported first).
-    let reader = {
-        let (path, opts) = (a.path.clone(), read_options(a.units, None));
-        std::thread::spawn(move || {
-            let parsed = read_program(&path, opts);
-            (parsed, t0.elapsed().as_secs_f64())
-        })
-    };
-    let join =
-        |r: std::thread::JoinHandle<_>| r.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
-    let (mesh, _) = match read_surface(&a.stl) {
-        Ok(m) => m,
-        Err(e) => {
-            let (parsed, _): (CliResult<_>, f64) = join(reader);
-            parsed?;
-            return Err(e);
-        }
-    };
-    let t_mesh = t0.elapsed().as_secs_f64();
-    let surface = Surface::new(&mesh);
-    let t_surface = t0.elapsed().as_secs_f64() - t_mesh;
-    let (parsed, t_read) = join(reader);
-    let parsed = parsed?;
-    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+type Reader = std::thread::JoinHandle<(CliResult<millplan_nc::Parsed>, f64)>;
+
+/// Reads the program on its own thread, while the STL is read and its
+/// search trees are built.
+fn spawn_reader(a: &Args, t0: std::time::Instant) -> Reader {
+    let (path, opts) = (a.path.clone(), read_options(a.units, None));
+    std::thread::spawn(move || {
+        let parsed = read_program(&path, opts);
+        (parsed, t0.elapsed().as_secs_f64())
+    })
+}
+
+fn join(r: Reader) -> (CliResult<millplan_nc::Parsed>, f64) {
+    r.join().unwrap_or_else(|e| std::panic::resume_unwind(e))
+}
+
+fn params(a: &Args) -> SpeedParams {
     let mut p = SpeedParams::new(a.vc, a.fz, a.flutes, a.ap);
     p.feed = if a.keep_feed {
         FeedCoupling::Programmed
@@ -149,9 +140,15 @@ pub fn run(a: Args) -> CliResult<i32> {
     p.nearest_incentre = a.nearest_incentre;
     p.ball_d = a.ball_d;
     p.keep_rows = a.table.is_some() || a.report.is_some();
-    let target = match (a.to, machine.target()) {
+    p
+}
+
+/// The dialect to write: --to; else the machine's, which the file name must
+/// not contradict; else the file name's or the source's.
+fn target(a: &Args, machine: &Machine, source: millplan_nc::Dialect) -> CliResult<Target> {
+    match (a.to, machine.target()) {
         (None, Some(t)) => {
-            let by_name = target_for(None, &a.output, parsed.program.source)?;
+            let by_name = target_for(None, &a.output, source)?;
             if by_name != t && a.output.extension().is_some() {
                 return Err(CliError::input(format!(
                     "{}: the machine file says {} but the file name says {}: give --to",
@@ -160,44 +157,62 @@ pub fn run(a: Args) -> CliResult<i32> {
                     by_name.name()
                 )));
             }
-            t
+            Ok(t)
         }
-        (to, _) => target_for(to, &a.output, parsed.program.source)?,
+        (to, _) => target_for(to, &a.output, source),
+    }
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    let t0 = std::time::Instant::now();
+    let reader = spawn_reader(&a, t0);
+    let mesh = match read_surface(&a.stl) {
+        Ok((m, _)) => m,
+        // A program error is still reported first.
+        Err(e) => return Err(join(reader).0.err().unwrap_or(e)),
     };
-    let res = apply_on(parsed.program, &surface, &machine, &p)
-        .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
-    let t_apply = t0.elapsed().as_secs_f64();
+    let t_mesh = t0.elapsed().as_secs_f64();
+    let surface = Surface::new(&mesh);
+    let t_surface = t0.elapsed().as_secs_f64() - t_mesh;
+    let (parsed, t_read) = join(reader);
+    let parsed = parsed?;
+    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    let target = target(&a, &machine, parsed.program.source)?;
+    let cx = Context::new(machine).with_surface(surface);
+    cx.record("read STL", t_mesh);
+    cx.record("surface (BVH, vertex normals)", t_surface);
+    cx.record("read toolpath (beside the two above)", t_read);
+    let mut program = parsed.program;
+    let mut pass = SpeedPass::new(params(&a));
+    pipeline::run(&mut [&mut pass], &mut program, &cx)
+        .map_err(|e| crate::cmd::pass_error(&a.path, e))?;
+    let Some(summary) = pass.summary.take() else {
+        return Err(CliError::internal("the speed pass left no summary"));
+    };
     let inputs = [a.path.as_path(), a.stl.as_path()];
-    write_program_file(
-        &res.program,
-        WriteOptions::new(target),
-        &a.output,
-        &a.path,
-        &inputs,
-        a.quiet,
-    )?;
+    cx.time("program written and synced", || {
+        write_program_file(
+            &program,
+            WriteOptions::new(target),
+            &a.output,
+            &a.path,
+            &inputs,
+            a.quiet,
+        )
+    })?;
     if a.timings {
-        eprintln!("{:>8.3} s  read STL", t_mesh);
-        eprintln!("{:>8.3} s  surface (BVH, vertex normals)", t_surface);
-        eprintln!("{:>8.3} s  read toolpath (beside the two above)", t_read);
-        for (name, t) in &res.timings {
-            eprintln!("{t:>8.3} s  {name}");
+        for t in cx.timings() {
+            eprintln!("{:>8.3} s  {}", t.seconds, t.name);
         }
-        eprintln!(
-            "{:>8.3} s  program written and synced",
-            t0.elapsed().as_secs_f64() - t_apply
-        );
         eprintln!(
             "{:>8.3} s  total until the program is written",
             t0.elapsed().as_secs_f64()
         );
     }
     if let Some(t) = &a.table {
-        write_atomic(
-            t,
-            millplan_report::table::points_csv(&res.rows).as_bytes(),
-            &inputs,
-        )?;
+        let csv = millplan_report::table::points_csv(&pass.rows);
+        write_atomic(t, csv.as_bytes(), &inputs)?;
     }
     if let Some(r) = &a.report {
         let title = format!(
@@ -207,45 +222,48 @@ pub fn run(a: Args) -> CliResult<i32> {
                 .map(|f| f.to_string_lossy())
                 .unwrap_or_default()
         );
-        write_atomic(
-            r,
-            millplan_report::html::speed_report(&title, &res.summary, &res.rows, a.vc).as_bytes(),
-            &inputs,
-        )?;
+        let html = millplan_report::html::speed_report(&title, &summary, &pass.rows, a.vc);
+        write_atomic(r, html.as_bytes(), &inputs)?;
     }
-    let s = &res.summary;
     if a.json {
-        let mut j = serde_json::to_value(s).unwrap_or_default();
+        let mut j = serde_json::to_value(&summary).unwrap_or_default();
         j["output"] = serde_json::json!(a.output.display().to_string());
         j["dialect"] = serde_json::json!(target.name());
-        j["machine"] = serde_json::to_value(&machine).unwrap_or_default();
+        j["machine"] = serde_json::to_value(&cx.machine).unwrap_or_default();
         println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
-        println!(
-            "{} cutting points in {} ball-end operation(s), CL points read as {:?}",
-            s.points, s.operations, s.convention
-        );
-        println!(
-            "  D_w        {:.3} … {:.3} mm (mean {:.3})",
-            s.d_w.min, s.d_w.max, s.d_w.mean
-        );
-        println!(
-            "  spindle    {:.0} … {:.0} 1/min",
-            s.spindle.min, s.spindle.max
-        );
-        println!(
-            "  vc         {:.1} … {:.1} m/min with control; {:.1} … {:.1} at constant {:.0} 1/min",
-            s.vc_controlled.min,
-            s.vc_controlled.max,
-            s.vc_constant.min,
-            s.vc_constant.max,
-            s.constant_spindle
-        );
-        println!("  limits     {} clamped, {} rate-limited, {} held under the S threshold, {} feeds clamped", s.clamped, s.rate_limited, s.held, s.feed_clamped);
-        if s.gap_flagged > 0 {
-            println!("  warning    {} points are not R from the surface (gouge, wrong convention or a different part)", s.gap_flagged);
-        }
-        println!("  wrote      {} ({})", a.output.display(), target.name());
+        print_summary(&summary, &a.output, target);
     }
     Ok(EXIT_OK)
+}
+
+fn print_summary(s: &Summary, output: &std::path::Path, target: Target) {
+    println!(
+        "{} cutting points in {} ball-end operation(s), CL points read as {:?}",
+        s.points, s.operations, s.convention
+    );
+    println!(
+        "  D_w        {:.3} … {:.3} mm (mean {:.3})",
+        s.d_w.min, s.d_w.max, s.d_w.mean
+    );
+    println!(
+        "  spindle    {:.0} … {:.0} 1/min",
+        s.spindle.min, s.spindle.max
+    );
+    println!(
+        "  vc         {:.1} … {:.1} m/min with control; {:.1} … {:.1} at constant {:.0} 1/min",
+        s.vc_controlled.min,
+        s.vc_controlled.max,
+        s.vc_constant.min,
+        s.vc_constant.max,
+        s.constant_spindle
+    );
+    println!(
+        "  limits     {} clamped, {} rate-limited, {} held under the S threshold, {} feeds clamped",
+        s.clamped, s.rate_limited, s.held, s.feed_clamped
+    );
+    if s.gap_flagged > 0 {
+        println!("  warning    {} points are not R from the surface (gouge, wrong convention or a different part)", s.gap_flagged);
+    }
+    println!("  wrote      {} ({})", output.display(), target.name());
 }
