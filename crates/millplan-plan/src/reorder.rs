@@ -643,16 +643,22 @@ pub struct Steps {
     pub max: f64,
 }
 
+/// Range of |ΔD_w| between points cut one after the other, and its largest
+/// value across a jump (retract and plunge), mm.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct DwSteps {
+    pub min: f64,
+    pub max: f64,
+    pub max_across_jumps: f64,
+}
+
 /// What an order of cutting points costs: successive changes of D_w
 /// (evaluated for the direction each point is reached from and the material
 /// cut before it) and of the spindle speed for constant cutting speed, plus
 /// path figures.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct OrderIndicators {
-    /// |ΔD_w| between points cut one after the other, mm.
-    pub delta_d_w: Steps,
-    /// The largest |ΔD_w| across a jump (retract and plunge), mm.
-    pub delta_d_w_across_jumps: f64,
+    pub delta_d_w: DwSteps,
     /// |Δn| between points cut one after the other, 1/min.
     pub delta_n: Steps,
     /// Σ|Δn| between points cut one after the other, 1/min.
@@ -696,8 +702,11 @@ pub fn indicators(
     let (across, _) = steps(dw, true);
     let s = millplan_nc::stats::summarize(p, rapid_rate);
     OrderIndicators {
-        delta_d_w,
-        delta_d_w_across_jumps: across.max,
+        delta_d_w: DwSteps {
+            min: delta_d_w.min,
+            max: delta_d_w.max,
+            max_across_jumps: across.max,
+        },
         delta_n,
         total_variation_n,
         jumps: jump.iter().filter(|j| **j).count(),

@@ -30,7 +30,7 @@ pub fn rows(before: &OrderIndicators, after: &OrderIndicators) -> Vec<(String, S
             format!("{:.4}", v.delta_d_w.max)
         }),
         row("|ΔD_w| max across jumps (mm)", &|v| {
-            format!("{:.4}", v.delta_d_w_across_jumps)
+            format!("{:.4}", v.delta_d_w.max_across_jumps)
         }),
         row("successive |Δn| max (1/min)", &|v| {
             format!("{:.0}", v.delta_n.max)
