@@ -128,14 +128,22 @@ impl fmt::Display for Diagnostic {
             Severity::Note => "note",
             Severity::Warning => "warning",
         };
-        write!(
-            f,
-            "{}:{}: {sev}[{}]: {}",
-            self.line,
-            self.col.max(1),
-            self.code,
-            self.message
-        )
+        // A finding about the whole file has no line.
+        if self.line > 0 {
+            write!(f, "{}:{}: ", self.line, self.col.max(1))?;
+        }
+        write!(f, "{sev}[{}]: {}", self.code, self.message)
+    }
+}
+
+impl Diagnostic {
+    /// `file:line:col: severity[code]: message`, or `file: …` for the whole file.
+    pub fn located(&self, file: &str) -> String {
+        if self.line > 0 {
+            format!("{file}:{self}")
+        } else {
+            format!("{file}: {self}")
+        }
     }
 }
 

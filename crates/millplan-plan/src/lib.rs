@@ -5,6 +5,7 @@
 //! | [`speed`] | part mesh, ball-end tool, cutting data, machine | *how* (spindle speed and feed per block), never *what* is cut |
 //! | [`reorder`] | part mesh, 3-axis ball-end operations | the *order* of the cutting points and the links between them (every point is still cut) |
 
+pub mod checks;
 pub mod directions;
 pub mod machine;
 pub mod orient;

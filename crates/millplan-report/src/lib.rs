@@ -5,4 +5,5 @@ pub mod html;
 pub mod reorder;
 pub mod setup;
 pub mod svg;
+pub mod sweep;
 pub mod table;

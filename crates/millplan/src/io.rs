@@ -231,3 +231,33 @@ fn same_file(a: &Path, b: &Path) -> bool {
         _ => false,
     }
 }
+
+/// Where a path will be: its folder resolved (the file itself may not exist yet).
+fn resolved(p: &Path) -> std::path::PathBuf {
+    let dir = match p.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let dir = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+    match p.file_name() {
+        Some(f) => dir.join(f),
+        None => dir,
+    }
+}
+
+/// Refuses a run whose outputs would overwrite one another (`-o out.nc
+/// --report out.nc`), before anything is written.
+pub fn distinct_outputs(outputs: &[Option<&Path>]) -> CliResult<()> {
+    let given: Vec<&Path> = outputs.iter().flatten().copied().collect();
+    for (i, a) in given.iter().enumerate() {
+        for b in &given[i + 1..] {
+            if resolved(a) == resolved(b) || same_file(a, b) {
+                return Err(CliError::input(format!(
+                    "{}: two outputs would be written to this one file; give each its own name",
+                    a.display()
+                )));
+            }
+        }
+    }
+    Ok(())
+}

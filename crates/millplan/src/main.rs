@@ -59,7 +59,26 @@ fn small_pages_only() {
     }
 }
 
+/// A closed standard output (`millplan inspect --ir F | head -1`) ends the
+/// run quietly: the reader has what it wanted.
+fn quiet_on_closed_stdout() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let p = info.payload();
+        let msg = p
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| p.downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if msg.starts_with("failed printing to stdout") && msg.contains("Broken pipe") {
+            std::process::exit(EXIT_OK);
+        }
+        default(info)
+    }));
+}
+
 fn main() {
+    quiet_on_closed_stdout();
     small_pages_only();
     let cli = match Cli::try_parse() {
         Ok(c) => c,

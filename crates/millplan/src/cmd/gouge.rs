@@ -4,8 +4,9 @@ use crate::cmd::{print_diagnostics, read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface};
 use millplan_models::cutter::Shape;
+use millplan_plan::checks;
 use millplan_sim::dropcutter::DropMesh;
-use millplan_sim::gouge::{check, GougeParams};
+use millplan_sim::gouge::{check, GougeParams, GougeReport, Skipped};
 use std::path::PathBuf;
 
 /// Check a program for gouges: every cutting move (and with --rapids every
@@ -13,8 +14,10 @@ use std::path::PathBuf;
 /// the cutter would touch the part there (drop-cutter, exact for flat, ball,
 /// bull and cone cutters). Deeper than --tol is a gouge.
 ///
-/// Exit code 0 when clean, 3 when gouges were found. Moves whose tool axis is
-/// not +Z (5-axis) and canned cycles are counted as skipped.
+/// Exit code 0 when clean, 3 when gouges were found, 2 when the program does
+/// not say its tool's shape (give --tool) or no move could be checked. Moves
+/// whose tool axis is not +Z (5-axis), canned cycles and moves from a position
+/// the program has not set are counted as not checked, each kind apart.
 #[derive(clap::Args)]
 pub struct Args {
     /// Program (APT/CL or G-code).
@@ -43,7 +46,7 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    if !(a.tol >= 0.0) || !(a.step > 0.0) {
+    if !(a.tol >= 0.0 && a.tol.is_finite() && a.step > 0.0 && a.step.is_finite()) {
         return Err(CliError::input(
             "--tol must not be negative and --step must be positive",
         ));
@@ -54,7 +57,26 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     let parsed = read_program(&a.path, read_options(a.units, None))?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    // A check without the cutter's shape checks nothing: refuse rather than
+    // call the program clean.
+    if fallback.is_none() {
+        if let Some(op) = parsed.program.operations.iter().find(|op| {
+            op.moves.iter().any(|m| m.is_cutting())
+                && op.tool.as_ref().and_then(|t| t.cutter).is_none()
+        }) {
+            let line = op.tool.as_ref().map_or(0, |t| t.line);
+            return Err(CliError::input(format!(
+                "{}:{line}:1: the program does not say the shape of its tool; give it with --tool (ball:D, flat:D, bull:D:R, cone:D:ANGLE)",
+                a.path.display()
+            )));
+        }
+    }
     let (mesh, _) = read_surface(&a.stl)?;
+    print_diagnostics(
+        &a.stl,
+        &checks::mesh(&mesh).into_iter().collect::<Vec<_>>(),
+        a.quiet || a.json,
+    );
     let part = DropMesh::new(&mesh);
     let g = GougeParams {
         step: a.step,
@@ -68,42 +90,68 @@ pub fn run(a: Args) -> CliResult<i32> {
     let rep = check(&parsed.program, &part, shape, &g);
     if a.json {
         let mut j = serde_json::to_value(&rep).unwrap_or_default();
-        j["clean"] = serde_json::json!(rep.gouges.is_empty());
+        j["clean"] = serde_json::json!(rep.gouges.is_empty() && rep.moves_checked > 0);
         j["tol"] = serde_json::json!(a.tol);
         println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
-        for gg in &rep.gouges {
-            println!(
-                "{}:{}: gouge {:.4} mm deep at X{:.4} Y{:.4} Z{:.4} (operation {}, move {})",
-                a.path.display(),
-                gg.line,
-                gg.depth,
-                gg.at[0],
-                gg.at[1],
-                gg.at[2],
-                gg.operation,
-                gg.mv
-            );
-        }
-        println!(
-            "{} moves checked at {} points, {} skipped: {}",
-            rep.moves_checked,
-            rep.points_checked,
-            rep.moves_skipped,
-            if rep.gouges.is_empty() {
-                "clean".to_string()
-            } else {
-                format!(
-                    "{} gouging moves, deepest {:.4} mm",
-                    rep.gouges.len(),
-                    rep.max_depth
-                )
-            }
-        );
+        print_report(&a, &rep);
+    }
+    if rep.moves_checked == 0 {
+        return Err(CliError::input(format!(
+            "{}: no move could be checked ({})",
+            a.path.display(),
+            skipped(&rep.skipped)
+        )));
     }
     Ok(if rep.gouges.is_empty() {
         EXIT_OK
     } else {
         EXIT_FINDINGS
     })
+}
+
+fn skipped(s: &Skipped) -> String {
+    format!(
+        "{} without a tool shape, {} with a tilted or unknown tool axis, {} canned-cycle holes, {} from or to an unknown position",
+        s.no_tool, s.tilted, s.cycles, s.unknown_position
+    )
+}
+
+fn print_report(a: &Args, rep: &GougeReport) {
+    for gg in &rep.gouges {
+        println!(
+            "{}:{}: gouge {:.4} mm deep at X{:.4} Y{:.4} Z{:.4} (operation {}, move {})",
+            a.path.display(),
+            gg.line,
+            gg.depth,
+            gg.at[0],
+            gg.at[1],
+            gg.at[2],
+            gg.operation,
+            gg.mv
+        );
+    }
+    println!(
+        "{} moves checked at {} points: {}",
+        rep.moves_checked,
+        rep.points_checked,
+        if rep.moves_checked == 0 {
+            "nothing checked".to_string()
+        } else if rep.gouges.is_empty() {
+            "clean".to_string()
+        } else {
+            format!(
+                "{} gouging moves, deepest {:.4} mm",
+                rep.gouges.len(),
+                rep.max_depth
+            )
+        }
+    );
+    if rep.moves_skipped > 0 {
+        println!(
+            "{} moves not checked: {}",
+            rep.moves_skipped,
+            skipped(&rep.skipped)
+        );
+    }
 }

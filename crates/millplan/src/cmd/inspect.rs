@@ -80,6 +80,7 @@ fn program_json(p: &Program, diags: usize, rapid_rate: f64) -> Value {
         "bounds": bounds_json(&s.bounds),
         "length_mm": { "cutting": s.cutting_mm, "rapid": s.rapid_mm },
         "time_s": s.time_s,
+        "unknown_moves": s.unknown_moves,
         "diagnostics": diags,
     })
 }
@@ -102,67 +103,98 @@ pub fn run(a: Args) -> CliResult<i32> {
             }
         }
         Input::Mesh(mesh, r) => {
-            let b = mesh.bounds();
-            let size = b.size();
-            let edges = mesh.edge_report();
-            let guess = if size.max_element() < 30.0 {
-                "inch (guess: the part is under 30 units across)"
-            } else {
-                "mm"
-            };
-            let j = json!({
-                "format": "stl",
-                "encoding": match r.format { millplan_geom::stl::StlFormat::Binary => "binary", _ => "ascii" },
-                "header": r.header,
-                "triangles": mesh.len(),
-                "facets_in_file": r.facets_in_file,
-                "vertices": mesh.vertices.len(),
-                "degenerate": r.degenerate,
-                "open_edges": edges.open,
-                "non_manifold_edges": edges.non_manifold,
-                "zero_normals": r.zero_normals,
-                "flipped_normals": r.flipped_normals,
-                "trailing_bytes": r.trailing_bytes,
-                "bounds": bounds_json(&b),
-                "units_guess": if size.max_element() < 30.0 { "inch" } else { "mm" },
-            });
+            let j = mesh_json(&mesh, &r);
             if a.json {
                 println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
             } else {
-                println!(
-                    "{}: STL ({}), header \"{}\"",
-                    a.file.display(),
-                    j["encoding"].as_str().unwrap_or(""),
-                    r.header
-                );
-                println!(
-                    "  triangles      {} ({} in file, {} degenerate dropped)",
-                    mesh.len(),
-                    r.facets_in_file,
-                    r.degenerate
-                );
-                println!("  vertices       {} after welding", mesh.vertices.len());
-                println!(
-                    "  open edges     {}   non-manifold edges {}",
-                    edges.open, edges.non_manifold
-                );
-                println!(
-                    "  stored normals {} zero, {} against the vertex order",
-                    r.zero_normals, r.flipped_normals
-                );
-                if r.trailing_bytes > 0 {
-                    println!("  trailing bytes {} after the last facet", r.trailing_bytes);
-                }
-                println!("  bounds         {:.4} .. {:.4}", b.min, b.max);
-                println!(
-                    "  size           {:.4} x {:.4} x {:.4}",
-                    size.x, size.y, size.z
-                );
-                println!("  units          {guess}");
+                print_mesh(&a.file, &j);
             }
         }
     }
     Ok(EXIT_OK)
+}
+
+/// A part's size says little about its unit; under 30 units across, inches
+/// are the likelier.
+fn units_guess(size: millplan_geom::DVec3) -> &'static str {
+    if size.max_element() < 30.0 {
+        "inch"
+    } else {
+        "mm"
+    }
+}
+
+fn mesh_json(mesh: &millplan_geom::TriMesh, r: &millplan_geom::stl::StlReport) -> Value {
+    let b = mesh.bounds();
+    let edges = mesh.edge_report();
+    json!({
+        "format": "stl",
+        "encoding": match r.format { millplan_geom::stl::StlFormat::Binary => "binary", _ => "ascii" },
+        "header": r.header,
+        "triangles": mesh.len(),
+        "facets_in_file": r.facets_in_file,
+        "vertices": mesh.vertices.len(),
+        "degenerate": r.degenerate,
+        "open_edges": edges.open,
+        "non_manifold_edges": edges.non_manifold,
+        "zero_normals": r.zero_normals,
+        "flipped_normals": r.flipped_normals,
+        "trailing_bytes": r.trailing_bytes,
+        "bounds": bounds_json(&b),
+        "units_guess": units_guess(b.size()),
+    })
+}
+
+fn print_mesh(path: &std::path::Path, j: &Value) {
+    println!(
+        "{}: STL ({}), header {}",
+        path.display(),
+        j["encoding"].as_str().unwrap_or(""),
+        j["header"]
+    );
+    println!(
+        "  triangles      {} ({} in file, {} degenerate dropped)",
+        j["triangles"], j["facets_in_file"], j["degenerate"]
+    );
+    println!("  vertices       {} after welding", j["vertices"]);
+    println!(
+        "  open edges     {}   non-manifold edges {}",
+        j["open_edges"], j["non_manifold_edges"]
+    );
+    println!(
+        "  stored normals {} zero, {} against the vertex order",
+        j["zero_normals"], j["flipped_normals"]
+    );
+    if j["trailing_bytes"].as_u64().unwrap_or(0) > 0 {
+        println!(
+            "  trailing bytes {} after the last facet",
+            j["trailing_bytes"]
+        );
+    }
+    if let Some(b) = j["bounds"].as_object() {
+        let v = |k: &str, i: usize| b[k][i].as_f64().unwrap_or(0.0);
+        println!(
+            "  bounds         [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}]",
+            v("min", 0),
+            v("min", 1),
+            v("min", 2),
+            v("max", 0),
+            v("max", 1),
+            v("max", 2)
+        );
+        println!(
+            "  size           {:.4} x {:.4} x {:.4}",
+            v("max", 0) - v("min", 0),
+            v("max", 1) - v("min", 1),
+            v("max", 2) - v("min", 2)
+        );
+    }
+    match j["units_guess"].as_str() {
+        Some("inch") => {
+            println!("  units          inch (guess: the part is under 30 units across)")
+        }
+        _ => println!("  units          mm"),
+    }
 }
 
 fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
@@ -208,6 +240,12 @@ fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
         j["length_mm"]["cutting"].as_f64().unwrap_or(0.0),
         j["length_mm"]["rapid"].as_f64().unwrap_or(0.0)
     );
+    let unknown = j["unknown_moves"].as_u64().unwrap_or(0);
+    if unknown > 0 {
+        println!(
+            "  unknown     {unknown} moves from or to a position the program has not set (left out of lengths, bounds and time)"
+        );
+    }
     let t = j["time_s"].as_f64().unwrap_or(0.0);
     println!(
         "  time        {:.0} s ({}:{:02}:{:02}) at programmed feeds",

@@ -213,7 +213,7 @@ pub fn print_diagnostics(path: &std::path::Path, diags: &[millplan_nc::Diagnosti
         return;
     }
     for d in diags {
-        eprintln!("{}:{d}", path.display());
+        eprintln!("{}", d.located(&path.display().to_string()));
     }
 }
 

@@ -1,11 +1,13 @@
 //! `millplan raster`: a finishing raster over an STL part.
 
-use crate::cmd::{target_for, write_program, TargetArg};
-use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::cmd::{print_diagnostics, target_for, write_program, TargetArg};
+use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_surface, write_atomic};
 use millplan_models::cutter::Shape;
 use millplan_nc::write::WriteOptions;
+use millplan_plan::checks;
 use millplan_sim::dropcutter::DropMesh;
+use millplan_sim::gouge::{check, GougeParams};
 use millplan_sim::raster::{raster, RasterParams};
 use std::path::PathBuf;
 
@@ -14,6 +16,9 @@ use std::path::PathBuf;
 /// where the surface bends until the chord stays within --tol of the surface.
 /// Zig-zag passes are linked along the surface; one-way passes retract to a
 /// clearance plane. Writes APT/CL (or a G-code dialect with --to).
+///
+/// The raster is then checked for gouges as `millplan gouge` would check it;
+/// one that cuts into the part is not written (exit 3) unless --force.
 #[derive(clap::Args)]
 pub struct Args {
     /// Part surface (STL).
@@ -56,11 +61,35 @@ pub struct Args {
     pub to: Option<TargetArg>,
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Write the raster even when its own gouge check finds it cutting into
+    /// the part (a mesh with holes or seams can make drop-cutter miss material).
+    #[arg(long)]
+    pub force: bool,
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
     let shape = Shape::parse(&a.tool).map_err(CliError::input)?;
-    if !(a.stepover > 0.0 && a.step > 0.0 && a.feed > 0.0 && a.spindle >= 0.0 && a.tol >= 0.0) {
+    let finite = [
+        a.stepover,
+        a.step,
+        a.feed,
+        a.spindle,
+        a.tol,
+        a.angle,
+        a.boundary,
+        a.clearance,
+    ]
+    .iter()
+    .all(|v| v.is_finite());
+    if !(finite
+        && a.stepover > 0.0
+        && a.step > 0.0
+        && a.feed > 0.0
+        && a.spindle >= 0.0
+        && a.tol >= 0.0)
+    {
         return Err(CliError::input(
             "--stepover, --step and --feed must be positive, --tol not negative",
         ));
@@ -77,6 +106,11 @@ pub fn run(a: Args) -> CliResult<i32> {
     p.clearance = a.clearance;
     p.feed = a.feed;
     p.spindle = a.spindle;
+    print_diagnostics(
+        &a.stl,
+        &checks::mesh(&mesh).into_iter().collect::<Vec<_>>(),
+        a.quiet,
+    );
     let prog = raster(&part, &mesh.bounds(), &p);
     if prog.move_count() == 0 {
         return Err(CliError::input(format!(
@@ -85,16 +119,37 @@ pub fn run(a: Args) -> CliResult<i32> {
         )));
     }
     let target = target_for(a.to, &a.output, millplan_nc::Dialect::Generated)?;
-    let out = write_program(&prog, WriteOptions::new(target), &a.stl, false)?;
+    // The raster checked as `millplan gouge` would check it.
+    let rep = check(&prog, &part, |_| Some(shape), &GougeParams::default());
+    if !rep.gouges.is_empty() {
+        eprintln!(
+            "{}: the raster's own gouge check finds {} moves cutting into the part, deepest {:.4} mm{}",
+            a.stl.display(),
+            rep.gouges.len(),
+            rep.max_depth,
+            if a.force { "; written anyway (--force)" } else { "; not written (--force writes it)" }
+        );
+        if !a.force {
+            return Ok(EXIT_FINDINGS);
+        }
+    }
+    let out = write_program(&prog, WriteOptions::new(target), &a.stl, a.quiet)?;
     write_atomic(&a.output, &out, &[a.stl.as_path()])?;
     let s = millplan_nc::stats::summarize(&prog, 15000.0);
     println!(
-        "wrote {}: {} moves, {:.0} mm cutting, {:.0} s at {} mm/min",
+        "wrote {}: {} moves, {:.0} mm cutting, {:.0} s at {} mm/min; gouge check: {} moves at {} points, {}",
         a.output.display(),
         prog.move_count(),
         s.cutting_mm,
         s.time_s,
-        a.feed
+        a.feed,
+        rep.moves_checked,
+        rep.points_checked,
+        if rep.gouges.is_empty() { "clean" } else { "gouges" }
     );
-    Ok(EXIT_OK)
+    Ok(if rep.gouges.is_empty() {
+        EXIT_OK
+    } else {
+        EXIT_FINDINGS
+    })
 }

@@ -91,6 +91,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     if !(a.max_step >= 0.0) {
         return Err(CliError::input("--max-step must be ≥ 0 (mm)"));
     }
+    crate::io::distinct_outputs(&[Some(&a.output), a.report.as_deref()])?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let parsed = read_program(&a.path, read_options(a.units, None))?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);

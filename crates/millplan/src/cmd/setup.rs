@@ -190,6 +190,7 @@ fn params(a: &Args) -> CliResult<SetupParams> {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    crate::io::distinct_outputs(&[a.output.as_deref(), a.report.as_deref()])?;
     let machine = machine(&a)?;
     let p = params(&a)?;
     let (mut mesh, _) = read_surface(&a.stl)?;

@@ -3,11 +3,12 @@
 use crate::cmd::{
     print_diagnostics, read_options, target_for, write_program_file, TargetArg, UnitArg,
 };
-use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, write_atomic};
 use clap::ValueEnum;
 use millplan_models::contact::{Convention, NormalMode, Surface};
 use millplan_nc::write::{Target, WriteOptions};
+use millplan_plan::checks;
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context};
 use millplan_plan::speed::{FeedCoupling, SpeedParams, SpeedPass, Summary};
@@ -36,6 +37,10 @@ pub enum NormalArg {
 /// n = 1000·vc/(π·D_w), within the machine's spindle range and acceleration.
 /// By default the feed follows, F = n·z·fz, so the chip load stays constant.
 /// Only speeds and feeds change, never positions.
+///
+/// Exit code 3 (the program is still written) when more than 5 % of the
+/// cutting points do not touch the part: the part does not match the program,
+/// or the CL points are not what --convention says, and the speeds mean nothing.
 #[derive(clap::Args)]
 pub struct Args {
     /// Toolpath: APT/CL or G-code with a ball-end tool.
@@ -164,6 +169,7 @@ fn target(a: &Args, machine: &Machine, source: millplan_nc::Dialect) -> CliResul
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    crate::io::distinct_outputs(&[Some(&a.output), a.table.as_deref(), a.report.as_deref()])?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let t0 = std::time::Instant::now();
     let reader = spawn_reader(&a, t0);
@@ -190,6 +196,12 @@ pub fn run(a: Args) -> CliResult<i32> {
     let Some(summary) = pass.summary.take() else {
         return Err(CliError::internal("the speed pass left no summary"));
     };
+    // A part that does not match its path makes every speed meaningless.
+    let findings: Vec<_> = [checks::mesh(&mesh), checks::off_surface(&summary)]
+        .into_iter()
+        .flatten()
+        .collect();
+    print_diagnostics(&a.stl, &findings, a.quiet || a.json);
     let inputs = [a.path.as_path(), a.stl.as_path()];
     cx.time("program written and synced", || {
         write_program_file(
@@ -230,11 +242,17 @@ pub fn run(a: Args) -> CliResult<i32> {
         j["output"] = serde_json::json!(a.output.display().to_string());
         j["dialect"] = serde_json::json!(target.name());
         j["machine"] = serde_json::to_value(&cx.machine).unwrap_or_default();
+        j["findings"] = serde_json::to_value(&findings).unwrap_or_default();
+        j["trusted"] = serde_json::json!(!checks::untrusted(&summary));
         println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
         print_summary(&summary, &a.output, target);
     }
-    Ok(EXIT_OK)
+    Ok(if checks::untrusted(&summary) {
+        EXIT_FINDINGS
+    } else {
+        EXIT_OK
+    })
 }
 
 fn print_summary(s: &Summary, output: &std::path::Path, target: Target) {

@@ -3,9 +3,7 @@
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::write_atomic;
 use millplan_models::regression::{samples, Surrogate};
-use millplan_models::wd::{self, Case, Neighbour, Side};
-use millplan_report::svg::{line_plot, Series};
-use std::fmt::Write;
+use millplan_report::sweep::{page, sweep, Design};
 use std::path::PathBuf;
 
 /// Tabulate and plot the working diameter over tool diameter, depth of cut,
@@ -41,92 +39,25 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    if !(a.af_step > 0.0)
-        || a.d.iter().chain(&a.ap).any(|v| !(*v > 0.0))
-        || a.alpha.iter().any(|v| !(0.0..90.0).contains(v))
-    {
-        return Err(CliError::input(
-            "diameters and depths must be positive, inclinations in [0, 90), --af-step > 0",
-        ));
-    }
+    let design = Design {
+        d: a.d,
+        ap: a.ap,
+        ae: a.ae,
+        alpha: a.alpha,
+        af_step: a.af_step,
+    };
+    design.check().map_err(CliError::input)?;
     std::fs::create_dir_all(&a.output)
         .map_err(|e| CliError::input(format!("{}: {e}", a.output.display())))?;
-    let mut csv = String::from("d,ap,ae,alpha_deg,af_deg,uncut_side,milling,d_w,d_cc,n_at_vc63\n");
-    let mut html = String::from("<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>Working diameter sweep</title></head><body style=\"font-family:sans-serif\"><h1>Working diameter sweep</h1>");
-    let colors = [
-        "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
-    ];
-    let steps = (180.0 / a.af_step).round() as usize;
-    for &d in &a.d {
-        for &ae in &a.ae {
-            for side in [Side::Right, Side::Left] {
-                // With M3: uncut on the right = climb (down) milling.
-                let milling = if side == Side::Right { "down" } else { "up" };
-                for &ap in &a.ap {
-                    let mut series = Vec::new();
-                    for (k, &alpha) in a.alpha.iter().enumerate() {
-                        let mut pts = Vec::new();
-                        for i in 0..=steps {
-                            let af = (a.af_step * i as f64).min(180.0);
-                            let c = Case {
-                                d,
-                                ap,
-                                neighbour: if ae > 0.0 {
-                                    Neighbour::One(ae)
-                                } else {
-                                    Neighbour::None
-                                },
-                                alpha: alpha.to_radians(),
-                                af: af.to_radians(),
-                                side,
-                            };
-                            let dw = wd::working_diameter(&c);
-                            let _ = writeln!(
-                                csv,
-                                "{d},{ap},{ae},{alpha},{af},{},{milling},{dw:.5},{:.5},{:.1}",
-                                if side == Side::Left { "left" } else { "right" },
-                                wd::contact_diameter(d, c.alpha),
-                                wd::spindle_speed(63.0, dw)
-                            );
-                            pts.push((af, dw));
-                        }
-                        series.push(Series {
-                            name: "",
-                            color: colors[k % colors.len()],
-                            points: pts,
-                        });
-                    }
-                    let names: Vec<String> = a.alpha.iter().map(|x| format!("α = {x}°")).collect();
-                    for (s, n) in series.iter_mut().zip(&names) {
-                        s.name = n;
-                    }
-                    let _ = write!(
-                        html,
-                        "<figure>{}</figure>",
-                        line_plot(
-                            &format!("D = {d} mm, ap = {ap} mm, ae = {ae} mm, {milling} milling"),
-                            "relative feed direction A_f (°)",
-                            "D_w (mm)",
-                            &series
-                        )
-                    );
-                }
-            }
-        }
-    }
-    if a.fit {
-        let s = Surrogate::fit(&samples());
-        let _ = write!(
-            html,
-            "<h2>Regression surrogate (thesis 2)</h2><p>{} samples, R² {:.4}, RMSE {:.4} mm, MAPE {:.2} %</p>",
-            s.fit.samples, s.fit.r2, s.fit.rmse, s.fit.mape
-        );
+    let (csv, figures) = sweep(&design);
+    let fit = a.fit.then(|| Surrogate::fit(&samples()).fit);
+    if let Some(f) = &fit {
         println!(
             "regression surrogate: {} samples, R² {:.4}, RMSE {:.4} mm, MAPE {:.2} %",
-            s.fit.samples, s.fit.r2, s.fit.rmse, s.fit.mape
+            f.samples, f.r2, f.rmse, f.mape
         );
     }
-    html.push_str("</body></html>");
+    let html = page(&figures, fit.as_ref());
     let (c, h) = (
         a.output.join("wd_sweep.csv"),
         a.output.join("wd_sweep.html"),
