@@ -14,8 +14,10 @@
 //!   - beyond LBREAK/RBREAK: broken. Lock the tool and the pallet (the thread
 //!     just cut is suspect) and switch to the sister tool if possible.
 
-use crate::db::{get_tool, log_event, put_tool_tx, DbError, ToolDb, ToolRecord};
-use rusqlite::params;
+use crate::db::{
+    damaged_or_sql, get_tool, latest_presetter, log_event, put_tool_tx, DbError, ToolDb, ToolRecord,
+};
+use rusqlite::{params, OptionalExtension};
 use serde_json::json;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -106,8 +108,16 @@ pub fn record(db: &mut ToolDb, m: &Measurement, s: &Settings) -> Result<Outcome,
             "the setup tolerance Δset must not be negative".into(),
         ));
     }
-    let presetter = db.latest_presetter(m.tool)?;
-    let tx = db.conn().transaction()?;
+    let per_tooth = match &m.per_tooth {
+        Some(teeth) => Some(
+            serde_json::to_string(teeth)
+                .map_err(|e| DbError::Invalid(format!("per-tooth radii: {e}")))?,
+        ),
+        None => None,
+    };
+    // The write lock first: what is read below cannot change before the commit.
+    let tx = db.transaction()?;
+    let presetter = latest_presetter(&tx, m.tool)?;
     let mut t = get_tool(&tx, m.tool)?.ok_or(DbError::UnknownTool(m.tool))?;
     // The radius that matters is the worst (smallest) tooth.
     let r_meas = match (&m.per_tooth, m.r) {
@@ -125,7 +135,7 @@ pub fn record(db: &mut ToolDb, m: &Measurement, s: &Settings) -> Result<Outcome,
             },
             m.l,
             r_meas,
-            m.per_tooth.as_ref().map(|v| serde_json::to_string(v).unwrap_or_default()),
+            per_tooth,
             m.pz
         ],
     )?;
@@ -288,6 +298,8 @@ pub fn record(db: &mut ToolDb, m: &Measurement, s: &Settings) -> Result<Outcome,
 /// control refuses a swap otherwise).
 fn free_sister(tx: &rusqlite::Connection, t: &ToolRecord) -> Result<Option<u32>, DbError> {
     let Some(n) = t.sister else { return Ok(None) };
+    // A sister tool missing from the library is no sister; one that cannot be
+    // read is an error.
     Ok(get_tool(tx, n)?
         .filter(|s| !s.locked && (s.effective_r() - t.effective_r()).abs() <= 0.001)
         .map(|s| s.number))
@@ -296,17 +308,16 @@ fn free_sister(tx: &rusqlite::Connection, t: &ToolRecord) -> Result<Option<u32>,
 /// A replacement for a wrongly set-up tool: its sister if free, else a free tool
 /// of the same name and kind.
 fn duplicate(tx: &rusqlite::Connection, t: &ToolRecord) -> Result<Option<u32>, DbError> {
-    if let Some(s) = t
-        .sister
-        .and_then(|n| get_tool(tx, n).ok().flatten())
-        .filter(|s| !s.locked)
-    {
-        return Ok(Some(s.number));
+    if let Some(n) = t.sister {
+        if let Some(s) = get_tool(tx, n)?.filter(|s| !s.locked) {
+            return Ok(Some(s.number));
+        }
     }
     let mut st = tx.prepare("SELECT number FROM tools WHERE name = ?1 AND kind = ?2 AND number != ?3 AND locked = 0 ORDER BY number LIMIT 1")?;
-    Ok(st
-        .query_row(params![t.name, t.kind, t.number], |r| r.get(0))
-        .ok())
+    // No row: no duplicate. Any other failure is reported.
+    st.query_row(params![t.name, t.kind, t.number], |r| r.get(0))
+        .optional()
+        .map_err(|e| damaged_or_sql(format!("duplicates of tool {}", t.number), e))
 }
 
 fn lock_pallet(tx: &rusqlite::Connection, id: &str) -> Result<(), DbError> {
