@@ -109,22 +109,51 @@ fn pz_and_thread_check_keys() {
         .output()
         .expect("runs");
     assert_eq!(o.status.code(), Some(2), "negative pitch");
-    let o = Command::new(env!("CARGO_BIN_EXE_millplan"))
-        .args([
-            "thread", "check", "M20x1", "--class", "6H", "--d2", "19.30", "--json",
-        ])
+}
+
+fn thread_check(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_millplan"))
+        .args(["thread", "check"])
+        .args(args)
+        .output()
+        .expect("runs")
+}
+
+#[test]
+fn thread_check_exits_3_on_reject() {
+    // Spec §5: M20×1-6H gauge decisions (19.515 is out by the standard).
+    for (d2, ok, code, verdict) in [
+        ("19.30", false, 3, "REJECT: 0.0500 mm under the minimum"),
+        ("19.40", true, 0, ": OK"),
+        ("19.515", false, 3, "REJECT: 0.0050 mm over the maximum"),
+    ] {
+        let o = thread_check(&["M20x1", "--class", "6H", "--d2", d2, "--json"]);
+        assert_eq!(o.status.code(), Some(code), "{d2}: {}", stderr(&o));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+        assert_eq!(
+            (j["ok"].as_bool(), j["min"].as_f64(), j["max"].as_f64()),
+            (Some(ok), Some(19.35), Some(19.51)),
+            "{d2}"
+        );
+        let o = thread_check(&["M20x1", "--class", "6H", "--d2", d2]);
+        assert_eq!(o.status.code(), Some(code), "{d2}");
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(text.trim_end().ends_with(verdict), "{d2}: {text}");
+    }
+    for bad in [
+        &["M99x7", "--class", "6H", "--d2", "1"][..],
+        &["M20x1", "--class", "6H", "--d2", "NaN"],
+        &["M20x1", "--class", "6H", "--d2=-19.4"],
+    ] {
+        let o = thread_check(bad);
+        assert_eq!(o.status.code(), Some(2), "{bad:?}: {}", stderr(&o));
+        assert!(o.stdout.is_empty() && stderr(&o).starts_with("error: "));
+    }
+    let help = Command::new(env!("CARGO_BIN_EXE_millplan"))
+        .args(["thread", "check", "--help"])
         .output()
         .expect("runs");
-    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
-    assert_eq!(
-        (j["ok"].as_bool(), j["min"].as_f64(), j["max"].as_f64()),
-        (Some(false), Some(19.35), Some(19.51))
-    );
-    let o = Command::new(env!("CARGO_BIN_EXE_millplan"))
-        .args(["thread", "check", "M99x7", "--class", "6H", "--d2", "1"])
-        .output()
-        .expect("runs");
-    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&help.stdout).contains("Exit 0 for OK, 3 for REJECT"));
 }
 
 #[test]
@@ -135,9 +164,11 @@ fn a_tool_room_session() {
         a_thread_mill(&db, n);
     }
     ok_json(&db, &["add", "5", "--sister", "6"]);
-    let j = ok_json(
+    // A setup mismatch locks the tool: a problem found, exit 3, JSON as ever.
+    let j = json_exit(
         &db,
         &["measure", "5", "--first", "--l", "120.01", "--r", "6.95"],
+        3,
     );
     assert_eq!(j["decision"], "setup-mismatch");
     assert_eq!(j["switch_to"], 6);
@@ -212,6 +243,66 @@ fn bad_inputs_change_nothing() {
     assert_eq!(o.status.code(), Some(2), "no tolerances set");
     assert_eq!(ok_json(&db, &["show"]), before);
     assert!(ok_json(&db, &["log"]).as_array().expect("log").is_empty());
+}
+
+#[test]
+fn measure_exits_3_when_the_tool_is_locked() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let db = dir.path().join("tools.db");
+    for n in ["5", "6"] {
+        a_thread_mill(&db, n);
+    }
+    for n in ["5", "6"] {
+        let j = ok_json(&db, &["measure", n, "--first", "--l", "120", "--r", "6.9"]);
+        assert_eq!(j["decision"], "first-accepted");
+    }
+    let j = ok_json(&db, &["measure", "5", "--r", "6.895"]);
+    assert_eq!(j["decision"], "wear-compensated");
+    // 0.02 under the compensated radius: beyond RTOL 0.01, within RBREAK 0.05.
+    let o = run(&db, &["measure", "5", "--r", "6.875"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.starts_with("WORN: "), "{text}");
+    // A tooth 0.1 short: broken, the pallet locked too.
+    let j = json_exit(
+        &db,
+        &["measure", "6", "--teeth", "6.9,6.8", "--pallet", "P1"],
+        3,
+    );
+    assert_eq!(
+        (&j["decision"], &j["tool_locked"], &j["pallet_locked"]),
+        (&"broken".into(), &true.into(), &true.into())
+    );
+    let o = run(&db, &["measure", "6", "--r", "6.9"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // Every decision logged, whatever the exit code.
+    let log = ok_json(&db, &["log"]);
+    let decisions: Vec<_> = log
+        .as_array()
+        .expect("log")
+        .iter()
+        .map(|e| e["decision"].as_str().expect("decision").to_string())
+        .collect();
+    assert_eq!(
+        decisions,
+        [
+            "first-accepted",
+            "first-accepted",
+            "wear-compensated",
+            "worn",
+            "broken",
+            "wear-compensated"
+        ]
+    );
+    let help = Command::new(env!("CARGO_BIN_EXE_millplan"))
+        .args(["tool", "measure", "--help"])
+        .output()
+        .expect("runs");
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        help.contains("setup-mismatch, worn and broken (exit 3"),
+        "{help}"
+    );
 }
 
 /// Issue 15: a tool row that cannot be read was taken for "new tool" and

@@ -1,6 +1,6 @@
 //! `millplan tool`: the tool library and thread-mill active control.
 
-use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::write_atomic;
 use clap::{Subcommand, ValueEnum};
 use millplan_tooldb::control::{record, Kind, Measurement, Settings};
@@ -27,7 +27,8 @@ use std::path::{Path, PathBuf};
 /// Exit codes: 0 done; 1 the system refused (the library is locked by another
 /// program for longer than 10 s, read-only, or an I/O error); 2 bad arguments,
 /// an unknown tool, or a library file millplan cannot use (not a database,
-/// damaged, written by a newer millplan), named in the message.
+/// damaged, written by a newer millplan), named in the message; 3 `measure`
+/// found a problem (setup mismatch, worn or broken: the tool is locked).
 /// A library that cannot be read is never taken for an empty one.
 #[derive(clap::Args)]
 pub struct Args {
@@ -66,6 +67,11 @@ pub enum ToolCommand {
         r: f64,
     },
     /// Record a laser measurement and let millplan decide (wear, worn, broken).
+    ///
+    /// Decisions: first-accepted and wear-compensated (exit 0: the tool may cut
+    /// on); setup-mismatch, worn and broken (exit 3: the tool is locked, and the
+    /// pallet too when the tool broke). The decision is printed (with --json as
+    /// the `decision` key) and logged either way.
     Measure(MeasureArgs),
     /// List the tools, or show one.
     Show { number: Option<u32> },
@@ -297,6 +303,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         None => default_db()?,
     };
     let mut db = ToolDb::open(&path).map_err(|e| db_err(&path, e))?;
+    let mut code = EXIT_OK;
     match a.command {
         ToolCommand::Pz { .. } => unreachable!("handled above"),
         ToolCommand::Add(x) => {
@@ -408,6 +415,9 @@ pub fn run(a: Args) -> CliResult<i32> {
                         .unwrap_or_default()
                 ),
             )?;
+            if o.decision.is_problem() {
+                code = EXIT_FINDINGS;
+            }
         }
         ToolCommand::Show { number } => {
             let tools = match number {
@@ -501,5 +511,5 @@ pub fn run(a: Args) -> CliResult<i32> {
             )?;
         }
     }
-    Ok(EXIT_OK)
+    Ok(code)
 }
