@@ -14,8 +14,10 @@
 //!   - beyond LBREAK/RBREAK: broken. Lock the tool and the pallet (the thread
 //!     just cut is suspect) and switch to the sister tool if possible.
 
-use crate::db::{get_tool, log_event, put_tool_tx, DbError, ToolDb, ToolRecord};
-use rusqlite::params;
+use crate::db::{
+    damaged_or_sql, get_tool, latest_presetter, log_event, put_tool_tx, DbError, ToolDb, ToolRecord,
+};
+use rusqlite::{params, OptionalExtension};
 use serde_json::json;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -59,12 +61,55 @@ impl Default for Settings {
     }
 }
 
+/// What millplan decided after a measurement.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Decision {
+    /// First measurement within Δset of the presetter: measured values written.
+    FirstAccepted,
+    /// First measurement beyond Δset: tool locked, offsets not written.
+    SetupMismatch,
+    /// Inspection within the wear tolerance: DL/DR updated.
+    WearCompensated,
+    /// Inspection beyond the wear tolerance: tool locked.
+    Worn,
+    /// Inspection beyond the breakage limit: tool (and pallet) locked.
+    Broken,
+}
+
+impl Decision {
+    /// The name as logged and printed (`first-accepted`, `setup-mismatch`,
+    /// `wear-compensated`, `worn`, `broken`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Decision::FirstAccepted => "first-accepted",
+            Decision::SetupMismatch => "setup-mismatch",
+            Decision::WearCompensated => "wear-compensated",
+            Decision::Worn => "worn",
+            Decision::Broken => "broken",
+        }
+    }
+
+    /// The check found a problem: the tool was locked and may not cut on.
+    pub fn is_problem(self) -> bool {
+        match self {
+            Decision::FirstAccepted | Decision::WearCompensated => false,
+            Decision::SetupMismatch | Decision::Worn | Decision::Broken => true,
+        }
+    }
+}
+
+impl std::fmt::Display for Decision {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
 /// The decision, as logged and printed.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Outcome {
     pub event_id: i64,
-    /// `first-accepted`, `setup-mismatch`, `wear-compensated`, `worn`, `broken`.
-    pub decision: String,
+    pub decision: Decision,
     pub reason: String,
     pub tool_locked: bool,
     /// Tool to continue with (the sister or a duplicate), if any.
@@ -106,8 +151,16 @@ pub fn record(db: &mut ToolDb, m: &Measurement, s: &Settings) -> Result<Outcome,
             "the setup tolerance Δset must not be negative".into(),
         ));
     }
-    let presetter = db.latest_presetter(m.tool)?;
-    let tx = db.conn().transaction()?;
+    let per_tooth = match &m.per_tooth {
+        Some(teeth) => Some(
+            serde_json::to_string(teeth)
+                .map_err(|e| DbError::Invalid(format!("per-tooth radii: {e}")))?,
+        ),
+        None => None,
+    };
+    // The write lock first: what is read below cannot change before the commit.
+    let tx = db.transaction()?;
+    let presetter = latest_presetter(&tx, m.tool)?;
     let mut t = get_tool(&tx, m.tool)?.ok_or(DbError::UnknownTool(m.tool))?;
     // The radius that matters is the worst (smallest) tooth.
     let r_meas = match (&m.per_tooth, m.r) {
@@ -125,14 +178,14 @@ pub fn record(db: &mut ToolDb, m: &Measurement, s: &Settings) -> Result<Outcome,
             },
             m.l,
             r_meas,
-            m.per_tooth.as_ref().map(|v| serde_json::to_string(v).unwrap_or_default()),
+            per_tooth,
             m.pz
         ],
     )?;
     let inputs = json!({ "measurement": m, "tool_before": t, "presetter": presetter.map(|(l, r)| json!({"l": l, "r": r})), "dset": s.dset, "pallet": s.pallet });
     let mut out = Outcome {
         event_id: 0,
-        decision: String::new(),
+        decision: Decision::FirstAccepted,
         reason: String::new(),
         tool_locked: t.locked,
         switch_to: None,
@@ -148,7 +201,7 @@ pub fn record(db: &mut ToolDb, m: &Measurement, s: &Settings) -> Result<Outcome,
             if dl.abs() > s.dset || dr.abs() > s.dset {
                 t.locked = true;
                 let dup = duplicate(&tx, &t)?;
-                out.decision = "setup-mismatch".into();
+                out.decision = Decision::SetupMismatch;
                 out.reason = format!(
                     "first laser measurement differs from the presetter by ΔL {dl:+.4} / ΔR {dr:+.4} mm, beyond Δset {:.4} mm: \
                      tool locked for checking outside the machine, offsets not written{}",
@@ -169,7 +222,7 @@ pub fn record(db: &mut ToolDb, m: &Measurement, s: &Settings) -> Result<Outcome,
                     t.dr = 0.0;
                 }
                 t.measured = true;
-                out.decision = "first-accepted".into();
+                out.decision = Decision::FirstAccepted;
                 out.reason = format!(
                     "first laser measurement within Δset {:.4} mm of the presetter (ΔL {dl:+.4}, ΔR {dr:+.4}): measured values written, DL and DR reset",
                     s.dset
@@ -202,7 +255,7 @@ pub fn record(db: &mut ToolDb, m: &Measurement, s: &Settings) -> Result<Outcome,
                     if let Some(d) = dr {
                         t.dr += d;
                     }
-                    out.decision = "wear-compensated".into();
+                    out.decision = Decision::WearCompensated;
                     out.reason = format!(
                         "deviation ΔL {} / ΔR {} mm within LTOL {:.4} / RTOL {:.4}: DL = {:+.4}, DR = {:+.4}",
                         fmt(dl),
@@ -217,7 +270,7 @@ pub fn record(db: &mut ToolDb, m: &Measurement, s: &Settings) -> Result<Outcome,
                     t.locked = true;
                     let sister = free_sister(&tx, &t)?;
                     out.switch_to = sister;
-                    out.decision = "worn".into();
+                    out.decision = Decision::Worn;
                     match (sister, &s.pallet) {
                         (Some(n), _) => {
                             out.reason = format!(
@@ -249,7 +302,7 @@ pub fn record(db: &mut ToolDb, m: &Measurement, s: &Settings) -> Result<Outcome,
                         lock_pallet(&tx, p)?;
                         out.pallet_locked = true;
                     }
-                    out.decision = "broken".into();
+                    out.decision = Decision::Broken;
                     out.reason = format!(
                         "deviation ΔL {} / ΔR {} mm beyond the breakage limit (LBREAK {:.4} / RBREAK {:.4}): tool locked, pallet {} locked \
                          for inspection of the last thread{}",
@@ -275,7 +328,7 @@ pub fn record(db: &mut ToolDb, m: &Measurement, s: &Settings) -> Result<Outcome,
     out.event_id = log_event(
         &tx,
         Some(m.tool),
-        &out.decision,
+        out.decision.as_str(),
         &out.reason,
         &inputs,
         &outcome,
@@ -288,6 +341,8 @@ pub fn record(db: &mut ToolDb, m: &Measurement, s: &Settings) -> Result<Outcome,
 /// control refuses a swap otherwise).
 fn free_sister(tx: &rusqlite::Connection, t: &ToolRecord) -> Result<Option<u32>, DbError> {
     let Some(n) = t.sister else { return Ok(None) };
+    // A sister tool missing from the library is no sister; one that cannot be
+    // read is an error.
     Ok(get_tool(tx, n)?
         .filter(|s| !s.locked && (s.effective_r() - t.effective_r()).abs() <= 0.001)
         .map(|s| s.number))
@@ -296,17 +351,16 @@ fn free_sister(tx: &rusqlite::Connection, t: &ToolRecord) -> Result<Option<u32>,
 /// A replacement for a wrongly set-up tool: its sister if free, else a free tool
 /// of the same name and kind.
 fn duplicate(tx: &rusqlite::Connection, t: &ToolRecord) -> Result<Option<u32>, DbError> {
-    if let Some(s) = t
-        .sister
-        .and_then(|n| get_tool(tx, n).ok().flatten())
-        .filter(|s| !s.locked)
-    {
-        return Ok(Some(s.number));
+    if let Some(n) = t.sister {
+        if let Some(s) = get_tool(tx, n)?.filter(|s| !s.locked) {
+            return Ok(Some(s.number));
+        }
     }
     let mut st = tx.prepare("SELECT number FROM tools WHERE name = ?1 AND kind = ?2 AND number != ?3 AND locked = 0 ORDER BY number LIMIT 1")?;
-    Ok(st
-        .query_row(params![t.name, t.kind, t.number], |r| r.get(0))
-        .ok())
+    // No row: no duplicate. Any other failure is reported.
+    st.query_row(params![t.name, t.kind, t.number], |r| r.get(0))
+        .optional()
+        .map_err(|e| damaged_or_sql(format!("duplicates of tool {}", t.number), e))
 }
 
 fn lock_pallet(tx: &rusqlite::Connection, id: &str) -> Result<(), DbError> {
@@ -360,7 +414,7 @@ mod tests {
             &Settings::default(),
         )
         .expect("record");
-        assert_eq!(o.decision, "first-accepted");
+        assert_eq!(o.decision, Decision::FirstAccepted);
         let t = db.tool(5).expect("tool");
         assert_eq!(
             (t.l, t.r, t.dl, t.dr, t.measured, t.locked),
@@ -374,8 +428,8 @@ mod tests {
         )
         .expect("record");
         assert_eq!(
-            (o.decision.as_str(), o.tool_locked, o.switch_to),
-            ("setup-mismatch", true, Some(6))
+            (o.decision, o.tool_locked, o.switch_to),
+            (Decision::SetupMismatch, true, Some(6))
         );
         // Offsets not written.
         assert_eq!(db.tool(5).expect("tool").r, 6.9);
@@ -396,7 +450,7 @@ mod tests {
             &Settings::default(),
         )
         .expect("inspect");
-        assert_eq!(o.decision, "wear-compensated");
+        assert_eq!(o.decision, Decision::WearCompensated);
         assert!((o.dr + 0.007).abs() < 1e-12 && (o.dl + 0.004).abs() < 1e-12);
         // Worn: 0.02 below the compensated radius; the sister has R + DR 6.9 ≠ 6.893: no switch.
         let s = Settings {
@@ -405,13 +459,8 @@ mod tests {
         };
         let o = record(&mut db, &meas(Kind::Inspection, 119.996, 6.873), &s).expect("inspect");
         assert_eq!(
-            (
-                o.decision.as_str(),
-                o.tool_locked,
-                o.switch_to,
-                o.pallet_locked
-            ),
-            ("worn", true, None, true)
+            (o.decision, o.tool_locked, o.switch_to, o.pallet_locked),
+            (Decision::Worn, true, None, true)
         );
         // Broken tooth: per-tooth radii, the worst one counts.
         let mut db = lib();
@@ -435,14 +484,30 @@ mod tests {
         )
         .expect("inspect");
         assert_eq!(
-            (o.decision.as_str(), o.switch_to, o.pallet_locked),
-            ("broken", Some(6), true)
+            (o.decision, o.switch_to, o.pallet_locked),
+            (Decision::Broken, Some(6), true)
         );
         assert!(db.pallet_locked("P1").expect("pallet"));
         let log = db.events(Some(5)).expect("log");
         assert_eq!(log.len(), 2);
         assert_eq!(log[1].decision, "broken");
         assert_eq!(log[1].inputs["measurement"]["per_tooth"][2], 6.7);
+    }
+
+    #[test]
+    fn decisions_keep_their_names_and_say_which_are_problems() {
+        use Decision::*;
+        for (d, name, problem) in [
+            (FirstAccepted, "first-accepted", false),
+            (SetupMismatch, "setup-mismatch", true),
+            (WearCompensated, "wear-compensated", false),
+            (Worn, "worn", true),
+            (Broken, "broken", true),
+        ] {
+            assert_eq!(serde_json::to_value(d).expect("json"), json!(name));
+            assert_eq!((d.as_str(), d.to_string().as_str()), (name, name));
+            assert_eq!(d.is_problem(), problem, "{name}");
+        }
     }
 
     #[test]

@@ -1,9 +1,15 @@
 //! The tool library: one SQLite file in WAL mode, created and migrated on open,
 //! every write a transaction, decisions in an append-only log.
 
-use rusqlite::{params, Connection, OptionalExtension, Transaction};
+use rusqlite::{
+    params, Connection, ErrorCode, OptionalExtension, Transaction, TransactionBehavior,
+};
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// How long a command waits for another program that is writing to the library.
+pub const BUSY_TIMEOUT: Duration = Duration::from_secs(10);
 
 /// Schema migrations; `PRAGMA user_version` is the number applied.
 const MIGRATIONS: &[&str] = &[
@@ -77,16 +83,71 @@ const MIGRATIONS: &[&str] = &[
     "#,
 ];
 
+/// What went wrong with the library. Only [`DbError::UnknownTool`] means a row
+/// is genuinely absent; every other variant is a failure to report.
 #[derive(Debug, thiserror::Error)]
 pub enum DbError {
-    #[error("{0}")]
+    #[error("{}", sql_message(.0))]
     Sql(#[from] rusqlite::Error),
+    /// The file system refused (creating the library's folder).
+    #[error("{}: {source}", .path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("the database has schema version {found}; this millplan knows up to {known}: use a newer millplan")]
     NewerSchema { found: i64, known: i64 },
+    /// A row that does not fit the schema (a text where a number belongs, a log
+    /// entry that is not JSON): the file was damaged or written by another program.
+    #[error("{0}: the library holds data this millplan cannot read (damaged, or changed by another program)")]
+    Damaged(String),
     #[error("no tool {0} in the library")]
     UnknownTool(u32),
     #[error("{0}")]
     Invalid(String),
+}
+
+impl DbError {
+    /// Whether the fault lies in what the user gave: arguments and values, or a
+    /// file that is not a tool library this millplan can read (not a database,
+    /// damaged, from a newer millplan). Otherwise the system refused (a lock held
+    /// by another program, a read-only file, an I/O error, a full disk) or
+    /// millplan itself is wrong (a constraint its own writes broke).
+    pub fn is_bad_input(&self) -> bool {
+        match self {
+            DbError::Sql(e) => matches!(
+                e.sqlite_error_code(),
+                Some(ErrorCode::NotADatabase | ErrorCode::DatabaseCorrupt)
+            ),
+            DbError::Io { .. } => false,
+            DbError::NewerSchema { .. }
+            | DbError::Damaged(_)
+            | DbError::UnknownTool(_)
+            | DbError::Invalid(_) => true,
+        }
+    }
+}
+
+/// SQLite's message, with what it means for a tool library when that helps.
+fn sql_message(e: &rusqlite::Error) -> String {
+    let hint = match e.sqlite_error_code() {
+        Some(ErrorCode::DatabaseBusy | ErrorCode::DatabaseLocked) => format!(
+            "another program is writing to the library (waited {} s); try again when it is done",
+            BUSY_TIMEOUT.as_secs()
+        ),
+        Some(ErrorCode::ReadOnly) => "the file or its folder is not writable".into(),
+        Some(ErrorCode::NotADatabase) => "this is not a millplan tool library".into(),
+        Some(ErrorCode::DatabaseCorrupt) => "the file is damaged; restore a copy".into(),
+        Some(ErrorCode::CannotOpen) => {
+            "check that its folder exists and is writable, and that FILE-wal and FILE-shm are not folders".into()
+        }
+        _ => String::new(),
+    };
+    if hint.is_empty() {
+        e.to_string()
+    } else {
+        format!("{e}: {hint}")
+    }
 }
 
 /// A tool as the library keeps it (mm, minutes).
@@ -248,22 +309,48 @@ pub fn now() -> String {
 
 impl ToolDb {
     /// Opens (creating and migrating as needed) the library at `path`.
+    ///
+    /// `path` is always a file name: never SQLite's `:memory:` nor a `file:` URI,
+    /// which would silently give a library that is not saved where asked. A library
+    /// from a newer millplan is refused before anything is written to it.
     pub fn open(path: &Path) -> Result<ToolDb, DbError> {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)
-                .map_err(|e| DbError::Invalid(format!("{}: {e}", dir.display())))?;
+        Self::open_with_timeout(path, BUSY_TIMEOUT)
+    }
+
+    /// [`ToolDb::open`] waiting at most `busy` for another program's write lock.
+    pub fn open_with_timeout(path: &Path, busy: Duration) -> Result<ToolDb, DbError> {
+        if path.as_os_str().is_empty() {
+            return Err(DbError::Invalid("the library path is empty".into()));
         }
-        let conn = Connection::open(path)?;
-        Self::setup(conn)
+        if path.is_dir() {
+            return Err(DbError::Invalid("is a folder, not a library file".into()));
+        }
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|source| DbError::Io {
+                path: dir.to_path_buf(),
+                source,
+            })?;
+        }
+        // SQLite gives special meaning to `:memory:` and `file:…` URIs; `./:memory:`
+        // and `./file:…` are plain file names. Absolute paths start with `/`.
+        let file = if path.is_relative() {
+            Path::new(".").join(path)
+        } else {
+            path.to_path_buf()
+        };
+        let conn = Connection::open(file)?;
+        Self::setup(conn, busy)
     }
 
     /// An in-memory library (tests, benchmarks).
     pub fn memory() -> Result<ToolDb, DbError> {
-        Self::setup(Connection::open_in_memory()?)
+        Self::setup(Connection::open_in_memory()?, BUSY_TIMEOUT)
     }
 
-    fn setup(conn: Connection) -> Result<ToolDb, DbError> {
-        conn.busy_timeout(std::time::Duration::from_secs(10))?;
+    fn setup(conn: Connection, busy: Duration) -> Result<ToolDb, DbError> {
+        conn.busy_timeout(busy)?;
+        // Refuse a newer library before switching it to WAL (which rewrites its header).
+        Self::check_version(&conn)?;
         // WAL: readers never block the writer; a killed process loses at most the
         // transaction it was in. synchronous=NORMAL keeps every committed
         // transaction across a process crash (not across a power cut).
@@ -275,49 +362,82 @@ impl ToolDb {
     }
 
     pub fn schema_version(&self) -> Result<i64, DbError> {
-        Ok(self
-            .conn
-            .query_row("PRAGMA user_version", [], |r| r.get(0))?)
+        version(&self.conn)
     }
 
-    fn migrate(&mut self) -> Result<(), DbError> {
-        let found = self.schema_version()?;
+    fn check_version(conn: &Connection) -> Result<i64, DbError> {
+        let found = version(conn)?;
         let known = MIGRATIONS.len() as i64;
         if found > known {
             return Err(DbError::NewerSchema { found, known });
         }
+        Ok(found)
+    }
+
+    fn migrate(&mut self) -> Result<(), DbError> {
+        // Up to date: no write lock (a read-only library stays readable).
+        if Self::check_version(&self.conn)? == MIGRATIONS.len() as i64 {
+            return Ok(());
+        }
+        // Two programs opening a new library at once must not both create its
+        // tables: the version is read again under the write lock.
+        let tx = self.write()?;
+        let found = Self::check_version(&tx)?;
         for (i, m) in MIGRATIONS.iter().enumerate().skip(found as usize) {
-            let tx = self.conn.transaction()?;
             tx.execute_batch(m)?;
             tx.execute_batch(&format!("PRAGMA user_version = {}", i + 1))?;
-            tx.commit()?;
         }
+        tx.commit()?;
         Ok(())
     }
 
+    /// A write transaction that takes the write lock at once (waiting up to the
+    /// busy timeout). A deferred one that read first would fail at once with
+    /// "database is locked" when another program wrote in between.
+    fn write(&mut self) -> Result<Transaction<'_>, DbError> {
+        Ok(self
+            .conn
+            .transaction_with_behavior(TransactionBehavior::Immediate)?)
+    }
+
+    /// A write transaction (the write lock taken at once).
     pub fn transaction(&mut self) -> Result<Transaction<'_>, DbError> {
-        Ok(self.conn.transaction()?)
+        self.write()
     }
 
     /// Inserts or replaces a tool (with its ISO properties).
     pub fn put_tool(&mut self, t: &ToolRecord) -> Result<(), DbError> {
         t.validate()?;
-        let tx = self.conn.transaction()?;
+        let tx = self.write()?;
         put_tool_tx(&tx, t)?;
         tx.commit()?;
         Ok(())
     }
 
+    /// The tool, or [`DbError::UnknownTool`] when the library has no such row.
     pub fn tool(&self, number: u32) -> Result<ToolRecord, DbError> {
         get_tool(&self.conn, number)?.ok_or(DbError::UnknownTool(number))
     }
 
+    /// The tool, or `None` when (and only when) the library has no such row; every
+    /// failure to read it is an error.
+    pub fn find_tool(&self, number: u32) -> Result<Option<ToolRecord>, DbError> {
+        get_tool(&self.conn, number)
+    }
+
     pub fn tools(&self) -> Result<Vec<ToolRecord>, DbError> {
-        let mut st = self
-            .conn
-            .prepare("SELECT number FROM tools ORDER BY number")?;
-        let numbers: Vec<u32> = st.query_map([], |r| r.get(0))?.collect::<Result<_, _>>()?;
-        numbers.into_iter().map(|n| self.tool(n)).collect()
+        // One read transaction: the list and its rows from the same snapshot.
+        let tx = self.conn.unchecked_transaction()?;
+        let numbers: Vec<u32> = {
+            let mut st = tx.prepare("SELECT number FROM tools ORDER BY number")?;
+            let rows = st.query_map([], |r| r.get(0))?;
+            rows.collect::<Result<_, _>>()
+                .map_err(|e| damaged_or_sql("tool numbers".into(), e))?
+        };
+        numbers
+            .into_iter()
+            .map(|n| get_tool(&tx, n)?.ok_or(DbError::UnknownTool(n)))
+            .collect()
     }
 
     /// Records presetter values for a tool (and takes them as its L and R while it
@@ -328,7 +448,7 @@ impl ToolDb {
                 "presetter L and R must be non-negative numbers".into(),
             ));
         }
-        let tx = self.conn.transaction()?;
+        let tx = self.write()?;
         let mut t = get_tool(&tx, number)?.ok_or(DbError::UnknownTool(number))?;
         tx.execute(
             "INSERT INTO presetter (tool, time, l, r) VALUES (?1, ?2, ?3, ?4)",
@@ -356,7 +476,7 @@ impl ToolDb {
         tp: f64,
     ) -> Result<f64, DbError> {
         let pz = crate::thread::pz(insl, tp).map_err(|e| DbError::Invalid(e.to_string()))?;
-        let tx = self.conn.transaction()?;
+        let tx = self.write()?;
         let mut t = get_tool(&tx, number)?.ok_or(DbError::UnknownTool(number))?;
         tx.execute(
             "INSERT INTO inserts (tool, designation, insl, tp) VALUES (?1, ?2, ?3, ?4)",
@@ -375,47 +495,51 @@ impl ToolDb {
             .conn
             .prepare("SELECT designation, insl, tp FROM inserts WHERE tool = ?1 ORDER BY id")?;
         let rows = st.query_map([number], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)))?;
-        Ok(rows.collect::<Result<_, _>>()?)
+        rows.collect::<Result<_, _>>()
+            .map_err(|e| damaged_or_sql(format!("inserts of tool {number}"), e))
     }
 
+    /// The newest presetter values (L, R), `None` when none were recorded.
     pub fn latest_presetter(&self, number: u32) -> Result<Option<(f64, f64)>, DbError> {
-        Ok(self
-            .conn
-            .query_row(
-                "SELECT l, r FROM presetter WHERE tool = ?1 ORDER BY id DESC LIMIT 1",
-                [number],
-                |r| Ok((r.get(0)?, r.get(1)?)),
-            )
-            .optional()?)
+        latest_presetter(&self.conn, number)
     }
 
     pub fn events(&self, tool: Option<u32>) -> Result<Vec<EventRecord>, DbError> {
         let mut st = self.conn.prepare(
             "SELECT id, time, tool, decision, reason, inputs, outcome FROM events WHERE ?1 IS NULL OR tool = ?1 ORDER BY id",
         )?;
-        let rows = st.query_map([tool], |r| {
-            let inputs: String = r.get(5)?;
-            let outcome: String = r.get(6)?;
-            Ok(EventRecord {
-                id: r.get(0)?,
-                time: r.get(1)?,
-                tool: r.get(2)?,
-                decision: r.get(3)?,
-                reason: r.get(4)?,
-                inputs: serde_json::from_str(&inputs).unwrap_or(serde_json::Value::Null),
-                outcome: serde_json::from_str(&outcome).unwrap_or(serde_json::Value::Null),
-            })
-        })?;
-        Ok(rows.collect::<Result<_, _>>()?)
+        let mut rows = st.query([tool])?;
+        let mut out = Vec::new();
+        while let Some(r) = rows.next()? {
+            let id: i64 = r.get(0)?;
+            let damaged = |e: &dyn std::fmt::Display| DbError::Damaged(format!("event {id}: {e}"));
+            let json = |col: usize, name: &str| -> Result<serde_json::Value, DbError> {
+                let text: String = r.get(col).map_err(|e| damaged(&e))?;
+                serde_json::from_str(&text)
+                    .map_err(|e| damaged(&format!("{name} is not JSON ({e})")))
+            };
+            out.push(EventRecord {
+                id,
+                time: r.get(1).map_err(|e| damaged(&e))?,
+                tool: r.get(2).map_err(|e| damaged(&e))?,
+                decision: r.get(3).map_err(|e| damaged(&e))?,
+                reason: r.get(4).map_err(|e| damaged(&e))?,
+                inputs: json(5, "inputs")?,
+                outcome: json(6, "outcome")?,
+            });
+        }
+        Ok(out)
     }
 
+    /// Whether a pallet is locked; a pallet the library has never locked has no row.
     pub fn pallet_locked(&self, id: &str) -> Result<bool, DbError> {
         Ok(self
             .conn
             .query_row("SELECT locked FROM pallets WHERE id = ?1", [id], |r| {
                 r.get::<_, bool>(0)
             })
-            .optional()?
+            .optional()
+            .map_err(|e| damaged_or_sql(format!("pallet {id}"), e))?
             .unwrap_or(false))
     }
 
@@ -448,7 +572,7 @@ impl ToolDb {
         for t in tools {
             t.validate()?;
         }
-        let tx = self.conn.transaction()?;
+        let tx = self.write()?;
         for t in tools {
             put_tool_tx(&tx, t)?;
         }
@@ -616,6 +740,7 @@ impl ToolDb {
         Ok(s)
     }
 
+    #[cfg(test)]
     pub(crate) fn conn(&mut self) -> &mut Connection {
         &mut self.conn
     }
@@ -633,7 +758,38 @@ fn csv_err(e: csv::Error) -> DbError {
     }
 }
 
+/// `PRAGMA user_version`: the number of migrations applied.
+fn version(conn: &Connection) -> Result<i64, DbError> {
+    Ok(conn.query_row("PRAGMA user_version", [], |r| r.get(0))?)
+}
+
+/// A value that does not convert (text in a number column, a number out of range)
+/// is damage to report as such; anything else stays SQLite's error.
+pub(crate) fn damaged_or_sql(what: String, e: rusqlite::Error) -> DbError {
+    match e {
+        rusqlite::Error::InvalidColumnType(..)
+        | rusqlite::Error::FromSqlConversionFailure(..)
+        | rusqlite::Error::IntegralValueOutOfRange(..) => DbError::Damaged(format!("{what}: {e}")),
+        e => DbError::Sql(e),
+    }
+}
+
+pub(crate) fn latest_presetter(
+    conn: &Connection,
+    number: u32,
+) -> Result<Option<(f64, f64)>, DbError> {
+    conn.query_row(
+        "SELECT l, r FROM presetter WHERE tool = ?1 ORDER BY id DESC LIMIT 1",
+        [number],
+        |r| Ok((r.get(0)?, r.get(1)?)),
+    )
+    .optional()
+    .map_err(|e| damaged_or_sql(format!("presetter values of tool {number}"), e))
+}
+
+/// The tool, `None` only when there is no row for it.
 pub(crate) fn get_tool(conn: &Connection, number: u32) -> Result<Option<ToolRecord>, DbError> {
+    let damaged = |e| damaged_or_sql(format!("tool {number}"), e);
     let t = conn
         .query_row(
             "SELECT number, name, kind, l, r, dl, dr, ltol, rtol, lbreak, rbreak, locked, sister, life_min, used_min, measured
@@ -661,13 +817,14 @@ pub(crate) fn get_tool(conn: &Connection, number: u32) -> Result<Option<ToolReco
                 })
             },
         )
-        .optional()?;
+        .optional()
+        .map_err(damaged)?;
     let Some(mut t) = t else { return Ok(None) };
     let mut st = conn.prepare_cached("SELECT symbol, value FROM tool_props WHERE tool = ?1")?;
     for kv in st.query_map([number], |r| {
         Ok((r.get::<_, String>(0)?, r.get::<_, String>(1)?))
     })? {
-        let (k, v) = kv?;
+        let (k, v) = kv.map_err(damaged)?;
         t.iso.insert(k, v);
     }
     Ok(Some(t))

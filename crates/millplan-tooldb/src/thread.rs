@@ -114,7 +114,14 @@ pub fn within(d2: f64, min: f64, max: f64) -> bool {
     d2 >= min - 1e-9 && d2 <= max + 1e-9
 }
 
+/// Checks a measured pitch diameter; a value that is not a positive number is
+/// an error, not a reject.
 pub fn check(thread: &str, class: &str, d2: f64) -> Result<Check, ThreadError> {
+    if !(d2 > 0.0 && d2.is_finite()) {
+        return Err(ThreadError::Invalid(format!(
+            "measured pitch diameter D2 must be a positive number, got {d2}"
+        )));
+    }
     let (min, max) = limits(thread, class)?;
     Ok(Check {
         ok: within(d2, min, max),
@@ -183,6 +190,12 @@ mod tests {
         const PAPER_UPPER_M20X1_6H: f64 = 19.52;
         assert!(within(19.515, 19.35, PAPER_UPPER_M20X1_6H));
         assert!(limits("M30x2", "6H").is_err());
+        for bad in [f64::NAN, f64::INFINITY, 0.0, -19.4] {
+            assert!(
+                matches!(check("M20x1", "6H", bad), Err(ThreadError::Invalid(_))),
+                "{bad}"
+            );
+        }
         assert!(parse_designation("20x1").is_err() && parse_designation("M20x-1").is_err());
     }
 

@@ -1,12 +1,17 @@
 //! `millplan thread`: ISO metric thread checks.
 
-use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::cmd::tool::print;
+use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use clap::Subcommand;
 use millplan_tooldb::thread::{check, parse_designation, pitch_diameter};
 use serde_json::json;
 
 /// ISO metric threads: is a measured pitch diameter within its tolerance class
 /// (ISO 965-1 tabulated limits)?
+///
+/// Exit codes: 0 within the class (OK); 2 bad arguments (a thread or class not
+/// in the table, a D2 that is not a positive number); 3 out of the class
+/// (REJECT).
 #[derive(clap::Args)]
 pub struct Args {
     #[command(subcommand)]
@@ -16,6 +21,9 @@ pub struct Args {
 #[derive(Subcommand)]
 pub enum ThreadCommand {
     /// Check a measured pitch diameter D2 against the class limits.
+    ///
+    /// Prints OK or REJECT (under the minimum / over the maximum, by how much);
+    /// with --json the key `ok`. Exit 0 for OK, 3 for REJECT.
     Check {
         /// Thread, e.g. M20x1.
         thread: String,
@@ -40,20 +48,24 @@ pub fn run(a: Args) -> CliResult<i32> {
         } => {
             let c = check(&thread, &class, d2).map_err(|e| CliError::input(e.to_string()))?;
             let (d, p) = parse_designation(&thread).map_err(|e| CliError::input(e.to_string()))?;
-            if json {
-                let j = json!({ "ok": c.ok, "min": c.min, "max": c.max, "d2": d2, "basic_d2": pitch_diameter(d, p) });
-                println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+            let verdict = if c.ok {
+                "OK".to_string()
+            } else if d2 < c.min {
+                format!("REJECT: {:.4} mm under the minimum", c.min - d2)
             } else {
-                let verdict = if c.ok {
-                    "OK".to_string()
-                } else if d2 < c.min {
-                    format!("REJECT: {:.4} mm under the minimum", c.min - d2)
-                } else {
-                    format!("REJECT: {:.4} mm over the maximum", d2 - c.max)
-                };
-                println!("{thread}-{class}: D2 {d2:.4} mm, limits {:.3} … {:.3} mm (basic {:.4}): {verdict}", c.min, c.max, pitch_diameter(d, p));
-            }
+                format!("REJECT: {:.4} mm over the maximum", d2 - c.max)
+            };
+            print(
+                json,
+                json!({ "ok": c.ok, "min": c.min, "max": c.max, "d2": d2, "basic_d2": pitch_diameter(d, p) }),
+                format!(
+                    "{thread}-{class}: D2 {d2:.4} mm, limits {:.3} … {:.3} mm (basic {:.4}): {verdict}",
+                    c.min,
+                    c.max,
+                    pitch_diameter(d, p)
+                ),
+            )?;
+            Ok(if c.ok { EXIT_OK } else { EXIT_FINDINGS })
         }
     }
-    Ok(EXIT_OK)
 }

@@ -1,6 +1,6 @@
 //! `millplan tool`: the tool library and thread-mill active control.
 
-use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::write_atomic;
 use clap::{Subcommand, ValueEnum};
 use millplan_tooldb::control::{record, Kind, Measurement, Settings};
@@ -8,7 +8,8 @@ use millplan_tooldb::cycles::{self, CycleOptions, Measure};
 use millplan_tooldb::db::{DbError, ToolDb, ToolRecord};
 use millplan_tooldb::thread::pz;
 use serde_json::json;
-use std::path::PathBuf;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
 /// The tool library and thread-mill control, for the tool room.
 ///
@@ -22,6 +23,13 @@ use std::path::PathBuf;
 ///
 /// The library is one SQLite file: --db, else $MILLPLAN_DB, else
 /// ~/.local/share/millplan/tools.db. It is created on first use.
+///
+/// Exit codes: 0 done; 1 the system refused (the library is locked by another
+/// program for longer than 10 s, read-only, or an I/O error); 2 bad arguments,
+/// an unknown tool, or a library file millplan cannot use (not a database,
+/// damaged, written by a newer millplan), named in the message; 3 `measure`
+/// found a problem (setup mismatch, worn or broken: the tool is locked).
+/// A library that cannot be read is never taken for an empty one.
 #[derive(clap::Args)]
 pub struct Args {
     /// Tool library file.
@@ -59,6 +67,11 @@ pub enum ToolCommand {
         r: f64,
     },
     /// Record a laser measurement and let millplan decide (wear, worn, broken).
+    ///
+    /// Decisions: first-accepted and wear-compensated (exit 0: the tool may cut
+    /// on); setup-mismatch, worn and broken (exit 3: the tool is locked, and the
+    /// pallet too when the tool broke). The decision is printed (with --json as
+    /// the `decision` key) and logged either way.
     Measure(MeasureArgs),
     /// List the tools, or show one.
     Show { number: Option<u32> },
@@ -198,22 +211,32 @@ pub struct CycleArgs {
     pub output: PathBuf,
 }
 
-/// The library's default location.
-pub fn default_db() -> PathBuf {
+/// The library's default location: $MILLPLAN_DB, else under $XDG_DATA_HOME or
+/// ~/.local/share. An empty $MILLPLAN_DB is an error, not a temporary library.
+pub fn default_db() -> CliResult<PathBuf> {
     if let Some(p) = std::env::var_os("MILLPLAN_DB") {
-        return PathBuf::from(p);
+        if p.is_empty() {
+            return Err(CliError::input(
+                "MILLPLAN_DB is set but empty: name the tool library file, or unset it",
+            ));
+        }
+        return Ok(PathBuf::from(p));
     }
     let base = std::env::var_os("XDG_DATA_HOME")
         .map(PathBuf::from)
         .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/share")))
         .unwrap_or_else(|| PathBuf::from("."));
-    base.join("millplan").join("tools.db")
+    Ok(base.join("millplan").join("tools.db"))
 }
 
-fn db_err(path: &std::path::Path, e: DbError) -> CliError {
-    match e {
-        DbError::Sql(_) => CliError::internal(format!("{}: {e}", path.display())),
-        _ => CliError::input(format!("{}: {e}", path.display())),
+/// A library error with the library's path: exit 2 when the arguments or the
+/// file are at fault, 1 when the system refused.
+fn db_err(path: &Path, e: DbError) -> CliError {
+    let message = format!("{}: {e}", path.display());
+    if e.is_bad_input() {
+        CliError::input(message)
+    } else {
+        CliError::internal(message)
     }
 }
 
@@ -222,11 +245,26 @@ fn insert_pz(t: &ToolRecord) -> Option<f64> {
     pz(g("INSL")?, g("TP")?).ok()
 }
 
-fn print(json_out: bool, j: serde_json::Value, text: String) {
-    if json_out {
-        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+fn to_json<T: serde::Serialize>(v: &T) -> CliResult<serde_json::Value> {
+    serde_json::to_value(v).map_err(|e| CliError::internal(format!("JSON output: {e}")))
+}
+
+/// Prints `j` (with --json) or `text` on standard output. A reader that closed
+/// the pipe early (`| head`) ends the output quietly; any other write failure
+/// is an error, not a panic.
+pub(crate) fn print(json_out: bool, j: serde_json::Value, text: String) -> CliResult<()> {
+    let s = if json_out {
+        serde_json::to_string_pretty(&j)
+            .map_err(|e| CliError::internal(format!("JSON output: {e}")))?
     } else {
-        println!("{text}");
+        text
+    };
+    let mut out = std::io::stdout().lock();
+    match writeln!(out, "{s}").and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(CliError::internal(format!("standard output: {e}")))
+        }
+        _ => Ok(()),
     }
 }
 
@@ -257,17 +295,24 @@ pub fn run(a: Args) -> CliResult<i32> {
             a.json,
             json!({ "pz": v, "insl": insl, "tp": tp }),
             format!("PZ = {v:.3} mm (INSL {insl}, TP {tp})"),
-        );
+        )?;
         return Ok(EXIT_OK);
     }
-    let path = a.db.clone().unwrap_or_else(default_db);
+    let path = match a.db.clone() {
+        Some(p) => p,
+        None => default_db()?,
+    };
     let mut db = ToolDb::open(&path).map_err(|e| db_err(&path, e))?;
+    let mut code = EXIT_OK;
     match a.command {
         ToolCommand::Pz { .. } => unreachable!("handled above"),
         ToolCommand::Add(x) => {
+            // Only a tool the library does not have is new; a row that cannot be
+            // read is an error, never overwritten by a fresh record.
             let mut t = db
-                .tool(x.number)
-                .unwrap_or_else(|_| ToolRecord::new(x.number, ""));
+                .find_tool(x.number)
+                .map_err(|e| db_err(&path, e))?
+                .unwrap_or_else(|| ToolRecord::new(x.number, ""));
             if let Some(v) = x.name {
                 t.name = v;
             }
@@ -308,11 +353,7 @@ pub fn run(a: Args) -> CliResult<i32> {
                 }
             }
             db.put_tool(&t).map_err(|e| db_err(&path, e))?;
-            print(
-                a.json,
-                serde_json::to_value(&t).unwrap_or_default(),
-                format!("saved {}", describe(&t)),
-            );
+            print(a.json, to_json(&t)?, format!("saved {}", describe(&t)))?;
         }
         ToolCommand::Insert {
             number,
@@ -327,7 +368,7 @@ pub fn run(a: Args) -> CliResult<i32> {
                 a.json,
                 json!({ "tool": number, "designation": designation, "insl": insl, "tp": tp, "pz": pz }),
                 format!("T{number}: insert {designation}, PZ {pz:.3} mm"),
-            );
+            )?;
         }
         ToolCommand::Preset { number, l, r } => {
             db.record_presetter(number, l, r)
@@ -335,9 +376,9 @@ pub fn run(a: Args) -> CliResult<i32> {
             let t = db.tool(number).map_err(|e| db_err(&path, e))?;
             print(
                 a.json,
-                serde_json::to_value(&t).unwrap_or_default(),
+                to_json(&t)?,
                 format!("presetter values recorded: {}", describe(&t)),
-            );
+            )?;
         }
         ToolCommand::Measure(x) => {
             let t = db.tool(x.number).map_err(|e| db_err(&path, e))?;
@@ -364,16 +405,19 @@ pub fn run(a: Args) -> CliResult<i32> {
             .map_err(|e| db_err(&path, e))?;
             print(
                 a.json,
-                serde_json::to_value(&o).unwrap_or_default(),
+                to_json(&o)?,
                 format!(
                     "{}: {}{}",
-                    o.decision.to_uppercase(),
+                    o.decision.as_str().to_uppercase(),
                     o.reason,
                     o.switch_to
                         .map(|n| format!("\nnext: use T{n}"))
                         .unwrap_or_default()
                 ),
-            );
+            )?;
+            if o.decision.is_problem() {
+                code = EXIT_FINDINGS;
+            }
         }
         ToolCommand::Show { number } => {
             let tools = match number {
@@ -385,11 +429,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             } else {
                 tools.iter().map(describe).collect::<Vec<_>>().join("\n")
             };
-            print(
-                a.json,
-                serde_json::to_value(&tools).unwrap_or_default(),
-                text,
-            );
+            print(a.json, to_json(&tools)?, text)?;
         }
         ToolCommand::Log { number } => {
             let ev = db.events(number).map_err(|e| db_err(&path, e))?;
@@ -406,7 +446,7 @@ pub fn run(a: Args) -> CliResult<i32> {
                 })
                 .collect::<Vec<_>>()
                 .join("\n");
-            print(a.json, serde_json::to_value(&ev).unwrap_or_default(), text);
+            print(a.json, to_json(&ev)?, text)?;
         }
         ToolCommand::Import { file } => {
             let text = std::fs::read_to_string(&file)
@@ -417,12 +457,16 @@ pub fn run(a: Args) -> CliResult<i32> {
             } else {
                 db.import_csv(&text)
             }
-            .map_err(|e| CliError::input(format!("{}:{e}", file.display())))?;
+            .map_err(|e| match e {
+                // Located in the imported file (line:column).
+                DbError::Invalid(_) => CliError::input(format!("{}:{e}", file.display())),
+                e => db_err(&path, e),
+            })?;
             print(
                 a.json,
                 json!({ "imported": n }),
                 format!("imported {n} tools into {}", path.display()),
-            );
+            )?;
         }
         ToolCommand::Export { format, output } => {
             let text = match format {
@@ -436,7 +480,7 @@ pub fn run(a: Args) -> CliResult<i32> {
                 a.json,
                 json!({ "output": output.display().to_string() }),
                 format!("wrote {}", output.display()),
-            );
+            )?;
         }
         ToolCommand::Cycle(x) => {
             let t = db.tool(x.number).map_err(|e| db_err(&path, e))?;
@@ -464,8 +508,8 @@ pub fn run(a: Args) -> CliResult<i32> {
                 a.json,
                 json!({ "output": x.output.display().to_string(), "pz": o.pz }),
                 format!("wrote {}", x.output.display()),
-            );
+            )?;
         }
     }
-    Ok(EXIT_OK)
+    Ok(code)
 }
