@@ -28,6 +28,31 @@ pub enum KinKind {
     HeadBTableC,
 }
 
+impl KinKind {
+    /// The letters of the (first, second) rotary axes as a G-code program names them.
+    pub fn rotary_names(self) -> [char; 2] {
+        match self {
+            KinKind::TableAc => ['A', 'C'],
+            KinKind::TableAb => ['A', 'B'],
+            KinKind::TableBc | KinKind::HeadBc | KinKind::HeadBTableC => ['B', 'C'],
+        }
+    }
+}
+
+/// A value of a kinematics description out of its range: the field (a dotted
+/// path such as `first.min`) and what is wrong with it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KinematicsError {
+    pub field: String,
+    pub message: String,
+}
+
+impl std::fmt::Display for KinematicsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.field, self.message)
+    }
+}
+
 /// One rotary axis: programmed-angle limits in degrees (`None`: unlimited) and sign.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -121,17 +146,49 @@ impl Kinematics {
 
     pub fn from_toml(text: &str) -> Result<Kinematics, String> {
         let k: Kinematics = toml_from_str(text)?;
-        for (n, a) in [("first", k.first), ("second", k.second)] {
+        k.check().map_err(|e| e.to_string())?;
+        Ok(k)
+    }
+
+    /// Every number finite, signs ±1, each rotary range ordered. NaN would
+    /// pass the range tests of the inverse (every comparison with it is
+    /// false) and silently unlimit an axis, so it is refused here.
+    pub fn check(&self) -> Result<(), KinematicsError> {
+        let err = |field: String, message: &str| {
+            Err(KinematicsError {
+                field,
+                message: message.to_string(),
+            })
+        };
+        for (name, v) in [("rot_point", self.rot_point), ("offset", self.offset)] {
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                return err(format!("{name}[{i}]"), "must be a finite number (mm)");
+            }
+        }
+        for (name, v) in [("tool_offset", self.tool_offset), ("pivot", self.pivot)] {
+            if !v.is_finite() {
+                return err(name.into(), "must be a finite number (mm)");
+            }
+        }
+        for (n, a) in [("first", self.first), ("second", self.second)] {
             if a.sign != 1.0 && a.sign != -1.0 {
-                return Err(format!("{n} axis: sign must be 1 or -1"));
+                return err(format!("{n}.sign"), "must be 1 or -1");
+            }
+            for (end, v) in [("min", a.min), ("max", a.max)] {
+                if v.is_some_and(|v| !v.is_finite()) {
+                    return err(
+                        format!("{n}.{end}"),
+                        "must be a finite angle (degrees); leave it out for no limit",
+                    );
+                }
             }
             if let (Some(lo), Some(hi)) = (a.min, a.max) {
                 if lo > hi {
-                    return Err(format!("{n} axis: min above max"));
+                    return err(format!("{n}.min"), "is above max");
                 }
             }
         }
-        Ok(k)
+        Ok(())
     }
 
     fn r(&self) -> DVec3 {
@@ -500,6 +557,51 @@ mod tests {
             .expect_err("a misspelt key");
         assert!(e.contains("sgn") && e.contains("line 4"), "{e}");
         assert!(Kinematics::from_toml("kind = \"head-bc\"\n[first]\nsign = 2\n").is_err());
+    }
+
+    #[test]
+    fn check_names_the_field_out_of_range() {
+        let field = |t: &str| {
+            Kinematics::from_toml(t)
+                .expect_err("out of range")
+                .split(':')
+                .next()
+                .map(str::to_string)
+        };
+        let f = |s: &str| Some(s.to_string());
+        assert_eq!(
+            field("kind = \"table-ac\"\n[first]\nsign = 2\n"),
+            f("first.sign")
+        );
+        assert_eq!(
+            field("kind = \"table-ac\"\n[second]\nmin = nan\n"),
+            f("second.min")
+        );
+        assert_eq!(
+            field("kind = \"table-ac\"\n[first]\nmax = inf\n"),
+            f("first.max")
+        );
+        assert_eq!(
+            field("kind = \"table-ac\"\n[first]\nmin = 10\nmax = -10\n"),
+            f("first.min")
+        );
+        assert_eq!(
+            field("kind = \"table-ac\"\nrot_point = [0, nan, 0]\n"),
+            f("rot_point[1]")
+        );
+        assert_eq!(field("kind = \"head-bc\"\npivot = -inf\n"), f("pivot"));
+        // A locked axis (min = max) is a range, not an error.
+        Kinematics::from_toml("kind = \"table-ac\"\n[first]\nmin = 0\nmax = 0\n")
+            .expect("locked axis");
+    }
+
+    #[test]
+    fn rotary_names_follow_the_arrangement() {
+        assert_eq!(KinKind::TableAc.rotary_names(), ['A', 'C']);
+        assert_eq!(KinKind::TableAb.rotary_names(), ['A', 'B']);
+        assert_eq!(KinKind::TableBc.rotary_names(), ['B', 'C']);
+        assert_eq!(KinKind::HeadBc.rotary_names(), ['B', 'C']);
+        assert_eq!(KinKind::HeadBTableC.rotary_names(), ['B', 'C']);
     }
 
     proptest! {

@@ -217,7 +217,8 @@ pub fn print_diagnostics(path: &std::path::Path, diags: &[millplan_nc::Diagnosti
     }
 }
 
-/// The machine from `--machine FILE`, or the built-in default.
+/// The machine from `--machine FILE` (the machine file, or either of the two
+/// older single-purpose files), or the built-in default.
 pub fn load_machine(
     path: Option<&std::path::Path>,
 ) -> crate::error::CliResult<millplan_plan::machine::Machine> {
@@ -226,8 +227,11 @@ pub fn load_machine(
         Some(p) => {
             let text = std::fs::read_to_string(p)
                 .map_err(|e| CliError::input(format!("{}: cannot read: {e}", p.display())))?;
-            millplan_plan::machine::Machine::from_toml(&text)
-                .map_err(|e| CliError::input(format!("{}: {e}", p.display())))
+            millplan_plan::machine::Machine::from_toml(&text).map_err(|e| {
+                // `file:line:col: field: message` when the error has a place.
+                let sep = if e.at.is_some() { ":" } else { ": " };
+                CliError::input(format!("{}{sep}{e}", p.display()))
+            })
         }
         None => Ok(millplan_plan::machine::Machine::default()),
     }

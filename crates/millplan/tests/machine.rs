@@ -1,0 +1,105 @@
+//! `--machine FILE` end to end: the complete example machine file, and both
+//! older layouts, drive `speed`; a bad file is refused with its place
+//! (`file:line:col: field: message`) and exit code 2 before any input is read.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_millplan"))
+}
+
+fn example() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/machine.toml")
+}
+
+/// `speed` on the demo's finishing program with `machine`, written as APT.
+fn speed(dir: &Path, machine: &Path) -> Output {
+    let d = dir.join("demo");
+    if !d.exists() {
+        let o = bin()
+            .args(["demo", "-o", d.to_str().expect("utf8")])
+            .output()
+            .expect("runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    bin()
+        .args(["speed", d.join("finish.apt").to_str().expect("utf8")])
+        .args(["--stl", d.join("part.stl").to_str().expect("utf8")])
+        .args(["--vc", "63", "--fz", "0.125", "--ap", "0.3"])
+        .args(["--json", "-q", "--to", "apt"])
+        .args(["--machine", machine.to_str().expect("utf8")])
+        .args(["-o", dir.join("out.apt").to_str().expect("utf8")])
+        .output()
+        .expect("runs")
+}
+
+fn json(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).expect("json")
+}
+
+#[test]
+fn every_layout_drives_speed() {
+    let dir = tempfile::tempdir().expect("tmp");
+    // The full example: its spindle range is the one applied.
+    let j = json(&speed(dir.path(), &example()));
+    assert_eq!(j["machine"]["spindle_max"], 18000.0);
+    assert_eq!(j["machine"]["kinematics"]["kind"], "table-ac");
+    let old_speed = dir.path().join("speed.toml");
+    std::fs::write(
+        &old_speed,
+        "spindle_min = 1000\nspindle_max = 9000\nspindle_accel = 4000\nfeed_max = 8000\n",
+    )
+    .expect("write");
+    let j = json(&speed(dir.path(), &old_speed));
+    assert_eq!(j["machine"]["spindle_max"], 9000.0);
+    // The kinematics-only file of `setup`: the default spindle and feeds.
+    let old_kin = dir.path().join("kin.toml");
+    std::fs::write(
+        &old_kin,
+        "kind = \"table-ac\"\n[first]\nmin = -30\nmax = 110\n",
+    )
+    .expect("write");
+    let j = json(&speed(dir.path(), &old_kin));
+    assert_eq!(j["machine"]["spindle_max"], 18000.0);
+    assert_eq!(j["machine"]["kinematics"]["first"]["max"], 110.0);
+}
+
+#[test]
+fn a_bad_machine_file_is_located() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let bad = dir.path().join("m.toml");
+    std::fs::write(
+        &bad,
+        "[spindle]\nmin = 500\nmax = nan\naccel = 6000\n[feed]\nmax = 20000\n",
+    )
+    .expect("write");
+    // No program is read: the machine file is checked first.
+    let o = bin()
+        .args([
+            "speed",
+            "missing.apt",
+            "--stl",
+            "missing.stl",
+            "--vc",
+            "63",
+            "--fz",
+            "0.125",
+            "--ap",
+            "0.3",
+        ])
+        .args(["--machine", bad.to_str().expect("utf8"), "-o"])
+        .arg(dir.path().join("out.apt"))
+        .output()
+        .expect("runs");
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!(
+            "{}:3:7: spindle.max: must be finite",
+            bad.display()
+        )),
+        "{err}"
+    );
+}
