@@ -3,8 +3,9 @@
 use crate::cmd::{print_diagnostics, read_options, target_for, write_program, TargetArg, UnitArg};
 use crate::error::{CliResult, EXIT_OK};
 use crate::io::{read_program, write_atomic};
-use millplan_nc::write::WriteOptions;
 use millplan_nc::LengthUnit;
+use millplan_plan::orient::ResolveOrientation;
+use millplan_plan::pipeline::{self, Context};
 use std::path::PathBuf;
 
 /// Convert an NC program (APT/CL or G-code) to another dialect.
@@ -46,6 +47,12 @@ pub struct Args {
     /// instead of refusing the conversion.
     #[arg(long)]
     pub lossy: bool,
+    /// Machine file (examples/machine.toml): its control's dialect is the
+    /// default target and its S-word decimals are used; with a [kinematics]
+    /// table, rotary angles become tool axes (so five-axis G-code can be
+    /// written as APT).
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
     /// Do not print reader diagnostics.
     #[arg(long, short)]
     pub quiet: bool,
@@ -54,9 +61,20 @@ pub struct Args {
 pub fn run(a: Args) -> CliResult<i32> {
     let parsed = read_program(&a.input, read_options(a.units, a.feed))?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet);
-    let p = parsed.program;
-    let target = target_for(a.to, &a.output, p.source)?;
-    let mut o = WriteOptions::new(target);
+    let mut p = parsed.program;
+    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    let to = a.to.map(Into::into).or(machine.target());
+    let target = match to {
+        Some(t) => t,
+        None => target_for(None, &a.output, p.source)?,
+    };
+    if let Some(k) = machine.kinematics() {
+        let cx = Context::new(machine.clone());
+        let mut pass = ResolveOrientation::new(k.clone());
+        pipeline::run(&mut [&mut pass], &mut p, &cx)
+            .map_err(|e| crate::cmd::pass_error(&a.input, e))?;
+    }
+    let mut o = machine.write_options(target);
     o.unit = a.out_units.map(LengthUnit::from);
     o.line_numbers = a.line_numbers;
     o.lossy = a.lossy;

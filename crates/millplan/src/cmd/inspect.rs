@@ -26,9 +26,13 @@ pub struct Args {
     /// Unit of the source when the file does not say (or says wrongly).
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
-    /// Rapid traverse rate for the time estimate, mm/min.
-    #[arg(long, default_value_t = 15000.0)]
-    pub rapid_rate: f64,
+    /// Rapid traverse rate for the time estimate, mm/min (default: the
+    /// machine file's, else 15000).
+    #[arg(long)]
+    pub rapid_rate: Option<f64>,
+    /// Machine file (examples/machine.toml): its rapid rate times the rapids.
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
     /// Do not print reader diagnostics.
     #[arg(long, short)]
     pub quiet: bool,
@@ -86,6 +90,13 @@ fn program_json(p: &Program, diags: usize, rapid_rate: f64) -> Value {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    let rapid_rate = a.rapid_rate.unwrap_or(machine.rapid);
+    if !(rapid_rate > 0.0 && rapid_rate.is_finite()) {
+        return Err(crate::error::CliError::input(
+            "--rapid-rate must be positive (mm/min)",
+        ));
+    }
     let input = read_any(&a.file, read_options(a.units, None))?;
     match input {
         Input::Program(parsed) => {
@@ -95,7 +106,7 @@ pub fn run(a: Args) -> CliResult<i32> {
                 print!("{}", millplan_nc::text::print(p));
                 return Ok(EXIT_OK);
             }
-            let j = program_json(p, parsed.diagnostics.len(), a.rapid_rate);
+            let j = program_json(p, parsed.diagnostics.len(), rapid_rate);
             if a.json {
                 println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
             } else {

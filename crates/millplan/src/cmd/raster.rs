@@ -4,7 +4,6 @@ use crate::cmd::{print_diagnostics, target_for, write_program, TargetArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_surface, write_atomic};
 use millplan_models::cutter::Shape;
-use millplan_nc::write::WriteOptions;
 use millplan_plan::checks;
 use millplan_sim::dropcutter::DropMesh;
 use millplan_sim::gouge::{check, GougeParams};
@@ -61,6 +60,10 @@ pub struct Args {
     pub to: Option<TargetArg>,
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Machine file (examples/machine.toml): its control's dialect is the
+    /// default target and its S-word decimals are used.
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
     /// Write the raster even when its own gouge check finds it cutting into
     /// the part (a mesh with holes or seams can make drop-cutter miss material).
     #[arg(long)]
@@ -118,7 +121,11 @@ pub fn run(a: Args) -> CliResult<i32> {
             a.stl.display()
         )));
     }
-    let target = target_for(a.to, &a.output, millplan_nc::Dialect::Generated)?;
+    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    let target = match a.to.map(Into::into).or(machine.target()) {
+        Some(t) => t,
+        None => target_for(None, &a.output, millplan_nc::Dialect::Generated)?,
+    };
     // The raster checked as `millplan gouge` would check it.
     let rep = check(&prog, &part, |_| Some(shape), &GougeParams::default());
     if !rep.gouges.is_empty() {
@@ -133,7 +140,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             return Ok(EXIT_FINDINGS);
         }
     }
-    let out = write_program(&prog, WriteOptions::new(target), &a.stl, a.quiet)?;
+    let out = write_program(&prog, machine.write_options(target), &a.stl, a.quiet)?;
     write_atomic(&a.output, &out, &[a.stl.as_path()])?;
     let s = millplan_nc::stats::summarize(&prog, 15000.0);
     println!(

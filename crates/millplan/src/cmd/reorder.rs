@@ -5,7 +5,6 @@ use crate::cmd::{print_diagnostics, read_options, target_for, write_program, Tar
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_program, read_surface, write_atomic};
 use clap::ValueEnum;
-use millplan_nc::write::WriteOptions;
 use millplan_plan::pipeline::{self, Context, Pass};
 use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Start};
 use millplan_plan::speed::SpeedPass;
@@ -110,7 +109,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let Some(o) = reorder.outcome else {
         return Err(CliError::internal("the reorder pass left no outcome"));
     };
-    let out = write_program(&program, WriteOptions::new(target), &a.path, a.quiet)?;
+    let out = write_program(&program, cx.machine.write_options(target), &a.path, a.quiet)?;
     let inputs = [a.path.as_path(), a.stl.as_path()];
     write_atomic(&a.output, &out, &inputs)?;
     if let Some(path) = &a.report {

@@ -32,8 +32,10 @@ pub struct Args {
     /// Part surface (STL).
     #[arg(long)]
     pub stl: PathBuf,
-    /// Machine kinematics (TOML: kind = "table-ac" | "table-bc" | "table-ab" |
-    /// "head-bc" | "head-b-table-c", [first] and [second] with min, max, sign).
+    /// Machine file (see examples/machine.toml) with a [kinematics] table:
+    /// kind = "table-ac" | "table-bc" | "table-ab" | "head-bc" |
+    /// "head-b-table-c", [kinematics.first] and [kinematics.second] with min,
+    /// max, sign. The older kinematics-only file reads too.
     #[arg(long, conflicts_with = "kind")]
     pub machine: Option<PathBuf>,
     /// Machine type when no --machine file is given.
@@ -155,12 +157,15 @@ fn parse_range(s: &str, what: &str) -> CliResult<RotaryAxis> {
 /// The machine from --machine, or --type with --range1/--range2.
 fn machine(a: &Args) -> CliResult<Kinematics> {
     match (&a.machine, a.kind) {
-        (Some(p), _) => {
-            let text = std::fs::read_to_string(p)
-                .map_err(|e| CliError::input(format!("{}: cannot read: {e}", p.display())))?;
-            Kinematics::from_toml(&text)
-                .map_err(|e| CliError::input(format!("{}: {e}", p.display())))
-        }
+        (Some(p), _) => crate::cmd::load_machine(Some(p))?
+            .kinematics()
+            .cloned()
+            .ok_or_else(|| {
+                CliError::input(format!(
+                    "{}: the machine file has no [kinematics] table: setup needs the rotary axes",
+                    p.display()
+                ))
+            }),
         (None, Some(t)) => {
             let mut k = Kinematics::new(match t {
                 TypeArg::Ca => KinKind::TableAc,

@@ -7,7 +7,7 @@ use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, write_atomic};
 use clap::ValueEnum;
 use millplan_models::contact::{Convention, NormalMode, Surface};
-use millplan_nc::write::{Target, WriteOptions};
+use millplan_nc::write::Target;
 use millplan_plan::checks;
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context};
@@ -206,7 +206,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     cx.time("program written and synced", || {
         write_program_file(
             &program,
-            WriteOptions::new(target),
+            cx.machine.write_options(target),
             &a.output,
             &a.path,
             &inputs,
