@@ -253,3 +253,21 @@ pub fn parse_num(s: &str) -> Option<f64> {
         _ => None,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_code_has_a_name_and_an_explanation() {
+        let mut names: Vec<&str> = Code::ALL.iter().map(|c| c.as_str()).collect();
+        for c in Code::ALL {
+            assert_eq!(Code::from_name(c.as_str()), Some(c));
+            assert!(c.explain().len() > 20, "{c}");
+        }
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), Code::ALL.len(), "names are unique");
+        assert_eq!(Code::from_name("no-such-code"), None);
+    }
+}

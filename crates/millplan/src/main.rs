@@ -40,17 +40,27 @@ enum Command {
     Setup(cmd::setup::Args),
     Tool(cmd::tool::Args),
     Thread(cmd::thread::Args),
+    Explain(cmd::explain::Args),
     #[command(name = "wd-sweep")]
     WdSweep(cmd::sweep::Args),
 }
 
-/// Faults this process's fresh memory in 4 KiB pages rather than 2 MiB ones.
-/// Under a hypervisor, a fresh transparent huge page often costs several times
-/// its zeroing (2.6–3.2 ms per MB measured on a 2-core cloud VM, against
-/// 0.4–0.6 ms per MB for small pages); `speed` on a million points faulted
-/// about 480 MB of them for 0.6–1.1 s of kernel time. The page-table walks
-/// saved by huge pages were not measurable there (one-thread `speed`: same
-/// user time either way).
+/// With `MILLPLAN_SMALL_PAGES=1`, faults this process's fresh memory in 4 KiB
+/// pages rather than 2 MiB ones. An opt-in for the machines where it was
+/// measured to help: under some hypervisors a fresh transparent huge page
+/// costs several times its zeroing (2.6–3.2 ms per MB on a 2-core cloud VM,
+/// against 0.4–0.6 ms per MB for small pages; `speed` on a million points
+/// faulted about 480 MB of them for 0.6–1.1 s of kernel time), while on
+/// bare metal huge pages save page-table walks. Nothing is switched
+/// process-wide unless asked for.
+fn small_pages_if_asked() -> bool {
+    let asked = std::env::var_os("MILLPLAN_SMALL_PAGES").is_some_and(|v| v == "1");
+    if asked {
+        small_pages_only();
+    }
+    asked
+}
+
 fn small_pages_only() {
     #[cfg(target_os = "linux")]
     {
@@ -79,7 +89,7 @@ fn quiet_on_closed_stdout() {
 
 fn main() {
     quiet_on_closed_stdout();
-    small_pages_only();
+    small_pages_if_asked();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
@@ -106,6 +116,7 @@ fn main() {
         Command::Setup(a) => cmd::setup::run(a),
         Command::Tool(a) => cmd::tool::run(a),
         Command::Thread(a) => cmd::thread::run(a),
+        Command::Explain(a) => cmd::explain::run(a),
     };
     match r {
         Ok(code) => std::process::exit(code),
@@ -121,8 +132,11 @@ mod tests {
     /// The kernel reports the process's huge-page setting in
     /// /proc/self/status (Linux 5.0 and later; older kernels skip the check).
     #[test]
-    fn the_process_asks_for_small_pages() {
-        super::small_pages_only();
+    fn small_pages_when_asked() {
+        std::env::set_var("MILLPLAN_SMALL_PAGES", "1");
+        assert!(super::small_pages_if_asked());
+        std::env::set_var("MILLPLAN_SMALL_PAGES", "0");
+        assert!(!super::small_pages_if_asked());
         let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
         if let Some(line) = status.lines().find(|l| l.starts_with("THP_enabled:")) {
             assert_eq!(line.split_whitespace().nth(1), Some("0"), "{line}");

@@ -306,26 +306,84 @@ fn help_explains_every_command() {
     }
 }
 
+/// ARCHITECTURE.md's dependency rule, read from `cargo metadata`: each
+/// library crate depends only on the crates below it
+/// (geom ← nc; geom ← models; nc + models ← sim ← plan ← report; tooldb
+/// alone), and no library on the command-line, terminal or temporary-file
+/// crates that only the binary uses.
 #[test]
 fn crate_dependencies_point_one_way() {
-    // ARCHITECTURE.md: geom <- nc <- binary; libraries never depend on the binary.
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let deps =
-        |c: &str| std::fs::read_to_string(root.join(c).join("Cargo.toml")).expect("manifest");
-    let geom = deps("millplan-geom");
-    assert!(!geom.contains("millplan-nc") && !geom.contains("millplan.workspace"));
-    let nc = deps("millplan-nc");
-    assert!(nc.contains("millplan-geom") && !nc.contains("clap") && !nc.contains("tempfile"));
-    let models = deps("millplan-models");
-    assert!(!models.contains("millplan-nc") && !models.contains("millplan-plan"));
-    let plan = deps("millplan-plan");
-    assert!(!plan.contains("millplan-report") && !plan.contains("clap"));
-    let tooldb = deps("millplan-tooldb");
-    assert!(!tooldb.contains("millplan-nc") && !tooldb.contains("clap"));
-    let sim = deps("millplan-sim");
-    assert!(!sim.contains("millplan-plan") && !sim.contains("clap"));
-    let report = deps("millplan-report");
-    assert!(!report.contains("clap") && !report.contains("tempfile"));
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let out = std::process::Command::new(cargo)
+        .args([
+            "metadata",
+            "--format-version",
+            "1",
+            "--no-deps",
+            "--offline",
+        ])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("cargo metadata runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m: serde_json::Value = serde_json::from_slice(&out.stdout).expect("metadata json");
+    let allowed: &[(&str, &[&str])] = &[
+        ("millplan-geom", &[]),
+        ("millplan-nc", &["millplan-geom"]),
+        ("millplan-models", &["millplan-geom"]),
+        (
+            "millplan-sim",
+            &["millplan-geom", "millplan-nc", "millplan-models"],
+        ),
+        (
+            "millplan-plan",
+            &[
+                "millplan-geom",
+                "millplan-nc",
+                "millplan-models",
+                "millplan-sim",
+            ],
+        ),
+        (
+            "millplan-report",
+            &[
+                "millplan-geom",
+                "millplan-nc",
+                "millplan-models",
+                "millplan-sim",
+                "millplan-plan",
+            ],
+        ),
+        ("millplan-tooldb", &[]),
+    ];
+    let binary_only = ["clap", "indicatif", "tempfile", "anyhow", "mimalloc"];
+    let packages = m["packages"].as_array().expect("packages");
+    let mut seen = 0;
+    for p in packages {
+        let name = p["name"].as_str().unwrap_or("");
+        let Some((_, ok)) = allowed.iter().find(|(n, _)| *n == name) else {
+            continue;
+        };
+        seen += 1;
+        for d in p["dependencies"].as_array().expect("dependencies") {
+            if !d["kind"].is_null() {
+                continue; // dev- and build-dependencies
+            }
+            let dep = d["name"].as_str().unwrap_or("");
+            if dep.starts_with("millplan") {
+                assert!(ok.contains(&dep), "{name} must not depend on {dep}");
+            }
+            assert!(
+                !binary_only.contains(&dep),
+                "{name} must not depend on {dep}: only the binary does I/O and argument parsing"
+            );
+        }
+    }
+    assert_eq!(seen, allowed.len(), "every library crate checked");
 }
 
 #[test]

@@ -3,6 +3,7 @@
 pub mod convert;
 pub mod demo;
 pub mod directions;
+pub mod explain;
 pub mod gouge;
 pub mod inspect;
 pub mod raster;

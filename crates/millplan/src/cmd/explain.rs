@@ -1,0 +1,38 @@
+//! `millplan explain`: what a finding's code means.
+
+use crate::error::{CliError, CliResult, EXIT_OK};
+use millplan_nc::diag::Code;
+
+/// Explain the code of a finding (`warning[unknown-word]`): what it means and
+/// what to do about it. Without a code, every code.
+#[derive(clap::Args)]
+pub struct Args {
+    /// A code as printed, e.g. unknown-word.
+    pub code: Option<String>,
+    /// Print the codes and their explanations as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    let codes: Vec<Code> = match &a.code {
+        Some(c) => vec![Code::from_name(c.trim()).ok_or_else(|| {
+            CliError::input(format!(
+                "`{c}` is not a millplan code; `millplan explain` lists them all"
+            ))
+        })?],
+        None => Code::ALL.to_vec(),
+    };
+    if a.json {
+        let v: Vec<_> = codes
+            .iter()
+            .map(|c| serde_json::json!({ "code": c.as_str(), "explanation": c.explain() }))
+            .collect();
+        println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
+    } else {
+        for c in codes {
+            println!("{:<24} {}", c.as_str(), c.explain());
+        }
+    }
+    Ok(EXIT_OK)
+}
