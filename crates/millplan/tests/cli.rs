@@ -1,6 +1,6 @@
 //! The CLI through the real binary: exit codes, JSON keys, atomic outputs.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
 fn bin() -> Command {
