@@ -193,7 +193,74 @@ fn default_kind() -> String {
     "mill".into()
 }
 
+/// Changes to a tool record: what is given replaces, what is not stays.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ToolEdit {
+    pub name: Option<String>,
+    pub kind: Option<String>,
+    pub l: Option<f64>,
+    pub r: Option<f64>,
+    pub ltol: Option<f64>,
+    pub rtol: Option<f64>,
+    pub lbreak: Option<f64>,
+    pub rbreak: Option<f64>,
+    pub sister: Option<u32>,
+    /// Tool life, minutes.
+    pub life_min: Option<f64>,
+    /// Insert length INSL and thread pitch TP (thread mills), mm.
+    pub insl: Option<f64>,
+    pub tp: Option<f64>,
+    /// Any ISO 13399 property, symbol and value.
+    pub iso: Vec<(String, String)>,
+}
+
 impl ToolRecord {
+    /// Applies `e`; refuses insert data whose PZ cannot be formed (the record
+    /// is then unchanged).
+    pub fn apply(&mut self, e: ToolEdit) -> Result<(), crate::thread::ThreadError> {
+        let mut t = self.clone();
+        if let Some(v) = e.name {
+            t.name = v;
+        }
+        if let Some(v) = e.kind {
+            t.kind = v;
+        }
+        for (slot, v) in [
+            (&mut t.l, e.l),
+            (&mut t.r, e.r),
+            (&mut t.ltol, e.ltol),
+            (&mut t.rtol, e.rtol),
+            (&mut t.lbreak, e.lbreak),
+            (&mut t.rbreak, e.rbreak),
+        ] {
+            if let Some(v) = v {
+                *slot = v;
+            }
+        }
+        if e.sister.is_some() {
+            t.sister = e.sister;
+        }
+        if e.life_min.is_some() {
+            t.life_min = e.life_min;
+        }
+        if let Some(v) = e.insl {
+            t.iso.insert("INSL".into(), v.to_string());
+        }
+        if let Some(v) = e.tp {
+            t.iso.insert("TP".into(), v.to_string());
+        }
+        for (k, v) in e.iso {
+            t.iso.insert(k, v);
+        }
+        if let (Some(l), Some(p)) = (t.iso.get("INSL"), t.iso.get("TP")) {
+            if let (Ok(l), Ok(p)) = (l.parse::<f64>(), p.parse::<f64>()) {
+                crate::thread::pz(l, p)?;
+            }
+        }
+        *self = t;
+        Ok(())
+    }
+
     pub fn new(number: u32, name: &str) -> ToolRecord {
         ToolRecord {
             number,

@@ -72,7 +72,7 @@ pub struct Args {
     pub quiet: bool,
 }
 
-pub fn run(a: Args) -> CliResult<i32> {
+fn params(a: &Args) -> CliResult<RasterParams> {
     let shape = Shape::parse(&a.tool).map_err(CliError::input)?;
     let finite = [
         a.stepover,
@@ -97,8 +97,6 @@ pub fn run(a: Args) -> CliResult<i32> {
             "--stepover, --step and --feed must be positive, --tol not negative",
         ));
     }
-    let (mesh, _) = read_surface(&a.stl)?;
-    let part = DropMesh::new(&mesh);
     let mut p = RasterParams::new(shape);
     p.angle_deg = a.angle;
     p.stepover = a.stepover;
@@ -109,6 +107,14 @@ pub fn run(a: Args) -> CliResult<i32> {
     p.clearance = a.clearance;
     p.feed = a.feed;
     p.spindle = a.spindle;
+    Ok(p)
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    let p = params(&a)?;
+    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    let (mesh, _) = read_surface(&a.stl)?;
+    let part = DropMesh::new(&mesh);
     print_diagnostics(
         &a.stl,
         &checks::mesh(&mesh).into_iter().collect::<Vec<_>>(),
@@ -121,13 +127,12 @@ pub fn run(a: Args) -> CliResult<i32> {
             a.stl.display()
         )));
     }
-    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let target = match a.to.map(Into::into).or(machine.target()) {
         Some(t) => t,
         None => target_for(None, &a.output, millplan_nc::Dialect::Generated)?,
     };
     // The raster checked as `millplan gouge` would check it.
-    let rep = check(&prog, &part, |_| Some(shape), &GougeParams::default());
+    let rep = check(&prog, &part, |_| Some(p.shape), &GougeParams::default());
     if !rep.gouges.is_empty() {
         eprintln!(
             "{}: the raster's own gouge check finds {} moves cutting into the part, deepest {:.4} mm{}",

@@ -222,21 +222,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             t0.elapsed().as_secs_f64()
         );
     }
-    if let Some(t) = &a.table {
-        let csv = millplan_report::table::points_csv(&pass.rows);
-        write_atomic(t, csv.as_bytes(), &inputs)?;
-    }
-    if let Some(r) = &a.report {
-        let title = format!(
-            "millplan speed: {}",
-            a.path
-                .file_name()
-                .map(|f| f.to_string_lossy())
-                .unwrap_or_default()
-        );
-        let html = millplan_report::html::speed_report(&title, &summary, &pass.rows, a.vc);
-        write_atomic(r, html.as_bytes(), &inputs)?;
-    }
+    write_table_and_report(&a, &summary, &pass.rows)?;
     if a.json {
         let mut j = serde_json::to_value(&summary).unwrap_or_default();
         j["output"] = serde_json::json!(a.output.display().to_string());
@@ -253,6 +239,31 @@ pub fn run(a: Args) -> CliResult<i32> {
     } else {
         EXIT_OK
     })
+}
+
+/// The per-point table (--table) and the report (--report), when asked for.
+fn write_table_and_report(
+    a: &Args,
+    summary: &Summary,
+    rows: &[millplan_plan::speed::PointRow],
+) -> CliResult<()> {
+    let inputs = [a.path.as_path(), a.stl.as_path()];
+    if let Some(t) = &a.table {
+        let csv = millplan_report::table::points_csv(rows);
+        write_atomic(t, csv.as_bytes(), &inputs)?;
+    }
+    if let Some(r) = &a.report {
+        let title = format!(
+            "millplan speed: {}",
+            a.path
+                .file_name()
+                .map(|f| f.to_string_lossy())
+                .unwrap_or_default()
+        );
+        let html = millplan_report::html::speed_report(&title, summary, rows, a.vc);
+        write_atomic(r, html.as_bytes(), &inputs)?;
+    }
+    Ok(())
 }
 
 fn print_summary(s: &Summary, output: &std::path::Path, target: Target) {

@@ -5,7 +5,7 @@ use crate::io::write_atomic;
 use clap::{Subcommand, ValueEnum};
 use millplan_tooldb::control::{record, Kind, Measurement, Settings};
 use millplan_tooldb::cycles::{self, CycleOptions, Measure};
-use millplan_tooldb::db::{DbError, ToolDb, ToolRecord};
+use millplan_tooldb::db::{DbError, ToolDb, ToolEdit, ToolRecord};
 use millplan_tooldb::thread::pz;
 use serde_json::json;
 use std::io::Write;
@@ -303,58 +303,13 @@ pub fn run(a: Args) -> CliResult<i32> {
         None => default_db()?,
     };
     let mut db = ToolDb::open(&path).map_err(|e| db_err(&path, e))?;
-    let mut code = EXIT_OK;
+    let lib = Lib {
+        path: &path,
+        json: a.json,
+    };
     match a.command {
         ToolCommand::Pz { .. } => unreachable!("handled above"),
-        ToolCommand::Add(x) => {
-            // Only a tool the library does not have is new; a row that cannot be
-            // read is an error, never overwritten by a fresh record.
-            let mut t = db
-                .find_tool(x.number)
-                .map_err(|e| db_err(&path, e))?
-                .unwrap_or_else(|| ToolRecord::new(x.number, ""));
-            if let Some(v) = x.name {
-                t.name = v;
-            }
-            if let Some(v) = x.kind {
-                t.kind = v;
-            }
-            for (slot, v) in [
-                (&mut t.l, x.l),
-                (&mut t.r, x.r),
-                (&mut t.ltol, x.ltol),
-                (&mut t.rtol, x.rtol),
-                (&mut t.lbreak, x.lbreak),
-                (&mut t.rbreak, x.rbreak),
-            ] {
-                if let Some(v) = v {
-                    *slot = v;
-                }
-            }
-            if x.sister.is_some() {
-                t.sister = x.sister;
-            }
-            if x.life.is_some() {
-                t.life_min = x.life;
-            }
-            if let Some(v) = x.insl {
-                t.iso.insert("INSL".into(), v.to_string());
-            }
-            if let Some(v) = x.tp {
-                t.iso.insert("TP".into(), v.to_string());
-            }
-            for (k, v) in x.iso {
-                t.iso.insert(k, v);
-            }
-            if let (Some(l), Some(p)) = (t.iso.get("INSL"), t.iso.get("TP")) {
-                let (l, p) = (l.parse::<f64>(), p.parse::<f64>());
-                if let (Ok(l), Ok(p)) = (l, p) {
-                    pz(l, p).map_err(|e| CliError::input(format!("insert data: {e}")))?;
-                }
-            }
-            db.put_tool(&t).map_err(|e| db_err(&path, e))?;
-            print(a.json, to_json(&t)?, format!("saved {}", describe(&t)))?;
-        }
+        ToolCommand::Add(x) => add(&mut db, &lib, x),
         ToolCommand::Insert {
             number,
             designation,
@@ -363,153 +318,194 @@ pub fn run(a: Args) -> CliResult<i32> {
         } => {
             let pz = db
                 .add_insert(number, &designation, insl, tp)
-                .map_err(|e| db_err(&path, e))?;
-            print(
-                a.json,
+                .map_err(|e| lib.err(e))?;
+            lib.print(
                 json!({ "tool": number, "designation": designation, "insl": insl, "tp": tp, "pz": pz }),
                 format!("T{number}: insert {designation}, PZ {pz:.3} mm"),
-            )?;
+            )
         }
         ToolCommand::Preset { number, l, r } => {
-            db.record_presetter(number, l, r)
-                .map_err(|e| db_err(&path, e))?;
-            let t = db.tool(number).map_err(|e| db_err(&path, e))?;
-            print(
-                a.json,
+            db.record_presetter(number, l, r).map_err(|e| lib.err(e))?;
+            let t = db.tool(number).map_err(|e| lib.err(e))?;
+            lib.print(
                 to_json(&t)?,
                 format!("presetter values recorded: {}", describe(&t)),
-            )?;
-        }
-        ToolCommand::Measure(x) => {
-            let t = db.tool(x.number).map_err(|e| db_err(&path, e))?;
-            let m = Measurement {
-                tool: x.number,
-                kind: if x.first {
-                    Kind::First
-                } else {
-                    Kind::Inspection
-                },
-                l: x.l,
-                r: x.r,
-                per_tooth: x.teeth,
-                pz: x.pz.or_else(|| insert_pz(&t)),
-            };
-            let o = record(
-                &mut db,
-                &m,
-                &Settings {
-                    dset: x.dset,
-                    pallet: x.pallet,
-                },
             )
-            .map_err(|e| db_err(&path, e))?;
-            print(
-                a.json,
-                to_json(&o)?,
-                format!(
-                    "{}: {}{}",
-                    o.decision.as_str().to_uppercase(),
-                    o.reason,
-                    o.switch_to
-                        .map(|n| format!("\nnext: use T{n}"))
-                        .unwrap_or_default()
-                ),
-            )?;
-            if o.decision.is_problem() {
-                code = EXIT_FINDINGS;
-            }
         }
-        ToolCommand::Show { number } => {
-            let tools = match number {
-                Some(n) => vec![db.tool(n).map_err(|e| db_err(&path, e))?],
-                None => db.tools().map_err(|e| db_err(&path, e))?,
-            };
-            let text = if tools.is_empty() {
-                format!("{}: no tools yet", path.display())
-            } else {
-                tools.iter().map(describe).collect::<Vec<_>>().join("\n")
-            };
-            print(a.json, to_json(&tools)?, text)?;
-        }
-        ToolCommand::Log { number } => {
-            let ev = db.events(number).map_err(|e| db_err(&path, e))?;
-            let text = ev
-                .iter()
-                .map(|e| {
-                    format!(
-                        "{} T{} {}: {}",
-                        e.time,
-                        e.tool.map(|t| t.to_string()).unwrap_or("-".into()),
-                        e.decision,
-                        e.reason
-                    )
-                })
-                .collect::<Vec<_>>()
-                .join("\n");
-            print(a.json, to_json(&ev)?, text)?;
-        }
-        ToolCommand::Import { file } => {
-            let text = std::fs::read_to_string(&file)
-                .map_err(|e| CliError::input(format!("{}: {e}", file.display())))?;
-            let is_json = text.trim_start().starts_with('[');
-            let n = if is_json {
-                db.import_json(&text)
-            } else {
-                db.import_csv(&text)
-            }
-            .map_err(|e| match e {
-                // Located in the imported file (line:column).
-                DbError::Invalid(_) => CliError::input(format!("{}:{e}", file.display())),
-                e => db_err(&path, e),
-            })?;
-            print(
-                a.json,
-                json!({ "imported": n }),
-                format!("imported {n} tools into {}", path.display()),
-            )?;
-        }
+        ToolCommand::Measure(x) => measure(&mut db, &lib, x),
+        ToolCommand::Show { number } => show(&db, &lib, number),
+        ToolCommand::Log { number } => log(&db, &lib, number),
+        ToolCommand::Import { file } => import(&mut db, &lib, &file),
         ToolCommand::Export { format, output } => {
             let text = match format {
                 ExportFormat::Csv => db.export_csv(),
                 ExportFormat::Json => db.export_json(),
                 ExportFormat::ToolT => db.export_tool_t(),
             }
-            .map_err(|e| db_err(&path, e))?;
-            write_atomic(&output, text.as_bytes(), &[path.as_path()])?;
-            print(
-                a.json,
+            .map_err(|e| lib.err(e))?;
+            write_atomic(&output, text.as_bytes(), &[lib.path])?;
+            lib.print(
                 json!({ "output": output.display().to_string() }),
                 format!("wrote {}", output.display()),
-            )?;
+            )
         }
-        ToolCommand::Cycle(x) => {
-            let t = db.tool(x.number).map_err(|e| db_err(&path, e))?;
-            let o = CycleOptions {
-                kind: if x.first {
-                    Kind::First
-                } else {
-                    Kind::Inspection
-                },
-                measure: match x.measure {
-                    MeasureArg::Length => Measure::Length,
-                    MeasureArg::Radius => Measure::Radius,
-                    MeasureArg::Both => Measure::Both,
-                },
-                clearance: x.clearance,
-                per_tooth: x.per_tooth,
-                pz: insert_pz(&t),
-            };
-            let text = match x.control {
-                Control::Heidenhain => cycles::heidenhain(&t, &o),
-                Control::Fanuc => cycles::fanuc(&t, &o),
-            };
-            write_atomic(&x.output, text.as_bytes(), &[path.as_path()])?;
-            print(
-                a.json,
-                json!({ "output": x.output.display().to_string(), "pz": o.pz }),
-                format!("wrote {}", x.output.display()),
-            )?;
-        }
+        ToolCommand::Cycle(x) => cycle(&db, &lib, x),
     }
-    Ok(code)
+}
+
+/// The library a subcommand works on, and how it prints.
+struct Lib<'a> {
+    path: &'a Path,
+    json: bool,
+}
+
+impl Lib<'_> {
+    fn err(&self, e: DbError) -> CliError {
+        db_err(self.path, e)
+    }
+
+    fn print(&self, j: serde_json::Value, text: String) -> CliResult<i32> {
+        print(self.json, j, text)?;
+        Ok(EXIT_OK)
+    }
+}
+
+fn add(db: &mut ToolDb, lib: &Lib, x: AddArgs) -> CliResult<i32> {
+    // Only a tool the library does not have is new; a row that cannot be
+    // read is an error, never overwritten by a fresh record.
+    let mut t = db
+        .find_tool(x.number)
+        .map_err(|e| lib.err(e))?
+        .unwrap_or_else(|| ToolRecord::new(x.number, ""));
+    t.apply(ToolEdit {
+        name: x.name,
+        kind: x.kind,
+        l: x.l,
+        r: x.r,
+        ltol: x.ltol,
+        rtol: x.rtol,
+        lbreak: x.lbreak,
+        rbreak: x.rbreak,
+        sister: x.sister,
+        life_min: x.life,
+        insl: x.insl,
+        tp: x.tp,
+        iso: x.iso,
+    })
+    .map_err(|e| CliError::input(format!("insert data: {e}")))?;
+    db.put_tool(&t).map_err(|e| lib.err(e))?;
+    lib.print(to_json(&t)?, format!("saved {}", describe(&t)))
+}
+
+fn measure(db: &mut ToolDb, lib: &Lib, x: MeasureArgs) -> CliResult<i32> {
+    let t = db.tool(x.number).map_err(|e| lib.err(e))?;
+    let m = Measurement {
+        tool: x.number,
+        kind: if x.first {
+            Kind::First
+        } else {
+            Kind::Inspection
+        },
+        l: x.l,
+        r: x.r,
+        per_tooth: x.teeth,
+        pz: x.pz.or_else(|| insert_pz(&t)),
+    };
+    let settings = Settings {
+        dset: x.dset,
+        pallet: x.pallet,
+    };
+    let o = record(db, &m, &settings).map_err(|e| lib.err(e))?;
+    let text = format!(
+        "{}: {}{}",
+        o.decision.as_str().to_uppercase(),
+        o.reason,
+        o.switch_to
+            .map(|n| format!("\nnext: use T{n}"))
+            .unwrap_or_default()
+    );
+    lib.print(to_json(&o)?, text)?;
+    Ok(if o.decision.is_problem() {
+        EXIT_FINDINGS
+    } else {
+        EXIT_OK
+    })
+}
+
+fn show(db: &ToolDb, lib: &Lib, number: Option<u32>) -> CliResult<i32> {
+    let tools = match number {
+        Some(n) => vec![db.tool(n).map_err(|e| lib.err(e))?],
+        None => db.tools().map_err(|e| lib.err(e))?,
+    };
+    let text = if tools.is_empty() {
+        format!("{}: no tools yet", lib.path.display())
+    } else {
+        tools.iter().map(describe).collect::<Vec<_>>().join("\n")
+    };
+    lib.print(to_json(&tools)?, text)
+}
+
+fn log(db: &ToolDb, lib: &Lib, number: Option<u32>) -> CliResult<i32> {
+    let ev = db.events(number).map_err(|e| lib.err(e))?;
+    let text = ev
+        .iter()
+        .map(|e| {
+            format!(
+                "{} T{} {}: {}",
+                e.time,
+                e.tool.map(|t| t.to_string()).unwrap_or("-".into()),
+                e.decision,
+                e.reason
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    lib.print(to_json(&ev)?, text)
+}
+
+fn import(db: &mut ToolDb, lib: &Lib, file: &Path) -> CliResult<i32> {
+    let text = std::fs::read_to_string(file)
+        .map_err(|e| CliError::input(format!("{}: {e}", file.display())))?;
+    let n = if text.trim_start().starts_with('[') {
+        db.import_json(&text)
+    } else {
+        db.import_csv(&text)
+    }
+    .map_err(|e| match e {
+        // Located in the imported file (line:column).
+        DbError::Invalid(_) => CliError::input(format!("{}:{e}", file.display())),
+        e => lib.err(e),
+    })?;
+    lib.print(
+        json!({ "imported": n }),
+        format!("imported {n} tools into {}", lib.path.display()),
+    )
+}
+
+fn cycle(db: &ToolDb, lib: &Lib, x: CycleArgs) -> CliResult<i32> {
+    let t = db.tool(x.number).map_err(|e| lib.err(e))?;
+    let o = CycleOptions {
+        kind: if x.first {
+            Kind::First
+        } else {
+            Kind::Inspection
+        },
+        measure: match x.measure {
+            MeasureArg::Length => Measure::Length,
+            MeasureArg::Radius => Measure::Radius,
+            MeasureArg::Both => Measure::Both,
+        },
+        clearance: x.clearance,
+        per_tooth: x.per_tooth,
+        pz: insert_pz(&t),
+    };
+    let text = match x.control {
+        Control::Heidenhain => cycles::heidenhain(&t, &o),
+        Control::Fanuc => cycles::fanuc(&t, &o),
+    };
+    write_atomic(&x.output, text.as_bytes(), &[lib.path])?;
+    lib.print(
+        json!({ "output": x.output.display().to_string(), "pz": o.pz }),
+        format!("wrote {}", x.output.display()),
+    )
 }
