@@ -1048,3 +1048,77 @@ mod tests {
         assert_eq!(i.speed_integral, 1100.0 + 2100.0);
     }
 }
+
+#[cfg(test)]
+mod pass_tests {
+    //! The speed pass as data: IR in, IR out.
+    use super::*;
+    use crate::pipeline::run;
+    use millplan_geom::TriMesh;
+    use millplan_nc::{same_position, text};
+
+    /// A flat plate at Z 0, 200 mm square around the origin.
+    fn plate() -> TriMesh {
+        let (a, b, c, d) = (
+            DVec3::new(-100.0, -100.0, 0.0),
+            DVec3::new(100.0, -100.0, 0.0),
+            DVec3::new(100.0, 100.0, 0.0),
+            DVec3::new(-100.0, 100.0, 0.0),
+        );
+        TriMesh::from_soup(&[[a, b, c], [a, c, d]]).0
+    }
+
+    /// On a flat surface D_w = 2·√(ap·(D − ap)) for any feed direction and
+    /// stepover (working-diameter.md, oracle O1: D 10, ap 0.3 → 3.4117 mm), so
+    /// every cutting block of a pass across the plate gets
+    /// n = 1000·vc/(π·D_w) and F = n·z·fz; nothing else changes.
+    #[test]
+    fn constant_speed_on_a_plate_ir_in_ir_out() {
+        let before = "program - source=generated units=mm/declared
+op name=-
+  tool number=1 name=- line=1 cutter=ball d=10 r=5 e=0 f=5 a=0 b=0 h=0
+  start (?, ?, ?)
+  L2 event spindle cw
+  L3 rapid (-20, 0, 5) F0 S3000 per_minute
+  L4 linear (-20, 0, 0) F600 S3000 per_minute
+  L5 linear (-10, 0, 0) F600 S3000 per_minute
+  L6 linear (0, 0, 0) F600 S3000 per_minute
+  L7 linear (10, 0, 0) F600 S3000 per_minute
+  L8 rapid (10, 0, 5) F0 S3000 per_minute
+";
+        let dw = 2.0 * (0.3f64 * (10.0 - 0.3)).sqrt();
+        assert!((dw - 3.4117).abs() < 1e-4, "oracle O1");
+        let n = 1000.0 * 63.0 / (std::f64::consts::PI * dw);
+        let f = n * 2.0 * 0.125;
+        let mesh = plate();
+        let cx = Context::new(Machine::default())
+            .with_part(&mesh)
+            .verifying();
+        let mut p = text::parse(before).expect("parses");
+        let mut pass = SpeedPass::new(SpeedParams::new(63.0, 0.125, 2, 0.3));
+        run(&mut [&mut pass], &mut p, &cx).expect("runs");
+        let got = text::print(&p);
+        // Every speed and feed as the closed form says (within the model's
+        // refinement of D_w); positions, kinds and lines as they were.
+        let before_p = text::parse(before).expect("parses");
+        for (m, was) in p.moves().zip(before_p.moves()) {
+            assert!(
+                same_position(m.end, was.end) && m.kind == was.kind && m.line == was.line,
+                "{got}"
+            );
+            assert!(
+                (m.spindle - n).abs() < 0.5,
+                "S {} against {n}\n{got}",
+                m.spindle
+            );
+            if m.is_cutting() {
+                assert!(
+                    (m.feed - f).abs() < 0.5 * 0.25,
+                    "F {} against {f}\n{got}",
+                    m.feed
+                );
+            }
+        }
+        assert_eq!(p.operations[0].events, before_p.operations[0].events);
+    }
+}

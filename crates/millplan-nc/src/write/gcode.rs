@@ -1076,7 +1076,13 @@ impl W<'_> {
                         "an arc from or to an unknown position cannot be written",
                     ));
                 };
-                match principal_plane(a) {
+                // An arc block cannot turn the tool: an arc whose tool axis is
+                // not the one already standing is written as chords that carry it.
+                let turns = op.is_five_axis()
+                    && op.orient(m).is_some_and(|o| {
+                        !o.has_angles() && o.axis.is_some() && o.axis != self.st.vec
+                    });
+                match principal_plane(a).filter(|_| !turns) {
                     Some(axis) => self.arc_block(m, a, s, e, axis, &extra),
                     None => {
                         // Each chord of an inverse-time arc takes its share of the time.
