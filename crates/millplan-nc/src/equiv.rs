@@ -213,28 +213,35 @@ fn same_attrs(a: &Step, b: &Step, tol: &Tolerance) -> Result<(), String> {
             return Err(format!("spindle {} against {}", a.spindle, b.spindle));
         }
     }
-    for k in 0..3 {
-        match (a.angles[k], b.angles[k]) {
-            (None, None) => {}
-            (Some(x), Some(y)) if (x - y).abs() <= tol.angle => {}
-            (x, y) => {
-                return Err(format!(
-                    "{} axis {:?} against {:?} (degrees)",
-                    ["A", "B", "C"][k],
-                    x.map(f64::to_degrees),
-                    y.map(f64::to_degrees)
-                ))
-            }
-        }
-    }
-    match (a.axis, b.axis) {
-        (Some(u), Some(v)) if (u - v).length() > tol.axis => {
-            return Err(format!("tool axis {u:?} against {v:?}"))
-        }
-        (Some(_), None) | (None, Some(_)) if a.angles == [None; 3] && b.angles == [None; 3] => {
-            return Err("tool axis present in one only".into())
-        }
-        _ => {}
+    // The same rotary angles, or the same tool axis (a program whose angles
+    // were turned into axes through the machine's kinematics, written as CL
+    // data, keeps the axes only).
+    let angle_miss = (0..3).find(|&k| match (a.angles[k], b.angles[k]) {
+        (None, None) => false,
+        (Some(x), Some(y)) => (x - y).abs() > tol.angle,
+        _ => true,
+    });
+    let axes = match (a.axis, b.axis) {
+        (Some(u), Some(v)) => Some((u - v).length() <= tol.axis),
+        (None, None) => None,
+        _ => Some(false),
+    };
+    let same = match (angle_miss, axes) {
+        (None, Some(false)) => a.axis.is_none() || b.axis.is_none(),
+        (None, _) => true,
+        (Some(_), Some(true)) => true,
+        (Some(_), _) => false,
+    };
+    if !same {
+        return Err(match angle_miss {
+            Some(k) => format!(
+                "{} axis {:?} against {:?} (degrees)",
+                ["A", "B", "C"][k],
+                a.angles[k].map(f64::to_degrees),
+                b.angles[k].map(f64::to_degrees)
+            ),
+            None => format!("tool axis {:?} against {:?}", a.axis, b.axis),
+        });
     }
     if a.tool != b.tool {
         return Err(format!("tool {:?} against {:?}", a.tool, b.tool));

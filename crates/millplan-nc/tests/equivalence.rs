@@ -98,7 +98,7 @@ fn every_sample_in_every_dialect_means_what_its_source_meant() {
     let files = programs(&root);
     assert!(files.len() >= 20, "only {} samples", files.len());
     let tol = Tolerance::default();
-    let (mut written, mut refused, mut chains) = (0, 0, 0);
+    let (mut written, mut refused, mut chains, mut chains3) = (0, 0, 0, 0);
     let mut failures = Vec::new();
     for f in &files {
         let name = f
@@ -133,22 +133,37 @@ fn every_sample_in_every_dialect_means_what_its_source_meant() {
                 Outcome::Failed(e) => failures.push(format!("{name} -> {}: {e}", t.name())),
             }
         }
-        // Round trips and chains: A -> B -> C against A.
+        // Round trips and chains: A -> B -> C and A -> B -> C -> D against A.
         for (t1, b) in &outputs {
             for t2 in Target::ALL {
-                if let Outcome::Read(c) = through(b, t2) {
-                    chains += 1;
-                    if let Err(m) = compare(&a, &c, &tol) {
-                        failures.push(format!("{name} -> {} -> {}: {m}", t1.name(), t2.name()));
+                let Outcome::Read(c) = through(b, t2) else {
+                    continue;
+                };
+                chains += 1;
+                if let Err(m) = compare(&a, &c, &tol) {
+                    failures.push(format!("{name} -> {} -> {}: {m}", t1.name(), t2.name()));
+                    continue;
+                }
+                for t3 in Target::ALL {
+                    if let Outcome::Read(d) = through(&c, t3) {
+                        chains3 += 1;
+                        if let Err(m) = compare(&a, &d, &tol) {
+                            failures.push(format!(
+                                "{name} -> {} -> {} -> {}: {m}",
+                                t1.name(),
+                                t2.name(),
+                                t3.name()
+                            ));
+                        }
                     }
                 }
             }
         }
     }
     eprintln!(
-        "{} samples: {written} conversions equivalent, {refused} refused with a located error, {chains} two-step chains",
+        "{} samples: {written} conversions equivalent, {refused} refused with a located error, {chains} two-step and {chains3} three-step chains",
         files.len()
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    assert!(written > 50 && chains > 100);
+    assert!(written > 50 && chains > 100 && chains3 > 500);
 }

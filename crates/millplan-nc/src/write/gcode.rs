@@ -313,16 +313,8 @@ impl W<'_> {
                 }
                 self.st.tool_number = Some(n);
             }
-            (target, None, Some(nm)) => {
-                lossy(
-                    self.o.lossy,
-                    &mut self.warnings,
-                    t.line,
-                    format!(
-                        "{} calls tools by number and the source names tool `{nm}` only",
-                        target.name()
-                    ),
-                )?;
+            (_, None, Some(nm)) => {
+                // The control calls tools by number: the operator loads this one.
                 self.comment(&format!("load tool {nm}: the source names no tool number"));
                 self.line("M0");
             }

@@ -1,8 +1,9 @@
 //! `millplan convert`: read a program in any supported format, write it in another.
 
 use crate::cmd::{print_diagnostics, read_options, target_for, write_program, TargetArg, UnitArg};
-use crate::error::{CliResult, EXIT_OK};
+use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_program, write_atomic};
+use millplan_nc::equiv::{compare, Tolerance};
 use millplan_nc::LengthUnit;
 use millplan_plan::orient::ResolveOrientation;
 use millplan_plan::pipeline::{self, Context};
@@ -58,6 +59,37 @@ pub struct Args {
     pub quiet: bool,
 }
 
+/// Reads the output back and runs it and its source through the same
+/// interpreter: a program that would command something else is not written
+/// (with --lossy, where words were dropped on purpose, it is, with a warning).
+fn check_output(p: &millplan_nc::Program, out: &[u8], a: &Args) -> CliResult<()> {
+    let text = String::from_utf8_lossy(out);
+    let back =
+        millplan_nc::parse_program(&text, millplan_nc::ReadOptions::default()).map_err(|e| {
+            CliError::internal(format!(
+                "{}: the program written does not read back ({e}); not written",
+                a.output.display()
+            ))
+        })?;
+    match compare(p, &back.program, &Tolerance::default()) {
+        Ok(_) => Ok(()),
+        Err(m) if a.lossy => {
+            if !a.quiet {
+                eprintln!(
+                    "{}: warning: the output does not command what the source does ({m})",
+                    a.output.display()
+                );
+            }
+            Ok(())
+        }
+        Err(m) => Err(CliError::internal(format!(
+            "{}:{}: the output would not command what the source does ({m}); not written",
+            a.input.display(),
+            m.line_a
+        ))),
+    }
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     let parsed = read_program(&a.input, read_options(a.units, a.feed))?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet);
@@ -79,6 +111,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     o.line_numbers = a.line_numbers;
     o.lossy = a.lossy;
     let out = write_program(&p, o, &a.input, a.quiet)?;
+    check_output(&p, &out, &a)?;
     write_atomic(&a.output, &out, &[&a.input])?;
     eprintln!(
         "wrote {} ({} moves, {})",
