@@ -567,3 +567,36 @@ fn bounds_and_lengths_include_canned_cycle_depths() {
 
 // ---------------------------------------------------------------------------
 // Found with the writer snapshots.
+
+/// Issue 15: "a 7-line `G83 … Q0.00001` became 3.6 M lines, 89 MB." Every
+/// target refuses it with an error at the cycle's line (7), `lossy` or not:
+/// spelled out it is millions of pecks, and in the control's own cycle the
+/// peck is below what the target's decimals can say (it was written `Q0.`).
+#[test]
+fn absurd_peck_is_a_located_error_in_every_target() {
+    let src = "%\nO0020\nG21 G17 G90 G94\nT2 M6\nG43 H2 S1500 M3\nG0 X10. Y10. Z5.\n\
+               G98 G83 X10. Y10. Z-20. R2. Q0.00001 F100.\nX30.\nG80\nM30\n%\n";
+    let p = parse(src, "G83");
+    let c = &p.operations[0].cycles[0];
+    assert_eq!(c.line, 7);
+    assert!(c.pecks() > millplan_nc::MAX_PECKS);
+    for t in Target::ALL {
+        for lossy in [false, true] {
+            match write(&p, t, lossy) {
+                Out::Refused(e) => {
+                    assert_eq!(e.line, 7, "{}: {e}", t.name());
+                    assert!(e.message.contains("peck"), "{}: {e}", t.name());
+                }
+                Out::Text(text, _) => panic!("{} (lossy {lossy}) wrote:\n{text}", t.name()),
+            }
+        }
+    }
+    // A sane peck is written and reads back with its value.
+    let ok = src.replace("Q0.00001", "Q2.5");
+    let p = parse(&ok, "G83 Q2.5");
+    for t in Target::ALL {
+        let (text, q) = through(&p, t, false, "G83 Q2.5");
+        compare(&p, &q, &Tolerance::default())
+            .unwrap_or_else(|e| panic!("{}: {e}\n{text}", t.name()));
+    }
+}

@@ -977,11 +977,32 @@ impl W<'_> {
     /// A hole of a canned cycle in the control's own words: the cycle block
     /// at its first hole (from the level it returns to), the position alone
     /// at the next.
-    fn cycle_block(&mut self, m: &Move, id: CycleId, c: &Cycle, extra: &str) {
+    fn cycle_block(
+        &mut self,
+        m: &Move,
+        id: CycleId,
+        c: &Cycle,
+        extra: &str,
+    ) -> Result<(), WriteError> {
+        super::check_pecks(c)?;
         if self.hh() {
             // The tool stands over the hole; the copied definition is called.
             self.line("CYCL CALL");
-            return;
+            return Ok(());
+        }
+        if let Some(q) = c.peck.filter(|q| *q > 0.0) {
+            let scale = 10f64.powi(self.coord.decimals as i32);
+            if (q * self.k * scale).round() == 0.0 {
+                return Err(WriteError::new(
+                    c.line,
+                    format!(
+                        "{}: a peck of {q:.6} mm is below the {} decimals {} is written with",
+                        c.name,
+                        self.coord.decimals,
+                        self.target().name()
+                    ),
+                ));
+            }
         }
         let top = m.end.z + c.retract.max(0.0);
         if self.st.cycle != Some(id) {
@@ -1034,6 +1055,7 @@ impl W<'_> {
         }
         self.finish_motion(mark);
         self.st.pos[2] = Some(((top.max(m.end.z) * self.k) * 1e4).round() / 1e4);
+        Ok(())
     }
 
     /// Move `i` of `op`, after the events due before it (`ev`: the next event).
@@ -1101,8 +1123,7 @@ impl W<'_> {
                     .get(id.index())
                     .ok_or_else(|| WriteError::new(m.line, "cycle id out of range"))?;
                 if self.native_cycle(op, m, c) {
-                    self.cycle_block(m, id, c, &extra);
-                    return Ok(());
+                    return self.cycle_block(m, id, c, &extra);
                 }
                 let axis = op.axis(m).unwrap_or(DVec3::Z);
                 let steps = cycle_moves(c, m.end, axis)?;
