@@ -26,6 +26,9 @@ use std::path::{Path, PathBuf};
 
 /// Lines per hashed range of a real sample's output.
 const CHUNK: usize = 256;
+/// Lines per part of a range: each part has a 16-bit hash beside the range's
+/// own, to find the part that changed.
+const PART: usize = 32;
 
 fn snapshot_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/snapshots")
@@ -320,10 +323,17 @@ fn digest(text: &str) -> String {
     for (k, chunk) in lines.chunks(CHUNK).enumerate() {
         let lo = k * CHUNK + 1;
         s.push_str(&format!(
-            "lines {lo}-{} fnv1a64 {:016x}\n",
+            "lines {lo}-{} fnv1a64 {:016x} parts",
             lo + chunk.len() - 1,
             fnv1a64(chunk.join("\n").as_bytes())
         ));
+        for part in chunk.chunks(PART) {
+            s.push_str(&format!(
+                " {:04x}",
+                fnv1a64(part.join("\n").as_bytes()) & 0xffff
+            ));
+        }
+        s.push('\n');
     }
     s
 }
@@ -364,19 +374,18 @@ fn real_snapshot(p: &Program, summary: &str) -> (String, BTreeMap<String, String
     (s, texts)
 }
 
-/// For a changed real digest: the lines, as written now, of the first range
-/// whose hash changed (shown, never stored).
+/// For a changed real digest: the lines, as written now, of the first part
+/// of the first range whose hash changed (shown, never stored).
 fn changed_lines(want: &str, got: &str, texts: &BTreeMap<String, String>) -> String {
+    // `lines 257-512 fnv1a64 … parts a1b2 …`: the range and its part hashes.
     let range = |l: &str| {
-        let (a, b) = l
-            .strip_prefix("lines ")?
-            .split_whitespace()
-            .next()?
-            .split_once('-')?;
-        Some((a.parse::<usize>().ok()?, b.parse::<usize>().ok()?))
+        let mut w = l.strip_prefix("lines ")?.split_whitespace();
+        let (a, b) = w.next()?.split_once('-')?;
+        let parts: Vec<String> = w.skip(3).map(str::to_string).collect();
+        Some((a.parse::<usize>().ok()?, b.parse::<usize>().ok()?, parts))
     };
     let mut section = String::new();
-    let mut first: Option<(String, (usize, usize))> = None;
+    let mut first: Option<(String, usize, usize)> = None;
     for (w, g) in want.lines().zip(got.lines()) {
         if let Some(name) = g.strip_prefix("== ") {
             section = name.to_string();
@@ -384,23 +393,29 @@ fn changed_lines(want: &str, got: &str, texts: &BTreeMap<String, String>) -> Str
         if w == g {
             continue;
         }
-        match range(g) {
-            Some(r) => {
-                first = Some((section.clone(), r));
+        match (range(w), range(g)) {
+            (Some((_, _, old)), Some((lo, hi, new))) => {
+                let k = old
+                    .iter()
+                    .zip(&new)
+                    .position(|(a, b)| a != b)
+                    .unwrap_or(old.len().min(new.len()));
+                let from = (lo + k * PART).min(hi);
+                first = Some((section.clone(), from, (from + PART - 1).min(hi)));
                 break;
             }
-            None if first.is_none() => first = Some((section.clone(), (1, 12))),
-            None => {}
+            _ if first.is_none() => first = Some((section.clone(), 1, PART)),
+            _ => {}
         }
     }
-    let Some((section, (lo, hi))) = first else {
+    let Some((section, lo, hi)) = first else {
         return String::new();
     };
     let Some(text) = texts.get(&section) else {
         return String::new();
     };
-    let hi = hi.min(lo + 11);
-    let mut s = format!("\n{section}: lines {lo}-{hi} as written now:\n");
+    let mut s =
+        format!("\n{section}: lines {lo}-{hi}, the first part that changed, as written now:\n");
     for (k, l) in text.lines().enumerate().take(hi).skip(lo - 1) {
         s.push_str(&format!("{:6} | {l}\n", k + 1));
     }
