@@ -600,3 +600,24 @@ fn absurd_peck_is_a_located_error_in_every_target() {
             .unwrap_or_else(|e| panic!("{}: {e}\n{text}", t.name()));
     }
 }
+
+/// Found with the writer snapshots: Fanuc's G82 dwell `P` is milliseconds
+/// and takes no decimal point; `G82 … P500` was written `P500.`.
+#[test]
+fn fanuc_cycle_dwell_is_whole_milliseconds() {
+    let src = "%\nO0021\nG21 G90 G17\nT2 M6\nG43 H2 S1500 M3\nG0 X0. Y0. Z10.\n\
+               G99 G82 X30. Y10. Z-4. R2. P500 F120.\nG80\nM30\n%\n";
+    let p = parse(src, "G82");
+    let text = written(&p, Target::Fanuc, "G82");
+    let line = text
+        .lines()
+        .find(|l| l.contains("G82"))
+        .expect("a G82 block");
+    let p_word = words(line)
+        .into_iter()
+        .find(|w| w.starts_with('P'))
+        .expect("a P word");
+    assert_eq!(p_word, "P500", "`{line}`");
+    let q = parse(&text, "G82 re-read");
+    assert_eq!(q.operations[0].cycles[0].dwell, Some(0.5));
+}

@@ -1034,13 +1034,18 @@ impl W<'_> {
                 self.word("Q", q * self.k, f);
             }
             if let Some(t) = c.dwell {
-                // Fanuc counts dwell in milliseconds, LinuxCNC in seconds.
-                let p = if self.target() == Target::Fanuc {
-                    (t * 1000.0).round()
+                // Fanuc counts dwell in whole milliseconds, without a
+                // decimal point (`P500.` is refused); LinuxCNC in seconds.
+                let (p, pf) = if self.target() == Target::Fanuc {
+                    let whole = NumFmt {
+                        decimals: 0,
+                        trailing_point: false,
+                        ..f
+                    };
+                    ((t * 1000.0).round(), whole)
                 } else {
-                    t
+                    (t, NumFmt { decimals: 3, ..f })
                 };
-                let pf = NumFmt { decimals: 3, ..f };
                 self.word("P", p, pf);
             }
             let ff = self.feedf;
