@@ -621,3 +621,44 @@ fn fanuc_cycle_dwell_is_whole_milliseconds() {
     let q = parse(&text, "G82 re-read");
     assert_eq!(q.operations[0].cycles[0].dwell, Some(0.5));
 }
+
+/// Found with the Mori Seiki test: moriseiki…ptp:347 `G00 B-37.576 C45. S0
+/// M03` in G91 (from :341) is kept verbatim and was written `G91 G0
+/// B-37.576 C45`; on a Fanuc without decimal-point input `C45` is 0.045°.
+/// Every axis word the Fanuc writer copies keeps its decimal point.
+#[test]
+fn verbatim_axis_words_keep_their_decimal_point_in_fanuc() {
+    let src = "%\nO0001\nG21 G90 G17\nT1 M6\nG91 G28 Z0.0 M05\nG00 B-90. C270. S0 M03\n\
+               G90 G53 G0 Z-10.\nG28 G91 X0.0 Y0.0\nG90 G0 X10. Y10. Z50.\nM30\n%\n";
+    let p = parse(src, "verbatim words");
+    let text = written(&p, Target::Fanuc, "verbatim words");
+    let mut copied = 0;
+    for l in text
+        .lines()
+        .filter(|l| l.contains("G91") || l.contains("G53"))
+    {
+        for w in words(l) {
+            let (letter, num) = w.split_at(1);
+            if matches!(letter, "X" | "Y" | "Z" | "A" | "B" | "C") {
+                assert!(num.contains('.'), "`{w}` in `{l}` has no decimal point");
+                copied += 1;
+            }
+        }
+    }
+    assert!(copied >= 5, "{text}");
+    if let Some(src) = sample(MORI) {
+        let p = read(&src, common::options_for(MORI), MORI);
+        let text = written(&p, Target::Fanuc, MORI);
+        for l in text.lines() {
+            for w in words(l) {
+                let (letter, num) = w.split_at(1);
+                let axis = matches!(letter, "X" | "Y" | "Z" | "A" | "B" | "C");
+                let number = num.parse::<f64>().is_ok();
+                assert!(
+                    !(axis && number) || num.contains('.'),
+                    "`{w}` in `{l}` has no decimal point"
+                );
+            }
+        }
+    }
+}

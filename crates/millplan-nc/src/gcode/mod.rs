@@ -1631,8 +1631,16 @@ pub(crate) fn fmt_num(v: f64) -> String {
     }
 }
 
+/// A word as a block kept verbatim spells it. Axis words keep a decimal
+/// point on whole numbers (`C45.`): on a Fanuc without decimal-point input
+/// `C45` is 0.045°. Codes, registers and counts (G, M, H, P, Q…) do not.
 fn fmt_word(c: char, v: f64) -> String {
-    format!("{c}{}", fmt_num(v))
+    let n = fmt_num(v);
+    if matches!(c, 'X' | 'Y' | 'Z' | 'A' | 'B' | 'C' | 'U' | 'V' | 'W') && !n.contains('.') {
+        format!("{c}{n}.")
+    } else {
+        format!("{c}{n}")
+    }
 }
 
 fn tok_text(t: &Tok) -> String {
