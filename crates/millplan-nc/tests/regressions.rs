@@ -662,3 +662,32 @@ fn verbatim_axis_words_keep_their_decimal_point_in_fanuc() {
         }
     }
 }
+
+/// Found with the Mori Seiki test: moriseiki…ptp:370 `G49` after
+/// `G43.4 … H09` (:350) was written `G49 G43 H9 G49`: TCP off (`G49 G43
+/// H9`) and length compensation off in one block. It is one `G49`.
+#[test]
+fn g49_under_tcp_is_one_g49() {
+    let src =
+        "%\nO0002\nG21 G90 G17\nT9 M6\nG43.4 X10. Y10. Z50. B0. C0. H09\nG1 X20. B-30. F500.\n\
+               G49\nG0 Z100.\nG43.4 X10. Y10. Z50. H09\nG1 X20. B-20.\nG49\nM30\n%\n";
+    let p = parse(src, "G49 under TCP");
+    let text = written(&p, Target::Fanuc, "G49 under TCP");
+    let g49: Vec<&str> = text.lines().filter(|l| l.contains("G49")).collect();
+    // The header's own G49 and one for each source G49.
+    assert_eq!(g49.len(), 3, "{text}");
+    for l in &g49[1..] {
+        assert_eq!(l.trim(), "G49", "{text}");
+    }
+    if let Some(src) = sample(MORI) {
+        let p = read(&src, common::options_for(MORI), MORI);
+        let text = written(&p, Target::Fanuc, MORI);
+        for l in text.lines().filter(|l| l.contains("G49")) {
+            let groups = words(l)
+                .iter()
+                .filter(|w| w.starts_with("G43") || **w == "G49")
+                .count();
+            assert_eq!(groups, 1, "`{l}`: two tool-length words in one block");
+        }
+    }
+}

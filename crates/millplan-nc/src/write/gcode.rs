@@ -466,7 +466,17 @@ impl W<'_> {
                 if was == *on {
                     return Ok(Words::Nothing);
                 }
+                // `G49` ends both: TCP off with length compensation off in
+                // the same source block is that one word, not `G49 G43 Hn G49`.
+                let tlc_off_too = !*on
+                    && e.line != 0
+                    && op.events.iter().any(|x| {
+                        x.at == e.at
+                            && x.line == e.line
+                            && x.kind == EventKind::ToolLength(ToolLength::Off)
+                    });
                 match target {
+                    Target::Fanuc if tlc_off_too => Words::Nothing,
                     Target::Fanuc => {
                         if self.st.tlc.is_some() {
                             let vectors = op
