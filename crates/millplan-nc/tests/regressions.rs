@@ -691,3 +691,28 @@ fn g49_under_tcp_is_one_g49() {
         }
     }
 }
+
+/// LinuxCNC has no tool-centre-point control: with `lossy`, a `G43.4`
+/// source said so in a comment and then wrote `G43.4 H9` anyway, a block
+/// LinuxCNC rejects. It writes plain `G43 H9`.
+#[test]
+fn linuxcnc_never_writes_tcp_words() {
+    let src =
+        "%\nO0030\nG21 G17 G90 G94\nT9 M6\nG43.4 G90 G0 X10. Y10. Z50. B0. C0. H09 S3000 M3\n\
+               G1 Z5. F500.\nX20. B-30. C45.\nG49\nM30\n%\n";
+    let p = parse(src, "TCP");
+    let Out::Text(text, warnings) = write(&p, Target::LinuxCnc, true) else {
+        panic!("lossy refused")
+    };
+    assert!(
+        warnings.iter().any(|w| w.contains("tool-centre-point")),
+        "{warnings:?}"
+    );
+    for l in text.lines().filter(|l| !l.starts_with('(')) {
+        assert!(
+            !l.contains("G43.4") && !l.contains("G43.5"),
+            "`{l}`\n{text}"
+        );
+    }
+    assert!(text.lines().any(|l| words(l).contains(&"G43")), "{text}");
+}

@@ -510,6 +510,8 @@ impl W<'_> {
                             "LinuxCNC has no tool-centre-point control (G43.4/TRAORI/M128)"
                                 .to_string(),
                         )?;
+                        // Its length compensation stays plain `G43 Hn`.
+                        self.st.tcp = false;
                         Words::Comment(format!("TCP {}", if *on { "on" } else { "off" }))
                     }
                     Target::Apt => Words::Nothing,
