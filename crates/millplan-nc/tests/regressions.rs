@@ -18,6 +18,7 @@ use millplan_nc::{Dialect, FeedMode, MoveKind, Operation, Orient, Program, ReadO
 const MORI: &str = "nx-posted-gcode-samples/moriseiki_nmv5000_fanuc_g43-4_mm.ptp";
 const DMU: &str = "nx-posted-gcode-samples/dmu70evo_sinumerik840d_traori_inch.ptp";
 const ACHSKREUZ: &str = "sinumerik-840d-spinner-u5/Achskreuz.mpf";
+const BOTTLE: &str = "sinumerik-840d-spinner-u5/Bottle_opener.mpf";
 const BEAR: &str = "camotics-ballnose-relief-gcode/bear.nc";
 const BOSS: &str = "swcam-apt-stl-pairs/boss.apt";
 const DMC100: &str = "nx-posted-gcode-samples/dmc100_heidenhain_m128_inch.ptp";
@@ -59,6 +60,76 @@ fn has_axis(line: &str, letter: char) -> bool {
             && c.next()
                 .is_some_and(|d| d.is_ascii_digit() || matches!(d, '-' | '+' | '.' | '='))
     })
+}
+
+fn has_xyz(line: &str) -> bool {
+    ['X', 'Y', 'Z'].iter().any(|&c| has_axis(line, c))
+}
+
+fn has_rotary(line: &str) -> bool {
+    ['A', 'B', 'C'].iter().any(|&c| has_axis(line, c))
+}
+
+/// Source lines that move rotary axes only: a G0/G1 block (comments
+/// stripped) with an A, B or C word and no X, Y or Z word.
+fn rotary_only_lines(src: &str) -> Vec<u32> {
+    src.lines()
+        .enumerate()
+        .filter_map(|(i, l)| {
+            let code = l.split(';').next().unwrap_or("");
+            let code = code.split('(').next().unwrap_or("");
+            let moves = words(code)
+                .iter()
+                .any(|w| matches!(*w, "G0" | "G00" | "G1" | "G01"));
+            (moves && has_rotary(code) && !has_xyz(code) && !code.contains("SUPA"))
+                .then_some(i as u32 + 1)
+        })
+        .collect()
+}
+
+/// A move to where the previous move already ended, in the same orientation.
+fn idle(a: &[(&Operation, &millplan_nc::Move)], i: usize) -> bool {
+    let angles = |(o, m): (&Operation, &millplan_nc::Move)| o.orient(m).map(|o| o.angles);
+    i > 0
+        && matches!(a[i].1.kind, MoveKind::Rapid | MoveKind::Linear)
+        && millplan_nc::same_position(a[i - 1].1.end, a[i].1.end)
+        && angles(a[i - 1]) == angles(a[i])
+        && a[i - 1].0.axis(a[i - 1].1) == a[i].0.axis(a[i].1)
+}
+
+/// For each move of `a`, the index of the move of `b` that ends where it
+/// ends (on every axis `a` knows, with the same rotary angles and the same
+/// kind), searched forward from the last match within a few moves; `None`
+/// for a move to where the tool already stands, which a writer may leave
+/// out. (With `lossy` a target may know positions its source did not: a
+/// machine-coordinate block written as a comment.)
+fn align(a: &Program, b: &Program) -> Vec<Option<usize>> {
+    let (a, b) = (moves(a), moves(b));
+    let same = |(ao, am): &(&Operation, &millplan_nc::Move),
+                (bo, bm): &(&Operation, &millplan_nc::Move)| {
+        let pos = (0..3).all(|k| am.end[k].is_nan() || (am.end[k] - bm.end[k]).abs() < 1e-3);
+        let angles = |o: &Operation, m: &millplan_nc::Move| {
+            o.orient(m).map(|o| o.angles).unwrap_or([None; 3])
+        };
+        let (x, y) = (angles(ao, am), angles(bo, bm));
+        let rot = (0..3).all(|k| match (x[k], y[k]) {
+            (Some(p), Some(q)) => (p - q).abs() < 1e-6,
+            (None, _) => true,
+            (Some(_), None) => false,
+        });
+        pos && rot && am.kind.name() == bm.kind.name()
+    };
+    let mut j = 0;
+    (0..a.len())
+        .map(|i| {
+            if idle(&a, i) {
+                return None;
+            }
+            let k = (j..(j + 4).min(b.len())).find(|&k| same(&a[i], &b[k]))?;
+            j = k + 1;
+            Some(k)
+        })
+        .collect()
 }
 
 /// Line `n` (1-based) of a text.
@@ -715,4 +786,123 @@ fn linuxcnc_never_writes_tcp_words() {
         );
     }
     assert!(text.lines().any(|l| words(l).contains(&"G43")), "{text}");
+}
+
+/// Issue 16: "A rotary-only `G00 B0.0 C0.0` becomes `G0 X0. Y0. Z0. B0. C0.`
+/// in every G-code output of the Sinumerik, Mori Seiki and DMU samples."
+/// Achskreuz.mpf:29 `N280 G0 B0.0 C0.0` (and 19 more), Bottle_opener.mpf,
+/// dmu70evo…ptp:15-16 `N15 G00 B0.0` / `N16 G00 C0.0`: each such block is
+/// written as a block with rotary words and no X, Y or Z word, in every
+/// G-code target (words a target refuses are written as comments).
+#[test]
+fn rotary_only_rapids_stay_rotary_only_in_every_gcode_target() {
+    // A rotary block to where the axes already stand (Achskreuz.mpf:933
+    // `N9320 G0 B0.0 C0.0`) is left out, or written as it is: Heidenhain
+    // wrote it `L X-59 Y+3.92 Z+8.2 FMAX`, naming the axes its source did not.
+    let src = "%\nO0001\nG21 G90 G17\nT1 M6\nG43 H1\nG0 X1. Y2. Z3. B0. C0.\nG0 B0. C0.\n\
+               G0 B10.\nM30\n%\n";
+    let p = parse(src, "idle rotary");
+    for t in GCODE {
+        let (text, _) = through(&p, t, false, "idle rotary");
+        let xyz = text.lines().filter(|l| has_xyz(l)).count();
+        assert_eq!(
+            xyz,
+            1,
+            "{}: only the first move names X, Y, Z\n{text}",
+            t.name()
+        );
+    }
+    let mut checked = 0;
+    for rel in [ACHSKREUZ, BOTTLE, DMU] {
+        let Some(src) = sample(rel) else { continue };
+        let lines = rotary_only_lines(&src);
+        assert!(!lines.is_empty(), "{rel}: no rotary-only block found");
+        let p = read(&src, common::options_for(rel), rel);
+        for t in GCODE {
+            let (text, q) = through(&p, t, true, rel);
+            let (a, b) = (moves(&p), moves(&q));
+            for (i, ((_, m), k)) in a.iter().zip(align(&p, &q)).enumerate() {
+                if !lines.contains(&m.line) {
+                    continue;
+                }
+                let Some(k) = k else {
+                    // Only a block to where the axes already stand may be left out.
+                    assert!(
+                        idle(&a, i),
+                        "{rel}:{} -> {}: not in the output",
+                        m.line,
+                        t.name()
+                    );
+                    continue;
+                };
+                let n = b[k].1;
+                let out = line_of(&text, n.line);
+                assert!(
+                    has_rotary(out) && !has_xyz(out),
+                    "{rel}:{} `{}` -> {} line {}: `{out}`",
+                    m.line,
+                    line_of(&src, m.line).trim(),
+                    t.name(),
+                    n.line
+                );
+                checked += 1;
+            }
+        }
+    }
+    if checked > 0 {
+        eprintln!("{checked} rotary-only blocks checked");
+    }
+}
+
+/// Issue 16: "a Heidenhain program written by `speed` re-reads as 6,310
+/// operations because each `TOOL CALL S…` reads as a tool change." A
+/// `TOOL CALL S…` (or `TOOL CALL Z S…`) without a tool number changes the
+/// speed of the same operation.
+#[test]
+fn heidenhain_tool_call_without_a_number_changes_the_speed() {
+    let src = "0 BEGIN PGM SPIN MM\n1 TOOL CALL 3 Z S4200.6\n2 L X+0 Y+0 Z+5 R0 FMAX M3\n\
+               3 L Z-1 F200\n4 TOOL CALL S5100\n5 L X+10 F200\n6 TOOL CALL Z S6100.4\n7 L X+20\n\
+               8 L Z+5 FMAX M5\n9 END PGM SPIN MM\n";
+    let p = parse(src, "TOOL CALL S");
+    assert_eq!(p.operations.len(), 1);
+    let speeds: Vec<f64> = p.moves().map(|m| m.spindle).collect();
+    assert_eq!(speeds, [4200.6, 4200.6, 5100.0, 6100.4, 0.0]);
+    // A real program whose speed changes at every cutting move (as `speed`
+    // writes them), into Heidenhain and back: as many operations as before.
+    let Some(mut p) = read_sample("swcam-apt-stl-pairs/Interface-glue.apt") else {
+        return;
+    };
+    let mut k = 0.0;
+    for op in &mut p.operations {
+        for m in &mut op.moves {
+            if m.is_cutting() && m.spindle > 0.0 {
+                k += 1.0;
+                m.spindle = 5000.0 + (k % 97.0) * 10.0;
+            }
+        }
+    }
+    let (text, q) = through(&p, Target::Heidenhain, false, "Interface-glue");
+    let calls = text.lines().filter(|l| l.contains("TOOL CALL S")).count();
+    assert!(calls > 1000, "{calls} speed changes");
+    assert_eq!(q.operations.len(), p.operations.len());
+    compare(&p, &q, &Tolerance::default()).unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// Found when Heidenhain stopped writing moves to where the tool stands:
+/// after a `CYCL CALL` the writer took the tool to be where it was before
+/// the cycle, and left out the retract after the last hole (dmc100…ptp:4094
+/// `L Z+1.9685 FMAX` after cycle 240 with Q204=+.1181). The cycle leaves
+/// the tool at its own clearance; the next block states Z.
+#[test]
+fn heidenhain_states_z_after_a_cycle_call() {
+    let src = "0 BEGIN PGM HOLES MM\n1 TOOL CALL 5 Z S4000\n2 L Z+50 R0 FMAX M3\n\
+               3 CYCL DEF 200 DRILLING ~\n  Q200=2 ;SET-UP CLEARANCE ~\n  Q201=-10 ;DEPTH ~\n\
+               \x20 Q206=150 ;FEED RATE ~\n  Q203=+0 ;SURFACE COORDINATE ~\n  Q204=5 ;2ND SET-UP CLEARANCE\n\
+               4 L X+10 Y+0 FMAX M99\n5 L X+20 Y+0 FMAX M99\n6 L Z+50 FMAX\n7 END PGM HOLES MM\n";
+    let p = parse(src, "holes");
+    let (text, q) = through(&p, Target::Heidenhain, false, "holes");
+    compare(&p, &q, &Tolerance::default()).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    let last = q.moves().last().expect("moves");
+    assert_eq!((last.end.x, last.end.z), (20.0, 50.0), "{text}");
+    assert!(last.is_rapid(), "{text}");
 }

@@ -856,15 +856,10 @@ impl W<'_> {
         extra: &str,
     ) -> Result<(), WriteError> {
         if self.hh() {
-            if !rapid
-                && m.spindle > 0.0
-                && self.st.spindle_running
-                && Some(m.spindle) != self.st.spindle
-            {
-                let s = self.spindle_text(m.spindle);
-                self.line(&format!("TOOL CALL S{s}"));
-                self.st.spindle = Some(m.spindle);
+            if !rapid {
+                self.heidenhain_speed(m);
             }
+            let (line, block_no) = (self.out.len(), self.st.block_no);
             self.start_block();
             let five_vec = op
                 .orient(m)
@@ -879,7 +874,15 @@ impl W<'_> {
             }
             self.orient_words(op, m)?;
             if self.out.len() == start {
-                // Heidenhain needs at least one coordinate.
+                if self.st.heidenhain_rl.is_empty() {
+                    // A move to where the tool stands, with nothing else to
+                    // say: no block (as in the other dialects), rather than one
+                    // that names axes its source did not.
+                    self.out.truncate(line);
+                    self.st.block_no = block_no;
+                    return Ok(());
+                }
+                // Radius compensation needs a block with a coordinate.
                 self.coords(end, true);
             }
             let rl = std::mem::take(&mut self.st.heidenhain_rl);
@@ -914,9 +917,19 @@ impl W<'_> {
         Ok(())
     }
 
+    /// `TOOL CALL S…` before a Heidenhain feed block whose speed changes.
+    fn heidenhain_speed(&mut self, m: &Move) {
+        if m.spindle > 0.0 && self.st.spindle_running && Some(m.spindle) != self.st.spindle {
+            let s = self.spindle_text(m.spindle);
+            self.line(&format!("TOOL CALL S{s}"));
+            self.st.spindle = Some(m.spindle);
+        }
+    }
+
     fn arc_block(&mut self, m: &Move, a: &Arc, start: DVec3, end: DVec3, axis: usize, extra: &str) {
         let ccw = a.normal[axis] > 0.0;
         if self.hh() {
+            self.heidenhain_speed(m);
             let (p, q) = match axis {
                 2 => (0, 1),
                 1 => (2, 0),
@@ -1000,6 +1013,9 @@ impl W<'_> {
         if self.hh() {
             // The tool stands over the hole; the copied definition is called.
             self.line("CYCL CALL");
+            // The cycle leaves the tool at its own clearance height: the next
+            // block states Z again.
+            self.st.pos[2] = None;
             return Ok(());
         }
         if let Some(q) = c.peck.filter(|q| *q > 0.0) {
