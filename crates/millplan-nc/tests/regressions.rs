@@ -906,3 +906,91 @@ fn heidenhain_states_z_after_a_cycle_call() {
     assert_eq!((last.end.x, last.end.z), (20.0, 50.0), "{text}");
     assert!(last.is_rapid(), "{text}");
 }
+
+/// Found with the tilted-arc test: an arc whose own tool orientation
+/// differs from the move before it (`CIRCLE/` then a six-value `GOTO` with a
+/// new axis; `G2 … B-30.`) lost it in every G-code target: the arc read back
+/// with the old one. Targets that can state it in the arc block do
+/// (Sinumerik vectors and angles, Fanuc and LinuxCNC angles); the others
+/// refuse at the arc's line (with `lossy`: a warning there).
+#[test]
+fn an_arc_that_turns_the_tool_keeps_its_orientation_or_refuses() {
+    let vectors =
+        "PARTNO ARCAXIS\nUNITS/MM\nCUTTER/10,0,5,0,0,0,50\nLOADTL/1\nSPINDL/3000,RPM,CLW\n\
+                   FEDRAT/200,MMPM\nGOTO/0,0,10,0,0,1\nGOTO/0,0,0,0,0,1\nCIRCLE/0,10,0,1,0,0,10\n\
+                   GOTO/0,10,10,1,0,0\nGOTO/0,20,10,1,0,0\nFINI\n";
+    let angles = "%\nO0005\nG21 G90 G17 G94\nT1 M6\nG43 H1 S3000 M3\nG0 X0. Y0. Z10. B0. C0.\n\
+                  G1 Z0. F200.\nG2 X10. Y0. I5. J0. B-30.\nG1 X20.\nG0 Z50.\nG49\nM30\n%\n";
+    // (source, the arc's line, targets that must write it, the line where
+    // a target that cannot take the program's orientations at all refuses)
+    let cases = [
+        (
+            vectors,
+            10,
+            vec![Target::Sinumerik, Target::Apt],
+            Some((Target::LinuxCnc, 7)),
+        ),
+        (
+            angles,
+            8,
+            vec![Target::Sinumerik, Target::Fanuc, Target::LinuxCnc],
+            Some((Target::Apt, 6)),
+        ),
+    ];
+    for (src, arc_line, writes, other) in cases {
+        let p = parse(src, "arc");
+        let arc = moves(&p)
+            .into_iter()
+            .find(|(_, m)| m.arc().is_some())
+            .expect("arc");
+        assert_eq!(arc.1.line, arc_line);
+        let want = *arc.0.orient(arc.1).expect("orientation");
+        for t in Target::ALL {
+            match write(&p, t, false) {
+                Out::Refused(e) => {
+                    assert!(!writes.contains(&t), "{}: {e}", t.name());
+                    let line = match other {
+                        Some((o, l)) if o == t => l,
+                        _ => arc_line,
+                    };
+                    assert_eq!(e.line, line, "{}: {e}", t.name());
+                    if line == arc_line {
+                        let Out::Text(_, w) = write(&p, t, true) else {
+                            panic!("{}: lossy refused", t.name())
+                        };
+                        assert!(
+                            w.iter().any(|w| w.starts_with(&format!("{arc_line}:1:"))),
+                            "{}: {w:?}",
+                            t.name()
+                        );
+                    }
+                }
+                Out::Text(text, _) => {
+                    assert!(writes.contains(&t), "{} wrote it:\n{text}", t.name());
+                    let q = parse(&text, t.name());
+                    compare(&p, &q, &Tolerance::default())
+                        .unwrap_or_else(|e| panic!("{}: {e}\n{text}", t.name()));
+                    let (op, m) = moves(&q)
+                        .into_iter()
+                        .find(|(_, m)| m.arc().is_some())
+                        .expect("the arc");
+                    let got = *op.orient(m).expect("an orientation");
+                    match (want.axis, got.axis) {
+                        (Some(u), Some(v)) => {
+                            assert!((u - v).length() < 1e-9, "{}: {v}\n{text}", t.name())
+                        }
+                        _ => {
+                            for k in 0..3 {
+                                let close = match (want.angles[k], got.angles[k]) {
+                                    (Some(a), Some(b)) => (a - b).abs() < 1e-6,
+                                    (a, b) => a.is_none() && b.is_none(),
+                                };
+                                assert!(close, "{}: {got:?} for {want:?}\n{text}", t.name());
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

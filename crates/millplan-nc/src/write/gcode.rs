@@ -926,7 +926,19 @@ impl W<'_> {
         }
     }
 
-    fn arc_block(&mut self, m: &Move, a: &Arc, start: DVec3, end: DVec3, axis: usize, extra: &str) {
+    /// An arc in a principal plane (`axis`: its normal); `turn`: the block
+    /// also states the move's orientation.
+    #[allow(clippy::too_many_arguments)]
+    fn arc_block(
+        &mut self,
+        op: &Operation,
+        m: &Move,
+        a: &Arc,
+        (start, end): (DVec3, DVec3),
+        axis: usize,
+        turn: bool,
+        extra: &str,
+    ) -> Result<(), WriteError> {
         let ccw = a.normal[axis] > 0.0;
         if self.hh() {
             self.heidenhain_speed(m);
@@ -957,7 +969,7 @@ impl W<'_> {
             self.feed_spindle(m, m.feed, m.feed_mode);
             self.st.fmax_last = false;
             self.end_block();
-            return;
+            return Ok(());
         }
         let mark = self.start_motion(extra);
         if self.st.plane != Some(axis) {
@@ -979,8 +991,12 @@ impl W<'_> {
                 self.word(l, off[k] * self.k, f);
             }
         }
+        if turn {
+            self.orient_words(op, m)?;
+        }
         self.feed_spindle(m, m.feed, m.feed_mode);
         self.finish_motion(mark);
+        Ok(())
     }
 
     /// Whether the control's own canned cycle can say what `c` says: a G-code
@@ -1131,8 +1147,35 @@ impl W<'_> {
                         "an arc from or to an unknown position cannot be written",
                     ));
                 };
-                match principal_plane(a) {
-                    Some(axis) => self.arc_block(m, a, s, e, axis, &extra),
+                // An arc whose own orientation differs from the move before it
+                // turns the tool along the way: the arc block says so where the
+                // target can (machine angles in G-code, vectors in Sinumerik),
+                // else the arc is refused at its line.
+                let before = i.checked_sub(1).and_then(|k| op.orient(&op.moves[k]));
+                let turns = op.is_five_axis() && op.orient(m).is_some_and(|o| Some(o) != before);
+                let plane = principal_plane(a);
+                let sayable = turns
+                    && plane.is_some()
+                    && op.orient(m).is_some_and(|o| match self.target() {
+                        Target::Sinumerik => true,
+                        Target::Fanuc | Target::LinuxCnc => o.has_angles(),
+                        _ => false,
+                    });
+                if turns && !sayable {
+                    let target = self.target().name();
+                    lossy(
+                        self.o.lossy,
+                        &mut self.warnings,
+                        m.line,
+                        format!(
+                            "an arc that turns the tool{} cannot be written in {}: write it as lines (a CAM chord tolerance) or into a dialect that can",
+                            if plane.is_some() { "" } else { " outside the XY, ZX and YZ planes" },
+                            target
+                        ),
+                    )?;
+                }
+                match plane {
+                    Some(axis) => self.arc_block(op, m, a, (s, e), axis, sayable, &extra)?,
                     None => {
                         // Each chord of an inverse-time arc takes its share of the time.
                         let pts = arc_points(a, s, e, self.o.chord_tol);

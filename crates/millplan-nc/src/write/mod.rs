@@ -745,7 +745,13 @@ mod tests {
                 };
                 m.spindle = speed;
                 if k == 1 {
-                    m.orient = Some(OrientId::new((rnd(50) == 0) as usize));
+                    // Arcs keep the orientation of the move before them (an
+                    // arc that turns the tool is refused by Fanuc).
+                    let o = rnd(50) == 0;
+                    m.orient = match (m.arc(), op.moves.last()) {
+                        (Some(_), Some(prev)) => prev.orient,
+                        _ => Some(OrientId::new(o as usize)),
+                    };
                 }
                 at = m.end;
                 op.moves.push(m);
