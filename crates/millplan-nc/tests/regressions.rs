@@ -13,7 +13,9 @@ use millplan_nc::detect::detect;
 use millplan_nc::equiv::{compare, Tolerance};
 use millplan_nc::stats::summarize;
 use millplan_nc::write::Target;
-use millplan_nc::{Dialect, FeedMode, MoveKind, Operation, Orient, Program, ReadOptions};
+use millplan_nc::{
+    Dialect, EventKind, FeedMode, MoveKind, Operation, Orient, Program, ReadOptions,
+};
 
 const MORI: &str = "nx-posted-gcode-samples/moriseiki_nmv5000_fanuc_g43-4_mm.ptp";
 const DMU: &str = "nx-posted-gcode-samples/dmu70evo_sinumerik840d_traori_inch.ptp";
@@ -992,5 +994,74 @@ fn an_arc_that_turns_the_tool_keeps_its_orientation_or_refuses() {
                 }
             }
         }
+    }
+}
+
+/// Found with the writer snapshots: Sinumerik `G4 F1.5` is a dwell of 1.5 s
+/// for that block only; it was read as no dwell and a feed of 1.5 for the
+/// moves after it. LinuxCNC's `G4 P` is in seconds, Fanuc's in milliseconds.
+#[test]
+fn dwell_words_are_read_in_each_dialects_unit() {
+    let cases = [
+        (
+            "; dwell\nG17 G710 G90 G94\nT1\nM6\nD1\nG0 X0 Y0 Z5 S1000 M3\nG1 Z0 F300\nG4 F1.5\nG1 X10\nM30\n",
+            Dialect::Sinumerik,
+        ),
+        (
+            "G21 G17 G90 G94 G64 P0.01\nT1 M6\nG0 X0 Y0 Z5 S1000 M3\nG1 Z0 F300\nG4 P1.5\nG1 X10\nM30\n",
+            Dialect::LinuxCnc,
+        ),
+        (
+            "%\nO0001\nG21 G17 G90 G94\nT1 M6\nG0 X0 Y0 Z5 S1000 M3\nG1 Z0 F300.\nG4 P1500\nG1 X10.\nM30\n%\n",
+            Dialect::Fanuc,
+        ),
+    ];
+    for (src, dialect) in cases {
+        assert_eq!(detect(src), dialect);
+        let p = parse(src, dialect.name());
+        let dwells: Vec<f64> = p.operations[0]
+            .events
+            .iter()
+            .filter_map(|e| match e.kind {
+                EventKind::Dwell(t) => Some(t),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(dwells, [1.5], "{}", dialect.name());
+        let last = p.operations[0].moves.last().expect("moves");
+        assert_eq!(
+            last.feed,
+            300.0,
+            "{}: the feed after the dwell",
+            dialect.name()
+        );
+    }
+}
+
+/// Found with the feed-mode tests: the F of a block was read before the
+/// block's G93/G95, so an inch `G93 G1 X1. F50.` read as 50 × 25.4 = 1270
+/// moves a minute, and `G95 G1 … F.004` as 0.004 in/rev taken for a
+/// per-minute feed first. F is read after the block's feed mode.
+#[test]
+fn feed_mode_and_f_in_one_block() {
+    let src = "%\nO0001\nG20 G17 G90 G94\nT1 M6\nS1000 M3\nG0 X0. Y0. Z1.\nG1 Z0. F10.\n\
+               G93 G1 X1. F50.\nG95 G1 X2. F.004\nG94 G1 X3. F20.\nM30\n%\n";
+    let p = parse(src, "inch feeds");
+    let feeds: Vec<(FeedMode, f64)> = p
+        .moves()
+        .filter(|m| m.is_cutting())
+        .map(|m| (m.feed_mode, m.feed))
+        .collect();
+    let inch = 25.4;
+    let want = [
+        (FeedMode::PerMinute, 10.0 * inch),
+        (FeedMode::InverseTime, 50.0),
+        (FeedMode::PerRev, 0.004 * inch),
+        (FeedMode::PerMinute, 20.0 * inch),
+    ];
+    assert_eq!(feeds.len(), want.len());
+    for ((gm, gf), (wm, wf)) in feeds.iter().zip(want) {
+        assert_eq!(*gm, wm);
+        assert!((gf - wf).abs() < 1e-9, "{gm:?} F{gf}, want F{wf}");
     }
 }

@@ -410,6 +410,9 @@ struct Words {
     d: Option<f64>,
     l: Option<f64>,
     u: Option<f64>,
+    /// The F word with its column: read after the block's G codes (its
+    /// unit depends on G93/G94/G95; in a Sinumerik G4 block it is the dwell).
+    f: Option<(f64, u32)>,
     m: Vec<f64>,
     /// Words nobody models, as written.
     keep: Vec<String>,
@@ -609,7 +612,7 @@ impl GcodeReader {
                         'X' | 'Y' | 'Z' => w.xyz[axis_index(*letter)] = Some(v),
                         'I' | 'J' | 'K' => w.ijk[axis_index(*letter)] = Some(v),
                         'A' | 'B' | 'C' => w.rot[(*letter as u8 - b'A') as usize] = Some(v),
-                        'F' => self.feed_word(v, ln, col)?,
+                        'F' => w.f = Some((v, col)),
                         'S' => {
                             if v < 0.0 {
                                 return Err(ParseError::new(ln, col, "negative spindle speed"));
@@ -670,10 +673,7 @@ impl GcodeReader {
                             Some(self.value(val, ln, col)?)
                     }
                     "CR" => w.cr = Some(self.value(val, ln, col)?),
-                    "F" => {
-                        let v = self.value(val, ln, col)?;
-                        self.feed_word(v, ln, col)?;
-                    }
+                    "F" => w.f = Some((self.value(val, ln, col)?, col)),
                     "S" => {
                         let v = self.value(val, ln, col)?;
                         if v < 0.0 {
@@ -757,6 +757,10 @@ impl GcodeReader {
             }
         }
         Ok(())
+    }
+
+    fn dwell_p(&self, p: f64) -> f64 {
+        dwell_p(self.dialect, p)
     }
 
     fn feed_word(&mut self, v: f64, ln: u32, col: u32) -> Result<(), ParseError> {
@@ -883,6 +887,16 @@ impl GcodeReader {
                 }
             }
         }
+        // F after the block's feed mode; Sinumerik `G4 F1.5` is a dwell of
+        // 1.5 s for that block, not a feed.
+        let mut dwell_f = None;
+        if let Some((v, col)) = w.f.take() {
+            if dwell && self.sinumerik() {
+                dwell_f = Some(v);
+            } else {
+                self.feed_word(v, ln, col)?;
+            }
+        }
         if let Some(m) = machine {
             return self.machine_block(toks, &w, ln, m);
         }
@@ -988,13 +1002,14 @@ impl GcodeReader {
             self.tool_change(ln);
         }
         if dwell {
-            // Fanuc P is milliseconds; X/U seconds (Sinumerik F, seconds).
-            let secs =
-                w.p.take()
-                    .map(|ms| ms / 1000.0)
-                    .or(w.xyz[0].take())
-                    .or(w.u.take())
-                    .unwrap_or(0.0);
+            // Fanuc P is whole milliseconds (a P with decimals, as Haas
+            // writes it, seconds), LinuxCNC P seconds; X/U seconds; Sinumerik F
+            // seconds.
+            let secs = dwell_f
+                .or(w.p.take().map(|p| self.dwell_p(p)))
+                .or(w.xyz[0].take())
+                .or(w.u.take())
+                .unwrap_or(0.0);
             self.op.push_event(ln, EventKind::Dwell(secs));
         }
         if let Some(name) = new_cycle {
@@ -1028,7 +1043,7 @@ impl GcodeReader {
                     cs.index = None;
                 }
                 if let Some(pv) = w.p.take() {
-                    cs.p = Some(pv / 1000.0);
+                    cs.p = Some(dwell_p(self.dialect, pv));
                     cs.index = None;
                 }
             }
@@ -1628,6 +1643,17 @@ pub(crate) fn fmt_num(v: f64) -> String {
     } else {
         let s = format!("{v:.6}");
         s.trim_end_matches('0').to_string()
+    }
+}
+
+/// Seconds of a dwell `P` word (G4, G82, G89): LinuxCNC counts seconds,
+/// Fanuc whole milliseconds; a P with decimals in a Fanuc-style program is
+/// seconds (Haas writes `P.05`).
+fn dwell_p(dialect: Dialect, p: f64) -> f64 {
+    if dialect == Dialect::LinuxCnc || p.fract() != 0.0 {
+        p
+    } else {
+        p / 1000.0
     }
 }
 
