@@ -1065,3 +1065,43 @@ fn feed_mode_and_f_in_one_block() {
         assert!((gf - wf).abs() < 1e-9, "{gm:?} F{gf}, want F{wf}");
     }
 }
+
+/// Found with the writer snapshots: LinuxCNC output read back as Fanuc (it
+/// said nothing only LinuxCNC says), so its dwell `G4 P1.000` and `G82 … P1`
+/// (seconds) came back as 1 ms. The LinuxCNC header now states `G91.1`
+/// (arc centres relative to the start, as the writer writes them), which
+/// marks it; the reader knows G91.1 and G90.1 (absolute arc centres).
+#[test]
+fn linuxcnc_output_reads_back_as_linuxcnc_with_its_dwells() {
+    let src = "%\nO0006\nG21 G17 G90 G94\nT1 M6\nG43 H1 S1000 M3\nG0 X0. Y0. Z10.\nG1 Z0. F100.\n\
+               G4 P1000\nG0 Z10.\nG99 G82 X30. Y10. Z-4. R2. P1000 F120.\nG80\nM30\n%\n";
+    let p = parse(src, "dwells");
+    let dwells = |p: &Program| -> (Vec<f64>, Vec<Option<f64>>) {
+        let op = &p.operations[0];
+        let events = op
+            .events
+            .iter()
+            .filter_map(|e| match e.kind {
+                EventKind::Dwell(t) => Some(t),
+                _ => None,
+            })
+            .collect();
+        (events, op.cycles.iter().map(|c| c.dwell).collect())
+    };
+    assert_eq!(dwells(&p), (vec![1.0], vec![Some(1.0)]));
+    let (text, q) = through(&p, Target::LinuxCnc, false, "dwells");
+    assert_eq!(q.source, Dialect::LinuxCnc, "{text}");
+    assert_eq!(dwells(&q), dwells(&p), "{text}");
+    // Absolute arc centres.
+    let arcs = "G21 G17 G90 G94 G90.1\nT1 M6\nG0 X0 Y0 Z5\nG1 Z0 F100\nG2 X10 Y0 I5 J0\nG91.1\n\
+                G3 X0 Y0 I-5 J0\nM2\n";
+    let p = parse(arcs, "G90.1");
+    let centres: Vec<_> = p.operations[0].arcs.iter().map(|a| a.centre).collect();
+    assert_eq!(centres.len(), 2);
+    for c in centres {
+        assert!(
+            (c - millplan_geom::DVec3::new(5.0, 0.0, 0.0)).length() < 1e-9,
+            "{c}"
+        );
+    }
+}

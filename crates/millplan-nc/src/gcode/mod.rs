@@ -305,6 +305,9 @@ pub struct GcodeReader {
     pending_select: Option<(usize, usize)>,
     cycle: Option<CycleState>,
     return_initial: bool,
+    /// G90.1: arc centres I, J, K are absolute coordinates (LinuxCNC);
+    /// G91.1 (the default): offsets from the arc's start.
+    arc_centre_absolute: bool,
     pub blocks: usize,
     pub motion_blocks: usize,
 }
@@ -454,6 +457,7 @@ impl GcodeReader {
             pending_select: None,
             cycle: None,
             return_initial: true,
+            arc_centre_absolute: false,
             blocks: 0,
             motion_blocks: 0,
         }
@@ -850,6 +854,8 @@ impl GcodeReader {
                     new_cycle = Some(format!("G{}", code / 10));
                     motion_word = true;
                 }
+                901 => self.arc_centre_absolute = true,
+                911 => self.arc_centre_absolute = false,
                 980 => self.return_initial = true,
                 990 => self.return_initial = false,
                 530 | 280 | 300 => machine = Some(col),
@@ -1367,13 +1373,23 @@ impl GcodeReader {
         let n = self.plane.normal();
         let normal = if self.motion == Motion::Ccw { n } else { -n };
         let centre = if ijk.iter().any(Option::is_some) {
-            let off = DVec3::new(
-                ijk[0].unwrap_or(0.0),
-                ijk[1].unwrap_or(0.0),
-                ijk[2].unwrap_or(0.0),
-            ) * self.scale;
+            let c = if self.arc_centre_absolute {
+                // A coordinate left out is the start's.
+                let s = self.scale;
+                DVec3::new(
+                    ijk[0].map_or(start.x, |v| v * s),
+                    ijk[1].map_or(start.y, |v| v * s),
+                    ijk[2].map_or(start.z, |v| v * s),
+                )
+            } else {
+                let off = DVec3::new(
+                    ijk[0].unwrap_or(0.0),
+                    ijk[1].unwrap_or(0.0),
+                    ijk[2].unwrap_or(0.0),
+                ) * self.scale;
+                start + off
+            };
             // Keep the centre in the plane of the start point.
-            let c = start + off;
             c - n * (c - start).dot(n)
         } else if let Some(r) = r {
             let r = r * self.scale;

@@ -184,8 +184,11 @@ impl W<'_> {
             Target::LinuxCnc => {
                 self.out.extend_from_slice(b"%\n");
                 self.comment(&format!("{name} - written by millplan"));
+                // G91.1 (arc centres relative to the start, LinuxCNC's
+                // default) says what I/J/K mean, and marks the program as
+                // LinuxCNC's, whose dwell P is in seconds, not milliseconds.
                 self.line(&format!(
-                    "G17 {} G90 G94 G40 G49 G80",
+                    "G17 {} G90 G91.1 G94 G40 G49 G80",
                     if inch { "G20" } else { "G21" }
                 ));
             }
