@@ -106,7 +106,7 @@ pub fn detect(head: &str) -> Dialect {
                 linuxcnc += 2;
             }
         }
-        for m in ["#<", " SUB", "ENDSUB", "G64 P", "G61.1"] {
+        for m in ["#<", " SUB", "ENDSUB", "G64 P", "G61.1", "G90.1", "G91.1"] {
             if code.contains(m) {
                 linuxcnc += 2;
             }

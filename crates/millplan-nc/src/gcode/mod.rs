@@ -305,6 +305,9 @@ pub struct GcodeReader {
     pending_select: Option<(usize, usize)>,
     cycle: Option<CycleState>,
     return_initial: bool,
+    /// G90.1: arc centres I, J, K are absolute coordinates (LinuxCNC);
+    /// G91.1 (the default): offsets from the arc's start.
+    arc_centre_absolute: bool,
     pub blocks: usize,
     pub motion_blocks: usize,
 }
@@ -410,6 +413,9 @@ struct Words {
     d: Option<f64>,
     l: Option<f64>,
     u: Option<f64>,
+    /// The F word with its column: read after the block's G codes (its
+    /// unit depends on G93/G94/G95; in a Sinumerik G4 block it is the dwell).
+    f: Option<(f64, u32)>,
     m: Vec<f64>,
     /// Words nobody models, as written.
     keep: Vec<String>,
@@ -451,6 +457,7 @@ impl GcodeReader {
             pending_select: None,
             cycle: None,
             return_initial: true,
+            arc_centre_absolute: false,
             blocks: 0,
             motion_blocks: 0,
         }
@@ -609,7 +616,7 @@ impl GcodeReader {
                         'X' | 'Y' | 'Z' => w.xyz[axis_index(*letter)] = Some(v),
                         'I' | 'J' | 'K' => w.ijk[axis_index(*letter)] = Some(v),
                         'A' | 'B' | 'C' => w.rot[(*letter as u8 - b'A') as usize] = Some(v),
-                        'F' => self.feed_word(v, ln, col)?,
+                        'F' => w.f = Some((v, col)),
                         'S' => {
                             if v < 0.0 {
                                 return Err(ParseError::new(ln, col, "negative spindle speed"));
@@ -670,10 +677,7 @@ impl GcodeReader {
                             Some(self.value(val, ln, col)?)
                     }
                     "CR" => w.cr = Some(self.value(val, ln, col)?),
-                    "F" => {
-                        let v = self.value(val, ln, col)?;
-                        self.feed_word(v, ln, col)?;
-                    }
+                    "F" => w.f = Some((self.value(val, ln, col)?, col)),
                     "S" => {
                         let v = self.value(val, ln, col)?;
                         if v < 0.0 {
@@ -757,6 +761,10 @@ impl GcodeReader {
             }
         }
         Ok(())
+    }
+
+    fn dwell_p(&self, p: f64) -> f64 {
+        dwell_p(self.dialect, p)
     }
 
     fn feed_word(&mut self, v: f64, ln: u32, col: u32) -> Result<(), ParseError> {
@@ -846,6 +854,8 @@ impl GcodeReader {
                     new_cycle = Some(format!("G{}", code / 10));
                     motion_word = true;
                 }
+                901 => self.arc_centre_absolute = true,
+                911 => self.arc_centre_absolute = false,
                 980 => self.return_initial = true,
                 990 => self.return_initial = false,
                 530 | 280 | 300 => machine = Some(col),
@@ -881,6 +891,16 @@ impl GcodeReader {
                     w.keep_modal |= is_modal_g(code);
                     w.keep_machine = true;
                 }
+            }
+        }
+        // F after the block's feed mode; Sinumerik `G4 F1.5` is a dwell of
+        // 1.5 s for that block, not a feed.
+        let mut dwell_f = None;
+        if let Some((v, col)) = w.f.take() {
+            if dwell && self.sinumerik() {
+                dwell_f = Some(v);
+            } else {
+                self.feed_word(v, ln, col)?;
             }
         }
         if let Some(m) = machine {
@@ -988,13 +1008,14 @@ impl GcodeReader {
             self.tool_change(ln);
         }
         if dwell {
-            // Fanuc P is milliseconds; X/U seconds (Sinumerik F, seconds).
-            let secs =
-                w.p.take()
-                    .map(|ms| ms / 1000.0)
-                    .or(w.xyz[0].take())
-                    .or(w.u.take())
-                    .unwrap_or(0.0);
+            // Fanuc P is whole milliseconds (a P with decimals, as Haas
+            // writes it, seconds), LinuxCNC P seconds; X/U seconds; Sinumerik F
+            // seconds.
+            let secs = dwell_f
+                .or(w.p.take().map(|p| self.dwell_p(p)))
+                .or(w.xyz[0].take())
+                .or(w.u.take())
+                .unwrap_or(0.0);
             self.op.push_event(ln, EventKind::Dwell(secs));
         }
         if let Some(name) = new_cycle {
@@ -1028,7 +1049,7 @@ impl GcodeReader {
                     cs.index = None;
                 }
                 if let Some(pv) = w.p.take() {
-                    cs.p = Some(pv / 1000.0);
+                    cs.p = Some(dwell_p(self.dialect, pv));
                     cs.index = None;
                 }
             }
@@ -1352,13 +1373,23 @@ impl GcodeReader {
         let n = self.plane.normal();
         let normal = if self.motion == Motion::Ccw { n } else { -n };
         let centre = if ijk.iter().any(Option::is_some) {
-            let off = DVec3::new(
-                ijk[0].unwrap_or(0.0),
-                ijk[1].unwrap_or(0.0),
-                ijk[2].unwrap_or(0.0),
-            ) * self.scale;
+            let c = if self.arc_centre_absolute {
+                // A coordinate left out is the start's.
+                let s = self.scale;
+                DVec3::new(
+                    ijk[0].map_or(start.x, |v| v * s),
+                    ijk[1].map_or(start.y, |v| v * s),
+                    ijk[2].map_or(start.z, |v| v * s),
+                )
+            } else {
+                let off = DVec3::new(
+                    ijk[0].unwrap_or(0.0),
+                    ijk[1].unwrap_or(0.0),
+                    ijk[2].unwrap_or(0.0),
+                ) * self.scale;
+                start + off
+            };
             // Keep the centre in the plane of the start point.
-            let c = start + off;
             c - n * (c - start).dot(n)
         } else if let Some(r) = r {
             let r = r * self.scale;
@@ -1631,8 +1662,27 @@ pub(crate) fn fmt_num(v: f64) -> String {
     }
 }
 
+/// Seconds of a dwell `P` word (G4, G82, G89): LinuxCNC counts seconds,
+/// Fanuc whole milliseconds; a P with decimals in a Fanuc-style program is
+/// seconds (Haas writes `P.05`).
+fn dwell_p(dialect: Dialect, p: f64) -> f64 {
+    if dialect == Dialect::LinuxCnc || p.fract() != 0.0 {
+        p
+    } else {
+        p / 1000.0
+    }
+}
+
+/// A word as a block kept verbatim spells it. Axis words keep a decimal
+/// point on whole numbers (`C45.`): on a Fanuc without decimal-point input
+/// `C45` is 0.045°. Codes, registers and counts (G, M, H, P, Q…) do not.
 fn fmt_word(c: char, v: f64) -> String {
-    format!("{c}{}", fmt_num(v))
+    let n = fmt_num(v);
+    if matches!(c, 'X' | 'Y' | 'Z' | 'A' | 'B' | 'C' | 'U' | 'V' | 'W') && !n.contains('.') {
+        format!("{c}{n}.")
+    } else {
+        format!("{c}{n}")
+    }
 }
 
 fn tok_text(t: &Tok) -> String {

@@ -383,6 +383,7 @@ fn write_move(
                 .cycles
                 .get(id.index())
                 .ok_or_else(|| WriteError::new(m.line, "cycle id out of range"))?;
+            super::check_pecks(c)?;
             out.extend_from_slice(format!("CYCLE/{},FEDTO,", c.name.replace(',', " ")).as_bytes());
             num(out, COORD, -c.bottom * k);
             out.extend_from_slice(b",RAPTO,");

@@ -184,8 +184,11 @@ impl W<'_> {
             Target::LinuxCnc => {
                 self.out.extend_from_slice(b"%\n");
                 self.comment(&format!("{name} - written by millplan"));
+                // G91.1 (arc centres relative to the start, LinuxCNC's
+                // default) says what I/J/K mean, and marks the program as
+                // LinuxCNC's, whose dwell P is in seconds, not milliseconds.
                 self.line(&format!(
-                    "G17 {} G90 G94 G40 G49 G80",
+                    "G17 {} G90 G91.1 G94 G40 G49 G80",
                     if inch { "G20" } else { "G21" }
                 ));
             }
@@ -458,7 +461,17 @@ impl W<'_> {
                 if was == *on {
                     return Ok(Words::Nothing);
                 }
+                // `G49` ends both: TCP off with length compensation off in
+                // the same source block is that one word, not `G49 G43 Hn G49`.
+                let tlc_off_too = !*on
+                    && e.line != 0
+                    && op.events.iter().any(|x| {
+                        x.at == e.at
+                            && x.line == e.line
+                            && x.kind == EventKind::ToolLength(ToolLength::Off)
+                    });
                 match target {
+                    Target::Fanuc if tlc_off_too => Words::Nothing,
                     Target::Fanuc => {
                         if self.st.tlc.is_some() {
                             let vectors = op
@@ -492,6 +505,8 @@ impl W<'_> {
                             "LinuxCNC has no tool-centre-point control (G43.4/TRAORI/M128)"
                                 .to_string(),
                         )?;
+                        // Its length compensation stays plain `G43 Hn`.
+                        self.st.tcp = false;
                         Words::Comment(format!("TCP {}", if *on { "on" } else { "off" }))
                     }
                     Target::Apt => Words::Nothing,
@@ -836,15 +851,10 @@ impl W<'_> {
         extra: &str,
     ) -> Result<(), WriteError> {
         if self.hh() {
-            if !rapid
-                && m.spindle > 0.0
-                && self.st.spindle_running
-                && Some(m.spindle) != self.st.spindle
-            {
-                let s = self.spindle_text(m.spindle);
-                self.line(&format!("TOOL CALL S{s}"));
-                self.st.spindle = Some(m.spindle);
+            if !rapid {
+                self.heidenhain_speed(m);
             }
+            let (line, block_no) = (self.out.len(), self.st.block_no);
             self.start_block();
             let five_vec = op
                 .orient(m)
@@ -859,7 +869,15 @@ impl W<'_> {
             }
             self.orient_words(op, m)?;
             if self.out.len() == start {
-                // Heidenhain needs at least one coordinate.
+                if self.st.heidenhain_rl.is_empty() {
+                    // A move to where the tool stands, with nothing else to
+                    // say: no block (as in the other dialects), rather than one
+                    // that names axes its source did not.
+                    self.out.truncate(line);
+                    self.st.block_no = block_no;
+                    return Ok(());
+                }
+                // Radius compensation needs a block with a coordinate.
                 self.coords(end, true);
             }
             let rl = std::mem::take(&mut self.st.heidenhain_rl);
@@ -894,9 +912,31 @@ impl W<'_> {
         Ok(())
     }
 
-    fn arc_block(&mut self, m: &Move, a: &Arc, start: DVec3, end: DVec3, axis: usize, extra: &str) {
+    /// `TOOL CALL S…` before a Heidenhain feed block whose speed changes.
+    fn heidenhain_speed(&mut self, m: &Move) {
+        if m.spindle > 0.0 && self.st.spindle_running && Some(m.spindle) != self.st.spindle {
+            let s = self.spindle_text(m.spindle);
+            self.line(&format!("TOOL CALL S{s}"));
+            self.st.spindle = Some(m.spindle);
+        }
+    }
+
+    /// An arc in a principal plane (`axis`: its normal); `turn`: the block
+    /// also states the move's orientation.
+    #[allow(clippy::too_many_arguments)]
+    fn arc_block(
+        &mut self,
+        op: &Operation,
+        m: &Move,
+        a: &Arc,
+        (start, end): (DVec3, DVec3),
+        axis: usize,
+        turn: bool,
+        extra: &str,
+    ) -> Result<(), WriteError> {
         let ccw = a.normal[axis] > 0.0;
         if self.hh() {
+            self.heidenhain_speed(m);
             let (p, q) = match axis {
                 2 => (0, 1),
                 1 => (2, 0),
@@ -924,7 +964,7 @@ impl W<'_> {
             self.feed_spindle(m, m.feed, m.feed_mode);
             self.st.fmax_last = false;
             self.end_block();
-            return;
+            return Ok(());
         }
         let mark = self.start_motion(extra);
         if self.st.plane != Some(axis) {
@@ -946,8 +986,12 @@ impl W<'_> {
                 self.word(l, off[k] * self.k, f);
             }
         }
+        if turn {
+            self.orient_words(op, m)?;
+        }
         self.feed_spindle(m, m.feed, m.feed_mode);
         self.finish_motion(mark);
+        Ok(())
     }
 
     /// Whether the control's own canned cycle can say what `c` says: a G-code
@@ -969,11 +1013,35 @@ impl W<'_> {
     /// A hole of a canned cycle in the control's own words: the cycle block
     /// at its first hole (from the level it returns to), the position alone
     /// at the next.
-    fn cycle_block(&mut self, m: &Move, id: CycleId, c: &Cycle, extra: &str) {
+    fn cycle_block(
+        &mut self,
+        m: &Move,
+        id: CycleId,
+        c: &Cycle,
+        extra: &str,
+    ) -> Result<(), WriteError> {
+        super::check_pecks(c)?;
         if self.hh() {
             // The tool stands over the hole; the copied definition is called.
             self.line("CYCL CALL");
-            return;
+            // The cycle leaves the tool at its own clearance height: the next
+            // block states Z again.
+            self.st.pos[2] = None;
+            return Ok(());
+        }
+        if let Some(q) = c.peck.filter(|q| *q > 0.0) {
+            let scale = 10f64.powi(self.coord.decimals as i32);
+            if (q * self.k * scale).round() == 0.0 {
+                return Err(WriteError::new(
+                    c.line,
+                    format!(
+                        "{}: a peck of {q:.6} mm is below the {} decimals {} is written with",
+                        c.name,
+                        self.coord.decimals,
+                        self.target().name()
+                    ),
+                ));
+            }
         }
         let top = m.end.z + c.retract.max(0.0);
         if self.st.cycle != Some(id) {
@@ -1005,13 +1073,18 @@ impl W<'_> {
                 self.word("Q", q * self.k, f);
             }
             if let Some(t) = c.dwell {
-                // Fanuc counts dwell in milliseconds, LinuxCNC in seconds.
-                let p = if self.target() == Target::Fanuc {
-                    (t * 1000.0).round()
+                // Fanuc counts dwell in whole milliseconds, without a
+                // decimal point (`P500.` is refused); LinuxCNC in seconds.
+                let (p, pf) = if self.target() == Target::Fanuc {
+                    let whole = NumFmt {
+                        decimals: 0,
+                        trailing_point: false,
+                        ..f
+                    };
+                    ((t * 1000.0).round(), whole)
                 } else {
-                    t
+                    (t, NumFmt { decimals: 3, ..f })
                 };
-                let pf = NumFmt { decimals: 3, ..f };
                 self.word("P", p, pf);
             }
             let ff = self.feedf;
@@ -1026,6 +1099,7 @@ impl W<'_> {
         }
         self.finish_motion(mark);
         self.st.pos[2] = Some(((top.max(m.end.z) * self.k) * 1e4).round() / 1e4);
+        Ok(())
     }
 
     /// Move `i` of `op`, after the events due before it (`ev`: the next event).
@@ -1068,14 +1142,35 @@ impl W<'_> {
                         "an arc from or to an unknown position cannot be written",
                     ));
                 };
-                // An arc block cannot turn the tool: an arc whose tool axis is
-                // not the one already standing is written as chords that carry it.
-                let turns = op.is_five_axis()
-                    && op.orient(m).is_some_and(|o| {
-                        !o.has_angles() && o.axis.is_some() && o.axis != self.st.vec
+                // An arc whose own orientation differs from the move before it
+                // turns the tool along the way: the arc block says so where the
+                // target can (machine angles in G-code, vectors in Sinumerik),
+                // else the arc is refused at its line.
+                let before = i.checked_sub(1).and_then(|k| op.orient(&op.moves[k]));
+                let turns = op.is_five_axis() && op.orient(m).is_some_and(|o| Some(o) != before);
+                let plane = principal_plane(a);
+                let sayable = turns
+                    && plane.is_some()
+                    && op.orient(m).is_some_and(|o| match self.target() {
+                        Target::Sinumerik => true,
+                        Target::Fanuc | Target::LinuxCnc => o.has_angles(),
+                        _ => false,
                     });
-                match principal_plane(a).filter(|_| !turns) {
-                    Some(axis) => self.arc_block(m, a, s, e, axis, &extra),
+                if turns && !sayable {
+                    let target = self.target().name();
+                    lossy(
+                        self.o.lossy,
+                        &mut self.warnings,
+                        m.line,
+                        format!(
+                            "an arc that turns the tool{} cannot be written in {}: write it as lines (a CAM chord tolerance) or into a dialect that can",
+                            if plane.is_some() { "" } else { " outside the XY, ZX and YZ planes" },
+                            target
+                        ),
+                    )?;
+                }
+                match plane {
+                    Some(axis) => self.arc_block(op, m, a, (s, e), axis, sayable, &extra)?,
                     None => {
                         // Each chord of an inverse-time arc takes its share of the time.
                         let pts = arc_points(a, s, e, self.o.chord_tol);
@@ -1099,8 +1194,7 @@ impl W<'_> {
                     .get(id.index())
                     .ok_or_else(|| WriteError::new(m.line, "cycle id out of range"))?;
                 if self.native_cycle(op, m, c) {
-                    self.cycle_block(m, id, c, &extra);
-                    return Ok(());
+                    return self.cycle_block(m, id, c, &extra);
                 }
                 let axis = op.axis(m).unwrap_or(DVec3::Z);
                 let steps = cycle_moves(c, m.end, axis)?;

@@ -539,6 +539,27 @@ pub fn cycle_kind(name: &str) -> CycleKind {
     }
 }
 
+/// Refuses a cycle of more than [`MAX_PECKS`] pecks a hole, at its
+/// definition's line, whether a writer spells it out or leaves it to the
+/// control's own cycle: `G83 … Q0.00001` is millions of strokes either way
+/// (and its peck is below the decimals any target writes).
+pub fn check_pecks(c: &Cycle) -> Result<(), WriteError> {
+    let pecks = c.pecks();
+    if pecks <= MAX_PECKS {
+        return Ok(());
+    }
+    Err(WriteError::new(
+        c.line,
+        format!(
+            "{}: a peck of {:.6} mm over a depth of {:.3} mm makes {} pecks a hole; at most {MAX_PECKS} are accepted",
+            c.name,
+            c.peck.unwrap_or(0.0),
+            c.clearance - c.bottom,
+            if pecks == usize::MAX { "too many".to_string() } else { pecks.to_string() }
+        ),
+    ))
+}
+
 /// Explicit steps (rapid to the feed plane, feed down with pecks, dwell, rapid
 /// or, for boring and reaming, feed out) for one hole of a cycle, along the tool axis `axis` from the cycle
 /// point `p`. A cycle needing more than [`MAX_PECKS`] pecks is an error at
@@ -555,19 +576,8 @@ pub fn cycle_moves(c: &Cycle, p: DVec3, axis: DVec3) -> Result<Vec<CycleStep>, W
             ),
         ));
     }
+    check_pecks(c)?;
     let pecks = c.pecks();
-    if pecks > MAX_PECKS {
-        return Err(WriteError::new(
-            c.line,
-            format!(
-                "{}: a peck of {:.6} mm over a depth of {:.3} mm makes {} pecks a hole; at most {MAX_PECKS} are written",
-                c.name,
-                c.peck.unwrap_or(0.0),
-                c.clearance - c.bottom,
-                if pecks == usize::MAX { "too many".to_string() } else { pecks.to_string() }
-            ),
-        ));
-    }
     let at = |h: f64| p + axis * h;
     let mut v = Vec::with_capacity(3 * pecks + 3);
     v.push(CycleStep::Rapid(at(c.clearance.max(c.bottom))));
@@ -735,7 +745,13 @@ mod tests {
                 };
                 m.spindle = speed;
                 if k == 1 {
-                    m.orient = Some(OrientId::new((rnd(50) == 0) as usize));
+                    // Arcs keep the orientation of the move before them (an
+                    // arc that turns the tool is refused by Fanuc).
+                    let o = rnd(50) == 0;
+                    m.orient = match (m.arc(), op.moves.last()) {
+                        (Some(_), Some(prev)) => prev.orient,
+                        _ => Some(OrientId::new(o as usize)),
+                    };
                 }
                 at = m.end;
                 op.moves.push(m);

@@ -1,0 +1,1107 @@
+//! Regression tests for the faults of issue 16 (and those found while
+//! writing these tests), each named after its fault and citing the source
+//! file and line it was seen at. Programs written out are read back and
+//! checked against their source, never against numbers copied from a run.
+//!
+//! Tests on the real samples of `../shared/data/` print a `SKIPPED:` line
+//! and pass when the samples are not there; the synthetic ones always run.
+
+mod common;
+
+use common::{read, read_sample, sample, write, written, Out, GCODE};
+use millplan_nc::detect::detect;
+use millplan_nc::equiv::{compare, Tolerance};
+use millplan_nc::stats::summarize;
+use millplan_nc::write::Target;
+use millplan_nc::{
+    Dialect, EventKind, FeedMode, MoveKind, Operation, Orient, Program, ReadOptions,
+};
+
+const MORI: &str = "nx-posted-gcode-samples/moriseiki_nmv5000_fanuc_g43-4_mm.ptp";
+const DMU: &str = "nx-posted-gcode-samples/dmu70evo_sinumerik840d_traori_inch.ptp";
+const ACHSKREUZ: &str = "sinumerik-840d-spinner-u5/Achskreuz.mpf";
+const BOTTLE: &str = "sinumerik-840d-spinner-u5/Bottle_opener.mpf";
+const BEAR: &str = "camotics-ballnose-relief-gcode/bear.nc";
+const BOSS: &str = "swcam-apt-stl-pairs/boss.apt";
+const DMC100: &str = "nx-posted-gcode-samples/dmc100_heidenhain_m128_inch.ptp";
+
+fn parse(text: &str, what: &str) -> Program {
+    read(text, ReadOptions::default(), what)
+}
+
+/// The text a target writes, refused words as comments (`lossy`), and the
+/// program read back from it.
+fn through(p: &Program, t: Target, lossy: bool, what: &str) -> (String, Program) {
+    let text = match write(p, t, lossy) {
+        Out::Text(s, _) => s,
+        Out::Refused(e) => panic!("{what} -> {}: refused: {e}", t.name()),
+    };
+    let q = parse(&text, &format!("{what} -> {} re-read", t.name()));
+    (text, q)
+}
+
+/// The words of a written block, without its block number (`12 L X+1` →
+/// `L`, `X+1`; `N20 G1 X1` → `G1`, `X1`).
+fn words(line: &str) -> Vec<&str> {
+    let mut w: Vec<&str> = line.split_whitespace().collect();
+    let numbered = |s: &str| {
+        let d = s.strip_prefix('N').unwrap_or(s);
+        !d.is_empty() && d.bytes().all(|c| c.is_ascii_digit())
+    };
+    if w.first().is_some_and(|s| numbered(s)) {
+        w.remove(0);
+    }
+    w
+}
+
+/// Whether a block has a word of `letter` with a value (`X1`, `X=1`, `X+1`, `X.5`).
+fn has_axis(line: &str, letter: char) -> bool {
+    words(line).iter().any(|w| {
+        let mut c = w.chars();
+        c.next() == Some(letter)
+            && c.next()
+                .is_some_and(|d| d.is_ascii_digit() || matches!(d, '-' | '+' | '.' | '='))
+    })
+}
+
+fn has_xyz(line: &str) -> bool {
+    ['X', 'Y', 'Z'].iter().any(|&c| has_axis(line, c))
+}
+
+fn has_rotary(line: &str) -> bool {
+    ['A', 'B', 'C'].iter().any(|&c| has_axis(line, c))
+}
+
+/// Source lines that move rotary axes only: a G0/G1 block (comments
+/// stripped) with an A, B or C word and no X, Y or Z word.
+fn rotary_only_lines(src: &str) -> Vec<u32> {
+    src.lines()
+        .enumerate()
+        .filter_map(|(i, l)| {
+            let code = l.split(';').next().unwrap_or("");
+            let code = code.split('(').next().unwrap_or("");
+            let moves = words(code)
+                .iter()
+                .any(|w| matches!(*w, "G0" | "G00" | "G1" | "G01"));
+            (moves && has_rotary(code) && !has_xyz(code) && !code.contains("SUPA"))
+                .then_some(i as u32 + 1)
+        })
+        .collect()
+}
+
+/// A move to where the previous move already ended, in the same orientation.
+fn idle(a: &[(&Operation, &millplan_nc::Move)], i: usize) -> bool {
+    let angles = |(o, m): (&Operation, &millplan_nc::Move)| o.orient(m).map(|o| o.angles);
+    i > 0
+        && matches!(a[i].1.kind, MoveKind::Rapid | MoveKind::Linear)
+        && millplan_nc::same_position(a[i - 1].1.end, a[i].1.end)
+        && angles(a[i - 1]) == angles(a[i])
+        && a[i - 1].0.axis(a[i - 1].1) == a[i].0.axis(a[i].1)
+}
+
+/// For each move of `a`, the index of the move of `b` that ends where it
+/// ends (on every axis `a` knows, with the same rotary angles and the same
+/// kind), searched forward from the last match within a few moves; `None`
+/// for a move to where the tool already stands, which a writer may leave
+/// out. (With `lossy` a target may know positions its source did not: a
+/// machine-coordinate block written as a comment.)
+fn align(a: &Program, b: &Program) -> Vec<Option<usize>> {
+    let (a, b) = (moves(a), moves(b));
+    let same = |(ao, am): &(&Operation, &millplan_nc::Move),
+                (bo, bm): &(&Operation, &millplan_nc::Move)| {
+        let pos = (0..3).all(|k| am.end[k].is_nan() || (am.end[k] - bm.end[k]).abs() < 1e-3);
+        let angles = |o: &Operation, m: &millplan_nc::Move| {
+            o.orient(m).map(|o| o.angles).unwrap_or([None; 3])
+        };
+        let (x, y) = (angles(ao, am), angles(bo, bm));
+        let rot = (0..3).all(|k| match (x[k], y[k]) {
+            (Some(p), Some(q)) => (p - q).abs() < 1e-6,
+            (None, _) => true,
+            (Some(_), None) => false,
+        });
+        pos && rot && am.kind.name() == bm.kind.name()
+    };
+    let mut j = 0;
+    (0..a.len())
+        .map(|i| {
+            if idle(&a, i) {
+                return None;
+            }
+            let k = (j..(j + 4).min(b.len())).find(|&k| same(&a[i], &b[k]))?;
+            j = k + 1;
+            Some(k)
+        })
+        .collect()
+}
+
+/// Line `n` (1-based) of a text.
+fn line_of(text: &str, n: u32) -> &str {
+    text.lines().nth(n as usize - 1).unwrap_or("")
+}
+
+/// The moves of a program in order, with their operation.
+fn moves(p: &Program) -> Vec<(&Operation, &millplan_nc::Move)> {
+    p.operations
+        .iter()
+        .flat_map(|op| op.moves.iter().map(move |m| (op, m)))
+        .collect()
+}
+
+// ---------------------------------------------------------------------------
+// Positions the source never commanded.
+
+/// Issue 16: "The CAMotics relief's `G0Z20` then `G0X0Y0` — a Z-first
+/// retract from wherever the tool is — becomes one diagonal `G0 X0. Y0. Z20.`"
+/// bear.nc:4 `G0Z20.000`, bear.nc:5 `G0X0.000Y0.000S15000M3`: two blocks in
+/// every G-code target, the first with Z alone, the second with X and Y and
+/// no Z; read back, X and Y are unknown until the second.
+#[test]
+fn bear_z_first_retract_stays_z_first() {
+    let Some(p) = read_sample(BEAR) else { return };
+    let first = &p.operations[0].moves[..2];
+    assert_eq!((first[0].line, first[1].line), (4, 5), "bear.nc:4-5");
+    for t in GCODE {
+        let (text, q) = through(&p, t, false, BEAR);
+        let m = &q.operations[0].moves;
+        let (z, xy) = (line_of(&text, m[0].line), line_of(&text, m[1].line));
+        assert!(
+            has_axis(z, 'Z') && !has_axis(z, 'X') && !has_axis(z, 'Y'),
+            "{}: `{z}`",
+            t.name()
+        );
+        assert!(
+            has_axis(xy, 'X') && has_axis(xy, 'Y') && !has_axis(xy, 'Z'),
+            "{}: `{xy}`",
+            t.name()
+        );
+        assert!(m[0].end.x.is_nan() && m[0].end.y.is_nan(), "{}", t.name());
+        assert_eq!(m[0].end.z, first[0].end.z, "{}", t.name());
+        assert_eq!(m[1].end, first[1].end, "{}", t.name());
+    }
+}
+
+/// The same on a program of our own, into every G-code target: a move from
+/// an unknown position names only the axes its source named, and a block in
+/// machine coordinates (`G53`) forgets X, Y and Z again.
+#[test]
+fn moves_from_unknown_positions_name_only_their_source_axes() {
+    let src = "G21 G17 G90 G94\nT1 M6\nG0 Z20\nG0 X0 Y0 S10000 M3\nG1 Z-1 F500\n\
+               G53 G0 Z0\nG0 X5\nG0 Y5 Z2\n";
+    let p = parse(src, "unknown start");
+    for t in GCODE {
+        let Out::Text(text, warnings) = write(&p, t, true) else {
+            panic!("{}: lossy refused", t.name())
+        };
+        let q = parse(&text, t.name());
+        if warnings.is_empty() {
+            compare(&p, &q, &Tolerance::default()).unwrap_or_else(|e| panic!("{}: {e}", t.name()));
+        }
+        let written: Vec<(&str, bool, bool, bool)> = moves(&q)
+            .iter()
+            .map(|(_, m)| {
+                let l = line_of(&text, m.line);
+                (l, has_axis(l, 'X'), has_axis(l, 'Y'), has_axis(l, 'Z'))
+            })
+            .collect();
+        let axes: Vec<_> = written.iter().map(|w| (w.1, w.2, w.3)).collect();
+        assert_eq!(axes.len(), 5, "{}: {written:?}", t.name());
+        // Z alone, then X and Y without Z, then Z.
+        assert_eq!(
+            axes[..3],
+            [
+                (false, false, true),
+                (true, true, false),
+                (false, false, true)
+            ],
+            "{}: {written:?}",
+            t.name()
+        );
+        // After the machine-coordinate block Z is unknown: `G0 X5` names X
+        // (Y, still known, may be stated again), never Z.
+        assert!(axes[3].0 && !axes[3].2, "{}: {written:?}", t.name());
+        assert!(axes[4].1 && axes[4].2, "{}: {written:?}", t.name());
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Words dropped or changed.
+
+/// Issue 16: "`G05.1 Q1` and `G05.1 Q0` (AI contour control on/off) both
+/// become `G5.1`." moriseiki…ptp:12 `G05.1 Q1`, :292 `G05.1 Q0`: into Fanuc
+/// every one keeps its Q word, as many of each as the source has.
+#[test]
+fn ai_contour_control_keeps_its_q_word() {
+    let Some(src) = sample(MORI) else { return };
+    let p = read(&src, common::options_for(MORI), MORI);
+    let text = written(&p, Target::Fanuc, MORI);
+    for (q, spelled) in [("Q1", "G5.1 Q1"), ("Q0", "G5.1 Q0")] {
+        let want = src
+            .lines()
+            .filter(|l| l.trim() == format!("G05.1 {q}"))
+            .count();
+        assert!(want > 0, "{MORI}: no `G05.1 {q}`");
+        let got = text.lines().filter(|l| l.trim() == spelled).count();
+        assert_eq!(got, want, "`{spelled}` blocks in the Fanuc output");
+    }
+    assert!(
+        !text.lines().any(|l| l.trim() == "G5.1"),
+        "a G5.1 without its Q"
+    );
+}
+
+/// Issue 16: "G-code → APT drops the rotary axes of five-axis moves (a
+/// PPRINT instead; 177 five-axis moves become 0 on re-read)." APT has no
+/// machine angles: a rotary program refuses at the line of its first move
+/// with angles; `lossy` writes each as a comment with a warning at its line.
+#[test]
+fn gcode_rotary_moves_into_apt_refuse_at_their_line() {
+    let src = "%\nO0003\nG21 G90 G17 G94\nT1 M6\nG43 H1 S2000 M3\nG0 X0. Y0. Z50.\n\
+               G1 Z5. F500.\nX10. B-30. C45.\nX20. B-35.\nG0 Z50.\nM30\n%\n";
+    let p = parse(src, "rotary");
+    let angled: Vec<u32> = moves(&p)
+        .iter()
+        .filter(|(op, m)| op.orient(m).is_some_and(Orient::has_angles))
+        .map(|(_, m)| m.line)
+        .collect();
+    assert_eq!(angled.first(), Some(&8), "the first move with B and C");
+    match write(&p, Target::Apt, false) {
+        Out::Refused(e) => {
+            assert_eq!(e.line, 8, "{e}");
+            assert!(e.message.contains("rotary"), "{e}");
+        }
+        Out::Text(t, _) => panic!("written:\n{t}"),
+    }
+    let Out::Text(text, warnings) = write(&p, Target::Apt, true) else {
+        panic!("lossy refused")
+    };
+    for l in &angled {
+        assert!(
+            warnings
+                .iter()
+                .any(|w| w.starts_with(&format!("{l}:1:")) && w.contains("rotary")),
+            "no warning at line {l}: {warnings:?}"
+        );
+    }
+    assert!(text.contains("PPRINT"), "{text}");
+    // The Mori Seiki sample: its first problem for APT is the reference
+    // return at :5; with lossy every move with angles is a warning at its line.
+    if let Some(src) = sample(MORI) {
+        let p = read(&src, common::options_for(MORI), MORI);
+        let Out::Refused(e) = write(&p, Target::Apt, false) else {
+            panic!("{MORI} written into APT without lossy")
+        };
+        assert!(e.line > 0, "{e}");
+        let Out::Text(_, warnings) = write(&p, Target::Apt, true) else {
+            panic!("{MORI}: lossy refused")
+        };
+        let angled: std::collections::BTreeSet<u32> = moves(&p)
+            .iter()
+            .filter(|(op, m)| op.orient(m).is_some_and(Orient::has_angles))
+            .map(|(_, m)| m.line)
+            .collect();
+        assert!(angled.len() > 100, "{}", angled.len());
+        for l in angled {
+            assert!(
+                warnings.iter().any(|w| w.starts_with(&format!("{l}:1:"))),
+                "{MORI}:{l}: a move with angles went into APT without a warning"
+            );
+        }
+    }
+}
+
+/// Issue 16: "the Heidenhain writer drops the tool axis of 455 tilted arcs."
+/// boss.apt (3+2, tool axis 1,0,0; its first such arc at :5614): into
+/// Heidenhain every arc reads back with the tool axis it had. dmc100…ptp
+/// (M128, B/C): every arc keeps its angles.
+#[test]
+fn heidenhain_keeps_the_tool_axis_of_tilted_arcs() {
+    for rel in [BOSS, DMC100] {
+        let Some(p) = read_sample(rel) else { continue };
+        let (_, q) = through(&p, Target::Heidenhain, false, rel);
+        let arcs = |p: &Program| -> Vec<(u32, Option<Orient>)> {
+            moves(p)
+                .iter()
+                .filter(|(_, m)| m.arc().is_some())
+                .map(|(op, m)| (m.line, op.orient(m).copied()))
+                .collect()
+        };
+        let (a, b) = (arcs(&p), arcs(&q));
+        assert_eq!(a.len(), b.len(), "{rel}: arcs");
+        let tilted = a
+            .iter()
+            .filter(|(_, o)| o.is_some_and(|o| o.is_tilted()))
+            .count();
+        assert!(tilted > 100, "{rel}: {tilted} tilted arcs");
+        for ((line, o), (_, r)) in a.iter().zip(&b) {
+            let (o, r) = match (o, r) {
+                (Some(o), Some(r)) => (o, r),
+                (None, r) => {
+                    assert!(!r.is_some_and(|r| r.is_tilted()), "{rel}:{line}: {r:?}");
+                    continue;
+                }
+                (Some(o), None) => panic!("{rel}:{line}: {o:?} read back without"),
+            };
+            match (o.axis, r.axis) {
+                (Some(u), Some(v)) => assert!((u - v).length() < 1e-6, "{rel}:{line}"),
+                _ => {
+                    for k in 0..3 {
+                        let d = match (o.angles[k], r.angles[k]) {
+                            (Some(x), Some(y)) => (x - y).abs(),
+                            (None, None) => 0.0,
+                            _ => f64::INFINITY,
+                        };
+                        assert!(d < 1e-6, "{rel}:{line}: {o:?} read back as {r:?}");
+                    }
+                }
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Feed modes.
+
+/// Issue 15/16: "`G93 … F50` is written under G94 as 50 mm/min; `G95 F0.1`
+/// becomes 0.1 mm/min." Blocks in inverse time and per revolution, from a
+/// G-code and from an APT source, keep their mode and value in every target
+/// (G93/G95 in Fanuc, Sinumerik and LinuxCNC; FT/FU in Heidenhain;
+/// FEDRAT/…,INVERS and MMPR in APT), read back move by move.
+#[test]
+fn inverse_time_and_per_revolution_feeds_survive_every_target() {
+    let gcode = "%\nO0010\nG21 G17 G90 G94\nT1 M6\nG43 H1\nS2000 M3\nG0 X0. Y0. Z5.\nG1 Z0. F300.\n\
+                 G93 G1 X10. Y5. F50.\nX20. F25.\nG95 G1 X30. F0.1\nY10. F0.25\nG94 G1 X40. F400.\nM30\n%\n";
+    let apt = "PARTNO FEEDS\nUNITS/MM\nLOADTL/1\nSPINDL/2000,RPM,CLW\nRAPID\nGOTO/0,0,5\n\
+               FEDRAT/300,MMPM\nGOTO/0,0,0\nFEDRAT/50,INVERS\nGOTO/10,5,0\nFEDRAT/25,INVERS\n\
+               GOTO/20,5,0\nFEDRAT/0.1,MMPR\nGOTO/30,5,0\nFEDRAT/0.25,MMPR\nGOTO/30,10,0\n\
+               FEDRAT/400,MMPM\nGOTO/40,10,0\nFINI\n";
+    for (what, src) in [("G-code", gcode), ("APT", apt)] {
+        let p = parse(src, what);
+        let feeds = |p: &Program| -> Vec<(FeedMode, f64)> {
+            moves(p)
+                .iter()
+                .filter(|(_, m)| m.is_cutting())
+                .map(|(_, m)| (m.feed_mode, m.feed))
+                .collect()
+        };
+        let want = feeds(&p);
+        assert!(
+            want.contains(&(FeedMode::InverseTime, 50.0)),
+            "{what}: {want:?}"
+        );
+        assert!(want.contains(&(FeedMode::PerRev, 0.1)), "{what}: {want:?}");
+        for t in Target::ALL {
+            let (text, q) = through(&p, t, false, what);
+            let got = feeds(&q);
+            assert_eq!(got.len(), want.len(), "{what} -> {}", t.name());
+            for ((wm, wf), (gm, gf)) in want.iter().zip(&got) {
+                assert_eq!(wm, gm, "{what} -> {}:\n{text}", t.name());
+                assert!(
+                    (wf - gf).abs() <= 1e-9 * wf.abs().max(1.0),
+                    "{what} -> {}: F{wf} read back as F{gf}",
+                    t.name()
+                );
+            }
+            let words: &[&str] = match t {
+                Target::Heidenhain => &[" FT", " FU"],
+                Target::Apt => &[",INVERS", ",MMPR"],
+                _ => &["G93", "G95"],
+            };
+            for w in words {
+                assert!(text.contains(w), "{what} -> {}: no {w}\n{text}", t.name());
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Bounded cycles.
+
+// ---------------------------------------------------------------------------
+// Spindle words.
+
+/// Issue 16: "Fanuc output carries decimal S words (`S4200.6`) that most
+/// Fanuc controls reject." Every S word of every Fanuc output of the real
+/// samples and of a program with fractional speeds is a whole number, within
+/// half a revolution per minute of the source.
+#[test]
+fn fanuc_spindle_speeds_are_whole_numbers() {
+    let src =
+        "%\nO0040\nG20 G17 G90 G94\nT3 M6\nG43 H3 S4200.6 M3\nG0 X0. Y0. Z1.\nG1 Z-.05 F20.\n\
+               G1 X1. S5100.4\nY.5 S5099.5\nM30\n%\n";
+    let mut programs = vec![("fractional speeds".to_string(), parse(src, "speeds"))];
+    if let Some(root) = common::data() {
+        for f in common::programs(&root) {
+            let name = f
+                .file_name()
+                .and_then(|n| n.to_str())
+                .unwrap_or("?")
+                .to_string();
+            let text = std::fs::read_to_string(&f).expect("sample");
+            programs.push((name.clone(), read(&text, common::options_for(&name), &name)));
+        }
+    } else {
+        eprintln!("SKIPPED: ../shared/data is not here; real samples not checked for S words");
+    }
+    let mut s_words = 0;
+    for (name, p) in &programs {
+        let Out::Text(text, _) = write(p, Target::Fanuc, true) else {
+            continue;
+        };
+        for l in text.lines() {
+            for w in words(l) {
+                if let Some(v) = w.strip_prefix('S') {
+                    if v.parse::<f64>().is_ok() {
+                        assert!(
+                            v.bytes().all(|c| c.is_ascii_digit()),
+                            "{name}: `{w}` in `{l}`"
+                        );
+                        s_words += 1;
+                    }
+                }
+            }
+        }
+        let q = parse(&text, name);
+        let speeds = |p: &Program| -> Vec<f64> { p.moves().map(|m| m.spindle).collect() };
+        if p.move_count() == q.move_count() {
+            for (a, b) in speeds(p).iter().zip(speeds(&q)) {
+                assert!((a - b).abs() <= 0.5, "{name}: S{a} written as S{b}");
+            }
+        }
+    }
+    assert!(s_words >= 4, "{s_words} S words");
+}
+
+// ---------------------------------------------------------------------------
+// Detection.
+
+/// Issue 16: "dialect detection looks inside comments." Words of other
+/// dialects in comments do not change what a program is read as.
+#[test]
+fn detection_ignores_words_in_comments() {
+    let fanuc = "%\nO0001 (TRAORI CYCLE800 G710 SUPA DEF REAL MSG( T=\"X\")\n\
+                 (SETUP: G70 G71 COMPCAD SOFT FNORM #<_X> O100 SUB ENDSUB G64 P0.01)\n\
+                 G21 G17 G90\nT1 M6 (CYCLE832 TRAFOOF)\nG0 X0. Y0. Z5. (G642 G61.1)\nG1 Z-1. F100.\nM30\n%\n";
+    assert_eq!(detect(fanuc), Dialect::Fanuc);
+    let sinumerik = "; program: #<depth> ENDSUB O100 SUB G64 P0.01 G61.1\n\
+                     N10 G17 G710 G90\nN20 T=\"MILL\"\nN30 M6\nN40 D1\n\
+                     N50 G0 X0 Y0 Z5 ; (MSG, not a LinuxCNC message) G61.1\nN60 G1 Z-1 F100\nN70 M30\n";
+    assert_eq!(detect(sinumerik), Dialect::Sinumerik);
+    let linuxcnc = "G21 G17 G90 G64 P0.01\n(TRAORI G710 SUPA CYCLE800 T=\"X\" DEF REAL)\n\
+                    ; TRAORI G710 SUPA CYCLE832 COMPCAD\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\nM2\n";
+    assert_eq!(detect(linuxcnc), Dialect::LinuxCnc);
+    // And the real samples read as what they are, whatever their comments say.
+    for (rel, d) in [
+        (MORI, Dialect::Fanuc),
+        (DMU, Dialect::Sinumerik),
+        (ACHSKREUZ, Dialect::Sinumerik),
+        (BEAR, Dialect::Fanuc),
+        (DMC100, Dialect::Heidenhain),
+    ] {
+        if let Some(src) = sample(rel) {
+            assert_eq!(detect(&src), d, "{rel}");
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Bounds and lengths.
+
+/// A small interpreter of plain absolute G0/G1 programs (bear.nc is one):
+/// the box of every known coordinate, and rapid and feed lengths of the
+/// moves whose start and end are both fully known.
+fn plain_gcode_figures(src: &str) -> ([f64; 3], [f64; 3], f64, f64, usize) {
+    let mut pos = [f64::NAN; 3];
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    let (mut rapid, mut feed, mut unknown) = (0.0, 0.0, 0);
+    let mut motion = 0;
+    for l in src.lines() {
+        let code = l
+            .split(['(', ';'])
+            .next()
+            .unwrap_or("")
+            .to_ascii_uppercase();
+        let mut toks = Vec::new();
+        let b = code.as_bytes();
+        let mut i = 0;
+        while i < b.len() {
+            if b[i].is_ascii_alphabetic() {
+                let s = i + 1;
+                let mut e = s;
+                while e < b.len() && (b[e].is_ascii_digit() || matches!(b[e], b'.' | b'-' | b'+')) {
+                    e += 1;
+                }
+                toks.push((b[i] as char, code[s..e].parse::<f64>().unwrap_or(f64::NAN)));
+                i = e;
+            } else {
+                i += 1;
+            }
+        }
+        let mut end = pos;
+        let mut moved = false;
+        for &(c, v) in &toks {
+            match c {
+                'G' if v == 0.0 => motion = 0,
+                'G' if v == 1.0 => motion = 1,
+                'G' => assert!(!matches!(v as i64, 2 | 3 | 91), "not a plain program: G{v}"),
+                'X' | 'Y' | 'Z' => {
+                    end[(c as u8 - b'X') as usize] = v;
+                    moved = true;
+                }
+                _ => {}
+            }
+        }
+        if !moved {
+            continue;
+        }
+        for k in 0..3 {
+            if !end[k].is_nan() {
+                lo[k] = lo[k].min(end[k]);
+                hi[k] = hi[k].max(end[k]);
+            }
+        }
+        if pos.iter().chain(&end).any(|v| v.is_nan()) {
+            unknown += 1;
+        } else {
+            let d = (0..3)
+                .map(|k| (end[k] - pos[k]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            if motion == 0 {
+                rapid += d;
+            } else {
+                feed += d;
+            }
+        }
+        pos = end;
+    }
+    (lo, hi, rapid, feed, unknown)
+}
+
+/// Issue 16: "Bounds and lengths count a phantom first move from 0,0,0 and
+/// leave out canned-cycle depths." bear.nc:4 `G0Z20.000` starts from an
+/// unknown position: `summarize` agrees with a separate interpreter of the
+/// text on the box and the lengths, and counts the moves from the unknown.
+#[test]
+fn bounds_and_lengths_have_no_phantom_start() {
+    let src = "G21 G17 G90 G94\nT1 M6\nG0 Z20\nG0 X5 Y5\nG1 Z0 F100\nG1 X15\nM30\n";
+    let p = parse(src, "phantom");
+    let s = summarize(&p, 10_000.0);
+    let (lo, hi, rapid, feed, unknown) = plain_gcode_figures(src);
+    assert_eq!(s.unknown_moves, unknown);
+    assert_eq!(
+        unknown, 2,
+        "the first two moves start where X, Y or Z is unknown"
+    );
+    assert!(
+        (s.rapid_mm - rapid).abs() < 1e-9 && (s.cutting_mm - feed).abs() < 1e-9,
+        "{s:?}"
+    );
+    assert_eq!((s.bounds.min.to_array(), s.bounds.max.to_array()), (lo, hi));
+    let Some(src) = sample(BEAR) else { return };
+    let p = read(&src, ReadOptions::default(), BEAR);
+    let s = summarize(&p, 10_000.0);
+    let (lo, hi, rapid, feed, unknown) = plain_gcode_figures(&src);
+    assert_eq!(s.unknown_moves, unknown, "{BEAR}");
+    assert!(unknown >= 1);
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * b.abs().max(1.0);
+    assert!(
+        close(s.rapid_mm, rapid) && close(s.cutting_mm, feed),
+        "{s:?} against {rapid} {feed}"
+    );
+    for k in 0..3 {
+        assert!(
+            close(s.bounds.min[k], lo[k]) && close(s.bounds.max[k], hi[k]),
+            "{:?} against {lo:?} {hi:?}",
+            s.bounds
+        );
+    }
+}
+
+/// Canned-cycle depths are in the bounds and the feed length: two G81
+/// holes from R to Z feed `2 (R - Z)` and the box reaches Z.
+#[test]
+fn bounds_and_lengths_include_canned_cycle_depths() {
+    let (r, z, clear) = (2.0, -15.5, 25.0);
+    let src = format!(
+        "%\nO0001\nG21 G17 G90 G94\nT1 M6\nG43 H1 S1000 M3\nG0 X0. Y0. Z{clear}\n\
+         G98 G81 X10. Y10. Z{z} R{r} F100.\nX20.\nG80\nM30\n%\n"
+    );
+    let p = parse(&src, "G81");
+    assert!(p.moves().any(|m| matches!(m.kind, MoveKind::Cycle(_))));
+    let s = summarize(&p, 10_000.0);
+    assert_eq!(s.bounds.min.z, z);
+    assert_eq!(s.bounds.max.z, clear);
+    assert!((s.cutting_mm - 2.0 * (r - z)).abs() < 1e-9, "{s:?}");
+    assert_eq!(
+        s.unknown_moves, 1,
+        "the first rapid, from an unknown position"
+    );
+}
+
+// ---------------------------------------------------------------------------
+// Found with the writer snapshots.
+
+/// Issue 15: "a 7-line `G83 … Q0.00001` became 3.6 M lines, 89 MB." Every
+/// target refuses it with an error at the cycle's line (7), `lossy` or not:
+/// spelled out it is millions of pecks, and in the control's own cycle the
+/// peck is below what the target's decimals can say (it was written `Q0.`).
+#[test]
+fn absurd_peck_is_a_located_error_in_every_target() {
+    let src = "%\nO0020\nG21 G17 G90 G94\nT2 M6\nG43 H2 S1500 M3\nG0 X10. Y10. Z5.\n\
+               G98 G83 X10. Y10. Z-20. R2. Q0.00001 F100.\nX30.\nG80\nM30\n%\n";
+    let p = parse(src, "G83");
+    let c = &p.operations[0].cycles[0];
+    assert_eq!(c.line, 7);
+    assert!(c.pecks() > millplan_nc::MAX_PECKS);
+    for t in Target::ALL {
+        for lossy in [false, true] {
+            match write(&p, t, lossy) {
+                Out::Refused(e) => {
+                    assert_eq!(e.line, 7, "{}: {e}", t.name());
+                    assert!(e.message.contains("peck"), "{}: {e}", t.name());
+                }
+                Out::Text(text, _) => panic!("{} (lossy {lossy}) wrote:\n{text}", t.name()),
+            }
+        }
+    }
+    // A sane peck is written and reads back with its value.
+    let ok = src.replace("Q0.00001", "Q2.5");
+    let p = parse(&ok, "G83 Q2.5");
+    for t in Target::ALL {
+        let (text, q) = through(&p, t, false, "G83 Q2.5");
+        compare(&p, &q, &Tolerance::default())
+            .unwrap_or_else(|e| panic!("{}: {e}\n{text}", t.name()));
+    }
+}
+
+/// Found with the writer snapshots: Fanuc's G82 dwell `P` is milliseconds
+/// and takes no decimal point; `G82 … P500` was written `P500.`.
+#[test]
+fn fanuc_cycle_dwell_is_whole_milliseconds() {
+    let src = "%\nO0021\nG21 G90 G17\nT2 M6\nG43 H2 S1500 M3\nG0 X0. Y0. Z10.\n\
+               G99 G82 X30. Y10. Z-4. R2. P500 F120.\nG80\nM30\n%\n";
+    let p = parse(src, "G82");
+    let text = written(&p, Target::Fanuc, "G82");
+    let line = text
+        .lines()
+        .find(|l| l.contains("G82"))
+        .expect("a G82 block");
+    let p_word = words(line)
+        .into_iter()
+        .find(|w| w.starts_with('P'))
+        .expect("a P word");
+    assert_eq!(p_word, "P500", "`{line}`");
+    let q = parse(&text, "G82 re-read");
+    assert_eq!(q.operations[0].cycles[0].dwell, Some(0.5));
+}
+
+/// Found with the Mori Seiki test: moriseiki…ptp:347 `G00 B-37.576 C45. S0
+/// M03` in G91 (from :341) is kept verbatim and was written `G91 G0
+/// B-37.576 C45`; on a Fanuc without decimal-point input `C45` is 0.045°.
+/// Every axis word the Fanuc writer copies keeps its decimal point.
+#[test]
+fn verbatim_axis_words_keep_their_decimal_point_in_fanuc() {
+    let src = "%\nO0001\nG21 G90 G17\nT1 M6\nG91 G28 Z0.0 M05\nG00 B-90. C270. S0 M03\n\
+               G90 G53 G0 Z-10.\nG28 G91 X0.0 Y0.0\nG90 G0 X10. Y10. Z50.\nM30\n%\n";
+    let p = parse(src, "verbatim words");
+    let text = written(&p, Target::Fanuc, "verbatim words");
+    let mut copied = 0;
+    for l in text
+        .lines()
+        .filter(|l| l.contains("G91") || l.contains("G53"))
+    {
+        for w in words(l) {
+            let (letter, num) = w.split_at(1);
+            if matches!(letter, "X" | "Y" | "Z" | "A" | "B" | "C") {
+                assert!(num.contains('.'), "`{w}` in `{l}` has no decimal point");
+                copied += 1;
+            }
+        }
+    }
+    assert!(copied >= 5, "{text}");
+    if let Some(src) = sample(MORI) {
+        let p = read(&src, common::options_for(MORI), MORI);
+        let text = written(&p, Target::Fanuc, MORI);
+        for l in text.lines() {
+            for w in words(l) {
+                let (letter, num) = w.split_at(1);
+                let axis = matches!(letter, "X" | "Y" | "Z" | "A" | "B" | "C");
+                let number = num.parse::<f64>().is_ok();
+                assert!(
+                    !(axis && number) || num.contains('.'),
+                    "`{w}` in `{l}` has no decimal point"
+                );
+            }
+        }
+    }
+}
+
+/// Found with the Mori Seiki test: moriseiki…ptp:370 `G49` after
+/// `G43.4 … H09` (:350) was written `G49 G43 H9 G49`: TCP off (`G49 G43
+/// H9`) and length compensation off in one block. It is one `G49`.
+#[test]
+fn g49_under_tcp_is_one_g49() {
+    let src =
+        "%\nO0002\nG21 G90 G17\nT9 M6\nG43.4 X10. Y10. Z50. B0. C0. H09\nG1 X20. B-30. F500.\n\
+               G49\nG0 Z100.\nG43.4 X10. Y10. Z50. H09\nG1 X20. B-20.\nG49\nM30\n%\n";
+    let p = parse(src, "G49 under TCP");
+    let text = written(&p, Target::Fanuc, "G49 under TCP");
+    let g49: Vec<&str> = text.lines().filter(|l| l.contains("G49")).collect();
+    // The header's own G49 and one for each source G49.
+    assert_eq!(g49.len(), 3, "{text}");
+    for l in &g49[1..] {
+        assert_eq!(l.trim(), "G49", "{text}");
+    }
+    if let Some(src) = sample(MORI) {
+        let p = read(&src, common::options_for(MORI), MORI);
+        let text = written(&p, Target::Fanuc, MORI);
+        for l in text.lines().filter(|l| l.contains("G49")) {
+            let groups = words(l)
+                .iter()
+                .filter(|w| w.starts_with("G43") || **w == "G49")
+                .count();
+            assert_eq!(groups, 1, "`{l}`: two tool-length words in one block");
+        }
+    }
+}
+
+/// LinuxCNC has no tool-centre-point control: with `lossy`, a `G43.4`
+/// source said so in a comment and then wrote `G43.4 H9` anyway, a block
+/// LinuxCNC rejects. It writes plain `G43 H9`.
+#[test]
+fn linuxcnc_never_writes_tcp_words() {
+    let src =
+        "%\nO0030\nG21 G17 G90 G94\nT9 M6\nG43.4 G90 G0 X10. Y10. Z50. B0. C0. H09 S3000 M3\n\
+               G1 Z5. F500.\nX20. B-30. C45.\nG49\nM30\n%\n";
+    let p = parse(src, "TCP");
+    let Out::Text(text, warnings) = write(&p, Target::LinuxCnc, true) else {
+        panic!("lossy refused")
+    };
+    assert!(
+        warnings.iter().any(|w| w.contains("tool-centre-point")),
+        "{warnings:?}"
+    );
+    for l in text.lines().filter(|l| !l.starts_with('(')) {
+        assert!(
+            !l.contains("G43.4") && !l.contains("G43.5"),
+            "`{l}`\n{text}"
+        );
+    }
+    assert!(text.lines().any(|l| words(l).contains(&"G43")), "{text}");
+}
+
+/// Issue 16: "A rotary-only `G00 B0.0 C0.0` becomes `G0 X0. Y0. Z0. B0. C0.`
+/// in every G-code output of the Sinumerik, Mori Seiki and DMU samples."
+/// Achskreuz.mpf:29 `N280 G0 B0.0 C0.0` (and 19 more), Bottle_opener.mpf,
+/// dmu70evo…ptp:15-16 `N15 G00 B0.0` / `N16 G00 C0.0`: each such block is
+/// written as a block with rotary words and no X, Y or Z word, in every
+/// G-code target (words a target refuses are written as comments).
+#[test]
+fn rotary_only_rapids_stay_rotary_only_in_every_gcode_target() {
+    // A rotary block to where the axes already stand (Achskreuz.mpf:933
+    // `N9320 G0 B0.0 C0.0`) is left out, or written as it is: Heidenhain
+    // wrote it `L X-59 Y+3.92 Z+8.2 FMAX`, naming the axes its source did not.
+    let src = "%\nO0001\nG21 G90 G17\nT1 M6\nG43 H1\nG0 X1. Y2. Z3. B0. C0.\nG0 B0. C0.\n\
+               G0 B10.\nM30\n%\n";
+    let p = parse(src, "idle rotary");
+    for t in GCODE {
+        let (text, _) = through(&p, t, false, "idle rotary");
+        let xyz = text.lines().filter(|l| has_xyz(l)).count();
+        assert_eq!(
+            xyz,
+            1,
+            "{}: only the first move names X, Y, Z\n{text}",
+            t.name()
+        );
+    }
+    let mut checked = 0;
+    for rel in [ACHSKREUZ, BOTTLE, DMU] {
+        let Some(src) = sample(rel) else { continue };
+        let lines = rotary_only_lines(&src);
+        assert!(!lines.is_empty(), "{rel}: no rotary-only block found");
+        let p = read(&src, common::options_for(rel), rel);
+        for t in GCODE {
+            let (text, q) = through(&p, t, true, rel);
+            let (a, b) = (moves(&p), moves(&q));
+            for (i, ((_, m), k)) in a.iter().zip(align(&p, &q)).enumerate() {
+                if !lines.contains(&m.line) {
+                    continue;
+                }
+                let Some(k) = k else {
+                    // Only a block to where the axes already stand may be left out.
+                    assert!(
+                        idle(&a, i),
+                        "{rel}:{} -> {}: not in the output",
+                        m.line,
+                        t.name()
+                    );
+                    continue;
+                };
+                let n = b[k].1;
+                let out = line_of(&text, n.line);
+                assert!(
+                    has_rotary(out) && !has_xyz(out),
+                    "{rel}:{} `{}` -> {} line {}: `{out}`",
+                    m.line,
+                    line_of(&src, m.line).trim(),
+                    t.name(),
+                    n.line
+                );
+                checked += 1;
+            }
+        }
+    }
+    if checked > 0 {
+        eprintln!("{checked} rotary-only blocks checked");
+    }
+}
+
+/// Issue 16: "a Heidenhain program written by `speed` re-reads as 6,310
+/// operations because each `TOOL CALL S…` reads as a tool change." A
+/// `TOOL CALL S…` (or `TOOL CALL Z S…`) without a tool number changes the
+/// speed of the same operation.
+#[test]
+fn heidenhain_tool_call_without_a_number_changes_the_speed() {
+    let src = "0 BEGIN PGM SPIN MM\n1 TOOL CALL 3 Z S4200.6\n2 L X+0 Y+0 Z+5 R0 FMAX M3\n\
+               3 L Z-1 F200\n4 TOOL CALL S5100\n5 L X+10 F200\n6 TOOL CALL Z S6100.4\n7 L X+20\n\
+               8 L Z+5 FMAX M5\n9 END PGM SPIN MM\n";
+    let p = parse(src, "TOOL CALL S");
+    assert_eq!(p.operations.len(), 1);
+    let speeds: Vec<f64> = p.moves().map(|m| m.spindle).collect();
+    assert_eq!(speeds, [4200.6, 4200.6, 5100.0, 6100.4, 0.0]);
+    // A real program whose speed changes at every cutting move (as `speed`
+    // writes them), into Heidenhain and back: as many operations as before.
+    let Some(mut p) = read_sample("swcam-apt-stl-pairs/Interface-glue.apt") else {
+        return;
+    };
+    let mut k = 0.0;
+    for op in &mut p.operations {
+        for m in &mut op.moves {
+            if m.is_cutting() && m.spindle > 0.0 {
+                k += 1.0;
+                m.spindle = 5000.0 + (k % 97.0) * 10.0;
+            }
+        }
+    }
+    let (text, q) = through(&p, Target::Heidenhain, false, "Interface-glue");
+    let calls = text.lines().filter(|l| l.contains("TOOL CALL S")).count();
+    assert!(calls > 1000, "{calls} speed changes");
+    assert_eq!(q.operations.len(), p.operations.len());
+    compare(&p, &q, &Tolerance::default()).unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// Found when Heidenhain stopped writing moves to where the tool stands:
+/// after a `CYCL CALL` the writer took the tool to be where it was before
+/// the cycle, and left out the retract after the last hole (dmc100…ptp:4094
+/// `L Z+1.9685 FMAX` after cycle 240 with Q204=+.1181). The cycle leaves
+/// the tool at its own clearance; the next block states Z.
+#[test]
+fn heidenhain_states_z_after_a_cycle_call() {
+    let src = "0 BEGIN PGM HOLES MM\n1 TOOL CALL 5 Z S4000\n2 L Z+50 R0 FMAX M3\n\
+               3 CYCL DEF 200 DRILLING ~\n  Q200=2 ;SET-UP CLEARANCE ~\n  Q201=-10 ;DEPTH ~\n\
+               \x20 Q206=150 ;FEED RATE ~\n  Q203=+0 ;SURFACE COORDINATE ~\n  Q204=5 ;2ND SET-UP CLEARANCE\n\
+               4 L X+10 Y+0 FMAX M99\n5 L X+20 Y+0 FMAX M99\n6 L Z+50 FMAX\n7 END PGM HOLES MM\n";
+    let p = parse(src, "holes");
+    let (text, q) = through(&p, Target::Heidenhain, false, "holes");
+    compare(&p, &q, &Tolerance::default()).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    let last = q.moves().last().expect("moves");
+    assert_eq!((last.end.x, last.end.z), (20.0, 50.0), "{text}");
+    assert!(last.is_rapid(), "{text}");
+}
+
+/// Found with the tilted-arc test: an arc whose own tool orientation
+/// differs from the move before it (`CIRCLE/` then a six-value `GOTO` with a
+/// new axis; `G2 … B-30.`) lost it in every G-code target: the arc read back
+/// with the old one. Targets that can state it in the arc block do
+/// (Sinumerik vectors and angles, Fanuc and LinuxCNC angles); the others
+/// refuse at the arc's line (with `lossy`: a warning there).
+#[test]
+fn an_arc_that_turns_the_tool_keeps_its_orientation_or_refuses() {
+    let vectors =
+        "PARTNO ARCAXIS\nUNITS/MM\nCUTTER/10,0,5,0,0,0,50\nLOADTL/1\nSPINDL/3000,RPM,CLW\n\
+                   FEDRAT/200,MMPM\nGOTO/0,0,10,0,0,1\nGOTO/0,0,0,0,0,1\nCIRCLE/0,10,0,1,0,0,10\n\
+                   GOTO/0,10,10,1,0,0\nGOTO/0,20,10,1,0,0\nFINI\n";
+    let angles = "%\nO0005\nG21 G90 G17 G94\nT1 M6\nG43 H1 S3000 M3\nG0 X0. Y0. Z10. B0. C0.\n\
+                  G1 Z0. F200.\nG2 X10. Y0. I5. J0. B-30.\nG1 X20.\nG0 Z50.\nG49\nM30\n%\n";
+    // (source, the arc's line, targets that must write it, the line where
+    // a target that cannot take the program's orientations at all refuses)
+    let cases = [
+        (
+            vectors,
+            10,
+            vec![Target::Sinumerik, Target::Apt],
+            Some((Target::LinuxCnc, 7)),
+        ),
+        (
+            angles,
+            8,
+            vec![Target::Sinumerik, Target::Fanuc, Target::LinuxCnc],
+            Some((Target::Apt, 6)),
+        ),
+    ];
+    for (src, arc_line, writes, other) in cases {
+        let p = parse(src, "arc");
+        let arc = moves(&p)
+            .into_iter()
+            .find(|(_, m)| m.arc().is_some())
+            .expect("arc");
+        assert_eq!(arc.1.line, arc_line);
+        let want = *arc.0.orient(arc.1).expect("orientation");
+        for t in Target::ALL {
+            match write(&p, t, false) {
+                Out::Refused(e) => {
+                    assert!(!writes.contains(&t), "{}: {e}", t.name());
+                    let line = match other {
+                        Some((o, l)) if o == t => l,
+                        _ => arc_line,
+                    };
+                    assert_eq!(e.line, line, "{}: {e}", t.name());
+                    if line == arc_line {
+                        let Out::Text(_, w) = write(&p, t, true) else {
+                            panic!("{}: lossy refused", t.name())
+                        };
+                        assert!(
+                            w.iter().any(|w| w.starts_with(&format!("{arc_line}:1:"))),
+                            "{}: {w:?}",
+                            t.name()
+                        );
+                    }
+                }
+                Out::Text(text, _) => {
+                    assert!(writes.contains(&t), "{} wrote it:\n{text}", t.name());
+                    let q = parse(&text, t.name());
+                    compare(&p, &q, &Tolerance::default())
+                        .unwrap_or_else(|e| panic!("{}: {e}\n{text}", t.name()));
+                    let (op, m) = moves(&q)
+                        .into_iter()
+                        .find(|(_, m)| m.arc().is_some())
+                        .expect("the arc");
+                    let got = *op.orient(m).expect("an orientation");
+                    match (want.axis, got.axis) {
+                        (Some(u), Some(v)) => {
+                            assert!((u - v).length() < 1e-9, "{}: {v}\n{text}", t.name())
+                        }
+                        _ => {
+                            for k in 0..3 {
+                                let close = match (want.angles[k], got.angles[k]) {
+                                    (Some(a), Some(b)) => (a - b).abs() < 1e-6,
+                                    (a, b) => a.is_none() && b.is_none(),
+                                };
+                                assert!(close, "{}: {got:?} for {want:?}\n{text}", t.name());
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Found with the writer snapshots: Sinumerik `G4 F1.5` is a dwell of 1.5 s
+/// for that block only; it was read as no dwell and a feed of 1.5 for the
+/// moves after it. LinuxCNC's `G4 P` is in seconds, Fanuc's in milliseconds.
+#[test]
+fn dwell_words_are_read_in_each_dialects_unit() {
+    let cases = [
+        (
+            "; dwell\nG17 G710 G90 G94\nT1\nM6\nD1\nG0 X0 Y0 Z5 S1000 M3\nG1 Z0 F300\nG4 F1.5\nG1 X10\nM30\n",
+            Dialect::Sinumerik,
+        ),
+        (
+            "G21 G17 G90 G94 G64 P0.01\nT1 M6\nG0 X0 Y0 Z5 S1000 M3\nG1 Z0 F300\nG4 P1.5\nG1 X10\nM30\n",
+            Dialect::LinuxCnc,
+        ),
+        (
+            "%\nO0001\nG21 G17 G90 G94\nT1 M6\nG0 X0 Y0 Z5 S1000 M3\nG1 Z0 F300.\nG4 P1500\nG1 X10.\nM30\n%\n",
+            Dialect::Fanuc,
+        ),
+    ];
+    for (src, dialect) in cases {
+        assert_eq!(detect(src), dialect);
+        let p = parse(src, dialect.name());
+        let dwells: Vec<f64> = p.operations[0]
+            .events
+            .iter()
+            .filter_map(|e| match e.kind {
+                EventKind::Dwell(t) => Some(t),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(dwells, [1.5], "{}", dialect.name());
+        let last = p.operations[0].moves.last().expect("moves");
+        assert_eq!(
+            last.feed,
+            300.0,
+            "{}: the feed after the dwell",
+            dialect.name()
+        );
+    }
+}
+
+/// Found with the feed-mode tests: the F of a block was read before the
+/// block's G93/G95, so an inch `G93 G1 X1. F50.` read as 50 × 25.4 = 1270
+/// moves a minute, and `G95 G1 … F.004` as 0.004 in/rev taken for a
+/// per-minute feed first. F is read after the block's feed mode.
+#[test]
+fn feed_mode_and_f_in_one_block() {
+    let src = "%\nO0001\nG20 G17 G90 G94\nT1 M6\nS1000 M3\nG0 X0. Y0. Z1.\nG1 Z0. F10.\n\
+               G93 G1 X1. F50.\nG95 G1 X2. F.004\nG94 G1 X3. F20.\nM30\n%\n";
+    let p = parse(src, "inch feeds");
+    let feeds: Vec<(FeedMode, f64)> = p
+        .moves()
+        .filter(|m| m.is_cutting())
+        .map(|m| (m.feed_mode, m.feed))
+        .collect();
+    let inch = 25.4;
+    let want = [
+        (FeedMode::PerMinute, 10.0 * inch),
+        (FeedMode::InverseTime, 50.0),
+        (FeedMode::PerRev, 0.004 * inch),
+        (FeedMode::PerMinute, 20.0 * inch),
+    ];
+    assert_eq!(feeds.len(), want.len());
+    for ((gm, gf), (wm, wf)) in feeds.iter().zip(want) {
+        assert_eq!(*gm, wm);
+        assert!((gf - wf).abs() < 1e-9, "{gm:?} F{gf}, want F{wf}");
+    }
+}
+
+/// Found with the writer snapshots: LinuxCNC output read back as Fanuc (it
+/// said nothing only LinuxCNC says), so its dwell `G4 P1.000` and `G82 … P1`
+/// (seconds) came back as 1 ms. The LinuxCNC header now states `G91.1`
+/// (arc centres relative to the start, as the writer writes them), which
+/// marks it; the reader knows G91.1 and G90.1 (absolute arc centres).
+#[test]
+fn linuxcnc_output_reads_back_as_linuxcnc_with_its_dwells() {
+    let src = "%\nO0006\nG21 G17 G90 G94\nT1 M6\nG43 H1 S1000 M3\nG0 X0. Y0. Z10.\nG1 Z0. F100.\n\
+               G4 P1000\nG0 Z10.\nG99 G82 X30. Y10. Z-4. R2. P1000 F120.\nG80\nM30\n%\n";
+    let p = parse(src, "dwells");
+    let dwells = |p: &Program| -> (Vec<f64>, Vec<Option<f64>>) {
+        let op = &p.operations[0];
+        let events = op
+            .events
+            .iter()
+            .filter_map(|e| match e.kind {
+                EventKind::Dwell(t) => Some(t),
+                _ => None,
+            })
+            .collect();
+        (events, op.cycles.iter().map(|c| c.dwell).collect())
+    };
+    assert_eq!(dwells(&p), (vec![1.0], vec![Some(1.0)]));
+    let (text, q) = through(&p, Target::LinuxCnc, false, "dwells");
+    assert_eq!(q.source, Dialect::LinuxCnc, "{text}");
+    assert_eq!(dwells(&q), dwells(&p), "{text}");
+    // Absolute arc centres.
+    let arcs = "G21 G17 G90 G94 G90.1\nT1 M6\nG0 X0 Y0 Z5\nG1 Z0 F100\nG2 X10 Y0 I5 J0\nG91.1\n\
+                G3 X0 Y0 I-5 J0\nM2\n";
+    let p = parse(arcs, "G90.1");
+    let centres: Vec<_> = p.operations[0].arcs.iter().map(|a| a.centre).collect();
+    assert_eq!(centres.len(), 2);
+    for c in centres {
+        assert!(
+            (c - millplan_geom::DVec3::new(5.0, 0.0, 0.0)).length() < 1e-9,
+            "{c}"
+        );
+    }
+}
