@@ -868,7 +868,17 @@ fn heidenhain_tool_call_without_a_number_changes_the_speed() {
     let p = parse(src, "TOOL CALL S");
     assert_eq!(p.operations.len(), 1);
     let speeds: Vec<f64> = p.moves().map(|m| m.spindle).collect();
-    assert_eq!(speeds, [4200.6, 4200.6, 5100.0, 6100.4, 0.0]);
+    // The TNC stops the spindle (M5) at the end of its block: the retract
+    // still turns.
+    assert_eq!(speeds, [4200.6, 4200.6, 5100.0, 6100.4, 6100.4]);
+    let op = &p.operations[0];
+    assert!(matches!(
+        op.events.last().map(|e| (e.at, &e.kind)),
+        Some((
+            5,
+            millplan_nc::EventKind::Spindle(millplan_nc::SpindleDir::Off)
+        ))
+    ));
     // A real program whose speed changes at every cutting move (as `speed`
     // writes them), into Heidenhain and back: as many operations as before.
     let Some(mut p) = read_sample("swcam-apt-stl-pairs/Interface-glue.apt") else {

@@ -287,7 +287,7 @@ impl HeidenhainReader {
                 Ok(())
             }
             w if m_number(w).is_some() => {
-                self.m_words(&words, ln);
+                self.m_words(&words, ln, Phase::All);
                 Ok(())
             }
             w if coord(w).is_some()
@@ -306,7 +306,7 @@ impl HeidenhainReader {
             }
             w if w.starts_with('S') && parse_num(&w[1..]).is_some() => {
                 self.spindle = parse_num(&w[1..]).unwrap_or(self.spindle);
-                self.m_words(&words, ln);
+                self.m_words(&words, ln, Phase::All);
                 Ok(())
             }
             _ => {
@@ -342,13 +342,22 @@ impl HeidenhainReader {
         );
     }
 
-    /// Handles M words; returns whether the block calls the cycle (M99).
-    fn m_words(&mut self, words: &[&str], ln: u32) -> bool {
+    /// Handles the M words of a block that act at `when`; returns whether the
+    /// block calls the cycle (M99). The TNC switches M3, M4, M8 and the like
+    /// on as the block starts, and M0, M1, M2, M5, M9, M30 and M99 at its end,
+    /// after the move.
+    fn m_words(&mut self, words: &[&str], ln: u32, when: Phase) -> bool {
         let mut cycle_call = false;
         for w in words {
             let Some(m) = m_number(w) else {
                 continue;
             };
+            let at_end = matches!(m, 0 | 1 | 2 | 5 | 9 | 30 | 99);
+            match when {
+                Phase::Start if at_end => continue,
+                Phase::End if !at_end => continue,
+                _ => {}
+            }
             match m {
                 3 | 4 => {
                     self.spindle_on = true;
@@ -479,7 +488,7 @@ impl HeidenhainReader {
                 },
             );
         }
-        let cycle_call = self.m_words(words, ln);
+        self.m_words(words, ln, Phase::Start);
         if machine {
             // Machine-datum coordinates: kept verbatim; its axes are unknown after.
             for (k, named) in named.iter().enumerate() {
@@ -493,6 +502,7 @@ impl HeidenhainReader {
                 }
             }
             self.passthrough("L", body, PassClass::Machine, true, ln);
+            self.m_words(words, ln, Phase::End);
             return Ok(());
         }
         if any {
@@ -525,7 +535,7 @@ impl HeidenhainReader {
             }
             self.push_move(m, ln);
         }
-        if cycle_call {
+        if self.m_words(words, ln, Phase::End) {
             self.cycle_call(ln, col0)?;
         }
         Ok(())
@@ -551,7 +561,7 @@ impl HeidenhainReader {
                 self.feed_seen = f > 0.0;
             }
         }
-        self.m_words(words, ln);
+        self.m_words(words, ln, Phase::Start);
         let ccw = ccw.ok_or_else(|| ParseError::new(ln, col0, "arc without DR+ or DR-"))?;
         let mut end = start;
         for k in 0..3 {
@@ -655,6 +665,7 @@ impl HeidenhainReader {
         m.feed_mode = self.feed_mode;
         m.spindle = if self.spindle_on { self.spindle } else { 0.0 };
         self.push_move(m, ln);
+        self.m_words(words, ln, Phase::End);
         Ok(())
     }
 
@@ -942,6 +953,15 @@ fn coord(w: &str) -> Option<(usize, f64, bool)> {
         _ => return None,
     };
     parse_num(&w[1..]).map(|v| (axis, v, inc))
+}
+
+/// When in a block an M function acts.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    Start,
+    End,
+    /// A block of M functions only.
+    All,
 }
 
 /// `M3` → 3; not `MAX`.

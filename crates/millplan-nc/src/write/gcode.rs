@@ -37,7 +37,7 @@ struct W<'a> {
     /// The unit the source's verbatim words are written in.
     source_unit: LengthUnit,
     /// The writer adds tool-length compensation (and, five-axis, TCP) at tool
-    /// changes only when the source has none of its own.
+    /// changes only to CL data that have none of their own.
     auto_tlc: bool,
     auto_tcp: bool,
     st: State,
@@ -1353,6 +1353,7 @@ pub(super) fn write_all(
     let k = 1.0 / o.unit().mm();
     let decimals = if o.unit() == LengthUnit::Inch { 5 } else { 4 };
     let fanuc_point = o.target == Target::Fanuc;
+    let cl_data = p.source.is_apt() || p.source == Dialect::Generated;
     let has = |f: fn(&EventKind) -> bool| {
         p.operations
             .iter()
@@ -1388,8 +1389,10 @@ pub(super) fn write_all(
         },
         source: p.source,
         source_unit: p.units.source,
-        auto_tlc: !has(|k| matches!(k, EventKind::ToolLength(_))),
-        auto_tcp: !has(|k| matches!(k, EventKind::Tcp(_))),
+        // CL data are tool-tip positions and leave compensation to the post;
+        // a G-code program says what it wants, and nothing is added to it.
+        auto_tlc: cl_data && !has(|k| matches!(k, EventKind::ToolLength(_))),
+        auto_tcp: cl_data && !has(|k| matches!(k, EventKind::Tcp(_))),
         st: State {
             block_no: 0,
             pos: [None; 3],
