@@ -1,5 +1,5 @@
 //! The IR's text form: `millplan inspect --ir`, golden files and data-driven pass
-//! tests (`IR in → IR out`). [`print`] and [`parse`] round-trip exactly: numbers
+//! tests (`IR in → IR out`). [`print()`] and [`parse()`] round-trip exactly: numbers
 //! are written as the shortest decimal that reads back to the same `f64`
 //! (angles in radians), `?` is an unknown coordinate and `-` an absent value.
 //!

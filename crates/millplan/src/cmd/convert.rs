@@ -49,7 +49,7 @@ pub struct Args {
     #[arg(long)]
     pub lossy: bool,
     /// Machine file (examples/machine.toml): its control's dialect is the
-    /// default target and its S-word decimals are used; with a [kinematics]
+    /// default target and its S-word decimals are used; with a `[kinematics]`
     /// table, rotary angles become tool axes (so five-axis G-code can be
     /// written as APT).
     #[arg(long)]

@@ -32,7 +32,7 @@ pub struct Args {
     /// Part surface (STL).
     #[arg(long)]
     pub stl: PathBuf,
-    /// Machine file (see examples/machine.toml) with a [kinematics] table:
+    /// Machine file (see examples/machine.toml) with a `[kinematics]` table:
     /// kind = "table-ac" | "table-bc" | "table-ab" | "head-bc" |
     /// "head-b-table-c", [kinematics.first] and [kinematics.second] with min,
     /// max, sign. The older kinematics-only file reads too.
@@ -54,7 +54,7 @@ pub struct Args {
     /// per 2 bands; icosphere: 20·4^k; healpix: 12·N²).
     #[arg(long, default_value_t = 1200)]
     pub cells: usize,
-    /// Tool mode: a ball-end mill D,REACH[,HOLDER_D,HOLDER_LENGTH] in mm (REACH
+    /// Tool mode: a ball-end mill `D,REACH[,HOLDER_D,HOLDER_LENGTH]` in mm (REACH
     /// from the ball centre to the holder). Without it, line of sight.
     #[arg(long, allow_hyphen_values = true)]
     pub tool: Option<String>,
