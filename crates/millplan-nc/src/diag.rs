@@ -26,6 +26,8 @@ pub enum Code {
     RapidCircle,
     ConstantSurfaceSpeed,
     FrameChange,
+    UnknownPosition,
+    BlockDelete,
     ZeroIncrement,
     LossyWord,
     OpenMesh,
@@ -33,7 +35,7 @@ pub enum Code {
 }
 
 impl Code {
-    pub const ALL: [Code; 15] = [
+    pub const ALL: [Code; 17] = [
         Code::UnknownWord,
         Code::UnitsAssumed,
         Code::UnitsChange,
@@ -45,6 +47,8 @@ impl Code {
         Code::RapidCircle,
         Code::ConstantSurfaceSpeed,
         Code::FrameChange,
+        Code::UnknownPosition,
+        Code::BlockDelete,
         Code::ZeroIncrement,
         Code::LossyWord,
         Code::OpenMesh,
@@ -65,6 +69,8 @@ impl Code {
             Code::RapidCircle => "rapid-circle",
             Code::ConstantSurfaceSpeed => "constant-surface-speed",
             Code::FrameChange => "frame-change",
+            Code::UnknownPosition => "unknown-position",
+            Code::BlockDelete => "block-delete",
             Code::ZeroIncrement => "zero-increment",
             Code::LossyWord => "lossy-word",
             Code::OpenMesh => "open-mesh",
@@ -85,7 +91,9 @@ impl Code {
             Code::ArcPlane => "a Heidenhain C block's plane was not named by its CC block and was inferred from where start and end lie",
             Code::RapidCircle => "RAPID stands before a CIRCLE end point; the move is made as a rapid straight line",
             Code::ConstantSurfaceSpeed => "SPINDL gives a constant surface speed (SFM/SMM); its number is kept as a spindle speed",
-            Code::FrameChange => "a block changes the programmable frame (ROT, TRANS, ...); it is kept verbatim and later positions are read unchanged",
+            Code::FrameChange => "a block changes the coordinate frame (ROT, TRANS, G52, G92, G68, G51, G10, a work offset); it is kept verbatim, and every axis is unknown after it until the program commands it again",
+            Code::UnknownPosition => "a block moves the tool to a place the reader cannot know (a probing move, a macro call, an axis word given by a macro variable); it is kept verbatim, and the axes it may move are unknown after it until the program commands them again",
+            Code::BlockDelete => "a block-delete block (`/`) runs or not as the operator's switch says; it is kept as written, and the axes it names are unknown after it until the program commands them again",
             Code::ZeroIncrement => "an incremental (G91) move steps an axis whose position is unknown: a zero step moves nothing; another step is kept verbatim (with its G91) and the axis stays unknown",
             Code::LossyWord => "with --lossy, a word the target dialect cannot express was written as a comment: the output does less than the source",
             Code::OpenMesh => "the part mesh has open or non-manifold edges; checks against it can miss material at holes and seams",

@@ -32,7 +32,7 @@ pub enum Rule {
     /// positive feed.
     Cycle,
     /// An axis known before a move becomes unknown only after an event that
-    /// moves the machine out of the program's view.
+    /// moves the machine out of the program's view or changes the work offset.
     Unknown,
     /// Events are sorted by the move they precede and anchored inside the operation.
     Events,
@@ -148,11 +148,15 @@ fn verify_op(oi: usize, op: &Operation, v: &mut Vec<Violation>) {
             );
         }
     }
-    // Moves before which the machine may have moved out of the program's view.
+    // Moves before which the machine may have moved out of the program's view,
+    // or the program changed the frame positions are given in.
     let moved: Vec<u32> = op
         .events
         .iter()
-        .filter(|e| matches!(&e.kind, EventKind::Passthrough(p) if p.moves))
+        .filter(|e| {
+            matches!(&e.kind, EventKind::Passthrough(p) if p.moves)
+                || matches!(e.kind, EventKind::WorkOffset(_))
+        })
         .map(|e| e.at)
         .collect();
     for (i, m) in op.moves.iter().enumerate() {

@@ -410,7 +410,9 @@ impl AptReader {
             }
             "MULTAX" => {
                 if s.args.trim().eq_ignore_ascii_case("OFF") {
-                    self.axis = None;
+                    // Three-axis output again: the tool stands along +Z, not at
+                    // the last five-axis orientation.
+                    self.axis = self.axis.map(|_| DVec3::Z);
                 }
                 Ok(())
             }

@@ -15,7 +15,13 @@ pub struct HeidenhainReader {
     op: Operation,
     diags: Diags,
     line_no: u32,
-    cont: Option<(String, u32)>,
+    /// A `~`-continued block being gathered: its words joined, its first line,
+    /// and its lines as written (without the block number).
+    cont: Option<(String, u32, String)>,
+    /// The lines of the block being read when it was continued, as written.
+    raw_block: Option<String>,
+    /// M89: the cycle is called after every positioning block until M99.
+    modal_call: bool,
     saw_content: bool,
     scale: f64,
     unit: Option<(LengthUnit, UnitsOrigin)>,
@@ -52,6 +58,8 @@ impl HeidenhainReader {
             diags: Diags::default(),
             line_no: 0,
             cont: None,
+            raw_block: None,
+            modal_call: false,
             saw_content: false,
             scale: unit.map(|(u, _)| u.mm()).unwrap_or(1.0),
             unit,
@@ -103,23 +111,39 @@ impl HeidenhainReader {
         if continued {
             let body = content;
             match &mut self.cont {
-                Some((b, _)) => {
+                Some((b, _, r)) => {
                     b.push(' ');
                     b.push_str(body.trim());
+                    r.push('\n');
+                    r.push_str(raw.trim_end());
+                    r.push_str(" ~");
                 }
-                None => self.cont = Some((body.to_string(), ln)),
+                None => {
+                    let t = raw.trim();
+                    let r = t
+                        .trim_start_matches(|c: char| c.is_ascii_digit())
+                        .trim_start();
+                    self.cont = Some((body.to_string(), ln, format!("{r} ~")))
+                }
             }
             return Ok(());
         }
         let (text, first) = match self.cont.take() {
-            Some((mut b, f)) => {
+            Some((mut b, f, mut r)) => {
                 b.push(' ');
                 b.push_str(content.trim());
+                r.push('\n');
+                r.push_str(raw.trim_end());
+                // The comments of a continued block stay with its lines.
+                self.raw_block = Some(r);
                 (b, f)
             }
-            None => (content.to_string(), ln),
+            None => {
+                self.raw_block = None;
+                (content.to_string(), ln)
+            }
         };
-        if let Some(c) = comment.filter(|c| !c.is_empty()) {
+        if let Some(c) = comment.filter(|c| !c.is_empty() && self.raw_block.is_none()) {
             self.saw_content = true;
             self.op.push_event(ln, EventKind::Comment(c.to_string()));
         }
@@ -201,6 +225,20 @@ impl HeidenhainReader {
                 let number = id.parse::<u32>().ok();
                 let radius = self.tool_radius.get(id).copied().filter(|r| *r > 0.0);
                 let from = if calls_tool { 3 } else { 2 };
+                // Length and radius deltas (DL, DR, DR2) change the tool the
+                // control compensates for: kept with the call.
+                let deltas: Vec<&str> = body
+                    .split_whitespace()
+                    .skip(from)
+                    .filter(|w| {
+                        let u = w.to_ascii_uppercase();
+                        ["DL", "DR2", "DR"].iter().any(|p| {
+                            u.strip_prefix(p)
+                                .and_then(parse_num)
+                                .is_some_and(|v| v != 0.0)
+                        })
+                    })
+                    .collect();
                 for w in &words[from..] {
                     if let Some(s) = w.strip_prefix('S').and_then(parse_num) {
                         self.spindle = s;
@@ -211,6 +249,9 @@ impl HeidenhainReader {
                     }
                 }
                 if !calls_tool {
+                    if !deltas.is_empty() {
+                        self.passthrough("TOOL CALL", body, PassClass::Machine, false, ln);
+                    }
                     return Ok(());
                 }
                 if !self.op.moves.is_empty() {
@@ -232,6 +273,10 @@ impl HeidenhainReader {
                     cutter: radius.map(|r| Cutter::flat(2.0 * r)),
                     line: ln,
                 });
+                if !deltas.is_empty() {
+                    let text = deltas.join(" ");
+                    self.passthrough(TOOL_DELTAS, &text, PassClass::Machine, false, ln);
+                }
                 Ok(())
             }
             "L" | "LN" => self.linear(body, &words[1..], ln, col0),
@@ -287,7 +332,9 @@ impl HeidenhainReader {
                 Ok(())
             }
             w if m_number(w).is_some() => {
+                let (words, m140) = take_m140(&words);
                 self.m_words(&words, ln, Phase::All);
+                self.retract(m140, ln);
                 Ok(())
             }
             w if coord(w).is_some()
@@ -352,7 +399,7 @@ impl HeidenhainReader {
             let Some(m) = m_number(w) else {
                 continue;
             };
-            let at_end = matches!(m, 0 | 1 | 2 | 5 | 9 | 30 | 99);
+            let at_end = matches!(m, 0 | 1 | 2 | 5 | 9 | 30 | 89 | 99);
             match when {
                 Phase::Start if at_end => continue,
                 Phase::End if !at_end => continue,
@@ -382,7 +429,14 @@ impl HeidenhainReader {
                 }
                 // Tool change and program end: the writer writes its own.
                 6 | 2 | 30 => {}
-                99 => cycle_call = true,
+                99 => {
+                    cycle_call = true;
+                    self.modal_call = false;
+                }
+                89 => {
+                    cycle_call = true;
+                    self.modal_call = true;
+                }
                 // Machine-datum positioning: handled by the block.
                 91 | 92 => {}
                 _ => self.passthrough(w, w, PassClass::Machine, false, ln),
@@ -391,7 +445,18 @@ impl HeidenhainReader {
         cycle_call
     }
 
+    /// M140 (retract along the tool axis, `MB` distance or `MAX`, its own F):
+    /// kept verbatim; the tool stands where the reader cannot know.
+    fn retract(&mut self, m140: Option<String>, ln: u32) {
+        if let Some(text) = m140 {
+            self.pos = UNKNOWN;
+            self.passthrough("M140", &text, PassClass::Machine, true, ln);
+        }
+    }
+
     fn linear(&mut self, body: &str, words: &[&str], ln: u32, col0: u32) -> Result<(), ParseError> {
+        let (words, m140) = take_m140(words);
+        let words = &words[..];
         let mut end = self.pos;
         let mut named = [false; 3];
         let mut any = false;
@@ -535,9 +600,12 @@ impl HeidenhainReader {
             }
             self.push_move(m, ln);
         }
-        if self.m_words(words, ln, Phase::End) {
+        // M89 calls the cycle after every positioning block until M99.
+        let modal = self.modal_call && any;
+        if self.m_words(words, ln, Phase::End) || modal {
             self.cycle_call(ln, col0)?;
         }
+        self.retract(m140, ln);
         Ok(())
     }
 
@@ -679,7 +747,8 @@ impl HeidenhainReader {
             .get(2)
             .and_then(|w| w.split('.').next()?.parse::<u32>().ok());
         if !matches!(number, Some(1 | 200..=209 | 240 | 241)) {
-            self.passthrough("CYCL", body, PassClass::Machine, false, ln);
+            let text = self.raw_block.take().unwrap_or_else(|| body.to_string());
+            self.passthrough("CYCL", &text, PassClass::Machine, false, ln);
             return Ok(());
         }
         if let Some(n) = words
@@ -696,7 +765,9 @@ impl HeidenhainReader {
             self.cycle_index = None;
             self.cycle_q = Some(BTreeMap::new());
             self.q_params(words);
-            self.passthrough("CYCL", body, PassClass::Info, false, ln);
+            self.modal_call = false;
+            let text = self.raw_block.take().unwrap_or_else(|| body.to_string());
+            self.passthrough("CYCL", &text, PassClass::Info, false, ln);
             return Ok(());
         }
         if words.get(2).map(|w| w.contains('.')).unwrap_or(false)
@@ -775,6 +846,18 @@ impl HeidenhainReader {
             let idx = match self.cycle_index {
                 Some(i) => i,
                 None => {
+                    if let Some(p) = q.get(&202).filter(|p| **p <= 0.0) {
+                        self.diags.warn(
+                            Code::UnknownWord,
+                            ln,
+                            col0,
+                            format!(
+                                "{}: plunging depth Q202={} is not positive; read as one plunge to depth (the control may stop with an error)",
+                                self.cycle.name,
+                                super::fmt_num(*p)
+                            ),
+                        );
+                    }
                     let feed = q.get(&206).map(|f| f * s).filter(|f| *f > 0.0).unwrap_or(
                         if self.feed_seen {
                             self.feed
@@ -810,10 +893,13 @@ impl HeidenhainReader {
             m.orient = self.current_orient();
             m.line = ln;
             m.spindle = if self.spindle_on { self.spindle } else { 0.0 };
-            let back = self.pos;
             self.push_move(m, ln);
-            // The control returns to where it stood (2nd set-up clearance at most).
-            self.pos = back;
+            // After the hole the tool stands at the set-up clearance, or at
+            // the 2nd set-up clearance (Q204) when that is higher.
+            if let Some(c) = self.op.cycle(&m) {
+                let axis = self.op.axis(&m).unwrap_or(DVec3::Z);
+                self.pos = m.end + axis * c.retract.max(c.clearance);
+            }
             return Ok(());
         }
         let idx = match self.cycle_index {
@@ -910,7 +996,7 @@ impl HeidenhainReader {
     }
 
     pub fn finish(mut self) -> Result<Parsed, ParseError> {
-        if let Some((_, l)) = self.cont {
+        if let Some((_, l, _)) = self.cont {
             return Err(ParseError::new(l, 1, "file ends inside a `~` continuation"));
         }
         if !self.saw_content {
@@ -954,6 +1040,44 @@ fn coord(w: &str) -> Option<(usize, f64, bool)> {
     };
     parse_num(&w[1..]).map(|v| (axis, v, inc))
 }
+
+/// The words of a block without its M140 retract, and that retract's words
+/// (`M140 MB MAX F…`, `M140 MB 50`).
+fn take_m140<'a>(words: &[&'a str]) -> (Vec<&'a str>, Option<String>) {
+    let Some(i) = words.iter().position(|w| *w == "M140") else {
+        return (words.to_vec(), None);
+    };
+    let mut j = i + 1;
+    if words.get(j) == Some(&"MB") {
+        j += 1;
+        if words
+            .get(j)
+            .is_some_and(|w| *w == "MAX" || parse_num(w).is_some())
+        {
+            j += 1;
+        }
+    } else if words.get(j).is_some_and(|w| w.starts_with("MB")) {
+        j += 1;
+    }
+    if words
+        .get(j)
+        .is_some_and(|w| w.starts_with('F') && *w != "FMAX")
+    {
+        j += 1;
+        if words.get(j) == Some(&"MAX") && words[j - 1] == "F" {
+            j += 1;
+        }
+    }
+    let text = words[i..j].join(" ");
+    let mut rest = words[..i].to_vec();
+    rest.extend_from_slice(&words[j..]);
+    (rest, Some(text))
+}
+
+/// The word of the pass-through event that carries a `TOOL CALL`'s length and
+/// radius deltas (`DL+0.1 DR-0.05`); the Heidenhain writer appends them to its
+/// tool call.
+pub const TOOL_DELTAS: &str = "TOOL CALL DL DR";
 
 /// When in a block an M function acts.
 #[derive(Clone, Copy, PartialEq, Eq)]

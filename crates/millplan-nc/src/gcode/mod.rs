@@ -33,6 +33,8 @@ enum Tok {
 struct Lexed {
     toks: Vec<(Tok, u32)>,
     comments: Vec<String>,
+    /// The block starts with `/`: it runs or not as the operator's switch says.
+    block_delete: bool,
 }
 
 /// Splits a block into tokens and comments. `(..)` comments may nest (some posts
@@ -42,6 +44,7 @@ fn lex(line: &str, ln: u32) -> Result<Lexed, ParseError> {
     let mut i = 0;
     let mut toks = Vec::with_capacity(8);
     let mut comments = Vec::new();
+    let mut block_delete = false;
     while i < b.len() {
         let c = b[i];
         let col = (i + 1) as u32;
@@ -89,8 +92,13 @@ fn lex(line: &str, ln: u32) -> Result<Lexed, ParseError> {
                 continue;
             }
             b'/' if toks.is_empty() => {
-                // Block delete: the block still runs unless the operator switches it off.
+                // Block delete (`/`, `/1`..`/9`): the block runs unless the
+                // operator switches it off.
+                block_delete = true;
                 i += 1;
+                while i < b.len() && b[i].is_ascii_digit() {
+                    i += 1;
+                }
                 continue;
             }
             _ => {}
@@ -199,7 +207,11 @@ fn lex(line: &str, ln: u32) -> Result<Lexed, ParseError> {
             format!("unexpected `{}`", &line[i..e]),
         ));
     }
-    Ok(Lexed { toks, comments })
+    Ok(Lexed {
+        toks,
+        comments,
+        block_delete,
+    })
 }
 
 /// The value text of an assignment: a quoted string or everything up to white space.
@@ -297,6 +309,12 @@ pub struct GcodeReader {
     pos: DVec3,
     rotary: [Option<f64>; 3],
     vector: Option<DVec3>,
+    /// The work offset last selected (`None`: none yet).
+    offset: Option<WorkOffset>,
+    /// A frame change (G52, G68, ...) was read: its cancel reframes positions.
+    frame_changed: bool,
+    /// A G98 canned cycle from an unknown height is active (kept verbatim).
+    blind_cycle: bool,
     tcp: bool,
     tcp_vectors: bool,
     selected_tool: Option<(Option<u32>, Option<String>, u32)>,
@@ -396,6 +414,23 @@ fn is_modal_g(code: i64) -> bool {
     )
 }
 
+/// G codes (×10) whose blocks the reader keeps whole, because their axis words
+/// are not a move to be read: data setting (G10), frame changes (G52, G92,
+/// G68, G51, G50.1/G51.1 mirror, G68.2 tilted plane), probing (G31) and macro
+/// calls (G65, G66). Every axis is unknown after them, except after G31, which
+/// leaves unknown only the axes it names.
+const SPECIAL_G: &[i64] = &[
+    100, 310, 311, 312, 313, 314, 510, 511, 520, 531, 650, 660, 661, 680, 681, 682, 683, 684, 920,
+];
+
+/// G codes (×10) that cancel a frame change (G50 scaling, G50.1 mirror, G69
+/// rotation, G92.1–G92.3 offsets): no-ops in a program header, but after a
+/// frame change every axis is unknown again.
+const CANCEL_G: &[i64] = &[500, 501, 690, 921, 922, 923];
+
+/// Of [`SPECIAL_G`], those whose other words are arguments, not state.
+const ARGUMENT_G: &[i64] = &[100, 650, 660, 661];
+
 /// The words of one block, gathered before they are interpreted.
 #[derive(Default)]
 struct Words {
@@ -451,6 +486,9 @@ impl GcodeReader {
             pos: UNKNOWN,
             rotary: [None; 3],
             vector: None,
+            offset: None,
+            frame_changed: false,
+            blind_cycle: false,
             tcp: false,
             tcp_vectors: false,
             selected_tool: None,
@@ -527,7 +565,67 @@ impl GcodeReader {
             return Ok(());
         }
         self.blocks += 1;
+        if lexed.block_delete {
+            return self.optional_block(&lexed.toks, ln);
+        }
         self.block(&lexed.toks, ln)
+    }
+
+    /// A block-delete block: it may run or not, so it is kept as written and
+    /// every axis it names is unknown afterwards. A block whose modal state
+    /// would differ between the two cases cannot be read either way.
+    fn optional_block(&mut self, toks: &[(Tok, u32)], ln: u32) -> Result<(), ParseError> {
+        for (t, col) in toks {
+            let modal = match t {
+                Tok::Word('G', v) => {
+                    // Allowed: what the program is in already, dwells and
+                    // machine-coordinate moves.
+                    let same = match (v * 10.0).round() as i64 {
+                        0 => self.motion == Motion::Rapid,
+                        10 => self.motion == Motion::Linear,
+                        20 => self.motion == Motion::Cw,
+                        30 => self.motion == Motion::Ccw,
+                        900 => self.absolute,
+                        910 => !self.absolute,
+                        40 | 530 | 280 | 300 => true,
+                        _ => false,
+                    };
+                    !same
+                }
+                Tok::Word('M', v) => *v == 6.0,
+                Tok::Word('T', _) | Tok::Word('F', _) | Tok::Word('S', _) => true,
+                Tok::Assign(..) | Tok::Call(..) => true,
+                _ => false,
+            };
+            if modal {
+                return Err(ParseError::new(
+                    ln,
+                    *col,
+                    format!(
+                        "`{}` in a block-delete block: the program's state after it depends on the operator's switch",
+                        tok_text(t)
+                    ),
+                ));
+            }
+        }
+        for (t, _) in toks {
+            match t {
+                Tok::Word(c @ ('X' | 'Y' | 'Z'), _) => self.pos[axis_index(*c)] = f64::NAN,
+                Tok::Word(c @ ('A' | 'B' | 'C'), _) => {
+                    self.rotary[(*c as u8 - b'A') as usize] = None
+                }
+                _ => {}
+            }
+        }
+        let text = format!("/{}", block_text(toks));
+        self.diags.note(
+            Code::BlockDelete,
+            ln,
+            1,
+            "block-delete block kept as written; the axes it names are unknown after it",
+        );
+        self.passthrough("/", &text, PassClass::Machine, false, true, ln);
+        Ok(())
     }
 
     fn passthrough(
@@ -563,20 +661,27 @@ impl GcodeReader {
         ) {
             // Frame-changing blocks carry angles and offsets in their X/Y/Z words.
             let has_values = toks.len() > 1;
-            if has_values && k != "TRANS"
+            let reframes = has_values && k != "TRANS"
                 || toks
                     .iter()
-                    .any(|(t, _)| matches!(t, Tok::Word(_, v) if *v != 0.0))
-            {
+                    .any(|(t, _)| matches!(t, Tok::Word(_, v) if *v != 0.0));
+            if reframes {
                 self.diags.warn(
                     Code::FrameChange,
                     ln,
                     1,
-                    format!("`{k}` changes the programmable frame; it is kept verbatim and not applied to positions"),
+                    format!("`{k}` changes the programmable frame; it is kept verbatim and every axis is unknown after it"),
                 );
             }
+            // A frame (or the reset of one after a change) moves every position.
+            let moves = reframes || std::mem::take(&mut self.frame_changed);
+            if moves {
+                self.pos = UNKNOWN;
+                self.rotary = [None; 3];
+                self.frame_changed = reframes;
+            }
             let k = k.clone();
-            self.passthrough(&k, &block_text(toks), PassClass::Machine, false, false, ln);
+            self.passthrough(&k, &block_text(toks), PassClass::Machine, false, moves, ln);
             return Some(());
         }
         if k == "DEF" {
@@ -798,6 +903,27 @@ impl GcodeReader {
         if self.whole_block(toks, ln).is_some() {
             return Ok(());
         }
+        if let Some(code) = toks.iter().find_map(|(t, _)| match t {
+            Tok::Word('G', v) => {
+                let c = (v * 10.0).round() as i64;
+                SPECIAL_G.contains(&c).then_some(c)
+            }
+            _ => None,
+        }) {
+            return self.kept_block(toks, ln, Some(code));
+        }
+        // `X#100`, `Z[#5-2.]`: an axis given by a macro variable, whose value
+        // is known only when the control runs.
+        if toks.windows(2).any(|p| {
+            matches!(&p[0].0, Tok::Keyword(k) if k.len() == 1 && "XYZABCIJKUVWR".contains(k.as_str()))
+                && matches!(&p[1].0, Tok::Keyword(v) if v.starts_with('#'))
+        }) {
+            return self.kept_block(toks, ln, None);
+        }
+        if self.blind_cycle_block(toks, ln)? {
+            return Ok(());
+        }
+        let ev_start = self.op.events.len();
         let mut w = Words::default();
         self.gather(toks, ln, &mut w)?;
         let mut motion_word = false;
@@ -871,6 +997,14 @@ impl GcodeReader {
                 }
                 591..=593 if self.dialect == Dialect::LinuxCnc => {
                     offset = Some(WorkOffset((code - 584) as u16))
+                }
+                c if CANCEL_G.contains(&c) => {
+                    if std::mem::take(&mut self.frame_changed) {
+                        self.pos = UNKNOWN;
+                        self.rotary = [None; 3];
+                    }
+                    w.keep.push(fmt_word('G', v));
+                    w.keep_machine = true;
                 }
                 _ => {
                     // Modal codes every control has (offsets, path modes, planes
@@ -967,6 +1101,12 @@ impl GcodeReader {
         }
         if let Some(o) = offset {
             self.op.push_event(ln, EventKind::WorkOffset(o));
+            if self.offset != Some(o) {
+                // Positions in the new frame: the program must command them.
+                self.offset = Some(o);
+                self.pos = UNKNOWN;
+                self.rotary = [None; 3];
+            }
         }
         let mut tool_change = false;
         for &v in &w.m {
@@ -1005,7 +1145,7 @@ impl GcodeReader {
             }
         }
         if tool_change {
-            self.tool_change(ln);
+            self.tool_change(ln, ev_start);
         }
         if dwell {
             // Fanuc P is whole milliseconds (a P with decimals, as Haas
@@ -1109,6 +1249,165 @@ impl GcodeReader {
             return Ok(());
         }
         self.motion_words(w, ln)
+    }
+
+    /// A canned cycle that returns to its initial level (G98) from a height the
+    /// program has not set: its blocks up to the cycle's end are kept verbatim
+    /// and not simulated. Returns whether `toks` was such a block.
+    fn blind_cycle_block(&mut self, toks: &[(Tok, u32)], ln: u32) -> Result<bool, ParseError> {
+        let codes: Vec<i64> = toks
+            .iter()
+            .filter_map(|(t, _)| match t {
+                Tok::Word('G', v) => Some((v * 10.0).round() as i64),
+                _ => None,
+            })
+            .collect();
+        let starts = codes.iter().any(|c| {
+            matches!(
+                c,
+                730 | 740 | 760 | 810 | 820 | 830 | 840 | 850 | 860 | 870 | 880 | 890
+            )
+        });
+        let ends = codes.iter().any(|c| matches!(c, 0 | 10 | 20 | 30 | 800));
+        let initial = if codes.contains(&980) {
+            true
+        } else if codes.contains(&990) {
+            false
+        } else {
+            self.return_initial
+        };
+        let hole = toks.iter().any(|(t, _)| {
+            matches!(
+                t,
+                Tok::Word('X' | 'Y' | 'Z' | 'R' | 'Q' | 'P' | 'A' | 'B' | 'C', _)
+            )
+        });
+        let blind = if starts {
+            initial && self.pos.z.is_nan()
+        } else {
+            self.blind_cycle && !ends && hole
+        };
+        if !blind {
+            if ends && std::mem::take(&mut self.blind_cycle) {
+                // The control's cycle ends here: say so, as the reader has
+                // no cycle of its own that a writer would end.
+                self.passthrough("G80", "G80", PassClass::Machine, true, false, ln);
+            }
+            return Ok(false);
+        }
+        self.return_initial = initial;
+        if starts {
+            self.blind_cycle = true;
+            self.cycle = None;
+            self.motion = Motion::Rapid;
+            self.diags.warn(
+                Code::UnknownPosition,
+                ln,
+                1,
+                "canned cycle returning (G98) to an initial height the program has not set: its blocks are kept verbatim and not simulated",
+            );
+        }
+        for (t, col) in toks {
+            match t {
+                Tok::Word('F', v) => self.feed_word(*v, ln, *col)?,
+                Tok::Word(c @ ('X' | 'Y'), _) => self.pos[axis_index(*c)] = f64::NAN,
+                _ => {}
+            }
+        }
+        let text = block_text(toks);
+        self.passthrough("G98", &text, PassClass::Machine, true, true, ln);
+        Ok(true)
+    }
+
+    /// A block kept whole and not simulated: a special G code's (`code`) or one
+    /// with a macro-variable axis word (`None`). Its modal words still set the
+    /// reader's state; the axes it may move or reframe are unknown after it.
+    fn kept_block(
+        &mut self,
+        toks: &[(Tok, u32)],
+        ln: u32,
+        code: Option<i64>,
+    ) -> Result<(), ParseError> {
+        let arguments = code.is_some_and(|c| ARGUMENT_G.contains(&c));
+        let mut modal = false;
+        if !arguments {
+            for (t, col) in toks {
+                match t {
+                    Tok::Word('G', v) => {
+                        let c = (v * 10.0).round() as i64;
+                        modal |= is_modal_g(c);
+                        match c {
+                            0 => self.motion = Motion::Rapid,
+                            10 => self.motion = Motion::Linear,
+                            20 => self.motion = Motion::Cw,
+                            30 => self.motion = Motion::Ccw,
+                            170 => self.plane = Plane::Xy,
+                            180 => self.plane = Plane::Zx,
+                            190 => self.plane = Plane::Yz,
+                            200 | 700 => self.set_unit(LengthUnit::Inch, ln),
+                            210 | 710 => self.set_unit(LengthUnit::Mm, ln),
+                            900 => self.absolute = true,
+                            910 => self.absolute = false,
+                            930 => self.feed_mode = FeedMode::InverseTime,
+                            940 => self.feed_mode = FeedMode::PerMinute,
+                            950 => self.feed_mode = FeedMode::PerRev,
+                            800 => {
+                                self.cycle = None;
+                                if self.motion == Motion::Cycle {
+                                    self.motion = Motion::Rapid;
+                                }
+                            }
+                            _ => {}
+                        }
+                    }
+                    Tok::Word('F', v) => self.feed_word(*v, ln, *col)?,
+                    _ => {}
+                }
+            }
+        }
+        let probe = code.is_some_and(|c| (310..=314).contains(&c));
+        let (what, diag) = match code {
+            None => (
+                "an axis word given by a macro variable",
+                Code::UnknownPosition,
+            ),
+            Some(c) if probe || c == 650 || c == 660 || c == 661 => {
+                ("a move the reader does not simulate", Code::UnknownPosition)
+            }
+            Some(_) => ("a frame or offset change", Code::FrameChange),
+        };
+        if code.is_none() || probe {
+            // Only the axes the block names may move.
+            for (t, _) in toks {
+                let letter = match t {
+                    Tok::Word(c, _) => Some(*c),
+                    Tok::Keyword(k) if k.len() == 1 => k.chars().next(),
+                    _ => None,
+                };
+                match letter {
+                    Some(c @ ('X' | 'Y' | 'Z')) => self.pos[axis_index(c)] = f64::NAN,
+                    Some(c @ ('A' | 'B' | 'C')) => self.rotary[(c as u8 - b'A') as usize] = None,
+                    _ => {}
+                }
+            }
+        } else {
+            self.pos = UNKNOWN;
+            self.rotary = [None; 3];
+            self.frame_changed = true;
+        }
+        let word = match code {
+            Some(c) => fmt_word('G', c as f64 / 10.0),
+            None => "#".to_string(),
+        };
+        let text = block_text(toks);
+        self.diags.warn(
+            diag,
+            ln,
+            1,
+            format!("`{text}`: {what}, kept verbatim; the axes it affects are unknown after it"),
+        );
+        self.passthrough(&word, &text, PassClass::Machine, modal, true, ln);
+        Ok(())
     }
 
     /// A block in machine coordinates or to a reference point (G28, G30, G53,
@@ -1500,6 +1799,29 @@ impl GcodeReader {
                 } else {
                     self.opts.default_feed
                 };
+                let pecking = matches!(cs.name.as_str(), "G73" | "G83");
+                match cs.q {
+                    Some(q) if pecking && q <= 0.0 => self.diags.warn(
+                        Code::UnknownWord,
+                        ln,
+                        1,
+                        format!(
+                            "{} with peck depth Q{}: read as one stroke to depth (a control may stop with an alarm)",
+                            cs.name,
+                            fmt_num(q / self.scale)
+                        ),
+                    ),
+                    None if pecking => self.diags.warn(
+                        Code::UnknownWord,
+                        ln,
+                        1,
+                        format!("{} without a peck depth Q: read as one stroke to depth", cs.name),
+                    ),
+                    _ => {}
+                }
+                let Some(cs) = &mut self.cycle else {
+                    return Ok(());
+                };
                 let cy = Cycle {
                     name: cs.name.clone(),
                     bottom: cs.z - cs.r,
@@ -1595,17 +1917,29 @@ impl GcodeReader {
         self.pending_select = None;
     }
 
-    fn tool_change(&mut self, ln: u32) {
+    /// An M6 in a block whose first event is `ev_start` of the operation.
+    fn tool_change(&mut self, ln: u32, mut ev_start: usize) {
         // A selection right before the change is the tool it takes in.
         if let Some((ev, moves)) = self.pending_select.take() {
             if moves == self.op.moves.len() && ev < self.op.events.len() {
                 self.op.events.remove(ev);
+                if ev < ev_start {
+                    ev_start -= 1;
+                }
             }
         }
         let (number, name, tl) = self.selected_tool.clone().unwrap_or((None, None, ln));
         if !self.op.moves.is_empty() {
             let prev = std::mem::take(&mut self.op);
             self.ops.push(prev);
+            self.cycle = None;
+        } else if ev_start > 0 && self.op.tool.is_some() {
+            // Two changes without a move between: the first tool's events
+            // stay with it.
+            let rest = self.op.events.split_off(ev_start);
+            let prev = std::mem::take(&mut self.op);
+            self.ops.push(prev);
+            self.op.events = rest;
             self.cycle = None;
         }
         // The change may move every linear axis.

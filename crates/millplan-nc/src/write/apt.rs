@@ -6,8 +6,8 @@
 //! said in APT and stop the writer at their line (with `lossy`: a `PPRINT`).
 
 use super::{
-    first_event_at, lossy, maybe_flush, room, write_runs, NumFmt, Run, Sink, WriteError,
-    WriteOptions, Written, PARALLEL_MIN,
+    events_before_tool, first_event_at, lossy, maybe_flush, room, write_runs, NumFmt, Run, Sink,
+    WriteError, WriteOptions, Written, PARALLEL_MIN,
 };
 use crate::ir::*;
 
@@ -104,6 +104,9 @@ pub(super) fn write_all(
         if let Some(n) = &op.name {
             text_line(out, &format!("PPRINT OPERATION NAME : {n}"));
         }
+        let before = events_before_tool(op);
+        let mut ev0 = 0;
+        write_events_until(out, cx, op, 0, &mut ev0, before, &mut st, &mut warnings)?;
         if let Some(t) = &op.tool {
             if let Some(c) = &t.cutter {
                 list(
@@ -129,6 +132,7 @@ pub(super) fn write_all(
             st.tool_number = t.number;
         }
         if let Some(f) = &op.frame {
+            st.framed = true;
             let (og, x, y) = (f.origin * k, f.rot.x_axis, f.rot.y_axis);
             list(
                 out,
@@ -145,8 +149,8 @@ pub(super) fn write_all(
                     (y.z, VECT),
                 ],
             );
-        } else if p.operations.len() > 1 {
-            // Make the frame explicit so a frame of an earlier operation does not carry over.
+        } else if std::mem::take(&mut st.framed) {
+            // Back to part coordinates after an earlier operation's frame.
             list(
                 out,
                 "MSYS",
@@ -175,7 +179,7 @@ pub(super) fn write_all(
             write_runs(n, &mut st, out, &mut sink, &mut warnings, |a, b, mut s| {
                 // GOTO with SPINDL and FEDRAT lines: under 96 bytes a move.
                 let mut text = Vec::with_capacity((b - a) * 96);
-                let mut ev = first_event_at(&op.events, a);
+                let mut ev = first_event_at(&op.events, a).max(before);
                 let mut result = Ok(());
                 let mut w = Vec::new();
                 for i in a..b {
@@ -193,7 +197,7 @@ pub(super) fn write_all(
             })?;
             first_event_at(&op.events, n)
         } else {
-            let mut ev = 0;
+            let mut ev = before;
             for i in 0..n {
                 maybe_flush(out, &mut sink)?;
                 write_move(out, cx, op, i, &mut ev, &mut st, &mut warnings)?;
@@ -219,6 +223,8 @@ struct State {
     multax: bool,
     tool_number: Option<u32>,
     tlc: bool,
+    /// A frame other than the part's is in effect.
+    framed: bool,
 }
 
 /// The events due before move `i` (`ev`: the next event).
@@ -231,7 +237,22 @@ fn write_events(
     st: &mut State,
     warnings: &mut Written,
 ) -> Result<(), WriteError> {
-    while *ev < op.events.len() && op.events[*ev].at as usize <= i {
+    write_events_until(out, cx, op, i, ev, op.events.len(), st, warnings)
+}
+
+/// [`write_events`] up to event `limit` (exclusive).
+#[allow(clippy::too_many_arguments)]
+fn write_events_until(
+    out: &mut Vec<u8>,
+    cx: Ctx,
+    op: &Operation,
+    i: usize,
+    ev: &mut usize,
+    limit: usize,
+    st: &mut State,
+    warnings: &mut Written,
+) -> Result<(), WriteError> {
+    while *ev < limit && op.events[*ev].at as usize <= i {
         let e = &op.events[*ev];
         *ev += 1;
         match &e.kind {

@@ -19,9 +19,11 @@
 //!   `lossy`, a comment and a warning).
 
 use super::{
-    arc_points, cycle_moves, first_event_at, lossy, maybe_flush, principal_plane, room, write_runs,
-    CycleStep, NumFmt, Run, Sink, Target, WriteError, WriteOptions, Written, PARALLEL_MIN,
+    arc_points, cycle_moves, events_before_tool, first_event_at, lossy, maybe_flush,
+    principal_plane, room, write_runs, CycleStep, NumFmt, Run, Sink, Target, WriteError,
+    WriteOptions, Written, PARALLEL_MIN,
 };
+use crate::gcode::heidenhain::TOOL_DELTAS;
 use crate::ir::*;
 use millplan_geom::DVec3;
 
@@ -66,6 +68,11 @@ struct State {
     /// Tool-length compensation on, with its register.
     tlc: Option<Option<u32>>,
     tcp: bool,
+    /// The output has said whether TCP is on: a source's `TRAFOOF` at the start
+    /// is written, not taken for the default.
+    tcp_said: bool,
+    /// The work offset last written.
+    offset: Option<u16>,
     fmax_last: bool,
     /// The canned cycle the control has active (written as a cycle block).
     cycle: Option<CycleId>,
@@ -158,6 +165,13 @@ impl W<'_> {
         self.out.push(b'\n');
     }
 
+    /// A Heidenhain source's tool-call deltas go into this output's tool calls.
+    fn deltas_copied(&self) -> bool {
+        self.target() == Target::Heidenhain
+            && self.source == Dialect::Heidenhain
+            && self.o.unit() == self.source_unit
+    }
+
     fn spindle_text(&self, rpm: f64) -> String {
         let mut b = Vec::new();
         self.spindlef.push(&mut b, rpm);
@@ -167,6 +181,18 @@ impl W<'_> {
     fn header(&mut self, p: &Program) {
         let name = program_name(p);
         let inch = self.o.unit() == LengthUnit::Inch;
+        // A source that never said its unit runs in the machine's default
+        // unit: the output says nothing either, unless it converts units.
+        let silent = p.units.origin == UnitsOrigin::Assumed && self.o.unit.is_none();
+        let unit = |i: &str, m: &str| -> String {
+            if silent {
+                String::new()
+            } else if inch {
+                format!(" {i}")
+            } else {
+                format!(" {m}")
+            }
+        };
         match self.target() {
             Target::Heidenhain => {
                 self.line(&format!(
@@ -176,10 +202,7 @@ impl W<'_> {
             }
             Target::Sinumerik => {
                 self.comment(&format!("{name} - written by millplan"));
-                self.line(&format!(
-                    "G17 {} G90 G94 G40 G64",
-                    if inch { "G70" } else { "G71" }
-                ));
+                self.line(&format!("G17{} G90 G94 G40", unit("G70", "G71")));
             }
             Target::LinuxCnc => {
                 self.out.extend_from_slice(b"%\n");
@@ -188,19 +211,24 @@ impl W<'_> {
                 // default) says what I/J/K mean, and marks the program as
                 // LinuxCNC's, whose dwell P is in seconds, not milliseconds.
                 self.line(&format!(
-                    "G17 {} G90 G91.1 G94 G40 G49 G80",
-                    if inch { "G20" } else { "G21" }
+                    "G17{} G90 G91.1 G94 G40 G49 G80",
+                    unit("G20", "G21")
                 ));
             }
             _ => {
                 self.out.extend_from_slice(b"%\n");
-                self.out
-                    .extend_from_slice(format!("O0001 ({name})\n").as_bytes());
+                // The source's own program number where it has one.
+                let number = name
+                    .parse::<u32>()
+                    .ok()
+                    .filter(|n| (1..=9999).contains(n) && name.len() <= 4);
+                let o = match number {
+                    Some(n) => format!("O{n:04}\n"),
+                    None => format!("O0001 ({name})\n"),
+                };
+                self.out.extend_from_slice(o.as_bytes());
                 self.comment("written by millplan");
-                self.line(&format!(
-                    "G17 {} G90 G94 G40 G49 G80",
-                    if inch { "G20" } else { "G21" }
-                ));
+                self.line(&format!("G17{} G90 G94 G40 G49 G80", unit("G20", "G21")));
             }
         }
         self.st.plane = Some(2);
@@ -275,7 +303,20 @@ impl W<'_> {
                 let s = s0
                     .map(|s| format!(" S{}", self.spindle_text(s)))
                     .unwrap_or_default();
-                self.line(&format!("TOOL CALL {id} Z{s}"));
+                // The source call's length and radius deltas.
+                let deltas = op
+                    .events
+                    .iter()
+                    .find_map(|e| match &e.kind {
+                        EventKind::Passthrough(p)
+                            if p.word == TOOL_DELTAS && self.deltas_copied() =>
+                        {
+                            Some(format!(" {}", p.text))
+                        }
+                        _ => None,
+                    })
+                    .unwrap_or_default();
+                self.line(&format!("TOOL CALL {id} Z{s}{deltas}"));
                 self.st.spindle = s0;
                 if five && self.auto_tcp {
                     self.line("M128");
@@ -400,7 +441,12 @@ impl W<'_> {
                     };
                     Words::Nothing
                 } else {
-                    let d = match (target, register.or(self.st.tool_number)) {
+                    // A Fanuc or LinuxCNC G41 without D keeps the control's
+                    // active D; CL data, Heidenhain RL and Sinumerik (whose D
+                    // counts a tool's edges) compensate by the called tool's.
+                    let own_d = matches!(self.source, Dialect::Fanuc | Dialect::LinuxCnc);
+                    let default = self.st.tool_number.filter(|_| !own_d);
+                    let d = match (target, register.or(default)) {
                         // Sinumerik takes the radius of the active D.
                         (Target::Sinumerik, _) | (_, None) => String::new(),
                         (_, Some(n)) => format!(" D{n}"),
@@ -458,7 +504,7 @@ impl W<'_> {
             EventKind::Tcp(on) => {
                 let was = self.st.tcp;
                 self.st.tcp = *on;
-                if was == *on {
+                if was == *on && std::mem::replace(&mut self.st.tcp_said, true) {
                     return Ok(Words::Nothing);
                 }
                 // `G49` ends both: TCP off with length compensation off in
@@ -514,6 +560,12 @@ impl W<'_> {
             }
             EventKind::WorkOffset(WorkOffset(n)) => {
                 let n = *n;
+                // Every position is restated in a new frame.
+                if self.st.offset != Some(n) {
+                    self.st.offset = Some(n);
+                    self.st.pos = [None; 3];
+                    self.st.rot = [None; 3];
+                }
                 let w = match (target, n) {
                     (Target::Fanuc | Target::LinuxCnc, 1..=6) => Some(format!("G{}", 53 + n)),
                     (Target::Fanuc, 7..) => Some(format!("G54.1 P{}", n - 6)),
@@ -567,7 +619,10 @@ impl W<'_> {
             }),
             EventKind::Passthrough(p) => {
                 let same_unit = self.o.unit() == self.source_unit || super::unit_free(&p.text);
-                if super::copies_verbatim(self.source, target, p) && same_unit {
+                if p.word == TOOL_DELTAS && self.deltas_copied() {
+                    // Written with the tool call.
+                    Words::Nothing
+                } else if super::copies_verbatim(self.source, target, p) && same_unit {
                     if p.modal {
                         self.st.motion = None;
                         self.st.plane = None;
@@ -617,10 +672,21 @@ impl W<'_> {
     /// Writes the events due before move `i` (`None`: after the last move) and
     /// returns the words that belong in that move's block.
     fn events(&mut self, op: &Operation, i: usize, ev: &mut usize) -> Result<String, WriteError> {
+        self.events_until(op, i, ev, op.events.len())
+    }
+
+    /// [`Self::events`], up to event `limit` (exclusive).
+    fn events_until(
+        &mut self,
+        op: &Operation,
+        i: usize,
+        ev: &mut usize,
+        limit: usize,
+    ) -> Result<String, WriteError> {
         let next = op.moves.get(i);
         let mut pending = String::new();
         let mut pending_line = 0u32;
-        while *ev < op.events.len() && op.events[*ev].at as usize <= i {
+        while *ev < limit && op.events[*ev].at as usize <= i {
             let e = &op.events[*ev];
             *ev += 1;
             if e.line != pending_line || e.line == 0 {
@@ -1284,10 +1350,11 @@ fn write_moves(
     op: &Operation,
     sink: &mut Option<Sink>,
     parallel: bool,
+    written: usize,
 ) -> Result<usize, WriteError> {
     let n = op.moves.len();
     if !parallel || n < PARALLEL_MIN || w.numbered() {
-        let mut ev = 0;
+        let mut ev = written;
         for i in 0..n {
             maybe_flush(w.out, sink)?;
             w.write_move(op, i, &mut ev)?;
@@ -1302,7 +1369,7 @@ fn write_moves(
         // A block with S and F: under 64 bytes.
         let mut text = Vec::with_capacity((b - a) * 64);
         let mut rw = cfg.fork(&mut text, st);
-        let mut ev = first_event_at(&op.events, a);
+        let mut ev = first_event_at(&op.events, a).max(written);
         let mut result = Ok(());
         for i in a..b {
             if let Err(e) = rw.write_move(op, i, &mut ev) {
@@ -1410,6 +1477,8 @@ pub(super) fn write_all(
             tool_number: None,
             tlc: None,
             tcp: false,
+            tcp_said: false,
+            offset: None,
             fmax_last: false,
             cycle: None,
         },
@@ -1427,8 +1496,14 @@ pub(super) fn write_all(
                 f.origin.x, f.origin.y, f.origin.z, f.rot.x_axis.x, f.rot.x_axis.y, f.rot.x_axis.z, f.rot.y_axis.x, f.rot.y_axis.y, f.rot.y_axis.z
             ));
         }
+        let before = events_before_tool(op);
+        let mut ev = 0;
+        let rest = w.events_until(op, 0, &mut ev, before)?;
+        if !rest.is_empty() {
+            w.line(&rest);
+        }
         w.tool_change(op)?;
-        let mut ev = write_moves(&mut w, op, &mut sink, parallel)?;
+        let mut ev = write_moves(&mut w, op, &mut sink, parallel, ev)?;
         if w.st.cycle.take().is_some() {
             w.line("G80");
             w.st.motion = None;

@@ -389,6 +389,17 @@ pub(crate) fn write_runs<S: Clone + PartialEq + Send + Sync>(
 
 /// The next event before move `i`: events are taken, in their order, before
 /// the first move at or after their position.
+/// How many of `op`'s first events came before its tool change in the source
+/// (a retract to the reference point, a comment, a blank form): a writer puts
+/// them before the tool change it writes.
+pub(crate) fn events_before_tool(op: &Operation) -> usize {
+    let Some(t) = &op.tool else { return 0 };
+    op.events
+        .iter()
+        .take_while(|e| e.at == 0 && e.line != 0 && e.line < t.line)
+        .count()
+}
+
 pub(crate) fn first_event_at(events: &[Event], i: usize) -> usize {
     events
         .iter()
