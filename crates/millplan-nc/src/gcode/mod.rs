@@ -2029,11 +2029,18 @@ fn tok_text(t: &Tok) -> String {
 }
 
 fn block_text(toks: &[(Tok, u32)]) -> String {
-    toks.iter()
-        .filter(|(t, _)| !matches!(t, Tok::Word('N', _)))
-        .map(|(t, _)| tok_text(t))
-        .collect::<Vec<_>>()
-        .join(" ")
+    let mut s = String::new();
+    let mut letter = false;
+    for (t, _) in toks.iter().filter(|(t, _)| !matches!(t, Tok::Word('N', _))) {
+        let text = tok_text(t);
+        // `X#100`: an address letter and the variable that gives its value.
+        if !(s.is_empty() || letter && text.starts_with('#')) {
+            s.push(' ');
+        }
+        letter = matches!(t, Tok::Keyword(k) if k.len() == 1);
+        s.push_str(&text);
+    }
+    s
 }
 
 #[cfg(test)]

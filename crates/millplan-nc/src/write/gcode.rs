@@ -38,6 +38,8 @@ struct W<'a> {
     source: Dialect,
     /// The unit the source's verbatim words are written in.
     source_unit: LengthUnit,
+    /// No unit word in the header: the source had none and no unit was asked for.
+    unit_silent: bool,
     /// The writer adds tool-length compensation (and, five-axis, TCP) at tool
     /// changes only to CL data that have none of their own.
     auto_tlc: bool,
@@ -181,9 +183,7 @@ impl W<'_> {
     fn header(&mut self, p: &Program) {
         let name = program_name(p);
         let inch = self.o.unit() == LengthUnit::Inch;
-        // A source that never said its unit runs in the machine's default
-        // unit: the output says nothing either, unless it converts units.
-        let silent = p.units.origin == UnitsOrigin::Assumed && self.o.unit.is_none();
+        let silent = self.unit_silent;
         let unit = |i: &str, m: &str| -> String {
             if silent {
                 String::new()
@@ -1320,6 +1320,7 @@ impl W<'_> {
             spindlef: self.spindlef,
             source: self.source,
             source_unit: self.source_unit,
+            unit_silent: self.unit_silent,
             auto_tlc: self.auto_tlc,
             auto_tcp: self.auto_tcp,
             st,
@@ -1416,6 +1417,9 @@ pub(super) fn write_all(
     if !o.target.is_gcode() {
         return Err(WriteError::new(0, "APT is written by the APT writer"));
     }
+    // A source that never said its unit runs in the machine's default unit:
+    // the output says nothing either, unless it is asked for a unit.
+    let unit_silent = p.units.origin == UnitsOrigin::Assumed && o.unit.is_none();
     let o = o.resolved(p);
     let k = 1.0 / o.unit().mm();
     let decimals = if o.unit() == LengthUnit::Inch { 5 } else { 4 };
@@ -1456,6 +1460,7 @@ pub(super) fn write_all(
         },
         source: p.source,
         source_unit: p.units.source,
+        unit_silent,
         // CL data are tool-tip positions and leave compensation to the post;
         // a G-code program says what it wants, and nothing is added to it.
         auto_tlc: cl_data && !has(|k| matches!(k, EventKind::ToolLength(_))),
