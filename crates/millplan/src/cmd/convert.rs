@@ -1,7 +1,7 @@
 //! `millplan convert`: read a program in any supported format, write it in another.
 
 use crate::cmd::{print_diagnostics, read_options, target_for, write_program, TargetArg, UnitArg};
-use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, write_atomic};
 use millplan_nc::equiv::{compare, Tolerance};
 use millplan_nc::LengthUnit;
@@ -17,7 +17,7 @@ use std::path::PathBuf;
 /// the source never set is never written; words the source dialect keeps
 /// verbatim are copied into the same dialect, and a word another dialect
 /// cannot express stops the conversion at its line (--lossy: a comment and a
-/// warning instead). Arcs outside the XY/ZX/YZ planes and canned cycles are
+/// warning instead, exit 3 when the output commands less than the source). Arcs outside the XY/ZX/YZ planes and canned cycles are
 /// written as straight lines. The output is written to a temporary file and
 /// renamed, so a failed run leaves nothing behind.
 #[derive(clap::Args)]
@@ -45,7 +45,8 @@ pub struct Args {
     #[arg(long)]
     pub line_numbers: bool,
     /// Write words the target cannot express as comments (a warning each)
-    /// instead of refusing the conversion.
+    /// instead of refusing the conversion; exit 3 when the output then
+    /// commands less than the source.
     #[arg(long)]
     pub lossy: bool,
     /// Machine file (examples/machine.toml): its control's dialect is the
@@ -61,8 +62,9 @@ pub struct Args {
 
 /// Reads the output back and runs it and its source through the same
 /// interpreter: a program that would command something else is not written
-/// (with --lossy, where words were dropped on purpose, it is, with a warning).
-fn check_output(p: &millplan_nc::Program, out: &[u8], a: &Args) -> CliResult<()> {
+/// (with --lossy, where words were dropped on purpose, it is, with a warning,
+/// and the run ends with exit 3). Returns whether the output is equivalent.
+fn check_output(p: &millplan_nc::Program, out: &[u8], a: &Args) -> CliResult<bool> {
     let text = String::from_utf8_lossy(out);
     let back =
         millplan_nc::parse_program(&text, millplan_nc::ReadOptions::default()).map_err(|e| {
@@ -72,15 +74,14 @@ fn check_output(p: &millplan_nc::Program, out: &[u8], a: &Args) -> CliResult<()>
             ))
         })?;
     match compare(p, &back.program, &Tolerance::default()) {
-        Ok(_) => Ok(()),
+        Ok(_) => Ok(true),
         Err(m) if a.lossy => {
-            if !a.quiet {
-                eprintln!(
-                    "{}: warning: the output does not command what the source does ({m})",
-                    a.output.display()
-                );
-            }
-            Ok(())
+            // Said even with --quiet: the exit code alone does not say why.
+            eprintln!(
+                "{}: warning: written with --lossy, the output does not command what the source does ({m})",
+                a.output.display()
+            );
+            Ok(false)
         }
         Err(m) => Err(CliError::internal(format!(
             "{}:{}: the output would not command what the source does ({m}); not written",
@@ -111,7 +112,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     o.line_numbers = a.line_numbers;
     o.lossy = a.lossy;
     let out = write_program(&p, o, &a.input, a.quiet)?;
-    check_output(&p, &out, &a)?;
+    let equivalent = check_output(&p, &out, &a)?;
     write_atomic(&a.output, &out, &[&a.input])?;
     eprintln!(
         "wrote {} ({} moves, {})",
@@ -119,5 +120,5 @@ pub fn run(a: Args) -> CliResult<i32> {
         p.move_count(),
         target.name()
     );
-    Ok(EXIT_OK)
+    Ok(if equivalent { EXIT_OK } else { EXIT_FINDINGS })
 }
