@@ -323,3 +323,38 @@ fn apt_multax_off_turns_the_tool_vertical() {
     let text = equivalent(&p, Target::Heidenhain);
     assert!(text.contains("TZ+1"), "{text}");
 }
+
+#[test]
+fn sinumerik_definitions_lead_the_program_and_keep_their_commas() {
+    let p = parse("N10 DEF REAL _A, _B=2 ; two\nN20 G71 G90\nN30 T=\"EM10\"\nN40 M6\nN50 G0 X=_B Y1 Z5\nN60 DEF INT _C\nM30\n");
+    let text = equivalent(&p, Target::Sinumerik);
+    let first_code = text
+        .lines()
+        .position(|l| !l.starts_with(';') && !l.starts_with("DEF"))
+        .expect("code");
+    let defs: Vec<usize> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.starts_with("DEF"))
+        .map(|(i, _)| i)
+        .collect();
+    assert_eq!(defs.len(), 2, "{text}");
+    assert!(defs.iter().all(|i| *i < first_code), "{text}");
+    assert!(text.contains("DEF REAL _A, _B=2"), "{text}");
+}
+
+#[test]
+fn a_restated_apt_frame_neither_splits_the_operation_nor_ends_its_cycle() {
+    let p = parse(
+        "PARTNO T\nUNITS/MM\nLOAD/TOOL,15\nSPINDL/1000,RPM,CLW\nCSYS/1.,0,0,0,0,1.,0,0,0,0,1.,0\nRAPID/\nGOTO/10,10,100.\n\
+         CYCLE/DRILL,FEDTO,7.65,MMPM,125.,RAPTO,3.,RTRCTO,100.\nGOTO/10,10,0\nGOTO/20,10,0\n\
+         CSYS/1.,0,0,0,0,1.,0,0,0,0,1.,0\nGOTO/30,10,0\nFINI\n",
+    );
+    assert_eq!(p.operations.len(), 1);
+    let holes = p.operations[0]
+        .moves
+        .iter()
+        .filter(|m| matches!(m.kind, MoveKind::Cycle(_)))
+        .count();
+    assert_eq!(holes, 3);
+}

@@ -1059,10 +1059,15 @@ impl AptReader {
     }
 
     fn set_frame(&mut self, f: Frame) {
+        let frame = if f.is_identity() { None } else { Some(f) };
+        // SOLIDWORKS CAM restates the frame it is in: nothing changes.
+        if frame == self.op.frame {
+            return;
+        }
         if !self.op.moves.is_empty() {
             self.start_new_op(false);
         }
-        self.op.frame = if f.is_identity() { None } else { Some(f) };
+        self.op.frame = frame;
     }
 
     fn set_units(&mut self, u: LengthUnit, origin: UnitsOrigin, ln: u32) {
@@ -1188,6 +1193,8 @@ impl AptReader {
         self.op.tool = prev.tool.clone();
         self.op.frame = if fresh_frame { None } else { prev.frame };
         self.op.start = self.pos.unwrap_or(UNKNOWN);
+        // A new operation ends a cycle: SOLIDWORKS CAM writes no CYCLE/OFF
+        // before the contour of its next tool.
         self.cycle = None;
         self.ops.push(prev);
     }

@@ -568,7 +568,7 @@ impl GcodeReader {
         if lexed.block_delete {
             return self.optional_block(&lexed.toks, ln);
         }
-        self.block(&lexed.toks, ln)
+        self.block(raw, &lexed.toks, ln)
     }
 
     /// A block-delete block: it may run or not, so it is kept as written and
@@ -650,7 +650,7 @@ impl GcodeReader {
     }
 
     /// Blocks that are frame changes or declarations as a whole.
-    fn whole_block(&mut self, toks: &[(Tok, u32)], ln: u32) -> Option<()> {
+    fn whole_block(&mut self, raw: &str, toks: &[(Tok, u32)], ln: u32) -> Option<()> {
         let Some((Tok::Keyword(k), _)) = toks.iter().find(|(t, _)| matches!(t, Tok::Keyword(_)))
         else {
             return None;
@@ -701,7 +701,15 @@ impl GcodeReader {
                     }
                 }
             }
-            self.passthrough("DEF", &block_text(toks), PassClass::Info, false, false, ln);
+            // As written (`DEF REAL _A, _B=2`), without its block number and comment.
+            let code = raw.split(';').next().unwrap_or(raw).trim();
+            let code = match code.strip_prefix(['N', 'n']) {
+                Some(r) if r.starts_with(|c: char| c.is_ascii_digit()) => r
+                    .trim_start_matches(|c: char| c.is_ascii_digit())
+                    .trim_start(),
+                _ => code,
+            };
+            self.passthrough("DEF", code, PassClass::Info, false, false, ln);
             return Some(());
         }
         None
@@ -729,12 +737,16 @@ impl GcodeReader {
                             self.spindle = v;
                         }
                         'T' => {
-                            if v < 0.0 || v.fract() != 0.0 {
+                            if v < 0.0 || v.fract() != 0.0 || v > f64::from(u32::MAX) {
                                 // `T9.` pre-selects tool 9; `T1.5` is not a tool number.
                                 return Err(ParseError::new(
                                     ln,
                                     col,
-                                    format!("tool number T{} is not whole", fmt_num(v)),
+                                    format!(
+                                        "tool number T{} is not a whole number up to {}",
+                                        fmt_num(v),
+                                        u32::MAX
+                                    ),
                                 ));
                             }
                             self.selected_tool = Some((Some(v as u32), None, ln));
@@ -899,8 +911,8 @@ impl GcodeReader {
         self.op.push_event(ln, EventKind::Tcp(on));
     }
 
-    fn block(&mut self, toks: &[(Tok, u32)], ln: u32) -> Result<(), ParseError> {
-        if self.whole_block(toks, ln).is_some() {
+    fn block(&mut self, raw: &str, toks: &[(Tok, u32)], ln: u32) -> Result<(), ParseError> {
+        if self.whole_block(raw, toks, ln).is_some() {
             return Ok(());
         }
         if let Some(code) = toks.iter().find_map(|(t, _)| match t {
@@ -1043,7 +1055,9 @@ impl GcodeReader {
         // Tool length: G43 Hn, G43.4/G43.5 Hn (with TCP), G49; Sinumerik D.
         if let Some((code, col)) = tlc {
             let register = match w.h.take() {
-                Some(h) if h >= 0.0 && h.fract() == 0.0 => Some(h as u32),
+                Some(h) if h >= 0.0 && h.fract() == 0.0 && h <= f64::from(u32::MAX) => {
+                    Some(h as u32)
+                }
                 Some(h) => {
                     return Err(ParseError::new(
                         ln,
@@ -1075,7 +1089,8 @@ impl GcodeReader {
                 }
             }
         }
-        let d_register = |d: f64| (d >= 0.0 && d.fract() == 0.0).then_some(d as u32);
+        let d_register =
+            |d: f64| (d >= 0.0 && d.fract() == 0.0 && d <= f64::from(u32::MAX)).then_some(d as u32);
         if self.sinumerik() {
             if let Some(d) = w.d.take() {
                 let t = match d_register(d) {

@@ -167,6 +167,13 @@ impl W<'_> {
         self.out.push(b'\n');
     }
 
+    /// A Sinumerik source's `DEF` blocks go to the head of a Sinumerik output.
+    fn defs_first(&self) -> bool {
+        self.target() == Target::Sinumerik
+            && self.source == Dialect::Sinumerik
+            && self.o.unit() == self.source_unit
+    }
+
     /// A Heidenhain source's tool-call deltas go into this output's tool calls.
     fn deltas_copied(&self) -> bool {
         self.target() == Target::Heidenhain
@@ -202,6 +209,17 @@ impl W<'_> {
             }
             Target::Sinumerik => {
                 self.comment(&format!("{name} - written by millplan"));
+                // Sinumerik takes definitions only before the first
+                // executable block.
+                if self.defs_first() {
+                    for e in p.operations.iter().flat_map(|o| &o.events) {
+                        if let EventKind::Passthrough(x) = &e.kind {
+                            if x.word == "DEF" {
+                                self.line(&x.text);
+                            }
+                        }
+                    }
+                }
                 self.line(&format!("G17{} G90 G94 G40", unit("G70", "G71")));
             }
             Target::LinuxCnc => {
@@ -619,8 +637,10 @@ impl W<'_> {
             }),
             EventKind::Passthrough(p) => {
                 let same_unit = self.o.unit() == self.source_unit || super::unit_free(&p.text);
-                if p.word == TOOL_DELTAS && self.deltas_copied() {
-                    // Written with the tool call.
+                if p.word == TOOL_DELTAS && self.deltas_copied()
+                    || p.word == "DEF" && self.defs_first()
+                {
+                    // Written with the tool call; definitions in the header.
                     Words::Nothing
                 } else if super::copies_verbatim(self.source, target, p) && same_unit {
                     if p.modal {
