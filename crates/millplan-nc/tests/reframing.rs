@@ -358,3 +358,40 @@ fn a_restated_apt_frame_neither_splits_the_operation_nor_ends_its_cycle() {
         .count();
     assert_eq!(holes, 3);
 }
+
+/// Written in inches from millimetres, read back and compared.
+fn in_inches(p: &Program, t: Target) -> String {
+    let mut o = millplan_nc::write::WriteOptions::new(t);
+    o.unit = Some(millplan_nc::LengthUnit::Inch);
+    let (b, _) = millplan_nc::write::write_program(p, o).expect("written");
+    let text = String::from_utf8(b).expect("UTF-8");
+    let q = parse(&text);
+    if let Err(e) = compare(p, &q, &Tolerance::default()) {
+        panic!("{} in inches differs: {e}\n{text}", t.name());
+    }
+    text
+}
+
+#[test]
+fn millimetres_written_in_inches_keep_small_steps_and_feeds_per_revolution() {
+    // -0.1127 and -0.112 mm are the same to 4 places of an inch, not to the 5
+    // written: the step in X was dropped.
+    let p = parse(
+        "G21 G90 G17 G94\nT1 M6\nG0 X-.1127 Y.048 Z1.7224\nG1 Y.0478 F10.\nX-.112 Y.0212\nX-.1123 Y.0089\n\
+         G95 G1 X40. F0.1\nM30\n",
+    );
+    for t in [Target::Fanuc, Target::LinuxCnc, Target::Sinumerik] {
+        let text = in_inches(&p, t);
+        assert!(
+            text.contains("0.003937"),
+            "{}: F0.1 mm/rev:\n{text}",
+            t.name()
+        );
+    }
+    // The cycle definition is copied only in its own unit: in inches the
+    // writer spells the holes out.
+    let hh = HH_CYCLE
+        .replace(" DL+0.1 DR-0.05", "")
+        .replace("10 M140 MB MAX F99999", "10 L Z+80 FMAX");
+    in_inches(&parse(&hh), Target::Heidenhain);
+}

@@ -749,6 +749,13 @@ impl W<'_> {
         }
     }
 
+    /// `v` (output units) on the grid of the written coordinates: positions
+    /// that print alike are the same (4 places in mm, 5 in inches).
+    fn grid(&self, v: f64) -> f64 {
+        let s = 10f64.powi(self.coord.decimals as i32);
+        (v * s).round() / s
+    }
+
     /// Writes the known coordinates of `end` that differ from the state (all
     /// known ones when `force`).
     fn coords(&mut self, end: DVec3, force: bool) {
@@ -758,7 +765,7 @@ impl W<'_> {
                 continue;
             }
             let v = end[k] * self.k;
-            let r = (v * 1e4).round() / 1e4;
+            let r = self.grid(v);
             if force || self.st.pos[k] != Some(r) {
                 let f = self.coord;
                 self.word(names[k], v, f);
@@ -860,7 +867,15 @@ impl W<'_> {
         };
         // Inverse time: every block carries its own F.
         if self.st.feed != Some(f) || self.st.fmax_last || mode == FeedMode::InverseTime {
-            let ff = self.feedf;
+            // Feeds per revolution (0.004 in) and block times need more places
+            // than feeds per minute.
+            let ff = match mode {
+                FeedMode::PerMinute => self.feedf,
+                _ => NumFmt {
+                    decimals: 6,
+                    ..self.feedf
+                },
+            };
             if self.hh() {
                 match mode {
                     FeedMode::PerMinute => self.word("F", f, ff),
@@ -1043,7 +1058,7 @@ impl W<'_> {
                 self.word(names[axis], end[axis] * self.k, f);
             }
             for k in 0..3 {
-                self.st.pos[k] = Some(((end[k] * self.k) * 1e4).round() / 1e4);
+                self.st.pos[k] = Some(self.grid(end[k] * self.k));
             }
             self.out
                 .extend_from_slice(if ccw { b" DR+".as_slice() } else { b" DR-" });
@@ -1091,7 +1106,10 @@ impl W<'_> {
             && match self.target() {
                 Target::Fanuc => matches!(code, Some(73 | 74 | 76 | 81..=89)),
                 Target::LinuxCnc => matches!(code, Some(73 | 81 | 82 | 83 | 85 | 89)),
-                Target::Heidenhain => self.source == Dialect::Heidenhain,
+                // Calls the source's own definition, copied only in its unit.
+                Target::Heidenhain => {
+                    self.source == Dialect::Heidenhain && self.o.unit() == self.source_unit
+                }
                 _ => false,
             }
     }
@@ -1135,7 +1153,7 @@ impl W<'_> {
                 self.line("G80");
             }
             // The control returns to the level the cycle starts from (G98).
-            let start_z = ((top * self.k) * 1e4).round() / 1e4;
+            let start_z = self.grid(top * self.k);
             if c.retract > 0.0 && self.st.pos[2] != Some(start_z) {
                 let mark = self.start_motion("");
                 self.motion(0);
@@ -1184,7 +1202,7 @@ impl W<'_> {
             self.coords(xy, false);
         }
         self.finish_motion(mark);
-        self.st.pos[2] = Some(((top.max(m.end.z) * self.k) * 1e4).round() / 1e4);
+        self.st.pos[2] = Some(self.grid(top.max(m.end.z) * self.k));
         Ok(())
     }
 
