@@ -395,3 +395,30 @@ fn millimetres_written_in_inches_keep_small_steps_and_feeds_per_revolution() {
         .replace("10 M140 MB MAX F99999", "10 L Z+80 FMAX");
     in_inches(&parse(&hh), Target::Heidenhain);
 }
+
+#[test]
+fn cycle_lengths_agree_between_a_g98_source_and_every_output() {
+    let p = parse(
+        "%\nO2000\nG21 G17 G90 G94 G40 G49 G80\nT1 M6\nS1000 M3\nG54\nG0 X0. Y0.\nG43 H1 Z50.\n\
+         G98 G81 X10. Y10. Z-5. R2. F100.\nX30. Y10.\nG80\nG0 Z50.\nM30\n%\n",
+    );
+    // Across at 50, down to R2, drill to -5, back to 50 (G98), twice:
+    // √200 + 48 + 55 + 20 + 48 + 55 mm at rapid.
+    let want = 200f64.sqrt() + 48.0 + 55.0 + 20.0 + 48.0 + 55.0;
+    let rapid = |q: &Program| millplan_nc::stats::summarize(q, 10_000.0).rapid_mm;
+    assert!((rapid(&p) - want).abs() < 1e-9, "{}", rapid(&p));
+    for t in [
+        Target::Fanuc,
+        Target::LinuxCnc,
+        Target::Sinumerik,
+        Target::Heidenhain,
+    ] {
+        let q = parse(&equivalent(&p, t));
+        assert!(
+            (rapid(&q) - want).abs() < 1e-6,
+            "{}: {}",
+            t.name(),
+            rapid(&q)
+        );
+    }
+}

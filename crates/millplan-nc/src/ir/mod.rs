@@ -793,12 +793,16 @@ impl Operation {
         CycleId::new(self.cycles.len() - 1)
     }
 
-    /// Start position of move `i`; NaN where unknown.
+    /// Start position of move `i`: where the previous move left the tool (after
+    /// a canned-cycle hole, the level the cycle returns to); NaN where unknown.
     pub fn move_start(&self, i: usize) -> DVec3 {
         if i == 0 {
-            self.start
-        } else {
-            self.moves[i - 1].end
+            return self.start;
+        }
+        let p = &self.moves[i - 1];
+        match self.cycle(p) {
+            Some(c) => p.end + self.axis(p).unwrap_or(DVec3::Z) * c.retract.max(c.clearance),
+            None => p.end,
         }
     }
 
