@@ -422,3 +422,27 @@ fn cycle_lengths_agree_between_a_g98_source_and_every_output() {
         );
     }
 }
+
+#[test]
+fn block_numbers_stay_within_five_digits() {
+    let mut src = String::from("G21 G90 G17 G94\nT1 M6\nG0 X0 Y0 Z5.\nG1 Z0 F100.\n");
+    for i in 1..=10_500 {
+        src.push_str(&format!("X{}.\n", i % 2));
+    }
+    src.push_str("M30\n");
+    let p = parse(&src);
+    for t in [Target::Fanuc, Target::LinuxCnc] {
+        let mut o = millplan_nc::write::WriteOptions::new(t);
+        o.line_numbers = true;
+        let (b, _) = millplan_nc::write::write_program(&p, o).expect("written");
+        let text = String::from_utf8(b).expect("UTF-8");
+        let longest = text
+            .lines()
+            .filter_map(|l| l.strip_prefix('N'))
+            .map(|l| l.bytes().take_while(u8::is_ascii_digit).count())
+            .max();
+        assert_eq!(longest, Some(5), "{}", t.name());
+        let q = parse(&text);
+        compare(&p, &q, &Tolerance::default()).expect("the same program");
+    }
+}

@@ -121,6 +121,11 @@ impl W<'_> {
             self.st.block_no += 1;
         } else if self.o.line_numbers {
             self.st.block_no += 10;
+            // Fanuc and LinuxCNC read five digits of N: the numbers start
+            // again (they are labels, not an order).
+            if self.o.target != Target::Sinumerik && self.st.block_no > 99_999 {
+                self.st.block_no = 10;
+            }
             let s = format!("N{} ", self.st.block_no);
             self.out.extend_from_slice(s.as_bytes());
         }
