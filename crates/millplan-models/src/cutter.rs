@@ -95,6 +95,34 @@ impl Shape {
         Ok(shape)
     }
 
+    /// The cutter shrunk inward by `t` (every point at least `t` inside the
+    /// original, or a shape a little larger where the exact inset is not one
+    /// of these shapes), and how far its tip rises: the tool that must still
+    /// meet the part for a contact to be more than `t` deep in any direction.
+    pub fn inset(&self, t: f64) -> (Shape, f64) {
+        let t = t.max(0.0).min(self.radius());
+        match *self {
+            Shape::Flat { radius } => (Shape::Flat { radius: radius - t }, t),
+            Shape::Ball { radius } => (Shape::Ball { radius: radius - t }, t),
+            Shape::Bull { radius, corner } if corner > t => (
+                Shape::Bull {
+                    radius: radius - t,
+                    corner: corner - t,
+                },
+                t,
+            ),
+            Shape::Bull { radius, .. } => (Shape::Flat { radius: radius - t }, t),
+            // The flank moves in by t; the tip rises by t / cos(alpha).
+            Shape::Cone { radius, alpha } => (
+                Shape::Cone {
+                    radius: radius - t,
+                    alpha,
+                },
+                t / alpha.cos().max(1e-6),
+            ),
+        }
+    }
+
     pub fn radius(&self) -> f64 {
         match *self {
             Shape::Flat { radius }

@@ -152,9 +152,25 @@ pub fn check(
     let depths: Vec<f64> = samples
         .par_iter()
         .map(|(_, _, q, sh)| {
-            part.drop(sh, DVec2::new(q.x, q.y))
+            let c = DVec2::new(q.x, q.y);
+            let depth = part
+                .drop(sh, c)
                 .map(|d| d.z - q.z)
-                .unwrap_or(f64::NEG_INFINITY)
+                .unwrap_or(f64::NEG_INFINITY);
+            if depth <= g.tol {
+                return depth;
+            }
+            // Deeper than the tolerance below where the tool would rest, but
+            // is it into the part by more than the tolerance in any direction?
+            // A tool standing exactly at a vertical wall is not: the tool
+            // shrunk by the tolerance must still meet the part.
+            let (inner, rise) = sh.inset(g.tol);
+            let into = part.drop(&inner, c).is_some_and(|d| d.z > q.z + rise);
+            if into {
+                depth
+            } else {
+                f64::NEG_INFINITY
+            }
         })
         .collect();
     for ((oi, mi, q, _), d) in samples.iter().zip(&depths) {

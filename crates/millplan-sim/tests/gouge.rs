@@ -1,0 +1,101 @@
+//! Gouge check against a box: a tool beside a vertical wall gouges by how far
+//! it stands inside the wall, and standing exactly at it (or within the
+//! tolerance) is not a gouge, whatever the tool's shape.
+
+use millplan_geom::{DVec3, TriMesh};
+use millplan_models::cutter::Shape;
+use millplan_nc::{parse_program, Program, ReadOptions};
+use millplan_sim::dropcutter::DropMesh;
+use millplan_sim::gouge::{check, GougeParams};
+
+/// The box [10,110] × [10,110] × [-30,-1], closed.
+fn box_mesh() -> DropMesh {
+    let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let (x0, x1, y0, y1, z0, z1) = (10.0, 110.0, 10.0, 110.0, -30.0, -1.0);
+    let c = [
+        v(x0, y0, z0),
+        v(x1, y0, z0),
+        v(x1, y1, z0),
+        v(x0, y1, z0),
+        v(x0, y0, z1),
+        v(x1, y0, z1),
+        v(x1, y1, z1),
+        v(x0, y1, z1),
+    ];
+    let quads = [
+        [0, 3, 2, 1],
+        [4, 5, 6, 7],
+        [0, 1, 5, 4],
+        [1, 2, 6, 5],
+        [2, 3, 7, 6],
+        [3, 0, 4, 7],
+    ];
+    let mut soup = Vec::new();
+    for q in quads {
+        soup.push([c[q[0]], c[q[1]], c[q[2]]]);
+        soup.push([c[q[0]], c[q[2]], c[q[3]]]);
+    }
+    let (mesh, _) = TriMesh::from_soup(&soup);
+    DropMesh::new(&mesh)
+}
+
+/// A pass along the wall y = 10 at depth -20 with the tool axis at `y`.
+fn pass(y: f64) -> Program {
+    let src = format!(
+        "PARTNO WALL\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nRAPID\nGOTO/0,{y},20\nGOTO/0,{y},-20\nGOTO/120,{y},-20\nFINI\n"
+    );
+    parse_program(&src, ReadOptions::default())
+        .expect("reads")
+        .program
+}
+
+#[test]
+fn a_tool_at_a_wall_gouges_only_when_inside_it() {
+    let part = box_mesh();
+    let g = GougeParams::default();
+    let shapes = [
+        Shape::Flat { radius: 7.0 },
+        Shape::Ball { radius: 7.0 },
+        Shape::Bull {
+            radius: 7.0,
+            corner: 2.0,
+        },
+    ];
+    for sh in shapes {
+        for (inside, gouges) in [
+            (-0.01, false),
+            (0.0, false),
+            (g.tol * 0.5, false),
+            (0.05, true),
+            (0.5, true),
+        ] {
+            let p = pass(10.0 - 7.0 + inside);
+            let rep = check(&p, &part, |_| Some(sh), &g);
+            assert!(rep.points_checked > 0);
+            assert_eq!(
+                !rep.gouges.is_empty(),
+                gouges,
+                "{sh:?} {inside} mm inside the wall: {:?}",
+                rep.gouges
+            );
+        }
+    }
+}
+
+#[test]
+fn a_tool_below_the_top_gouges_by_its_depth() {
+    // Straight down onto the top face at z = -1: 0.5 mm below it.
+    let part = box_mesh();
+    let src = "PARTNO TOP\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nRAPID\nGOTO/50,50,20\nGOTO/50,50,-1.5\nGOTO/60,50,-1.5\nFINI\n";
+    let p = parse_program(src, ReadOptions::default())
+        .expect("reads")
+        .program;
+    let rep = check(
+        &p,
+        &part,
+        |_| Some(Shape::Ball { radius: 3.0 }),
+        &GougeParams::default(),
+    );
+    let deepest = rep.gouges.iter().map(|g| g.depth).fold(0.0, f64::max);
+    assert!((deepest - 0.5).abs() < 1e-9, "{deepest}");
+}
