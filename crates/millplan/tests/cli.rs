@@ -457,3 +457,18 @@ fn the_binary_stays_thin() {
     }
     assert!(long.is_empty(), "functions of 80 lines or more: {long:?}");
 }
+
+#[test]
+fn explain_takes_a_code_as_it_is_printed() {
+    for arg in [
+        "unknown-word",
+        "warning[unknown-word]",
+        "note[block-delete]",
+    ] {
+        let out = bin().args(["explain", arg]).output().expect("runs");
+        assert!(out.status.success(), "{arg}");
+        assert!(!out.stdout.is_empty(), "{arg}");
+    }
+    let out = bin().args(["explain", "no-such"]).output().expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+}

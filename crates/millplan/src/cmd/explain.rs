@@ -7,16 +7,25 @@ use millplan_nc::diag::Code;
 /// what to do about it. Without a code, every code.
 #[derive(clap::Args)]
 pub struct Args {
-    /// A code as printed, e.g. unknown-word.
+    /// A code as printed: `unknown-word`, or the whole `warning[unknown-word]`.
     pub code: Option<String>,
     /// Print the codes and their explanations as JSON.
     #[arg(long)]
     pub json: bool,
 }
 
+/// `warning[unknown-word]` → `unknown-word`.
+fn bare(c: &str) -> &str {
+    let c = c.trim();
+    match (c.find('['), c.rfind(']')) {
+        (Some(a), Some(b)) if a < b => &c[a + 1..b],
+        _ => c,
+    }
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     let codes: Vec<Code> = match &a.code {
-        Some(c) => vec![Code::from_name(c.trim()).ok_or_else(|| {
+        Some(c) => vec![Code::from_name(bare(c)).ok_or_else(|| {
             CliError::input(format!(
                 "`{c}` is not a millplan code; `millplan explain` lists them all"
             ))
