@@ -10,9 +10,8 @@ pub enum Severity {
 }
 
 /// The stable code of every finding millplan reports: one variant each, with a
-/// one-line explanation (`millplan explain CODE` prints it; the codes are
-/// listed in ARCHITECTURE.md). Codes are spelled in kebab case wherever they
-/// are printed.
+/// one-line explanation (`millplan explain CODE` prints it, `millplan explain`
+/// all of them). Codes are spelled in kebab case wherever they are printed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Code {
     UnknownWord,
