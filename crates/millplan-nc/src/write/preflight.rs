@@ -12,9 +12,7 @@ use millplan_geom::DVec3;
 /// Refuses a program with a number no target can write, or one whose written
 /// form would exceed the limits of `o`, at the source line that asks for it.
 pub fn check(p: &Program, o: &WriteOptions) -> Result<(), WriteError> {
-    for op in &p.operations {
-        finite_op(op)?;
-    }
+    finite(p)?;
     let mut lines: f64 = 0.0;
     for op in &p.operations {
         lines += written_moves(op, o)?;
@@ -34,6 +32,12 @@ pub fn check(p: &Program, o: &WriteOptions) -> Result<(), WriteError> {
         ));
     }
     Ok(())
+}
+
+/// Refuses a program with a number that is not finite (coordinates may be
+/// NaN: unknown, never written), at its source line.
+pub fn finite(p: &Program) -> Result<(), WriteError> {
+    p.operations.iter().try_for_each(finite_op)
 }
 
 /// How many lines an arc takes when written as chords of tolerance `tol`

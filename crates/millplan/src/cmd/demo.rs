@@ -72,24 +72,25 @@ pub fn run(a: Args) -> CliResult<i32> {
         write_atomic(path, bytes, &[])?;
     }
     let s = millplan_nc::stats::summarize(&program, 15000.0);
-    println!(
+    outln!(
         "millplan demo: free-form part {} triangles, ball D10 raster {} points",
         mesh.len(),
         program.move_count()
     );
-    println!(
+    outln!(
         "  cutting length {:.0} mm, estimated time {:.0} s",
-        s.cutting_mm, s.time_s
+        s.cutting_mm,
+        s.time_s
     );
     for (path, bytes) in &written {
-        println!("  wrote {} ({} bytes)", path.display(), bytes.len());
+        outln!("  wrote {} ({} bytes)", path.display(), bytes.len());
     }
     let r = &res.summary;
-    println!(
+    outln!(
         "spindle control: D_w {:.2}…{:.2} mm, n {:.0}…{:.0} 1/min; vc {:.1}…{:.1} m/min with control vs {:.1}…{:.1} at a constant {:.0} 1/min",
         r.d_w.min, r.d_w.max, r.spindle.min, r.spindle.max, r.vc_controlled.min, r.vc_controlled.max, r.vc_constant.min, r.vc_constant.max, r.constant_spindle
     );
-    println!(
+    outln!(
         "open {} in a browser for the plots",
         a.output.join("report.html").display()
     );

@@ -52,9 +52,12 @@ pub fn run(a: Args) -> CliResult<i32> {
     let (csv, figures) = sweep(&design);
     let fit = a.fit.then(|| Surrogate::fit(&samples()).fit);
     if let Some(f) = &fit {
-        println!(
+        outln!(
             "regression surrogate: {} samples, R² {:.4}, RMSE {:.4} mm, MAPE {:.2} %",
-            f.samples, f.r2, f.rmse, f.mape
+            f.samples,
+            f.r2,
+            f.rmse,
+            f.mape
         );
     }
     let html = page(&figures, fit.as_ref());
@@ -64,6 +67,6 @@ pub fn run(a: Args) -> CliResult<i32> {
     );
     write_atomic(&c, csv.as_bytes(), &[])?;
     write_atomic(&h, html.as_bytes(), &[])?;
-    println!("wrote {} and {}", c.display(), h.display());
+    outln!("wrote {} and {}", c.display(), h.display());
     Ok(EXIT_OK)
 }
