@@ -556,6 +556,57 @@ pub fn stdout_failure() -> Option<String> {
 mod tests {
     use super::*;
 
+    /// Issue 17: "with several outputs (`-o`, `--table`, `--report`), a
+    /// failure in a later one leaves the earlier ones written". Nothing is
+    /// in place until every output is written; a failure leaves neither the
+    /// outputs nor their temporary files.
+    #[test]
+    fn outputs_land_together_or_not_at_all() {
+        let dir = tempfile::tempdir().expect("tmp");
+        let (a, b) = (dir.path().join("a.nc"), dir.path().join("b.csv"));
+        std::fs::write(&b, "old").expect("write");
+        let mut o =
+            Outputs::plan(&[], &[("-o", Some(&a)), ("--table", Some(&b))], false).expect("plan");
+        o.write(&a, b"program").expect("stage a");
+        assert!(!a.exists(), "staged, not yet in place");
+        let e = o
+            .write_with(&b, |w| {
+                w.write_all(b"half")?;
+                Err(std::io::Error::other("disk full"))
+            })
+            .expect_err("fails");
+        assert!(e.message.contains("disk full"), "{e}");
+        drop(o);
+        assert!(!a.exists());
+        assert_eq!(std::fs::read_to_string(&b).expect("b"), "old");
+        let left: Vec<_> = std::fs::read_dir(dir.path())
+            .expect("dir")
+            .flatten()
+            .collect();
+        assert_eq!(left.len(), 1, "{left:?}");
+        assert!(staged().is_empty());
+        // All written: all in place, the replaced file keeps its mode.
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            std::fs::set_permissions(&b, std::fs::Permissions::from_mode(0o600)).expect("chmod");
+        }
+        let mut o =
+            Outputs::plan(&[], &[("-o", Some(&a)), ("--table", Some(&b))], false).expect("plan");
+        o.write(&a, b"program").expect("a");
+        o.write(&b, b"table").expect("b");
+        o.commit().expect("commit");
+        assert_eq!(std::fs::read_to_string(&a).expect("a"), "program");
+        assert_eq!(std::fs::read_to_string(&b).expect("b"), "table");
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&b).expect("b").permissions().mode() & 0o777;
+            assert_eq!(mode, 0o600);
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 2);
+    }
+
     #[test]
     fn lines_end_at_lf_crlf_and_cr_across_reads() {
         // A reader of 1-byte reads puts every CR and LF in a read of its own.
