@@ -1203,3 +1203,97 @@ fn eight_concurrent_writers_all_succeed() {
     assert_eq!(e, m, "every measurement logged once");
     eprintln!("{} measurements by {WRITERS} processes in {secs:.1} s: 0 failed, integrity ok, {m} measurements = {e} events", WRITERS * EACH);
 }
+
+/// Found fuzzing the tool-room commands: `tool cycle --clearance nan` wrote
+/// `Q260=+NaN`, `tool measure --dset inf` accepted any first measurement,
+/// `wd-sweep --af-step 1e-300` never ended.
+#[test]
+fn tool_room_and_sweep_numbers_are_checked() {
+    let b = Bench::new();
+    for args in [
+        &[
+            "tool", "--db", "lib.db", "add", "1", "--l", "100", "--r", "5",
+        ][..],
+        &[
+            "tool", "--db", "lib.db", "preset", "1", "--l", "100", "--r", "5",
+        ][..],
+    ] {
+        let o = b.run(args);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    b.refused(
+        &[
+            "tool",
+            "--db",
+            "lib.db",
+            "cycle",
+            "1",
+            "--clearance",
+            "nan",
+            "-o",
+            "c.h",
+        ],
+        "--clearance NaN: must be a number above 0",
+    );
+    b.refused(
+        &[
+            "tool", "--db", "lib.db", "measure", "1", "--first", "--l", "100", "--r", "5",
+            "--dset", "inf",
+        ],
+        "--dset inf: must be a number from 0 to 10 mm",
+    );
+    b.refused(
+        &[
+            "tool", "--db", "lib.db", "measure", "1", "--l", "nan", "--r", "5",
+        ],
+        "measured L must be a non-negative number",
+    );
+    b.refused(
+        &["thread", "check", "M20x1", "--class", "6H", "--d2", "inf"],
+        "D2 must be a positive number",
+    );
+    b.refused(
+        &["wd-sweep", "--af-step", "1e-300", "-o", "sweep"],
+        "--af-step 1e-300: must be a number from 0.1 to 180 degrees",
+    );
+    b.refused(
+        &["wd-sweep", "--d", "10,inf", "-o", "sweep"],
+        "--d inf: must be a number above 0",
+    );
+}
+
+/// The hostile inputs stay in bounds under a cap on the process's memory
+/// (`ulimit -v`): refused with exit 2, never killed by the allocator.
+#[test]
+fn limits_hold_under_a_memory_cap() {
+    let b = Bench::new();
+    b.write("nurbs.apt", b"CUTTER/10\nFEDRAT/100\nGOTO/0,0,0\nNURBS/\nKNOT/0.5,1\nCNTRL/1e12,0,0\nCNTRL/0,1e12,0\nCNTRL/1e12,1e12,0\nCNTRL/0,0,1e12\nFINI\n");
+    b.write("peck.nc", b"G21 G17 G90 G94\nT2 M6\nG0 X10. Y10. Z5.\nG98 G83 X10. Y10. Z-20. R2. Q0.000001 F100.\nG80\nM30\n");
+    let bin = env!("CARGO_BIN_EXE_millplan");
+    for (cmd, needle) in [
+        (format!("{bin} inspect nurbs.apt"), "expansion limit"),
+        (
+            format!("{bin} convert peck.nc --to linuxcnc -o p.ngc"),
+            "at most 1000 are accepted",
+        ),
+        (
+            format!(
+                "{bin} raster --stl part.stl --tool ball:10 --stepover 0.01 --step 0.001 -o r.apt"
+            ),
+            "moves limit",
+        ),
+        (
+            format!("{bin} gouge ball.apt --stl part.stl --step 0.001 --limit memory=1"),
+            "memory limit",
+        ),
+    ] {
+        let o = Command::new("sh")
+            .current_dir(b.dir.path())
+            .arg("-c")
+            .arg(format!("ulimit -v 2000000 && exec {cmd}"))
+            .output()
+            .expect("sh");
+        assert_eq!(o.status.code(), Some(2), "{cmd}: {}", stderr(&o));
+        assert!(stderr(&o).contains(needle), "{cmd}: {}", stderr(&o));
+    }
+}

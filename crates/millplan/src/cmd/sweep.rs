@@ -38,7 +38,27 @@ pub struct Args {
     pub fit: bool,
 }
 
+/// Every value in its range: a feed-direction step of 1e-300 would never end.
+fn check(a: &Args) -> CliResult<()> {
+    use crate::cmd::{arg, Range, MAX_TOOL_D};
+    for d in &a.d {
+        arg("--d", *d, Range::positive(MAX_TOOL_D, "mm"))?;
+    }
+    for ap in &a.ap {
+        arg("--ap", *ap, Range::positive(MAX_TOOL_D / 2.0, "mm"))?;
+    }
+    for ae in &a.ae {
+        arg("--ae", *ae, Range::from(0.0, MAX_TOOL_D, "mm"))?;
+    }
+    for al in &a.alpha {
+        arg("--alpha", *al, Range::from(0.0, 89.9, "degrees"))?;
+    }
+    arg("--af-step", a.af_step, Range::from(0.1, 180.0, "degrees"))?;
+    Ok(())
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
+    check(&a)?;
     let design = Design {
         d: a.d,
         ap: a.ap,

@@ -404,6 +404,11 @@ fn add(db: &mut ToolDb, lib: &Lib, x: AddArgs) -> CliResult<i32> {
 }
 
 fn measure(db: &mut ToolDb, lib: &Lib, x: MeasureArgs) -> CliResult<i32> {
+    use crate::cmd::{arg, Range};
+    arg("--dset", x.dset, Range::from(0.0, 10.0, "mm"))?;
+    if let Some(pz) = x.pz {
+        arg("--pz", pz, Range::from(0.0, 1000.0, "mm"))?;
+    }
     let t = db.tool(x.number).map_err(|e| lib.err(e))?;
     let m = Measurement {
         tool: x.number,
@@ -489,6 +494,11 @@ fn import(db: &mut ToolDb, lib: &Lib, file: &Path) -> CliResult<i32> {
 }
 
 fn cycle(db: &ToolDb, lib: &Lib, x: CycleArgs) -> CliResult<i32> {
+    crate::cmd::arg(
+        "--clearance",
+        x.clearance,
+        crate::cmd::Range::positive(10_000.0, "mm"),
+    )?;
     let t = db.tool(x.number).map_err(|e| lib.err(e))?;
     let o = CycleOptions {
         kind: if x.first {
