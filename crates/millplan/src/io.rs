@@ -511,14 +511,6 @@ fn keep_mode(f: &File, target: &Path) {
     let _ = (f, target);
 }
 
-/// Writes the single output `path` of a run (checked as by
-/// [`Outputs::plan`]).
-pub fn write_atomic(path: &Path, bytes: &[u8], inputs: &[&Path]) -> CliResult<()> {
-    let mut o = Outputs::plan(inputs, &[("-o", Some(path))], false)?;
-    o.write(path, bytes)?;
-    o.commit()
-}
-
 // ---------------------------------------------------------------------------
 // Standard output.
 

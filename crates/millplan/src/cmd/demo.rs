@@ -1,7 +1,7 @@
 //! `millplan demo`: the whole flow on a bundled, generated example.
 
 use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::write_atomic;
+use crate::io::Outputs;
 use millplan_geom::analytic::{tessellate, DemoSurface};
 use millplan_nc::generate::{raster, Raster};
 use millplan_nc::write::{write_program, Target, WriteOptions};
@@ -21,6 +21,19 @@ pub struct Args {
     /// Folder for the demo's outputs (created if missing).
     #[arg(short, long, default_value = "millplan-demo")]
     pub output: PathBuf,
+}
+
+/// Writes every file, all of them or none.
+fn write_all(written: &[(PathBuf, Vec<u8>)]) -> CliResult<()> {
+    let named: Vec<(&str, Option<&std::path::Path>)> = written
+        .iter()
+        .map(|(p, _)| ("-o", Some(p.as_path())))
+        .collect();
+    let mut outputs = Outputs::plan(&[], &named, false)?;
+    for (path, bytes) in written {
+        outputs.write(path, bytes)?;
+    }
+    outputs.commit()
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -68,9 +81,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         )
         .into_bytes(),
     ));
-    for (path, bytes) in &written {
-        write_atomic(path, bytes, &[])?;
-    }
+    write_all(&written)?;
     let s = millplan_nc::stats::summarize(&program, 15000.0);
     outln!(
         "millplan demo: free-form part {} triangles, ball D10 raster {} points",

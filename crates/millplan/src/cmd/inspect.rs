@@ -91,12 +91,11 @@ fn program_json(p: &Program, diags: usize, rapid_rate: f64) -> Value {
 
 pub fn run(a: Args) -> CliResult<i32> {
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let rapid_rate = a.rapid_rate.unwrap_or(machine.rapid);
-    if !(rapid_rate > 0.0 && rapid_rate.is_finite()) {
-        return Err(crate::error::CliError::input(
-            "--rapid-rate must be positive (mm/min)",
-        ));
-    }
+    let rapid_rate = crate::cmd::arg(
+        "--rapid-rate",
+        a.rapid_rate.unwrap_or(machine.rapid),
+        crate::cmd::Range::positive(1e7, "mm/min"),
+    )?;
     let input = read_any(&a.file, read_options(a.units, None)?)?;
     match input {
         Input::Program(parsed) => {

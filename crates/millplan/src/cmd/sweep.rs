@@ -1,7 +1,7 @@
 //! `millplan wd-sweep`: the working diameter over a grid of cases (thesis 1).
 
 use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::write_atomic;
+use crate::io::Outputs;
 use millplan_models::regression::{samples, Surrogate};
 use millplan_report::sweep::{page, sweep, Design};
 use std::path::PathBuf;
@@ -85,8 +85,10 @@ pub fn run(a: Args) -> CliResult<i32> {
         a.output.join("wd_sweep.csv"),
         a.output.join("wd_sweep.html"),
     );
-    write_atomic(&c, csv.as_bytes(), &[])?;
-    write_atomic(&h, html.as_bytes(), &[])?;
+    let mut outputs = Outputs::plan(&[], &[("-o", Some(&c)), ("-o", Some(&h))], false)?;
+    outputs.write(&c, csv.as_bytes())?;
+    outputs.write(&h, html.as_bytes())?;
+    outputs.commit()?;
     outln!("wrote {} and {}", c.display(), h.display());
     Ok(EXIT_OK)
 }

@@ -82,6 +82,7 @@ pub enum ToolCommand {
     Export {
         #[arg(long, value_enum, default_value = "csv")]
         format: ExportFormat,
+        /// Output file (`-`: standard output).
         #[arg(short, long)]
         output: PathBuf,
     },
@@ -206,6 +207,7 @@ pub struct CycleArgs {
     /// Measure every tooth.
     #[arg(long)]
     pub per_tooth: bool,
+    /// Output file (`-`: standard output).
     #[arg(short, long)]
     pub output: PathBuf,
 }
