@@ -457,6 +457,16 @@ impl Outputs {
 
     /// Renames every staged output into place (after all were written).
     pub fn commit(mut self) -> CliResult<()> {
+        // What became a special file or a folder while the run worked is
+        // still not replaced: all are checked before the first rename.
+        for s in &self.staged {
+            if std::fs::metadata(&s.target).is_ok_and(|m| !m.is_file()) {
+                return Err(CliError::input(format!(
+                    "{}: no longer a regular file; nothing written",
+                    s.target.display()
+                )));
+            }
+        }
         for mut s in std::mem::take(&mut self.staged) {
             let Some(f) = s.file.take() else { continue };
             f.persist(&s.target).map_err(|e| {
@@ -597,6 +607,23 @@ mod tests {
             assert_eq!(mode, 0o600);
         }
         assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 2);
+    }
+
+    /// A target that turned into a folder (or a FIFO) while the run worked
+    /// is not replaced either.
+    #[test]
+    fn a_target_changed_meanwhile_is_not_replaced() {
+        let dir = tempfile::tempdir().expect("tmp");
+        let (a, b) = (dir.path().join("a.nc"), dir.path().join("b.nc"));
+        let mut o =
+            Outputs::plan(&[], &[("-o", Some(&a)), ("--report", Some(&b))], false).expect("plan");
+        o.write(&a, b"a").expect("a");
+        o.write(&b, b"b").expect("b");
+        std::fs::create_dir(&b).expect("dir");
+        let e = o.commit().expect_err("refused");
+        assert!(e.message.contains("no longer a regular file"), "{e}");
+        assert!(!a.exists() && b.is_dir());
+        assert_eq!(std::fs::read_dir(dir.path()).expect("dir").count(), 1);
     }
 
     #[test]
