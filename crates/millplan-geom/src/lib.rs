@@ -1,5 +1,6 @@
 //! Geometry shared by every millplan crate: f64 vectors and frames, one tolerance
-//! policy, bounding boxes, indexed triangle meshes and the STL reader.
+//! policy, bounding boxes, indexed triangle meshes, the STL reader and the
+//! resource limits every crate checks.
 //!
 //! Units inside millplan are millimetres and radians; conversions happen only at
 //! front and back ends.
@@ -9,6 +10,7 @@ pub mod analytic;
 pub mod bezier;
 pub mod bvh;
 pub mod frame;
+pub mod limits;
 pub mod mesh;
 pub mod optimize;
 pub mod stl;
@@ -17,4 +19,5 @@ pub mod tol;
 pub use aabb::Aabb;
 pub use frame::Frame;
 pub use glam::{DMat3, DVec2, DVec3};
+pub use limits::Limits;
 pub use mesh::TriMesh;

@@ -6,6 +6,7 @@
 //! trusted; facet normals come from the vertex order, and the stored ones are only
 //! compared against them.
 
+use crate::limits::{amount, Exceeded, Limits};
 use crate::mesh::TriMesh;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -78,8 +79,14 @@ impl NormalCheck {
     }
 }
 
-/// Reads an STL file's bytes.
+/// Reads an STL file's bytes (within the default [`Limits`]).
 pub fn read_stl(bytes: &[u8]) -> Result<(TriMesh, StlReport), StlError> {
+    read_stl_limited(bytes, &Limits::default())
+}
+
+/// Reads an STL file's bytes; more facets than `limits.stl_triangles` or a
+/// vertex beyond ±`limits.stl_extent` is an error at its place.
+pub fn read_stl_limited(bytes: &[u8], limits: &Limits) -> Result<(TriMesh, StlReport), StlError> {
     if bytes.is_empty() {
         return Err(StlError {
             location: StlLocation::Byte(0),
@@ -89,11 +96,11 @@ pub fn read_stl(bytes: &[u8]) -> Result<(TriMesh, StlReport), StlError> {
     if bytes.len() >= 84 {
         let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
         if 84 + 50 * n == bytes.len() as u64 {
-            return read_binary(bytes, n as usize, 0);
+            return read_binary(bytes, n as usize, 0, limits);
         }
     }
     if looks_ascii(bytes) {
-        return read_ascii(bytes);
+        return read_ascii(bytes, limits);
     }
     if bytes.len() < 84 {
         return Err(StlError {
@@ -109,7 +116,7 @@ pub fn read_stl(bytes: &[u8]) -> Result<(TriMesh, StlReport), StlError> {
     let have = bytes.len() as u64;
     if have > need {
         // Tolerated: extra bytes after the declared facets (seen from some exporters).
-        return read_binary(bytes, n as usize, (have - need) as usize);
+        return read_binary(bytes, n as usize, (have - need) as usize, limits);
     }
     Err(StlError {
         location: StlLocation::Byte(80),
@@ -136,25 +143,50 @@ fn header_text(h: &[u8]) -> String {
     String::from_utf8_lossy(&h[..end]).trim().to_string()
 }
 
-fn read_binary(bytes: &[u8], n: usize, trailing: usize) -> Result<(TriMesh, StlReport), StlError> {
+/// Refuses a facet count over the limit before anything is allocated for it.
+fn check_count(n: u64, limits: &Limits) -> Result<(), StlError> {
+    if n <= limits.stl_triangles {
+        return Ok(());
+    }
+    Err(StlError {
+        location: StlLocation::Byte(80),
+        message: Exceeded::new(
+            "stl-triangles",
+            format!("the binary STL header declares {n} facets"),
+            limits.stl_triangles as f64,
+        )
+        .to_string(),
+    })
+}
+
+fn read_binary(
+    bytes: &[u8],
+    n: usize,
+    trailing: usize,
+    limits: &Limits,
+) -> Result<(TriMesh, StlReport), StlError> {
+    check_count(n as u64, limits)?;
     let mut corners: Vec<[u32; 3]> = vec![[0; 3]; 3 * n];
-    let normals = parse_records(&bytes[84..84 + 50 * n], 0, &mut corners)?;
+    let normals = parse_records(&bytes[84..84 + 50 * n], 0, &mut corners, limits)?;
     finish_binary(&bytes[..80], n, trailing, corners, normals)
 }
 
 /// Parses binary facet records (the first is facet `first`) into their
-/// corners' f32 bit patterns, in parallel blocks.
+/// corners' f32 bit patterns, in parallel blocks. A coordinate that is not
+/// finite or lies beyond the extent limit is an error at its facet.
 fn parse_records(
     body: &[u8],
     first: usize,
     corners: &mut [[u32; 3]],
+    limits: &Limits,
 ) -> Result<NormalCheck, StlError> {
+    let extent = limits.stl_extent;
     const BLOCK: usize = 1 << 14;
     #[inline]
     fn f(b: &[u8], at: usize) -> f32 {
         f32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
     }
-    let blocks: Vec<(NormalCheck, Option<usize>)> = body
+    let blocks: Vec<(NormalCheck, Option<(usize, f32)>)> = body
         .par_chunks(50 * BLOCK)
         .zip(corners.par_chunks_mut(3 * BLOCK))
         .enumerate()
@@ -167,8 +199,8 @@ fn parse_records(
             {
                 let v = |k: usize| [f(rec, 12 * k), f(rec, 12 * k + 4), f(rec, 12 * k + 8)];
                 let tri = [v(1), v(2), v(3)];
-                if !tri.iter().flatten().all(|c| c.is_finite()) {
-                    return (normals, Some(first + b * BLOCK + i));
+                if let Some(c) = tri.iter().flatten().find(|c| !(c.abs() as f64 <= extent)) {
+                    return (normals, Some((first + b * BLOCK + i, *c)));
                 }
                 let d = |p: [f32; 3]| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
                 normals.check(d(v(0)), &[d(tri[0]), d(tri[1]), d(tri[2])]);
@@ -180,10 +212,14 @@ fn parse_records(
             (normals, None)
         })
         .collect();
-    if let Some(i) = blocks.iter().find_map(|b| b.1) {
+    if let Some((i, c)) = blocks.iter().find_map(|b| b.1) {
         return Err(StlError {
             location: StlLocation::Byte((84 + 50 * i) as u64),
-            message: format!("facet {} has a non-finite coordinate", i + 1),
+            message: if c.is_finite() {
+                out_of_extent(&format!("facet {}", i + 1), c as f64, limits)
+            } else {
+                format!("facet {} has a non-finite coordinate", i + 1)
+            },
         });
     }
     Ok(blocks
@@ -215,12 +251,31 @@ fn finish_binary(
     Ok((mesh, report))
 }
 
-/// Reads an STL of `len` bytes from `r`. A binary file whose size matches its
-/// facet count is parsed as it streams in (its bytes are never held whole);
-/// anything else is read whole and given to [`read_stl`].
+/// The message for a vertex coordinate beyond the extent limit.
+fn out_of_extent(what: &str, c: f64, limits: &Limits) -> String {
+    Exceeded::new(
+        "stl-extent",
+        format!("{what} has a vertex at {} mm", amount(c)),
+        limits.stl_extent,
+    )
+    .to_string()
+}
+
+/// Reads an STL of `len` bytes from `r` (within the default [`Limits`]).
 pub fn read_stl_from(
     r: &mut impl std::io::Read,
     len: u64,
+) -> Result<(TriMesh, StlReport), StlError> {
+    read_stl_from_limited(r, len, &Limits::default())
+}
+
+/// Reads an STL of `len` bytes from `r`. A binary file whose size matches its
+/// facet count is parsed as it streams in (its bytes are never held whole);
+/// anything else is read whole and given to [`read_stl_limited`].
+pub fn read_stl_from_limited(
+    r: &mut impl std::io::Read,
+    len: u64,
+    limits: &Limits,
 ) -> Result<(TriMesh, StlReport), StlError> {
     let io = |e: std::io::Error, at: u64| StlError {
         location: StlLocation::Byte(at),
@@ -231,6 +286,7 @@ pub fn read_stl_from(
     if head.len() == 84 {
         let n = u32::from_le_bytes([head[80], head[81], head[82], head[83]]) as u64;
         if n > 0 && 84 + 50 * n == len {
+            check_count(n, limits)?;
             const CHUNK: usize = 1 << 16;
             let n = n as usize;
             let mut corners: Vec<[u32; 3]> = vec![[0; 3]; 3 * n];
@@ -241,7 +297,7 @@ pub fn read_stl_from(
                 let body = &mut buf[..50 * recs];
                 r.read_exact(body)
                     .map_err(|e| io(e, 84 + 50 * (c * CHUNK) as u64))?;
-                let got = parse_records(body, c * CHUNK, out)?;
+                let got = parse_records(body, c * CHUNK, out, limits)?;
                 normals.zero += got.zero;
                 normals.flipped += got.flipped;
             }
@@ -250,10 +306,11 @@ pub fn read_stl_from(
     }
     let mut bytes = head;
     r.read_to_end(&mut bytes).map_err(|e| io(e, 0))?;
-    read_stl(&bytes)
+    read_stl_limited(&bytes, limits)
 }
 
 /// Whitespace tokenizer over ASCII STL that tracks line and column.
+#[derive(Clone)]
 struct Tokens<'a> {
     b: &'a [u8],
     pos: usize,
@@ -265,7 +322,9 @@ impl<'a> Tokens<'a> {
     /// Next token with its (line, col), or `None` at end of input.
     fn next(&mut self) -> Option<(&'a [u8], u32, u32)> {
         while self.pos < self.b.len() && self.b[self.pos].is_ascii_whitespace() {
-            if self.b[self.pos] == b'\n' {
+            // A line ends at LF, CRLF or a lone CR.
+            let c = self.b[self.pos];
+            if c == b'\n' || (c == b'\r' && self.b.get(self.pos + 1) != Some(&b'\n')) {
                 self.line += 1;
                 self.line_start = self.pos + 1;
             }
@@ -288,7 +347,7 @@ impl<'a> Tokens<'a> {
     /// The rest of the current line (solid names may contain spaces).
     fn rest_of_line(&mut self) -> &'a [u8] {
         let s = self.pos;
-        while self.pos < self.b.len() && self.b[self.pos] != b'\n' {
+        while self.pos < self.b.len() && !matches!(self.b[self.pos], b'\n' | b'\r') {
             self.pos += 1;
         }
         &self.b[s..self.pos]
@@ -302,7 +361,7 @@ impl<'a> Tokens<'a> {
     }
 }
 
-fn read_ascii(bytes: &[u8]) -> Result<(TriMesh, StlReport), StlError> {
+fn read_ascii(bytes: &[u8], limits: &Limits) -> Result<(TriMesh, StlReport), StlError> {
     let mut t = Tokens {
         b: bytes,
         pos: 0,
@@ -377,15 +436,39 @@ fn read_ascii(bytes: &[u8]) -> Result<(TriMesh, StlReport), StlError> {
                     t.rest_of_line();
                     break;
                 }
-                Some((tok, _, _)) if tok.eq_ignore_ascii_case(b"facet") => {
+                Some((tok, fl, fc)) if tok.eq_ignore_ascii_case(b"facet") => {
                     expect(&mut t, "normal")?;
                     let n = DVec3::new(number(&mut t)?, number(&mut t)?, number(&mut t)?);
                     expect(&mut t, "outer")?;
                     expect(&mut t, "loop")?;
+                    if soup.len() as u64 >= limits.stl_triangles {
+                        return Err(err(
+                            fl,
+                            fc,
+                            Exceeded::new(
+                                "stl-triangles",
+                                format!("facet {} is one too many", soup.len() + 1),
+                                limits.stl_triangles as f64,
+                            )
+                            .to_string(),
+                        ));
+                    }
                     let mut tri = [DVec3::ZERO; 3];
+                    let facet = format!("facet {}", soup.len() + 1);
+                    // A vertex coordinate, within the extent limit.
+                    let coord = |t: &mut Tokens| -> Result<f64, StlError> {
+                        let at = t.clone();
+                        let v = number(t)?;
+                        if v.abs() <= limits.stl_extent {
+                            return Ok(v);
+                        }
+                        let mut at = at;
+                        let (_, l, c) = at.next().unwrap_or((b"", t.line, 1));
+                        Err(err(l, c, out_of_extent(&facet, v, limits)))
+                    };
                     for p in &mut tri {
                         expect(&mut t, "vertex")?;
-                        *p = DVec3::new(number(&mut t)?, number(&mut t)?, number(&mut t)?);
+                        *p = DVec3::new(coord(&mut t)?, coord(&mut t)?, coord(&mut t)?);
                     }
                     expect(&mut t, "endloop")?;
                     expect(&mut t, "endfacet")?;
@@ -542,6 +625,76 @@ mod tests {
         assert_eq!(e.location, StlLocation::Text { line: 6, col: 10 });
         let e = read_stl(b"solid x\nfacet normal 0 0 1\n").expect_err("fails");
         assert!(e.message.contains("file ends"), "{e}");
+    }
+
+    /// Issue 17: "a 123-byte STL facet at ±1e30 makes `raster` take 8–24
+    /// GB". A vertex beyond the extent limit is refused at its facet (binary:
+    /// the facet's byte; ASCII: the number's line and column), and a facet
+    /// count over the limit before anything is allocated for it.
+    #[test]
+    fn limits_are_located_errors() {
+        let mut b = Vec::new();
+        write_binary_stl(&tetra(), "x", &mut b);
+        let at = 84 + 50 * 2 + 12 + 4;
+        b[at..at + 4].copy_from_slice(&1e30f32.to_le_bytes());
+        for e in [
+            read_stl(&b).expect_err("far"),
+            read_stl_from(&mut &b[..], b.len() as u64).expect_err("far"),
+        ] {
+            assert_eq!(e.location, StlLocation::Byte(84 + 100), "{e}");
+            assert!(
+                e.message.contains("facet 3 has a vertex at 1.000e30 mm"),
+                "{e}"
+            );
+            assert!(e.message.contains("--limit stl-extent=N"), "{e}");
+        }
+        let wide = Limits {
+            stl_extent: 1e31,
+            ..Limits::default()
+        };
+        assert!(read_stl_limited(&b, &wide).is_ok());
+        let few = Limits {
+            stl_triangles: 3,
+            ..Limits::default()
+        };
+        write_binary_stl(&tetra(), "x", &mut b);
+        let e = read_stl_limited(&b[b.len() / 2..], &few).expect_err("count");
+        assert_eq!(e.location, StlLocation::Byte(80));
+        assert!(e.message.contains("declares 4 facets"), "{e}");
+        let e = read_stl_from_limited(&mut &b[b.len() / 2..], b.len() as u64 / 2, &few)
+            .expect_err("count");
+        assert!(e.message.contains("stl-triangles limit of 3"), "{e}");
+        let ascii = "solid x\rfacet normal 0 0 1\router loop\rvertex 0 0 0\rvertex 1 0 0\rvertex 0 -1e30 0\r";
+        let e = read_stl(ascii.as_bytes()).expect_err("far");
+        assert_eq!(e.location, StlLocation::Text { line: 6, col: 10 }, "{e}");
+        let facets = "facet normal 0 0 1 outer loop vertex 0 0 0 vertex 1 0 0 vertex 0 1 0 endloop endfacet\n";
+        let many = format!("solid x\n{}endsolid\n", facets.repeat(4));
+        let e = read_stl_limited(many.as_bytes(), &few).expect_err("count");
+        assert_eq!(e.location, StlLocation::Text { line: 5, col: 1 }, "{e}");
+    }
+
+    /// Lines of an ASCII STL end at LF, CRLF or a lone CR.
+    #[test]
+    fn ascii_lines_end_at_any_line_ending() {
+        for nl in ["\n", "\r\n", "\r"] {
+            let src = [
+                "solid named part",
+                "facet normal 0 0 1",
+                "outer loop",
+                "vertex 0 0 0",
+                "vertex 1 0 0",
+                "vertex 0 1 0",
+                "endloop",
+                "endfacet",
+                "endsolid",
+            ]
+            .join(nl);
+            let (m, r) = read_stl(src.as_bytes()).expect("reads");
+            assert_eq!((m.len(), r.header.as_str()), (1, "named part"), "{nl:?}");
+            let bad = src.replace("vertex 0 1 0", "vertex 0 1 q");
+            let e = read_stl(bad.as_bytes()).expect_err("bad");
+            assert_eq!(e.location, StlLocation::Text { line: 6, col: 12 }, "{nl:?}");
+        }
     }
 
     #[test]

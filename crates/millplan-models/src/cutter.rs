@@ -56,8 +56,8 @@ impl Shape {
                 .map_err(|_| format!("`{s}`: `{}` is not a number", parts[i]))
         };
         let d = num(1)?;
-        if !(d > 0.0) {
-            return Err(format!("`{s}`: the diameter must be positive"));
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(format!("`{s}`: the diameter must be a positive number"));
         }
         let shape = match parts[0].to_ascii_lowercase().as_str() {
             "ball" => Shape::Ball { radius: d / 2.0 },

@@ -15,7 +15,7 @@ pub fn detect(head: &str) -> Dialect {
     let mut heidenhain = 0i32;
     let (mut nx, mut catia, mut sw) = (0, 0, 0);
     let (mut sinumerik, mut linuxcnc) = (0, 0);
-    for line in head.lines().take(400) {
+    for line in crate::lines::split(head).take(400) {
         let t = line.trim();
         if t.is_empty() {
             continue;

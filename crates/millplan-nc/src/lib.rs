@@ -11,6 +11,7 @@ pub mod equiv;
 pub mod gcode;
 pub mod generate;
 pub mod ir;
+pub mod lines;
 pub mod stats;
 pub mod text;
 pub mod transform;
@@ -19,6 +20,7 @@ pub mod write;
 
 pub use diag::{Diagnostic, ParseError, Parsed, Severity};
 pub use ir::*;
+pub use millplan_geom::limits::{Exceeded, Limits};
 
 /// Reader settings shared by all front ends.
 #[derive(Clone, Copy, Debug)]
@@ -33,6 +35,10 @@ pub struct ReadOptions {
     /// operation to get a move reserves room for them at once, instead of
     /// growing (copying, and touching fresh memory) step by step.
     pub expect_moves: usize,
+    /// Resource limits: the sampling of a NURBS span (`expansion`), the
+    /// length of a line (`line_bytes`), the nesting of an expression
+    /// (`expression_depth`).
+    pub limits: Limits,
 }
 
 impl Default for ReadOptions {
@@ -42,16 +48,37 @@ impl Default for ReadOptions {
             default_feed: 1000.0,
             chord_tol: 0.002,
             expect_moves: 0,
+            limits: Limits::default(),
         }
     }
 }
 
 /// Reads a program of any supported format from its text, detecting the format
-/// from the content.
+/// from the content. Lines end at LF, CRLF or a lone CR.
 pub fn parse_program(src: &str, opts: ReadOptions) -> Result<Parsed, ParseError> {
     let mut r = detect::Reader::new(detect::detect(src), opts);
-    for line in src.split('\n') {
+    for (k, line) in lines::split(src).enumerate() {
+        check_line_length(line.len(), k + 1, &opts.limits)?;
         r.line(line)?;
     }
     r.finish()
+}
+
+/// Refuses a line longer than `limits.line_bytes` (`line` counted from 1),
+/// located just past the limit.
+pub fn check_line_length(len: usize, line: usize, limits: &Limits) -> Result<(), ParseError> {
+    if len as u64 <= limits.line_bytes {
+        return Ok(());
+    }
+    let col = u32::try_from(limits.line_bytes + 1).unwrap_or(u32::MAX);
+    Err(ParseError::new(
+        u32::try_from(line).unwrap_or(u32::MAX),
+        col,
+        Exceeded::new(
+            "line-bytes",
+            format!("a line of {len} bytes or more"),
+            limits.line_bytes as f64,
+        )
+        .to_string(),
+    ))
 }

@@ -499,7 +499,7 @@ fn pick<T: Copy>(c: &mut Cur, what: &str, options: &[(&str, T)]) -> Result<T, Pa
 /// Reads the text form back into a program.
 pub fn parse(text: &str) -> Result<Program, ParseError> {
     let mut p: Option<Program> = None;
-    for (k, line) in text.lines().enumerate() {
+    for (k, line) in crate::lines::split(text).enumerate() {
         let ln = k as u32 + 1;
         if line.trim().is_empty() {
             continue;

@@ -302,6 +302,39 @@ pub struct DropMesh {
 
 const LEAF: usize = 4;
 
+/// The triangles of `mesh` without repeats (the same three vertices, in any
+/// order): a copy lifts the cutter no higher, and 200,000 copies of one
+/// facet would make every query test all of them. Returns the triangles
+/// kept (in index order) and each repeat with the triangle it repeats.
+fn distinct(mesh: &TriMesh) -> (Vec<u32>, Vec<(u32, u32)>) {
+    let mut keys: Vec<u128> = mesh
+        .triangles
+        .par_iter()
+        .enumerate()
+        .map(|(t, tri)| {
+            let mut v = *tri;
+            v.sort_unstable();
+            (v[0] as u128) << 96 | (v[1] as u128) << 64 | (v[2] as u128) << 32 | t as u128
+        })
+        .collect();
+    keys.par_sort_unstable();
+    let mut keep = Vec::with_capacity(keys.len());
+    let mut repeats = Vec::new();
+    let mut prev: Option<u128> = None;
+    for k in keys {
+        let t = (k & 0xffff_ffff) as u32;
+        match prev {
+            Some(p) if p >> 32 == k >> 32 => repeats.push((t, (p & 0xffff_ffff) as u32)),
+            _ => {
+                keep.push(t);
+                prev = Some(k);
+            }
+        }
+    }
+    keep.par_sort_unstable();
+    (keep, repeats)
+}
+
 impl DropMesh {
     pub fn new(mesh: &TriMesh) -> DropMesh {
         let n = mesh.len();
@@ -312,7 +345,7 @@ impl DropMesh {
                 xy(a + b + c) / 3.0
             })
             .collect();
-        let mut order: Vec<u32> = (0..n as u32).collect();
+        let (mut order, repeats) = distinct(mesh);
         let mut nodes = Vec::with_capacity(2 * n / LEAF + 2);
         if n > 0 {
             nodes.push(Self::leaf_bounds(mesh, &order, 0));
@@ -323,6 +356,10 @@ impl DropMesh {
         let mut pos = vec![0u32; n];
         for (k, &t) in order.iter().enumerate() {
             pos[t as usize] = k as u32;
+        }
+        // A repeat stands for the triangle it repeats.
+        for (t, same) in repeats {
+            pos[t as usize] = pos[same as usize];
         }
         DropMesh {
             nodes,

@@ -74,6 +74,40 @@ pub struct GougeReport {
     pub max_depth: f64,
 }
 
+/// Memory per sample point of a check: the sample and its depth.
+pub const BYTES_PER_SAMPLE: f64 =
+    (std::mem::size_of::<(u32, u32, DVec3, Shape)>() + std::mem::size_of::<f64>()) as f64;
+
+/// How many points [`check`] would sample (an upper bound: moves it would
+/// skip for a tilted tool are counted), in one pass over the moves without
+/// allocating: a step of 1e-9 is refused from this, never attempted.
+pub fn samples(p: &Program, shape: impl Fn(&Operation) -> Option<Shape>, g: &GougeParams) -> f64 {
+    let mut n = 0.0;
+    for op in &p.operations {
+        if shape(op).is_none() {
+            continue;
+        }
+        for (i, m) in op.moves.iter().enumerate() {
+            let wanted = match m.kind {
+                MoveKind::Linear | MoveKind::Arc(_) => true,
+                MoveKind::Rapid => g.rapids,
+                MoveKind::Cycle(_) => false,
+            };
+            let (Some(start), Some(end)) = (op.known_start(i), known(m.end)) else {
+                continue;
+            };
+            if wanted {
+                let len = match op.arc(m) {
+                    Some(a) => a.length(start, end),
+                    None => (end - start).length(),
+                };
+                n += (len / g.step).ceil().max(1.0) + 1.0;
+            }
+        }
+    }
+    n
+}
+
 /// Checks a program against the part. `shape` gives the cutter of an operation
 /// (`None` skips the operation).
 pub fn check(

@@ -115,6 +115,52 @@ fn refine(
     }
 }
 
+/// The work a raster asks for, counted from its grid before any point is
+/// dropped (the refinement where the surface bends comes on top).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RasterEstimate {
+    /// Passes that cross the part's bounds.
+    pub lines: f64,
+    /// Points on them at the step (and so moves of the program).
+    pub points: f64,
+    /// Memory the grid, the program, its text and its own gouge check take.
+    pub bytes: f64,
+}
+
+/// Memory per raster point: the grid (position, height, point), the move and
+/// its text.
+pub const BYTES_PER_POINT: f64 = 16.0 + 16.0 + 32.0 + 24.0 + 64.0 + 48.0;
+
+/// Counts the raster `p` over `bounds` would make, in constant time: a step
+/// of 1e-300 or a margin of -1e308 is refused from this, never attempted.
+pub fn estimate(bounds: &Aabb, p: &RasterParams, gouge_step: f64) -> RasterEstimate {
+    let size = DVec2::new(
+        bounds.max.x - bounds.min.x - 2.0 * p.margin,
+        bounds.max.y - bounds.min.y - 2.0 * p.margin,
+    );
+    if !(size.x > 0.0 && size.y > 0.0) {
+        return RasterEstimate {
+            lines: 0.0,
+            points: 0.0,
+            bytes: 0.0,
+        };
+    }
+    let (sa, ca) = p.angle_deg.to_radians().sin_cos();
+    // The rectangle's width across the passes and along them.
+    // (0·∞ is no width: an infinite side along the passes adds none across.)
+    let part = |len: f64, f: f64| if f == 0.0 { 0.0 } else { (len * f).abs() };
+    let across = part(size.x, sa) + part(size.y, ca);
+    let lines = (across / p.stepover).floor() + 1.0;
+    let points = size.x * size.y / (p.stepover * p.step) + 2.0 * lines;
+    // The raster's own gouge check samples every move at its step.
+    let samples = points * (p.step / gouge_step).ceil().max(1.0) + points;
+    RasterEstimate {
+        lines,
+        points,
+        bytes: points * BYTES_PER_POINT + samples * crate::gouge::BYTES_PER_SAMPLE,
+    }
+}
+
 /// A raster over the part (`bounds`: the part's bounding box).
 pub fn raster(part: &DropMesh, bounds: &Aabb, p: &RasterParams) -> Program {
     let (lo, hi) = (
@@ -123,6 +169,9 @@ pub fn raster(part: &DropMesh, bounds: &Aabb, p: &RasterParams) -> Program {
     );
     let (sa, ca) = p.angle_deg.to_radians().sin_cos();
     let (dir, perp) = (DVec2::new(ca, sa), DVec2::new(-sa, ca));
+    // A margin wider than the part leaves nothing to raster (and a rectangle
+    // turned inside out would count its lines without end).
+    let cross = hi.x > lo.x && hi.y > lo.y;
     let centre = (lo + hi) / 2.0;
     let half = (hi - lo).length() / 2.0;
     // Clip each line to the rectangle [lo, hi].
@@ -142,7 +191,11 @@ pub fn raster(part: &DropMesh, bounds: &Aabb, p: &RasterParams) -> Program {
         }
         (t1 > t0).then(|| (base + dir * t0, base + dir * t1))
     };
-    let lines = (half / p.stepover).floor() as i64;
+    let lines = if cross {
+        (half / p.stepover).floor() as i64
+    } else {
+        -1
+    };
     let segs: Vec<(DVec2, DVec2)> = (-lines..=lines)
         .filter_map(|j| clip(centre + perp * (p.stepover * j as f64)))
         .collect();

@@ -392,6 +392,14 @@ impl ToolDb {
         if path.is_dir() {
             return Err(DbError::Invalid("is a folder, not a library file".into()));
         }
+        // A device, FIFO or socket is no library: SQLite would open it and
+        // create its journal beside it (`/dev/null-wal`).
+        if std::fs::metadata(path).is_ok_and(|m| !m.is_file()) {
+            return Err(DbError::Invalid(
+                "not a regular file (a device, a FIFO or a socket): the library is an SQLite file"
+                    .into(),
+            ));
+        }
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|source| DbError::Io {
                 path: dir.to_path_buf(),

@@ -1,13 +1,32 @@
 //! `millplan`: the command-line front of the planner. The only crate that touches
 //! files, the environment, the terminal and exit codes.
 
+/// `println!` that never panics on a closed or full standard output (see
+/// `io::out`).
+macro_rules! outln {
+    () => {
+        $crate::io::out(format_args!(""), true)
+    };
+    ($($t:tt)*) => {
+        $crate::io::out(format_args!($($t)*), true)
+    };
+}
+
+/// `print!` that never panics (see `io::out`).
+macro_rules! out {
+    ($($t:tt)*) => {
+        $crate::io::out(format_args!($($t)*), false)
+    };
+}
+
 mod cmd;
 mod error;
 mod io;
+mod limits;
 mod progress;
 
 use clap::{Parser, Subcommand};
-use error::{EXIT_BAD_INPUT, EXIT_OK};
+use error::{EXIT_BAD_INPUT, EXIT_FINDINGS, EXIT_INTERNAL, EXIT_OK};
 
 #[global_allocator]
 static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
@@ -17,11 +36,20 @@ static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
 /// millplan reads the toolpath a CAM system wrote (APT/CL or G-code) and the part
 /// (STL), simulates what the machine will do and writes a better NC program.
 ///
-/// Exit codes: 0 success; 1 internal failure; 2 bad input or arguments (the
-/// message names file:line:col); 3 a check ran and found problems.
+/// Exit codes: 0 success; 1 internal failure (or the system refused: a full
+/// disk, a closed standard output); 2 bad input or arguments (the message
+/// names file:line:col); 3 a check ran and found problems.
+///
+/// Resource limits (what a small input may ask for) are in README.md; raise
+/// one with --limit NAME=VALUE or MILLPLAN_LIMITS=NAME=VALUE,….
 #[derive(Parser)]
 #[command(name = "millplan", version, about, long_about)]
 struct Cli {
+    /// Raise (or lower) a resource limit: moves, expansion, line-bytes,
+    /// expression-depth, stl-triangles, stl-extent (mm), memory (MB).
+    /// Repeatable; a value may end in k, M or G.
+    #[arg(long = "limit", global = true, value_name = "NAME=VALUE")]
+    limit: Vec<String>,
     #[command(subcommand)]
     command: Command,
 }
@@ -69,9 +97,10 @@ fn small_pages_only() {
     }
 }
 
-/// A closed standard output (`millplan inspect --ir F | head -1`) ends the
-/// run quietly: the reader has what it wanted.
-fn quiet_on_closed_stdout() {
+/// Standard output is written through `outln!`, which never panics; should
+/// a write to it or to standard error panic all the same (a library's
+/// print), the run ends with a message and exit 1, never 101.
+fn no_panic_on_closed_output() {
     let default = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
         let p = info.payload();
@@ -80,15 +109,31 @@ fn quiet_on_closed_stdout() {
             .map(String::as_str)
             .or_else(|| p.downcast_ref::<&str>().copied())
             .unwrap_or("");
-        if msg.starts_with("failed printing to stdout") && msg.contains("Broken pipe") {
-            std::process::exit(EXIT_OK);
+        if let Some(why) = msg.strip_prefix("failed printing to stdout: ") {
+            eprintln!("error: standard output: {why}");
+            std::process::exit(EXIT_INTERNAL);
+        }
+        if msg.starts_with("failed printing to stderr") {
+            std::process::exit(EXIT_INTERNAL);
         }
         default(info)
     }));
 }
 
+/// The exit code of a run that returned `r`, after writing standard output
+/// failed with `failure` (if it did): a success becomes 1, what a check found
+/// (3) and errors stay.
+fn exit_code(r: &Result<i32, error::CliError>, failure: Option<&str>) -> i32 {
+    match (r, failure) {
+        (Ok(code), None) => *code,
+        (Ok(EXIT_FINDINGS), Some(_)) => EXIT_FINDINGS,
+        (Ok(_), Some(_)) => EXIT_INTERNAL,
+        (Err(e), _) => e.code,
+    }
+}
+
 fn main() {
-    quiet_on_closed_stdout();
+    no_panic_on_closed_output();
     small_pages_if_asked();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
@@ -98,11 +143,31 @@ fn main() {
             } else {
                 EXIT_OK
             };
-            let _ = e.print();
+            // Help or version text that cannot be written is a failure too.
+            if let Err(f) = e.print() {
+                eprintln!("error: standard output: {f}");
+                std::process::exit(EXIT_INTERNAL);
+            }
             std::process::exit(code);
         }
     };
-    let r = match cli.command {
+    if let Err(e) = limits::init(&cli.limit) {
+        eprintln!("error: {}", error::shorten(&e.message));
+        std::process::exit(e.code);
+    }
+    io::remove_staged_on_signals();
+    let r = run(cli.command);
+    let failure = io::stdout_failure();
+    if let Err(e) = &r {
+        eprintln!("error: {}", error::shorten(&e.message));
+    } else if let Some(f) = &failure {
+        eprintln!("error: standard output: {f}: the output is cut short");
+    }
+    std::process::exit(exit_code(&r, failure.as_deref()));
+}
+
+fn run(command: Command) -> error::CliResult<i32> {
+    match command {
         Command::Inspect(a) => cmd::inspect::run(a),
         Command::Convert(a) => cmd::convert::run(a),
         Command::Demo(a) => cmd::demo::run(a),
@@ -117,13 +182,6 @@ fn main() {
         Command::Tool(a) => cmd::tool::run(a),
         Command::Thread(a) => cmd::thread::run(a),
         Command::Explain(a) => cmd::explain::run(a),
-    };
-    match r {
-        Ok(code) => std::process::exit(code),
-        Err(e) => {
-            eprintln!("error: {e}");
-            std::process::exit(e.code);
-        }
     }
 }
 

@@ -401,7 +401,7 @@ fn wd_prints_the_oracle_value() {
     assert!((j["d_w"].as_f64().expect("d_w") - 6.4210).abs() < 1e-4);
     fails_with_2(
         &["wd", "--d", "10", "--ap=-1", "--alpha", "20", "--af", "0"],
-        "positive",
+        "--ap -1: must be a number above 0 and at most 5 mm",
     );
 }
 

@@ -520,8 +520,10 @@ fn library_paths_are_files_or_refused() {
     }
 }
 
+/// Issue 17: a closed standard output ends the run with a message and exit
+/// 1 (the output is cut short), never a panic.
 #[test]
-fn closed_stdout_ends_quietly() {
+fn closed_stdout_ends_with_a_message() {
     let dir = tempfile::tempdir().expect("tmp");
     let db = dir.path().join("tools.db");
     let csv = dir.path().join("many.csv");
@@ -540,6 +542,11 @@ fn closed_stdout_ends_quietly() {
         .expect("spawn");
     drop(child.stdout.take());
     let o = child.wait_with_output().expect("wait");
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert!(o.stderr.is_empty(), "{}", stderr(&o));
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("error: standard output: Broken pipe"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
 }

@@ -869,7 +869,18 @@ impl AptReader {
         };
         let spline = nurbs::BSpline::from_nx(n.start, &n.knots, &n.cntrl)
             .map_err(|e| ParseError::new(n.line, 1, format!("NURBS: {e}")))?;
-        for p in spline.sample(self.opts.chord_tol) {
+        let limit = self.opts.limits.expansion;
+        let points = spline
+            .sample_within(self.opts.chord_tol, limit)
+            .map_err(|span| {
+                let needs = format!(
+                    "NURBS: span {span} needs more than {limit} moves at the chord tolerance of {} mm",
+                    self.opts.chord_tol
+                );
+                let e = crate::Exceeded::new("expansion", needs, limit as f64);
+                ParseError::new(n.line, 1, e.to_string())
+            })?;
+        for p in points {
             self.emit_move(p, n.line)?;
         }
         Ok(())
@@ -1257,7 +1268,7 @@ pub fn parse_apt(
     opts: ReadOptions,
 ) -> Result<(Parsed, AptStats), ParseError> {
     let mut r = AptReader::new(dialect, opts);
-    for line in src.split('\n') {
+    for line in crate::lines::split(src) {
         r.line(line)?;
     }
     let stats = r.stats;

@@ -95,35 +95,52 @@ impl BSpline {
     /// Points after the start, so that every chord stays within `tol` of the curve
     /// (checked at the chord's quarter points), ending exactly at the curve's end.
     pub fn sample(&self, tol: f64) -> Vec<DVec3> {
+        self.sample_within(tol, u64::MAX).unwrap_or_default()
+    }
+
+    /// [`BSpline::sample`], giving up as soon as one polynomial piece (span)
+    /// needs more than `per_span` points: `Err(span)` with the span's number
+    /// (from 1). The work done is bounded by the limit, whatever the control
+    /// points (a spline with points at 1e12 would otherwise become millions
+    /// of moves).
+    pub fn sample_within(&self, tol: f64, per_span: u64) -> Result<Vec<DVec3>, usize> {
         // Seed with the distinct knots so each polynomial piece is subdivided on its own.
         let mut params: Vec<f64> = self.knots[DEGREE..=self.ctrl.len()].to_vec();
         params.dedup();
         let mut out = Vec::new();
-        for w in params.windows(2) {
+        for (k, w) in params.windows(2).enumerate() {
+            let before = out.len();
+            // One point over the limit is enough to know.
+            let mut budget = per_span.saturating_add(1);
             self.refine(
-                w[0],
-                self.eval(w[0]),
-                w[1],
-                self.eval(w[1]),
+                (w[0], self.eval(w[0])),
+                (w[1], self.eval(w[1])),
                 tol,
                 0,
+                &mut budget,
                 &mut out,
             );
+            if (out.len() - before) as u64 > per_span {
+                return Err(k + 1);
+            }
         }
-        out
+        Ok(out)
     }
 
-    #[allow(clippy::too_many_arguments)]
+    /// Subdivides (u0, p0)–(u1, p1) until its chords are within `tol`, one
+    /// point from `budget` each; stops when the budget runs out.
     fn refine(
         &self,
-        u0: f64,
-        p0: DVec3,
-        u1: f64,
-        p1: DVec3,
+        (u0, p0): (f64, DVec3),
+        (u1, p1): (f64, DVec3),
         tol: f64,
         depth: u32,
+        budget: &mut u64,
         out: &mut Vec<DVec3>,
     ) {
+        if *budget == 0 {
+            return;
+        }
         let um = 0.5 * (u0 + u1);
         let pm = self.eval(um);
         let dev = |q: DVec3| dist_to_segment(q, p0, p1);
@@ -131,9 +148,10 @@ impl BSpline {
             .max(dev(self.eval(0.5 * (u0 + um))))
             .max(dev(self.eval(0.5 * (um + u1))));
         if worst > tol && depth < 24 {
-            self.refine(u0, p0, um, pm, tol, depth + 1, out);
-            self.refine(um, pm, u1, p1, tol, depth + 1, out);
+            self.refine((u0, p0), (um, pm), tol, depth + 1, budget, out);
+            self.refine((um, pm), (u1, p1), tol, depth + 1, budget, out);
         } else {
+            *budget -= 1;
             out.push(p1);
         }
     }

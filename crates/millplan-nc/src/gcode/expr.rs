@@ -3,12 +3,26 @@
 
 use std::collections::BTreeMap;
 
-/// Evaluates `text` with the given variables (names upper-case).
+/// Evaluates `text` with the given variables (names upper-case), nested at
+/// most as deep as the default `expression-depth` limit.
 pub fn eval(text: &str, vars: &BTreeMap<String, f64>) -> Result<f64, String> {
+    eval_within(text, vars, crate::Limits::default().expression_depth)
+}
+
+/// [`eval`] with parentheses and signs nested at most `max_depth` deep: the
+/// evaluator recurses once per level, and a 12 KB line of `-` would
+/// otherwise overflow the reader's stack.
+pub fn eval_within(
+    text: &str,
+    vars: &BTreeMap<String, f64>,
+    max_depth: u64,
+) -> Result<f64, String> {
     let mut p = P {
         b: text.as_bytes(),
         i: 0,
         vars,
+        depth: 0,
+        max_depth,
     };
     let v = p.sum()?;
     p.ws();
@@ -25,6 +39,8 @@ struct P<'a> {
     b: &'a [u8],
     i: usize,
     vars: &'a BTreeMap<String, f64>,
+    depth: u64,
+    max_depth: u64,
 }
 
 impl P<'_> {
@@ -70,11 +86,40 @@ impl P<'_> {
         }
     }
 
+    /// One level deeper for a sign or a parenthesis, refused past the limit.
+    fn nested<T>(&mut self, f: impl FnOnce(&mut Self) -> Result<T, String>) -> Result<T, String> {
+        if self.depth >= self.max_depth {
+            return Err(crate::Exceeded::new(
+                "expression-depth",
+                format!(
+                    "at byte {} the expression nests signs and parentheses deeper than {}",
+                    self.i + 1,
+                    self.max_depth
+                ),
+                self.max_depth as f64,
+            )
+            .to_string());
+        }
+        self.depth += 1;
+        let v = f(self);
+        self.depth -= 1;
+        v
+    }
+
     fn atom(&mut self) -> Result<f64, String> {
         self.ws();
         let Some(&c) = self.b.get(self.i) else {
             return Err("missing value".into());
         };
+        match c {
+            b'-' | b'+' | b'(' => self.nested(Self::signed),
+            _ => self.plain(),
+        }
+    }
+
+    /// A signed or parenthesised value.
+    fn signed(&mut self) -> Result<f64, String> {
+        let c = self.b[self.i];
         match c {
             b'-' => {
                 self.i += 1;
@@ -94,6 +139,14 @@ impl P<'_> {
                 self.i += 1;
                 Ok(v)
             }
+            _ => self.plain(),
+        }
+    }
+
+    /// A number or a variable.
+    fn plain(&mut self) -> Result<f64, String> {
+        let c = self.b[self.i];
+        match c {
             b'0'..=b'9' | b'.' => {
                 let s = self.i;
                 while self.i < self.b.len()
@@ -157,5 +210,35 @@ mod tests {
         assert!(eval("_NOPE+1", &v).is_err());
         assert!(eval("AC(5)", &v).is_err());
         assert!(eval("2+", &v).is_err());
+    }
+
+    /// Issue 17: "a 12 KB Sinumerik expression of nested unary minus
+    /// overflows the reader thread's stack (exit 134)". Nesting past the
+    /// limit is an error naming the limit, on a small stack too.
+    #[test]
+    fn nesting_is_bounded() {
+        let v = BTreeMap::new();
+        assert_eq!(eval(&format!("{}5", "-".repeat(64)), &v), Ok(5.0));
+        assert_eq!(
+            eval(&format!("{}1{}", "(".repeat(63), ")".repeat(63)), &v),
+            Ok(1.0)
+        );
+        for deep in [
+            format!("{}5", "-".repeat(12_000)),
+            format!("{}1", "(-".repeat(6_000)),
+        ] {
+            let e = std::thread::Builder::new()
+                .stack_size(64 * 1024)
+                .spawn(move || eval(&deep, &BTreeMap::new()))
+                .expect("spawn")
+                .join()
+                .expect("no overflow");
+            let e = e.expect_err("too deep");
+            assert!(e.contains("expression-depth limit of 64"), "{e}");
+        }
+        assert_eq!(
+            eval_within(&format!("{}5", "-".repeat(1000)), &v, 1000),
+            Ok(5.0)
+        );
     }
 }

@@ -526,7 +526,8 @@ impl GcodeReader {
     }
 
     fn value(&self, text: &str, ln: u32, col: u32) -> Result<f64, ParseError> {
-        expr::eval(text, &self.vars).map_err(|e| ParseError::new(ln, col, format!("`{text}`: {e}")))
+        expr::eval_within(text, &self.vars, self.opts.limits.expression_depth)
+            .map_err(|e| ParseError::new(ln, col, format!("`{text}`: {e}")))
     }
 
     /// Feeds one physical line.
@@ -687,7 +688,9 @@ impl GcodeReader {
         if k == "DEF" {
             for (t, _) in toks {
                 if let Tok::Assign(n, v) = t {
-                    if let Ok(x) = expr::eval(v, &self.vars) {
+                    if let Ok(x) =
+                        expr::eval_within(v, &self.vars, self.opts.limits.expression_depth)
+                    {
                         self.vars.insert(n.clone(), x);
                     }
                 } else if let Tok::Keyword(n) = t {
@@ -820,7 +823,8 @@ impl GcodeReader {
                     _ => {
                         // Variable assignment (`_camtolerance=.02`, `R1=5`): the
                         // reader substitutes its value where it is used.
-                        match expr::eval(val, &self.vars) {
+                        match expr::eval_within(val, &self.vars, self.opts.limits.expression_depth)
+                        {
                             Ok(x) => {
                                 self.vars.insert(name.clone(), x);
                             }

@@ -3,6 +3,7 @@
 
 pub mod apt;
 pub mod gcode;
+pub mod preflight;
 
 use crate::diag::{Code, Diagnostic, Severity};
 use crate::ir::*;
@@ -176,6 +177,9 @@ pub struct WriteOptions {
     /// Decimals of spindle speeds; `None`: the target's usual (whole numbers
     /// for Fanuc, whose controls refuse `S4200.6`, one decimal elsewhere).
     pub spindle_decimals: Option<u32>,
+    /// Resource limits: lines an arc may become (`expansion`) and moves of
+    /// the program written (`moves`).
+    pub limits: millplan_geom::Limits,
 }
 
 impl WriteOptions {
@@ -187,6 +191,7 @@ impl WriteOptions {
             chord_tol: 0.001,
             lossy: false,
             spindle_decimals: None,
+            limits: millplan_geom::Limits::default(),
         }
     }
 
@@ -218,6 +223,7 @@ pub fn write_program_to(
     out: &mut Vec<u8>,
     sink: Option<Sink>,
 ) -> Result<Written, WriteError> {
+    preflight::check(p, &o)?;
     if o.target == Target::Apt {
         apt::write_apt_to(p, o, out, sink)
     } else {

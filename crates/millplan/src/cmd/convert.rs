@@ -2,7 +2,7 @@
 
 use crate::cmd::{print_diagnostics, read_options, target_for, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_program, write_atomic};
+use crate::io::{read_program, Outputs};
 use millplan_nc::equiv::{compare, Tolerance};
 use millplan_nc::LengthUnit;
 use millplan_plan::orient::ResolveOrientation;
@@ -24,7 +24,7 @@ use std::path::PathBuf;
 pub struct Args {
     /// Input program.
     pub input: PathBuf,
-    /// Output file.
+    /// Output file (`-`: standard output).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Target dialect; default: from the output's extension (.nc Fanuc, .mpf
@@ -92,7 +92,12 @@ fn check_output(p: &millplan_nc::Program, out: &[u8], a: &Args) -> CliResult<boo
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let parsed = read_program(&a.input, read_options(a.units, a.feed))?;
+    let inputs: Vec<&std::path::Path> = [Some(a.input.as_path()), a.machine.as_deref()]
+        .into_iter()
+        .flatten()
+        .collect();
+    let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
+    let parsed = read_program(&a.input, read_options(a.units, a.feed)?)?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet);
     let mut p = parsed.program;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
@@ -113,7 +118,8 @@ pub fn run(a: Args) -> CliResult<i32> {
     o.lossy = a.lossy;
     let out = write_program(&p, o, &a.input, a.quiet)?;
     let equivalent = check_output(&p, &out, &a)?;
-    write_atomic(&a.output, &out, &[&a.input])?;
+    outputs.write(&a.output, &out)?;
+    outputs.commit()?;
     eprintln!(
         "wrote {} ({} moves, {})",
         a.output.display(),

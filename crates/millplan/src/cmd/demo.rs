@@ -1,7 +1,7 @@
 //! `millplan demo`: the whole flow on a bundled, generated example.
 
 use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::write_atomic;
+use crate::io::Outputs;
 use millplan_geom::analytic::{tessellate, DemoSurface};
 use millplan_nc::generate::{raster, Raster};
 use millplan_nc::write::{write_program, Target, WriteOptions};
@@ -21,6 +21,19 @@ pub struct Args {
     /// Folder for the demo's outputs (created if missing).
     #[arg(short, long, default_value = "millplan-demo")]
     pub output: PathBuf,
+}
+
+/// Writes every file, all of them or none.
+fn write_all(written: &[(PathBuf, Vec<u8>)]) -> CliResult<()> {
+    let named: Vec<(&str, Option<&std::path::Path>)> = written
+        .iter()
+        .map(|(p, _)| ("-o", Some(p.as_path())))
+        .collect();
+    let mut outputs = Outputs::plan(&[], &named, false)?;
+    for (path, bytes) in written {
+        outputs.write(path, bytes)?;
+    }
+    outputs.commit()
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -68,28 +81,27 @@ pub fn run(a: Args) -> CliResult<i32> {
         )
         .into_bytes(),
     ));
-    for (path, bytes) in &written {
-        write_atomic(path, bytes, &[])?;
-    }
+    write_all(&written)?;
     let s = millplan_nc::stats::summarize(&program, 15000.0);
-    println!(
+    outln!(
         "millplan demo: free-form part {} triangles, ball D10 raster {} points",
         mesh.len(),
         program.move_count()
     );
-    println!(
+    outln!(
         "  cutting length {:.0} mm, estimated time {:.0} s",
-        s.cutting_mm, s.time_s
+        s.cutting_mm,
+        s.time_s
     );
     for (path, bytes) in &written {
-        println!("  wrote {} ({} bytes)", path.display(), bytes.len());
+        outln!("  wrote {} ({} bytes)", path.display(), bytes.len());
     }
     let r = &res.summary;
-    println!(
+    outln!(
         "spindle control: D_w {:.2}…{:.2} mm, n {:.0}…{:.0} 1/min; vc {:.1}…{:.1} m/min with control vs {:.1}…{:.1} at a constant {:.0} 1/min",
         r.d_w.min, r.d_w.max, r.spindle.min, r.spindle.max, r.vc_controlled.min, r.vc_controlled.max, r.vc_constant.min, r.vc_constant.max, r.constant_spindle
     );
-    println!(
+    outln!(
         "open {} in a browser for the plots",
         a.output.join("report.html").display()
     );

@@ -61,21 +61,58 @@ pub struct Args {
     pub json: bool,
 }
 
+/// The generated rasters' arguments in range, and their points (counted
+/// from the grid) within the limits.
+fn check_rasters(
+    a: &Args,
+    bounds: &millplan_geom::Aabb,
+) -> CliResult<millplan_models::cutter::Shape> {
+    use crate::cmd::{arg, Range};
+    let shape = crate::cmd::tool_shape("--tool", &a.tool)?;
+    let d = 2.0 * shape.radius();
+    for angle in &a.angles {
+        arg("--angles", *angle, Range::from(-360.0, 360.0, "degrees"))?;
+    }
+    arg(
+        "--stepover",
+        a.stepover,
+        Range::from((d / 1000.0).max(0.001), 1000.0, "mm (from D/1000)"),
+    )?;
+    arg("--step", a.step, Range::from(0.001, 1000.0, "mm"))?;
+    let mut p = millplan_sim::raster::RasterParams::new(shape);
+    (p.stepover, p.step) = (a.stepover, a.step);
+    let e = millplan_sim::raster::estimate(bounds, &p, 0.1);
+    let n = e.points * a.angles.len() as f64;
+    let limit = crate::limits::get().moves as f64;
+    if !(n <= limit) {
+        let needs = format!(
+            "{} rasters at --stepover {} and --step {} make {} points",
+            a.angles.len(),
+            a.stepover,
+            a.step,
+            millplan_geom::limits::amount(n.ceil())
+        );
+        return Err(CliError::input(
+            millplan_geom::limits::Exceeded::new("moves", needs, limit).to_string(),
+        ));
+    }
+    crate::limits::check_memory("the candidate rasters", e.bytes * a.angles.len() as f64)?;
+    Ok(shape)
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
+    a.cut.check()?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let (mesh, _) = read_surface(&a.stl)?;
     let cx = Context::new(machine).with_part(&mesh);
     let mut candidates = Vec::new();
     if !a.angles.is_empty() {
-        let shape = millplan_models::cutter::Shape::parse(&a.tool).map_err(CliError::input)?;
-        if !(a.stepover > 0.0 && a.step > 0.0) {
-            return Err(CliError::input("--stepover and --step must be positive"));
-        }
+        let shape = check_rasters(&a, &mesh.bounds())?;
         candidates = raster_candidates(&cx, shape, &a.angles, a.stepover, a.step)
             .map_err(|e| crate::cmd::pass_error(&a.stl, e))?;
     }
     for p in &a.paths {
-        let parsed = read_program(p, read_options(a.units, None))?;
+        let parsed = read_program(p, read_options(a.units, None)?)?;
         candidates.push(Candidate {
             name: p.display().to_string(),
             program: parsed.program,
@@ -98,15 +135,21 @@ pub fn run(a: Args) -> CliResult<i32> {
             })
             .collect();
         let j = json!({ "ranked_by": format!("{:?}", a.by), "candidates": rows });
-        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
-        println!(
+        outln!(
             "{:>4}  {:<40} {:>12} {:>10} {:>12} {:>12} {:>10}",
-            "rank", "path", "Σ|Δn|", "max|Δn|", "max accel", "∫n ds", "σ(D_w)"
+            "rank",
+            "path",
+            "Σ|Δn|",
+            "max|Δn|",
+            "max accel",
+            "∫n ds",
+            "σ(D_w)"
         );
         for r in &ranked {
             let (i, s) = (&r.summary.indicators, &r.summary);
-            println!(
+            outln!(
                 "{:>4}  {:<40} {:>12.0} {:>10.0} {:>12.0} {:>12.4e} {:>10.3}",
                 r.rank,
                 r.name,

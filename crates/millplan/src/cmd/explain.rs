@@ -37,10 +37,10 @@ pub fn run(a: Args) -> CliResult<i32> {
             .iter()
             .map(|c| serde_json::json!({ "code": c.as_str(), "explanation": c.explain() }))
             .collect();
-        println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
+        outln!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
     } else {
         for c in codes {
-            println!("{:<24} {}", c.as_str(), c.explain());
+            outln!("{:<24} {}", c.as_str(), c.explain());
         }
     }
     Ok(EXIT_OK)

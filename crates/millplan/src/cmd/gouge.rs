@@ -3,10 +3,9 @@
 use crate::cmd::{print_diagnostics, read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface};
-use millplan_models::cutter::Shape;
 use millplan_plan::checks;
 use millplan_sim::dropcutter::DropMesh;
-use millplan_sim::gouge::{check, GougeParams, GougeReport, Skipped};
+use millplan_sim::gouge::{check, samples, GougeParams, GougeReport, Skipped, BYTES_PER_SAMPLE};
 use std::path::PathBuf;
 
 /// Check a program for gouges: every cutting move (and with --rapids every
@@ -46,16 +45,17 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    if !(a.tol >= 0.0 && a.tol.is_finite() && a.step > 0.0 && a.step.is_finite()) {
-        return Err(CliError::input(
-            "--tol must not be negative and --step must be positive",
-        ));
-    }
+    crate::cmd::arg("--tol", a.tol, crate::cmd::Range::from(0.0, 100.0, "mm"))?;
+    crate::cmd::arg(
+        "--step",
+        a.step,
+        crate::cmd::Range::from(0.001, 1000.0, "mm"),
+    )?;
     let fallback = match &a.tool {
-        Some(s) => Some(Shape::parse(s).map_err(CliError::input)?),
+        Some(s) => Some(crate::cmd::tool_shape("--tool", s)?),
         None => None,
     };
-    let parsed = read_program(&a.path, read_options(a.units, None))?;
+    let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     // A check without the cutter's shape checks nothing: refuse rather than
     // call the program clean.
@@ -87,12 +87,22 @@ pub fn run(a: Args) -> CliResult<i32> {
         Some(c) => millplan_sim::shape_of(&c),
         None => fallback,
     };
+    // Counted first: a step of 1e-9 on a long program is refused, not run.
+    let n = samples(&parsed.program, shape, &g);
+    crate::limits::check_memory(
+        &format!(
+            "--step {} over this program samples {} points, which",
+            a.step,
+            millplan_geom::limits::amount(n)
+        ),
+        n * BYTES_PER_SAMPLE,
+    )?;
     let rep = check(&parsed.program, &part, shape, &g);
     if a.json {
         let mut j = serde_json::to_value(&rep).unwrap_or_default();
         j["clean"] = serde_json::json!(rep.gouges.is_empty() && rep.moves_checked > 0);
         j["tol"] = serde_json::json!(a.tol);
-        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
         print_report(&a, &rep);
     }
@@ -119,7 +129,7 @@ fn skipped(s: &Skipped) -> String {
 
 fn print_report(a: &Args, rep: &GougeReport) {
     for gg in &rep.gouges {
-        println!(
+        outln!(
             "{}:{}: gouge {:.4} mm deep at X{:.4} Y{:.4} Z{:.4} (operation {}, move {})",
             a.path.display(),
             gg.line,
@@ -131,7 +141,7 @@ fn print_report(a: &Args, rep: &GougeReport) {
             gg.mv
         );
     }
-    println!(
+    outln!(
         "{} moves checked at {} points: {}",
         rep.moves_checked,
         rep.points_checked,
@@ -148,7 +158,7 @@ fn print_report(a: &Args, rep: &GougeReport) {
         }
     );
     if rep.moves_skipped > 0 {
-        println!(
+        outln!(
             "{} moves not checked: {}",
             rep.moves_skipped,
             skipped(&rep.skipped)

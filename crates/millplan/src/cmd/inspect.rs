@@ -91,24 +91,23 @@ fn program_json(p: &Program, diags: usize, rapid_rate: f64) -> Value {
 
 pub fn run(a: Args) -> CliResult<i32> {
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let rapid_rate = a.rapid_rate.unwrap_or(machine.rapid);
-    if !(rapid_rate > 0.0 && rapid_rate.is_finite()) {
-        return Err(crate::error::CliError::input(
-            "--rapid-rate must be positive (mm/min)",
-        ));
-    }
-    let input = read_any(&a.file, read_options(a.units, None))?;
+    let rapid_rate = crate::cmd::arg(
+        "--rapid-rate",
+        a.rapid_rate.unwrap_or(machine.rapid),
+        crate::cmd::Range::positive(1e7, "mm/min"),
+    )?;
+    let input = read_any(&a.file, read_options(a.units, None)?)?;
     match input {
         Input::Program(parsed) => {
             print_diagnostics(&a.file, &parsed.diagnostics, a.quiet || a.json);
             let p = &parsed.program;
             if a.ir {
-                print!("{}", millplan_nc::text::print(p));
+                out!("{}", millplan_nc::text::print(p));
                 return Ok(EXIT_OK);
             }
             let j = program_json(p, parsed.diagnostics.len(), rapid_rate);
             if a.json {
-                println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+                outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
             } else {
                 print_program(&a.file, p, &j);
             }
@@ -116,7 +115,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         Input::Mesh(mesh, r) => {
             let j = mesh_json(&mesh, &r);
             if a.json {
-                println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+                outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
             } else {
                 print_mesh(&a.file, &j);
             }
@@ -157,34 +156,38 @@ fn mesh_json(mesh: &millplan_geom::TriMesh, r: &millplan_geom::stl::StlReport) -
 }
 
 fn print_mesh(path: &std::path::Path, j: &Value) {
-    println!(
+    outln!(
         "{}: STL ({}), header {}",
         path.display(),
         j["encoding"].as_str().unwrap_or(""),
         j["header"]
     );
-    println!(
+    outln!(
         "  triangles      {} ({} in file, {} degenerate dropped)",
-        j["triangles"], j["facets_in_file"], j["degenerate"]
+        j["triangles"],
+        j["facets_in_file"],
+        j["degenerate"]
     );
-    println!("  vertices       {} after welding", j["vertices"]);
-    println!(
+    outln!("  vertices       {} after welding", j["vertices"]);
+    outln!(
         "  open edges     {}   non-manifold edges {}",
-        j["open_edges"], j["non_manifold_edges"]
+        j["open_edges"],
+        j["non_manifold_edges"]
     );
-    println!(
+    outln!(
         "  stored normals {} zero, {} against the vertex order",
-        j["zero_normals"], j["flipped_normals"]
+        j["zero_normals"],
+        j["flipped_normals"]
     );
     if j["trailing_bytes"].as_u64().unwrap_or(0) > 0 {
-        println!(
+        outln!(
             "  trailing bytes {} after the last facet",
             j["trailing_bytes"]
         );
     }
     if let Some(b) = j["bounds"].as_object() {
         let v = |k: &str, i: usize| b[k][i].as_f64().unwrap_or(0.0);
-        println!(
+        outln!(
             "  bounds         [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}]",
             v("min", 0),
             v("min", 1),
@@ -193,7 +196,7 @@ fn print_mesh(path: &std::path::Path, j: &Value) {
             v("max", 1),
             v("max", 2)
         );
-        println!(
+        outln!(
             "  size           {:.4} x {:.4} x {:.4}",
             v("max", 0) - v("min", 0),
             v("max", 1) - v("min", 1),
@@ -202,21 +205,21 @@ fn print_mesh(path: &std::path::Path, j: &Value) {
     }
     match j["units_guess"].as_str() {
         Some("inch") => {
-            println!("  units          inch (guess: the part is under 30 units across)")
+            outln!("  units          inch (guess: the part is under 30 units across)")
         }
-        _ => println!("  units          mm"),
+        _ => outln!("  units          mm"),
     }
 }
 
 fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
-    println!(
+    outln!(
         "{}: {} ({})",
         path.display(),
         j["format"].as_str().unwrap_or(""),
         p.source.name()
     );
-    println!("  units       {:?} ({:?})", p.units.source, p.units.origin);
-    println!("  operations  {}", p.operations.len());
+    outln!("  units       {:?} ({:?})", p.units.source, p.units.origin);
+    outln!("  operations  {}", p.operations.len());
     for (i, op) in p.operations.iter().enumerate() {
         let t = op.tool.as_ref();
         let tool = match t {
@@ -232,33 +235,37 @@ fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
             }
             None => "no tool".into(),
         };
-        println!(
+        outln!(
             "    {i:>3} {:<24} {:>8} moves  {tool}",
             op.name.as_deref().unwrap_or("-"),
             op.moves.len()
         );
     }
     let m = &j["moves"];
-    println!(
+    outln!(
         "  moves       {} rapid, {} linear, {} arc, {} cycle ({} five-axis)",
-        m["rapid"], m["linear"], m["arc"], m["cycle"], m["five_axis"]
+        m["rapid"],
+        m["linear"],
+        m["arc"],
+        m["cycle"],
+        m["five_axis"]
     );
     if let Some(b) = j["bounds"].as_object() {
-        println!("  bounds      {} .. {}", b["min"], b["max"]);
+        outln!("  bounds      {} .. {}", b["min"], b["max"]);
     }
-    println!(
+    outln!(
         "  length      {:.1} mm cutting, {:.1} mm rapid",
         j["length_mm"]["cutting"].as_f64().unwrap_or(0.0),
         j["length_mm"]["rapid"].as_f64().unwrap_or(0.0)
     );
     let unknown = j["unknown_moves"].as_u64().unwrap_or(0);
     if unknown > 0 {
-        println!(
+        outln!(
             "  unknown     {unknown} moves from or to a position the program has not set (left out of lengths, bounds and time)"
         );
     }
     let t = j["time_s"].as_f64().unwrap_or(0.0);
-    println!(
+    outln!(
         "  time        {:.0} s ({}:{:02}:{:02}) at programmed feeds",
         t,
         (t / 3600.0) as u64,

@@ -15,9 +15,100 @@ pub mod thread;
 pub mod tool;
 pub mod wd;
 
+use crate::error::{CliError, CliResult};
 use clap::ValueEnum;
 use millplan_nc::write::{Target, WriteOptions};
 use millplan_nc::{LengthUnit, ReadOptions};
+
+/// The physical range of a numeric argument: above (or from) `lo`, up to
+/// `hi`, in `unit`.
+#[derive(Clone, Copy, Debug)]
+pub struct Range {
+    pub lo: f64,
+    /// `lo` itself is outside (a positive quantity).
+    pub lo_open: bool,
+    pub hi: f64,
+    pub unit: &'static str,
+}
+
+impl Range {
+    /// Above 0, at most `hi`.
+    pub const fn positive(hi: f64, unit: &'static str) -> Range {
+        Range {
+            lo: 0.0,
+            lo_open: true,
+            hi,
+            unit,
+        }
+    }
+
+    /// From `lo` to `hi`, both included.
+    pub const fn from(lo: f64, hi: f64, unit: &'static str) -> Range {
+        Range {
+            lo,
+            lo_open: false,
+            hi,
+            unit,
+        }
+    }
+
+    fn holds(&self, v: f64) -> bool {
+        let above = if self.lo_open {
+            v > self.lo
+        } else {
+            v >= self.lo
+        };
+        above && v <= self.hi
+    }
+}
+
+/// Checks a numeric argument: finite and in its range, else an error naming
+/// the option, the value and the range (exit 2).
+pub fn arg(flag: &str, v: f64, r: Range) -> CliResult<f64> {
+    if v.is_finite() && r.holds(v) {
+        return Ok(v);
+    }
+    let unit = if r.unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {}", r.unit)
+    };
+    let lo = millplan_geom::limits::amount(r.lo);
+    let hi = millplan_geom::limits::amount(r.hi);
+    // 1e-300 as written, not three hundred zeros.
+    let v = if v != 0.0 && (v.abs() < 1e-4 || v.abs() >= 1e9) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    };
+    Err(CliError::input(if r.lo_open {
+        format!("{flag} {v}: must be a number above {lo} and at most {hi}{unit}")
+    } else {
+        format!("{flag} {v}: must be a number from {lo} to {hi}{unit}")
+    }))
+}
+
+/// Largest tool diameter any argument may give, mm.
+pub const MAX_TOOL_D: f64 = 1000.0;
+/// Largest feed, mm/min.
+pub const MAX_FEED: f64 = 1e6;
+/// Largest spindle speed, 1/min.
+pub const MAX_SPINDLE: f64 = 1e6;
+/// Largest cutting speed, m/min.
+pub const MAX_VC: f64 = 1e4;
+
+/// Checks a cutter from `--tool`: its diameter at most [`MAX_TOOL_D`].
+pub fn tool_shape(flag: &str, s: &str) -> CliResult<millplan_models::cutter::Shape> {
+    let shape = millplan_models::cutter::Shape::parse(s)
+        .map_err(|e| CliError::input(format!("{flag} {e}")))?;
+    let d = 2.0 * shape.radius();
+    if !(d <= MAX_TOOL_D) {
+        return Err(CliError::input(format!(
+            "{flag} {s}: the diameter must be at most {MAX_TOOL_D} mm"
+        )));
+    }
+    Ok(shape)
+}
 
 /// Cutting data for the commands that evaluate spindle control along the way;
 /// the defaults are the paper's test conditions.
@@ -38,6 +129,15 @@ pub struct CuttingData {
 }
 
 impl CuttingData {
+    /// Checks every value against its physical range.
+    pub fn check(&self) -> CliResult<()> {
+        arg("--vc", self.vc, Range::positive(MAX_VC, "m/min"))?;
+        arg("--fz", self.fz, Range::positive(10.0, "mm"))?;
+        arg("--flutes", self.flutes as f64, Range::from(1.0, 1000.0, ""))?;
+        arg("--ap", self.ap, Range::positive(MAX_TOOL_D / 2.0, "mm"))?;
+        Ok(())
+    }
+
     /// Spindle-control settings for commands that read only the summary and
     /// the program (no per-point rows).
     pub fn params(&self) -> millplan_plan::speed::SpeedParams {
@@ -95,23 +195,26 @@ pub fn target_for(
     })
 }
 
-/// Writes a program for `o.target` straight into the file `path` (atomically,
-/// never over one of `inputs`), a few megabytes at a time: a large program is
-/// never held whole as text. Words written as comments under `--lossy` are
-/// printed as warnings located in `source`.
+/// Writes a program for `o.target` as the output `path` of `outputs`, a few
+/// megabytes at a time: a large program is never held whole as text. Words
+/// written as comments under `--lossy` are printed as warnings located in
+/// `source`.
 pub fn write_program_file(
     p: &millplan_nc::Program,
     o: WriteOptions,
+    outputs: &mut crate::io::Outputs,
     path: &std::path::Path,
     source: &std::path::Path,
-    inputs: &[&std::path::Path],
     quiet: bool,
 ) -> crate::error::CliResult<()> {
     use millplan_nc::write::WriteError;
-    use std::io::Write;
+    let o = WriteOptions {
+        limits: crate::limits::get(),
+        ..o
+    };
     let mut failed: Option<WriteError> = None;
     let mut warnings = Vec::new();
-    let written = crate::io::write_atomic_with(path, inputs, |f| {
+    let written = outputs.write_with(path, |f| {
         let mut buf = Vec::new();
         let mut io_error = None;
         let r = {
@@ -163,6 +266,10 @@ pub fn write_program(
     source: &std::path::Path,
     quiet: bool,
 ) -> crate::error::CliResult<Vec<u8>> {
+    let o = WriteOptions {
+        limits: crate::limits::get(),
+        ..o
+    };
     let (out, warnings) = millplan_nc::write::write_program(p, o)
         .map_err(|e| crate::error::CliError::input(located(source, &e)))?;
     print_diagnostics(source, &warnings, quiet);
@@ -198,14 +305,18 @@ impl From<UnitArg> for LengthUnit {
     }
 }
 
-/// Reader options from the common flags.
-pub fn read_options(units: Option<UnitArg>, feed: Option<f64>) -> ReadOptions {
+/// Reader options from the common flags, with the limits of this run.
+pub fn read_options(units: Option<UnitArg>, feed: Option<f64>) -> CliResult<ReadOptions> {
     let d = ReadOptions::default();
-    ReadOptions {
+    Ok(ReadOptions {
         units: units.map(Into::into),
-        default_feed: feed.unwrap_or(d.default_feed),
+        default_feed: match feed {
+            Some(f) => arg("--feed", f, Range::positive(MAX_FEED, "mm/min"))?,
+            None => d.default_feed,
+        },
+        limits: crate::limits::get(),
         ..d
-    }
+    })
 }
 
 /// Prints a program's diagnostics to standard error, prefixed with the file name.
@@ -214,7 +325,10 @@ pub fn print_diagnostics(path: &std::path::Path, diags: &[millplan_nc::Diagnosti
         return;
     }
     for d in diags {
-        eprintln!("{}", d.located(&path.display().to_string()));
+        eprintln!(
+            "{}",
+            crate::error::shorten(&d.located(&path.display().to_string()))
+        );
     }
 }
 

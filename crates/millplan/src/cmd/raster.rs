@@ -1,13 +1,15 @@
 //! `millplan raster`: a finishing raster over an STL part.
 
-use crate::cmd::{print_diagnostics, target_for, write_program, TargetArg};
+use crate::cmd::{arg, print_diagnostics, target_for, tool_shape, write_program, Range, TargetArg};
+use crate::cmd::{MAX_FEED, MAX_SPINDLE};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_surface, write_atomic};
-use millplan_models::cutter::Shape;
+use crate::io::{read_surface, Outputs};
+use millplan_geom::limits::{amount, Exceeded};
+use millplan_geom::Aabb;
 use millplan_plan::checks;
 use millplan_sim::dropcutter::DropMesh;
 use millplan_sim::gouge::{check, GougeParams};
-use millplan_sim::raster::{raster, RasterParams};
+use millplan_sim::raster::{estimate, raster, RasterParams};
 use std::path::PathBuf;
 
 /// Generate a finishing raster over a part: parallel passes at --angle, every
@@ -72,31 +74,38 @@ pub struct Args {
     pub quiet: bool,
 }
 
+/// Every argument in its physical range: the stepover from a thousandth of
+/// the tool's diameter, the step from a micrometre, the clearance above the
+/// part.
 fn params(a: &Args) -> CliResult<RasterParams> {
-    let shape = Shape::parse(&a.tool).map_err(CliError::input)?;
-    let finite = [
+    let shape = tool_shape("--tool", &a.tool)?;
+    let d = 2.0 * shape.radius();
+    arg("--angle", a.angle, Range::from(-360.0, 360.0, "degrees"))?;
+    arg(
+        "--stepover",
         a.stepover,
-        a.step,
-        a.feed,
-        a.spindle,
-        a.tol,
-        a.angle,
-        a.boundary,
-        a.clearance,
-    ]
-    .iter()
-    .all(|v| v.is_finite());
-    if !(finite
-        && a.stepover > 0.0
-        && a.step > 0.0
-        && a.feed > 0.0
-        && a.spindle >= 0.0
-        && a.tol >= 0.0)
-    {
-        return Err(CliError::input(
-            "--stepover, --step and --feed must be positive, --tol not negative",
-        ));
+        Range::from((d / 1000.0).max(0.001), 1000.0, "mm (from D/1000)"),
+    )?;
+    arg("--step", a.step, Range::from(0.001, 1000.0, "mm"))?;
+    if a.tol != 0.0 {
+        arg(
+            "--tol",
+            a.tol,
+            Range::from(1e-5, 10.0, "mm (or 0: no refinement)"),
+        )?;
     }
+    arg("--boundary", a.boundary, Range::from(-1e6, 1e6, "mm"))?;
+    arg(
+        "--clearance",
+        a.clearance,
+        Range::positive(1e4, "mm above the part"),
+    )?;
+    arg("--feed", a.feed, Range::positive(MAX_FEED, "mm/min"))?;
+    arg(
+        "--spindle",
+        a.spindle,
+        Range::positive(MAX_SPINDLE, "1/min"),
+    )?;
     let mut p = RasterParams::new(shape);
     p.angle_deg = a.angle;
     p.stepover = a.stepover;
@@ -110,10 +119,55 @@ fn params(a: &Args) -> CliResult<RasterParams> {
     Ok(p)
 }
 
+/// The margin within the part (at most half its narrower side, or nothing
+/// is left) and beyond it by at most its size and the tool, and the raster's
+/// points and memory within the limits: counted from the grid, before any
+/// point is dropped.
+fn check_grid(a: &Args, p: &RasterParams, bounds: &Aabb) -> CliResult<()> {
+    let size = bounds.size();
+    let (narrow, wide) = (size.x.min(size.y), size.x.max(size.y));
+    let reach = wide + 2.0 * p.shape.radius();
+    if !(a.boundary < narrow / 2.0 && a.boundary >= -reach) {
+        return Err(CliError::input(format!(
+            "--boundary {}: must be from {} to under {} mm for this part ({} × {} mm in XY, with this tool)",
+            a.boundary,
+            amount(-reach),
+            amount(narrow / 2.0),
+            amount(size.x),
+            amount(size.y)
+        )));
+    }
+    let e = estimate(bounds, p, GougeParams::default().step);
+    let limits = crate::limits::get();
+    if !(e.points <= limits.moves as f64) {
+        let needs = format!(
+            "--stepover {} and --step {} over {} × {} mm make {} points",
+            a.stepover,
+            a.step,
+            amount(size.x - 2.0 * a.boundary),
+            amount(size.y - 2.0 * a.boundary),
+            amount(e.points.ceil())
+        );
+        return Err(CliError::input(
+            Exceeded::new("moves", needs, limits.moves as f64).to_string(),
+        ));
+    }
+    crate::limits::check_memory(
+        &format!("a raster of {} points", amount(e.points.ceil())),
+        e.bytes,
+    )
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     let p = params(&a)?;
+    let inputs: Vec<&std::path::Path> = [Some(a.stl.as_path()), a.machine.as_deref()]
+        .into_iter()
+        .flatten()
+        .collect();
+    let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], false)?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let (mesh, _) = read_surface(&a.stl)?;
+    check_grid(&a, &p, &mesh.bounds())?;
     let part = DropMesh::new(&mesh);
     print_diagnostics(
         &a.stl,
@@ -146,9 +200,10 @@ pub fn run(a: Args) -> CliResult<i32> {
         }
     }
     let out = write_program(&prog, machine.write_options(target), &a.stl, a.quiet)?;
-    write_atomic(&a.output, &out, &[a.stl.as_path()])?;
+    outputs.write(&a.output, &out)?;
+    outputs.commit()?;
     let s = millplan_nc::stats::summarize(&prog, 15000.0);
-    println!(
+    outln!(
         "wrote {}: {} moves, {:.0} mm cutting, {:.0} s at {} mm/min; gouge check: {} moves at {} points, {}",
         a.output.display(),
         prog.move_count(),

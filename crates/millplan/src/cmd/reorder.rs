@@ -3,7 +3,7 @@
 
 use crate::cmd::{print_diagnostics, read_options, target_for, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::{read_program, read_surface, write_atomic};
+use crate::io::{read_program, read_surface, Outputs};
 use clap::ValueEnum;
 use millplan_plan::pipeline::{self, Context, Pass};
 use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Start};
@@ -87,12 +87,28 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    if !(a.max_step >= 0.0) {
-        return Err(CliError::input("--max-step must be ≥ 0 (mm)"));
-    }
-    crate::io::distinct_outputs(&[Some(&a.output), a.report.as_deref()])?;
+    crate::cmd::arg(
+        "--max-step",
+        a.max_step,
+        crate::cmd::Range::from(0.0, 1000.0, "mm"),
+    )?;
+    crate::cmd::arg("--tie", a.tie, crate::cmd::Range::from(0.0, 100.0, "mm"))?;
+    a.cut.check()?;
+    let inputs: Vec<&std::path::Path> = [
+        Some(a.path.as_path()),
+        Some(a.stl.as_path()),
+        a.machine.as_deref(),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let mut outputs = Outputs::plan(
+        &inputs,
+        &[("-o", Some(&a.output)), ("--report", a.report.as_deref())],
+        false,
+    )?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let parsed = read_program(&a.path, read_options(a.units, None))?;
+    let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = target_for(a.to, &a.output, parsed.program.source)?;
     let (mesh, _) = read_surface(&a.stl)?;
@@ -110,22 +126,22 @@ pub fn run(a: Args) -> CliResult<i32> {
         return Err(CliError::internal("the reorder pass left no outcome"));
     };
     let out = write_program(&program, cx.machine.write_options(target), &a.path, a.quiet)?;
-    let inputs = [a.path.as_path(), a.stl.as_path()];
-    write_atomic(&a.output, &out, &inputs)?;
+    outputs.write(&a.output, &out)?;
     if let Some(path) = &a.report {
         let html = reorder_report(&parsed.program, &program, &o, a.cut.vc);
-        write_atomic(path, html.as_bytes(), &inputs)?;
+        outputs.write(path, html.as_bytes())?;
     }
+    outputs.commit()?;
     if a.json {
         let j = json!({ "method": format!("{:?}", a.method).to_lowercase(), "original": o.before, "reordered": o.after, "stats": o.stats, "output": a.output.display().to_string() });
-        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
-        println!("  {:<28} {:>16} {:>16}", "", "original", "reordered");
+        outln!("  {:<28} {:>16} {:>16}", "", "original", "reordered");
         for (k, v) in millplan_report::reorder::rows(&o.before, &o.after) {
             let (b, r) = v.split_once(" → ").unwrap_or((&v, ""));
-            println!("  {k:<28} {b:>16} {r:>16}");
+            outln!("  {k:<28} {b:>16} {r:>16}");
         }
-        println!(
+        outln!(
             "  {} direct links, {} retracts; wrote {}",
             o.stats.direct_links,
             o.stats.retracts,

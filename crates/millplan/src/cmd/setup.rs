@@ -2,7 +2,7 @@
 //! and how should the part be clamped?
 
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_surface, write_atomic};
+use crate::io::{read_surface, Outputs};
 use millplan_models::kinematics::{KinKind, Kinematics, RotaryAxis};
 use millplan_plan::setup::{self, GridKind, SetupParams, SetupPlan, Summary};
 use millplan_sim::access;
@@ -195,7 +195,28 @@ fn params(a: &Args) -> CliResult<SetupParams> {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    crate::io::distinct_outputs(&[a.output.as_deref(), a.report.as_deref()])?;
+    let inputs: Vec<&std::path::Path> = [Some(a.stl.as_path()), a.machine.as_deref()]
+        .into_iter()
+        .flatten()
+        .collect();
+    let mut outputs = Outputs::plan(
+        &inputs,
+        &[
+            ("-o", a.output.as_deref()),
+            ("--report", a.report.as_deref()),
+        ],
+        false,
+    )?;
+    crate::cmd::arg(
+        "--clearance",
+        a.clearance,
+        crate::cmd::Range::from(0.0, 89.0, "degrees"),
+    )?;
+    crate::cmd::arg(
+        "--cells",
+        a.cells as f64,
+        crate::cmd::Range::from(8.0, 1e7, "cells"),
+    )?;
     let machine = machine(&a)?;
     let p = params(&a)?;
     let (mut mesh, _) = read_surface(&a.stl)?;
@@ -219,7 +240,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         rotated.map_vertices(|v| s * v);
         let mut bytes = Vec::new();
         millplan_geom::stl::write_binary_stl(&rotated, "millplan setup", &mut bytes);
-        write_atomic(out, &bytes, &[a.stl.as_path()])?;
+        outputs.write(out, &bytes)?;
     }
     if let Some(path) = &a.report {
         let mode = a
@@ -234,8 +255,9 @@ pub fn run(a: Args) -> CliResult<i32> {
             &plan,
             &machine,
         );
-        write_atomic(path, html.as_bytes(), &[a.stl.as_path()])?;
+        outputs.write(path, html.as_bytes())?;
     }
+    outputs.commit()?;
     let s = plan.summary(&mesh, &machine);
     if a.json {
         print_json(&a, &s, &machine, secs);
@@ -282,11 +304,11 @@ fn print_json(a: &Args, s: &Summary, machine: &Kinematics, secs: f64) {
         "mode": if a.tool.is_some() { "tool" } else { "line-of-sight" },
         "seconds": secs,
     });
-    println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+    outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
 }
 
 fn print_text(a: &Args, s: &Summary, plan: &SetupPlan) {
-    println!(
+    outln!(
         "{}: {} facets, {} grid ({} cells), clearance {}°",
         a.stl.display(),
         s.facets,
@@ -294,7 +316,7 @@ fn print_text(a: &Args, s: &Summary, plan: &SetupPlan) {
         s.cells,
         a.clearance
     );
-    println!(
+    outln!(
         "{}",
         if s.feasible {
             "feasible in one setup"
@@ -302,33 +324,33 @@ fn print_text(a: &Args, s: &Summary, plan: &SetupPlan) {
             "NOT feasible in one setup"
         }
     );
-    println!("setup rotation (part → table):");
+    outln!("setup rotation (part → table):");
     for r in s.setup {
-        println!("  [{:9.6} {:9.6} {:9.6}]", r[0], r[1], r[2]);
+        outln!("  [{:9.6} {:9.6} {:9.6}]", r[0], r[1], r[2]);
     }
     let e = s.euler_zyx_deg;
-    println!("  Euler Z-Y-X: {:.3}°, {:.3}°, {:.3}°", e[0], e[1], e[2]);
+    outln!("  Euler Z-Y-X: {:.3}°, {:.3}°, {:.3}°", e[0], e[1], e[2]);
     let [n0, n1] = s.axes.map(str::to_uppercase);
     match (s.required, s.would_do) {
-        (Some(r), _) => println!(
+        (Some(r), _) => outln!(
             "required: {n0} {:.2}..{:.2}°, {n1} {:.2}..{:.2}° (largest tilt {:.2}°)",
             r[0].0, r[0].1, r[1].0, r[1].1, s.max_tilt_deg
         ),
-        (None, Some(r)) => println!(
+        (None, Some(r)) => outln!(
             "out of reach; ranges that would do in this setup: {n0} {:.2}..{:.2}°, {n1} {:.2}..{:.2}°",
             r[0].0, r[0].1, r[1].0, r[1].1
         ),
-        (None, None) => println!("required: some facets have no reachable direction"),
+        (None, None) => outln!("required: some facets have no reachable direction"),
     }
     if !s.unreachable.is_empty() {
-        println!(
+        outln!(
             "{} facets ({:.2} mm²) out of the machine's reach",
             s.unreachable.len(),
             s.unreachable_area
         );
     }
     if let Some((t, c)) = s.inaccessible.first() {
-        println!(
+        outln!(
             "{} facets no tool direction can see (the first: facet {t} at {c:?})",
             plan.inaccessible.len()
         );

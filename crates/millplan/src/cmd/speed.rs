@@ -1,10 +1,11 @@
 //! `millplan speed`: constant-cutting-speed spindle control for ball-end finishing.
 
 use crate::cmd::{
-    print_diagnostics, read_options, target_for, write_program_file, TargetArg, UnitArg,
+    arg, print_diagnostics, read_options, target_for, write_program_file, Range, TargetArg,
+    UnitArg, MAX_TOOL_D, MAX_VC,
 };
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_program, read_surface, write_atomic};
+use crate::io::{read_program, read_surface, Outputs};
 use clap::ValueEnum;
 use millplan_models::contact::{Convention, NormalMode, Surface};
 use millplan_nc::write::Target;
@@ -112,12 +113,31 @@ type Reader = std::thread::JoinHandle<(CliResult<millplan_nc::Parsed>, f64)>;
 
 /// Reads the program on its own thread, while the STL is read and its
 /// search trees are built.
-fn spawn_reader(a: &Args, t0: std::time::Instant) -> Reader {
-    let (path, opts) = (a.path.clone(), read_options(a.units, None));
-    std::thread::spawn(move || {
+fn spawn_reader(a: &Args, t0: std::time::Instant) -> CliResult<Reader> {
+    let (path, opts) = (a.path.clone(), read_options(a.units, None)?);
+    Ok(std::thread::spawn(move || {
         let parsed = read_program(&path, opts);
         (parsed, t0.elapsed().as_secs_f64())
-    })
+    }))
+}
+
+/// Every number in its physical range, naming the option.
+fn check_args(a: &Args) -> CliResult<()> {
+    arg("--vc", a.vc, Range::positive(MAX_VC, "m/min"))?;
+    arg("--fz", a.fz, Range::positive(10.0, "mm"))?;
+    arg("--flutes", a.flutes as f64, Range::from(1.0, 1000.0, ""))?;
+    let d = match a.ball_d {
+        Some(d) => arg("--ball-d", d, Range::positive(MAX_TOOL_D, "mm"))?,
+        None => MAX_TOOL_D,
+    };
+    // The ball model's domain: the stock no thicker than the ball's radius.
+    arg("--ap", a.ap, Range::positive(d / 2.0, "mm (at most D/2)"))?;
+    arg(
+        "--s-threshold",
+        a.s_threshold,
+        Range::from(0.0, 1e5, "1/min"),
+    )?;
+    Ok(())
 }
 
 fn join(r: Reader) -> (CliResult<millplan_nc::Parsed>, f64) {
@@ -168,11 +188,34 @@ fn target(a: &Args, machine: &Machine, source: millplan_nc::Dialect) -> CliResul
     }
 }
 
+/// The program, table and report, checked against each other and the inputs
+/// before any work.
+fn plan_outputs(a: &Args) -> CliResult<Outputs> {
+    let inputs: Vec<&std::path::Path> = [
+        Some(a.path.as_path()),
+        Some(a.stl.as_path()),
+        a.machine.as_deref(),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    Outputs::plan(
+        &inputs,
+        &[
+            ("-o", Some(&a.output)),
+            ("--table", a.table.as_deref()),
+            ("--report", a.report.as_deref()),
+        ],
+        false,
+    )
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
-    crate::io::distinct_outputs(&[Some(&a.output), a.table.as_deref(), a.report.as_deref()])?;
+    check_args(&a)?;
+    let mut outputs = plan_outputs(&a)?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let t0 = std::time::Instant::now();
-    let reader = spawn_reader(&a, t0);
+    let reader = spawn_reader(&a, t0)?;
     let mesh = match read_surface(&a.stl) {
         Ok((m, _)) => m,
         // A program error is still reported first.
@@ -202,17 +245,18 @@ pub fn run(a: Args) -> CliResult<i32> {
         .flatten()
         .collect();
     print_diagnostics(&a.stl, &findings, a.quiet || a.json);
-    let inputs = [a.path.as_path(), a.stl.as_path()];
     cx.time("program written and synced", || {
         write_program_file(
             &program,
             cx.machine.write_options(target),
+            &mut outputs,
             &a.output,
             &a.path,
-            &inputs,
             a.quiet,
         )
     })?;
+    write_table_and_report(&a, &mut outputs, &summary, &pass.rows)?;
+    outputs.commit()?;
     if a.timings {
         for t in cx.timings() {
             eprintln!("{:>8.3} s  {}", t.seconds, t.name);
@@ -222,7 +266,6 @@ pub fn run(a: Args) -> CliResult<i32> {
             t0.elapsed().as_secs_f64()
         );
     }
-    write_table_and_report(&a, &summary, &pass.rows)?;
     if a.json {
         let mut j = serde_json::to_value(&summary).unwrap_or_default();
         j["output"] = serde_json::json!(a.output.display().to_string());
@@ -230,7 +273,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         j["machine"] = serde_json::to_value(&cx.machine).unwrap_or_default();
         j["findings"] = serde_json::to_value(&findings).unwrap_or_default();
         j["trusted"] = serde_json::json!(!checks::untrusted(&summary));
-        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
         print_summary(&summary, &a.output, target);
     }
@@ -244,13 +287,13 @@ pub fn run(a: Args) -> CliResult<i32> {
 /// The per-point table (--table) and the report (--report), when asked for.
 fn write_table_and_report(
     a: &Args,
+    outputs: &mut Outputs,
     summary: &Summary,
     rows: &[millplan_plan::speed::PointRow],
 ) -> CliResult<()> {
-    let inputs = [a.path.as_path(), a.stl.as_path()];
     if let Some(t) = &a.table {
         let csv = millplan_report::table::points_csv(rows);
-        write_atomic(t, csv.as_bytes(), &inputs)?;
+        outputs.write(t, csv.as_bytes())?;
     }
     if let Some(r) = &a.report {
         let title = format!(
@@ -261,25 +304,30 @@ fn write_table_and_report(
                 .unwrap_or_default()
         );
         let html = millplan_report::html::speed_report(&title, summary, rows, a.vc);
-        write_atomic(r, html.as_bytes(), &inputs)?;
+        outputs.write(r, html.as_bytes())?;
     }
     Ok(())
 }
 
 fn print_summary(s: &Summary, output: &std::path::Path, target: Target) {
-    println!(
+    outln!(
         "{} cutting points in {} ball-end operation(s), CL points read as {:?}",
-        s.points, s.operations, s.convention
+        s.points,
+        s.operations,
+        s.convention
     );
-    println!(
+    outln!(
         "  D_w        {:.3} … {:.3} mm (mean {:.3})",
-        s.d_w.min, s.d_w.max, s.d_w.mean
+        s.d_w.min,
+        s.d_w.max,
+        s.d_w.mean
     );
-    println!(
+    outln!(
         "  spindle    {:.0} … {:.0} 1/min",
-        s.spindle.min, s.spindle.max
+        s.spindle.min,
+        s.spindle.max
     );
-    println!(
+    outln!(
         "  vc         {:.1} … {:.1} m/min with control; {:.1} … {:.1} at constant {:.0} 1/min",
         s.vc_controlled.min,
         s.vc_controlled.max,
@@ -287,12 +335,15 @@ fn print_summary(s: &Summary, output: &std::path::Path, target: Target) {
         s.vc_constant.max,
         s.constant_spindle
     );
-    println!(
+    outln!(
         "  limits     {} clamped, {} rate-limited, {} held under the S threshold, {} feeds clamped",
-        s.clamped, s.rate_limited, s.held, s.feed_clamped
+        s.clamped,
+        s.rate_limited,
+        s.held,
+        s.feed_clamped
     );
     if s.gap_flagged > 0 {
-        println!("  warning    {} points are not R from the surface (gouge, wrong convention or a different part)", s.gap_flagged);
+        outln!("  warning    {} points are not R from the surface (gouge, wrong convention or a different part)", s.gap_flagged);
     }
-    println!("  wrote      {} ({})", output.display(), target.name());
+    outln!("  wrote      {} ({})", output.display(), target.name());
 }

@@ -1,7 +1,7 @@
 //! `millplan wd-sweep`: the working diameter over a grid of cases (thesis 1).
 
 use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::write_atomic;
+use crate::io::Outputs;
 use millplan_models::regression::{samples, Surrogate};
 use millplan_report::sweep::{page, sweep, Design};
 use std::path::PathBuf;
@@ -38,7 +38,27 @@ pub struct Args {
     pub fit: bool,
 }
 
+/// Every value in its range: a feed-direction step of 1e-300 would never end.
+fn check(a: &Args) -> CliResult<()> {
+    use crate::cmd::{arg, Range, MAX_TOOL_D};
+    for d in &a.d {
+        arg("--d", *d, Range::positive(MAX_TOOL_D, "mm"))?;
+    }
+    for ap in &a.ap {
+        arg("--ap", *ap, Range::positive(MAX_TOOL_D / 2.0, "mm"))?;
+    }
+    for ae in &a.ae {
+        arg("--ae", *ae, Range::from(0.0, MAX_TOOL_D, "mm"))?;
+    }
+    for al in &a.alpha {
+        arg("--alpha", *al, Range::from(0.0, 89.9, "degrees"))?;
+    }
+    arg("--af-step", a.af_step, Range::from(0.1, 180.0, "degrees"))?;
+    Ok(())
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
+    check(&a)?;
     let design = Design {
         d: a.d,
         ap: a.ap,
@@ -52,9 +72,12 @@ pub fn run(a: Args) -> CliResult<i32> {
     let (csv, figures) = sweep(&design);
     let fit = a.fit.then(|| Surrogate::fit(&samples()).fit);
     if let Some(f) = &fit {
-        println!(
+        outln!(
             "regression surrogate: {} samples, R² {:.4}, RMSE {:.4} mm, MAPE {:.2} %",
-            f.samples, f.r2, f.rmse, f.mape
+            f.samples,
+            f.r2,
+            f.rmse,
+            f.mape
         );
     }
     let html = page(&figures, fit.as_ref());
@@ -62,8 +85,10 @@ pub fn run(a: Args) -> CliResult<i32> {
         a.output.join("wd_sweep.csv"),
         a.output.join("wd_sweep.html"),
     );
-    write_atomic(&c, csv.as_bytes(), &[])?;
-    write_atomic(&h, html.as_bytes(), &[])?;
-    println!("wrote {} and {}", c.display(), h.display());
+    let mut outputs = Outputs::plan(&[], &[("-o", Some(&c)), ("-o", Some(&h))], false)?;
+    outputs.write(&c, csv.as_bytes())?;
+    outputs.write(&h, html.as_bytes())?;
+    outputs.commit()?;
+    outln!("wrote {} and {}", c.display(), h.display());
     Ok(EXIT_OK)
 }

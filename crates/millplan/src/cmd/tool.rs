@@ -1,14 +1,13 @@
 //! `millplan tool`: the tool library and thread-mill active control.
 
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::write_atomic;
+use crate::io::Outputs;
 use clap::{Subcommand, ValueEnum};
 use millplan_tooldb::control::{record, Kind, Measurement, Settings};
 use millplan_tooldb::cycles::{self, CycleOptions, Measure};
 use millplan_tooldb::db::{DbError, ToolDb, ToolEdit, ToolRecord};
 use millplan_tooldb::thread::pz;
 use serde_json::json;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// The tool library and thread-mill control, for the tool room.
@@ -83,6 +82,7 @@ pub enum ToolCommand {
     Export {
         #[arg(long, value_enum, default_value = "csv")]
         format: ExportFormat,
+        /// Output file (`-`: standard output).
         #[arg(short, long)]
         output: PathBuf,
     },
@@ -207,6 +207,7 @@ pub struct CycleArgs {
     /// Measure every tooth.
     #[arg(long)]
     pub per_tooth: bool,
+    /// Output file (`-`: standard output).
     #[arg(short, long)]
     pub output: PathBuf,
 }
@@ -249,9 +250,8 @@ fn to_json<T: serde::Serialize>(v: &T) -> CliResult<serde_json::Value> {
     serde_json::to_value(v).map_err(|e| CliError::internal(format!("JSON output: {e}")))
 }
 
-/// Prints `j` (with --json) or `text` on standard output. A reader that closed
-/// the pipe early (`| head`) ends the output quietly; any other write failure
-/// is an error, not a panic.
+/// Prints `j` (with --json) or `text` on standard output. A write that fails
+/// (a closed pipe, a full disk) is reported when the run ends, never a panic.
 pub(crate) fn print(json_out: bool, j: serde_json::Value, text: String) -> CliResult<()> {
     let s = if json_out {
         serde_json::to_string_pretty(&j)
@@ -259,13 +259,20 @@ pub(crate) fn print(json_out: bool, j: serde_json::Value, text: String) -> CliRe
     } else {
         text
     };
-    let mut out = std::io::stdout().lock();
-    match writeln!(out, "{s}").and_then(|()| out.flush()) {
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
-            Err(CliError::internal(format!("standard output: {e}")))
-        }
-        _ => Ok(()),
+    outln!("{s}");
+    Ok(())
+}
+
+/// Writes `text` as the output `path` (`-`: standard output), never over
+/// the library; says what it wrote unless that was standard output.
+fn write_output(lib: &Lib, path: &Path, text: &str, j: serde_json::Value) -> CliResult<i32> {
+    let mut o = Outputs::plan(&[lib.path], &[("-o", Some(path))], true)?;
+    o.write(path, text.as_bytes())?;
+    o.commit()?;
+    if path.as_os_str() == "-" {
+        return Ok(EXIT_OK);
     }
+    lib.print(j, format!("wrote {}", path.display()))
 }
 
 fn describe(t: &ToolRecord) -> String {
@@ -343,10 +350,11 @@ pub fn run(a: Args) -> CliResult<i32> {
                 ExportFormat::ToolT => db.export_tool_t(),
             }
             .map_err(|e| lib.err(e))?;
-            write_atomic(&output, text.as_bytes(), &[lib.path])?;
-            lib.print(
+            write_output(
+                &lib,
+                &output,
+                &text,
                 json!({ "output": output.display().to_string() }),
-                format!("wrote {}", output.display()),
             )
         }
         ToolCommand::Cycle(x) => cycle(&db, &lib, x),
@@ -398,6 +406,11 @@ fn add(db: &mut ToolDb, lib: &Lib, x: AddArgs) -> CliResult<i32> {
 }
 
 fn measure(db: &mut ToolDb, lib: &Lib, x: MeasureArgs) -> CliResult<i32> {
+    use crate::cmd::{arg, Range};
+    arg("--dset", x.dset, Range::from(0.0, 10.0, "mm"))?;
+    if let Some(pz) = x.pz {
+        arg("--pz", pz, Range::from(0.0, 1000.0, "mm"))?;
+    }
     let t = db.tool(x.number).map_err(|e| lib.err(e))?;
     let m = Measurement {
         tool: x.number,
@@ -483,6 +496,11 @@ fn import(db: &mut ToolDb, lib: &Lib, file: &Path) -> CliResult<i32> {
 }
 
 fn cycle(db: &ToolDb, lib: &Lib, x: CycleArgs) -> CliResult<i32> {
+    crate::cmd::arg(
+        "--clearance",
+        x.clearance,
+        crate::cmd::Range::positive(10_000.0, "mm"),
+    )?;
     let t = db.tool(x.number).map_err(|e| lib.err(e))?;
     let o = CycleOptions {
         kind: if x.first {
@@ -503,9 +521,10 @@ fn cycle(db: &ToolDb, lib: &Lib, x: CycleArgs) -> CliResult<i32> {
         Control::Heidenhain => cycles::heidenhain(&t, &o),
         Control::Fanuc => cycles::fanuc(&t, &o),
     };
-    write_atomic(&x.output, text.as_bytes(), &[lib.path])?;
-    lib.print(
+    write_output(
+        lib,
+        &x.output,
+        &text,
         json!({ "output": x.output.display().to_string(), "pz": o.pz }),
-        format!("wrote {}", x.output.display()),
     )
 }

@@ -1,5 +1,6 @@
 //! `millplan wd`: the working diameter of one case.
 
+use crate::cmd::{arg, Range, MAX_TOOL_D, MAX_VC};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use clap::ValueEnum;
 use millplan_models::wd::{self, Case, Neighbour, Side};
@@ -61,11 +62,21 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    if !(a.d > 0.0) || !(a.ap > 0.0) || a.ae.map(|x| !(x > 0.0)).unwrap_or(false) {
-        return Err(CliError::input("--d, --ap and --ae must be positive"));
+    arg("--d", a.d, Range::positive(MAX_TOOL_D, "mm"))?;
+    // The ball model's domain: the stock no thicker than the ball's radius.
+    arg("--ap", a.ap, Range::positive(a.d / 2.0, "mm (at most D/2)"))?;
+    if let Some(ae) = a.ae {
+        arg("--ae", ae, Range::positive(MAX_TOOL_D, "mm"))?;
     }
     if !(0.0..90.0).contains(&a.alpha) {
-        return Err(CliError::input("--alpha must be in [0, 90) degrees"));
+        return Err(CliError::input(format!(
+            "--alpha {}: must be a number from 0 to under 90 degrees",
+            a.alpha
+        )));
+    }
+    arg("--af", a.af, Range::from(-360.0, 360.0, "degrees"))?;
+    if let Some(vc) = a.vc {
+        arg("--vc", vc, Range::positive(MAX_VC, "m/min"))?;
     }
     if a.both && a.ae.is_none() {
         return Err(CliError::input("--both needs --ae"));
@@ -100,13 +111,13 @@ pub fn run(a: Args) -> CliResult<i32> {
             "d_w": dw, "d_cc": dcc, "d_mean_area": d_mean_area, "d_mean_chip": d_mean_chip,
             "n": n, "model": format!("{:?}", a.model).to_lowercase()
         });
-        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
-        println!("D_w  {dw:.4} mm  (working diameter, highest engaged point)");
-        println!("D_cc {dcc:.4} mm  (diameter at the contact point)");
-        println!("D_mean {d_mean_area:.4} mm by area, {d_mean_chip:.4} mm by chip thickness (over the engaged region)");
+        outln!("D_w  {dw:.4} mm  (working diameter, highest engaged point)");
+        outln!("D_cc {dcc:.4} mm  (diameter at the contact point)");
+        outln!("D_mean {d_mean_area:.4} mm by area, {d_mean_chip:.4} mm by chip thickness (over the engaged region)");
         if let Some(n) = n {
-            println!("n    {n:.0} 1/min for vc = {} m/min", a.vc.unwrap_or(0.0));
+            outln!("n    {n:.0} 1/min for vc = {} m/min", a.vc.unwrap_or(0.0));
         }
     }
     Ok(EXIT_OK)

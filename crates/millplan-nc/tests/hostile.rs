@@ -1,0 +1,186 @@
+//! Hostile inputs to the readers (issue 17): line endings of every kind in
+//! every dialect, and the limits on what a few bytes may ask for — a NURBS
+//! span sampled into millions of moves, an expression nested thousands
+//! deep, a line without end. Each is the smallest repro, with the located
+//! error it must give.
+
+mod common;
+
+use millplan_nc::detect::detect;
+use millplan_nc::{parse_program, text, Limits, ReadOptions};
+use std::path::Path;
+
+fn golden(name: &str) -> String {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/golden")
+        .join(name);
+    std::fs::read_to_string(p).expect("golden input")
+}
+
+/// `src` with every line ending replaced by `nl`.
+fn with_endings(src: &str, nl: &str) -> String {
+    millplan_nc::lines::split(src).collect::<Vec<_>>().join(nl)
+}
+
+/// The IR of `src` read with LF, CRLF and lone-CR line endings is the same
+/// program, line numbers and all, in the same dialect.
+fn same_under_every_ending(name: &str, src: &str, opts: ReadOptions) {
+    let lf = with_endings(src, "\n");
+    let want = parse_program(&lf, opts).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let want_ir = text::print(&want.program);
+    assert!(want.program.move_count() > 0, "{name}");
+    for nl in ["\r\n", "\r"] {
+        let other = with_endings(src, nl);
+        assert_eq!(detect(&other), detect(&lf), "{name} {nl:?}");
+        let got = parse_program(&other, opts).unwrap_or_else(|e| panic!("{name} {nl:?}: {e}"));
+        assert_eq!(
+            got.program.move_count(),
+            want.program.move_count(),
+            "{name} {nl:?}"
+        );
+        assert!(
+            text::print(&got.program) == want_ir,
+            "{name} {nl:?}: the IR differs"
+        );
+        assert_eq!(got.diagnostics, want.diagnostics, "{name} {nl:?}");
+    }
+}
+
+/// Issue 17: "CR-only line endings read silently as one line: a five-block
+/// program becomes one move". Every dialect's golden input reads the same
+/// with LF, CRLF and CR only.
+#[test]
+fn every_dialect_reads_every_line_ending() {
+    for name in [
+        "fanuc.nc",
+        "linuxcnc.ngc",
+        "sinumerik.mpf",
+        "heidenhain.h",
+        "catia.apt",
+        "inch_iso.apt",
+        "nx.cls",
+        "solidworks.apt",
+    ] {
+        same_under_every_ending(name, &golden(name), ReadOptions::default());
+    }
+    // The five-block program of the issue: five moves, not one.
+    let five = "G21 G90\rT1 M6\rG0 X0 Y0 Z5\rG1 Z0 F100\rG1 X10\rG1 Y10\rG1 X0\rM30\r";
+    let p = parse_program(five, ReadOptions::default()).expect("reads");
+    assert_eq!(p.program.move_count(), 5);
+    assert_eq!(p.program.moves().last().map(|m| m.line), Some(7));
+}
+
+/// The real samples (when `../shared/data` is here) read the same with
+/// their line endings turned into CRLF and into CR only.
+#[test]
+fn every_sample_reads_every_line_ending() {
+    let Some(root) = common::data() else {
+        eprintln!("SKIPPED: ../shared/data is not here");
+        return;
+    };
+    for path in common::programs(&root) {
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let src = String::from_utf8_lossy(&std::fs::read(&path).expect("read")).into_owned();
+        if parse_program(&src, common::options_for(name)).is_err() {
+            continue;
+        }
+        same_under_every_ending(name, &src, common::options_for(name));
+    }
+}
+
+/// Issue 17: "A 133-byte NURBS with 1e12 control points subdivides to 16.8
+/// M moves (2 GB, 13 s)". The span is refused at the NURBS record, naming the
+/// limit, after at most the limit's worth of sampling; raised, it reads.
+#[test]
+fn a_nurbs_span_is_sampled_within_the_expansion_limit() {
+    let src = "CUTTER/10\nFEDRAT/100\nGOTO/0,0,0\nNURBS/\nKNOT/0.5,1\nCNTRL/1e12,0,0\nCNTRL/0,1e12,0\nCNTRL/1e12,1e12,0\nCNTRL/0,0,1e12\nFINI\n";
+    assert!(src.len() < 133);
+    let t = std::time::Instant::now();
+    let e = parse_program(src, ReadOptions::default()).expect_err("refused");
+    assert_eq!((e.line, e.col), (4, 1), "{e}");
+    assert!(
+        e.message.contains("span 1 needs more than 10000 moves"),
+        "{e}"
+    );
+    assert!(e.message.contains("--limit expansion=N"), "{e}");
+    assert!(t.elapsed().as_secs() < 5);
+    // A sane spline (the published samples' shape) is well within.
+    let sane = src.replace("1e12", "10");
+    let p = parse_program(&sane, ReadOptions::default()).expect("reads");
+    assert!(p.program.move_count() < 1000);
+    let mut o = ReadOptions::default();
+    o.limits.expansion = 20;
+    assert!(parse_program(&sane, o).is_err());
+}
+
+/// Issue 17: "a 12 KB Sinumerik expression of nested unary minus overflows
+/// the reader thread's stack (exit 134)". Read on a thread with a small
+/// stack, it is a located error naming the limit.
+#[test]
+fn a_deep_expression_is_a_located_error() {
+    let src = format!(
+        "N10 G710 G90\nN20 TRAORI\nN30 DEF REAL _Z\nN40 T=\"BALL\" D1\nN50 G1 X1 Y1 Z={}5 F100\nN60 M30\n",
+        "-".repeat(12_000)
+    );
+    assert!(src.len() > 12_000);
+    let e = std::thread::Builder::new()
+        .stack_size(256 * 1024)
+        .spawn(move || parse_program(&src, ReadOptions::default()))
+        .expect("spawn")
+        .join()
+        .expect("the reader does not overflow its stack")
+        .expect_err("refused");
+    assert_eq!((e.line, e.col), (5, 14), "{e}");
+    assert!(e.message.contains("expression-depth limit of 64"), "{e}");
+    // LinuxCNC's expressions go through the same evaluator.
+    let ngc = format!(
+        "G21\nT1 M6\n#<a>={}1\nG1 X#<a> F100\nM30\n",
+        "-".repeat(5000)
+    );
+    if let Err(e) = parse_program(&ngc, ReadOptions::default()) {
+        assert!(!e.message.is_empty());
+    }
+}
+
+/// A line longer than the line-bytes limit is refused where the limit ends.
+#[test]
+fn a_line_without_end_is_a_located_error() {
+    let long = format!("G21\nT1 M6\nG1 X1 F100 ({})\nM30\n", "x".repeat(70_000));
+    let e = parse_program(&long, ReadOptions::default()).expect_err("refused");
+    assert_eq!((e.line, e.col), (3, 65_537), "{e}");
+    assert!(e.message.contains("line-bytes limit of 65536"), "{e}");
+    let o = ReadOptions {
+        limits: Limits {
+            line_bytes: 100_000,
+            ..Limits::default()
+        },
+        ..ReadOptions::default()
+    };
+    assert!(parse_program(&long, o).is_ok());
+}
+
+/// Issue 17: pecks of `Q0.000001` in G83, APT `CYCLE/DEEP` and Heidenhain
+/// cycles 200 and 1 are read as cycles (nothing is expanded on reading) and
+/// refused by every writer at the cycle's line (`MAX_PECKS`).
+#[test]
+fn tiny_pecks_are_refused_in_every_dialect() {
+    let cases = [
+        ("G21 G17 G90 G94\nT2 M6\nG43 H2 S1500 M3\nG0 X10. Y10. Z5.\nG98 G83 X10. Y10. Z-20. R2. Q0.000001 F100.\nX30.\nG80\nM30\n", 5),
+        ("UNITS/MM\nCUTTER/10\nFEDRAT/100\nGOTO/0,0,10\nCYCLE/DEEP,FEDTO,20,STEP,0.000001,RAPTO,2,MMPM,100\nGOTO/10,10,0\nCYCLE/OFF\nFINI\n", 5),
+        ("0 BEGIN PGM P MM\n1 TOOL CALL 1 Z S1000\n2 L Z+50 R0 FMAX\n3 CYCL DEF 200 DRILLING ~\n  Q200=2 ;SET-UP CLEARANCE ~\n  Q201=-20 ;DEPTH ~\n  Q206=150 ;FEED RATE ~\n  Q202=0.000001 ;PLUNGING DEPTH ~\n  Q210=0 ;DWELL TIME AT TOP ~\n  Q203=+0 ;SURFACE COORDINATE ~\n  Q204=50 ;2ND SET-UP CLEARANCE ~\n  Q211=0 ;DWELL TIME AT BOTTOM\n4 L X+10 Y+10 R0 FMAX M99\n5 END PGM P MM\n", 4),
+        ("0 BEGIN PGM P MM\n1 TOOL CALL 1 Z S1000\n2 L Z+50 R0 FMAX\n3 CYCL DEF 1.0 PECKING\n4 CYCL DEF 1.1 SET UP 2\n5 CYCL DEF 1.2 DEPTH -20\n6 CYCL DEF 1.3 PECKG 0.000001\n7 CYCL DEF 1.4 DWELL 0\n8 CYCL DEF 1.5 F150\n9 L X+10 Y+10 R0 FMAX M99\n10 END PGM P MM\n", 4),
+    ];
+    for (src, line) in cases {
+        let p = parse_program(src, ReadOptions::default()).expect("reads");
+        // Every target refuses it; the G-code targets for its pecks (APT
+        // may stop earlier, at a move from a position not yet known).
+        for t in millplan_nc::write::Target::ALL {
+            let o = millplan_nc::write::WriteOptions::new(t);
+            let e = millplan_nc::write::write_program(&p.program, o).expect_err("refused");
+            if t.is_gcode() {
+                assert_eq!(e.line, line, "{}: {e}", t.name());
+                assert!(e.message.contains("at most 1000 are accepted"), "{e}");
+            }
+        }
+    }
+}

@@ -1,0 +1,73 @@
+//! The resource limits of this run (the table is `millplan_geom::limits`):
+//! the defaults, with `memory` set to half of this machine's memory, then
+//! `$MILLPLAN_LIMITS` (`moves=1e8,memory=8000`), then every `--limit
+//! NAME=VALUE` of the command line, later ones winning.
+
+use crate::error::{CliError, CliResult};
+use millplan_geom::limits::{amount, Exceeded, Limits};
+use std::sync::OnceLock;
+
+static LIMITS: OnceLock<Limits> = OnceLock::new();
+
+/// The limits in force (the defaults until [`init`] ran).
+pub fn get() -> Limits {
+    LIMITS.get().copied().unwrap_or_else(defaults)
+}
+
+/// The documented defaults, with `memory` half of what this machine has.
+fn defaults() -> Limits {
+    let mut l = Limits::default();
+    if let Some(total) = total_memory() {
+        l.memory = total / 2;
+    }
+    l
+}
+
+/// Physical memory in bytes, where the system says.
+fn total_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Settles the limits from the environment and the `--limit` arguments.
+pub fn init(args: &[String]) -> CliResult<()> {
+    let mut l = defaults();
+    if let Some(env) = std::env::var_os("MILLPLAN_LIMITS") {
+        let env = env.to_string_lossy().into_owned();
+        for item in env.split(',').filter(|s| !s.trim().is_empty()) {
+            set(&mut l, item).map_err(|e| CliError::input(format!("MILLPLAN_LIMITS: {e}")))?;
+        }
+    }
+    for a in args {
+        set(&mut l, a).map_err(|e| CliError::input(format!("--limit {a}: {e}")))?;
+    }
+    let _ = LIMITS.set(l);
+    Ok(())
+}
+
+fn set(l: &mut Limits, item: &str) -> Result<(), String> {
+    let (name, value) = item
+        .split_once('=')
+        .ok_or_else(|| "write NAME=VALUE, e.g. moves=1e8".to_string())?;
+    l.set(name.trim(), value.trim())
+}
+
+/// Refuses estimated work whose memory exceeds the `memory` limit; `what`
+/// says what would take it (`a raster of 3.2e9 points`).
+pub fn check_memory(what: &str, bytes: f64) -> CliResult<()> {
+    let l = get();
+    if bytes <= l.memory as f64 {
+        return Ok(());
+    }
+    let e = Exceeded::new(
+        "memory",
+        format!(
+            "{what} would take about {} MB",
+            amount((bytes / 1e6).ceil())
+        ),
+        (l.memory / 1_000_000) as f64,
+    );
+    Err(CliError::input(e.to_string()))
+}
