@@ -446,3 +446,16 @@ fn block_numbers_stay_within_five_digits() {
         compare(&p, &q, &Tolerance::default()).expect("the same program");
     }
 }
+
+#[test]
+fn heidenhain_cycle_values_that_are_not_numbers_are_located() {
+    for (src, line) in [
+        ("0 BEGIN PGM T MM\n1 TOOL CALL 5 Z S3000\n2 CYCL DEF 1.0 PECKING\n3 CYCL DEF 1.5 F-inf\n4 END PGM T MM\n", 4),
+        ("0 BEGIN PGM T MM\n1 TOOL CALL 5 Z S3000\n2 CYCL DEF 200 DRILLING ~\n-inf\n3 END PGM T MM\n", 3),
+    ] {
+        let e = parse_program(src, ReadOptions::default()).expect_err("refused");
+        assert_eq!(e.line, line, "{e}");
+    }
+    // No value at all, or a word, is still read.
+    parse("0 BEGIN PGM T MM\n1 TOOL CALL 5 Z S3000\n2 CYCL DEF 1.0 PECKING\n3 CYCL DEF 1.4 DWELL\n4 CYCL DEF 200 DRILLING ~\n  Q206=FAUTO ;FEED ~\n  Q201=-5\n5 END PGM T MM\n");
+}

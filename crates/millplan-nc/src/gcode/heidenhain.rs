@@ -764,6 +764,30 @@ impl HeidenhainReader {
             };
             self.cycle_index = None;
             self.cycle_q = Some(BTreeMap::new());
+            // After the number: the cycle's name, then Q parameters only.
+            for w in &words[3..] {
+                let ok = match w.strip_prefix('Q').and_then(|r| r.split_once('=')) {
+                    // A number, or a word (`FAUTO`, `MAX`, `PREDEF`, `Q12`).
+                    Some((k, v)) => {
+                        k.parse::<u32>().is_ok()
+                            && (parse_num(v).is_some()
+                                || v.starts_with(|c: char| c.is_ascii_alphabetic())
+                                    && v.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'))
+                    }
+                    None => {
+                        w.chars()
+                            .all(|c| c.is_ascii_alphabetic() || "_-./".contains(c))
+                            && w.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
+                    }
+                };
+                if !ok {
+                    return Err(ParseError::new(
+                        ln,
+                        1,
+                        format!("`{w}` is not a Q parameter of CYCL DEF {n}"),
+                    ));
+                }
+            }
             self.q_params(words);
             self.modal_call = false;
             let text = self.raw_block.take().unwrap_or_else(|| body.to_string());
@@ -774,6 +798,23 @@ impl HeidenhainReader {
             && words.get(2).map(|w| w.starts_with("1.")).unwrap_or(false)
         {
             self.cycle_q = None;
+        }
+        // The pecking cycle's values are read: one that is not a number stops here.
+        if matches!(
+            words.get(2).copied(),
+            Some("1.1" | "1.2" | "1.3" | "1.4" | "1.5")
+        ) {
+            let last = words.last().copied().unwrap_or("");
+            let text = last.strip_prefix('F').unwrap_or(last);
+            // `CYCL DEF 1.4 DWELL` without a value is none; a value must be a number.
+            let word = text.chars().all(|c| c.is_ascii_alphabetic());
+            if !word && parse_num(text).is_none() {
+                return Err(ParseError::new(
+                    ln,
+                    1,
+                    format!("`{last}` in `{}` is not a number", body.trim()),
+                ));
+            }
         }
         match words.get(2).copied() {
             Some("1.0") => {
