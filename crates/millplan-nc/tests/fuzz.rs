@@ -117,8 +117,17 @@ fn check_program(src: &str) {
 /// word kept verbatim from the source, `-inf` for all a reader knows, is the
 /// source's own).
 fn write_every_target(p: &millplan_nc::Program, src: &str) {
-    let verbatim: Vec<&str> = millplan_nc::lines::split(src)
-        .map(str::trim)
+    // A line without its block number (`12 L X+1`, `N20 G1`): a verbatim
+    // block is renumbered by the writer.
+    let body = |l: &str| -> String {
+        let l = l.trim();
+        let l = l.strip_prefix('N').unwrap_or(l);
+        l.trim_start_matches(|c: char| c.is_ascii_digit())
+            .trim()
+            .to_string()
+    };
+    let verbatim: Vec<String> = millplan_nc::lines::split(src)
+        .map(body)
         .filter(|l| !l.is_empty())
         .collect();
     for t in Target::ALL {
@@ -131,7 +140,8 @@ fn write_every_target(p: &millplan_nc::Program, src: &str) {
         };
         let text = String::from_utf8_lossy(&out);
         for line in text.lines() {
-            if verbatim.iter().any(|v| line.contains(v)) {
+            let b = body(line);
+            if verbatim.iter().any(|v| b.contains(v.as_str())) {
                 continue;
             }
             // Comments carry the source's words.
