@@ -73,12 +73,7 @@ fn check_rasters(
     for angle in &a.angles {
         arg("--angles", *angle, Range::from(-360.0, 360.0, "degrees"))?;
     }
-    arg(
-        "--stepover",
-        a.stepover,
-        Range::from((d / 1000.0).max(0.001), 1000.0, "mm (from D/1000)"),
-    )?;
-    arg("--step", a.step, Range::from(0.001, 1000.0, "mm"))?;
+    crate::cmd::raster_spacing(d, a.stepover, a.step)?;
     let mut p = millplan_sim::raster::RasterParams::new(shape);
     (p.stepover, p.step) = (a.stepover, a.step);
     let e = millplan_sim::raster::estimate(bounds, &p, 0.1);

@@ -62,6 +62,17 @@ impl Range {
     }
 }
 
+/// A raster's `--stepover` (from D/1000) and `--step` for a tool of diameter `d`.
+pub fn raster_spacing(d: f64, stepover: f64, step: f64) -> CliResult<()> {
+    arg(
+        "--stepover",
+        stepover,
+        Range::from((d / 1000.0).max(0.001), 1000.0, "mm (from D/1000)"),
+    )?;
+    arg("--step", step, Range::from(0.001, 1000.0, "mm"))?;
+    Ok(())
+}
+
 /// Checks a numeric argument: finite and in its range, else an error naming
 /// the option, the value and the range (exit 2).
 pub fn arg(flag: &str, v: f64, r: Range) -> CliResult<f64> {

@@ -81,12 +81,7 @@ fn params(a: &Args) -> CliResult<RasterParams> {
     let shape = tool_shape("--tool", &a.tool)?;
     let d = 2.0 * shape.radius();
     arg("--angle", a.angle, Range::from(-360.0, 360.0, "degrees"))?;
-    arg(
-        "--stepover",
-        a.stepover,
-        Range::from((d / 1000.0).max(0.001), 1000.0, "mm (from D/1000)"),
-    )?;
-    arg("--step", a.step, Range::from(0.001, 1000.0, "mm"))?;
+    crate::cmd::raster_spacing(d, a.stepover, a.step)?;
     if a.tol != 0.0 {
         arg(
             "--tol",
