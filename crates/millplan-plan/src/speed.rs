@@ -267,6 +267,24 @@ pub struct Summary {
     pub indicators: Indicators,
     /// Indicators of the target speeds before machine limits.
     pub indicators_target: Indicators,
+    /// Points where the spindle cannot hold the constant cutting speed: the
+    /// speed written differs from the target by more than
+    /// [`VC_DEVIATION`] of it (the machine's range or acceleration would not
+    /// let it follow).
+    pub vc_deviation_points: usize,
+    /// Their share of the points.
+    pub vc_deviation_share: f64,
+}
+
+/// Relative difference between the written and the target spindle speed
+/// above which a point counts as not at the constant cutting speed.
+pub const VC_DEVIATION: f64 = 0.05;
+
+/// Whether speed `n` misses the constant-cutting-speed target by more than
+/// [`VC_DEVIATION`].
+#[inline]
+pub fn deviates(n: f64, target: f64) -> bool {
+    (n - target).abs() > VC_DEVIATION * target
 }
 
 pub struct SpeedResult {
@@ -467,19 +485,6 @@ pub fn apply_in_place(
             .iter()
             .map(|l| millplan_models::wd::spindle_speed(p.vc, l.dw))
             .collect();
-        let clamp = |n: f64| n.clamp(m.spindle_min, m.spindle_max);
-        let mut n: Vec<f64> = Vec::with_capacity(target.len());
-        let mut held = vec![false; target.len()];
-        for (k, t) in target.iter().enumerate() {
-            let c = clamp(*t);
-            match n.last() {
-                Some(&last) if (c - last).abs() <= p.s_threshold => {
-                    n.push(last);
-                    held[k] = c != last;
-                }
-                _ => n.push(c),
-            }
-        }
         // Block times between cutting points need the feeds, which depend on n.
         let len_between = |k: usize| -> (f64, f64) {
             // (cutting length of the move into point k, time of non-cutting moves before it at rapid)
@@ -506,47 +511,15 @@ pub fn apply_in_place(
         } else {
             Vec::new()
         };
-        let feed_of = |k: usize, n: f64| -> (f64, bool) {
-            let f = match p.feed {
-                FeedCoupling::ChipLoad => n * p.flutes as f64 * p.fz,
-                FeedCoupling::Programmed => match programmed[k] {
-                    (f, true) => f,
-                    (f, false) => return (f, false),
-                },
-            };
-            let c = f.clamp(m.feed_min, m.feed_max);
-            (c, c != f)
-        };
-        // Block times of speeds n at their feeds.
-        let block_times = |n: &[f64], dt: &mut [f64]| {
-            dt.par_iter_mut().enumerate().for_each(|(k, t)| {
-                let (f, _) = feed_of(k, n[k]);
-                *t = geo[k].0 / f * 60.0 + geo[k].1;
-            });
-        };
-        let mut dt = vec![0.0; n.len()];
-        let before_limit = n.clone();
-        // The block time depends on the speed through the feed: iterate until the
-        // limited speeds satisfy the bound with their own block times.
-        for _ in 0..50 {
-            // Block times of these speeds, and whether the speeds respect them.
-            block_times(&n, &mut dt);
-            let ok = (1..n.len())
-                .into_par_iter()
-                .all(|k| (n[k] - n[k - 1]).abs() <= m.spindle_accel * dt[k] * (1.0 + 1e-12) + 1e-9);
-            if ok {
-                break;
-            }
-            // Aim slightly inside the bound so the next feeds cannot push it over.
-            rate_limit_scaled(&mut n, &dt, 0.999, m.spindle_accel);
-        }
-        // The final feeds and block times; every point into the summary, and
-        // into a row when rows are kept.
-        let (feeds, feed_clamped): (Vec<f64>, Vec<bool>) = (0..n.len())
-            .into_par_iter()
-            .map(|k| feed_of(k, n[k]))
-            .unzip();
-        block_times(&n, &mut dt);
+        let Controlled {
+            n,
+            held,
+            before_limit,
+            dt,
+            feeds,
+            feed_clamped,
+        } = control(&target, &geo, &programmed, m, p);
+        let clamp = |n: f64| n.clamp(m.spindle_min, m.spindle_max);
         if p.keep_rows {
             rows.reserve(n.len());
         }
@@ -714,6 +687,104 @@ pub(crate) fn cutting_points(op: &millplan_nc::Operation) -> (Vec<PathPoint>, Ve
     (pts, idx)
 }
 
+/// The spindle as the machine drives it at cutting points with constant-
+/// cutting-speed targets `target`.
+pub(crate) struct Controlled {
+    /// Speeds written.
+    pub n: Vec<f64>,
+    /// Held at the previous speed (a change under the S threshold).
+    pub held: Vec<bool>,
+    /// Speeds in the machine's range, before the acceleration limit.
+    pub before_limit: Vec<f64>,
+    /// Block time into each point, s.
+    pub dt: Vec<f64>,
+    pub feeds: Vec<f64>,
+    pub feed_clamped: Vec<bool>,
+}
+
+/// Speeds at points with targets `target` (1/min) and `geo` = (cutting length
+/// of the move into the point, time of the non-cutting moves before it, s):
+/// the machine's range, the S threshold, then the acceleration limit over
+/// block times at the feeds the speeds give (`programmed`: the programmed
+/// feed per point and whether it is per minute, read only for
+/// [`FeedCoupling::Programmed`]).
+pub(crate) fn control(
+    target: &[f64],
+    geo: &[(f64, f64)],
+    programmed: &[(f64, bool)],
+    m: &Machine,
+    p: &SpeedParams,
+) -> Controlled {
+    // Small inputs (the reorder's windows) on one thread.
+    const PAR: usize = 1 << 12;
+    let clamp = |n: f64| n.clamp(m.spindle_min, m.spindle_max);
+    let mut n: Vec<f64> = Vec::with_capacity(target.len());
+    let mut held = vec![false; target.len()];
+    for (k, t) in target.iter().enumerate() {
+        let c = clamp(*t);
+        match n.last() {
+            Some(&last) if (c - last).abs() <= p.s_threshold => {
+                n.push(last);
+                held[k] = c != last;
+            }
+            _ => n.push(c),
+        }
+    }
+    let feed_of = |k: usize, n: f64| -> (f64, bool) {
+        let f = match p.feed {
+            FeedCoupling::ChipLoad => n * p.flutes as f64 * p.fz,
+            FeedCoupling::Programmed => match programmed[k] {
+                (f, true) => f,
+                (f, false) => return (f, false),
+            },
+        };
+        let c = f.clamp(m.feed_min, m.feed_max);
+        (c, c != f)
+    };
+    // Block times of speeds n at their feeds.
+    let block_times = |n: &[f64], dt: &mut [f64]| {
+        dt.par_iter_mut()
+            .with_min_len(PAR)
+            .enumerate()
+            .for_each(|(k, t)| {
+                let (f, _) = feed_of(k, n[k]);
+                *t = geo[k].0 / f * 60.0 + geo[k].1;
+            });
+    };
+    let mut dt = vec![0.0; n.len()];
+    let before_limit = n.clone();
+    // The block time depends on the speed through the feed: iterate until the
+    // limited speeds satisfy the bound with their own block times.
+    for _ in 0..50 {
+        // Block times of these speeds, and whether the speeds respect them.
+        block_times(&n, &mut dt);
+        let ok = (1..n.len())
+            .into_par_iter()
+            .with_min_len(PAR)
+            .all(|k| (n[k] - n[k - 1]).abs() <= m.spindle_accel * dt[k] * (1.0 + 1e-12) + 1e-9);
+        if ok {
+            break;
+        }
+        // Aim slightly inside the bound so the next feeds cannot push it over.
+        rate_limit_scaled(&mut n, &dt, 0.999, m.spindle_accel);
+    }
+    // The final feeds and block times.
+    let (feeds, feed_clamped): (Vec<f64>, Vec<bool>) = (0..n.len())
+        .into_par_iter()
+        .with_min_len(PAR)
+        .map(|k| feed_of(k, n[k]))
+        .unzip();
+    block_times(&n, &mut dt);
+    Controlled {
+        n,
+        held,
+        before_limit,
+        dt,
+        feeds,
+        feed_clamped,
+    }
+}
+
 /// Limits |n_k − n_{k−1}| to `accel`·dt_k: a forward pass, then a backward pass
 /// that guarantees the bound for every pair.
 pub fn rate_limit(n: &mut [f64], dt: &[f64], accel: f64) {
@@ -782,6 +853,7 @@ struct SummaryAcc {
     vc_controlled: StatsAcc,
     ind: IndicatorsAcc,
     ind_target: IndicatorsAcc,
+    deviating: usize,
 }
 
 impl SummaryAcc {
@@ -796,6 +868,7 @@ impl SummaryAcc {
             vc_controlled: StatsAcc::default(),
             ind: IndicatorsAcc::default(),
             ind_target: IndicatorsAcc::default(),
+            deviating: 0,
         }
     }
 
@@ -822,6 +895,7 @@ impl SummaryAcc {
         self.vc_controlled.push(pi * l.dw * n / 1000.0);
         self.ind.push(n, ds, dt);
         self.ind_target.push(n_target, ds, dt);
+        self.deviating += deviates(n, n_target) as usize;
     }
 
     fn finish(
@@ -852,6 +926,12 @@ impl SummaryAcc {
             vc_controlled: self.vc_controlled.finish(),
             indicators: self.ind.finish(),
             indicators_target: self.ind_target.finish(),
+            vc_deviation_points: self.deviating,
+            vc_deviation_share: if self.points > 0 {
+                self.deviating as f64 / self.points as f64
+            } else {
+                0.0
+            },
         }
     }
 }

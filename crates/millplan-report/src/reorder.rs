@@ -26,6 +26,16 @@ pub fn rows(before: &OrderIndicators, after: &OrderIndicators) -> Vec<(String, S
         (k.to_string(), format!("{} → {}", f(before), f(after)))
     };
     vec![
+        row("off the cutting speed (> 5 %)", &|v| {
+            format!("{:.2} %", 100.0 * v.as_run.vc_deviation_share)
+        }),
+        row("Σ|Δn| as run (1/min)", &|v| {
+            format!("{:.0}", v.as_run.total_variation_n)
+        }),
+        row("max |Δn| as run (1/min)", &|v| {
+            format!("{:.0}", v.as_run.max_delta_n)
+        }),
+        row("time as run (s)", &|v| format!("{:.1}", v.as_run.time_s)),
         row("successive |ΔD_w| max (mm)", &|v| {
             format!("{:.4}", v.delta_d_w.max)
         }),
@@ -35,13 +45,15 @@ pub fn rows(before: &OrderIndicators, after: &OrderIndicators) -> Vec<(String, S
         row("successive |Δn| max (1/min)", &|v| {
             format!("{:.0}", v.delta_n.max)
         }),
-        row("Σ|Δn| (1/min)", &|v| {
+        row("Σ|Δn| of targets (1/min)", &|v| {
             format!("{:.0}", v.total_variation_n)
         }),
         row("jumps (retract or long link)", &|v| v.jumps.to_string()),
         row("cutting length (mm)", &|v| format!("{:.0}", v.cutting_mm)),
         row("rapid length (mm)", &|v| format!("{:.0}", v.link_mm)),
-        row("estimated time (s)", &|v| format!("{:.0}", v.time_s)),
+        row("time at programmed feeds (s)", &|v| {
+            format!("{:.0}", v.time_s)
+        }),
     ]
 }
 

@@ -42,21 +42,11 @@ pub fn setup_report(
     let tilts: Vec<(f64, f64, f64)> = plan
         .live
         .iter()
-        .zip(&best.chosen)
-        .filter_map(|(&t, c)| {
+        .zip(&best.dirs)
+        .filter_map(|(&t, d)| {
             let [p, q, r] = mesh.corners(t);
             let m = s * ((p + q + r) / 3.0);
-            c.map(|c| {
-                (
-                    m.x,
-                    m.y,
-                    (s * grid.direction(c))
-                        .z
-                        .clamp(-1.0, 1.0)
-                        .acos()
-                        .to_degrees(),
-                )
-            })
+            d.map(|d| (m.x, m.y, (s * d).z.clamp(-1.0, 1.0).acos().to_degrees()))
         })
         .collect();
     let range = |ax: &RotaryAxis| match (ax.min, ax.max) {
@@ -101,13 +91,17 @@ pub fn setup_report(
             ),
         ),
         (
-            "facets no direction sees".to_string(),
+            "facets no direction sees (no range reaches)".to_string(),
             plan.inaccessible.len().to_string(),
+        ),
+        (
+            "share of the machine's ranges needed".to_string(),
+            format!("{:.1} %", 100.0 * best.usage),
         ),
     ];
     if let Some(r) = best.required {
         rows.push((
-            "required ranges".to_string(),
+            "required ranges (the least of any setup)".to_string(),
             format!(
                 "first {:.2}° … {:.2}°, second {:.2}° … {:.2}°",
                 r[0].0, r[0].1, r[1].0, r[1].1

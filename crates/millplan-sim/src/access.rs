@@ -376,13 +376,13 @@ pub fn visibility(
     grid: &dyn SphereGrid,
     clearance_deg: f64,
 ) -> CellSets {
-    let lift = 1e-7 * mesh.bounds().diagonal().max(1e-9);
+    let test = DirectionTest::sight(mesh, bvh, clearance_deg);
     cones(
         mesh,
         grid,
         clearance_deg,
         |_, _, _| true,
-        |t, p, n, d| !bvh.occluded(p + n * lift, d, f64::INFINITY, Some(t as u32)),
+        |t, p, n, d| test.clear(t, p, n, d),
     )
 }
 
@@ -446,33 +446,129 @@ pub fn accessibility(
     clearance_deg: f64,
     tool: &ToolModel,
 ) -> CellSets {
-    let r = tool.radius;
-    let tol = 1e-3 * r + 1e-7 * mesh.bounds().diagonal();
+    let test = DirectionTest::tool(mesh, bvh, clearance_deg, tool);
     cones(
         mesh,
         grid,
         clearance_deg,
-        // The ball itself, whatever the direction.
-        |_, p, n| !bvh.capsule_hits(p + n * r, p + n * r, r - tol, None),
-        |_, p, n, d| {
-            let centre = p + n * r;
-            let top = centre + d * tool.reach;
-            // Behind the plane through the centre across the axis the shank
-            // reaches no farther than the ball, checked free above; nothing
-            // below the holder's lowest point can touch the holder.
-            let (hr, hl) = (tool.holder_radius, tool.holder_length);
-            !bvh.capsule_hits_above(centre, top, r - tol, None, Some((d, d.dot(centre))))
-                && (hr <= 0.0
-                    || hl <= 0.0
-                    || !bvh.capsule_hits_above(
-                        top,
-                        top + d * hl,
-                        hr,
-                        None,
-                        Some((d, d.dot(top) - hr)),
-                    ))
-        },
+        |t, p, n| test.usable_at(t, p, n),
+        |t, p, n, d| test.clear(t, p, n, d),
     )
+}
+
+/// The test the cones are made of, for any direction: whether a direction
+/// leaves a facet by more than the clearance angle and is free (line of
+/// sight, or the tool in tool mode). The setup search refines directions
+/// between the grid's cells with it: a direction counts only once this test
+/// has passed it.
+pub struct DirectionTest<'a> {
+    mesh: &'a TriMesh,
+    bvh: &'a Bvh,
+    min_dot: f64,
+    mode: TestMode,
+}
+
+enum TestMode {
+    /// The ray from the centroid, lifted by `lift` along the normal.
+    Sight { lift: f64 },
+    /// The ball, shank and holder; capsules shrunk by `tol`.
+    Tool { tool: ToolModel, tol: f64 },
+}
+
+impl<'a> DirectionTest<'a> {
+    /// Line of sight.
+    pub fn sight(mesh: &'a TriMesh, bvh: &'a Bvh, clearance_deg: f64) -> DirectionTest<'a> {
+        DirectionTest {
+            mesh,
+            bvh,
+            min_dot: clearance_deg.to_radians().sin(),
+            mode: TestMode::Sight {
+                lift: 1e-7 * mesh.bounds().diagonal().max(1e-9),
+            },
+        }
+    }
+
+    /// Tool mode.
+    pub fn tool(
+        mesh: &'a TriMesh,
+        bvh: &'a Bvh,
+        clearance_deg: f64,
+        tool: &ToolModel,
+    ) -> DirectionTest<'a> {
+        DirectionTest {
+            mesh,
+            bvh,
+            min_dot: clearance_deg.to_radians().sin(),
+            mode: TestMode::Tool {
+                tool: *tool,
+                tol: 1e-3 * tool.radius + 1e-7 * mesh.bounds().diagonal(),
+            },
+        }
+    }
+
+    /// sin(clearance): a direction must leave a facet by more than this (d·n).
+    pub fn min_dot(&self) -> f64 {
+        self.min_dot
+    }
+
+    /// Centroid and unit normal of facet t (`None` for a zero-area facet).
+    pub fn facet(&self, t: usize) -> Option<(DVec3, DVec3)> {
+        let n = self.mesh.facet_normal(t);
+        let [a, b, c] = self.mesh.corners(t);
+        (n != DVec3::ZERO).then(|| ((a + b + c) / 3.0, n))
+    }
+
+    /// Whether unit direction `d` is in facet t's cone.
+    pub fn free(&self, t: usize, d: DVec3) -> bool {
+        let Some((p, n)) = self.facet(t) else {
+            return false;
+        };
+        d.dot(n) > self.min_dot && self.usable_at(t, p, n) && self.clear(t, p, n, d)
+    }
+
+    /// Whether facet t can be served at all: in tool mode, whether the ball
+    /// touching its centroid is free whatever the direction.
+    fn usable_at(&self, _t: usize, p: DVec3, n: DVec3) -> bool {
+        match &self.mode {
+            TestMode::Sight { .. } => true,
+            TestMode::Tool { tool, tol } => {
+                let c = p + n * tool.radius;
+                !self.bvh.capsule_hits(c, c, tool.radius - tol, None)
+            }
+        }
+    }
+
+    /// Whether direction d from facet t (centroid p, normal n) meets nothing.
+    fn clear(&self, t: usize, p: DVec3, n: DVec3, d: DVec3) -> bool {
+        match &self.mode {
+            TestMode::Sight { lift } => {
+                !self
+                    .bvh
+                    .occluded(p + n * *lift, d, f64::INFINITY, Some(t as u32))
+            }
+            TestMode::Tool { tool, tol } => {
+                let (r, reach) = (tool.radius, tool.reach);
+                let centre = p + n * r;
+                let top = centre + d * reach;
+                // Behind the plane through the centre across the axis the shank
+                // reaches no farther than the ball, checked free above; nothing
+                // below the holder's lowest point can touch the holder.
+                let (hr, hl) = (tool.holder_radius, tool.holder_length);
+                !self
+                    .bvh
+                    .capsule_hits_above(centre, top, r - tol, None, Some((d, d.dot(centre))))
+                    && (hr <= 0.0
+                        || hl <= 0.0
+                        || !self.bvh.capsule_hits_above(
+                            top,
+                            top + d * hl,
+                            hr,
+                            None,
+                            Some((d, d.dot(top) - hr)),
+                        ))
+            }
+        }
+    }
 }
 
 /// The directions, in part coordinates, that a machine reaches with the part

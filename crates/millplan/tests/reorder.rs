@@ -1,5 +1,6 @@
 //! `millplan reorder`: every cutting point kept exactly once, no gouging link,
-//! the optimised method never worse than the original on its documented cost.
+//! the default method never worse than the original as it will run, the
+//! optimised method never worse than the original on its documented cost.
 
 mod common;
 use common::bin;
@@ -44,7 +45,7 @@ fn reordered_paths_keep_every_point_and_never_gouge() {
         ],
     );
     let original = cutting_points(&path);
-    for method in ["paper", "optimised"] {
+    for method in ["as-run", "paper", "optimised"] {
         let out = dir.path().join(format!("{method}.apt"));
         let o = bin()
             .args([
@@ -93,6 +94,28 @@ fn reordered_paths_keep_every_point_and_never_gouge() {
             "{method}: {}",
             String::from_utf8_lossy(&g.stdout)
         );
+        if method == "as-run" {
+            // The default: worse than the original on none of the measures as
+            // it will run, and it says whether it found better.
+            let m = |k: &str, f: &str| j[k]["as_run"][f].as_f64().expect("measure");
+            assert!(
+                j["verdict"] == "improved" || j["verdict"] == "kept",
+                "{}",
+                j["verdict"]
+            );
+            assert_eq!(
+                j["original"]["vc_deviation_share"],
+                j["original"]["as_run"]["vc_deviation_share"]
+            );
+            assert!(
+                j["reordered"]["vc_deviation_share"]
+                    .as_f64()
+                    .expect("share")
+                    <= j["original"]["vc_deviation_share"].as_f64().expect("share")
+            );
+            assert!(m("reordered", "total_variation_n") <= m("original", "total_variation_n"));
+            assert!(m("reordered", "time_s") <= 1.03 * m("original", "time_s"));
+        }
         if method == "optimised" {
             let w = [1.0, 10.0, 100.0];
             let cost = |k: &str| -> f64 {
@@ -153,7 +176,12 @@ fn paper_search_lowers_the_largest_working_diameter_step() {
         &stl,
         &path,
         &out,
-        &["--report", report.to_str().expect("utf8")],
+        &[
+            "--method",
+            "paper",
+            "--report",
+            report.to_str().expect("utf8"),
+        ],
     );
     assert!(max(&j, "original") > 2.0, "{j}");
     // The report shows both orders: the summary as original → reordered, the
@@ -171,7 +199,7 @@ fn paper_search_lowers_the_largest_working_diameter_step() {
     assert_eq!(j["reordered"]["points"], j["original"]["points"]);
     // The published search alone still runs and keeps every point; it is
     // greedy, so at dead ends it takes large steps (reported, not asserted).
-    let j0 = summary(&stl, &path, &out, &["--max-step", "0"]);
+    let j0 = summary(&stl, &path, &out, &["--method", "paper", "--max-step", "0"]);
     assert_eq!(j0["reordered"]["points"], j0["original"]["points"]);
     assert!(max(&j0, "reordered") > 0.0);
 }

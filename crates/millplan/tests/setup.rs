@@ -109,7 +109,9 @@ fn cube_on_a_ca_table_needs_a_tilt_near_ninety_degrees() {
     let (code, j) = setup2(&p, &["--type", "ca", "--range1", "0,60"], &common);
     assert_eq!(code, Some(3));
     assert_eq!(j["feasible"], false);
-    assert_eq!(j["unreachable"].as_array().expect("list").len(), 8);
+    assert_eq!(j["out_of_reach"].as_array().expect("list").len(), 8);
+    // Every face is seen from somewhere: no range is out of the question.
+    assert!(j["unreachable"].as_array().expect("list").is_empty());
     // ... and the ranges that would do are reported: A up to the walls' 80-90°.
     let w = &j["would_do"]["a"];
     assert!(
@@ -338,7 +340,7 @@ fn the_bezier_vase_runs_end_to_end_for_both_machine_types() {
         .contains("<svg"));
     let (code, j) = setup2(&p, &["--type", "ca", "--range1", "0,60"], &common);
     assert_eq!(code, Some(3));
-    assert!(!j["unreachable"].as_array().expect("list").is_empty());
+    assert!(!j["out_of_reach"].as_array().expect("list").is_empty());
     let (code, j) = setup2(
         &p,
         &[
@@ -353,4 +355,39 @@ fn the_bezier_vase_runs_end_to_end_for_both_machine_types() {
         &common,
     );
     assert_eq!(code, Some(3));
+}
+
+#[test]
+fn cube_on_its_corner_needs_a_tilt_of_35_26_degrees_on_every_grid() {
+    // Every face of a closed cube sees its open half-space; standing on a
+    // corner, the faces turned away begin atan(1/√2) = 35.26° from the C axis.
+    let dir = tempfile::tempdir().expect("tmp");
+    let p = cube(dir.path(), "cube.stl", DMat3::IDENTITY, true);
+    let exact = (1.0f64 / 2f64.sqrt()).atan().to_degrees();
+    for grid in ["latlon", "icosphere", "healpix"] {
+        let run = |range: &str| setup(&p, &["--type", "ca", "--range1", range, "--grid", grid]);
+        let (code, j) = run("-36,36");
+        assert_eq!(
+            (code, &j["feasible"]),
+            (Some(0), &serde_json::json!(true)),
+            "{grid}: {j}"
+        );
+        assert!((f(&j["max_tilt_deg"]) - exact).abs() < 0.5, "{grid}: {j}");
+        // Out of reach at ±34.5°, and the JSON says what would do: the least
+        // tilt of any setup, in that setup; nothing is out of every range.
+        let (code, j) = run("-34.5,34.5");
+        assert_eq!(
+            (code, &j["feasible"]),
+            (Some(3), &serde_json::json!(false)),
+            "{grid}: {j}"
+        );
+        let a = &j["required"]["a"];
+        assert!(
+            f(&a[0]) == 0.0 && (f(&a[1]) - exact).abs() < 0.5,
+            "{grid}: {a}"
+        );
+        assert!(f(&j["usage"]) > 1.0);
+        assert!(j["unreachable"].as_array().expect("list").is_empty());
+        assert!(!j["out_of_reach"].as_array().expect("list").is_empty());
+    }
 }

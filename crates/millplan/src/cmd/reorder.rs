@@ -6,7 +6,7 @@ use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
 use clap::ValueEnum;
 use millplan_plan::pipeline::{self, Context, Pass};
-use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Start};
+use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Start, Verdict};
 use millplan_plan::speed::SpeedPass;
 use millplan_report::reorder::reorder_report;
 use serde_json::json;
@@ -14,6 +14,10 @@ use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum MethodArg {
+    /// The machining as it will run: candidate orders (start corners, one-way,
+    /// pass directions) measured with spindle control; the best one worse than
+    /// the original on nothing, or the original when none is better.
+    AsRun,
     /// The paper's greedy search over single points.
     Paper,
     /// Passes kept as units, improved by 2-opt on |Δn|, link length and turns.
@@ -41,7 +45,7 @@ pub struct Args {
     pub path: PathBuf,
     #[arg(long)]
     pub stl: PathBuf,
-    #[arg(long, value_enum, default_value = "paper")]
+    #[arg(long, value_enum, default_value = "as-run")]
     pub method: MethodArg,
     /// Start of the paper's search, among the border points.
     #[arg(long, value_enum, default_value = "lowest")]
@@ -133,7 +137,11 @@ pub fn run(a: Args) -> CliResult<i32> {
     }
     outputs.commit()?;
     if a.json {
-        let j = json!({ "method": format!("{:?}", a.method).to_lowercase(), "original": o.before, "reordered": o.after, "stats": o.stats, "output": a.output.display().to_string() });
+        let method = a
+            .method
+            .to_possible_value()
+            .map(|v| v.get_name().to_string());
+        let j = json!({ "method": method, "verdict": o.verdict, "original": o.before, "reordered": o.after, "stats": o.stats, "tried": o.tried, "output": a.output.display().to_string() });
         outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
         outln!("  {:<28} {:>16} {:>16}", "", "original", "reordered");
@@ -141,18 +149,25 @@ pub fn run(a: Args) -> CliResult<i32> {
             let (b, r) = v.split_once(" → ").unwrap_or((&v, ""));
             outln!("  {k:<28} {b:>16} {r:>16}");
         }
-        outln!(
-            "  {} direct links, {} retracts; wrote {}",
-            o.stats.direct_links,
-            o.stats.retracts,
-            a.output.display()
-        );
+        match o.verdict {
+            Some(Verdict::Kept) => outln!(
+                "  no order found that runs better and worse on nothing: the original order kept; wrote {}",
+                a.output.display()
+            ),
+            _ => outln!(
+                "  {} direct links, {} retracts; wrote {}",
+                o.stats.direct_links,
+                o.stats.retracts,
+                a.output.display()
+            ),
+        }
     }
     Ok(EXIT_OK)
 }
 
 fn params(a: &Args) -> ReorderParams {
     let mut rp = ReorderParams::new(match a.method {
+        MethodArg::AsRun => Method::AsRun,
         MethodArg::Paper => Method::Paper,
         MethodArg::Optimised => Method::Optimised,
     });
@@ -167,5 +182,6 @@ fn params(a: &Args) -> ReorderParams {
     rp.max_step = (a.max_step > 0.0).then_some(a.max_step);
     rp.ap = a.cut.ap;
     rp.vc = a.cut.vc;
+    rp.speed = a.cut.params();
     rp
 }

@@ -291,10 +291,12 @@ fn print_json(a: &Args, s: &Summary, machine: &Kinematics, secs: f64) {
         "required": ranges(s.required),
         "would_do": ranges(s.would_do),
         "max_tilt_deg": s.max_tilt_deg,
+        "usage": s.usage,
         "machine": { "kind": machine.kind, s.axes[0]: limit(&machine.first), s.axes[1]: limit(&machine.second) },
         "unreachable": facets(&s.unreachable),
         "unreachable_area": s.unreachable_area,
-        "inaccessible": facets(&s.inaccessible),
+        "out_of_reach": facets(&s.out_of_reach),
+        "out_of_reach_area": s.out_of_reach_area,
         "facets": s.facets,
         "ignored": s.ignored,
         "grid": s.grid,
@@ -331,27 +333,36 @@ fn print_text(a: &Args, s: &Summary, plan: &SetupPlan) {
     let e = s.euler_zyx_deg;
     outln!("  Euler Z-Y-X: {:.3}°, {:.3}°, {:.3}°", e[0], e[1], e[2]);
     let [n0, n1] = s.axes.map(str::to_uppercase);
-    match (s.required, s.would_do) {
-        (Some(r), _) => outln!(
-            "required: {n0} {:.2}..{:.2}°, {n1} {:.2}..{:.2}° (largest tilt {:.2}°)",
-            r[0].0, r[0].1, r[1].0, r[1].1, s.max_tilt_deg
-        ),
-        (None, Some(r)) => outln!(
-            "out of reach; ranges that would do in this setup: {n0} {:.2}..{:.2}°, {n1} {:.2}..{:.2}°",
-            r[0].0, r[0].1, r[1].0, r[1].1
-        ),
-        (None, None) => outln!("required: some facets have no reachable direction"),
-    }
-    if !s.unreachable.is_empty() {
+    if let Some(r) = s.required {
         outln!(
-            "{} facets ({:.2} mm²) out of the machine's reach",
-            s.unreachable.len(),
-            s.unreachable_area
+            "required (the least of any setup): {n0} {:.2}..{:.2}°, {n1} {:.2}..{:.2}° (largest tilt {:.2}°, {:.0} % of the machine's ranges)",
+            r[0].0,
+            r[0].1,
+            r[1].0,
+            r[1].1,
+            s.max_tilt_deg,
+            100.0 * s.usage
         );
     }
-    if let Some((t, c)) = s.inaccessible.first() {
+    if let Some(r) = s.would_do {
         outln!(
-            "{} facets no tool direction can see (the first: facet {t} at {c:?})",
+            "as it lies in the file it would need {n0} {:.2}..{:.2}°, {n1} {:.2}..{:.2}°",
+            r[0].0,
+            r[0].1,
+            r[1].0,
+            r[1].1
+        );
+    }
+    if !s.out_of_reach.is_empty() {
+        outln!(
+            "{} facets ({:.2} mm²) out of the machine's reach",
+            s.out_of_reach.len(),
+            s.out_of_reach_area
+        );
+    }
+    if let Some((t, c)) = s.unreachable.first() {
+        outln!(
+            "{} facets no tool direction can see, no range reaches (the first: facet {t} at {c:?})",
             plan.inaccessible.len()
         );
     }

@@ -23,12 +23,15 @@
 //! drop-cutter check along it finds no gouge; otherwise the tool retracts to a
 //! clearance height, rapids across and plunges at the plunge feed.
 
+pub mod run;
+
 use crate::pipeline::{Changes, Context, Need, Pass, PassError, PassInfo};
+use crate::speed::SpeedParams;
 use millplan_geom::{DVec2, DVec3, TriMesh};
-use millplan_models::contact::{self, feed_angle, SideFinder};
+use millplan_models::contact::{self, feed_angle, PathPoint, SideFinder};
 use millplan_models::cutter::Shape;
 use millplan_models::wd::{self, Case};
-use millplan_nc::{EventKind, Move, MoveKind, Program};
+use millplan_nc::{EventKind, Move, MoveKind, Operation, Program};
 use millplan_sim::dropcutter::DropMesh;
 use rustc_hash::{FxHashMap, FxHashSet};
 
@@ -46,8 +49,24 @@ pub enum Start {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
+    /// The thesis's greedy search over single points, as published.
     Paper,
+    /// Passes as units, 2-opt on |Δn|, link length and turns at the joints.
     Optimised,
+    /// The machining as it will run (the default): candidate orders measured
+    /// with spindle control, the best one not worse than the original kept
+    /// ([`run`]).
+    AsRun,
+}
+
+/// What the default method concluded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// An order better than the original, and worse on none of the measures.
+    Improved,
+    /// Nothing better found: the original order, as it was.
+    Kept,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -79,6 +98,12 @@ pub struct ReorderParams {
     pub plunge_factor: f64,
     /// Gouge tolerance of direct links, mm.
     pub gouge_tol: f64,
+    /// Spindle control the default method measures its candidates with (and
+    /// the written program gets, unless the caller leaves it out).
+    pub speed: SpeedParams,
+    /// How much longer than the original the default method's result may
+    /// take, as a fraction of the original's time.
+    pub time_slack: f64,
 }
 
 impl ReorderParams {
@@ -98,6 +123,8 @@ impl ReorderParams {
             clearance: 5.0,
             plunge_factor: 0.5,
             gouge_tol: 0.005,
+            speed: SpeedParams::new(63.0, 0.125, 2, 0.3),
+            time_slack: 0.03,
         }
     }
 }
@@ -135,6 +162,10 @@ pub struct Reordered {
     /// long direct link), where the spindle has time to change speed.
     pub jump_original: Vec<bool>,
     pub jump_reordered: Vec<bool>,
+    /// The default method's conclusion (`None` for the others).
+    pub verdict: Option<Verdict>,
+    /// The candidates the default method measured, per operation.
+    pub tried: Vec<run::Tried>,
 }
 
 fn xy(v: DVec3) -> DVec2 {
@@ -586,6 +617,10 @@ pub struct Outcome {
     /// The indicators of both orders.
     pub before: OrderIndicators,
     pub after: OrderIndicators,
+    /// The default method's conclusion (`None` for the others).
+    pub verdict: Option<Verdict>,
+    /// The candidates the default method measured.
+    pub tried: Vec<run::Tried>,
 }
 
 impl ReorderPass {
@@ -603,25 +638,41 @@ impl Pass for ReorderPass {
     }
 
     fn run(&mut self, program: &mut Program, cx: &Context) -> Result<(), PassError> {
-        let r = reorder_in(program, cx, &self.params).map_err(|e| PassError::Input {
+        let input = |message: String| PassError::Input {
             pass: INFO.name,
-            message: e.to_string(),
-        })?;
+            message,
+        };
+        let r = reorder_in(program, cx, &self.params).map_err(|e| input(e.to_string()))?;
         let rapid = cx.machine.rapid;
-        let before = indicators(
+        let mut before = indicators(
             program,
             &r.dw_original,
             &r.jump_original,
             self.params.vc,
             rapid,
         );
-        let after = indicators(
+        let mut after = indicators(
             &r.program,
             &r.dw_reordered,
             &r.jump_reordered,
             self.params.vc,
             rapid,
         );
+        // Both orders as they will run, with spindle control.
+        if let Some(surface) = cx.surface() {
+            let run = |p: &Program| {
+                run::measure(p, surface, &cx.machine, &self.params.speed)
+                    .map_err(|e| input(e.to_string()))
+            };
+            before.as_run = run(program)?;
+            after.as_run = if r.verdict == Some(Verdict::Kept) {
+                before.as_run
+            } else {
+                run(&r.program)?
+            };
+            before.vc_deviation_share = before.as_run.vc_deviation_share;
+            after.vc_deviation_share = after.as_run.vc_deviation_share;
+        }
         *program = r.program;
         self.outcome = Some(Outcome {
             stats: r.stats,
@@ -631,6 +682,8 @@ impl Pass for ReorderPass {
             jump_reordered: r.jump_reordered,
             before,
             after,
+            verdict: r.verdict,
+            tried: r.tried,
         });
         Ok(())
     }
@@ -669,6 +722,11 @@ pub struct OrderIndicators {
     pub rapids: usize,
     pub time_s: f64,
     pub points: usize,
+    /// Share of the cutting points whose spindle speed, under control, misses
+    /// the constant-cutting-speed target by more than 5 %.
+    pub vc_deviation_share: f64,
+    /// The order as it will run with spindle control.
+    pub as_run: run::RunMeasures,
 }
 
 /// The indicators of program `p` whose cutting points have working diameters
@@ -715,6 +773,8 @@ pub fn indicators(
         rapids: s.moves.rapid,
         time_s: s.time_s,
         points: dw.len(),
+        vc_deviation_share: 0.0,
+        as_run: run::RunMeasures::default(),
     }
 }
 
@@ -734,9 +794,15 @@ pub fn reorder_in(
     cx: &Context,
     p: &ReorderParams,
 ) -> Result<Reordered, ReorderError> {
-    if !(p.ap > 0.0 && p.vc > 0.0 && p.n_min >= 1 && p.tie >= 0.0 && p.plunge_factor > 0.0) {
+    if !(p.ap > 0.0
+        && p.vc > 0.0
+        && p.n_min >= 1
+        && p.tie >= 0.0
+        && p.plunge_factor > 0.0
+        && p.time_slack >= 0.0)
+    {
         return Err(ReorderError::Invalid(
-            "ap, vc, plunge factor must be positive, n_min ≥ 1".into(),
+            "ap, vc, plunge factor must be positive, n_min ≥ 1, the time slack ≥ 0".into(),
         ));
     }
     let (Some(mesh), Some(surface), Some(part)) = (cx.mesh(), cx.surface(), cx.drop_mesh()) else {
@@ -746,6 +812,8 @@ pub fn reorder_in(
     let mut stats = ReorderStats::default();
     let (mut dw_original, mut dw_reordered) = (Vec::new(), Vec::new());
     let (mut jump_original, mut jump_reordered) = (Vec::new(), Vec::new());
+    let mut tried = Vec::new();
+    let mut verdicts = Vec::new();
     let mut any = false;
     for (oi, op) in program.operations.iter().enumerate() {
         let Some(c) = op
@@ -788,41 +856,22 @@ pub fn reorder_in(
         let side_search = contact::stepover_search_radius(&centres, &pts, 0.6 * c.d);
         // Steps longer than this retract and plunge: the spindle has time there.
         let jump = 3.0 * spacing.max(side_search / 1.6);
-        let (order, retract): (Vec<usize>, Vec<bool>) = match p.method {
-            Method::Paper => paper_search(&centres, &normals, c.d, p, side_search, spacing, jump),
-            Method::Optimised => {
-                let res = contact::analyse(surface, &pts, &cp);
-                let dw: Vec<f64> = res.iter().map(|r| r.dw).collect();
-                let mut passes = Vec::new();
-                let mut a = 0;
-                for i in 1..=pts.len() {
-                    if i == pts.len() || pts[i].pass != pts[a].pass {
-                        passes.push((a, i));
-                        a = i;
-                    }
-                }
-                let (seq, before, after) = optimised(&centres, &dw, &passes, p);
-                stats.passes += passes.len();
-                for k in 0..3 {
-                    stats.cost_original[k] += before[k];
-                    stats.cost_reordered[k] += after[k];
-                }
-                let order: Vec<usize> = seq
-                    .iter()
-                    .flat_map(|&(pi, rev)| {
-                        let (a, b) = passes[pi];
-                        let v: Vec<usize> = if rev {
-                            (a..b).rev().collect()
-                        } else {
-                            (a..b).collect()
-                        };
-                        v
-                    })
-                    .collect();
-                (order, Vec::new())
-            }
+        let top = pts
+            .iter()
+            .map(|q| q.cl.z)
+            .fold(f64::NEG_INFINITY, f64::max)
+            .max(mesh.bounds().max.z);
+        let links = Links {
+            op,
+            rapid: cx.machine.rapid,
+            jump,
+            pts: &pts,
+            idx: &idx,
+            part,
+            shape: Shape::Ball { radius: c.d / 2.0 },
+            safe: top + p.clearance,
+            p,
         };
-        stats.points += order.len();
         let identity: Vec<usize> = (0..pts.len()).collect();
         let fresh = || Evaluator {
             centres: &centres,
@@ -832,45 +881,225 @@ pub fn reorder_in(
             side_search,
             machined: FxHashMap::default(),
         };
+        stats.points += pts.len();
+        let (order, retract, built) = match p.method {
+            Method::Paper => {
+                let (order, retract) =
+                    paper_search(&centres, &normals, c.d, p, side_search, spacing, jump);
+                let built = links.build(&order, &retract, LinkStyle::FromClearance);
+                (order, retract, built)
+            }
+            Method::Optimised => {
+                let res = contact::analyse(surface, &pts, &cp);
+                let dw: Vec<f64> = res.iter().map(|r| r.dw).collect();
+                let passes = pass_ranges(&pts);
+                let (seq, before, after) = optimised(&centres, &dw, &passes, p);
+                stats.passes += passes.len();
+                for k in 0..3 {
+                    stats.cost_original[k] += before[k];
+                    stats.cost_reordered[k] += after[k];
+                }
+                let order = expand(&passes, &seq);
+                let built = links.build(&order, &[], LinkStyle::FromClearance);
+                (order, Vec::new(), built)
+            }
+            Method::AsRun => {
+                // The working diameters as the spindle control has them.
+                let s = run::search(program, oi, cx, &links, jump)
+                    .map_err(|e| ReorderError::Invalid(e.to_string()))?;
+                tried.extend(s.tried);
+                verdicts.push(s.verdict);
+                let jumps = |order: &[usize], retracted: &[bool]| -> Vec<bool> {
+                    (0..order.len())
+                        .map(|m| {
+                            m > 0
+                                && (retracted.get(m).copied().unwrap_or(false)
+                                    || (pts[order[m]].cl - pts[order[m - 1]].cl).length() > jump)
+                        })
+                        .collect()
+                };
+                jump_original.extend(jumps(&identity, &[]));
+                dw_original.extend(s.dw_original);
+                dw_reordered.extend(s.dw_chosen);
+                let Some((order, built)) = s.chosen else {
+                    jump_reordered.extend(jumps(&identity, &[]));
+                    continue;
+                };
+                jump_reordered.extend(jumps(&order, &built.retracted));
+                stats.direct_links += built.direct;
+                stats.retracts += built.retracts;
+                out.operations[oi] = links.operation(built.moves, p.method);
+                continue;
+            }
+        };
         let (a, b) = sequence_dw(fresh(), &identity, jump, &[]);
         dw_original.extend(a);
         jump_original.extend(b);
+        // D_w by the thesis's rule, where the search forced a retract.
         let (a, b) = sequence_dw(fresh(), &order, jump, &retract);
         dw_reordered.extend(a);
         jump_reordered.extend(b);
-        // Rebuild the operation: cutting points in the new order, safe links.
-        let shape = Shape::Ball { radius: c.d / 2.0 };
-        let top = pts
-            .iter()
-            .map(|q| q.cl.z)
-            .fold(f64::NEG_INFINITY, f64::max)
-            .max(mesh.bounds().max.z);
-        let safe = top + p.clearance;
+        stats.direct_links += built.direct;
+        stats.retracts += built.retracts;
+        out.operations[oi] = links.operation(built.moves, p.method);
+    }
+    if !any {
+        return Err(ReorderError::NoBallOperation);
+    }
+    let verdict = (p.method == Method::AsRun).then(|| {
+        if verdicts.contains(&Verdict::Improved) {
+            Verdict::Improved
+        } else {
+            Verdict::Kept
+        }
+    });
+    Ok(Reordered {
+        program: out,
+        stats,
+        dw_original,
+        dw_reordered,
+        jump_original,
+        jump_reordered,
+        verdict,
+        tried,
+    })
+}
+
+/// The ranges of the passes of the cutting points (consecutive points of one pass).
+fn pass_ranges(pts: &[PathPoint]) -> Vec<(usize, usize)> {
+    let mut passes = Vec::new();
+    let mut a = 0;
+    for i in 1..=pts.len() {
+        if i == pts.len() || pts[i].pass != pts[a].pass {
+            passes.push((a, i));
+            a = i;
+        }
+    }
+    passes
+}
+
+/// The points of passes in sequence, each forwards or reversed.
+fn expand(passes: &[(usize, usize)], seq: &[(usize, bool)]) -> Vec<usize> {
+    seq.iter()
+        .flat_map(|&(pi, rev)| {
+            let (a, b) = passes[pi];
+            let v: Vec<usize> = if rev {
+                (a..b).rev().collect()
+            } else {
+                (a..b).collect()
+            };
+            v
+        })
+        .collect()
+}
+
+/// How a retract ends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum LinkStyle {
+    /// Plunge at the plunge feed all the way from the clearance height (the
+    /// paper and optimised methods).
+    FromClearance,
+    /// Rapid down to `APPROACH` above the point, then plunge; a direct link
+    /// only where it is quicker than a retract.
+    Low,
+}
+
+/// Height above a point at which a retract's plunge begins (`LinkStyle::Low`), mm.
+const APPROACH: f64 = 1.0;
+
+/// An operation rebuilt from an order of its cutting points.
+struct Built {
+    moves: Vec<Move>,
+    direct: usize,
+    retracts: usize,
+    /// Per position, whether the tool retracted before it.
+    retracted: Vec<bool>,
+}
+
+/// What it takes to link the cutting points of an operation in a new order.
+struct Links<'a> {
+    op: &'a Operation,
+    /// The machine's rapid rate, mm/min.
+    rapid: f64,
+    /// Links longer than this retract (`LinkStyle::Low`), mm.
+    jump: f64,
+    pts: &'a [PathPoint],
+    idx: &'a [usize],
+    part: &'a DropMesh,
+    shape: Shape,
+    /// Clearance height of retracts.
+    safe: f64,
+    p: &'a ReorderParams,
+}
+
+impl Links<'_> {
+    /// Whether points i and j are near enough to link directly
+    /// (`LinkStyle::Low`): no farther apart than a jump, or one move of the
+    /// original program apart. Farther, a retract is quicker or about as quick.
+    fn near(&self, i: usize, j: usize) -> bool {
+        (self.pts[j].cl - self.pts[i].cl).length() <= self.jump || self.retraces(i, j)
+    }
+
+    /// Whether the tool goes from point i to point j directly: along a move
+    /// of the original path, or when the link is proven free of gouges (even
+    /// one between neighbouring points can cut into a concave region, and a
+    /// chord between passes over a convex one) and, with `LinkStyle::Low`, the
+    /// points are [near](Self::near).
+    fn direct(&self, i: usize, j: usize, style: LinkStyle) -> bool {
+        let pts = self.pts;
+        if i.abs_diff(j) == 1 && pts[i].pass == pts[j].pass {
+            return true;
+        }
+        if style == LinkStyle::Low {
+            if self.retraces(i, j) {
+                return true;
+            }
+            if !self.near(i, j) {
+                return false;
+            }
+        }
+        link_is_clean(
+            self.part,
+            &self.shape,
+            pts[i].cl,
+            pts[j].cl,
+            self.p.gouge_tol,
+        )
+    }
+
+    /// Whether the move from point i to point j retraces one move of the
+    /// original program (either way): it is then that move.
+    fn retraces(&self, i: usize, j: usize) -> bool {
+        let (a, b) = (i.min(j), i.max(j));
+        b == a + 1 && self.idx[b] == self.idx[a] + 1
+    }
+
+    /// The moves of the cutting points in `order`: the first reached by a rapid
+    /// and a plunge; each next one [directly](Self::direct) or by a retract, a
+    /// rapid and a plunge. `retract` forces a retract before a position.
+    fn build(&self, order: &[usize], retract: &[bool], style: LinkStyle) -> Built {
+        let (op, pts, idx, p) = (self.op, self.pts, self.idx, self.p);
         let feed_of = |k: usize| op.moves[idx[k]].feed;
         let spindle = op.moves[idx[0]].spindle;
-        let mut moves: Vec<Move> = Vec::with_capacity(order.len() * 2);
         let tmpl = op.moves[idx[0]];
         // Every new link is checked for gouges (even one between neighbouring
-        // points can cut into a concave region), in parallel; a link that
-        // retraces a move of the original path (either way) is that move.
+        // points can cut into a concave region), in parallel.
         let clean: Vec<bool> = {
             use rayon::prelude::*;
             (0..order.len())
                 .into_par_iter()
                 .map(|m| {
-                    if m == 0 {
-                        return true;
-                    }
-                    if retract.get(m).copied().unwrap_or(false) {
-                        return false;
-                    }
-                    let (i, j) = (order[m - 1], order[m]);
-                    if i.abs_diff(j) == 1 && pts[i].pass == pts[j].pass {
-                        return true;
-                    }
-                    link_is_clean(part, &shape, pts[i].cl, pts[j].cl, p.gouge_tol)
+                    m == 0
+                        || (!retract.get(m).copied().unwrap_or(false)
+                            && self.direct(order[m - 1], order[m], style))
                 })
                 .collect()
+        };
+        let mut b = Built {
+            moves: Vec::with_capacity(order.len() + 8),
+            direct: 0,
+            retracts: 0,
+            retracted: vec![false; order.len()],
         };
         let mut prev: Option<DVec3> = None;
         for (m, &k) in order.iter().enumerate() {
@@ -884,49 +1113,52 @@ pub fn reorder_in(
                 spindle,
                 ..tmpl
             };
-            // A rapid at the safe height above a point.
-            let rapid_over = |at: DVec3| Move {
-                end: DVec3::new(at.x, at.y, safe),
+            // A rapid at height z above a point.
+            let rapid_to = |at: DVec3, z: f64| Move {
+                end: DVec3::new(at.x, at.y, z),
                 kind: MoveKind::Rapid,
                 feed: 0.0,
                 line,
                 ..tmpl
             };
-            match prev {
-                None => {
-                    moves.push(rapid_over(q));
-                    moves.push(Move {
-                        feed: feed_of(k) * p.plunge_factor,
-                        ..cut
-                    });
-                }
-                Some(_) if clean[m] => {
-                    stats.direct_links += 1;
-                    moves.push(cut);
-                }
-                Some(a) => {
-                    stats.retracts += 1;
-                    moves.push(rapid_over(a));
-                    moves.push(rapid_over(q));
-                    moves.push(Move {
-                        feed: feed_of(k) * p.plunge_factor,
-                        ..cut
-                    });
-                }
+            let plunge = Move {
+                feed: feed_of(k) * p.plunge_factor,
+                ..cut
+            };
+            if m > 0 && clean[m] {
+                b.direct += 1;
+                b.moves.push(cut);
+                prev = Some(q);
+                continue;
             }
+            if let Some(a) = prev {
+                b.retracts += 1;
+                b.retracted[m] = true;
+                b.moves.push(rapid_to(a, self.safe));
+            }
+            b.moves.push(rapid_to(q, self.safe));
+            if style == LinkStyle::Low && self.safe > q.z + APPROACH {
+                b.moves.push(rapid_to(q, q.z + APPROACH));
+            }
+            b.moves.push(plunge);
             prev = Some(q);
         }
         if let Some(a) = prev {
-            moves.push(Move {
-                end: DVec3::new(a.x, a.y, safe),
+            b.moves.push(Move {
+                end: DVec3::new(a.x, a.y, self.safe),
                 kind: MoveKind::Rapid,
                 feed: 0.0,
                 ..tmpl
             });
         }
-        let o = &mut out.operations[oi];
-        // Events keep their order; those between moves move to the start, the
-        // trailing ones stay at the end.
+        b
+    }
+
+    /// The operation with `moves` in place of its own: events keep their
+    /// order, those between moves move to the start, the trailing ones stay at
+    /// the end, and a comment says what was done.
+    fn operation(&self, moves: Vec<Move>, method: Method) -> Operation {
+        let mut o = self.op.clone();
         let n_old = o.moves.len() as u32;
         let n_new = moves.len() as u32;
         for e in &mut o.events {
@@ -939,8 +1171,7 @@ pub fn reorder_in(
                 at: 0,
                 line: 0,
                 kind: EventKind::Comment(format!(
-                    "points reordered by millplan ({:?} method)",
-                    p.method
+                    "points reordered by millplan ({method:?} method)"
                 )),
             },
         );
@@ -948,18 +1179,8 @@ pub fn reorder_in(
         o.arcs.clear();
         o.cycles.clear();
         o.start = millplan_nc::UNKNOWN;
+        o
     }
-    if !any {
-        return Err(ReorderError::NoBallOperation);
-    }
-    Ok(Reordered {
-        program: out,
-        stats,
-        dw_original,
-        dw_reordered,
-        jump_original,
-        jump_reordered,
-    })
 }
 
 /// A straight move from a to b is clean when the tool tip never dips below the

@@ -14,8 +14,13 @@
 
 use millplan_geom::bvh::Bvh;
 use millplan_geom::{DMat3, DVec3, TriMesh};
-use millplan_models::kinematics::{KinKind, Kinematics, RotaryAxis};
-use millplan_sim::access::{self, CellSets, Healpix, Icosphere, LatLon, SphereGrid, ToolModel};
+use millplan_models::kinematics::{KinKind, Kinematics};
+use millplan_sim::access::{
+    self, CellSets, DirectionTest, Healpix, Icosphere, LatLon, SphereGrid, ToolModel,
+};
+
+pub mod fit;
+use fit::{Dof, Fit, Search};
 
 /// The sphere grid of tool directions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -98,14 +103,23 @@ pub enum SetupError {
 pub struct Candidate {
     /// Rotation from part to table coordinates.
     pub setup: DMat3,
+    /// Facets this machine does not reach in this setup.
     pub unreachable: Vec<usize>,
     pub unreachable_area: f64,
-    /// Required (first, second) ranges in degrees over the facets' best directions.
+    /// Ranges (degrees) of the (first, second) axis the setup needs: the span
+    /// of the facets' directions (tilts with 0, the C axis as its smallest
+    /// arc), whether or not the machine has them.
     pub required: Option<[(f64, f64); 2]>,
-    /// The largest angle between the C axis (or the A=B=0 direction) and a
-    /// facet's nearest direction, degrees.
+    /// The largest angle between the table's Z (the C axis, or the A=B=0
+    /// direction) and a facet's direction, degrees.
     pub tilt: f64,
-    /// Per live facet, the reachable cell nearest the vertical, if any.
+    /// The largest share of the machine's ranges a facet needs (at most 1:
+    /// the machine reaches every facet); see [`fit`].
+    pub usage: f64,
+    /// Per live facet, the direction it is cut from (part frame), tested
+    /// free, of least usage.
+    pub dirs: Vec<Option<DVec3>>,
+    /// Per live facet, the grid cell of that direction.
     pub chosen: Vec<Option<usize>>,
     /// The machine's reachable cells.
     pub mask: Vec<u64>,
@@ -118,15 +132,18 @@ pub struct SetupPlan {
     pub vis: CellSets,
     /// Facets a setup must serve (with a cone, not ignored, not degenerate).
     pub live: Vec<usize>,
-    /// Facets no direction sees.
+    /// Facets no direction sees: no rotary range reaches them.
     pub inaccessible: Vec<usize>,
     /// Facets left out as the bottom face.
     pub ignored: usize,
     /// The mesh was wound inward and was turned outward.
     pub flipped: bool,
+    /// The setup that needs least of this machine's ranges (so the smallest
+    /// ranges, scaled like the machine's, over all setups), found on the grid
+    /// and refined between its directions; its `required` holds them.
     pub best: Candidate,
-    /// Out of reach: the ranges the same setup would need with unlimited
-    /// rotary axes.
+    /// Out of reach: the ranges the part needs as it lies in the file, on the
+    /// same kind of machine with unlimited rotary axes.
     pub would_do: Option<[(f64, f64); 2]>,
     pub feasible: bool,
 }
@@ -160,9 +177,15 @@ pub fn plan(
     let mesh: &TriMesh = mesh;
     let grid = grid(p.grid, p.cells);
     let bvh = Bvh::build(mesh);
-    let vis = match &p.tool {
-        Some(t) => access::accessibility(mesh, &bvh, grid.as_ref(), p.clearance_deg, t),
-        None => access::visibility(mesh, &bvh, grid.as_ref(), p.clearance_deg),
+    let (vis, test) = match &p.tool {
+        Some(t) => (
+            access::accessibility(mesh, &bvh, grid.as_ref(), p.clearance_deg, t),
+            DirectionTest::tool(mesh, &bvh, p.clearance_deg, t),
+        ),
+        None => (
+            access::visibility(mesh, &bvh, grid.as_ref(), p.clearance_deg),
+            DirectionTest::sight(mesh, &bvh, p.clearance_deg),
+        ),
     };
     let areas: Vec<f64> = (0..mesh.len()).map(|t| facet_area(mesh, t)).collect();
     let ignored = if p.ignore_bottom {
@@ -176,6 +199,8 @@ pub fn plan(
     let live: Vec<usize> = (0..mesh.len())
         .filter(|&t| !ignored[t] && areas[t] > 0.0 && vis.count(t) > 0)
         .collect();
+    let fit = Fit::new(machine);
+    let search = Search::new(&fit, grid.as_ref(), &vis, &test, &live);
     let mut poles = vec![DVec3::Z];
     // A part standing on its bottom face keeps it on the table: spins only.
     if !p.ignore_bottom {
@@ -183,7 +208,19 @@ pub fn plan(
             poles.push(pole);
         }
     }
-    let candidates: Vec<Candidate> = poles
+    let dof = if p.ignore_bottom {
+        Dof::Spin
+    } else if has_c_axis(machine.kind)
+        && machine.second.min.is_none()
+        && machine.second.max.is_none()
+    {
+        Dof::Tilt
+    } else {
+        Dof::All
+    };
+    // The grid search: each pole spun in 15° steps, by the cells' usage; the
+    // best few then refined between the grid's directions.
+    let mut seeds: Vec<(f64, f64, DMat3)> = poles
         .iter()
         .flat_map(|&pole| {
             (0..24).map(move |k| {
@@ -191,27 +228,45 @@ pub fn plan(
                     * access::setup_for_pole(pole)
             })
         })
-        .map(|setup| evaluate(setup, machine, grid.as_ref(), &vis, &live, &areas))
+        .map(|s| (search.by_cells(s).0, turn(s), s))
         .collect();
-    let mut best = choose(candidates, machine)
+    seeds.sort_by(|a, b| {
+        (a.0 * 1e9)
+            .round()
+            .total_cmp(&(b.0 * 1e9).round())
+            .then(a.1.total_cmp(&b.1))
+    });
+    seeds.dedup_by(|a, b| (a.2 - b.2).abs_diff_eq(DMat3::ZERO, 1e-9));
+    // The part as it lies in the file is always refined too: between the
+    // grid's directions it may do as well as any.
+    let as_is = seeds.iter().position(|q| q.1 < 1e-12);
+    let refined: Vec<(f64, f64, DMat3)> = seeds
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i < if dof == Dof::Spin { 1 } else { 3 } || Some(*i) == as_is)
+        .map(|(_, &(_, _, s))| {
+            let (s, u) = search.optimise(s, dof);
+            (u, turn(s), s)
+        })
+        .collect();
+    let (_, _, setup) = refined
+        .into_iter()
+        .min_by(|a, b| {
+            (a.0 * 1e9)
+                .round()
+                .total_cmp(&(b.0 * 1e9).round())
+                .then(a.1.total_cmp(&b.1))
+        })
         .ok_or_else(|| SetupError::Invalid("no setup candidates".into()))?;
-    // Out of this machine's reach: report what ranges would do, from the same
-    // setup on the same kind of machine with unlimited rotary axes.
+    let mut best = candidate(setup, machine, &search, &areas);
+    // Out of this machine's reach: the ranges the part needs as it lies in
+    // the file (spun only, like the search, when it stands on its bottom).
     let would_do = if best.unreachable.is_empty() {
         None
     } else {
-        let mut free = machine.clone();
-        free.first = RotaryAxis {
-            min: None,
-            max: None,
-            sign: machine.first.sign,
-        };
-        free.second = RotaryAxis {
-            min: None,
-            max: None,
-            sign: machine.second.sign,
-        };
-        evaluate(best.setup, &free, grid.as_ref(), &vis, &live, &areas).required
+        let free = Fit::free(machine);
+        let fs = Search::new(&free, grid.as_ref(), &vis, &test, &live);
+        candidate(DMat3::IDENTITY, machine, &fs, &areas).required
     };
     if p.exact && has_c_axis(machine.kind) && best.unreachable.is_empty() {
         if let Some(r) = exact_ranges(machine, grid.as_ref(), &vis, &live, best.setup)? {
@@ -232,45 +287,68 @@ pub fn plan(
     })
 }
 
-fn has_c_axis(kind: KinKind) -> bool {
+/// The angle of a rotation, radians.
+fn turn(s: DMat3) -> f64 {
+    ((s.x_axis.x + s.y_axis.y + s.z_axis.z - 1.0) / 2.0)
+        .clamp(-1.0, 1.0)
+        .acos()
+}
+
+pub(crate) fn has_c_axis(kind: KinKind) -> bool {
     matches!(
         kind,
         KinKind::TableAc | KinKind::TableBc | KinKind::HeadBc | KinKind::HeadBTableC
     )
 }
 
-/// Least unreachable area, then least tilt, then the narrowest ranges on the
-/// limited axes, then the smallest turn away from the part as programmed.
-fn choose(candidates: Vec<Candidate>, machine: &Kinematics) -> Option<Candidate> {
-    let limited = [
-        machine.first.min.is_some() || machine.first.max.is_some(),
-        machine.second.min.is_some() || machine.second.max.is_some(),
-    ];
-    let key = |c: &Candidate| {
-        let spread = c.required.map_or(f64::INFINITY, |r| {
-            (0..2)
-                .filter(|&i| limited[i])
-                .map(|i| r[i].1 - r[i].0)
-                .sum::<f64>()
-        });
-        let turn = ((c.setup.x_axis.x + c.setup.y_axis.y + c.setup.z_axis.z - 1.0) / 2.0)
-            .clamp(-1.0, 1.0)
-            .acos();
-        [
-            c.unreachable_area,
-            (c.tilt * 1e3).round(),
-            (spread * 1e3).round(),
-            turn,
-        ]
+/// Setup `setup` with every live facet's direction of least usage (by the
+/// search's fit), the facets `machine` does not reach and the ranges needed.
+fn candidate(setup: DMat3, machine: &Kinematics, search: &Search, areas: &[f64]) -> Candidate {
+    let choices = search.choices(setup);
+    let mut unreachable = Vec::new();
+    let (mut first, mut second) = ((0.0f64, 0.0f64), Vec::new());
+    let mut tilt: f64 = 0.0;
+    let mut usage: f64 = 0.0;
+    for (&t, c) in search.live.iter().zip(&choices) {
+        let Some(c) = c else {
+            unreachable.push(t);
+            continue;
+        };
+        let q = setup * c.dir;
+        if !machine.reaches(q) {
+            unreachable.push(t);
+        }
+        usage = usage.max(c.usage);
+        first = (first.0.min(c.angles.0), first.1.max(c.angles.0));
+        second.push(c.angles.1);
+        tilt = tilt.max(q.z.clamp(-1.0, 1.0).acos().to_degrees());
+    }
+    let s = if has_c_axis(machine.kind) {
+        // A rotary C axis: the smallest arc of azimuths that serves every facet.
+        let (start, len) = access::min_arc(&second).unwrap_or((0.0, 0.0));
+        centred_window(start, len)
+    } else {
+        second
+            .iter()
+            .fold((0.0f64, 0.0f64), |r, &s| (r.0.min(s), r.1.max(s)))
     };
-    candidates.into_iter().min_by(|x, y| {
-        let (kx, ky) = (key(x), key(y));
-        kx.iter()
-            .zip(&ky)
-            .map(|(a, b)| a.total_cmp(b))
-            .find(|o| o.is_ne())
-            .unwrap_or(std::cmp::Ordering::Equal)
-    })
+    // (+ 0.0: the empty float sum is −0.0.)
+    let unreachable_area = unreachable.iter().map(|&t| areas[t]).sum::<f64>() + 0.0;
+    let grid = search.grid;
+    Candidate {
+        setup,
+        unreachable,
+        unreachable_area,
+        required: (!second.is_empty()).then_some([first, s]),
+        tilt,
+        usage,
+        dirs: choices.iter().map(|c| c.map(|c| c.dir)).collect(),
+        chosen: choices
+            .iter()
+            .map(|c| c.map(|c| grid.cell_of(c.dir)))
+            .collect(),
+        mask: access::reachable(grid, machine, setup),
+    }
 }
 
 /// The exact window algorithm for a machine with a C axis: every tilt
@@ -374,99 +452,10 @@ pub fn axis_names(kind: KinKind) -> [&'static str; 2] {
     }
 }
 
-/// Which of two IK branches a facet is cut with: on a machine with a C axis the
-/// one with the tilt positive (C turns instead), on an A,B table the one
-/// nearest home on both axes.
-fn branch_cost(kind: KinKind, (first, second): (f64, f64)) -> f64 {
-    match kind {
-        KinKind::TableAb => first.abs().max(second.abs()),
-        _ => first.abs() + if first < 0.0 { 1e3 } else { 0.0 },
-    }
-}
-
 /// A circular window as (from, to) degrees with its middle in (−180°, 180°].
 fn centred_window(start: f64, len: f64) -> (f64, f64) {
     let mid = (start + len / 2.0 + 180.0).rem_euclid(360.0) - 180.0;
     (mid - len / 2.0, mid + len / 2.0)
-}
-
-fn evaluate(
-    setup: DMat3,
-    machine: &Kinematics,
-    grid: &dyn SphereGrid,
-    vis: &CellSets,
-    live: &[usize],
-    areas: &[f64],
-) -> Candidate {
-    let mask = access::reachable(grid, machine, setup);
-    // Per cell, the machine's rotary positions for that direction (the branch
-    // nearest zero) when reachable.
-    let angles: Vec<Option<(f64, f64)>> = (0..grid.len())
-        .map(|c| {
-            if mask[c / 64] >> (c % 64) & 1 == 0 {
-                return None;
-            }
-            let d = setup * grid.direction(c);
-            machine
-                .inverse(DVec3::ZERO, d, 0.0)
-                .into_iter()
-                .map(|j| (j.first, j.second))
-                .min_by(|x, y| {
-                    branch_cost(machine.kind, *x).total_cmp(&branch_cost(machine.kind, *y))
-                })
-        })
-        .collect();
-    let cos: Vec<f64> = (0..grid.len())
-        .map(|c| (setup * grid.direction(c)).z)
-        .collect();
-    let mut unreachable = Vec::new();
-    // Both ranges hold 0, the machine's home position.
-    let mut first = (0.0f64, 0.0f64);
-    let mut second = Vec::new();
-    let mut tilt: f64 = 0.0;
-    let mut chosen = Vec::with_capacity(live.len());
-    for &t in live {
-        // The facet's reachable direction nearest the C axis (least tilt).
-        let best = vis
-            .cells_of(t)
-            .filter(|&c| angles[c].is_some())
-            .max_by(|&x, &y| cos[x].total_cmp(&cos[y]));
-        chosen.push(best);
-        match best {
-            None => unreachable.push(t),
-            Some(c) => {
-                let (f, s) = angles[c].unwrap_or_default();
-                first = (first.0.min(f), first.1.max(f));
-                second.push(s);
-                tilt = tilt.max(cos[c].clamp(-1.0, 1.0).acos().to_degrees());
-            }
-        }
-    }
-    let required = if unreachable.is_empty() && !second.is_empty() {
-        let s = if has_c_axis(machine.kind) {
-            // A rotary C axis: the smallest arc of azimuths that serves every facet.
-            let (start, len) = access::min_arc(&second).unwrap_or((0.0, 0.0));
-            centred_window(start, len)
-        } else {
-            second
-                .iter()
-                .fold((0.0f64, 0.0f64), |r, &s| (r.0.min(s), r.1.max(s)))
-        };
-        Some([first, s])
-    } else {
-        None
-    };
-    // (+ 0.0: the empty float sum is −0.0.)
-    let unreachable_area = unreachable.iter().map(|&t| areas[t]).sum::<f64>() + 0.0;
-    Candidate {
-        setup,
-        unreachable,
-        unreachable_area,
-        required,
-        tilt,
-        chosen,
-        mask,
-    }
 }
 
 /// What a setup plan says, for JSON.
@@ -476,15 +465,24 @@ pub struct Summary {
     /// Rotation part → table, row by row.
     pub setup: [[f64; 3]; 3],
     pub euler_zyx_deg: [f64; 3],
-    /// Required ranges of the (first, second) axis, degrees; `None` when out of reach.
+    /// Ranges of the (first, second) axis, degrees, the setup needs: the
+    /// smallest over all setups (scaled like the machine's own), whether or
+    /// not this machine has them.
     pub required: Option<[(f64, f64); 2]>,
+    /// Out of reach: the ranges the part needs as it lies in the file.
     pub would_do: Option<[(f64, f64); 2]>,
     pub axes: [&'static str; 2],
     pub max_tilt_deg: f64,
-    /// Facets out of reach and no direction sees, with their centroids.
+    /// The largest share of the machine's ranges a facet needs (≤ 1 when the
+    /// machine reaches every facet).
+    pub usage: f64,
+    /// Facets no rotary range reaches (no direction sees them), with their
+    /// centroids, and their area.
     pub unreachable: Vec<(usize, [f64; 3])>,
     pub unreachable_area: f64,
-    pub inaccessible: Vec<(usize, [f64; 3])>,
+    /// Facets this machine does not reach in the setup, and their area.
+    pub out_of_reach: Vec<(usize, [f64; 3])>,
+    pub out_of_reach_area: f64,
     pub facets: usize,
     pub ignored: usize,
     pub grid: String,
@@ -495,9 +493,9 @@ pub struct Summary {
 impl SetupPlan {
     pub fn summary(&self, mesh: &TriMesh, machine: &Kinematics) -> Summary {
         let s = self.best.setup;
-        let centroid = |t: usize| {
-            let [p, q, r] = mesh.corners(t);
-            ((p + q + r) / 3.0).to_array()
+        let centroid = |t: &usize| {
+            let [p, q, r] = mesh.corners(*t);
+            (*t, ((p + q + r) / 3.0).to_array())
         };
         Summary {
             feasible: self.feasible,
@@ -511,18 +509,16 @@ impl SetupPlan {
             would_do: self.would_do,
             axes: axis_names(machine.kind),
             max_tilt_deg: self.best.tilt,
-            unreachable: self
-                .best
-                .unreachable
-                .iter()
-                .map(|&t| (t, centroid(t)))
-                .collect(),
-            unreachable_area: self.best.unreachable_area,
-            inaccessible: self
+            usage: self.best.usage,
+            unreachable: self.inaccessible.iter().map(centroid).collect(),
+            unreachable_area: self
                 .inaccessible
                 .iter()
-                .map(|&t| (t, centroid(t)))
-                .collect(),
+                .map(|&t| facet_area(mesh, t))
+                .sum::<f64>()
+                + 0.0,
+            out_of_reach: self.best.unreachable.iter().map(centroid).collect(),
+            out_of_reach_area: self.best.unreachable_area,
             facets: mesh.len(),
             ignored: self.ignored,
             grid: self.grid.name(),
@@ -554,5 +550,147 @@ mod tests {
         // 170°…210° has its middle at 190°, that is −170°.
         assert_eq!(centred_window(170.0, 40.0), (-190.0, -150.0));
         assert_eq!(centred_window(-30.0, 20.0), (-30.0, -10.0));
+    }
+}
+
+#[cfg(test)]
+mod cube_tests {
+    use super::*;
+    use millplan_models::kinematics::RotaryAxis;
+
+    /// A closed 40 mm cube, facets wound outward.
+    fn cube() -> TriMesh {
+        let s = 40.0;
+        let faces: [(DVec3, [[f64; 3]; 4]); 6] = [
+            (
+                DVec3::Z,
+                [[0.0, 0.0, s], [s, 0.0, s], [s, s, s], [0.0, s, s]],
+            ),
+            (
+                -DVec3::Z,
+                [[0.0, 0.0, 0.0], [s, 0.0, 0.0], [s, s, 0.0], [0.0, s, 0.0]],
+            ),
+            (
+                DVec3::X,
+                [[s, 0.0, 0.0], [s, s, 0.0], [s, s, s], [s, 0.0, s]],
+            ),
+            (
+                -DVec3::X,
+                [[0.0, 0.0, 0.0], [0.0, s, 0.0], [0.0, s, s], [0.0, 0.0, s]],
+            ),
+            (
+                DVec3::Y,
+                [[0.0, s, 0.0], [s, s, 0.0], [s, s, s], [0.0, s, s]],
+            ),
+            (
+                -DVec3::Y,
+                [[0.0, 0.0, 0.0], [s, 0.0, 0.0], [s, 0.0, s], [0.0, 0.0, s]],
+            ),
+        ];
+        let mut soup = Vec::new();
+        for (n, q) in faces {
+            let [a, b, c, d] = q.map(DVec3::from_array);
+            if (b - a).cross(c - a).dot(n) > 0.0 {
+                soup.extend([[a, b, c], [a, c, d]]);
+            } else {
+                soup.extend([[a, c, b], [a, d, c]]);
+            }
+        }
+        TriMesh::from_soup(&soup).0
+    }
+
+    fn ca(lo: f64, hi: f64) -> Kinematics {
+        let mut k = Kinematics::new(KinKind::TableAc);
+        k.first = RotaryAxis {
+            min: Some(lo),
+            max: Some(hi),
+            sign: 1.0,
+        };
+        k
+    }
+
+    #[test]
+    fn cube_on_its_corner() {
+        // Every face of a closed cube sees its open half-space: a setup needs
+        // a tilt reaching each of the six half-spaces. With the pole on a
+        // body diagonal the three faces turned away are 90° + 35.26° from it,
+        // atan(1/√2) = 35.26° beyond their planes, and no pole does better
+        // (each of the six normals is within 125.26° of it at most there).
+        let exact = (1.0f64 / 2f64.sqrt()).atan().to_degrees();
+        for g in [GridKind::LatLon, GridKind::Icosphere, GridKind::Healpix] {
+            let p = SetupParams {
+                grid: g,
+                ..SetupParams::new()
+            };
+            for (range, feasible) in [(36.0, true), (34.5, false)] {
+                let plan = plan(&mut cube(), &ca(-range, range), &p).expect("plans");
+                assert_eq!(plan.feasible, feasible, "{g:?} ±{range}");
+                // Feasible or not, the least tilt of any setup: standing on a
+                // corner, the three faces below see the table's Z at 35.26°.
+                let r = plan.best.required.expect("required");
+                assert!(
+                    (plan.best.tilt - exact).abs() < 0.5,
+                    "{g:?}: {}",
+                    plan.best.tilt
+                );
+                assert!(
+                    r[0].0 == 0.0 && (r[0].1 - exact).abs() < 0.5,
+                    "{g:?}: {r:?}"
+                );
+                let pole = plan.best.setup.transpose() * DVec3::Z;
+                assert!(
+                    (pole.x.abs() - pole.z.abs()).abs() < 0.01
+                        && (pole.y.abs() - pole.z.abs()).abs() < 0.01,
+                    "on a corner: {pole}"
+                );
+                assert!(plan.inaccessible.is_empty());
+                assert_eq!(plan.best.unreachable.is_empty(), feasible);
+            }
+        }
+    }
+
+    fn ab(l: f64) -> Kinematics {
+        let mut k = Kinematics::new(KinKind::TableAb);
+        let r = RotaryAxis {
+            min: Some(-l),
+            max: Some(l),
+            sign: 1.0,
+        };
+        (k.first, k.second) = (r, r);
+        k
+    }
+
+    #[test]
+    fn cube_on_its_bottom_on_an_ab_table() {
+        // The cube stands on its bottom face (spins only) and every face must
+        // be cut at least 30° off its plane: a wall with outward normal n
+        // needs K·n > sin 30°. With K = (sin B, −sin A·cos B, cos A·cos B)
+        // and |A|, |B| ≤ L, a wall at azimuth φ gets at most
+        // sin L·|cos φ| + sin L·cos L·|sin φ| (the corner of the box: the
+        // derivative in B is cos B·|cos φ| − sin L·sin B·|sin φ| > 0 for
+        // B ≤ L < 45°). The four walls are at φ = ψ + k·90°; the worst of
+        // them needs least L at ψ = 45°, where sin L·(1 + cos L) = √2·sin 30°:
+        // L* = 21.486°, against 30° with the walls square to the axes. The
+        // top face sees straight up.
+        let exact = 21.486_43;
+        for g in [GridKind::LatLon, GridKind::Icosphere, GridKind::Healpix] {
+            let p = SetupParams {
+                grid: g,
+                clearance_deg: 30.0,
+                ignore_bottom: true,
+                ..SetupParams::new()
+            };
+            for (l, feasible) in [(exact + 0.5, true), (exact - 0.5, false)] {
+                let plan = plan(&mut cube(), &ab(l), &p).expect("plans");
+                let r = plan.best.required.expect("required");
+                assert_eq!(plan.feasible, feasible, "{g:?} ±{l}");
+                for (lo, hi) in r {
+                    assert!(
+                        (lo + exact).abs() < 0.5 && (hi - exact).abs() < 0.5,
+                        "{g:?}: {r:?}"
+                    );
+                }
+            }
+        }
     }
 }
