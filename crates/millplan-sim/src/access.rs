@@ -439,7 +439,96 @@ pub struct ToolModel {
 /// (ball centre on the facet normal) and its axis along d touches no part of
 /// the mesh except where the ball already touches (a tolerance of 0.1 % of the
 /// radius absorbs the tessellation).
+///
+/// Decided per direction over the whole part at once: the mesh seen along d
+/// is rasterised twice (cells of 1/6 of the shank's and of the holder's
+/// radius), each cell holding the greatest depth along d of any point of the
+/// mesh over it and of any vertex in it. Where no point within a capsule's
+/// radius of the axis lies above the capsule's base, the capsule is proven
+/// free (the ball itself was tested free beforehand); where a vertex lies
+/// inside a capsule's cylinder, it is proven blocked; the exact capsule tests
+/// decide the rest. So the answer is the exact test's, every one
+/// ([`accessibility_exact`] is the reference), in a fraction of the time.
 pub fn accessibility(
+    mesh: &TriMesh,
+    bvh: &Bvh,
+    grid: &dyn SphereGrid,
+    clearance_deg: f64,
+    tool: &ToolModel,
+) -> CellSets {
+    // On few triangles the capsule tests are cheap and the maps not.
+    if mesh.len() < MAPS_FROM {
+        accessibility_exact(mesh, bvh, grid, clearance_deg, tool)
+    } else {
+        accessibility_mapped(mesh, bvh, grid, clearance_deg, tool)
+    }
+}
+
+/// Meshes of at least this many triangles are decided by depth maps first.
+const MAPS_FROM: usize = 4096;
+
+/// [`accessibility`] by depth maps first, whatever the size of the mesh.
+fn accessibility_mapped(
+    mesh: &TriMesh,
+    bvh: &Bvh,
+    grid: &dyn SphereGrid,
+    clearance_deg: f64,
+    tool: &ToolModel,
+) -> CellSets {
+    let test = DirectionTest::tool(mesh, bvh, clearance_deg, tool);
+    let cells = grid.len();
+    let mut out = CellSets::new(mesh.len(), cells);
+    let words = out.words;
+    // Per facet: centroid, normal, ball centre; `None` when it cannot be served.
+    let facets: Vec<Option<(DVec3, DVec3)>> = (0..mesh.len())
+        .into_par_iter()
+        .map(|t| {
+            let (p, n) = test.facet(t)?;
+            test.usable_at(t, p, n).then_some((p, n))
+        })
+        .collect();
+    let mut used = vec![false; mesh.vertices.len()];
+    for tri in &mesh.triangles {
+        for &v in tri {
+            used[v as usize] = true;
+        }
+    }
+    let verts: Vec<DVec3> = mesh
+        .vertices
+        .iter()
+        .zip(&used)
+        .filter(|(_, u)| **u)
+        .map(|(v, _)| *v)
+        .collect();
+    let dirs: Vec<DVec3> = (0..cells).map(|c| grid.direction(c)).collect();
+    // One word of 64 directions per job: its bits of every facet.
+    let columns: Vec<Vec<u64>> = (0..words)
+        .into_par_iter()
+        .map(|w| {
+            let mut col = vec![0u64; mesh.len()];
+            for (k, &d) in dirs.iter().enumerate().skip(w * 64).take(64) {
+                let view = ToolView::new(mesh, &verts, d, tool, test.tol());
+                for (t, f) in facets.iter().enumerate() {
+                    let Some((p, n)) = *f else { continue };
+                    if d.dot(n) > test.min_dot && view.free(&test, p, n) {
+                        col[t] |= 1 << (k % 64);
+                    }
+                }
+            }
+            col
+        })
+        .collect();
+    for (w, col) in columns.iter().enumerate() {
+        for (t, bits) in col.iter().enumerate() {
+            out.bits[t * words + w] = *bits;
+        }
+    }
+    out
+}
+
+/// The plain tool-mode accessibility, every direction of every facet by the
+/// exact capsule tests: the reference for [`accessibility`].
+pub fn accessibility_exact(
     mesh: &TriMesh,
     bvh: &Bvh,
     grid: &dyn SphereGrid,
@@ -454,6 +543,285 @@ pub fn accessibility(
         |t, p, n| test.usable_at(t, p, n),
         |t, p, n, d| test.clear(t, p, n, d),
     )
+}
+
+/// The mesh seen along one tool direction, rasterised on the plane across
+/// it: what proves a tool position free or blocked without the capsule tests.
+struct ToolView {
+    d: DVec3,
+    e1: DVec3,
+    e2: DVec3,
+    /// The ball's radius (its centre stands this far off the facet), mm.
+    radius: f64,
+    reach: f64,
+    /// The holder's radius and length, when there is one.
+    holder: Option<(f64, f64)>,
+    shank: DepthMap,
+    holder_map: Option<DepthMap>,
+    /// Margin of the depth comparisons (rounding), mm.
+    eps: f64,
+}
+
+/// Cells of a depth map across a capsule's radius.
+const CELLS_PER_RADIUS: f64 = 8.0;
+
+/// Cells of a depth map across the part, at most (about).
+const MAP_CELLS: f64 = 256.0;
+
+/// Depths along the view direction over square cells of the plane across it.
+struct DepthMap {
+    h: f64,
+    u0: f64,
+    v0: f64,
+    nu: usize,
+    nv: usize,
+    /// Greatest depth of any mesh point within `radius` (across the axis) of
+    /// any point of the cell.
+    near: Vec<f64>,
+    /// Greatest depth of a mesh vertex lying, wherever in the cell the axis
+    /// passes, within `radius` of it.
+    inside: Vec<f64>,
+}
+
+impl DepthMap {
+    /// The map for capsules of `radius` about axes along the view: triangles
+    /// `tris` over points projected to `proj` = (u, v, depth), the vertices
+    /// of the mesh (those of its triangles only) projected to `verts`, all of
+    /// them within `lo`..`hi` across the view.
+    fn new(
+        tris: &[[u32; 3]],
+        proj: &[(f64, f64, f64)],
+        verts: &[(f64, f64, f64)],
+        (lo, hi): ((f64, f64), (f64, f64)),
+        radius: f64,
+    ) -> DepthMap {
+        // Proving free takes a window a hair wider than the radius, proving
+        // blocked one a hair narrower: rounding never decides.
+        let (outer, inner) = (radius * (1.0 + 1e-9), radius * (1.0 - 1e-9));
+        // At most about MAP_CELLS cells across the part.
+        let h = (radius / CELLS_PER_RADIUS).max((hi.0 - lo.0).max(hi.1 - lo.1) / MAP_CELLS);
+        let u0 = lo.0 - outer - h;
+        let v0 = lo.1 - outer - h;
+        let nu = (((hi.0 + outer + h - u0) / h).ceil() as usize).max(1);
+        let nv = (((hi.1 + outer + h - v0) / h).ceil() as usize).max(1);
+        let mut all = vec![f64::NEG_INFINITY; nu * nv];
+        let mut vert = vec![f64::NEG_INFINITY; nu * nv];
+        let cell = |u: f64, v: f64| {
+            (
+                (((u - u0) / h).floor().max(0.0) as usize).min(nu - 1),
+                (((v - v0) / h).floor().max(0.0) as usize).min(nv - 1),
+            )
+        };
+        for &(u, v, z) in verts {
+            let (i, j) = cell(u, v);
+            let x = &mut vert[j * nu + i];
+            *x = x.max(z);
+        }
+        // Every point of a triangle projects into its box and lies no deeper
+        // than its deepest corner.
+        for tri in tris {
+            let [a, b, c] = tri.map(|k| proj[k as usize]);
+            let (i0, j0) = cell(a.0.min(b.0).min(c.0), a.1.min(b.1).min(c.1));
+            let (i1, j1) = cell(a.0.max(b.0).max(c.0), a.1.max(b.1).max(c.1));
+            let z = a.2.max(b.2).max(c.2);
+            for j in j0..=j1 {
+                for x in &mut all[j * nu + i0..=j * nu + i1] {
+                    *x = x.max(z);
+                }
+            }
+        }
+        // For an axis anywhere in cell (i, j): the cells (i + di, j + dj)
+        // that come within `outer` of some point of it, and those all of
+        // whose points lie within `inner` of every point of it.
+        let (ro, ri) = (outer / h, inner / h);
+        let k = ro.ceil() as i64 + 1;
+        let reach = |dj: i64, near: bool| -> Option<usize> {
+            (0..=k)
+                .rev()
+                .find(|&di| {
+                    if near {
+                        let (a, b) = ((di - 1).max(0) as f64, (dj.abs() - 1).max(0) as f64);
+                        a * a + b * b <= ro * ro
+                    } else {
+                        let (a, b) = ((di + 1) as f64, (dj.abs() + 1) as f64);
+                        a * a + b * b < ri * ri
+                    }
+                })
+                .map(|di| di as usize)
+        };
+        let near_w: Vec<(i64, usize)> = (-k..=k)
+            .filter_map(|dj| reach(dj, true).map(|w| (dj, w)))
+            .collect();
+        let inside_w: Vec<(i64, usize)> = (-k..=k)
+            .filter_map(|dj| reach(dj, false).map(|w| (dj, w)))
+            .collect();
+        DepthMap {
+            h,
+            u0,
+            v0,
+            nu,
+            nv,
+            near: disc_max(&all, nu, nv, &near_w),
+            inside: disc_max(&vert, nu, nv, &inside_w),
+        }
+    }
+
+    fn at(&self, u: f64, v: f64) -> Option<usize> {
+        let i = ((u - self.u0) / self.h).floor();
+        let j = ((v - self.v0) / self.h).floor();
+        (i >= 0.0 && j >= 0.0 && (i as usize) < self.nu && (j as usize) < self.nv)
+            .then(|| j as usize * self.nu + i as usize)
+    }
+}
+
+/// The greatest value over a window given by rows: `rows` holds (dj, w),
+/// the cells (i + di, j + dj) with |di| ≤ w; an empty window gives −∞.
+fn disc_max(src: &[f64], nu: usize, nv: usize, rows: &[(i64, usize)]) -> Vec<f64> {
+    let mut out = vec![f64::NEG_INFINITY; src.len()];
+    let mut widths: Vec<usize> = rows.iter().map(|r| r.1).collect();
+    widths.sort_unstable();
+    widths.dedup();
+    for w in widths {
+        // Each row's running maximum over 2w + 1 cells, then into every
+        // output row that takes this width at its offset.
+        let mut run = vec![f64::NEG_INFINITY; src.len()];
+        for j in 0..nv {
+            window_max(
+                &src[j * nu..(j + 1) * nu],
+                &mut run[j * nu..(j + 1) * nu],
+                w,
+            );
+        }
+        for &(dj, _) in rows.iter().filter(|r| r.1 == w) {
+            for j in 0..nv {
+                let from = j as i64 + dj;
+                if from < 0 || from >= nv as i64 {
+                    continue;
+                }
+                let f = from as usize;
+                for (o, r) in out[j * nu..(j + 1) * nu]
+                    .iter_mut()
+                    .zip(&run[f * nu..(f + 1) * nu])
+                {
+                    *o = o.max(*r);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// dst[i] = max of src[i − k ..= i + k] (van Herk / Gil–Werman: blocks of
+/// 2k + 1, prefix and suffix maxima).
+fn window_max(src: &[f64], dst: &mut [f64], k: usize) {
+    let n = src.len();
+    if k == 0 {
+        dst.copy_from_slice(src);
+        return;
+    }
+    let b = 2 * k + 1;
+    let mut pre = vec![f64::NEG_INFINITY; n];
+    let mut suf = vec![f64::NEG_INFINITY; n];
+    for i in 0..n {
+        pre[i] = if i % b == 0 {
+            src[i]
+        } else {
+            pre[i - 1].max(src[i])
+        };
+    }
+    for i in (0..n).rev() {
+        suf[i] = if i % b == b - 1 || i == n - 1 {
+            src[i]
+        } else {
+            suf[i + 1].max(src[i])
+        };
+    }
+    for (i, out) in dst.iter_mut().enumerate() {
+        let lo = i.saturating_sub(k);
+        let hi = (i + k).min(n - 1);
+        // A window within one block starts it (at the first cell) or ends it
+        // (at the last); otherwise it spans one block boundary.
+        *out = if lo / b != hi / b {
+            suf[lo].max(pre[hi])
+        } else if lo % b == 0 {
+            pre[hi]
+        } else {
+            suf[lo]
+        };
+    }
+}
+
+impl ToolView {
+    fn new(mesh: &TriMesh, verts: &[DVec3], d: DVec3, tool: &ToolModel, tol: f64) -> ToolView {
+        let (e1, e2) = d.any_orthonormal_pair();
+        let proj_of = |x: &DVec3| (x.dot(e1), x.dot(e2), x.dot(d));
+        let all: Vec<(f64, f64, f64)> = mesh.vertices.iter().map(proj_of).collect();
+        let vproj: Vec<(f64, f64, f64)> = verts.iter().map(proj_of).collect();
+        let mut span = (
+            (f64::INFINITY, f64::INFINITY),
+            (f64::NEG_INFINITY, f64::NEG_INFINITY),
+        );
+        for &(u, v, _) in &vproj {
+            span.0 = (span.0 .0.min(u), span.0 .1.min(v));
+            span.1 = (span.1 .0.max(u), span.1 .1.max(v));
+        }
+        let b = mesh.bounds();
+        let scale = b.diagonal().max(1.0) + b.min.abs().max(b.max.abs()).max_element();
+        let holder = (tool.holder_radius > 0.0 && tool.holder_length > 0.0)
+            .then_some((tool.holder_radius, tool.holder_length));
+        let map = |radius: f64| DepthMap::new(&mesh.triangles, &all, &vproj, span, radius);
+        ToolView {
+            d,
+            e1,
+            e2,
+            radius: tool.radius,
+            reach: tool.reach,
+            holder,
+            shank: map(tool.radius - tol),
+            holder_map: holder.map(|(hr, _)| map(hr)),
+            eps: 1e-9 * scale,
+        }
+    }
+
+    /// Whether the tool touching a facet at centroid p (normal n) along this
+    /// direction is free: by the maps where they prove it either way, else by
+    /// the capsule tests of what they leave open. The ball must have been
+    /// tested free.
+    fn free(&self, test: &DirectionTest, p: DVec3, n: DVec3) -> bool {
+        let centre = p + n * self.radius;
+        let (u, v) = (centre.dot(self.e1), centre.dot(self.e2));
+        let base = centre.dot(self.d);
+        let top = base + self.reach;
+        let eps = self.eps;
+        let shank_at = self.shank.at(u, v);
+        // A vertex inside the shank's cylinder.
+        if shank_at.is_some_and(|s| {
+            let x = self.shank.inside[s];
+            x > base + eps && x < top - eps
+        }) {
+            return false;
+        }
+        let holder_free = match (&self.holder_map, self.holder) {
+            (Some(m), Some((hr, hl))) => {
+                let c = m.at(u, v);
+                // A vertex inside the holder's cylinder.
+                if c.is_some_and(|c| {
+                    let x = m.inside[c];
+                    x > top + eps && x < top + hl - eps
+                }) {
+                    return false;
+                }
+                // Nothing within its radius above its lowest point.
+                c.is_some_and(|c| m.near[c] < top - hr - eps)
+            }
+            _ => true,
+        };
+        // Nothing within the shank's radius above the ball's centre.
+        let shank_free = shank_at.is_some_and(|s| self.shank.near[s] < base - eps);
+        // The holder's test first: it is the quicker, and often blocked.
+        (holder_free || test.holder_clear(p, n, self.d))
+            && (shank_free || test.shank_clear(p, n, self.d))
+    }
 }
 
 /// The test the cones are made of, for any direction: whether a direction
@@ -506,6 +874,14 @@ impl<'a> DirectionTest<'a> {
         }
     }
 
+    /// The tolerance the tool's capsules are shrunk by (0 in line of sight), mm.
+    fn tol(&self) -> f64 {
+        match &self.mode {
+            TestMode::Sight { .. } => 0.0,
+            TestMode::Tool { tol, .. } => *tol,
+        }
+    }
+
     /// sin(clearance): a direction must leave a facet by more than this (d·n).
     pub fn min_dot(&self) -> f64 {
         self.min_dot
@@ -531,7 +907,7 @@ impl<'a> DirectionTest<'a> {
     fn usable_at(&self, _t: usize, p: DVec3, n: DVec3) -> bool {
         match &self.mode {
             TestMode::Sight { .. } => true,
-            TestMode::Tool { tool, tol } => {
+            TestMode::Tool { tool, tol, .. } => {
                 let c = p + n * tool.radius;
                 !self.bvh.capsule_hits(c, c, tool.radius - tol, None)
             }
@@ -546,28 +922,43 @@ impl<'a> DirectionTest<'a> {
                     .bvh
                     .occluded(p + n * *lift, d, f64::INFINITY, Some(t as u32))
             }
-            TestMode::Tool { tool, tol } => {
-                let (r, reach) = (tool.radius, tool.reach);
-                let centre = p + n * r;
-                let top = centre + d * reach;
-                // Behind the plane through the centre across the axis the shank
-                // reaches no farther than the ball, checked free above; nothing
-                // below the holder's lowest point can touch the holder.
-                let (hr, hl) = (tool.holder_radius, tool.holder_length);
-                !self
-                    .bvh
-                    .capsule_hits_above(centre, top, r - tol, None, Some((d, d.dot(centre))))
-                    && (hr <= 0.0
-                        || hl <= 0.0
-                        || !self.bvh.capsule_hits_above(
-                            top,
-                            top + d * hl,
-                            hr,
-                            None,
-                            Some((d, d.dot(top) - hr)),
-                        ))
-            }
+            TestMode::Tool { .. } => self.shank_clear(p, n, d) && self.holder_clear(p, n, d),
         }
+    }
+
+    /// Tool mode: whether the shank along d, the ball touching centroid p
+    /// (normal n), meets nothing. Behind the plane through the ball's centre
+    /// across the axis the shank reaches no farther than the ball, checked
+    /// free on its own.
+    fn shank_clear(&self, p: DVec3, n: DVec3, d: DVec3) -> bool {
+        let TestMode::Tool { tool, tol, .. } = &self.mode else {
+            return true;
+        };
+        let centre = p + n * tool.radius;
+        let top = centre + d * tool.reach;
+        !self.bvh.capsule_hits_above(
+            centre,
+            top,
+            tool.radius - tol,
+            None,
+            Some((d, d.dot(centre))),
+        )
+    }
+
+    /// Tool mode: whether the holder meets nothing (nothing below its lowest
+    /// point can touch it).
+    fn holder_clear(&self, p: DVec3, n: DVec3, d: DVec3) -> bool {
+        let TestMode::Tool { tool, .. } = &self.mode else {
+            return true;
+        };
+        let (hr, hl) = (tool.holder_radius, tool.holder_length);
+        if hr <= 0.0 || hl <= 0.0 {
+            return true;
+        }
+        let top = p + n * tool.radius + d * tool.reach;
+        !self
+            .bvh
+            .capsule_hits_above(top, top + d * hl, hr, None, Some((d, d.dot(top) - hr)))
     }
 }
 
@@ -1259,18 +1650,42 @@ mod tests {
         }
     }
 
+    /// Steep bumps: tools at grazing angles touch them, nearly touch them and
+    /// pass them, so every proof of the depth maps and every capsule test is
+    /// met.
+    struct Bumps;
+    impl millplan_geom::analytic::HeightField for Bumps {
+        fn z(&self, x: f64, y: f64) -> f64 {
+            6.0 * (0.35 * x).sin() * (0.3 * y).cos() + 0.05 * x
+        }
+        fn grad(&self, x: f64, y: f64) -> millplan_geom::DVec2 {
+            millplan_geom::DVec2::new(
+                2.1 * (0.35 * x).cos() * (0.3 * y).cos() + 0.05,
+                -1.8 * (0.35 * x).sin() * (0.3 * y).sin(),
+            )
+        }
+        fn domain(&self) -> (millplan_geom::DVec2, millplan_geom::DVec2) {
+            (
+                millplan_geom::DVec2::ZERO,
+                millplan_geom::DVec2::splat(40.0),
+            )
+        }
+    }
+
     #[test]
     fn tool_mode_pruning_changes_no_answer() {
         // The plain formulation (whole capsules, nothing left out) against
-        // `accessibility`, which leaves out what only the ball could touch: on a
-        // free-form surface and in the pocket, with and without a holder.
+        // `accessibility` by depth maps first, which proves directions free or
+        // blocked where it can and leaves out what only the ball could touch:
+        // on free-form surfaces and in the pocket, with and without a holder.
         let surf = millplan_geom::analytic::tessellate(
             &millplan_geom::analytic::DemoSurface::default(),
             4.0,
         );
+        let bumps = millplan_geom::analytic::tessellate(&Bumps, 1.6);
         let pocket_mesh = mesh(&pocket(30.0, 6.0, 12.0)).0;
         let g = Icosphere::new(2);
-        for m in [surf, pocket_mesh] {
+        for m in [surf, bumps, pocket_mesh] {
             let b = Bvh::build(&m);
             for tool in [
                 ToolModel {
@@ -1305,7 +1720,7 @@ mod tests {
                                 ))
                     },
                 );
-                let fast = accessibility(&m, &b, &g, 0.0, &tool);
+                let fast = accessibility_mapped(&m, &b, &g, 0.0, &tool);
                 let total: usize = (0..m.len()).map(|f| plain.count(f)).sum();
                 assert!(total > 0);
                 for f in 0..m.len() {
@@ -1463,5 +1878,66 @@ mod tests {
             assert!((r * d - DVec3::Z).length() < 1e-12);
             assert!((r.determinant() - 1.0).abs() < 1e-12);
         }
+    }
+}
+
+#[cfg(test)]
+mod window_tests {
+    use super::*;
+
+    #[test]
+    fn window_maxima_agree_with_brute_force() {
+        let mut seed = 3u64;
+        for n in 1..40 {
+            let v: Vec<f64> = (0..n)
+                .map(|_| {
+                    seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1);
+                    (seed >> 40) as f64
+                })
+                .collect();
+            for k in 0..12 {
+                let mut got = vec![0.0; n];
+                window_max(&v, &mut got, k);
+                for i in 0..n {
+                    let want = v[i.saturating_sub(k)..=(i + k).min(n - 1)]
+                        .iter()
+                        .copied()
+                        .fold(f64::NEG_INFINITY, f64::max);
+                    assert_eq!(got[i], want, "n {n} k {k} i {i}");
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod slow_tests {
+    use super::*;
+
+    /// The depth maps against the plain capsule tests on the demo surface at
+    /// 24,642 triangles with the benchmark's tool (D10 ball, 40 mm reach,
+    /// D40 × 60 mm holder): the same answer for every facet and direction.
+    /// About a minute in a release build: `cargo test --release -p
+    /// millplan-sim -- --ignored`.
+    #[test]
+    #[ignore]
+    fn depth_maps_answer_like_the_capsule_tests_on_the_demo_surface() {
+        let m = millplan_geom::analytic::tessellate(
+            &millplan_geom::analytic::DemoSurface::default(),
+            0.54,
+        );
+        let b = Bvh::build(&m);
+        let g = Icosphere::new(2);
+        let tool = ToolModel {
+            radius: 5.0,
+            reach: 40.0,
+            holder_radius: 20.0,
+            holder_length: 60.0,
+        };
+        assert!(m.len() >= MAPS_FROM);
+        assert_eq!(
+            accessibility(&m, &b, &g, 0.0, &tool),
+            accessibility_exact(&m, &b, &g, 0.0, &tool)
+        );
     }
 }

@@ -1,7 +1,11 @@
-//! Reordering the points of a ball-end finishing path so the working diameter
-//! changes as little as possible between successive points (paper 000, thesis 5;
-//! spec `working-diameter.md` §4.4 and §5.8), with safe links.
+//! Reordering the points of a ball-end finishing path so the spindle, driven
+//! for a constant cutting speed, has less to change between successive points
+//! (paper 000, thesis 5; spec `working-diameter.md` §4.4 and §5.8), with safe
+//! links.
 //!
+//! - [`Method::AsRun`] (the default, [`run`]): candidate orders judged by the
+//!   machining as it will run with spindle control, the best one worse than
+//!   the original on nothing kept, else the original as it was.
 //! - [`Method::Paper`]: the paper's greedy search. Start on the border of the point
 //!   set; candidates are the unvisited points within a radius grown ×1.5 until at
 //!   least `n_min` are found; visited points are tabu; the candidate with the
@@ -21,7 +25,9 @@
 //!
 //! Links: a move between successive points is made directly only when the
 //! drop-cutter check along it finds no gouge; otherwise the tool retracts to a
-//! clearance height, rapids across and plunges at the plunge feed.
+//! clearance height, rapids across and plunges at the plunge feed (the default
+//! method: rapids down to 1 mm above the point first, and links only points a
+//! jump apart directly).
 
 pub mod run;
 
@@ -596,9 +602,9 @@ fn optimised(
 /// The pass as the pipeline runs it.
 pub static INFO: PassInfo = PassInfo {
     name: "reorder",
-    needs: &[Need::Part],
+    needs: &[Need::Part, Need::Machine],
     changes: Changes::Order,
-    does: "cutting points of 3-axis ball-end operations reordered for small working-diameter changes, links gouge-checked or retracted (paper 000, thesis 5)",
+    does: "cutting points of 3-axis ball-end operations reordered so the machining runs better with spindle control, or kept; the thesis's search on request; links gouge-checked or retracted (paper 000, thesis 5)",
 };
 
 /// Reordering as a pass; what it did stays with it for the report.

@@ -6,11 +6,13 @@
 //! (tool mode: along which the ball-end mill, its shank and holder touch
 //! nothing but the facet). A setup is feasible when, with the part rotated by
 //! it, every facet keeps a direction the machine reaches within its rotary
-//! limits. The search tries the part as it lies and the orientation needing
-//! least tilt (the pole every facet sees most nearly), each spun about the
-//! vertical in 15° steps, and keeps the feasible one with the smallest required
-//! rotary ranges (or, if none is feasible, the one leaving the least area out
-//! of reach).
+//! limits. A setup's usage is the largest share of the machine's ranges a
+//! facet needs ([`fit`]); the search seeds from the part as it lies and the
+//! orientation needing least tilt (the pole every facet sees most nearly), each
+//! spun about the vertical in 15° steps, refines the best seeds (and the part
+//! as it lies) between the grid's directions, and keeps the one of least
+//! usage, ties to the smallest turn: the smallest ranges, scaled like the
+//! machine's, of any setup, and feasible exactly when the machine has them.
 
 use millplan_geom::bvh::Bvh;
 use millplan_geom::{DMat3, DVec3, TriMesh};

@@ -14,13 +14,13 @@ use std::path::PathBuf;
 /// Every facet gets its visibility cone: the grid directions that leave its
 /// outer side by more than --clearance degrees and see no other part of the
 /// part (with --tool: along which the ball-end mill, its shank and holder
-/// touch nothing but the facet). A setup is feasible when, with the part rotated by it, every facet
-/// keeps a direction the machine reaches within its rotary limits. The search
-/// tries the part as it lies in the file and the orientation that needs the
-/// least tilt (the pole every facet sees most nearly), each spun about the
-/// vertical in 15° steps, and keeps the feasible one with the smallest required
-/// rotary ranges (or, if none is feasible, the one leaving the least area
-/// unreachable).
+/// touch nothing but the facet). A setup needs, of the machine's rotary ranges,
+/// what its most demanding facet needs along its best direction. The grid
+/// seeds the search (the part as it lies and the orientation needing least
+/// tilt, each spun in 15° steps); the best seeds are then refined between the
+/// grid's directions, each facet's direction tested exactly, and feasibility
+/// is decided by the refined setup. `required` holds the least ranges of any
+/// setup, also when the machine falls short.
 ///
 /// Ranges are MIN,MAX in degrees or `free` for an unlimited axis; for `ca`
 /// range1 is the tilting A axis and range2 the C table, for `ab` range1 is the
