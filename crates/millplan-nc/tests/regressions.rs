@@ -468,7 +468,9 @@ fn fanuc_spindle_speeds_are_whole_numbers() {
             }
         }
     }
-    assert!(s_words >= 4, "{s_words} S words");
+    // The synthetic program alone writes S4201, S5100 (S5099.5 rounds to the
+    // speed already running and is not repeated).
+    assert!(s_words >= 3, "{s_words} S words");
 }
 
 // ---------------------------------------------------------------------------
