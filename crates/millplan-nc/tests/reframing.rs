@@ -308,7 +308,7 @@ fn heidenhain_cycles_keep_their_lines_and_end_at_the_second_set_up_clearance() {
 #[test]
 fn a_peck_of_zero_is_reported() {
     let src = "G21 G90 G17\nT1 M6\nG0 X0 Y0 Z10.\nG99 G83 X0 Y0 Z-3. R3. Q0 F250.\nG80\nM30\n";
-    assert!(codes(src).contains(&Code::UnknownWord), "{:?}", codes(src));
+    assert!(codes(src).contains(&Code::PeckDepth), "{:?}", codes(src));
 }
 
 #[test]

@@ -889,7 +889,7 @@ impl HeidenhainReader {
                 None => {
                     if let Some(p) = q.get(&202).filter(|p| **p <= 0.0) {
                         self.diags.warn(
-                            Code::UnknownWord,
+                            Code::PeckDepth,
                             ln,
                             col0,
                             format!(

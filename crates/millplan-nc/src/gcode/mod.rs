@@ -1821,7 +1821,7 @@ impl GcodeReader {
                 let pecking = matches!(cs.name.as_str(), "G73" | "G83");
                 match cs.q {
                     Some(q) if pecking && q <= 0.0 => self.diags.warn(
-                        Code::UnknownWord,
+                        Code::PeckDepth,
                         ln,
                         1,
                         format!(
@@ -1831,7 +1831,7 @@ impl GcodeReader {
                         ),
                     ),
                     None if pecking => self.diags.warn(
-                        Code::UnknownWord,
+                        Code::PeckDepth,
                         ln,
                         1,
                         format!("{} without a peck depth Q: read as one stroke to depth", cs.name),
