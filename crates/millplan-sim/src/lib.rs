@@ -1,12 +1,14 @@
 //! Simulation against the part: drop-cutter of flat, ball, bull and cone cutters
 //! on triangle meshes ([`dropcutter`]), the gouge check of a program
 //! ([`gouge`]), finishing rasters made of drop-cutter points ([`raster`]) and
-//! tool-direction accessibility on a spherical map ([`access`]).
+//! tool-direction accessibility on a spherical map ([`access`]), and the
+//! stock: material removal and engagement along a program ([`stock`]).
 
 pub mod access;
 pub mod dropcutter;
 pub mod gouge;
 pub mod raster;
+pub mod stock;
 
 use millplan_models::cutter::Shape;
 

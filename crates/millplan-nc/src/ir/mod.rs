@@ -578,6 +578,25 @@ impl Orient {
     }
 }
 
+/// The tool axis at fraction `t` of a move whose axis turns from `a0` to `a1`
+/// (unit vectors): at a constant rate on the great circle between them, the
+/// way a controller's tool-centre-point mode interpolates the orientation.
+/// Opposite axes have no such circle; the axis then jumps at the middle.
+pub fn axis_at(a0: DVec3, a1: DVec3, t: f64) -> DVec3 {
+    let c = a0.dot(a1).clamp(-1.0, 1.0);
+    if c > 1.0 - 1e-15 {
+        return a0;
+    }
+    let ang = c.acos();
+    let s = ang.sin();
+    if s < 1e-9 {
+        return if t < 0.5 { a0 } else { a1 };
+    }
+    let w0 = ((1.0 - t) * ang).sin() / s;
+    let w1 = (t * ang).sin() / s;
+    (a0 * w0 + a1 * w1).normalize()
+}
+
 /// A canned cycle's parameters, relative to each cycle point along the tool axis
 /// (positive = up the axis from the point).
 #[derive(Clone, Debug, PartialEq)]

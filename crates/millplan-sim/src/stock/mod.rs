@@ -1,0 +1,408 @@
+//! The workpiece as material: a z-dexel model, material removal by the tool's
+//! swept volume, engagement per move and the result against the part.
+//!
+//! # Representation
+//!
+//! The stock is a grid of square cells of side `res` over the XY plane. Each
+//! cell holds the material on the vertical line through its centre as one
+//! interval `[bot, top]` and, where a tilted tool has cut under material
+//! (an undercut) or a cast blank has a cavity, the gaps of air inside it.
+//! So the model is exact along Z and sampled in X and Y: a volume is the sum
+//! of the cells' material lengths times `res²`, and its error shrinks with the
+//! cell (tests measure the convergence).
+//!
+//! Tilted tools are handled by the same columns: a tilted tool's body meets a
+//! vertical line in one interval per convex part, and removing an interval
+//! that ends below a cell's top opens a gap. Tri-dexels would resolve steep
+//! walls better along X and Y; they triple the memory and the work per move,
+//! and the five-axis tests (a tilted flat end mill against its analytic swept
+//! volume) converge as the cell shrinks with z-dexels alone.
+//!
+//! # Conventions
+//!
+//! Part coordinates, mm. The tool axis points from the tip up the spindle.
+//! Heights are stored as `f32` (6·10⁻⁵ mm at 1000 mm from the origin, far
+//! below any useful cell size); sums are `f64`.
+
+pub mod engage;
+mod mesh;
+pub mod path;
+pub mod remaining;
+pub mod sim;
+pub mod spec;
+pub mod tool;
+
+pub use mesh::stock_mesh;
+
+use millplan_geom::{DVec2, DVec3, TriMesh};
+use rustc_hash::FxHashMap;
+
+/// The XY grid of a stock: cell (i, j) has its centre at
+/// (x0 + (i + ½)·res, y0 + (j + ½)·res).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grid {
+    pub x0: f64,
+    pub y0: f64,
+    pub res: f64,
+    pub nx: usize,
+    pub ny: usize,
+}
+
+impl Grid {
+    /// The grid of cell size `res` covering the rectangle `min`–`max`.
+    pub fn covering(min: DVec2, max: DVec2, res: f64) -> Grid {
+        let nx = (((max.x - min.x) / res).ceil() as usize).max(1);
+        let ny = (((max.y - min.y) / res).ceil() as usize).max(1);
+        Grid {
+            x0: min.x,
+            y0: min.y,
+            res,
+            nx,
+            ny,
+        }
+    }
+
+    pub fn cells(&self) -> usize {
+        self.nx * self.ny
+    }
+
+    #[inline]
+    pub fn cx(&self, i: usize) -> f64 {
+        self.x0 + (i as f64 + 0.5) * self.res
+    }
+
+    #[inline]
+    pub fn cy(&self, j: usize) -> f64 {
+        self.y0 + (j as f64 + 0.5) * self.res
+    }
+
+    /// The cell whose square holds (x, y).
+    pub fn cell_of(&self, x: f64, y: f64) -> Option<(usize, usize)> {
+        let i = ((x - self.x0) / self.res).floor();
+        let j = ((y - self.y0) / self.res).floor();
+        (i >= 0.0 && j >= 0.0 && (i as usize) < self.nx && (j as usize) < self.ny)
+            .then_some((i as usize, j as usize))
+    }
+
+    /// The column indices whose centres lie in [xa, xb], clamped to the grid.
+    #[inline]
+    pub fn span(&self, xa: f64, xb: f64) -> Option<(usize, usize)> {
+        let a = ((xa - self.x0) / self.res - 0.5).ceil().max(0.0);
+        let b = ((xb - self.x0) / self.res - 0.5).floor();
+        if !(b >= a) || a >= self.nx as f64 {
+            return None;
+        }
+        Some((a as usize, (b as usize).min(self.nx - 1)))
+    }
+
+    /// The row indices whose centres lie in [ya, yb], clamped to the grid.
+    #[inline]
+    pub fn rows(&self, ya: f64, yb: f64) -> Option<(usize, usize)> {
+        let a = ((ya - self.y0) / self.res - 0.5).ceil().max(0.0);
+        let b = ((yb - self.y0) / self.res - 0.5).floor();
+        if !(b >= a) || a >= self.ny as f64 {
+            return None;
+        }
+        Some((a as usize, (b as usize).min(self.ny - 1)))
+    }
+
+    pub fn min(&self) -> DVec2 {
+        DVec2::new(self.x0, self.y0)
+    }
+
+    pub fn max(&self) -> DVec2 {
+        DVec2::new(
+            self.x0 + self.nx as f64 * self.res,
+            self.y0 + self.ny as f64 * self.res,
+        )
+    }
+}
+
+/// Air inside the material interval of the cells of one row: cell index →
+/// sorted, disjoint gaps strictly inside (bot, top).
+pub type RowGaps = FxHashMap<u32, Vec<[f32; 2]>>;
+
+/// A z-dexel stock (see the module docs).
+#[derive(Clone, Debug)]
+pub struct Stock {
+    pub grid: Grid,
+    /// Top of the material per cell (row-major, `j * nx + i`); a cell with
+    /// `top <= bot` is empty.
+    pub(crate) top: Vec<f32>,
+    pub(crate) bot: Vec<f32>,
+    /// Per row.
+    pub(crate) gaps: Vec<RowGaps>,
+}
+
+/// Memory per cell of a stock without gaps, bytes.
+pub const BYTES_PER_CELL: f64 = 8.0 + std::mem::size_of::<RowGaps>() as f64 / 64.0;
+
+impl Stock {
+    /// An empty stock on `grid`.
+    pub fn empty(grid: Grid) -> Stock {
+        let n = grid.cells();
+        Stock {
+            grid,
+            top: vec![0.0; n],
+            bot: vec![0.0; n],
+            gaps: vec![RowGaps::default(); grid.ny],
+        }
+    }
+
+    /// A box from `min` to `max` (z from min.z to max.z).
+    pub fn block(min: DVec3, max: DVec3, res: f64) -> Stock {
+        let grid = Grid::covering(min.truncate(), max.truncate(), res);
+        let mut s = Stock::empty(grid);
+        let (lo, hi) = (min.z as f32, max.z as f32);
+        for j in 0..grid.ny {
+            let y = grid.cy(j);
+            if y > max.y {
+                continue;
+            }
+            for i in 0..grid.nx {
+                if grid.cx(i) <= max.x {
+                    let k = j * grid.nx + i;
+                    s.top[k] = hi;
+                    s.bot[k] = lo;
+                }
+            }
+        }
+        s
+    }
+
+    /// An upright cylinder of axis (cx, cy), radius `r`, from z0 to z1.
+    pub fn cylinder(c: DVec2, r: f64, z0: f64, z1: f64, res: f64) -> Stock {
+        let grid = Grid::covering(c - DVec2::splat(r), c + DVec2::splat(r), res);
+        let mut s = Stock::empty(grid);
+        for j in 0..grid.ny {
+            for i in 0..grid.nx {
+                if (DVec2::new(grid.cx(i), grid.cy(j)) - c).length() <= r {
+                    let k = j * grid.nx + i;
+                    s.top[k] = z1 as f32;
+                    s.bot[k] = z0 as f32;
+                }
+            }
+        }
+        s
+    }
+
+    /// Builds a stock from each cell's material intervals (sorted or not,
+    /// overlapping or not), given by `f(x, y)`.
+    pub fn from_columns(grid: Grid, f: impl Fn(f64, f64) -> Vec<[f64; 2]> + Sync) -> Stock {
+        use rayon::prelude::*;
+        let mut s = Stock::empty(grid);
+        let nx = grid.nx;
+        s.top
+            .par_chunks_mut(nx)
+            .zip(s.bot.par_chunks_mut(nx))
+            .zip(s.gaps.par_iter_mut())
+            .enumerate()
+            .for_each(|(j, ((top, bot), gaps))| {
+                let y = grid.cy(j);
+                for i in 0..nx {
+                    let mut iv = f(grid.cx(i), y);
+                    iv.retain(|[a, b]| b > a);
+                    if iv.is_empty() {
+                        continue;
+                    }
+                    iv.sort_by(|a, b| a[0].total_cmp(&b[0]));
+                    let mut merged: Vec<[f64; 2]> = Vec::with_capacity(iv.len());
+                    for [a, b] in iv {
+                        match merged.last_mut() {
+                            Some(m) if a <= m[1] => m[1] = m[1].max(b),
+                            _ => merged.push([a, b]),
+                        }
+                    }
+                    bot[i] = merged[0][0] as f32;
+                    top[i] = merged[merged.len() - 1][1] as f32;
+                    if merged.len() > 1 {
+                        let g: Vec<[f32; 2]> = merged
+                            .windows(2)
+                            .map(|w| [w[0][1] as f32, w[1][0] as f32])
+                            .collect();
+                        gaps.insert(i as u32, g);
+                    }
+                }
+            });
+        s
+    }
+
+    /// A closed mesh (a cast blank): the material of each column is where the
+    /// vertical line through the cell's centre is inside the mesh (winding
+    /// number of the crossings).
+    pub fn from_solid(mesh: &TriMesh, res: f64) -> Stock {
+        let b = mesh.bounds();
+        let grid = Grid::covering(b.min.truncate(), b.max.truncate(), res);
+        let crossings = column_crossings(mesh, &grid);
+        Stock::from_columns(grid, |x, y| {
+            let Some((i, j)) = grid.cell_of(x, y) else {
+                return Vec::new();
+            };
+            let mut c = crossings[j * grid.nx + i].clone();
+            c.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let mut out = Vec::new();
+            let mut wind = 0i32;
+            let mut start = 0.0;
+            for (z, s) in c {
+                let before = wind;
+                wind += s;
+                if before <= 0 && wind > 0 {
+                    start = z;
+                } else if before > 0 && wind <= 0 {
+                    out.push([start, z]);
+                }
+            }
+            out
+        })
+    }
+
+    /// Cells in the grid.
+    pub fn cells(&self) -> usize {
+        self.grid.cells()
+    }
+
+    /// Material volume, mm³.
+    pub fn volume(&self) -> f64 {
+        let a = self.grid.res * self.grid.res;
+        let mut v = 0.0;
+        for j in 0..self.grid.ny {
+            for i in 0..self.grid.nx {
+                v += self.length(i, j);
+            }
+        }
+        v * a
+    }
+
+    /// Material length of cell (i, j), mm.
+    pub fn length(&self, i: usize, j: usize) -> f64 {
+        let k = j * self.grid.nx + i;
+        let (t, b) = (self.top[k] as f64, self.bot[k] as f64);
+        if t <= b {
+            return 0.0;
+        }
+        let air: f64 = self.gaps[j]
+            .get(&(i as u32))
+            .map_or(0.0, |g| g.iter().map(|[a, b]| (*b - *a) as f64).sum());
+        t - b - air
+    }
+
+    /// The material intervals of cell (i, j), bottom up.
+    pub fn intervals(&self, i: usize, j: usize) -> Vec<[f64; 2]> {
+        let k = j * self.grid.nx + i;
+        let (t, b) = (self.top[k] as f64, self.bot[k] as f64);
+        if t <= b {
+            return Vec::new();
+        }
+        let mut out = Vec::new();
+        let mut lo = b;
+        if let Some(g) = self.gaps[j].get(&(i as u32)) {
+            for [a, c] in g {
+                out.push([lo, *a as f64]);
+                lo = *c as f64;
+            }
+        }
+        out.push([lo, t]);
+        out
+    }
+
+    /// Top of the material of cell (i, j); `None` when the cell is empty.
+    pub fn top(&self, i: usize, j: usize) -> Option<f64> {
+        let k = j * self.grid.nx + i;
+        (self.top[k] > self.bot[k]).then_some(self.top[k] as f64)
+    }
+
+    /// Whether `p` lies in material (the cell's column holds p.z).
+    pub fn contains(&self, p: DVec3) -> bool {
+        let Some((i, j)) = self.grid.cell_of(p.x, p.y) else {
+            return false;
+        };
+        let k = j * self.grid.nx + i;
+        let z = p.z as f32;
+        if !(z > self.bot[k] && z < self.top[k]) {
+            return false;
+        }
+        match self.gaps[j].get(&(i as u32)) {
+            Some(g) => !g.iter().any(|[a, b]| z >= *a && z <= *b),
+            None => true,
+        }
+    }
+
+    /// Highest material, mm (−∞ for an empty stock).
+    pub fn max_top(&self) -> f64 {
+        self.top
+            .iter()
+            .zip(&self.bot)
+            .filter(|(t, b)| t > b)
+            .map(|(t, _)| *t as f64)
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// Whether any cell has gaps.
+    pub fn has_gaps(&self) -> bool {
+        self.gaps.iter().any(|g| !g.is_empty())
+    }
+
+    /// A copy keeping every `step`-th cell in X and Y (for a lighter mesh).
+    pub fn coarsened(&self, step: usize) -> Stock {
+        let step = step.max(1);
+        if step == 1 {
+            return self.clone();
+        }
+        let g = self.grid;
+        let grid = Grid {
+            x0: g.x0,
+            y0: g.y0,
+            res: g.res * step as f64,
+            nx: g.nx.div_ceil(step),
+            ny: g.ny.div_ceil(step),
+        };
+        Stock::from_columns(grid, |x, y| match g.cell_of(x, y) {
+            Some((i, j)) => self.intervals(i, j),
+            None => Vec::new(),
+        })
+    }
+}
+
+/// Each cell's crossings (z, +1 entering upward through a downward-facing
+/// facet... −1 leaving) of the vertical line through its centre with `mesh`.
+/// A centre exactly on a shared edge counts once (half-open edge tests).
+fn column_crossings(mesh: &TriMesh, grid: &Grid) -> Vec<Vec<(f64, i32)>> {
+    let mut out: Vec<Vec<(f64, i32)>> = vec![Vec::new(); grid.cells()];
+    for t in 0..mesh.len() {
+        let [a, b, c] = mesh.corners(t);
+        let n = (b - a).cross(c - a);
+        if n.z == 0.0 {
+            continue;
+        }
+        // Orient the triangle counter-clockwise in XY.
+        let (a, b, c) = if n.z > 0.0 { (a, b, c) } else { (a, c, b) };
+        let sign = if n.z > 0.0 { -1 } else { 1 };
+        let lo = a.truncate().min(b.truncate()).min(c.truncate());
+        let hi = a.truncate().max(b.truncate()).max(c.truncate());
+        let (Some((j0, j1)), Some((i0, i1))) = (grid.rows(lo.y, hi.y), grid.span(lo.x, hi.x))
+        else {
+            continue;
+        };
+        let edge = |p: DVec3, q: DVec3, x: f64, y: f64| -> bool {
+            // Inside or on a top-left edge (counter-clockwise triangle).
+            let w = (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
+            if w != 0.0 {
+                return w > 0.0;
+            }
+            let (dx, dy) = (q.x - p.x, q.y - p.y);
+            (dy == 0.0 && dx < 0.0) || dy < 0.0
+        };
+        for j in j0..=j1 {
+            let y = grid.cy(j);
+            for i in i0..=i1 {
+                let x = grid.cx(i);
+                if edge(a, b, x, y) && edge(b, c, x, y) && edge(c, a, x, y) {
+                    // Height of the plane at (x, y).
+                    let z = a.z - (n.x * (x - a.x) + n.y * (y - a.y)) / n.z;
+                    out[j * grid.nx + i].push((z, sign));
+                }
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,777 @@
+//! Material removal: each stroke's swept tool body taken out of the stock, in
+//! program order, with what it removed and what its non-cutting parts met.
+//!
+//! A vertical tool sweeps exactly: over each cell, the lowest point of the
+//! body moved along the stroke (a capsule for the ball, closed forms for the
+//! flat end and the non-cutting cylinders, a convex one-dimensional search for
+//! bull and cone), and everything above it goes. A ball-end stroke no longer
+//! than a cell is taken as the tool at its end (the material the two
+//! positions miss between them is at most s²/8R high, 0.06 µm for s = 0.05 mm
+//! and R = 5 mm). A stroke that does not descend cannot lower a cell behind
+//! its start below what the previous stroke's end left, so those cells are not
+//! visited. A tilted tool is placed at steps along the stroke (position and
+//! axis interpolated as the IR defines) at which no point of the cutting part
+//! moves more than half a cell.
+//!
+//! [`simulate`] runs every stroke over bands of rows in parallel: each band
+//! sees the strokes in program order, so the result does not depend on the
+//! number of threads (the per-stroke sums are added band group by band group
+//! in a fixed order).
+
+use super::path::{Stroke, Strokes};
+use super::tool::{Pose, ToolBody, VerticalSweep};
+use super::{Grid, RowGaps, Stock};
+use millplan_geom::{DVec2, DVec3};
+use millplan_models::cutter::Shape;
+use rayon::prelude::*;
+
+/// Removed material thinner than this (mm) does not count as cutting (float
+/// noise of a tool passing exactly where it already cut).
+pub const CUT_EPS: f64 = 1e-4;
+
+/// What one stroke did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StrokeCut {
+    /// Removed volume, mm³.
+    pub removed: f64,
+    /// Deepest material met by the shank or holder, mm (0: none).
+    pub noncut: f64,
+    /// Deepest material met by the cutter, measured down from the material's
+    /// top (mm; 0: none).
+    pub depth: f64,
+    /// Highest removed material, mm (−∞: none).
+    pub top: f64,
+    /// Lateral extent of the cells the stroke cut into, mm, across the feed.
+    pub side: [f64; 2],
+}
+
+impl Default for StrokeCut {
+    fn default() -> Self {
+        StrokeCut {
+            removed: 0.0,
+            noncut: 0.0,
+            depth: 0.0,
+            top: f64::NEG_INFINITY,
+            side: [f64::INFINITY, f64::NEG_INFINITY],
+        }
+    }
+}
+
+impl StrokeCut {
+    fn merge(&mut self, o: &StrokeCut) {
+        self.removed += o.removed;
+        self.noncut = self.noncut.max(o.noncut);
+        self.depth = self.depth.max(o.depth);
+        self.top = self.top.max(o.top);
+        self.side = [self.side[0].min(o.side[0]), self.side[1].max(o.side[1])];
+    }
+
+    fn touched(&self) -> bool {
+        self.removed > 0.0 || self.noncut > 0.0
+    }
+}
+
+/// Rows `j0..j0 + rows` of a stock, mutable.
+pub struct Band<'a> {
+    pub j0: usize,
+    pub rows: usize,
+    top: &'a mut [f32],
+    bot: &'a mut [f32],
+    gaps: &'a mut [RowGaps],
+}
+
+/// How a stroke is applied.
+#[derive(Clone, Copy, Debug)]
+pub struct Apply<'a> {
+    pub grid: Grid,
+    pub tool: &'a ToolBody,
+    /// The previous stroke ended where this one starts, with the same tool,
+    /// and was applied.
+    pub continues: bool,
+    /// Highest material anywhere when the run began: the shank and holder are
+    /// tested only where they can reach below it.
+    pub max_top: f64,
+}
+
+/// Applies one stroke to a band of rows.
+pub fn apply(band: &mut Band, s: &Stroke, a: &Apply, out: &mut StrokeCut) {
+    if s.vertical() {
+        apply_vertical(band, s, a, out);
+    } else {
+        apply_tilted(band, s, a, out);
+    }
+}
+
+fn apply_vertical(band: &mut Band, s: &Stroke, a: &Apply, out: &mut StrokeCut) {
+    let tool = a.tool;
+    let sw = VerticalSweep::new(*tool, s.p0, s.p1);
+    let g = &a.grid;
+    let reach_noncut = s.p0.z.min(s.p1.z) + tool.flute < a.max_top;
+    let rad = if reach_noncut {
+        tool.reach()
+    } else {
+        tool.radius()
+    };
+    let descending = s.p1.z < s.p0.z - 1e-12;
+    // Cells behind the start cannot go lower than the previous stroke's end
+    // left them unless the stroke descends.
+    let front_only = a.continues && !descending && sw.len > 1e-12;
+    let p0 = s.p0.truncate();
+    let p1 = s.p1.truncate();
+    let lo = p0.min(p1) - DVec2::splat(rad);
+    let hi = p0.max(p1) + DVec2::splat(rad);
+    let Some((ja, jb)) = g.rows(lo.y, hi.y) else {
+        return;
+    };
+    let ja = ja.max(band.j0);
+    let jb = jb.min(band.j0 + band.rows - 1);
+    if ja > jb {
+        return;
+    }
+    let n = DVec2::new(-sw.u.y, sw.u.x);
+    let fast = matches!(tool.shape, Shape::Ball { .. }) && sw.len <= g.res && !reach_noncut;
+    for j in ja..=jb {
+        let y = g.cy(j);
+        let Some((xa, xb)) = stadium_row(p0, p1, sw.u, sw.len, rad, y) else {
+            continue;
+        };
+        let (xa, xb) = if front_only {
+            match half_plane_row(if fast { (p0 + p1) * 0.5 } else { p0 }, sw.u, y, xa, xb) {
+                Some(r) => r,
+                None => continue,
+            }
+        } else {
+            (xa, xb)
+        };
+        let Some((i0, i1)) = g.span(xa, xb) else {
+            continue;
+        };
+        let r = j - band.j0;
+        let nx = g.nx;
+        let row_top = &mut band.top[r * nx..(r + 1) * nx];
+        let row_bot = &band.bot[r * nx..(r + 1) * nx];
+        let gaps = &mut band.gaps[r];
+        let mut acc = StrokeCut::default();
+        if fast && gaps.is_empty() {
+            ball_row(
+                &mut row_top[i0..=i1],
+                &row_bot[i0..=i1],
+                (g.cx(i0) - s.p1.x) as f32,
+                g.res as f32,
+                (y - s.p1.y) as f32,
+                (s.p1.z + tool.radius()) as f32,
+                tool.radius() as f32,
+                n,
+                &mut acc,
+            );
+        } else {
+            for i in i0..=i1 {
+                let c = DVec2::new(g.cx(i), y);
+                let cc = sw.column(c);
+                if cc.cut == f64::INFINITY {
+                    continue;
+                }
+                let lat = (c - p1).dot(n);
+                cut_above(
+                    &mut row_top[i],
+                    row_bot[i],
+                    gaps,
+                    i as u32,
+                    cc.cut,
+                    cc.noncut,
+                    lat,
+                    &mut acc,
+                );
+            }
+        }
+        acc.removed *= g.res * g.res;
+        out.merge(&acc);
+    }
+}
+
+/// The span [xa, xb] of row y within `rad` of the segment p0–p1.
+fn stadium_row(p0: DVec2, p1: DVec2, u: DVec2, len: f64, rad: f64, y: f64) -> Option<(f64, f64)> {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for p in [p0, p1] {
+        let dy = y - p.y;
+        let h2 = rad * rad - dy * dy;
+        if h2 >= 0.0 {
+            let h = h2.sqrt();
+            lo = lo.min(p.x - h);
+            hi = hi.max(p.x + h);
+        }
+    }
+    if len > 1e-12 && u.y.abs() > 1e-12 {
+        // The band |(q − p0)·n| ≤ rad, 0 ≤ (q − p0)·u ≤ len on the line y.
+        let n = DVec2::new(-u.y, u.x);
+        let mut a = f64::NEG_INFINITY;
+        let mut b = f64::INFINITY;
+        // Constraint: lo_c ≤ (x − p0.x)·k.x + (y − p0.y)·k.y ≤ hi_c.
+        for (k, lo_c, hi_c) in [(n, -rad, rad), (u, 0.0, len)] {
+            let base = (y - p0.y) * k.y;
+            if k.x.abs() < 1e-15 {
+                if base < lo_c || base > hi_c {
+                    a = f64::INFINITY;
+                }
+                continue;
+            }
+            let t1 = p0.x + (lo_c - base) / k.x;
+            let t2 = p0.x + (hi_c - base) / k.x;
+            a = a.max(t1.min(t2));
+            b = b.min(t1.max(t2));
+        }
+        if a <= b {
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+    } else if len > 1e-12 {
+        // Along X: the band is the rectangle between the two discs.
+        if (y - p0.y).abs() <= rad {
+            lo = lo.min(p0.x.min(p1.x));
+            hi = hi.max(p0.x.max(p1.x));
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
+}
+
+/// The part of [xa, xb] on row y with (q − m)·u ≥ 0.
+fn half_plane_row(m: DVec2, u: DVec2, y: f64, xa: f64, xb: f64) -> Option<(f64, f64)> {
+    let base = (y - m.y) * u.y;
+    if u.x.abs() < 1e-15 {
+        return (base >= 0.0).then_some((xa, xb));
+    }
+    let x = m.x - base / u.x;
+    let (a, b) = if u.x > 0.0 {
+        (xa.max(x), xb)
+    } else {
+        (xa, xb.min(x))
+    };
+    (a <= b).then_some((a, b))
+}
+
+/// A ball standing at one place over a row of cells without gaps: the tight
+/// loop of finishing paths. `dx0`: x of the first cell's centre from the ball's
+/// axis; `dy`: the row's offset; `zc`: the ball centre's height.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn ball_row(
+    top: &mut [f32],
+    bot: &[f32],
+    dx0: f32,
+    res: f32,
+    dy: f32,
+    zc: f32,
+    r: f32,
+    n: DVec2,
+    out: &mut StrokeCut,
+) {
+    let dy2 = dy * dy;
+    let r2 = r * r;
+    let eps = CUT_EPS as f32;
+    let mut removed = 0.0f64;
+    let mut depth = 0.0f32;
+    let mut hi = f32::NEG_INFINITY;
+    let (mut imin, mut imax) = (usize::MAX, 0usize);
+    const L: usize = 8;
+    let n_full = top.len() / L * L;
+    let mut k0 = 0;
+    while k0 < n_full {
+        // Can any of these eight cells change? Without the square root:
+        // the ball's underside zc − √(r² − d²) is below `old` iff
+        // zc − old < 0 or (zc − old)² < r² − d².
+        let mut any = false;
+        for l in 0..L {
+            let dx = dx0 + (k0 + l) as f32 * res;
+            let under = r2 - (dx * dx + dy2);
+            let old = top[k0 + l];
+            let gap = zc - old;
+            let live = under >= 0.0 && old > bot[k0 + l] && (gap < 0.0 || gap * gap < under);
+            any |= live;
+        }
+        if any {
+            for l in 0..L {
+                let k = k0 + l;
+                let dx = dx0 + k as f32 * res;
+                let under = r2 - (dx * dx + dy2);
+                if under < 0.0 {
+                    continue;
+                }
+                let cut = zc - under.sqrt();
+                let old = top[k];
+                let new = if cut < old { cut } else { old };
+                let new = if new > bot[k] { new } else { bot[k] };
+                let d = old - new;
+                if d > 0.0 {
+                    removed += d as f64;
+                    top[k] = new;
+                    if d > eps {
+                        depth = depth.max(d);
+                        hi = hi.max(old);
+                        imin = imin.min(k);
+                        imax = imax.max(k);
+                    }
+                }
+            }
+        }
+        k0 += L;
+    }
+    for k in n_full..top.len() {
+        let dx = dx0 + k as f32 * res;
+        let under = r2 - (dx * dx + dy2);
+        if under < 0.0 {
+            continue;
+        }
+        let cut = zc - under.sqrt();
+        let old = top[k];
+        let new = old.min(cut).max(bot[k]);
+        let d = old - new;
+        if d > 0.0 {
+            removed += d as f64;
+            top[k] = new;
+            if d > eps {
+                depth = depth.max(d);
+                hi = hi.max(old);
+                imin = imin.min(k);
+                imax = imax.max(k);
+            }
+        }
+    }
+    out.removed += removed;
+    if imin <= imax {
+        out.depth = out.depth.max(depth as f64);
+        out.top = out.top.max(hi as f64);
+        for k in [imin, imax] {
+            let lat = (dx0 + k as f32 * res) as f64 * n.x + dy as f64 * n.y;
+            out.side = [out.side[0].min(lat), out.side[1].max(lat)];
+        }
+    }
+}
+
+/// Removes everything above `cut` from one cell; material above `noncut`
+/// was met by the shank or holder. `lat`: the cell's offset across the feed.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn cut_above(
+    top: &mut f32,
+    bot: f32,
+    gaps: &mut RowGaps,
+    i: u32,
+    cut: f64,
+    noncut: f64,
+    lat: f64,
+    out: &mut StrokeCut,
+) {
+    let old = *top as f64;
+    let b = bot as f64;
+    if old <= b || cut >= old {
+        return;
+    }
+    if noncut < old {
+        out.noncut = out.noncut.max(old - noncut.max(b));
+    }
+    let new = cut.max(b);
+    let mut removed = old - new;
+    let mut new_top = new as f32;
+    if let Some(g) = gaps.get_mut(&i) {
+        // Air between the new top and the old one was not material.
+        let mut keep = Vec::with_capacity(g.len());
+        for &[ga, gb] in g.iter() {
+            let (ga64, gb64) = (ga as f64, gb as f64);
+            if ga64 >= new {
+                removed -= gb64 - ga64;
+            } else if gb64 > new {
+                removed -= gb64 - new;
+                new_top = ga;
+            } else {
+                keep.push([ga, gb]);
+            }
+        }
+        if keep.is_empty() {
+            gaps.remove(&i);
+        } else {
+            *g = keep;
+        }
+    }
+    *top = new_top;
+    if removed > 0.0 {
+        out.removed += removed;
+        if removed > CUT_EPS {
+            out.depth = out.depth.max(old - new);
+            out.top = out.top.max(old);
+            out.side = [out.side[0].min(lat), out.side[1].max(lat)];
+        }
+    }
+}
+
+/// Removes [lo, hi] from one cell (a tilted tool's part); returns the material
+/// removed, mm.
+fn cut_interval(top: &mut f32, bot: &mut f32, gaps: &mut RowGaps, i: u32, lo: f64, hi: f64) -> f64 {
+    let (t, b) = (*top as f64, *bot as f64);
+    if t <= b || hi <= b || lo >= t {
+        return 0.0;
+    }
+    // Material intervals, then subtract.
+    let mut iv: Vec<[f64; 2]> = Vec::with_capacity(2);
+    let mut start = b;
+    if let Some(g) = gaps.get(&i) {
+        for [ga, gb] in g {
+            iv.push([start, *ga as f64]);
+            start = *gb as f64;
+        }
+    }
+    iv.push([start, t]);
+    let mut removed = 0.0;
+    let mut out: Vec<[f64; 2]> = Vec::with_capacity(iv.len() + 1);
+    for [a, c] in iv {
+        let (x, y) = (a.max(lo), c.min(hi));
+        if x < y {
+            removed += y - x;
+            if a < x {
+                out.push([a, x]);
+            }
+            if y < c {
+                out.push([y, c]);
+            }
+        } else {
+            out.push([a, c]);
+        }
+    }
+    out.retain(|[a, c]| c > a);
+    if out.is_empty() {
+        *top = *bot;
+        gaps.remove(&i);
+        return removed;
+    }
+    *bot = out[0][0] as f32;
+    *top = out[out.len() - 1][1] as f32;
+    if out.len() > 1 {
+        gaps.insert(
+            i,
+            out.windows(2)
+                .map(|w| [w[0][1] as f32, w[1][0] as f32])
+                .collect(),
+        );
+    } else {
+        gaps.remove(&i);
+    }
+    removed
+}
+
+fn apply_tilted(band: &mut Band, s: &Stroke, a: &Apply, out: &mut StrokeCut) {
+    let tool = a.tool;
+    let g = &a.grid;
+    let turn = s.a0.dot(s.a1).clamp(-1.0, 1.0).acos();
+    let travel = (s.p1 - s.p0).length() + turn * tool.flute;
+    let n = ((travel / (0.5 * g.res)).ceil() as usize).clamp(1, 1_000_000);
+    let first = if a.continues { 1 } else { 0 };
+    let feed = (s.p1 - s.p0).truncate();
+    let nrm = DVec2::new(-feed.y, feed.x).normalize_or_zero();
+    for k in first..=n {
+        let t = k as f64 / n as f64;
+        let pose = Pose {
+            tool: *tool,
+            tip: s.p0.lerp(s.p1, t),
+            axis: s.axis_at(t),
+        };
+        apply_pose(band, &pose, g, a.max_top, nrm, out);
+    }
+}
+
+/// One placement of a (possibly tilted) tool.
+fn apply_pose(
+    band: &mut Band,
+    pose: &Pose,
+    g: &Grid,
+    max_top: f64,
+    nrm: DVec2,
+    out: &mut StrokeCut,
+) {
+    let tool = &pose.tool;
+    // Only as high up the axis as any point of the body can still be below
+    // the highest material.
+    let side = tool.reach() * (1.0 - pose.axis.z * pose.axis.z).max(0.0).sqrt();
+    let height = ((max_top - pose.tip.z + side) / pose.axis.z.max(1e-3)).clamp(0.0, 1e4);
+    let height = if pose.tip.z + tool.flute * pose.axis.z.min(1.0) < max_top {
+        height.max(tool.flute)
+    } else {
+        height.min(tool.flute)
+    };
+    let (lo, hi) = pose.xy_box(height);
+    let Some((ja, jb)) = g.rows(lo.y, hi.y) else {
+        return;
+    };
+    let ja = ja.max(band.j0);
+    let jb = jb.min(band.j0 + band.rows - 1);
+    let Some((i0, i1)) = g.span(lo.x, hi.x) else {
+        return;
+    };
+    let nx = g.nx;
+    let mut acc = StrokeCut::default();
+    for j in ja..=jb {
+        let y = g.cy(j);
+        let r = j - band.j0;
+        for i in i0..=i1 {
+            let k = r * nx + i;
+            let (t, b) = (band.top[k] as f64, band.bot[k] as f64);
+            if t <= b {
+                continue;
+            }
+            let c = DVec2::new(g.cx(i), y);
+            let (cut, noncut) = pose.column(c);
+            if let Some([l, h]) = noncut {
+                if h > b && l < t {
+                    acc.noncut = acc.noncut.max(t.min(h) - l.max(b));
+                }
+            }
+            for (iv, cutting) in [(cut, true), (noncut, false)] {
+                let Some([l, h]) = iv else { continue };
+                let (mut tt, mut bb) = (band.top[k], band.bot[k]);
+                let old_top = tt as f64;
+                let rem = cut_interval(&mut tt, &mut bb, &mut band.gaps[r], i as u32, l, h);
+                band.top[k] = tt;
+                band.bot[k] = bb;
+                if rem > 0.0 {
+                    acc.removed += rem;
+                    if cutting && rem > CUT_EPS {
+                        acc.depth = acc.depth.max(rem);
+                        acc.top = acc.top.max(old_top.min(h));
+                        let lat = (c - pose.tip.truncate()).dot(nrm);
+                        acc.side = [acc.side[0].min(lat), acc.side[1].max(lat)];
+                    }
+                }
+            }
+        }
+    }
+    acc.removed *= g.res * g.res;
+    out.merge(&acc);
+}
+
+/// Whether stroke `k` continues stroke `k − 1` (same tool, starts where it
+/// ended, same axis).
+pub fn continues(strokes: &[Stroke], k: usize) -> bool {
+    k > 0 && {
+        let (p, s) = (&strokes[k - 1], &strokes[k]);
+        p.tool == s.tool && p.p1 == s.p0 && (p.a1 - s.a0).length_squared() < 1e-18
+    }
+}
+
+/// A stock run stroke by stroke, in order: the library entry point for
+/// process models that need the stock as it is before each stroke (engagement
+/// and forces), then remove it.
+pub struct Simulator {
+    pub stock: Stock,
+    max_top: f64,
+    last: Option<(u16, DVec3, DVec3)>,
+}
+
+impl Simulator {
+    pub fn new(stock: Stock) -> Simulator {
+        let max_top = stock.max_top();
+        Simulator {
+            stock,
+            max_top,
+            last: None,
+        }
+    }
+
+    /// Removes one stroke of `tool` and says what it did.
+    pub fn step(&mut self, s: &Stroke, tool: &ToolBody) -> StrokeCut {
+        let continues = self.last.is_some_and(|(t, p, a)| {
+            t == s.tool && p == s.p0 && (a - s.a0).length_squared() < 1e-18
+        });
+        self.last = Some((s.tool, s.p1, s.a1));
+        let grid = self.stock.grid;
+        let st = &mut self.stock;
+        let mut band = Band {
+            j0: 0,
+            rows: grid.ny,
+            top: &mut st.top,
+            bot: &mut st.bot,
+            gaps: &mut st.gaps,
+        };
+        let mut out = StrokeCut::default();
+        apply(
+            &mut band,
+            s,
+            &Apply {
+                grid,
+                tool,
+                continues,
+                max_top: self.max_top,
+            },
+            &mut out,
+        );
+        out
+    }
+}
+
+/// Rows per band of the parallel run: a band is a unit of work, so a stroke
+/// touches a few of them and each band group sees most strokes.
+const BAND_ROWS: usize = 16;
+/// Band groups: fixed, so that sums do not depend on the thread count.
+const GROUPS: usize = 16;
+
+/// Runs every stroke over the stock. `progress(done)` is called now and then
+/// with the number of strokes done by the slowest band group.
+pub fn simulate(
+    stock: &mut Stock,
+    strokes: &Strokes,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Vec<StrokeCut> {
+    let grid = stock.grid;
+    let max_top = stock.max_top();
+    let nx = grid.nx;
+    let list = &strokes.strokes;
+    let cont: Vec<bool> = (0..list.len()).map(|k| continues(list, k)).collect();
+    // Bands, dealt to the groups in turn.
+    let mut groups: Vec<Vec<Band>> = (0..GROUPS).map(|_| Vec::new()).collect();
+    for (b, ((top, bot), gaps)) in stock
+        .top
+        .chunks_mut(BAND_ROWS * nx)
+        .zip(stock.bot.chunks_mut(BAND_ROWS * nx))
+        .zip(stock.gaps.chunks_mut(BAND_ROWS))
+        .enumerate()
+    {
+        groups[b % GROUPS].push(Band {
+            j0: b * BAND_ROWS,
+            rows: gaps.len(),
+            top,
+            bot,
+            gaps,
+        });
+    }
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let results: Vec<Vec<(u32, StrokeCut)>> = groups
+        .par_iter_mut()
+        .map(|bands| {
+            let mut touched = Vec::new();
+            if bands.is_empty() {
+                return touched;
+            }
+            for (k, s) in list.iter().enumerate() {
+                let tool = &strokes.tools[s.tool as usize];
+                let a = Apply {
+                    grid,
+                    tool,
+                    continues: cont[k],
+                    max_top,
+                };
+                let mut acc = StrokeCut::default();
+                let rad = tool.reach()
+                    + if s.vertical() {
+                        0.0
+                    } else {
+                        tool.flute + 1e3_f64.min((max_top - s.p0.z.min(s.p1.z)).max(0.0))
+                    };
+                let ylo = s.p0.y.min(s.p1.y) - rad;
+                let yhi = s.p0.y.max(s.p1.y) + rad;
+                for band in bands.iter_mut() {
+                    let (y0, y1) = (
+                        grid.cy(band.j0) - grid.res,
+                        grid.cy(band.j0 + band.rows - 1) + grid.res,
+                    );
+                    if y1 < ylo || y0 > yhi {
+                        continue;
+                    }
+                    apply(band, s, &a, &mut acc);
+                }
+                if acc.touched() {
+                    touched.push((k as u32, acc));
+                }
+                if k % 65_536 == 0 {
+                    let d = done.fetch_add(65_536 / GROUPS, std::sync::atomic::Ordering::Relaxed);
+                    progress(d.min(list.len()));
+                }
+            }
+            touched
+        })
+        .collect();
+    let mut out = vec![StrokeCut::default(); list.len()];
+    for group in &results {
+        for (k, c) in group {
+            out[*k as usize].merge(c);
+        }
+    }
+    out
+}
+
+/// What each IR move did, from its strokes.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct MoveCut {
+    /// Index of the move over the whole program.
+    pub index: u32,
+    pub line: u32,
+    pub rapid: bool,
+    /// Removed volume, mm³.
+    pub removed_mm3: f64,
+    /// Material removal rate, mm³/min (0 for a move of no duration).
+    pub mrr: f64,
+    /// Axial depth: the highest removed material above the lowest tool tip
+    /// of the move, mm.
+    pub ap: f64,
+    /// Radial engagement: the width, across the feed, of the cells the move
+    /// cut into, mm.
+    pub ae: f64,
+    /// A cutting move that removed nothing.
+    pub air: bool,
+    /// Deepest material met by the shank or holder, mm.
+    pub holder_depth: f64,
+    /// Deepest material met by the cutter, mm.
+    pub depth: f64,
+    pub minutes: f64,
+}
+
+/// Sums the strokes of each IR move (moves with no stroke are left out).
+pub fn per_move(strokes: &Strokes, cuts: &[StrokeCut]) -> Vec<MoveCut> {
+    let mut out: Vec<MoveCut> = Vec::new();
+    let mut low = f64::INFINITY;
+    let mut acc = StrokeCut::default();
+    let flush = |out: &mut Vec<MoveCut>, acc: &StrokeCut, low: f64| {
+        if let Some(m) = out.last_mut() {
+            m.removed_mm3 = acc.removed;
+            m.mrr = if m.minutes > 0.0 {
+                acc.removed / m.minutes
+            } else {
+                0.0
+            };
+            m.ap = if acc.top > low { acc.top - low } else { 0.0 };
+            m.ae = if acc.side[1] >= acc.side[0] {
+                acc.side[1] - acc.side[0]
+            } else {
+                0.0
+            };
+            m.air = !m.rapid && acc.removed <= CUT_EPS * 1e-2;
+            m.holder_depth = acc.noncut;
+            m.depth = acc.depth;
+        }
+    };
+    for (s, c) in strokes.strokes.iter().zip(cuts) {
+        if out.last().is_none_or(|m| m.index != s.mv) {
+            flush(&mut out, &acc, low);
+            acc = StrokeCut::default();
+            low = f64::INFINITY;
+            out.push(MoveCut {
+                index: s.mv,
+                line: s.line,
+                rapid: s.rapid,
+                removed_mm3: 0.0,
+                mrr: 0.0,
+                ap: 0.0,
+                ae: 0.0,
+                air: false,
+                holder_depth: 0.0,
+                depth: 0.0,
+                minutes: 0.0,
+            });
+        }
+        let m = out.last_mut().expect("pushed above");
+        m.minutes += s.minutes;
+        // A cycle's feed strokes make the move a cutting one.
+        m.rapid &= s.rapid;
+        low = low.min(s.p0.z.min(s.p1.z));
+        acc.merge(c);
+    }
+    flush(&mut out, &acc, low);
+    out
+}
