@@ -4,6 +4,7 @@
 pub mod html;
 pub mod reorder;
 pub mod setup;
+pub mod sim;
 pub mod svg;
 pub mod sweep;
 pub mod table;

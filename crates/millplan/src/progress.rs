@@ -30,3 +30,19 @@ pub fn spinner(what: &str, show: bool) -> ProgressBar {
     bar.enable_steady_tick(std::time::Duration::from_millis(120));
     bar
 }
+
+/// A bar over a count of items (strokes, points), with the rate and the time
+/// left; hidden when `show` is false or the work is small.
+pub fn count(total: u64, what: &str, show: bool) -> ProgressBar {
+    if !show || total < 10_000 {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(total);
+    if let Ok(style) =
+        ProgressStyle::with_template("{msg} [{bar:30}] {human_pos}/{human_len} {per_sec} {eta}")
+    {
+        bar.set_style(style);
+    }
+    bar.set_message(what.to_string());
+    bar
+}

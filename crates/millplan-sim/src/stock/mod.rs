@@ -28,6 +28,7 @@ pub mod engage;
 mod mesh;
 pub mod path;
 pub mod remaining;
+pub mod run;
 pub mod sim;
 pub mod spec;
 pub mod tool;
@@ -363,8 +364,8 @@ impl Stock {
     }
 }
 
-/// Each cell's crossings (z, +1 entering upward through a downward-facing
-/// facet... −1 leaving) of the vertical line through its centre with `mesh`.
+/// Each cell's crossings of the vertical line through its centre with `mesh`:
+/// (z, +1) entering the solid going up (a facet facing down), (z, −1) leaving.
 /// A centre exactly on a shared edge counts once (half-open edge tests).
 fn column_crossings(mesh: &TriMesh, grid: &Grid) -> Vec<Vec<(f64, i32)>> {
     let mut out: Vec<Vec<(f64, i32)>> = vec![Vec::new(); grid.cells()];

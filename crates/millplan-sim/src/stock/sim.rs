@@ -107,6 +107,25 @@ fn apply_vertical(band: &mut Band, s: &Stroke, a: &Apply, out: &mut StrokeCut) {
     let sw = VerticalSweep::new(*tool, s.p0, s.p1);
     let g = &a.grid;
     let reach_noncut = s.p0.z.min(s.p1.z) + tool.flute < a.max_top;
+    let n = DVec2::new(-sw.u.y, sw.u.x);
+    // A ball on a stroke of up to 40 cells: the ball placed at steps along
+    // it (cheaper than the exact capsule over so short a stroke).
+    if matches!(tool.shape, Shape::Ball { .. }) && !reach_noncut && sw.len <= 40.0 * g.res {
+        // Balls placed δ apart miss at most δ²/8R between them: δ = √(0.08·R·res)
+        // keeps that to a hundredth of a cell (and δ is never below a cell).
+        let step = g.res.max((0.08 * tool.radius() * g.res).sqrt());
+        let k = ((sw.len / step).ceil() as usize).max(1);
+        for m in 1..=k {
+            let q0 = s.p0.lerp(s.p1, (m - 1) as f64 / k as f64);
+            let q1 = if m == k {
+                s.p1
+            } else {
+                s.p0.lerp(s.p1, m as f64 / k as f64)
+            };
+            ball_pose(band, q0, q1, m > 1 || a.continues, tool.radius(), g, n, out);
+        }
+        return;
+    }
     let rad = if reach_noncut {
         tool.reach()
     } else {
@@ -118,25 +137,16 @@ fn apply_vertical(band: &mut Band, s: &Stroke, a: &Apply, out: &mut StrokeCut) {
     let front_only = a.continues && !descending && sw.len > 1e-12;
     let p0 = s.p0.truncate();
     let p1 = s.p1.truncate();
-    let lo = p0.min(p1) - DVec2::splat(rad);
-    let hi = p0.max(p1) + DVec2::splat(rad);
-    let Some((ja, jb)) = g.rows(lo.y, hi.y) else {
+    let Some((ja, jb)) = band_rows(band, g, p0.y.min(p1.y) - rad, p0.y.max(p1.y) + rad) else {
         return;
     };
-    let ja = ja.max(band.j0);
-    let jb = jb.min(band.j0 + band.rows - 1);
-    if ja > jb {
-        return;
-    }
-    let n = DVec2::new(-sw.u.y, sw.u.x);
-    let fast = matches!(tool.shape, Shape::Ball { .. }) && sw.len <= g.res && !reach_noncut;
     for j in ja..=jb {
         let y = g.cy(j);
         let Some((xa, xb)) = stadium_row(p0, p1, sw.u, sw.len, rad, y) else {
             continue;
         };
         let (xa, xb) = if front_only {
-            match half_plane_row(if fast { (p0 + p1) * 0.5 } else { p0 }, sw.u, y, xa, xb) {
+            match half_plane_row(p0, sw.u, y, xa, xb) {
                 Some(r) => r,
                 None => continue,
             }
@@ -152,41 +162,112 @@ fn apply_vertical(band: &mut Band, s: &Stroke, a: &Apply, out: &mut StrokeCut) {
         let row_bot = &band.bot[r * nx..(r + 1) * nx];
         let gaps = &mut band.gaps[r];
         let mut acc = StrokeCut::default();
-        if fast && gaps.is_empty() {
+        for i in i0..=i1 {
+            let c = DVec2::new(g.cx(i), y);
+            let cc = sw.column(c);
+            if cc.cut == f64::INFINITY {
+                continue;
+            }
+            let lat = (c - p1).dot(n);
+            cut_above(
+                &mut row_top[i],
+                row_bot[i],
+                gaps,
+                i as u32,
+                cc.cut,
+                cc.noncut,
+                lat,
+                &mut acc,
+            );
+        }
+        acc.removed *= g.res * g.res;
+        out.merge(&acc);
+    }
+}
+
+/// The band's rows whose centres lie in [ya, yb].
+fn band_rows(band: &Band, g: &Grid, ya: f64, yb: f64) -> Option<(usize, usize)> {
+    let (ja, jb) = g.rows(ya, yb)?;
+    let ja = ja.max(band.j0);
+    let jb = jb.min(band.j0 + band.rows - 1);
+    (ja <= jb).then_some((ja, jb))
+}
+
+/// A ball of radius `r` placed with its tip at `q1`, coming from `q0`: when
+/// `cont` (the ball at q0 was applied) and it does not descend, only the
+/// cells ahead of the bisector of q0–q1 can change.
+#[allow(clippy::too_many_arguments)]
+fn ball_pose(band: &mut Band, q0: DVec3, q1: DVec3, cont: bool, r: f64, g: &Grid, n: DVec2, out: &mut StrokeCut) {
+    let d = (q1 - q0).truncate();
+    let front_only = cont && q1.z >= q0.z - 1e-12 && d.length_squared() > 1e-24;
+    let u = d.normalize_or_zero();
+    let mid = (q0.truncate() + q1.truncate()) * 0.5;
+    let c = q1.truncate();
+    let Some((ja, jb)) = band_rows(band, g, c.y - r, c.y + r) else {
+        return;
+    };
+    let zc = q1.z + r;
+    let nx = g.nx;
+    let mut acc = StrokeCut::default();
+    for j in ja..=jb {
+        let y = g.cy(j);
+        let dy = y - c.y;
+        let h2 = r * r - dy * dy;
+        if h2 < 0.0 {
+            continue;
+        }
+        let h = h2.sqrt();
+        let (xa, xb) = (c.x - h, c.x + h);
+        let (xa, xb) = if front_only {
+            match half_plane_row(mid, u, y, xa, xb) {
+                Some(v) => v,
+                None => continue,
+            }
+        } else {
+            (xa, xb)
+        };
+        let Some((i0, i1)) = g.span(xa, xb) else {
+            continue;
+        };
+        let row = j - band.j0;
+        let row_top = &mut band.top[row * nx..(row + 1) * nx];
+        let row_bot = &band.bot[row * nx..(row + 1) * nx];
+        let gaps = &mut band.gaps[row];
+        if gaps.is_empty() {
             ball_row(
                 &mut row_top[i0..=i1],
                 &row_bot[i0..=i1],
-                (g.cx(i0) - s.p1.x) as f32,
+                (g.cx(i0) - c.x) as f32,
                 g.res as f32,
-                (y - s.p1.y) as f32,
-                (s.p1.z + tool.radius()) as f32,
-                tool.radius() as f32,
+                dy as f32,
+                zc as f32,
+                r as f32,
                 n,
                 &mut acc,
             );
         } else {
             for i in i0..=i1 {
-                let c = DVec2::new(g.cx(i), y);
-                let cc = sw.column(c);
-                if cc.cut == f64::INFINITY {
+                let p = DVec2::new(g.cx(i), y);
+                let under = r * r - (p - c).length_squared();
+                if under < 0.0 {
                     continue;
                 }
-                let lat = (c - p1).dot(n);
+                let lat = (p - c).dot(n);
                 cut_above(
                     &mut row_top[i],
                     row_bot[i],
                     gaps,
                     i as u32,
-                    cc.cut,
-                    cc.noncut,
+                    zc - under.sqrt(),
+                    f64::INFINITY,
                     lat,
                     &mut acc,
                 );
             }
         }
-        acc.removed *= g.res * g.res;
-        out.merge(&acc);
     }
+    acc.removed *= g.res * g.res;
+    out.merge(&acc);
 }
 
 /// The span [xa, xb] of row y within `rad` of the segment p0–p1.
@@ -250,9 +331,22 @@ fn half_plane_row(m: DVec2, u: DVec2, y: f64, xa: f64, xb: f64) -> Option<(f64, 
     (a <= b).then_some((a, b))
 }
 
+const L: usize = 8;
+
+/// Per-lane sums of [`ball_row`].
+struct Lanes {
+    removed: [f32; L],
+    depth: [f32; L],
+    hi: [f32; L],
+    kmin: [f32; L],
+    kmax: [f32; L],
+}
+
 /// A ball standing at one place over a row of cells without gaps: the tight
 /// loop of finishing paths. `dx0`: x of the first cell's centre from the ball's
-/// axis; `dy`: the row's offset; `zc`: the ball centre's height.
+/// axis; `dy`: the row's offset; `zc`: the ball centre's height. Cells go in
+/// groups of eight, each loop without branches so that it vectorises; a group
+/// the ball cannot lower (tested without the square root) is left alone.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn ball_row(
@@ -266,85 +360,92 @@ fn ball_row(
     n: DVec2,
     out: &mut StrokeCut,
 ) {
-    let dy2 = dy * dy;
-    let r2 = r * r;
-    let eps = CUT_EPS as f32;
-    let mut removed = 0.0f64;
-    let mut depth = 0.0f32;
-    let mut hi = f32::NEG_INFINITY;
-    let (mut imin, mut imax) = (usize::MAX, 0usize);
-    const L: usize = 8;
-    let n_full = top.len() / L * L;
+    let mut acc = Lanes {
+        removed: [0.0; L],
+        depth: [0.0; L],
+        hi: [f32::NEG_INFINITY; L],
+        kmin: [f32::INFINITY; L],
+        kmax: [f32::NEG_INFINITY; L],
+    };
+    let under0 = r * r - dy * dy;
+    let len = top.len();
+    let full = len / L * L;
     let mut k0 = 0;
-    while k0 < n_full {
-        // Can any of these eight cells change? Without the square root:
-        // the ball's underside zc − √(r² − d²) is below `old` iff
-        // zc − old < 0 or (zc − old)² < r² − d².
-        let mut any = false;
-        for l in 0..L {
-            let dx = dx0 + (k0 + l) as f32 * res;
-            let under = r2 - (dx * dx + dy2);
-            let old = top[k0 + l];
-            let gap = zc - old;
-            let live = under >= 0.0 && old > bot[k0 + l] && (gap < 0.0 || gap * gap < under);
-            any |= live;
-        }
-        if any {
-            for l in 0..L {
-                let k = k0 + l;
-                let dx = dx0 + k as f32 * res;
-                let under = r2 - (dx * dx + dy2);
-                if under < 0.0 {
-                    continue;
-                }
-                let cut = zc - under.sqrt();
-                let old = top[k];
-                let new = if cut < old { cut } else { old };
-                let new = if new > bot[k] { new } else { bot[k] };
-                let d = old - new;
-                if d > 0.0 {
-                    removed += d as f64;
-                    top[k] = new;
-                    if d > eps {
-                        depth = depth.max(d);
-                        hi = hi.max(old);
-                        imin = imin.min(k);
-                        imax = imax.max(k);
-                    }
-                }
-            }
-        }
+    while k0 < full {
+        let t: &mut [f32; L] = (&mut top[k0..k0 + L]).try_into().expect("eight cells");
+        let b: &[f32; L] = bot[k0..k0 + L].try_into().expect("eight cells");
+        ball_group(t, b, k0 as f32, dx0, res, under0, zc, &mut acc);
         k0 += L;
     }
-    for k in n_full..top.len() {
-        let dx = dx0 + k as f32 * res;
-        let under = r2 - (dx * dx + dy2);
-        if under < 0.0 {
-            continue;
-        }
-        let cut = zc - under.sqrt();
-        let old = top[k];
-        let new = old.min(cut).max(bot[k]);
-        let d = old - new;
-        if d > 0.0 {
-            removed += d as f64;
-            top[k] = new;
-            if d > eps {
-                depth = depth.max(d);
-                hi = hi.max(old);
-                imin = imin.min(k);
-                imax = imax.max(k);
-            }
-        }
+    if full < len {
+        // The tail, padded with empty cells.
+        let m = len - full;
+        let mut t = [0.0f32; L];
+        let mut b = [0.0f32; L];
+        t[..m].copy_from_slice(&top[full..]);
+        b[..m].copy_from_slice(&bot[full..]);
+        ball_group(&mut t, &b, full as f32, dx0, res, under0, zc, &mut acc);
+        top[full..].copy_from_slice(&t[..m]);
     }
-    out.removed += removed;
-    if imin <= imax {
-        out.depth = out.depth.max(depth as f64);
-        out.top = out.top.max(hi as f64);
-        for k in [imin, imax] {
-            let lat = (dx0 + k as f32 * res) as f64 * n.x + dy as f64 * n.y;
+    out.removed += acc.removed.iter().map(|v| *v as f64).sum::<f64>();
+    let kmin = acc.kmin.iter().fold(f32::INFINITY, |a, b| a.min(*b));
+    let kmax = acc.kmax.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b));
+    if kmin <= kmax {
+        out.depth = out.depth.max(acc.depth.iter().fold(0.0f32, |a, b| a.max(*b)) as f64);
+        out.top = out.top.max(acc.hi.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b)) as f64);
+        for k in [kmin, kmax] {
+            let lat = (dx0 + k * res) as f64 * n.x + dy as f64 * n.y;
             out.side = [out.side[0].min(lat), out.side[1].max(lat)];
         }
+    }
+}
+
+/// Eight cells of [`ball_row`] starting at cell `k0` of the row.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn ball_group(
+    t: &mut [f32; L],
+    b: &[f32; L],
+    k0: f32,
+    dx0: f32,
+    res: f32,
+    under0: f32,
+    zc: f32,
+    acc: &mut Lanes,
+) {
+    const LANE: [f32; L] = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
+    let base = dx0 + k0 * res;
+    let mut under = [0.0f32; L];
+    let mut live = [0u32; L];
+    for l in 0..L {
+        let dx = base + LANE[l] * res;
+        let u = under0 - dx * dx;
+        under[l] = u;
+        let gap = zc - t[l];
+        // The ball's underside zc − √u is below the top iff gap < 0 or gap² < u.
+        live[l] = u32::from((u >= 0.0) & ((gap < 0.0) | (gap * gap < u)));
+    }
+    if live.iter().fold(0, |a, v| a | v) == 0 {
+        return;
+    }
+    let eps = CUT_EPS as f32;
+    for l in 0..L {
+        let u = under[l];
+        let root = if u > 0.0 { u } else { 0.0 }.sqrt();
+        let cut = if u >= 0.0 { zc - root } else { f32::INFINITY };
+        let old = t[l];
+        let new = if cut < old { cut } else { old };
+        let new = if new > b[l] { new } else { b[l] };
+        let new = if old > b[l] { new } else { old };
+        let d = old - new;
+        t[l] = new;
+        acc.removed[l] += d;
+        let cutting = d > eps;
+        let kf = k0 + LANE[l];
+        acc.depth[l] = if cutting & (d > acc.depth[l]) { d } else { acc.depth[l] };
+        acc.hi[l] = if cutting & (old > acc.hi[l]) { old } else { acc.hi[l] };
+        acc.kmin[l] = if cutting & (kf < acc.kmin[l]) { kf } else { acc.kmin[l] };
+        acc.kmax[l] = if cutting & (kf > acc.kmax[l]) { kf } else { acc.kmax[l] };
     }
 }
 
@@ -462,7 +563,8 @@ fn apply_tilted(band: &mut Band, s: &Stroke, a: &Apply, out: &mut StrokeCut) {
     let tool = a.tool;
     let g = &a.grid;
     let turn = s.a0.dot(s.a1).clamp(-1.0, 1.0).acos();
-    let travel = (s.p1 - s.p0).length() + turn * tool.flute;
+    // The cutting part's far end moves most when the axis turns.
+    let travel = (s.p1 - s.p0).length() + turn * tool.flute.min(10.0 * tool.radius());
     let n = ((travel / (0.5 * g.res)).ceil() as usize).clamp(1, 1_000_000);
     let first = if a.continues { 1 } else { 0 };
     let feed = (s.p1 - s.p0).truncate();

@@ -9,6 +9,7 @@ pub mod inspect;
 pub mod raster;
 pub mod reorder;
 pub mod setup;
+pub mod simulate;
 pub mod speed;
 pub mod sweep;
 pub mod thread;

@@ -1,0 +1,154 @@
+//! The stock simulation's table and report.
+
+use crate::html::simple_report;
+use crate::svg::{self, Series};
+use millplan_geom::TriMesh;
+use millplan_sim::stock::remaining::Remaining;
+use millplan_sim::stock::run::SimReport;
+use millplan_sim::stock::sim::MoveCut;
+use millplan_sim::stock::Stock;
+use std::fmt::Write;
+
+/// One row per simulated move. Lengths in mm to the µm, volumes in mm³ to
+/// 0.001, rates in mm³/min to 0.1.
+pub fn moves_csv(moves: &[MoveCut]) -> String {
+    let mut s = String::with_capacity(64 * moves.len() + 80);
+    s.push_str("index,line,removed_mm3,mrr,ap,ae,air,rapid,holder_depth,minutes\n");
+    for m in moves {
+        let _ = writeln!(
+            s,
+            "{},{},{:.3},{:.1},{:.3},{:.3},{},{},{:.3},{:.6}",
+            m.index,
+            m.line,
+            m.removed_mm3,
+            m.mrr,
+            m.ap,
+            m.ae,
+            u8::from(m.air),
+            u8::from(m.rapid),
+            m.holder_depth,
+            m.minutes
+        );
+    }
+    s
+}
+
+/// At most `n` × `n` samples of the stock's top, (x, y, top).
+fn top_view(stock: &Stock, n: usize) -> Vec<(f64, f64, f64)> {
+    let g = stock.grid;
+    let step = (g.nx.max(g.ny) / n).max(1);
+    let mut pts = Vec::new();
+    for j in (0..g.ny).step_by(step) {
+        for i in (0..g.nx).step_by(step) {
+            if let Some(t) = stock.top(i, j) {
+                pts.push((g.cx(i), g.cy(j), t));
+            }
+        }
+    }
+    pts
+}
+
+/// The report: what was simulated, collisions first, the stock seen from
+/// above (coloured by the material left on the part when it is given, else
+/// by height) and the removal rate along the program.
+pub fn report(
+    title: &str,
+    stock_spec: &str,
+    stock: &Stock,
+    rep: &SimReport,
+    part: Option<(&Remaining, &TriMesh)>,
+) -> String {
+    let hits = rep.rapid_collisions.len() + rep.holder_collisions.len();
+    let intro = if hits == 0 {
+        format!(
+            "No rapid, shank or holder met material. {} cutting moves removed {:.1} mm³; {} cutting moves cut only air.",
+            rep.cutting_moves, rep.removed_mm3, rep.air_moves
+        )
+    } else {
+        let mut lines: Vec<String> = rep
+            .rapid_collisions
+            .iter()
+            .map(|c| format!("line {}: rapid {:.3} mm into material", c.line, c.depth))
+            .chain(
+                rep.holder_collisions
+                    .iter()
+                    .map(|c| format!("line {}: shank or holder {:.3} mm into material", c.line, c.depth)),
+            )
+            .take(20)
+            .collect();
+        if hits > 20 {
+            lines.push(format!("and {} more", hits - 20));
+        }
+        format!("COLLISIONS: {hits}. {}", lines.join("; "))
+    };
+    let mut rows: Vec<(String, String)> = vec![
+        ("Stock".into(), stock_spec.into()),
+        ("Resolution".into(), format!("{} mm ({} × {} dexels)", rep.resolution_mm, stock.grid.nx, stock.grid.ny)),
+        ("Moves simulated".into(), format!("{} of {}", rep.simulated, rep.moves)),
+        ("Cutting moves / in air".into(), format!("{} / {}", rep.cutting_moves, rep.air_moves)),
+        ("Removed".into(), format!("{:.1} mm³ of {:.1} mm³", rep.removed_mm3, rep.stock_before_mm3)),
+        ("Highest removal rate".into(), format!("{:.0} mm³/min (line {})", rep.max_mrr_mm3_min, rep.max_mrr_line)),
+        ("Estimated time".into(), format!("{:.2} min", rep.minutes)),
+        ("Rapid collisions".into(), rep.rapid_collisions.len().to_string()),
+        ("Shank or holder collisions".into(), rep.holder_collisions.len().to_string()),
+    ];
+    let mut figures = Vec::new();
+    if let Some((r, mesh)) = part {
+        rows.push((
+            "Material left on the part".into(),
+            format!("{:.3} to {:.3} mm, mean {:.3} ({} facets, {} cut into)", r.min, r.max, r.mean, r.facets, r.gouged),
+        ));
+        let step = (mesh.len() / 20_000).max(1);
+        let pts: Vec<(f64, f64, f64)> = (0..mesh.len())
+            .step_by(step)
+            .filter(|t| r.per_facet[*t].is_finite())
+            .map(|t| {
+                let [a, b, c] = mesh.corners(t);
+                let q = (a + b + c) / 3.0;
+                (q.x, q.y, r.per_facet[t])
+            })
+            .collect();
+        figures.push((
+            "The part from above, coloured by the material left on it (mm; negative: cut into).".to_string(),
+            svg::map("Material left on the part", "mm", &pts),
+        ));
+        let vals: Vec<f64> = r.per_facet.iter().copied().filter(|v| v.is_finite()).collect();
+        figures.push((
+            "How much material is left, over the part's facets.".to_string(),
+            svg::histogram("Material left", "mm", 30, &[("facets", "#1f77b4", vals)]),
+        ));
+    } else {
+        figures.push((
+            "The stock after the program, from above, coloured by height (mm).".to_string(),
+            svg::map("Stock after the program", "z (mm)", &top_view(stock, 150)),
+        ));
+    }
+    let mut t = 0.0;
+    let mrr: Vec<(f64, f64)> = rep
+        .per_move
+        .iter()
+        .map(|m| {
+            t += m.minutes;
+            (t, m.mrr)
+        })
+        .collect();
+    figures.push((
+        "Material removal rate along the program (rapids at 0).".to_string(),
+        svg::line_plot(
+            "Removal rate",
+            "time (min)",
+            "mm³/min",
+            &[Series {
+                name: "MRR",
+                color: "#d62728",
+                points: mrr,
+            }],
+        ),
+    ));
+    let mut h = simple_report(title, &intro, &rows, &figures);
+    if hits > 0 {
+        // The warning sits in a box at the top.
+        h = h.replacen("<p>COLLISIONS", "<p style=\"border:2px solid #d62728;padding:8px\">COLLISIONS", 1);
+    }
+    h
+}
