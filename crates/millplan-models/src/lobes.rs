@@ -288,3 +288,15 @@ pub fn minimum(lobes: &[Lobe]) -> Option<LobePoint> {
         .flat_map(|l| l.points.iter().copied())
         .min_by(|a, b| a.a_lim_mm.total_cmp(&b.a_lim_mm))
 }
+
+/// The stability limit over spindle speeds n_lo..n_hi [1/min] in `steps`
+/// steps: (n, smallest a_lim over the lobes) where a lobe covers n.
+pub fn envelope(lobes: &[Lobe], n_lo: f64, n_hi: f64, steps: usize) -> Vec<(f64, f64)> {
+    let steps = steps.max(2);
+    (0..steps)
+        .filter_map(|i| {
+            let n = n_lo + (n_hi - n_lo) * i as f64 / (steps - 1) as f64;
+            a_lim_at(lobes, n).map(|a| (n, a))
+        })
+        .collect()
+}

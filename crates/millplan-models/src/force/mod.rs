@@ -18,6 +18,7 @@
 //! table entries. The force is periodic with the tooth period, so one period
 //! of M/N spindle angles is kept.
 //!
+//! - [`case`]: one planar-raster engagement with its loads (`millplan cut`).
 //! - [`edge`]: tool description and edge discretisation (§1.1).
 //! - [`coeffs`]: coefficients, oblique transformation, calibration (§1.5).
 //! - [`engage`]: the engagement interface and the analytic planar raster (§1.4a).
@@ -26,6 +27,7 @@
 //! - [`feed`]: the feed-per-tooth iteration of §2.3.
 //! - [`materials`]: named coefficient sets from a small TOML file.
 
+pub mod case;
 pub mod coeffs;
 pub mod deflect;
 pub mod edge;
