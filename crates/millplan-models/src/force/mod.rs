@@ -123,6 +123,7 @@ struct SliceK {
     z: f64,
     r: f64,
     kappa: f64,
+    psi: f64,
     sin_psi: f64,
     cos_psi: f64,
     /// Outward normal (y, z components; x is 0 at θ = 0).
@@ -289,7 +290,10 @@ impl ForceModel {
         };
         for s in &self.slices[first..last.max(first)] {
             let mut engaged = false;
-            for (k, row) in table.iter_mut().enumerate() {
+            let (lo, count) = self.chip_window(s, f);
+            for i in 0..count {
+                let k = (lo + i) % m;
+                let row = &mut table[k];
                 // θ = kδ − ψ
                 let (sk, ck) = (self.sin_t[k], self.cos_t[k]);
                 let st = sk * s.cos_psi - ck * s.sin_psi;
@@ -354,6 +358,30 @@ impl ForceModel {
     }
 }
 
+impl ForceModel {
+    /// The angle indices of one revolution where the chip thickness of slice
+    /// `s` can be positive, as (first index, count): h(θ) = A sin θ + B cos θ
+    /// + C is positive on one arc, widened by a step on each side (every index
+    /// is still checked).
+    fn chip_window(&self, s: &SliceK, f: [f64; 3]) -> (usize, usize) {
+        let m = self.m;
+        let (a, b, c) = (f[0] * s.ny, f[1] * s.ny, f[2] * s.nz);
+        let rho = a.hypot(b);
+        if rho <= c.abs() {
+            return if c > 0.0 { (0, m) } else { (0, 0) };
+        }
+        // ρ sin(θ + α) > −C on θ + α ∈ (u, π − u), u = asin(−C/ρ).
+        let alpha = b.atan2(a);
+        let u = (-c / rho).asin();
+        let step = 2.0 * PI / m as f64;
+        let start = u - alpha + s.psi;
+        let span = PI - 2.0 * u;
+        let first = (start / step).floor() as i64 - 1;
+        let count = ((span / step).ceil() as usize + 3).min(m);
+        (first.rem_euclid(m as i64) as usize, count)
+    }
+}
+
 fn slice_k(s: &Slice, law: &Law) -> SliceK {
     let (sk, ck) = (s.sin_k, s.cos_k);
     let nrm = s.normal;
@@ -388,6 +416,7 @@ fn slice_k(s: &Slice, law: &Law) -> SliceK {
         z: s.z,
         r: s.edge.r,
         kappa: s.edge.kappa,
+        psi: s.edge.psi,
         sin_psi: s.edge.psi.sin(),
         cos_psi: s.edge.psi.cos(),
         ny: nrm[1],
