@@ -360,9 +360,9 @@ impl ForceModel {
 
 impl ForceModel {
     /// The angle indices of one revolution where the chip thickness of slice
-    /// `s` can be positive, as (first index, count): h(θ) = A sin θ + B cos θ
-    /// + C is positive on one arc, widened by a step on each side (every index
-    /// is still checked).
+    /// `s` can be positive, as (first index, count): h(θ) = A·sin θ +
+    /// B·cos θ + C is positive on one arc, widened by a step on each side
+    /// (every index is still checked).
     fn chip_window(&self, s: &SliceK, f: [f64; 3]) -> (usize, usize) {
         let m = self.m;
         let (a, b, c) = (f[0] * s.ny, f[1] * s.ny, f[2] * s.nz);
