@@ -8,10 +8,15 @@
 //!   brute-force sampler the tests use as reference.
 //! - [`kinematics`]: forward/inverse kinematics of 5-axis machines (spec
 //!   `kinematics-access-tools.md` §1).
+//! - [`force`]: mechanistic cutting forces, torque, power, tool bending and the
+//!   feed iteration (spec `process-models.md` §0–§2).
+//! - [`lobes`]: zero-order stability lobes (spec `process-models.md` §3).
 //! - [`regression`]: the least-squares surrogate of thesis 2.
 
 pub mod contact;
 pub mod cutter;
+pub mod force;
 pub mod kinematics;
+pub mod lobes;
 pub mod regression;
 pub mod wd;

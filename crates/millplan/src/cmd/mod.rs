@@ -1,11 +1,14 @@
 //! One file per subcommand.
 
 pub mod convert;
+pub mod cut;
 pub mod demo;
 pub mod directions;
 pub mod explain;
+pub mod force;
 pub mod gouge;
 pub mod inspect;
+pub mod lobes;
 pub mod raster;
 pub mod reorder;
 pub mod setup;

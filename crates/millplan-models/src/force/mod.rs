@@ -1,0 +1,473 @@
+//! Mechanistic cutting-force model of helical end mills (spec
+//! `process-models.md` §0–§2): ball, flat and bull end mills in 3- and 5-axis
+//! work, with the linear edge-force model of Altintas (constant or oblique
+//! coefficients) or the flute-segment model of Schnoes & Zaeh.
+//!
+//! Conventions (§0): lengths mm, forces N, torque N·mm, angles rad. Tool frame
+//! (TCS) with the origin at the tip and +z toward the shank; an edge point at
+//! immersion φ sits at (R sin φ, R cos φ, z) and φ grows with time; the feed is
+//! +x of the feed frame (FCN), whose z is the surface normal. R_wt = Rx(tilt)·
+//! Ry(lead) maps TCS vectors into FCN. Forces are those acting on the tool.
+//!
+//! How it is evaluated: the edge is cut into axial slices once per tool
+//! ([`ForceModel::new`]). For one engagement, every (slice, absolute angle θ)
+//! cell on a grid of M angles per revolution is tested once for chip thickness
+//! and material, and its force is accumulated into a per-angle table; flute j
+//! at spindle angle φ_m sits at θ = φ_m + 2πj/N − ψ(z), which is a fixed
+//! index shift, so the total over flutes at every spindle angle is a sum of N
+//! table entries. The force is periodic with the tooth period, so one period
+//! of M/N spindle angles is kept.
+//!
+//! - [`case`]: one planar-raster engagement with its loads (`millplan cut`).
+//! - [`edge`]: tool description and edge discretisation (§1.1).
+//! - [`coeffs`]: coefficients, oblique transformation, calibration (§1.5).
+//! - [`engage`]: the engagement interface and the analytic planar raster (§1.4a).
+//! - [`flat`]: closed-form mean forces of a flat end mill (T1, T2).
+//! - [`deflect`]: bending stress and deflection of the tool (§2.2).
+//! - [`feed`]: the feed-per-tooth iteration of §2.3.
+//! - [`materials`]: named coefficient sets from a small TOML file.
+
+pub mod case;
+pub mod coeffs;
+pub mod deflect;
+pub mod edge;
+pub mod engage;
+pub mod feed;
+pub mod flat;
+pub mod materials;
+
+use coeffs::{ChipRule, Law};
+use edge::{Slice, Tool};
+use engage::Engagement;
+use std::f64::consts::PI;
+
+/// 3×3 matrix, row-major.
+pub type Mat3 = [[f64; 3]; 3];
+
+/// R_wt = Rx(tilt)·Ry(lead) (§0): maps tool-frame vectors into the feed frame.
+pub fn r_wt(lead: f64, tilt: f64) -> Mat3 {
+    let (sl, cl) = lead.sin_cos();
+    let (st, ct) = tilt.sin_cos();
+    // Rx(T) = [[1,0,0],[0,cT,−sT],[0,sT,cT]], Ry(L) = [[cL,0,sL],[0,1,0],[−sL,0,cL]].
+    [
+        [cl, 0.0, sl],
+        [st * sl, ct, -st * cl],
+        [-ct * sl, st, ct * cl],
+    ]
+}
+
+/// m·v.
+#[inline]
+pub fn mul(m: &Mat3, v: [f64; 3]) -> [f64; 3] {
+    [
+        m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2],
+        m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],
+        m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2],
+    ]
+}
+
+/// mᵀ·v.
+#[inline]
+pub fn mul_t(m: &Mat3, v: [f64; 3]) -> [f64; 3] {
+    [
+        m[0][0] * v[0] + m[1][0] * v[1] + m[2][0] * v[2],
+        m[0][1] * v[0] + m[1][1] * v[1] + m[2][1] * v[2],
+        m[0][2] * v[0] + m[1][2] * v[1] + m[2][2] * v[2],
+    ]
+}
+
+/// Cutting conditions of one engagement.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cut {
+    /// Feed per tooth [mm].
+    pub fz: f64,
+    /// Spindle speed [1/min] (for power only).
+    pub rpm: f64,
+    /// Lead and tilt [rad] (§0).
+    pub lead: f64,
+    pub tilt: f64,
+}
+
+impl Cut {
+    /// The feed-per-tooth vector in the tool frame, fz·R_wtᵀ·x̂ (§1.2).
+    pub fn feed_vector(&self) -> [f64; 3] {
+        let m = r_wt(self.lead, self.tilt);
+        let v = mul_t(&m, [1.0, 0.0, 0.0]);
+        [self.fz * v[0], self.fz * v[1], self.fz * v[2]]
+    }
+}
+
+/// Discretisation: axial slice height and rotation step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grid {
+    /// Slice height [mm].
+    pub dz: f64,
+    /// Rotation step [rad]; rounded down so that a tooth period holds a whole
+    /// number of steps.
+    pub dphi: f64,
+}
+
+impl Default for Grid {
+    /// 0.05 mm slices and 1° steps.
+    fn default() -> Grid {
+        Grid {
+            dz: 0.05,
+            dphi: 1f64.to_radians(),
+        }
+    }
+}
+
+/// Per-slice constants of the kernel, at θ = 0.
+#[derive(Clone, Copy, Debug)]
+struct SliceK {
+    z: f64,
+    r: f64,
+    kappa: f64,
+    psi: f64,
+    sin_psi: f64,
+    cos_psi: f64,
+    /// Outward normal (y, z components; x is 0 at θ = 0).
+    ny: f64,
+    nz: f64,
+    /// Force directions of the three coefficient channels.
+    dirs: [[f64; 3]; 3],
+    /// Width multiplying the cutting term (h·w_cut) and the edge term.
+    w_cut: f64,
+    w_edge: f64,
+    /// Per-slice coefficients (for h-independent laws).
+    kc: [f64; 3],
+    ke: [f64; 3],
+    /// Local inclination i(z) [rad] for the per-element oblique law.
+    incl: f64,
+}
+
+/// A tool, force law and grid, prepared for many evaluations.
+#[derive(Clone, Debug)]
+pub struct ForceModel {
+    pub tool: Tool,
+    pub law: Law,
+    pub grid: Grid,
+    slices: Vec<SliceK>,
+    dz: f64,
+    /// Angles per revolution (a multiple of the flute count).
+    m: usize,
+    sin_t: Vec<f64>,
+    cos_t: Vec<f64>,
+}
+
+/// Forces over one tooth period and what follows from them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Evaluation {
+    /// Rotation step actually used [rad].
+    pub dphi: f64,
+    pub flutes: usize,
+    pub rpm: f64,
+    /// R_wt of the engagement.
+    pub r_wt: Mat3,
+    /// [Fx, Fy, Fz, T] in the tool frame at spindle angles m·dphi over one
+    /// tooth period (the force repeats every 2π/N).
+    pub period: Vec<[f64; 4]>,
+    /// Engaged (slice, angle) cells, counted once per revolution of one flute.
+    pub cells: usize,
+    /// Smallest axial immersion angle κ of an engaged cell [rad].
+    pub kappa_min: Option<f64>,
+    /// Highest engaged point above the tip [mm].
+    pub z_max: Option<f64>,
+}
+
+/// Minimum and maximum of a quantity over one revolution.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MinMax {
+    pub min: f64,
+    pub max: f64,
+}
+
+impl MinMax {
+    fn of(v: impl Iterator<Item = f64>) -> MinMax {
+        let mut r = MinMax {
+            min: f64::INFINITY,
+            max: f64::NEG_INFINITY,
+        };
+        for x in v {
+            r.min = r.min.min(x);
+            r.max = r.max.max(x);
+        }
+        if r.min > r.max {
+            r = MinMax { min: 0.0, max: 0.0 };
+        }
+        r
+    }
+}
+
+/// Revolution statistics of an [`Evaluation`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Summary {
+    /// Fx, Fy, Fz ranges in the tool frame.
+    pub tool: [MinMax; 3],
+    /// The same in the feed (workpiece) frame, F_w = R_wt·F_t.
+    pub work: [MinMax; 3],
+    /// Mean force over a revolution, tool frame.
+    pub mean: [f64; 3],
+    /// Maximum transversal resultant sqrt(Fx² + Fy²) in the tool frame.
+    pub fxy_max: f64,
+    pub torque_max: f64,
+    pub torque_mean: f64,
+    /// Mean power P = T_mean·ω/1000 [W], and the peak from T_max.
+    pub power_w: f64,
+    pub power_peak_w: f64,
+}
+
+/// One sample of the force curve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Spindle angle [rad].
+    pub phi: f64,
+    pub tool: [f64; 3],
+    pub work: [f64; 3],
+    pub torque: f64,
+}
+
+/// Angular velocity [rad/s] at n [1/min].
+pub fn omega(rpm: f64) -> f64 {
+    2.0 * PI * rpm / 60.0
+}
+
+impl ForceModel {
+    /// Prepares the edge of `tool` over its whole flute length.
+    pub fn new(tool: Tool, law: Law, grid: Grid) -> Result<ForceModel, String> {
+        tool.validate()?;
+        if !(grid.dz > 0.0 && grid.dz <= 1.0) {
+            return Err(format!("slice height {} mm: must be in (0, 1]", grid.dz));
+        }
+        if !(grid.dphi > 0.0 && grid.dphi <= 10f64.to_radians()) {
+            return Err("rotation step: must be above 0 and at most 10 degrees".into());
+        }
+        if tool.flute_length / grid.dz > 1e6 {
+            return Err("too many slices: the flute is too long for the slice height".into());
+        }
+        let n = tool.flutes;
+        let per_tooth = (2.0 * PI / (n as f64 * grid.dphi) - 1e-9).ceil().max(1.0) as usize;
+        let m = per_tooth * n;
+        let step = 2.0 * PI / m as f64;
+        let (sin_t, cos_t) = (0..m).map(|k| (k as f64 * step).sin_cos()).unzip();
+        let raw = edge::slices(&tool, 0.0, tool.flute_length, grid.dz);
+        let dz = raw.first().map_or(grid.dz, |s| s.dz);
+        let slices = raw.iter().map(|s| slice_k(s, &law)).collect();
+        Ok(ForceModel {
+            tool,
+            law,
+            grid,
+            slices,
+            dz,
+            m,
+            sin_t,
+            cos_t,
+        })
+    }
+
+    /// Rotation step actually used [rad].
+    pub fn dphi(&self) -> f64 {
+        2.0 * PI / self.m as f64
+    }
+
+    /// Forces of one engagement.
+    pub fn evaluate<E: Engagement + ?Sized>(&self, cut: &Cut, eng: &E) -> Evaluation {
+        let m = self.m;
+        let f = cut.feed_vector();
+        let (z_lo, z_hi) = eng.z_range(&self.tool);
+        let first = ((z_lo.max(0.0) / self.dz).floor() as usize).min(self.slices.len());
+        let last = ((z_hi.max(0.0) / self.dz).ceil() as usize).min(self.slices.len());
+        let mut table = vec![[0.0f64; 4]; m];
+        let mut cells = 0usize;
+        let mut kappa_min = f64::INFINITY;
+        let mut z_max = f64::NEG_INFINITY;
+        let oblique = match self.law {
+            Law::Oblique(o) => match o.chip {
+                ChipRule::PerElement { h_min } => Some((o, h_min)),
+                ChipRule::Fixed(_) => None,
+            },
+            _ => None,
+        };
+        for s in &self.slices[first..last.max(first)] {
+            let mut engaged = false;
+            let (lo, count) = self.chip_window(s, f);
+            for i in 0..count {
+                let k = (lo + i) % m;
+                let row = &mut table[k];
+                // θ = kδ − ψ
+                let (sk, ck) = (self.sin_t[k], self.cos_t[k]);
+                let st = sk * s.cos_psi - ck * s.sin_psi;
+                let ct = ck * s.cos_psi + sk * s.sin_psi;
+                // h = f·n(θ), n(θ) = (ny sθ, ny cθ, nz)
+                let h = f[0] * s.ny * st + f[1] * s.ny * ct + f[2] * s.nz;
+                if h <= 0.0 {
+                    continue;
+                }
+                if !eng.contains([s.r * st, s.r * ct, s.z]) {
+                    continue;
+                }
+                engaged = true;
+                cells += 1;
+                let kc = match oblique {
+                    Some((o, h_min)) => o.db.oblique(o.rake_deg, h.max(h_min), s.incl, o.beta),
+                    None => s.kc,
+                };
+                let wc = h * s.w_cut;
+                let mut f0 = [0.0; 3];
+                for ((ke, kc), d) in s.ke.iter().zip(kc).zip(&s.dirs) {
+                    let mag = ke * s.w_edge + kc * wc;
+                    f0[0] += mag * d[0];
+                    f0[1] += mag * d[1];
+                    f0[2] += mag * d[2];
+                }
+                // Rotate from θ = 0 to θ: (a, b, c) → (a cθ + b sθ, −a sθ + b cθ, c).
+                row[0] += f0[0] * ct + f0[1] * st;
+                row[1] += -f0[0] * st + f0[1] * ct;
+                row[2] += f0[2];
+                row[3] -= s.r * f0[0];
+            }
+            if engaged {
+                kappa_min = kappa_min.min(s.kappa);
+                z_max = z_max.max(s.z + 0.5 * self.dz);
+            }
+        }
+        let n = self.tool.flutes;
+        let p = m / n;
+        let period = (0..p)
+            .map(|i| {
+                let mut acc = [0.0; 4];
+                for j in 0..n {
+                    let t = &table[(i + j * p) % m];
+                    for c in 0..4 {
+                        acc[c] += t[c];
+                    }
+                }
+                acc
+            })
+            .collect();
+        Evaluation {
+            dphi: self.dphi(),
+            flutes: n,
+            rpm: cut.rpm,
+            r_wt: r_wt(cut.lead, cut.tilt),
+            period,
+            cells,
+            kappa_min: kappa_min.is_finite().then_some(kappa_min),
+            z_max: z_max.is_finite().then_some(z_max),
+        }
+    }
+}
+
+impl ForceModel {
+    /// The angle indices of one revolution where the chip thickness of slice
+    /// `s` can be positive, as (first index, count): h(θ) = A·sin θ +
+    /// B·cos θ + C is positive on one arc, widened by a step on each side
+    /// (every index is still checked).
+    fn chip_window(&self, s: &SliceK, f: [f64; 3]) -> (usize, usize) {
+        let m = self.m;
+        let (a, b, c) = (f[0] * s.ny, f[1] * s.ny, f[2] * s.nz);
+        let rho = a.hypot(b);
+        if rho <= c.abs() {
+            return if c > 0.0 { (0, m) } else { (0, 0) };
+        }
+        // ρ sin(θ + α) > −C on θ + α ∈ (u, π − u), u = asin(−C/ρ).
+        let alpha = b.atan2(a);
+        let u = (-c / rho).asin();
+        let step = 2.0 * PI / m as f64;
+        let start = u - alpha + s.psi;
+        let span = PI - 2.0 * u;
+        let first = (start / step).floor() as i64 - 1;
+        let count = ((span / step).ceil() as usize + 3).min(m);
+        (first.rem_euclid(m as i64) as usize, count)
+    }
+}
+
+fn slice_k(s: &Slice, law: &Law) -> SliceK {
+    let (sk, ck) = (s.sin_k, s.cos_k);
+    let nrm = s.normal;
+    let t = s.tangent;
+    // Altintas directions at θ = 0 (§1.3): tangential (−1, 0, 0), radial −n,
+    // axial (−cos κ sin p, −cos κ cos p, −sin κ).
+    let rta = [[-1.0, 0.0, 0.0], [0.0, -sk, ck], [0.0, -ck, -sk]];
+    let incl = s.edge.tan_i.atan();
+    let (dirs, w_cut, kc, ke) = match *law {
+        Law::Rta(c) => (rta, s.db, c.kc, c.ke),
+        Law::Oblique(o) => {
+            let kc = match o.chip {
+                ChipRule::Fixed(h) => o.db.oblique(o.rake_deg, h, incl, o.beta),
+                ChipRule::PerElement { .. } => [0.0; 3],
+            };
+            (rta, s.db, kc, o.db.ke)
+        }
+        Law::FluteSegment(c) => {
+            // d = t × v / |…| = the outward normal; n = d × t (along v).
+            let d = nrm;
+            let nv = [
+                d[1] * t[2] - d[2] * t[1],
+                d[2] * t[0] - d[0] * t[2],
+                d[0] * t[1] - d[1] * t[0],
+            ];
+            let l = (nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2]).sqrt();
+            let nv = [nv[0] / l, nv[1] / l, nv[2] / l];
+            ([t, d, nv], s.ds, c.kc, c.ke)
+        }
+    };
+    SliceK {
+        z: s.z,
+        r: s.edge.r,
+        kappa: s.edge.kappa,
+        psi: s.edge.psi,
+        sin_psi: s.edge.psi.sin(),
+        cos_psi: s.edge.psi.cos(),
+        ny: nrm[1],
+        nz: nrm[2],
+        dirs,
+        w_cut,
+        w_edge: s.ds,
+        kc,
+        ke,
+        incl,
+    }
+}
+
+impl Evaluation {
+    /// Statistics over one revolution.
+    pub fn summary(&self) -> Summary {
+        let p = &self.period;
+        let work: Vec<[f64; 3]> = p
+            .iter()
+            .map(|s| mul(&self.r_wt, [s[0], s[1], s[2]]))
+            .collect();
+        let len = p.len().max(1) as f64;
+        let mean = |c: usize| p.iter().map(|s| s[c]).sum::<f64>() / len;
+        let torque_mean = mean(3);
+        let torque_max = MinMax::of(p.iter().map(|s| s[3])).max;
+        let w = omega(self.rpm);
+        Summary {
+            tool: [0, 1, 2].map(|c| MinMax::of(p.iter().map(|s| s[c]))),
+            work: [0, 1, 2].map(|c| MinMax::of(work.iter().map(|s| s[c]))),
+            mean: [mean(0), mean(1), mean(2)],
+            fxy_max: p.iter().map(|s| s[0].hypot(s[1])).fold(0.0, f64::max),
+            torque_max,
+            torque_mean,
+            power_w: torque_mean * w / 1000.0,
+            power_peak_w: torque_max * w / 1000.0,
+        }
+    }
+
+    /// The force curve over one whole revolution.
+    pub fn revolution(&self) -> Vec<Sample> {
+        let p = self.period.len();
+        (0..p * self.flutes)
+            .map(|i| {
+                let s = self.period[i % p.max(1)];
+                Sample {
+                    phi: i as f64 * self.dphi,
+                    tool: [s[0], s[1], s[2]],
+                    work: mul(&self.r_wt, [s[0], s[1], s[2]]),
+                    torque: s[3],
+                }
+            })
+            .collect()
+    }
+}

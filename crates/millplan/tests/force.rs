@@ -1,0 +1,373 @@
+//! `millplan cut`, `millplan force calibrate|materials` and `millplan lobes`
+//! end to end: JSON keys, agreement with the spec's oracles (T4, T10),
+//! outputs, and refusal of bad input with exit 2.
+
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_millplan"))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("runs")
+}
+
+fn json(args: &[&str]) -> serde_json::Value {
+    let o = run(args);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&o.stdout).expect("json")
+}
+
+fn fails_with_2(args: &[&str], needle: &str) {
+    let o = run(args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+    assert!(err.contains(needle), "{args:?}: {err}");
+}
+
+fn f(v: &serde_json::Value) -> f64 {
+    v.as_f64().expect("number")
+}
+
+const T4_ROW2: [&str; 14] = [
+    "cut",
+    "--tool",
+    "ball:16",
+    "--flutes",
+    "4",
+    "--helix",
+    "30",
+    "--fz",
+    "0.16",
+    "--ap",
+    "1",
+    "--coeffs",
+    "1750,550,640,24,43,0",
+    "--json",
+];
+
+#[test]
+fn cut_reports_the_t4_row_at_the_default_grid() {
+    // T4, ae = 2, lead 10 / tilt −10: F_xy,max 443.1, Fx −385.1…0, T_max
+    // 1556.4, T_mean 533.9 (±3 % peaks, ±1 % T_mean; default 0.05 mm / 1°).
+    let mut a = T4_ROW2.to_vec();
+    a.extend(["--ae", "2", "--lead", "10", "--tilt", "-10", "--n", "1750"]);
+    let j = json(&a);
+    for k in [
+        "fxy_max",
+        "fx",
+        "fy",
+        "fz",
+        "torque_max",
+        "torque_mean",
+        "power_w",
+        "stress_mpa",
+        "deflection_mm",
+    ] {
+        assert!(!j[k].is_null(), "missing {k}");
+    }
+    assert!((f(&j["fxy_max"]) - 443.1).abs() <= 0.03 * 443.1);
+    assert!((f(&j["fx"][0]) - -385.1).abs() <= 0.03 * 385.1);
+    assert!((f(&j["torque_max"]) - 1556.4).abs() <= 0.03 * 1556.4);
+    assert!((f(&j["torque_mean"]) - 533.9).abs() <= 0.01 * 533.9);
+    // P = T_mean·ω/1000; σ and δ of a uniform 0.8·D cantilever of 3·D.
+    let p = f(&j["torque_mean"]) * 2.0 * std::f64::consts::PI * 1750.0 / 60.0 / 1000.0;
+    assert!((f(&j["power_w"]) - p).abs() < 1e-9);
+    let (de, l) = (12.8f64, 48.0f64);
+    let sigma = 32.0 * f(&j["fxy_max"]) * l / (std::f64::consts::PI * de.powi(3));
+    assert!((f(&j["stress_mpa"]) - sigma).abs() < 1e-9 * sigma);
+    assert!(f(&j["deflection_mm"]) > 0.0);
+}
+
+#[test]
+fn cut_writes_force_curves() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let (csv, svg) = (dir.path().join("f.csv"), dir.path().join("f.svg"));
+    let mut a = T4_ROW2.to_vec();
+    a.extend([
+        "--slot",
+        "--n",
+        "1000",
+        "--csv",
+        csv.to_str().expect("utf8"),
+    ]);
+    a.extend(["--svg", svg.to_str().expect("utf8")]);
+    let j = json(&a);
+    let text = std::fs::read_to_string(&csv).expect("csv");
+    let rows: Vec<&str> = text.lines().collect();
+    assert_eq!(rows[0], "phi_deg,fx,fy,fz,fx_w,fy_w,fz_w,torque");
+    assert_eq!(rows.len(), 361);
+    // The curve's maximum of sqrt(Fx² + Fy²) is the reported F_xy,max.
+    let fxy = rows[1..]
+        .iter()
+        .map(|r| {
+            let v: Vec<f64> = r.split(',').map(|x| x.parse().expect("number")).collect();
+            v[1].hypot(v[2])
+        })
+        .fold(0.0, f64::max);
+    assert!((fxy - f(&j["fxy_max"])).abs() < 1e-3 * fxy);
+    assert!(std::fs::read_to_string(&svg).expect("svg").contains("<svg"));
+}
+
+#[test]
+fn cut_named_materials_and_bad_input() {
+    let base = [
+        "cut", "--tool", "ball:16", "--fz", "0.16", "--ap", "1", "--ae", "2", "--n", "1750",
+    ];
+    let mut a = base.to_vec();
+    a.extend([
+        "--material",
+        "ti6al4v",
+        "--lead",
+        "10",
+        "--tilt",
+        "-10",
+        "--json",
+    ]);
+    let j = json(&a);
+    // T6 band (±30 %) around 400–450 N.
+    assert!(
+        (280.0..=585.0).contains(&f(&j["fxy_max"])),
+        "{}",
+        j["fxy_max"]
+    );
+    let mut a = base.to_vec();
+    a.extend(["--material", "en-aw-2007", "--json"]);
+    assert!(f(&json(&a)["fxy_max"]) > 0.0);
+    let mut a = base.to_vec();
+    a.extend(["--material", "unobtainium"]);
+    fails_with_2(&a, "unknown material");
+    let mut a = base.to_vec();
+    a.extend(["--coeffs", "1,2,3"]);
+    fails_with_2(&a, "six");
+    fails_with_2(
+        &[
+            "cut",
+            "--tool",
+            "flat:10",
+            "--fz",
+            "0.1",
+            "--ap",
+            "2",
+            "--ae",
+            "1",
+            "--lead",
+            "5",
+            "--n",
+            "1000",
+            "--material",
+            "al7075",
+        ],
+        "ball-end",
+    );
+    fails_with_2(
+        &[
+            "cut",
+            "--tool",
+            "ball:10",
+            "--fz",
+            "-0.1",
+            "--ap",
+            "2",
+            "--slot",
+            "--n",
+            "1000",
+            "--material",
+            "al7075",
+        ],
+        "--fz",
+    );
+    fails_with_2(
+        &[
+            "cut",
+            "--tool",
+            "ball:10",
+            "--fz",
+            "0.1",
+            "--ap",
+            "2",
+            "--slot",
+            "--ae",
+            "1",
+            "--n",
+            "1000",
+            "--material",
+            "al7075",
+        ],
+        "cannot be used with",
+    );
+}
+
+#[test]
+fn user_materials_file_extends_the_table() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let m = dir.path().join("m.toml");
+    std::fs::write(&m, "[c45]\nmodel = \"linear\"\nnote = \"shop test\"\nkc = [2100, 800, 500]\nke = [30, 40, 0]\n").expect("write");
+    let o = run(&[
+        "force",
+        "materials",
+        "--materials",
+        m.to_str().expect("utf8"),
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("c45") && text.contains("ti6al4v") && text.contains("en-aw-2007"));
+    let j = json(&[
+        "cut",
+        "--tool",
+        "flat:10",
+        "--fz",
+        "0.1",
+        "--ap",
+        "2",
+        "--ae",
+        "5",
+        "--n",
+        "3000",
+        "--material",
+        "c45",
+        "--materials",
+        m.to_str().expect("utf8"),
+        "--json",
+    ]);
+    assert!(f(&j["torque_mean"]) > 0.0);
+    std::fs::write(&m, "[c45]\nmodel = \"linear\"\nkc = [2100]\n").expect("write");
+    fails_with_2(
+        &[
+            "force",
+            "materials",
+            "--materials",
+            m.to_str().expect("utf8"),
+        ],
+        "m.toml",
+    );
+}
+
+#[test]
+fn calibrate_recovers_coefficients_from_cut_means() {
+    // §1.5b end to end: mean slot forces of a flat end mill from `cut` at four
+    // feeds, then `force calibrate` gives the coefficients back.
+    let dir = tempfile::tempdir().expect("tmp");
+    let mut csv = String::from("# slot tests\nfeed,fx,fy,fz,note\n");
+    for c in ["0.05", "0.1", "0.15", "0.2"] {
+        let j = json(&[
+            "cut",
+            "--tool",
+            "flat:16",
+            "--flutes",
+            "4",
+            "--helix",
+            "0",
+            "--fz",
+            c,
+            "--ap",
+            "5",
+            "--slot",
+            "--coeffs",
+            "800,250,150,25,30,2",
+            "--n",
+            "1000",
+            "--dphi",
+            "0.1",
+            "--json",
+        ]);
+        let m = &j["mean"];
+        csv.push_str(&format!("{c},{},{},{},x\n", f(&m[0]), f(&m[1]), f(&m[2])));
+    }
+    let p = dir.path().join("m.csv");
+    std::fs::write(&p, csv).expect("write");
+    let j = json(&[
+        "force",
+        "calibrate",
+        p.to_str().expect("utf8"),
+        "--flutes",
+        "4",
+        "--ap",
+        "5",
+        "--json",
+    ]);
+    for (k, want) in [("ktc", 800.0), ("krc", 250.0), ("kac", 150.0)] {
+        assert!((f(&j[k]) - want).abs() < 0.005 * want, "{k} = {}", j[k]);
+    }
+    for (k, want) in [("kte", 25.0), ("kre", 30.0), ("kae", 2.0)] {
+        assert!((f(&j[k]) - want).abs() < 0.05 * want, "{k} = {}", j[k]);
+    }
+    assert!(f(&j["fit_y"]["r2"]) > 0.99999);
+    std::fs::write(&p, "feed,fx,fy,fz\n0.1,1,2,x\n").expect("write");
+    fails_with_2(
+        &[
+            "force",
+            "calibrate",
+            p.to_str().expect("utf8"),
+            "--flutes",
+            "4",
+            "--ap",
+            "5",
+        ],
+        "m.csv:2",
+    );
+    std::fs::write(&p, "c,fx,fy,fz\n").expect("write");
+    fails_with_2(
+        &[
+            "force",
+            "calibrate",
+            p.to_str().expect("utf8"),
+            "--flutes",
+            "4",
+            "--ap",
+            "5",
+        ],
+        "header",
+    );
+}
+
+#[test]
+fn lobes_match_t10e_t10f_and_plot() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let svg = dir.path().join("lobes.svg");
+    let base = [
+        "lobes",
+        "--fn",
+        "922",
+        "--k",
+        "1.34005e6",
+        "--zeta",
+        "0.011",
+        "--flutes",
+        "2",
+        "--kt",
+        "600",
+        "--kr",
+        "0.333333333",
+        "--slot",
+        "--json",
+    ];
+    let mut a = base.to_vec();
+    a.extend(["-o", svg.to_str().expect("utf8")]);
+    let j = json(&a);
+    assert!((f(&j["a_lim_min_mm"]) - 0.0479).abs() <= 0.005 * 0.0479);
+    assert!((f(&j["fc_hz"]) - 923.6).abs() <= 0.01 * 923.6);
+    assert!(std::fs::read_to_string(&svg).expect("svg").contains("<svg"));
+    assert!(j["envelope"].as_array().expect("envelope").len() > 100);
+    let mut a = base.to_vec();
+    a.push("--rigid-y");
+    assert!((f(&json(&a)["a_lim_min_mm"]) - 0.29805).abs() <= 0.005 * 0.29805);
+    fails_with_2(
+        &[
+            "lobes", "--fn", "922", "--k", "1e6", "--zeta", "0", "--flutes", "2", "--kt", "600",
+            "--kr", "0.3", "--slot",
+        ],
+        "damping",
+    );
+    fails_with_2(
+        &[
+            "lobes", "--fn", "922", "--k", "1e6", "--zeta", "0.01", "--flutes", "2", "--kt", "600",
+            "--kr", "0.3", "--ae", "3",
+        ],
+        "--d",
+    );
+}
