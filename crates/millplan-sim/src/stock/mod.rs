@@ -88,8 +88,8 @@ impl Grid {
     /// The column indices whose centres lie in [xa, xb], clamped to the grid.
     #[inline]
     pub fn span(&self, xa: f64, xb: f64) -> Option<(usize, usize)> {
-        let a = ((xa - self.x0) / self.res - 0.5).ceil().max(0.0);
-        let b = ((xb - self.x0) / self.res - 0.5).floor();
+        let a = ceil((xa - self.x0) / self.res - 0.5).max(0.0);
+        let b = floor((xb - self.x0) / self.res - 0.5);
         if !(b >= a) || a >= self.nx as f64 {
             return None;
         }
@@ -99,8 +99,8 @@ impl Grid {
     /// The row indices whose centres lie in [ya, yb], clamped to the grid.
     #[inline]
     pub fn rows(&self, ya: f64, yb: f64) -> Option<(usize, usize)> {
-        let a = ((ya - self.y0) / self.res - 0.5).ceil().max(0.0);
-        let b = ((yb - self.y0) / self.res - 0.5).floor();
+        let a = ceil((ya - self.y0) / self.res - 0.5).max(0.0);
+        let b = floor((yb - self.y0) / self.res - 0.5);
         if !(b >= a) || a >= self.ny as f64 {
             return None;
         }
@@ -119,6 +119,27 @@ impl Grid {
     }
 }
 
+/// `x.floor()` inline (the x86-64 baseline has no rounding instruction, and
+/// the library call shows in profiles). Exact for |x| < 2⁵²; NaN and
+/// infinities pass through.
+#[inline]
+fn floor(x: f64) -> f64 {
+    if !(x.abs() < 4.5e15) {
+        return x;
+    }
+    let t = x as i64 as f64;
+    if t > x {
+        t - 1.0
+    } else {
+        t
+    }
+}
+
+#[inline]
+fn ceil(x: f64) -> f64 {
+    -floor(-x)
+}
+
 /// Air inside the material interval of the cells of one row: cell index →
 /// sorted, disjoint gaps strictly inside (bot, top).
 pub type RowGaps = FxHashMap<u32, Vec<[f32; 2]>>;
@@ -133,7 +154,14 @@ pub struct Stock {
     pub(crate) bot: Vec<f32>,
     /// Per row.
     pub(crate) gaps: Vec<RowGaps>,
+    /// Per row, per block of [`BLOCK`] cells: at least the highest top in the
+    /// block (tops only go down, so a stale value is still a bound), for
+    /// skipping blocks a tool passes above.
+    pub(crate) bmax: Vec<f32>,
 }
+
+/// Cells per block of [`Stock::bmax`].
+pub const BLOCK: usize = 16;
 
 /// Memory per cell of a stock without gaps, bytes.
 pub const BYTES_PER_CELL: f64 = 8.0 + std::mem::size_of::<RowGaps>() as f64 / 64.0;
@@ -147,6 +175,22 @@ impl Stock {
             top: vec![0.0; n],
             bot: vec![0.0; n],
             gaps: vec![RowGaps::default(); grid.ny],
+            bmax: vec![0.0; grid.ny * grid.nx.div_ceil(BLOCK)],
+        }
+    }
+
+    /// Recomputes every block's highest top.
+    pub(crate) fn refresh_bmax(&mut self) {
+        let nx = self.grid.nx;
+        let nb = nx.div_ceil(BLOCK);
+        for j in 0..self.grid.ny {
+            for b in 0..nb {
+                let row = &self.top[j * nx..(j + 1) * nx];
+                let hi = row[b * BLOCK..((b + 1) * BLOCK).min(nx)]
+                    .iter()
+                    .fold(f32::NEG_INFINITY, |a, t| a.max(*t));
+                self.bmax[j * nb + b] = hi;
+            }
         }
     }
 
@@ -168,6 +212,7 @@ impl Stock {
                 }
             }
         }
+        s.refresh_bmax();
         s
     }
 
@@ -184,6 +229,7 @@ impl Stock {
                 }
             }
         }
+        s.refresh_bmax();
         s
     }
 
@@ -225,6 +271,7 @@ impl Stock {
                     }
                 }
             });
+        s.refresh_bmax();
         s
     }
 

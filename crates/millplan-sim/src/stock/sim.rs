@@ -78,6 +78,7 @@ pub struct Band<'a> {
     top: &'a mut [f32],
     bot: &'a mut [f32],
     gaps: &'a mut [RowGaps],
+    bmax: &'a mut [f32],
 }
 
 /// How a stroke is applied.
@@ -199,9 +200,21 @@ fn band_rows(band: &Band, g: &Grid, ya: f64, yb: f64) -> Option<(usize, usize)> 
 #[allow(clippy::too_many_arguments)]
 fn ball_pose(band: &mut Band, q0: DVec3, q1: DVec3, cont: bool, r: f64, g: &Grid, n: DVec2, out: &mut StrokeCut) {
     let d = (q1 - q0).truncate();
-    let front_only = cont && q1.z >= q0.z - 1e-12 && d.length_squared() > 1e-24;
+    let l = d.length();
+    let front_only = cont && l > 1e-12;
     let u = d.normalize_or_zero();
-    let mid = (q0.truncate() + q1.truncate()) * 0.5;
+    // Behind the bisector of q0–q1 (w = distance behind it) the ball rises:
+    // d1² − d0² = 2·l·w, so d1 − d0 ≥ l·w/r, and the underside's slope is at
+    // least d/r, so it rises by at least l·w·d0/r² ≥ l·w·(w − l/2)/r². A cell
+    // can go lower only if that is less than the drop Δ = z0 − z1: none
+    // farther behind than w_max = l/4 + √(l²/16 + Δ·r²/l).
+    let drop = (q0.z - q1.z).max(0.0);
+    let w_max = if drop > 0.0 {
+        0.25 * l + (l * l / 16.0 + drop * r * r / l.max(1e-12)).sqrt()
+    } else {
+        0.0
+    };
+    let mid = (q0.truncate() + q1.truncate()) * 0.5 - u * w_max;
     let c = q1.truncate();
     let Some((ja, jb)) = band_rows(band, g, c.y - r, c.y + r) else {
         return;
@@ -234,10 +247,13 @@ fn ball_pose(band: &mut Band, q0: DVec3, q1: DVec3, cont: bool, r: f64, g: &Grid
         let row_bot = &band.bot[row * nx..(row + 1) * nx];
         let gaps = &mut band.gaps[row];
         if gaps.is_empty() {
+            let nb = nx.div_ceil(super::BLOCK);
             ball_row(
-                &mut row_top[i0..=i1],
-                &row_bot[i0..=i1],
-                (g.cx(i0) - c.x) as f32,
+                row_top,
+                row_bot,
+                &mut band.bmax[row * nb..(row + 1) * nb],
+                (i0, i1),
+                (g.cx(0) - c.x) as f32,
                 g.res as f32,
                 dy as f32,
                 zc as f32,
@@ -352,6 +368,8 @@ struct Lanes {
 fn ball_row(
     top: &mut [f32],
     bot: &[f32],
+    bmax: &mut [f32],
+    (i0, i1): (usize, usize),
     dx0: f32,
     res: f32,
     dy: f32,
@@ -360,6 +378,7 @@ fn ball_row(
     n: DVec2,
     out: &mut StrokeCut,
 ) {
+    use super::BLOCK;
     let mut acc = Lanes {
         removed: [0.0; L],
         depth: [0.0; L],
@@ -368,24 +387,41 @@ fn ball_row(
         kmax: [f32::NEG_INFINITY; L],
     };
     let under0 = r * r - dy * dy;
-    let len = top.len();
-    let full = len / L * L;
-    let mut k0 = 0;
-    while k0 < full {
-        let t: &mut [f32; L] = (&mut top[k0..k0 + L]).try_into().expect("eight cells");
-        let b: &[f32; L] = bot[k0..k0 + L].try_into().expect("eight cells");
-        ball_group(t, b, k0 as f32, dx0, res, under0, zc, &mut acc);
-        k0 += L;
-    }
-    if full < len {
-        // The tail, padded with empty cells.
-        let m = len - full;
-        let mut t = [0.0f32; L];
-        let mut b = [0.0f32; L];
-        t[..m].copy_from_slice(&top[full..]);
-        b[..m].copy_from_slice(&bot[full..]);
-        ball_group(&mut t, &b, full as f32, dx0, res, under0, zc, &mut acc);
-        top[full..].copy_from_slice(&t[..m]);
+    for kb in i0 / BLOCK..=i1 / BLOCK {
+        let a = i0.max(kb * BLOCK);
+        let b = i1.min(kb * BLOCK + BLOCK - 1);
+        // The ball's lowest point over these cells: a block it passes above
+        // is left alone.
+        let (xa, xb) = (dx0 + a as f32 * res, dx0 + b as f32 * res);
+        let near = if xa <= 0.0 && xb >= 0.0 { 0.0 } else { xa.abs().min(xb.abs()) };
+        let u = under0 - near * near;
+        let gap = zc - bmax[kb];
+        // zc − √u ≥ bmax, without the root.
+        if u < 0.0 || (gap >= 0.0 && gap * gap >= u) {
+            continue;
+        }
+        let before = acc.removed;
+        let mut k0 = a;
+        while k0 + L <= b + 1 {
+            let t: &mut [f32; L] = (&mut top[k0..k0 + L]).try_into().expect("eight cells");
+            let bb: &[f32; L] = bot[k0..k0 + L].try_into().expect("eight cells");
+            ball_group(t, bb, k0 as f32, dx0, res, under0, zc, &mut acc);
+            k0 += L;
+        }
+        if k0 <= b {
+            // The rest, padded with empty cells.
+            let m = b + 1 - k0;
+            let mut t = [0.0f32; L];
+            let mut bb = [0.0f32; L];
+            t[..m].copy_from_slice(&top[k0..=b]);
+            bb[..m].copy_from_slice(&bot[k0..=b]);
+            ball_group(&mut t, &bb, k0 as f32, dx0, res, under0, zc, &mut acc);
+            top[k0..=b].copy_from_slice(&t[..m]);
+        }
+        if acc.removed != before {
+            let end = (kb * BLOCK + BLOCK).min(top.len());
+            bmax[kb] = top[kb * BLOCK..end].iter().fold(f32::NEG_INFINITY, |m, t| m.max(*t));
+        }
     }
     out.removed += acc.removed.iter().map(|v| *v as f64).sum::<f64>();
     let kmin = acc.kmin.iter().fold(f32::INFINITY, |a, b| a.min(*b));
@@ -691,6 +727,7 @@ impl Simulator {
             top: &mut st.top,
             bot: &mut st.bot,
             gaps: &mut st.gaps,
+            bmax: &mut st.bmax,
         };
         let mut out = StrokeCut::default();
         apply(
@@ -728,11 +765,13 @@ pub fn simulate(
     let cont: Vec<bool> = (0..list.len()).map(|k| continues(list, k)).collect();
     // Bands, dealt to the groups in turn.
     let mut groups: Vec<Vec<Band>> = (0..GROUPS).map(|_| Vec::new()).collect();
-    for (b, ((top, bot), gaps)) in stock
+    let nb = nx.div_ceil(super::BLOCK);
+    for (b, (((top, bot), gaps), bmax)) in stock
         .top
         .chunks_mut(BAND_ROWS * nx)
         .zip(stock.bot.chunks_mut(BAND_ROWS * nx))
         .zip(stock.gaps.chunks_mut(BAND_ROWS))
+        .zip(stock.bmax.chunks_mut(BAND_ROWS * nb))
         .enumerate()
     {
         groups[b % GROUPS].push(Band {
@@ -741,61 +780,71 @@ pub fn simulate(
             top,
             bot,
             gaps,
+            bmax,
         });
     }
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let results: Vec<Vec<(u32, StrokeCut)>> = groups
-        .par_iter_mut()
-        .map(|bands| {
-            let mut touched = Vec::new();
-            if bands.is_empty() {
-                return touched;
-            }
-            for (k, s) in list.iter().enumerate() {
-                let tool = &strokes.tools[s.tool as usize];
-                let a = Apply {
-                    grid,
-                    tool,
-                    continues: cont[k],
-                    max_top,
-                };
-                let mut acc = StrokeCut::default();
-                let rad = tool.reach()
-                    + if s.vertical() {
-                        0.0
-                    } else {
-                        tool.flute + 1e3_f64.min((max_top - s.p0.z.min(s.p1.z)).max(0.0))
-                    };
-                let ylo = s.p0.y.min(s.p1.y) - rad;
-                let yhi = s.p0.y.max(s.p1.y) + rad;
-                for band in bands.iter_mut() {
-                    let (y0, y1) = (
-                        grid.cy(band.j0) - grid.res,
-                        grid.cy(band.j0 + band.rows - 1) + grid.res,
-                    );
-                    if y1 < ylo || y0 > yhi {
-                        continue;
-                    }
-                    apply(band, s, &a, &mut acc);
-                }
-                if acc.touched() {
-                    touched.push((k as u32, acc));
-                }
-                if k % 65_536 == 0 {
-                    let d = done.fetch_add(65_536 / GROUPS, std::sync::atomic::Ordering::Relaxed);
-                    progress(d.min(list.len()));
-                }
-            }
-            touched
-        })
-        .collect();
+    // Strokes in chunks: each band group runs a chunk over its bands, then
+    // the chunk's sums are gathered (in group order) before the next.
     let mut out = vec![StrokeCut::default(); list.len()];
-    for group in &results {
-        for (k, c) in group {
-            out[*k as usize].merge(c);
+    const CHUNK: usize = 1 << 15;
+    let mut start = 0;
+    while start < list.len() {
+        let end = (start + CHUNK).min(list.len());
+        let results: Vec<Vec<(u32, StrokeCut)>> = groups
+            .par_iter_mut()
+            .map(|bands| {
+                let mut touched = Vec::new();
+                if bands.is_empty() {
+                    return touched;
+                }
+                for k in start..end {
+                    let s = &list[k];
+                    let tool = &strokes.tools[s.tool as usize];
+                    let a = Apply {
+                        grid,
+                        tool,
+                        continues: cont[k],
+                        max_top,
+                    };
+                    let (ylo, yhi) = y_reach(s, tool, max_top);
+                    let mut acc = StrokeCut::default();
+                    for band in bands.iter_mut() {
+                        let (y0, y1) = (
+                            grid.cy(band.j0) - grid.res,
+                            grid.cy(band.j0 + band.rows - 1) + grid.res,
+                        );
+                        if y1 < ylo || y0 > yhi {
+                            continue;
+                        }
+                        apply(band, s, &a, &mut acc);
+                    }
+                    if acc.touched() {
+                        touched.push((k as u32, acc));
+                    }
+                }
+                touched
+            })
+            .collect();
+        for group in &results {
+            for (k, c) in group {
+                out[*k as usize].merge(c);
+            }
         }
+        progress(end);
+        start = end;
     }
     out
+}
+
+/// The Y range a stroke's tool body can reach material in.
+fn y_reach(s: &Stroke, tool: &ToolBody, max_top: f64) -> (f64, f64) {
+    let mut rad = tool.reach();
+    if !s.vertical() {
+        let az = s.a0.z.min(s.a1.z).max(1e-3);
+        let up = ((max_top - s.p0.z.min(s.p1.z) + rad) / az).clamp(0.0, 1e4);
+        rad += up * (1.0 - az * az).max(0.0).sqrt();
+    }
+    (s.p0.y.min(s.p1.y) - rad, s.p0.y.max(s.p1.y) + rad)
 }
 
 /// What each IR move did, from its strokes.
