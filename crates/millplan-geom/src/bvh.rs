@@ -475,24 +475,33 @@ impl Bvh {
         let r2 = radius * radius;
         let reaches = |t: &[DVec3; 3]| above.is_none_or(|(n, h)| t.iter().any(|v| n.dot(*v) > h));
         let (ab, ab2) = (b - a, (b - a).length_squared());
+        let inv_ab2 = if ab2 > 0.0 { 1.0 / ab2 } else { 0.0 };
         // Cheap first: the triangle's bounding sphere about its centroid.
         let sphere_near = |[p, q, r]: &[DVec3; 3]| {
-            let c = (*p + *q + *r) / 3.0;
+            let c = (*p + *q + *r) * (1.0 / 3.0);
             let rho2 = (*p - c)
                 .length_squared()
                 .max((*q - c).length_squared())
                 .max((*r - c).length_squared());
-            let s = if ab2 > 0.0 {
-                ((c - a).dot(ab) / ab2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
+            let s = ((c - a).dot(ab) * inv_ab2).clamp(0.0, 1.0);
             let reach = radius + rho2.sqrt();
             (a + ab * s - c).length_squared() < reach * reach * (1.0 + 1e-9)
+        };
+        // Also cheap: both ends of the segment on one side of the triangle's
+        // plane and at least `radius` from it (with a relative margin far
+        // above rounding) keep the whole segment that far from the triangle.
+        // Near a tool's contact point the surface is nearly tangent to the
+        // ball, and this is what rules most of it out.
+        let plane_near = |[p, q, r]: &[DVec3; 3]| {
+            let m = (*q - *p).cross(*r - *p);
+            let (sa, sb) = ((a - *p).dot(m), (b - *p).dot(m));
+            let lim2 = r2 * m.length_squared() * (1.0 + 1e-9);
+            sa * sb <= 0.0 || sa.abs().min(sb.abs()).powi(2) < lim2
         };
         self.any_near_ray(a, b - a, 1.0, radius, above, |k, t| {
             let [p, q, r] = t;
             skip != Some(self.order[k])
+                && plane_near(t)
                 && sphere_near(t)
                 && reaches(t)
                 && segment_triangle_dist2(a, b, *p, *q, *r) < r2
@@ -1210,6 +1219,39 @@ mod tests {
             culled += (bvh.capsule_hits(a, b, r, None) && !brute) as usize;
         }
         assert!(hits > 40 && culled > 10, "{hits} hits, {culled} only below");
+    }
+
+    #[test]
+    fn capsule_test_near_tangency_agrees_with_brute_force() {
+        // Capsules standing on the surface like a tool: the axis starting a
+        // radius (a hair more or less) off a facet along its normal, tilted
+        // from steep to grazing, so that the surface nearly touches them
+        // over a long stretch: where the per-triangle plane test decides.
+        let mesh = tessellate(&DemoSurface::default(), 0.8);
+        let bvh = Bvh::build(&mesh);
+        let (mut hits, mut free) = (0, 0);
+        for i in 0..300 {
+            let f = i as f64;
+            let t = (i * 7919) % mesh.len();
+            let [p, q, s] = mesh.corners(t);
+            let n = mesh.facet_normal(t);
+            let r = 0.5 + (f * 0.7) % 4.0;
+            let lift = r * (1.0 + [-1e-3, 1e-3, 1e-6][i % 3]);
+            let a = (p + q + s) / 3.0 + n * lift;
+            let (u, _) = n.any_orthonormal_pair();
+            let tilt = (f * 0.29) % 1.55;
+            let spin = f * 2.4;
+            let side = u * spin.cos() + n.cross(u) * spin.sin();
+            let b = a + (n * tilt.cos() + side * tilt.sin()) * (5.0 + (f * 1.3) % 30.0);
+            let brute = (0..mesh.len()).any(|k| {
+                let [p, q, s] = mesh.corners(k);
+                segment_triangle_dist2(a, b, p, q, s) < r * r
+            });
+            assert_eq!(bvh.capsule_hits(a, b, r, None), brute, "capsule {i}");
+            hits += brute as usize;
+            free += !brute as usize;
+        }
+        assert!(hits > 30 && free > 30, "{hits} hits, {free} free");
     }
 
     #[test]

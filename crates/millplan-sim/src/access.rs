@@ -501,26 +501,30 @@ fn accessibility_mapped(
         .map(|(v, _)| *v)
         .collect();
     let dirs: Vec<DVec3> = (0..cells).map(|c| grid.direction(c)).collect();
-    // One word of 64 directions per job: its bits of every facet.
-    let columns: Vec<Vec<u64>> = (0..words)
-        .into_par_iter()
-        .map(|w| {
-            let mut col = vec![0u64; mesh.len()];
-            for (k, &d) in dirs.iter().enumerate().skip(w * 64).take(64) {
-                let view = ToolView::new(mesh, &verts, d, tool, test.tol());
-                for (t, f) in facets.iter().enumerate() {
-                    let Some((p, n)) = *f else { continue };
-                    if d.dot(n) > test.min_dot && view.free(&test, p, n) {
-                        col[t] |= 1 << (k % 64);
+    // One word of 64 directions at a time: their views side by side, then
+    // the facets in chunks, so that both cores stay busy to the end (the
+    // cost of a facet varies tenfold with its slope and neighbourhood).
+    for (w, word) in dirs.chunks(64).enumerate() {
+        let views: Vec<ToolView> = word
+            .par_iter()
+            .map(|&d| ToolView::new(mesh, &verts, d, tool, test.tol()))
+            .collect();
+        let col: Vec<u64> = facets
+            .par_iter()
+            .with_min_len(256)
+            .map(|f| {
+                let Some((p, n)) = *f else { return 0 };
+                let mut bits = 0u64;
+                for (k, view) in views.iter().enumerate() {
+                    if view.d.dot(n) > test.min_dot && view.free(&test, p, n) {
+                        bits |= 1 << k;
                     }
                 }
-            }
-            col
-        })
-        .collect();
-    for (w, col) in columns.iter().enumerate() {
-        for (t, bits) in col.iter().enumerate() {
-            out.bits[t * words + w] = *bits;
+                bits
+            })
+            .collect();
+        for (t, bits) in col.into_iter().enumerate() {
+            out.bits[t * words + w] = bits;
         }
     }
     out
@@ -553,6 +557,8 @@ struct ToolView {
     e2: DVec3,
     /// The ball's radius (its centre stands this far off the facet), mm.
     radius: f64,
+    /// The radius of the shank's capsule (the ball's, less the tolerance), mm.
+    shank_radius: f64,
     reach: f64,
     /// The holder's radius and length, when there is one.
     holder: Option<(f64, f64)>,
@@ -775,6 +781,7 @@ impl ToolView {
             e1,
             e2,
             radius: tool.radius,
+            shank_radius: tool.radius - tol,
             reach: tool.reach,
             holder,
             shank: map(tool.radius - tol),
@@ -817,10 +824,29 @@ impl ToolView {
             _ => true,
         };
         // Nothing within the shank's radius above the ball's centre.
-        let shank_free = shank_at.is_some_and(|s| self.shank.near[s] < base - eps);
+        let near = shank_at.map(|s| self.shank.near[s]);
+        let shank_free = near.is_some_and(|z| z < base - eps);
         // The holder's test first: it is the quicker, and often blocked.
-        (holder_free || test.holder_clear(p, n, self.d))
-            && (shank_free || test.shank_clear(p, n, self.d))
+        if !(holder_free || test.holder_clear(p, n, self.d)) {
+            return false;
+        }
+        if shank_free {
+            return true;
+        }
+        // The shank's capsule is the union of the capsules over two pieces
+        // of its axis, split at `s` from the ball's centre. Every point of
+        // the upper one lies within the shank's radius of the axis and
+        // deeper than base + s − radius: above the deepest mesh point within
+        // that radius when s is chosen so, and the map then proves it free.
+        // Only the lower, short piece needs the capsule test; it meets the
+        // mesh only where the whole shank does.
+        if let Some(z) = near {
+            let s = z - base + self.shank_radius + 4.0 * eps;
+            if s < 0.75 * self.reach {
+                return test.shank_piece_clear(p, n, self.d, s);
+            }
+        }
+        test.shank_clear(p, n, self.d)
     }
 }
 
@@ -939,6 +965,23 @@ impl<'a> DirectionTest<'a> {
         !self.bvh.capsule_hits_above(
             centre,
             top,
+            tool.radius - tol,
+            None,
+            Some((d, d.dot(centre))),
+        )
+    }
+
+    /// Tool mode: whether the shank's axis from the ball's centre up to
+    /// `s` (< the reach) along d, with the shank's radius about it, meets
+    /// nothing: the lower piece of [`shank_clear`](Self::shank_clear).
+    fn shank_piece_clear(&self, p: DVec3, n: DVec3, d: DVec3, s: f64) -> bool {
+        let TestMode::Tool { tool, tol, .. } = &self.mode else {
+            return true;
+        };
+        let centre = p + n * tool.radius;
+        !self.bvh.capsule_hits_above(
+            centre,
+            centre + d * s.clamp(0.0, tool.reach),
             tool.radius - tol,
             None,
             Some((d, d.dot(centre))),
@@ -1726,6 +1769,44 @@ mod tests {
                 for f in 0..m.len() {
                     assert_eq!(fast.set(f), plain.set(f), "facet {f}, {tool:?}");
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn tool_mode_agrees_with_the_exact_reference_on_random_tools() {
+        // Random tools (ball, reach, holder) on the bumps and in the pocket:
+        // the depth maps with the split shank test and the chunked facets
+        // answer like `accessibility_exact`, cell for cell.
+        let bumps = millplan_geom::analytic::tessellate(&Bumps, 2.2);
+        let pocket_mesh = mesh(&pocket(20.0, 7.0, 10.0)).0;
+        let g = Icosphere::new(2);
+        let mut seed = 20_261_123u64;
+        let mut next = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for (i, m) in [&bumps, &pocket_mesh, &bumps, &pocket_mesh]
+            .into_iter()
+            .enumerate()
+        {
+            let b = Bvh::build(m);
+            let radius = 0.5 + 4.0 * next();
+            let tool = ToolModel {
+                radius,
+                reach: radius + 30.0 * next(),
+                holder_radius: if i < 2 { radius + 12.0 * next() } else { 0.0 },
+                holder_length: 10.0 + 40.0 * next(),
+            };
+            let clearance = [0.0, 5.0][i % 2];
+            let fast = accessibility_mapped(m, &b, &g, clearance, &tool);
+            let exact = accessibility_exact(m, &b, &g, clearance, &tool);
+            let total: usize = (0..m.len()).map(|f| exact.count(f)).sum();
+            assert!(total > 0, "{tool:?}");
+            for f in 0..m.len() {
+                assert_eq!(fast.set(f), exact.set(f), "facet {f}, {tool:?}");
             }
         }
     }
