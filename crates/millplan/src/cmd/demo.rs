@@ -13,9 +13,11 @@ use std::path::PathBuf;
 /// ball-end finishing raster over it, generated on the spot.
 ///
 /// Writes into the output folder: the part (STL), the raster (APT/CL), the
-/// program for each supported control, and the result of constant-cutting-speed
-/// spindle control (vc 63 m/min, fz 0.125 mm, 2 flutes, ap 0.3 mm: the paper's
-/// test conditions): the controlled program, its per-point table and its report.
+/// same raster at 0°, 45° and 90° for `directions`, the machine file it runs
+/// on, the program for each supported control, and the result of
+/// constant-cutting-speed spindle control (vc 63 m/min, fz 0.125 mm, 2 flutes,
+/// ap 0.3 mm: the paper's test conditions): the controlled program, its
+/// per-point table and its report. Every input of README's tour is among them.
 #[derive(clap::Args)]
 pub struct Args {
     /// Folder for the demo's outputs (created if missing).
@@ -34,6 +36,41 @@ fn write_all(written: &[(PathBuf, Vec<u8>)]) -> CliResult<()> {
         outputs.write(path, bytes)?;
     }
     outputs.commit()
+}
+
+/// The demo's machine: a three-axis high-speed machining centre with a Fanuc
+/// control, the machine file every `--machine` of README's tour reads.
+pub const MACHINE_TOML: &str = r#"# The machine of millplan's demo (examples/machine.toml documents every field).
+name = "demo HSC centre, three axes"
+
+[control]
+dialect = "fanuc"
+
+[spindle]
+min = 500       # 1/min
+max = 18000     # 1/min
+accel = 6000    # 1/min per second
+
+[feed]
+max = 20000     # mm/min
+rapid = 15000   # mm/min
+"#;
+
+/// The demo raster at 0°, 45° and 90° as APT/CL, each with its file name.
+fn direction_rasters(surface: &DemoSurface) -> CliResult<Vec<(String, Vec<u8>)>> {
+    let mut files = Vec::new();
+    for angle in [0, 45, 90] {
+        let r = Raster {
+            angle_deg: angle as f64,
+            ..Raster::default()
+        };
+        let (program, _) = raster(surface, &r);
+        let mut apt = Vec::new();
+        millplan_nc::write::apt::write_apt(&program, WriteOptions::new(Target::Apt), &mut apt)
+            .map_err(|e| CliError::internal(e.to_string()))?;
+        files.push((format!("raster_{angle}.apt"), apt));
+    }
+    Ok(files)
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -60,10 +97,19 @@ pub fn run(a: Args) -> CliResult<i32> {
             .map_err(|e| CliError::internal(e.to_string()))?;
         written.push((a.output.join(name), out));
     }
+    for (name, bytes) in direction_rasters(&surface)? {
+        written.push((a.output.join(name), bytes));
+    }
+    let machine =
+        Machine::from_toml(MACHINE_TOML).map_err(|e| CliError::internal(e.to_string()))?;
+    written.push((
+        a.output.join("machine.toml"),
+        MACHINE_TOML.as_bytes().to_vec(),
+    ));
     // Spindle control on the same part and path.
     let params = SpeedParams::new(63.0, 0.125, 2, 0.3);
-    let res = apply(&program, &mesh, &Machine::default(), &params)
-        .map_err(|e| CliError::internal(e.to_string()))?;
+    let res =
+        apply(&program, &mesh, &machine, &params).map_err(|e| CliError::internal(e.to_string()))?;
     let (controlled, _) = write_program(&res.program, WriteOptions::new(Target::Fanuc))
         .map_err(|e| CliError::internal(e.to_string()))?;
     written.push((a.output.join("finish_constant_vc_fanuc.nc"), controlled));
@@ -82,10 +128,22 @@ pub fn run(a: Args) -> CliResult<i32> {
         .into_bytes(),
     ));
     write_all(&written)?;
-    let s = millplan_nc::stats::summarize(&program, 15000.0);
+    print_summary(&a, &written, mesh.len(), &program, &res.summary);
+    Ok(EXIT_OK)
+}
+
+/// What the demo made and where, and what spindle control did on it.
+fn print_summary(
+    a: &Args,
+    written: &[(PathBuf, Vec<u8>)],
+    triangles: usize,
+    program: &millplan_nc::Program,
+    r: &millplan_plan::speed::Summary,
+) {
+    let s = millplan_nc::stats::summarize(program, 15000.0);
     outln!(
         "millplan demo: free-form part {} triangles, ball D10 raster {} points",
-        mesh.len(),
+        triangles,
         program.move_count()
     );
     outln!(
@@ -93,10 +151,9 @@ pub fn run(a: Args) -> CliResult<i32> {
         s.cutting_mm,
         s.time_s
     );
-    for (path, bytes) in &written {
+    for (path, bytes) in written {
         outln!("  wrote {} ({} bytes)", path.display(), bytes.len());
     }
-    let r = &res.summary;
     outln!(
         "spindle control: D_w {:.2}…{:.2} mm, n {:.0}…{:.0} 1/min; vc {:.1}…{:.1} m/min with control vs {:.1}…{:.1} at a constant {:.0} 1/min",
         r.d_w.min, r.d_w.max, r.spindle.min, r.spindle.max, r.vc_controlled.min, r.vc_controlled.max, r.vc_constant.min, r.vc_constant.max, r.constant_spindle
@@ -105,5 +162,4 @@ pub fn run(a: Args) -> CliResult<i32> {
         "open {} in a browser for the plots",
         a.output.join("report.html").display()
     );
-    Ok(EXIT_OK)
 }
