@@ -4,8 +4,11 @@
 //! Interface-glue pair (14 mm ball-end operation).
 
 use millplan_nc::{parse_program, MoveKind, ReadOptions};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
+
+#[path = "../../millplan-nc/tests/shared_data/mod.rs"]
+mod shared_data;
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_millplan"))
@@ -158,16 +161,12 @@ fn speed_on_the_generated_free_form_case() {
 
 #[test]
 fn speed_on_interface_glue() {
-    let root =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/swcam-apt-stl-pairs");
-    let (apt, stl) = (
-        root.join("Interface-glue.apt"),
-        root.join("Interface-glue.STL"),
-    );
-    if !apt.exists() || !stl.exists() {
-        eprintln!("skipped: shared/data not present");
+    let (Some(apt), Some(stl)) = (
+        shared_data::file("swcam-apt-stl-pairs/Interface-glue.apt"),
+        shared_data::file("swcam-apt-stl-pairs/Interface-glue.STL"),
+    ) else {
         return;
-    }
+    };
     let dir = tempfile::tempdir().expect("tmp");
     let r = run(&apt, &stl, dir.path(), &[]);
     check(&r);
