@@ -43,7 +43,7 @@ static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
 /// Resource limits (what a small input may ask for) are in README.md; raise
 /// one with --limit NAME=VALUE or MILLPLAN_LIMITS=NAME=VALUE,….
 #[derive(Parser)]
-#[command(name = "millplan", version, about, long_about)]
+#[command(name = "millplan", version, about, long_about, next_line_help = true)]
 struct Cli {
     /// Raise (or lower) a resource limit: moves, expansion, line-bytes,
     /// expression-depth, stl-triangles, stl-extent (mm), memory (MB).
@@ -182,6 +182,75 @@ fn run(command: Command) -> error::CliResult<i32> {
         Command::Tool(a) => cmd::tool::run(a),
         Command::Thread(a) => cmd::thread::run(a),
         Command::Explain(a) => cmd::explain::run(a),
+    }
+}
+
+#[cfg(test)]
+mod help_tests {
+    use clap::CommandFactory;
+
+    /// Every command of the tree with its path (`millplan tool add`).
+    fn commands() -> Vec<(String, clap::Command)> {
+        let mut root = super::Cli::command();
+        root.build();
+        let mut out = Vec::new();
+        let mut todo = vec![("millplan".to_string(), root)];
+        while let Some((path, c)) = todo.pop() {
+            for s in c.get_subcommands() {
+                if s.get_name() != "help" {
+                    todo.push((format!("{path} {}", s.get_name()), s.clone()));
+                }
+            }
+            out.push((path, c));
+        }
+        out
+    }
+
+    /// Every command says what it does, and every option and argument of every
+    /// command says what it is.
+    #[test]
+    fn every_command_option_and_argument_has_help() {
+        let mut missing = Vec::new();
+        let empty = |h: Option<&clap::builder::StyledStr>| {
+            h.is_none_or(|h| h.to_string().trim().is_empty())
+        };
+        for (path, c) in commands() {
+            if empty(c.get_about()) && empty(c.get_long_about()) {
+                missing.push(path.clone());
+            }
+            for a in c.get_arguments() {
+                if matches!(a.get_id().as_str(), "help" | "version") {
+                    continue;
+                }
+                if empty(a.get_help()) && empty(a.get_long_help()) {
+                    missing.push(format!("{path} {}", a.get_id()));
+                }
+            }
+        }
+        assert!(commands().len() > 20, "the walk found the subcommands");
+        assert!(missing.is_empty(), "without help: {missing:#?}");
+    }
+
+    /// One layout for every command's help: the text of an option on the
+    /// line after its name, never beside it.
+    #[test]
+    fn every_help_has_one_layout() {
+        for (path, mut c) in commands() {
+            let help = c.render_long_help().to_string();
+            for line in help.lines() {
+                let t = line.trim_start();
+                // `-o, --output` or `--stl`, not a possible value (`- latlon: …`).
+                let option = t.starts_with('-')
+                    && t.chars()
+                        .nth(1)
+                        .is_some_and(|c| c == '-' || c.is_ascii_alphanumeric());
+                let option = option || (t.starts_with('<') && line.starts_with("  "));
+                assert!(
+                    !(option && t.trim_end().contains("  ")),
+                    "{path}: `{line}` has its help beside it"
+                );
+            }
+        }
     }
 }
 

@@ -46,17 +46,24 @@ pub struct Args {
     /// Point spacing of generated rasters, mm.
     #[arg(long, default_value_t = 0.5)]
     pub step: f64,
+    /// Part surface (STL) in the same coordinates as the paths.
     #[arg(long)]
     pub stl: PathBuf,
     #[command(flatten)]
     pub cut: super::CuttingData,
+    /// Machine file (examples/machine.toml): the spindle range and acceleration the
+    /// load is judged by; a typical HSC machine by default.
     #[arg(long)]
     pub machine: Option<PathBuf>,
     /// Indicator to rank by (smaller is better).
     #[arg(long, value_enum, default_value = "tv")]
     pub by: RankBy,
+    /// Unit of a program that does not say (NX's Haas posts, bare GOTO files): mm or
+    /// inch.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
+    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
+    /// on standard error.
     #[arg(long)]
     pub json: bool,
 }

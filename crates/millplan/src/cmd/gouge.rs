@@ -36,10 +36,15 @@ pub struct Args {
     /// Cutter for operations whose tool has no geometry: ball:D, flat:D, bull:D:R, cone:D:ANGLE.
     #[arg(long)]
     pub tool: Option<String>,
+    /// Unit of a program that does not say (NX's Haas posts, bare GOTO files): mm or
+    /// inch.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
+    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
+    /// on standard error.
     #[arg(long)]
     pub json: bool,
+    /// Print no warnings or notes about the inputs (errors still print).
     #[arg(long, short)]
     pub quiet: bool,
 }

@@ -52,14 +52,17 @@ pub struct Args {
     /// Clearance above the part for rapids, mm.
     #[arg(long, default_value_t = 5.0)]
     pub clearance: f64,
+    /// Cutting feed written on every cutting move, mm/min.
     #[arg(long, default_value_t = 1500.0)]
     pub feed: f64,
+    /// Spindle speed written with the tool, 1/min.
     #[arg(long, default_value_t = 6000.0)]
     pub spindle: f64,
     /// Output dialect; default: from the output's extension (.apt/.cls APT,
     /// .nc Fanuc, .mpf Sinumerik, .h Heidenhain, .ngc LinuxCNC).
     #[arg(long, value_enum)]
     pub to: Option<TargetArg>,
+    /// Raster program to write (APT/CL, or the dialect of --to or the extension).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Machine file (examples/machine.toml): its control's dialect is the
@@ -70,6 +73,7 @@ pub struct Args {
     /// the part (a mesh with holes or seams can make drop-cutter miss material).
     #[arg(long)]
     pub force: bool,
+    /// Print no warnings or notes about the inputs (errors still print).
     #[arg(long, short)]
     pub quiet: bool,
 }

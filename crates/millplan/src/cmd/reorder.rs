@@ -49,9 +49,14 @@ pub enum StartArg {
 /// original and the reordered order.
 #[derive(clap::Args)]
 pub struct Args {
+    /// Program to reorder (APT/CL or G-code).
     pub path: PathBuf,
+    /// Part surface (STL) in the same coordinates as the program.
     #[arg(long)]
     pub stl: PathBuf,
+    /// How the order is searched: as-run (default) measures candidate orders as the
+    /// machine will run them; paper is the thesis's greedy search; optimised keeps
+    /// passes whole.
     #[arg(long, value_enum, default_value = "as-run")]
     pub method: MethodArg,
     /// Start of the paper's search, among the border points.
@@ -60,6 +65,7 @@ pub struct Args {
     /// Start at this cutting point (index) instead.
     #[arg(long)]
     pub start_index: Option<usize>,
+    /// Seed of --start random: the same seed picks the same start point.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Minimum number of candidates of the paper's search.
@@ -79,20 +85,30 @@ pub struct Args {
     /// Write the reordered points without spindle control.
     #[arg(long)]
     pub no_speed: bool,
+    /// Machine file (examples/machine.toml): spindle range and acceleration, feed
+    /// limits, control dialect; a typical HSC machine by default.
     #[arg(long)]
     pub machine: Option<PathBuf>,
+    /// Output dialect; default: the machine file's control, else the output's
+    /// extension, else the source's dialect.
     #[arg(long, value_enum)]
     pub to: Option<TargetArg>,
+    /// Reordered program to write.
     #[arg(short, long)]
     pub output: PathBuf,
     /// HTML report: both orders side by side (D_w and spindle speed along the
     /// path, the distribution of successive changes, the tour from above).
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Unit of a program that does not say (NX's Haas posts, bare GOTO files): mm or
+    /// inch.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
+    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
+    /// on standard error.
     #[arg(long)]
     pub json: bool,
+    /// Print no warnings or notes about the inputs (errors still print).
     #[arg(long, short)]
     pub quiet: bool,
 }

@@ -77,8 +77,12 @@ pub struct Args {
     /// Write the part rotated into the chosen setup (binary STL).
     #[arg(long, short)]
     pub output: Option<PathBuf>,
+    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
+    /// on standard error.
     #[arg(long)]
     pub json: bool,
+    /// Print no warnings or notes about the inputs (errors still print). No progress
+    /// either.
     #[arg(long, short)]
     pub quiet: bool,
 }

@@ -105,6 +105,7 @@ pub struct Args {
     /// Print the wall time of each phase on standard error.
     #[arg(long)]
     pub timings: bool,
+    /// Print no warnings or notes about the inputs (errors still print).
     #[arg(long, short)]
     pub quiet: bool,
 }

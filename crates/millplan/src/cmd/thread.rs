@@ -33,6 +33,7 @@ pub enum ThreadCommand {
         /// Measured pitch diameter, mm.
         #[arg(long)]
         d2: f64,
+        /// Print the result as JSON on standard output (the key `ok`).
         #[arg(long)]
         json: bool,
     },

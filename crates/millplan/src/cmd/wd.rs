@@ -55,8 +55,12 @@ pub struct Args {
     /// Cutting speed, m/min: also print the spindle speed for it.
     #[arg(long)]
     pub vc: Option<f64>,
+    /// Which model computes D_w: geometric (exact) or regression (the fitted
+    /// surrogate).
     #[arg(long, value_enum, default_value = "geometric")]
     pub model: ModelArg,
+    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
+    /// on standard error.
     #[arg(long)]
     pub json: bool,
 }
