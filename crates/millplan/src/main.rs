@@ -132,11 +132,49 @@ fn exit_code(r: &Result<i32, error::CliError>, failure: Option<&str>) -> i32 {
     }
 }
 
+/// Whether the command line asks for JSON (`--json` before any `--`): then
+/// errors are JSON too, also those of arguments clap refuses.
+fn json_requested() -> bool {
+    std::env::args_os()
+        .skip(1)
+        .take_while(|a| a != "--")
+        .any(|a| a == "--json")
+}
+
+/// Prints an error on standard error: `error: message`, or under `--json`
+/// one line `{"error": {…}}`.
+fn print_error(message: &str, exit: i32, usage: bool, json: bool) {
+    if json {
+        eprintln!("{}", error::json(&error::shorten(message), exit, usage));
+    } else {
+        eprintln!("error: {}", error::shorten(message));
+    }
+}
+
 fn main() {
     no_panic_on_closed_output();
     small_pages_if_asked();
+    let json = json_requested();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
+        Err(e) if e.use_stderr() && json => {
+            // clap's message without its usage lines, on one line.
+            let text = e.to_string();
+            let what = text.split("\n\nUsage:").next().unwrap_or("");
+            let what: Vec<&str> = what
+                .lines()
+                .map(str::trim)
+                .filter(|l| !l.is_empty())
+                .collect();
+            let what = what.join(" ");
+            print_error(
+                what.trim_start_matches("error: "),
+                EXIT_BAD_INPUT,
+                true,
+                true,
+            );
+            std::process::exit(EXIT_BAD_INPUT);
+        }
         Err(e) => {
             let code = if e.use_stderr() {
                 EXIT_BAD_INPUT
@@ -152,16 +190,17 @@ fn main() {
         }
     };
     if let Err(e) = limits::init(&cli.limit) {
-        eprintln!("error: {}", error::shorten(&e.message));
+        print_error(&e.message, e.code, false, json);
         std::process::exit(e.code);
     }
     io::remove_staged_on_signals();
     let r = run(cli.command);
     let failure = io::stdout_failure();
     if let Err(e) = &r {
-        eprintln!("error: {}", error::shorten(&e.message));
+        print_error(&e.message, e.code, false, json);
     } else if let Some(f) = &failure {
-        eprintln!("error: standard output: {f}: the output is cut short");
+        let m = format!("standard output: {f}: the output is cut short");
+        print_error(&m, EXIT_INTERNAL, false, json);
     }
     std::process::exit(exit_code(&r, failure.as_deref()));
 }

@@ -23,6 +23,10 @@ pub struct Args {
     /// Folder for the demo's outputs (created if missing).
     #[arg(short, long, default_value = "millplan-demo")]
     pub output: PathBuf,
+    /// Print a machine-readable summary (JSON) on standard output; errors too,
+    /// as JSON on standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Writes every file, all of them or none.
@@ -141,6 +145,29 @@ fn print_summary(
     r: &millplan_plan::speed::Summary,
 ) {
     let s = millplan_nc::stats::summarize(program, 15000.0);
+    if a.json {
+        let files: Vec<_> = written
+            .iter()
+            .map(|(p, b)| serde_json::json!({"path": p.display().to_string(), "bytes": b.len()}))
+            .collect();
+        let json = serde_json::json!({
+            "folder": a.output.display().to_string(),
+            "triangles": triangles,
+            "points": program.move_count(),
+            "cutting_mm": s.cutting_mm,
+            "time_s": s.time_s,
+            "files": files,
+            "spindle_control": {
+                "d_w_mm": [r.d_w.min, r.d_w.max],
+                "spindle_rpm": [r.spindle.min, r.spindle.max],
+                "vc_controlled_m_min": [r.vc_controlled.min, r.vc_controlled.max],
+                "vc_constant_m_min": [r.vc_constant.min, r.vc_constant.max],
+                "constant_spindle_rpm": r.constant_spindle,
+            },
+        });
+        outln!("{json}");
+        return;
+    }
     outln!(
         "millplan demo: free-form part {} triangles, ball D10 raster {} points",
         triangles,

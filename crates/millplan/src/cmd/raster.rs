@@ -76,6 +76,10 @@ pub struct Args {
     /// Print no warnings or notes about the inputs (errors still print).
     #[arg(long, short)]
     pub quiet: bool,
+    /// Print a machine-readable summary (JSON) on standard output; errors too,
+    /// as JSON on standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Every argument in its physical range: the stepover from a thousandth of
@@ -201,7 +205,36 @@ pub fn run(a: Args) -> CliResult<i32> {
     let out = write_program(&prog, machine.write_options(target), &a.stl, a.quiet)?;
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
-    let s = millplan_nc::stats::summarize(&prog, 15000.0);
+    Ok(print_result(&a, &prog, &rep))
+}
+
+/// What was written and what the gouge check found; the exit code.
+fn print_result(
+    a: &Args,
+    prog: &millplan_nc::Program,
+    rep: &millplan_sim::gouge::GougeReport,
+) -> i32 {
+    let s = millplan_nc::stats::summarize(prog, 15000.0);
+    if a.json {
+        let json = serde_json::json!({
+            "output": a.output.display().to_string(),
+            "moves": prog.move_count(),
+            "cutting_mm": s.cutting_mm,
+            "time_s": s.time_s,
+            "gouge_check": {
+                "moves_checked": rep.moves_checked,
+                "points_checked": rep.points_checked,
+                "gouges": rep.gouges.len(),
+                "max_depth_mm": rep.max_depth,
+            },
+        });
+        outln!("{json}");
+        return if rep.gouges.is_empty() {
+            EXIT_OK
+        } else {
+            EXIT_FINDINGS
+        };
+    }
     outln!(
         "wrote {}: {} moves, {:.0} mm cutting, {:.0} s at {} mm/min; gouge check: {} moves at {} points, {}",
         a.output.display(),
@@ -213,9 +246,9 @@ pub fn run(a: Args) -> CliResult<i32> {
         rep.points_checked,
         if rep.gouges.is_empty() { "clean" } else { "gouges" }
     );
-    Ok(if rep.gouges.is_empty() {
+    if rep.gouges.is_empty() {
         EXIT_OK
     } else {
         EXIT_FINDINGS
-    })
+    }
 }
