@@ -71,6 +71,8 @@ enum Command {
     Explain(cmd::explain::Args),
     #[command(name = "wd-sweep")]
     WdSweep(cmd::sweep::Args),
+    Completions(cmd::completions::Args),
+    Man(cmd::completions::ManArgs),
 }
 
 /// With `MILLPLAN_SMALL_PAGES=1`, faults this process's fresh memory in 4 KiB
@@ -221,6 +223,8 @@ fn run(command: Command) -> error::CliResult<i32> {
         Command::Tool(a) => cmd::tool::run(a),
         Command::Thread(a) => cmd::thread::run(a),
         Command::Explain(a) => cmd::explain::run(a),
+        Command::Completions(a) => cmd::completions::run(a),
+        Command::Man(a) => cmd::completions::man(a),
     }
 }
 

@@ -360,7 +360,15 @@ fn crate_dependencies_point_one_way() {
         ),
         ("millplan-tooldb", &[]),
     ];
-    let binary_only = ["clap", "indicatif", "tempfile", "anyhow", "mimalloc"];
+    let binary_only = [
+        "clap",
+        "clap_complete",
+        "clap_mangen",
+        "indicatif",
+        "tempfile",
+        "anyhow",
+        "mimalloc",
+    ];
     let packages = m["packages"].as_array().expect("packages");
     let mut seen = 0;
     for p in packages {

@@ -206,6 +206,16 @@ fn cases(d: &Path, tmp: &Path) -> Vec<Case> {
             ]),
         },
         Case {
+            command: "completions",
+            ok: v(&["completions", "--json", "fish"]),
+            fails: v(&["completions", "--json", "powershell"]),
+        },
+        Case {
+            command: "man",
+            ok: v(&["man", "--json", "-o", &t("man")]),
+            fails: v(&["man", "--json", "-o", &stl]),
+        },
+        Case {
             command: "explain",
             ok: v(&["explain", "--json"]),
             fails: v(&["explain", "--json", "no-such-code"]),
