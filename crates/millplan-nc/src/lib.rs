@@ -56,6 +56,9 @@ impl Default for ReadOptions {
 /// Reads a program of any supported format from its text, detecting the format
 /// from the content. Lines end at LF, CRLF or a lone CR.
 pub fn parse_program(src: &str, opts: ReadOptions) -> Result<Parsed, ParseError> {
+    if let Some(e) = detect::krl_refusal(src) {
+        return Err(e);
+    }
     let mut r = detect::Reader::new(detect::detect(src), opts);
     for (k, line) in lines::split(src).enumerate() {
         check_line_length(line.len(), k + 1, &opts.limits)?;

@@ -182,7 +182,11 @@ pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
             path.display()
         )));
     }
-    let dialect = detect(&String::from_utf8_lossy(head));
+    let head = String::from_utf8_lossy(head);
+    if let Some(e) = millplan_nc::detect::krl_refusal(&head) {
+        return Err(CliError::input(format!("{}:{e}", path.display())));
+    }
+    let dialect = detect(&head);
     // A move takes a line of 20 bytes or more.
     let opts = ReadOptions {
         expect_moves: (size / 20) as usize,
