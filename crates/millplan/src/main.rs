@@ -274,6 +274,20 @@ mod help_tests {
         assert!(missing.is_empty(), "without help: {missing:#?}");
     }
 
+    /// Every command that reads an STL can be told its unit.
+    #[test]
+    fn every_stl_reader_takes_stl_units() {
+        for (path, c) in commands() {
+            let ids: Vec<&str> = c.get_arguments().map(|a| a.get_id().as_str()).collect();
+            if ids.contains(&"stl") {
+                assert!(
+                    ids.contains(&"stl_units"),
+                    "{path} reads --stl without --stl-units"
+                );
+            }
+        }
+    }
+
     /// One layout for every command's help: the text of an option on the
     /// line after its name, never beside it.
     #[test]

@@ -17,7 +17,13 @@ fn completions_for_bash_zsh_and_fish_name_the_commands_and_options() {
             String::from_utf8_lossy(&o.stderr)
         );
         let script = String::from_utf8_lossy(&o.stdout);
-        for word in ["millplan", "reorder", "wd-sweep", "completions"] {
+        for word in [
+            "millplan",
+            "reorder",
+            "wd-sweep",
+            "completions",
+            "stl-units",
+        ] {
             assert!(script.contains(word), "{shell}: no `{word}` in the script");
         }
         // `--stl`, as fish spells a long option too.

@@ -49,6 +49,10 @@ pub struct Args {
     /// Part surface (STL) in the same coordinates as the paths.
     #[arg(long)]
     pub stl: PathBuf,
+    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
+    /// converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
     #[command(flatten)]
     pub cut: super::CuttingData,
     /// Machine file (examples/machine.toml): the spindle range and acceleration the
@@ -105,7 +109,7 @@ fn check_rasters(
 pub fn run(a: Args) -> CliResult<i32> {
     a.cut.check()?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let (mesh, _) = read_surface(&a.stl)?;
+    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
     let cx = Context::new(machine).with_part(&mesh);
     let mut candidates = Vec::new();
     if !a.angles.is_empty() {

@@ -24,6 +24,10 @@ pub struct Args {
     /// Part surface (STL).
     #[arg(long)]
     pub stl: PathBuf,
+    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
+    /// converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
     /// Depth that counts as a gouge, mm.
     #[arg(long, default_value_t = 0.005)]
     pub tol: f64,
@@ -76,7 +80,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             )));
         }
     }
-    let (mesh, _) = read_surface(&a.stl)?;
+    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
     print_diagnostics(
         &a.stl,
         &checks::mesh(&mesh).into_iter().collect::<Vec<_>>(),

@@ -36,6 +36,10 @@ pub struct Args {
     /// Do not print reader diagnostics.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Unit of an STL's numbers (an STL does not say): mm or inch, converted
+    /// to mm; without it the unit is guessed from the part's size.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
 }
 
 fn bounds_json(b: &Aabb) -> Value {
@@ -112,8 +116,9 @@ pub fn run(a: Args) -> CliResult<i32> {
                 print_program(&a.file, p, &j);
             }
         }
-        Input::Mesh(mesh, r) => {
-            let j = mesh_json(&mesh, &r);
+        Input::Mesh(mut mesh, r) => {
+            crate::cmd::stl_to_mm(&mut mesh, a.stl_units);
+            let j = mesh_json(&mesh, &r, a.stl_units);
             if a.json {
                 outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
             } else {
@@ -134,8 +139,16 @@ fn units_guess(size: millplan_geom::DVec3) -> &'static str {
     }
 }
 
-fn mesh_json(mesh: &millplan_geom::TriMesh, r: &millplan_geom::stl::StlReport) -> Value {
+fn mesh_json(
+    mesh: &millplan_geom::TriMesh,
+    r: &millplan_geom::stl::StlReport,
+    given: Option<UnitArg>,
+) -> Value {
     let b = mesh.bounds();
+    let given = given.map(|u| match u {
+        UnitArg::Mm => "mm",
+        UnitArg::Inch => "inch",
+    });
     let edges = mesh.edge_report();
     json!({
         "format": "stl",
@@ -151,7 +164,8 @@ fn mesh_json(mesh: &millplan_geom::TriMesh, r: &millplan_geom::stl::StlReport) -
         "flipped_normals": r.flipped_normals,
         "trailing_bytes": r.trailing_bytes,
         "bounds": bounds_json(&b),
-        "units_guess": units_guess(b.size()),
+        "stl_units": given,
+        "units_guess": if given.is_some() { None } else { Some(units_guess(b.size())) },
     })
 }
 
@@ -202,6 +216,10 @@ fn print_mesh(path: &std::path::Path, j: &Value) {
             v("max", 1) - v("min", 1),
             v("max", 2) - v("min", 2)
         );
+    }
+    if let Some(u) = j["stl_units"].as_str() {
+        outln!("  units          {u} (--stl-units), bounds in mm");
+        return;
     }
     match j["units_guess"].as_str() {
         Some("inch") => {

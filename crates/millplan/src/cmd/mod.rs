@@ -317,6 +317,14 @@ impl From<UnitArg> for LengthUnit {
     }
 }
 
+/// Scales a mesh read from an STL to mm: `--stl-units inch` multiplies every
+/// coordinate by 25.4; mm (the default: an STL does not say) leaves it.
+pub fn stl_to_mm(mesh: &mut millplan_geom::TriMesh, units: Option<UnitArg>) {
+    if let Some(UnitArg::Inch) = units {
+        mesh.map_vertices(|v| v * 25.4);
+    }
+}
+
 /// Reader options from the common flags, with the limits of this run.
 pub fn read_options(units: Option<UnitArg>, feed: Option<f64>) -> CliResult<ReadOptions> {
     let d = ReadOptions::default();

@@ -1,5 +1,6 @@
 //! `millplan raster`: a finishing raster over an STL part.
 
+use crate::cmd::UnitArg;
 use crate::cmd::{arg, print_diagnostics, target_for, tool_shape, write_program, Range, TargetArg};
 use crate::cmd::{MAX_FEED, MAX_SPINDLE};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
@@ -25,6 +26,10 @@ pub struct Args {
     /// Part surface (STL).
     #[arg(long)]
     pub stl: PathBuf,
+    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
+    /// converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
     /// Cutter: ball:D, flat:D, bull:D:R (corner radius), cone:D:ANGLE (point angle).
     #[arg(long)]
     pub tool: String,
@@ -169,7 +174,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         .collect();
     let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], false)?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let (mesh, _) = read_surface(&a.stl)?;
+    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
     check_grid(&a, &p, &mesh.bounds())?;
     let part = DropMesh::new(&mesh);
     print_diagnostics(

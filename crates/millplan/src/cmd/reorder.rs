@@ -54,6 +54,10 @@ pub struct Args {
     /// Part surface (STL) in the same coordinates as the program.
     #[arg(long)]
     pub stl: PathBuf,
+    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
+    /// converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
     /// How the order is searched: as-run (default) measures candidate orders as the
     /// machine will run them; paper is the thesis's greedy search; optimised keeps
     /// passes whole.
@@ -138,7 +142,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = target_for(a.to, &a.output, parsed.program.source)?;
-    let (mesh, _) = read_surface(&a.stl)?;
+    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
     let cx = Context::new(machine).with_part(&mesh);
     let mut program = parsed.program.clone();
     let mut reorder = ReorderPass::new(params(&a));

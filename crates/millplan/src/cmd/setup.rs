@@ -1,6 +1,7 @@
 //! `millplan setup`: can a five-axis machine reach the whole part in one setup,
 //! and how should the part be clamped?
 
+use crate::cmd::UnitArg;
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_surface, Outputs};
 use millplan_models::kinematics::{KinKind, Kinematics, RotaryAxis};
@@ -32,6 +33,10 @@ pub struct Args {
     /// Part surface (STL).
     #[arg(long)]
     pub stl: PathBuf,
+    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
+    /// converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
     /// Machine file (see examples/machine.toml) with a `[kinematics]` table:
     /// kind = "table-ac" | "table-bc" | "table-ab" | "head-bc" |
     /// "head-b-table-c", [kinematics.first] and [kinematics.second] with min,
@@ -223,7 +228,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     )?;
     let machine = machine(&a)?;
     let p = params(&a)?;
-    let (mut mesh, _) = read_surface(&a.stl)?;
+    let (mut mesh, _) = read_surface(&a.stl, a.stl_units)?;
     let t0 = std::time::Instant::now();
     let bar = crate::progress::spinner("visibility", mesh.len() * p.cells > 20_000_000 && !a.quiet);
     let plan = setup::plan(&mut mesh, &machine, &p).map_err(|e| match e {

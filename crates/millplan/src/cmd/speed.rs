@@ -49,6 +49,10 @@ pub struct Args {
     /// Part surface (STL) in the same coordinates as the toolpath.
     #[arg(long)]
     pub stl: PathBuf,
+    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
+    /// converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
     /// Cutting speed, m/min.
     #[arg(long)]
     pub vc: f64,
@@ -217,7 +221,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let t0 = std::time::Instant::now();
     let reader = spawn_reader(&a, t0)?;
-    let mesh = match read_surface(&a.stl) {
+    let mesh = match read_surface(&a.stl, a.stl_units) {
         Ok((m, _)) => m,
         // A program error is still reported first.
         Err(e) => return Err(join(reader).0.err().unwrap_or(e)),
