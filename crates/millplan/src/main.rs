@@ -24,6 +24,7 @@ mod error;
 mod io;
 mod limits;
 mod progress;
+mod round;
 
 use clap::{Parser, Subcommand};
 use error::{EXIT_BAD_INPUT, EXIT_FINDINGS, EXIT_INTERNAL, EXIT_OK};

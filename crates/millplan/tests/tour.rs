@@ -88,7 +88,7 @@ fn readme_tour_runs_as_written() {
         "wrote r45.apt",
         "wrote reordered.apt",
         "moves checked",
-        "M8x1.25-6g: D2 7.1000 mm",
+        "M8x1.25-6g: D2 7.100 mm",
     ] {
         assert!(
             stdout.contains(said) || stderr.contains(said),

@@ -165,7 +165,7 @@ fn print_summary(
                 "constant_spindle_rpm": r.constant_spindle,
             },
         });
-        outln!("{json}");
+        crate::cmd::print_json(json);
         return;
     }
     outln!(

@@ -141,7 +141,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             })
             .collect();
         let j = json!({ "ranked_by": format!("{:?}", a.by), "candidates": rows });
-        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        crate::cmd::print_json(j);
     } else {
         outln!(
             "{:>4}  {:<40} {:>12} {:>10} {:>12} {:>12} {:>10}",

@@ -111,7 +111,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         let mut j = serde_json::to_value(&rep).unwrap_or_default();
         j["clean"] = serde_json::json!(rep.gouges.is_empty() && rep.moves_checked > 0);
         j["tol"] = serde_json::json!(a.tol);
-        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        crate::cmd::print_json(j);
     } else {
         print_report(&a, &rep);
     }

@@ -111,7 +111,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             }
             let j = program_json(p, parsed.diagnostics.len(), rapid_rate);
             if a.json {
-                outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+                crate::cmd::print_json(j);
             } else {
                 print_program(&a.file, p, &j);
             }
@@ -120,7 +120,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             crate::cmd::stl_to_mm(&mut mesh, a.stl_units);
             let j = mesh_json(&mesh, &r, a.stl_units);
             if a.json {
-                outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+                crate::cmd::print_json(j);
             } else {
                 print_mesh(&a.file, &j);
             }

@@ -159,6 +159,13 @@ impl CuttingData {
     }
 }
 
+/// Prints a JSON summary on standard output, every number rounded to what
+/// it means (`round::json`).
+pub fn print_json(v: serde_json::Value) {
+    let v = crate::round::json(v);
+    outln!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
+}
+
 /// Output dialect, shared by the writing commands.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum TargetArg {

@@ -233,7 +233,7 @@ fn print_result(
                 "max_depth_mm": rep.max_depth,
             },
         });
-        outln!("{json}");
+        crate::cmd::print_json(json);
         return if rep.gouges.is_empty() {
             EXIT_OK
         } else {

@@ -169,7 +169,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             .to_possible_value()
             .map(|v| v.get_name().to_string());
         let j = json!({ "method": method, "verdict": o.verdict, "original": o.before, "reordered": o.after, "stats": o.stats, "tried": o.tried, "output": a.output.display().to_string() });
-        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        crate::cmd::print_json(j);
     } else {
         outln!("  {:<28} {:>16} {:>16}", "", "original", "reordered");
         for (k, v) in millplan_report::reorder::rows(&o.before, &o.after) {

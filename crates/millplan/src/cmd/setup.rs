@@ -315,7 +315,7 @@ fn print_json(a: &Args, s: &Summary, machine: &Kinematics, secs: f64) {
         "mode": if a.tool.is_some() { "tool" } else { "line-of-sight" },
         "seconds": secs,
     });
-    outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+    crate::cmd::print_json(j);
 }
 
 fn print_text(a: &Args, s: &Summary, plan: &SetupPlan) {

@@ -278,7 +278,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         j["machine"] = serde_json::to_value(&cx.machine).unwrap_or_default();
         j["findings"] = serde_json::to_value(&findings).unwrap_or_default();
         j["trusted"] = serde_json::json!(!checks::untrusted(&summary));
-        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        crate::cmd::print_json(j);
     } else {
         print_summary(&summary, &a.output, target);
     }

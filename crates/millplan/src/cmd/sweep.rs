@@ -102,7 +102,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             "html": h.display().to_string(),
             "fit": fit,
         });
-        outln!("{json}");
+        crate::cmd::print_json(json);
     } else {
         outln!("wrote {} and {}", c.display(), h.display());
     }

@@ -280,7 +280,7 @@ fn to_json<T: serde::Serialize>(v: &T) -> CliResult<serde_json::Value> {
 /// (a closed pipe, a full disk) is reported when the run ends, never a panic.
 pub(crate) fn print(json_out: bool, j: serde_json::Value, text: String) -> CliResult<()> {
     let s = if json_out {
-        serde_json::to_string_pretty(&j)
+        serde_json::to_string_pretty(&crate::round::json(j))
             .map_err(|e| CliError::internal(format!("JSON output: {e}")))?
     } else {
         text

@@ -115,7 +115,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             "d_w": dw, "d_cc": dcc, "d_mean_area": d_mean_area, "d_mean_chip": d_mean_chip,
             "n": n, "model": format!("{:?}", a.model).to_lowercase()
         });
-        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        crate::cmd::print_json(j);
     } else {
         outln!("D_w  {dw:.4} mm  (working diameter, highest engaged point)");
         outln!("D_cc {dcc:.4} mm  (diameter at the contact point)");
