@@ -30,3 +30,18 @@ pub fn spinner(what: &str, show: bool) -> ProgressBar {
     bar.enable_steady_tick(std::time::Duration::from_millis(120));
     bar
 }
+
+/// A counting bar with an estimate of the time left, for a phase of `total`
+/// steps: shown when `show` (not `-q`) and standard error is a terminal.
+pub fn count(total: u64, what: &str, unit: &str, show: bool) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(total);
+    let template = format!("{{msg}} [{{bar:30}}] {{human_pos}}/{{human_len}} {unit}, {{eta}} left");
+    if let Ok(style) = ProgressStyle::with_template(&template) {
+        bar.set_style(style);
+    }
+    bar.set_message(what.to_string());
+    bar
+}

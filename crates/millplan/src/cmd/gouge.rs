@@ -5,7 +5,9 @@ use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface};
 use millplan_plan::checks;
 use millplan_sim::dropcutter::DropMesh;
-use millplan_sim::gouge::{check, samples, GougeParams, GougeReport, Skipped, BYTES_PER_SAMPLE};
+use millplan_sim::gouge::{
+    check_with_progress, samples, GougeParams, GougeReport, Skipped, BYTES_PER_SAMPLE,
+};
 use std::path::PathBuf;
 
 /// Check a program for gouges: every cutting move (and with --rapids every
@@ -106,7 +108,12 @@ pub fn run(a: Args) -> CliResult<i32> {
         ),
         n * BYTES_PER_SAMPLE,
     )?;
-    let rep = check(&parsed.program, &part, shape, &g);
+    // Some 300,000 points a second: a bar from a second's worth on.
+    let bar = crate::progress::count(n as u64, "gouge check", "points", !a.quiet && n >= 3e5);
+    let rep = check_with_progress(&parsed.program, &part, shape, &g, &|done, _| {
+        bar.set_position(done as u64)
+    });
+    bar.finish_and_clear();
     if a.json {
         let mut j = serde_json::to_value(&rep).unwrap_or_default();
         j["clean"] = serde_json::json!(rep.gouges.is_empty() && rep.moves_checked > 0);
