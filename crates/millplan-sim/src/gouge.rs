@@ -204,7 +204,7 @@ pub fn check_with_progress(
         .par_iter()
         .map(|(_, _, q, sh)| {
             let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            if k % PROGRESS_EVERY == 0 || k == total {
+            if k.is_multiple_of(PROGRESS_EVERY) || k == total {
                 progress(k, total);
             }
             let c = DVec2::new(q.x, q.y);

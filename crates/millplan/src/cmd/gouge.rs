@@ -55,6 +55,22 @@ pub struct Args {
     pub quiet: bool,
 }
 
+/// A check without the cutter's shape checks nothing: a program with a
+/// cutting operation whose tool has no shape is refused rather than called
+/// clean.
+fn shape_is_known(path: &std::path::Path, program: &millplan_nc::Program) -> CliResult<()> {
+    if let Some(op) = program.operations.iter().find(|op| {
+        op.moves.iter().any(|m| m.is_cutting()) && op.tool.as_ref().and_then(|t| t.cutter).is_none()
+    }) {
+        let line = op.tool.as_ref().map_or(0, |t| t.line);
+        return Err(CliError::input(format!(
+            "{}:{line}:1: the program does not say the shape of its tool; give it with --tool (ball:D, flat:D, bull:D:R, cone:D:ANGLE)",
+            path.display()
+        )));
+    }
+    Ok(())
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     crate::cmd::arg("--tol", a.tol, crate::cmd::Range::from(0.0, 100.0, "mm"))?;
     crate::cmd::arg(
@@ -68,19 +84,8 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
-    // A check without the cutter's shape checks nothing: refuse rather than
-    // call the program clean.
     if fallback.is_none() {
-        if let Some(op) = parsed.program.operations.iter().find(|op| {
-            op.moves.iter().any(|m| m.is_cutting())
-                && op.tool.as_ref().and_then(|t| t.cutter).is_none()
-        }) {
-            let line = op.tool.as_ref().map_or(0, |t| t.line);
-            return Err(CliError::input(format!(
-                "{}:{line}:1: the program does not say the shape of its tool; give it with --tool (ball:D, flat:D, bull:D:R, cone:D:ANGLE)",
-                a.path.display()
-            )));
-        }
+        shape_is_known(&a.path, &parsed.program)?;
     }
     let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
     print_diagnostics(
