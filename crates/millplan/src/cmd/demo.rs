@@ -123,17 +123,49 @@ pub fn run(a: Args) -> CliResult<i32> {
     ));
     written.push((
         a.output.join("report.html"),
-        millplan_report::html::speed_report(
-            "millplan demo: constant cutting speed",
-            &res.summary,
-            &res.rows,
-            63.0,
-        )
-        .into_bytes(),
+        report(&program, &mesh, &machine, &res),
     ));
     write_all(&written)?;
     print_summary(&a, &written, mesh.len(), &program, &res.summary);
     Ok(EXIT_OK)
+}
+
+/// The spindle-control report of the demo, with its inputs, findings and
+/// cycle times.
+fn report(
+    program: &millplan_nc::Program,
+    mesh: &millplan_geom::TriMesh,
+    machine: &Machine,
+    res: &millplan_plan::speed::SpeedResult,
+) -> Vec<u8> {
+    let findings: Vec<_> = [
+        millplan_plan::checks::mesh(mesh),
+        millplan_plan::checks::off_surface(&res.summary),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let cut = crate::cmd::CuttingData {
+        vc: 63.0,
+        fz: 0.125,
+        flutes: 2,
+        ap: 0.3,
+    };
+    let inputs = crate::cmd::speed::report_inputs(
+        (std::path::Path::new("finish.apt"), &res.program),
+        std::path::Path::new("part.stl"),
+        machine,
+        cut,
+        &findings,
+        millplan_nc::stats::summarize(program, machine.rapid).time_s,
+    );
+    millplan_report::html::speed_report(
+        "millplan demo: constant cutting speed",
+        &inputs,
+        &res.summary,
+        &res.rows,
+    )
+    .into_bytes()
 }
 
 /// What the demo made and where, and what spindle control did on it.
