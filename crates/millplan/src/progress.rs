@@ -45,3 +45,17 @@ pub fn count(total: u64, what: &str, unit: &str, show: bool) -> ProgressBar {
     bar.set_message(what.to_string());
     bar
 }
+
+/// A bar of the share done and the time left, for work whose steps have no
+/// name of their own (its length is set by the first report).
+pub fn fraction(what: &str, show: bool) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(1);
+    if let Ok(style) = ProgressStyle::with_template("{msg} [{bar:30}] {percent:>3} %, {eta} left") {
+        bar.set_style(style);
+    }
+    bar.set_message(what.to_string());
+    bar
+}

@@ -151,8 +151,12 @@ pub fn run(a: Args) -> CliResult<i32> {
     if !a.no_speed {
         passes.push(&mut speed);
     }
-    pipeline::run(&mut passes, &mut program, &cx)
-        .map_err(|e| crate::cmd::pass_error(&a.path, e))?;
+    // Some 100,000 points a second at the least: from there it takes a while.
+    let show = !a.quiet && program.move_count() >= 100_000;
+    let bar = crate::progress::spinner("reordering", show);
+    let ran = pipeline::run(&mut passes, &mut program, &cx);
+    bar.finish_and_clear();
+    ran.map_err(|e| crate::cmd::pass_error(&a.path, e))?;
     let Some(o) = reorder.outcome else {
         return Err(CliError::internal("the reorder pass left no outcome"));
     };

@@ -203,6 +203,28 @@ fn params(a: &Args) -> CliResult<SetupParams> {
     })
 }
 
+/// The setup search, with a bar of the share done and the time left where
+/// it takes a while (hidden with -q and when standard error is no terminal).
+fn plan_shown(
+    a: &Args,
+    mesh: &mut millplan_geom::TriMesh,
+    machine: &Kinematics,
+    p: &setup::SetupParams,
+) -> CliResult<setup::SetupPlan> {
+    let show = mesh.len() * p.cells > 20_000_000 && !a.quiet;
+    let bar = crate::progress::fraction("cones of access", show);
+    let progress = |done: usize, total: usize| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    };
+    let plan = setup::plan_with_progress(mesh, machine, p, &progress).map_err(|e| match e {
+        setup::SetupError::NoTriangles => CliError::input(format!("{}: {e}", a.stl.display())),
+        e => CliError::input(e.to_string()),
+    });
+    bar.finish_and_clear();
+    plan
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     let inputs: Vec<&std::path::Path> = [Some(a.stl.as_path()), a.machine.as_deref()]
         .into_iter()
@@ -230,12 +252,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let p = params(&a)?;
     let (mut mesh, _) = read_surface(&a.stl, a.stl_units)?;
     let t0 = std::time::Instant::now();
-    let bar = crate::progress::spinner("visibility", mesh.len() * p.cells > 20_000_000 && !a.quiet);
-    let plan = setup::plan(&mut mesh, &machine, &p).map_err(|e| match e {
-        setup::SetupError::NoTriangles => CliError::input(format!("{}: {e}", a.stl.display())),
-        e => CliError::input(e.to_string()),
-    })?;
-    bar.finish_and_clear();
+    let plan = plan_shown(&a, &mut mesh, &machine, &p)?;
     let secs = t0.elapsed().as_secs_f64();
     if plan.flipped && !a.quiet && !a.json {
         eprintln!(
