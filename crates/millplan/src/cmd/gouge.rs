@@ -151,7 +151,7 @@ fn skipped(s: &Skipped) -> String {
 fn print_report(a: &Args, rep: &GougeReport) {
     for gg in &rep.gouges {
         outln!(
-            "{}:{}: gouge {:.4} mm deep at X{:.4} Y{:.4} Z{:.4} (operation {}, move {})",
+            "{}:{}: gouge {:.3} mm deep at X{:.3} Y{:.3} Z{:.3} (operation {}, move {})",
             a.path.display(),
             gg.line,
             gg.depth,
@@ -172,7 +172,7 @@ fn print_report(a: &Args, rep: &GougeReport) {
             "clean".to_string()
         } else {
             format!(
-                "{} gouging moves, deepest {:.4} mm",
+                "{} gouging moves, deepest {:.3} mm",
                 rep.gouges.len(),
                 rep.max_depth
             )

@@ -202,7 +202,7 @@ fn print_mesh(path: &std::path::Path, j: &Value) {
     if let Some(b) = j["bounds"].as_object() {
         let v = |k: &str, i: usize| b[k][i].as_f64().unwrap_or(0.0);
         outln!(
-            "  bounds         [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}]",
+            "  bounds         [{:.3}, {:.3}, {:.3}] .. [{:.3}, {:.3}, {:.3}]",
             v("min", 0),
             v("min", 1),
             v("min", 2),
@@ -211,7 +211,7 @@ fn print_mesh(path: &std::path::Path, j: &Value) {
             v("max", 2)
         );
         outln!(
-            "  size           {:.4} x {:.4} x {:.4}",
+            "  size           {:.3} x {:.3} x {:.3}",
             v("max", 0) - v("min", 0),
             v("max", 1) - v("min", 1),
             v("max", 2) - v("min", 2)

@@ -197,7 +197,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let rep = check(&prog, &part, |_| Some(p.shape), &GougeParams::default());
     if !rep.gouges.is_empty() {
         eprintln!(
-            "{}: the raster's own gouge check finds {} moves cutting into the part, deepest {:.4} mm{}",
+            "{}: the raster's own gouge check finds {} moves cutting into the part, deepest {:.3} mm{}",
             a.stl.display(),
             rep.gouges.len(),
             rep.max_depth,

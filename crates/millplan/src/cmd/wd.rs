@@ -117,9 +117,9 @@ pub fn run(a: Args) -> CliResult<i32> {
         });
         crate::cmd::print_json(j);
     } else {
-        outln!("D_w  {dw:.4} mm  (working diameter, highest engaged point)");
-        outln!("D_cc {dcc:.4} mm  (diameter at the contact point)");
-        outln!("D_mean {d_mean_area:.4} mm by area, {d_mean_chip:.4} mm by chip thickness (over the engaged region)");
+        outln!("D_w  {dw:.3} mm  (working diameter, highest engaged point)");
+        outln!("D_cc {dcc:.3} mm  (diameter at the contact point)");
+        outln!("D_mean {d_mean_area:.3} mm by area, {d_mean_chip:.3} mm by chip thickness (over the engaged region)");
         if let Some(n) = n {
             outln!("n    {n:.0} 1/min for vc = {} m/min", a.vc.unwrap_or(0.0));
         }
