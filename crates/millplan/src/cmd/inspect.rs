@@ -129,13 +129,15 @@ pub fn run(a: Args) -> CliResult<i32> {
     Ok(EXIT_OK)
 }
 
-/// A part's size says little about its unit; under 30 units across, inches
-/// are the likelier.
+/// A part's size says little about its unit: under 8 units across, inches
+/// are the likelier (a part of a few mm is rare); from 8 to 30 both are
+/// common (beet_mm.stl is 28 mm across, a 20-inch plate 20 units), so the
+/// guess says it cannot tell; above, mm.
 fn units_guess(size: millplan_geom::DVec3) -> &'static str {
-    if size.max_element() < 30.0 {
-        "inch"
-    } else {
-        "mm"
+    match size.max_element() {
+        s if s < 8.0 => "inch",
+        s if s < 30.0 => "unknown",
+        _ => "mm",
     }
 }
 
@@ -223,8 +225,11 @@ fn print_mesh(path: &std::path::Path, j: &Value) {
     }
     match j["units_guess"].as_str() {
         Some("inch") => {
-            outln!("  units          inch (guess: the part is under 30 units across)")
+            outln!("  units          inch (guess: the part is under 8 units across; --stl-units says)")
         }
+        Some("unknown") => outln!(
+            "  units          mm or inch: 8 to 30 units across fits both (commands take mm unless --stl-units inch)"
+        ),
         _ => outln!("  units          mm"),
     }
 }
@@ -290,4 +295,17 @@ fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
         ((t / 60.0) as u64) % 60,
         (t as u64) % 60
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use millplan_geom::DVec3;
+
+    /// Issue 18: beet_mm.stl (28 mm across) was guessed as inch.
+    #[test]
+    fn mid_sized_parts_are_not_guessed_as_inch() {
+        assert_eq!(super::units_guess(DVec3::new(22.2, 28.4, 7.2)), "unknown");
+        assert_eq!(super::units_guess(DVec3::new(3.0, 2.0, 1.0)), "inch");
+        assert_eq!(super::units_guess(DVec3::new(60.0, 60.0, 9.6)), "mm");
+    }
 }
