@@ -80,6 +80,18 @@ impl NormalCheck {
 }
 
 /// Reads an STL file's bytes (within the default [`Limits`]).
+///
+/// ```
+/// use millplan_geom::stl::{read_stl, write_binary_stl};
+/// use millplan_geom::{DVec3, TriMesh};
+///
+/// let (tri, _) = TriMesh::from_soup(&[[DVec3::ZERO, DVec3::X, DVec3::Y]]);
+/// let mut bytes = Vec::new();
+/// write_binary_stl(&tri, "one facet", &mut bytes);
+/// let (mesh, report) = read_stl(&bytes).expect("reads");
+/// assert_eq!((mesh.len(), report.degenerate), (1, 0));
+/// assert_eq!(mesh.bounds().max, DVec3::new(1.0, 1.0, 0.0));
+/// ```
 pub fn read_stl(bytes: &[u8]) -> Result<(TriMesh, StlReport), StlError> {
     read_stl_limited(bytes, &Limits::default())
 }

@@ -285,6 +285,27 @@ fn falling_root(g: &impl Fn(f64) -> f64, lo: (f64, f64), hi: (f64, f64)) -> f64 
 }
 
 /// Working diameter D_w (mm) by the boundary method.
+///
+/// A D10 ball, 0.3 mm stock, the neighbouring pass 0.25 mm away on the left,
+/// the surface inclined by 20° and the feed 45° from uphill:
+///
+/// ```
+/// use millplan_models::wd::{working_diameter, Case, Neighbour, Side};
+///
+/// let c = Case {
+///     d: 10.0,
+///     ap: 0.3,
+///     neighbour: Neighbour::One(0.25),
+///     alpha: 20f64.to_radians(),
+///     af: 45f64.to_radians(),
+///     side: Side::Left,
+/// };
+/// let dw = working_diameter(&c);
+/// assert!((dw - 4.1301).abs() < 1e-4, "{dw}");
+/// // The spindle speed for 63 m/min there: n = 1000·vc/(π·D_w).
+/// let n = 1000.0 * 63.0 / (std::f64::consts::PI * dw);
+/// assert!((n - 4855.0).abs() < 1.0);
+/// ```
 pub fn working_diameter(c: &Case) -> f64 {
     diameter_from_height(c.d, highest_point(c))
 }

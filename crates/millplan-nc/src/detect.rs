@@ -8,6 +8,41 @@ use crate::gcode::GcodeReader;
 use crate::ir::Dialect;
 use crate::ReadOptions;
 
+/// The error for a KUKA KRL robot program (`.SRC`), which no front end reads
+/// yet: `None` for anything else. KRL opens with `&ACCESS`/`&REL`/`&PARAM`
+/// header lines or `DEF name(`/`DEFDAT name` (Sinumerik's `DEF REAL X` has
+/// no parenthesis), after `;` comments.
+pub fn krl_refusal(head: &str) -> Option<ParseError> {
+    for (k, line) in crate::lines::split(head).enumerate().take(50) {
+        let t = line.trim();
+        if t.is_empty() || t.starts_with(';') {
+            continue;
+        }
+        let up = t.to_ascii_uppercase();
+        let def_call = up
+            .strip_prefix("GLOBAL ")
+            .unwrap_or(&up)
+            .strip_prefix("DEF ")
+            .and_then(|r| r.trim_start().split_once('('))
+            .is_some_and(|(name, _)| {
+                !name.is_empty() && name.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_')
+            });
+        let header = ["&ACCESS", "&REL", "&PARAM", "&COMMENT"]
+            .iter()
+            .any(|h| up.starts_with(h));
+        if header || def_call || up.starts_with("DEFDAT ") {
+            let line = u32::try_from(k + 1).unwrap_or(u32::MAX);
+            return Some(ParseError::new(
+                line,
+                1,
+                "a KUKA KRL robot program: KRL is not read yet (millplan reads APT/CL and G-code)",
+            ));
+        }
+        return None;
+    }
+    None
+}
+
 /// Guesses the dialect from the first part of a file (a few kB are plenty).
 pub fn detect(head: &str) -> Dialect {
     let mut apt = 0i32;
@@ -197,5 +232,26 @@ mod tests {
         assert_eq!(detect(fanuc), Dialect::Fanuc);
         let sinumerik = "N10 G710 G90\nN20 TRAORI\nN30 G0 X1\n";
         assert_eq!(detect(sinumerik), Dialect::Sinumerik);
+    }
+
+    /// Issue 18: a KUKA `.SRC` got "1:1: unexpected `&ACCESS`".
+    #[test]
+    fn krl_is_refused_by_name() {
+        let krl = "&ACCESS RVP\n&REL 2\nDEF f1_Kuka()\nPTP $AXIS_ACT\nEND\n";
+        let e = krl_refusal(krl).expect("refused");
+        assert_eq!((e.line, e.col), (1, 1));
+        assert!(e.message.contains("KRL is not read yet"), "{e}");
+        let bare = "; generated\nDEF main( )\n  LIN {X 1}\nEND\n";
+        assert_eq!(krl_refusal(bare).map(|e| e.line), Some(2));
+        let e = crate::parse_program(krl, ReadOptions::default()).expect_err("refused");
+        assert!(e.message.contains("KRL"), "{e}");
+        for not_krl in [
+            "N10 DEF REAL DEPTH=2\nN20 G0 X1\n",
+            "G21 G90\nG1 X1 F100\n",
+            "TOOL PATH/ROUGH\nGOTO/1,2,3\n",
+            "0 BEGIN PGM X MM\n",
+        ] {
+            assert!(krl_refusal(not_krl).is_none(), "{not_krl}");
+        }
     }
 }

@@ -55,7 +55,23 @@ impl Default for ReadOptions {
 
 /// Reads a program of any supported format from its text, detecting the format
 /// from the content. Lines end at LF, CRLF or a lone CR.
+///
+/// ```
+/// use millplan_nc::{parse_program, ReadOptions};
+///
+/// let src = "G21 G90\nT1 M6\nS6000 M3\nG0 X0 Y0 Z5\nG1 Z-1 F300\nG1 X10\nM30\n";
+/// let parsed = parse_program(src, ReadOptions::default()).expect("reads");
+/// assert_eq!(parsed.program.move_count(), 3);
+/// let last = parsed.program.moves().last().expect("a move");
+/// assert_eq!((last.end.x, last.end.z, last.line), (10.0, -1.0, 6));
+/// // Bad input is an error at its line and column, never a panic.
+/// let e = parse_program("G21\nG1 X1 Q@@\n", ReadOptions::default()).unwrap_err();
+/// assert_eq!((e.line, e.col), (2, 8));
+/// ```
 pub fn parse_program(src: &str, opts: ReadOptions) -> Result<Parsed, ParseError> {
+    if let Some(e) = detect::krl_refusal(src) {
+        return Err(e);
+    }
     let mut r = detect::Reader::new(detect::detect(src), opts);
     for (k, line) in lines::split(src).enumerate() {
         check_line_length(line.len(), k + 1, &opts.limits)?;

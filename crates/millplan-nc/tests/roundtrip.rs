@@ -8,7 +8,8 @@ use millplan_nc::write::gcode::write_gcode;
 use millplan_nc::write::{Target, WriteOptions};
 use millplan_nc::*;
 use proptest::prelude::*;
-use std::path::PathBuf;
+
+mod shared_data;
 
 fn reread(p: &Program) -> Program {
     let mut out = Vec::new();
@@ -71,7 +72,6 @@ fn assert_same_moves(a: &Program, b: &Program, tol: f64) {
 
 #[test]
 fn apt_round_trip_on_real_files() {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
     for rel in [
         "swcam-apt-stl-pairs/Interface-glue.apt",
         "swcam-apt-stl-pairs/boss.apt",
@@ -81,10 +81,10 @@ fn apt_round_trip_on_real_files() {
         "nx-clsf-ballend-nurbs/nurbs.clsf",
         "impeller-5axis-goto-fragments/pathdata2.txt",
     ] {
-        let Ok(src) = std::fs::read_to_string(root.join(rel)) else {
-            eprintln!("skipped: {rel} not present");
+        let Some(path) = shared_data::file(rel) else {
             continue;
         };
+        let src = std::fs::read_to_string(path).expect("a sample reads");
         let p1 = parse_program(&src, ReadOptions::default())
             .expect("reads")
             .program;

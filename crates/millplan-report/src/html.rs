@@ -13,8 +13,143 @@ fn esc(s: &str) -> String {
         .replace('>', "&gt;")
 }
 
-/// The report page.
-pub fn speed_report(title: &str, s: &Summary, rows: &[PointRow], vc: f64) -> String {
+/// What a spindle-control report was made from, shown in its header.
+#[derive(Clone, Debug, Default)]
+pub struct SpeedInputs {
+    /// The program's file name.
+    pub program: String,
+    /// The part's file name.
+    pub part: String,
+    /// The tool, as the program names it (`T1 BALL D10`).
+    pub tool: String,
+    /// The machine's name.
+    pub machine: String,
+    /// Spindle range (min, max), 1/min.
+    pub spindle: (f64, f64),
+    /// Spindle acceleration, 1/min per second.
+    pub spindle_accel: f64,
+    /// Largest feed, mm/min.
+    pub feed_max: f64,
+    /// Cutting speed asked for, m/min.
+    pub vc: f64,
+    /// Feed per tooth, mm.
+    pub fz: f64,
+    pub flutes: u32,
+    /// Stock along the normal, mm.
+    pub ap: f64,
+    /// Time of the program before and after spindle control (feeds at
+    /// F = n·z·fz unless kept), s.
+    pub time_before_s: Option<f64>,
+    pub time_after_s: Option<f64>,
+    /// Findings about the inputs (off-surface points, mesh defects), shown
+    /// in the warning box at the top.
+    pub warnings: Vec<String>,
+}
+
+/// Share of points (0–1) whose cutting speed at the program's constant
+/// spindle speed misses `vc` by more than the deviation the control allows.
+fn share_off_vc_constant(s: &Summary, rows: &[PointRow], vc: f64) -> f64 {
+    if rows.is_empty() {
+        return 0.0;
+    }
+    let pi = std::f64::consts::PI;
+    let off = rows
+        .iter()
+        .filter(|r| {
+            let v = pi * r.r.dw * s.constant_spindle / 1000.0;
+            (v - vc).abs() > millplan_plan::speed::VC_DEVIATION * vc
+        })
+        .count();
+    off as f64 / rows.len() as f64
+}
+
+/// The verdict in words: what changed, what it buys, what to look at.
+pub fn speed_verdict(i: &SpeedInputs, s: &Summary, rows: &[PointRow]) -> Vec<String> {
+    let pct = |n: usize| {
+        if s.points == 0 {
+            0.0
+        } else {
+            100.0 * n as f64 / s.points as f64
+        }
+    };
+    let mut v = Vec::new();
+    let before = 100.0 * share_off_vc_constant(s, rows, i.vc);
+    let after = 100.0 * s.vc_deviation_share;
+    v.push(format!(
+        "Spindle control keeps the cutting speed within 5 % of {} m/min at {:.1} % of the {} points, against {:.1} % at the program's constant {:.0} 1/min (cutting speed {:.1}–{:.1} m/min there).",
+        i.vc,
+        100.0 - after,
+        s.points,
+        100.0 - before,
+        s.constant_spindle,
+        s.vc_constant.min,
+        s.vc_constant.max
+    ));
+    if s.rate_limited > 0 || s.clamped > 0 {
+        v.push(format!(
+            "The machine limits it: {} points ({:.1} %) wait for the spindle's acceleration of {:.0} 1/min/s and {} ({:.1} %) are clamped to its range {:.0}–{:.0} 1/min; that is why the cutting speed still spans {:.1}–{:.1} m/min with control.",
+            s.rate_limited,
+            pct(s.rate_limited),
+            i.spindle_accel,
+            s.clamped,
+            pct(s.clamped),
+            i.spindle.0,
+            i.spindle.1,
+            s.vc_controlled.min,
+            s.vc_controlled.max
+        ));
+    }
+    if let (Some(b), Some(a)) = (i.time_before_s, i.time_after_s) {
+        let d = a - b;
+        v.push(format!(
+            "Cycle time {:.0} s → {:.0} s ({}{:.0} s, {:+.1} %) at the feeds written.",
+            b,
+            a,
+            if d >= 0.0 { "+" } else { "−" },
+            d.abs(),
+            if b > 0.0 { 100.0 * d / b } else { 0.0 }
+        ));
+    }
+    if !i.warnings.is_empty() {
+        v.push("Look at the warnings above before using the program.".to_string());
+    } else if s.rate_limited > 0 {
+        v.push("Look at the spindle-speed plot where the written speed leaves its target: there a higher spindle acceleration, or an order that changes D_w less (millplan reorder), would help.".to_string());
+    }
+    v
+}
+
+fn header(h: &mut String, i: &SpeedInputs) {
+    let row = |h: &mut String, k: &str, v: String| {
+        let _ = write!(h, "<tr><th>{}</th><td>{}</td></tr>", esc(k), esc(&v));
+    };
+    h.push_str("<table class=\"inputs\" id=\"inputs\">");
+    row(h, "program", i.program.clone());
+    row(h, "part", i.part.clone());
+    row(h, "tool", i.tool.clone());
+    row(
+        h,
+        "machine",
+        format!(
+            "{}: spindle {:.0}–{:.0} 1/min, acceleration {:.0} 1/min/s, feed up to {:.0} mm/min",
+            i.machine, i.spindle.0, i.spindle.1, i.spindle_accel, i.feed_max
+        ),
+    );
+    row(
+        h,
+        "cutting data",
+        format!(
+            "vc {} m/min, fz {} mm, {} flutes, ap {} mm",
+            i.vc, i.fz, i.flutes, i.ap
+        ),
+    );
+    h.push_str("</table>");
+}
+
+/// The report page: a header with its inputs, the warnings in a box, the
+/// verdict in words, the summary table and the plots with the machine's
+/// limits drawn.
+pub fn speed_report(title: &str, i: &SpeedInputs, s: &Summary, rows: &[PointRow]) -> String {
+    let vc = i.vc;
     let pi = std::f64::consts::PI;
     let idx = |f: &dyn Fn(&PointRow) -> f64| {
         rows.iter()
@@ -28,10 +163,28 @@ pub fn speed_report(title: &str, s: &Summary, rows: &[PointRow], vc: f64) -> Str
         "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title><style>\
          body{{font-family:sans-serif;margin:24px;max-width:1100px;color:#222}}\
          table{{border-collapse:collapse;margin:8px 0 20px}}td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}\
-         th{{background:#f4f4f4}}td:first-child{{text-align:left}}figure{{margin:10px 0 24px}}</style></head><body>\
+         th{{background:#f4f4f4}}td:first-child{{text-align:left}}figure{{margin:10px 0 24px}}\
+         table.inputs th{{text-align:left}}table.inputs td{{text-align:left}}\
+         .warnings{{border:2px solid #c62828;background:#fdecea;padding:8px 14px;margin:12px 0}}\
+         .verdict{{border-left:4px solid #2e7d32;background:#f1f8e9;padding:8px 14px;margin:12px 0}}</style></head><body>\
          <h1>{t}</h1><p>Constant cutting speed vc = {vc} m/min by per-point spindle speed n = 1000·vc/(π·D<sub>w</sub>).</p>",
         t = esc(title)
     );
+    header(&mut h, i);
+    if !i.warnings.is_empty() {
+        h.push_str(
+            "<div class=\"warnings\" id=\"warnings\" role=\"alert\"><strong>Warnings</strong><ul>",
+        );
+        for w in &i.warnings {
+            let _ = write!(h, "<li>{}</li>", esc(w));
+        }
+        h.push_str("</ul></div>");
+    }
+    h.push_str("<div class=\"verdict\" id=\"verdict\"><strong>Verdict</strong>");
+    for p in speed_verdict(i, s, rows) {
+        let _ = write!(h, "<p>{}</p>", esc(&p));
+    }
+    h.push_str("</div>");
     let row = |h: &mut String, name: &str, v: String| {
         let _ = write!(h, "<tr><td>{}</td><td>{v}</td></tr>", esc(name));
     };
@@ -171,9 +324,19 @@ pub fn speed_report(title: &str, s: &Summary, rows: &[PointRow], vc: f64) -> Str
                     color: "#2ca02c",
                     points: idx(&|r| r.n),
                 },
+                Series {
+                    name: "spindle maximum",
+                    color: "#c62828",
+                    points: limit_line(rows.len(), i.spindle.1),
+                },
+                Series {
+                    name: "spindle minimum",
+                    color: "#8e24aa",
+                    points: limit_line(rows.len(), i.spindle.0),
+                },
             ],
         ),
-        "Spindle speed per point: target and what the program commands.",
+        "Spindle speed per point: target, what the program commands, and the machine's range.",
     );
     fig(
         &mut h,
@@ -230,6 +393,11 @@ pub fn speed_report(title: &str, s: &Summary, rows: &[PointRow], vc: f64) -> Str
         esc(&serde_json::to_string_pretty(s).unwrap_or_default())
     );
     h
+}
+
+/// A horizontal line at `y` across `n` points, for a machine limit.
+fn limit_line(n: usize, y: f64) -> Vec<(f64, f64)> {
+    vec![(0.0, y), (n.saturating_sub(1) as f64, y)]
 }
 
 /// A plain report page: a title, an introduction, a summary table and figures

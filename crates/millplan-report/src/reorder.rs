@@ -37,10 +37,10 @@ pub fn rows(before: &OrderIndicators, after: &OrderIndicators) -> Vec<(String, S
         }),
         row("time as run (s)", &|v| format!("{:.1}", v.as_run.time_s)),
         row("successive |ΔD_w| max (mm)", &|v| {
-            format!("{:.4}", v.delta_d_w.max)
+            format!("{:.3}", v.delta_d_w.max)
         }),
         row("|ΔD_w| max across jumps (mm)", &|v| {
-            format!("{:.4}", v.delta_d_w.max_across_jumps)
+            format!("{:.3}", v.delta_d_w.max_across_jumps)
         }),
         row("successive |Δn| max (1/min)", &|v| {
             format!("{:.0}", v.delta_n.max)

@@ -123,11 +123,17 @@ fn axes(s: &mut String, f: &Frame, title: &str, xlabel: &str, ylabel: &str) {
 }
 
 fn fmt_tick(v: f64, step: f64) -> String {
-    if step >= 1.0 {
+    let t = if step >= 1.0 {
         format!("{:.0}", v)
     } else {
         let d = (-step.log10().floor()) as usize;
         format!("{:.*}", d, v)
+    };
+    // A tick at zero reads 0, never -0 (or -0.00).
+    if t.starts_with('-') && t[1..].bytes().all(|b| b == b'0' || b == b'.') {
+        t[1..].to_string()
+    } else {
+        t
     }
 }
 
@@ -494,6 +500,15 @@ pub fn sphere_map(title: &str, cells: &[([f64; 3], DirClass)]) -> String {
 
 #[cfg(test)]
 mod tests {
+    /// Issue 18: axis ticks read "-0".
+    #[test]
+    fn zero_ticks_have_no_sign() {
+        assert_eq!(super::fmt_tick(-0.0, 1.0), "0");
+        assert_eq!(super::fmt_tick(-1e-12, 0.25), "0.0");
+        assert_eq!(super::fmt_tick(-0.5, 0.25), "-0.5");
+        assert_eq!(super::fmt_tick(-20.0, 10.0), "-20");
+    }
+
     use super::*;
 
     #[test]

@@ -79,7 +79,7 @@ pub fn sweep(design: &Design) -> (String, String) {
                             let dw = wd::working_diameter(&c);
                             let _ = writeln!(
                                 csv,
-                                "{d},{ap},{ae},{alpha},{af},{},{milling},{dw:.5},{:.5},{:.1}",
+                                "{d},{ap},{ae},{alpha},{af},{},{milling},{dw:.3},{:.3},{:.1}",
                                 if side == Side::Left { "left" } else { "right" },
                                 wd::contact_diameter(d, c.alpha),
                                 wd::spindle_speed(63.0, dw)

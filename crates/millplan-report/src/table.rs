@@ -12,11 +12,12 @@ pub fn points_csv(rows: &[PointRow]) -> String {
     s.push('\n');
     for (i, r) in rows.iter().enumerate() {
         let p = &r.r;
-        let ae = p.ae().map(|a| format!("{a:.4}")).unwrap_or_default();
+        // Lengths to the micrometre, angles to 0.001°, speeds to 0.1 1/min.
+        let ae = p.ae().map(|a| format!("{a:.3}")).unwrap_or_default();
         let b = |x: bool| if x { 1 } else { 0 };
         let _ = writeln!(
             s,
-            "{i},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{:.3},{:.3},{},{ae},{:.4},{:.1},{:.1},{:.1},{:.4},{},{},{},{},{}",
+            "{i},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.6},{:.6},{:.6},{:.3},{:.3},{},{ae},{:.3},{:.1},{:.1},{:.1},{:.3},{},{},{},{},{}",
             r.line,
             r.cl.x,
             r.cl.y,

@@ -376,6 +376,21 @@ pub fn visibility(
     grid: &dyn SphereGrid,
     clearance_deg: f64,
 ) -> CellSets {
+    visibility_with_progress(mesh, bvh, grid, clearance_deg, &|_, _| {})
+}
+
+/// A progress callback: `(done, total)` steps of the work, called from any
+/// thread.
+pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
+
+/// [`visibility`], calling `progress(done, total)` as facets are decided.
+pub fn visibility_with_progress(
+    mesh: &TriMesh,
+    bvh: &Bvh,
+    grid: &dyn SphereGrid,
+    clearance_deg: f64,
+    progress: Progress,
+) -> CellSets {
     let test = DirectionTest::sight(mesh, bvh, clearance_deg);
     cones(
         mesh,
@@ -383,7 +398,34 @@ pub fn visibility(
         clearance_deg,
         |_, _, _| true,
         |t, p, n, d| test.clear(t, p, n, d),
+        progress,
     )
+}
+
+/// Counts finished steps and reports them every 1/256 of `total` and at the end.
+struct Counter<'a> {
+    done: std::sync::atomic::AtomicUsize,
+    total: usize,
+    every: usize,
+    progress: Progress<'a>,
+}
+
+impl<'a> Counter<'a> {
+    fn new(total: usize, progress: Progress<'a>) -> Counter<'a> {
+        Counter {
+            done: std::sync::atomic::AtomicUsize::new(0),
+            total,
+            every: (total / 256).max(1),
+            progress,
+        }
+    }
+
+    fn step(&self) {
+        let k = self.done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        if k.is_multiple_of(self.every) || k == self.total {
+            (self.progress)(k, self.total);
+        }
+    }
 }
 
 /// The cones of all facets: cell d is in facet t's cone when d·n_t >
@@ -395,7 +437,9 @@ fn cones(
     clearance_deg: f64,
     usable: impl Fn(usize, DVec3, DVec3) -> bool + Sync,
     free: impl Fn(usize, DVec3, DVec3, DVec3) -> bool + Sync,
+    progress: Progress,
 ) -> CellSets {
+    let counter = Counter::new(mesh.len(), progress);
     let cells = grid.len();
     let dirs: Vec<DVec3> = (0..cells).map(|c| grid.direction(c)).collect();
     let min_dot = clearance_deg.to_radians().sin();
@@ -405,6 +449,7 @@ fn cones(
         .par_chunks_mut(words.max(1))
         .enumerate()
         .for_each(|(t, set)| {
+            counter.step();
             let n = mesh.facet_normal(t);
             let [a, b, c] = mesh.corners(t);
             let p = (a + b + c) / 3.0;
@@ -456,11 +501,24 @@ pub fn accessibility(
     clearance_deg: f64,
     tool: &ToolModel,
 ) -> CellSets {
+    accessibility_with_progress(mesh, bvh, grid, clearance_deg, tool, &|_, _| {})
+}
+
+/// [`accessibility`], calling `progress(done, total)` as facets (few
+/// triangles) or groups of 64 directions (depth maps) are decided.
+pub fn accessibility_with_progress(
+    mesh: &TriMesh,
+    bvh: &Bvh,
+    grid: &dyn SphereGrid,
+    clearance_deg: f64,
+    tool: &ToolModel,
+    progress: Progress,
+) -> CellSets {
     // On few triangles the capsule tests are cheap and the maps not.
     if mesh.len() < MAPS_FROM {
-        accessibility_exact(mesh, bvh, grid, clearance_deg, tool)
+        exact(mesh, bvh, grid, clearance_deg, tool, progress)
     } else {
-        accessibility_mapped(mesh, bvh, grid, clearance_deg, tool)
+        accessibility_mapped(mesh, bvh, grid, clearance_deg, tool, progress)
     }
 }
 
@@ -474,11 +532,13 @@ fn accessibility_mapped(
     grid: &dyn SphereGrid,
     clearance_deg: f64,
     tool: &ToolModel,
+    progress: Progress,
 ) -> CellSets {
     let test = DirectionTest::tool(mesh, bvh, clearance_deg, tool);
     let cells = grid.len();
     let mut out = CellSets::new(mesh.len(), cells);
     let words = out.words;
+    let counter = Counter::new(words, progress);
     // Per facet: centroid, normal, ball centre; `None` when it cannot be served.
     let facets: Vec<Option<(DVec3, DVec3)>> = (0..mesh.len())
         .into_par_iter()
@@ -526,6 +586,7 @@ fn accessibility_mapped(
         for (t, bits) in col.into_iter().enumerate() {
             out.bits[t * words + w] = bits;
         }
+        counter.step();
     }
     out
 }
@@ -539,6 +600,17 @@ pub fn accessibility_exact(
     clearance_deg: f64,
     tool: &ToolModel,
 ) -> CellSets {
+    exact(mesh, bvh, grid, clearance_deg, tool, &|_, _| {})
+}
+
+fn exact(
+    mesh: &TriMesh,
+    bvh: &Bvh,
+    grid: &dyn SphereGrid,
+    clearance_deg: f64,
+    tool: &ToolModel,
+    progress: Progress,
+) -> CellSets {
     let test = DirectionTest::tool(mesh, bvh, clearance_deg, tool);
     cones(
         mesh,
@@ -546,6 +618,7 @@ pub fn accessibility_exact(
         clearance_deg,
         |t, p, n| test.usable_at(t, p, n),
         |t, p, n, d| test.clear(t, p, n, d),
+        progress,
     )
 }
 
@@ -1762,8 +1835,29 @@ mod tests {
                                     None,
                                 ))
                     },
+                    &|_, _| {},
                 );
-                let fast = accessibility_mapped(&m, &b, &g, 0.0, &tool);
+                let seen = std::sync::Mutex::new(Vec::new());
+                let fast = accessibility_mapped(&m, &b, &g, 0.0, &tool, &|d, t| {
+                    seen.lock().expect("lock").push((d, t))
+                });
+                // Progress counts the words of 64 directions up to their total.
+                let words = g.len().div_ceil(64);
+                let seen = seen.into_inner().expect("lock");
+                assert_eq!(seen.iter().map(|s| s.0).max(), Some(words));
+                assert!(seen
+                    .iter()
+                    .all(|&(d, t)| t == words && d >= 1 && d <= words));
+                // Line of sight counts facets, and decides what it would without.
+                let seen = std::sync::Mutex::new(Vec::new());
+                let vis = visibility_with_progress(&m, &b, &g, 0.0, &|d, t| {
+                    seen.lock().expect("lock").push((d, t))
+                });
+                let seen = seen.into_inner().expect("lock");
+                assert_eq!(seen.iter().map(|s| s.0).max(), Some(m.len()));
+                assert!(seen.iter().all(|&(_, t)| t == m.len()));
+                let plain_vis = visibility(&m, &b, &g, 0.0);
+                assert!((0..m.len()).all(|f| vis.set(f) == plain_vis.set(f)));
                 let total: usize = (0..m.len()).map(|f| plain.count(f)).sum();
                 assert!(total > 0);
                 for f in 0..m.len() {

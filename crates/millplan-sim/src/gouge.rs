@@ -116,6 +116,21 @@ pub fn check(
     shape: impl Fn(&Operation) -> Option<Shape>,
     g: &GougeParams,
 ) -> GougeReport {
+    check_with_progress(p, part, shape, g, &|_, _| {})
+}
+
+/// Sample points checked between two calls of a progress callback.
+pub const PROGRESS_EVERY: usize = 16_384;
+
+/// [`check`], calling `progress(done, total)` with the sample points checked
+/// so far (from any thread, every [`PROGRESS_EVERY`] points and at the end).
+pub fn check_with_progress(
+    p: &Program,
+    part: &DropMesh,
+    shape: impl Fn(&Operation) -> Option<Shape>,
+    g: &GougeParams,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> GougeReport {
     let mut rep = GougeReport::default();
     // (operation, move, sample point, shape index)
     let mut samples: Vec<(u32, u32, DVec3, Shape)> = Vec::new();
@@ -183,9 +198,15 @@ pub fn check(
     }
     rep.moves_skipped = rep.skipped.total();
     rep.points_checked = samples.len();
+    let total = samples.len();
+    let done = std::sync::atomic::AtomicUsize::new(0);
     let depths: Vec<f64> = samples
         .par_iter()
         .map(|(_, _, q, sh)| {
+            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if k.is_multiple_of(PROGRESS_EVERY) || k == total {
+                progress(k, total);
+            }
             let c = DVec2::new(q.x, q.y);
             let depth = part
                 .drop(sh, c)

@@ -8,6 +8,9 @@ use millplan_models::cutter::Shape;
 use millplan_sim::dropcutter::{drop_brute, DropMesh};
 use proptest::prelude::*;
 
+#[path = "../../millplan-nc/tests/shared_data/mod.rs"]
+mod shared_data;
+
 fn shapes() -> Vec<Shape> {
     vec![
         Shape::Flat { radius: 3.0 },
@@ -134,13 +137,11 @@ fn raster_heights_match_the_analytic_offset_surface() {
 
 #[test]
 fn opencamlib_meshes_agree_with_brute_force() {
-    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/stl-pitfalls-opencamlib");
     for name in ["ktoolcav.stl", "beet_mm.stl", "mount_rush.stl"] {
-        let Ok(bytes) = std::fs::read(root.join(name)) else {
-            eprintln!("skipped: {name} not present");
+        let Some(path) = shared_data::file(&format!("stl-pitfalls-opencamlib/{name}")) else {
             continue;
         };
+        let bytes = std::fs::read(path).expect("a sample reads");
         let (mesh, _) = millplan_geom::stl::read_stl(&bytes).expect("reads");
         let b = mesh.bounds();
         let dm = DropMesh::new(&mesh);

@@ -99,3 +99,30 @@ fn a_tool_below_the_top_gouges_by_its_depth() {
     let deepest = rep.gouges.iter().map(|g| g.depth).fold(0.0, f64::max);
     assert!((deepest - 0.5).abs() < 1e-9, "{deepest}");
 }
+
+/// The progress of a check counts its sample points up to the total, which
+/// is what the report says it checked, and the report is the one `check` gives.
+#[test]
+fn progress_counts_every_sample_point() {
+    let part = box_mesh();
+    let g = GougeParams {
+        step: 0.001,
+        ..GougeParams::default()
+    };
+    let p = pass(0.0);
+    let sh = Shape::Ball { radius: 3.0 };
+    let seen = std::sync::Mutex::new(Vec::new());
+    let rep = millplan_sim::gouge::check_with_progress(&p, &part, |_| Some(sh), &g, &|d, t| {
+        seen.lock().expect("lock").push((d, t));
+    });
+    let mut seen = seen.into_inner().expect("lock");
+    seen.sort();
+    let total = rep.points_checked;
+    assert!(total > 2 * millplan_sim::gouge::PROGRESS_EVERY, "{total}");
+    assert!(seen.iter().all(|&(d, t)| t == total && d <= total));
+    assert_eq!(seen.last(), Some(&(total, total)));
+    assert_eq!(seen.len(), total / millplan_sim::gouge::PROGRESS_EVERY + 1);
+    let plain = check(&p, &part, |_| Some(sh), &g);
+    assert_eq!(plain.points_checked, total);
+    assert_eq!(plain.gouges.len(), rep.gouges.len());
+}

@@ -87,9 +87,99 @@ pub fn shorten(message: &str) -> std::borrow::Cow<'_, str> {
     std::borrow::Cow::Owned(out)
 }
 
+/// The stable name of an exit code in a JSON error: `usage` (arguments
+/// clap refused), `bad-input`, `internal`.
+pub fn code_name(exit: i32, usage: bool) -> &'static str {
+    match (exit, usage) {
+        (_, true) => "usage",
+        (EXIT_BAD_INPUT, _) => "bad-input",
+        _ => "internal",
+    }
+}
+
+/// `file`, `line` and `col` of a message that starts `file:line:col: `, and
+/// the rest of the message. A binary STL's `file:byte N: ` has no line; its
+/// `col` is the byte offset N. `file: what` names the file alone.
+fn locate(message: &str) -> (Option<&str>, Option<u64>, Option<u64>, &str) {
+    let digits = |s: &str| -> Option<(u64, usize)> {
+        let n = s.bytes().take_while(u8::is_ascii_digit).count();
+        s[..n].parse().ok().map(|v| (v, n))
+    };
+    for (i, _) in message.match_indices(':') {
+        let rest = &message[i + 1..];
+        if let Some((line, n)) = digits(rest) {
+            let after = &rest[n..];
+            if let Some(c) = after.strip_prefix(':') {
+                if let Some((col, m)) = digits(c) {
+                    if let Some(msg) = c[m..].strip_prefix(": ") {
+                        return (Some(&message[..i]), Some(line), Some(col), msg);
+                    }
+                }
+            }
+        }
+        if let Some(b) = rest.strip_prefix("byte ") {
+            if let Some((byte, n)) = digits(b) {
+                if let Some(msg) = b[n..].strip_prefix(": ") {
+                    return (Some(&message[..i]), None, Some(byte), msg);
+                }
+            }
+        }
+    }
+    // `file: what`: a path is one word that is not an option.
+    match message.split_once(": ") {
+        Some((file, rest)) if !file.contains(char::is_whitespace) && !file.starts_with('-') => {
+            (Some(file), None, None, rest)
+        }
+        _ => (None, None, None, message),
+    }
+}
+
+/// An error as one line of JSON, `{"error": {"file", "line", "col", "code",
+/// "exit", "message"}}`, for standard error under `--json`; what the message
+/// does not say is null.
+pub fn json(message: &str, exit: i32, usage: bool) -> String {
+    let (file, line, col, rest) = locate(message);
+    serde_json::json!({
+        "error": {
+            "file": file,
+            "line": line,
+            "col": col,
+            "code": code_name(exit, usage),
+            "exit": exit,
+            "message": rest,
+        }
+    })
+    .to_string()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn json_errors_name_their_place() {
+        let v: serde_json::Value =
+            serde_json::from_str(&json("dir/a:b.nc:12:7: `Q` is not a word", 2, false))
+                .expect("json");
+        let e = &v["error"];
+        assert_eq!(e["file"], "dir/a:b.nc");
+        assert_eq!((e["line"].as_u64(), e["col"].as_u64()), (Some(12), Some(7)));
+        assert_eq!(e["code"], "bad-input");
+        assert_eq!(e["message"], "`Q` is not a word");
+        let v: serde_json::Value =
+            serde_json::from_str(&json("bad.stl:byte 80: short file", 2, false)).expect("json");
+        assert_eq!(v["error"]["col"], 80);
+        assert!(v["error"]["line"].is_null());
+        let v: serde_json::Value =
+            serde_json::from_str(&json("--step 0: must be a number", 2, true)).expect("json");
+        assert!(v["error"]["file"].is_null());
+        assert_eq!(v["error"]["code"], "usage");
+        assert_eq!(v["error"]["message"], "--step 0: must be a number");
+        let v: serde_json::Value =
+            serde_json::from_str(&json("/no/such.apt: cannot open", 2, false)).expect("json");
+        assert_eq!(v["error"]["file"], "/no/such.apt");
+        assert_eq!(v["error"]["message"], "cannot open");
+    }
 
     /// Issue 17: "error messages echo a whole 1 MB token".
     #[test]

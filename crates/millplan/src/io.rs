@@ -115,8 +115,12 @@ pub fn read_mesh(path: &Path) -> CliResult<(TriMesh, StlReport)> {
 /// Reads the part for a command that works on its surface: an STL without a
 /// triangle (after degenerate ones are dropped) is refused, rather than every
 /// point coming out without contact.
-pub fn read_surface(path: &Path) -> CliResult<(TriMesh, StlReport)> {
-    let (mesh, report) = read_mesh(path)?;
+pub fn read_surface(
+    path: &Path,
+    units: Option<crate::cmd::UnitArg>,
+) -> CliResult<(TriMesh, StlReport)> {
+    let (mut mesh, report) = read_mesh(path)?;
+    crate::cmd::stl_to_mm(&mut mesh, units);
     if mesh.is_empty() {
         return Err(CliError::input(format!(
             "{}: no triangles: there is no part surface to work on",
@@ -182,7 +186,11 @@ pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
             path.display()
         )));
     }
-    let dialect = detect(&String::from_utf8_lossy(head));
+    let head = String::from_utf8_lossy(head);
+    if let Some(e) = millplan_nc::detect::krl_refusal(&head) {
+        return Err(CliError::input(format!("{}:{e}", path.display())));
+    }
+    let dialect = detect(&head);
     // A move takes a line of 20 bytes or more.
     let opts = ReadOptions {
         expect_moves: (size / 20) as usize,

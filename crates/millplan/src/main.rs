@@ -24,6 +24,7 @@ mod error;
 mod io;
 mod limits;
 mod progress;
+mod round;
 
 use clap::{Parser, Subcommand};
 use error::{EXIT_BAD_INPUT, EXIT_FINDINGS, EXIT_INTERNAL, EXIT_OK};
@@ -43,7 +44,7 @@ static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
 /// Resource limits (what a small input may ask for) are in README.md; raise
 /// one with --limit NAME=VALUE or MILLPLAN_LIMITS=NAME=VALUE,….
 #[derive(Parser)]
-#[command(name = "millplan", version, about, long_about)]
+#[command(name = "millplan", version, about, long_about, next_line_help = true)]
 struct Cli {
     /// Raise (or lower) a resource limit: moves, expansion, line-bytes,
     /// expression-depth, stl-triangles, stl-extent (mm), memory (MB).
@@ -75,6 +76,8 @@ enum Command {
     Explain(cmd::explain::Args),
     #[command(name = "wd-sweep")]
     WdSweep(cmd::sweep::Args),
+    Completions(cmd::completions::Args),
+    Man(cmd::completions::ManArgs),
 }
 
 /// With `MILLPLAN_SMALL_PAGES=1`, faults this process's fresh memory in 4 KiB
@@ -136,11 +139,49 @@ fn exit_code(r: &Result<i32, error::CliError>, failure: Option<&str>) -> i32 {
     }
 }
 
+/// Whether the command line asks for JSON (`--json` before any `--`): then
+/// errors are JSON too, also those of arguments clap refuses.
+fn json_requested() -> bool {
+    std::env::args_os()
+        .skip(1)
+        .take_while(|a| a != "--")
+        .any(|a| a == "--json")
+}
+
+/// Prints an error on standard error: `error: message`, or under `--json`
+/// one line `{"error": {…}}`.
+fn print_error(message: &str, exit: i32, usage: bool, json: bool) {
+    if json {
+        eprintln!("{}", error::json(&error::shorten(message), exit, usage));
+    } else {
+        eprintln!("error: {}", error::shorten(message));
+    }
+}
+
 fn main() {
     no_panic_on_closed_output();
     small_pages_if_asked();
+    let json = json_requested();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
+        Err(e) if e.use_stderr() && json => {
+            // clap's message without its usage lines, on one line.
+            let text = e.to_string();
+            let what = text.split("\n\nUsage:").next().unwrap_or("");
+            let what: Vec<&str> = what
+                .lines()
+                .map(str::trim)
+                .filter(|l| !l.is_empty())
+                .collect();
+            let what = what.join(" ");
+            print_error(
+                what.trim_start_matches("error: "),
+                EXIT_BAD_INPUT,
+                true,
+                true,
+            );
+            std::process::exit(EXIT_BAD_INPUT);
+        }
         Err(e) => {
             let code = if e.use_stderr() {
                 EXIT_BAD_INPUT
@@ -156,16 +197,17 @@ fn main() {
         }
     };
     if let Err(e) = limits::init(&cli.limit) {
-        eprintln!("error: {}", error::shorten(&e.message));
+        print_error(&e.message, e.code, false, json);
         std::process::exit(e.code);
     }
     io::remove_staged_on_signals();
     let r = run(cli.command);
     let failure = io::stdout_failure();
     if let Err(e) = &r {
-        eprintln!("error: {}", error::shorten(&e.message));
+        print_error(&e.message, e.code, false, json);
     } else if let Some(f) = &failure {
-        eprintln!("error: standard output: {f}: the output is cut short");
+        let m = format!("standard output: {f}: the output is cut short");
+        print_error(&m, EXIT_INTERNAL, false, json);
     }
     std::process::exit(exit_code(&r, failure.as_deref()));
 }
@@ -190,6 +232,91 @@ fn run(command: Command) -> error::CliResult<i32> {
         Command::Tool(a) => cmd::tool::run(a),
         Command::Thread(a) => cmd::thread::run(a),
         Command::Explain(a) => cmd::explain::run(a),
+        Command::Completions(a) => cmd::completions::run(a),
+        Command::Man(a) => cmd::completions::man(a),
+    }
+}
+
+#[cfg(test)]
+mod help_tests {
+    use clap::CommandFactory;
+
+    /// Every command of the tree with its path (`millplan tool add`).
+    fn commands() -> Vec<(String, clap::Command)> {
+        let mut root = super::Cli::command();
+        root.build();
+        let mut out = Vec::new();
+        let mut todo = vec![("millplan".to_string(), root)];
+        while let Some((path, c)) = todo.pop() {
+            for s in c.get_subcommands() {
+                if s.get_name() != "help" {
+                    todo.push((format!("{path} {}", s.get_name()), s.clone()));
+                }
+            }
+            out.push((path, c));
+        }
+        out
+    }
+
+    /// Every command says what it does, and every option and argument of every
+    /// command says what it is.
+    #[test]
+    fn every_command_option_and_argument_has_help() {
+        let mut missing = Vec::new();
+        let empty = |h: Option<&clap::builder::StyledStr>| {
+            h.is_none_or(|h| h.to_string().trim().is_empty())
+        };
+        for (path, c) in commands() {
+            if empty(c.get_about()) && empty(c.get_long_about()) {
+                missing.push(path.clone());
+            }
+            for a in c.get_arguments() {
+                if matches!(a.get_id().as_str(), "help" | "version") {
+                    continue;
+                }
+                if empty(a.get_help()) && empty(a.get_long_help()) {
+                    missing.push(format!("{path} {}", a.get_id()));
+                }
+            }
+        }
+        assert!(commands().len() > 20, "the walk found the subcommands");
+        assert!(missing.is_empty(), "without help: {missing:#?}");
+    }
+
+    /// Every command that reads an STL can be told its unit.
+    #[test]
+    fn every_stl_reader_takes_stl_units() {
+        for (path, c) in commands() {
+            let ids: Vec<&str> = c.get_arguments().map(|a| a.get_id().as_str()).collect();
+            if ids.contains(&"stl") {
+                assert!(
+                    ids.contains(&"stl_units"),
+                    "{path} reads --stl without --stl-units"
+                );
+            }
+        }
+    }
+
+    /// One layout for every command's help: the text of an option on the
+    /// line after its name, never beside it.
+    #[test]
+    fn every_help_has_one_layout() {
+        for (path, mut c) in commands() {
+            let help = c.render_long_help().to_string();
+            for line in help.lines() {
+                let t = line.trim_start();
+                // `-o, --output` or `--stl`, not a possible value (`- latlon: …`).
+                let option = t.starts_with('-')
+                    && t.chars()
+                        .nth(1)
+                        .is_some_and(|c| c == '-' || c.is_ascii_alphanumeric());
+                let option = option || (t.starts_with('<') && line.starts_with("  "));
+                assert!(
+                    !(option && t.trim_end().contains("  ")),
+                    "{path}: `{line}` has its help beside it"
+                );
+            }
+        }
     }
 }
 

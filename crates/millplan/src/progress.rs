@@ -31,16 +31,29 @@ pub fn spinner(what: &str, show: bool) -> ProgressBar {
     bar
 }
 
-/// A bar over a count of items (strokes, points), with the rate and the time
-/// left; hidden when `show` is false or the work is small.
-pub fn count(total: u64, what: &str, show: bool) -> ProgressBar {
-    if !show || total < 10_000 {
+/// A counting bar with an estimate of the time left, for a phase of `total`
+/// steps: shown when `show` (not `-q`) and standard error is a terminal.
+pub fn count(total: u64, what: &str, unit: &str, show: bool) -> ProgressBar {
+    if !show {
         return ProgressBar::hidden();
     }
     let bar = ProgressBar::new(total);
-    if let Ok(style) =
-        ProgressStyle::with_template("{msg} [{bar:30}] {human_pos}/{human_len} {per_sec} {eta}")
-    {
+    let template = format!("{{msg}} [{{bar:30}}] {{human_pos}}/{{human_len}} {unit}, {{eta}} left");
+    if let Ok(style) = ProgressStyle::with_template(&template) {
+        bar.set_style(style);
+    }
+    bar.set_message(what.to_string());
+    bar
+}
+
+/// A bar of the share done and the time left, for work whose steps have no
+/// name of their own (its length is set by the first report).
+pub fn fraction(what: &str, show: bool) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(1);
+    if let Ok(style) = ProgressStyle::with_template("{msg} [{bar:30}] {percent:>3} %, {eta} left") {
         bar.set_style(style);
     }
     bar.set_message(what.to_string());

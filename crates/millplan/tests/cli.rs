@@ -7,9 +7,8 @@ fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_millplan"))
 }
 
-fn data_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data")
-}
+#[path = "../../millplan-nc/tests/shared_data/mod.rs"]
+mod shared_data;
 
 fn golden(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -29,10 +28,10 @@ fn json(args: &[&str]) -> serde_json::Value {
 
 #[test]
 fn inspect_json_on_every_shared_file() {
-    let Ok(dirs) = std::fs::read_dir(data_dir()) else {
-        eprintln!("skipped: shared/data not present");
+    let Some(root) = shared_data::dir() else {
         return;
     };
+    let dirs = std::fs::read_dir(root).expect("../shared/data lists");
     let mut n = 0;
     for d in dirs.flatten() {
         for f in std::fs::read_dir(d.path()).expect("dir").flatten() {
@@ -84,10 +83,12 @@ fn inspect_json_on_every_shared_file() {
 
 #[test]
 fn inspect_counts_the_interface_glue_pair() {
-    let apt = data_dir().join("swcam-apt-stl-pairs/Interface-glue.apt");
-    if !apt.exists() {
+    let (Some(apt), Some(stl)) = (
+        shared_data::file("swcam-apt-stl-pairs/Interface-glue.apt"),
+        shared_data::file("swcam-apt-stl-pairs/Interface-glue.STL"),
+    ) else {
         return;
-    }
+    };
     let j = json(&["inspect", "--json", apt.to_str().expect("utf8")]);
     let m = &j["moves"];
     let total = m["rapid"].as_u64().unwrap_or(0)
@@ -96,7 +97,6 @@ fn inspect_counts_the_interface_glue_pair() {
         + m["cycle"].as_u64().unwrap_or(0);
     assert_eq!(total, 6311);
     assert_eq!(m["arc"], 50);
-    let stl = data_dir().join("swcam-apt-stl-pairs/Interface-glue.STL");
     let j = json(&["inspect", "--json", stl.to_str().expect("utf8")]);
     assert_eq!(
         (j["encoding"].as_str(), j["triangles"].as_u64()),
@@ -360,7 +360,15 @@ fn crate_dependencies_point_one_way() {
         ),
         ("millplan-tooldb", &[]),
     ];
-    let binary_only = ["clap", "indicatif", "tempfile", "anyhow", "mimalloc"];
+    let binary_only = [
+        "clap",
+        "clap_complete",
+        "clap_mangen",
+        "indicatif",
+        "tempfile",
+        "anyhow",
+        "mimalloc",
+    ];
     let packages = m["packages"].as_array().expect("packages");
     let mut seen = 0;
     for p in packages {
@@ -471,4 +479,22 @@ fn explain_takes_a_code_as_it_is_printed() {
     }
     let out = bin().args(["explain", "no-such"]).output().expect("runs");
     assert_eq!(out.status.code(), Some(2));
+}
+
+/// Issue 18: a KUKA robot program is named as such, not a parse error at `&ACCESS`.
+#[test]
+fn krl_programs_are_refused_as_krl() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let src = dir.path().join("ROBOT.SRC");
+    std::fs::write(&src, "&ACCESS RVP\r\n&REL 2\r\nDEF robot()\r\nEND\r\n").expect("write");
+    fails_with_2(
+        &["inspect", src.to_str().expect("utf8")],
+        "ROBOT.SRC:1:1: a KUKA KRL robot program: KRL is not read yet",
+    );
+    if let Some(real) = shared_data::file("kuka-krl-powermill-ballnose/f1_Kuka_APT2_Main.SRC") {
+        fails_with_2(
+            &["inspect", real.to_str().expect("utf8")],
+            "KRL is not read yet",
+        );
+    }
 }

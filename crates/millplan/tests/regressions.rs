@@ -3,8 +3,9 @@
 //! and line it was seen at. Outputs are read back (with `inspect --json` or
 //! the library) and compared with their source, never with copied numbers.
 //!
-//! Tests on the samples of `../shared/data/` print `SKIPPED:` and pass when
-//! the samples are not there; the ones on programs written here always run.
+//! Tests on the samples of `../shared/data/` record a skip when the samples
+//! are not there (counted by `.ci/run`, see `shared_data`); the ones on
+//! programs written here always run.
 
 use millplan_nc::equiv::{compare, Tolerance};
 use millplan_nc::write::Target;
@@ -12,21 +13,16 @@ use millplan_nc::{parse_program, FeedMode, Program, ReadOptions};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+#[path = "../../millplan-nc/tests/shared_data/mod.rs"]
+mod shared_data;
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_millplan"))
 }
 
-/// A sample of `../shared/data/`, or `None` after printing why the test skips.
+/// A sample of `../shared/data/`, or `None` after recording the skip.
 fn sample(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.is_file() {
-        Some(p)
-    } else {
-        eprintln!("SKIPPED: ../shared/data/{rel} is not here");
-        None
-    }
+    shared_data::file(rel)
 }
 
 fn s(p: &Path) -> &str {

@@ -190,7 +190,7 @@ fn paper_search_lowers_the_largest_working_diameter_step() {
     assert!(html.matches("<svg").count() >= 5, "five figures");
     assert!(html.contains("Original order") && html.contains("Reordered"));
     assert!(html.contains(&format!(
-        "{:.4} → {:.4}",
+        "{:.3} → {:.3}",
         max(&j, "original"),
         max(&j, "reordered")
     )));

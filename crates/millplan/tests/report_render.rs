@@ -2,7 +2,29 @@
 //! Run with `cargo test -p millplan --test report_render -- --ignored`; `.ci/run`
 //! does when it could install Chromium.
 
+use std::path::Path;
 use std::process::Command;
+
+/// Headless Chromium on a page: `--screenshot=PNG` or `--dump-dom`.
+fn chromium(profile: &Path, page: &Path, what: &str) -> std::process::Output {
+    Command::new("chromium")
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--window-size=1200,2600",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .arg(what)
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .expect("chromium runs")
+}
 
 #[test]
 #[ignore = "needs /usr/bin/chromium"]
@@ -15,26 +37,11 @@ fn speed_report_renders_in_headless_chromium() {
         .expect("runs");
     assert!(st.status.success());
     let png = dir.path().join("report.png");
-    let out = Command::new("chromium")
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-quic",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--window-size=1200,2600",
-        ])
-        .arg(format!(
-            "--user-data-dir={}",
-            dir.path().join("profile").display()
-        ))
-        .arg(format!("--screenshot={}", png.display()))
-        .arg(format!("file://{}", demo.join("report.html").display()))
-        .output()
-        .expect("chromium runs");
+    let out = chromium(
+        &dir.path().join("profile"),
+        &demo.join("report.html"),
+        &format!("--screenshot={}", png.display()),
+    );
     assert!(
         out.status.success(),
         "{}",
@@ -48,4 +55,99 @@ fn speed_report_renders_in_headless_chromium() {
         "screenshot only {} bytes",
         bytes.len()
     );
+}
+
+/// The speed report opens with its inputs, the warnings in a box and the
+/// verdict in words, above the summary table: as Chromium lays the page out,
+/// for a part that matches its program and for one that does not.
+#[test]
+#[ignore = "needs /usr/bin/chromium"]
+fn speed_report_shows_inputs_warnings_and_verdict() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let demo = dir.path().join("demo");
+    let st = Command::new(env!("CARGO_BIN_EXE_millplan"))
+        .arg("demo")
+        .arg("-o")
+        .arg(&demo)
+        .output()
+        .expect("runs");
+    assert!(st.status.success());
+    // The part read in the wrong unit: most points miss it.
+    let report = dir.path().join("mismatch.html");
+    let st = Command::new(env!("CARGO_BIN_EXE_millplan"))
+        .args([
+            "speed",
+            "--vc",
+            "63",
+            "--fz",
+            "0.125",
+            "--ap",
+            "0.3",
+            "--stl-units",
+            "inch",
+            "--stl",
+        ])
+        .arg(demo.join("part.stl"))
+        .arg(demo.join("finish.apt"))
+        .arg("-o")
+        .arg(dir.path().join("vc.nc"))
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .expect("runs");
+    assert_eq!(
+        st.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    for (page, warning) in [
+        (demo.join("report.html"), "open edges"),
+        (report, "do not touch the part"),
+    ] {
+        let out = chromium(&dir.path().join("profile"), &page, "--dump-dom");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let dom = String::from_utf8_lossy(&out.stdout).to_string();
+        let at = |needle: &str| {
+            dom.find(needle)
+                .unwrap_or_else(|| panic!("{}: no `{needle}`", page.display()))
+        };
+        let (inputs, warnings, verdict, summary) = (
+            at("id=\"inputs\""),
+            at("id=\"warnings\""),
+            at("id=\"verdict\""),
+            at("<h2>Summary</h2>"),
+        );
+        assert!(
+            inputs < warnings && warnings < verdict && verdict < summary,
+            "{}",
+            page.display()
+        );
+        let box_text = &dom[warnings..verdict];
+        assert!(box_text.contains(warning), "{}: {box_text}", page.display());
+        let verdict_text = &dom[verdict..summary];
+        for said in [
+            "Spindle control keeps the cutting speed",
+            "Cycle time",
+            "spindle's acceleration",
+        ] {
+            assert!(
+                verdict_text.contains(said),
+                "{}: {verdict_text}",
+                page.display()
+            );
+        }
+        assert!(
+            dom.contains("spindle 500–18000 1/min"),
+            "the machine limits in the header"
+        );
+        assert!(
+            dom.contains("spindle maximum"),
+            "the limit drawn on the speed plot"
+        );
+    }
 }

@@ -4,6 +4,9 @@ use millplan_geom::{DMat3, DVec3, TriMesh};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+#[path = "../../millplan-nc/tests/shared_data/mod.rs"]
+mod shared_data;
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_millplan"))
 }
@@ -291,12 +294,9 @@ fn an_inside_out_part_is_turned_outward() {
 
 #[test]
 fn moulds_from_the_shared_data_run_for_both_machine_types() {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/stl-pitfalls-opencamlib/ktoolcor.stl");
-    if !p.exists() {
-        eprintln!("skipped: {} is absent", p.display());
+    let Some(p) = shared_data::file("stl-pitfalls-opencamlib/ktoolcor.stl") else {
         return;
-    }
+    };
     for args in [
         ["--type", "ca", "--range1", "-30,110"],
         ["--type", "ab", "--range1", "-120,120"],

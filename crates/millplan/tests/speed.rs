@@ -4,8 +4,11 @@
 //! Interface-glue pair (14 mm ball-end operation).
 
 use millplan_nc::{parse_program, MoveKind, ReadOptions};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
+
+#[path = "../../millplan-nc/tests/shared_data/mod.rs"]
+mod shared_data;
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_millplan"))
@@ -158,16 +161,12 @@ fn speed_on_the_generated_free_form_case() {
 
 #[test]
 fn speed_on_interface_glue() {
-    let root =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/swcam-apt-stl-pairs");
-    let (apt, stl) = (
-        root.join("Interface-glue.apt"),
-        root.join("Interface-glue.STL"),
-    );
-    if !apt.exists() || !stl.exists() {
-        eprintln!("skipped: shared/data not present");
+    let (Some(apt), Some(stl)) = (
+        shared_data::file("swcam-apt-stl-pairs/Interface-glue.apt"),
+        shared_data::file("swcam-apt-stl-pairs/Interface-glue.STL"),
+    ) else {
         return;
-    }
+    };
     let dir = tempfile::tempdir().expect("tmp");
     let r = run(&apt, &stl, dir.path(), &[]);
     check(&r);
@@ -341,4 +340,69 @@ fn directions_generates_raster_candidates_from_angles() {
     assert!(c
         .iter()
         .all(|x| x["path"].as_str().expect("name").starts_with("raster ")));
+}
+
+/// Issue 18: an STL written in inches is read in mm with `--stl-units inch`:
+/// the demo part scaled to inches gives, with the flag, the result of the
+/// millimetre part, and without it a part that does not match the program.
+#[test]
+fn stl_units_inch_scales_the_part() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let demo = dir.path().join("demo");
+    assert!(bin()
+        .args(["demo", "-o"])
+        .arg(&demo)
+        .output()
+        .expect("runs")
+        .status
+        .success());
+    let stl = demo.join("part.stl");
+    let (mut mesh, _) =
+        millplan_geom::stl::read_stl(&std::fs::read(&stl).expect("stl")).expect("reads");
+    mesh.map_vertices(|v| v / 25.4);
+    let mut bytes = Vec::new();
+    millplan_geom::stl::write_binary_stl(&mesh, "demo part in inches", &mut bytes);
+    let inch = dir.path().join("part_inch.stl");
+    std::fs::write(&inch, bytes).expect("write");
+    let apt = demo.join("finish.apt");
+    let gouge = |part: &Path, units: Option<&str>| {
+        let mut c = bin();
+        c.args(["gouge", "--json", "--stl"]).arg(part).arg(&apt);
+        if let Some(u) = units {
+            c.args(["--stl-units", u]);
+        }
+        let o = c.output().expect("runs");
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_default();
+        (o.status.code(), j["gouges"].as_array().map(Vec::len))
+    };
+    let mm = gouge(&stl, None);
+    assert_eq!(mm, (Some(0), Some(0)));
+    assert_eq!(gouge(&stl, Some("mm")), mm);
+    assert_eq!(gouge(&inch, Some("inch")), mm);
+    // Read as millimetres, the inch part does not match the program: speed
+    // exits 3; told its unit, it runs.
+    let speed = |units: &[&str]| {
+        bin()
+            .args(["speed", "--vc", "63", "--fz", "0.1", "--ap", "0.3", "--stl"])
+            .arg(&inch)
+            .args(units)
+            .arg(&apt)
+            .arg("-o")
+            .arg(dir.path().join("vc.nc"))
+            .output()
+            .expect("runs")
+            .status
+            .code()
+    };
+    assert_eq!(speed(&[]), Some(3));
+    assert_eq!(speed(&["--stl-units", "inch"]), Some(0));
+    let o = bin()
+        .args(["inspect", "--json", "--stl-units", "inch"])
+        .arg(&inch)
+        .output()
+        .expect("runs");
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let x = j["bounds"]["max"][0].as_f64().unwrap_or(0.0);
+    assert!((x - 60.0).abs() < 1e-3, "{j}");
+    assert_eq!(j["stl_units"], "inch");
 }

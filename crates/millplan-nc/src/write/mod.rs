@@ -232,6 +232,20 @@ pub fn write_program_to(
 }
 
 /// Writes a program for `o.target` into memory.
+///
+/// ```
+/// use millplan_nc::write::{write_program, Target, WriteOptions};
+/// use millplan_nc::{parse_program, ReadOptions};
+///
+/// let src = "G21 G90\nT1 M6\nS6000 M3\nG0 X0 Y0 Z5\nG1 Z-1 F300\nG1 X10\nM30\n";
+/// let p = parse_program(src, ReadOptions::default()).expect("reads").program;
+/// let (text, _warnings) = write_program(&p, WriteOptions::new(Target::Heidenhain)).expect("writes");
+/// let text = String::from_utf8(text).expect("text");
+/// assert!(text.contains("TOOL CALL 1"), "{text}");
+/// // Read back, it commands what its source did.
+/// let back = parse_program(&text, ReadOptions::default()).expect("reads back").program;
+/// assert_eq!(back.move_count(), p.move_count());
+/// ```
 pub fn write_program(p: &Program, o: WriteOptions) -> Result<(Vec<u8>, Written), WriteError> {
     // Room for a typical block per move up front: growing an 80 MB text by
     // doubling copies it and faults in fresh pages each time.

@@ -10,23 +10,23 @@ use millplan_nc::write::{write_program, Target, WriteOptions};
 use millplan_nc::{parse_program, verify::verify, LengthUnit, Program, ReadOptions};
 use std::path::{Path, PathBuf};
 
-/// The shared data folder, when it is there.
+#[path = "../shared_data/mod.rs"]
+pub mod shared_data;
+
+/// The shared data folder, when it is there; its absence is recorded as a
+/// skip of the calling test (`shared_data::skipped`).
 pub fn data() -> Option<PathBuf> {
-    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
-    d.is_dir().then_some(d)
+    shared_data::dir()
 }
 
-/// The text of one sample (`folder/file`), or `None` after printing why the
+/// The text of one sample (`folder/file`), or `None` after recording why the
 /// calling test skips.
 pub fn sample(rel: &str) -> Option<String> {
-    let Some(d) = data() else {
-        eprintln!("SKIPPED: ../shared/data is not here ({rel})");
-        return None;
-    };
-    match std::fs::read(d.join(rel)) {
+    let p = shared_data::file(rel)?;
+    match std::fs::read(&p) {
         Ok(b) => Some(String::from_utf8_lossy(&b).into_owned()),
         Err(e) => {
-            eprintln!("SKIPPED: ../shared/data/{rel}: {e}");
+            shared_data::skipped(&format!("../shared/data/{rel}: {e}"));
             None
         }
     }

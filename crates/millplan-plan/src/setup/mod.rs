@@ -157,6 +157,17 @@ pub fn plan(
     machine: &Kinematics,
     p: &SetupParams,
 ) -> Result<SetupPlan, SetupError> {
+    plan_with_progress(mesh, machine, p, &|_, _| {})
+}
+
+/// [`plan`], calling `progress(done, total)` through the part's cones of
+/// access, the bulk of the work (from any thread).
+pub fn plan_with_progress(
+    mesh: &mut TriMesh,
+    machine: &Kinematics,
+    p: &SetupParams,
+    progress: access::Progress,
+) -> Result<SetupPlan, SetupError> {
     if mesh.is_empty() {
         return Err(SetupError::NoTriangles);
     }
@@ -181,11 +192,18 @@ pub fn plan(
     let bvh = Bvh::build(mesh);
     let (vis, test) = match &p.tool {
         Some(t) => (
-            access::accessibility(mesh, &bvh, grid.as_ref(), p.clearance_deg, t),
+            access::accessibility_with_progress(
+                mesh,
+                &bvh,
+                grid.as_ref(),
+                p.clearance_deg,
+                t,
+                progress,
+            ),
             DirectionTest::tool(mesh, &bvh, p.clearance_deg, t),
         ),
         None => (
-            access::visibility(mesh, &bvh, grid.as_ref(), p.clearance_deg),
+            access::visibility_with_progress(mesh, &bvh, grid.as_ref(), p.clearance_deg, progress),
             DirectionTest::sight(mesh, &bvh, p.clearance_deg),
         ),
     };

@@ -58,6 +58,10 @@ pub struct Args {
     /// Do not print reader diagnostics.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Print a machine-readable summary (JSON) on standard output (not with -o -); errors too,
+    /// as JSON on standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Reads the output back and runs it and its source through the same
@@ -92,6 +96,11 @@ fn check_output(p: &millplan_nc::Program, out: &[u8], a: &Args) -> CliResult<boo
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    if a.json && a.output.as_os_str() == "-" {
+        return Err(CliError::input(
+            "--json: not with -o - (the program itself goes to standard output)",
+        ));
+    }
     let inputs: Vec<&std::path::Path> = [Some(a.input.as_path()), a.machine.as_deref()]
         .into_iter()
         .flatten()
@@ -120,11 +129,24 @@ pub fn run(a: Args) -> CliResult<i32> {
     let equivalent = check_output(&p, &out, &a)?;
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
-    eprintln!(
-        "wrote {} ({} moves, {})",
-        a.output.display(),
-        p.move_count(),
-        target.name()
-    );
+    if a.json {
+        outln!(
+            "{}",
+            serde_json::json!({
+                "input": a.input.display().to_string(),
+                "output": a.output.display().to_string(),
+                "target": target.name(),
+                "moves": p.move_count(),
+                "equivalent": equivalent,
+            })
+        );
+    } else {
+        eprintln!(
+            "wrote {} ({} moves, {})",
+            a.output.display(),
+            p.move_count(),
+            target.name()
+        );
+    }
     Ok(if equivalent { EXIT_OK } else { EXIT_FINDINGS })
 }

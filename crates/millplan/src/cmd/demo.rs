@@ -13,14 +13,20 @@ use std::path::PathBuf;
 /// ball-end finishing raster over it, generated on the spot.
 ///
 /// Writes into the output folder: the part (STL), the raster (APT/CL), the
-/// program for each supported control, and the result of constant-cutting-speed
-/// spindle control (vc 63 m/min, fz 0.125 mm, 2 flutes, ap 0.3 mm: the paper's
-/// test conditions): the controlled program, its per-point table and its report.
+/// same raster at 0°, 45° and 90° for `directions`, the machine file it runs
+/// on, the program for each supported control, and the result of
+/// constant-cutting-speed spindle control (vc 63 m/min, fz 0.125 mm, 2 flutes,
+/// ap 0.3 mm: the paper's test conditions): the controlled program, its
+/// per-point table and its report. Every input of README's tour is among them.
 #[derive(clap::Args)]
 pub struct Args {
     /// Folder for the demo's outputs (created if missing).
     #[arg(short, long, default_value = "millplan-demo")]
     pub output: PathBuf,
+    /// Print a machine-readable summary (JSON) on standard output; errors too,
+    /// as JSON on standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Writes every file, all of them or none.
@@ -34,6 +40,41 @@ fn write_all(written: &[(PathBuf, Vec<u8>)]) -> CliResult<()> {
         outputs.write(path, bytes)?;
     }
     outputs.commit()
+}
+
+/// The demo's machine: a three-axis high-speed machining centre with a Fanuc
+/// control, the machine file every `--machine` of README's tour reads.
+pub const MACHINE_TOML: &str = r#"# The machine of millplan's demo (examples/machine.toml documents every field).
+name = "demo HSC centre, three axes"
+
+[control]
+dialect = "fanuc"
+
+[spindle]
+min = 500       # 1/min
+max = 18000     # 1/min
+accel = 6000    # 1/min per second
+
+[feed]
+max = 20000     # mm/min
+rapid = 15000   # mm/min
+"#;
+
+/// The demo raster at 0°, 45° and 90° as APT/CL, each with its file name.
+fn direction_rasters(surface: &DemoSurface) -> CliResult<Vec<(String, Vec<u8>)>> {
+    let mut files = Vec::new();
+    for angle in [0, 45, 90] {
+        let r = Raster {
+            angle_deg: angle as f64,
+            ..Raster::default()
+        };
+        let (program, _) = raster(surface, &r);
+        let mut apt = Vec::new();
+        millplan_nc::write::apt::write_apt(&program, WriteOptions::new(Target::Apt), &mut apt)
+            .map_err(|e| CliError::internal(e.to_string()))?;
+        files.push((format!("raster_{angle}.apt"), apt));
+    }
+    Ok(files)
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -60,10 +101,19 @@ pub fn run(a: Args) -> CliResult<i32> {
             .map_err(|e| CliError::internal(e.to_string()))?;
         written.push((a.output.join(name), out));
     }
+    for (name, bytes) in direction_rasters(&surface)? {
+        written.push((a.output.join(name), bytes));
+    }
+    let machine =
+        Machine::from_toml(MACHINE_TOML).map_err(|e| CliError::internal(e.to_string()))?;
+    written.push((
+        a.output.join("machine.toml"),
+        MACHINE_TOML.as_bytes().to_vec(),
+    ));
     // Spindle control on the same part and path.
     let params = SpeedParams::new(63.0, 0.125, 2, 0.3);
-    let res = apply(&program, &mesh, &Machine::default(), &params)
-        .map_err(|e| CliError::internal(e.to_string()))?;
+    let res =
+        apply(&program, &mesh, &machine, &params).map_err(|e| CliError::internal(e.to_string()))?;
     let (controlled, _) = write_program(&res.program, WriteOptions::new(Target::Fanuc))
         .map_err(|e| CliError::internal(e.to_string()))?;
     written.push((a.output.join("finish_constant_vc_fanuc.nc"), controlled));
@@ -73,19 +123,86 @@ pub fn run(a: Args) -> CliResult<i32> {
     ));
     written.push((
         a.output.join("report.html"),
-        millplan_report::html::speed_report(
-            "millplan demo: constant cutting speed",
-            &res.summary,
-            &res.rows,
-            63.0,
-        )
-        .into_bytes(),
+        report(&program, &mesh, &machine, &res),
     ));
     write_all(&written)?;
-    let s = millplan_nc::stats::summarize(&program, 15000.0);
+    print_summary(&a, &written, mesh.len(), &program, &res.summary);
+    Ok(EXIT_OK)
+}
+
+/// The spindle-control report of the demo, with its inputs, findings and
+/// cycle times.
+fn report(
+    program: &millplan_nc::Program,
+    mesh: &millplan_geom::TriMesh,
+    machine: &Machine,
+    res: &millplan_plan::speed::SpeedResult,
+) -> Vec<u8> {
+    let findings: Vec<_> = [
+        millplan_plan::checks::mesh(mesh),
+        millplan_plan::checks::off_surface(&res.summary),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let cut = crate::cmd::CuttingData {
+        vc: 63.0,
+        fz: 0.125,
+        flutes: 2,
+        ap: 0.3,
+    };
+    let inputs = crate::cmd::speed::report_inputs(
+        (std::path::Path::new("finish.apt"), &res.program),
+        std::path::Path::new("part.stl"),
+        machine,
+        cut,
+        &findings,
+        millplan_nc::stats::summarize(program, machine.rapid).time_s,
+    );
+    millplan_report::html::speed_report(
+        "millplan demo: constant cutting speed",
+        &inputs,
+        &res.summary,
+        &res.rows,
+    )
+    .into_bytes()
+}
+
+/// What the demo made and where, and what spindle control did on it.
+fn print_summary(
+    a: &Args,
+    written: &[(PathBuf, Vec<u8>)],
+    triangles: usize,
+    program: &millplan_nc::Program,
+    r: &millplan_plan::speed::Summary,
+) {
+    let s = millplan_nc::stats::summarize(program, 15000.0);
+    if a.json {
+        let files: Vec<_> = written
+            .iter()
+            .map(|(p, b)| serde_json::json!({"path": p.display().to_string(), "bytes": b.len()}))
+            .collect();
+        let json = serde_json::json!({
+            "folder": a.output.display().to_string(),
+            "triangles": triangles,
+            "points": program.move_count(),
+            "cutting_mm": s.cutting_mm,
+            "time_s": s.time_s,
+            "files": files,
+            "spindle_control": {
+                "d_w_mm": [r.d_w.min, r.d_w.max],
+                "spindle_rpm": [r.spindle.min, r.spindle.max],
+                "vc_controlled_m_min": [r.vc_controlled.min, r.vc_controlled.max],
+                "vc_constant_m_min": [r.vc_constant.min, r.vc_constant.max],
+                "constant_spindle_rpm": r.constant_spindle,
+            },
+        });
+        crate::cmd::print_json(json);
+        return;
+    }
     outln!(
         "millplan demo: free-form part {} triangles, ball D10 raster {} points",
-        mesh.len(),
+        triangles,
         program.move_count()
     );
     outln!(
@@ -93,10 +210,9 @@ pub fn run(a: Args) -> CliResult<i32> {
         s.cutting_mm,
         s.time_s
     );
-    for (path, bytes) in &written {
+    for (path, bytes) in written {
         outln!("  wrote {} ({} bytes)", path.display(), bytes.len());
     }
-    let r = &res.summary;
     outln!(
         "spindle control: D_w {:.2}…{:.2} mm, n {:.0}…{:.0} 1/min; vc {:.1}…{:.1} m/min with control vs {:.1}…{:.1} at a constant {:.0} 1/min",
         r.d_w.min, r.d_w.max, r.spindle.min, r.spindle.max, r.vc_controlled.min, r.vc_controlled.max, r.vc_constant.min, r.vc_constant.max, r.constant_spindle
@@ -105,5 +221,4 @@ pub fn run(a: Args) -> CliResult<i32> {
         "open {} in a browser for the plots",
         a.output.join("report.html").display()
     );
-    Ok(EXIT_OK)
 }

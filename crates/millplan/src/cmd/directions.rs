@@ -46,17 +46,28 @@ pub struct Args {
     /// Point spacing of generated rasters, mm.
     #[arg(long, default_value_t = 0.5)]
     pub step: f64,
+    /// Part surface (STL) in the same coordinates as the paths.
     #[arg(long)]
     pub stl: PathBuf,
+    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
+    /// converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
     #[command(flatten)]
     pub cut: super::CuttingData,
+    /// Machine file (examples/machine.toml): the spindle range and acceleration the
+    /// load is judged by; a typical HSC machine by default.
     #[arg(long)]
     pub machine: Option<PathBuf>,
     /// Indicator to rank by (smaller is better).
     #[arg(long, value_enum, default_value = "tv")]
     pub by: RankBy,
+    /// Unit of a program that does not say (NX's Haas posts, bare GOTO files): mm or
+    /// inch.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
+    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
+    /// on standard error.
     #[arg(long)]
     pub json: bool,
 }
@@ -98,7 +109,7 @@ fn check_rasters(
 pub fn run(a: Args) -> CliResult<i32> {
     a.cut.check()?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let (mesh, _) = read_surface(&a.stl)?;
+    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
     let cx = Context::new(machine).with_part(&mesh);
     let mut candidates = Vec::new();
     if !a.angles.is_empty() {
@@ -130,7 +141,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             })
             .collect();
         let j = json!({ "ranked_by": format!("{:?}", a.by), "candidates": rows });
-        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        crate::cmd::print_json(j);
     } else {
         outln!(
             "{:>4}  {:<40} {:>12} {:>10} {:>12} {:>12} {:>10}",

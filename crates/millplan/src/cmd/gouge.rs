@@ -5,7 +5,9 @@ use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface};
 use millplan_plan::checks;
 use millplan_sim::dropcutter::DropMesh;
-use millplan_sim::gouge::{check, samples, GougeParams, GougeReport, Skipped, BYTES_PER_SAMPLE};
+use millplan_sim::gouge::{
+    check_with_progress, samples, GougeParams, GougeReport, Skipped, BYTES_PER_SAMPLE,
+};
 use std::path::PathBuf;
 
 /// Check a program for gouges: every cutting move (and with --rapids every
@@ -24,6 +26,10 @@ pub struct Args {
     /// Part surface (STL).
     #[arg(long)]
     pub stl: PathBuf,
+    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
+    /// converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
     /// Depth that counts as a gouge, mm.
     #[arg(long, default_value_t = 0.005)]
     pub tol: f64,
@@ -36,12 +42,33 @@ pub struct Args {
     /// Cutter for operations whose tool has no geometry: ball:D, flat:D, bull:D:R, cone:D:ANGLE.
     #[arg(long)]
     pub tool: Option<String>,
+    /// Unit of a program that does not say (NX's Haas posts, bare GOTO files): mm or
+    /// inch.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
+    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
+    /// on standard error.
     #[arg(long)]
     pub json: bool,
+    /// Print no warnings or notes about the inputs (errors still print).
     #[arg(long, short)]
     pub quiet: bool,
+}
+
+/// A check without the cutter's shape checks nothing: a program with a
+/// cutting operation whose tool has no shape is refused rather than called
+/// clean.
+fn shape_is_known(path: &std::path::Path, program: &millplan_nc::Program) -> CliResult<()> {
+    if let Some(op) = program.operations.iter().find(|op| {
+        op.moves.iter().any(|m| m.is_cutting()) && op.tool.as_ref().and_then(|t| t.cutter).is_none()
+    }) {
+        let line = op.tool.as_ref().map_or(0, |t| t.line);
+        return Err(CliError::input(format!(
+            "{}:{line}:1: the program does not say the shape of its tool; give it with --tool (ball:D, flat:D, bull:D:R, cone:D:ANGLE)",
+            path.display()
+        )));
+    }
+    Ok(())
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -57,21 +84,10 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
-    // A check without the cutter's shape checks nothing: refuse rather than
-    // call the program clean.
     if fallback.is_none() {
-        if let Some(op) = parsed.program.operations.iter().find(|op| {
-            op.moves.iter().any(|m| m.is_cutting())
-                && op.tool.as_ref().and_then(|t| t.cutter).is_none()
-        }) {
-            let line = op.tool.as_ref().map_or(0, |t| t.line);
-            return Err(CliError::input(format!(
-                "{}:{line}:1: the program does not say the shape of its tool; give it with --tool (ball:D, flat:D, bull:D:R, cone:D:ANGLE)",
-                a.path.display()
-            )));
-        }
+        shape_is_known(&a.path, &parsed.program)?;
     }
-    let (mesh, _) = read_surface(&a.stl)?;
+    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
     print_diagnostics(
         &a.stl,
         &checks::mesh(&mesh).into_iter().collect::<Vec<_>>(),
@@ -97,12 +113,17 @@ pub fn run(a: Args) -> CliResult<i32> {
         ),
         n * BYTES_PER_SAMPLE,
     )?;
-    let rep = check(&parsed.program, &part, shape, &g);
+    // Some 300,000 points a second: a bar from a second's worth on.
+    let bar = crate::progress::count(n as u64, "gouge check", "points", !a.quiet && n >= 3e5);
+    let rep = check_with_progress(&parsed.program, &part, shape, &g, &|done, _| {
+        bar.set_position(done as u64)
+    });
+    bar.finish_and_clear();
     if a.json {
         let mut j = serde_json::to_value(&rep).unwrap_or_default();
         j["clean"] = serde_json::json!(rep.gouges.is_empty() && rep.moves_checked > 0);
         j["tol"] = serde_json::json!(a.tol);
-        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        crate::cmd::print_json(j);
     } else {
         print_report(&a, &rep);
     }
@@ -130,7 +151,7 @@ fn skipped(s: &Skipped) -> String {
 fn print_report(a: &Args, rep: &GougeReport) {
     for gg in &rep.gouges {
         outln!(
-            "{}:{}: gouge {:.4} mm deep at X{:.4} Y{:.4} Z{:.4} (operation {}, move {})",
+            "{}:{}: gouge {:.3} mm deep at X{:.3} Y{:.3} Z{:.3} (operation {}, move {})",
             a.path.display(),
             gg.line,
             gg.depth,
@@ -151,7 +172,7 @@ fn print_report(a: &Args, rep: &GougeReport) {
             "clean".to_string()
         } else {
             format!(
-                "{} gouging moves, deepest {:.4} mm",
+                "{} gouging moves, deepest {:.3} mm",
                 rep.gouges.len(),
                 rep.max_depth
             )

@@ -36,6 +36,10 @@ pub struct Args {
     /// Do not print reader diagnostics.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Unit of an STL's numbers (an STL does not say): mm or inch, converted
+    /// to mm; without it the unit is guessed from the part's size.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
 }
 
 fn bounds_json(b: &Aabb) -> Value {
@@ -107,15 +111,16 @@ pub fn run(a: Args) -> CliResult<i32> {
             }
             let j = program_json(p, parsed.diagnostics.len(), rapid_rate);
             if a.json {
-                outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+                crate::cmd::print_json(j);
             } else {
                 print_program(&a.file, p, &j);
             }
         }
-        Input::Mesh(mesh, r) => {
-            let j = mesh_json(&mesh, &r);
+        Input::Mesh(mut mesh, r) => {
+            crate::cmd::stl_to_mm(&mut mesh, a.stl_units);
+            let j = mesh_json(&mesh, &r, a.stl_units);
             if a.json {
-                outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+                crate::cmd::print_json(j);
             } else {
                 print_mesh(&a.file, &j);
             }
@@ -124,18 +129,28 @@ pub fn run(a: Args) -> CliResult<i32> {
     Ok(EXIT_OK)
 }
 
-/// A part's size says little about its unit; under 30 units across, inches
-/// are the likelier.
+/// A part's size says little about its unit: under 8 units across, inches
+/// are the likelier (a part of a few mm is rare); from 8 to 30 both are
+/// common (beet_mm.stl is 28 mm across, a 20-inch plate 20 units), so the
+/// guess says it cannot tell; above, mm.
 fn units_guess(size: millplan_geom::DVec3) -> &'static str {
-    if size.max_element() < 30.0 {
-        "inch"
-    } else {
-        "mm"
+    match size.max_element() {
+        s if s < 8.0 => "inch",
+        s if s < 30.0 => "unknown",
+        _ => "mm",
     }
 }
 
-fn mesh_json(mesh: &millplan_geom::TriMesh, r: &millplan_geom::stl::StlReport) -> Value {
+fn mesh_json(
+    mesh: &millplan_geom::TriMesh,
+    r: &millplan_geom::stl::StlReport,
+    given: Option<UnitArg>,
+) -> Value {
     let b = mesh.bounds();
+    let given = given.map(|u| match u {
+        UnitArg::Mm => "mm",
+        UnitArg::Inch => "inch",
+    });
     let edges = mesh.edge_report();
     json!({
         "format": "stl",
@@ -151,7 +166,8 @@ fn mesh_json(mesh: &millplan_geom::TriMesh, r: &millplan_geom::stl::StlReport) -
         "flipped_normals": r.flipped_normals,
         "trailing_bytes": r.trailing_bytes,
         "bounds": bounds_json(&b),
-        "units_guess": units_guess(b.size()),
+        "stl_units": given,
+        "units_guess": if given.is_some() { None } else { Some(units_guess(b.size())) },
     })
 }
 
@@ -188,7 +204,7 @@ fn print_mesh(path: &std::path::Path, j: &Value) {
     if let Some(b) = j["bounds"].as_object() {
         let v = |k: &str, i: usize| b[k][i].as_f64().unwrap_or(0.0);
         outln!(
-            "  bounds         [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}]",
+            "  bounds         [{:.3}, {:.3}, {:.3}] .. [{:.3}, {:.3}, {:.3}]",
             v("min", 0),
             v("min", 1),
             v("min", 2),
@@ -197,16 +213,23 @@ fn print_mesh(path: &std::path::Path, j: &Value) {
             v("max", 2)
         );
         outln!(
-            "  size           {:.4} x {:.4} x {:.4}",
+            "  size           {:.3} x {:.3} x {:.3}",
             v("max", 0) - v("min", 0),
             v("max", 1) - v("min", 1),
             v("max", 2) - v("min", 2)
         );
     }
+    if let Some(u) = j["stl_units"].as_str() {
+        outln!("  units          {u} (--stl-units), bounds in mm");
+        return;
+    }
     match j["units_guess"].as_str() {
         Some("inch") => {
-            outln!("  units          inch (guess: the part is under 30 units across)")
+            outln!("  units          inch (guess: the part is under 8 units across; --stl-units says)")
         }
+        Some("unknown") => outln!(
+            "  units          mm or inch: 8 to 30 units across fits both (commands take mm unless --stl-units inch)"
+        ),
         _ => outln!("  units          mm"),
     }
 }
@@ -272,4 +295,17 @@ fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
         ((t / 60.0) as u64) % 60,
         (t as u64) % 60
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use millplan_geom::DVec3;
+
+    /// Issue 18: beet_mm.stl (28 mm across) was guessed as inch.
+    #[test]
+    fn mid_sized_parts_are_not_guessed_as_inch() {
+        assert_eq!(super::units_guess(DVec3::new(22.2, 28.4, 7.2)), "unknown");
+        assert_eq!(super::units_guess(DVec3::new(3.0, 2.0, 1.0)), "inch");
+        assert_eq!(super::units_guess(DVec3::new(60.0, 60.0, 9.6)), "mm");
+    }
 }

@@ -1,5 +1,6 @@
 //! One file per subcommand.
 
+pub mod completions;
 pub mod convert;
 pub mod cut;
 pub mod demo;
@@ -162,6 +163,13 @@ impl CuttingData {
     }
 }
 
+/// Prints a JSON summary on standard output, every number rounded to what
+/// it means (`round::json`).
+pub fn print_json(v: serde_json::Value) {
+    let v = crate::round::json(v);
+    outln!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
+}
+
 /// Output dialect, shared by the writing commands.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum TargetArg {
@@ -317,6 +325,14 @@ impl From<UnitArg> for LengthUnit {
             UnitArg::Mm => LengthUnit::Mm,
             UnitArg::Inch => LengthUnit::Inch,
         }
+    }
+}
+
+/// Scales a mesh read from an STL to mm: `--stl-units inch` multiplies every
+/// coordinate by 25.4; mm (the default: an STL does not say) leaves it.
+pub fn stl_to_mm(mesh: &mut millplan_geom::TriMesh, units: Option<UnitArg>) {
+    if let Some(UnitArg::Inch) = units {
+        mesh.map_vertices(|v| v * 25.4);
     }
 }
 

@@ -1,5 +1,6 @@
 //! `millplan raster`: a finishing raster over an STL part.
 
+use crate::cmd::UnitArg;
 use crate::cmd::{arg, print_diagnostics, target_for, tool_shape, write_program, Range, TargetArg};
 use crate::cmd::{MAX_FEED, MAX_SPINDLE};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
@@ -25,6 +26,10 @@ pub struct Args {
     /// Part surface (STL).
     #[arg(long)]
     pub stl: PathBuf,
+    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
+    /// converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
     /// Cutter: ball:D, flat:D, bull:D:R (corner radius), cone:D:ANGLE (point angle).
     #[arg(long)]
     pub tool: String,
@@ -52,14 +57,17 @@ pub struct Args {
     /// Clearance above the part for rapids, mm.
     #[arg(long, default_value_t = 5.0)]
     pub clearance: f64,
+    /// Cutting feed written on every cutting move, mm/min.
     #[arg(long, default_value_t = 1500.0)]
     pub feed: f64,
+    /// Spindle speed written with the tool, 1/min.
     #[arg(long, default_value_t = 6000.0)]
     pub spindle: f64,
     /// Output dialect; default: from the output's extension (.apt/.cls APT,
     /// .nc Fanuc, .mpf Sinumerik, .h Heidenhain, .ngc LinuxCNC).
     #[arg(long, value_enum)]
     pub to: Option<TargetArg>,
+    /// Raster program to write (APT/CL, or the dialect of --to or the extension).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Machine file (examples/machine.toml): its control's dialect is the
@@ -70,8 +78,13 @@ pub struct Args {
     /// the part (a mesh with holes or seams can make drop-cutter miss material).
     #[arg(long)]
     pub force: bool,
+    /// Print no warnings or notes about the inputs (errors still print).
     #[arg(long, short)]
     pub quiet: bool,
+    /// Print a machine-readable summary (JSON) on standard output; errors too,
+    /// as JSON on standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Every argument in its physical range: the stepover from a thousandth of
@@ -161,7 +174,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         .collect();
     let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], false)?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let (mesh, _) = read_surface(&a.stl)?;
+    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
     check_grid(&a, &p, &mesh.bounds())?;
     let part = DropMesh::new(&mesh);
     print_diagnostics(
@@ -184,7 +197,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let rep = check(&prog, &part, |_| Some(p.shape), &GougeParams::default());
     if !rep.gouges.is_empty() {
         eprintln!(
-            "{}: the raster's own gouge check finds {} moves cutting into the part, deepest {:.4} mm{}",
+            "{}: the raster's own gouge check finds {} moves cutting into the part, deepest {:.3} mm{}",
             a.stl.display(),
             rep.gouges.len(),
             rep.max_depth,
@@ -197,7 +210,36 @@ pub fn run(a: Args) -> CliResult<i32> {
     let out = write_program(&prog, machine.write_options(target), &a.stl, a.quiet)?;
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
-    let s = millplan_nc::stats::summarize(&prog, 15000.0);
+    Ok(print_result(&a, &prog, &rep))
+}
+
+/// What was written and what the gouge check found; the exit code.
+fn print_result(
+    a: &Args,
+    prog: &millplan_nc::Program,
+    rep: &millplan_sim::gouge::GougeReport,
+) -> i32 {
+    let s = millplan_nc::stats::summarize(prog, 15000.0);
+    if a.json {
+        let json = serde_json::json!({
+            "output": a.output.display().to_string(),
+            "moves": prog.move_count(),
+            "cutting_mm": s.cutting_mm,
+            "time_s": s.time_s,
+            "gouge_check": {
+                "moves_checked": rep.moves_checked,
+                "points_checked": rep.points_checked,
+                "gouges": rep.gouges.len(),
+                "max_depth_mm": rep.max_depth,
+            },
+        });
+        crate::cmd::print_json(json);
+        return if rep.gouges.is_empty() {
+            EXIT_OK
+        } else {
+            EXIT_FINDINGS
+        };
+    }
     outln!(
         "wrote {}: {} moves, {:.0} mm cutting, {:.0} s at {} mm/min; gouge check: {} moves at {} points, {}",
         a.output.display(),
@@ -209,9 +251,9 @@ pub fn run(a: Args) -> CliResult<i32> {
         rep.points_checked,
         if rep.gouges.is_empty() { "clean" } else { "gouges" }
     );
-    Ok(if rep.gouges.is_empty() {
+    if rep.gouges.is_empty() {
         EXIT_OK
     } else {
         EXIT_FINDINGS
-    })
+    }
 }

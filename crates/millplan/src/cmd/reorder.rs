@@ -49,9 +49,18 @@ pub enum StartArg {
 /// original and the reordered order.
 #[derive(clap::Args)]
 pub struct Args {
+    /// Program to reorder (APT/CL or G-code).
     pub path: PathBuf,
+    /// Part surface (STL) in the same coordinates as the program.
     #[arg(long)]
     pub stl: PathBuf,
+    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
+    /// converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
+    /// How the order is searched: as-run (default) measures candidate orders as the
+    /// machine will run them; paper is the thesis's greedy search; optimised keeps
+    /// passes whole.
     #[arg(long, value_enum, default_value = "as-run")]
     pub method: MethodArg,
     /// Start of the paper's search, among the border points.
@@ -60,6 +69,7 @@ pub struct Args {
     /// Start at this cutting point (index) instead.
     #[arg(long)]
     pub start_index: Option<usize>,
+    /// Seed of --start random: the same seed picks the same start point.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Minimum number of candidates of the paper's search.
@@ -79,20 +89,30 @@ pub struct Args {
     /// Write the reordered points without spindle control.
     #[arg(long)]
     pub no_speed: bool,
+    /// Machine file (examples/machine.toml): spindle range and acceleration, feed
+    /// limits, control dialect; a typical HSC machine by default.
     #[arg(long)]
     pub machine: Option<PathBuf>,
+    /// Output dialect; default: the machine file's control, else the output's
+    /// extension, else the source's dialect.
     #[arg(long, value_enum)]
     pub to: Option<TargetArg>,
+    /// Reordered program to write.
     #[arg(short, long)]
     pub output: PathBuf,
     /// HTML report: both orders side by side (D_w and spindle speed along the
     /// path, the distribution of successive changes, the tour from above).
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Unit of a program that does not say (NX's Haas posts, bare GOTO files): mm or
+    /// inch.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
+    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
+    /// on standard error.
     #[arg(long)]
     pub json: bool,
+    /// Print no warnings or notes about the inputs (errors still print).
     #[arg(long, short)]
     pub quiet: bool,
 }
@@ -122,7 +142,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = target_for(a.to, &a.output, parsed.program.source)?;
-    let (mesh, _) = read_surface(&a.stl)?;
+    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
     let cx = Context::new(machine).with_part(&mesh);
     let mut program = parsed.program.clone();
     let mut reorder = ReorderPass::new(params(&a));
@@ -131,8 +151,12 @@ pub fn run(a: Args) -> CliResult<i32> {
     if !a.no_speed {
         passes.push(&mut speed);
     }
-    pipeline::run(&mut passes, &mut program, &cx)
-        .map_err(|e| crate::cmd::pass_error(&a.path, e))?;
+    // Some 100,000 points a second at the least: from there it takes a while.
+    let show = !a.quiet && program.move_count() >= 100_000;
+    let bar = crate::progress::spinner("reordering", show);
+    let ran = pipeline::run(&mut passes, &mut program, &cx);
+    bar.finish_and_clear();
+    ran.map_err(|e| crate::cmd::pass_error(&a.path, e))?;
     let Some(o) = reorder.outcome else {
         return Err(CliError::internal("the reorder pass left no outcome"));
     };
@@ -149,7 +173,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             .to_possible_value()
             .map(|v| v.get_name().to_string());
         let j = json!({ "method": method, "verdict": o.verdict, "original": o.before, "reordered": o.after, "stats": o.stats, "tried": o.tried, "output": a.output.display().to_string() });
-        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        crate::cmd::print_json(j);
     } else {
         outln!("  {:<28} {:>16} {:>16}", "", "original", "reordered");
         for (k, v) in millplan_report::reorder::rows(&o.before, &o.after) {

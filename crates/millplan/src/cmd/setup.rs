@@ -1,6 +1,7 @@
 //! `millplan setup`: can a five-axis machine reach the whole part in one setup,
 //! and how should the part be clamped?
 
+use crate::cmd::UnitArg;
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_surface, Outputs};
 use millplan_models::kinematics::{KinKind, Kinematics, RotaryAxis};
@@ -32,6 +33,10 @@ pub struct Args {
     /// Part surface (STL).
     #[arg(long)]
     pub stl: PathBuf,
+    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
+    /// converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
     /// Machine file (see examples/machine.toml) with a `[kinematics]` table:
     /// kind = "table-ac" | "table-bc" | "table-ab" | "head-bc" |
     /// "head-b-table-c", [kinematics.first] and [kinematics.second] with min,
@@ -77,8 +82,12 @@ pub struct Args {
     /// Write the part rotated into the chosen setup (binary STL).
     #[arg(long, short)]
     pub output: Option<PathBuf>,
+    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
+    /// on standard error.
     #[arg(long)]
     pub json: bool,
+    /// Print no warnings or notes about the inputs (errors still print). No progress
+    /// either.
     #[arg(long, short)]
     pub quiet: bool,
 }
@@ -194,6 +203,28 @@ fn params(a: &Args) -> CliResult<SetupParams> {
     })
 }
 
+/// The setup search, with a bar of the share done and the time left where
+/// it takes a while (hidden with -q and when standard error is no terminal).
+fn plan_shown(
+    a: &Args,
+    mesh: &mut millplan_geom::TriMesh,
+    machine: &Kinematics,
+    p: &setup::SetupParams,
+) -> CliResult<setup::SetupPlan> {
+    let show = mesh.len() * p.cells > 20_000_000 && !a.quiet;
+    let bar = crate::progress::fraction("cones of access", show);
+    let progress = |done: usize, total: usize| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    };
+    let plan = setup::plan_with_progress(mesh, machine, p, &progress).map_err(|e| match e {
+        setup::SetupError::NoTriangles => CliError::input(format!("{}: {e}", a.stl.display())),
+        e => CliError::input(e.to_string()),
+    });
+    bar.finish_and_clear();
+    plan
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     let inputs: Vec<&std::path::Path> = [Some(a.stl.as_path()), a.machine.as_deref()]
         .into_iter()
@@ -219,14 +250,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     )?;
     let machine = machine(&a)?;
     let p = params(&a)?;
-    let (mut mesh, _) = read_surface(&a.stl)?;
+    let (mut mesh, _) = read_surface(&a.stl, a.stl_units)?;
     let t0 = std::time::Instant::now();
-    let bar = crate::progress::spinner("visibility", mesh.len() * p.cells > 20_000_000 && !a.quiet);
-    let plan = setup::plan(&mut mesh, &machine, &p).map_err(|e| match e {
-        setup::SetupError::NoTriangles => CliError::input(format!("{}: {e}", a.stl.display())),
-        e => CliError::input(e.to_string()),
-    })?;
-    bar.finish_and_clear();
+    let plan = plan_shown(&a, &mut mesh, &machine, &p)?;
     let secs = t0.elapsed().as_secs_f64();
     if plan.flipped && !a.quiet && !a.json {
         eprintln!(
@@ -306,7 +332,7 @@ fn print_json(a: &Args, s: &Summary, machine: &Kinematics, secs: f64) {
         "mode": if a.tool.is_some() { "tool" } else { "line-of-sight" },
         "seconds": secs,
     });
-    outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+    crate::cmd::print_json(j);
 }
 
 fn print_text(a: &Args, s: &Summary, plan: &SetupPlan) {

@@ -58,6 +58,9 @@ pub struct Args {
     /// Part surface (STL): report the material left on it.
     #[arg(long)]
     pub stl: Option<PathBuf>,
+    /// Units of the STL files (the part and an stl: blank); default mm.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
     /// Dexel size, mm.
     #[arg(long, default_value_t = 0.1, value_name = "MM")]
     pub resolution: f64,
@@ -100,6 +103,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let mut inputs: Vec<&Path> = vec![&a.path];
     inputs.extend(a.stl.as_deref());
+    if let StockSpec::Stl(p) = &spec {
+        inputs.push(p);
+    }
     let mut outputs = Outputs::plan(
         &inputs,
         &[
@@ -113,11 +119,16 @@ pub fn run(a: Args) -> CliResult<i32> {
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let strokes = program_strokes(&a, &parsed.program, machine.rapid)?;
     let part = match &a.stl {
-        Some(p) => Some(read_surface(p)?.0),
+        Some(p) => Some(read_surface(p, a.stl_units)?.0),
         None => None,
     };
     let mut stock = initial_stock(&a, &spec, &strokes, part.as_ref())?;
-    let bar = crate::progress::count(strokes.strokes.len() as u64, "simulating", !a.quiet && !a.json);
+    let bar = crate::progress::count(
+        strokes.strokes.len() as u64,
+        "simulating",
+        "strokes",
+        !a.quiet && !a.json && strokes.strokes.len() > 50_000,
+    );
     let rep = run_sim(&mut stock, &strokes, a.tol, &|d| bar.set_position(d as u64));
     bar.finish_and_clear();
     let rem = part.as_ref().map(|p| remaining(&stock, p, 10.0, a.tol));
@@ -233,7 +244,7 @@ fn initial_stock(a: &Args, spec: &StockSpec, s: &Strokes, part: Option<&TriMesh>
             check(*centre - DVec2::splat(d / 2.0), *centre + DVec2::splat(d / 2.0))?;
             Stock::cylinder(*centre, d / 2.0, *z0, *z1, res)
         }
-        StockSpec::Stl(p) => blank(p, res, &check)?,
+        StockSpec::Stl(p) => blank(p, a.stl_units, res, &check)?,
         StockSpec::Offset(mm) => {
             let part = part.ok_or_else(|| CliError::input("--stock offset:MM needs the part: give --stl"))?;
             let b = part.bounds();
@@ -245,8 +256,14 @@ fn initial_stock(a: &Args, spec: &StockSpec, s: &Strokes, part: Option<&TriMesh>
 }
 
 /// A cast blank: a closed mesh.
-fn blank(p: &Path, res: f64, check: &dyn Fn(DVec2, DVec2) -> CliResult<()>) -> CliResult<Stock> {
-    let (mesh, _) = read_mesh(p)?;
+fn blank(
+    p: &Path,
+    units: Option<UnitArg>,
+    res: f64,
+    check: &dyn Fn(DVec2, DVec2) -> CliResult<()>,
+) -> CliResult<Stock> {
+    let (mut mesh, _) = read_mesh(p)?;
+    crate::cmd::stl_to_mm(&mut mesh, units);
     if mesh.is_empty() {
         return Err(CliError::input(format!("{}: no triangles: not a blank", p.display())));
     }

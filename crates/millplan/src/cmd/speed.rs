@@ -49,6 +49,10 @@ pub struct Args {
     /// Part surface (STL) in the same coordinates as the toolpath.
     #[arg(long)]
     pub stl: PathBuf,
+    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
+    /// converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
     /// Cutting speed, m/min.
     #[arg(long)]
     pub vc: f64,
@@ -105,6 +109,7 @@ pub struct Args {
     /// Print the wall time of each phase on standard error.
     #[arg(long)]
     pub timings: bool,
+    /// Print no warnings or notes about the inputs (errors still print).
     #[arg(long, short)]
     pub quiet: bool,
 }
@@ -216,7 +221,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let t0 = std::time::Instant::now();
     let reader = spawn_reader(&a, t0)?;
-    let mesh = match read_surface(&a.stl) {
+    let mesh = match read_surface(&a.stl, a.stl_units) {
         Ok((m, _)) => m,
         // A program error is still reported first.
         Err(e) => return Err(join(reader).0.err().unwrap_or(e)),
@@ -233,6 +238,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     cx.record("surface (BVH, vertex normals)", t_surface);
     cx.record("read toolpath (beside the two above)", t_read);
     let mut program = parsed.program;
+    let time_before = millplan_nc::stats::summarize(&program, cx.machine.rapid).time_s;
     let mut pass = SpeedPass::new(params(&a));
     pipeline::run(&mut [&mut pass], &mut program, &cx)
         .map_err(|e| crate::cmd::pass_error(&a.path, e))?;
@@ -255,8 +261,41 @@ pub fn run(a: Args) -> CliResult<i32> {
             a.quiet,
         )
     })?;
-    write_table_and_report(&a, &mut outputs, &summary, &pass.rows)?;
+    let cut = super::CuttingData {
+        vc: a.vc,
+        fz: a.fz,
+        flutes: a.flutes,
+        ap: a.ap,
+    };
+    let inputs = || {
+        report_inputs(
+            (&a.path, &program),
+            &a.stl,
+            &cx.machine,
+            cut,
+            &findings,
+            time_before,
+        )
+    };
+    write_table_and_report(&a, &mut outputs, &summary, &pass.rows, inputs)?;
     outputs.commit()?;
+    print_outcome(&a, &cx, t0, &summary, &findings, target);
+    Ok(if checks::untrusted(&summary) {
+        EXIT_FINDINGS
+    } else {
+        EXIT_OK
+    })
+}
+
+/// The timings (with --timings) and the summary, as JSON or text.
+fn print_outcome(
+    a: &Args,
+    cx: &Context,
+    t0: std::time::Instant,
+    summary: &Summary,
+    findings: &[millplan_nc::Diagnostic],
+    target: Target,
+) {
     if a.timings {
         for t in cx.timings() {
             eprintln!("{:>8.3} s  {}", t.seconds, t.name);
@@ -267,21 +306,71 @@ pub fn run(a: Args) -> CliResult<i32> {
         );
     }
     if a.json {
-        let mut j = serde_json::to_value(&summary).unwrap_or_default();
+        let mut j = serde_json::to_value(summary).unwrap_or_default();
         j["output"] = serde_json::json!(a.output.display().to_string());
         j["dialect"] = serde_json::json!(target.name());
         j["machine"] = serde_json::to_value(&cx.machine).unwrap_or_default();
-        j["findings"] = serde_json::to_value(&findings).unwrap_or_default();
-        j["trusted"] = serde_json::json!(!checks::untrusted(&summary));
-        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        j["findings"] = serde_json::to_value(findings).unwrap_or_default();
+        j["trusted"] = serde_json::json!(!checks::untrusted(summary));
+        crate::cmd::print_json(j);
     } else {
-        print_summary(&summary, &a.output, target);
+        print_summary(summary, &a.output, target);
     }
-    Ok(if checks::untrusted(&summary) {
-        EXIT_FINDINGS
-    } else {
-        EXIT_OK
-    })
+}
+
+/// The tool of the first operation that cuts, as the program names it.
+pub fn tool_name(p: &millplan_nc::Program) -> String {
+    let Some(t) = p
+        .operations
+        .iter()
+        .find(|op| op.moves.iter().any(|m| m.is_cutting()))
+        .and_then(|op| op.tool.as_ref())
+    else {
+        return "not named by the program".to_string();
+    };
+    let mut words = Vec::new();
+    if let Some(n) = t.number {
+        words.push(format!("T{n}"));
+    }
+    if let Some(n) = &t.name {
+        words.push(n.clone());
+    }
+    if let Some(c) = &t.cutter {
+        words.push(format!("D{:.3} R{:.3}", c.d, c.r));
+    }
+    words.join(" ")
+}
+
+/// The header, warnings and cycle times of a spindle-control report.
+pub fn report_inputs(
+    program: (&std::path::Path, &millplan_nc::Program),
+    part: &std::path::Path,
+    machine: &millplan_plan::machine::Machine,
+    cut: super::CuttingData,
+    findings: &[millplan_nc::Diagnostic],
+    time_before_s: f64,
+) -> millplan_report::html::SpeedInputs {
+    let name = |p: &std::path::Path| {
+        p.file_name()
+            .map(|f| f.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    millplan_report::html::SpeedInputs {
+        program: name(program.0),
+        part: name(part),
+        tool: tool_name(program.1),
+        machine: machine.name.clone(),
+        spindle: (machine.spindle_min, machine.spindle_max),
+        spindle_accel: machine.spindle_accel,
+        feed_max: machine.feed_max,
+        vc: cut.vc,
+        fz: cut.fz,
+        flutes: cut.flutes,
+        ap: cut.ap,
+        time_before_s: Some(time_before_s),
+        time_after_s: Some(millplan_nc::stats::summarize(program.1, machine.rapid).time_s),
+        warnings: findings.iter().map(|d| d.message.clone()).collect(),
+    }
 }
 
 /// The per-point table (--table) and the report (--report), when asked for.
@@ -290,6 +379,7 @@ fn write_table_and_report(
     outputs: &mut Outputs,
     summary: &Summary,
     rows: &[millplan_plan::speed::PointRow],
+    inputs: impl FnOnce() -> millplan_report::html::SpeedInputs,
 ) -> CliResult<()> {
     if let Some(t) = &a.table {
         let csv = millplan_report::table::points_csv(rows);
@@ -303,7 +393,7 @@ fn write_table_and_report(
                 .map(|f| f.to_string_lossy())
                 .unwrap_or_default()
         );
-        let html = millplan_report::html::speed_report(&title, summary, rows, a.vc);
+        let html = millplan_report::html::speed_report(&title, &inputs(), summary, rows);
         outputs.write(r, html.as_bytes())?;
     }
     Ok(())

@@ -36,6 +36,10 @@ pub struct Args {
     /// Also fit the regression surrogate and print R², RMSE and MAPE.
     #[arg(long)]
     pub fit: bool,
+    /// Print a machine-readable summary (JSON) on standard output; errors too,
+    /// as JSON on standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Every value in its range: a feed-direction step of 1e-300 would never end.
@@ -71,7 +75,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         .map_err(|e| CliError::input(format!("{}: {e}", a.output.display())))?;
     let (csv, figures) = sweep(&design);
     let fit = a.fit.then(|| Surrogate::fit(&samples()).fit);
-    if let Some(f) = &fit {
+    if let (Some(f), false) = (&fit, a.json) {
         outln!(
             "regression surrogate: {} samples, R² {:.4}, RMSE {:.4} mm, MAPE {:.2} %",
             f.samples,
@@ -89,6 +93,18 @@ pub fn run(a: Args) -> CliResult<i32> {
     outputs.write(&c, csv.as_bytes())?;
     outputs.write(&h, html.as_bytes())?;
     outputs.commit()?;
-    outln!("wrote {} and {}", c.display(), h.display());
+    if a.json {
+        let fit = fit.as_ref().map(|f| {
+            serde_json::json!({"samples": f.samples, "r2": f.r2, "rmse_mm": f.rmse, "mape_percent": f.mape})
+        });
+        let json = serde_json::json!({
+            "csv": c.display().to_string(),
+            "html": h.display().to_string(),
+            "fit": fit,
+        });
+        crate::cmd::print_json(json);
+    } else {
+        outln!("wrote {} and {}", c.display(), h.display());
+    }
     Ok(EXIT_OK)
 }

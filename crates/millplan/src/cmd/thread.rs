@@ -33,6 +33,7 @@ pub enum ThreadCommand {
         /// Measured pitch diameter, mm.
         #[arg(long)]
         d2: f64,
+        /// Print the result as JSON on standard output (the key `ok`).
         #[arg(long)]
         json: bool,
     },
@@ -51,15 +52,15 @@ pub fn run(a: Args) -> CliResult<i32> {
             let verdict = if c.ok {
                 "OK".to_string()
             } else if d2 < c.min {
-                format!("REJECT: {:.4} mm under the minimum", c.min - d2)
+                format!("REJECT: {:.3} mm under the minimum", c.min - d2)
             } else {
-                format!("REJECT: {:.4} mm over the maximum", d2 - c.max)
+                format!("REJECT: {:.3} mm over the maximum", d2 - c.max)
             };
             print(
                 json,
                 json!({ "ok": c.ok, "min": c.min, "max": c.max, "d2": d2, "basic_d2": pitch_diameter(d, p) }),
                 format!(
-                    "{thread}-{class}: D2 {d2:.4} mm, limits {:.3} … {:.3} mm (basic {:.4}): {verdict}",
+                    "{thread}-{class}: D2 {d2:.3} mm, limits {:.3} … {:.3} mm (basic {:.3}): {verdict}",
                     c.min,
                     c.max,
                     pitch_diameter(d, p)

@@ -47,16 +47,20 @@ pub enum ToolCommand {
     Add(AddArgs),
     /// Record the insert mounted on a thread mill (designation, INSL, TP).
     Insert {
+        /// Tool number (T).
         number: u32,
         /// Catalogue designation, e.g. "MT LNHU 1403 I1.00 ISO IC908".
         designation: String,
+        /// Insert length INSL, mm (ISO 13399).
         #[arg(long)]
         insl: f64,
+        /// Thread pitch TP of the insert, mm.
         #[arg(long)]
         tp: f64,
     },
     /// Enter the presetter's length and radius for a tool.
     Preset {
+        /// Tool number (T).
         number: u32,
         /// Length, mm.
         #[arg(long)]
@@ -73,13 +77,23 @@ pub enum ToolCommand {
     /// the `decision` key) and logged either way.
     Measure(MeasureArgs),
     /// List the tools, or show one.
-    Show { number: Option<u32> },
+    Show {
+        /// Tool number (T); all tools when left out.
+        number: Option<u32>,
+    },
     /// The decision log (all tools, or one).
-    Log { number: Option<u32> },
+    Log {
+        /// Tool number (T); every tool's decisions when left out.
+        number: Option<u32>,
+    },
     /// Import tools from CSV or JSON (all or nothing).
-    Import { file: PathBuf },
+    Import {
+        /// CSV (the export's columns) or JSON (a list of tools) file.
+        file: PathBuf,
+    },
     /// Export the library.
     Export {
+        /// csv, json, or tool-t (a Heidenhain TOOL.T-style table).
         #[arg(long, value_enum, default_value = "csv")]
         format: ExportFormat,
         /// Output file (`-`: standard output).
@@ -89,8 +103,10 @@ pub enum ToolCommand {
     /// PZ: the laser's axial measuring point on a thread-mill insert, from
     /// the insert length INSL and the pitch TP (ISO 13399).
     Pz {
+        /// Insert length INSL, mm (ISO 13399).
         #[arg(long)]
         insl: f64,
+        /// Thread pitch TP of the insert, mm.
         #[arg(long)]
         tp: f64,
     },
@@ -108,24 +124,30 @@ pub enum ExportFormat {
 
 #[derive(clap::Args)]
 pub struct AddArgs {
+    /// Tool number (T).
     pub number: u32,
+    /// Name shown in lists and logs, e.g. "MTE D13.7".
     #[arg(long)]
     pub name: Option<String>,
     /// mill, ball, thread-mill, drill, …
     #[arg(long)]
     pub kind: Option<String>,
+    /// Length (presetter), mm.
     #[arg(long)]
     pub l: Option<f64>,
+    /// Radius (presetter), mm.
     #[arg(long)]
     pub r: Option<f64>,
-    /// Wear tolerances (length, radius), mm.
+    /// Wear tolerance of the length, mm: worn beyond it, the tool is locked.
     #[arg(long)]
     pub ltol: Option<f64>,
+    /// Wear tolerance of the radius, mm: worn beyond it, the tool is locked.
     #[arg(long)]
     pub rtol: Option<f64>,
-    /// Breakage limits (length, radius), mm.
+    /// Breakage limit of the length, mm: beyond it the tool and its pallet are locked.
     #[arg(long)]
     pub lbreak: Option<f64>,
+    /// Breakage limit of the radius, mm: beyond it the tool and its pallet are locked.
     #[arg(long)]
     pub rbreak: Option<f64>,
     /// Replacement (sister) tool number.
@@ -154,6 +176,7 @@ fn parse_kv(s: &str) -> Result<(String, String), String> {
 
 #[derive(clap::Args)]
 pub struct MeasureArgs {
+    /// Tool number (T).
     pub number: u32,
     /// The first measurement on the machine (compared with the presetter).
     #[arg(long)]
@@ -193,12 +216,15 @@ pub enum MeasureArg {
 
 #[derive(clap::Args)]
 pub struct CycleArgs {
+    /// Tool number (T).
     pub number: u32,
+    /// The control the measuring program is written for.
     #[arg(long, value_enum, default_value = "heidenhain")]
     pub control: Control,
     /// First measurement instead of an inspection.
     #[arg(long)]
     pub first: bool,
+    /// What the laser measures: length, radius or both.
     #[arg(long, value_enum, default_value = "both")]
     pub measure: MeasureArg,
     /// Clearance height above the laser, mm.
@@ -254,7 +280,7 @@ fn to_json<T: serde::Serialize>(v: &T) -> CliResult<serde_json::Value> {
 /// (a closed pipe, a full disk) is reported when the run ends, never a panic.
 pub(crate) fn print(json_out: bool, j: serde_json::Value, text: String) -> CliResult<()> {
     let s = if json_out {
-        serde_json::to_string_pretty(&j)
+        serde_json::to_string_pretty(&crate::round::json(j))
             .map_err(|e| CliError::internal(format!("JSON output: {e}")))?
     } else {
         text

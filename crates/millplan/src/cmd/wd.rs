@@ -55,8 +55,12 @@ pub struct Args {
     /// Cutting speed, m/min: also print the spindle speed for it.
     #[arg(long)]
     pub vc: Option<f64>,
+    /// Which model computes D_w: geometric (exact) or regression (the fitted
+    /// surrogate).
     #[arg(long, value_enum, default_value = "geometric")]
     pub model: ModelArg,
+    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
+    /// on standard error.
     #[arg(long)]
     pub json: bool,
 }
@@ -111,11 +115,11 @@ pub fn run(a: Args) -> CliResult<i32> {
             "d_w": dw, "d_cc": dcc, "d_mean_area": d_mean_area, "d_mean_chip": d_mean_chip,
             "n": n, "model": format!("{:?}", a.model).to_lowercase()
         });
-        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        crate::cmd::print_json(j);
     } else {
-        outln!("D_w  {dw:.4} mm  (working diameter, highest engaged point)");
-        outln!("D_cc {dcc:.4} mm  (diameter at the contact point)");
-        outln!("D_mean {d_mean_area:.4} mm by area, {d_mean_chip:.4} mm by chip thickness (over the engaged region)");
+        outln!("D_w  {dw:.3} mm  (working diameter, highest engaged point)");
+        outln!("D_cc {dcc:.3} mm  (diameter at the contact point)");
+        outln!("D_mean {d_mean_area:.3} mm by area, {d_mean_chip:.3} mm by chip thickness (over the engaged region)");
         if let Some(n) = n {
             outln!("n    {n:.0} 1/min for vc = {} m/min", a.vc.unwrap_or(0.0));
         }
