@@ -197,7 +197,16 @@ fn band_rows(band: &Band, g: &Grid, ya: f64, yb: f64) -> Option<(usize, usize)> 
 /// `cont` (the ball at q0 was applied) and it does not descend, only the
 /// cells ahead of the bisector of q0–q1 can change.
 #[allow(clippy::too_many_arguments)]
-fn ball_pose(band: &mut Band, q0: DVec3, q1: DVec3, cont: bool, r: f64, g: &Grid, n: DVec2, out: &mut StrokeCut) {
+fn ball_pose(
+    band: &mut Band,
+    q0: DVec3,
+    q1: DVec3,
+    cont: bool,
+    r: f64,
+    g: &Grid,
+    n: DVec2,
+    out: &mut StrokeCut,
+) {
     let d = (q1 - q0).truncate();
     let front_only = cont && q1.z >= q0.z - 1e-12 && d.length_squared() > 1e-24;
     let u = d.normalize_or_zero();
@@ -391,8 +400,12 @@ fn ball_row(
     let kmin = acc.kmin.iter().fold(f32::INFINITY, |a, b| a.min(*b));
     let kmax = acc.kmax.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b));
     if kmin <= kmax {
-        out.depth = out.depth.max(acc.depth.iter().fold(0.0f32, |a, b| a.max(*b)) as f64);
-        out.top = out.top.max(acc.hi.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b)) as f64);
+        out.depth = out
+            .depth
+            .max(acc.depth.iter().fold(0.0f32, |a, b| a.max(*b)) as f64);
+        out.top = out
+            .top
+            .max(acc.hi.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b)) as f64);
         for k in [kmin, kmax] {
             let lat = (dx0 + k * res) as f64 * n.x + dy as f64 * n.y;
             out.side = [out.side[0].min(lat), out.side[1].max(lat)];
@@ -442,10 +455,26 @@ fn ball_group(
         acc.removed[l] += d;
         let cutting = d > eps;
         let kf = k0 + LANE[l];
-        acc.depth[l] = if cutting & (d > acc.depth[l]) { d } else { acc.depth[l] };
-        acc.hi[l] = if cutting & (old > acc.hi[l]) { old } else { acc.hi[l] };
-        acc.kmin[l] = if cutting & (kf < acc.kmin[l]) { kf } else { acc.kmin[l] };
-        acc.kmax[l] = if cutting & (kf > acc.kmax[l]) { kf } else { acc.kmax[l] };
+        acc.depth[l] = if cutting & (d > acc.depth[l]) {
+            d
+        } else {
+            acc.depth[l]
+        };
+        acc.hi[l] = if cutting & (old > acc.hi[l]) {
+            old
+        } else {
+            acc.hi[l]
+        };
+        acc.kmin[l] = if cutting & (kf < acc.kmin[l]) {
+            kf
+        } else {
+            acc.kmin[l]
+        };
+        acc.kmax[l] = if cutting & (kf > acc.kmax[l]) {
+            kf
+        } else {
+            acc.kmax[l]
+        };
     }
 }
 
