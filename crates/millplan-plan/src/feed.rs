@@ -129,6 +129,15 @@ impl Pass for FeedPass {
     }
 }
 
+/// The machine's feed acceleration, mm/s²: the smallest its linear axes
+/// give; `None` when it gives none.
+pub fn machine_accel(m: &Machine) -> Option<f64> {
+    [m.axes.x.accel, m.axes.y.accel, m.axes.z.accel]
+        .into_iter()
+        .flatten()
+        .min_by(f64::total_cmp)
+}
+
 /// The feed (mm/min) each block asks for and why, before smoothing.
 fn target(mf: &MoveForces, m: &Machine, flutes: f64) -> (f64, &'static str) {
     if mf.air {

@@ -206,7 +206,7 @@ pub struct FeedLimits {
 
 impl FeedLimits {
     /// The iteration's limits at spindle speed `rpm` on `machine`.
-    fn at(&self, rpm: f64, machine: &crate::machine::Machine) -> Limits {
+    pub fn at(&self, rpm: f64, machine: &crate::machine::Machine) -> Limits {
         let chart = machine.spindle_limit(rpm);
         let min = |a: Option<f64>, b: Option<f64>| match (a, b) {
             (Some(a), Some(b)) => Some(a.min(b)),
@@ -309,6 +309,45 @@ pub struct ForceRun {
     pub evaluated: usize,
     /// Moves not simulated (unknown position or axis, no tool).
     pub skipped: usize,
+}
+
+/// The largest loads of a run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Maxima {
+    pub fxy: f64,
+    pub torque: f64,
+    pub power: f64,
+    pub stress: f64,
+    pub deflection: f64,
+}
+
+impl ForceRun {
+    /// The largest loads over every move.
+    pub fn maxima(&self) -> Maxima {
+        let mut x = Maxima::default();
+        for m in &self.moves {
+            x.fxy = x.fxy.max(m.fxy_max);
+            x.torque = x.torque.max(m.torque_max);
+            x.power = x.power.max(m.power_w);
+            x.stress = x.stress.max(m.stress_mpa);
+            x.deflection = x.deflection.max(m.deflection_mm);
+        }
+        x
+    }
+
+    /// Moves whose loads exceed their limits (the factor of safety and the
+    /// spindle chart at their speed included).
+    pub fn over_limits(&self, lim: &FeedLimits, m: &crate::machine::Machine) -> Vec<&MoveForces> {
+        self.moves
+            .iter()
+            .filter(|x| !x.rapid && !x.unmodelled)
+            .filter(|x| {
+                lim.at(x.rpm, m)
+                    .ratio(&x.loads())
+                    .is_some_and(|(r, _)| r < 1.0 - 1e-9)
+            })
+            .collect()
+    }
 }
 
 /// The IR moves of a program by their index over the whole program.

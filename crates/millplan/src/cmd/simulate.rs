@@ -120,7 +120,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         Some(p) => Some(read_surface(p)?.0),
         None => None,
     };
-    let mut stock = initial_stock(&a, &spec, &strokes, part.as_ref())?;
+    let mut stock = initial_stock(&a.path, a.resolution, &spec, &strokes, part.as_ref())?;
     let bar = crate::progress::count(
         strokes.strokes.len() as u64,
         "simulating",
@@ -214,13 +214,15 @@ fn program_strokes(a: &Args, p: &millplan_nc::Program, rapid: f64) -> CliResult<
     Ok(s)
 }
 
-fn initial_stock(
-    a: &Args,
+/// The stock before the program at `program` runs, as `spec` names it, at
+/// cell size `res`.
+pub fn initial_stock(
+    program: &Path,
+    res: f64,
     spec: &StockSpec,
     s: &Strokes,
     part: Option<&TriMesh>,
 ) -> CliResult<Stock> {
-    let res = a.resolution;
     let check = |min: DVec2, max: DVec2| {
         let g = Grid::covering(min, max, res);
         crate::limits::check_memory(
@@ -234,7 +236,7 @@ fn initial_stock(
     let no_cut = || {
         CliError::input(format!(
             "{}: no cutting move to take the stock's bounds from",
-            a.path.display()
+            program.display()
         ))
     };
     Ok(match spec {
