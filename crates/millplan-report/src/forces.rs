@@ -26,13 +26,16 @@ pub fn moves_csv(moves: &[MoveForces]) -> String {
     s
 }
 
+/// A quantity's limit at one move.
+pub type LimitFn<'a> = Box<dyn Fn(&MoveForces) -> Option<f64> + 'a>;
+
 /// One quantity to plot: its name, unit, value per move and its limit per
 /// move (`None`: not limited there).
 pub struct Quantity<'a> {
     pub name: &'a str,
     pub unit: &'a str,
     pub value: fn(&MoveForces) -> f64,
-    pub limit: Box<dyn Fn(&MoveForces) -> Option<f64> + 'a>,
+    pub limit: LimitFn<'a>,
 }
 
 /// The report: a summary table and, per quantity, its value over time for

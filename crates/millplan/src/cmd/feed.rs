@@ -386,18 +386,8 @@ pub fn run(a: Args) -> CliResult<i32> {
         m.quiet,
     )?;
     let over = after.over_limits(&limits, &p.machine);
-    let rapid = p.machine.rapid;
-    let t = |q: &millplan_nc::Program| millplan_nc::stats::summarize(q, rapid).time_s;
-    let summary = json!({
-        "time_before_s": t(&p.program), "time_after_s": t(&out),
-        "max_before": before.maxima(), "max_after": after.maxima(),
-        "binding": changes.binding, "blocks": changes.blocks, "air_blocks": changes.air_blocks,
-        "kept_blocks": changes.kept_blocks, "feed_range_written": [changes.feed_min, changes.feed_max],
-        "feed_accel": pass.params.accel, "fz_range": [limits.fz_min, limits.fz_max],
-        "limits": {"fxy": limits.fxy, "torque": limits.torque, "power": limits.power, "stress": limits.stress, "deflection": limits.deflection, "fos": limits.fos},
-        "over_limit_after": over.len(), "over_limit_lines": over.iter().take(20).map(|x| x.line).collect::<Vec<_>>(),
-        "stock": p.stock_name, "output": a.output.display().to_string(), "dialect": target.name(),
-    });
+    let runs = [&before, &after];
+    let summary = feed_summary(&a, &p, &out, runs, &changes, &pass.params, target, &over);
     write_extras(
         m,
         &mut outputs,
@@ -413,6 +403,33 @@ pub fn run(a: Args) -> CliResult<i32> {
         EXIT_OK
     } else {
         EXIT_FINDINGS
+    })
+}
+
+/// The JSON summary of a feed run.
+#[allow(clippy::too_many_arguments)]
+fn feed_summary(
+    a: &Args,
+    p: &Prepared,
+    out: &millplan_nc::Program,
+    [before, after]: [&ForceRun; 2],
+    changes: &millplan_plan::feed::FeedChanges,
+    params: &FeedParams,
+    target: millplan_nc::write::Target,
+    over: &[&MoveForces],
+) -> serde_json::Value {
+    let limits = params.limits;
+    let rapid = p.machine.rapid;
+    let t = |q: &millplan_nc::Program| millplan_nc::stats::summarize(q, rapid).time_s;
+    json!({
+        "time_before_s": t(&p.program), "time_after_s": t(out),
+        "max_before": before.maxima(), "max_after": after.maxima(),
+        "binding": changes.binding, "blocks": changes.blocks, "air_blocks": changes.air_blocks,
+        "kept_blocks": changes.kept_blocks, "feed_range_written": [changes.feed_min, changes.feed_max],
+        "feed_accel": params.accel, "fz_range": [limits.fz_min, limits.fz_max],
+        "limits": {"fxy": limits.fxy, "torque": limits.torque, "power": limits.power, "stress": limits.stress, "deflection": limits.deflection, "fos": limits.fos},
+        "over_limit_after": over.len(), "over_limit_lines": over.iter().take(20).map(|x| x.line).collect::<Vec<_>>(),
+        "stock": p.stock_name, "output": a.output.display().to_string(), "dialect": target.name(),
     })
 }
 
