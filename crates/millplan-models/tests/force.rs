@@ -779,3 +779,30 @@ fn materials_file() {
         .expect_err("refused")
         .contains("ti6al4v"));
 }
+
+/// The engaged cells of one engagement serve every feed per tooth: evaluated
+/// from them at another feed, the forces are those of a fresh evaluation, for
+/// the linear law and for the oblique law whose coefficients follow the chip.
+#[test]
+fn engaged_cells_serve_every_feed() {
+    let tool = ball(10.0, 2, 30.0);
+    let e = PlanarRaster::new(&tool, 0.5, Some(0.6), deg(15.0), deg(-10.0)).expect("raster");
+    let laws = [
+        Law::Rta(Coeffs::rta(800.0, 300.0, 200.0, 20.0, 15.0, 5.0)),
+        Materials::builtin().get("ti6al4v").expect("built in").law,
+    ];
+    for law in laws {
+        let model = ForceModel::new(tool, law, Grid::default()).expect("model");
+        let first = cut(0.05, 15.0, -10.0);
+        let cells = model.engaged(&first, &e);
+        assert!(!cells.is_empty(), "the pass engages the tool");
+        for fz in [0.02, 0.05, 0.13] {
+            let c = Cut { fz, ..first };
+            assert_eq!(
+                model.evaluate_engaged(&c, &cells),
+                model.evaluate(&c, &e),
+                "fz {fz}"
+            );
+        }
+    }
+}

@@ -7,6 +7,8 @@
 
 pub mod checks;
 pub mod directions;
+pub mod feed;
+pub mod force;
 pub mod machine;
 pub mod orient;
 pub mod pipeline;

@@ -62,6 +62,7 @@ pub const PASSES: &[&PassInfo] = &[
     &crate::orient::INFO,
     &crate::reorder::INFO,
     &crate::speed::INFO,
+    &crate::feed::INFO,
 ];
 
 /// A transformation of the IR.

@@ -1,6 +1,7 @@
 //! Tables and reports: the per-point CSV, SVG plots and self-contained HTML pages
 //! (no network: everything inline).
 
+pub mod forces;
 pub mod html;
 pub mod reorder;
 pub mod setup;

@@ -69,11 +69,12 @@ pub fn report(
             .rapid_collisions
             .iter()
             .map(|c| format!("line {}: rapid {:.3} mm into material", c.line, c.depth))
-            .chain(
-                rep.holder_collisions
-                    .iter()
-                    .map(|c| format!("line {}: shank or holder {:.3} mm into material", c.line, c.depth)),
-            )
+            .chain(rep.holder_collisions.iter().map(|c| {
+                format!(
+                    "line {}: shank or holder {:.3} mm into material",
+                    c.line, c.depth
+                )
+            }))
             .take(20)
             .collect();
         if hits > 20 {
@@ -83,20 +84,53 @@ pub fn report(
     };
     let mut rows: Vec<(String, String)> = vec![
         ("Stock".into(), stock_spec.into()),
-        ("Resolution".into(), format!("{} mm ({} × {} dexels)", rep.resolution_mm, stock.grid.nx, stock.grid.ny)),
-        ("Moves simulated".into(), format!("{} of {}", rep.simulated, rep.moves)),
-        ("Cutting moves / in air".into(), format!("{} / {}", rep.cutting_moves, rep.air_moves)),
-        ("Removed".into(), format!("{:.1} mm³ of {:.1} mm³", rep.removed_mm3, rep.stock_before_mm3)),
-        ("Highest removal rate".into(), format!("{:.0} mm³/min (line {})", rep.max_mrr_mm3_min, rep.max_mrr_line)),
+        (
+            "Resolution".into(),
+            format!(
+                "{} mm ({} × {} dexels)",
+                rep.resolution_mm, stock.grid.nx, stock.grid.ny
+            ),
+        ),
+        (
+            "Moves simulated".into(),
+            format!("{} of {}", rep.simulated, rep.moves),
+        ),
+        (
+            "Cutting moves / in air".into(),
+            format!("{} / {}", rep.cutting_moves, rep.air_moves),
+        ),
+        (
+            "Removed".into(),
+            format!(
+                "{:.1} mm³ of {:.1} mm³",
+                rep.removed_mm3, rep.stock_before_mm3
+            ),
+        ),
+        (
+            "Highest removal rate".into(),
+            format!(
+                "{:.0} mm³/min (line {})",
+                rep.max_mrr_mm3_min, rep.max_mrr_line
+            ),
+        ),
         ("Estimated time".into(), format!("{:.2} min", rep.minutes)),
-        ("Rapid collisions".into(), rep.rapid_collisions.len().to_string()),
-        ("Shank or holder collisions".into(), rep.holder_collisions.len().to_string()),
+        (
+            "Rapid collisions".into(),
+            rep.rapid_collisions.len().to_string(),
+        ),
+        (
+            "Shank or holder collisions".into(),
+            rep.holder_collisions.len().to_string(),
+        ),
     ];
     let mut figures = Vec::new();
     if let Some((r, mesh)) = part {
         rows.push((
             "Material left on the part".into(),
-            format!("{:.3} to {:.3} mm, mean {:.3} ({} facets, {} cut into)", r.min, r.max, r.mean, r.facets, r.gouged),
+            format!(
+                "{:.3} to {:.3} mm, mean {:.3} ({} facets, {} cut into)",
+                r.min, r.max, r.mean, r.facets, r.gouged
+            ),
         ));
         let step = (mesh.len() / 20_000).max(1);
         let pts: Vec<(f64, f64, f64)> = (0..mesh.len())
@@ -109,10 +143,16 @@ pub fn report(
             })
             .collect();
         figures.push((
-            "The part from above, coloured by the material left on it (mm; negative: cut into).".to_string(),
+            "The part from above, coloured by the material left on it (mm; negative: cut into)."
+                .to_string(),
             svg::map("Material left on the part", "mm", &pts),
         ));
-        let vals: Vec<f64> = r.per_facet.iter().copied().filter(|v| v.is_finite()).collect();
+        let vals: Vec<f64> = r
+            .per_facet
+            .iter()
+            .copied()
+            .filter(|v| v.is_finite())
+            .collect();
         figures.push((
             "How much material is left, over the part's facets.".to_string(),
             svg::histogram("Material left", "mm", 30, &[("facets", "#1f77b4", vals)]),
@@ -148,7 +188,11 @@ pub fn report(
     let mut h = simple_report(title, &intro, &rows, &figures);
     if hits > 0 {
         // The warning sits in a box at the top.
-        h = h.replacen("<p>COLLISIONS", "<p style=\"border:2px solid #d62728;padding:8px\">COLLISIONS", 1);
+        h = h.replacen(
+            "<p>COLLISIONS",
+            "<p style=\"border:2px solid #d62728;padding:8px\">COLLISIONS",
+            1,
+        );
     }
     h
 }

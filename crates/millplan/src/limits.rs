@@ -8,6 +8,17 @@ use millplan_geom::limits::{amount, Exceeded, Limits};
 use std::sync::OnceLock;
 
 static LIMITS: OnceLock<Limits> = OnceLock::new();
+static LOADS: OnceLock<Vec<(String, String)>> = OnceLock::new();
+
+/// The names `--limit` gives to cutting loads (`millplan feed`, `millplan
+/// force`) rather than to resources.
+pub const LOAD_NAMES: [&str; 5] = ["fxy", "torque", "power", "stress", "deflection"];
+
+/// The load limits of the command line (`--limit fxy=300,torque=2000`), as
+/// given, in order.
+pub fn loads() -> Vec<(String, String)> {
+    LOADS.get().cloned().unwrap_or_default()
+}
 
 /// The limits in force (the defaults until [`init`] ran).
 pub fn get() -> Limits {
@@ -40,9 +51,23 @@ pub fn init(args: &[String]) -> CliResult<()> {
             set(&mut l, item).map_err(|e| CliError::input(format!("MILLPLAN_LIMITS: {e}")))?;
         }
     }
+    let mut loads = Vec::new();
     for a in args {
-        set(&mut l, a).map_err(|e| CliError::input(format!("--limit {a}: {e}")))?;
+        // Several NAME=VALUE may share one --limit, separated by commas.
+        for item in a.split(',').filter(|s| !s.trim().is_empty()) {
+            let name = item.split_once('=').map_or(item, |(n, _)| n).trim();
+            if let Some(v) = item
+                .split_once('=')
+                .map(|(_, v)| v.trim())
+                .filter(|_| LOAD_NAMES.contains(&name))
+            {
+                loads.push((name.to_string(), v.to_string()));
+                continue;
+            }
+            set(&mut l, item).map_err(|e| CliError::input(format!("--limit {a}: {e}")))?;
+        }
     }
+    let _ = LOADS.set(loads);
     let _ = LIMITS.set(l);
     Ok(())
 }

@@ -48,7 +48,10 @@ static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
 struct Cli {
     /// Raise (or lower) a resource limit: moves, expansion, line-bytes,
     /// expression-depth, stl-triangles, stl-extent (mm), memory (MB).
-    /// Repeatable; a value may end in k, M or G.
+    /// Repeatable; a value may end in k, M or G. For `feed` and `force`
+    /// also the cutting loads: fxy (N), torque (N·mm), power (W), stress
+    /// (MPa), deflection (mm), several per option separated by commas
+    /// (--limit fxy=300,power=2000).
     #[arg(long = "limit", global = true, value_name = "NAME=VALUE")]
     limit: Vec<String>,
     #[command(subcommand)]
@@ -63,6 +66,7 @@ enum Command {
     Wd(cmd::wd::Args),
     Cut(cmd::cut::Args),
     Force(cmd::force::Args),
+    Feed(cmd::feed::Args),
     Lobes(cmd::lobes::Args),
     Speed(cmd::speed::Args),
     Directions(cmd::directions::Args),
@@ -220,6 +224,7 @@ fn run(command: Command) -> error::CliResult<i32> {
         Command::Wd(a) => cmd::wd::run(a),
         Command::Cut(a) => cmd::cut::run(a),
         Command::Force(a) => cmd::force::run(a),
+        Command::Feed(a) => cmd::feed::run(a),
         Command::Lobes(a) => cmd::lobes::run(a),
         Command::Speed(a) => cmd::speed::run(a),
         Command::WdSweep(a) => cmd::sweep::run(a),

@@ -498,3 +498,96 @@ fn krl_programs_are_refused_as_krl() {
         );
     }
 }
+
+/// `millplan feed` on a generated ball-end finishing case: the program it
+/// writes re-reads, stays in the machine's feed range and its limits, and
+/// is faster than the conservative input; `force PATH` reports the loads.
+#[test]
+fn feed_schedules_a_generated_finishing_raster() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let d = dir.path();
+    let s = |p: &str| d.join(p).display().to_string();
+    let out = bin()
+        .args(["demo", "-o", &s("demo")])
+        .output()
+        .expect("runs");
+    assert!(out.status.success());
+    let raster = bin()
+        .args([
+            "raster",
+            "--stl",
+            &s("demo/part.stl"),
+            "--tool",
+            "ball:10",
+            "--stepover",
+            "2",
+            "--step",
+            "1",
+            "-o",
+            &s("r.apt"),
+            "-q",
+        ])
+        .output()
+        .expect("runs");
+    assert!(
+        raster.status.success(),
+        "{}",
+        String::from_utf8_lossy(&raster.stderr)
+    );
+    let common = [
+        "--stock",
+        "offset:0.3",
+        "--stl",
+        &s("demo/part.stl"),
+        "--material",
+        "al7075",
+    ];
+    let f = json(&[&["force", &s("r.apt")][..], &common, &["--json", "-q"]].concat());
+    assert!(f["max"]["fxy"].as_f64().expect("fxy") > 0.0, "{f}");
+    let j = json(
+        &[
+            &["feed", &s("r.apt")][..],
+            &common,
+            &[
+                "--limit",
+                "fxy=150,deflection=0.05",
+                "-o",
+                &s("out.apt"),
+                "--json",
+                "-q",
+            ],
+        ]
+        .concat(),
+    );
+    for k in [
+        "time_before_s",
+        "time_after_s",
+        "max_before",
+        "max_after",
+        "binding",
+        "blocks",
+    ] {
+        assert!(!j[k].is_null(), "{k}: {j}");
+    }
+    assert!(
+        j["max_after"]["fxy"].as_f64().expect("fxy") <= 150.0 * (1.0 + 1e-9),
+        "{j}"
+    );
+    assert!(
+        j["time_after_s"].as_f64() < j["time_before_s"].as_f64(),
+        "{j}"
+    );
+    let back = json(&["inspect", "--json", &s("out.apt")]);
+    assert!(!back.is_null());
+    let text = std::fs::read_to_string(d.join("out.apt")).expect("written");
+    for f in text.lines().filter_map(|l| l.strip_prefix("FEDRAT/")) {
+        let v: f64 = f
+            .split(',')
+            .next()
+            .unwrap_or("")
+            .trim()
+            .parse()
+            .expect("a feed");
+        assert!((1.0..=20000.0).contains(&v), "feed {v}");
+    }
+}

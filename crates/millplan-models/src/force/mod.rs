@@ -272,13 +272,48 @@ impl ForceModel {
 
     /// Forces of one engagement.
     pub fn evaluate<E: Engagement + ?Sized>(&self, cut: &Cut, eng: &E) -> Evaluation {
+        self.evaluate_engaged(cut, &self.engaged(cut, eng))
+    }
+
+    /// The cells of one engagement where the chip is positive and the edge
+    /// is in material. They depend on the direction of the feed (lead and
+    /// tilt), not on the feed per tooth, so one set serves every feed of the
+    /// §2.3 iteration without asking the engagement again.
+    pub fn engaged<E: Engagement + ?Sized>(&self, cut: &Cut, eng: &E) -> Engaged {
         let m = self.m;
-        let f = cut.feed_vector();
+        let dir = Cut { fz: 1.0, ..*cut };
+        let f = dir.feed_vector();
         let (z_lo, z_hi) = eng.z_range(&self.tool);
         let first = ((z_lo.max(0.0) / self.dz).floor() as usize).min(self.slices.len());
         let last = ((z_hi.max(0.0) / self.dz).ceil() as usize).min(self.slices.len());
+        let mut cells = Vec::new();
+        for (si, s) in self.slices[first..last.max(first)].iter().enumerate() {
+            let (lo, count) = self.chip_window(s, f);
+            for i in 0..count {
+                let k = (lo + i) % m;
+                let (st, ct) = self.rotated(s, k);
+                // h = f·n(θ), n(θ) = (ny sθ, ny cθ, nz)
+                let h = f[0] * s.ny * st + f[1] * s.ny * ct + f[2] * s.nz;
+                if h > 0.0 && eng.contains([s.r * st, s.r * ct, s.z]) {
+                    cells.push(((first + si) as u32, k as u32));
+                }
+            }
+        }
+        Engaged {
+            lead: cut.lead,
+            tilt: cut.tilt,
+            cells,
+        }
+    }
+
+    /// Forces of an engagement from its engaged cells, at the feed per tooth
+    /// and spindle speed of `cut` (its lead and tilt must be those the cells
+    /// were found with).
+    pub fn evaluate_engaged(&self, cut: &Cut, e: &Engaged) -> Evaluation {
+        debug_assert!(e.lead == cut.lead && e.tilt == cut.tilt);
+        let m = self.m;
+        let f = cut.feed_vector();
         let mut table = vec![[0.0f64; 4]; m];
-        let mut cells = 0usize;
         let mut kappa_min = f64::INFINITY;
         let mut z_max = f64::NEG_INFINITY;
         let oblique = match self.law {
@@ -288,48 +323,35 @@ impl ForceModel {
             },
             _ => None,
         };
-        for s in &self.slices[first..last.max(first)] {
-            let mut engaged = false;
-            let (lo, count) = self.chip_window(s, f);
-            for i in 0..count {
-                let k = (lo + i) % m;
-                let row = &mut table[k];
-                // θ = kδ − ψ
-                let (sk, ck) = (self.sin_t[k], self.cos_t[k]);
-                let st = sk * s.cos_psi - ck * s.sin_psi;
-                let ct = ck * s.cos_psi + sk * s.sin_psi;
-                // h = f·n(θ), n(θ) = (ny sθ, ny cθ, nz)
-                let h = f[0] * s.ny * st + f[1] * s.ny * ct + f[2] * s.nz;
-                if h <= 0.0 {
-                    continue;
-                }
-                if !eng.contains([s.r * st, s.r * ct, s.z]) {
-                    continue;
-                }
-                engaged = true;
-                cells += 1;
-                let kc = match oblique {
-                    Some((o, h_min)) => o.db.oblique(o.rake_deg, h.max(h_min), s.incl, o.beta),
-                    None => s.kc,
-                };
-                let wc = h * s.w_cut;
-                let mut f0 = [0.0; 3];
-                for ((ke, kc), d) in s.ke.iter().zip(kc).zip(&s.dirs) {
-                    let mag = ke * s.w_edge + kc * wc;
-                    f0[0] += mag * d[0];
-                    f0[1] += mag * d[1];
-                    f0[2] += mag * d[2];
-                }
-                // Rotate from θ = 0 to θ: (a, b, c) → (a cθ + b sθ, −a sθ + b cθ, c).
-                row[0] += f0[0] * ct + f0[1] * st;
-                row[1] += -f0[0] * st + f0[1] * ct;
-                row[2] += f0[2];
-                row[3] -= s.r * f0[0];
-            }
-            if engaged {
+        let mut last_slice = u32::MAX;
+        for &(si, k) in &e.cells {
+            let s = &self.slices[si as usize];
+            let k = k as usize;
+            if si != last_slice {
+                last_slice = si;
                 kappa_min = kappa_min.min(s.kappa);
                 z_max = z_max.max(s.z + 0.5 * self.dz);
             }
+            let (st, ct) = self.rotated(s, k);
+            let h = (f[0] * s.ny * st + f[1] * s.ny * ct + f[2] * s.nz).max(0.0);
+            let kc = match oblique {
+                Some((o, h_min)) => o.db.oblique(o.rake_deg, h.max(h_min), s.incl, o.beta),
+                None => s.kc,
+            };
+            let wc = h * s.w_cut;
+            let mut f0 = [0.0; 3];
+            for ((ke, kc), d) in s.ke.iter().zip(kc).zip(&s.dirs) {
+                let mag = ke * s.w_edge + kc * wc;
+                f0[0] += mag * d[0];
+                f0[1] += mag * d[1];
+                f0[2] += mag * d[2];
+            }
+            // Rotate from θ = 0 to θ: (a, b, c) → (a cθ + b sθ, −a sθ + b cθ, c).
+            let row = &mut table[k];
+            row[0] += f0[0] * ct + f0[1] * st;
+            row[1] += -f0[0] * st + f0[1] * ct;
+            row[2] += f0[2];
+            row[3] -= s.r * f0[0];
         }
         let n = self.tool.flutes;
         let p = m / n;
@@ -351,10 +373,40 @@ impl ForceModel {
             rpm: cut.rpm,
             r_wt: r_wt(cut.lead, cut.tilt),
             period,
-            cells,
+            cells: e.cells.len(),
             kappa_min: kappa_min.is_finite().then_some(kappa_min),
             z_max: z_max.is_finite().then_some(z_max),
         }
+    }
+
+    /// sin θ and cos θ of slice `s` at angle index `k`: θ = kδ − ψ.
+    #[inline]
+    fn rotated(&self, s: &SliceK, k: usize) -> (f64, f64) {
+        let (sk, ck) = (self.sin_t[k], self.cos_t[k]);
+        (
+            sk * s.cos_psi - ck * s.sin_psi,
+            ck * s.cos_psi + sk * s.sin_psi,
+        )
+    }
+}
+
+/// The engaged cells of one engagement ([`ForceModel::engaged`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Engaged {
+    lead: f64,
+    tilt: f64,
+    /// (slice, angle index), slices ascending.
+    cells: Vec<(u32, u32)>,
+}
+
+impl Engaged {
+    /// Engaged cells.
+    pub fn len(&self) -> usize {
+        self.cells.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.cells.is_empty()
     }
 }
 

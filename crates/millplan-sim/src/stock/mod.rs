@@ -360,6 +360,7 @@ impl Stock {
     }
 
     /// Whether `p` lies in material (the cell's column holds p.z).
+    #[inline]
     pub fn contains(&self, p: DVec3) -> bool {
         let Some((i, j)) = self.grid.cell_of(p.x, p.y) else {
             return false;
@@ -383,6 +384,29 @@ impl Stock {
             .filter(|(t, b)| t > b)
             .map(|(t, _)| *t as f64)
             .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// Highest material over the cells whose centres lie in the rectangle
+    /// `min`–`max` (−∞ where there is none).
+    pub fn max_top_in(&self, min: DVec2, max: DVec2) -> f64 {
+        let g = &self.grid;
+        let (Some((i0, i1)), Some((j0, j1))) = (g.span(min.x, max.x), g.rows(min.y, max.y)) else {
+            return f64::NEG_INFINITY;
+        };
+        let mut m = f32::NEG_INFINITY;
+        for j in j0..=j1 {
+            let row = j * g.nx;
+            let (t, b) = (
+                &self.top[row + i0..=row + i1],
+                &self.bot[row + i0..=row + i1],
+            );
+            for (t, b) in t.iter().zip(b) {
+                if t > b && *t > m {
+                    m = *t;
+                }
+            }
+        }
+        m as f64
     }
 
     /// Whether any cell has gaps.

@@ -46,7 +46,12 @@ pub struct SimReport {
 
 /// Runs `strokes` over `stock`. Material deeper than `tol` mm met by a rapid
 /// or by the shank or holder is a collision.
-pub fn run(stock: &mut Stock, strokes: &Strokes, tol: f64, progress: &(dyn Fn(usize) + Sync)) -> SimReport {
+pub fn run(
+    stock: &mut Stock,
+    strokes: &Strokes,
+    tol: f64,
+    progress: &(dyn Fn(usize) + Sync),
+) -> SimReport {
     let before = stock.volume();
     let cuts = simulate(stock, strokes, progress);
     let after = stock.volume();

@@ -198,7 +198,16 @@ fn band_rows(band: &Band, g: &Grid, ya: f64, yb: f64) -> Option<(usize, usize)> 
 /// `cont` (the ball at q0 was applied) and it does not descend, only the
 /// cells ahead of the bisector of q0–q1 can change.
 #[allow(clippy::too_many_arguments)]
-fn ball_pose(band: &mut Band, q0: DVec3, q1: DVec3, cont: bool, r: f64, g: &Grid, n: DVec2, out: &mut StrokeCut) {
+fn ball_pose(
+    band: &mut Band,
+    q0: DVec3,
+    q1: DVec3,
+    cont: bool,
+    r: f64,
+    g: &Grid,
+    n: DVec2,
+    out: &mut StrokeCut,
+) {
     let d = (q1 - q0).truncate();
     let l = d.length();
     let front_only = cont && l > 1e-12;
@@ -393,7 +402,11 @@ fn ball_row(
         // The ball's lowest point over these cells: a block it passes above
         // is left alone.
         let (xa, xb) = (dx0 + a as f32 * res, dx0 + b as f32 * res);
-        let near = if xa <= 0.0 && xb >= 0.0 { 0.0 } else { xa.abs().min(xb.abs()) };
+        let near = if xa <= 0.0 && xb >= 0.0 {
+            0.0
+        } else {
+            xa.abs().min(xb.abs())
+        };
         let u = under0 - near * near;
         let gap = zc - bmax[kb];
         // zc − √u ≥ bmax, without the root.
@@ -420,15 +433,21 @@ fn ball_row(
         }
         if acc.removed != before {
             let end = (kb * BLOCK + BLOCK).min(top.len());
-            bmax[kb] = top[kb * BLOCK..end].iter().fold(f32::NEG_INFINITY, |m, t| m.max(*t));
+            bmax[kb] = top[kb * BLOCK..end]
+                .iter()
+                .fold(f32::NEG_INFINITY, |m, t| m.max(*t));
         }
     }
     out.removed += acc.removed.iter().map(|v| *v as f64).sum::<f64>();
     let kmin = acc.kmin.iter().fold(f32::INFINITY, |a, b| a.min(*b));
     let kmax = acc.kmax.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b));
     if kmin <= kmax {
-        out.depth = out.depth.max(acc.depth.iter().fold(0.0f32, |a, b| a.max(*b)) as f64);
-        out.top = out.top.max(acc.hi.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b)) as f64);
+        out.depth = out
+            .depth
+            .max(acc.depth.iter().fold(0.0f32, |a, b| a.max(*b)) as f64);
+        out.top = out
+            .top
+            .max(acc.hi.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b)) as f64);
         for k in [kmin, kmax] {
             let lat = (dx0 + k * res) as f64 * n.x + dy as f64 * n.y;
             out.side = [out.side[0].min(lat), out.side[1].max(lat)];
@@ -478,10 +497,26 @@ fn ball_group(
         acc.removed[l] += d;
         let cutting = d > eps;
         let kf = k0 + LANE[l];
-        acc.depth[l] = if cutting & (d > acc.depth[l]) { d } else { acc.depth[l] };
-        acc.hi[l] = if cutting & (old > acc.hi[l]) { old } else { acc.hi[l] };
-        acc.kmin[l] = if cutting & (kf < acc.kmin[l]) { kf } else { acc.kmin[l] };
-        acc.kmax[l] = if cutting & (kf > acc.kmax[l]) { kf } else { acc.kmax[l] };
+        acc.depth[l] = if cutting & (d > acc.depth[l]) {
+            d
+        } else {
+            acc.depth[l]
+        };
+        acc.hi[l] = if cutting & (old > acc.hi[l]) {
+            old
+        } else {
+            acc.hi[l]
+        };
+        acc.kmin[l] = if cutting & (kf < acc.kmin[l]) {
+            kf
+        } else {
+            acc.kmin[l]
+        };
+        acc.kmax[l] = if cutting & (kf > acc.kmax[l]) {
+            kf
+        } else {
+            acc.kmax[l]
+        };
     }
 }
 

@@ -9,11 +9,29 @@ use millplan_models::force::materials::Materials;
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
-/// Cutting-force model data: calibrate coefficients, list materials.
+/// Cutting forces along a program, and the force model's data.
+///
+/// `millplan force PATH --stock SPEC --material M`: the program runs stroke
+/// by stroke through its stock and every cutting stroke's engagement (the
+/// tool at the stroke's end against the material left before it) gives the
+/// forces, torque, power, bending stress and tip deflection over a
+/// revolution; per move the largest of its strokes. Cutting data from the
+/// program: spindle speed, feed, feed per tooth = feed/(n·--flutes). With
+/// --limit fxy=…,power=… the moves over a limit are listed (exit 3); the
+/// machine's spindle chart limits power and torque at each block's speed.
+///
+/// `millplan force calibrate` and `millplan force materials` are the model's
+/// data; a program file named `calibrate` or `materials` is given as
+/// `./calibrate`.
 #[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true)]
 pub struct Args {
     #[command(subcommand)]
-    pub command: Sub,
+    pub command: Option<Sub>,
+    /// Program (APT/CL or G-code) to simulate.
+    pub path: Option<PathBuf>,
+    #[command(flatten)]
+    pub model: crate::cmd::feed::ModelArgs,
 }
 
 #[derive(clap::Subcommand)]
@@ -60,9 +78,122 @@ pub struct MaterialsArgs {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    match a.command {
-        Sub::Calibrate(c) => calibrate(c),
-        Sub::Materials(m) => list(&load_materials(m.materials.as_deref())?, m.json),
+    match (a.command, a.path) {
+        (Some(Sub::Calibrate(c)), _) => calibrate(c),
+        (Some(Sub::Materials(m)), _) => list(&load_materials(m.materials.as_deref())?, m.json),
+        (None, Some(path)) => program_forces(&path, &a.model),
+        (None, None) => Err(CliError::input(
+            "give a program (millplan force PATH --stock SPEC --material M) or a subcommand (calibrate, materials)",
+        )),
+    }
+}
+
+/// `millplan force PATH`: the loads of every move.
+fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32> {
+    use crate::cmd::feed::{load_limits, prepare, quantities, run_forces, summary_rows};
+    let mut inputs: Vec<&Path> = vec![path];
+    inputs.extend(m.stl.as_deref());
+    inputs.extend(m.machine.as_deref());
+    let mut outputs = crate::io::Outputs::plan(
+        &inputs,
+        &[
+            ("--table", m.table.as_deref()),
+            ("--report", m.report.as_deref()),
+        ],
+        false,
+    )?;
+    let limits = load_limits(1.0, (0.0, f64::INFINITY))?;
+    let p = prepare(path, m)?;
+    let run = run_forces(&p, &p.program, &p.strokes, m.quiet || m.json)?;
+    let over = run.over_limits(&limits, &p.machine);
+    let cutting = run.moves.iter().filter(|x| !x.rapid).count();
+    let last = run.moves.last().map_or(0.0, |x| x.t_start_s + x.seconds);
+    let worst = |f: fn(&millplan_plan::force::MoveForces) -> f64| {
+        run.moves
+            .iter()
+            .max_by(|a, b| f(a).total_cmp(&f(b)))
+            .map_or(0, |x| x.line)
+    };
+    let summary = json!({
+        "moves": run.moves.len(), "cutting_moves": cutting,
+        "air_moves": run.moves.iter().filter(|x| x.air).count(),
+        "unmodelled_moves": run.moves.iter().filter(|x| x.unmodelled).count(),
+        "skipped_moves": run.skipped, "evaluations": run.evaluated, "time_s": last,
+        "max": run.maxima(),
+        "max_lines": {"fxy": worst(|x| x.fxy_max), "torque": worst(|x| x.torque_max), "power": worst(|x| x.power_w), "deflection": worst(|x| x.deflection_mm)},
+        "over_limit": over.len(), "over_limit_lines": over.iter().take(20).map(|x| x.line).collect::<Vec<_>>(),
+        "stock": p.stock_name,
+    });
+    if let Some(t) = &m.table {
+        outputs.write(t, millplan_report::forces::moves_csv(&run.moves).as_bytes())?;
+    }
+    if let Some(r) = &m.report {
+        let html = millplan_report::forces::report(
+            &format!("millplan force: {}", path.display()),
+            "Per move, the largest load of its strokes against the time the move starts; the black line is the limit at the move's spindle speed.",
+            &summary_rows(&summary),
+            &[("program", &run.moves)],
+            &quantities(&limits, &p.machine),
+        );
+        outputs.write(r, html.as_bytes())?;
+    }
+    outputs.commit()?;
+    print_forces(path, m.json, &summary, &over);
+    Ok(if over.is_empty() {
+        EXIT_OK
+    } else {
+        crate::error::EXIT_FINDINGS
+    })
+}
+
+fn print_forces(
+    path: &Path,
+    json: bool,
+    s: &serde_json::Value,
+    over: &[&millplan_plan::force::MoveForces],
+) {
+    if json {
+        outln!("{}", serde_json::to_string_pretty(s).unwrap_or_default());
+        return;
+    }
+    for x in over.iter().take(20) {
+        outln!(
+            "{}:{}: over a limit: F_xy {:.1} N, T {:.1} N·mm, P {:.1} W, δ {:.4} mm",
+            path.display(),
+            x.line,
+            x.fxy_max,
+            x.torque_max,
+            x.power_w,
+            x.deflection_mm
+        );
+    }
+    outln!(
+        "{} moves ({} cutting, {} in air, {} not modelled), {:.1} s",
+        s["moves"],
+        s["cutting_moves"],
+        s["air_moves"],
+        s["unmodelled_moves"],
+        s["time_s"].as_f64().unwrap_or(0.0)
+    );
+    let mx = &s["max"];
+    let l = &s["max_lines"];
+    outln!(
+        "F_xy,max {:.1} N (line {}), T_max {:.1} N·mm (line {}), power {:.1} W (line {})",
+        mx["fxy"].as_f64().unwrap_or(0.0),
+        l["fxy"],
+        mx["torque"].as_f64().unwrap_or(0.0),
+        l["torque"],
+        mx["power"].as_f64().unwrap_or(0.0),
+        l["power"]
+    );
+    outln!(
+        "stress {:.1} MPa, deflection {:.4} mm (line {})",
+        mx["stress"].as_f64().unwrap_or(0.0),
+        mx["deflection"].as_f64().unwrap_or(0.0),
+        l["deflection"]
+    );
+    if !over.is_empty() {
+        outln!("{} moves over a limit", over.len());
     }
 }
 

@@ -6,6 +6,7 @@ pub mod cut;
 pub mod demo;
 pub mod directions;
 pub mod explain;
+pub mod feed;
 pub mod force;
 pub mod gouge;
 pub mod inspect;

@@ -58,7 +58,8 @@ pub struct Args {
     /// Part surface (STL): report the material left on it.
     #[arg(long)]
     pub stl: Option<PathBuf>,
-    /// Units of the STL files (the part and an stl: blank); default mm.
+    /// Unit of the STL files' numbers (the part and an stl: blank; an STL
+    /// does not say): mm (default) or inch, converted to mm on reading.
     #[arg(long, value_enum)]
     pub stl_units: Option<UnitArg>,
     /// Dexel size, mm.
@@ -97,7 +98,11 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    crate::cmd::arg("--resolution", a.resolution, Range::from(0.005, 100.0, "mm"))?;
+    crate::cmd::arg(
+        "--resolution",
+        a.resolution,
+        Range::from(0.005, 100.0, "mm"),
+    )?;
     crate::cmd::arg("--tol", a.tol, Range::from(0.0, 100.0, "mm"))?;
     let spec = StockSpec::parse(&a.stock).map_err(|e| CliError::input(format!("--stock {e}")))?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
@@ -122,7 +127,14 @@ pub fn run(a: Args) -> CliResult<i32> {
         Some(p) => Some(read_surface(p, a.stl_units)?.0),
         None => None,
     };
-    let mut stock = initial_stock(&a, &spec, &strokes, part.as_ref())?;
+    let mut stock = initial_stock(
+        &a.path,
+        a.resolution,
+        &spec,
+        &strokes,
+        part.as_ref(),
+        a.stl_units,
+    )?;
     let bar = crate::progress::count(
         strokes.strokes.len() as u64,
         "simulating",
@@ -135,11 +147,13 @@ pub fn run(a: Args) -> CliResult<i32> {
     write_outputs(&a, &mut outputs, &stock, &rep, rem.as_ref(), part.as_ref())?;
     outputs.commit()?;
     print_summary(&a, &rep, rem.as_ref());
-    Ok(if rep.rapid_collisions.is_empty() && rep.holder_collisions.is_empty() {
-        EXIT_OK
-    } else {
-        EXIT_FINDINGS
-    })
+    Ok(
+        if rep.rapid_collisions.is_empty() && rep.holder_collisions.is_empty() {
+            EXIT_OK
+        } else {
+            EXIT_FINDINGS
+        },
+    )
 }
 
 /// The tool body of an operation: its cutter (or --tool), flutes, shank and
@@ -154,7 +168,9 @@ fn tool_body(a: &Args) -> CliResult<impl Fn(&millplan_nc::Operation) -> Option<T
         Some(s) => {
             let v: Vec<f64> = s.split(':').filter_map(|x| x.trim().parse().ok()).collect();
             match v[..] {
-                [d, l] if d > 0.0 && l > 0.0 && d.is_finite() && l.is_finite() => Some((d / 2.0, l)),
+                [d, l] if d > 0.0 && l > 0.0 && d.is_finite() && l.is_finite() => {
+                    Some((d / 2.0, l))
+                }
                 _ => {
                     return Err(CliError::input(format!(
                         "--holder {s}: give DIAMETER:STICKOUT in mm, e.g. 32:40"
@@ -213,16 +229,32 @@ fn program_strokes(a: &Args, p: &millplan_nc::Program, rapid: f64) -> CliResult<
     Ok(s)
 }
 
-fn initial_stock(a: &Args, spec: &StockSpec, s: &Strokes, part: Option<&TriMesh>) -> CliResult<Stock> {
-    let res = a.resolution;
+/// The stock before the program at `program` runs, as `spec` names it, at
+/// cell size `res`.
+pub fn initial_stock(
+    program: &Path,
+    res: f64,
+    spec: &StockSpec,
+    s: &Strokes,
+    part: Option<&TriMesh>,
+    stl_units: Option<UnitArg>,
+) -> CliResult<Stock> {
     let check = |min: DVec2, max: DVec2| {
         let g = Grid::covering(min, max, res);
         crate::limits::check_memory(
-            &format!("a stock of {} × {} dexels at --resolution {res}", g.nx, g.ny),
+            &format!(
+                "a stock of {} × {} dexels at --resolution {res}",
+                g.nx, g.ny
+            ),
             g.cells() as f64 * BYTES_PER_CELL,
         )
     };
-    let no_cut = || CliError::input(format!("{}: no cutting move to take the stock's bounds from", a.path.display()));
+    let no_cut = || {
+        CliError::input(format!(
+            "{}: no cutting move to take the stock's bounds from",
+            program.display()
+        ))
+    };
     Ok(match spec {
         StockSpec::BoxAuto { margin } => {
             let (lo, hi) = auto_box(s, *margin).ok_or_else(no_cut)?;
@@ -241,12 +273,16 @@ fn initial_stock(a: &Args, spec: &StockSpec, s: &Strokes, part: Option<&TriMesh>
             Stock::cylinder(c, r, lo.z, hi.z, res)
         }
         StockSpec::Cylinder { centre, z0, z1, d } => {
-            check(*centre - DVec2::splat(d / 2.0), *centre + DVec2::splat(d / 2.0))?;
+            check(
+                *centre - DVec2::splat(d / 2.0),
+                *centre + DVec2::splat(d / 2.0),
+            )?;
             Stock::cylinder(*centre, d / 2.0, *z0, *z1, res)
         }
-        StockSpec::Stl(p) => blank(p, a.stl_units, res, &check)?,
+        StockSpec::Stl(p) => blank(p, stl_units, res, &check)?,
         StockSpec::Offset(mm) => {
-            let part = part.ok_or_else(|| CliError::input("--stock offset:MM needs the part: give --stl"))?;
+            let part = part
+                .ok_or_else(|| CliError::input("--stock offset:MM needs the part: give --stl"))?;
             let b = part.bounds();
             let e = DVec2::splat(*mm);
             check(b.min.truncate() - e, b.max.truncate() + e)?;
@@ -265,7 +301,10 @@ fn blank(
     let (mut mesh, _) = read_mesh(p)?;
     crate::cmd::stl_to_mm(&mut mesh, units);
     if mesh.is_empty() {
-        return Err(CliError::input(format!("{}: no triangles: not a blank", p.display())));
+        return Err(CliError::input(format!(
+            "{}: no triangles: not a blank",
+            p.display()
+        )));
     }
     let e = mesh.edge_report();
     if e.open > 0 || e.non_manifold > 0 {
@@ -327,10 +366,22 @@ fn print_summary(a: &Args, rep: &SimReport, rem: Option<&Remaining>) {
         return;
     }
     for c in &rep.rapid_collisions {
-        outln!("{}:{}: rapid into material, {:.3} mm deep ({:.3} mm³)", a.path.display(), c.line, c.depth, c.volume_mm3);
+        outln!(
+            "{}:{}: rapid into material, {:.3} mm deep ({:.3} mm³)",
+            a.path.display(),
+            c.line,
+            c.depth,
+            c.volume_mm3
+        );
     }
     for c in &rep.holder_collisions {
-        outln!("{}:{}: shank or holder in material, {:.3} mm deep ({:.3} mm³)", a.path.display(), c.line, c.depth, c.volume_mm3);
+        outln!(
+            "{}:{}: shank or holder in material, {:.3} mm deep ({:.3} mm³)",
+            a.path.display(),
+            c.line,
+            c.depth,
+            c.volume_mm3
+        );
     }
     outln!(
         "{} of {} moves simulated at {} mm: removed {:.1} mm³ of {:.1} ({} cutting, {} in air), highest rate {:.0} mm³/min at line {}",
@@ -350,5 +401,12 @@ fn print_summary(a: &Args, rep: &SimReport, rem: Option<&Remaining>) {
         );
     }
     let hits = rep.rapid_collisions.len() + rep.holder_collisions.len();
-    outln!("{}", if hits == 0 { "no collisions".to_string() } else { format!("{hits} collisions") });
+    outln!(
+        "{}",
+        if hits == 0 {
+            "no collisions".to_string()
+        } else {
+            format!("{hits} collisions")
+        }
+    );
 }

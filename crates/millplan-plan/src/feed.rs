@@ -1,0 +1,299 @@
+//! The feed pass: a feed per block from the cutting forces (spec
+//! `process-models.md` §2.3). The program runs through its stock
+//! ([`crate::force::simulate`]); every cutting stroke gets the feed per tooth
+//! at which its tightest limit (F_xy, torque, power, bending stress, tip
+//! deflection, the spindle chart's power and torque at the block's speed) is
+//! met; a block takes the smallest of its strokes'. Blocks whose edge meets
+//! no material run at the machine's feed limit. Feeds then stay within the
+//! machine's feed range, and changes between neighbouring blocks are brought
+//! within the feed acceleration by lowering feeds only (a block decelerates
+//! to its successor's feed within its own length, and reaches its own feed
+//! from its predecessor's within its length), so no block ends up above the
+//! feed its limits allow. Spindle speeds, positions and feed modes are kept;
+//! canned cycles and moves the simulation could not follow keep their feeds.
+
+use crate::force::{self, FeedLimits, ForceRun, ForceSetup, MoveForces};
+use crate::machine::Machine;
+use crate::pipeline::{Changes, Context, Need, Pass, PassError, PassInfo};
+use millplan_nc::{FeedMode, MoveKind, Operation, Program};
+use millplan_sim::stock::path::{strokes, PathOptions};
+use millplan_sim::stock::tool::ToolBody;
+use millplan_sim::stock::Stock;
+use std::collections::BTreeMap;
+
+pub static INFO: PassInfo = PassInfo {
+    name: "feed",
+    needs: &[Need::Machine],
+    changes: Changes::How,
+    does:
+        "a feed per block so the tightest force, torque, power, stress or deflection limit is met",
+};
+
+/// The tool body of an operation (`None` leaves the operation out).
+pub type BodyFn = Box<dyn Fn(&Operation) -> Option<ToolBody> + Sync>;
+
+/// What the feed pass needs besides the program and the machine.
+pub struct FeedParams {
+    pub setup: ForceSetup,
+    pub limits: FeedLimits,
+    /// Feed acceleration, mm/s².
+    pub accel: f64,
+    /// Chord tolerance of arcs in the simulation, mm.
+    pub chord: f64,
+}
+
+/// How the feeds were set.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FeedChanges {
+    /// Cutting blocks that got a feed from the forces.
+    pub blocks: usize,
+    /// Cutting blocks in air, set to the machine's feed limit.
+    pub air_blocks: usize,
+    /// Cutting blocks that keep their feed (canned cycles, moves not
+    /// simulated, material the model could not load).
+    pub kept_blocks: usize,
+    /// What decided each block's feed: a limit's name, `feed-range` (fz or
+    /// the machine's feed range), `accel` (lowered for the feed
+    /// acceleration), `air`, `kept`.
+    pub binding: BTreeMap<&'static str, usize>,
+    /// Feeds written, mm/min.
+    pub feed_min: f64,
+    pub feed_max: f64,
+}
+
+/// The feed pass (see the module docs).
+pub struct FeedPass {
+    pub params: FeedParams,
+    stock: Option<Stock>,
+    body: BodyFn,
+    /// The forces at the input's feeds with the feeds allowed, after the run.
+    pub before: Option<ForceRun>,
+    pub changes: Option<FeedChanges>,
+}
+
+impl FeedPass {
+    /// `stock` is the material before the program; `body` the tool body of
+    /// an operation (`None` leaves it out).
+    pub fn new(params: FeedParams, stock: Stock, body: BodyFn) -> FeedPass {
+        FeedPass {
+            params,
+            stock: Some(stock),
+            body,
+            before: None,
+            changes: None,
+        }
+    }
+}
+
+impl Pass for FeedPass {
+    fn info(&self) -> &'static PassInfo {
+        &INFO
+    }
+
+    fn run(&mut self, p: &mut Program, cx: &Context) -> Result<(), PassError> {
+        let input = |message: String| PassError::Input {
+            pass: INFO.name,
+            message,
+        };
+        let stock = self
+            .stock
+            .take()
+            .ok_or_else(|| input("the pass runs once per stock".into()))?;
+        let m = &cx.machine;
+        let s = strokes(
+            p,
+            &self.body,
+            &PathOptions {
+                chord: self.params.chord,
+                rapid_rate: m.rapid,
+            },
+        );
+        let run = cx
+            .time("forces and allowed feeds", || {
+                force::simulate(
+                    p,
+                    &s,
+                    stock,
+                    &self.params.setup,
+                    Some((&self.params.limits, m)),
+                    &|_| {},
+                )
+            })
+            .map_err(input)?;
+        let changes = cx.time("feeds smoothed and written", || {
+            apply(p, &run, m, &self.params)
+        });
+        self.before = Some(run);
+        self.changes = Some(changes);
+        Ok(())
+    }
+}
+
+/// The machine's feed acceleration, mm/s²: the smallest its linear axes
+/// give; `None` when it gives none.
+pub fn machine_accel(m: &Machine) -> Option<f64> {
+    [m.axes.x.accel, m.axes.y.accel, m.axes.z.accel]
+        .into_iter()
+        .flatten()
+        .min_by(f64::total_cmp)
+}
+
+/// The feed (mm/min) each block asks for and why, before smoothing.
+fn target(mf: &MoveForces, m: &Machine, flutes: f64) -> (f64, &'static str) {
+    if mf.air {
+        return (m.feed_max, "air");
+    }
+    match mf.fz_allowed {
+        Some(fz) if !mf.unmodelled => {
+            let v = fz * mf.rpm * flutes;
+            let c = v.clamp(m.feed_min, m.feed_max);
+            (
+                c,
+                if c != v {
+                    "feed-range"
+                } else {
+                    mf.binding.unwrap_or("none")
+                },
+            )
+        }
+        _ => (mf.feed, "kept"),
+    }
+}
+
+/// Sets the feeds of `p` from `run` (see the module docs).
+pub fn apply(p: &mut Program, run: &ForceRun, m: &Machine, params: &FeedParams) -> FeedChanges {
+    let flutes = params.setup.flutes as f64;
+    let by_index: BTreeMap<u32, &MoveForces> = run.moves.iter().map(|x| (x.index, x)).collect();
+    let mut ch = FeedChanges {
+        feed_min: f64::INFINITY,
+        feed_max: 0.0,
+        ..FeedChanges::default()
+    };
+    let mut first = 0u32;
+    for op in &mut p.operations {
+        // Chains of consecutive feed blocks: (move index, length, feed, why).
+        let mut chain: Vec<(usize, f64, f64, &'static str)> = Vec::new();
+        let mut chains = Vec::new();
+        for i in 0..op.moves.len() {
+            let mv = op.moves[i];
+            let mf = by_index.get(&(first + i as u32));
+            let len = op.move_length(i);
+            let schedulable =
+                matches!(mv.kind, MoveKind::Linear | MoveKind::Arc(_)) && mv.feed > 0.0;
+            match (schedulable, mf, len) {
+                (true, Some(mf), Some(len)) if len > 0.0 => {
+                    let (v, why) = target(mf, m, flutes);
+                    chain.push((i, len, v, why));
+                }
+                _ => {
+                    if mv.is_cutting() {
+                        ch.kept_blocks += 1;
+                        *ch.binding.entry("kept").or_default() += 1;
+                    }
+                    if !chain.is_empty() {
+                        chains.push(std::mem::take(&mut chain));
+                    }
+                }
+            }
+        }
+        chains.push(chain);
+        first += op.moves.len() as u32;
+        for c in chains.iter_mut().filter(|c| !c.is_empty()) {
+            smooth(c, params.accel);
+            for &(i, len, v, why) in c.iter() {
+                set_feed(op, i, len, v);
+                match why {
+                    "air" => ch.air_blocks += 1,
+                    "kept" => ch.kept_blocks += 1,
+                    _ => ch.blocks += 1,
+                }
+                *ch.binding.entry(why).or_default() += 1;
+                ch.feed_min = ch.feed_min.min(v);
+                ch.feed_max = ch.feed_max.max(v);
+            }
+        }
+    }
+    if ch.feed_min > ch.feed_max {
+        ch.feed_min = 0.0;
+    }
+    ch
+}
+
+/// Lowers feeds (mm/min) so that neighbouring blocks differ by no more than
+/// the acceleration `accel` (mm/s²) allows over a block's length; a lowered
+/// block is marked `accel`.
+fn smooth(c: &mut [(usize, f64, f64, &'static str)], accel: f64) {
+    if !(accel > 0.0 && accel.is_finite()) {
+        return;
+    }
+    // v in mm/min, s in mm: v² may grow by 2·a·s·3600 over a block.
+    let k = 2.0 * accel * 3600.0;
+    let mut lowered = vec![false; c.len()];
+    for j in 1..c.len() {
+        let cap = (c[j - 1].2 * c[j - 1].2 + k * c[j].1).sqrt();
+        if c[j].2 > cap {
+            c[j].2 = cap;
+            lowered[j] = true;
+        }
+    }
+    for j in (0..c.len().saturating_sub(1)).rev() {
+        let cap = (c[j + 1].2 * c[j + 1].2 + k * c[j].1).sqrt();
+        if c[j].2 > cap {
+            c[j].2 = cap;
+            lowered[j] = true;
+        }
+    }
+    for (e, l) in c.iter_mut().zip(lowered) {
+        // Only a clear change counts as the acceleration's doing.
+        if l && e.3 != "kept" {
+            e.3 = "accel";
+        }
+    }
+}
+
+/// Writes feed `v` (mm/min) into move `i` in its own feed mode.
+fn set_feed(op: &mut Operation, i: usize, len: f64, v: f64) {
+    let mv = &mut op.moves[i];
+    mv.feed = match mv.feed_mode {
+        FeedMode::PerMinute => v,
+        FeedMode::PerRev if mv.spindle > 0.0 => v / mv.spindle,
+        FeedMode::PerRev => mv.feed,
+        // 1 / block time in minutes.
+        FeedMode::InverseTime => v / len,
+    };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn smoothing_only_lowers_and_keeps_within_the_acceleration() {
+        let k = 2.0 * 1000.0 * 3600.0;
+        let mut c: Vec<(usize, f64, f64, &'static str)> =
+            [5000.0, 500.0, 8000.0, 8000.0, 300.0, 6000.0]
+                .iter()
+                .enumerate()
+                .map(|(i, v)| (i, 0.5, *v, "fxy"))
+                .collect();
+        let before: Vec<f64> = c.iter().map(|e| e.2).collect();
+        smooth(&mut c, 1000.0);
+        for (j, e) in c.iter().enumerate() {
+            assert!(e.2 <= before[j] + 1e-9, "block {j} raised");
+            if j > 0 {
+                let (a, b) = (c[j - 1].2, e.2);
+                assert!(
+                    b * b <= a * a + k * e.1 + 1e-6,
+                    "accelerates too fast into {j}"
+                );
+                assert!(
+                    a * a <= b * b + k * c[j - 1].1 + 1e-6,
+                    "decelerates too late into {j}"
+                );
+            }
+        }
+        assert_eq!(c[1].2, 500.0, "the slow block stays");
+        assert_eq!(c[0].3, "accel", "the block before the slow one slows down");
+        assert_eq!(c[1].3, "fxy");
+    }
+}

@@ -1,0 +1,587 @@
+//! Cutting forces along a whole program (spec `process-models.md` §1–§2): the
+//! program runs stroke by stroke through its stock, and every cutting stroke's
+//! engagement is handed to the force model before the stroke is removed.
+//!
+//! The engagement of a stroke is the tool at the stroke's *end* pose against
+//! the stock as the strokes before it left it ([`StockEngagement`]): the model
+//! asks only about edge points where the chip is positive, the half of the
+//! tool ahead of the feed, which is material this stroke has not yet removed.
+//!
+//! Cutting data per stroke: the spindle speed of its IR move, the feed from
+//! the stroke's length and time (so per-minute, per-revolution and
+//! inverse-time feeds all count), the feed per tooth fz = v/(n·z). The tool
+//! frame is the stock simulation's ([`tool_frame`]: z along the axis, x the
+//! feed normal to it). The feed's component along the axis is the lead angle
+//! (a ramp, or a vertical tool climbing a slope: the feed vector in the tool
+//! frame is (cos lead, 0, sin lead), exactly what §1.2 needs). The chip, and
+//! so every load the feed is limited by, depends on nothing else: the tilt
+//! turns only the workpiece frame, which without the surface normal is taken
+//! as the feed frame of a tool with no tilt (`tilt = 0`).
+
+use millplan_geom::{DVec2, DVec3};
+use millplan_models::force::coeffs::Law;
+use millplan_models::force::deflect::{Cantilever, DE_RATIO, E_CARBIDE};
+use millplan_models::force::edge::Tool;
+use millplan_models::force::engage::Engagement;
+use millplan_models::force::feed::{Limits, Loads};
+use millplan_models::force::{Cut, Engaged, ForceModel, Grid, Summary};
+use millplan_nc::{Move, Program};
+use millplan_sim::stock::engage::tool_frame;
+use millplan_sim::stock::path::{Stroke, Strokes};
+use millplan_sim::stock::sim::{Simulator, CUT_EPS};
+use millplan_sim::stock::tool::ToolBody;
+use millplan_sim::stock::Stock;
+
+/// The stock seen from the tool at one pose: tool-frame points (origin at the
+/// tip, z along the axis, x the feed) turned into part coordinates and looked
+/// up in the stock.
+pub struct StockEngagement<'a> {
+    stock: &'a Stock,
+    tip: DVec3,
+    x: DVec3,
+    y: DVec3,
+    z: DVec3,
+    /// Highest height above the tip worth slicing.
+    z_hi: f64,
+    /// Material counts from this far below a column's top, mm.
+    lift: f64,
+}
+
+/// The share of a dexel's size an edge point must lie below a column's top
+/// to count as in material. The columns sample the surface a tool left at
+/// their centres, so the tool at a pose next to its own cut finds up to half
+/// a cell's slope of "material" that is not there; on a ball-end raster over
+/// a curved part that noise alone loads a second run over the finished part
+/// with a sixth of the first run's F_xy. A fifth of a cell removes nearly
+/// all of it and changes a straight pass beside an earlier one by under 1 %
+/// against the analytic planar raster (tests/feed.rs).
+pub const LIFT_SHARE: f64 = 0.2;
+
+impl<'a> StockEngagement<'a> {
+    /// The tool of radius `radius` at `tip` with unit axis `axis` moving
+    /// along `feed`. The band of heights is bounded by the highest material
+    /// under the tool's reach (a tilted tool's shadow on the XY grid).
+    pub fn new(
+        stock: &'a Stock,
+        radius: f64,
+        tip: DVec3,
+        axis: DVec3,
+        feed: DVec3,
+        flute: f64,
+    ) -> Self {
+        let (x, y, z) = tool_frame(axis, feed);
+        let cos_g = z.z;
+        let sin_g = (1.0 - cos_g * cos_g).max(0.0).sqrt();
+        let z_hi = if cos_g > 0.2 {
+            // The tool up to the flute length covers this XY rectangle.
+            let top_c = tip + z * flute;
+            let lo = tip.truncate().min(top_c.truncate()) - DVec2::splat(radius);
+            let hi = tip.truncate().max(top_c.truncate()) + DVec2::splat(radius);
+            let top = stock.max_top_in(lo, hi);
+            // A point h up the axis lies at least h·cos γ − R·sin γ above the tip.
+            ((top - tip.z + radius * sin_g) / cos_g).clamp(0.0, flute)
+        } else {
+            flute
+        };
+        StockEngagement {
+            stock,
+            tip,
+            x,
+            y,
+            z,
+            z_hi,
+            lift: LIFT_SHARE * stock.grid.res,
+        }
+    }
+
+    /// The tool frame's axes in part coordinates.
+    pub fn frame(&self) -> (DVec3, DVec3, DVec3) {
+        (self.x, self.y, self.z)
+    }
+}
+
+impl Engagement for StockEngagement<'_> {
+    fn z_range(&self, _tool: &Tool) -> (f64, f64) {
+        (0.0, self.z_hi)
+    }
+
+    #[inline]
+    fn contains(&self, p: [f64; 3]) -> bool {
+        let q = self.tip + self.x * p[0] + self.y * p[1] + self.z * p[2];
+        self.stock.contains(DVec3::new(q.x, q.y, q.z + self.lift))
+    }
+}
+
+/// How the forces are modelled: the law (material), the flutes and helix of
+/// every tool, the discretisation and the tool as a cantilever.
+#[derive(Clone, Copy, Debug)]
+pub struct ForceSetup {
+    pub law: Law,
+    pub flutes: usize,
+    /// Helix angle, rad.
+    pub helix: f64,
+    pub grid: Grid,
+    /// Gauge length from the holder face to the tip, mm (default 3·D).
+    pub stickout: Option<f64>,
+    /// Fluted length, mm: a stepped cantilever (default: the whole
+    /// stick-out fluted, the Tunc–Budak form).
+    pub flute_length: Option<f64>,
+    /// Young's modulus of the tool, N/mm².
+    pub modulus: f64,
+}
+
+impl ForceSetup {
+    pub fn new(law: Law, flutes: usize) -> ForceSetup {
+        ForceSetup {
+            law,
+            flutes,
+            helix: 30f64.to_radians(),
+            grid: Grid::default(),
+            stickout: None,
+            flute_length: None,
+            modulus: E_CARBIDE,
+        }
+    }
+
+    /// The force model and cantilever of one tool body.
+    fn tool(&self, body: &ToolBody) -> Result<ToolForces, String> {
+        let d = 2.0 * body.radius();
+        let stickout = self.stickout.unwrap_or(3.0 * d);
+        // The edge up to the body's flutes, never beyond what can cut.
+        let flute = body
+            .flute
+            .min(self.flute_length.unwrap_or(stickout))
+            .min(stickout);
+        let tool = Tool {
+            shape: body.shape,
+            flutes: self.flutes,
+            helix: self.helix,
+            flute_length: flute,
+        };
+        let holding = Cantilever {
+            length: stickout,
+            shank_d: d,
+            flute_d: DE_RATIO * d,
+            flute_length: self.flute_length.filter(|l| *l < stickout),
+            e: self.modulus,
+        };
+        holding.validate()?;
+        Ok(ToolForces {
+            model: ForceModel::new(tool, self.law, self.grid)?,
+            holding,
+            radius: body.radius(),
+            flute,
+        })
+    }
+}
+
+struct ToolForces {
+    model: ForceModel,
+    holding: Cantilever,
+    radius: f64,
+    flute: f64,
+}
+
+/// Limits of the feed scheduling (§2.3); `None` leaves a quantity free.
+/// The spindle chart of the machine adds its power and torque at each
+/// block's speed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeedLimits {
+    /// F_xy,max, N.
+    pub fxy: Option<f64>,
+    /// T_max, N·mm.
+    pub torque: Option<f64>,
+    /// Mean power, W.
+    pub power: Option<f64>,
+    /// Bending stress, MPa.
+    pub stress: Option<f64>,
+    /// Tip deflection, mm.
+    pub deflection: Option<f64>,
+    /// Factor of safety on power, torque and stress.
+    pub fos: f64,
+    /// Feed per tooth range, mm.
+    pub fz_min: f64,
+    pub fz_max: f64,
+}
+
+impl FeedLimits {
+    /// The iteration's limits at spindle speed `rpm` on `machine`.
+    pub fn at(&self, rpm: f64, machine: &crate::machine::Machine) -> Limits {
+        let chart = machine.spindle_limit(rpm);
+        let min = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        Limits {
+            fxy: self.fxy,
+            torque: min(self.torque, chart.map(|c| c.torque * 1000.0)),
+            power: min(self.power, chart.map(|c| c.power * 1000.0)),
+            stress: self.stress,
+            deflection: self.deflection,
+            fos: self.fos,
+            fz_min: self.fz_min,
+            fz_max: self.fz_max,
+        }
+    }
+}
+
+/// What one IR move met: its cutting data and the largest loads of its strokes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct MoveForces {
+    /// Index of the move over the whole program.
+    pub index: u32,
+    pub line: u32,
+    pub rapid: bool,
+    /// A cutting move whose edge met no material.
+    pub air: bool,
+    /// A cutting move that removed material the model could not load (the
+    /// spindle stopped, or no edge point ahead of the feed in material): its
+    /// feed is kept.
+    pub unmodelled: bool,
+    /// Time at the move's start and its duration, s.
+    pub t_start_s: f64,
+    pub seconds: f64,
+    /// Spindle speed, 1/min; feed, mm/min; feed per tooth, mm.
+    pub rpm: f64,
+    pub feed: f64,
+    pub fz: f64,
+    /// Lead angle of the feed against the tool axis, degrees.
+    pub lead_deg: f64,
+    /// Engaged edge cells (slice × angle) of the most loaded stroke.
+    pub cells: usize,
+    pub removed_mm3: f64,
+    /// F_xy,max, N.
+    pub fxy_max: f64,
+    /// Fx, Fy, Fz ranges over a revolution in the tool frame, N.
+    pub fx: [f64; 2],
+    pub fy: [f64; 2],
+    pub fz_force: [f64; 2],
+    /// N·mm.
+    pub torque_max: f64,
+    pub torque_mean: f64,
+    /// W.
+    pub power_w: f64,
+    pub stress_mpa: f64,
+    pub deflection_mm: f64,
+    /// The feed per tooth the limits allow (scheduling only), mm.
+    pub fz_allowed: Option<f64>,
+    /// The constraint that binds there.
+    pub binding: Option<&'static str>,
+}
+
+impl MoveForces {
+    fn merge(&mut self, s: &Summary, l: &Loads, cells: usize) {
+        let mm =
+            |a: [f64; 2], m: millplan_models::force::MinMax| [a[0].min(m.min), a[1].max(m.max)];
+        self.fx = mm(self.fx, s.tool[0]);
+        self.fy = mm(self.fy, s.tool[1]);
+        self.fz_force = mm(self.fz_force, s.tool[2]);
+        if l.fxy_max >= self.fxy_max {
+            self.cells = cells;
+        }
+        self.fxy_max = self.fxy_max.max(l.fxy_max);
+        self.torque_max = self.torque_max.max(l.torque_max);
+        self.torque_mean = self.torque_mean.max(l.torque_mean);
+        self.power_w = self.power_w.max(l.power_w);
+        self.stress_mpa = self.stress_mpa.max(l.stress_mpa);
+        self.deflection_mm = self.deflection_mm.max(l.deflection_mm);
+    }
+
+    /// The loads as the scheduler's quantities.
+    pub fn loads(&self) -> Loads {
+        Loads {
+            fxy_max: self.fxy_max,
+            torque_max: self.torque_max,
+            torque_mean: self.torque_mean,
+            power_w: self.power_w,
+            stress_mpa: self.stress_mpa,
+            deflection_mm: self.deflection_mm,
+        }
+    }
+}
+
+/// The forces of a whole program.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ForceRun {
+    /// One entry per simulated move, in program order.
+    pub moves: Vec<MoveForces>,
+    /// Strokes whose engagement was evaluated.
+    pub evaluated: usize,
+    /// Moves not simulated (unknown position or axis, no tool).
+    pub skipped: usize,
+}
+
+/// The largest loads of a run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Maxima {
+    pub fxy: f64,
+    pub torque: f64,
+    pub power: f64,
+    pub stress: f64,
+    pub deflection: f64,
+}
+
+impl ForceRun {
+    /// The largest loads over every move.
+    pub fn maxima(&self) -> Maxima {
+        let mut x = Maxima::default();
+        for m in &self.moves {
+            x.fxy = x.fxy.max(m.fxy_max);
+            x.torque = x.torque.max(m.torque_max);
+            x.power = x.power.max(m.power_w);
+            x.stress = x.stress.max(m.stress_mpa);
+            x.deflection = x.deflection.max(m.deflection_mm);
+        }
+        x
+    }
+
+    /// Moves whose loads exceed their limits (the factor of safety and the
+    /// spindle chart at their speed included).
+    pub fn over_limits(&self, lim: &FeedLimits, m: &crate::machine::Machine) -> Vec<&MoveForces> {
+        self.moves
+            .iter()
+            .filter(|x| !x.rapid && !x.unmodelled)
+            .filter(|x| {
+                lim.at(x.rpm, m)
+                    .ratio(&x.loads())
+                    .is_some_and(|(r, _)| r < 1.0 - 1e-9)
+            })
+            .collect()
+    }
+}
+
+/// The IR moves of a program by their index over the whole program.
+pub fn moves_by_index(p: &Program) -> Vec<&Move> {
+    p.operations.iter().flat_map(|op| op.moves.iter()).collect()
+}
+
+/// Runs `strokes` (of `program`) through `stock`, evaluating the forces of
+/// every cutting stroke; with `schedule`, also the feed per tooth each
+/// stroke's limits allow (§2.3, the iteration reusing the stroke's engaged
+/// cells). `progress(done)` is called now and then.
+pub fn simulate(
+    program: &Program,
+    strokes: &Strokes,
+    stock: Stock,
+    setup: &ForceSetup,
+    schedule: Option<(&FeedLimits, &crate::machine::Machine)>,
+    progress: &dyn Fn(usize),
+) -> Result<ForceRun, String> {
+    let tools: Vec<ToolForces> = strokes
+        .tools
+        .iter()
+        .map(|b| setup.tool(b))
+        .collect::<Result<_, _>>()?;
+    let ir = moves_by_index(program);
+    let mut sim = Simulator::new(stock);
+    let mut run = ForceRun {
+        skipped: strokes.skipped.total(),
+        ..ForceRun::default()
+    };
+    let mut t = 0.0;
+    for (k, s) in strokes.strokes.iter().enumerate() {
+        if k % 4096 == 0 {
+            progress(k);
+        }
+        let new_move = run.moves.last().is_none_or(|m| m.index != s.mv);
+        if new_move {
+            let mv = ir.get(s.mv as usize).copied();
+            run.moves.push(MoveForces {
+                index: s.mv,
+                line: s.line,
+                rapid: s.rapid,
+                t_start_s: t,
+                rpm: mv.map_or(0.0, |m| m.spindle),
+                fx: [f64::INFINITY, f64::NEG_INFINITY],
+                fy: [f64::INFINITY, f64::NEG_INFINITY],
+                fz_force: [f64::INFINITY, f64::NEG_INFINITY],
+                ..MoveForces::default()
+            });
+        }
+        let m = run.moves.last_mut().expect("pushed above");
+        m.rapid &= s.rapid;
+        t += s.minutes * 60.0;
+        m.seconds += s.minutes * 60.0;
+        let body = &strokes.tools[s.tool as usize];
+        if !s.rapid {
+            if let Some(n) = stroke_forces(&tools[s.tool as usize], &sim.stock, s, m, schedule) {
+                run.evaluated += n;
+            }
+        }
+        m.removed_mm3 += sim.step(s, body).removed;
+    }
+    for m in &mut run.moves {
+        finish_move(m);
+    }
+    Ok(run)
+}
+
+/// Evaluates one cutting stroke into its move; the number of evaluations.
+fn stroke_forces(
+    tf: &ToolForces,
+    stock: &Stock,
+    s: &Stroke,
+    m: &mut MoveForces,
+    schedule: Option<(&FeedLimits, &crate::machine::Machine)>,
+) -> Option<usize> {
+    let d = s.p1 - s.p0;
+    let len = d.length();
+    if !(len > 1e-9 && s.minutes > 0.0) {
+        return None;
+    }
+    let v = len / s.minutes;
+    let flutes = tf.model.tool.flutes as f64;
+    m.feed = m.feed.max(v);
+    if !(m.rpm > 0.0) {
+        return None;
+    }
+    let eng = StockEngagement::new(stock, tf.radius, s.p1, s.a1, d, tf.flute);
+    let (x, _, z) = eng.frame();
+    let lead = d.dot(z).atan2(d.dot(x));
+    m.lead_deg = lead.to_degrees();
+    let fz = v / (m.rpm * flutes);
+    m.fz = m.fz.max(fz);
+    let cut = Cut {
+        fz,
+        rpm: m.rpm,
+        lead,
+        tilt: 0.0,
+    };
+    let cells = tf.model.engaged(&cut, &eng);
+    if cells.is_empty() {
+        return Some(0);
+    }
+    let load_at = |fz: f64| -> (Summary, Loads) {
+        let s = tf
+            .model
+            .evaluate_engaged(&Cut { fz, ..cut }, &cells)
+            .summary();
+        let l = Loads::new(&s, &tf.holding);
+        (s, l)
+    };
+    let (sum, loads) = load_at(fz);
+    m.merge(&sum, &loads, cells.len());
+    let mut evals = 1;
+    if let Some((lim, machine)) = schedule {
+        let (f, c, n) = allowed_fz(&cut, &cells, tf, &lim.at(m.rpm, machine));
+        evals += n;
+        if m.fz_allowed.is_none_or(|a| f < a) {
+            m.fz_allowed = Some(f);
+            m.binding = Some(c);
+        }
+    }
+    Some(evals)
+}
+
+/// The feed per tooth at which the tightest limit is met (§2.3), never above
+/// it: the iteration stops within 1 %, and a feed still over a limit is
+/// lowered until it is not (or sits on fz_min). Returns the feed, the
+/// binding constraint's name and the evaluations used.
+fn allowed_fz(
+    cut: &Cut,
+    cells: &Engaged,
+    tf: &ToolForces,
+    lim: &Limits,
+) -> (f64, &'static str, usize) {
+    use millplan_models::force::feed::iterate_feed;
+    let eval = |fz: f64| {
+        let s = tf
+            .model
+            .evaluate_engaged(&Cut { fz, ..*cut }, cells)
+            .summary();
+        Loads::new(&s, &tf.holding)
+    };
+    let sched = iterate_feed(cut.fz, lim, 0.01, 20, eval);
+    let mut fz = sched.fz;
+    let mut n = sched.sequence.len();
+    let mut binding = sched.binding.map_or("none", |c| c.name());
+    let mut loads = sched.loads;
+    for _ in 0..20 {
+        let Some((r, _)) = loads.and_then(|l| lim.ratio(&l)) else {
+            break;
+        };
+        if r >= 1.0 || fz <= lim.fz_min {
+            break;
+        }
+        fz = (fz * r * 0.999).max(lim.fz_min);
+        if fz == lim.fz_min {
+            binding = "feed-range";
+        }
+        loads = Some(eval(fz));
+        n += 1;
+    }
+    (fz, binding, n)
+}
+
+fn finish_move(m: &mut MoveForces) {
+    let fixed = |a: &mut [f64; 2]| {
+        if a[0] > a[1] {
+            *a = [0.0, 0.0];
+        }
+    };
+    fixed(&mut m.fx);
+    fixed(&mut m.fy);
+    fixed(&mut m.fz_force);
+    if m.rapid {
+        return;
+    }
+    let removed = m.removed_mm3 > CUT_EPS * 1e-2;
+    if m.cells == 0 && m.fxy_max == 0.0 {
+        m.air = !removed;
+        m.unmodelled = removed;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_adapter_finds_material_ahead_and_bounds_its_heights() {
+        // A 10 mm block; a vertical D10 ball 0.5 mm deep at x = 5 feeding +x.
+        let stock = Stock::block(
+            DVec3::new(0.0, -10.0, -10.0),
+            DVec3::new(20.0, 10.0, 0.0),
+            0.1,
+        );
+        let e = StockEngagement::new(
+            &stock,
+            5.0,
+            DVec3::new(5.0, 0.0, -0.5),
+            DVec3::Z,
+            DVec3::X,
+            30.0,
+        );
+        let (lo, hi) = e.z_range(&Tool {
+            shape: millplan_models::cutter::Shape::Ball { radius: 5.0 },
+            flutes: 2,
+            helix: 0.5,
+            flute_length: 30.0,
+        });
+        assert_eq!(lo, 0.0);
+        assert!(
+            (hi - 0.5).abs() < 1e-6,
+            "material reaches 0.5 mm above the tip, got {hi}"
+        );
+        // Ahead (+x in the tool frame) and below the top: material.
+        assert!(e.contains([2.0, 0.0, 0.3]));
+        // Above the block's top: none.
+        assert!(!e.contains([2.0, 0.0, 0.7]));
+        // Within a fifth of a cell below the top: not yet material.
+        assert!(!e.contains([2.0, 0.0, 0.49]));
+        // The tool frame follows the feed: feeding −y, tool-frame +x is world −y.
+        let e = StockEngagement::new(
+            &stock,
+            5.0,
+            DVec3::new(5.0, 9.9, -0.5),
+            DVec3::Z,
+            -DVec3::Y,
+            30.0,
+        );
+        assert!(e.contains([2.0, 0.0, 0.3]), "ahead is −y, inside the block");
+        assert!(
+            !e.contains([-2.0, 0.0, 0.3]),
+            "behind is +y, beyond the block's edge at 10"
+        );
+    }
+}

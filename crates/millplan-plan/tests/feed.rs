@@ -1,0 +1,240 @@
+//! The feed pass on a generated ball-end finishing case: a raster over the
+//! demo surface with a finishing allowance, cut at a conservative feed.
+
+use millplan_geom::analytic::{tessellate, DemoSurface};
+use millplan_models::cutter::Shape;
+use millplan_models::force::materials::Materials;
+use millplan_nc::generate::{raster, Raster};
+use millplan_nc::Program;
+use millplan_plan::feed::{FeedParams, FeedPass};
+use millplan_plan::force::{simulate, FeedLimits, ForceRun, ForceSetup};
+use millplan_plan::machine::Machine;
+use millplan_plan::pipeline::{self, Context};
+use millplan_sim::stock::path::{strokes, PathOptions};
+use millplan_sim::stock::spec::offset_stock;
+use millplan_sim::stock::tool::ToolBody;
+use millplan_sim::stock::Stock;
+
+fn case() -> (Program, Stock) {
+    let surface = DemoSurface { size: 24.0 };
+    let mesh = tessellate(&surface, 0.5);
+    let (program, _) = raster(
+        &surface,
+        &Raster {
+            stepover: 0.8,
+            step: 0.4,
+            feed: 1000.0,
+            spindle: 10000.0,
+            ..Raster::default()
+        },
+    );
+    (program, offset_stock(&mesh, 0.4, 0.1))
+}
+
+fn body(_: &millplan_nc::Operation) -> Option<ToolBody> {
+    Some(ToolBody::new(Shape::Ball { radius: 5.0 }))
+}
+
+fn setup() -> ForceSetup {
+    ForceSetup::new(Materials::builtin().get("al7075").expect("built in").law, 2)
+}
+
+fn limits() -> FeedLimits {
+    FeedLimits {
+        fxy: Some(160.0),
+        torque: None,
+        power: Some(400.0),
+        stress: None,
+        deflection: Some(0.05),
+        fos: 1.0,
+        fz_min: 0.01,
+        fz_max: 0.25,
+    }
+}
+
+fn forces(p: &Program, stock: Stock, m: &Machine) -> ForceRun {
+    let s = strokes(
+        p,
+        body,
+        &PathOptions {
+            chord: 0.025,
+            rapid_rate: m.rapid,
+        },
+    );
+    simulate(p, &s, stock, &setup(), None, &|_| {}).expect("simulates")
+}
+
+fn time_s(p: &Program, m: &Machine) -> f64 {
+    millplan_nc::stats::summarize(p, m.rapid).time_s
+}
+
+#[test]
+fn forces_follow_the_engagement_along_the_program() {
+    let (p, stock) = case();
+    let m = Machine::default();
+    let run = forces(&p, stock, &m);
+    let cutting: Vec<_> = run.moves.iter().filter(|x| !x.rapid && !x.air).collect();
+    assert!(
+        cutting.len() > 500,
+        "the raster cuts: {} moves",
+        cutting.len()
+    );
+    assert!(cutting.iter().all(|x| x.fxy_max > 0.0 || x.unmodelled));
+    // Power is T_mean·ω: every loaded move's follows from its torque.
+    for x in &cutting {
+        let w = x.rpm * std::f64::consts::TAU / 60.0;
+        assert!((x.power_w - x.torque_mean * w / 1000.0).abs() <= 1e-6 * x.power_w.max(1.0));
+    }
+    // Material goes as it is cut: running the program a second time over its
+    // own result meets air everywhere.
+    let (p2, mut stock2) = case();
+    let s = strokes(
+        &p2,
+        body,
+        &PathOptions {
+            chord: 0.025,
+            rapid_rate: m.rapid,
+        },
+    );
+    let _ = millplan_sim::stock::run::run(&mut stock2, &s, 0.01, &|_| {});
+    let again = simulate(&p2, &s, stock2, &setup(), None, &|_| {}).expect("simulates");
+    let median = |r: &ForceRun| {
+        let mut v: Vec<f64> = r
+            .moves
+            .iter()
+            .filter(|x| !x.rapid)
+            .map(|x| x.fxy_max)
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (first, second) = (median(&run), median(&again));
+    assert!(
+        second < 0.1 * first,
+        "F_xy median {second:.1} N over the finished part, {first:.1} N cutting it"
+    );
+}
+
+#[test]
+fn scheduled_feeds_meet_the_limits_within_the_machine_and_save_time() {
+    let (mut p, stock) = case();
+    let input = p.clone();
+    let m = Machine::default();
+    let params = FeedParams {
+        setup: setup(),
+        limits: limits(),
+        accel: 2000.0,
+        chord: 0.025,
+    };
+    let mut pass = FeedPass::new(params, stock.clone(), Box::new(body));
+    let cx = Context::new(m.clone()).verifying();
+    pipeline::run(&mut [&mut pass], &mut p, &cx).expect("the pass runs");
+    let ch = pass.changes.expect("changes");
+    assert!(ch.blocks > 500, "{ch:?}");
+    // Every feed block within the machine's range, spindle speeds kept.
+    for (a, b) in input.moves().zip(p.moves()) {
+        assert_eq!(a.spindle, b.spindle);
+        if b.is_cutting() {
+            assert!(
+                b.feed >= m.feed_min && b.feed <= m.feed_max,
+                "feed {}",
+                b.feed
+            );
+        }
+    }
+    // The output's own prediction stays within every limit.
+    let after = forces(&p, stock, &m);
+    let l = limits();
+    for x in after.moves.iter().filter(|x| !x.unmodelled) {
+        assert!(
+            x.fxy_max <= l.fxy.unwrap_or(f64::INFINITY) * (1.0 + 1e-9),
+            "line {} fxy {}",
+            x.line,
+            x.fxy_max
+        );
+        assert!(x.power_w <= l.power.unwrap_or(f64::INFINITY) * (1.0 + 1e-9));
+        assert!(x.deflection_mm <= l.deflection.unwrap_or(f64::INFINITY) * (1.0 + 1e-9));
+        if x.fz > 0.0 && x.fxy_max > 0.0 {
+            assert!(x.fz <= l.fz_max * (1.0 + 1e-9), "fz {}", x.fz);
+        }
+    }
+    // 1000 mm/min at 10000 1/min is 0.05 mm per tooth: conservative here.
+    let (t0, t1) = (time_s(&input, &m), time_s(&p, &m));
+    assert!(t1 < 0.8 * t0, "time {t0:.1} s became {t1:.1} s");
+    // Some limit binds on most blocks; smoothing shows where it acted.
+    let limited: usize = ["fxy", "power", "deflection", "feed-range", "accel"]
+        .iter()
+        .map(|k| ch.binding.get(k).copied().unwrap_or(0))
+        .sum();
+    assert!(limited * 2 > ch.blocks, "{:?}", ch.binding);
+}
+
+/// A straight ball-end pass through a box, next to an earlier pass, against
+/// the analytic planar raster of §1.4(a) with the same depth and stepover.
+#[test]
+fn a_pass_through_the_stock_loads_the_tool_as_the_planar_raster_does() {
+    use millplan_models::force::engage::PlanarRaster;
+    use millplan_models::force::{Cut, ForceModel};
+    use millplan_nc::{Move, Operation};
+    let (ap, ae, fz, n) = (0.5, 0.8, 0.05, 10000.0);
+    let mut op = Operation {
+        name: None,
+        tool: None,
+        frame: None,
+        start: millplan_geom::DVec3::new(-10.0, -ae, 10.0),
+        moves: Vec::new(),
+        arcs: Vec::new(),
+        cycles: Vec::new(),
+        orients: Vec::new(),
+        events: Vec::new(),
+    };
+    let feed = fz * 2.0 * n;
+    let mut push = |m: Move| op.moves.push(Move { spindle: n, ..m });
+    for y in [-ae, 0.0] {
+        push(Move::rapid(millplan_geom::DVec3::new(-10.0, y, 10.0)));
+        push(Move::linear(millplan_geom::DVec3::new(-10.0, y, -ap), feed));
+        for k in 1..=60 {
+            push(Move::linear(
+                millplan_geom::DVec3::new(-10.0 + k as f64 * 0.5, y, -ap),
+                feed,
+            ));
+        }
+        push(Move::rapid(millplan_geom::DVec3::new(20.0, y, 10.0)));
+    }
+    let mut p = Program::new(millplan_nc::Dialect::AptIso);
+    p.operations.push(op);
+    let stock = Stock::block(
+        millplan_geom::DVec3::new(-2.0, -10.0, -10.0),
+        millplan_geom::DVec3::new(30.0, 10.0, 0.0),
+        0.1,
+    );
+    let run = forces(&p, stock, &Machine::default());
+    // The middle of the second pass.
+    let got: Vec<f64> = run.moves[100..115].iter().map(|x| x.fxy_max).collect();
+    let sim = got.iter().sum::<f64>() / got.len() as f64;
+    let s = setup();
+    let edge = millplan_models::force::edge::Tool {
+        shape: Shape::Ball { radius: 5.0 },
+        flutes: 2,
+        helix: s.helix,
+        flute_length: 30.0,
+    };
+    let model = ForceModel::new(edge, s.law, s.grid).expect("model");
+    let raster = PlanarRaster::new(&edge, ap, Some(ae), 0.0, 0.0).expect("raster");
+    let want = model
+        .evaluate(
+            &Cut {
+                fz,
+                rpm: n,
+                lead: 0.0,
+                tilt: 0.0,
+            },
+            &raster,
+        )
+        .summary()
+        .fxy_max;
+    assert!(
+        (sim - want).abs() < 0.02 * want,
+        "F_xy,max {sim:.1} N in the stock, {want:.1} N analytic"
+    );
+}

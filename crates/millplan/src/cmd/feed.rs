@@ -1,0 +1,556 @@
+//! `millplan feed`: a feed per block from the cutting forces; and what
+//! `millplan force PATH` shares with it (the program, its stock, the model).
+
+use crate::cmd::cut::load_materials;
+use crate::cmd::simulate::initial_stock;
+use crate::cmd::{
+    arg, print_diagnostics, read_options, target_for, tool_shape, write_program_file, Range,
+    TargetArg, UnitArg,
+};
+use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::io::{read_program, read_surface, Outputs};
+use millplan_models::cutter::Shape;
+use millplan_models::force::deflect::E_CARBIDE;
+use millplan_models::force::Grid;
+use millplan_plan::feed::{machine_accel, BodyFn, FeedParams, FeedPass};
+use millplan_plan::force::{simulate, FeedLimits, ForceRun, ForceSetup, MoveForces};
+use millplan_plan::machine::Machine;
+use millplan_plan::pipeline::{self, Context};
+use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
+use millplan_sim::stock::spec::StockSpec;
+use millplan_sim::stock::tool::ToolBody;
+use millplan_sim::stock::Stock;
+use serde_json::json;
+use std::path::{Path, PathBuf};
+
+/// The program's stock, material and tools (shared by `force PATH` and `feed`).
+#[derive(clap::Args, Clone)]
+pub struct ModelArgs {
+    /// Initial stock: box:auto[:MARGIN], box:X0,Y0,Z0,X1,Y1,Z1,
+    /// cylinder:auto[:MARGIN], cylinder:CX,CY,Z0,Z1,D, stl:FILE or
+    /// offset:MM (the --stl part grown by MM), as in `millplan simulate`.
+    #[arg(long)]
+    pub stock: Option<String>,
+    /// Part surface (STL), for --stock offset:MM.
+    #[arg(long)]
+    pub stl: Option<PathBuf>,
+    /// Unit of the STL files' numbers (an STL does not say): mm (default) or
+    /// inch, converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<crate::cmd::UnitArg>,
+    /// Named material (`millplan force materials` lists them).
+    #[arg(long)]
+    pub material: Option<String>,
+    /// A TOML file of further materials.
+    #[arg(long)]
+    pub materials: Option<PathBuf>,
+    /// Machine file (TOML): feed range, rapid rate, axis accelerations, the
+    /// spindle's power/torque chart (its limits at each block's speed).
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
+    /// Cutter for operations whose tool has no geometry, or to override it:
+    /// ball:D, flat:D or bull:D:R.
+    #[arg(long)]
+    pub tool: Option<String>,
+    /// Flutes of every tool.
+    #[arg(long, default_value_t = 2)]
+    pub flutes: usize,
+    /// Helix angle, degrees.
+    #[arg(long, default_value_t = 30.0, allow_hyphen_values = true)]
+    pub helix: f64,
+    /// Gauge length from the holder face to the tip, mm (default 3·D).
+    #[arg(long)]
+    pub stickout: Option<f64>,
+    /// Fluted length, mm (default: the program's tool height, else the
+    /// stick-out); a stepped cantilever when shorter than the stick-out.
+    #[arg(long)]
+    pub flute_length: Option<f64>,
+    /// Young's modulus of the tool, N/mm².
+    #[arg(long, default_value_t = E_CARBIDE)]
+    pub modulus: f64,
+    /// Dexel size of the stock, mm.
+    #[arg(long, default_value_t = 0.1)]
+    pub resolution: f64,
+    /// Axial slice height of the force model, mm.
+    #[arg(long, default_value_t = 0.05)]
+    pub dz: f64,
+    /// Rotation step of the force model, degrees.
+    #[arg(long, default_value_t = 1.0)]
+    pub dphi: f64,
+    /// Units of a program that does not say.
+    #[arg(long, value_enum)]
+    pub units: Option<UnitArg>,
+    /// One CSV row per move: loads, feed per tooth, allowed feed, binding limit.
+    #[arg(long, value_name = "FILE")]
+    pub table: Option<PathBuf>,
+    /// HTML report: loads against time with the limits drawn.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress bar or warnings.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// A program ready for force simulation.
+pub struct Prepared {
+    pub program: millplan_nc::Program,
+    pub strokes: Strokes,
+    pub stock: Stock,
+    pub setup: ForceSetup,
+    pub machine: Machine,
+    pub stock_name: String,
+}
+
+fn need<'a>(v: &'a Option<String>, flag: &str) -> CliResult<&'a str> {
+    v.as_deref()
+        .ok_or_else(|| CliError::input(format!("give {flag}")))
+}
+
+/// The force model's setup from the options, every number checked.
+pub fn force_setup(m: &ModelArgs) -> CliResult<ForceSetup> {
+    let materials = load_materials(m.materials.as_deref())?;
+    let law = materials
+        .get(need(&m.material, "--material")?)
+        .map_err(|e| CliError::input(format!("--material: {e}")))?
+        .law;
+    if !(1..=64).contains(&m.flutes) {
+        return Err(CliError::input(format!(
+            "--flutes {}: must be from 1 to 64",
+            m.flutes
+        )));
+    }
+    arg("--helix", m.helix, Range::from(-70.0, 70.0, "degrees"))?;
+    arg("--dz", m.dz, Range::from(0.001, 1.0, "mm"))?;
+    arg("--dphi", m.dphi, Range::from(0.01, 10.0, "degrees"))?;
+    arg("--modulus", m.modulus, Range::positive(2e6, "N/mm²"))?;
+    arg(
+        "--resolution",
+        m.resolution,
+        Range::from(0.005, 100.0, "mm"),
+    )?;
+    for (flag, v) in [
+        ("--stickout", m.stickout),
+        ("--flute-length", m.flute_length),
+    ] {
+        if let Some(v) = v {
+            arg(flag, v, Range::positive(10_000.0, "mm"))?;
+        }
+    }
+    let mut s = ForceSetup::new(law, m.flutes);
+    s.helix = m.helix.to_radians();
+    s.grid = Grid {
+        dz: m.dz,
+        dphi: m.dphi.to_radians(),
+    };
+    s.stickout = m.stickout;
+    s.flute_length = m.flute_length;
+    s.modulus = m.modulus;
+    Ok(s)
+}
+
+/// The tool body of an operation: its cutter or --tool, flutes from
+/// --flute-length or the program's tool height.
+pub fn body_fn(m: &ModelArgs) -> CliResult<BodyFn> {
+    let fallback = match &m.tool {
+        Some(s) => Some(tool_shape("--tool", s)?),
+        None => None,
+    };
+    if matches!(fallback, Some(Shape::Cone { .. })) {
+        return Err(CliError::input("--tool: use ball:D, flat:D or bull:D:R"));
+    }
+    let flute = m.flute_length;
+    Ok(Box::new(move |op: &millplan_nc::Operation| {
+        let cutter = op.tool.as_ref().and_then(|t| t.cutter);
+        let shape = fallback.or_else(|| cutter.and_then(|c| millplan_sim::shape_of(&c)))?;
+        if matches!(shape, Shape::Cone { .. }) {
+            return None;
+        }
+        let mut b = ToolBody::new(shape);
+        b.flute = flute
+            .or_else(|| cutter.map(|c| c.h).filter(|h| *h > 0.0))
+            .unwrap_or(1e6);
+        Some(b)
+    }))
+}
+
+/// Reads the program and builds its strokes and stock.
+pub fn prepare(path: &Path, m: &ModelArgs) -> CliResult<Prepared> {
+    let setup = force_setup(m)?;
+    let stock_name = need(&m.stock, "--stock")?.to_string();
+    let spec =
+        StockSpec::parse(&stock_name).map_err(|e| CliError::input(format!("--stock {e}")))?;
+    let machine = crate::cmd::load_machine(m.machine.as_deref())?;
+    let parsed = read_program(path, read_options(m.units, None)?)?;
+    print_diagnostics(path, &parsed.diagnostics, m.quiet || m.json);
+    let body = body_fn(m)?;
+    let s = strokes(
+        &parsed.program,
+        &body,
+        &PathOptions {
+            chord: m.resolution / 4.0,
+            rapid_rate: machine.rapid,
+        },
+    );
+    if s.strokes.iter().all(|x| x.rapid) {
+        return Err(CliError::input(format!(
+            "{}: no cutting move can be simulated (give the tool's shape with --tool ball:D, flat:D or bull:D:R; {} moves from or to an unknown position)",
+            path.display(),
+            s.skipped.unknown_position
+        )));
+    }
+    let part = match &m.stl {
+        Some(p) => Some(read_surface(p, m.stl_units)?.0),
+        None => None,
+    };
+    let stock = initial_stock(path, m.resolution, &spec, &s, part.as_ref(), m.stl_units)?;
+    Ok(Prepared {
+        program: parsed.program,
+        strokes: s,
+        stock,
+        setup,
+        machine,
+        stock_name,
+    })
+}
+
+/// Forces of the prepared program, with a progress bar.
+pub fn run_forces(
+    p: &Prepared,
+    program: &millplan_nc::Program,
+    s: &Strokes,
+    quiet: bool,
+) -> CliResult<ForceRun> {
+    let bar = crate::progress::count(s.strokes.len() as u64, "forces", "strokes", !quiet);
+    let r = simulate(program, s, p.stock.clone(), &p.setup, None, &|d| {
+        bar.set_position(d as u64)
+    });
+    bar.finish_and_clear();
+    r.map_err(CliError::input)
+}
+
+/// The load limits of `--limit NAME=VALUE` with the feed-per-tooth range.
+pub fn load_limits(fos: f64, fz: (f64, f64)) -> CliResult<FeedLimits> {
+    let mut l = FeedLimits {
+        fxy: None,
+        torque: None,
+        power: None,
+        stress: None,
+        deflection: None,
+        fos,
+        fz_min: fz.0,
+        fz_max: fz.1,
+    };
+    for (name, value) in crate::limits::loads() {
+        let v: f64 = value
+            .parse()
+            .map_err(|_| CliError::input(format!("--limit {name}={value}: not a number")))?;
+        let flag = format!("--limit {name}");
+        let v = Some(arg(
+            &flag,
+            v,
+            Range::positive(1e9, "(N, N·mm, W, MPa or mm)"),
+        )?);
+        match name.as_str() {
+            "fxy" => l.fxy = v,
+            "torque" => l.torque = v,
+            "power" => l.power = v,
+            "stress" => l.stress = v,
+            _ => l.deflection = v,
+        }
+    }
+    Ok(l)
+}
+
+/// A feed per block from the cutting forces (spec process-models.md §2.3,
+/// issue 21 part 5).
+///
+/// The program runs stroke by stroke through its stock; each cutting stroke
+/// gets the feed per tooth at which the tightest limit is met: --limit
+/// fxy=N,torque=N·mm,power=W,stress=MPa,deflection=mm and the machine's
+/// spindle chart (power and torque at the block's speed), power, torque and
+/// stress divided by --fos. A block takes the smallest of its strokes'. Blocks
+/// whose edge meets no material run at the machine's feed limit. Feeds stay
+/// within --fz-min..--fz-max and the machine's feed range; changes between
+/// blocks are brought within the feed acceleration by lowering feeds only.
+/// Positions, spindle speeds and feed modes are kept; canned cycles keep
+/// their feeds. The written program is simulated again: its own prediction.
+///
+/// Exit codes: 0 done; 2 bad input; 3 the written program still exceeds a
+/// limit somewhere (even --fz-min is too much there; the program is written).
+#[derive(clap::Args)]
+pub struct Args {
+    /// Program (APT/CL or G-code).
+    pub path: PathBuf,
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Output program.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Output dialect (default: the machine's, else the file name's, else the input's).
+    #[arg(long, value_enum)]
+    pub to: Option<TargetArg>,
+    /// Smallest feed per tooth, mm.
+    #[arg(long, default_value_t = 0.01)]
+    pub fz_min: f64,
+    /// Largest feed per tooth, mm (the tool maker's chip load); default 0.02·D
+    /// of the first tool.
+    #[arg(long)]
+    pub fz_max: Option<f64>,
+    /// Factor of safety on power, torque and stress.
+    #[arg(long, default_value_t = 1.0)]
+    pub fos: f64,
+    /// Feed acceleration, mm/s² (default: the machine's smallest linear-axis
+    /// acceleration, else 1000).
+    #[arg(long)]
+    pub feed_accel: Option<f64>,
+}
+
+fn feed_params(a: &Args, p: &Prepared) -> CliResult<FeedParams> {
+    let d = p.strokes.tools.first().map_or(10.0, |t| 2.0 * t.radius());
+    let fz_max = a.fz_max.unwrap_or(0.02 * d);
+    arg("--fz-min", a.fz_min, Range::positive(5.0, "mm"))?;
+    arg(
+        "--fz-max",
+        fz_max,
+        Range::from(a.fz_min, 5.0, "mm (from --fz-min)"),
+    )?;
+    arg("--fos", a.fos, Range::from(1.0, 100.0, ""))?;
+    let accel = a
+        .feed_accel
+        .or_else(|| machine_accel(&p.machine))
+        .unwrap_or(1000.0);
+    arg("--feed-accel", accel, Range::positive(1e6, "mm/s²"))?;
+    let limits = load_limits(a.fos, (a.fz_min, fz_max))?;
+    Ok(FeedParams {
+        setup: p.setup,
+        limits,
+        accel,
+        chord: a.model.resolution / 4.0,
+    })
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    let m = &a.model;
+    let mut inputs: Vec<&Path> = vec![&a.path];
+    inputs.extend(m.stl.as_deref());
+    inputs.extend(m.machine.as_deref());
+    let mut outputs = Outputs::plan(
+        &inputs,
+        &[
+            ("-o", Some(&a.output)),
+            ("--table", m.table.as_deref()),
+            ("--report", m.report.as_deref()),
+        ],
+        false,
+    )?;
+    let p = prepare(&a.path, m)?;
+    let params = feed_params(&a, &p)?;
+    let limits = params.limits;
+    let target = match (a.to, p.machine.target()) {
+        (None, Some(t)) => {
+            let by_name = target_for(None, &a.output, p.program.source)?;
+            if by_name != t && a.output.extension().is_some() {
+                return Err(CliError::input(format!(
+                    "{}: the machine file says {} but the file name says {}: give --to",
+                    a.output.display(),
+                    t.name(),
+                    by_name.name()
+                )));
+            }
+            t
+        }
+        (to, _) => target_for(to, &a.output, p.program.source)?,
+    };
+    let mut out = p.program.clone();
+    let mut pass = FeedPass::new(params, p.stock.clone(), body_fn(m)?);
+    let cx = Context::new(p.machine.clone());
+    pipeline::run(&mut [&mut pass], &mut out, &cx)
+        .map_err(|e| crate::cmd::pass_error(&a.path, e))?;
+    let (Some(before), Some(changes)) = (pass.before.take(), pass.changes.take()) else {
+        return Err(CliError::internal("the feed pass left no result"));
+    };
+    let s2 = strokes(
+        &out,
+        body_fn(m)?,
+        &PathOptions {
+            chord: m.resolution / 4.0,
+            rapid_rate: p.machine.rapid,
+        },
+    );
+    let after = run_forces(&p, &out, &s2, m.quiet || m.json)?;
+    write_program_file(
+        &out,
+        cx.machine.write_options(target),
+        &mut outputs,
+        &a.output,
+        &a.path,
+        m.quiet,
+    )?;
+    let over = after.over_limits(&limits, &p.machine);
+    let runs = [&before, &after];
+    let summary = feed_summary(&a, &p, &out, runs, &changes, &pass.params, target, &over);
+    write_extras(
+        m,
+        &mut outputs,
+        &summary,
+        &before,
+        &after,
+        &limits,
+        &p.machine,
+    )?;
+    outputs.commit()?;
+    print_feed(&a, &summary);
+    Ok(if over.is_empty() {
+        EXIT_OK
+    } else {
+        EXIT_FINDINGS
+    })
+}
+
+/// The JSON summary of a feed run.
+#[allow(clippy::too_many_arguments)]
+fn feed_summary(
+    a: &Args,
+    p: &Prepared,
+    out: &millplan_nc::Program,
+    [before, after]: [&ForceRun; 2],
+    changes: &millplan_plan::feed::FeedChanges,
+    params: &FeedParams,
+    target: millplan_nc::write::Target,
+    over: &[&MoveForces],
+) -> serde_json::Value {
+    let limits = params.limits;
+    let rapid = p.machine.rapid;
+    let t = |q: &millplan_nc::Program| millplan_nc::stats::summarize(q, rapid).time_s;
+    json!({
+        "time_before_s": t(&p.program), "time_after_s": t(out),
+        "max_before": before.maxima(), "max_after": after.maxima(),
+        "binding": changes.binding, "blocks": changes.blocks, "air_blocks": changes.air_blocks,
+        "kept_blocks": changes.kept_blocks, "feed_range_written": [changes.feed_min, changes.feed_max],
+        "feed_accel": params.accel, "fz_range": [limits.fz_min, limits.fz_max],
+        "limits": {"fxy": limits.fxy, "torque": limits.torque, "power": limits.power, "stress": limits.stress, "deflection": limits.deflection, "fos": limits.fos},
+        "over_limit_after": over.len(), "over_limit_lines": over.iter().take(20).map(|x| x.line).collect::<Vec<_>>(),
+        "stock": p.stock_name, "output": a.output.display().to_string(), "dialect": target.name(),
+    })
+}
+
+/// The table (the input's loads with the allowed feeds) and the report.
+fn write_extras(
+    m: &ModelArgs,
+    outputs: &mut Outputs,
+    summary: &serde_json::Value,
+    before: &ForceRun,
+    after: &ForceRun,
+    limits: &FeedLimits,
+    machine: &Machine,
+) -> CliResult<()> {
+    if let Some(t) = &m.table {
+        outputs.write(
+            t,
+            millplan_report::forces::moves_csv(&before.moves).as_bytes(),
+        )?;
+    }
+    if let Some(r) = &m.report {
+        let rows = summary_rows(summary);
+        let html = millplan_report::forces::report(
+            "millplan feed: loads before and after",
+            "Per move, the largest load of its strokes against the time the move starts; the black line is the limit at the move's spindle speed.",
+            &rows,
+            &[("input", &before.moves), ("output", &after.moves)],
+            &quantities(limits, machine),
+        );
+        outputs.write(r, html.as_bytes())?;
+    }
+    Ok(())
+}
+
+/// The summary's scalar entries as table rows.
+pub fn summary_rows(v: &serde_json::Value) -> Vec<(String, String)> {
+    v.as_object()
+        .map(|o| o.iter().map(|(k, v)| (k.clone(), v.to_string())).collect())
+        .unwrap_or_default()
+}
+
+/// The plotted quantities with their limits (user and spindle chart).
+pub fn quantities<'a>(
+    l: &'a FeedLimits,
+    m: &'a Machine,
+) -> Vec<millplan_report::forces::Quantity<'a>> {
+    use millplan_report::forces::Quantity;
+    let fos = l.fos;
+    vec![
+        Quantity {
+            name: "F_xy,max",
+            unit: "N",
+            value: |x: &MoveForces| x.fxy_max,
+            limit: Box::new(move |_| l.fxy),
+        },
+        Quantity {
+            name: "torque T_max",
+            unit: "N·mm",
+            value: |x: &MoveForces| x.torque_max,
+            limit: Box::new(move |x| l.at(x.rpm, m).torque.map(|t| t / fos)),
+        },
+        Quantity {
+            name: "power",
+            unit: "W",
+            value: |x: &MoveForces| x.power_w,
+            limit: Box::new(move |x| l.at(x.rpm, m).power.map(|p| p / fos)),
+        },
+        Quantity {
+            name: "bending stress",
+            unit: "MPa",
+            value: |x: &MoveForces| x.stress_mpa,
+            limit: Box::new(move |_| l.stress.map(|s| s / fos)),
+        },
+        Quantity {
+            name: "tip deflection",
+            unit: "mm",
+            value: |x: &MoveForces| x.deflection_mm,
+            limit: Box::new(move |_| l.deflection),
+        },
+    ]
+}
+
+fn print_feed(a: &Args, s: &serde_json::Value) {
+    if a.model.json {
+        outln!("{}", serde_json::to_string_pretty(s).unwrap_or_default());
+        return;
+    }
+    let f = |k: &str| s[k].as_f64().unwrap_or(0.0);
+    outln!(
+        "time {:.1} s → {:.1} s ({:+.1} %)",
+        f("time_before_s"),
+        f("time_after_s"),
+        100.0 * (f("time_after_s") / f("time_before_s").max(1e-9) - 1.0)
+    );
+    for k in ["fxy", "torque", "power", "stress", "deflection"] {
+        outln!(
+            "  {k:<11} max {:>10.3} → {:>10.3}",
+            s["max_before"][k].as_f64().unwrap_or(0.0),
+            s["max_after"][k].as_f64().unwrap_or(0.0)
+        );
+    }
+    outln!(
+        "{} blocks from the forces, {} in air, {} kept; binding: {}",
+        s["blocks"],
+        s["air_blocks"],
+        s["kept_blocks"],
+        s["binding"]
+    );
+    if f("over_limit_after") > 0.0 {
+        outln!(
+            "{} moves still over a limit at the smallest feed (lines {})",
+            s["over_limit_after"],
+            s["over_limit_lines"]
+        );
+    }
+    outln!(
+        "wrote {} ({})",
+        a.output.display(),
+        s["dialect"].as_str().unwrap_or("")
+    );
+}
