@@ -1895,7 +1895,7 @@ mod tests {
                 holder_length: 10.0 + 40.0 * next(),
             };
             let clearance = [0.0, 5.0][i % 2];
-            let fast = accessibility_mapped(m, &b, &g, clearance, &tool);
+            let fast = accessibility_mapped(m, &b, &g, clearance, &tool, &|_, _| {});
             let exact = accessibility_exact(m, &b, &g, clearance, &tool);
             let total: usize = (0..m.len()).map(|f| exact.count(f)).sum();
             assert!(total > 0, "{tool:?}");

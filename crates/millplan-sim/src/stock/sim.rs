@@ -79,6 +79,55 @@ pub struct Band<'a> {
     bot: &'a mut [f32],
     gaps: &'a mut [RowGaps],
     bmax: &'a mut [f32],
+    /// Per tile of [`TILE_ROWS`] rows × [`TILE`] cells of this band: at
+    /// least the highest top in it (stale values stay bounds).
+    tmax: Vec<f32>,
+}
+
+/// Cells across and rows down a tile of [`Band::tmax`].
+const TILE: usize = 64;
+const TILE_ROWS: usize = 16;
+
+impl<'a> Band<'a> {
+    fn new(
+        j0: usize,
+        nx: usize,
+        top: &'a mut [f32],
+        bot: &'a mut [f32],
+        gaps: &'a mut [RowGaps],
+        bmax: &'a mut [f32],
+    ) -> Band<'a> {
+        let rows = gaps.len();
+        let mut b = Band {
+            j0,
+            rows,
+            top,
+            bot,
+            gaps,
+            bmax,
+            tmax: vec![f32::NEG_INFINITY; rows.div_ceil(TILE_ROWS) * nx.div_ceil(TILE)],
+        };
+        let ntx = nx.div_ceil(TILE);
+        for ty in 0..rows.div_ceil(TILE_ROWS) {
+            for tx in 0..ntx {
+                b.refresh_tile(nx, ty, tx);
+            }
+        }
+        b
+    }
+
+    /// Recomputes tile (ty, tx) from its blocks.
+    fn refresh_tile(&mut self, nx: usize, ty: usize, tx: usize) {
+        let nb = nx.div_ceil(super::BLOCK);
+        let per = TILE / super::BLOCK;
+        let mut hi = f32::NEG_INFINITY;
+        for r in ty * TILE_ROWS..((ty + 1) * TILE_ROWS).min(self.rows) {
+            for kb in tx * per..((tx + 1) * per).min(nb) {
+                hi = hi.max(self.bmax[r * nb + kb]);
+            }
+        }
+        self.tmax[ty * nx.div_ceil(TILE) + tx] = hi;
+    }
 }
 
 /// How a stroke is applied.
@@ -651,7 +700,10 @@ fn apply_tilted(band: &mut Band, s: &Stroke, a: &Apply, out: &mut StrokeCut) {
     }
 }
 
-/// One placement of a (possibly tilted) tool.
+/// One placement of a (possibly tilted) tool. The body lies within `reach`
+/// of its axis, so over a rectangle of cells it is no lower than the axis's
+/// lowest point within that distance minus `reach`: tiles, then blocks of a
+/// row, whose highest material is below that are passed over.
 fn apply_pose(
     band: &mut Band,
     pose: &Pose,
@@ -660,64 +712,137 @@ fn apply_pose(
     nrm: DVec2,
     out: &mut StrokeCut,
 ) {
+    use super::BLOCK;
     let tool = &pose.tool;
+    let a = pose.axis;
     // Only as high up the axis as any point of the body can still be below
     // the highest material.
-    let side = tool.reach() * (1.0 - pose.axis.z * pose.axis.z).max(0.0).sqrt();
-    let height = ((max_top - pose.tip.z + side) / pose.axis.z.max(1e-3)).clamp(0.0, 1e4);
-    let height = if pose.tip.z + tool.flute * pose.axis.z.min(1.0) < max_top {
+    let rho = tool.reach();
+    let side = rho * (1.0 - a.z * a.z).max(0.0).sqrt();
+    let height = ((max_top - pose.tip.z + side) / a.z.max(1e-3)).clamp(0.0, 1e4);
+    let height = if pose.tip.z + tool.flute * a.z.min(1.0) < max_top {
         height.max(tool.flute)
     } else {
         height.min(tool.flute)
     };
     let (lo, hi) = pose.xy_box(height);
-    let Some((ja, jb)) = g.rows(lo.y, hi.y) else {
+    let Some((ja, jb)) = band_rows(band, g, lo.y, hi.y) else {
         return;
     };
-    let ja = ja.max(band.j0);
-    let jb = jb.min(band.j0 + band.rows - 1);
     let Some((i0, i1)) = g.span(lo.x, hi.x) else {
         return;
     };
-    let nx = g.nx;
-    let mut acc = StrokeCut::default();
-    for j in ja..=jb {
-        let y = g.cy(j);
-        let r = j - band.j0;
-        for i in i0..=i1 {
-            let k = r * nx + i;
-            let (t, b) = (band.top[k] as f64, band.bot[k] as f64);
-            if t <= b {
+    let tip = pose.tip;
+    // Lowest possible z of the body over the cell centres in [x0, x1] × [y0, y1].
+    let lowest = |x0: f64, x1: f64, y0: f64, y1: f64| -> Option<f64> {
+        if a.z <= 0.0 {
+            return Some(f64::NEG_INFINITY);
+        }
+        let (mut t0, mut t1) = (0.0, height);
+        for (p, d, lo, hi) in [
+            (tip.x, a.x, x0 - rho, x1 + rho),
+            (tip.y, a.y, y0 - rho, y1 + rho),
+        ] {
+            if d.abs() < 1e-12 {
+                if p < lo || p > hi {
+                    return None;
+                }
                 continue;
             }
-            let c = DVec2::new(g.cx(i), y);
-            let (cut, noncut) = pose.column(c);
-            if let Some([l, h]) = noncut {
-                if h > b && l < t {
-                    acc.noncut = acc.noncut.max(t.min(h) - l.max(b));
-                }
+            let (u, v) = ((lo - p) / d, (hi - p) / d);
+            t0 = f64::max(t0, u.min(v));
+            t1 = f64::min(t1, u.max(v));
+        }
+        (t0 <= t1).then(|| tip.z + a.z * t0 - rho)
+    };
+    let nx = g.nx;
+    let nb = nx.div_ceil(BLOCK);
+    let ntx = nx.div_ceil(TILE);
+    let mut acc = StrokeCut::default();
+    let (ra, rb) = (ja - band.j0, jb - band.j0);
+    for ty in ra / TILE_ROWS..=rb / TILE_ROWS {
+        let (r0, r1) = (
+            ra.max(ty * TILE_ROWS),
+            rb.min(ty * TILE_ROWS + TILE_ROWS - 1),
+        );
+        for tx in i0 / TILE..=i1 / TILE {
+            let (c0, c1) = (i0.max(tx * TILE), i1.min(tx * TILE + TILE - 1));
+            let (y0, y1) = (g.cy(band.j0 + r0), g.cy(band.j0 + r1));
+            match lowest(g.cx(c0), g.cx(c1), y0, y1) {
+                Some(z) if z < band.tmax[ty * ntx + tx] as f64 => {}
+                _ => continue,
             }
-            for (iv, cutting) in [(cut, true), (noncut, false)] {
-                let Some([l, h]) = iv else { continue };
-                let (mut tt, mut bb) = (band.top[k], band.bot[k]);
-                let old_top = tt as f64;
-                let rem = cut_interval(&mut tt, &mut bb, &mut band.gaps[r], i as u32, l, h);
-                band.top[k] = tt;
-                band.bot[k] = bb;
-                if rem > 0.0 {
-                    acc.removed += rem;
-                    if cutting && rem > CUT_EPS {
-                        acc.depth = acc.depth.max(rem);
-                        acc.top = acc.top.max(old_top.min(h));
-                        let lat = (c - pose.tip.truncate()).dot(nrm);
-                        acc.side = [acc.side[0].min(lat), acc.side[1].max(lat)];
+            let mut changed = false;
+            for r in r0..=r1 {
+                let y = g.cy(band.j0 + r);
+                for kb in c0 / BLOCK..=c1 / BLOCK {
+                    let (ba, bb) = (c0.max(kb * BLOCK), c1.min(kb * BLOCK + BLOCK - 1));
+                    match lowest(g.cx(ba), g.cx(bb), y, y) {
+                        Some(z) if z < band.bmax[r * nb + kb] as f64 => {}
+                        _ => continue,
+                    }
+                    let before = acc.removed;
+                    for i in ba..=bb {
+                        pose_cell(band, pose, g, r, i, nrm, &mut acc);
+                    }
+                    if acc.removed != before {
+                        let row = &band.top[r * nx..(r + 1) * nx];
+                        let end = (kb * BLOCK + BLOCK).min(nx);
+                        band.bmax[r * nb + kb] = row[kb * BLOCK..end]
+                            .iter()
+                            .fold(f32::NEG_INFINITY, |m, t| m.max(*t));
+                        changed = true;
                     }
                 }
+            }
+            if changed {
+                band.refresh_tile(nx, ty, tx);
             }
         }
     }
     acc.removed *= g.res * g.res;
     out.merge(&acc);
+}
+
+/// One cell (row `r` of the band, column `i`) under a placed tool.
+fn pose_cell(
+    band: &mut Band,
+    pose: &Pose,
+    g: &Grid,
+    r: usize,
+    i: usize,
+    nrm: DVec2,
+    acc: &mut StrokeCut,
+) {
+    let k = r * g.nx + i;
+    let (t, b) = (band.top[k] as f64, band.bot[k] as f64);
+    if t <= b {
+        return;
+    }
+    let c = DVec2::new(g.cx(i), g.cy(band.j0 + r));
+    let (cut, noncut) = pose.column(c);
+    if let Some([l, h]) = noncut {
+        if h > b && l < t {
+            acc.noncut = acc.noncut.max(t.min(h) - l.max(b));
+        }
+    }
+    for (iv, cutting) in [(cut, true), (noncut, false)] {
+        let Some([l, h]) = iv else { continue };
+        let (mut tt, mut bb) = (band.top[k], band.bot[k]);
+        let old_top = tt as f64;
+        let rem = cut_interval(&mut tt, &mut bb, &mut band.gaps[r], i as u32, l, h);
+        band.top[k] = tt;
+        band.bot[k] = bb;
+        if rem > 0.0 {
+            acc.removed += rem;
+            if cutting && rem > CUT_EPS {
+                acc.depth = acc.depth.max(rem);
+                acc.top = acc.top.max(old_top.min(h));
+                let lat = (c - pose.tip.truncate()).dot(nrm);
+                acc.side = [acc.side[0].min(lat), acc.side[1].max(lat)];
+            }
+        }
+    }
 }
 
 /// Whether stroke `k` continues stroke `k − 1` (same tool, starts where it
@@ -736,15 +861,29 @@ pub struct Simulator {
     pub stock: Stock,
     max_top: f64,
     last: Option<(u16, DVec3, DVec3)>,
+    tmax: Vec<f32>,
 }
 
 impl Simulator {
-    pub fn new(stock: Stock) -> Simulator {
+    pub fn new(mut stock: Stock) -> Simulator {
         let max_top = stock.max_top();
+        let nx = stock.grid.nx;
+        let tmax = std::mem::take(
+            &mut Band::new(
+                0,
+                nx,
+                &mut stock.top,
+                &mut stock.bot,
+                &mut stock.gaps,
+                &mut stock.bmax,
+            )
+            .tmax,
+        );
         Simulator {
             stock,
             max_top,
             last: None,
+            tmax,
         }
     }
 
@@ -763,6 +902,7 @@ impl Simulator {
             bot: &mut st.bot,
             gaps: &mut st.gaps,
             bmax: &mut st.bmax,
+            tmax: std::mem::take(&mut self.tmax),
         };
         let mut out = StrokeCut::default();
         apply(
@@ -776,6 +916,7 @@ impl Simulator {
             },
             &mut out,
         );
+        self.tmax = std::mem::take(&mut band.tmax);
         out
     }
 }
@@ -809,14 +950,7 @@ pub fn simulate(
         .zip(stock.bmax.chunks_mut(BAND_ROWS * nb))
         .enumerate()
     {
-        groups[b % GROUPS].push(Band {
-            j0: b * BAND_ROWS,
-            rows: gaps.len(),
-            top,
-            bot,
-            gaps,
-            bmax,
-        });
+        groups[b % GROUPS].push(Band::new(b * BAND_ROWS, nx, top, bot, gaps, bmax));
     }
     // Strokes in chunks: each band group runs a chunk over its bands, then
     // the chunk's sums are gathered (in group order) before the next.

@@ -448,7 +448,8 @@ impl Pose {
         let (lo, hi) = (centre.z - span, centre.z + span);
         const INV_PHI: f64 = 0.618_033_988_749_894_9;
         let (mut a1, mut b1) = (lo, hi);
-        for _ in 0..80 {
+        // 40 steps shrink the bracket (a few tens of mm) below 1e-6 mm.
+        for _ in 0..40 {
             let x1 = b1 - INV_PHI * (b1 - a1);
             let x2 = a1 + INV_PHI * (b1 - a1);
             if f(x1) < f(x2) {
@@ -462,7 +463,7 @@ impl Pose {
             return None;
         }
         let bis = |mut inn: f64, mut out: f64| -> f64 {
-            for _ in 0..60 {
+            for _ in 0..40 {
                 let m = 0.5 * (inn + out);
                 if f(m) <= 0.0 {
                     inn = m;
