@@ -753,7 +753,7 @@ fn apply_pose(
             t0 = f64::max(t0, u.min(v));
             t1 = f64::min(t1, u.max(v));
         }
-        (t0 <= t1).then(|| tip.z + a.z * t0 - rho)
+        (t0 <= t1).then_some(tip.z + a.z * t0 - rho)
     };
     let nx = g.nx;
     let nb = nx.div_ceil(BLOCK);
