@@ -90,3 +90,58 @@ pub fn ball_raster_apt(n: usize) -> String {
     );
     String::from_utf8(out).unwrap_or_default()
 }
+
+/// A five-axis ball-end (D10) finishing path of about `n` points over the demo
+/// surface, as APT: the raster of [`ball_raster_apt`] with the tool leaning
+/// back 10° from the feed and rolling ±15° to the side along each pass,
+/// each point moved so that the ball centre (and so the contact) stays where
+/// the vertical raster had it.
+pub fn five_axis_apt(n: usize) -> String {
+    use millplan_geom::DVec3;
+    use millplan_nc::generate::{raster, Raster};
+    use std::fmt::Write;
+    let spacing = 56.0 / (n as f64).sqrt();
+    let (p, _) = raster(
+        &DemoSurface::default(),
+        &Raster {
+            step: spacing,
+            stepover: spacing,
+            ..Raster::default()
+        },
+    );
+    let r = 5.0;
+    let mut s = String::from(
+        "PARTNO DEMO_FIVE_AXIS\nUNITS/MM\nMULTAX/ON\nCUTTER/10,5,0,5,0,0,0\nLOADTL/1\nSPINDL/6000,RPM,CLW\n",
+    );
+    let mut prev: Option<DVec3> = None;
+    let mut k = 0usize;
+    for op in &p.operations {
+        for m in &op.moves {
+            let Some(tip) = millplan_nc::known(m.end) else {
+                continue;
+            };
+            let feed = prev.map_or(DVec3::X, |q| (tip - q).with_z(0.0).normalize_or(DVec3::X));
+            prev = Some(tip);
+            let side = DVec3::Z.cross(feed);
+            let roll = (15f64.to_radians()) * (k as f64 * 0.002).sin();
+            let lead = 10f64.to_radians();
+            let axis = (DVec3::Z * lead.cos() * roll.cos() - feed * lead.sin() + side * roll.sin())
+                .normalize();
+            k += 1;
+            let centre = tip + DVec3::Z * r;
+            let q = centre - axis * r;
+            if m.is_rapid() {
+                let _ = writeln!(s, "RAPID");
+            } else if k == 1 || (m.feed > 0.0 && k % 100_000 == 1) {
+                let _ = writeln!(s, "FEDRAT/1500,MMPM");
+            }
+            let _ = writeln!(
+                s,
+                "GOTO/{:.6},{:.6},{:.6},{:.7},{:.7},{:.7}",
+                q.x, q.y, q.z, axis.x, axis.y, axis.z
+            );
+        }
+    }
+    s.push_str("END\nFINI\n");
+    s
+}

@@ -1,6 +1,8 @@
 //! Writes the benchmark inputs to a folder: `big.apt` (1,000,000 GOTOs),
 //! `big.stl` (2,000,000 triangles of the demo surface) and `raster_1m.apt` (a D10
-//! ball-end raster of about 1,000,000 points over that surface), for whole-command
+//! ball-end raster of about 1,000,000 points over that surface) and
+//! `five_axis_100k.apt` (the same raster with 100,000 points and a leaning,
+//! rolling tool axis), for whole-command
 //! timing and peak memory (`/usr/bin/time -v millplan speed ...`).
 
 fn main() {
@@ -15,6 +17,12 @@ fn main() {
             std::fs::write(
                 dir.join("raster_1m.apt"),
                 millplan_bench::ball_raster_apt(1_000_000),
+            )
+        })
+        .and_then(|_| {
+            std::fs::write(
+                dir.join("five_axis_100k.apt"),
+                millplan_bench::five_axis_apt(100_000),
             )
         })
     {

@@ -685,7 +685,13 @@ fn apply_tilted(band: &mut Band, s: &Stroke, a: &Apply, out: &mut StrokeCut) {
     let turn = s.a0.dot(s.a1).clamp(-1.0, 1.0).acos();
     // The cutting part's far end moves most when the axis turns.
     let travel = (s.p1 - s.p0).length() + turn * tool.flute.min(10.0 * tool.radius());
-    let n = ((travel / (0.5 * g.res)).ceil() as usize).clamp(1, 1_000_000);
+    // Half a cell; for a ball, placements δ apart miss at most δ²/8R between
+    // them, a hundredth of a cell at δ = √(0.08·R·res), as in the vertical case.
+    let step = match tool.shape {
+        Shape::Ball { radius } => (0.5 * g.res).max((0.08 * radius * g.res).sqrt()),
+        _ => 0.5 * g.res,
+    };
+    let n = ((travel / step).ceil() as usize).clamp(1, 1_000_000);
     let first = if a.continues { 1 } else { 0 };
     let feed = (s.p1 - s.p0).truncate();
     let nrm = DVec2::new(-feed.y, feed.x).normalize_or_zero();
@@ -758,6 +764,7 @@ fn apply_pose(
     let nx = g.nx;
     let nb = nx.div_ceil(BLOCK);
     let ntx = nx.div_ceil(TILE);
+    let noncut = pose.noncut_lowest() < max_top;
     let mut acc = StrokeCut::default();
     let (ra, rb) = (ja - band.j0, jb - band.j0);
     for ty in ra / TILE_ROWS..=rb / TILE_ROWS {
@@ -783,7 +790,7 @@ fn apply_pose(
                     }
                     let before = acc.removed;
                     for i in ba..=bb {
-                        pose_cell(band, pose, g, r, i, nrm, &mut acc);
+                        pose_cell(band, pose, g, (r, i), noncut, nrm, &mut acc);
                     }
                     if acc.removed != before {
                         let row = &band.top[r * nx..(r + 1) * nx];
@@ -809,8 +816,8 @@ fn pose_cell(
     band: &mut Band,
     pose: &Pose,
     g: &Grid,
-    r: usize,
-    i: usize,
+    (r, i): (usize, usize),
+    noncut: bool,
     nrm: DVec2,
     acc: &mut StrokeCut,
 ) {
@@ -820,7 +827,7 @@ fn pose_cell(
         return;
     }
     let c = DVec2::new(g.cx(i), g.cy(band.j0 + r));
-    let (cut, noncut) = pose.column(c);
+    let (cut, noncut) = pose.column_parts(c, noncut);
     if let Some([l, h]) = noncut {
         if h > b && l < t {
             acc.noncut = acc.noncut.max(t.min(h) - l.max(b));

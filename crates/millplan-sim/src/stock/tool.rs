@@ -369,7 +369,13 @@ impl Pose {
     /// The z-intervals where the vertical line through `c` is inside the
     /// cutting parts and inside the non-cutting parts.
     pub fn column(&self, c: DVec2) -> (Option<[f64; 2]>, Option<[f64; 2]>) {
-        let (cut, noncut) = self.parts();
+        self.column_parts(c, true)
+    }
+
+    /// As [`Pose::column`]; the non-cutting parts only when `noncut`.
+    pub fn column_parts(&self, c: DVec2, noncut: bool) -> (Option<[f64; 2]>, Option<[f64; 2]>) {
+        let (cut, upper) = self.parts();
+        let upper = if noncut { upper } else { [None, None] };
         let hull = |parts: [Option<Part>; 2]| {
             let mut out: Option<[f64; 2]> = None;
             for p in parts.into_iter().flatten() {
@@ -385,7 +391,20 @@ impl Pose {
             }
             out
         };
-        (hull(cut), hull(noncut))
+        (hull(cut), hull(upper))
+    }
+
+    /// The lowest z any non-cutting part (shank, holder) reaches.
+    pub fn noncut_lowest(&self) -> f64 {
+        let t = &self.tool;
+        let sin = (1.0 - self.axis.z * self.axis.z).max(0.0).sqrt();
+        let shank = self.tip.z + self.axis.z * t.flute - t.shank_r * sin;
+        let holder = if t.stickout.is_finite() && t.holder_r > 0.0 {
+            self.tip.z + self.axis.z * t.stickout - t.holder_r * sin
+        } else {
+            f64::INFINITY
+        };
+        shank.min(holder)
     }
 
     /// The z-interval of the vertical line through `c` inside one part.
