@@ -747,3 +747,37 @@ fn a_tilted_pose_meets_a_line_where_the_cutter_profile_says() {
         }
     }
 }
+
+#[test]
+fn a_tilted_ball_in_closed_form_removes_what_the_general_parts_do() {
+    // The same leaning, rolling ball strokes with the shank as wide as the
+    // ball (the capsule in closed form) and a hair wider (the general parts).
+    let mut rng = Lcg(5);
+    let mut strokes = Vec::new();
+    let mut p = DVec3::new(0.0, 0.0, -1.0);
+    let mut a = DVec3::Z;
+    for k in 0..120 {
+        let q = p + DVec3::new(0.3, 0.05 * (rng.f() - 0.5), 0.1 * (rng.f() - 0.5));
+        let b =
+            (DVec3::Z + DVec3::new(-0.3 + 0.1 * rng.f(), 0.4 * (rng.f() - 0.5), 0.0)).normalize();
+        let mut s = stroke(p, q, a, false, k);
+        s.a1 = b;
+        strokes.push(s);
+        p = q;
+        a = b;
+    }
+    let block = || {
+        Stock::block(
+            DVec3::new(-6.0, -8.0, -6.0),
+            DVec3::new(42.0, 8.0, 0.0),
+            0.1,
+        )
+    };
+    let mut tool = ToolBody::new(Shape::Ball { radius: 3.0 });
+    let (mut s1, mut s2) = (block(), block());
+    let (v1, _, _) = run(&mut s1, tool, strokes.clone());
+    tool.shank_r = 3.0 + 1e-6;
+    let (v2, _, _) = run(&mut s2, tool, strokes);
+    assert!(v1 > 100.0);
+    assert!((v1 - v2).abs() < 1e-6 * v1, "{v1} vs {v2}");
+}

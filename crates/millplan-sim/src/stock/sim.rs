@@ -702,8 +702,162 @@ fn apply_tilted(band: &mut Band, s: &Stroke, a: &Apply, out: &mut StrokeCut) {
             tip: s.p0.lerp(s.p1, t),
             axis: s.axis_at(t),
         };
-        apply_pose(band, &pose, g, a.max_top, nrm, out);
+        if !ball_capsule(band, &pose, g, a.max_top, nrm, out) {
+            apply_pose(band, &pose, g, a.max_top, nrm, out);
+        }
     }
+}
+
+/// A tilted ball-end mill whose shank and holder cannot reach material: its
+/// body is the capsule of radius R around the axis from the ball centre up,
+/// met by a cell's line in one interval found in closed form (the sphere and
+/// the cylinder's roots). Returns false, doing nothing, for any other tool.
+fn ball_capsule(
+    band: &mut Band,
+    pose: &Pose,
+    g: &Grid,
+    max_top: f64,
+    nrm: DVec2,
+    out: &mut StrokeCut,
+) -> bool {
+    use super::BLOCK;
+    let tool = &pose.tool;
+    let Shape::Ball { radius: r } = tool.shape else {
+        return false;
+    };
+    let a = pose.axis;
+    if a.z < 0.2 || tool.shank_r > r + 1e-9 || pose.noncut_lowest() < max_top {
+        return false;
+    }
+    let c = pose.tip + a * r;
+    // Up the axis only as far as the capsule can be below the highest material.
+    let len = ((max_top - c.z + r) / a.z).clamp(0.0, (tool.flute - r).max(0.0));
+    let top = c + a * len;
+    let (c2, t2) = (c.truncate(), top.truncate());
+    let d = t2 - c2;
+    let dl = d.length();
+    let u = if dl > 1e-12 { d / dl } else { DVec2::X };
+    let Some((ja, jb)) = band_rows(band, g, c2.y.min(t2.y) - r, c2.y.max(t2.y) + r) else {
+        return true;
+    };
+    let nx = g.nx;
+    let nb = nx.div_ceil(BLOCK);
+    let ca = 1.0 - a.z * a.z;
+    let mut acc = StrokeCut::default();
+    for j in ja..=jb {
+        let y = g.cy(j);
+        let Some((xa, xb)) = stadium_row(c2, t2, u, dl, r, y) else {
+            continue;
+        };
+        let Some((i0, i1)) = g.span(xa, xb) else {
+            continue;
+        };
+        let row = j - band.j0;
+        let wy = y - c.y;
+        for kb in i0 / BLOCK..=i1 / BLOCK {
+            let (ba, bb) = (i0.max(kb * BLOCK), i1.min(kb * BLOCK + BLOCK - 1));
+            // The capsule is no lower than the centre segment's lowest point
+            // within r of these cells, minus r.
+            let (mut t0, mut t1) = (0.0, len);
+            for (p, dd, lo, hi) in [
+                (c.x, a.x, g.cx(ba) - r, g.cx(bb) + r),
+                (c.y, a.y, y - r, y + r),
+            ] {
+                if dd.abs() < 1e-12 {
+                    if p < lo || p > hi {
+                        t0 = f64::INFINITY;
+                    }
+                    continue;
+                }
+                let (v0, v1) = ((lo - p) / dd, (hi - p) / dd);
+                t0 = t0.max(v0.min(v1));
+                t1 = t1.min(v0.max(v1));
+            }
+            if t0 > t1 || c.z + a.z * t0 - r >= band.bmax[row * nb + kb] as f64 {
+                continue;
+            }
+            let before = acc.removed;
+            for i in ba..=bb {
+                let k = row * nx + i;
+                let (t, b) = (band.top[k] as f64, band.bot[k] as f64);
+                if t <= b {
+                    continue;
+                }
+                let wx = g.cx(i) - c.x;
+                let w2 = wx * wx + wy * wy;
+                let wa = wx * a.x + wy * a.y;
+                // The sphere.
+                let us = r * r - w2;
+                let mut lo = if us >= 0.0 {
+                    c.z - us.sqrt()
+                } else {
+                    f64::INFINITY
+                };
+                let mut hi = if us >= 0.0 {
+                    c.z + us.sqrt()
+                } else {
+                    f64::NEG_INFINITY
+                };
+                // The cylinder above the centre: (1 − az²) z² − 2 (w·a) az z + (|w|² − (w·a)² − r²) = 0.
+                if ca > 1e-12 {
+                    let qb = -2.0 * wa * a.z;
+                    let qc = w2 - wa * wa - r * r;
+                    let disc = qb * qb - 4.0 * ca * qc;
+                    if disc >= 0.0 {
+                        let sq = disc.sqrt();
+                        let (z1, z2) = ((-qb - sq) / (2.0 * ca), (-qb + sq) / (2.0 * ca));
+                        // Above the centre (axial height ≥ 0); the far end
+                        // lies above all material.
+                        let z0 = z1.max(-wa / a.z);
+                        if z0 <= z2 {
+                            lo = lo.min(c.z + z0);
+                            hi = hi.max(c.z + z2);
+                        }
+                    }
+                }
+                if lo >= t {
+                    continue;
+                }
+                let lat = (DVec2::new(g.cx(i), y) - pose.tip.truncate()).dot(nrm);
+                if hi >= t {
+                    cut_above(
+                        &mut band.top[k],
+                        band.bot[k],
+                        &mut band.gaps[row],
+                        i as u32,
+                        lo,
+                        f64::INFINITY,
+                        lat,
+                        &mut acc,
+                    );
+                } else {
+                    let old = band.top[k] as f64;
+                    let (mut tt, mut bt) = (band.top[k], band.bot[k]);
+                    let rem = cut_interval(&mut tt, &mut bt, &mut band.gaps[row], i as u32, lo, hi);
+                    band.top[k] = tt;
+                    band.bot[k] = bt;
+                    if rem > 0.0 {
+                        acc.removed += rem;
+                        if rem > CUT_EPS {
+                            acc.depth = acc.depth.max(rem);
+                            acc.top = acc.top.max(old.min(hi));
+                            acc.side = [acc.side[0].min(lat), acc.side[1].max(lat)];
+                        }
+                    }
+                }
+            }
+            if acc.removed != before {
+                let rowt = &band.top[row * nx..(row + 1) * nx];
+                let end = (kb * BLOCK + BLOCK).min(nx);
+                band.bmax[row * nb + kb] = rowt[kb * BLOCK..end]
+                    .iter()
+                    .fold(f32::NEG_INFINITY, |m, t| m.max(*t));
+            }
+        }
+    }
+    acc.removed *= g.res * g.res;
+    out.merge(&acc);
+    true
 }
 
 /// One placement of a (possibly tilted) tool. The body lies within `reach`
