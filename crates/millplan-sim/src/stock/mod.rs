@@ -161,7 +161,7 @@ pub struct Stock {
 }
 
 /// Cells per block of [`Stock::bmax`].
-pub const BLOCK: usize = 16;
+pub const BLOCK: usize = 32;
 
 /// Memory per cell of a stock without gaps, bytes.
 pub const BYTES_PER_CELL: f64 = 8.0 + std::mem::size_of::<RowGaps>() as f64 / 64.0;

@@ -280,6 +280,7 @@ fn ball_pose(
     let zc = q1.z + r;
     let nx = g.nx;
     let mut acc = StrokeCut::default();
+    let mut lanes = Lanes::new();
     for j in ja..=jb {
         let y = g.cy(j);
         let dy = y - c.y;
@@ -317,8 +318,9 @@ fn ball_pose(
                 zc as f32,
                 r as f32,
                 n,
-                &mut acc,
+                &mut lanes,
             );
+            lanes.flush_removed(&mut acc);
         } else {
             for i in i0..=i1 {
                 let p = DVec2::new(g.cx(i), y);
@@ -340,6 +342,7 @@ fn ball_pose(
             }
         }
     }
+    lanes.finish(&mut acc);
     acc.removed *= g.res * g.res;
     out.merge(&acc);
 }
@@ -412,8 +415,39 @@ struct Lanes {
     removed: [f32; L],
     depth: [f32; L],
     hi: [f32; L],
-    kmin: [f32; L],
-    kmax: [f32; L],
+    /// Lateral offsets (across the feed) of the cells cut into.
+    lmin: [f32; L],
+    lmax: [f32; L],
+}
+
+impl Lanes {
+    fn new() -> Lanes {
+        Lanes {
+            removed: [0.0; L],
+            depth: [0.0; L],
+            hi: [f32::NEG_INFINITY; L],
+            lmin: [f32::INFINITY; L],
+            lmax: [f32::NEG_INFINITY; L],
+        }
+    }
+
+    /// Moves the removed lengths into `out` (in f64, row by row, so small
+    /// removals do not vanish in a large f32 sum).
+    fn flush_removed(&mut self, out: &mut StrokeCut) {
+        out.removed += self.removed.iter().map(|v| *v as f64).sum::<f64>();
+        self.removed = [0.0; L];
+    }
+
+    fn finish(mut self, out: &mut StrokeCut) {
+        self.flush_removed(out);
+        let lmin = self.lmin.iter().fold(f32::INFINITY, |a, b| a.min(*b));
+        let lmax = self.lmax.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b));
+        if lmin <= lmax {
+            out.depth = out.depth.max(self.depth.iter().fold(0.0f32, |a, b| a.max(*b)) as f64);
+            out.top = out.top.max(self.hi.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b)) as f64);
+            out.side = [out.side[0].min(lmin as f64), out.side[1].max(lmax as f64)];
+        }
+    }
 }
 
 /// A ball standing at one place over a row of cells without gaps: the tight
@@ -434,17 +468,11 @@ fn ball_row(
     zc: f32,
     r: f32,
     n: DVec2,
-    out: &mut StrokeCut,
+    acc: &mut Lanes,
 ) {
     use super::BLOCK;
-    let mut acc = Lanes {
-        removed: [0.0; L],
-        depth: [0.0; L],
-        hi: [f32::NEG_INFINITY; L],
-        kmin: [f32::INFINITY; L],
-        kmax: [f32::NEG_INFINITY; L],
-    };
     let under0 = r * r - dy * dy;
+    let lat = (dy * n.y as f32, n.x as f32);
     for kb in i0 / BLOCK..=i1 / BLOCK {
         let a = i0.max(kb * BLOCK);
         let b = i1.min(kb * BLOCK + BLOCK - 1);
@@ -467,7 +495,7 @@ fn ball_row(
         while k0 + L <= b + 1 {
             let t: &mut [f32; L] = (&mut top[k0..k0 + L]).try_into().expect("eight cells");
             let bb: &[f32; L] = bot[k0..k0 + L].try_into().expect("eight cells");
-            ball_group(t, bb, k0 as f32, dx0, res, under0, zc, &mut acc);
+            ball_group(t, bb, k0 as f32, dx0, res, under0, zc, lat, acc);
             k0 += L;
         }
         if k0 <= b {
@@ -477,7 +505,7 @@ fn ball_row(
             let mut bb = [0.0f32; L];
             t[..m].copy_from_slice(&top[k0..=b]);
             bb[..m].copy_from_slice(&bot[k0..=b]);
-            ball_group(&mut t, &bb, k0 as f32, dx0, res, under0, zc, &mut acc);
+            ball_group(&mut t, &bb, k0 as f32, dx0, res, under0, zc, lat, acc);
             top[k0..=b].copy_from_slice(&t[..m]);
         }
         if acc.removed != before {
@@ -485,21 +513,6 @@ fn ball_row(
             bmax[kb] = top[kb * BLOCK..end]
                 .iter()
                 .fold(f32::NEG_INFINITY, |m, t| m.max(*t));
-        }
-    }
-    out.removed += acc.removed.iter().map(|v| *v as f64).sum::<f64>();
-    let kmin = acc.kmin.iter().fold(f32::INFINITY, |a, b| a.min(*b));
-    let kmax = acc.kmax.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b));
-    if kmin <= kmax {
-        out.depth = out
-            .depth
-            .max(acc.depth.iter().fold(0.0f32, |a, b| a.max(*b)) as f64);
-        out.top = out
-            .top
-            .max(acc.hi.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b)) as f64);
-        for k in [kmin, kmax] {
-            let lat = (dx0 + k * res) as f64 * n.x + dy as f64 * n.y;
-            out.side = [out.side[0].min(lat), out.side[1].max(lat)];
         }
     }
 }
@@ -515,6 +528,7 @@ fn ball_group(
     res: f32,
     under0: f32,
     zc: f32,
+    (lat0, latx): (f32, f32),
     acc: &mut Lanes,
 ) {
     const LANE: [f32; L] = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
@@ -545,27 +559,11 @@ fn ball_group(
         t[l] = new;
         acc.removed[l] += d;
         let cutting = d > eps;
-        let kf = k0 + LANE[l];
-        acc.depth[l] = if cutting & (d > acc.depth[l]) {
-            d
-        } else {
-            acc.depth[l]
-        };
-        acc.hi[l] = if cutting & (old > acc.hi[l]) {
-            old
-        } else {
-            acc.hi[l]
-        };
-        acc.kmin[l] = if cutting & (kf < acc.kmin[l]) {
-            kf
-        } else {
-            acc.kmin[l]
-        };
-        acc.kmax[l] = if cutting & (kf > acc.kmax[l]) {
-            kf
-        } else {
-            acc.kmax[l]
-        };
+        let lat = (base + LANE[l] * res) * latx + lat0;
+        acc.depth[l] = if cutting & (d > acc.depth[l]) { d } else { acc.depth[l] };
+        acc.hi[l] = if cutting & (old > acc.hi[l]) { old } else { acc.hi[l] };
+        acc.lmin[l] = if cutting & (lat < acc.lmin[l]) { lat } else { acc.lmin[l] };
+        acc.lmax[l] = if cutting & (lat > acc.lmax[l]) { lat } else { acc.lmax[l] };
     }
 }
 
