@@ -443,8 +443,12 @@ impl Lanes {
         let lmin = self.lmin.iter().fold(f32::INFINITY, |a, b| a.min(*b));
         let lmax = self.lmax.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b));
         if lmin <= lmax {
-            out.depth = out.depth.max(self.depth.iter().fold(0.0f32, |a, b| a.max(*b)) as f64);
-            out.top = out.top.max(self.hi.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b)) as f64);
+            out.depth = out
+                .depth
+                .max(self.depth.iter().fold(0.0f32, |a, b| a.max(*b)) as f64);
+            out.top = out
+                .top
+                .max(self.hi.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b)) as f64);
             out.side = [out.side[0].min(lmin as f64), out.side[1].max(lmax as f64)];
         }
     }
@@ -560,10 +564,26 @@ fn ball_group(
         acc.removed[l] += d;
         let cutting = d > eps;
         let lat = (base + LANE[l] * res) * latx + lat0;
-        acc.depth[l] = if cutting & (d > acc.depth[l]) { d } else { acc.depth[l] };
-        acc.hi[l] = if cutting & (old > acc.hi[l]) { old } else { acc.hi[l] };
-        acc.lmin[l] = if cutting & (lat < acc.lmin[l]) { lat } else { acc.lmin[l] };
-        acc.lmax[l] = if cutting & (lat > acc.lmax[l]) { lat } else { acc.lmax[l] };
+        acc.depth[l] = if cutting & (d > acc.depth[l]) {
+            d
+        } else {
+            acc.depth[l]
+        };
+        acc.hi[l] = if cutting & (old > acc.hi[l]) {
+            old
+        } else {
+            acc.hi[l]
+        };
+        acc.lmin[l] = if cutting & (lat < acc.lmin[l]) {
+            lat
+        } else {
+            acc.lmin[l]
+        };
+        acc.lmax[l] = if cutting & (lat > acc.lmax[l]) {
+            lat
+        } else {
+            acc.lmax[l]
+        };
     }
 }
 
@@ -1082,7 +1102,7 @@ impl Simulator {
 
 /// Rows per band of the parallel run: a band is a unit of work, so a stroke
 /// touches a few of them and each band group sees most strokes.
-const BAND_ROWS: usize = 16;
+const BAND_ROWS: usize = 32;
 /// Band groups: fixed, so that sums do not depend on the thread count.
 const GROUPS: usize = 16;
 
