@@ -51,7 +51,7 @@ impl C {
 /// One single-degree-of-freedom mode.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Mode {
-    /// Natural frequency [Hz].
+    /// Natural frequency \[Hz\].
     pub fn_hz: f64,
     /// Stiffness k = m·ωn² [N/m].
     pub k: f64,
@@ -92,7 +92,7 @@ impl Mode {
 }
 
 /// Directional factors (a_xx, a_xy, a_yx, a_yy) between immersion angles
-/// φst and φex [rad] with Kr = Krc/Ktc (§3).
+/// φst and φex \[rad\] with Kr = Krc/Ktc (§3).
 pub fn directional(kr: f64, st: f64, ex: f64) -> [f64; 4] {
     let f = |p: f64| {
         let (s2, c2) = (2.0 * p).sin_cos();
@@ -107,7 +107,7 @@ pub fn directional(kr: f64, st: f64, ex: f64) -> [f64; 4] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2], a[3] - b[3]]
 }
 
-/// Immersion angles [rad] of a cut of radial depth ae with a tool of
+/// Immersion angles \[rad\] of a cut of radial depth ae with a tool of
 /// diameter d: down-milling exits at π, up-milling enters at 0.
 pub fn immersion(ae: f64, d: f64, down: bool) -> (f64, f64) {
     let a = (1.0 - 2.0 * (ae / d).clamp(0.0, 1.0))
@@ -130,7 +130,7 @@ pub struct Setup {
     /// Ktc [N/m²] and Kr = Krc/Ktc.
     pub kt: f64,
     pub kr: f64,
-    /// Immersion [rad].
+    /// Immersion \[rad\].
     pub st: f64,
     pub ex: f64,
 }
@@ -138,11 +138,11 @@ pub struct Setup {
 /// One point of a lobe.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LobePoint {
-    /// Chatter frequency [Hz].
+    /// Chatter frequency \[Hz\].
     pub fc_hz: f64,
     /// Spindle speed [1/min].
     pub rpm: f64,
-    /// Limiting axial depth [mm].
+    /// Limiting axial depth \[mm\].
     pub a_lim_mm: f64,
 }
 
@@ -196,7 +196,7 @@ impl Setup {
         ]
     }
 
-    /// a_lim [mm] and phase ε [rad] of each root at ω (None where a_lim ≤ 0).
+    /// a_lim \[mm\] and phase ε \[rad\] of each root at ω (None where a_lim ≤ 0).
     pub fn limits_at(&self, w: f64) -> Vec<Option<(f64, f64)>> {
         self.eigen(w)
             .into_iter()
@@ -212,7 +212,7 @@ impl Setup {
             .collect()
     }
 
-    /// Lobes k = 0..lobes over chatter frequencies fc_lo..fc_hi [Hz] in
+    /// Lobes k = 0..lobes over chatter frequencies fc_lo..fc_hi \[Hz\] in
     /// `steps` steps.
     pub fn lobes(&self, fc_lo: f64, fc_hi: f64, steps: usize, lobes: usize) -> Vec<Lobe> {
         let mut out: Vec<Lobe> = (0..lobes)
@@ -262,7 +262,7 @@ impl Setup {
     }
 }
 
-/// The smallest a_lim [mm] over all lobes at spindle speed `rpm` (linear
+/// The smallest a_lim \[mm\] over all lobes at spindle speed `rpm` (linear
 /// interpolation along each lobe); None where no lobe covers the speed.
 pub fn a_lim_at(lobes: &[Lobe], rpm: f64) -> Option<f64> {
     let mut best: Option<f64> = None;

@@ -16,9 +16,9 @@ pub struct CutCase {
     pub law: Law,
     pub grid: Grid,
     pub cut: Cut,
-    /// Axial depth [mm].
+    /// Axial depth \[mm\].
     pub ap: f64,
-    /// Stepover to the earlier pass [mm]; None for a slot.
+    /// Stepover to the earlier pass \[mm\]; None for a slot.
     pub ae: Option<f64>,
     pub holding: Cantilever,
 }

@@ -56,18 +56,18 @@ pub enum BetaRule {
 pub struct Orthogonal {
     /// Shear stress τs [N/mm²].
     pub tau_s: f64,
-    /// βa [deg] = beta_a[0] + beta_a[1]·αn.
+    /// βa \[deg\] = beta_a\[0\] + beta_a\[1\]·αn.
     pub beta_a: [f64; 2],
-    /// Chip ratio r_c = C0·h^a with C0 = rc_c0[0] + rc_c0[1]·αn …
+    /// Chip ratio r_c = C0·h^a with C0 = rc_c0\[0\] + rc_c0\[1\]·αn …
     pub rc_c0: [f64; 2],
-    /// … and a = rc_a[0] + rc_a[1]·αn.
+    /// … and a = rc_a\[0\] + rc_a\[1\]·αn.
     pub rc_a: [f64; 2],
     /// Edge coefficients Kte, Kre, Kae [N/mm].
     pub ke: [f64; 3],
 }
 
 impl Orthogonal {
-    /// Ti6Al4V with a carbide tool [P] (§1.5a).
+    /// Ti6Al4V with a carbide tool \[P\] (§1.5a).
     pub const TI6AL4V: Orthogonal = Orthogonal {
         tau_s: 613.0,
         beta_a: [19.1, 0.29],
@@ -76,7 +76,7 @@ impl Orthogonal {
         ke: [24.0, 43.0, 0.0],
     };
 
-    /// Shear angle φn [rad] at rake αn [deg] and chip thickness h [mm].
+    /// Shear angle φn \[rad\] at rake αn \[deg\] and chip thickness h \[mm\].
     pub fn shear_angle(&self, rake_deg: f64, h: f64) -> f64 {
         let an = rake_deg.to_radians();
         let c0 = self.rc_c0[0] + self.rc_c0[1] * rake_deg;
@@ -85,8 +85,8 @@ impl Orthogonal {
         (rc * an.cos() / (1.0 - rc * an.sin())).atan()
     }
 
-    /// Oblique cutting coefficients (Ktc, Krc, Kac) [N/mm²] at rake αn [deg],
-    /// chip thickness h [mm] and inclination i [rad], with chip flow η = i.
+    /// Oblique cutting coefficients (Ktc, Krc, Kac) [N/mm²] at rake αn \[deg\],
+    /// chip thickness h \[mm\] and inclination i \[rad\], with chip flow η = i.
     pub fn oblique(&self, rake_deg: f64, h: f64, i: f64, rule: BetaRule) -> [f64; 3] {
         let an = rake_deg.to_radians();
         let phi_n = self.shear_angle(rake_deg, h);
@@ -122,7 +122,7 @@ pub enum ChipRule {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Oblique {
     pub db: Orthogonal,
-    /// Normal rake αn [deg].
+    /// Normal rake αn \[deg\].
     pub rake_deg: f64,
     pub beta: BetaRule,
     pub chip: ChipRule,
@@ -184,8 +184,8 @@ pub fn fit_line(x: &[f64], y: &[f64]) -> Option<Line> {
     })
 }
 
-/// One slot test: feed per tooth c [mm] and the measured mean forces on the
-/// tool [N] in the tool frame (x feed, z toward the shank).
+/// One slot test: feed per tooth c \[mm\] and the measured mean forces on the
+/// tool \[N\] in the tool frame (x feed, z toward the shank).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SlotTest {
     pub c: f64,
@@ -209,7 +209,7 @@ pub struct Calibration {
 /// F̄x = −(Na/4)·Krc·c − Na·Kre/π, F̄y = (Na/4)·Ktc·c + Na·Kte/π and
 /// F̄z = −(Na/π)·(Kac·c + Kae·π/2): the z sign is the opposite of the
 /// textbook form, so that coefficients calibrated here reproduce the
-/// measurements through [`super::evaluate`].
+/// measurements through \[`super::evaluate`\].
 pub fn calibrate_slot(tests: &[SlotTest], flutes: usize, a: f64) -> Result<Calibration, String> {
     if tests.len() < 2 {
         return Err(format!(

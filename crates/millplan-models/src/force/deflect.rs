@@ -10,7 +10,7 @@ pub const E_CARBIDE: f64 = 600_000.0;
 /// Equivalent diameter of the fluted part over the nominal one (Kops & Vo).
 pub const DE_RATIO: f64 = 0.8;
 
-/// Second moment of area of a round section of diameter d [mm⁴].
+/// Second moment of area of a round section of diameter d \[mm⁴\].
 pub fn inertia(d: f64) -> f64 {
     PI * d.powi(4) / 64.0
 }
@@ -18,13 +18,13 @@ pub fn inertia(d: f64) -> f64 {
 /// A tool clamped at the holder face, loaded at the tip.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cantilever {
-    /// Gauge length from the holder face to the force point [mm].
+    /// Gauge length from the holder face to the force point \[mm\].
     pub length: f64,
-    /// Shank diameter [mm].
+    /// Shank diameter \[mm\].
     pub shank_d: f64,
-    /// Equivalent diameter of the fluted part [mm] (≈ 0.8·D).
+    /// Equivalent diameter of the fluted part \[mm\] (≈ 0.8·D).
     pub flute_d: f64,
-    /// Length of the fluted part at the tip [mm]; `None` treats the whole
+    /// Length of the fluted part at the tip \[mm\]; `None` treats the whole
     /// length as fluted (the Tunc–Budak form).
     pub flute_length: Option<f64>,
     /// Young's modulus [N/mm²].
@@ -34,12 +34,12 @@ pub struct Cantilever {
 /// Stresses and deflection under one force.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bending {
-    /// Largest bending stress [MPa] (holder face or flute root).
+    /// Largest bending stress \[MPa\] (holder face or flute root).
     pub stress: f64,
-    /// Stress at the holder face and at the flute root [MPa].
+    /// Stress at the holder face and at the flute root \[MPa\].
     pub stress_holder: f64,
     pub stress_flute_root: f64,
-    /// Tip deflection [mm].
+    /// Tip deflection \[mm\].
     pub deflection: f64,
 }
 

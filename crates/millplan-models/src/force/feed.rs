@@ -8,14 +8,14 @@ use super::Summary;
 /// The quantities a feed is limited by, at one feed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Loads {
-    /// F_xy,max [N].
+    /// F_xy,max \[N\].
     pub fxy_max: f64,
     /// T_max and T_mean [N·mm].
     pub torque_max: f64,
     pub torque_mean: f64,
-    /// Mean power [W].
+    /// Mean power \[W\].
     pub power_w: f64,
-    /// Bending stress [MPa] and tip deflection [mm].
+    /// Bending stress \[MPa\] and tip deflection \[mm\].
     pub stress_mpa: f64,
     pub deflection_mm: f64,
 }
@@ -105,7 +105,7 @@ impl Limits {
 /// Result of the iteration.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FeedSchedule {
-    /// The feed per tooth reached [mm].
+    /// The feed per tooth reached \[mm\].
     pub fz: f64,
     /// Every feed tried, starting with the start value.
     pub sequence: Vec<f64>,

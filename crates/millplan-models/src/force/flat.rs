@@ -7,8 +7,8 @@
 use super::coeffs::Coeffs;
 use std::f64::consts::PI;
 
-/// Mean (F̄x, F̄y, F̄z) [N] of N flutes at axial depth a [mm] and feed per tooth
-/// c [mm] between immersion angles φst and φex [rad] (T2).
+/// Mean (F̄x, F̄y, F̄z) \[N\] of N flutes at axial depth a \[mm\] and feed per tooth
+/// c \[mm\] between immersion angles φst and φex \[rad\] (T2).
 pub fn mean_forces(co: &Coeffs, flutes: usize, a: f64, c: f64, st: f64, ex: f64) -> [f64; 3] {
     let [ktc, krc, kac] = co.kc;
     let [kte, kre, kae] = co.ke;

@@ -79,11 +79,11 @@ pub fn mul_t(m: &Mat3, v: [f64; 3]) -> [f64; 3] {
 /// Cutting conditions of one engagement.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cut {
-    /// Feed per tooth [mm].
+    /// Feed per tooth \[mm\].
     pub fz: f64,
     /// Spindle speed [1/min] (for power only).
     pub rpm: f64,
-    /// Lead and tilt [rad] (§0).
+    /// Lead and tilt \[rad\] (§0).
     pub lead: f64,
     pub tilt: f64,
 }
@@ -100,9 +100,9 @@ impl Cut {
 /// Discretisation: axial slice height and rotation step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Grid {
-    /// Slice height [mm].
+    /// Slice height \[mm\].
     pub dz: f64,
-    /// Rotation step [rad]; rounded down so that a tooth period holds a whole
+    /// Rotation step \[rad\]; rounded down so that a tooth period holds a whole
     /// number of steps.
     pub dphi: f64,
 }
@@ -158,7 +158,7 @@ pub struct ForceModel {
 /// Forces over one tooth period and what follows from them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Evaluation {
-    /// Rotation step actually used [rad].
+    /// Rotation step actually used \[rad\].
     pub dphi: f64,
     pub flutes: usize,
     pub rpm: f64,
@@ -169,9 +169,9 @@ pub struct Evaluation {
     pub period: Vec<[f64; 4]>,
     /// Engaged (slice, angle) cells, counted once per revolution of one flute.
     pub cells: usize,
-    /// Smallest axial immersion angle κ of an engaged cell [rad].
+    /// Smallest axial immersion angle κ of an engaged cell \[rad\].
     pub kappa_min: Option<f64>,
-    /// Highest engaged point above the tip [mm].
+    /// Highest engaged point above the tip \[mm\].
     pub z_max: Option<f64>,
 }
 
@@ -212,7 +212,7 @@ pub struct Summary {
     pub fxy_max: f64,
     pub torque_max: f64,
     pub torque_mean: f64,
-    /// Mean power P = T_mean·ω/1000 [W], and the peak from T_max.
+    /// Mean power P = T_mean·ω/1000 \[W\], and the peak from T_max.
     pub power_w: f64,
     pub power_peak_w: f64,
 }
@@ -220,7 +220,7 @@ pub struct Summary {
 /// One sample of the force curve.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
-    /// Spindle angle [rad].
+    /// Spindle angle \[rad\].
     pub phi: f64,
     pub tool: [f64; 3],
     pub work: [f64; 3],
@@ -265,7 +265,7 @@ impl ForceModel {
         })
     }
 
-    /// Rotation step actually used [rad].
+    /// Rotation step actually used \[rad\].
     pub fn dphi(&self) -> f64 {
         2.0 * PI / self.m as f64
     }

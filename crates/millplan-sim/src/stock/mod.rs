@@ -160,7 +160,8 @@ pub struct Stock {
     pub(crate) bmax: Vec<f32>,
 }
 
-/// Cells per block of [`Stock::bmax`].
+/// Cells per block of the stock's block maxima (a row of a block is the unit
+/// a tool passing above is skipped by).
 pub const BLOCK: usize = 32;
 
 /// Memory per cell of a stock without gaps, bytes.

@@ -26,8 +26,8 @@ use std::path::{Path, PathBuf};
 /// The program's stock, material and tools (shared by `force PATH` and `feed`).
 #[derive(clap::Args, Clone)]
 pub struct ModelArgs {
-    /// Initial stock: box:auto[:MARGIN], box:X0,Y0,Z0,X1,Y1,Z1,
-    /// cylinder:auto[:MARGIN], cylinder:CX,CY,Z0,Z1,D, stl:FILE or
+    /// Initial stock: box:auto or box:auto:MARGIN, box:X0,Y0,Z0,X1,Y1,Z1,
+    /// cylinder:auto or cylinder:auto:MARGIN, cylinder:CX,CY,Z0,Z1,D, stl:FILE or
     /// offset:MM (the --stl part grown by MM), as in `millplan simulate`.
     #[arg(long)]
     pub stock: Option<String>,

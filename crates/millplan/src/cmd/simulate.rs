@@ -25,9 +25,9 @@ use std::path::{Path, PathBuf};
 ///
 /// With --stl, the material left on the part (or cut into it) at every facet.
 ///
-/// Stocks: box:auto[:MARGIN] (the cutting moves' bounds widened by the tool
+/// Stocks: box:auto or box:auto:MARGIN (the cutting moves' bounds widened by the tool
 /// radius and MARGIN mm, default 1; top at the highest cutting tip),
-/// box:X0,Y0,Z0,X1,Y1,Z1, cylinder:auto[:MARGIN], cylinder:CX,CY,Z0,Z1,D,
+/// box:X0,Y0,Z0,X1,Y1,Z1, cylinder:auto or cylinder:auto:MARGIN, cylinder:CX,CY,Z0,Z1,D,
 /// stl:FILE (a closed mesh, e.g. a casting), offset:MM (the --stl part grown
 /// by MM, down to its bottom: what a finishing program meets after roughing).
 ///
