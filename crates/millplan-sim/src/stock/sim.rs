@@ -477,6 +477,8 @@ fn ball_row(
     use super::BLOCK;
     let under0 = r * r - dy * dy;
     let lat = (dy * n.y as f32, n.x as f32);
+    // Indexes both the cells and their block maxima.
+    #[allow(clippy::needless_range_loop)]
     for kb in i0 / BLOCK..=i1 / BLOCK {
         let a = i0.max(kb * BLOCK);
         let b = i1.min(kb * BLOCK + BLOCK - 1);
@@ -513,10 +515,7 @@ fn ball_row(
             top[k0..=b].copy_from_slice(&t[..m]);
         }
         if acc.removed != before {
-            let end = (kb * BLOCK + BLOCK).min(top.len());
-            bmax[kb] = top[kb * BLOCK..end]
-                .iter()
-                .fold(f32::NEG_INFINITY, |m, t| m.max(*t));
+            bmax[kb] = block_max(top, kb);
         }
     }
 }
@@ -639,6 +638,44 @@ fn cut_above(
             out.depth = out.depth.max(old - new);
             out.top = out.top.max(old);
             out.side = [out.side[0].min(lat), out.side[1].max(lat)];
+        }
+    }
+}
+
+/// The highest top among the cells of block `kb` of a row.
+#[inline]
+fn block_max(row: &[f32], kb: usize) -> f32 {
+    let b = super::BLOCK;
+    row[kb * b..(kb * b + b).min(row.len())]
+        .iter()
+        .fold(f32::NEG_INFINITY, |m, t| m.max(*t))
+}
+
+/// Removes [lo, hi] from cell `i` of band row `r` and adds it to `acc` (a
+/// cutting part's removal also to the depth, top and lateral extent).
+#[allow(clippy::too_many_arguments)]
+fn take_interval(
+    band: &mut Band,
+    nx: usize,
+    (r, i): (usize, usize),
+    lo: f64,
+    hi: f64,
+    cutting: bool,
+    lat: f64,
+    acc: &mut StrokeCut,
+) {
+    let k = r * nx + i;
+    let (mut tt, mut bb) = (band.top[k], band.bot[k]);
+    let old = tt as f64;
+    let rem = cut_interval(&mut tt, &mut bb, &mut band.gaps[r], i as u32, lo, hi);
+    band.top[k] = tt;
+    band.bot[k] = bb;
+    if rem > 0.0 {
+        acc.removed += rem;
+        if cutting && rem > CUT_EPS {
+            acc.depth = acc.depth.max(rem);
+            acc.top = acc.top.max(old.min(hi));
+            acc.side = [acc.side[0].min(lat), acc.side[1].max(lat)];
         }
     }
 }
@@ -849,27 +886,11 @@ fn ball_capsule(
                         &mut acc,
                     );
                 } else {
-                    let old = band.top[k] as f64;
-                    let (mut tt, mut bt) = (band.top[k], band.bot[k]);
-                    let rem = cut_interval(&mut tt, &mut bt, &mut band.gaps[row], i as u32, lo, hi);
-                    band.top[k] = tt;
-                    band.bot[k] = bt;
-                    if rem > 0.0 {
-                        acc.removed += rem;
-                        if rem > CUT_EPS {
-                            acc.depth = acc.depth.max(rem);
-                            acc.top = acc.top.max(old.min(hi));
-                            acc.side = [acc.side[0].min(lat), acc.side[1].max(lat)];
-                        }
-                    }
+                    take_interval(band, nx, (row, i), lo, hi, true, lat, &mut acc);
                 }
             }
             if acc.removed != before {
-                let rowt = &band.top[row * nx..(row + 1) * nx];
-                let end = (kb * BLOCK + BLOCK).min(nx);
-                band.bmax[row * nb + kb] = rowt[kb * BLOCK..end]
-                    .iter()
-                    .fold(f32::NEG_INFINITY, |m, t| m.max(*t));
+                band.bmax[row * nb + kb] = block_max(&band.top[row * nx..(row + 1) * nx], kb);
             }
         }
     }
@@ -965,11 +986,7 @@ fn apply_pose(
                         pose_cell(band, pose, g, (r, i), noncut, nrm, &mut acc);
                     }
                     if acc.removed != before {
-                        let row = &band.top[r * nx..(r + 1) * nx];
-                        let end = (kb * BLOCK + BLOCK).min(nx);
-                        band.bmax[r * nb + kb] = row[kb * BLOCK..end]
-                            .iter()
-                            .fold(f32::NEG_INFINITY, |m, t| m.max(*t));
+                        band.bmax[r * nb + kb] = block_max(&band.top[r * nx..(r + 1) * nx], kb);
                         changed = true;
                     }
                 }
@@ -1007,20 +1024,8 @@ fn pose_cell(
     }
     for (iv, cutting) in [(cut, true), (noncut, false)] {
         let Some([l, h]) = iv else { continue };
-        let (mut tt, mut bb) = (band.top[k], band.bot[k]);
-        let old_top = tt as f64;
-        let rem = cut_interval(&mut tt, &mut bb, &mut band.gaps[r], i as u32, l, h);
-        band.top[k] = tt;
-        band.bot[k] = bb;
-        if rem > 0.0 {
-            acc.removed += rem;
-            if cutting && rem > CUT_EPS {
-                acc.depth = acc.depth.max(rem);
-                acc.top = acc.top.max(old_top.min(h));
-                let lat = (c - pose.tip.truncate()).dot(nrm);
-                acc.side = [acc.side[0].min(lat), acc.side[1].max(lat)];
-            }
-        }
+        let lat = (c - pose.tip.truncate()).dot(nrm);
+        take_interval(band, g.nx, (r, i), l, h, cutting, lat, acc);
     }
 }
 
