@@ -798,6 +798,10 @@ fn ball_capsule(
     let nx = g.nx;
     let nb = nx.div_ceil(BLOCK);
     let ca = 1.0 - a.z * a.z;
+    // A nearly upright axis: the cylinder is taken as straight up.
+    let cyl = ca > 1e-9;
+    let inv2ca = if cyl { 0.5 / ca } else { 0.0 };
+    let inv_az = 1.0 / a.z;
     let mut acc = StrokeCut::default();
     for j in ja..=jb {
         let y = g.cy(j);
@@ -832,45 +836,48 @@ fn ball_capsule(
                 continue;
             }
             let before = acc.removed;
+            // The capsule over the block's cells, without branches so that
+            // it vectorises: the sphere, and the cylinder above the centre
+            // ((1 − az²) z² − 2 (w·a) az z + (|w|² − (w·a)² − r²) = 0, the far
+            // end above all material).
+            let mut los = [f64::INFINITY; BLOCK];
+            let mut his = [f64::NEG_INFINITY; BLOCK];
+            let x0 = g.cx(ba) - c.x;
+            for q in 0..BLOCK {
+                let wx = x0 + q as f64 * g.res;
+                let w2 = wx * wx + wy * wy;
+                let wa = wx * a.x + wy * a.y;
+                let us = r * r - w2;
+                let ss = if us > 0.0 { us } else { 0.0 }.sqrt();
+                let (lo_s, hi_s) = if us >= 0.0 {
+                    (c.z - ss, c.z + ss)
+                } else {
+                    (f64::INFINITY, f64::NEG_INFINITY)
+                };
+                let qb = -2.0 * wa * a.z;
+                let qc = w2 - wa * wa - r * r;
+                let disc = qb * qb - 4.0 * ca * qc;
+                let sq = if disc > 0.0 { disc } else { 0.0 }.sqrt();
+                let z1 = (-qb - sq) * inv2ca;
+                let z2 = (-qb + sq) * inv2ca;
+                let z0 = if z1 > -wa * inv_az { z1 } else { -wa * inv_az };
+                let ok = cyl & (disc >= 0.0) & (z0 <= z2);
+                let lo_c = c.z + z0;
+                let hi_c = c.z + z2;
+                los[q] = if ok & (lo_c < lo_s) { lo_c } else { lo_s };
+                his[q] = if ok & (hi_c > hi_s) { hi_c } else { hi_s };
+                // Straight up: the cylinder above the ball.
+                his[q] = if !cyl & (us >= 0.0) {
+                    f64::INFINITY
+                } else {
+                    his[q]
+                };
+            }
             for i in ba..=bb {
                 let k = row * nx + i;
                 let (t, b) = (band.top[k] as f64, band.bot[k] as f64);
-                if t <= b {
-                    continue;
-                }
-                let wx = g.cx(i) - c.x;
-                let w2 = wx * wx + wy * wy;
-                let wa = wx * a.x + wy * a.y;
-                // The sphere.
-                let us = r * r - w2;
-                let mut lo = if us >= 0.0 {
-                    c.z - us.sqrt()
-                } else {
-                    f64::INFINITY
-                };
-                let mut hi = if us >= 0.0 {
-                    c.z + us.sqrt()
-                } else {
-                    f64::NEG_INFINITY
-                };
-                // The cylinder above the centre: (1 − az²) z² − 2 (w·a) az z + (|w|² − (w·a)² − r²) = 0.
-                if ca > 1e-12 {
-                    let qb = -2.0 * wa * a.z;
-                    let qc = w2 - wa * wa - r * r;
-                    let disc = qb * qb - 4.0 * ca * qc;
-                    if disc >= 0.0 {
-                        let sq = disc.sqrt();
-                        let (z1, z2) = ((-qb - sq) / (2.0 * ca), (-qb + sq) / (2.0 * ca));
-                        // Above the centre (axial height ≥ 0); the far end
-                        // lies above all material.
-                        let z0 = z1.max(-wa / a.z);
-                        if z0 <= z2 {
-                            lo = lo.min(c.z + z0);
-                            hi = hi.max(c.z + z2);
-                        }
-                    }
-                }
-                if lo >= t {
+                let (lo, hi) = (los[i - ba], his[i - ba]);
+                if t <= b || lo >= t {
                     continue;
                 }
                 let lat = (DVec2::new(g.cx(i), y) - pose.tip.truncate()).dot(nrm);
