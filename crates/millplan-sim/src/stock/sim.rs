@@ -279,6 +279,11 @@ fn ball_pose(
     };
     let zc = q1.z + r;
     let nx = g.nx;
+    let nb = nx.div_ceil(super::BLOCK);
+    let inv_res = 1.0 / g.res;
+    // The half-plane on row y: x ≥ (or ≤) mid.x − (y − mid.y)·u.y/u.x.
+    let along_x = u.x.abs() >= 1e-15;
+    let slope = if along_x { u.y / u.x } else { 0.0 };
     let mut acc = StrokeCut::default();
     let mut lanes = Lanes::new();
     for j in ja..=jb {
@@ -289,24 +294,32 @@ fn ball_pose(
             continue;
         }
         let h = h2.sqrt();
-        let (xa, xb) = (c.x - h, c.x + h);
-        let (xa, xb) = if front_only {
-            match half_plane_row(mid, u, y, xa, xb) {
-                Some(v) => v,
-                None => continue,
+        let (mut xa, mut xb) = (c.x - h, c.x + h);
+        if front_only {
+            if along_x {
+                let x = mid.x - (y - mid.y) * slope;
+                if u.x > 0.0 {
+                    xa = xa.max(x);
+                } else {
+                    xb = xb.min(x);
+                }
+            } else if (y - mid.y) * u.y < 0.0 {
+                continue;
             }
-        } else {
-            (xa, xb)
-        };
-        let Some((i0, i1)) = g.span(xa, xb) else {
+        }
+        // The columns whose centres lie in [xa, xb] (Grid::span without
+        // its divisions).
+        let ia = super::ceil((xa - g.x0) * inv_res - 0.5).max(0.0);
+        let ib = super::floor((xb - g.x0) * inv_res - 0.5);
+        if !(ib >= ia) || ia >= nx as f64 {
             continue;
-        };
+        }
+        let (i0, i1) = (ia as usize, (ib as usize).min(nx - 1));
         let row = j - band.j0;
         let row_top = &mut band.top[row * nx..(row + 1) * nx];
         let row_bot = &band.bot[row * nx..(row + 1) * nx];
         let gaps = &mut band.gaps[row];
         if gaps.is_empty() {
-            let nb = nx.div_ceil(super::BLOCK);
             ball_row(
                 row_top,
                 row_bot,
