@@ -139,7 +139,7 @@ fn bad_stocks_and_open_blanks_are_refused_with_exit_2() {
     let dir = tempfile::tempdir().expect("tmp");
     let nc = write(dir.path(), "slot.nc", PROGRAM);
     for (stock, says) in [
-        ("box:1,2,3", "6 numbers"),
+        ("box:1,2,3", "6 finite numbers"),
         ("box:0,0,0,-1,1,1", "must exceed"),
         ("sphere:3", "a stock is"),
         ("offset:0.5", "needs the part"),

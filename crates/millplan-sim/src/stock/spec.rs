@@ -48,7 +48,7 @@ impl StockSpec {
             match v {
                 Ok(v) if v.len() == want && v.iter().all(|x| x.is_finite()) => Ok(v),
                 _ => Err(format!(
-                    "`{s}`: {kind} takes {want} numbers separated by commas"
+                    "`{s}`: {kind} takes {want} finite numbers separated by commas"
                 )),
             }
         };

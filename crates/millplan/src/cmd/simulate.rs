@@ -104,6 +104,10 @@ pub fn run(a: Args) -> CliResult<i32> {
         Range::from(0.005, 100.0, "mm"),
     )?;
     crate::cmd::arg("--tol", a.tol, Range::from(0.0, 100.0, "mm"))?;
+    // Checked before any work, not after the simulation.
+    if let Some(m) = a.mesh_resolution {
+        crate::cmd::arg("--mesh-resolution", m, Range::from(0.005, 1000.0, "mm"))?;
+    }
     let spec = StockSpec::parse(&a.stock).map_err(|e| CliError::input(format!("--stock {e}")))?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let mut inputs: Vec<&Path> = vec![&a.path];
@@ -330,10 +334,7 @@ fn write_outputs(
 ) -> CliResult<()> {
     if let Some(p) = &a.output {
         let step = match a.mesh_resolution {
-            Some(m) => {
-                crate::cmd::arg("--mesh-resolution", m, Range::from(0.005, 1000.0, "mm"))?;
-                ((m / stock.grid.res).round() as usize).max(1)
-            }
+            Some(m) => ((m / stock.grid.res).round() as usize).max(1),
             None => ((stock.cells() as f64 / 1e6).sqrt().ceil() as usize).max(1),
         };
         let mesh = millplan_sim::stock::stock_mesh(&stock.coarsened(step));
