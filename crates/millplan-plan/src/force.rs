@@ -30,7 +30,7 @@ use millplan_sim::stock::engage::tool_frame;
 use millplan_sim::stock::path::{Stroke, Strokes};
 use millplan_sim::stock::sim::{Simulator, CUT_EPS};
 use millplan_sim::stock::tool::ToolBody;
-use millplan_sim::stock::Stock;
+use millplan_sim::stock::{Stock, RADIAL_SLACK};
 
 /// The stock seen from the tool at one pose: tool-frame points (origin at the
 /// tip, z along the axis, x the feed) turned into part coordinates and looked
@@ -45,6 +45,9 @@ pub struct StockEngagement<'a> {
     z_hi: f64,
     /// Material counts from this far below a column's top, mm.
     lift: f64,
+    /// For a vertical tool, the highest material by distance from the axis
+    /// ([`Stock::radial_tops`]); empty otherwise.
+    rings: Vec<f32>,
 }
 
 /// The share of a dexel's size an edge point must lie below a column's top
@@ -70,9 +73,20 @@ impl<'a> StockEngagement<'a> {
         flute: f64,
     ) -> Self {
         let (x, y, z) = tool_frame(axis, feed);
+        let lift = LIFT_SHARE * stock.grid.res;
         let cos_g = z.z;
         let sin_g = (1.0 - cos_g * cos_g).max(0.0).sqrt();
-        let z_hi = if cos_g > 0.2 {
+        let mut rings = Vec::new();
+        // A vertical tool's slices are level circles: one pass over the
+        // cells it can reach gives the highest material at every distance
+        // from the axis, which bounds every slice at once.
+        let vertical = z == DVec3::Z && x.z == 0.0 && y.z == 0.0;
+        let z_hi = if vertical {
+            let res = stock.grid.res;
+            let reach = radius + RADIAL_SLACK * res;
+            let top = stock.radial_tops(tip.truncate(), reach, &mut rings);
+            (top - tip.z).clamp(0.0, flute)
+        } else if cos_g > 0.2 {
             // The tool up to the flute length covers this XY rectangle.
             let top_c = tip + z * flute;
             let lo = tip.truncate().min(top_c.truncate()) - DVec2::splat(radius);
@@ -90,7 +104,8 @@ impl<'a> StockEngagement<'a> {
             y,
             z,
             z_hi,
-            lift: LIFT_SHARE * stock.grid.res,
+            lift,
+            rings,
         }
     }
 
@@ -109,6 +124,22 @@ impl Engagement for StockEngagement<'_> {
     fn contains(&self, p: [f64; 3]) -> bool {
         let q = self.tip + self.x * p[0] + self.y * p[1] + self.z * p[2];
         self.stock.contains(DVec3::new(q.x, q.y, q.z + self.lift))
+    }
+
+    /// A point at distance r from the axis lies in a tile whose centre is
+    /// within [`RADIAL_SLACK`] cells of r; it is in material only where a top
+    /// rises above it (the comparison of `contains`, which rounds to f32 as
+    /// the tops are: rounding is monotone, so a top not above the level in
+    /// f64 is not above it in f32 either).
+    fn ring_may_touch(&self, z: f64, r: f64) -> bool {
+        let Some(last) = self.rings.len().checked_sub(1) else {
+            return true;
+        };
+        let res = self.stock.grid.res;
+        let a = (((r / res - RADIAL_SLACK).max(0.0)) as usize).min(last);
+        let b = (((r / res + RADIAL_SLACK).max(0.0)) as usize).min(last);
+        let level = (self.tip.z + z) + self.lift;
+        self.rings[a..=b].iter().any(|t| *t as f64 > level)
     }
 }
 
@@ -359,61 +390,208 @@ pub fn moves_by_index(p: &Program) -> Vec<&Move> {
 /// every cutting stroke; with `schedule`, also the feed per tooth each
 /// stroke's limits allow (§2.3, the iteration reusing the stroke's engaged
 /// cells). `progress(done)` is called now and then.
+///
+/// The strokes run in order through one stock, yet in parallel: one thread
+/// removes material only (a small share of the work) and hands a copy of the
+/// simulator to each part of the program as it reaches the part's first
+/// stroke, and the parts' engagements and forces run on the other threads.
+/// Every stroke meets exactly the stock it would meet in one sequential run,
+/// so the result does not depend on the number of threads.
 pub fn simulate(
     program: &Program,
     strokes: &Strokes,
     stock: Stock,
     setup: &ForceSetup,
     schedule: Option<(&FeedLimits, &crate::machine::Machine)>,
-    progress: &dyn Fn(usize),
+    progress: &(dyn Fn(usize) + Sync),
 ) -> Result<ForceRun, String> {
+    simulate_in_parts(program, strokes, stock, setup, schedule, progress, MIN_PART)
+}
+
+/// Strokes of the smallest part [`simulate`] hands to a thread: below that,
+/// copying the stock costs more than the part's forces.
+pub const MIN_PART: usize = 5000;
+
+/// [`simulate`] with parts of at least `min_part` strokes (the result is the
+/// same for any size; tests split short programs with it).
+pub fn simulate_in_parts(
+    program: &Program,
+    strokes: &Strokes,
+    stock: Stock,
+    setup: &ForceSetup,
+    schedule: Option<(&FeedLimits, &crate::machine::Machine)>,
+    progress: &(dyn Fn(usize) + Sync),
+    min_part: usize,
+) -> Result<ForceRun, String> {
+    use std::sync::atomic::AtomicUsize;
+    use std::sync::Mutex;
     let tools: Vec<ToolForces> = strokes
         .tools
         .iter()
         .map(|b| setup.tool(b))
         .collect::<Result<_, _>>()?;
     let ir = moves_by_index(program);
-    let mut sim = Simulator::new(stock);
+    let all = &strokes.strokes;
+    let stock_bytes = stock.memory_bytes();
+    let bounds = part_bounds(all, rayon::current_num_threads(), stock_bytes, min_part);
+    let done = AtomicUsize::new(0);
+    let parts: Vec<Mutex<Option<Part>>> = (1..bounds.len()).map(|_| Mutex::new(None)).collect();
+    let cx = PartContext {
+        ir: &ir,
+        tools: &tools,
+        strokes,
+        schedule,
+        done: &done,
+        progress,
+    };
+    let sim = Simulator::new(stock);
+    if bounds.len() == 2 {
+        let mut sim = sim;
+        *parts[0].lock().expect("not poisoned") = Some(cx.run(&mut sim, 0..all.len(), 0.0));
+    } else {
+        rayon::scope(|sc| {
+            let mut sim = Some(sim);
+            let mut t = 0.0;
+            for (c, w) in bounds.windows(2).enumerate() {
+                let (range, t0, cx, slot) = (w[0]..w[1], t, &cx, &parts[c]);
+                let Some(cur) = sim.as_mut() else { break };
+                // The last part takes the simulator itself; the others a copy,
+                // while this thread removes their strokes to reach the next.
+                let mut own = if c + 2 == bounds.len() {
+                    sim.take().expect("checked above")
+                } else {
+                    let own = cur.clone();
+                    for s in &all[range.clone()] {
+                        t += s.minutes * 60.0;
+                    }
+                    own
+                };
+                let run_range = range.clone();
+                sc.spawn(move |_| {
+                    let part = cx.run(&mut own, run_range, t0);
+                    *slot.lock().expect("not poisoned") = Some(part);
+                });
+                if let Some(cur) = sim.as_mut() {
+                    for s in &all[range] {
+                        cur.step(s, &strokes.tools[s.tool as usize]);
+                    }
+                }
+            }
+        });
+    }
     let mut run = ForceRun {
         skipped: strokes.skipped.total(),
         ..ForceRun::default()
     };
-    let mut t = 0.0;
-    for (k, s) in strokes.strokes.iter().enumerate() {
-        if k % 4096 == 0 {
-            progress(k);
-        }
-        let new_move = run.moves.last().is_none_or(|m| m.index != s.mv);
-        if new_move {
-            let mv = ir.get(s.mv as usize).copied();
-            run.moves.push(MoveForces {
-                index: s.mv,
-                line: s.line,
-                rapid: s.rapid,
-                t_start_s: t,
-                rpm: mv.map_or(0.0, |m| m.spindle),
-                fx: [f64::INFINITY, f64::NEG_INFINITY],
-                fy: [f64::INFINITY, f64::NEG_INFINITY],
-                fz_force: [f64::INFINITY, f64::NEG_INFINITY],
-                ..MoveForces::default()
-            });
-        }
-        let m = run.moves.last_mut().expect("pushed above");
-        m.rapid &= s.rapid;
-        t += s.minutes * 60.0;
-        m.seconds += s.minutes * 60.0;
-        let body = &strokes.tools[s.tool as usize];
-        if !s.rapid {
-            if let Some(n) = stroke_forces(&tools[s.tool as usize], &sim.stock, s, m, schedule) {
-                run.evaluated += n;
-            }
-        }
-        m.removed_mm3 += sim.step(s, body).removed;
+    for p in parts {
+        let p = p
+            .into_inner()
+            .expect("not poisoned")
+            .expect("every part ran");
+        run.evaluated += p.evaluated;
+        run.moves.extend(p.moves);
     }
     for m in &mut run.moves {
         finish_move(m);
     }
     Ok(run)
+}
+
+/// What every part of a force run shares.
+struct PartContext<'a> {
+    ir: &'a [&'a Move],
+    tools: &'a [ToolForces],
+    strokes: &'a Strokes,
+    schedule: Option<(&'a FeedLimits, &'a crate::machine::Machine)>,
+    done: &'a std::sync::atomic::AtomicUsize,
+    progress: &'a (dyn Fn(usize) + Sync),
+}
+
+/// The moves of one part of the program.
+struct Part {
+    moves: Vec<MoveForces>,
+    evaluated: usize,
+}
+
+impl PartContext<'_> {
+    /// Strokes `range`, starting at time `t` (s) with `sim` as the strokes
+    /// before them left it.
+    fn run(&self, sim: &mut Simulator, range: std::ops::Range<usize>, mut t: f64) -> Part {
+        use std::sync::atomic::Ordering;
+        let mut part = Part {
+            moves: Vec::new(),
+            evaluated: 0,
+        };
+        for (k, s) in self.strokes.strokes[range].iter().enumerate() {
+            if k % 4096 == 4095 {
+                (self.progress)(self.done.fetch_add(4096, Ordering::Relaxed) + 4096);
+            }
+            let new_move = part.moves.last().is_none_or(|m| m.index != s.mv);
+            if new_move {
+                let mv = self.ir.get(s.mv as usize).copied();
+                part.moves.push(MoveForces {
+                    index: s.mv,
+                    line: s.line,
+                    rapid: s.rapid,
+                    t_start_s: t,
+                    rpm: mv.map_or(0.0, |m| m.spindle),
+                    fx: [f64::INFINITY, f64::NEG_INFINITY],
+                    fy: [f64::INFINITY, f64::NEG_INFINITY],
+                    fz_force: [f64::INFINITY, f64::NEG_INFINITY],
+                    ..MoveForces::default()
+                });
+            }
+            let m = part.moves.last_mut().expect("pushed above");
+            m.rapid &= s.rapid;
+            t += s.minutes * 60.0;
+            m.seconds += s.minutes * 60.0;
+            let body = &self.strokes.tools[s.tool as usize];
+            if !s.rapid {
+                if let Some(n) = stroke_forces(
+                    &self.tools[s.tool as usize],
+                    &sim.stock,
+                    s,
+                    m,
+                    self.schedule,
+                ) {
+                    part.evaluated += n;
+                }
+            }
+            m.removed_mm3 += sim.step(s, body).removed;
+        }
+        part
+    }
+}
+
+/// Stroke indices where the program is cut into parts for the threads:
+/// 0, the parts' first strokes, and the stroke count. A part starts with a
+/// new move (a move's strokes stay together); there are a few parts per
+/// thread, so that one slow part does not leave a thread idle, each holding
+/// its own copy of the stock (together at most a quarter of a gigabyte, and
+/// never for a program too short to be worth it).
+fn part_bounds(
+    strokes: &[Stroke],
+    threads: usize,
+    stock_bytes: usize,
+    min_part: usize,
+) -> Vec<usize> {
+    let n = strokes.len();
+    let by_memory = (256usize << 20) / stock_bytes.max(1);
+    let parts = (4 * threads).min(n / min_part.max(1)).min(by_memory).max(1);
+    let mut b = vec![0];
+    if threads > 1 {
+        for c in 1..parts {
+            let mut k = c * n / parts;
+            while k < n && k > 0 && strokes[k].mv == strokes[k - 1].mv {
+                k += 1;
+            }
+            if k < n && k > *b.last().expect("starts with 0") {
+                b.push(k);
+            }
+        }
+    }
+    b.push(n);
+    b
 }
 
 /// Evaluates one cutting stroke into its move; the number of evaluations.
@@ -535,6 +713,88 @@ fn finish_move(m: &mut MoveForces) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use millplan_models::force::engage::FnEngagement;
+
+    #[test]
+    fn skipping_slices_by_the_rings_never_changes_the_engaged_cells() {
+        // A stock with a wavy top, partly cut by a slot, and a vertical D10
+        // ball at many poses near its surface: the cells found with the
+        // ring bound are those found asking every point.
+        let mut stock = Stock::from_columns(
+            millplan_sim::stock::Grid::covering(
+                DVec2::new(-15.0, -15.0),
+                DVec2::new(15.0, 15.0),
+                0.1,
+            ),
+            |x, y| vec![[-10.0, 0.8 * (0.3 * x).sin() + 0.5 * (0.2 * y).cos()]],
+        );
+        let body = ToolBody::new(millplan_models::cutter::Shape::Ball { radius: 5.0 });
+        let mut sim = Simulator::new(stock.clone());
+        let slot = Stroke {
+            mv: 0,
+            line: 0,
+            tool: 0,
+            rapid: false,
+            p0: DVec3::new(-12.0, 2.0, -0.6),
+            p1: DVec3::new(12.0, 2.0, -0.6),
+            a0: DVec3::Z,
+            a1: DVec3::Z,
+            minutes: 0.1,
+        };
+        sim.step(&slot, &body);
+        stock = sim.stock;
+        let setup = ForceSetup::new(
+            millplan_models::force::materials::Materials::builtin()
+                .get("al7075")
+                .expect("built in")
+                .law,
+            2,
+        );
+        let tf = setup.tool(&body).expect("valid tool");
+        let mut seed = 12345u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut pruned = 0;
+        for _ in 0..300 {
+            let tip = DVec3::new(
+                20.0 * next() - 10.0,
+                20.0 * next() - 10.0,
+                2.0 * next() - 1.8,
+            );
+            let a = std::f64::consts::TAU * next();
+            let feed = DVec3::new(a.cos(), a.sin(), 0.4 * next() - 0.2);
+            let eng = StockEngagement::new(&stock, 5.0, tip, DVec3::Z, feed, tf.flute);
+            let (x, _, z) = eng.frame();
+            let cut = Cut {
+                fz: 0.1,
+                rpm: 10000.0,
+                lead: feed.dot(z).atan2(feed.dot(x)),
+                tilt: 0.0,
+            };
+            let every = FnEngagement {
+                z_lo: 0.0,
+                z_hi: eng.z_hi,
+                f: |p| eng.contains(p),
+            };
+            let fast = tf.model.engaged(&cut, &eng);
+            assert_eq!(
+                fast,
+                tf.model.engaged(&cut, &every),
+                "tip {tip}, feed {feed}"
+            );
+            pruned += (0..200)
+                .filter(|k| !eng.ring_may_touch(*k as f64 * 0.05, 2.0))
+                .count();
+        }
+        assert!(
+            pruned > 0,
+            "the bound skipped nothing: the test would not see an error"
+        );
+    }
 
     #[test]
     fn the_adapter_finds_material_ahead_and_bounds_its_heights() {

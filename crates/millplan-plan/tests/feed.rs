@@ -7,7 +7,7 @@ use millplan_models::force::materials::Materials;
 use millplan_nc::generate::{raster, Raster};
 use millplan_nc::Program;
 use millplan_plan::feed::{FeedParams, FeedPass};
-use millplan_plan::force::{simulate, FeedLimits, ForceRun, ForceSetup};
+use millplan_plan::force::{simulate, simulate_in_parts, FeedLimits, ForceRun, ForceSetup};
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context};
 use millplan_sim::stock::path::{strokes, PathOptions};
@@ -66,6 +66,50 @@ fn forces(p: &Program, stock: Stock, m: &Machine) -> ForceRun {
 
 fn time_s(p: &Program, m: &Machine) -> f64 {
     millplan_nc::stats::summarize(p, m.rapid).time_s
+}
+
+#[test]
+fn forces_do_not_depend_on_how_the_run_is_split_over_threads() {
+    // Parts run on other threads from copies of the simulator: every stroke
+    // must still meet the stock one sequential run gives it.
+    let (p, stock) = case();
+    let m = Machine::default();
+    let s = strokes(
+        &p,
+        body,
+        &PathOptions {
+            chord: 0.025,
+            rapid_rate: m.rapid,
+        },
+    );
+    let limits = limits();
+    let run = |threads: usize, min_part: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a pool")
+            .install(|| {
+                simulate_in_parts(
+                    &p,
+                    &s,
+                    stock.clone(),
+                    &setup(),
+                    Some((&limits, &m)),
+                    &|_| {},
+                    min_part,
+                )
+            })
+            .expect("simulates")
+    };
+    let one = run(1, 100);
+    assert!(s.strokes.len() > 1000, "{} strokes", s.strokes.len());
+    for (threads, min_part) in [(2, 100), (3, 37), (4, 1000)] {
+        assert_eq!(
+            run(threads, min_part),
+            one,
+            "{threads} threads, parts of {min_part}"
+        );
+    }
 }
 
 #[test]

@@ -15,6 +15,13 @@ pub trait Engagement {
     fn z_range(&self, tool: &Tool) -> (f64, f64);
     /// Whether the edge point `p` is in material.
     fn contains(&self, p: [f64; 3]) -> bool;
+    /// Whether any point of the circle of radius `r` around the axis at
+    /// height `z` (the edge of one slice over a revolution) can be in
+    /// material. A `false` must be certain: the model then skips the slice.
+    /// By default every slice is asked point by point.
+    fn ring_may_touch(&self, _z: f64, _r: f64) -> bool {
+        true
+    }
 }
 
 /// An engagement given by a closure, with the band of heights to slice.

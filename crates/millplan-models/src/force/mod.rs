@@ -288,9 +288,12 @@ impl ForceModel {
         let last = ((z_hi.max(0.0) / self.dz).ceil() as usize).min(self.slices.len());
         let mut cells = Vec::new();
         for (si, s) in self.slices[first..last.max(first)].iter().enumerate() {
+            if !eng.ring_may_touch(s.z, s.r) {
+                continue;
+            }
             let (lo, count) = self.chip_window(s, f);
             for i in 0..count {
-                let k = (lo + i) % m;
+                let k = if lo + i >= m { lo + i - m } else { lo + i };
                 let (st, ct) = self.rotated(s, k);
                 // h = f·n(θ), n(θ) = (ny sθ, ny cθ, nz)
                 let h = f[0] * s.ny * st + f[1] * s.ny * ct + f[2] * s.nz;

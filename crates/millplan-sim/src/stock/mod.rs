@@ -78,11 +78,17 @@ impl Grid {
     }
 
     /// The cell whose square holds (x, y).
+    #[inline]
     pub fn cell_of(&self, x: f64, y: f64) -> Option<(usize, usize)> {
-        let i = ((x - self.x0) / self.res).floor();
-        let j = ((y - self.y0) / self.res).floor();
-        (i >= 0.0 && j >= 0.0 && (i as usize) < self.nx && (j as usize) < self.ny)
-            .then_some((i as usize, j as usize))
+        // Truncation is the floor for u, v ≥ 0 (and NaN fails the test), so
+        // no call to the C library's floor on this hot path.
+        let u = (x - self.x0) / self.res;
+        let v = (y - self.y0) / self.res;
+        if !(u >= 0.0 && v >= 0.0) {
+            return None;
+        }
+        let (i, j) = (u as usize, v as usize);
+        (i < self.nx && j < self.ny).then_some((i, j))
     }
 
     /// The column indices whose centres lie in [xa, xb], clamped to the grid.
@@ -163,6 +169,14 @@ pub struct Stock {
 /// Cells per block of the stock's block maxima (a row of a block is the unit
 /// a tool passing above is skipped by).
 pub const BLOCK: usize = 32;
+
+/// Cells per side of the tiles of [`Stock::radial_tops`].
+pub const RADIAL_TILE: usize = 4;
+
+/// How far from a point's distance to the axis, in cells, the centre of the
+/// tile holding it can lie: half a tile's diagonal, and a little for a point
+/// on a cell's edge.
+pub const RADIAL_SLACK: f64 = RADIAL_TILE as f64 * std::f64::consts::FRAC_1_SQRT_2 + 0.05;
 
 /// Memory per cell of a stock without gaps, bytes.
 pub const BYTES_PER_CELL: f64 = 8.0 + std::mem::size_of::<RowGaps>() as f64 / 64.0;
@@ -360,6 +374,21 @@ impl Stock {
         (self.top[k] > self.bot[k]).then_some(self.top[k] as f64)
     }
 
+    /// Memory the stock holds, bytes (its cells, block maxima and gaps).
+    pub fn memory_bytes(&self) -> usize {
+        let gaps: usize = self
+            .gaps
+            .iter()
+            .map(|r| {
+                r.capacity() * (std::mem::size_of::<(u32, Vec<[f32; 2]>)>() + 1)
+                    + r.values().map(|g| g.capacity() * 8).sum::<usize>()
+            })
+            .sum();
+        (self.top.len() + self.bot.len() + self.bmax.len()) * 4
+            + self.gaps.len() * std::mem::size_of::<RowGaps>()
+            + gaps
+    }
+
     /// Whether `p` lies in material (the cell's column holds p.z).
     #[inline]
     pub fn contains(&self, p: DVec3) -> bool {
@@ -371,7 +400,11 @@ impl Stock {
         if !(z > self.bot[k] && z < self.top[k]) {
             return false;
         }
-        match self.gaps[j].get(&(i as u32)) {
+        let row = &self.gaps[j];
+        if row.is_empty() {
+            return true;
+        }
+        match row.get(&(i as u32)) {
             Some(g) => !g.iter().any(|[a, b]| z >= *a && z <= *b),
             None => true,
         }
@@ -406,6 +439,58 @@ impl Stock {
                     m = *t;
                 }
             }
+        }
+        m as f64
+    }
+
+    /// An upper bound of the material by distance from a vertical axis
+    /// through `centre`, out to `reach`: the cells are taken in tiles of
+    /// [`RADIAL_TILE`]² (a tile's highest top, empty cells included, which
+    /// only loosens the bound), and entry b of `out` is the highest tile
+    /// whose centre lies between b·res and (b + 1)·res from the axis (−∞
+    /// where none). The highest of all is returned. A point at distance r
+    /// lies in a tile whose centre is within [`RADIAL_SLACK`]·res of r.
+    pub fn radial_tops(&self, centre: DVec2, reach: f64, out: &mut Vec<f32>) -> f64 {
+        const T: usize = RADIAL_TILE;
+        let g = &self.grid;
+        out.clear();
+        out.resize((reach / g.res).ceil() as usize + 1, f32::NEG_INFINITY);
+        let lo = centre - DVec2::splat(reach);
+        let hi = centre + DVec2::splat(reach);
+        let (Some((i0, i1)), Some((j0, j1))) = (g.span(lo.x, hi.x), g.rows(lo.y, hi.y)) else {
+            return f64::NEG_INFINITY;
+        };
+        let last = out.len() - 1;
+        let mut cols = vec![f32::NEG_INFINITY; i1 - i0 + 1];
+        let mut m = f32::NEG_INFINITY;
+        let mut j = j0;
+        while j <= j1 {
+            let je = (j + T - 1).min(j1);
+            cols.fill(f32::NEG_INFINITY);
+            for jj in j..=je {
+                let row = &self.top[jj * g.nx + i0..=jj * g.nx + i1];
+                for (c, t) in cols.iter_mut().zip(row) {
+                    if *t > *c {
+                        *c = *t;
+                    }
+                }
+            }
+            let dy = 0.5 * (g.cy(j) + g.cy(je)) - centre.y;
+            for (k, tile) in cols.chunks(T).enumerate() {
+                let t = tile
+                    .iter()
+                    .fold(f32::NEG_INFINITY, |a, b| if *b > a { *b } else { a });
+                let (ia, ie) = (i0 + k * T, i0 + k * T + tile.len() - 1);
+                let dx = 0.5 * (g.cx(ia) + g.cx(ie)) - centre.x;
+                let bin = (((dx * dx + dy * dy).sqrt() / g.res) as usize).min(last);
+                if t > out[bin] {
+                    out[bin] = t;
+                }
+                if t > m {
+                    m = t;
+                }
+            }
+            j = je + 1;
         }
         m as f64
     }

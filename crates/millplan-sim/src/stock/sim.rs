@@ -1060,7 +1060,10 @@ pub fn continues(strokes: &[Stroke], k: usize) -> bool {
 
 /// A stock run stroke by stroke, in order: the library entry point for
 /// process models that need the stock as it is before each stroke (engagement
-/// and forces), then remove it.
+/// and forces), then remove it. A clone carries on exactly where the original
+/// stands (the stock and what the last stroke left), so a run can be split at
+/// any stroke and its parts continued on other threads.
+#[derive(Clone)]
 pub struct Simulator {
     pub stock: Stock,
     max_top: f64,
