@@ -303,3 +303,43 @@ fn the_five_axis_samples_simulate() {
         assert!(json(&o)["cutting_moves"].as_u64().expect("n") > 10, "{f}");
     }
 }
+
+/// A drilling cycle returns the tool to its retract level (`RTRCTO`, 20 mm
+/// above the holes here, whose points lie 2 mm under the stock's top); the
+/// next operation's first rapid starts there, not at the last hole's point,
+/// and so crosses no material.
+#[test]
+fn the_move_after_a_drilling_cycle_starts_at_the_cycles_return_level() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let apt = write(
+        dir.path(),
+        "drill.apt",
+        "PARTNO/1\nUNIT/MM\nCUTTER/6.,0,3.,0,0,0,60.\nLOAD/TOOL,1\nSPINDL/3000,RPM,CLW\n\
+         RAPID/\nGOTO/10,10,25.\nCYCLE/DRILL,FEDTO,5.,MMPM,200.,RAPTO,2.,RTRCTO,20.\n\
+         GOTO/10,10,3.\nGOTO/30,10,3.\nCYCLE/OFF\n\
+         CUTTER/10.,0,5.,0,0,0,60.\nLOAD/TOOL,2\nSPINDL/6000,RPM,CLW\n\
+         RAPID/\nGOTO/50,30,25.\nGOTO/50,30,6.\nFEDRAT/500,MMPM\nGOTO/50,30,4.\nGOTO/60,30,4.\n\
+         RAPID/\nGOTO/60,30,25.\nFINI\n",
+    );
+    let o = run(&[
+        "simulate",
+        &apt,
+        "--stock",
+        "box:0,0,0,70,40,5",
+        "--resolution",
+        "0.25",
+        "--json",
+    ]);
+    let j = json(&o);
+    assert_eq!(
+        j["rapid_collisions"].as_array().map(Vec::len),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert_eq!(o.status.code(), Some(0));
+    assert!(
+        j["removed_mm3"].as_f64().unwrap_or(0.0) > 100.0,
+        "the holes and the slot cut"
+    );
+}

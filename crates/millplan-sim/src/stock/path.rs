@@ -86,7 +86,13 @@ pub fn strokes(
 ) -> Strokes {
     let mut out = Strokes::default();
     let mut mv = 0u32;
+    let mut returned = None;
     for op in &p.operations {
+        let entry = if op.moves.is_empty() {
+            returned
+        } else {
+            returned.take()
+        };
         let first = mv;
         mv += op.moves.len() as u32;
         out.moves += op.moves.len();
@@ -101,12 +107,22 @@ pub fn strokes(
                 out.tools.len() - 1
             }
         } as u16;
-        op_strokes(op, first, ti, o, &mut out);
+        returned = op_strokes(op, first, ti, o, &mut out, entry);
     }
     out
 }
 
-fn op_strokes(op: &Operation, first: u32, ti: u16, o: &PathOptions, out: &mut Strokes) {
+/// The strokes of one operation; `entry` is where a canned cycle at the end
+/// of the operation before left the tool (part coordinates). Returns the
+/// same for this operation's end.
+fn op_strokes(
+    op: &Operation,
+    first: u32,
+    ti: u16,
+    o: &PathOptions,
+    out: &mut Strokes,
+    entry: Option<DVec3>,
+) -> Option<DVec3> {
     let to_part = |v: DVec3| op.frame.map(|f| f.to_parent(v)).unwrap_or(v);
     let dir_part = |v: DVec3| op.frame.map(|f| f.dir_to_parent(v)).unwrap_or(v);
     // The axis in the operation's frame; `None` when only angles say it.
@@ -124,15 +140,23 @@ fn op_strokes(op: &Operation, first: u32, ti: u16, o: &PathOptions, out: &mut St
     if let Some(m) = op.moves.first() {
         prev_axis = axis(m).unwrap_or(DVec3::Z);
     }
+    // Where a canned cycle left the tool: at its return level above the
+    // last hole, not at the hole's point the program names.
+    let mut after_cycle: Option<DVec3> =
+        entry.map(|p| op.frame.map(|f| f.from_parent(p)).unwrap_or(p));
     for (i, m) in op.moves.iter().enumerate() {
         let idx = first + i as u32;
+        let returned = after_cycle.take();
         let Some(a1) = axis(m) else {
             out.skipped.unknown_axis += 1;
             continue;
         };
         let a0 = prev_axis;
         prev_axis = a1;
-        let (Some(start), Some(end)) = (op.known_start(i), known(m.end)) else {
+        // A known start after a cycle is where the cycle left the tool; an
+        // unknown one (a tool change in between) stays unknown.
+        let start = op.known_start(i).map(|s| returned.unwrap_or(s));
+        let (Some(start), Some(end)) = (start, known(m.end)) else {
             out.skipped.unknown_position += 1;
             continue;
         };
@@ -225,9 +249,11 @@ fn op_strokes(op: &Operation, first: u32, ti: u16, o: &PathOptions, out: &mut St
                         CycleStep::Dwell(_) => {}
                     }
                 }
+                after_cycle = Some(here);
             }
         }
     }
+    after_cycle.map(to_part)
 }
 
 /// Feed time in minutes of a cutting stroke of length `len`.
