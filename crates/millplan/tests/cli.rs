@@ -26,6 +26,98 @@ fn json(args: &[&str]) -> serde_json::Value {
     serde_json::from_slice(&out.stdout).expect("json")
 }
 
+/// `feed` on a real program: SOLIDWORKS CAM's Interface-glue (a 14 mm flat
+/// end mill clearing, a 14 mm ball on 40 Z levels, the flat end mill again)
+/// over its 135 × 135 × 30 mm stock in al7075, with a 1500 N F_xy and
+/// 0.1 mm deflection limit. The written program re-reads, its feeds stay in
+/// the machine's range, its own prediction stays within the limits, and
+/// the operations whose feed was conservative (the flat end mill's, loaded
+/// to about half the limit) run faster, while the ball's, which exceeds it,
+/// is slowed.
+#[test]
+fn feed_on_a_real_program_meets_its_limits_and_speeds_up_the_conservative_operations() {
+    let Some(apt) = shared_data::file("swcam-apt-stl-pairs/Interface-glue.apt") else {
+        return;
+    };
+    let machine = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/machine.toml");
+    let d = tempfile::tempdir().expect("tmp");
+    let out = d.path().join("feed.apt");
+    let j = json(&[
+        "feed",
+        apt.to_str().expect("utf-8"),
+        "--stock",
+        "box:0,0,-30,135,135,0",
+        "--material",
+        "al7075",
+        "--machine",
+        machine.to_str().expect("utf-8"),
+        "--to",
+        "apt",
+        "--limit",
+        "fxy=1500,deflection=0.1",
+        "--flutes",
+        "2",
+        "--resolution",
+        "0.5",
+        "--dz",
+        "0.25",
+        "--dphi",
+        "4",
+        "-o",
+        out.to_str().expect("utf-8"),
+        "--json",
+        "-q",
+    ]);
+    let f = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
+    assert_eq!(j["over_limit_after"], 0, "{j}");
+    assert!(f(&j["max_after"]["fxy"]) <= 1500.0, "{j}");
+    assert!(f(&j["max_after"]["deflection"]) <= 0.1, "{j}");
+    assert!(
+        f(&j["max_before"]["fxy"]) > 1500.0,
+        "the input exceeds the limit somewhere: {j}"
+    );
+    let ops = j["operations"].as_array().expect("operations");
+    assert_eq!(ops.len(), 3, "three milling operations are simulated: {j}");
+    let mut faster = 0;
+    let mut slowed = 0;
+    for o in ops {
+        let (t0, t1) = (f(&o["time_before_s"]), f(&o["time_after_s"]));
+        if f(&o["fxy_max_before"]) < 0.6 * 1500.0 {
+            assert!(t1 < 0.8 * t0, "a conservative operation gains: {o}");
+            faster += 1;
+        } else if f(&o["fxy_max_before"]) > 1500.0 {
+            assert!(t1 > t0, "an overloaded operation is slowed: {o}");
+            slowed += 1;
+        }
+    }
+    assert!(faster >= 1 && slowed >= 1, "{j}");
+    // Feeds within the machine's range (1–20000 mm/min in examples/machine.toml).
+    let text = std::fs::read_to_string(&out).expect("written");
+    let feeds: Vec<f64> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("FEDRAT/"))
+        .map(|f| {
+            f.split(',')
+                .next()
+                .unwrap_or("")
+                .trim()
+                .parse()
+                .expect("a feed")
+        })
+        .collect();
+    assert!(feeds.len() > 100, "{} feeds written", feeds.len());
+    assert!(
+        feeds.iter().all(|v| (1.0..=20000.0).contains(v)),
+        "{feeds:?}"
+    );
+    // It re-reads, with every move of the input.
+    let (a, b) = (
+        json(&["inspect", "--json", apt.to_str().expect("utf-8")]),
+        json(&["inspect", "--json", out.to_str().expect("utf-8")]),
+    );
+    assert_eq!(a["moves"], b["moves"], "{a}\n{b}");
+}
+
 #[test]
 fn inspect_json_on_every_shared_file() {
     let Some(root) = shared_data::dir() else {

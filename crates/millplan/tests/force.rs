@@ -75,12 +75,13 @@ fn cut_reports_the_t4_row_at_the_default_grid() {
     assert!((f(&j["fx"][0]) - -385.1).abs() <= 0.03 * 385.1);
     assert!((f(&j["torque_max"]) - 1556.4).abs() <= 0.03 * 1556.4);
     assert!((f(&j["torque_mean"]) - 533.9).abs() <= 0.01 * 533.9);
-    // P = T_mean·ω/1000; σ and δ of a uniform 0.8·D cantilever of 3·D.
+    // P = T_mean·ω/1000; σ and δ of a uniform 0.8·D cantilever of 3·D (the
+    // JSON carries 6 significant digits, hence the relative 2e-5).
     let p = f(&j["torque_mean"]) * 2.0 * std::f64::consts::PI * 1750.0 / 60.0 / 1000.0;
-    assert!((f(&j["power_w"]) - p).abs() < 1e-9);
+    assert!((f(&j["power_w"]) - p).abs() < 2e-5 * p);
     let (de, l) = (12.8f64, 48.0f64);
     let sigma = 32.0 * f(&j["fxy_max"]) * l / (std::f64::consts::PI * de.powi(3));
-    assert!((f(&j["stress_mpa"]) - sigma).abs() < 1e-9 * sigma);
+    assert!((f(&j["stress_mpa"]) - sigma).abs() < 2e-5 * sigma);
     assert!(f(&j["deflection_mm"]) > 0.0);
 }
 

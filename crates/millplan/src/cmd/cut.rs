@@ -106,10 +106,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     }
     outputs.commit()?;
     if a.json {
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(&to_json(&r)).unwrap_or_default()
-        );
+        crate::cmd::print_json(to_json(&r));
     } else {
         print_text(&r);
     }

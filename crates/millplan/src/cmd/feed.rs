@@ -434,7 +434,58 @@ fn feed_summary(
         "limits": {"fxy": limits.fxy, "torque": limits.torque, "power": limits.power, "stress": limits.stress, "deflection": limits.deflection, "fos": limits.fos},
         "over_limit_after": over.len(), "over_limit_lines": over.iter().take(20).map(|x| x.line).collect::<Vec<_>>(),
         "stock": p.stock_name, "output": a.output.display().to_string(), "dialect": target.name(),
+        "operations": per_operation(out, before, after),
     })
+}
+
+/// Per operation with simulated moves: its simulated time and largest F_xy
+/// before and after, so a user sees which operation gained and which was
+/// slowed to respect a limit.
+fn per_operation(
+    p: &millplan_nc::Program,
+    before: &ForceRun,
+    after: &ForceRun,
+) -> Vec<serde_json::Value> {
+    let mut starts = Vec::with_capacity(p.operations.len());
+    let mut k = 0u32;
+    for op in &p.operations {
+        starts.push(k);
+        k += op.moves.len() as u32;
+    }
+    let op_of = |i: u32| starts.partition_point(|s| *s <= i).saturating_sub(1);
+    #[derive(Clone, Copy, Default)]
+    struct Acc {
+        moves: usize,
+        t: [f64; 2],
+        fxy: [f64; 2],
+    }
+    let mut acc = vec![Acc::default(); p.operations.len()];
+    for (side, run) in [before, after].into_iter().enumerate() {
+        for m in &run.moves {
+            let a = &mut acc[op_of(m.index)];
+            a.moves += usize::from(side == 0);
+            a.t[side] += m.seconds;
+            a.fxy[side] = a.fxy[side].max(m.fxy_max);
+        }
+    }
+    p.operations
+        .iter()
+        .zip(&acc)
+        .enumerate()
+        .filter(|(_, (_, a))| a.moves > 0)
+        .map(|(i, (op, a))| {
+            json!({
+                "operation": i + 1,
+                "name": op.name,
+                "tool": op.tool.as_ref().and_then(|t| t.number),
+                "tool_name": op.tool.as_ref().and_then(|t| t.name.clone()),
+                "line": op.moves.first().map(|m| m.line),
+                "moves": a.moves,
+                "time_before_s": a.t[0], "time_after_s": a.t[1],
+                "fxy_max_before": a.fxy[0], "fxy_max_after": a.fxy[1],
+            })
+        })
+        .collect()
 }
 
 /// The table (the input's loads with the allowed feeds) and the report.
@@ -517,7 +568,7 @@ pub fn quantities<'a>(
 
 fn print_feed(a: &Args, s: &serde_json::Value) {
     if a.model.json {
-        outln!("{}", serde_json::to_string_pretty(s).unwrap_or_default());
+        crate::cmd::print_json(s.clone());
         return;
     }
     let f = |k: &str| s[k].as_f64().unwrap_or(0.0);
@@ -533,6 +584,21 @@ fn print_feed(a: &Args, s: &serde_json::Value) {
             s["max_before"][k].as_f64().unwrap_or(0.0),
             s["max_after"][k].as_f64().unwrap_or(0.0)
         );
+    }
+    if let Some(ops) = s["operations"].as_array().filter(|o| o.len() > 1) {
+        for o in ops {
+            let g = |k: &str| o[k].as_f64().unwrap_or(0.0);
+            outln!(
+                "  operation {} (line {}, tool {}): {:.1} s → {:.1} s, F_xy max {:.1} → {:.1} N",
+                o["operation"],
+                o["line"],
+                o["tool"],
+                g("time_before_s"),
+                g("time_after_s"),
+                g("fxy_max_before"),
+                g("fxy_max_after")
+            );
+        }
     }
     outln!(
         "{} blocks from the forces, {} in air, {} kept; binding: {}",

@@ -153,7 +153,7 @@ fn print_forces(
     over: &[&millplan_plan::force::MoveForces],
 ) {
     if json {
-        outln!("{}", serde_json::to_string_pretty(s).unwrap_or_default());
+        crate::cmd::print_json(s.clone());
         return;
     }
     for x in over.iter().take(20) {
@@ -209,10 +209,7 @@ fn calibrate(a: CalibrateArgs) -> CliResult<i32> {
     let cal = calibrate_slot(&tests, a.flutes, a.ap)
         .map_err(|e| CliError::input(format!("{}: {e}", a.measurements.display())))?;
     if a.json {
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(&cal_json(&cal, tests.len())).unwrap_or_default()
-        );
+        crate::cmd::print_json(cal_json(&cal, tests.len()));
     } else {
         print_cal(&cal, &a.name, tests.len());
     }
@@ -311,7 +308,7 @@ fn list(m: &Materials, json: bool) -> CliResult<i32> {
             .values()
             .map(|x| json!({"name": x.name, "note": x.note}))
             .collect();
-        outln!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
+        crate::cmd::print_json(serde_json::Value::from(v));
     } else {
         for x in m.by_name.values() {
             outln!("{:<12} {}", x.name, x.note);

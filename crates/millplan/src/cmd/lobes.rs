@@ -164,7 +164,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             "immersion_deg": [s.st.to_degrees(), s.ex.to_degrees()],
             "envelope": env.iter().map(|(n, a)| [*n, *a]).collect::<Vec<_>>(),
         });
-        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        crate::cmd::print_json(j);
     } else {
         outln!(
             "a_lim,min {:.4} mm (chatter at {:.1} Hz, {:.0} 1/min)",

@@ -363,7 +363,7 @@ fn print_summary(a: &Args, rep: &SimReport, rem: Option<&Remaining>) {
                 "facets": r.facets, "gouged": r.gouged, "histogram": r.histogram,
             });
         }
-        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        crate::cmd::print_json(j);
         return;
     }
     for c in &rep.rapid_collisions {
