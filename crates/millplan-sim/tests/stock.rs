@@ -337,6 +337,62 @@ fn the_parallel_run_and_the_stroke_by_stroke_simulator_agree() {
     assert_eq!(st.strokes.len(), cuts.len());
 }
 
+/// A ball on short strokes (placements) climbing, descending and turning:
+/// the run that leaves to each placement the cells the next is sure to cut
+/// at least as low gives every column the height of the stroke-by-stroke
+/// simulator, which skips nothing, and the same volume in total.
+#[test]
+fn leaving_cells_to_the_next_ball_placement_changes_no_column() {
+    let tool = ToolBody::new(Shape::Ball { radius: 3.0 });
+    let mut strokes = Vec::new();
+    let mut prev = DVec3::new(-6.0, -2.0, 4.0);
+    for k in 0..400 {
+        let t = k as f64 * 0.05;
+        // A meander: along x, turning back every 100 strokes, the height
+        // waving by ±1.5 mm (climbs steeper than 45°, descents, flats).
+        let leg = k / 100;
+        let s = (k % 100) as f64 * 0.12;
+        let x = if leg % 2 == 0 { -6.0 + s } else { 6.0 - s };
+        let p = DVec3::new(x, -2.0 + leg as f64 * 1.3, -0.5 + 1.5 * (3.0 * t).sin());
+        strokes.push(stroke(prev, p, DVec3::Z, false, 2 + k as u32));
+        prev = p;
+    }
+    let block = || {
+        Stock::block(
+            DVec3::new(-12.0, -8.0, -6.0),
+            DVec3::new(12.0, 10.0, 0.0),
+            0.05,
+        )
+    };
+    let mut par = block();
+    let (_, _, cuts) = run(&mut par, tool, strokes.clone());
+    let mut sim = Simulator::new(block());
+    let mut total = 0.0;
+    for s in &strokes {
+        total += sim.step(s, &tool).removed;
+    }
+    let g = par.grid;
+    let mut worst = 0.0f64;
+    for j in 0..g.ny {
+        for i in 0..g.nx {
+            let (a, b) = (par.top(i, j), sim.stock.top(i, j));
+            let d = match (a, b) {
+                (Some(a), Some(b)) => (a - b).abs(),
+                (None, None) => 0.0,
+                _ => f64::INFINITY,
+            };
+            worst = worst.max(d);
+        }
+    }
+    assert!(worst < 1e-5, "a column differs by {worst} mm");
+    let removed: f64 = cuts.iter().map(|c| c.removed).sum();
+    assert!(removed > 100.0, "the path cuts: {removed} mm³");
+    assert!(
+        (removed - total).abs() < 1e-6 * total,
+        "{removed} vs {total}"
+    );
+}
+
 #[test]
 fn a_rapid_through_stock_and_a_shank_in_the_material_are_reported_on_their_lines() {
     let mut tool = ToolBody::new(Shape::Flat { radius: 3.0 });

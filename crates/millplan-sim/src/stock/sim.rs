@@ -141,6 +141,44 @@ pub struct Apply<'a> {
     /// Highest material anywhere when the run began: the shank and holder are
     /// tested only where they can reach below it.
     pub max_top: f64,
+    /// Where the next ball placement will stand when the next stroke
+    /// continues this one as placements too ([`next_placement`]): cells it
+    /// is sure to cut at least as low are left to it.
+    pub next: Option<DVec3>,
+}
+
+/// The number of ball placements a stroke is applied as, or `None` when it
+/// is swept exactly (not a vertical ball, too long, or low enough for the
+/// shank or holder to meet material).
+fn placements(s: &Stroke, tool: &ToolBody, g: &Grid, max_top: f64) -> Option<usize> {
+    if !s.vertical() || !matches!(tool.shape, Shape::Ball { .. }) {
+        return None;
+    }
+    let reach_noncut = s.p0.z.min(s.p1.z) + tool.flute < max_top;
+    let len = (s.p1 - s.p0).length();
+    if reach_noncut || len > 40.0 * g.res {
+        return None;
+    }
+    // Balls placed δ apart miss at most δ²/8R between them: δ = √(0.08·R·res)
+    // keeps that to a hundredth of a cell (and δ is never below a cell).
+    let step = g.res.max((0.08 * tool.radius() * g.res).sqrt());
+    Some(((len / step).ceil() as usize).max(1))
+}
+
+/// The first ball placement of stroke `k` of `list` when it continues stroke
+/// k − 1 and is applied as placements; `None` otherwise.
+pub fn next_placement(strokes: &Strokes, k: usize, g: &Grid, max_top: f64) -> Option<DVec3> {
+    let list = &strokes.strokes;
+    if k >= list.len() || !continues(list, k) {
+        return None;
+    }
+    let s = &list[k];
+    let n = placements(s, &strokes.tools[s.tool as usize], g, max_top)?;
+    Some(if n == 1 {
+        s.p1
+    } else {
+        s.p0.lerp(s.p1, 1.0 / n as f64)
+    })
 }
 
 /// Applies one stroke to a band of rows.
@@ -160,19 +198,23 @@ fn apply_vertical(band: &mut Band, s: &Stroke, a: &Apply, out: &mut StrokeCut) {
     let n = DVec2::new(-sw.u.y, sw.u.x);
     // A ball on a stroke of up to 40 cells: the ball placed at steps along
     // it (cheaper than the exact capsule over so short a stroke).
-    if matches!(tool.shape, Shape::Ball { .. }) && !reach_noncut && sw.len <= 40.0 * g.res {
-        // Balls placed δ apart miss at most δ²/8R between them: δ = √(0.08·R·res)
-        // keeps that to a hundredth of a cell (and δ is never below a cell).
-        let step = g.res.max((0.08 * tool.radius() * g.res).sqrt());
-        let k = ((sw.len / step).ceil() as usize).max(1);
-        for m in 1..=k {
-            let q0 = s.p0.lerp(s.p1, (m - 1) as f64 / k as f64);
-            let q1 = if m == k {
+    if let Some(k) = placements(s, tool, g, a.max_top) {
+        let at = |m: usize| {
+            if m == k {
                 s.p1
             } else {
                 s.p0.lerp(s.p1, m as f64 / k as f64)
+            }
+        };
+        for m in 1..=k {
+            let next = if m < k { Some(at(m + 1)) } else { a.next };
+            let pose = Placement {
+                q0: at(m - 1),
+                q1: at(m),
+                next,
+                cont: m > 1 || a.continues,
             };
-            ball_pose(band, q0, q1, m > 1 || a.continues, tool.radius(), g, n, out);
+            ball_pose(band, &pose, tool.radius(), g, n, out);
         }
         return;
     }
@@ -243,35 +285,57 @@ fn band_rows(band: &Band, g: &Grid, ya: f64, yb: f64) -> Option<(usize, usize)> 
     (ja <= jb).then_some((ja, jb))
 }
 
-/// A ball of radius `r` placed with its tip at `q1`, coming from `q0`: when
-/// `cont` (the ball at q0 was applied) and it does not descend, only the
-/// cells ahead of the bisector of q0–q1 can change.
-#[allow(clippy::too_many_arguments)]
-fn ball_pose(
-    band: &mut Band,
+/// One ball placement: the tip at `q1`, coming from `q0` (applied when
+/// `cont`), going on to `next` (to be applied after it).
+struct Placement {
     q0: DVec3,
     q1: DVec3,
+    next: Option<DVec3>,
     cont: bool,
-    r: f64,
-    g: &Grid,
-    n: DVec2,
-    out: &mut StrokeCut,
-) {
+}
+
+/// How far ahead of the bisector of a–b (horizontal distance, tips at a then
+/// b) the ball at b is sure to stand no higher than the ball at a: anywhere
+/// ahead when b is not higher; when it rises by Δ, from l/4 + √(l²/16 + Δ·r²/l)
+/// on (the mirror of the bound behind a bisector in [`ball_pose`]).
+fn lower_ahead(l: f64, rise: f64, r: f64) -> f64 {
+    if rise > 0.0 {
+        0.25 * l + (l * l / 16.0 + rise * r * r / l.max(1e-12)).sqrt()
+    } else {
+        0.0
+    }
+}
+
+/// A ball of radius `r` placed as `pose` says: when `cont` (the ball at q0
+/// was applied) and it does not descend, only the cells ahead of the
+/// bisector of q0–q1 can change; with a `next` placement, cells far enough
+/// ahead of the bisector of q1–next are left to it, since it cuts them at
+/// least as low (and applies to every cell ahead of that bisector).
+fn ball_pose(band: &mut Band, pose: &Placement, r: f64, g: &Grid, n: DVec2, out: &mut StrokeCut) {
+    let (q0, q1) = (pose.q0, pose.q1);
     let d = (q1 - q0).truncate();
     let l = d.length();
-    let front_only = cont && l > 1e-12;
+    let front_only = pose.cont && l > 1e-12;
     let u = d.normalize_or_zero();
+    // The far side of the strip: cells whose distance ahead of the next
+    // bisector is at least `ahead` are the next placement's.
+    let back = pose.next.and_then(|qn| {
+        let dn = (qn - q1).truncate();
+        let ln = dn.length();
+        (ln > 1e-12).then(|| {
+            let un = dn / ln;
+            let ahead = lower_ahead(ln, qn.z - q1.z, r);
+            // Points p with (p − m)·un < 0 are kept, m on the line `ahead`
+            // beyond the bisector.
+            ((q1.truncate() + qn.truncate()) * 0.5 + un * ahead, un)
+        })
+    });
     // Behind the bisector of q0–q1 (w = distance behind it) the ball rises:
     // d1² − d0² = 2·l·w, so d1 − d0 ≥ l·w/r, and the underside's slope is at
     // least d/r, so it rises by at least l·w·d0/r² ≥ l·w·(w − l/2)/r². A cell
     // can go lower only if that is less than the drop Δ = z0 − z1: none
     // farther behind than w_max = l/4 + √(l²/16 + Δ·r²/l).
-    let drop = (q0.z - q1.z).max(0.0);
-    let w_max = if drop > 0.0 {
-        0.25 * l + (l * l / 16.0 + drop * r * r / l.max(1e-12)).sqrt()
-    } else {
-        0.0
-    };
+    let w_max = lower_ahead(l, q0.z - q1.z, r);
     let mid = (q0.truncate() + q1.truncate()) * 0.5 - u * w_max;
     let c = q1.truncate();
     let Some((ja, jb)) = band_rows(band, g, c.y - r, c.y + r) else {
@@ -304,6 +368,20 @@ fn ball_pose(
                     xb = xb.min(x);
                 }
             } else if (y - mid.y) * u.y < 0.0 {
+                continue;
+            }
+        }
+        if let Some((m, un)) = back {
+            // Keep (p − m)·un < 0, with a cell's margin for the rounding of
+            // the span to cell centres.
+            if un.x.abs() >= 1e-15 {
+                let x = m.x - (y - m.y) * un.y / un.x;
+                if un.x > 0.0 {
+                    xb = xb.min(x + g.res);
+                } else {
+                    xa = xa.max(x - g.res);
+                }
+            } else if (y - m.y) * un.y >= g.res {
                 continue;
             }
         }
@@ -423,6 +501,21 @@ fn half_plane_row(m: DVec2, u: DVec2, y: f64, xa: f64, xb: f64) -> Option<(f64, 
 
 const L: usize = 8;
 
+/// Per number of valid lanes: 0 for a valid lane, −∞ for a masked one.
+const PAD: [[f32; L]; L + 1] = {
+    let mut t = [[0.0f32; L]; L + 1];
+    let mut v = 0;
+    while v <= L {
+        let mut l = v;
+        while l < L {
+            t[v][l] = f32::NEG_INFINITY;
+            l += 1;
+        }
+        v += 1;
+    }
+    t
+};
+
 /// Per-lane sums of [`ball_row`].
 struct Lanes {
     removed: [f32; L],
@@ -431,6 +524,8 @@ struct Lanes {
     /// Lateral offsets (across the feed) of the cells cut into.
     lmin: [f32; L],
     lmax: [f32; L],
+    /// Something was removed since the last flush.
+    dirty: bool,
 }
 
 impl Lanes {
@@ -441,14 +536,19 @@ impl Lanes {
             hi: [f32::NEG_INFINITY; L],
             lmin: [f32::INFINITY; L],
             lmax: [f32::NEG_INFINITY; L],
+            dirty: false,
         }
     }
 
     /// Moves the removed lengths into `out` (in f64, row by row, so small
     /// removals do not vanish in a large f32 sum).
     fn flush_removed(&mut self, out: &mut StrokeCut) {
+        if !self.dirty {
+            return;
+        }
         out.removed += self.removed.iter().map(|v| *v as f64).sum::<f64>();
         self.removed = [0.0; L];
+        self.dirty = false;
     }
 
     fn finish(mut self, out: &mut StrokeCut) {
@@ -511,24 +611,27 @@ fn ball_row(
         }
         let before = acc.removed;
         let mut k0 = a;
-        while k0 + L <= b + 1 {
-            let t: &mut [f32; L] = (&mut top[k0..k0 + L]).try_into().expect("eight cells");
-            let bb: &[f32; L] = bot[k0..k0 + L].try_into().expect("eight cells");
-            ball_group(t, bb, k0 as f32, dx0, res, under0, zc, lat, acc);
+        while k0 <= b {
+            // Eight cells from k0, those beyond b masked off; past the row's
+            // end, a padded copy.
+            let m = (b + 1 - k0).min(L);
+            if k0 + L <= top.len() {
+                let t: &mut [f32; L] = (&mut top[k0..k0 + L]).try_into().expect("eight cells");
+                let bb: &[f32; L] = bot[k0..k0 + L].try_into().expect("eight cells");
+                ball_group(t, bb, m, k0 as f32, dx0, res, under0, zc, lat, acc);
+            } else {
+                let mut t = [0.0f32; L];
+                let mut bb = [0.0f32; L];
+                t[..m].copy_from_slice(&top[k0..k0 + m]);
+                bb[..m].copy_from_slice(&bot[k0..k0 + m]);
+                ball_group(&mut t, &bb, m, k0 as f32, dx0, res, under0, zc, lat, acc);
+                top[k0..k0 + m].copy_from_slice(&t[..m]);
+            }
             k0 += L;
-        }
-        if k0 <= b {
-            // The rest, padded with empty cells.
-            let m = b + 1 - k0;
-            let mut t = [0.0f32; L];
-            let mut bb = [0.0f32; L];
-            t[..m].copy_from_slice(&top[k0..=b]);
-            bb[..m].copy_from_slice(&bot[k0..=b]);
-            ball_group(&mut t, &bb, k0 as f32, dx0, res, under0, zc, lat, acc);
-            top[k0..=b].copy_from_slice(&t[..m]);
         }
         if acc.removed != before {
             bmax[kb] = block_max(top, kb);
+            acc.dirty = true;
         }
     }
 }
@@ -539,6 +642,7 @@ fn ball_row(
 fn ball_group(
     t: &mut [f32; L],
     b: &[f32; L],
+    valid: usize,
     k0: f32,
     dx0: f32,
     res: f32,
@@ -549,11 +653,13 @@ fn ball_group(
 ) {
     const LANE: [f32; L] = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
     let base = dx0 + k0 * res;
+    // A masked lane is outside the ball (u = −∞): left as it is.
+    let pad = &PAD[valid.min(L)];
     let mut under = [0.0f32; L];
     let mut live = [0u32; L];
     for l in 0..L {
         let dx = base + LANE[l] * res;
-        let u = under0 - dx * dx;
+        let u = (under0 - dx * dx) + pad[l];
         under[l] = u;
         let gap = zc - t[l];
         // The ball's underside zc − √u is below the top iff gap < 0 or gap² < u.
@@ -1120,6 +1226,7 @@ impl Simulator {
                 tool,
                 continues,
                 max_top: self.max_top,
+                next: None,
             },
             &mut out,
         );
@@ -1181,6 +1288,7 @@ pub fn simulate(
                         tool,
                         continues: cont[k],
                         max_top,
+                        next: next_placement(strokes, k + 1, &grid, max_top),
                     };
                     let (ylo, yhi) = y_reach(s, tool, max_top);
                     let mut acc = StrokeCut::default();
