@@ -393,6 +393,66 @@ fn leaving_cells_to_the_next_ball_placement_changes_no_column() {
     );
 }
 
+/// A flat end mill whose axis turns by 30° along a 0.2 mm stroke, cutting
+/// 1 mm into a block (the rim swings by more than a millimetre): placed as
+/// densely as the part below the block's top needs (its long flutes above
+/// the top do not count), it leaves the stock of a thousand short strokes
+/// each turning by 0.03°.
+#[test]
+fn a_turning_axis_is_placed_as_densely_as_the_material_needs() {
+    let mut tool = ToolBody::new(Shape::Flat { radius: 3.0 });
+    tool.flute = 40.0;
+    let tilt = |deg: f64| {
+        let t = deg.to_radians();
+        DVec3::new(t.sin(), 0.0, t.cos())
+    };
+    let (p0, p1) = (DVec3::new(-0.1, 0.0, -1.0), DVec3::new(0.1, 0.0, -1.0));
+    let block = || {
+        Stock::block(
+            DVec3::new(-12.0, -6.0, -6.0),
+            DVec3::new(12.0, 6.0, 0.0),
+            0.05,
+        )
+    };
+    let mut one = Stroke {
+        a0: tilt(-15.0),
+        a1: tilt(15.0),
+        ..stroke(p0, p1, DVec3::Z, false, 1)
+    };
+    one.mv = 0;
+    let mut coarse = block();
+    let (_, _, cuts) = run(&mut coarse, tool, vec![one]);
+    let mut fine = Simulator::new(block());
+    let n = 1000;
+    for k in 0..n {
+        let (t0, t1) = (k as f64 / n as f64, (k + 1) as f64 / n as f64);
+        let s = Stroke {
+            p0: p0.lerp(p1, t0),
+            p1: p0.lerp(p1, t1),
+            a0: one.axis_at(t0),
+            a1: one.axis_at(t1),
+            ..one
+        };
+        fine.step(&s, &tool);
+    }
+    let g = coarse.grid;
+    let mut worst = 0.0f64;
+    for j in 0..g.ny {
+        for i in 0..g.nx {
+            if let (Some(a), Some(b)) = (coarse.top(i, j), fine.stock.top(i, j)) {
+                worst = worst.max((a - b).abs());
+            }
+        }
+    }
+    let removed = cuts[0].removed;
+    let fine_removed = block().volume() - fine.stock.volume();
+    assert!(worst < 1e-4, "a column differs by {worst} mm");
+    assert!(
+        (removed - fine_removed).abs() < 1e-5 * fine_removed,
+        "{removed} vs {fine_removed} mm³"
+    );
+}
+
 #[test]
 fn a_rapid_through_stock_and_a_shank_in_the_material_are_reported_on_their_lines() {
     let mut tool = ToolBody::new(Shape::Flat { radius: 3.0 });

@@ -857,8 +857,19 @@ fn apply_tilted(band: &mut Band, s: &Stroke, a: &Apply, out: &mut StrokeCut) {
     let tool = a.tool;
     let g = &a.grid;
     let turn = s.a0.dot(s.a1).clamp(-1.0, 1.0).acos();
-    // The cutting part's far end moves most when the axis turns.
-    let travel = (s.p1 - s.p0).length() + turn * tool.flute.min(10.0 * tool.radius());
+    // When the axis turns, a point h up the axis and ρ from it moves by at
+    // most turn·(h + ρ); only the part that can be below the highest
+    // material counts: a point h up the axis stands at least h·a_z − R·sin γ
+    // above the tip.
+    let az = s.a0.z.min(s.a1.z);
+    let below_top = if az > 0.2 {
+        let sin_g = (1.0 - az * az).max(0.0).sqrt();
+        ((a.max_top - s.p0.z.min(s.p1.z) + tool.reach() * sin_g) / az).max(0.0)
+    } else {
+        f64::INFINITY
+    };
+    let arm = tool.flute.min(10.0 * tool.radius()).min(below_top) + tool.reach();
+    let travel = (s.p1 - s.p0).length() + turn * arm;
     // Half a cell; for a ball, placements δ apart miss at most δ²/8R between
     // them, a hundredth of a cell at δ = √(0.08·R·res), as in the vertical case.
     let step = match tool.shape {
