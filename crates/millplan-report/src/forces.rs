@@ -1,7 +1,7 @@
 //! The per-move force table and the report of `millplan force` and
 //! `millplan feed`: loads against time with the limits drawn.
 
-use crate::html::simple_report;
+use crate::html::{report_page, Notes};
 use crate::svg::{line_plot, Series};
 use millplan_plan::force::MoveForces;
 use std::fmt::Write;
@@ -43,6 +43,7 @@ pub struct Quantity<'a> {
 pub fn report(
     title: &str,
     intro: &str,
+    notes: &Notes,
     rows: &[(String, String)],
     runs: &[(&str, &[MoveForces])],
     quantities: &[Quantity],
@@ -90,5 +91,5 @@ pub fn report(
             )
         })
         .collect();
-    simple_report(title, intro, rows, &figures)
+    report_page(title, intro, notes, rows, &figures)
 }

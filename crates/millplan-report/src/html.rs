@@ -157,34 +157,19 @@ pub fn speed_report(title: &str, i: &SpeedInputs, s: &Summary, rows: &[PointRow]
             .map(|(i, r)| (i as f64, f(r)))
             .collect::<Vec<_>>()
     };
-    let mut h = String::new();
+    let mut h = page_start(title);
     let _ = write!(
         h,
-        "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title><style>\
-         body{{font-family:sans-serif;margin:24px;max-width:1100px;color:#222}}\
-         table{{border-collapse:collapse;margin:8px 0 20px}}td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}\
-         th{{background:#f4f4f4}}td:first-child{{text-align:left}}figure{{margin:10px 0 24px}}\
-         table.inputs th{{text-align:left}}table.inputs td{{text-align:left}}\
-         .warnings{{border:2px solid #c62828;background:#fdecea;padding:8px 14px;margin:12px 0}}\
-         .verdict{{border-left:4px solid #2e7d32;background:#f1f8e9;padding:8px 14px;margin:12px 0}}</style></head><body>\
-         <h1>{t}</h1><p>Constant cutting speed vc = {vc} m/min by per-point spindle speed n = 1000·vc/(π·D<sub>w</sub>).</p>",
-        t = esc(title)
+        "<p>Constant cutting speed vc = {vc} m/min by per-point spindle speed n = 1000·vc/(π·D<sub>w</sub>).</p>"
     );
     header(&mut h, i);
-    if !i.warnings.is_empty() {
-        h.push_str(
-            "<div class=\"warnings\" id=\"warnings\" role=\"alert\"><strong>Warnings</strong><ul>",
-        );
-        for w in &i.warnings {
-            let _ = write!(h, "<li>{}</li>", esc(w));
-        }
-        h.push_str("</ul></div>");
-    }
-    h.push_str("<div class=\"verdict\" id=\"verdict\"><strong>Verdict</strong>");
-    for p in speed_verdict(i, s, rows) {
-        let _ = write!(h, "<p>{}</p>", esc(&p));
-    }
-    h.push_str("</div>");
+    notes(
+        &mut h,
+        &Notes {
+            warnings: i.warnings.clone(),
+            verdict: speed_verdict(i, s, rows),
+        },
+    );
     let row = |h: &mut String, name: &str, v: String| {
         let _ = write!(h, "<tr><td>{}</td><td>{v}</td></tr>", esc(name));
     };
@@ -400,6 +385,53 @@ fn limit_line(n: usize, y: f64) -> Vec<(f64, f64)> {
     vec![(0.0, y), (n.saturating_sub(1) as f64, y)]
 }
 
+/// What a report says before its tables: warnings (shown in a red box at
+/// the top: what to look at before using the result) and a verdict in words
+/// (what changed and what it buys). Either may be empty.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Notes {
+    pub warnings: Vec<String>,
+    pub verdict: Vec<String>,
+}
+
+/// The page's head (style, title) up to the heading.
+fn page_start(title: &str) -> String {
+    let mut h = String::new();
+    let _ = write!(
+        h,
+        "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title><style>\
+         body{{font-family:sans-serif;margin:24px;max-width:1100px;color:#222}}\
+         table{{border-collapse:collapse;margin:8px 0 20px}}td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}\
+         th{{background:#f4f4f4}}td:first-child{{text-align:left}}figure{{margin:10px 0 24px}}\
+         table.inputs th{{text-align:left}}table.inputs td{{text-align:left}}\
+         .warnings{{border:2px solid #c62828;background:#fdecea;padding:8px 14px;margin:12px 0}}\
+         .verdict{{border-left:4px solid #2e7d32;background:#f1f8e9;padding:8px 14px;margin:12px 0}}</style></head><body>\
+         <h1>{t}</h1>",
+        t = esc(title)
+    );
+    h
+}
+
+/// The warnings box and the verdict (each left out when empty).
+fn notes(h: &mut String, n: &Notes) {
+    if !n.warnings.is_empty() {
+        h.push_str(
+            "<div class=\"warnings\" id=\"warnings\" role=\"alert\"><strong>Warnings</strong><ul>",
+        );
+        for w in &n.warnings {
+            let _ = write!(h, "<li>{}</li>", esc(w));
+        }
+        h.push_str("</ul></div>");
+    }
+    if !n.verdict.is_empty() {
+        h.push_str("<div class=\"verdict\" id=\"verdict\"><strong>Verdict</strong>");
+        for p in &n.verdict {
+            let _ = write!(h, "<p>{}</p>", esc(p));
+        }
+        h.push_str("</div>");
+    }
+}
+
 /// A plain report page: a title, an introduction, a summary table and figures
 /// (SVG with captions). No scripts, no network.
 pub fn simple_report(
@@ -408,16 +440,22 @@ pub fn simple_report(
     rows: &[(String, String)],
     figures: &[(String, String)],
 ) -> String {
-    let mut h = String::new();
-    let _ = write!(
-        h,
-        "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title><style>\
-         body{{font-family:sans-serif;margin:24px;max-width:1100px;color:#222}}\
-         table{{border-collapse:collapse;margin:8px 0 20px}}td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}\
-         td:first-child{{text-align:left}}figure{{margin:10px 0 24px}}</style></head><body><h1>{t}</h1><p>{i}</p><h2>Summary</h2><table>",
-        t = esc(title),
-        i = esc(intro)
-    );
+    report_page(title, intro, &Notes::default(), rows, figures)
+}
+
+/// A report page with warnings and a verdict above its summary table and
+/// figures.
+pub fn report_page(
+    title: &str,
+    intro: &str,
+    n: &Notes,
+    rows: &[(String, String)],
+    figures: &[(String, String)],
+) -> String {
+    let mut h = page_start(title);
+    let _ = write!(h, "<p>{}</p>", esc(intro));
+    notes(&mut h, n);
+    h.push_str("<h2>Summary</h2><table>");
     for (k, v) in rows {
         let _ = write!(h, "<tr><td>{}</td><td>{}</td></tr>", esc(k), esc(v));
     }

@@ -1,6 +1,6 @@
 //! The stock simulation's table and report.
 
-use crate::html::simple_report;
+use crate::html::{report_page, Notes};
 use crate::svg::{self, Series};
 use millplan_geom::TriMesh;
 use millplan_sim::stock::remaining::Remaining;
@@ -59,29 +59,67 @@ pub fn report(
     part: Option<(&Remaining, &TriMesh)>,
 ) -> String {
     let hits = rep.rapid_collisions.len() + rep.holder_collisions.len();
-    let intro = if hits == 0 {
-        format!(
-            "No rapid, shank or holder met material. {} cutting moves removed {:.1} mm³; {} cutting moves cut only air.",
-            rep.cutting_moves, rep.removed_mm3, rep.air_moves
-        )
-    } else {
-        let mut lines: Vec<String> = rep
-            .rapid_collisions
-            .iter()
-            .map(|c| format!("line {}: rapid {:.3} mm into material", c.line, c.depth))
-            .chain(rep.holder_collisions.iter().map(|c| {
-                format!(
-                    "line {}: shank or holder {:.3} mm into material",
-                    c.line, c.depth
-                )
-            }))
-            .take(20)
-            .collect();
-        if hits > 20 {
-            lines.push(format!("and {} more", hits - 20));
+    let intro = format!(
+        "The program run over the stock {stock_spec} at {} mm: what every move removed, where anything but the cutting edge met material, and the stock left.",
+        rep.resolution_mm
+    );
+    let mut warnings: Vec<String> = rep
+        .rapid_collisions
+        .iter()
+        .map(|c| {
+            format!(
+                "COLLISION line {}: rapid {:.3} mm into material",
+                c.line, c.depth
+            )
+        })
+        .chain(rep.holder_collisions.iter().map(|c| {
+            format!(
+                "COLLISION line {}: shank or holder {:.3} mm into material",
+                c.line, c.depth
+            )
+        }))
+        .take(20)
+        .collect();
+    if hits > 20 {
+        warnings.push(format!("and {} more collisions", hits - 20));
+    }
+    let skipped = rep.skipped.total();
+    if skipped > 0 {
+        warnings.push(format!(
+            "{skipped} moves not simulated ({} from or to an unknown position, {} with the axis known only as machine angles, {} without a tool): the stock does not show them",
+            rep.skipped.unknown_position, rep.skipped.unknown_axis, rep.skipped.no_tool
+        ));
+    }
+    if let Some((r, _)) = part {
+        if r.gouged > 0 {
+            warnings.push(format!(
+                "the program cuts into the part on {} facets, down to {:.3} mm below its surface",
+                r.gouged, -r.min
+            ));
         }
-        format!("COLLISIONS: {hits}. {}", lines.join("; "))
-    };
+    }
+    let mut verdict = vec![format!(
+        "{} {:.1} mm³ removed of {:.1} mm³ ({:.1} %) in {:.2} min; the highest removal rate {:.0} mm³/min at line {}; {} of {} cutting moves cut only air.",
+        if hits == 0 {
+            "No rapid, shank or holder met material."
+        } else {
+            "Collisions: see the warnings."
+        },
+        rep.removed_mm3,
+        rep.stock_before_mm3,
+        100.0 * rep.removed_mm3 / rep.stock_before_mm3.max(1e-12),
+        rep.minutes,
+        rep.max_mrr_mm3_min,
+        rep.max_mrr_line,
+        rep.air_moves,
+        rep.cutting_moves + rep.air_moves
+    )];
+    if let Some((r, _)) = part {
+        verdict.push(format!(
+            "Material left on the part: {:.3} to {:.3} mm, mean {:.3} mm.",
+            r.min, r.max, r.mean
+        ));
+    }
     let mut rows: Vec<(String, String)> = vec![
         ("Stock".into(), stock_spec.into()),
         (
@@ -185,14 +223,5 @@ pub fn report(
             }],
         ),
     ));
-    let mut h = simple_report(title, &intro, &rows, &figures);
-    if hits > 0 {
-        // The warning sits in a box at the top.
-        h = h.replacen(
-            "<p>COLLISIONS",
-            "<p style=\"border:2px solid #d62728;padding:8px\">COLLISIONS",
-            1,
-        );
-    }
-    h
+    report_page(title, &intro, &Notes { warnings, verdict }, &rows, &figures)
 }

@@ -102,7 +102,9 @@ fn a_rapid_through_stock_and_a_shank_in_the_wall_exit_3_with_their_lines() {
     assert_eq!(mesh.len(), 84 + 50 * tris);
     let html = std::fs::read_to_string(&report).expect("report");
     assert!(
-        html.contains("COLLISIONS: ") && html.contains("<svg"),
+        html.contains("id=\"warnings\"")
+            && html.contains("COLLISION line")
+            && html.contains("<svg"),
         "report"
     );
 }

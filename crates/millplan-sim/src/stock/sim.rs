@@ -141,10 +141,6 @@ pub struct Apply<'a> {
     /// Highest material anywhere when the run began: the shank and holder are
     /// tested only where they can reach below it.
     pub max_top: f64,
-    /// Where the next ball placement will stand when the next stroke
-    /// continues this one as placements too ([`next_placement`]): cells it
-    /// is sure to cut at least as low are left to it.
-    pub next: Option<DVec3>,
 }
 
 /// The number of ball placements a stroke is applied as, or `None` when it
@@ -163,22 +159,6 @@ fn placements(s: &Stroke, tool: &ToolBody, g: &Grid, max_top: f64) -> Option<usi
     // keeps that to a hundredth of a cell (and δ is never below a cell).
     let step = g.res.max((0.08 * tool.radius() * g.res).sqrt());
     Some(((len / step).ceil() as usize).max(1))
-}
-
-/// The first ball placement of stroke `k` of `list` when it continues stroke
-/// k − 1 and is applied as placements; `None` otherwise.
-pub fn next_placement(strokes: &Strokes, k: usize, g: &Grid, max_top: f64) -> Option<DVec3> {
-    let list = &strokes.strokes;
-    if k >= list.len() || !continues(list, k) {
-        return None;
-    }
-    let s = &list[k];
-    let n = placements(s, &strokes.tools[s.tool as usize], g, max_top)?;
-    Some(if n == 1 {
-        s.p1
-    } else {
-        s.p0.lerp(s.p1, 1.0 / n as f64)
-    })
 }
 
 /// Applies one stroke to a band of rows.
@@ -207,7 +187,10 @@ fn apply_vertical(band: &mut Band, s: &Stroke, a: &Apply, out: &mut StrokeCut) {
             }
         };
         for m in 1..=k {
-            let next = if m < k { Some(at(m + 1)) } else { a.next };
+            // The next placement of the same stroke; the stroke's last
+            // leaves nothing to the next stroke, so that each stroke's
+            // removal is its own.
+            let next = (m < k).then(|| at(m + 1));
             let pose = Placement {
                 q0: at(m - 1),
                 q1: at(m),
@@ -611,10 +594,16 @@ fn ball_row(
         }
         let before = acc.removed;
         let mut k0 = a;
-        while k0 <= b {
-            // Eight cells from k0, those beyond b masked off; past the row's
-            // end, a padded copy.
-            let m = (b + 1 - k0).min(L);
+        while k0 + L <= b + 1 {
+            let t: &mut [f32; L] = (&mut top[k0..k0 + L]).try_into().expect("eight cells");
+            let bb: &[f32; L] = bot[k0..k0 + L].try_into().expect("eight cells");
+            ball_group(t, bb, L, k0 as f32, dx0, res, under0, zc, lat, acc);
+            k0 += L;
+        }
+        if k0 <= b {
+            // The rest: eight cells with those beyond b masked off, or past
+            // the row's end a padded copy.
+            let m = b + 1 - k0;
             if k0 + L <= top.len() {
                 let t: &mut [f32; L] = (&mut top[k0..k0 + L]).try_into().expect("eight cells");
                 let bb: &[f32; L] = bot[k0..k0 + L].try_into().expect("eight cells");
@@ -622,12 +611,11 @@ fn ball_row(
             } else {
                 let mut t = [0.0f32; L];
                 let mut bb = [0.0f32; L];
-                t[..m].copy_from_slice(&top[k0..k0 + m]);
-                bb[..m].copy_from_slice(&bot[k0..k0 + m]);
+                t[..m].copy_from_slice(&top[k0..=b]);
+                bb[..m].copy_from_slice(&bot[k0..=b]);
                 ball_group(&mut t, &bb, m, k0 as f32, dx0, res, under0, zc, lat, acc);
-                top[k0..k0 + m].copy_from_slice(&t[..m]);
+                top[k0..=b].copy_from_slice(&t[..m]);
             }
-            k0 += L;
         }
         if acc.removed != before {
             bmax[kb] = block_max(top, kb);
@@ -1237,7 +1225,6 @@ impl Simulator {
                 tool,
                 continues,
                 max_top: self.max_top,
-                next: None,
             },
             &mut out,
         );
@@ -1299,7 +1286,6 @@ pub fn simulate(
                         tool,
                         continues: cont[k],
                         max_top,
-                        next: next_placement(strokes, k + 1, &grid, max_top),
                     };
                     let (ylo, yhi) = y_reach(s, tool, max_top);
                     let mut acc = StrokeCut::default();

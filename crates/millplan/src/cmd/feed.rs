@@ -509,6 +509,7 @@ fn write_extras(
         let html = millplan_report::forces::report(
             "millplan feed: loads before and after",
             "Per move, the largest load of its strokes against the time the move starts; the black line is the limit at the move's spindle speed.",
+            &feed_notes(summary),
             &rows,
             &[("input", &before.moves), ("output", &after.moves)],
             &quantities(limits, machine),
@@ -516,6 +517,94 @@ fn write_extras(
         outputs.write(r, html.as_bytes())?;
     }
     Ok(())
+}
+
+/// Warnings shared by `force` and `feed`: moves over a limit, moves whose
+/// loads are missing, moves not simulated.
+fn load_warnings(v: &serde_json::Value, over: &str, lines: &str) -> Vec<String> {
+    let n = |k: &str| v[k].as_u64().unwrap_or(0);
+    let mut w = Vec::new();
+    if n(over) > 0 {
+        w.push(format!(
+            "{} moves exceed a limit (lines {}{})",
+            n(over),
+            v[lines]
+                .as_array()
+                .map(|a| a
+                    .iter()
+                    .map(|x| x.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "))
+                .unwrap_or_default(),
+            if n(over) > 20 { ", …" } else { "" }
+        ));
+    }
+    if n("unmodelled_moves") > 0 {
+        w.push(format!(
+            "{} moves removed material the model could not load (spindle stopped, or no edge ahead of the feed in material): their loads are missing",
+            n("unmodelled_moves")
+        ));
+    }
+    if n("skipped_moves") > 0 {
+        w.push(format!(
+            "{} moves not simulated (unknown position or axis, no tool): their loads are missing",
+            n("skipped_moves")
+        ));
+    }
+    w
+}
+
+/// The force report's warnings and verdict.
+pub fn force_notes(v: &serde_json::Value) -> millplan_report::html::Notes {
+    let f = |a: &str, b: &str| v[a][b].as_f64().unwrap_or(0.0);
+    millplan_report::html::Notes {
+        warnings: load_warnings(v, "over_limit", "over_limit_lines"),
+        verdict: vec![format!(
+            "Largest loads: F_xy {:.1} N (line {}), torque {:.1} N·mm (line {}), power {:.1} W (line {}), tip deflection {:.4} mm (line {}), over {:.1} s of program.",
+            f("max", "fxy"),
+            v["max_lines"]["fxy"],
+            f("max", "torque"),
+            v["max_lines"]["torque"],
+            f("max", "power"),
+            v["max_lines"]["power"],
+            f("max", "deflection"),
+            v["max_lines"]["deflection"],
+            v["time_s"].as_f64().unwrap_or(0.0)
+        )],
+    }
+}
+
+/// The feed report's warnings and verdict.
+fn feed_notes(v: &serde_json::Value) -> millplan_report::html::Notes {
+    let g = |k: &str| v[k].as_f64().unwrap_or(0.0);
+    let f = |a: &str, b: &str| v[a][b].as_f64().unwrap_or(0.0);
+    let (t0, t1) = (g("time_before_s"), g("time_after_s"));
+    let mut verdict = vec![format!(
+        "Time {t0:.1} s → {t1:.1} s ({:+.1} %); F_xy max {:.1} → {:.1} N, tip deflection {:.4} → {:.4} mm; deciding per block: {}.",
+        100.0 * (t1 / t0.max(1e-9) - 1.0),
+        f("max_before", "fxy"),
+        f("max_after", "fxy"),
+        f("max_before", "deflection"),
+        f("max_after", "deflection"),
+        v["binding"]
+    )];
+    for o in v["operations"].as_array().into_iter().flatten() {
+        let g = |k: &str| o[k].as_f64().unwrap_or(0.0);
+        verdict.push(format!(
+            "Operation {} (line {}, tool {}): {:.1} s → {:.1} s, F_xy max {:.1} → {:.1} N.",
+            o["operation"],
+            o["line"],
+            o["tool"],
+            g("time_before_s"),
+            g("time_after_s"),
+            g("fxy_max_before"),
+            g("fxy_max_after")
+        ));
+    }
+    millplan_report::html::Notes {
+        warnings: load_warnings(v, "over_limit_after", "over_limit_lines"),
+        verdict,
+    }
 }
 
 /// The summary's scalar entries as table rows.

@@ -90,7 +90,9 @@ pub fn run(a: Args) -> CliResult<i32> {
 
 /// `millplan force PATH`: the loads of every move.
 fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32> {
-    use crate::cmd::feed::{load_limits, prepare, quantities, run_forces, summary_rows};
+    use crate::cmd::feed::{
+        force_notes, load_limits, prepare, quantities, run_forces, summary_rows,
+    };
     let mut inputs: Vec<&Path> = vec![path];
     inputs.extend(m.stl.as_deref());
     inputs.extend(m.machine.as_deref());
@@ -131,6 +133,7 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
         let html = millplan_report::forces::report(
             &format!("millplan force: {}", path.display()),
             "Per move, the largest load of its strokes against the time the move starts; the black line is the limit at the move's spindle speed.",
+            &force_notes(&summary),
             &summary_rows(&summary),
             &[("program", &run.moves)],
             &quantities(&limits, &p.machine),
