@@ -15,3 +15,4 @@ pub mod pipeline;
 pub mod reorder;
 pub mod setup;
 pub mod speed;
+pub mod timing;
