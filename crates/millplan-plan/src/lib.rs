@@ -9,6 +9,7 @@ pub mod checks;
 pub mod directions;
 pub mod feed;
 pub mod force;
+pub mod leadtilt;
 pub mod machine;
 pub mod orient;
 pub mod pipeline;
