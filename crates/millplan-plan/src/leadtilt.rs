@@ -5,7 +5,8 @@
 //! and steepest descent of [`millplan_models::leadtilt::search`], subject to
 //!
 //! * tip contact (process-models §1.4c): a negative lead makes the
-//!   zero-speed tip cut; zero lead does when R·(1 − cos T) < ap;
+//!   zero-speed tip cut; zero lead (within 0.01°) does when
+//!   R·(1 − cos T) < ap;
 //! * the shank and holder clear of the part at every point (the capsule
 //!   tests of the setup analysis, `millplan-sim` `access`);
 //! * the machine's rotary limits (`Kinematics::reaches`).
@@ -77,6 +78,11 @@ pub struct Refusals {
     pub rotary_limits: usize,
     pub rotary_limits_points: usize,
 }
+
+/// A lead within this of zero (degrees) counts as zero for the tip rule: a
+/// 3-axis program read through rounded coordinates has leads of a few
+/// thousandths of a degree, and its tip still cuts.
+const ZERO_LEAD: f64 = 0.01;
 
 /// The constraints of the choice.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -264,7 +270,7 @@ pub fn choose(
         // The constraints at every point; the first that fails, with the
         // points where it does.
         let feasible = |l: f64, t: f64| -> Result<(), (Constraint, usize)> {
-            if l < -1e-9 || (l.abs() <= 1e-9 && r * (1.0 - t.to_radians().cos()) < p.ap) {
+            if l < -ZERO_LEAD || (l.abs() <= ZERO_LEAD && r * (1.0 - t.to_radians().cos()) < p.ap) {
                 return Err((Constraint::Tip, 0));
             }
             let reach_fail = machine.kinematics().map_or(0, |k| {
