@@ -271,7 +271,9 @@ fn report(a: &Args, s: &serde_json::Value) {
         let f = |k: &str| c[k].as_f64().unwrap_or(f64::NAN);
         let before = c["objective_before"]
             .as_f64()
-            .map_or("refused".to_string(), |v| format!("{v:.1} {unit}"));
+            .map_or("(the orientation read is refused)".to_string(), |v| {
+                format!("{v:.1} {unit}")
+            });
         outln!(
             "operation {}: lead {:.2}°, tilt {:.2}° (read: {:.2}°, {:.2}°); {} {} → {:.1} {unit}; refused: {} by tip contact, {} by holder collision, {} by rotary limits",
             c["operation"],
