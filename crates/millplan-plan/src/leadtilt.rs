@@ -8,7 +8,9 @@
 //!   zero-speed tip cut; zero lead (within 0.01°) does when
 //!   R·(1 − cos T) < ap;
 //! * the shank and holder clear of the part at every point (the capsule
-//!   tests of the setup analysis, `millplan-sim` `access`);
+//!   tests of the setup analysis, `millplan-sim` `access`; the shank may
+//!   come as near the part as the ball does at that point, so a program's
+//!   own overlap with the STL's chords is not a collision);
 //! * the machine's rotary limits (`Kinematics::reaches`).
 //!
 //! Lead and tilt are taken in each point's FCN frame (kinematics-access-
@@ -155,6 +157,9 @@ struct Point {
     /// Index of the move.
     index: usize,
     centre: DVec3,
+    /// Distance from the centre to the part: the ball's radius, less what
+    /// the program (or the STL's chords) already lets it overlap.
+    clear: f64,
     frame: Fcn,
 }
 
@@ -186,6 +191,7 @@ fn locate(op: &millplan_nc::ir::Operation, r: f64, mesh: &TriMesh, bvh: &Bvh) ->
             Some(Point {
                 index,
                 centre: c,
+                clear: q.distance,
                 frame,
             })
         })
@@ -289,7 +295,10 @@ pub fn choose(
                     let d = q.frame.axis(l, t, p.variant);
                     let c = q.centre;
                     let top = c + d * p.reach;
-                    bvh.capsule_hits_above(c, top, r - tol, None, Some((d, d.dot(c))))
+                    // The shank may come as near the part as the ball
+                    // itself does at this point, no nearer.
+                    let rs = r.min(q.clear) - tol;
+                    bvh.capsule_hits_above(c, top, rs, None, Some((d, d.dot(c))))
                         || (p.holder_radius > 0.0
                             && p.holder_length > 0.0
                             && bvh.capsule_hits_above(

@@ -125,3 +125,57 @@ fn orient_leans_a_ball_on_a_flat_plate() {
         "{back}"
     );
 }
+
+#[path = "../../millplan-nc/tests/shared_data/mod.rs"]
+mod shared_data;
+
+/// The SolidWorks CAM glue-interface pair of `../shared/data` (a D14 ball
+/// finishing operation among a drill and two flat end mills): only the ball
+/// operation is re-oriented, leaning forward (its tip would cut otherwise),
+/// the others are left as they were and said so, and the output reads back
+/// with a tool axis on every re-oriented point.
+#[test]
+fn orient_the_shared_glue_interface_pair() {
+    let (Some(apt), Some(stl)) = (
+        shared_data::file("swcam-apt-stl-pairs/Interface-glue.apt"),
+        shared_data::file("swcam-apt-stl-pairs/Interface-glue.STL"),
+    ) else {
+        return;
+    };
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("glue.apt");
+    let s = |p: &Path| p.to_str().expect("utf8").to_string();
+    let o = bin()
+        .args([
+            "orient",
+            &s(&apt),
+            "--stl",
+            &s(&stl),
+            "--material",
+            "al7075",
+        ])
+        .args(["--json", "-q", "-o", &s(&out)])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let ops = j["operations"].as_array().expect("operations");
+    assert_eq!(ops.len(), 1, "{j}");
+    assert_eq!(ops[0]["operation"], 2);
+    assert!(ops[0]["lead"].as_f64() > Some(0.0), "{j}");
+    let skipped = j["skipped"].as_array().expect("skipped");
+    assert_eq!(skipped.len(), 3, "{j}");
+    assert!(skipped
+        .iter()
+        .all(|k| k["reason"].as_str().is_some_and(|r| r.contains("ball-end"))));
+    let o = bin()
+        .args(["inspect", "--json", "-q", &s(&out)])
+        .output()
+        .expect("runs");
+    assert!(o.status.success());
+    let back: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(
+        back["moves"]["five_axis"].as_u64(),
+        ops[0]["points"].as_u64()
+    );
+}
