@@ -10,6 +10,8 @@
 //!   `kinematics-access-tools.md` §1).
 //! - [`force`]: mechanistic cutting forces, torque, power, tool bending and the
 //!   feed iteration (spec `process-models.md` §0–§2).
+//! - [`leadtilt`]: the lead/tilt frame, both conversions and the lead/tilt
+//!   search (spec `kinematics-access-tools.md` §2, `process-models.md` §2.4).
 //! - [`lobes`]: zero-order stability lobes (spec `process-models.md` §3).
 //! - [`regression`]: the least-squares surrogate of thesis 2.
 
@@ -17,6 +19,7 @@ pub mod contact;
 pub mod cutter;
 pub mod force;
 pub mod kinematics;
+pub mod leadtilt;
 pub mod lobes;
 pub mod regression;
 pub mod wd;

@@ -162,6 +162,33 @@ fn cases(d: &Path, tmp: &Path) -> Vec<Case> {
             ]),
         },
         Case {
+            command: "orient",
+            ok: v(&[
+                "orient",
+                "--json",
+                "--stl",
+                &stl,
+                &apt,
+                "--material",
+                "al7075",
+                "-o",
+                &t("or.apt"),
+            ]),
+            fails: v(&[
+                "orient",
+                "--json",
+                "--stl",
+                &stl,
+                &apt,
+                "--material",
+                "al7075",
+                "--lead-range",
+                "20:10",
+                "-o",
+                &t("or2.apt"),
+            ]),
+        },
+        Case {
             command: "reorder",
             ok: v(&[
                 "reorder",

@@ -210,7 +210,8 @@ pub fn run(a: Args) -> CliResult<i32> {
     let out = write_program(&prog, machine.write_options(target), &a.stl, a.quiet)?;
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
-    Ok(print_result(&a, &prog, &rep))
+    let est = millplan_plan::timing::estimate_program(&prog, &machine);
+    Ok(print_result(&a, &prog, &rep, &est))
 }
 
 /// What was written and what the gouge check found; the exit code.
@@ -218,6 +219,7 @@ fn print_result(
     a: &Args,
     prog: &millplan_nc::Program,
     rep: &millplan_sim::gouge::GougeReport,
+    est: &millplan_plan::timing::TimeEstimate,
 ) -> i32 {
     let s = millplan_nc::stats::summarize(prog, 15000.0);
     if a.json {
@@ -225,7 +227,8 @@ fn print_result(
             "output": a.output.display().to_string(),
             "moves": prog.move_count(),
             "cutting_mm": s.cutting_mm,
-            "time_s": s.time_s,
+            "time_s": est.total_s,
+            "time_nominal_s": est.nominal_s,
             "gouge_check": {
                 "moves_checked": rep.moves_checked,
                 "points_checked": rep.points_checked,
@@ -241,11 +244,12 @@ fn print_result(
         };
     }
     outln!(
-        "wrote {}: {} moves, {:.0} mm cutting, {:.0} s at {} mm/min; gouge check: {} moves at {} points, {}",
+        "wrote {}: {} moves, {:.0} mm cutting, {:.0} s estimated with acceleration ({:.0} s at {} mm/min); gouge check: {} moves at {} points, {}",
         a.output.display(),
         prog.move_count(),
         s.cutting_mm,
-        s.time_s,
+        est.total_s,
+        est.nominal_s,
         a.feed,
         rep.moves_checked,
         rep.points_checked,

@@ -1,0 +1,303 @@
+//! `millplan orient`: lead and tilt per operation by the force model or the
+//! machining time (spec process-models §2.4).
+
+use crate::cmd::cut::load_materials;
+use crate::cmd::{arg, print_diagnostics, read_options, target_for, Range, TargetArg, UnitArg};
+use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::io::{read_program, read_surface, Outputs};
+use millplan_models::leadtilt::{SearchOptions, Variant};
+use millplan_plan::leadtilt::{choose, Objective, Oriented, Params};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+
+/// Choose lead and tilt per ball-end operation (spec process-models §2.4):
+/// a 5° grid over the ranges, then steepest descent from its best node, on
+/// F_xy,max of the force model at --fz (--objective fxy) or on the machining
+/// time estimated with acceleration, the feed scaled to keep the original
+/// F_xy,max (--objective time).
+///
+/// Lead and tilt are taken in each point's frame of feed, cross-feed and the
+/// part's normal (from the STL at the contact), the ball centre kept where
+/// the program has it. A candidate is refused when the zero-speed tip would
+/// cut (negative lead; zero lead, within 0.01°, unless R·(1 − cos tilt) ≥ --ap), when the
+/// shank or holder meets the part at any point, or when the machine's rotary
+/// axes cannot reach it. Writes the re-oriented CL (tool axes on every
+/// point). Exit 3, nothing written, when no operation can be re-oriented.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Program with ball-end operations (APT/CL or G-code).
+    pub path: PathBuf,
+    /// Part surface (STL): the normals at the contacts and the collision
+    /// tests.
+    #[arg(long)]
+    pub stl: PathBuf,
+    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
+    /// Machine file (examples/machine.toml): rotary limits, and the axis
+    /// limits of the time estimate (default: a built-in three-axis machine,
+    /// no rotary limits).
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
+    /// Named material (`millplan force materials` lists them).
+    #[arg(long)]
+    pub material: String,
+    /// A TOML file of further materials (same form as the built-in table).
+    #[arg(long)]
+    pub materials: Option<PathBuf>,
+    /// Lead range LO:HI, degrees.
+    #[arg(long, default_value = "0:30", allow_hyphen_values = true)]
+    pub lead_range: String,
+    /// Tilt range LO:HI, degrees.
+    #[arg(long, default_value = "-30:30", allow_hyphen_values = true)]
+    pub tilt_range: String,
+    /// What to minimise: fxy (F_xy,max at --fz) or time (with the feed
+    /// scaled to the original force level).
+    #[arg(long, value_enum, default_value = "fxy")]
+    pub objective: ObjectiveArg,
+    /// Order of the two rotations: lead-then-tilt (variant 1 of spec
+    /// kinematics-access-tools §2.2) or tilt-then-lead (variant 2).
+    #[arg(long, value_enum, default_value = "lead-then-tilt")]
+    pub variant: VariantArg,
+    /// Feed per tooth the forces are evaluated at, mm.
+    #[arg(long, default_value_t = 0.1)]
+    pub fz: f64,
+    /// Spindle speed, 1/min (default: the program's first cutting S word).
+    #[arg(long)]
+    pub n: Option<f64>,
+    /// Number of flutes.
+    #[arg(long, default_value_t = 2)]
+    pub flutes: usize,
+    /// Helix angle, degrees.
+    #[arg(long, default_value_t = 30.0)]
+    pub helix: f64,
+    /// Axial depth of the engagement the forces are evaluated for, mm.
+    #[arg(long, default_value_t = 0.5)]
+    pub ap: f64,
+    /// Stepover of that engagement, mm.
+    #[arg(long, default_value_t = 0.5)]
+    pub ae: f64,
+    /// The shank's reach: from the ball centre to the holder's face, mm.
+    #[arg(long, default_value_t = 30.0)]
+    pub reach: f64,
+    /// Holder as DIAMETER:LENGTH, mm (default: no holder, the shank alone).
+    #[arg(long)]
+    pub holder: Option<String>,
+    /// Output program (the extension or --to names the dialect).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Dialect to write: fanuc, sinumerik, heidenhain, linuxcnc or apt.
+    #[arg(long, value_enum)]
+    pub to: Option<TargetArg>,
+    /// Unit of a program that does not say: mm or inch.
+    #[arg(long, value_enum)]
+    pub units: Option<UnitArg>,
+    /// Print a machine-readable summary (JSON) on standard output; errors
+    /// too, as JSON on standard error.
+    #[arg(long)]
+    pub json: bool,
+    /// Print no warnings, notes or progress (errors still print).
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum ObjectiveArg {
+    Fxy,
+    Time,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum VariantArg {
+    LeadThenTilt,
+    TiltThenLead,
+}
+
+/// `LO:HI` in degrees, within ±89°.
+fn range(flag: &str, s: &str) -> CliResult<(f64, f64)> {
+    let bad = || {
+        CliError::input(format!(
+            "{flag} {s}: give LO:HI in degrees, LO ≤ HI, within ±89"
+        ))
+    };
+    let (a, b) = s.split_once(':').ok_or_else(bad)?;
+    let (a, b): (f64, f64) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if !(a.is_finite() && b.is_finite() && a <= b && a >= -89.0 && b <= 89.0) {
+        return Err(bad());
+    }
+    Ok((a, b))
+}
+
+fn holder(s: Option<&str>) -> CliResult<(f64, f64)> {
+    let Some(s) = s else {
+        return Ok((0.0, 0.0));
+    };
+    let bad = || {
+        CliError::input(format!(
+            "--holder {s}: give DIAMETER:LENGTH in mm, both positive"
+        ))
+    };
+    let (d, l) = s.split_once(':').ok_or_else(bad)?;
+    let (d, l): (f64, f64) = (
+        d.trim().parse().map_err(|_| bad())?,
+        l.trim().parse().map_err(|_| bad())?,
+    );
+    if !(d.is_finite() && l.is_finite() && d > 0.0 && l > 0.0) {
+        return Err(bad());
+    }
+    Ok((d / 2.0, l))
+}
+
+/// The inputs checked into the pass's parameters (before any file is read).
+fn params(a: &Args) -> CliResult<(Params, f64)> {
+    let lead = range("--lead-range", &a.lead_range)?;
+    let tilt = range("--tilt-range", &a.tilt_range)?;
+    let fz = arg("--fz", a.fz, Range::positive(10.0, "mm"))?;
+    let ap = arg("--ap", a.ap, Range::positive(1000.0, "mm"))?;
+    let ae = arg("--ae", a.ae, Range::positive(1000.0, "mm"))?;
+    let reach = arg("--reach", a.reach, Range::positive(10_000.0, "mm"))?;
+    let helix = arg("--helix", a.helix, Range::from(0.0, 60.0, "degrees"))?;
+    if a.flutes == 0 || a.flutes > 64 {
+        return Err(CliError::input("--flutes: give 1 to 64"));
+    }
+    let n = match a.n {
+        Some(n) => arg("--n", n, Range::positive(crate::cmd::MAX_SPINDLE, "1/min"))?,
+        None => 0.0,
+    };
+    let (holder_radius, holder_length) = holder(a.holder.as_deref())?;
+    let materials = load_materials(a.materials.as_deref())?;
+    let law = materials
+        .get(&a.material)
+        .map_err(|e| CliError::input(format!("--material: {e}")))?
+        .law;
+    Ok((
+        Params {
+            search: SearchOptions {
+                lead,
+                tilt,
+                ..SearchOptions::default()
+            },
+            variant: match a.variant {
+                VariantArg::LeadThenTilt => Variant::LeadThenTilt,
+                VariantArg::TiltThenLead => Variant::TiltThenLead,
+            },
+            objective: match a.objective {
+                ObjectiveArg::Fxy => Objective::Fxy,
+                ObjectiveArg::Time => Objective::Time,
+            },
+            law,
+            flutes: a.flutes,
+            helix: helix.to_radians(),
+            fz,
+            rpm: n,
+            ap,
+            ae,
+            reach,
+            holder_radius,
+            holder_length,
+        },
+        n,
+    ))
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    let (mut p, n) = params(&a)?;
+    let mut inputs: Vec<&Path> = vec![&a.path, &a.stl];
+    inputs.extend(a.machine.as_deref());
+    let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], false)?;
+    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    let parsed = read_program(&a.path, read_options(a.units, None)?)?;
+    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    let target = target_for(a.to, &a.output, parsed.program.source)?;
+    if n <= 0.0 {
+        p.rpm = parsed
+            .program
+            .moves()
+            .find(|m| m.is_cutting() && m.spindle > 0.0)
+            .map(|m| m.spindle)
+            .ok_or_else(|| {
+                CliError::input(format!(
+                    "{}: the program sets no spindle speed; give --n",
+                    a.path.display()
+                ))
+            })?;
+    }
+    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
+    let total = parsed.program.operations.len() as u64;
+    let bar = crate::progress::count(total, "lead/tilt", "operations", !a.quiet);
+    let o = choose(&parsed.program, &mesh, &machine, &p, &|done, _| {
+        bar.set_position(done as u64)
+    })
+    .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
+    bar.finish_and_clear();
+    let summary = summary_json(&a, &o, p.objective);
+    if o.chosen.is_empty() {
+        outputs.commit()?;
+        report(&a, &summary);
+        return Ok(EXIT_FINDINGS);
+    }
+    crate::cmd::write_program_file(
+        &o.program,
+        machine.write_options(target),
+        &mut outputs,
+        &a.output,
+        &a.path,
+        a.quiet,
+    )?;
+    outputs.commit()?;
+    report(&a, &summary);
+    Ok(EXIT_OK)
+}
+
+fn summary_json(a: &Args, o: &Oriented, objective: Objective) -> serde_json::Value {
+    json!({
+        "objective": objective,
+        "operations": o.chosen,
+        "skipped": o.skipped,
+        "output": (!o.chosen.is_empty()).then(|| a.output.display().to_string()),
+    })
+}
+
+fn report(a: &Args, s: &serde_json::Value) {
+    if a.json {
+        crate::cmd::print_json(s.clone());
+        return;
+    }
+    let unit = if s["objective"] == "time" { "s" } else { "N" };
+    for c in s["operations"].as_array().into_iter().flatten() {
+        let f = |k: &str| c[k].as_f64().unwrap_or(f64::NAN);
+        let before = c["objective_before"]
+            .as_f64()
+            .map_or("(the orientation read is refused)".to_string(), |v| {
+                format!("{v:.1} {unit}")
+            });
+        outln!(
+            "operation {}: lead {:.2}°, tilt {:.2}° (read: {:.2}°, {:.2}°); {} {} → {:.1} {unit}; refused: {} by tip contact, {} by holder collision, {} by rotary limits",
+            c["operation"],
+            f("lead"),
+            f("tilt"),
+            f("lead_before"),
+            f("tilt_before"),
+            s["objective"].as_str().unwrap_or(""),
+            before,
+            f("objective_after"),
+            c["refused"]["tip_contact"],
+            c["refused"]["holder_collision"],
+            c["refused"]["rotary_limits"],
+        );
+    }
+    for k in s["skipped"].as_array().into_iter().flatten() {
+        outln!(
+            "operation {}: left as it was: {}",
+            k["operation"],
+            k["reason"].as_str().unwrap_or("")
+        );
+    }
+    match s["output"].as_str() {
+        Some(o) => outln!("wrote {o}"),
+        None => outln!("no operation could be re-oriented: nothing written"),
+    }
+}
