@@ -12,6 +12,7 @@ pub mod force;
 pub mod machine;
 pub mod orient;
 pub mod pipeline;
+pub mod post;
 pub mod reorder;
 pub mod setup;
 pub mod speed;

@@ -634,6 +634,8 @@ impl Machine {
     pub fn write_options(&self, target: Target) -> WriteOptions {
         WriteOptions {
             spindle_decimals: self.control.spindle_decimals,
+            g93_seconds: self.control.g93_f == InverseTimeF::Seconds,
+            g93_rapids: self.control.g93_rapids,
             ..WriteOptions::new(target)
         }
     }

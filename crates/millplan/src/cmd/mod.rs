@@ -11,6 +11,7 @@ pub mod force;
 pub mod gouge;
 pub mod inspect;
 pub mod lobes;
+pub mod post;
 pub mod raster;
 pub mod reorder;
 pub mod setup;
