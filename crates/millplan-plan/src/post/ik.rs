@@ -139,7 +139,8 @@ pub struct OutOfRange {
 /// Candidates of a unit tool axis, pushed onto `out` (every branch and
 /// winding the rotary limits allow). With `hold`, the
 /// axis lies inside the pole cone: each held angle given is kept and the
-/// tilt solved alone (§1.8). Returns the range problem when none fits.
+/// tilt solved alone (§1.8), the exact solutions kept beside them. Returns
+/// the range problem when none fits.
 pub fn candidates(
     kin: &Kinematics,
     r: Roles,
@@ -158,6 +159,17 @@ pub fn candidates(
         Some(held) => {
             for &h in held.iter().take(8) {
                 raw[n] = solve_tilt(kin, r, k, h);
+                n += 1;
+            }
+            // The exact solutions too: where the travel refuses the held
+            // angle's tilt, the turning axis must swing (slowly, near the
+            // pole, where its turn hardly moves the tool).
+            for (f, s) in kin.orientation_ik(k, held.first().copied().unwrap_or(0.0)) {
+                raw[n] = Cand {
+                    first: f,
+                    second: s,
+                    dev: 0.0,
+                };
                 n += 1;
             }
         }
