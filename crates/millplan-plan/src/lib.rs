@@ -16,3 +16,4 @@ pub mod post;
 pub mod reorder;
 pub mod setup;
 pub mod speed;
+pub mod timing;

@@ -98,8 +98,9 @@ impl InverseTimeF {
     }
 }
 
-/// One linear axis: travel (mm, machine coordinates), top speed (mm/min) and
-/// acceleration (mm/s²); `None`: not known.
+/// One linear axis: travel (mm, machine coordinates), top speed (mm/min),
+/// acceleration (mm/s²) and jerk (mm/s³); `None`: not known (the time
+/// estimate then uses conservative defaults, and no jerk limit).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct LinearAxis {
@@ -111,10 +112,12 @@ pub struct LinearAxis {
     pub velocity: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub accel: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jerk: Option<f64>,
 }
 
-/// The drive of one rotary axis: top speed (degrees/min) and acceleration
-/// (degrees/s²). Its travel is in the kinematics ([`RotaryAxis`]
+/// The drive of one rotary axis: top speed (degrees/min), acceleration
+/// (degrees/s²) and jerk (degrees/s³). Its travel is in the kinematics ([`RotaryAxis`]
 /// min/max), the one place the inverse kinematics reads it from.
 ///
 /// [`RotaryAxis`]: millplan_models::kinematics::RotaryAxis
@@ -125,6 +128,8 @@ pub struct RotaryDrive {
     pub velocity: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub accel: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jerk: Option<f64>,
 }
 
 impl RotaryDrive {
@@ -496,6 +501,9 @@ fn check_linear(a: &LinearAxis, name: char) -> Result<(), MachineError> {
     if let Some(v) = a.accel {
         positive(v, &f("accel"), "mm/s²")?;
     }
+    if let Some(v) = a.jerk {
+        positive(v, &f("jerk"), "mm/s³")?;
+    }
     Ok(())
 }
 
@@ -581,6 +589,9 @@ impl Machine {
                     }
                     if let Some(v) = d.accel {
                         positive(v, &f("accel"), "degrees/s²")?;
+                    }
+                    if let Some(v) = d.jerk {
+                        positive(v, &f("jerk"), "degrees/s³")?;
                     }
                 }
             }
@@ -835,6 +846,7 @@ mod tests {
         );
         bad(&|m| m.axes.z.velocity = Some(f64::NAN), "axes.z.velocity");
         bad(&|m| m.axes.z.accel = Some(-1.0), "axes.z.accel");
+        bad(&|m| m.axes.x.jerk = Some(0.0), "axes.x.jerk");
         bad(&|m| m.axes.first.velocity = Some(100.0), "axes");
         let five_axis = |m: &mut Machine| {
             m.kinematics = Some(Kinematics::new(
@@ -847,6 +859,13 @@ mod tests {
                 m.axes.second.accel = Some(0.0);
             },
             "axes.b.accel",
+        );
+        bad(
+            &|m| {
+                five_axis(m);
+                m.axes.first.jerk = Some(f64::NAN);
+            },
+            "axes.a.jerk",
         );
         bad(
             &|m| {

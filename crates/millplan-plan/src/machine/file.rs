@@ -836,12 +836,18 @@ mod tests {
                 max,
                 velocity,
                 accel,
+                jerk,
             } = a;
             assert!(min.is_some() && max.is_some() && velocity.is_some() && accel.is_some());
+            assert!(jerk.is_some());
         }
         for d in [first, second] {
-            let RotaryDrive { velocity, accel } = d;
-            assert!(velocity.is_some() && accel.is_some());
+            let RotaryDrive {
+                velocity,
+                accel,
+                jerk,
+            } = d;
+            assert!(velocity.is_some() && accel.is_some() && jerk.is_some());
         }
         let modal = modal.as_ref().expect("modal");
         assert!(!modal.x.is_empty() && !modal.y.is_empty());
