@@ -417,7 +417,7 @@ fn t9a_g93_word() {
     let mv = posted.program.operations[0].moves[1];
     assert!((mv.feed - 2240.0).abs() < 1e-9, "{}", mv.feed);
     match posted.blocks[1].kind {
-        millplan_plan::post::BlockKind::Feed { nominal_min } => {
+        millplan_plan::timing::MoveKind::Feed { nominal_min } => {
             assert!((nominal_min - 4.4643e-4).abs() < 1e-8, "{nominal_min}")
         }
         k => panic!("{k:?}"),

@@ -35,6 +35,7 @@ pub mod ik;
 
 use crate::machine::{LinearAxis, Machine};
 use crate::orient::letters;
+use crate::timing::{estimate_axes, AxisMove, MoveKind as AxisKind};
 use feed::{g94_machine_f, g94_minutes, tip_deviation, tip_path_length};
 use ik::{candidates, in_pole, is_flip, roles, wrap180, wrapped, Cand, Roles};
 use millplan_geom::DVec3;
@@ -135,38 +136,37 @@ pub struct PostReport {
     /// The block times the posted F words ask for, and rapids at the axes'
     /// top speeds, seconds.
     pub nominal_s: f64,
-    /// The same blocks at the programmed tip feed exactly: what G93 gives.
-    pub time_g93_s: f64,
+    /// The same blocks at the programmed tip feed exactly: what G93 asks
+    /// for, nominal.
+    pub nominal_g93_s: f64,
     /// The same blocks in G94 with the CL feed written as F unconverted (a
     /// plain post): the control applies it to the joints' XYZ distance.
+    pub nominal_g94_s: f64,
+    /// The controller-aware estimate (axis velocities, accelerations, jerk,
+    /// look-ahead: `timing::estimate_axes`) of the posted program, seconds.
+    pub time_s: f64,
+    /// The same estimate at the exact tip feed (G93) and as a plain G94
+    /// post would run.
+    pub time_g93_s: f64,
     pub time_g94_s: f64,
     pub rotary: Vec<AxisRange>,
 }
 
-/// One posted block as the machine moves: X Y Z (mm) and A B C (degrees) of
-/// the joints, whichever rotary axes the machine has (the other stays 0).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PostedBlock {
-    pub target: [f64; 6],
-    pub kind: BlockKind,
-    pub line: u32,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum BlockKind {
-    Rapid,
-    /// The block time the F word asks for, minutes.
-    Feed {
-        nominal_min: f64,
-    },
-}
-
 /// A posted program, its blocks in machine coordinates (one per move, in
-/// order) and the report.
+/// order, as the controller-aware time estimate takes them) and the report.
 #[derive(Clone, Debug)]
 pub struct Posted {
     pub program: Program,
-    pub blocks: Vec<PostedBlock>,
+    /// X Y Z (mm) and A B C (degrees) of the joints per move, with the
+    /// block time its F word asks for.
+    pub blocks: Vec<AxisMove>,
+    /// Per block, the minutes at the CL tip feed exactly (what G93 asks
+    /// for before any slowing) and those of a plain G94 post (the CL feed
+    /// applied to the joints' XYZ distance); 0 on rapids.
+    pub exact_min: Vec<f64>,
+    pub plain_g94_min: Vec<f64>,
+    /// Index of each operation's first block.
+    pub op_starts: Vec<usize>,
     pub report: PostReport,
 }
 
@@ -253,6 +253,7 @@ pub fn post(p: &Program, machine: &Machine, o: &PostOptions) -> Result<Posted, P
     };
     let mut report = PostReport::default();
     let mut blocks = Vec::new();
+    let (mut exact_min, mut plain_g94_min, mut op_starts) = (Vec::new(), Vec::new(), Vec::new());
     let mut ranges = [[f64::INFINITY, f64::NEG_INFINITY]; 2];
     for op in &p.operations {
         let pts = post_operation(op, kin, machine, o, &mut report)?;
@@ -263,7 +264,10 @@ pub fn post(p: &Program, machine: &Machine, o: &PostOptions) -> Result<Posted, P
             }
         }
         let (new_op, b) = build(op, &pts, kin, machine, o, &mut report);
-        blocks.extend(b);
+        op_starts.push(blocks.len());
+        blocks.extend(b.iter().map(|x| x.0));
+        exact_min.extend(b.iter().map(|x| x.1));
+        plain_g94_min.extend(b.iter().map(|x| x.2));
         out.operations.push(new_op);
     }
     let names = kin.kind.rotary_names();
@@ -281,11 +285,49 @@ pub fn post(p: &Program, machine: &Machine, o: &PostOptions) -> Result<Posted, P
         })
         .collect();
     report.blocks = out.move_count();
-    Ok(Posted {
+    let mut posted = Posted {
         program: out,
         blocks,
+        exact_min,
+        plain_g94_min,
+        op_starts,
         report,
-    })
+    };
+    estimate(&mut posted, machine);
+    Ok(posted)
+}
+
+/// The controller-aware estimates (`timing::estimate_axes`: axis
+/// velocities, accelerations, jerk, look-ahead) of the posted blocks as
+/// written, at the exact tip feed (G93) and as a plain G94 post would run.
+fn estimate(posted: &mut Posted, machine: &Machine) {
+    let mut ends = posted.op_starts.clone();
+    ends.push(posted.blocks.len());
+    let with = |minutes: Option<&[f64]>| -> f64 {
+        let mut total = 0.0;
+        for w in ends.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            if b <= a + 1 {
+                continue;
+            }
+            // Each operation from its first block's position (the move
+            // there comes from an unknown place).
+            let moves: Vec<AxisMove> = (a + 1..b)
+                .map(|i| {
+                    let mut m = posted.blocks[i];
+                    if let (Some(t), AxisKind::Feed { .. }) = (minutes, m.kind) {
+                        m.kind = AxisKind::Feed { nominal_min: t[i] };
+                    }
+                    m
+                })
+                .collect();
+            total += estimate_axes(posted.blocks[a].target, &moves, machine).total_s;
+        }
+        total
+    };
+    posted.report.time_s = with(None);
+    posted.report.time_g93_s = with(Some(&posted.exact_min));
+    posted.report.time_g94_s = with(Some(&posted.plain_g94_min));
 }
 
 trait Header {
@@ -800,7 +842,7 @@ fn build(
     machine: &Machine,
     o: &PostOptions,
     report: &mut PostReport,
-) -> (Operation, Vec<PostedBlock>) {
+) -> (Operation, Vec<(AxisMove, f64, f64)>) {
     let mut new = Operation {
         name: op.name.clone(),
         tool: op.tool.clone(),
@@ -860,6 +902,7 @@ fn build(
             feed_mode: FeedMode::PerMinute,
         };
         let kind;
+        let (mut exact_t, mut plain_t) = (0.0, 0.0);
         if p.cl.rapid || i == 0 {
             let prev = i.checked_sub(1).map(|k| pts[k].j);
             let t = prev.map_or(0.0, |a| {
@@ -869,13 +912,13 @@ fn build(
             g93 += t;
             g94 += t;
             if p.cl.rapid {
-                kind = BlockKind::Rapid;
+                kind = AxisKind::Rapid;
             } else {
                 // A first cut from an unknown position: its length and time
                 // are unknown, so it keeps the CL feed per minute.
                 m.kind = MoveKind::Linear;
                 m.feed = p.cl.v;
-                kind = BlockKind::Feed { nominal_min: 0.0 };
+                kind = AxisKind::Feed { nominal_min: 0.0 };
             }
         } else {
             let a = &pts[i - 1];
@@ -910,18 +953,23 @@ fn build(
             } else {
                 m.feed = g94_machine_f(&a.j, &p.j, t);
             }
-            kind = BlockKind::Feed { nominal_min: t };
+            kind = AxisKind::Feed { nominal_min: t };
+            exact_t = exact;
+            plain_t = if plain.is_finite() { plain } else { t };
         }
         m.orient = Some(new.intern_orient(orient_of(kin, &p.c)));
         let src = p.cl.src as usize;
         if first_of[src] == u32::MAX {
             first_of[src] = new.moves.len() as u32;
         }
-        blocks.push(PostedBlock {
-            target: target6(kin, &p.j),
-            kind,
-            line: p.cl.line,
-        });
+        blocks.push((
+            AxisMove {
+                target: target6(kin, &p.j),
+                kind,
+            },
+            exact_t,
+            plain_t,
+        ));
         new.moves.push(m);
     }
     // Events before source move k go before the first posted move of k or
@@ -955,7 +1003,7 @@ fn build(
         );
     }
     report.nominal_s += nominal * 60.0;
-    report.time_g93_s += g93 * 60.0;
-    report.time_g94_s += g94 * 60.0;
+    report.nominal_g93_s += g93 * 60.0;
+    report.nominal_g94_s += g94 * 60.0;
     (new, blocks)
 }

@@ -197,10 +197,12 @@ fn summary(a: &Args, machine: &Machine, target: &str, r: &PostReport) -> Value {
         "slowed_blocks": r.slowed_blocks,
         "null_moves": r.null_moves,
         "max_tip_error_mm": r.max_tip_error_mm,
-        "time_s": r.nominal_s,
-        "time_kind": "nominal",
+        "time_s": r.time_s,
+        "nominal_s": r.nominal_s,
         "time_g93_s": r.time_g93_s,
         "time_g94_s": r.time_g94_s,
+        "nominal_g93_s": r.nominal_g93_s,
+        "nominal_g94_s": r.nominal_g94_s,
         "rotary": r.rotary,
     })
 }
@@ -243,7 +245,8 @@ fn print_text(a: &Args, j: &Value, r: &PostReport) {
         r.slowed_blocks
     );
     outln!(
-        "time {:.1} s nominal; at the CL tip feed (G93) {:.1} s, plain G94 {:.1} s",
+        "time {:.1} s estimated ({:.1} s nominal); at the CL tip feed (G93) {:.1} s, a plain G94 post {:.1} s",
+        r.time_s,
         r.nominal_s,
         r.time_g93_s,
         r.time_g94_s
