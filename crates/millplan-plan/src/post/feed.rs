@@ -17,18 +17,6 @@ pub fn lerp(a: &Joints, b: &Joints, s: f64) -> Joints {
     }
 }
 
-/// Chord sum of the tip path over `n` equal steps.
-fn chords(kin: &Kinematics, a: &Joints, b: &Joints, n: usize) -> f64 {
-    let mut prev = kin.forward(a).0;
-    let mut sum = 0.0;
-    for i in 1..=n {
-        let p = kin.forward(&lerp(a, b, i as f64 / n as f64)).0;
-        sum += (p - prev).length();
-        prev = p;
-    }
-    sum
-}
-
 /// Length of the tool tip's path relative to the workpiece while the joints
 /// go linearly from `a` to `b` (a non-TCP control): the chord sums over n and
 /// 2n steps extrapolated (Richardson: the chord error falls as 1/n², so
@@ -38,11 +26,24 @@ fn chords(kin: &Kinematics, a: &Joints, b: &Joints, n: usize) -> f64 {
 pub fn tip_path_length(kin: &Kinematics, a: &Joints, b: &Joints) -> f64 {
     let turn = (b.first - a.first).abs().max((b.second - a.second).abs());
     if turn < 1e-12 {
-        return (kin.forward(b).0 - kin.forward(a).0).length();
+        return (kin.tip(b) - kin.tip(a)).length();
     }
     let n = ((turn / 2.0).ceil() as usize).clamp(2, 512);
-    let ln = chords(kin, a, b, n);
-    let l2n = chords(kin, a, b, 2 * n);
+    let m = 2 * n;
+    // The 2n steps; every other point gives the n steps.
+    let mut l2n = 0.0;
+    let mut ln = 0.0;
+    let mut prev = kin.tip(a);
+    let mut prev2 = prev;
+    for i in 1..=m {
+        let p = kin.tip(&lerp(a, b, i as f64 / m as f64));
+        l2n += (p - prev).length();
+        prev = p;
+        if i % 2 == 0 {
+            ln += (p - prev2).length();
+            prev2 = p;
+        }
+    }
     (4.0 * l2n - ln) / 3.0
 }
 
@@ -75,7 +76,7 @@ pub fn tip_deviation(kin: &Kinematics, a: &Joints, b: &Joints, p0: DVec3, p1: DV
     (1..DEVIATION_SAMPLES)
         .map(|i| {
             let s = i as f64 / DEVIATION_SAMPLES as f64;
-            segment_distance(kin.forward(&lerp(a, b, s)).0, p0, p1)
+            segment_distance(kin.tip(&lerp(a, b, s)), p0, p1)
         })
         .fold(0.0, f64::max)
 }

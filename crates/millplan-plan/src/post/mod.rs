@@ -325,9 +325,18 @@ fn estimate(posted: &mut Posted, machine: &Machine) {
         }
         total
     };
-    posted.report.time_s = with(None);
-    posted.report.time_g93_s = with(Some(&posted.exact_min));
-    posted.report.time_g94_s = with(Some(&posted.plain_g94_min));
+    let (t, (g93, g94)) = rayon::join(
+        || with(None),
+        || {
+            rayon::join(
+                || with(Some(&posted.exact_min)),
+                || with(Some(&posted.plain_g94_min)),
+            )
+        },
+    );
+    posted.report.time_s = t;
+    posted.report.time_g93_s = g93;
+    posted.report.time_g94_s = g94;
 }
 
 trait Header {
@@ -859,6 +868,15 @@ fn build(
     let mut first_of = vec![u32::MAX; op.moves.len() + 1];
     let rapid_lin = machine.rapid;
     // Per block: path length and times, computed in parallel.
+    // Forward kinematics of every posted point: the distance of its tip
+    // from the CL tip and the angle of its axis from the CL axis.
+    let fk: Vec<(f64, f64)> = pts
+        .par_iter()
+        .map(|p| {
+            let (tip, k) = kin.forward(&p.j);
+            ((tip - p.cl.tip).length(), ik::angle_deg(k, p.cl.k))
+        })
+        .collect();
     let times: Vec<(f64, f64, f64)> = (0..pts.len())
         .into_par_iter()
         .map(|i| {
@@ -882,9 +900,8 @@ fn build(
         .collect();
     let (mut nominal, mut g93, mut g94) = (0.0, 0.0, 0.0);
     for (i, p) in pts.iter().enumerate() {
-        let fk = kin.forward(&p.j);
-        report.max_tip_error_mm = report.max_tip_error_mm.max((fk.0 - p.cl.tip).length());
-        let dev = ik::angle_deg(fk.1, p.cl.k);
+        let (err, dev) = fk[i];
+        report.max_tip_error_mm = report.max_tip_error_mm.max(err);
         report.max_orientation_deviation_deg = report.max_orientation_deviation_deg.max(dev);
         if p.pole {
             report.pole_blocks += 1;
