@@ -585,3 +585,59 @@ fn g94_feed_is_converted_to_the_joint_distance() {
     }
     assert!(checked > 30);
 }
+
+/// A G94 block that turns the table 90° while X, Y and Z move a few µm
+/// would need an F below the machine's lowest feed: it is written in G93
+/// (§1.10.4: its time from the rotary axis's top speed) and counted.
+#[test]
+fn a_g94_block_below_the_lowest_feed_is_written_in_g93() {
+    let kin = Kinematics::new(KinKind::TableAc);
+    let (k0, k1) = (kin.tool_axis(30.0, 0.0), kin.tool_axis(30.0, 90.0));
+    let recs: Vec<Rec> = vec![
+        (true, [0.001, 0.0, 0.0], k0.to_array()),
+        (false, [0.001, 0.0, 0.0], k1.to_array()),
+    ];
+    let mut m = machine(kin);
+    m.axes.second.velocity = Some(18000.0);
+    let posted = post(&program(&recs, 1000.0), &m, &PostOptions::default()).expect("posts");
+    let mv = posted.program.operations[0].moves[1];
+    assert_eq!(posted.report.g93_blocks, 1);
+    assert_eq!(mv.feed_mode, FeedMode::InverseTime);
+    // 90° at 18000 °/min: 0.005 min, F = 200.
+    assert!((mv.feed - 200.0).abs() < 1e-6, "{}", mv.feed);
+}
+
+/// Under TCP, LinuxCNC gets a comment (its TCP is the loaded kinematics)
+/// and Fanuc, whose G43.4 needs a tool number, refuses an operation
+/// without one; Sinumerik and Heidenhain write TRAORI and M128.
+#[test]
+fn tcp_words_per_control() {
+    let kin = Kinematics::new(KinKind::TableAc);
+    let k = kin.tool_axis(20.0, 10.0).to_array();
+    let p = program(
+        &[(true, [0.0, 0.0, 5.0], k), (false, [5.0, 0.0, 5.0], k)],
+        500.0,
+    );
+    let m = machine(kin);
+    let o = PostOptions {
+        tcp: true,
+        ..PostOptions::default()
+    };
+    let posted = post(&p, &m, &o).expect("posts");
+    for (target, word) in [
+        (Target::Sinumerik, "TRAORI"),
+        (Target::Heidenhain, "M128"),
+        (Target::LinuxCnc, "TCP KINEMATICS"),
+    ] {
+        let mut q = posted.program.clone();
+        millplan_plan::post::for_target(&mut q, target).expect("fits");
+        let mut wo = m.write_options(target);
+        wo.auto_tcp = false;
+        let (text, _) = write_program(&q, wo).expect("writes");
+        let text = String::from_utf8(text).expect("utf-8");
+        assert!(text.contains(word), "{target:?}: {text}");
+    }
+    let mut q = posted.program.clone();
+    let e = millplan_plan::post::for_target(&mut q, Target::Fanuc).expect_err("no tool number");
+    assert!(e.to_string().contains("G43.4"), "{e}");
+}

@@ -130,6 +130,11 @@ pub struct PostReport {
     pub slowed_blocks: usize,
     /// Feed moves that move no axis at all, left out (their events kept).
     pub null_moves: usize,
+    /// Blocks of a G94 program written in G93 because the F word the
+    /// control would need (the joints' XYZ distance over the block time)
+    /// falls below the machine's lowest feed: a block that turns the table
+    /// far while X, Y and Z hardly move.
+    pub g93_blocks: usize,
     /// Largest distance between a posted block's tool tip by forward
     /// kinematics and the CL tip it stands for, mm (a self-check).
     pub max_tip_error_mm: f64,
@@ -241,6 +246,44 @@ struct Pt {
     j: Joints,
     /// Inside the pole cone.
     pole: bool,
+}
+
+/// Fits a program posted with TCP to its control. LinuxCNC has no TCP word:
+/// its tool-centre-point control is the kinematics module its configuration
+/// loads, so the switch becomes a comment saying what the positions are.
+/// Fanuc's TCP is `G43.4 H`: an operation without a tool number cannot
+/// switch it on, and its tool tips would run as machine positions, so it is
+/// refused at its first move.
+pub fn for_target(p: &mut Program, target: millplan_nc::write::Target) -> Result<(), PostError> {
+    use millplan_nc::write::Target;
+    for op in &mut p.operations {
+        let tcp = op
+            .events
+            .iter()
+            .any(|e| e.line == 0 && e.kind == EventKind::Tcp(true));
+        if !tcp {
+            continue;
+        }
+        match target {
+            Target::LinuxCnc => {
+                for e in &mut op.events {
+                    if e.line == 0 && e.kind == EventKind::Tcp(true) {
+                        e.kind = EventKind::Comment(
+                            "TOOL TIPS: RUN WITH TCP KINEMATICS (E.G. XYZAC-TRT, XYZBC-TRT)".into(),
+                        );
+                    }
+                }
+            }
+            Target::Fanuc if op.tool.as_ref().and_then(|t| t.number).is_none() => {
+                return Err(PostError::Unsupported {
+                    line: op.moves.first().map_or(0, |m| m.line),
+                    what: "Fanuc switches TCP on with G43.4 H and a tool number, and this operation has none (post it without --tcp, or give the CL file a LOADTL)".into(),
+                });
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// Posts `p` for `machine` (which must have kinematics).
@@ -969,6 +1012,11 @@ fn build(
                 m.feed = if t == exact { p.cl.v } else { len / t };
             } else {
                 m.feed = g94_machine_f(&a.j, &p.j, t);
+            }
+            if m.feed_mode == FeedMode::PerMinute && m.feed < machine.feed_min {
+                m.feed_mode = FeedMode::InverseTime;
+                m.feed = 1.0 / t;
+                report.g93_blocks += 1;
             }
             kind = AxisKind::Feed { nominal_min: t };
             exact_t = exact;

@@ -5,7 +5,7 @@ use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, Outputs};
 use millplan_nc::equiv::{compare, Tolerance};
 use millplan_plan::machine::Machine;
-use millplan_plan::post::{post, PostError, PostOptions, PostReport, Posted};
+use millplan_plan::post::{for_target, post, PostError, PostOptions, PostReport, Posted};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
@@ -158,7 +158,8 @@ pub fn run(a: Args) -> CliResult<i32> {
     let parsed = read_program(&a.input, read_options(a.units, None)?)?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet || a.json);
     let bar = crate::progress::spinner("posting", !a.quiet && !a.json);
-    let posted = post(&parsed.program, &machine, &o).map_err(|e| post_error(&a.input, e))?;
+    let mut posted = post(&parsed.program, &machine, &o).map_err(|e| post_error(&a.input, e))?;
+    for_target(&mut posted.program, target).map_err(|e| post_error(&a.input, e))?;
     bar.finish_and_clear();
     let mut wo = machine.write_options(target);
     // The post states TCP itself, per operation, when asked for it.
@@ -196,6 +197,7 @@ fn summary(a: &Args, machine: &Machine, target: &str, r: &PostReport) -> Value {
         "flip_moves": r.flip_moves,
         "slowed_blocks": r.slowed_blocks,
         "null_moves": r.null_moves,
+        "g93_blocks": r.g93_blocks,
         "max_tip_error_mm": r.max_tip_error_mm,
         "time_s": r.time_s,
         "nominal_s": r.nominal_s,
