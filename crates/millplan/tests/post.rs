@@ -94,8 +94,9 @@ fn run_post(input: &Path, machine: &Path, out: &Path, extra: &[&str]) -> Value {
 }
 
 /// The five-axis CL samples post for both machines, in G94 and G93, with and
-/// without TCP; `millplan inspect` re-reads each output and reports the
-/// rotary motion the post commanded (the machine's two letters, moved).
+/// without TCP (Heidenhain M128: the fragments have no tool number for
+/// G43.4); `millplan inspect` re-reads each output and reports the rotary
+/// motion the post commanded (the machine's two letters, moved).
 #[test]
 fn cl_samples_post_for_table_ac_and_head_table_bc_and_reinspect() {
     let samples = [
@@ -116,7 +117,7 @@ fn cl_samples_post_for_table_ac_and_head_table_bc_and_reinspect() {
             let Some(input) = shared_data::file(s) else {
                 continue;
             };
-            for (k, extra) in [&[][..], &["--g93"], &["--tcp", "--g93"]]
+            for (k, extra) in [&[][..], &["--g93"], &["--tcp", "--g93", "--to", "heidenhain"]]
                 .iter()
                 .enumerate()
             {

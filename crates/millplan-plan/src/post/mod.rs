@@ -772,7 +772,7 @@ fn post_operation(
         }
         all.push(*p);
     }
-    check_travel(&all, machine)?;
+    check_travel(&all, kin, machine)?;
     Ok(all)
 }
 
@@ -811,8 +811,28 @@ fn flip_moves(
     });
 }
 
-/// Every posted position within the linear axes' travel.
-fn check_travel(all: &[Pt], machine: &Machine) -> Result<(), PostError> {
+/// Every posted position within the axes' travel: the linear axes, and the
+/// rotary ones again for the points linearisation and flips inserted.
+fn check_travel(all: &[Pt], kin: &Kinematics, machine: &Machine) -> Result<(), PostError> {
+    let names = kin.kind.rotary_names();
+    for p in all {
+        for (a, v, name) in [
+            (&kin.first, p.c.first, names[0]),
+            (&kin.second, p.c.second, names[1]),
+        ] {
+            let lo = a.min.unwrap_or(f64::NEG_INFINITY);
+            let hi = a.max.unwrap_or(f64::INFINITY);
+            if v < lo - 1e-9 || v > hi + 1e-9 {
+                return Err(PostError::Unreachable {
+                    line: p.cl.line,
+                    axis: name,
+                    wanted: v,
+                    min: a.min,
+                    max: a.max,
+                });
+            }
+        }
+    }
     let axes: [(&LinearAxis, char); 3] = [
         (&machine.axes.x, 'X'),
         (&machine.axes.y, 'Y'),
