@@ -358,19 +358,59 @@ pub(crate) fn block_time(b: &Block, v0: f64, v1: f64) -> (f64, bool) {
             .sqrt()
             .clamp(lo0, vc)
     } else {
-        let (mut lo, mut hi) = (lo0, vc);
-        for _ in 0..64 {
-            let mid = 0.5 * (lo + hi);
-            if need(mid) <= len {
-                lo = mid;
+        // need(vp) increases with vp, like √(vp − lo0) near the lower end
+        // (jerk-only ramps): Newton's method on u = √(vp − lo0), where it
+        // is smooth, kept inside a shrinking bracket (bisection when a step
+        // leaves it).
+        let slope = |v0: f64, vp: f64| {
+            let dv = vp - v0;
+            let t = ramp_time(dv, a, j);
+            let dt = if dv <= 0.0 {
+                0.0
+            } else if dv >= a * a / j {
+                1.0 / a
             } else {
-                hi = mid;
+                1.0 / (j * dv).sqrt()
+            };
+            0.5 * t + 0.5 * (v0 + vp) * dt
+        };
+        // Without jerk the peak would be higher: an upper bound.
+        let free = ((2.0 * a * len + v0 * v0 + v1 * v1) / 2.0).sqrt();
+        let (mut lo, mut hi) = (0.0f64, (vc.min(free) - lo0).max(0.0).sqrt());
+        let mut u = hi;
+        for _ in 0..100 {
+            let x = lo0 + u * u;
+            let f = need(x) - len;
+            if f <= 0.0 {
+                lo = u;
+            } else {
+                hi = u;
             }
-            if hi - lo <= 1e-12 * hi {
+            if hi - lo <= 1e-12 * hi || f.abs() <= 1e-12 * len {
+                break;
+            }
+            // d need / du = need'(vp)·2u; the slope of a ramp of no
+            // change is infinite, so it is taken from the other one.
+            let s = |v: f64| {
+                if x - v > 0.0 {
+                    slope(v, x) * 2.0 * u
+                } else {
+                    0.5 * (v + x) * 2.0 / j.sqrt()
+                }
+            };
+            let d = s(v0) + s(v1);
+            let next = u - f / d;
+            let prev = u;
+            u = if d > 0.0 && d.is_finite() && next > lo && next < hi {
+                next
+            } else {
+                0.5 * (lo + hi)
+            };
+            if (u - prev).abs() <= 1e-12 * u {
                 break;
             }
         }
-        lo
+        lo0 + u.clamp(lo, hi).powi(2)
     };
     let (t_up, t_down) = (ramp_time(vp - v0, a, j), ramp_time(vp - v1, a, j));
     // What is left (rounding, or the bisection's last step) at the peak.
@@ -394,14 +434,22 @@ pub(crate) fn plan(blocks: &[Block], stops: &[bool], lim: &Limits) -> Vec<f64> {
         };
     }
     for k in (0..n).rev() {
-        let b = &blocks[k];
-        v[k] = v[k].min(reach(v[k + 1], b.len, b.accel, b.jerk));
+        v[k] = capped(v[k + 1], v[k], &blocks[k]);
     }
     for k in 0..n {
-        let b = &blocks[k];
-        v[k + 1] = v[k + 1].min(reach(v[k], b.len, b.accel, b.jerk));
+        v[k + 1] = capped(v[k], v[k + 1], &blocks[k]);
     }
     v
+}
+
+/// `want`, or less when it cannot be reached from `from` within the block
+/// (the speed is only solved for when the cheap check fails).
+fn capped(from: f64, want: f64, b: &Block) -> f64 {
+    if want <= from || ramp_dist(from, want, b.accel, b.jerk) <= b.len {
+        want
+    } else {
+        reach(from, b.len, b.accel, b.jerk).min(want)
+    }
 }
 
 /// Times a block sequence in machine coordinates from `start`, at rest
@@ -458,6 +506,15 @@ pub fn estimate_with(start: [f64; 6], moves: &[AxisMove], lim: &Limits) -> TimeE
     }
     e.total_s = e.rapid_s + e.feed_s + e.dwell_s;
     e
+}
+
+/// Time of one straight move by `d` (X Y Z A B C) from rest to rest, s: a
+/// link's cost where the motion stops at both ends (a rapid of a
+/// retract, for the `reorder` planner's fast model).
+pub fn rest_to_rest_s(lim: &Limits, d: [f64; 6], kind: MoveKind) -> f64 {
+    let moves = [AxisMove { target: d, kind }];
+    let (blocks, _) = prepare([0.0; 6], &moves, lim);
+    blocks.first().map_or(0.0, |b| block_time(b, 0.0, 0.0).0)
 }
 
 /// Largest angle one chord of an arc may sweep, degrees, when an arc is
@@ -559,23 +616,18 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
         for (i, m) in op.moves.iter().enumerate() {
             let o = op.orient(m);
             let start = op.known_start(i);
+            for e in op.events_before(i) {
+                if let ir::EventKind::Dwell(t) = &e.kind {
+                    dwell(&mut cur, here, *t);
+                }
+            }
             if let Some(c) = op.cycle(m) {
-                let (Some(at), Some(s)) = (known(m.end), start) else {
+                let Some(at) = known(m.end) else {
                     flush(&mut cur);
                     here = None;
                     continue;
                 };
                 let axis = op.axis(m).unwrap_or(DVec3::Z);
-                let s6 = joints(s, o, &mut rot);
-                let list = &mut cur
-                    .get_or_insert_with(|| (here.unwrap_or(s6), Vec::new()))
-                    .1;
-                let across = DVec3::new(at.x, at.y, s.z.max(at.z + c.retract.max(c.clearance)));
-                list.push(AxisMove {
-                    target: joints(across, o, &mut rot),
-                    kind: MoveKind::Rapid,
-                });
-                let mut prev = across;
                 let steps = cycle_moves(c, at, axis).unwrap_or_else(|_| {
                     vec![
                         CycleStep::Rapid(at + axis * c.clearance),
@@ -583,6 +635,36 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
                         CycleStep::Rapid(at + axis * c.retract.max(c.clearance)),
                     ]
                 });
+                let mut steps = steps.into_iter();
+                // Across to the hole at the height the tool stands; from an
+                // unknown position the cycle's first position starts a chain
+                // (as the program summary counts it).
+                let prev = match start {
+                    Some(s) => {
+                        let s6 = joints(s, o, &mut rot);
+                        let list = &mut cur
+                            .get_or_insert_with(|| (here.unwrap_or(s6), Vec::new()))
+                            .1;
+                        let across =
+                            DVec3::new(at.x, at.y, s.z.max(at.z + c.retract.max(c.clearance)));
+                        list.push(AxisMove {
+                            target: joints(across, o, &mut rot),
+                            kind: MoveKind::Rapid,
+                        });
+                        across
+                    }
+                    None => {
+                        flush(&mut cur);
+                        let first = match steps.next() {
+                            Some(CycleStep::Rapid(q) | CycleStep::Feed(q, _)) => q,
+                            _ => at,
+                        };
+                        cur = Some((joints(first, o, &mut rot), Vec::new()));
+                        first
+                    }
+                };
+                let mut prev = prev;
+                let list = &mut cur.get_or_insert_with(|| ([0.0; 6], Vec::new())).1;
                 for st in steps {
                     let (q, kind) = match st {
                         CycleStep::Rapid(q) => (q, MoveKind::Rapid),
@@ -600,13 +682,8 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
                     });
                     prev = q;
                 }
-                here = list.last().map(|m| m.target);
+                here = list.last().map(|m| m.target).or(cur.as_ref().map(|c| c.0));
                 continue;
-            }
-            for e in op.events_before(i) {
-                if let ir::EventKind::Dwell(t) = &e.kind {
-                    dwell(&mut cur, here, *t);
-                }
             }
             let (Some(s), Some(e)) = (start, known(m.end)) else {
                 flush(&mut cur);
@@ -1059,6 +1136,32 @@ mod tests {
         close(e.nominal_s, s.time_s, 1e-12);
         // A zig-zag of 10 mm strokes with sharp reversals: clearly slower.
         assert!(e.total_s > 1.05 * e.nominal_s, "{e:?}");
+        // Drilling cycles, the first from a position the program has not
+        // set (NX CLSF drilling): timed from the cycle's own first position,
+        // as the summary counts them.
+        let mut op = Operation::default();
+        let cy = op.push_cycle(millplan_nc::ir::Cycle {
+            name: "G81".into(),
+            bottom: -12.0,
+            clearance: 0.0,
+            retract: 3.0,
+            feed: 250.0,
+            peck: None,
+            peck_next: None,
+            dwell: Some(0.5),
+            line: 1,
+        });
+        for x in [66.0, -255.0] {
+            let mut c = Move::rapid(DVec3::new(x, 0.0, 240.0));
+            c.kind = millplan_nc::ir::MoveKind::Cycle(cy);
+            op.moves.push(c);
+        }
+        let mut p = Program::new(Dialect::Fanuc);
+        p.operations.push(op);
+        let e = estimate_program(&p, &m);
+        let s = millplan_nc::stats::summarize(&p, m.rapid);
+        close(e.nominal_s, s.time_s, 1e-12);
+        assert!(e.total_s > e.nominal_s, "{e:?}");
     }
 
     #[test]

@@ -102,7 +102,7 @@ pub fn speed_verdict(i: &SpeedInputs, s: &Summary, rows: &[PointRow]) -> Vec<Str
     if let (Some(b), Some(a)) = (i.time_before_s, i.time_after_s) {
         let d = a - b;
         v.push(format!(
-            "Cycle time {:.0} s → {:.0} s ({}{:.0} s, {:+.1} %) at the feeds written.",
+            "Cycle time {:.0} s → {:.0} s ({}{:.0} s, {:+.1} %) at the feeds written, estimated with acceleration.",
             b,
             a,
             if d >= 0.0 { "+" } else { "−" },

@@ -35,7 +35,9 @@ pub fn rows(before: &OrderIndicators, after: &OrderIndicators) -> Vec<(String, S
         row("max |Δn| as run (1/min)", &|v| {
             format!("{:.0}", v.as_run.max_delta_n)
         }),
-        row("time as run (s)", &|v| format!("{:.1}", v.as_run.time_s)),
+        row("time as run, estimated with acceleration (s)", &|v| {
+            format!("{:.1}", v.as_run.time_s)
+        }),
         row("successive |ΔD_w| max (mm)", &|v| {
             format!("{:.3}", v.delta_d_w.max)
         }),

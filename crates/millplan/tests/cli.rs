@@ -75,6 +75,17 @@ fn inspect_json_on_every_shared_file() {
                 assert!(
                     j["length_mm"]["cutting"].is_number() && j["length_mm"]["rapid"].is_number()
                 );
+                // The estimate with acceleration never undercuts the time at
+                // programmed feeds (rapids at the rapid rate).
+                let (t, t0) = (
+                    j["time_s"].as_f64().expect("time_s"),
+                    j["time_nominal_s"].as_f64().expect("time_nominal_s"),
+                );
+                assert!(
+                    t.is_finite() && t >= t0 * (1.0 - 1e-9),
+                    "{name}: {t} < {t0}"
+                );
+                assert_eq!(j["time"]["model"], "acceleration", "{name}");
             }
         }
     }

@@ -103,3 +103,46 @@ fn a_bad_machine_file_is_located() {
         "{err}"
     );
 }
+
+/// `inspect` times a program with the machine's axis limits: the example
+/// machine (5 m/s², jerk-limited) is quicker than the built-in one with its
+/// conservative 1 m/s², both are at least the time at programmed feeds, and
+/// the text says the time is an estimate with acceleration.
+#[test]
+fn inspect_estimates_the_time_with_the_machines_acceleration() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let d = dir.path().join("demo");
+    let o = bin()
+        .args(["demo", "-o", d.to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let apt = d.join("finish.apt");
+    let inspect = |machine: Option<&Path>, json_out: bool| {
+        let mut c = bin();
+        c.args(["inspect", apt.to_str().expect("utf8"), "-q"]);
+        if json_out {
+            c.arg("--json");
+        }
+        if let Some(m) = machine {
+            c.args(["--machine", m.to_str().expect("utf8")]);
+        }
+        c.output().expect("runs")
+    };
+    let default = json(&inspect(None, true));
+    let hsc = json(&inspect(Some(&example()), true));
+    let t = |j: &serde_json::Value, k: &str| j[k].as_f64().expect(k);
+    // The example's rapid rate differs, so the nominal times differ too;
+    // each estimate is above its own nominal.
+    assert!(t(&default, "time_s") > t(&default, "time_nominal_s"));
+    assert!(t(&hsc, "time_s") >= t(&hsc, "time_nominal_s"));
+    assert!(
+        t(&hsc, "time_s") - t(&hsc, "time_nominal_s")
+            < t(&default, "time_s") - t(&default, "time_nominal_s"),
+        "{hsc}\n{default}"
+    );
+    let o = inspect(None, false);
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("estimated with acceleration"), "{text}");
+}

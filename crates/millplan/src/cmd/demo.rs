@@ -157,7 +157,10 @@ fn report(
         machine,
         cut,
         &findings,
-        millplan_nc::stats::summarize(program, machine.rapid).time_s,
+        [
+            millplan_plan::timing::estimate_program(program, machine).total_s,
+            millplan_plan::timing::estimate_program(&res.program, machine).total_s,
+        ],
     );
     millplan_report::html::speed_report(
         "millplan demo: constant cutting speed",
@@ -177,6 +180,10 @@ fn print_summary(
     r: &millplan_plan::speed::Summary,
 ) {
     let s = millplan_nc::stats::summarize(program, 15000.0);
+    let est = millplan_plan::timing::estimate_program(
+        program,
+        &millplan_plan::machine::Machine::default(),
+    );
     if a.json {
         let files: Vec<_> = written
             .iter()
@@ -187,7 +194,8 @@ fn print_summary(
             "triangles": triangles,
             "points": program.move_count(),
             "cutting_mm": s.cutting_mm,
-            "time_s": s.time_s,
+            "time_s": est.total_s,
+            "time_nominal_s": s.time_s,
             "files": files,
             "spindle_control": {
                 "d_w_mm": [r.d_w.min, r.d_w.max],
@@ -206,8 +214,9 @@ fn print_summary(
         program.move_count()
     );
     outln!(
-        "  cutting length {:.0} mm, estimated time {:.0} s",
+        "  cutting length {:.0} mm, time {:.0} s estimated with acceleration ({:.0} s at programmed feeds)",
         s.cutting_mm,
+        est.total_s,
         s.time_s
     );
     for (path, bytes) in written {

@@ -423,10 +423,12 @@ fn feed_summary(
     over: &[&MoveForces],
 ) -> serde_json::Value {
     let limits = params.limits;
-    let rapid = p.machine.rapid;
-    let t = |q: &millplan_nc::Program| millplan_nc::stats::summarize(q, rapid).time_s;
+    let t = |q: &millplan_nc::Program| millplan_plan::timing::estimate_program(q, &p.machine);
+    let (t0, t1) = (t(&p.program), t(out));
     json!({
-        "time_before_s": t(&p.program), "time_after_s": t(out),
+        "time_before_s": t0.total_s, "time_after_s": t1.total_s,
+        "time_nominal_before_s": t0.nominal_s, "time_nominal_after_s": t1.nominal_s,
+        "time_model": "acceleration",
         "max_before": before.maxima(), "max_after": after.maxima(),
         "binding": changes.binding, "blocks": changes.blocks, "air_blocks": changes.air_blocks,
         "kept_blocks": changes.kept_blocks, "feed_range_written": [changes.feed_min, changes.feed_max],
@@ -522,10 +524,12 @@ fn print_feed(a: &Args, s: &serde_json::Value) {
     }
     let f = |k: &str| s[k].as_f64().unwrap_or(0.0);
     outln!(
-        "time {:.1} s → {:.1} s ({:+.1} %)",
+        "time {:.1} s → {:.1} s ({:+.1} %), estimated with acceleration ({:.1} s → {:.1} s at programmed feeds)",
         f("time_before_s"),
         f("time_after_s"),
-        100.0 * (f("time_after_s") / f("time_before_s").max(1e-9) - 1.0)
+        100.0 * (f("time_after_s") / f("time_before_s").max(1e-9) - 1.0),
+        f("time_nominal_before_s"),
+        f("time_nominal_after_s"),
     );
     for k in ["fxy", "torque", "power", "stress", "deflection"] {
         outln!(

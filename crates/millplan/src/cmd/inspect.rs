@@ -12,6 +12,11 @@ use std::path::PathBuf;
 /// Print what a file holds: format and dialect, units, tools, moves, bounds,
 /// path lengths and estimated time (programs); triangles, defects and bounds (STL).
 ///
+/// The time is an estimate with acceleration: the machine file's axis
+/// velocities, accelerations and jerks (conservative defaults where it has
+/// none), with look-ahead across blocks; the time at programmed feeds is
+/// printed beside it.
+///
 /// The format is detected from the content, not the file name.
 #[derive(clap::Args)]
 pub struct Args {
@@ -30,7 +35,8 @@ pub struct Args {
     /// machine file's, else 15000).
     #[arg(long)]
     pub rapid_rate: Option<f64>,
-    /// Machine file (examples/machine.toml): its rapid rate times the rapids.
+    /// Machine file (examples/machine.toml): its rapid rate, axis limits and
+    /// kinematics time the program (default: a built-in three-axis machine).
     #[arg(long)]
     pub machine: Option<PathBuf>,
     /// Do not print reader diagnostics.
@@ -68,8 +74,9 @@ fn format_name(d: Dialect) -> &'static str {
     }
 }
 
-fn program_json(p: &Program, diags: usize, rapid_rate: f64) -> Value {
-    let s = summarize(p, rapid_rate);
+fn program_json(p: &Program, diags: usize, machine: &millplan_plan::machine::Machine) -> Value {
+    let s = summarize(p, machine.rapid);
+    let est = millplan_plan::timing::estimate_program(p, machine);
     let tools: Vec<Value> = p
         .operations
         .iter()
@@ -98,7 +105,9 @@ fn program_json(p: &Program, diags: usize, rapid_rate: f64) -> Value {
                    "total": p.move_count(), "five_axis": s.five_axis_moves },
         "bounds": bounds_json(&s.bounds),
         "length_mm": { "cutting": s.cutting_mm, "rapid": s.rapid_mm },
-        "time_s": s.time_s,
+        "time_s": est.total_s,
+        "time_nominal_s": s.time_s,
+        "time": crate::cmd::time_json(&est),
         "unknown_moves": s.unknown_moves,
         "rotary": rotary_json(&s.rotary),
         "diagnostics": diags,
@@ -106,8 +115,8 @@ fn program_json(p: &Program, diags: usize, rapid_rate: f64) -> Value {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let rapid_rate = crate::cmd::arg(
+    let mut machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    machine.rapid = crate::cmd::arg(
         "--rapid-rate",
         a.rapid_rate.unwrap_or(machine.rapid),
         crate::cmd::Range::positive(1e7, "mm/min"),
@@ -121,7 +130,7 @@ pub fn run(a: Args) -> CliResult<i32> {
                 out!("{}", millplan_nc::text::print(p));
                 return Ok(EXIT_OK);
             }
-            let j = program_json(p, parsed.diagnostics.len(), rapid_rate);
+            let j = program_json(p, parsed.diagnostics.len(), &machine);
             if a.json {
                 crate::cmd::print_json(j);
             } else {
@@ -311,12 +320,11 @@ fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
         );
     }
     let t = j["time_s"].as_f64().unwrap_or(0.0);
+    let t0 = j["time_nominal_s"].as_f64().unwrap_or(0.0);
     outln!(
-        "  time        {:.0} s ({}:{:02}:{:02}) at programmed feeds",
-        t,
-        (t / 3600.0) as u64,
-        ((t / 60.0) as u64) % 60,
-        (t as u64) % 60
+        "  time        {} estimated with acceleration ({} at programmed feeds)",
+        crate::cmd::hms(t),
+        crate::cmd::hms(t0),
     );
 }
 

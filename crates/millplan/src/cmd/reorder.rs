@@ -37,7 +37,8 @@ pub enum StartArg {
 /// The default judges an order by its machining as it will run: the speeds
 /// after the machine's range and acceleration, the share of points where they
 /// miss the cutting speed by more than 5 %, Σ|Δn| and the time with links and
-/// retracts. It writes the best candidate (start corners, one-way, planned pass
+/// retracts (estimated with acceleration: the machine's axis limits and
+/// look-ahead, as `inspect` prints it). It writes the best candidate (start corners, one-way, planned pass
 /// directions and splits) that is worse than the original on none of these
 /// (time within 3 %), or, when none is better, the original order (verdict
 /// kept). --method paper runs the thesis's search over single points.

@@ -238,7 +238,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     cx.record("surface (BVH, vertex normals)", t_surface);
     cx.record("read toolpath (beside the two above)", t_read);
     let mut program = parsed.program;
-    let time_before = millplan_nc::stats::summarize(&program, cx.machine.rapid).time_s;
+    let time_before = millplan_plan::timing::estimate_program(&program, &cx.machine).total_s;
     let mut pass = SpeedPass::new(params(&a));
     pipeline::run(&mut [&mut pass], &mut program, &cx)
         .map_err(|e| crate::cmd::pass_error(&a.path, e))?;
@@ -267,6 +267,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         flutes: a.flutes,
         ap: a.ap,
     };
+    let time_after = millplan_plan::timing::estimate_program(&program, &cx.machine).total_s;
     let inputs = || {
         report_inputs(
             (&a.path, &program),
@@ -274,12 +275,13 @@ pub fn run(a: Args) -> CliResult<i32> {
             &cx.machine,
             cut,
             &findings,
-            time_before,
+            [time_before, time_after],
         )
     };
     write_table_and_report(&a, &mut outputs, &summary, &pass.rows, inputs)?;
     outputs.commit()?;
-    print_outcome(&a, &cx, t0, &summary, &findings, target);
+    let times = [time_before, time_after];
+    print_outcome(&a, &cx, t0, &summary, &findings, target, times);
     Ok(if checks::untrusted(&summary) {
         EXIT_FINDINGS
     } else {
@@ -295,6 +297,7 @@ fn print_outcome(
     summary: &Summary,
     findings: &[millplan_nc::Diagnostic],
     target: Target,
+    [time_before, time_after]: [f64; 2],
 ) {
     if a.timings {
         for t in cx.timings() {
@@ -312,9 +315,18 @@ fn print_outcome(
         j["machine"] = serde_json::to_value(&cx.machine).unwrap_or_default();
         j["findings"] = serde_json::to_value(findings).unwrap_or_default();
         j["trusted"] = serde_json::json!(!checks::untrusted(summary));
+        j["time_before_s"] = serde_json::json!(time_before);
+        j["time_after_s"] = serde_json::json!(time_after);
+        j["time_model"] = serde_json::json!("acceleration");
         crate::cmd::print_json(j);
     } else {
         print_summary(summary, &a.output, target);
+        outln!(
+            "  time       {:.1} s → {:.1} s, estimated with acceleration on {}",
+            time_before,
+            time_after,
+            cx.machine.name
+        );
     }
 }
 
@@ -348,7 +360,7 @@ pub fn report_inputs(
     machine: &millplan_plan::machine::Machine,
     cut: super::CuttingData,
     findings: &[millplan_nc::Diagnostic],
-    time_before_s: f64,
+    [time_before_s, time_after_s]: [f64; 2],
 ) -> millplan_report::html::SpeedInputs {
     let name = |p: &std::path::Path| {
         p.file_name()
@@ -368,7 +380,7 @@ pub fn report_inputs(
         flutes: cut.flutes,
         ap: cut.ap,
         time_before_s: Some(time_before_s),
-        time_after_s: Some(millplan_nc::stats::summarize(program.1, machine.rapid).time_s),
+        time_after_s: Some(time_after_s),
         warnings: findings.iter().map(|d| d.message.clone()).collect(),
     }
 }
