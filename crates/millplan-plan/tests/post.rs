@@ -641,3 +641,29 @@ fn tcp_words_per_control() {
     let e = millplan_plan::post::for_target(&mut q, Target::Fanuc).expect_err("no tool number");
     assert!(e.to_string().contains("G43.4"), "{e}");
 }
+
+/// `[post]` in the machine file: read, defaulted, and checked against its
+/// ranges with the field named.
+#[test]
+fn machine_file_post_settings() {
+    let base = "[spindle]\nmin = 100.0\nmax = 20000.0\naccel = 5000.0\n[feed]\nmax = 20000.0\n[kinematics]\nkind = \"table-ac\"\n";
+    let m = Machine::from_toml(base).expect("reads");
+    assert_eq!(m.post, millplan_plan::machine::PostSettings::default());
+    assert_eq!(
+        (m.post.pole_cone, m.post.pole_tol, m.post.clearance),
+        (1.0, 1.0, 50.0)
+    );
+    let m = Machine::from_toml(&format!(
+        "{base}[post]\npole_cone = 2.5\nclearance = 20.0\n"
+    ))
+    .expect("reads");
+    assert_eq!(
+        (m.post.pole_cone, m.post.pole_tol, m.post.clearance),
+        (2.5, 1.0, 20.0)
+    );
+    let e = Machine::from_toml(&format!("{base}[post]\npole_cone = 45.0\n")).expect_err("refused");
+    assert_eq!(e.field.as_deref(), Some("post.pole_cone"), "{e}");
+    assert!(e.at.is_some(), "located: {e}");
+    let e = Machine::from_toml(&format!("{base}[post]\nclearence = 5.0\n")).expect_err("typo");
+    assert!(e.to_string().contains("clearence"), "{e}");
+}

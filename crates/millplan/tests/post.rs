@@ -117,9 +117,13 @@ fn cl_samples_post_for_table_ac_and_head_table_bc_and_reinspect() {
             let Some(input) = shared_data::file(s) else {
                 continue;
             };
-            for (k, extra) in [&[][..], &["--g93"], &["--tcp", "--g93", "--to", "heidenhain"]]
-                .iter()
-                .enumerate()
+            for (k, extra) in [
+                &[][..],
+                &["--g93"],
+                &["--tcp", "--g93", "--to", "heidenhain"],
+            ]
+            .iter()
+            .enumerate()
             {
                 let out = tmp.path().join(format!("{name}-{k}.nc"));
                 let j = run_post(&input, &m, &out, extra);

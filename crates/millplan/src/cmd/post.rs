@@ -50,15 +50,18 @@ pub struct Args {
     #[arg(long, default_value_t = 0.01)]
     pub tol: f64,
     /// Half-angle of the cone about the pole (the tool along the turning
-    /// axis) inside which the turning axis is held, degrees.
-    #[arg(long, default_value_t = 1.0)]
-    pub pole_cone: f64,
-    /// Orientation deviation beyond which a pole block is flagged, degrees.
-    #[arg(long, default_value_t = 1.0)]
-    pub pole_tol: f64,
-    /// Retract distance along the tool axis of a branch change, mm.
-    #[arg(long, default_value_t = 50.0)]
-    pub clearance: f64,
+    /// axis) inside which the turning axis is held, degrees (default: the
+    /// machine file's `[post] pole_cone`, else 1).
+    #[arg(long)]
+    pub pole_cone: Option<f64>,
+    /// Orientation deviation beyond which a pole block is flagged, degrees
+    /// (default: the machine file's `[post] pole_tol`, else 1).
+    #[arg(long)]
+    pub pole_tol: Option<f64>,
+    /// Retract distance along the tool axis of a branch change, mm
+    /// (default: the machine file's `[post] clearance`, else 50).
+    #[arg(long)]
+    pub clearance: Option<f64>,
     /// Output file (`-`: standard output).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -74,18 +77,27 @@ pub struct Args {
     pub json: bool,
 }
 
-fn options(a: &Args) -> CliResult<PostOptions> {
+/// The post's options: the command line's, else the machine file's `[post]`.
+fn options(a: &Args, m: &Machine) -> CliResult<PostOptions> {
     Ok(PostOptions {
         tol: arg("--tol", a.tol, Range::positive(10.0, "mm"))?,
         tcp: a.tcp,
         g93: a.g93,
         pole_cone: arg(
             "--pole-cone",
-            a.pole_cone,
+            a.pole_cone.unwrap_or(m.post.pole_cone),
             Range::from(0.0, 30.0, "degrees"),
         )?,
-        pole_tol: arg("--pole-tol", a.pole_tol, Range::from(0.0, 180.0, "degrees"))?,
-        clearance: arg("--clearance", a.clearance, Range::positive(10_000.0, "mm"))?,
+        pole_tol: arg(
+            "--pole-tol",
+            a.pole_tol.unwrap_or(m.post.pole_tol),
+            Range::from(0.0, 180.0, "degrees"),
+        )?,
+        clearance: arg(
+            "--clearance",
+            a.clearance.unwrap_or(m.post.clearance),
+            Range::positive(10_000.0, "mm"),
+        )?,
     })
 }
 
@@ -138,10 +150,10 @@ pub fn run(a: Args) -> CliResult<i32> {
             "--json: not with -o - (the program itself goes to standard output)",
         ));
     }
-    let o = options(&a)?;
     let inputs = [a.input.as_path(), a.machine.as_path()];
     let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
     let machine = crate::cmd::load_machine(Some(&a.machine))?;
+    let o = options(&a, &machine)?;
     if machine.kinematics().is_none() {
         return Err(CliError::input(format!(
             "{}: no [kinematics] table: a five-axis post needs the machine's rotary axes",
@@ -168,7 +180,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     check_output(&posted, &out, &a)?;
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
-    let j = summary(&a, &machine, target.name(), &posted.report);
+    let j = summary(&a, &o, &machine, target.name(), &posted.report);
     if a.json {
         print_json(j);
     } else {
@@ -177,7 +189,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     Ok(EXIT_OK)
 }
 
-fn summary(a: &Args, machine: &Machine, target: &str, r: &PostReport) -> Value {
+fn summary(a: &Args, o: &PostOptions, machine: &Machine, target: &str, r: &PostReport) -> Value {
     json!({
         "input": a.input.display().to_string(),
         "output": a.output.display().to_string(),
@@ -186,6 +198,7 @@ fn summary(a: &Args, machine: &Machine, target: &str, r: &PostReport) -> Value {
         "mode": if a.tcp { "tcp" } else { "machine" },
         "feed_mode": if a.g93 { "g93" } else { "g94" },
         "tol_mm": a.tol,
+        "pole_cone_deg": o.pole_cone,
         "blocks": r.blocks,
         "flips": r.flips.len(),
         "flip_list": r.flips,
