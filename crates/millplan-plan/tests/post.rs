@@ -667,3 +667,34 @@ fn machine_file_post_settings() {
     let e = Machine::from_toml(&format!("{base}[post]\nclearence = 5.0\n")).expect_err("typo");
     assert!(e.to_string().contains("clearence"), "{e}");
 }
+
+/// §1.9: a block whose rotary travel the axis cannot make in the time the
+/// tip feed gives is slowed to the axis's top speed, and counted.
+#[test]
+fn a_block_too_fast_for_a_rotary_axis_is_slowed() {
+    let kin = Kinematics::new(KinKind::TableAc);
+    // A tilts from 10° to 40° while the tip moves 1 mm at 6000 mm/min
+    // (0.01 min): 3000 °/min, where A makes 900 °/min.
+    let (k0, k1) = (kin.tool_axis(10.0, 0.0), kin.tool_axis(40.0, 0.0));
+    let recs: Vec<Rec> = vec![
+        (true, [0.0, 0.0, 0.0], k0.to_array()),
+        (false, [1.0, 0.0, 0.0], k1.to_array()),
+    ];
+    let mut m = machine(kin);
+    m.axes.first.velocity = Some(900.0);
+    let o = PostOptions {
+        g93: true,
+        tol: 10.0,
+        ..PostOptions::default()
+    };
+    let posted = post(&program(&recs, 6000.0), &m, &o).expect("posts");
+    assert_eq!(posted.report.slowed_blocks, 1);
+    let mv = posted.program.operations[0].moves[1];
+    // 30° at 900 °/min: 1/30 min, F = 30.
+    assert!((mv.feed - 30.0).abs() < 1e-9, "{}", mv.feed);
+    // Without the limit, the tip feed decides.
+    m.axes.first.velocity = None;
+    let posted = post(&program(&recs, 6000.0), &m, &o).expect("posts");
+    assert_eq!(posted.report.slowed_blocks, 0);
+    assert!(posted.program.operations[0].moves[1].feed > 30.0);
+}
