@@ -250,6 +250,24 @@ impl Kinematics {
         (tip, k)
     }
 
+    /// The tool tip of [`Kinematics::forward`] alone (half the trigonometry:
+    /// a post samples tip paths by the million).
+    pub fn tip(&self, j: &Joints) -> DVec3 {
+        let (a, c) = self.angles(j);
+        let r = self.r();
+        match self.kind {
+            KinKind::TableAc => {
+                let d = DVec3::new(0.0, self.offset[1], self.offset[2] + self.tool_offset);
+                r + rz(c).transpose() * (rx(a).transpose() * (j.xyz - r - d) + d)
+            }
+            KinKind::TableBc => {
+                let d = DVec3::new(self.offset[0], 0.0, self.offset[2] + self.tool_offset);
+                r + rz(c).transpose() * (ry(a).transpose() * (j.xyz - r - d) + d)
+            }
+            _ => self.forward(j).0,
+        }
+    }
+
     /// Both rotary solutions (programmed degrees) for a unit tool axis, the
     /// principal one first. At the pole the rotary angle is `keep`.
     pub fn orientation_ik(&self, k: DVec3, keep: f64) -> [(f64, f64); 2] {

@@ -32,6 +32,46 @@ pub struct Summary {
     /// Moves whose length is unknown (from or to an unset axis): left out of
     /// lengths and times.
     pub unknown_moves: usize,
+    /// The rotary motion the program commands, A, B and C (`None`: the axis
+    /// is never written).
+    pub rotary: [Option<RotaryUse>; 3],
+}
+
+/// How a rotary axis is used: the range of its positions and the sum of its
+/// moves, degrees.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct RotaryUse {
+    pub min_deg: f64,
+    pub max_deg: f64,
+    pub travel_deg: f64,
+}
+
+/// The rotary motion of a program's written angles.
+pub fn rotary_use(p: &Program) -> [Option<RotaryUse>; 3] {
+    let mut r: [Option<RotaryUse>; 3] = [None; 3];
+    for op in &p.operations {
+        let mut last: [Option<f64>; 3] = [None; 3];
+        for m in &op.moves {
+            let Some(o) = op.orient(m) else { continue };
+            for k in 0..3 {
+                let Some(a) = o.angles[k].map(f64::to_degrees) else {
+                    continue;
+                };
+                let u = r[k].get_or_insert(RotaryUse {
+                    min_deg: a,
+                    max_deg: a,
+                    travel_deg: 0.0,
+                });
+                u.min_deg = u.min_deg.min(a);
+                u.max_deg = u.max_deg.max(a);
+                if let Some(b) = last[k] {
+                    u.travel_deg += (a - b).abs();
+                }
+                last[k] = Some(a);
+            }
+        }
+    }
+    r
 }
 
 /// Feed time in minutes of a cutting stroke of length `len`.
@@ -59,6 +99,7 @@ pub fn summarize(p: &Program, rapid_rate: f64) -> Summary {
         bounds: p.bounds(),
         five_axis_moves: 0,
         unknown_moves: 0,
+        rotary: rotary_use(p),
     };
     let mut minutes = 0.0;
     for op in &p.operations {

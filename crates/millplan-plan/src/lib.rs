@@ -13,6 +13,7 @@ pub mod leadtilt;
 pub mod machine;
 pub mod orient;
 pub mod pipeline;
+pub mod post;
 pub mod reorder;
 pub mod setup;
 pub mod speed;

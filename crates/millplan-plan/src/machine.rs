@@ -40,6 +40,45 @@ pub struct Machine {
     pub kinematics: Option<Kinematics>,
     pub axes: Axes,
     pub modal: Option<Modal>,
+    /// What the five-axis post needs of this machine beyond its axes.
+    pub post: PostSettings,
+}
+
+/// The five-axis post's settings for one machine (`[post]`): the pole cone
+/// and its tolerance (spec kinematics-access-tools §1.8) and the retract of
+/// a branch change (§1.7).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PostSettings {
+    /// Half-angle (degrees) of the cone about the pole within which the
+    /// turning axis is held.
+    #[serde(default = "one_degree")]
+    pub pole_cone: f64,
+    /// Orientation deviation (degrees) beyond which a pole block is flagged.
+    #[serde(default = "one_degree")]
+    pub pole_tol: f64,
+    /// Retract along the tool axis before the rotaries turn for a branch
+    /// change, mm.
+    #[serde(default = "fifty_mm")]
+    pub clearance: f64,
+}
+
+fn one_degree() -> f64 {
+    1.0
+}
+
+fn fifty_mm() -> f64 {
+    50.0
+}
+
+impl Default for PostSettings {
+    fn default() -> Self {
+        PostSettings {
+            pole_cone: one_degree(),
+            pole_tol: one_degree(),
+            clearance: fifty_mm(),
+        }
+    }
 }
 
 /// What the control makes of the words a program holds.
@@ -414,6 +453,8 @@ impl serde::Serialize for Machine {
             axes: Option<&'a Axes>,
             #[serde(skip_serializing_if = "Option::is_none")]
             modal: Option<&'a Modal>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            post: Option<&'a PostSettings>,
         }
         let c = &self.control;
         let d = Control::default();
@@ -433,6 +474,7 @@ impl serde::Serialize for Machine {
             kinematics: self.kinematics.as_ref(),
             axes: (self.axes != Axes::default()).then_some(&self.axes),
             modal: self.modal.as_ref(),
+            post: (self.post != PostSettings::default()).then_some(&self.post),
         }
         .serialize(s)
     }
@@ -455,6 +497,7 @@ impl Default for Machine {
             kinematics: None,
             axes: Axes::default(),
             modal: None,
+            post: PostSettings::default(),
         }
     }
 }
@@ -529,6 +572,31 @@ impl Machine {
     /// Every number finite and in its range; the field at fault is named as
     /// the machine file spells it (`spindle.max`, `axes.x.accel`, ...).
     pub fn validate(&self) -> Result<(), MachineError> {
+        let ps = &self.post;
+        need(
+            ps.pole_cone.is_finite() && (0.0..=30.0).contains(&ps.pole_cone),
+            "post.pole_cone",
+            format!(
+                "must be an angle from 0 to 30 degrees, got {}",
+                ps.pole_cone
+            ),
+        )?;
+        need(
+            ps.pole_tol.is_finite() && (0.0..=180.0).contains(&ps.pole_tol),
+            "post.pole_tol",
+            format!(
+                "must be an angle from 0 to 180 degrees, got {}",
+                ps.pole_tol
+            ),
+        )?;
+        need(
+            ps.clearance.is_finite() && ps.clearance > 0.0 && ps.clearance <= 10_000.0,
+            "post.clearance",
+            format!(
+                "must be a length above 0 and at most 10000 mm, got {}",
+                ps.clearance
+            ),
+        )?;
         let (n0, n1) = (self.spindle_min, self.spindle_max);
         need(
             n0.is_finite() && n0 >= 0.0,
@@ -645,6 +713,8 @@ impl Machine {
     pub fn write_options(&self, target: Target) -> WriteOptions {
         WriteOptions {
             spindle_decimals: self.control.spindle_decimals,
+            g93_seconds: self.control.g93_f == InverseTimeF::Seconds,
+            g93_rapids: self.control.g93_rapids,
             ..WriteOptions::new(target)
         }
     }

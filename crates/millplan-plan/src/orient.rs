@@ -16,7 +16,7 @@ pub static INFO: PassInfo = PassInfo {
 };
 
 /// Indices into A, B, C of a machine's first (tilting) and second rotary axis.
-fn letters(kind: KinKind) -> (usize, usize) {
+pub(crate) fn letters(kind: KinKind) -> (usize, usize) {
     match kind {
         KinKind::TableAc => (0, 2),
         KinKind::TableAb => (0, 1),

@@ -62,6 +62,7 @@ struct Cli {
 enum Command {
     Inspect(cmd::inspect::Args),
     Convert(cmd::convert::Args),
+    Post(cmd::post::Args),
     Demo(cmd::demo::Args),
     Wd(cmd::wd::Args),
     Cut(cmd::cut::Args),
@@ -221,6 +222,7 @@ fn run(command: Command) -> error::CliResult<i32> {
     match command {
         Command::Inspect(a) => cmd::inspect::run(a),
         Command::Convert(a) => cmd::convert::run(a),
+        Command::Post(a) => cmd::post::run(a),
         Command::Demo(a) => cmd::demo::run(a),
         Command::Wd(a) => cmd::wd::run(a),
         Command::Cut(a) => cmd::cut::run(a),

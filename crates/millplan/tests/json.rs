@@ -28,6 +28,17 @@ fn listed_commands() -> Vec<String> {
         .collect()
 }
 
+/// A five-axis machine file (A/C table) in `tmp`, its path.
+fn machine5(tmp: &Path) -> String {
+    let m = tmp.join("five.toml");
+    std::fs::write(
+        &m,
+        "[spindle]\nmin = 100.0\nmax = 20000.0\naccel = 5000.0\n[feed]\nmax = 20000.0\n[kinematics]\nkind = \"table-ac\"\n",
+    )
+    .expect("write");
+    m.display().to_string()
+}
+
 /// A successful run and a failing one of a command, both with --json.
 struct Case {
     command: &'static str,
@@ -340,6 +351,29 @@ fn cases(d: &Path, tmp: &Path) -> Vec<Case> {
                 "al7075",
                 "-o",
                 &t("fed2.apt"),
+            ]),
+        },
+        Case {
+            command: "post",
+            ok: v(&[
+                "post",
+                "--json",
+                &apt,
+                "--machine",
+                &machine5(tmp),
+                "--to",
+                "fanuc",
+                "-o",
+                &t("posted.nc"),
+            ]),
+            fails: v(&[
+                "post",
+                "--json",
+                &apt,
+                "--machine",
+                &machine5(tmp),
+                "-o",
+                "-",
             ]),
         },
         Case {

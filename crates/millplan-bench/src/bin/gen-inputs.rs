@@ -1,8 +1,8 @@
 //! Writes the benchmark inputs to a folder: `big.apt` (1,000,000 GOTOs),
 //! `big.stl` (2,000,000 triangles of the demo surface) and `raster_1m.apt` (a D10
 //! ball-end raster of about 1,000,000 points over that surface) and
-//! `five_axis_100k.apt` (the same raster with 100,000 points and a leaning,
-//! rolling tool axis), for whole-command
+//! `five_axis_100k.apt` and `five_axis_1m.apt` (the same raster with 100,000
+//! and 1,000,000 points and a leaning, rolling tool axis), for whole-command
 //! timing and peak memory (`/usr/bin/time -v millplan speed ...`).
 
 fn main() {
@@ -23,6 +23,12 @@ fn main() {
             std::fs::write(
                 dir.join("five_axis_100k.apt"),
                 millplan_bench::five_axis_apt(100_000),
+            )
+        })
+        .and_then(|_| {
+            std::fs::write(
+                dir.join("five_axis_1m.apt"),
+                millplan_bench::five_axis_apt(1_000_000),
             )
         })
     {

@@ -263,6 +263,11 @@ impl W<'_> {
         if self.st.spindle_running {
             self.line("M5");
         }
+        // A program never leaves the control in inverse-time mode.
+        if !self.hh() && self.st.feed_mode == Some(FeedMode::InverseTime) {
+            self.line("G94");
+            self.st.feed_mode = Some(FeedMode::PerMinute);
+        }
         self.line("M30");
         match self.target() {
             Target::Heidenhain => {
@@ -889,6 +894,9 @@ impl W<'_> {
                     FeedMode::InverseTime => self.word("FT", 60.0 / f, ff),
                 }
                 self.st.feed_mode = Some(mode);
+            } else if mode == FeedMode::InverseTime && self.o.g93_seconds {
+                // The block's time in seconds (Beckhoff/ISG G93).
+                self.word("F", 60.0 / f, ff);
             } else {
                 self.word("F", f, ff);
             }
@@ -1001,6 +1009,9 @@ impl W<'_> {
         let mark = self.start_motion(extra);
         if !rapid {
             self.feed_mode_word(mode);
+        } else if !self.o.g93_rapids && self.st.feed_mode == Some(FeedMode::InverseTime) {
+            // This control refuses G0 in inverse-time mode.
+            self.feed_mode_word(FeedMode::PerMinute);
         }
         self.motion(if rapid { 0 } else { 1 });
         self.coords(end, false);
@@ -1507,7 +1518,7 @@ pub(super) fn write_all(
         // CL data are tool-tip positions and leave compensation to the post;
         // a G-code program says what it wants, and nothing is added to it.
         auto_tlc: cl_data && !has(|k| matches!(k, EventKind::ToolLength(_))),
-        auto_tcp: cl_data && !has(|k| matches!(k, EventKind::Tcp(_))),
+        auto_tcp: o.auto_tcp && cl_data && !has(|k| matches!(k, EventKind::Tcp(_))),
         st: State {
             block_no: 0,
             pos: [None; 3],

@@ -180,6 +180,16 @@ pub struct WriteOptions {
     /// Resource limits: lines an arc may become (`expansion`) and moves of
     /// the program written (`moves`).
     pub limits: millplan_geom::Limits,
+    /// Switch tool-centre-point control on at a five-axis tool change of CL
+    /// data that say nothing about it (G43.4, TRAORI, M128). A program
+    /// posted in machine coordinates must run without it.
+    pub auto_tcp: bool,
+    /// The control reads a G93 F word as the block time in seconds
+    /// (Beckhoff/ISG) rather than as 1/minutes (RS274/NGC).
+    pub g93_seconds: bool,
+    /// The control takes G0 while G93 is active; when not, the writer states
+    /// G94 before a rapid in inverse-time mode.
+    pub g93_rapids: bool,
 }
 
 impl WriteOptions {
@@ -192,6 +202,9 @@ impl WriteOptions {
             lossy: false,
             spindle_decimals: None,
             limits: millplan_geom::Limits::default(),
+            auto_tcp: true,
+            g93_seconds: false,
+            g93_rapids: true,
         }
     }
 

@@ -5,8 +5,8 @@
 //! them is refused, never guessed.
 
 use super::{
-    Axes, Control, CurvePoint, InverseTimeF, LinearAxis, Machine, MachineError, Modal, RotaryDrive,
-    SpindleCurve,
+    Axes, Control, CurvePoint, InverseTimeF, LinearAxis, Machine, MachineError, Modal,
+    PostSettings, RotaryDrive, SpindleCurve,
 };
 use millplan_models::kinematics::Kinematics;
 use millplan_nc::write::Target;
@@ -29,7 +29,15 @@ pub enum Layout {
     KinematicsOnly,
 }
 
-const MACHINE_KEYS: &[&str] = &["control", "spindle", "feed", "kinematics", "axes", "modal"];
+const MACHINE_KEYS: &[&str] = &[
+    "control",
+    "spindle",
+    "feed",
+    "kinematics",
+    "axes",
+    "modal",
+    "post",
+];
 const SPEED_KEYS: &[&str] = &[
     "spindle_min",
     "spindle_max",
@@ -290,6 +298,7 @@ pub(super) fn write(m: &Machine) -> Result<String, MachineError> {
         kinematics: m.kinematics.clone(),
         axes,
         modal: m.modal.clone(),
+        post: m.post,
     };
     toml::to_string(&file).map_err(|e| MachineError {
         at: None,
@@ -385,6 +394,8 @@ struct MachineFile {
     axes: AxesFile,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     modal: Option<Modal>,
+    #[serde(default, skip_serializing_if = "is_default")]
+    post: PostSettings,
 }
 
 #[derive(serde::Deserialize, serde::Serialize)]
@@ -504,6 +515,7 @@ impl MachineFile {
             kinematics: self.kinematics,
             axes,
             modal: self.modal,
+            post: self.post,
         })
     }
 }
@@ -817,8 +829,10 @@ mod tests {
                     second,
                 },
             modal,
+            post,
         } = &m;
         assert_ne!(name, "machine");
+        assert_ne!(*post, PostSettings::default(), "the example sets [post]");
         assert!(dialect.is_some() && spindle_decimals.is_some());
         let curve = spindle_curve.as_ref().expect("curve");
         assert!(curve

@@ -55,6 +55,17 @@ fn bounds_json(b: &Aabb) -> Value {
     json!({ "min": [b.min.x, b.min.y, b.min.z], "max": [b.max.x, b.max.y, b.max.z] })
 }
 
+/// The rotary axes the program moves, by letter.
+fn rotary_json(r: &[Option<millplan_nc::stats::RotaryUse>; 3]) -> Value {
+    let mut m = serde_json::Map::new();
+    for (name, u) in ["A", "B", "C"].iter().zip(r) {
+        if let Some(u) = u {
+            m.insert(name.to_string(), json!(u));
+        }
+    }
+    Value::Object(m)
+}
+
 fn format_name(d: Dialect) -> &'static str {
     if d.is_apt() {
         "apt"
@@ -98,6 +109,7 @@ fn program_json(p: &Program, diags: usize, machine: &millplan_plan::machine::Mac
         "time_nominal_s": s.time_s,
         "time": crate::cmd::time_json(&est),
         "unknown_moves": s.unknown_moves,
+        "rotary": rotary_json(&s.rotary),
         "diagnostics": diags,
     })
 }
@@ -282,6 +294,17 @@ fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
         m["cycle"],
         m["five_axis"]
     );
+    if let Some(r) = j["rotary"].as_object() {
+        for (name, u) in r {
+            let f = |k: &str| u[k].as_f64().unwrap_or(f64::NAN);
+            outln!(
+                "  rotary {name}    {:.3} .. {:.3} deg, {:.3} deg travelled",
+                f("min_deg"),
+                f("max_deg"),
+                f("travel_deg")
+            );
+        }
+    }
     if let Some(b) = j["bounds"].as_object() {
         outln!("  bounds      {} .. {}", b["min"], b["max"]);
     }

@@ -12,6 +12,7 @@ pub mod gouge;
 pub mod inspect;
 pub mod lobes;
 pub mod orient;
+pub mod post;
 pub mod raster;
 pub mod reorder;
 pub mod setup;
