@@ -440,8 +440,10 @@ fn feed_summary(
     })
 }
 
-/// Per operation with simulated moves: its simulated time and largest F_xy
-/// before and after, so a user sees which operation gained and which was
+/// Per operation with simulated moves: its time at the programmed feeds
+/// (the simulation's strokes; the whole program's estimate with
+/// acceleration is `time_before_s`/`time_after_s`) and largest F_xy before
+/// and after, so a user sees which operation gained and which was
 /// slowed to respect a limit.
 fn per_operation(
     p: &millplan_nc::Program,
@@ -483,7 +485,7 @@ fn per_operation(
                 "tool_name": op.tool.as_ref().and_then(|t| t.name.clone()),
                 "line": op.moves.first().map(|m| m.line),
                 "moves": a.moves,
-                "time_before_s": a.t[0], "time_after_s": a.t[1],
+                "time_nominal_before_s": a.t[0], "time_nominal_after_s": a.t[1],
                 "fxy_max_before": a.fxy[0], "fxy_max_after": a.fxy[1],
             })
         })
@@ -593,12 +595,12 @@ fn feed_notes(v: &serde_json::Value) -> millplan_report::html::Notes {
     for o in v["operations"].as_array().into_iter().flatten() {
         let g = |k: &str| o[k].as_f64().unwrap_or(0.0);
         verdict.push(format!(
-            "Operation {} (line {}, tool {}): {:.1} s → {:.1} s, F_xy max {:.1} → {:.1} N.",
+            "Operation {} (line {}, tool {}): {:.1} s → {:.1} s at the programmed feeds, F_xy max {:.1} → {:.1} N.",
             o["operation"],
             o["line"],
             o["tool"],
-            g("time_before_s"),
-            g("time_after_s"),
+            g("time_nominal_before_s"),
+            g("time_nominal_after_s"),
             g("fxy_max_before"),
             g("fxy_max_after")
         ));
@@ -682,12 +684,12 @@ fn print_feed(a: &Args, s: &serde_json::Value) {
         for o in ops {
             let g = |k: &str| o[k].as_f64().unwrap_or(0.0);
             outln!(
-                "  operation {} (line {}, tool {}): {:.1} s → {:.1} s, F_xy max {:.1} → {:.1} N",
+                "  operation {} (line {}, tool {}): {:.1} s → {:.1} s at the programmed feeds, F_xy max {:.1} → {:.1} N",
                 o["operation"],
                 o["line"],
                 o["tool"],
-                g("time_before_s"),
-                g("time_after_s"),
+                g("time_nominal_before_s"),
+                g("time_nominal_after_s"),
                 g("fxy_max_before"),
                 g("fxy_max_after")
             );
