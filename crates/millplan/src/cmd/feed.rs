@@ -578,6 +578,21 @@ pub fn force_notes(v: &serde_json::Value) -> millplan_report::html::Notes {
     }
 }
 
+/// One entry of the summary's `operations` in words.
+fn operation_line(o: &serde_json::Value) -> String {
+    let g = |k: &str| o[k].as_f64().unwrap_or(0.0);
+    format!(
+        "Operation {} (line {}, tool {}): {:.1} s → {:.1} s at the programmed feeds, F_xy max {:.1} → {:.1} N",
+        o["operation"],
+        o["line"],
+        o["tool"],
+        g("time_nominal_before_s"),
+        g("time_nominal_after_s"),
+        g("fxy_max_before"),
+        g("fxy_max_after")
+    )
+}
+
 /// The feed report's warnings and verdict.
 fn feed_notes(v: &serde_json::Value) -> millplan_report::html::Notes {
     let g = |k: &str| v[k].as_f64().unwrap_or(0.0);
@@ -593,17 +608,7 @@ fn feed_notes(v: &serde_json::Value) -> millplan_report::html::Notes {
         v["binding"]
     )];
     for o in v["operations"].as_array().into_iter().flatten() {
-        let g = |k: &str| o[k].as_f64().unwrap_or(0.0);
-        verdict.push(format!(
-            "Operation {} (line {}, tool {}): {:.1} s → {:.1} s at the programmed feeds, F_xy max {:.1} → {:.1} N.",
-            o["operation"],
-            o["line"],
-            o["tool"],
-            g("time_nominal_before_s"),
-            g("time_nominal_after_s"),
-            g("fxy_max_before"),
-            g("fxy_max_after")
-        ));
+        verdict.push(format!("{}.", operation_line(o)));
     }
     millplan_report::html::Notes {
         warnings: load_warnings(v, "over_limit_after", "over_limit_lines"),
@@ -682,17 +687,7 @@ fn print_feed(a: &Args, s: &serde_json::Value) {
     }
     if let Some(ops) = s["operations"].as_array().filter(|o| o.len() > 1) {
         for o in ops {
-            let g = |k: &str| o[k].as_f64().unwrap_or(0.0);
-            outln!(
-                "  operation {} (line {}, tool {}): {:.1} s → {:.1} s at the programmed feeds, F_xy max {:.1} → {:.1} N",
-                o["operation"],
-                o["line"],
-                o["tool"],
-                g("time_nominal_before_s"),
-                g("time_nominal_after_s"),
-                g("fxy_max_before"),
-                g("fxy_max_after")
-            );
+            outln!("  {}", operation_line(o));
         }
     }
     outln!(

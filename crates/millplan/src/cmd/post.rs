@@ -173,6 +173,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     let mut posted = post(&parsed.program, &machine, &o).map_err(|e| post_error(&a.input, e))?;
     for_target(&mut posted.program, target).map_err(|e| post_error(&a.input, e))?;
     bar.finish_and_clear();
+    // The CL program is not needed any more: its memory goes before the
+    // written program and its read-back take theirs.
+    drop(parsed);
     let mut wo = machine.write_options(target);
     // The post states TCP itself, per operation, when asked for it.
     wo.auto_tcp = false;
