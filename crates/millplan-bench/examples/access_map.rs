@@ -51,8 +51,14 @@ fn main() {
         let acc = accessibility(&mesh, &bvh, grid.as_ref(), 0.0, &tool);
         let secs = t.elapsed().as_secs_f64();
         let free: usize = (0..acc.len()).map(|i| acc.count(i)).sum();
+        // FNV-1a over every facet's cells: runs compare bit for bit.
+        let hash = (0..acc.len())
+            .flat_map(|i| acc.set(i).iter().copied())
+            .fold(0xcbf2_9ce4_8422_2325u64, |h, w| {
+                (h ^ w).wrapping_mul(0x0100_0000_01b3)
+            });
         println!(
-            "tool mode: {secs:.2} s ({:.2}M direction tests/s, {:.1} % free)",
+            "tool mode: {secs:.2} s ({:.2}M direction tests/s, {:.1} % free, cones {hash:016x})",
             rays as f64 / secs / 1e6,
             100.0 * free as f64 / rays as f64
         );
