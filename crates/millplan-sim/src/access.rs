@@ -1961,6 +1961,77 @@ mod tests {
     }
 
     #[test]
+    fn tool_mode_agrees_with_brute_force_where_the_capsule_tests_decide() {
+        // Spec §3.4, tool model: the distance from each triangle to each of
+        // the tool's axis segments must be at least its radius (the ball's
+        // own contact region left out). Brute force over every triangle, no
+        // tree, no maps, against the depth maps with their capsule tests and
+        // against `accessibility_exact`, on the bumps with a holder, where the
+        // maps leave a good share of the free directions to the capsules.
+        let m = millplan_geom::analytic::tessellate(&Bumps, 3.2);
+        let b = Bvh::build(&m);
+        let g = Icosphere::new(1);
+        let tool = ToolModel {
+            radius: 3.0,
+            reach: 12.0,
+            holder_radius: 8.0,
+            holder_length: 20.0,
+        };
+        let fast = accessibility_mapped(&m, &b, &g, 0.0, &tool, &|_, _| {});
+        let exact = accessibility_exact(&m, &b, &g, 0.0, &tool);
+        let tol = 1e-3 * tool.radius + 1e-7 * m.bounds().diagonal();
+        let rs = tool.radius - tol;
+        let hits = |a: DVec3, z: DVec3, r: f64, above: Option<(DVec3, f64)>| {
+            (0..m.len()).any(|k| {
+                let [p, q, s] = m.corners(k);
+                above.is_none_or(|(n, h)| [p, q, s].iter().any(|v| n.dot(*v) > h))
+                    && millplan_geom::bvh::segment_triangle_dist2(a, z, p, q, s) < r * r
+            })
+        };
+        let test = DirectionTest::tool(&m, &b, 0.0, &tool);
+        let views: Vec<ToolView> = (0..g.len())
+            .map(|c| ToolView::new(&m, &m.vertices, g.direction(c), &tool, tol))
+            .collect();
+        let (mut free, mut by_capsules) = (0, 0);
+        for t in (0..m.len()).step_by(2) {
+            let (p, n) = test.facet(t).expect("no degenerate facets");
+            let c = p + n * tool.radius;
+            let usable = !hits(c, c, rs, None);
+            for (k, view) in views.iter().enumerate() {
+                let d = view.d;
+                let top = c + d * tool.reach;
+                let want = d.dot(n) > 0.0
+                    && usable
+                    && !hits(c, top, rs, Some((d, d.dot(c))))
+                    && !hits(
+                        top,
+                        top + d * tool.holder_length,
+                        tool.holder_radius,
+                        Some((d, d.dot(top) - tool.holder_radius)),
+                    );
+                assert_eq!(fast.contains(t, k), want, "facet {t}, cell {k}");
+                assert_eq!(exact.contains(t, k), want, "facet {t}, cell {k}");
+                if want {
+                    free += 1;
+                    // Whether the shank's map alone proved it.
+                    let (u, v) = (c.dot(view.e1), c.dot(view.e2));
+                    let proved = view
+                        .shank
+                        .at(u, v)
+                        .is_some_and(|s| view.shank.near[s] < c.dot(d) - view.eps);
+                    by_capsules += !proved as usize;
+                }
+            }
+        }
+        // 338 triangles, half of them tested: 1,239 free pairs, 920 of them
+        // left by the shank's map to the capsule tests.
+        assert!(
+            free > 500 && by_capsules * 2 > free,
+            "{free} free, {by_capsules} by the capsule tests"
+        );
+    }
+
+    #[test]
     fn a_tool_sees_less_of_a_pocket_bottom_than_a_ray() {
         // The pocket of the line-of-sight test; a ball of radius 2 with a long
         // shank: its axis must cross the top of the walls 2 mm inside them.
