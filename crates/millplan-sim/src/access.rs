@@ -2218,7 +2218,7 @@ mod slow_tests {
     /// The depth maps against the plain capsule tests on the demo surface at
     /// 24,642 triangles with the benchmark's tool (D10 ball, 40 mm reach,
     /// D40 × 60 mm holder): the same answer for every facet and direction.
-    /// About a minute in a release build: `cargo test --release -p
+    /// Seconds in a release build: `cargo test --release -p
     /// millplan-sim -- --ignored`.
     #[test]
     #[ignore]
