@@ -439,12 +439,17 @@ impl Bvh {
     }
 }
 
+/// A triangle a capsule query hit, to try first in the next one
+/// ([`Bvh::capsule_hits_above_from`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CapsuleHit(usize);
+
 impl Bvh {
     /// Whether the ray `origin + s·dir`, `0 < s < max_s`, hits any triangle other
     /// than `skip` (an any-hit occlusion query: it stops at the first hit).
     /// Triangles are hit from both sides; `dir` need not be unit.
     pub fn occluded(&self, origin: DVec3, dir: DVec3, max_s: f64, skip: Option<u32>) -> bool {
-        self.any_near_ray(origin, dir, max_s, 0.0, None, |k, [a, b, c]| {
+        self.any_near_ray(origin, dir, max_s, 0.0, None, false, |k, [a, b, c]| {
             // The skipped triangle is looked up only on a hit.
             ray_triangle(origin, dir, *a, *b, *c).is_some_and(|s| s > 0.0 && s < max_s)
                 && skip != Some(self.order[k])
@@ -468,6 +473,24 @@ impl Bvh {
         radius: f64,
         skip: Option<u32>,
         above: Option<(DVec3, f64)>,
+    ) -> bool {
+        self.capsule_hits_above_from(a, b, radius, skip, above, &mut None)
+    }
+
+    /// [`capsule_hits_above`](Self::capsule_hits_above), trying first the
+    /// triangle `hint` names (a previous query's hit, as this returns it in
+    /// `hint`): queries in a row that the same triangle blocks, like a tool
+    /// turned through neighbouring directions, then cost one triangle test.
+    /// The answer is the same whatever `hint` holds: the hinted triangle is
+    /// put to the very test every other triangle gets.
+    pub fn capsule_hits_above_from(
+        &self,
+        a: DVec3,
+        b: DVec3,
+        radius: f64,
+        skip: Option<u32>,
+        above: Option<(DVec3, f64)>,
+        hint: &mut Option<CapsuleHit>,
     ) -> bool {
         if radius <= 0.0 {
             return false;
@@ -498,19 +521,66 @@ impl Bvh {
             let lim2 = r2 * m.length_squared() * (1.0 + 1e-9);
             sa * sb <= 0.0 || sa.abs().min(sb.abs()).powi(2) < lim2
         };
-        self.any_near_ray(a, b - a, 1.0, radius, above, |k, t| {
-            let [p, q, r] = t;
-            skip != Some(self.order[k])
-                && plane_near(t)
-                && sphere_near(t)
-                && reaches(t)
-                && segment_triangle_dist2(a, b, *p, *q, *r) < r2
-        })
+        // When what lies wholly below the plane through a across the axis is
+        // left out (a shank standing on its ball), what is left touches the
+        // capsule through its side or its top, beside the axis: there the
+        // distance across the axis, to the triangle seen along it, is cheaper
+        // than the distance to the segment and never more, and rules out most
+        // of what the tests above leave. Its margin is far above the rounding
+        // of either distance, so it never decides what the exact one would not.
+        let axis = (ab2 > 0.0).then(|| ab * inv_ab2.sqrt()).filter(|u| {
+            above.is_some_and(|(n, h)| n.dot(*u) > 1.0 - 1e-12 && h >= n.dot(a) - 1e-9 * radius)
+        });
+        let scale = a.abs().max(b.abs()).max_element() + radius;
+        let beside = r2 * (1.0 + 1e-9) + 1e-13 * scale * scale;
+        let apart = |[p, q, r]: &[DVec3; 3]| {
+            axis.is_some_and(|u| {
+                let across = |x: DVec3| {
+                    let w = x - a;
+                    w - u * w.dot(u)
+                };
+                lateral_dist2(across(*p), across(*q), across(*r)) >= beside
+            })
+        };
+        // The test of triangle t at position k, written out at both places
+        // it runs so that the traversal's copy is inlined.
+        macro_rules! hits {
+            ($k:expr, $t:expr) => {{
+                let (k, t): (usize, &[DVec3; 3]) = ($k, $t);
+                let [p, q, r] = t;
+                skip != Some(self.order[k])
+                    && plane_near(t)
+                    && sphere_near(t)
+                    && reaches(t)
+                    && !apart(t)
+                    && segment_triangle_dist2(a, b, *p, *q, *r) < r2
+            }};
+        }
+        if let Some(CapsuleHit(k)) = *hint {
+            if k < self.order.len() && hits!(k, &self.tris.get(k)) {
+                return true;
+            }
+        }
+        let mut found = None;
+        let hit = self.any_near_ray(a, b - a, 1.0, radius, above, axis.is_some(), |k, t| {
+            let yes = hits!(k, t);
+            if yes {
+                found = Some(CapsuleHit(k));
+            }
+            yes
+        });
+        if hit {
+            *hint = found;
+        }
+        hit
     }
 
     /// Any-hit traversal: calls `hit(position in order, corners)` for the
     /// triangles of every leaf whose box, grown by `pad`, the ray
-    /// `origin + s·dir` (0 ≤ s ≤ max_s) meets, until `hit` says yes.
+    /// `origin + s·dir` (0 ≤ s ≤ max_s) meets, until `hit` says yes. With
+    /// `beside`, boxes are also tested across the axis (worth it where what
+    /// is near the capsule mostly lies beside it, not against its end).
+    #[allow(clippy::too_many_arguments)] // private; each query passes all
     fn any_near_ray(
         &self,
         origin: DVec3,
@@ -518,6 +588,7 @@ impl Bvh {
         max_s: f64,
         pad: f64,
         above: Option<(DVec3, f64)>,
+        beside: bool,
         mut hit: impl FnMut(usize, &[DVec3; 3]) -> bool,
     ) -> bool {
         if self.order.is_empty() {
@@ -557,6 +628,24 @@ impl Bvh {
                 Vec4::splat(pad as f32),
             )
         });
+        // Capsules with a length: each child box is also tested across the
+        // axis, along the direction g from the axis to the box's centre: the
+        // capsule lies within `pad` of the axis along g, the box no nearer
+        // than its centre's distance less its extent along g. For the flat
+        // boxes of a surface beside the axis this is far tighter than the
+        // bounding sphere. Its margin covers the single-precision rounding of
+        // the origin, the axis and the centres.
+        let across = (pad > 0.0 && beside)
+            .then(|| (dir * max_s).normalize_or_zero())
+            .filter(|u| *u != DVec3::ZERO)
+            .map(|u| {
+                let u = u.as_vec3();
+                let scale = origin.abs().max_element() + (dir * max_s).length() + pad;
+                (
+                    [u.x, u.y, u.z].map(Vec4::splat),
+                    Vec4::splat((16.0 * f32::EPSILON as f64 * scale + 1e-6) as f32),
+                )
+            });
         let wide = self.wide();
         let mut stack: [u32; 128] = [0; 128];
         let mut sp = 1;
@@ -592,6 +681,22 @@ impl Bvh {
                 // A relative margin for single precision.
                 let reach = (*r + e2.sqrt()) * 1.0001 + Vec4::splat(1e-6);
                 mask &= dist2.cmplt(reach * reach).bitmask();
+                if let Some((u, slack)) = &across {
+                    let mut tu = Vec4::ZERO;
+                    for a in 0..3 {
+                        tu += c[a] * u[a];
+                    }
+                    let (mut l2, mut ext) = (Vec4::ZERO, Vec4::ZERO);
+                    for a in 0..3 {
+                        let l = c[a] - u[a] * tu;
+                        l2 += l * l;
+                        ext += l.abs() * (node.max[a] - node.min[a]) * 0.5;
+                    }
+                    // Extent along g = l/|l|; at |l| = 0 nothing is ruled out.
+                    let l = l2.sqrt();
+                    let reach = (*r + ext / l.max(Vec4::splat(1e-30))) * 1.0001 + *slack;
+                    mask &= l.cmple(reach).bitmask();
+                }
             }
             if let Some((n, up, h)) = &cull {
                 let mut top = Vec4::ZERO;
@@ -619,6 +724,39 @@ impl Bvh {
         }
         false
     }
+}
+
+/// Squared distance from the origin to triangle pqr, whose corners lie in a
+/// plane through the origin (a triangle seen along an axis, possibly edge-on):
+/// the least over its three edges, or 0 when the origin lies inside it. NaN
+/// never comes out as a distance the caller could trust: a degenerate input
+/// gives at most the true value.
+fn lateral_dist2(p: DVec3, q: DVec3, r: DVec3) -> f64 {
+    // Inside: the origin on the same side of all three edges (within the
+    // plane the corners span; a flat triangle spans none and is its edges).
+    // Near an edge's line rounding may flip a side: within a relative 1e-9 of
+    // it counts as either side, so a doubt answers 0, never too much.
+    let m = (q - p).cross(r - p);
+    let side = |u: DVec3, v: DVec3| {
+        let s = (v - u).cross(-u).dot(m);
+        let tol = 1e-9 * (v - u).length() * u.length() * m.length();
+        (s >= -tol, s <= tol)
+    };
+    let (s1, s2, s3) = (side(p, q), side(q, r), side(r, p));
+    if m.length_squared() > 0.0 && ((s1.0 && s2.0 && s3.0) || (s1.1 && s2.1 && s3.1)) {
+        return 0.0;
+    }
+    let edge = |u: DVec3, v: DVec3| {
+        let e = v - u;
+        let e2 = e.length_squared();
+        let t = if e2 > 0.0 {
+            (-u.dot(e) / e2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (u + e * t).length_squared()
+    };
+    edge(p, q).min(edge(q, r)).min(edge(r, p))
 }
 
 /// Squared distance between segment ab and triangle pqr.
@@ -1255,6 +1393,57 @@ mod tests {
     }
 
     #[test]
+    fn shank_capsules_standing_on_their_ball_agree_with_brute_force() {
+        // Capsules like a tool's shank: starting a radius (a hair more or
+        // less) off a facet, tilted from steep to grazing, with only what
+        // reaches above the plane through the ball's centre across the axis:
+        // where the distance across the axis rules triangles out. Every other
+        // query carries the previous one's hit as its hint, which must not
+        // change the answer, whether it hits or not.
+        let mesh = tessellate(&DemoSurface::default(), 0.8);
+        let bvh = Bvh::build(&mesh);
+        let (mut hits, mut free, mut hinted) = (0, 0, 0);
+        let mut hint = None;
+        for i in 0..600 {
+            let f = i as f64;
+            let t = (i * 7919) % mesh.len();
+            let [p, q, s] = mesh.corners(t);
+            let n = mesh.facet_normal(t);
+            let r = 0.5 + (f * 0.7) % 4.0;
+            let lift = r * (1.0 + [-1e-3, 1e-3, 1e-6][i % 3]);
+            let a = (p + q + s) / 3.0 + n * lift;
+            let (u, _) = n.any_orthonormal_pair();
+            let tilt = (f * 0.29) % 1.55;
+            let spin = f * 2.4;
+            let side = u * spin.cos() + n.cross(u) * spin.sin();
+            let axis = n * tilt.cos() + side * tilt.sin();
+            let b = a + axis * (r + (f * 1.3) % 30.0);
+            let h = axis.dot(a);
+            let brute = (0..mesh.len()).any(|k| {
+                let [p, q, s] = mesh.corners(k);
+                [p, q, s].iter().any(|v| axis.dot(*v) > h)
+                    && segment_triangle_dist2(a, b, p, q, s) < r * r
+            });
+            let above = Some((axis, h));
+            assert_eq!(bvh.capsule_hits_above(a, b, r, None, above), brute, "{i}");
+            if i % 2 == 1 {
+                hinted += hint.is_some() as usize;
+                let got = bvh.capsule_hits_above_from(a, b, r, None, above, &mut hint);
+                assert_eq!(got, brute, "{i} with a hint");
+            } else {
+                hint = None;
+                bvh.capsule_hits_above_from(a, b, r, None, above, &mut hint);
+            }
+            hits += brute as usize;
+            free += !brute as usize;
+        }
+        assert!(
+            hits > 30 && free > 30 && hinted > 10,
+            "{hits} hits, {free} free, {hinted}"
+        );
+    }
+
+    #[test]
     fn capsule_test_agrees_with_sampled_distance() {
         let mesh = tessellate(&DemoSurface::default(), 2.0);
         let bvh = Bvh::build(&mesh);
@@ -1298,6 +1487,56 @@ mod tests {
             DVec3::new(3.0, 1.0, 0.0),
         );
         assert!((d2 - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn distance_across_an_axis_never_exceeds_the_distance_to_the_segment() {
+        // The capsule query rules a triangle out by its distance across the
+        // axis: that must be a lower bound of the exact distance to the
+        // segment, and equal to it where the segment's nearest point is
+        // inside its span. Random triangles, thin, edge-on ones among them.
+        let mut seed = 19_005u64;
+        let mut next = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let (mut inside, mut equal) = (0, 0);
+        for i in 0..20_000 {
+            let x: [f64; 18] = std::array::from_fn(|_| next());
+            let v = |k: usize| DVec3::new(x[k], x[k + 1], x[k + 2]) * 8.0;
+            let (a, dir) = (v(0), v(3).normalize_or(DVec3::Z));
+            let b = a + dir * (1.0 + 20.0 * (x[15] + 0.5));
+            let (p, q) = (v(6), v(9));
+            let r = match i % 4 {
+                // Edge-on: the third corner on the plane through p, q and the axis.
+                0 => p + (q - p) * x[16] * 3.0 + dir * x[17] * 5.0,
+                // Thin.
+                1 => p + (q - p) * (0.5 + x[16]) + dir.cross(q - p) * 1e-7,
+                _ => v(12),
+            };
+            let across = |x: DVec3| {
+                let w = x - a;
+                w - dir * w.dot(dir)
+            };
+            let lat = lateral_dist2(across(p), across(q), across(r));
+            let exact = segment_triangle_dist2(a, b, p, q, r);
+            assert!(lat <= exact * (1.0 + 1e-9) + 1e-12, "{i}: {lat} > {exact}");
+            // The infinite line's distance, brute force: on a long segment
+            // through the triangle's span the two agree.
+            let long = segment_triangle_dist2(a - dir * 1e3, a + dir * 1e3, p, q, r);
+            assert!(
+                (lat - long).abs() <= 1e-7 * (1.0 + long),
+                "{i}: {lat} vs {long}"
+            );
+            inside += (lat == 0.0) as usize;
+            equal += ((lat - exact).abs() < 1e-9) as usize;
+        }
+        assert!(
+            inside > 500 && equal > 2000,
+            "{inside} inside, {equal} equal"
+        );
     }
 
     #[test]
