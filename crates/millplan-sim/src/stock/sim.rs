@@ -1240,7 +1240,8 @@ const BAND_ROWS: usize = 32;
 const GROUPS: usize = 16;
 
 /// Runs every stroke over the stock. `progress(done)` is called now and then
-/// with the number of strokes done by the slowest band group.
+/// with the number of strokes the first band group has done (all groups
+/// have, at the end of each chunk of strokes); never decreasing.
 pub fn simulate(
     stock: &mut Stock,
     strokes: &Strokes,
@@ -1267,18 +1268,25 @@ pub fn simulate(
     // Strokes in chunks: each band group runs a chunk over its bands, then
     // the chunk's sums are gathered (in group order) before the next.
     let mut out = vec![StrokeCut::default(); list.len()];
-    const CHUNK: usize = 1 << 15;
+    // Large chunks keep both threads busy (a chunk of a raster covers few
+    // bands); progress comes from within the chunk.
+    const CHUNK: usize = 1 << 19;
     let mut start = 0;
     while start < list.len() {
         let end = (start + CHUNK).min(list.len());
         let results: Vec<Vec<(u32, StrokeCut)>> = groups
             .par_iter_mut()
-            .map(|bands| {
+            .enumerate()
+            .map(|(gi, bands)| {
                 let mut touched = Vec::new();
                 if bands.is_empty() {
                     return touched;
                 }
                 for k in start..end {
+                    // The first group tells how far the run is within a chunk.
+                    if gi == 0 && k % 16384 == 0 {
+                        progress(k);
+                    }
                     let s = &list[k];
                     let tool = &strokes.tools[s.tool as usize];
                     let a = Apply {
