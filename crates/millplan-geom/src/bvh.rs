@@ -1369,18 +1369,8 @@ mod tests {
         let bvh = Bvh::build(&mesh);
         let (mut hits, mut free) = (0, 0);
         for i in 0..300 {
-            let f = i as f64;
-            let t = (i * 7919) % mesh.len();
-            let [p, q, s] = mesh.corners(t);
-            let n = mesh.facet_normal(t);
-            let r = 0.5 + (f * 0.7) % 4.0;
-            let lift = r * (1.0 + [-1e-3, 1e-3, 1e-6][i % 3]);
-            let a = (p + q + s) / 3.0 + n * lift;
-            let (u, _) = n.any_orthonormal_pair();
-            let tilt = (f * 0.29) % 1.55;
-            let spin = f * 2.4;
-            let side = u * spin.cos() + n.cross(u) * spin.sin();
-            let b = a + (n * tilt.cos() + side * tilt.sin()) * (5.0 + (f * 1.3) % 30.0);
+            let (a, axis, r, f) = near_facet_capsule(&mesh, i);
+            let b = a + axis * (5.0 + (f * 1.3) % 30.0);
             let brute = (0..mesh.len()).any(|k| {
                 let [p, q, s] = mesh.corners(k);
                 segment_triangle_dist2(a, b, p, q, s) < r * r
@@ -1390,6 +1380,24 @@ mod tests {
             free += !brute as usize;
         }
         assert!(hits > 30 && free > 30, "{hits} hits, {free} free");
+    }
+
+    /// Case `i` of the capsule tests: a start a radius (a hair more or
+    /// less) off a facet along its normal, a unit axis tilted from the
+    /// normal from steep to grazing, the radius, and `i` as a number.
+    fn near_facet_capsule(mesh: &TriMesh, i: usize) -> (DVec3, DVec3, f64, f64) {
+        let f = i as f64;
+        let t = (i * 7919) % mesh.len();
+        let [p, q, s] = mesh.corners(t);
+        let n = mesh.facet_normal(t);
+        let r = 0.5 + (f * 0.7) % 4.0;
+        let lift = r * (1.0 + [-1e-3, 1e-3, 1e-6][i % 3]);
+        let a = (p + q + s) / 3.0 + n * lift;
+        let (u, _) = n.any_orthonormal_pair();
+        let tilt = (f * 0.29) % 1.55;
+        let spin = f * 2.4;
+        let side = u * spin.cos() + n.cross(u) * spin.sin();
+        (a, n * tilt.cos() + side * tilt.sin(), r, f)
     }
 
     #[test]
@@ -1405,18 +1413,7 @@ mod tests {
         let (mut hits, mut free, mut hinted) = (0, 0, 0);
         let mut hint = None;
         for i in 0..600 {
-            let f = i as f64;
-            let t = (i * 7919) % mesh.len();
-            let [p, q, s] = mesh.corners(t);
-            let n = mesh.facet_normal(t);
-            let r = 0.5 + (f * 0.7) % 4.0;
-            let lift = r * (1.0 + [-1e-3, 1e-3, 1e-6][i % 3]);
-            let a = (p + q + s) / 3.0 + n * lift;
-            let (u, _) = n.any_orthonormal_pair();
-            let tilt = (f * 0.29) % 1.55;
-            let spin = f * 2.4;
-            let side = u * spin.cos() + n.cross(u) * spin.sin();
-            let axis = n * tilt.cos() + side * tilt.sin();
+            let (a, axis, r, f) = near_facet_capsule(&mesh, i);
             let b = a + axis * (r + (f * 1.3) % 30.0);
             let h = axis.dot(a);
             let brute = (0..mesh.len()).any(|k| {

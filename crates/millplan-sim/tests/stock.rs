@@ -23,6 +23,24 @@ fn stroke(p0: DVec3, p1: DVec3, axis: DVec3, rapid: bool, line: u32) -> Stroke {
     }
 }
 
+/// The largest difference between the tops of two stocks on one grid
+/// (infinite where a column is empty in one and not the other).
+fn worst_column(a: &Stock, b: &Stock) -> f64 {
+    let g = a.grid;
+    let mut worst = 0.0f64;
+    for j in 0..g.ny {
+        for i in 0..g.nx {
+            let d = match (a.top(i, j), b.top(i, j)) {
+                (Some(x), Some(y)) => (x - y).abs(),
+                (None, None) => 0.0,
+                _ => f64::INFINITY,
+            };
+            worst = worst.max(d);
+        }
+    }
+    worst
+}
+
 fn run(
     stock: &mut Stock,
     tool: ToolBody,
@@ -383,19 +401,7 @@ fn leaving_cells_to_the_next_ball_placement_changes_no_column() {
             );
         }
     }
-    let g = par.grid;
-    let mut worst = 0.0f64;
-    for j in 0..g.ny {
-        for i in 0..g.nx {
-            let (a, b) = (par.top(i, j), dense.stock.top(i, j));
-            let d = match (a, b) {
-                (Some(a), Some(b)) => (a - b).abs(),
-                (None, None) => 0.0,
-                _ => f64::INFINITY,
-            };
-            worst = worst.max(d);
-        }
-    }
+    let worst = worst_column(&par, &dense.stock);
     let delta = (0.08f64 * 3.0 * 0.05).sqrt();
     let cusp = delta * delta / (8.0 * 3.0);
     assert!(worst < 4.0 * cusp, "a column differs by {worst} mm");
@@ -445,15 +451,7 @@ fn a_turning_axis_is_placed_as_densely_as_the_material_needs() {
         };
         fine.step(&s, &tool);
     }
-    let g = coarse.grid;
-    let mut worst = 0.0f64;
-    for j in 0..g.ny {
-        for i in 0..g.nx {
-            if let (Some(a), Some(b)) = (coarse.top(i, j), fine.stock.top(i, j)) {
-                worst = worst.max((a - b).abs());
-            }
-        }
-    }
+    let worst = worst_column(&coarse, &fine.stock);
     let removed = cuts[0].removed;
     let fine_removed = block().volume() - fine.stock.volume();
     assert!(worst < 1e-4, "a column differs by {worst} mm");
