@@ -92,75 +92,119 @@ struct Step {
     line: u32,
 }
 
-/// The steps of a program, in order.
-fn steps(p: &Program) -> Vec<Step> {
-    let mut out = Vec::with_capacity(p.move_count());
-    for op in &p.operations {
-        let tool = op.tool.as_ref().and_then(|t| t.number);
-        let mut cur = op.start;
-        for m in &op.moves {
-            let o = op.orient(m);
-            let base = Step {
-                start: cur,
-                end: m.end,
-                path: Path::Line,
-                rapid: m.is_rapid(),
-                feed: m.feed,
-                mode: m.feed_mode,
-                spindle: m.spindle,
-                angles: o.map(|o| o.angles).unwrap_or([None; 3]),
-                axis: o.and_then(|o| o.axis).filter(|_| op.is_five_axis()),
-                tool,
-                line: m.line,
-            };
-            match m.kind {
-                MoveKind::Arc(_) => {
-                    let path = op.arc(m).map_or(Path::Line, |a| Path::Arc(*a));
-                    out.push(Step { path, ..base });
-                    cur = m.end;
-                }
-                MoveKind::Cycle(_) => {
-                    let Some(c) = op.cycle(m) else { continue };
-                    // Across to the hole at the height the tool stands, then down.
-                    let axis = op.axis(m).unwrap_or(DVec3::Z);
-                    let top = m.end + axis * c.retract.max(c.clearance);
-                    let z = if cur.z.is_nan() {
-                        top.z
-                    } else {
-                        cur.z.max(top.z)
-                    };
-                    let across = DVec3::new(m.end.x, m.end.y, z);
-                    let mut push = |end: DVec3, rapid: bool, feed: f64| {
-                        out.push(Step {
-                            start: cur,
-                            end,
-                            rapid,
-                            feed,
-                            mode: FeedMode::PerMinute,
-                            ..base
-                        });
-                        cur = end;
-                    };
-                    push(across, true, 0.0);
-                    // A cycle that cannot be spelled out compares by its hole.
-                    let v =
-                        cycle_moves(c, m.end, axis).unwrap_or_else(|_| vec![CycleStep::Rapid(top)]);
-                    for s in v {
-                        match s {
-                            CycleStep::Rapid(q) => push(q, true, 0.0),
-                            CycleStep::Feed(q, f) => push(q, false, f),
-                            CycleStep::Dwell(_) => {}
-                        }
-                    }
-                }
-                _ => {
-                    out.push(base);
-                    cur = m.end;
-                }
+/// The steps of a program, in order, made as the comparison walks them (a
+/// million-move program would otherwise hold hundreds of megabytes of steps
+/// twice over).
+struct Steps<'a> {
+    program: &'a Program,
+    op: usize,
+    mv: usize,
+    cur: DVec3,
+    /// The steps of the current move (a cycle makes several), handed out from `next`.
+    buf: Vec<Step>,
+    next: usize,
+}
+
+fn steps(p: &Program) -> Steps<'_> {
+    Steps {
+        program: p,
+        op: 0,
+        mv: 0,
+        cur: p.operations.first().map_or(DVec3::NAN, |op| op.start),
+        buf: Vec::new(),
+        next: 0,
+    }
+}
+
+impl Iterator for Steps<'_> {
+    type Item = Step;
+
+    fn next(&mut self) -> Option<Step> {
+        loop {
+            if let Some(s) = self.buf.get(self.next) {
+                self.next += 1;
+                return Some(*s);
             }
+            self.buf.clear();
+            self.next = 0;
+            let op = self.program.operations.get(self.op)?;
+            let Some(m) = op.moves.get(self.mv) else {
+                self.op += 1;
+                self.mv = 0;
+                if let Some(op) = self.program.operations.get(self.op) {
+                    self.cur = op.start;
+                }
+                continue;
+            };
+            self.mv += 1;
+            self.cur = move_steps(op, m, self.cur, &mut self.buf);
         }
     }
-    out
+}
+
+/// Appends the steps of move `m` of `op`, from `cur`, to `out`; returns where
+/// the tool then stands.
+fn move_steps(op: &Operation, m: &Move, mut cur: DVec3, out: &mut Vec<Step>) -> DVec3 {
+    let tool = op.tool.as_ref().and_then(|t| t.number);
+    let o = op.orient(m);
+    let base = Step {
+        start: cur,
+        end: m.end,
+        path: Path::Line,
+        rapid: m.is_rapid(),
+        feed: m.feed,
+        mode: m.feed_mode,
+        spindle: m.spindle,
+        angles: o.map(|o| o.angles).unwrap_or([None; 3]),
+        axis: o.and_then(|o| o.axis).filter(|_| op.is_five_axis()),
+        tool,
+        line: m.line,
+    };
+    match m.kind {
+        MoveKind::Arc(_) => {
+            let path = op.arc(m).map_or(Path::Line, |a| Path::Arc(*a));
+            out.push(Step { path, ..base });
+            m.end
+        }
+        MoveKind::Cycle(_) => {
+            let Some(c) = op.cycle(m) else { return cur };
+            // Across to the hole at the height the tool stands, then down.
+            let axis = op.axis(m).unwrap_or(DVec3::Z);
+            let top = m.end + axis * c.retract.max(c.clearance);
+            let z = if cur.z.is_nan() {
+                top.z
+            } else {
+                cur.z.max(top.z)
+            };
+            let across = DVec3::new(m.end.x, m.end.y, z);
+            let mut push = |end: DVec3, rapid: bool, feed: f64| {
+                out.push(Step {
+                    start: cur,
+                    end,
+                    rapid,
+                    feed,
+                    mode: FeedMode::PerMinute,
+                    ..base
+                });
+                cur = end;
+            };
+            push(across, true, 0.0);
+            // A cycle that cannot be spelled out compares by its hole.
+            let v = cycle_moves(c, m.end, axis).unwrap_or_else(|_| vec![CycleStep::Rapid(top)]);
+            for s in v {
+                match s {
+                    CycleStep::Rapid(q) => push(q, true, 0.0),
+                    CycleStep::Feed(q, f) => push(q, false, f),
+                    CycleStep::Dwell(_) => {}
+                }
+            }
+            cur
+        }
+        _ => {
+            out.push(base);
+            m.end
+        }
+    }
 }
 
 fn close(a: DVec3, b: DVec3, tol: f64) -> bool {
@@ -262,17 +306,17 @@ fn same_attrs(a: &Step, b: &Step, tol: &Tolerance) -> Result<(), String> {
 
 /// Compares what `a` and `b` command, step by step.
 pub fn compare(a: &Program, b: &Program, tol: &Tolerance) -> Result<Walked, Mismatch> {
-    let (sa, sb) = (steps(a), steps(b));
+    let mut sb = steps(b).peekable();
     let mut w = Walked::default();
-    let mut j = 0;
     let miss = |x: Option<&Step>, y: Option<&Step>, message: String| Mismatch {
         line_a: x.map_or(0, |s| s.line),
         line_b: y.map_or(0, |s| s.line),
         message,
     };
-    for s in &sa {
+    for s in steps(a) {
+        let s = &s;
         loop {
-            let Some(t) = sb.get(j) else {
+            let Some(t) = sb.peek() else {
                 if close(s.start, s.end, tol.position) {
                     w.skipped += 1;
                     break;
@@ -286,7 +330,7 @@ pub fn compare(a: &Program, b: &Program, tol: &Tolerance) -> Result<Walked, Mism
             if close(t.end, s.end, tol.position) {
                 same_attrs(s, t, tol).map_err(|m| miss(Some(s), Some(t), m))?;
                 w.steps += 1;
-                j += 1;
+                sb.next();
                 break;
             }
             // A zero-length step the second program leaves out.
@@ -297,7 +341,7 @@ pub fn compare(a: &Program, b: &Program, tol: &Tolerance) -> Result<Walked, Mism
             match off_path(s, t.end) {
                 Some(d) if d <= tol.chord + tol.position => {
                     w.intermediate += 1;
-                    j += 1;
+                    sb.next();
                 }
                 _ => {
                     return Err(miss(
@@ -309,7 +353,7 @@ pub fn compare(a: &Program, b: &Program, tol: &Tolerance) -> Result<Walked, Mism
             }
         }
     }
-    if let Some(t) = sb.get(j) {
+    if let Some(t) = sb.peek() {
         return Err(miss(
             None,
             Some(t),
