@@ -203,6 +203,17 @@ pub(crate) fn prepare(
     moves: &[AxisMove],
     lim: &Limits,
 ) -> (Vec<Block>, Vec<bool>) {
+    prepare_at(start, moves, None, lim)
+}
+
+/// [`prepare`] with each feed block's nominal minutes taken from
+/// `minutes` (same index as `moves`) when given.
+fn prepare_at(
+    start: [f64; 6],
+    moves: &[AxisMove],
+    minutes: Option<&[f64]>,
+    lim: &Limits,
+) -> (Vec<Block>, Vec<bool>) {
     let mut blocks = Vec::with_capacity(moves.len());
     let mut stops = Vec::with_capacity(moves.len());
     let mut stop = true;
@@ -214,7 +225,7 @@ pub(crate) fn prepare(
                 continue;
             }
             MoveKind::Rapid => (true, 0.0),
-            MoveKind::Feed { nominal_min } => (false, nominal_min),
+            MoveKind::Feed { nominal_min } => (false, minutes.map_or(nominal_min, |t| t[index])),
         };
         let mut d = [0.0; 6];
         for (i, di) in d.iter_mut().enumerate() {
@@ -460,11 +471,33 @@ pub fn estimate_axes(start: [f64; 6], moves: &[AxisMove], machine: &Machine) -> 
 
 /// [`estimate_axes`] with explicit limits.
 pub fn estimate_with(start: [f64; 6], moves: &[AxisMove], lim: &Limits) -> TimeEstimate {
+    estimate_at(start, moves, None, lim)
+}
+
+/// [`estimate_axes`] with every feed block asking for the minutes
+/// `minutes` gives at its index instead of its own: one program timed at
+/// other feeds without a copy of its blocks.
+pub fn estimate_axes_at(
+    start: [f64; 6],
+    moves: &[AxisMove],
+    minutes: &[f64],
+    machine: &Machine,
+) -> TimeEstimate {
+    assert_eq!(minutes.len(), moves.len(), "one time per block");
+    estimate_at(start, moves, Some(minutes), &Limits::of(machine))
+}
+
+fn estimate_at(
+    start: [f64; 6],
+    moves: &[AxisMove],
+    minutes: Option<&[f64]>,
+    lim: &Limits,
+) -> TimeEstimate {
     let mut e = TimeEstimate {
         per_move_s: vec![0.0; moves.len()],
         ..TimeEstimate::default()
     };
-    let (blocks, stops) = prepare(start, moves, lim);
+    let (blocks, stops) = prepare_at(start, moves, minutes, lim);
     let v = plan(&blocks, &stops, lim);
     for (k, b) in blocks.iter().enumerate() {
         let (t, cruise) = block_time(b, v[k], v[k + 1]);
@@ -475,7 +508,7 @@ pub fn estimate_with(start: [f64; 6], moves: &[AxisMove], lim: &Limits) -> TimeE
         }
     }
     let mut here = start;
-    for (m, t) in moves.iter().zip(e.per_move_s.iter_mut()) {
+    for (i, (m, t)) in moves.iter().zip(e.per_move_s.iter_mut()).enumerate() {
         match m.kind {
             MoveKind::Dwell { s } => {
                 *t = s.max(0.0);
@@ -494,6 +527,7 @@ pub fn estimate_with(start: [f64; 6], moves: &[AxisMove], lim: &Limits) -> TimeE
                 e.rapid_s += *t;
             }
             MoveKind::Feed { nominal_min } => {
+                let nominal_min = minutes.map_or(nominal_min, |t| t[i]);
                 // A block that does not move takes what it asks for.
                 if *t == 0.0 {
                     *t = nominal_min.max(0.0) * 60.0;
@@ -1085,6 +1119,38 @@ mod tests {
                 (e.total_s - b).abs() <= 1e-3 + 1e-3 * b,
                 "case {case}: {} vs brute force {b}",
                 e.total_s
+            );
+        }
+    }
+
+    #[test]
+    fn other_minutes_time_as_the_blocks_rewritten_with_them() {
+        let mut l = lim(600.0);
+        l.velocity[4] = 120.0;
+        let mut rng = Rng(0x51ed_2701_3b5f_9c4d);
+        for case in 0..8 {
+            let moves = random_moves(&mut rng, 30);
+            let minutes: Vec<f64> = (0..moves.len())
+                .map(|_| 0.001 + 0.02 * rng.next())
+                .collect();
+            let rewritten: Vec<AxisMove> = moves
+                .iter()
+                .zip(&minutes)
+                .map(|(m, &t)| match m.kind {
+                    MoveKind::Feed { .. } => AxisMove {
+                        kind: MoveKind::Feed { nominal_min: t },
+                        ..*m
+                    },
+                    _ => *m,
+                })
+                .collect();
+            let at = estimate_at([0.0; 6], &moves, Some(&minutes), &l);
+            let want = estimate_with([0.0; 6], &rewritten, &l);
+            assert_eq!(at, want, "case {case}");
+            assert_ne!(
+                at.total_s,
+                estimate_with([0.0; 6], &moves, &l).total_s,
+                "case {case}"
             );
         }
     }
