@@ -72,6 +72,15 @@ pub fn parse_program(src: &str, opts: ReadOptions) -> Result<Parsed, ParseError>
     if let Some(e) = detect::krl_refusal(src) {
         return Err(e);
     }
+    // A move takes a line of 20 bytes or more.
+    let opts = ReadOptions {
+        expect_moves: if opts.expect_moves > 0 {
+            opts.expect_moves
+        } else {
+            src.len() / 20
+        },
+        ..opts
+    };
     let mut r = detect::Reader::new(detect::detect(src), opts);
     for (k, line) in lines::split(src).enumerate() {
         check_line_length(line.len(), k + 1, &opts.limits)?;

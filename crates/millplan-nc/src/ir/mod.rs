@@ -798,6 +798,13 @@ impl Operation {
         if self.orients.last() == Some(&o) {
             return OrientId::new(self.orients.len() - 1);
         }
+        // A five-axis program has an orientation per move: when the moves
+        // have room reserved (a reader's hint), take as much at once rather
+        // than grow by copying.
+        let room = self.moves.capacity() - self.moves.len();
+        if self.orients.len() == self.orients.capacity() && room > self.orients.len() {
+            let _ = self.orients.try_reserve_exact(room);
+        }
         self.orients.push(o);
         OrientId::new(self.orients.len() - 1)
     }

@@ -35,7 +35,7 @@ pub mod ik;
 
 use crate::machine::{LinearAxis, Machine};
 use crate::orient::letters;
-use crate::timing::{estimate_axes, AxisMove, MoveKind as AxisKind};
+use crate::timing::{estimate_axes, estimate_axes_at, AxisMove, MoveKind as AxisKind};
 use feed::{g94_machine_f, g94_minutes, tip_deviation, tip_path_length};
 use ik::{candidates, in_pole, is_flip, roles, wrap180, wrapped, Cand, Roles};
 use millplan_geom::DVec3;
@@ -306,11 +306,14 @@ pub fn post(p: &Program, machine: &Machine, o: &PostOptions) -> Result<Posted, P
                 r[1] = r[1].max(v);
             }
         }
-        let (new_op, b) = build(op, &pts, kin, machine, o, &mut report);
         op_starts.push(blocks.len());
-        blocks.extend(b.iter().map(|x| x.0));
-        exact_min.extend(b.iter().map(|x| x.1));
-        plain_g94_min.extend(b.iter().map(|x| x.2));
+        let lists = BlockLists {
+            blocks: &mut blocks,
+            exact_min: &mut exact_min,
+            plain_g94_min: &mut plain_g94_min,
+        };
+        let new_op = build(op, &pts, kin, machine, o, lists, &mut report);
+        drop(pts);
         out.operations.push(new_op);
     }
     let names = kin.kind.rotary_names();
@@ -355,16 +358,12 @@ fn estimate(posted: &mut Posted, machine: &Machine) {
             }
             // Each operation from its first block's position (the move
             // there comes from an unknown place).
-            let moves: Vec<AxisMove> = (a + 1..b)
-                .map(|i| {
-                    let mut m = posted.blocks[i];
-                    if let (Some(t), AxisKind::Feed { .. }) = (minutes, m.kind) {
-                        m.kind = AxisKind::Feed { nominal_min: t[i] };
-                    }
-                    m
-                })
-                .collect();
-            total += estimate_axes(posted.blocks[a].target, &moves, machine).total_s;
+            let (start, moves) = (posted.blocks[a].target, &posted.blocks[a + 1..b]);
+            total += match minutes {
+                Some(t) => estimate_axes_at(start, moves, &t[a + 1..b], machine),
+                None => estimate_axes(start, moves, machine),
+            }
+            .total_s;
         }
         total
     };
@@ -734,6 +733,7 @@ fn post_operation(
     let r = roles(kin.kind);
     let (cands, off, pole) = all_candidates(&cls, kin, r, o.pole_cone)?;
     let chosen = choose(&cls, &cands, &off, kin, r)?;
+    drop((cands, off));
     let pts: Vec<Pt> = cls
         .par_iter()
         .zip(chosen.par_iter())
@@ -745,29 +745,44 @@ fn post_operation(
             pole,
         })
         .collect();
-    // Linearisation, each cutting block on its own.
-    let inserted: Vec<Vec<Pt>> = if o.tcp {
+    drop((cls, chosen, pole));
+    // Linearisation, each cutting block on its own, in chunks: the points
+    // inserted before each point, flat, and their number per point.
+    const CHUNK: usize = 8192;
+    let inserted: Vec<(Vec<Pt>, Vec<u32>)> = if o.tcp {
         Vec::new()
     } else {
-        (1..pts.len())
+        (0..pts.len())
             .into_par_iter()
-            .map(|i| {
-                let mut v = Vec::new();
-                if !pts[i].cl.rapid {
-                    refine(kin, r, &pts[i - 1], &pts[i], o, 0, &mut v);
+            .step_by(CHUNK)
+            .map(|start| {
+                let (mut flat, mut counts) = (Vec::new(), Vec::with_capacity(CHUNK));
+                for i in start..(start + CHUNK).min(pts.len()) {
+                    let before = flat.len();
+                    if i > 0 && !pts[i].cl.rapid {
+                        refine(kin, r, &pts[i - 1], &pts[i], o, 0, &mut flat);
+                    }
+                    counts.push((flat.len() - before) as u32);
                 }
-                v
+                (flat, counts)
             })
             .collect()
     };
-    let extra: usize = inserted.iter().map(Vec::len).sum();
+    let extra: usize = inserted.iter().map(|c| c.0.len()).sum();
     report.inserted_points += extra;
     let mut all = Vec::with_capacity(pts.len() + extra);
+    let mut before = inserted.iter().flat_map(|(flat, counts)| {
+        counts.iter().scan(0usize, move |at, &n| {
+            let v = &flat[*at..*at + n as usize];
+            *at += n as usize;
+            Some(v)
+        })
+    });
     for (i, p) in pts.iter().enumerate() {
         if i > 0 && is_flip(r, &pts[i - 1].c, &p.c) {
             flip_moves(kin, &pts[i - 1], p, o, &mut all, report);
         }
-        if let Some(v) = i.checked_sub(1).and_then(|k| inserted.get(k)) {
+        if let Some(v) = before.next() {
             all.extend_from_slice(v);
         }
         all.push(*p);
@@ -906,6 +921,13 @@ fn target6(kin: &Kinematics, j: &Joints) -> [f64; 6] {
     t
 }
 
+/// Where `build` appends each posted block and its two reference times.
+struct BlockLists<'a> {
+    blocks: &'a mut Vec<AxisMove>,
+    exact_min: &'a mut Vec<f64>,
+    plain_g94_min: &'a mut Vec<f64>,
+}
+
 /// The posted operation: moves, orientations, events re-anchored, feeds.
 fn build(
     op: &Operation,
@@ -913,8 +935,9 @@ fn build(
     kin: &Kinematics,
     machine: &Machine,
     o: &PostOptions,
+    out: BlockLists,
     report: &mut PostReport,
-) -> (Operation, Vec<(AxisMove, f64, f64)>) {
+) -> Operation {
     let mut new = Operation {
         name: op.name.clone(),
         tool: op.tool.clone(),
@@ -923,10 +946,12 @@ fn build(
         moves: Vec::with_capacity(pts.len()),
         arcs: Vec::new(),
         cycles: Vec::new(),
-        orients: Vec::new(),
+        orients: Vec::with_capacity(pts.len()),
         events: Vec::new(),
     };
-    let mut blocks = Vec::with_capacity(pts.len());
+    out.blocks.reserve(pts.len());
+    out.exact_min.reserve(pts.len());
+    out.plain_g94_min.reserve(pts.len());
     // The first posted move of each source move.
     let mut first_of = vec![u32::MAX; op.moves.len() + 1];
     let rapid_lin = machine.rapid;
@@ -1047,14 +1072,12 @@ fn build(
         if first_of[src] == u32::MAX {
             first_of[src] = new.moves.len() as u32;
         }
-        blocks.push((
-            AxisMove {
-                target: target6(kin, &p.j),
-                kind,
-            },
-            exact_t,
-            plain_t,
-        ));
+        out.blocks.push(AxisMove {
+            target: target6(kin, &p.j),
+            kind,
+        });
+        out.exact_min.push(exact_t);
+        out.plain_g94_min.push(plain_t);
         new.moves.push(m);
     }
     // Events before source move k go before the first posted move of k or
@@ -1090,5 +1113,5 @@ fn build(
     report.nominal_s += nominal * 60.0;
     report.nominal_g93_s += g93 * 60.0;
     report.nominal_g94_s += g94 * 60.0;
-    (new, blocks)
+    new
 }

@@ -121,7 +121,7 @@ fn post_error(path: &Path, e: PostError) -> CliError {
 }
 
 /// Reads the written program back: it must command what the posted IR does.
-fn check_output(posted: &Posted, out: &[u8], a: &Args) -> CliResult<()> {
+fn check_output(posted: &millplan_nc::ir::Program, out: &[u8], a: &Args) -> CliResult<()> {
     let text = String::from_utf8_lossy(out);
     let back =
         millplan_nc::parse_program(&text, millplan_nc::ReadOptions::default()).map_err(|e| {
@@ -134,7 +134,7 @@ fn check_output(posted: &Posted, out: &[u8], a: &Args) -> CliResult<()> {
         position: a.tol.max(Tolerance::default().position),
         ..Tolerance::default()
     };
-    compare(&posted.program, &back.program, &tol).map_err(|m| {
+    compare(posted, &back.program, &tol).map_err(|m| {
         CliError::internal(format!(
             "{}:{}: the posted program would not command what the post made ({m}); not written",
             a.input.display(),
@@ -170,24 +170,30 @@ pub fn run(a: Args) -> CliResult<i32> {
     let parsed = read_program(&a.input, read_options(a.units, None)?)?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet || a.json);
     let bar = crate::progress::spinner("posting", !a.quiet && !a.json);
-    let mut posted = post(&parsed.program, &machine, &o).map_err(|e| post_error(&a.input, e))?;
-    for_target(&mut posted.program, target).map_err(|e| post_error(&a.input, e))?;
-    bar.finish_and_clear();
-    // The CL program is not needed any more: its memory goes before the
-    // written program and its read-back take theirs.
+    let posted = post(&parsed.program, &machine, &o).map_err(|e| post_error(&a.input, e))?;
+    // The CL program and the posted blocks (timed inside the post) are not
+    // needed any more: their memory goes before the written program and its
+    // read-back take theirs.
     drop(parsed);
+    let Posted {
+        mut program,
+        report,
+        ..
+    } = posted;
+    for_target(&mut program, target).map_err(|e| post_error(&a.input, e))?;
+    bar.finish_and_clear();
     let mut wo = machine.write_options(target);
     // The post states TCP itself, per operation, when asked for it.
     wo.auto_tcp = false;
-    let out = crate::cmd::write_program(&posted.program, wo, &a.input, a.quiet)?;
-    check_output(&posted, &out, &a)?;
+    let out = crate::cmd::write_program(&program, wo, &a.input, a.quiet)?;
+    check_output(&program, &out, &a)?;
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
-    let j = summary(&a, &o, &machine, target.name(), &posted.report);
+    let j = summary(&a, &o, &machine, target.name(), &report);
     if a.json {
         print_json(j);
     } else {
-        print_text(&a, &j, &posted.report);
+        print_text(&a, &j, &report);
     }
     Ok(EXIT_OK)
 }
