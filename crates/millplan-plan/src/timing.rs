@@ -190,6 +190,9 @@ pub(crate) struct Block {
     pub(crate) rapid: bool,
     /// Speed cap along the path (per second).
     pub(crate) vcap: f64,
+    /// The part of the cap that does not depend on the programmed feed:
+    /// the path's rate and the axes' speeds.
+    pub(crate) vgeom: f64,
     pub(crate) accel: f64,
     pub(crate) jerk: f64,
     /// The programmed speed is above what the axes allow.
@@ -203,17 +206,6 @@ pub(crate) fn prepare(
     moves: &[AxisMove],
     lim: &Limits,
 ) -> (Vec<Block>, Vec<bool>) {
-    prepare_at(start, moves, None, lim)
-}
-
-/// [`prepare`] with each feed block's nominal minutes taken from
-/// `minutes` (same index as `moves`) when given.
-fn prepare_at(
-    start: [f64; 6],
-    moves: &[AxisMove],
-    minutes: Option<&[f64]>,
-    lim: &Limits,
-) -> (Vec<Block>, Vec<bool>) {
     let mut blocks = Vec::with_capacity(moves.len());
     let mut stops = Vec::with_capacity(moves.len());
     let mut stop = true;
@@ -225,7 +217,7 @@ fn prepare_at(
                 continue;
             }
             MoveKind::Rapid => (true, 0.0),
-            MoveKind::Feed { nominal_min } => (false, minutes.map_or(nominal_min, |t| t[index])),
+            MoveKind::Feed { nominal_min } => (false, nominal_min),
         };
         let mut d = [0.0; 6];
         for (i, di) in d.iter_mut().enumerate() {
@@ -260,12 +252,9 @@ fn prepare_at(
         } else {
             lim.feed_max
         };
-        let programmed = if rapid || nominal_min <= 0.0 {
-            f64::INFINITY
-        } else {
-            len / (nominal_min * 60.0)
-        };
-        let vcap = programmed.min(path_cap).min(vaxes);
+        let programmed = programmed_speed(rapid, len, nominal_min);
+        let vgeom = path_cap.min(vaxes);
+        let vcap = programmed.min(vgeom);
         blocks.push(Block {
             index,
             len,
@@ -273,6 +262,7 @@ fn prepare_at(
             rotary_only,
             rapid,
             vcap,
+            vgeom,
             accel,
             jerk,
             velocity_limited: !rapid && vcap < programmed * (1.0 - 1e-12),
@@ -283,15 +273,31 @@ fn prepare_at(
     (blocks, stops)
 }
 
+/// The speed a block's F asks for along its path (per second; unbounded on
+/// rapids and blocks without a time).
+fn programmed_speed(rapid: bool, len: f64, nominal_min: f64) -> f64 {
+    if rapid || nominal_min <= 0.0 {
+        f64::INFINITY
+    } else {
+        len / (nominal_min * 60.0)
+    }
+}
+
 /// The highest speed at which the junction between `a` and `b` can be passed
 /// (the motion stops when the control has to: around rapids and between XYZ
 /// and rotary-only blocks).
+#[cfg(test)]
 pub(crate) fn junction(a: &Block, b: &Block, lim: &Limits) -> f64 {
+    junction_at(a, b, a.vcap.min(b.vcap), lim)
+}
+
+/// [`junction`] with the lower of the two blocks' caps given.
+fn junction_at(a: &Block, b: &Block, cap: f64, lim: &Limits) -> f64 {
     if a.rapid || b.rapid || a.rotary_only != b.rotary_only {
         return 0.0;
     }
     let blend = a.len.min(b.len).min(BLEND_MM);
-    let mut v = a.vcap.min(b.vcap);
+    let mut v = cap;
     for i in 0..6 {
         let de = (b.dir[i] - a.dir[i]).abs();
         if de > 1e-12 {
@@ -356,7 +362,12 @@ pub(crate) fn reach(v0: f64, len: f64, a: f64, j: f64) -> f64 {
 /// each other within it), cruising at most at `b.vcap`. Also whether the
 /// cap is reached.
 pub(crate) fn block_time(b: &Block, v0: f64, v1: f64) -> (f64, bool) {
-    let (a, j, len, vc) = (b.accel, b.jerk, b.len, b.vcap);
+    block_time_at(b, b.vcap, v0, v1)
+}
+
+/// [`block_time`] cruising at most at `vc`.
+fn block_time_at(b: &Block, vc: f64, v0: f64, v1: f64) -> (f64, bool) {
+    let (a, j, len) = (b.accel, b.jerk, b.len);
     let need = |vp: f64| ramp_dist(v0, vp, a, j) + ramp_dist(vp, v1, a, j);
     let (d_up, d_down) = (ramp_dist(v0, vc, a, j), ramp_dist(vc, v1, a, j));
     if d_up + d_down <= len {
@@ -434,14 +445,21 @@ pub(crate) fn block_time(b: &Block, v0: f64, v1: f64) -> (f64, bool) {
 
 /// The speeds at every junction after the look-ahead: `v[k]` entering block
 /// k, `v[k + 1]` leaving it.
+#[cfg(test)]
 pub(crate) fn plan(blocks: &[Block], stops: &[bool], lim: &Limits) -> Vec<f64> {
+    let caps: Vec<f64> = blocks.iter().map(|b| b.vcap).collect();
+    plan_at(blocks, &caps, stops, lim)
+}
+
+/// [`plan`] with each block's speed cap from `caps`.
+fn plan_at(blocks: &[Block], caps: &[f64], stops: &[bool], lim: &Limits) -> Vec<f64> {
     let n = blocks.len();
     let mut v = vec![0.0; n + 1];
     for k in 1..n {
         v[k] = if stops[k] {
             0.0
         } else {
-            junction(&blocks[k - 1], &blocks[k], lim)
+            junction_at(&blocks[k - 1], &blocks[k], caps[k - 1].min(caps[k]), lim)
         };
     }
     for k in (0..n).rev() {
@@ -483,8 +501,25 @@ pub fn estimate_axes_at(
     minutes: &[f64],
     machine: &Machine,
 ) -> TimeEstimate {
-    assert_eq!(minutes.len(), moves.len(), "one time per block");
     estimate_at(start, moves, Some(minutes), &Limits::of(machine))
+}
+
+/// [`estimate_axes`] of the same blocks for each set of minutes in
+/// `variants` (`None`: the blocks' own), in parallel, the blocks' geometry
+/// prepared once.
+pub fn estimate_axes_variants(
+    start: [f64; 6],
+    moves: &[AxisMove],
+    variants: &[Option<&[f64]>],
+    machine: &Machine,
+) -> Vec<TimeEstimate> {
+    use rayon::prelude::*;
+    let lim = Limits::of(machine);
+    let (blocks, stops) = prepare(start, moves, &lim);
+    variants
+        .par_iter()
+        .map(|m| finish(start, moves, *m, &blocks, &stops, &lim))
+        .collect()
 }
 
 fn estimate_at(
@@ -493,17 +528,45 @@ fn estimate_at(
     minutes: Option<&[f64]>,
     lim: &Limits,
 ) -> TimeEstimate {
+    let (blocks, stops) = prepare(start, moves, lim);
+    finish(start, moves, minutes, &blocks, &stops, lim)
+}
+
+/// The estimate of prepared blocks, each feed block asking for the minutes
+/// `minutes` gives at its index when given.
+fn finish(
+    start: [f64; 6],
+    moves: &[AxisMove],
+    minutes: Option<&[f64]>,
+    blocks: &[Block],
+    stops: &[bool],
+    lim: &Limits,
+) -> TimeEstimate {
+    if let Some(t) = minutes {
+        assert_eq!(t.len(), moves.len(), "one time per block");
+    }
     let mut e = TimeEstimate {
         per_move_s: vec![0.0; moves.len()],
         ..TimeEstimate::default()
     };
-    let (blocks, stops) = prepare_at(start, moves, minutes, lim);
-    let v = plan(&blocks, &stops, lim);
+    // Each block's cap and whether it is below what its F asks.
+    let cap = |b: &Block| -> (f64, bool) {
+        match minutes {
+            Some(t) if !b.rapid => {
+                let programmed = programmed_speed(false, b.len, t[b.index]);
+                let vcap = programmed.min(b.vgeom);
+                (vcap, vcap < programmed * (1.0 - 1e-12))
+            }
+            _ => (b.vcap, b.velocity_limited),
+        }
+    };
+    let caps: Vec<f64> = blocks.iter().map(|b| cap(b).0).collect();
+    let v = plan_at(blocks, &caps, stops, lim);
     for (k, b) in blocks.iter().enumerate() {
-        let (t, cruise) = block_time(b, v[k], v[k + 1]);
+        let (t, cruise) = block_time_at(b, caps[k], v[k], v[k + 1]);
         e.per_move_s[b.index] = t;
         if !b.rapid {
-            e.velocity_limited_blocks += usize::from(b.velocity_limited);
+            e.velocity_limited_blocks += usize::from(cap(b).1);
             e.accel_limited_blocks += usize::from(!cruise);
         }
     }
@@ -1147,11 +1210,14 @@ mod tests {
             let at = estimate_at([0.0; 6], &moves, Some(&minutes), &l);
             let want = estimate_with([0.0; 6], &rewritten, &l);
             assert_eq!(at, want, "case {case}");
-            assert_ne!(
-                at.total_s,
-                estimate_with([0.0; 6], &moves, &l).total_s,
-                "case {case}"
-            );
+            let own = estimate_with([0.0; 6], &moves, &l);
+            assert_ne!(at.total_s, own.total_s, "case {case}");
+            // All at once, the geometry shared: the same two estimates.
+            let (blocks, stops) = prepare([0.0; 6], &moves, &l);
+            for (m, want) in [(None, &own), (Some(&minutes[..]), &want)] {
+                let got = finish([0.0; 6], &moves, m, &blocks, &stops, &l);
+                assert_eq!(&got, want, "case {case}");
+            }
         }
     }
 

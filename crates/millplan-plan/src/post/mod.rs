@@ -35,7 +35,7 @@ pub mod ik;
 
 use crate::machine::{LinearAxis, Machine};
 use crate::orient::letters;
-use crate::timing::{estimate_axes, estimate_axes_at, AxisMove, MoveKind as AxisKind};
+use crate::timing::{estimate_axes_variants, AxisMove, MoveKind as AxisKind};
 use feed::{g94_machine_f, g94_minutes, tip_deviation, tip_path_length};
 use ik::{candidates, in_pole, is_flip, roles, wrap180, wrapped, Cand, Roles};
 use millplan_geom::DVec3;
@@ -349,36 +349,32 @@ pub fn post(p: &Program, machine: &Machine, o: &PostOptions) -> Result<Posted, P
 fn estimate(posted: &mut Posted, machine: &Machine) {
     let mut ends = posted.op_starts.clone();
     ends.push(posted.blocks.len());
-    let with = |minutes: Option<&[f64]>| -> f64 {
-        let mut total = 0.0;
-        for w in ends.windows(2) {
-            let (a, b) = (w[0], w[1]);
-            if b <= a + 1 {
-                continue;
-            }
-            // Each operation from its first block's position (the move
-            // there comes from an unknown place).
-            let (start, moves) = (posted.blocks[a].target, &posted.blocks[a + 1..b]);
-            total += match minutes {
-                Some(t) => estimate_axes_at(start, moves, &t[a + 1..b], machine),
-                None => estimate_axes(start, moves, machine),
-            }
-            .total_s;
+    let mut totals = [0.0; 3];
+    for w in ends.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        if b <= a + 1 {
+            continue;
         }
-        total
-    };
-    let (t, (g93, g94)) = rayon::join(
-        || with(None),
-        || {
-            rayon::join(
-                || with(Some(&posted.exact_min)),
-                || with(Some(&posted.plain_g94_min)),
-            )
-        },
-    );
-    posted.report.time_s = t;
-    posted.report.time_g93_s = g93;
-    posted.report.time_g94_s = g94;
+        // Each operation from its first block's position (the move there
+        // comes from an unknown place).
+        let r = a + 1..b;
+        let e = estimate_axes_variants(
+            posted.blocks[a].target,
+            &posted.blocks[r.clone()],
+            &[
+                None,
+                Some(&posted.exact_min[r.clone()]),
+                Some(&posted.plain_g94_min[r]),
+            ],
+            machine,
+        );
+        for (t, e) in totals.iter_mut().zip(&e) {
+            *t += e.total_s;
+        }
+    }
+    posted.report.time_s = totals[0];
+    posted.report.time_g93_s = totals[1];
+    posted.report.time_g94_s = totals[2];
 }
 
 trait Header {
