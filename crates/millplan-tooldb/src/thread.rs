@@ -1,12 +1,16 @@
 //! PZ (the laser's axial measuring point on a thread-mill insert) and ISO metric
 //! thread dimensions and tolerances.
 
+use crate::iso965::{self, Class, ClassLimits};
+
 /// Errors of the thread formulas.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum ThreadError {
     #[error("{0}")]
     Invalid(String),
-    #[error("no ISO 965-1 limits for {0} in class {1} in this table (known: {2})")]
+    /// A thread and class the ISO 965-1 tables here cannot tolerance; the
+    /// third field says which value is missing.
+    #[error("no ISO 965-1 limits for {0}-{1}: {2}")]
     Unknown(String, String, String),
 }
 
@@ -40,22 +44,6 @@ pub fn minor_diameter(d: f64, p: f64) -> f64 {
     d - 5.0 * 3f64.sqrt() / 8.0 * p
 }
 
-/// ISO 965-1 pitch-diameter limits (mm): (thread, class, min, max). Tabulated
-/// values, not the formula: the standard rounds its tolerances.
-const LIMITS: &[(&str, &str, f64, f64)] = &[
-    ("M10x1.5", "6H", 9.026, 9.206),
-    ("M10x1", "6H", 9.350, 9.500),
-    ("M12x1.75", "6H", 10.863, 11.063),
-    ("M12x1", "6H", 11.350, 11.510),
-    ("M14x1.5", "6H", 13.026, 13.216),
-    ("M20x1", "6H", 19.350, 19.510),
-    ("M6x1", "6g", 5.212, 5.324),
-    ("M8x1.25", "6g", 7.042, 7.160),
-    ("M10x1.5", "6g", 8.862, 8.994),
-    ("M12x1", "6g", 11.206, 11.324),
-    ("M20x1", "6g", 19.206, 19.324),
-];
-
 /// A metric thread designation: `M20x1`, `M20×1`, `m12x1.75`.
 pub fn parse_designation(s: &str) -> Result<(f64, f64), ThreadError> {
     let t = s.trim().to_ascii_uppercase().replace('×', "X");
@@ -79,25 +67,21 @@ pub fn parse_designation(s: &str) -> Result<(f64, f64), ThreadError> {
     Ok((d, p))
 }
 
-/// Pitch-diameter limits (min, max) of a thread in a tolerance class.
+/// Pitch-diameter limits (min, max) of a thread in a class (`6H`, `5H`,
+/// `6g`, `4H5H`…), from the ISO 965-1 tables of [`crate::iso965`].
 pub fn limits(thread: &str, class: &str) -> Result<(f64, f64), ThreadError> {
+    Ok(class_limits(thread, class)?.pitch)
+}
+
+/// All limits of size of a thread in a class (pitch, crest and major
+/// diameters, the deviation and tolerances used).
+pub fn class_limits(thread: &str, class: &str) -> Result<ClassLimits, ThreadError> {
     let (d, p) = parse_designation(thread)?;
-    LIMITS
-        .iter()
-        .find(|(t, c, _, _)| {
-            parse_designation(t)
-                .map(|(td, tp)| (td - d).abs() < 1e-9 && (tp - p).abs() < 1e-9)
-                .unwrap_or(false)
-                && *c == class
-        })
-        .map(|(_, _, lo, hi)| (*lo, *hi))
-        .ok_or_else(|| {
-            let known: Vec<String> = LIMITS
-                .iter()
-                .map(|(t, c, _, _)| format!("{t}-{c}"))
-                .collect();
-            ThreadError::Unknown(thread.to_string(), class.to_string(), known.join(", "))
-        })
+    let c = Class::parse(class)?;
+    iso965::class_limits(d, p, &c).map_err(|e| match e {
+        ThreadError::Unknown(_, c, why) => ThreadError::Unknown(thread.to_string(), c, why),
+        e => e,
+    })
 }
 
 /// Whether a measured pitch diameter lies within the class.
@@ -189,7 +173,17 @@ mod tests {
         assert!(!check("M20x1", "6H", 19.515).expect("known").ok);
         const PAPER_UPPER_M20X1_6H: f64 = 19.52;
         assert!(within(19.515, 19.35, PAPER_UPPER_M20X1_6H));
-        assert!(limits("M30x2", "6H").is_err());
+        // Grade 7 of T_D2 and the e position rest on one source only.
+        for (thread, class) in [("M10x1.5", "7H"), ("M10x1.5", "6e"), ("M100x2", "6H")] {
+            assert!(
+                matches!(limits(thread, class), Err(ThreadError::Unknown(..))),
+                "{thread}-{class}"
+            );
+        }
+        assert!(matches!(
+            limits("M20x1", "9Z"),
+            Err(ThreadError::Invalid(_))
+        ));
         for bad in [f64::NAN, f64::INFINITY, 0.0, -19.4] {
             assert!(
                 matches!(check("M20x1", "6H", bad), Err(ThreadError::Invalid(_))),

@@ -167,6 +167,71 @@ fn thread_check_exits_3_on_reject() {
 }
 
 #[test]
+fn thread_limits_and_checks_of_more_classes() {
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_millplan"))
+            .arg("thread")
+            .args(args)
+            .output()
+            .expect("runs")
+    };
+    // Spec §4.7: M10×1.5-6H pitch 9.026–9.206, D1 8.376–8.676, D ≥ 10.000.
+    let o = run(&["limits", "M10x1.5", "--class", "6H", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(
+        (
+            j["pitch_diameter_mm"]["min"].as_f64(),
+            j["pitch_diameter_mm"]["max"].as_f64(),
+            j["crest_diameter_mm"]["min"].as_f64(),
+            j["crest_diameter_mm"]["max"].as_f64(),
+            j["major_diameter_min_mm"].as_f64(),
+            j["pitch_tolerance_um"].as_u64(),
+        ),
+        (
+            Some(9.026),
+            Some(9.206),
+            Some(8.376),
+            Some(8.676),
+            Some(10.0),
+            Some(180)
+        )
+    );
+    // Yamawa's 5H M6×1: T_D2 = 118 µm; ASME B1.13M 4g6g M10×1.5: d2 8.909–8.994.
+    let text =
+        String::from_utf8_lossy(&run(&["limits", "M6x1", "--class", "5H"]).stdout).to_string();
+    assert!(text.contains("D2 5.350 … 5.468 mm (T_D2 118 µm"), "{text}");
+    let o = run(&[
+        "check", "M10x1.5", "--class", "4g6g", "--d2", "8.9", "--json",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "8.9 < 8.909: {}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(
+        (j["min"].as_f64(), j["max"].as_f64()),
+        (Some(8.909), Some(8.994))
+    );
+    // A crest tolerance only one source gives: the limits say so, the
+    // pitch diameter is still given.
+    let text =
+        String::from_utf8_lossy(&run(&["limits", "M10x1.5", "--class", "4h"]).stdout).to_string();
+    assert!(
+        text.contains("major diameter d: not given (no confirmed T_d for grade 4"),
+        "{text}"
+    );
+    // Classes the tables cannot tolerance: exit 2 with the reason, as JSON too.
+    for class in ["7H", "6e"] {
+        let o = run(&["limits", "M10x1.5", "--class", class, "--json"]);
+        assert_eq!(o.status.code(), Some(2), "{class}");
+        let e: serde_json::Value = serde_json::from_slice(&o.stderr).expect("json error");
+        let msg = e["error"]["message"]
+            .as_str()
+            .unwrap_or_default()
+            .to_string();
+        assert!(msg.contains("M10x1.5-") && msg.contains(class), "{msg}");
+    }
+}
+
+#[test]
 fn a_tool_room_session() {
     let dir = tempfile::tempdir().expect("tmp");
     let db = dir.path().join("lib").join("tools.db");
