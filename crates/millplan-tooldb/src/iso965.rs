@@ -9,8 +9,8 @@
 //!
 //! # Where the numbers come from
 //!
-//! Nobody here owns the standard, so every value below was taken only when
-//! two independent public sources state it (or one states it and a second
+//! The standard's own text is not reproduced here: every value below was
+//! taken only when two independent public sources state it (or one states it and a second
 //! one's published limits of size reproduce it and no neighbouring R 40
 //! value does). A value that one source alone gives is left out (0 in the
 //! tables) and a class that needs it is refused with the reason.
