@@ -604,17 +604,67 @@ impl Bvh {
             }
         }
         let mut found = None;
-        let hit = self.any_near_ray(a, b - a, 1.0, radius, above, axis.is_some(), |k, t| {
+        let test = |k: usize, t: &[DVec3; 3]| {
             let yes = hits!(k, t);
             if yes {
                 found = Some(CapsuleHit(k));
             }
             yes
-        });
+        };
+        // A ball (a point segment) over all triangles: the closest-point
+        // tree's oriented boxes bound the distance far tighter than the
+        // ray tree's boxes where the ball stands on a finely tessellated
+        // surface; each triangle gets the very same test.
+        let hit = if ab2 == 0.0 && above.is_none() {
+            self.any_within(a, r2, test)
+        } else {
+            self.any_near_ray(a, b - a, 1.0, radius, above, axis.is_some(), test)
+        };
         if hit {
             *hint = found;
         }
         hit
+    }
+
+    /// Any-hit traversal of the closest-point tree: calls `hit(position in
+    /// order, corners)` for the triangles of every leaf whose box may come
+    /// within squared distance `r2` of `p` (the boxes' bounds never exceed
+    /// the true distance, and a relative margin covers single precision),
+    /// until `hit` says yes.
+    fn any_within(
+        &self,
+        p: DVec3,
+        r2: f64,
+        mut hit: impl FnMut(usize, &[DVec3; 3]) -> bool,
+    ) -> bool {
+        if self.order.is_empty() {
+            return false;
+        }
+        let bound = Vec4::splat((r2 * (1.0 + 1e-6)) as f32);
+        let mut stack: [u32; 64] = [0; 64];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.near[stack[sp] as usize];
+            let mut mask = node.lower_bounds(p).cmple(bound).bitmask() & node.valid;
+            while mask != 0 {
+                let lane = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let count = node.count[lane] as usize;
+                if count > 0 {
+                    let start = node.child[lane] as usize;
+                    for k in start..start + count {
+                        if hit(k, &self.tris.get(k)) {
+                            return true;
+                        }
+                    }
+                } else if sp < stack.len() {
+                    stack[sp] = node.child[lane];
+                    sp += 1;
+                }
+            }
+        }
+        false
     }
 
     /// Any-hit traversal: calls `hit(position in order, corners)` for the
@@ -1447,6 +1497,30 @@ mod tests {
         let spin = f * 2.4;
         let side = u * spin.cos() + n.cross(u) * spin.sin();
         (a, n * tilt.cos() + side * tilt.sin(), r, f)
+    }
+
+    #[test]
+    fn balls_standing_on_a_fine_surface_agree_with_brute_force() {
+        // A point capsule (a tool's ball) walks the closest-point tree: on a
+        // finely tessellated surface, far from the origin in single
+        // precision and near it in double, with the ball a hair off its
+        // facet or a hair into it, and a convex and concave neighbourhood
+        // either way: the same answer as every triangle tested.
+        for mesh in [tessellate(&DemoSurface::default(), 0.4), far_mesh(0.4)] {
+            let bvh = Bvh::build(&mesh);
+            let (mut hits, mut free) = (0, 0);
+            for i in 0..400 {
+                let (a, _, r, _) = near_facet_capsule(&mesh, i);
+                let brute = (0..mesh.len()).any(|k| {
+                    let [p, q, s] = mesh.corners(k);
+                    segment_triangle_dist2(a, a, p, q, s) < r * r
+                });
+                assert_eq!(bvh.capsule_hits(a, a, r, None), brute, "{i}");
+                hits += brute as usize;
+                free += !brute as usize;
+            }
+            assert!(hits > 50 && free > 50, "{hits} hits, {free} free");
+        }
     }
 
     #[test]
