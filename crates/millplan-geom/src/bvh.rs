@@ -162,6 +162,9 @@ pub struct Bvh {
     order: Vec<u32>,
     /// Triangle corners in `order`, contiguous: the queries read them leaf by leaf.
     tris: Tris,
+    /// Per triangle in `order`, what the capsule query's cheap tests read,
+    /// computed once on the first capsule query.
+    shapes: OnceLock<Vec<TriShape>>,
     /// The closest-point tree, root first.
     near: Vec<NearNode>,
     wide: OnceLock<Vec<WideNode>>,
@@ -309,6 +312,7 @@ impl Bvh {
             order,
             tris,
             near,
+            shapes: OnceLock::new(),
             wide: OnceLock::new(),
         }
     }
@@ -327,6 +331,16 @@ impl Bvh {
                 WideNode::from_near(&self.near, &self.tris, 0, pad, &mut wide);
             }
             wide
+        })
+    }
+
+    /// The triangles' [`TriShape`]s in tree order, computed on first use.
+    fn shapes(&self) -> &[TriShape] {
+        self.shapes.get_or_init(|| {
+            (0..self.order.len())
+                .into_par_iter()
+                .map(|k| TriShape::new(&self.tris.get(k)))
+                .collect()
         })
     }
 
@@ -439,6 +453,36 @@ impl Bvh {
     }
 }
 
+/// What the capsule query's cheap tests read of one triangle pqr: its
+/// plane's normal m = (q − p) × (r − p) (not normalised) with |m|², and its
+/// centroid with the greatest distance of a corner from it. Computed once
+/// by exactly the arithmetic the tests did inline, so they answer to the bit
+/// as before.
+#[derive(Clone, Copy, Debug)]
+struct TriShape {
+    m: DVec3,
+    m2: f64,
+    centre: DVec3,
+    rho: f64,
+}
+
+impl TriShape {
+    fn new([p, q, r]: &[DVec3; 3]) -> TriShape {
+        let m = (*q - *p).cross(*r - *p);
+        let c = (*p + *q + *r) * (1.0 / 3.0);
+        let rho2 = (*p - c)
+            .length_squared()
+            .max((*q - c).length_squared())
+            .max((*r - c).length_squared());
+        TriShape {
+            m,
+            m2: m.length_squared(),
+            centre: c,
+            rho: rho2.sqrt(),
+        }
+    }
+}
+
 /// A triangle a capsule query hit, to try first in the next one
 /// ([`Bvh::capsule_hits_above_from`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -499,15 +543,12 @@ impl Bvh {
         let reaches = |t: &[DVec3; 3]| above.is_none_or(|(n, h)| t.iter().any(|v| n.dot(*v) > h));
         let (ab, ab2) = (b - a, (b - a).length_squared());
         let inv_ab2 = if ab2 > 0.0 { 1.0 / ab2 } else { 0.0 };
+        let shapes = self.shapes();
         // Cheap first: the triangle's bounding sphere about its centroid.
-        let sphere_near = |[p, q, r]: &[DVec3; 3]| {
-            let c = (*p + *q + *r) * (1.0 / 3.0);
-            let rho2 = (*p - c)
-                .length_squared()
-                .max((*q - c).length_squared())
-                .max((*r - c).length_squared());
+        let sphere_near = |sh: &TriShape| {
+            let c = sh.centre;
             let s = ((c - a).dot(ab) * inv_ab2).clamp(0.0, 1.0);
-            let reach = radius + rho2.sqrt();
+            let reach = radius + sh.rho;
             (a + ab * s - c).length_squared() < reach * reach * (1.0 + 1e-9)
         };
         // Also cheap: both ends of the segment on one side of the triangle's
@@ -515,10 +556,10 @@ impl Bvh {
         // above rounding) keep the whole segment that far from the triangle.
         // Near a tool's contact point the surface is nearly tangent to the
         // ball, and this is what rules most of it out.
-        let plane_near = |[p, q, r]: &[DVec3; 3]| {
-            let m = (*q - *p).cross(*r - *p);
-            let (sa, sb) = ((a - *p).dot(m), (b - *p).dot(m));
-            let lim2 = r2 * m.length_squared() * (1.0 + 1e-9);
+        let plane_near = |p: DVec3, sh: &TriShape| {
+            let m = sh.m;
+            let (sa, sb) = ((a - p).dot(m), (b - p).dot(m));
+            let lim2 = r2 * sh.m2 * (1.0 + 1e-9);
             sa * sb <= 0.0 || sa.abs().min(sb.abs()).powi(2) < lim2
         };
         // When what lies wholly below the plane through a across the axis is
@@ -548,9 +589,10 @@ impl Bvh {
             ($k:expr, $t:expr) => {{
                 let (k, t): (usize, &[DVec3; 3]) = ($k, $t);
                 let [p, q, r] = t;
+                let sh = &shapes[k];
                 skip != Some(self.order[k])
-                    && plane_near(t)
-                    && sphere_near(t)
+                    && plane_near(*p, sh)
+                    && sphere_near(sh)
                     && reaches(t)
                     && !apart(t)
                     && segment_triangle_dist2(a, b, *p, *q, *r) < r2
@@ -562,17 +604,67 @@ impl Bvh {
             }
         }
         let mut found = None;
-        let hit = self.any_near_ray(a, b - a, 1.0, radius, above, axis.is_some(), |k, t| {
+        let test = |k: usize, t: &[DVec3; 3]| {
             let yes = hits!(k, t);
             if yes {
                 found = Some(CapsuleHit(k));
             }
             yes
-        });
+        };
+        // A ball (a point segment) over all triangles: the closest-point
+        // tree's oriented boxes bound the distance far tighter than the
+        // ray tree's boxes where the ball stands on a finely tessellated
+        // surface; each triangle gets the very same test.
+        let hit = if ab2 == 0.0 && above.is_none() {
+            self.any_within(a, r2, test)
+        } else {
+            self.any_near_ray(a, b - a, 1.0, radius, above, axis.is_some(), test)
+        };
         if hit {
             *hint = found;
         }
         hit
+    }
+
+    /// Any-hit traversal of the closest-point tree: calls `hit(position in
+    /// order, corners)` for the triangles of every leaf whose box may come
+    /// within squared distance `r2` of `p` (the boxes' bounds never exceed
+    /// the true distance, and a relative margin covers single precision),
+    /// until `hit` says yes.
+    fn any_within(
+        &self,
+        p: DVec3,
+        r2: f64,
+        mut hit: impl FnMut(usize, &[DVec3; 3]) -> bool,
+    ) -> bool {
+        if self.order.is_empty() {
+            return false;
+        }
+        let bound = Vec4::splat((r2 * (1.0 + 1e-6)) as f32);
+        let mut stack: [u32; 64] = [0; 64];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let node = &self.near[stack[sp] as usize];
+            let mut mask = node.lower_bounds(p).cmple(bound).bitmask() & node.valid;
+            while mask != 0 {
+                let lane = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let count = node.count[lane] as usize;
+                if count > 0 {
+                    let start = node.child[lane] as usize;
+                    for k in start..start + count {
+                        if hit(k, &self.tris.get(k)) {
+                            return true;
+                        }
+                    }
+                } else if sp < stack.len() {
+                    stack[sp] = node.child[lane];
+                    sp += 1;
+                }
+            }
+        }
+        false
     }
 
     /// Any-hit traversal: calls `hit(position in order, corners)` for the
@@ -661,6 +753,10 @@ impl Bvh {
                 hi = hi.min(t1.max(t2));
             }
             let mut mask = lo.cmple(hi).bitmask() & node.valid;
+            // The further tests only narrow the mask: none when it is empty.
+            if mask == 0 {
+                continue;
+            }
             if let Some((d, inv_len2, r)) = &seg {
                 // Centre and half diagonal per lane; the nearest point of the
                 // segment to the centre.
@@ -681,6 +777,9 @@ impl Bvh {
                 // A relative margin for single precision.
                 let reach = (*r + e2.sqrt()) * 1.0001 + Vec4::splat(1e-6);
                 mask &= dist2.cmplt(reach * reach).bitmask();
+                if mask == 0 {
+                    continue;
+                }
                 if let Some((u, slack)) = &across {
                     let mut tu = Vec4::ZERO;
                     for a in 0..3 {
@@ -1398,6 +1497,30 @@ mod tests {
         let spin = f * 2.4;
         let side = u * spin.cos() + n.cross(u) * spin.sin();
         (a, n * tilt.cos() + side * tilt.sin(), r, f)
+    }
+
+    #[test]
+    fn balls_standing_on_a_fine_surface_agree_with_brute_force() {
+        // A point capsule (a tool's ball) walks the closest-point tree: on a
+        // finely tessellated surface, far from the origin in single
+        // precision and near it in double, with the ball a hair off its
+        // facet or a hair into it, and a convex and concave neighbourhood
+        // either way: the same answer as every triangle tested.
+        for mesh in [tessellate(&DemoSurface::default(), 0.4), far_mesh(0.4)] {
+            let bvh = Bvh::build(&mesh);
+            let (mut hits, mut free) = (0, 0);
+            for i in 0..400 {
+                let (a, _, r, _) = near_facet_capsule(&mesh, i);
+                let brute = (0..mesh.len()).any(|k| {
+                    let [p, q, s] = mesh.corners(k);
+                    segment_triangle_dist2(a, a, p, q, s) < r * r
+                });
+                assert_eq!(bvh.capsule_hits(a, a, r, None), brute, "{i}");
+                hits += brute as usize;
+                free += !brute as usize;
+            }
+            assert!(hits > 50 && free > 50, "{hits} hits, {free} free");
+        }
     }
 
     #[test]

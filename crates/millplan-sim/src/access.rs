@@ -764,24 +764,24 @@ fn disc_max(src: &[f64], nu: usize, nv: usize, rows: &[(i64, usize)]) -> Vec<f64
     let mut widths: Vec<usize> = rows.iter().map(|r| r.1).collect();
     widths.sort_unstable();
     widths.dedup();
+    // One buffer for the running maxima and one for the suffix maxima,
+    // reused for every width and row (no allocation per row).
+    let mut run = vec![f64::NEG_INFINITY; src.len()];
+    let mut suffix = vec![f64::NEG_INFINITY; nu];
     for w in widths {
         // Each row's running maximum over 2w + 1 cells, then into every
         // output row that takes this width at its offset.
-        let mut run = vec![f64::NEG_INFINITY; src.len()];
-        for j in 0..nv {
-            window_max(
-                &src[j * nu..(j + 1) * nu],
-                &mut run[j * nu..(j + 1) * nu],
-                w,
-            );
+        for (s, r) in src.chunks_exact(nu).zip(run.chunks_exact_mut(nu)) {
+            window_max(s, r, w, &mut suffix);
         }
         for &(dj, _) in rows.iter().filter(|r| r.1 == w) {
-            for j in 0..nv {
-                let from = j as i64 + dj;
-                if from < 0 || from >= nv as i64 {
-                    continue;
-                }
-                let f = from as usize;
+            // Output row j takes run row j + dj where that exists.
+            let (j0, j1) = (
+                (-dj).clamp(0, nv as i64) as usize,
+                (nv as i64 - dj).clamp(0, nv as i64) as usize,
+            );
+            for j in j0..j1 {
+                let f = (j as i64 + dj) as usize;
                 for (o, r) in out[j * nu..(j + 1) * nu]
                     .iter_mut()
                     .zip(&run[f * nu..(f + 1) * nu])
@@ -795,39 +795,44 @@ fn disc_max(src: &[f64], nu: usize, nv: usize, rows: &[(i64, usize)]) -> Vec<f64
 }
 
 /// dst[i] = max of src[i − k ..= i + k] (van Herk / Gil–Werman: blocks of
-/// 2k + 1, prefix and suffix maxima).
-fn window_max(src: &[f64], dst: &mut [f64], k: usize) {
+/// 2k + 1, prefix and suffix maxima). `suffix` is scratch space (resized to
+/// the row); the prefix maxima are built in `dst` itself, each read at or
+/// after the position being written.
+fn window_max(src: &[f64], dst: &mut [f64], k: usize, suffix: &mut Vec<f64>) {
     let n = src.len();
-    if k == 0 {
+    if k == 0 || n == 0 {
         dst.copy_from_slice(src);
         return;
     }
     let b = 2 * k + 1;
-    let mut pre = vec![f64::NEG_INFINITY; n];
-    let mut suf = vec![f64::NEG_INFINITY; n];
+    suffix.resize(n, f64::NEG_INFINITY);
+    let suf = &mut suffix[..n];
+    // Prefix maxima within each block of b cells, in dst.
+    for (pre, s) in dst.chunks_mut(b).zip(src.chunks(b)) {
+        let mut m = f64::NEG_INFINITY;
+        for (p, x) in pre.iter_mut().zip(s) {
+            m = m.max(*x);
+            *p = m;
+        }
+    }
+    // Suffix maxima within each block.
+    for (su, s) in suf.chunks_mut(b).zip(src.chunks(b)) {
+        let mut m = f64::NEG_INFINITY;
+        for (p, x) in su.iter_mut().zip(s).rev() {
+            m = m.max(*x);
+            *p = m;
+        }
+    }
     for i in 0..n {
-        pre[i] = if i % b == 0 {
-            src[i]
-        } else {
-            pre[i - 1].max(src[i])
-        };
-    }
-    for i in (0..n).rev() {
-        suf[i] = if i % b == b - 1 || i == n - 1 {
-            src[i]
-        } else {
-            suf[i + 1].max(src[i])
-        };
-    }
-    for (i, out) in dst.iter_mut().enumerate() {
         let lo = i.saturating_sub(k);
         let hi = (i + k).min(n - 1);
         // A window within one block starts it (at the first cell) or ends it
-        // (at the last); otherwise it spans one block boundary.
-        *out = if lo / b != hi / b {
-            suf[lo].max(pre[hi])
+        // (at the last); otherwise it spans one block boundary. dst[hi]
+        // (hi ≥ i) still holds its prefix maximum.
+        dst[i] = if lo / b != hi / b {
+            suf[lo].max(dst[hi])
         } else if lo % b == 0 {
-            pre[hi]
+            dst[hi]
         } else {
             suf[lo]
         };
@@ -2198,7 +2203,9 @@ mod window_tests {
                 .collect();
             for k in 0..12 {
                 let mut got = vec![0.0; n];
-                window_max(&v, &mut got, k);
+                // A scratch buffer left longer by an earlier call.
+                let mut scratch = vec![7.0; 50];
+                window_max(&v, &mut got, k, &mut scratch);
                 for i in 0..n {
                     let want = v[i.saturating_sub(k)..=(i + k).min(n - 1)]
                         .iter()
