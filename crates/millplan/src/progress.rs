@@ -59,3 +59,50 @@ pub fn fraction(what: &str, show: bool) -> ProgressBar {
     bar.set_message(what.to_string());
     bar
 }
+
+/// One bar for the phases a pipeline's passes report (`Context::progress`):
+/// a new phase names itself and starts the count again.
+pub struct Phases {
+    bar: ProgressBar,
+    phase: std::sync::Mutex<String>,
+}
+
+impl Phases {
+    /// A bar drawn when `show` (not `-q`) and standard error is a terminal.
+    pub fn new(show: bool) -> Phases {
+        let bar = if show {
+            ProgressBar::new(0)
+        } else {
+            ProgressBar::hidden()
+        };
+        if let Ok(style) =
+            ProgressStyle::with_template("{msg} [{bar:30}] {human_pos}/{human_len}, {eta} left")
+        {
+            bar.set_style(style);
+        }
+        Phases {
+            bar,
+            phase: std::sync::Mutex::new(String::new()),
+        }
+    }
+
+    /// What a pass reported: `done` of the `total` steps of `phase`.
+    pub fn report(&self, phase: &str, done: usize, total: usize) {
+        if self.bar.is_hidden() {
+            return;
+        }
+        if let Ok(mut p) = self.phase.lock() {
+            if *p != phase {
+                *p = phase.to_string();
+                self.bar.reset();
+                self.bar.set_message(phase.to_string());
+            }
+        }
+        self.bar.set_length(total as u64);
+        self.bar.set_position(done as u64);
+    }
+
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
