@@ -47,12 +47,12 @@ fn span(ax: &RotaryAxis) -> (f64, f64) {
     (ax.min.unwrap_or(-180.0), ax.max.unwrap_or(180.0))
 }
 
-/// Whether the machine misses some direction within 1° of `d`: `d` lies on
+/// Whether the machine misses some direction within 0.1° of `d`: `d` lies on
 /// the edge of what its ranges reach (or outside).
 fn on_edge(machine: &Kinematics, d: DVec3) -> bool {
     let u = d.any_orthonormal_vector();
     let v = d.cross(u);
-    let e = 1f64.to_radians().tan();
+    let e = 0.1f64.to_radians().tan();
     (0..8).any(|k| {
         let t = std::f64::consts::TAU * k as f64 / 8.0;
         !machine.reaches((d + e * (t.cos() * u + t.sin() * v)).normalize())
@@ -282,4 +282,52 @@ pub fn setup_report(
             ("The part in the chosen setup seen from above, coloured by the tilt its facets need (degrees).".to_string(), map("Required tilt", "tilt °", &tilts)),
         ],
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use millplan_models::kinematics::KinKind;
+
+    /// The tilt of a direction from the table's Z, degrees.
+    fn tilt(d: &[f64; 3]) -> f64 {
+        d[2].clamp(-1.0, 1.0).acos().to_degrees()
+    }
+
+    /// On an A/C table the tool's tilt from Z is |A| (the tool axis is
+    /// Rz(C)ᵀ·Rx(A)ᵀ·Z), so what A ≤ 30° reaches ends on the 30° circle. The
+    /// C limits of ±90° lie inside it (negative A covers the other half) and
+    /// A = 0 is a single direction inside: neither is drawn.
+    #[test]
+    fn limit_curves_of_an_ac_table_are_its_tilt_circle() {
+        for c in [None, Some((-90.0, 90.0))] {
+            let mut k = Kinematics::new(KinKind::TableAc);
+            k.first = RotaryAxis {
+                min: Some(if c.is_some() { -30.0 } else { 0.0 }),
+                max: Some(30.0),
+                sign: 1.0,
+            };
+            if let Some((lo, hi)) = c {
+                k.second = RotaryAxis {
+                    min: Some(lo),
+                    max: Some(hi),
+                    sign: 1.0,
+                };
+            }
+            let curves = limit_curves(&k);
+            let points: Vec<&[f64; 3]> = curves.iter().flatten().collect();
+            assert!(points.len() > 100, "{c:?}: {}", points.len());
+            for d in points {
+                assert!((tilt(d) - 30.0).abs() < 1e-9, "{c:?}: {d:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn angles_that_round_to_zero_have_no_sign() {
+        assert_eq!(deg(-0.0), "0.000");
+        assert_eq!(deg(-0.0004), "0.000");
+        assert_eq!(deg(-0.0006), "-0.001");
+        assert_eq!(deg(35.26439), "35.264");
+    }
 }

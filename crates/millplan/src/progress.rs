@@ -1,7 +1,7 @@
 //! Progress bars (indicatif) for work that can take longer than a second; they draw
 //! on standard error only when it is a terminal.
 
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// A byte-count bar, shown only for inputs large enough to take a while.
 pub fn bytes(total: u64, what: &str) -> ProgressBar {
@@ -91,15 +91,23 @@ impl Phases {
         if self.bar.is_hidden() {
             return;
         }
-        if let Ok(mut p) = self.phase.lock() {
-            if *p != phase {
-                *p = phase.to_string();
-                self.bar.reset();
-                self.bar.set_message(phase.to_string());
-            }
+        let Ok(mut p) = self.phase.lock() else {
+            return;
+        };
+        if *p == phase {
+            self.bar.set_length(total as u64);
+            self.bar.set_position(done as u64);
+            return;
         }
+        // A new phase: name and counts change out of sight, so no frame shows
+        // one phase's name with another's count.
+        *p = phase.to_string();
+        self.bar.set_draw_target(ProgressDrawTarget::hidden());
+        self.bar.reset();
         self.bar.set_length(total as u64);
         self.bar.set_position(done as u64);
+        self.bar.set_message(phase.to_string());
+        self.bar.set_draw_target(ProgressDrawTarget::stderr());
     }
 
     pub fn finish(&self) {
