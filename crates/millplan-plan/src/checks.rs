@@ -38,12 +38,17 @@ pub fn mesh(mesh: &TriMesh) -> Option<Diagnostic> {
 /// Cutting points of a spindle-control run whose tool does not touch the
 /// part within tolerance (a different part, a wrong convention or gouges).
 pub fn off_surface(s: &Summary) -> Option<Diagnostic> {
-    let off = s.gap_flagged;
-    if off == 0 || s.points == 0 {
+    off_surface_points(s.gap_flagged, s.no_contact, s.points)
+}
+
+/// [`off_surface`] from the counts: `off` of `points` cutting points off the
+/// part, `no_contact` of them without any contact.
+pub fn off_surface_points(off: usize, no_contact: usize, points: usize) -> Option<Diagnostic> {
+    if off == 0 || points == 0 {
         return None;
     }
     Some(Diagnostic {
-        severity: if untrusted(s) {
+        severity: if off as f64 > OFF_SURFACE_LIMIT * points as f64 {
             Severity::Warning
         } else {
             Severity::Note
@@ -52,8 +57,7 @@ pub fn off_surface(s: &Summary) -> Option<Diagnostic> {
         line: 0,
         col: 0,
         message: format!(
-            "{off} of {} cutting points do not touch the part within tolerance ({} without any contact): the part may not match the program, or the CL points are not tips",
-            s.points, s.no_contact
+            "{off} of {points} cutting points do not touch the part within tolerance ({no_contact} without any contact): the part may not match the program, or the CL points are not tips"
         ),
     })
 }

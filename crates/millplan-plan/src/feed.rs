@@ -108,6 +108,7 @@ impl Pass for FeedPass {
                 rapid_rate: m.rapid,
             },
         );
+        let total = s.strokes.len();
         let run = cx
             .time("forces and allowed feeds", || {
                 force::simulate(
@@ -116,10 +117,11 @@ impl Pass for FeedPass {
                     stock,
                     &self.params.setup,
                     Some((&self.params.limits, m)),
-                    &|_| {},
+                    &|done| cx.progress("feed: forces", done, total),
                 )
             })
             .map_err(input)?;
+        cx.progress("feed: forces", total, total);
         let changes = cx.time("feeds smoothed and written", || {
             apply(p, &run, m, &self.params)
         });

@@ -108,6 +108,12 @@ pub struct Timing {
     pub seconds: f64,
 }
 
+/// Where passes report how far a phase of theirs has come: the phase's name,
+/// the steps done and the steps it has in all. Within one phase the counts
+/// only grow and the last report has `done == total`; a new name starts a new
+/// phase. Called from any thread.
+pub type Progress<'a> = dyn Fn(&str, usize, usize) + Sync + 'a;
+
 /// What the passes of a run share: the machine, the part and the analyses of
 /// it, each built once when a pass first asks for it.
 pub struct Context<'a> {
@@ -116,6 +122,11 @@ pub struct Context<'a> {
     surface: OnceLock<Surface<'a>>,
     drop: OnceLock<DropMesh>,
     timings: Mutex<Vec<Timing>>,
+    progress: Option<&'a Progress<'a>>,
+    /// The phase last reported and how far it had come: reports from
+    /// threads that arrive late (a smaller count of the same phase) are
+    /// dropped, so the hook sees every phase's counts only grow.
+    last: Mutex<(String, usize)>,
     /// Verify the IR and each pass's declared changes after every pass (on in
     /// debug builds and tests).
     pub verify: bool,
@@ -129,8 +140,40 @@ impl<'a> Context<'a> {
             surface: OnceLock::new(),
             drop: OnceLock::new(),
             timings: Mutex::new(Vec::new()),
+            progress: None,
+            last: Mutex::new((String::new(), 0)),
             verify: cfg!(debug_assertions),
         }
+    }
+
+    /// Passes report their progress to `f` (a bar, say); without it nobody
+    /// hears of it.
+    pub fn with_progress(mut self, f: &'a Progress<'a>) -> Context<'a> {
+        self.progress = Some(f);
+        self
+    }
+
+    /// Reports that `done` of the `total` steps of `phase` are done (see
+    /// [`Progress`]); nothing without a hook. A count smaller than the one
+    /// last reported for the same phase (a thread that came late) is dropped,
+    /// and `done` is capped at `total`.
+    pub fn progress(&self, phase: &str, done: usize, total: usize) {
+        let Some(f) = self.progress else {
+            return;
+        };
+        let done = done.min(total);
+        let Ok(mut last) = self.last.lock() else {
+            return;
+        };
+        if last.0 == phase {
+            if done < last.1 {
+                return;
+            }
+        } else {
+            last.0 = phase.to_string();
+        }
+        last.1 = done;
+        f(phase, done, total);
     }
 
     /// Verify the IR and each pass's declared changes after every pass, also
@@ -436,5 +479,30 @@ op name=-
         let mut q = program();
         let mut rev = Probe(&ORDER, |p| p.operations[0].moves[1..].reverse());
         run(&mut [&mut rev], &mut q, &cx).expect("the same points in another order");
+    }
+
+    #[test]
+    fn progress_reaches_the_hook_in_order_and_capped() {
+        let heard = Mutex::new(Vec::new());
+        let hook = |phase: &str, done: usize, total: usize| {
+            heard
+                .lock()
+                .expect("lock")
+                .push((phase.to_string(), done, total));
+        };
+        // Without a hook nothing happens.
+        Context::new(Machine::default()).progress("a", 1, 2);
+        let cx = Context::new(Machine::default()).with_progress(&hook);
+        // A thread that came late (3 after 5) is dropped; past the total is
+        // the total; a new phase starts from its own counts.
+        for (phase, done) in [("a", 0), ("a", 5), ("a", 3), ("a", 12), ("b", 1), ("b", 1)] {
+            cx.progress(phase, done, 10);
+        }
+        let got = heard.lock().expect("lock").clone();
+        let want: Vec<(String, usize, usize)> = [("a", 0), ("a", 5), ("a", 10), ("b", 1), ("b", 1)]
+            .into_iter()
+            .map(|(p, d)| (p.to_string(), d, 10))
+            .collect();
+        assert_eq!(got, want);
     }
 }

@@ -406,11 +406,22 @@ impl Pass for SpeedPass {
         let surface = cx
             .surface()
             .ok_or(PassError::NeedsPart { pass: INFO.name })?;
-        let (rows, summary, timings) = apply_in_place(program, surface, &cx.machine, &self.params)
-            .map_err(|e| PassError::Input {
-                pass: INFO.name,
-                message: e.to_string(),
-            })?;
+        let several = program.operations.len() > 1;
+        let tick = |oi: usize, done: usize, total: usize| {
+            let phase = if several {
+                format!("speed: contact and working diameter (operation {})", oi + 1)
+            } else {
+                "speed: contact and working diameter".to_string()
+            };
+            cx.progress(&phase, done, total)
+        };
+        let (rows, summary, timings) =
+            apply_in_place_with(program, surface, &cx.machine, &self.params, &tick).map_err(
+                |e| PassError::Input {
+                    pass: INFO.name,
+                    message: e.to_string(),
+                },
+            )?;
         for (name, t) in timings {
             cx.record(&format!("  {name}"), t);
         }
@@ -429,6 +440,22 @@ pub fn apply_in_place(
     surface: &Surface,
     m: &Machine,
     p: &SpeedParams,
+) -> Result<Applied, SpeedError> {
+    apply_in_place_with(program, surface, m, p, &|_, _, _| {})
+}
+
+/// Points analysed between two reports of progress.
+const TICK: usize = 4096;
+
+/// [`apply_in_place`], `tick(operation, done, total)` hearing of the points
+/// of each operation whose contact and working diameter are done (from any
+/// thread, now and then).
+pub fn apply_in_place_with(
+    program: &mut Program,
+    surface: &Surface,
+    m: &Machine,
+    p: &SpeedParams,
+    tick: &(dyn Fn(usize, usize, usize) + Sync),
 ) -> Result<Applied, SpeedError> {
     if !(p.vc > 0.0 && p.fz > 0.0 && p.flutes > 0 && p.ap > 0.0)
         || p.ball_d.map(|d| !(d > 0.0)).unwrap_or(false)
@@ -491,16 +518,31 @@ pub fn apply_in_place(
             corner: r.corner,
             first_pass: r.neighbour == Neighbour::None,
         };
+        let (n, done) = (pts.len(), std::sync::atomic::AtomicUsize::new(0));
+        let count = || {
+            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if k % TICK == 0 {
+                tick(oi, k, n);
+            }
+        };
+        tick(oi, 0, n);
         let (full, lites) = if p.keep_rows {
-            let full = contact::analyse(surface, &pts, &cp);
+            let full = contact::analyse_with(surface, &pts, &cp, |r| {
+                count();
+                r
+            });
             let lites: Vec<Lite> = full.iter().map(lite).collect();
             (full, lites)
         } else {
             (
                 Vec::new(),
-                contact::analyse_with(surface, &pts, &cp, |r| lite(&r)),
+                contact::analyse_with(surface, &pts, &cp, |r| {
+                    count();
+                    lite(&r)
+                }),
             )
         };
+        tick(oi, n, n);
         drop(pts);
         lap("contact and working diameter", &mut timings);
         // Targets, machine range, threshold.
@@ -1169,6 +1211,55 @@ mod pass_tests {
             DVec3::new(-100.0, 100.0, 0.0),
         );
         TriMesh::from_soup(&[[a, b, c], [a, c, d]]).0
+    }
+
+    /// The pass reports its contact analysis through the pipeline's hook:
+    /// counts that only grow, from 0 to every cutting point.
+    #[test]
+    fn progress_counts_every_point_of_the_contact_analysis() {
+        // 10,000 cutting points along X over the plate: more than two reports
+        // between the first and the last.
+        let mut t = String::from(
+            "program - source=generated units=mm/declared
+op name=-
+  tool number=1 name=- line=1 cutter=ball d=10 r=5 e=0 f=5 a=0 b=0 h=0
+  start (?, ?, ?)
+  L2 rapid (-50, 0, 5) F0 S3000 per_minute
+",
+        );
+        for k in 0..10_000 {
+            t.push_str(&format!(
+                "  L{} linear ({}, 0, 0) F600 S3000 per_minute\n",
+                k + 3,
+                -50.0 + 0.01 * k as f64
+            ));
+        }
+        let heard = std::sync::Mutex::new(Vec::new());
+        let hook = |phase: &str, done: usize, total: usize| {
+            heard
+                .lock()
+                .expect("lock")
+                .push((phase.to_string(), done, total));
+        };
+        let mesh = plate();
+        let cx = Context::new(Machine::default())
+            .with_part(&mesh)
+            .with_progress(&hook);
+        let mut p = text::parse(&t).expect("parses");
+        let mut pass = SpeedPass::new(SpeedParams::new(63.0, 0.125, 2, 0.3));
+        run(&mut [&mut pass], &mut p, &cx).expect("runs");
+        let heard = heard.lock().expect("lock").clone();
+        assert!(heard
+            .iter()
+            .all(|h| h.0 == "speed: contact and working diameter" && h.2 == 10_000));
+        let counts: Vec<usize> = heard.iter().map(|h| h.1).collect();
+        assert!(counts.windows(2).all(|w| w[0] <= w[1]), "{counts:?}");
+        assert_eq!(counts.first(), Some(&0));
+        assert_eq!(counts.last(), Some(&10_000));
+        assert!(
+            counts.contains(&4096) || counts.contains(&8192),
+            "{counts:?}"
+        );
     }
 
     /// On a flat surface D_w = 2·√(ap·(D − ap)) for any feed direction and

@@ -118,30 +118,39 @@ pub fn speed_verdict(i: &SpeedInputs, s: &Summary, rows: &[PointRow]) -> Vec<Str
     v
 }
 
-fn header(h: &mut String, i: &SpeedInputs) {
-    let row = |h: &mut String, k: &str, v: String| {
-        let _ = write!(h, "<tr><th>{}</th><td>{}</td></tr>", esc(k), esc(&v));
-    };
+/// The header rows of a run with spindle control: the files, the tool, the
+/// machine's limits and the cutting data.
+pub fn speed_inputs_rows(i: &SpeedInputs) -> Vec<(String, String)> {
+    vec![
+        ("program".into(), i.program.clone()),
+        ("part".into(), i.part.clone()),
+        ("tool".into(), i.tool.clone()),
+        (
+            "machine".into(),
+            format!(
+                "{}: spindle {:.0}–{:.0} 1/min, acceleration {:.0} 1/min/s, feed up to {:.0} mm/min",
+                i.machine, i.spindle.0, i.spindle.1, i.spindle_accel, i.feed_max
+            ),
+        ),
+        (
+            "cutting data".into(),
+            format!(
+                "vc {} m/min, fz {} mm, {} flutes, ap {} mm",
+                i.vc, i.fz, i.flutes, i.ap
+            ),
+        ),
+    ]
+}
+
+/// The table of a report's inputs (left out when there are none).
+fn inputs_table(h: &mut String, rows: &[(String, String)]) {
+    if rows.is_empty() {
+        return;
+    }
     h.push_str("<table class=\"inputs\" id=\"inputs\">");
-    row(h, "program", i.program.clone());
-    row(h, "part", i.part.clone());
-    row(h, "tool", i.tool.clone());
-    row(
-        h,
-        "machine",
-        format!(
-            "{}: spindle {:.0}–{:.0} 1/min, acceleration {:.0} 1/min/s, feed up to {:.0} mm/min",
-            i.machine, i.spindle.0, i.spindle.1, i.spindle_accel, i.feed_max
-        ),
-    );
-    row(
-        h,
-        "cutting data",
-        format!(
-            "vc {} m/min, fz {} mm, {} flutes, ap {} mm",
-            i.vc, i.fz, i.flutes, i.ap
-        ),
-    );
+    for (k, v) in rows {
+        let _ = write!(h, "<tr><th>{}</th><td>{}</td></tr>", esc(k), esc(v));
+    }
     h.push_str("</table>");
 }
 
@@ -162,10 +171,10 @@ pub fn speed_report(title: &str, i: &SpeedInputs, s: &Summary, rows: &[PointRow]
         h,
         "<p>Constant cutting speed vc = {vc} m/min by per-point spindle speed n = 1000·vc/(π·D<sub>w</sub>).</p>"
     );
-    header(&mut h, i);
     notes(
         &mut h,
         &Notes {
+            inputs: speed_inputs_rows(i),
             warnings: i.warnings.clone(),
             verdict: speed_verdict(i, s, rows),
         },
@@ -381,15 +390,18 @@ pub fn speed_report(title: &str, i: &SpeedInputs, s: &Summary, rows: &[PointRow]
 }
 
 /// A horizontal line at `y` across `n` points, for a machine limit.
-fn limit_line(n: usize, y: f64) -> Vec<(f64, f64)> {
+pub(crate) fn limit_line(n: usize, y: f64) -> Vec<(f64, f64)> {
     vec![(0.0, y), (n.saturating_sub(1) as f64, y)]
 }
 
-/// What a report says before its tables: warnings (shown in a red box at
-/// the top: what to look at before using the result) and a verdict in words
-/// (what changed and what it buys). Either may be empty.
+/// What a report says before its tables: the inputs it was made from (a
+/// header table), warnings (shown in a red box: what to look at before using
+/// the result) and a verdict in words (what changed and what it buys). Any
+/// may be empty.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Notes {
+    /// Header rows: name, value (files, tool, machine limits, cutting data).
+    pub inputs: Vec<(String, String)>,
     pub warnings: Vec<String>,
     pub verdict: Vec<String>,
 }
@@ -412,8 +424,9 @@ fn page_start(title: &str) -> String {
     h
 }
 
-/// The warnings box and the verdict (each left out when empty).
+/// The inputs, the warnings box and the verdict (each left out when empty).
 fn notes(h: &mut String, n: &Notes) {
+    inputs_table(h, &n.inputs);
     if !n.warnings.is_empty() {
         h.push_str(
             "<div class=\"warnings\" id=\"warnings\" role=\"alert\"><strong>Warnings</strong><ul>",

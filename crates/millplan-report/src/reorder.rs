@@ -1,9 +1,130 @@
-//! The reordering report: both orders side by side.
+//! The reordering report: its inputs, the warnings, the verdict in words and
+//! both orders side by side.
 
-use crate::html::simple_report;
+use crate::html::{limit_line, report_page, speed_inputs_rows, Notes, SpeedInputs};
 use crate::svg::{histogram, line_plot, map, Series};
 use millplan_nc::Program;
-use millplan_plan::reorder::{OrderIndicators, Outcome};
+use millplan_plan::reorder::{OrderIndicators, Outcome, Verdict};
+
+/// What a reordering report was made from: the files, tool, machine and
+/// cutting data of its spindle control (`run`; its `warnings` the findings
+/// about the inputs, a mesh's defects say) and the method's name.
+#[derive(Clone, Debug, Default)]
+pub struct ReorderInputs {
+    pub run: SpeedInputs,
+    pub method: String,
+}
+
+/// Above this share of rate-limited points the report warns: there the
+/// spindle cannot follow the speeds the order asks for.
+pub const RATE_LIMITED_WARNING: f64 = 0.05;
+
+fn share(n: usize, of: usize) -> f64 {
+    if of == 0 {
+        0.0
+    } else {
+        n as f64 / of as f64
+    }
+}
+
+/// `a → b` with the relative change, in the unit given.
+fn change(a: f64, b: f64, decimals: usize, unit: &str) -> String {
+    let pct = if a.abs() > 1e-12 {
+        format!(" ({:+.1} %)", 100.0 * (b - a) / a)
+    } else {
+        String::new()
+    };
+    format!("{a:.decimals$} → {b:.decimals$}{unit}{pct}")
+}
+
+/// The report's warnings and verdict in words: whether the order was improved
+/// or kept and by how much (time, Σ|Δn|, the share off the cutting speed, all
+/// as the machine will run it), and what to look at.
+pub fn reorder_notes(o: &Outcome, i: &ReorderInputs) -> Notes {
+    let (b, a) = (&o.before.as_run, &o.after.as_run);
+    let mut warnings = i.run.warnings.clone();
+    if let Some(d) =
+        millplan_plan::checks::off_surface_points(b.off_surface, b.no_contact, b.points)
+    {
+        warnings.push(d.message);
+    }
+    let limited = share(a.rate_limited, a.points);
+    if limited > RATE_LIMITED_WARNING {
+        warnings.push(format!(
+            "{} of {} points ({:.1} %) wait for the spindle's acceleration of {:.0} 1/min/s in the written order: the cutting speed misses its target there",
+            a.rate_limited,
+            a.points,
+            100.0 * limited,
+            i.run.spindle_accel
+        ));
+    }
+    let measures = format!(
+        "points off the cutting speed by more than 5 % {:.1} % → {:.1} %, Σ|Δn| {}, time {}, estimated with acceleration as the machine will run it with spindle control",
+        100.0 * b.vc_deviation_share,
+        100.0 * a.vc_deviation_share,
+        change(b.total_variation_n, a.total_variation_n, 0, " 1/min"),
+        change(b.time_s, a.time_s, 1, " s")
+    );
+    let tried = o.tried.len().saturating_sub(1);
+    let mut verdict = vec![match o.verdict {
+        Some(Verdict::Improved) => format!(
+            "Improved: of {tried} candidate orders measured, the one written is worse than the original on no measure and better on at least one: {measures}."
+        ),
+        Some(Verdict::Kept) => format!(
+            "Kept: none of the {tried} candidate orders measured runs better without running worse on another measure, so the original order is written as it was: {:.1} % of the points off the cutting speed by more than 5 %, Σ|Δn| {:.0} 1/min, {:.1} s as the machine will run it.",
+            100.0 * b.vc_deviation_share,
+            b.total_variation_n,
+            b.time_s
+        ),
+        None => format!("Reordered by the {} method: {measures}.", i.method),
+    }];
+    if o.verdict != Some(Verdict::Kept) {
+        verdict.push(format!(
+            "{} links are direct (proven gouge-free by the drop-cutter), {} retract, rapid and plunge.",
+            o.stats.direct_links, o.stats.retracts
+        ));
+    }
+    let worse: Vec<&str> = [
+        (
+            a.vc_deviation_points > b.vc_deviation_points,
+            "the share off the cutting speed",
+        ),
+        (
+            a.total_variation_n > b.total_variation_n * (1.0 + 1e-9),
+            "Σ|Δn|",
+        ),
+        (
+            a.time_s > b.time_s * 1.03,
+            "the time (more than 3 % longer)",
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(w, name)| w.then_some(name))
+    .collect();
+    if !worse.is_empty() {
+        verdict.push(format!(
+            "Worse than the original on {}: compare with the default method (as-run) before using it.",
+            worse.join(", ")
+        ));
+    }
+    if !warnings.is_empty() {
+        verdict.push("Look at the warnings above before using the program.".to_string());
+    } else if a.rate_limited > 0 {
+        verdict.push(format!(
+            "Look at the spindle-speed plot where the targets change fastest or leave the range {:.0}–{:.0} 1/min: there the machine limits the speed ({:.1} % of the points wait for its acceleration).",
+            i.run.spindle.0,
+            i.run.spindle.1,
+            100.0 * limited
+        ));
+    }
+    let mut inputs = speed_inputs_rows(&i.run);
+    inputs.push(("method".into(), i.method.clone()));
+    Notes {
+        inputs,
+        warnings,
+        verdict,
+    }
+}
 
 /// The XY of the cutting moves of the ball-end operations, in program order.
 fn cutting_xy(p: &Program) -> Vec<(f64, f64)> {
@@ -61,7 +182,14 @@ pub fn rows(before: &OrderIndicators, after: &OrderIndicators) -> Vec<(String, S
 
 /// The HTML page: indicators, D_w and spindle speed along both orders, the
 /// distribution of successive changes and both tours from above.
-pub fn reorder_report(original: &Program, reordered: &Program, o: &Outcome, vc: f64) -> String {
+pub fn reorder_report(
+    original: &Program,
+    reordered: &Program,
+    o: &Outcome,
+    i: &ReorderInputs,
+) -> String {
+    let vc = i.run.vc;
+    let longest = o.dw_original.len().max(o.dw_reordered.len());
     let (blue, orange) = ("#1f77b4", "#ff7f0e");
     let along = |v: &[f64], f: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
         v.iter()
@@ -98,7 +226,7 @@ pub fn reorder_report(original: &Program, reordered: &Program, o: &Outcome, vc: 
             ),
         ),
         (
-            format!("Spindle speed for a constant cutting speed of {vc} m/min (before machine limits), in cutting order."),
+            format!("Spindle speed for a constant cutting speed of {vc} m/min (before machine limits), in cutting order, with the machine's spindle range."),
             line_plot(
                 "Spindle speed along the path",
                 "point in cutting order",
@@ -106,6 +234,8 @@ pub fn reorder_report(original: &Program, reordered: &Program, o: &Outcome, vc: 
                 &[
                     Series { name: "original", color: blue, points: along(&o.dw_original, &speed) },
                     Series { name: "reordered", color: orange, points: along(&o.dw_reordered, &speed) },
+                    Series { name: "spindle maximum", color: "#c62828", points: limit_line(longest, i.run.spindle.1) },
+                    Series { name: "spindle minimum", color: "#8e24aa", points: limit_line(longest, i.run.spindle.0) },
                 ],
             ),
         ),
@@ -130,9 +260,10 @@ pub fn reorder_report(original: &Program, reordered: &Program, o: &Outcome, vc: 
             map("Reordered", "order", &tour(cutting_xy(reordered))),
         ),
     ];
-    simple_report(
+    report_page(
         "Toolpath reordering",
         "Paper 000, thesis 5: cutting points reordered so the working diameter, and with it the spindle speed for a constant cutting speed, changes as little as possible between successive points. Original → reordered.",
+        &reorder_notes(o, i),
         &rows(&o.before, &o.after),
         &figures,
     )

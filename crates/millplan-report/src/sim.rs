@@ -223,5 +223,15 @@ pub fn report(
             }],
         ),
     ));
-    report_page(title, &intro, &Notes { warnings, verdict }, &rows, &figures)
+    report_page(
+        title,
+        &intro,
+        &Notes {
+            warnings,
+            verdict,
+            ..Notes::default()
+        },
+        &rows,
+        &figures,
+    )
 }

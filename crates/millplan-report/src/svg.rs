@@ -436,7 +436,9 @@ pub enum DirClass {
 /// The unit sphere of tool directions as two Lambert azimuthal equal-area discs
 /// (upper hemisphere left, lower right; X right, Y up in each), one dot per grid
 /// cell coloured by its class. Equal areas on the sphere stay equal on the page.
-pub fn sphere_map(title: &str, cells: &[([f64; 3], DirClass)]) -> String {
+/// `limits`: curves of directions (the edges of what a machine's rotary ranges
+/// reach) drawn as lines.
+pub fn sphere_map(title: &str, cells: &[([f64; 3], DirClass)], limits: &[Vec<[f64; 3]>]) -> String {
     let (r0, cy) = (150.0, 200.0);
     let centres = [190.0, 530.0];
     let mut s = String::new();
@@ -459,16 +461,19 @@ pub fn sphere_map(title: &str, cells: &[([f64; 3], DirClass)]) -> String {
             }
         );
     }
-    for (d, class) in cells {
-        let [x, y, z] = *d;
+    // Lambert: radius √(2(1 − |z|)) reaches √2 at the equator.
+    let project = |[x, y, z]: [f64; 3]| {
         let up = z >= 0.0;
-        // Lambert: radius √(2(1 − |z|)) reaches √2 at the equator.
         let rho = (2.0 * (1.0 - z.abs())).max(0.0).sqrt() / 2f64.sqrt();
         let h = (x * x + y * y).sqrt().max(1e-300);
-        let (px, py) = (
+        (
+            up,
             centres[usize::from(!up)] + r0 * rho * x / h,
             cy - r0 * rho * y / h,
-        );
+        )
+    };
+    for (d, class) in cells {
+        let (_, px, py) = project(*d);
         let (fill, rad) = match class {
             DirClass::Out => ("#e4e4e4", 1.6),
             DirClass::Reach => ("#9ecae1", 2.2),
@@ -479,6 +484,32 @@ pub fn sphere_map(title: &str, cells: &[([f64; 3], DirClass)]) -> String {
             s,
             r#"<circle cx="{px:.1}" cy="{py:.1}" r="{rad}" fill="{fill}"/>"#
         );
+    }
+    // The limits, each curve cut where it passes to the other hemisphere.
+    for curve in limits {
+        let mut pieces: Vec<Vec<(f64, f64)>> = Vec::new();
+        let mut side = None;
+        for d in curve {
+            let (up, px, py) = project(*d);
+            if side != Some(up) {
+                pieces.push(Vec::new());
+                side = Some(up);
+            }
+            if let Some(p) = pieces.last_mut() {
+                p.push((px, py));
+            }
+        }
+        for p in pieces.iter().filter(|p| p.len() > 1) {
+            let pts: Vec<String> = p.iter().map(|(x, y)| format!("{x:.1},{y:.1}")).collect();
+            let _ = write!(
+                s,
+                r##"<polyline class="limit" points="{}" fill="none" stroke="#111" stroke-width="1.5"/>"##,
+                pts.join(" ")
+            );
+        }
+    }
+    if !limits.is_empty() {
+        s.push_str(r##"<line x1="680" y1="22" x2="700" y2="22" stroke="#111" stroke-width="1.5"/><text x="676" y="26" text-anchor="end">machine's rotary limits</text>"##);
     }
     let legend = [
         ("#9ecae1", "reachable"),
@@ -521,7 +552,12 @@ mod tests {
                 ([0.0, 0.0, -1.0], DirClass::Missing),
                 ([0.0, -1.0, 0.0], DirClass::Out),
             ],
+            &[vec![[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]]],
         );
+        // A limit from the upper pole to the equator, then on in the lower
+        // hemisphere: two pieces.
+        assert!(svg.contains(r#"points="190.0,200.0 340.0,200.0""#), "{svg}");
+        assert_eq!(svg.matches("<polyline").count(), 1, "{svg}");
         assert!(
             svg.contains(r##"cx="190.0" cy="200.0" r="3" fill="#08519c""##),
             "{svg}"

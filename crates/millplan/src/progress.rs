@@ -1,7 +1,7 @@
 //! Progress bars (indicatif) for work that can take longer than a second; they draw
 //! on standard error only when it is a terminal.
 
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// A byte-count bar, shown only for inputs large enough to take a while.
 pub fn bytes(total: u64, what: &str) -> ProgressBar {
@@ -58,4 +58,59 @@ pub fn fraction(what: &str, show: bool) -> ProgressBar {
     }
     bar.set_message(what.to_string());
     bar
+}
+
+/// One bar for the phases a pipeline's passes report (`Context::progress`):
+/// a new phase names itself and starts the count again.
+pub struct Phases {
+    bar: ProgressBar,
+    phase: std::sync::Mutex<String>,
+}
+
+impl Phases {
+    /// A bar drawn when `show` (not `-q`) and standard error is a terminal.
+    pub fn new(show: bool) -> Phases {
+        let bar = if show {
+            ProgressBar::new(0)
+        } else {
+            ProgressBar::hidden()
+        };
+        if let Ok(style) =
+            ProgressStyle::with_template("{msg} [{bar:30}] {human_pos}/{human_len}, {eta} left")
+        {
+            bar.set_style(style);
+        }
+        Phases {
+            bar,
+            phase: std::sync::Mutex::new(String::new()),
+        }
+    }
+
+    /// What a pass reported: `done` of the `total` steps of `phase`.
+    pub fn report(&self, phase: &str, done: usize, total: usize) {
+        if self.bar.is_hidden() {
+            return;
+        }
+        let Ok(mut p) = self.phase.lock() else {
+            return;
+        };
+        if *p == phase {
+            self.bar.set_length(total as u64);
+            self.bar.set_position(done as u64);
+            return;
+        }
+        // A new phase: name and counts change out of sight, so no frame shows
+        // one phase's name with another's count.
+        *p = phase.to_string();
+        self.bar.set_draw_target(ProgressDrawTarget::hidden());
+        self.bar.reset();
+        self.bar.set_length(total as u64);
+        self.bar.set_position(done as u64);
+        self.bar.set_message(phase.to_string());
+        self.bar.set_draw_target(ProgressDrawTarget::stderr());
+    }
+
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
 }

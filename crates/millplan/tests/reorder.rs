@@ -203,3 +203,109 @@ fn paper_search_lowers_the_largest_working_diameter_step() {
     assert_eq!(j0["reordered"]["points"], j0["original"]["points"]);
     assert!(max(&j0, "reordered") > 0.0);
 }
+
+/// The text of the report's inputs, warnings box and verdict, in the order
+/// they stand before the summary table (a section missing is an empty string).
+fn report_sections(html: &str) -> [String; 3] {
+    let at = |needle: &str| html.find(needle);
+    let summary = at("<h2>Summary</h2>").expect("a summary table");
+    let ids = ["id=\"inputs\"", "id=\"warnings\"", "id=\"verdict\""].map(at);
+    let mut prev = 0;
+    for i in ids.iter().flatten() {
+        assert!(prev <= *i && *i < summary, "out of order: {ids:?}");
+        prev = *i;
+    }
+    let mut out: [String; 3] = Default::default();
+    for k in 0..3 {
+        if let Some(a) = ids[k] {
+            let b = ids[k + 1..]
+                .iter()
+                .flatten()
+                .next()
+                .copied()
+                .unwrap_or(summary);
+            out[k] = html[a..b].to_string();
+        }
+    }
+    out
+}
+
+/// Issue 18, item 7: the reorder report opens with its inputs (files, tool,
+/// machine limits, cutting data), a warnings box and a verdict in words with
+/// the measures as the JSON gives them; the spindle's range is drawn on the
+/// speed plot. A part read in the wrong unit puts its off-surface points in
+/// the box.
+#[test]
+fn reorder_report_has_inputs_warnings_and_verdict() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let demo = dir.path().join("demo");
+    assert!(bin()
+        .arg("demo")
+        .arg("-o")
+        .arg(&demo)
+        .output()
+        .expect("runs")
+        .status
+        .success());
+    for (units, off_part) in [("mm", false), ("inch", true)] {
+        let report = dir.path().join(format!("reorder_{units}.html"));
+        let o = bin()
+            .args(["reorder", "--json", "--ap", "0.3", "--stl-units", units])
+            .arg("--stl")
+            .arg(demo.join("part.stl"))
+            .arg(demo.join("finish.apt"))
+            .arg("--machine")
+            .arg(demo.join("machine.toml"))
+            .arg("-o")
+            .arg(dir.path().join("r.apt"))
+            .arg("--report")
+            .arg(&report)
+            .output()
+            .expect("runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+        let html = std::fs::read_to_string(&report).expect("report");
+        let [inputs, warnings, verdict] = report_sections(&html);
+        for said in [
+            "finish.apt",
+            "part.stl",
+            "T1",
+            "spindle 500–18000 1/min, acceleration 6000 1/min/s",
+            "vc 63 m/min, fz 0.125 mm, 2 flutes, ap 0.3 mm",
+            "as-run",
+        ] {
+            assert!(inputs.contains(said), "{units}: {said} in {inputs}");
+        }
+        // The demo part is an open relief: its border is a mesh defect.
+        assert!(warnings.contains("open edges"), "{units}: {warnings}");
+        assert_eq!(
+            warnings.contains("do not touch the part within tolerance"),
+            off_part,
+            "{units}: {warnings}"
+        );
+        let share = |k: &str| {
+            100.0
+                * j[k]["as_run"]["vc_deviation_share"]
+                    .as_f64()
+                    .expect("share")
+        };
+        let word = match j["verdict"].as_str() {
+            Some("improved") => "Improved:",
+            Some("kept") => "Kept:",
+            v => panic!("verdict {v:?}"),
+        };
+        assert!(verdict.contains(word), "{units}: {verdict}");
+        if word == "Improved:" {
+            let shares = format!("{:.1} % → {:.1} %", share("original"), share("reordered"));
+            assert!(verdict.contains(&shares), "{units}: {shares} in {verdict}");
+            let time = |k: &str| j[k]["as_run"]["time_s"].as_f64().expect("time");
+            let times = format!("time {:.1} → {:.1} s", time("original"), time("reordered"));
+            assert!(verdict.contains(&times), "{units}: {times} in {verdict}");
+        }
+        assert!(verdict.contains("Look at the warnings above"), "{verdict}");
+        assert!(
+            html.contains("spindle maximum") && html.contains("spindle minimum"),
+            "the spindle's range drawn"
+        );
+    }
+}

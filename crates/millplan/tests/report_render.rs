@@ -151,3 +151,104 @@ fn speed_report_shows_inputs_warnings_and_verdict() {
         );
     }
 }
+
+/// Runs `millplan` with `args`; returns its exit code.
+fn millplan(args: &[&std::ffi::OsStr]) -> Option<i32> {
+    let o = Command::new(env!("CARGO_BIN_EXE_millplan"))
+        .args(args)
+        .output()
+        .expect("runs");
+    o.status.code()
+}
+
+/// The reorder and setup reports open with their inputs, the warnings in a
+/// box and the verdict in words, above the summary table, as Chromium lays
+/// the pages out; the machine's limits are drawn on their plots.
+#[test]
+#[ignore = "needs /usr/bin/chromium"]
+fn reorder_and_setup_reports_show_inputs_warnings_and_verdict() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let demo = dir.path().join("demo");
+    let os = |p: &Path| p.as_os_str().to_owned();
+    assert_eq!(
+        millplan(&["demo".as_ref(), "-o".as_ref(), demo.as_os_str()]),
+        Some(0)
+    );
+    let (part, apt) = (demo.join("part.stl"), demo.join("finish.apt"));
+    // The part read in the wrong unit: its points do not touch it.
+    let reorder = dir.path().join("reorder.html");
+    let mut args: Vec<std::ffi::OsString> = ["reorder", "-q", "--stl-units", "inch", "--stl"]
+        .iter()
+        .map(|s| s.into())
+        .collect();
+    args.extend([
+        os(&part),
+        os(&apt),
+        "-o".into(),
+        os(&dir.path().join("r.apt")),
+    ]);
+    args.extend(["--report".into(), os(&reorder)]);
+    let args: Vec<&std::ffi::OsStr> = args.iter().map(|s| s.as_os_str()).collect();
+    assert_eq!(millplan(&args), Some(0));
+    let setup = dir.path().join("setup.html");
+    let mut args: Vec<std::ffi::OsString> = [
+        "setup", "-q", "--type", "ab", "--range1", "-20,20", "--range2", "-20,20", "--stl",
+    ]
+    .iter()
+    .map(|s| s.into())
+    .collect();
+    args.extend([os(&part), "--report".into(), os(&setup)]);
+    let args: Vec<&std::ffi::OsStr> = args.iter().map(|s| s.as_os_str()).collect();
+    assert_eq!(millplan(&args), Some(0), "a relief is seen from above");
+    for (k, (page, warning, verdict, limit)) in [
+        (
+            &reorder,
+            "do not touch the part within tolerance",
+            "candidate orders measured",
+            "spindle maximum",
+        ),
+        (
+            &setup,
+            "open edges",
+            "Feasible in one setup",
+            "class=\"limit\"",
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let out = chromium(&dir.path().join(format!("profile{k}")), page, "--dump-dom");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let dom = String::from_utf8_lossy(&out.stdout).to_string();
+        let at = |needle: &str| {
+            dom.find(needle)
+                .unwrap_or_else(|| panic!("{}: no `{needle}`", page.display()))
+        };
+        let (inputs, warnings, said, summary) = (
+            at("id=\"inputs\""),
+            at("id=\"warnings\""),
+            at("id=\"verdict\""),
+            at("<h2>Summary</h2>"),
+        );
+        assert!(
+            inputs < warnings && warnings < said && said < summary,
+            "{}",
+            page.display()
+        );
+        assert!(
+            dom[warnings..said].contains(warning),
+            "{}",
+            &dom[warnings..said]
+        );
+        assert!(
+            dom[said..summary].contains(verdict),
+            "{}",
+            &dom[said..summary]
+        );
+        assert!(dom.contains(limit), "{}: the limits drawn", page.display());
+    }
+}

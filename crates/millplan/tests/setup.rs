@@ -391,3 +391,80 @@ fn cube_on_its_corner_needs_a_tilt_of_35_26_degrees_on_every_grid() {
         assert!(!j["out_of_reach"].as_array().expect("list").is_empty());
     }
 }
+
+/// Issue 18, item 7: the setup report opens with its inputs (the part, the
+/// machine's rotary ranges, the mode, the sphere grid), a warnings box
+/// (facets out of reach, a mesh's open edges) and a verdict in words (feasible
+/// or not, the ranges the part needs, the setup chosen); the machine's limits
+/// are drawn on the direction map.
+#[test]
+fn setup_report_has_inputs_warnings_and_verdict() {
+    let dir = tempfile::tempdir().expect("tmp");
+    // A cube without its bottom face: an open mesh.
+    let p = cube(dir.path(), "open.stl", DMat3::IDENTITY, false);
+    let html = dir.path().join("setup.html");
+    let report = [
+        "--clearance",
+        "80",
+        "--report",
+        html.to_str().expect("utf8"),
+    ];
+    // Two tilting axes of ±30° do not reach the walls.
+    let (code, j) = setup2(
+        &p,
+        &["--type", "ab", "--range1", "-30,30", "--range2", "-30,30"],
+        &report,
+    );
+    assert_eq!(code, Some(3), "{j}");
+    let page = std::fs::read_to_string(&html).expect("report");
+    let at = |needle: &str| page.find(needle).unwrap_or_else(|| panic!("no {needle}"));
+    let (inputs, warnings, verdict, summary) = (
+        at("id=\"inputs\""),
+        at("id=\"warnings\""),
+        at("id=\"verdict\""),
+        at("<h2>Summary</h2>"),
+    );
+    assert!(inputs < warnings && warnings < verdict && verdict < summary);
+    let head = &page[inputs..warnings];
+    for said in [
+        "open.stl",
+        "TableAb: A -30° … 30°, B -30° … 30°",
+        "line of sight",
+        "clearance 80°",
+    ] {
+        assert!(head.contains(said), "{said} in {head}");
+    }
+    let boxed = &page[warnings..verdict];
+    let out = j["out_of_reach"].as_array().expect("list").len();
+    assert!(out > 0, "{j}");
+    assert!(
+        boxed.contains(&format!("{out} facets (")) && boxed.contains("out of the machine's reach"),
+        "{boxed}"
+    );
+    assert!(boxed.contains("open edges"), "{boxed}");
+    let said = &page[verdict..summary];
+    assert!(said.contains("Not feasible in one setup"), "{said}");
+    let r = &j["required"];
+    let needs = format!(
+        "The part needs A {:.3}° … {:.3}° and B {:.3}° … {:.3}°",
+        f(&r["a"][0]),
+        f(&r["a"][1]),
+        f(&r["b"][0]),
+        f(&r["b"][1])
+    )
+    .replace("-0.000", "0.000");
+    assert!(said.contains(&needs), "{needs} in {said}");
+    assert!(said.contains("a second setup"), "{said}");
+    // The limits of both axes bound the reachable directions.
+    assert!(page.contains("class=\"limit\""), "the limits drawn");
+    // Feasible on ±95°: the verdict says so, and the box holds only the mesh.
+    let (code, j) = setup2(
+        &p,
+        &["--type", "ab", "--range1", "-95,95", "--range2", "-95,95"],
+        &report,
+    );
+    assert_eq!(code, Some(0), "{j}");
+    let page = std::fs::read_to_string(&html).expect("report");
+    assert!(page.contains("Feasible in one setup"));
+    assert!(!page.contains("out of the machine's reach"));
+}

@@ -364,12 +364,13 @@ impl Evaluator<'_> {
 /// applies to its candidates. A point reached by a jump (farther than `jump`:
 /// the tool retracts and plunges there), or with `retract` set, is cut in the
 /// direction it leaves in. Returns D_w per position and whether the step into
-/// it was a jump.
+/// it was a jump. `tick` hears of the positions done now and then.
 fn sequence_dw(
     mut ev: Evaluator,
     order: &[usize],
     jump: f64,
     retract: &[bool],
+    tick: &dyn Fn(usize),
 ) -> (Vec<f64>, Vec<bool>) {
     let centres = ev.centres;
     let mut out = Vec::with_capacity(order.len());
@@ -388,13 +389,18 @@ fn sequence_dw(
         out.push(ev.dw(j, dir.normalize_or_zero()));
         jumps.push(is_jump && k > 0);
         ev.mark(j);
+        if k % TICK == TICK - 1 {
+            tick(k + 1);
+        }
     }
+    tick(order.len());
     (out, jumps)
 }
 
 /// The paper's search: the order of the points (indices), and per position
 /// whether the step into it retracts (the step guard could not avoid a larger
 /// D_w change there: the spindle changes speed while the tool is clear).
+/// `tick` hears of the points placed now and then.
 #[allow(clippy::too_many_arguments)]
 fn paper_search(
     centres: &[DVec3],
@@ -404,6 +410,7 @@ fn paper_search(
     side_search: f64,
     spacing: f64,
     jump: f64,
+    tick: &dyn Fn(usize),
 ) -> (Vec<usize>, Vec<bool>) {
     let n = centres.len();
     let border = hull(centres);
@@ -448,6 +455,9 @@ fn paper_search(
         order.push(cur);
         unv.remove(cur, xy(centres[cur]));
         ev.mark(cur);
+        if order.len() % TICK == 0 || order.len() == n {
+            tick(order.len());
+        }
         if order.len() == n {
             break;
         }
@@ -501,11 +511,13 @@ fn paper_search(
 }
 
 /// The optimised method: passes as units, 2-opt from the original order.
+/// `tick(done, total)` hears of the 2-opt's sweeps over the passes.
 fn optimised(
     centres: &[DVec3],
     dw: &[f64],
     passes: &[(usize, usize)],
     p: &ReorderParams,
+    tick: &dyn Fn(usize, usize),
 ) -> (Vec<(usize, bool)>, [f64; 3], [f64; 3]) {
     let nspeed = |i: usize| 1000.0 * p.vc / (std::f64::consts::PI * dw[i].max(1e-6));
     // Ends of a pass in a direction: (first point, second, second last, last).
@@ -562,9 +574,13 @@ fn optimised(
         p.weights[0] * j[0] + p.weights[1] * j[1] + p.weights[2] * j[2]
     };
     // 2-opt: reverse seq[i..=k] (the passes' order and their directions).
-    for _ in 0..p.iterations {
+    let total = p.iterations * seq.len();
+    for it in 0..p.iterations {
         let mut improved = false;
         for i in 1..seq.len() {
+            if i % 64 == 0 {
+                tick(it * seq.len() + i, total);
+            }
             for k in i..seq.len() {
                 let before = jc(seq[i - 1], seq[i])
                     + if k + 1 < seq.len() {
@@ -594,10 +610,14 @@ fn optimised(
             break;
         }
     }
+    tick(total, total);
     let reordered = cost_terms(&seq);
     debug_assert!(weighted(reordered) <= weighted(original) + 1e-6);
     (seq, original, reordered)
 }
+
+/// Points between two reports of progress.
+const TICK: usize = 4096;
 
 /// The pass as the pipeline runs it.
 pub static INFO: PassInfo = PassInfo {
@@ -666,15 +686,20 @@ impl Pass for ReorderPass {
         );
         // Both orders as they will run, with spindle control.
         if let Some(surface) = cx.surface() {
-            let run = |p: &Program| {
-                run::measure(p, surface, &cx.machine, &self.params.speed)
-                    .map_err(|e| input(e.to_string()))
+            let phase = "reorder: both orders measured as run";
+            let run = |p: &Program, done: usize| {
+                cx.progress(phase, done, 2);
+                let m = run::measure(p, surface, &cx.machine, &self.params.speed)
+                    .map_err(|e| input(e.to_string()));
+                cx.progress(phase, done + 1, 2);
+                m
             };
-            before.as_run = run(program)?;
+            before.as_run = run(program, 0)?;
             after.as_run = if r.verdict == Some(Verdict::Kept) {
+                cx.progress(phase, 2, 2);
                 before.as_run
             } else {
-                run(&r.program)?
+                run(&r.program, 1)?
             };
             before.vc_deviation_share = before.as_run.vc_deviation_share;
             after.vc_deviation_share = after.as_run.vc_deviation_share;
@@ -821,7 +846,14 @@ pub fn reorder_in(
     let mut tried = Vec::new();
     let mut verdicts = Vec::new();
     let mut any = false;
+    // Progress phases name their operation where there are several.
+    let several = program.operations.len() > 1;
     for (oi, op) in program.operations.iter().enumerate() {
+        let label = if several {
+            format!(" (operation {})", oi + 1)
+        } else {
+            String::new()
+        };
         let Some(c) = op
             .tool
             .as_ref()
@@ -890,29 +922,53 @@ pub fn reorder_in(
         stats.points += pts.len();
         let (order, retract, built) = match p.method {
             Method::Paper => {
-                let (order, retract) =
-                    paper_search(&centres, &normals, c.d, p, side_search, spacing, jump);
-                let built = links.build(&order, &retract, LinkStyle::FromClearance);
+                let phase = format!("reorder: thesis search{label}");
+                let n = pts.len();
+                let (order, retract) = paper_search(
+                    &centres,
+                    &normals,
+                    c.d,
+                    p,
+                    side_search,
+                    spacing,
+                    jump,
+                    &|k| cx.progress(&phase, k, n),
+                );
+                let phase = format!("reorder: links checked for gouges{label}");
+                let built = links.build_with(&order, &retract, LinkStyle::FromClearance, &|k| {
+                    cx.progress(&phase, k, n)
+                });
                 (order, retract, built)
             }
             Method::Optimised => {
                 let res = contact::analyse(surface, &pts, &cp);
                 let dw: Vec<f64> = res.iter().map(|r| r.dw).collect();
                 let passes = pass_ranges(&pts);
-                let (seq, before, after) = optimised(&centres, &dw, &passes, p);
+                let phase = format!("reorder: 2-opt over the passes{label}");
+                let (seq, before, after) =
+                    optimised(&centres, &dw, &passes, p, &|k, n| cx.progress(&phase, k, n));
                 stats.passes += passes.len();
                 for k in 0..3 {
                     stats.cost_original[k] += before[k];
                     stats.cost_reordered[k] += after[k];
                 }
                 let order = expand(&passes, &seq);
-                let built = links.build(&order, &[], LinkStyle::FromClearance);
+                let (phase, n) = (
+                    format!("reorder: links checked for gouges{label}"),
+                    order.len(),
+                );
+                let built = links.build_with(&order, &[], LinkStyle::FromClearance, &|k| {
+                    cx.progress(&phase, k, n)
+                });
                 (order, Vec::new(), built)
             }
             Method::AsRun => {
                 // The working diameters as the spindle control has them.
-                let s = run::search(program, oi, cx, &links, jump)
-                    .map_err(|e| ReorderError::Invalid(e.to_string()))?;
+                let phase = format!("reorder: candidate orders measured{label}");
+                let s = run::search(program, oi, cx, &links, jump, &|k, n| {
+                    cx.progress(&phase, k, n)
+                })
+                .map_err(|e| ReorderError::Invalid(e.to_string()))?;
                 tried.extend(s.tried);
                 verdicts.push(s.verdict);
                 let jumps = |order: &[usize], retracted: &[bool]| -> Vec<bool> {
@@ -938,11 +994,16 @@ pub fn reorder_in(
                 continue;
             }
         };
-        let (a, b) = sequence_dw(fresh(), &identity, jump, &[]);
+        let (phase, n) = (format!("reorder: D_w along both orders{label}"), pts.len());
+        let (a, b) = sequence_dw(fresh(), &identity, jump, &[], &|k| {
+            cx.progress(&phase, k, 2 * n)
+        });
         dw_original.extend(a);
         jump_original.extend(b);
         // D_w by the thesis's rule, where the search forced a retract.
-        let (a, b) = sequence_dw(fresh(), &order, jump, &retract);
+        let (a, b) = sequence_dw(fresh(), &order, jump, &retract, &|k| {
+            cx.progress(&phase, n + k, 2 * n)
+        });
         dw_reordered.extend(a);
         jump_reordered.extend(b);
         stats.direct_links += built.direct;
@@ -1084,23 +1145,41 @@ impl Links<'_> {
     /// and a plunge; each next one [directly](Self::direct) or by a retract, a
     /// rapid and a plunge. `retract` forces a retract before a position.
     fn build(&self, order: &[usize], retract: &[bool], style: LinkStyle) -> Built {
+        self.build_with(order, retract, style, &|_| {})
+    }
+
+    /// [`Links::build`], `tick` hearing of the links checked now and then
+    /// (from any thread).
+    fn build_with(
+        &self,
+        order: &[usize],
+        retract: &[bool],
+        style: LinkStyle,
+        tick: &(dyn Fn(usize) + Sync),
+    ) -> Built {
         let (op, pts, idx, p) = (self.op, self.pts, self.idx, self.p);
         let feed_of = |k: usize| op.moves[idx[k]].feed;
         let spindle = op.moves[idx[0]].spindle;
         let tmpl = op.moves[idx[0]];
         // Every new link is checked for gouges (even one between neighbouring
         // points can cut into a concave region), in parallel.
+        let checked = std::sync::atomic::AtomicUsize::new(0);
         let clean: Vec<bool> = {
             use rayon::prelude::*;
             (0..order.len())
                 .into_par_iter()
                 .map(|m| {
+                    if m % TICK == TICK - 1 {
+                        let done = checked.fetch_add(TICK, std::sync::atomic::Ordering::Relaxed);
+                        tick(done + TICK);
+                    }
                     m == 0
                         || (!retract.get(m).copied().unwrap_or(false)
                             && self.direct(order[m - 1], order[m], style))
                 })
                 .collect()
         };
+        tick(order.len());
         let mut b = Built {
             moves: Vec::with_capacity(order.len() + 8),
             direct: 0,

@@ -32,6 +32,14 @@ pub struct RunMeasures {
     /// the controller-aware estimate (acceleration, look-ahead) of
     /// [`crate::timing`] on the machine.
     pub time_s: f64,
+    /// Points whose speed waits for the spindle's acceleration, and points
+    /// clamped to its range.
+    pub rate_limited: usize,
+    pub clamped: usize,
+    /// Points whose tool does not touch the part within tolerance, and of
+    /// them those without any contact (the part may not match the program).
+    pub off_surface: usize,
+    pub no_contact: usize,
 }
 
 impl RunMeasures {
@@ -85,6 +93,10 @@ fn measure_targets(
         total_variation_n: s.indicators.total_variation,
         max_delta_n: s.indicators.max_step,
         time_s: t.total_s,
+        rate_limited: s.rate_limited,
+        clamped: s.clamped,
+        off_surface: s.gap_flagged,
+        no_contact: s.no_contact,
     };
     Ok((m, rows.iter().map(|r| r.n_target).collect()))
 }
@@ -565,13 +577,17 @@ fn fixed_candidates(pts: &[PathPoint], units: &[(usize, usize)]) -> Vec<(String,
 /// the weight of time that keeps the estimate within the time allowed. The
 /// best few plans are built and measured exactly, what they measure teaches
 /// the model, and it plans again (`ROUNDS` times). The best candidate worse
-/// than the original on no measure wins if it is better on one.
+/// than the original on no measure wins if it is better on one. `tick(done,
+/// total)` hears of every exact measurement (the original's too); the total is
+/// what the rounds could measure at most and is reported when the search ends
+/// earlier.
 pub(super) fn search(
     program: &Program,
     oi: usize,
     cx: &Context,
     links: &Links,
     jump: f64,
+    tick: &dyn Fn(usize, usize),
 ) -> Result<Search, SpeedError> {
     let Some(surface) = cx.surface() else {
         return Err(SpeedError::Invalid("the part surface is needed".into()));
@@ -583,6 +599,17 @@ pub(super) fn search(
         units: program.units,
         operations: vec![op],
     };
+    let units = units(links.pts, jump);
+    let fixed = fixed_candidates(links.pts, &units);
+    let rounds = if links.pts.len() > 200_000 { 1 } else { ROUNDS };
+    // Exact measurements at most: the original, the fixed candidates, the plans.
+    let total = 1 + fixed.len() + rounds * PLANS_MEASURED;
+    let done = std::cell::Cell::new(0);
+    let count = || {
+        done.set(done.get() + 1);
+        tick(done.get(), total);
+    };
+    tick(0, total);
     let (base, base_targets) = measure_targets(
         &single(links.op.clone()),
         surface,
@@ -590,6 +617,7 @@ pub(super) fn search(
         &p.speed,
         true,
     )?;
+    count();
     let dw_of = |t: &[f64]| -> Vec<f64> {
         t.iter()
             .map(|n| 1000.0 * p.speed.vc / (std::f64::consts::PI * n))
@@ -601,7 +629,6 @@ pub(super) fn search(
         measures: base,
         admissible: true,
     }];
-    let units = units(links.pts, jump);
     // Measures a candidate exactly: built with its links, spindle control
     // applied; the targets of its points in cutting order.
     let mut best: Option<(f64, Vec<usize>, Built, Vec<f64>)> = None;
@@ -610,6 +637,7 @@ pub(super) fn search(
         let built = links.build(&order, &[], LinkStyle::Low);
         let op = links.operation(built.moves.clone(), Method::AsRun);
         let (m, t) = measure_targets(&single(op), surface, &cx.machine, &p.speed, true)?;
+        count();
         let admissible = m.not_worse_than(&base, p.time_slack);
         let score = m.score(&base);
         if admissible && better(&m, &base) && best.as_ref().is_none_or(|b| score < b.0) {
@@ -623,7 +651,6 @@ pub(super) fn search(
         });
         Ok::<_, SpeedError>(t)
     };
-    let fixed = fixed_candidates(links.pts, &units);
     let mut target: [Vec<f64>; 4] = Default::default();
     let mut measured = Vec::new();
     for (i, (name, steps)) in fixed.iter().enumerate() {
@@ -650,7 +677,6 @@ pub(super) fn search(
         model.learn(steps, t);
     }
     let window = window(&model, links.pts);
-    let rounds = if links.pts.len() > 200_000 { 1 } else { ROUNDS };
     let mut seen: Vec<Vec<Step>> = measured.into_iter().map(|m| m.0).collect();
     for _ in 0..rounds {
         let mut plans = plans(&model, &units, &base, window);
@@ -665,6 +691,7 @@ pub(super) fn search(
             seen.push(steps);
         }
     }
+    tick(total, total);
     Ok(Search {
         verdict: if best.is_some() {
             Verdict::Improved
@@ -1009,5 +1036,108 @@ mod tests {
         let (before, after, verdict) = check_program(&Plate, prog, &Machine::default());
         assert_eq!(verdict, Verdict::Kept, "{before:?}");
         assert_eq!(before, after);
+    }
+
+    /// Every report the progress hook heard: (phase, done, total).
+    type Heard = std::sync::Mutex<Vec<(String, usize, usize)>>;
+
+    /// Runs the reorder pass through the pipeline with a hook that records
+    /// what it hears; checks each phase's counts only grow and end at its
+    /// total, and returns the phases in the order they began.
+    fn phases_heard(method: Method, heard: &Heard) -> (Vec<String>, super::super::Outcome) {
+        let (prog, _) = raster(
+            &Shape::Wave,
+            &Raster {
+                stepover: 2.0,
+                step: 1.0,
+                ..Raster::default()
+            },
+        );
+        let mesh = tessellate(&Shape::Wave, 0.5);
+        let hook = |phase: &str, done: usize, total: usize| {
+            heard
+                .lock()
+                .expect("lock")
+                .push((phase.to_string(), done, total));
+        };
+        let cx = crate::pipeline::Context::new(Machine::default())
+            .with_part(&mesh)
+            .with_progress(&hook);
+        let mut pass = super::super::ReorderPass::new(ReorderParams { method, ..params() });
+        let mut p = prog.clone();
+        crate::pipeline::run(&mut [&mut pass], &mut p, &cx).expect("reorders");
+        let heard = heard.lock().expect("lock").clone();
+        let mut phases: Vec<String> = Vec::new();
+        for (phase, _, _) in &heard {
+            if phases.last() != Some(phase) {
+                assert!(!phases.contains(phase), "{phase} began twice: {heard:?}");
+                phases.push(phase.clone());
+            }
+        }
+        for phase in &phases {
+            let counts: Vec<(usize, usize)> = heard
+                .iter()
+                .filter(|h| &h.0 == phase)
+                .map(|h| (h.1, h.2))
+                .collect();
+            let total = counts[0].1;
+            assert!(total > 0, "{phase}");
+            assert!(counts.iter().all(|c| c.1 == total), "{phase}: {counts:?}");
+            assert!(
+                counts.windows(2).all(|w| w[0].0 <= w[1].0),
+                "{phase} went back: {counts:?}"
+            );
+            assert_eq!(counts.last().map(|c| c.0), Some(total), "{phase}");
+        }
+        (phases, pass.outcome.expect("an outcome"))
+    }
+
+    #[test]
+    fn progress_hook_hears_every_phase_grow_to_its_total() {
+        let heard = Heard::default();
+        let (phases, o) = phases_heard(Method::AsRun, &heard);
+        assert_eq!(
+            phases,
+            [
+                "reorder: candidate orders measured",
+                "reorder: both orders measured as run"
+            ]
+        );
+        // One count per exact measurement: the original and every candidate.
+        let counts: Vec<usize> = heard
+            .lock()
+            .expect("lock")
+            .iter()
+            .filter(|h| h.0 == phases[0])
+            .map(|h| h.1)
+            .collect();
+        assert_eq!(
+            counts[..o.tried.len() + 1],
+            (0..=o.tried.len()).collect::<Vec<_>>()[..]
+        );
+        let heard = Heard::default();
+        let (phases, o) = phases_heard(Method::Paper, &heard);
+        assert_eq!(
+            phases,
+            [
+                "reorder: thesis search",
+                "reorder: links checked for gouges",
+                "reorder: D_w along both orders",
+                "reorder: both orders measured as run"
+            ]
+        );
+        // The search reports the points placed, then D_w along both orders.
+        let totals: Vec<usize> = heard.lock().expect("lock").iter().map(|h| h.2).collect();
+        assert_eq!(totals[0], o.before.points);
+        assert!(totals.contains(&(2 * o.before.points)));
+        let heard = Heard::default();
+        let (phases, _) = phases_heard(Method::Optimised, &heard);
+        assert_eq!(
+            phases[..2],
+            [
+                "reorder: 2-opt over the passes",
+                "reorder: links checked for gouges"
+            ]
+        );
     }
 }

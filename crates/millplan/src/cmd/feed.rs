@@ -332,6 +332,26 @@ fn feed_params(a: &Args, p: &Prepared) -> CliResult<FeedParams> {
     })
 }
 
+/// The dialect to write: --to, else the machine file's control (which the
+/// output's extension must not contradict), else the output's extension.
+fn feed_target(a: &Args, p: &Prepared) -> CliResult<millplan_nc::write::Target> {
+    Ok(match (a.to, p.machine.target()) {
+        (None, Some(t)) => {
+            let by_name = target_for(None, &a.output, p.program.source)?;
+            if by_name != t && a.output.extension().is_some() {
+                return Err(CliError::input(format!(
+                    "{}: the machine file says {} but the file name says {}: give --to",
+                    a.output.display(),
+                    t.name(),
+                    by_name.name()
+                )));
+            }
+            t
+        }
+        (to, _) => target_for(to, &a.output, p.program.source)?,
+    })
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     let m = &a.model;
     let mut inputs: Vec<&Path> = vec![&a.path];
@@ -349,26 +369,15 @@ pub fn run(a: Args) -> CliResult<i32> {
     let p = prepare(&a.path, m)?;
     let params = feed_params(&a, &p)?;
     let limits = params.limits;
-    let target = match (a.to, p.machine.target()) {
-        (None, Some(t)) => {
-            let by_name = target_for(None, &a.output, p.program.source)?;
-            if by_name != t && a.output.extension().is_some() {
-                return Err(CliError::input(format!(
-                    "{}: the machine file says {} but the file name says {}: give --to",
-                    a.output.display(),
-                    t.name(),
-                    by_name.name()
-                )));
-            }
-            t
-        }
-        (to, _) => target_for(to, &a.output, p.program.source)?,
-    };
+    let target = feed_target(&a, &p)?;
     let mut out = p.program.clone();
     let mut pass = FeedPass::new(params, p.stock.clone(), body_fn(m)?);
-    let cx = Context::new(p.machine.clone());
-    pipeline::run(&mut [&mut pass], &mut out, &cx)
-        .map_err(|e| crate::cmd::pass_error(&a.path, e))?;
+    let bar = crate::progress::Phases::new(!(m.quiet || m.json));
+    let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
+    let cx = Context::new(p.machine.clone()).with_progress(&hook);
+    let ran = pipeline::run(&mut [&mut pass], &mut out, &cx);
+    bar.finish();
+    ran.map_err(|e| crate::cmd::pass_error(&a.path, e))?;
     let (Some(before), Some(changes)) = (pass.before.take(), pass.changes.take()) else {
         return Err(CliError::internal("the feed pass left no result"));
     };
@@ -563,6 +572,7 @@ pub fn force_notes(v: &serde_json::Value) -> millplan_report::html::Notes {
     let f = |a: &str, b: &str| v[a][b].as_f64().unwrap_or(0.0);
     millplan_report::html::Notes {
         warnings: load_warnings(v, "over_limit", "over_limit_lines"),
+        inputs: Vec::new(),
         verdict: vec![format!(
             "Largest loads: F_xy {:.1} N (line {}), torque {:.1} N·mm (line {}), power {:.1} W (line {}), tip deflection {:.4} mm (line {}), over {:.1} s of program.",
             f("max", "fxy"),
@@ -613,6 +623,7 @@ fn feed_notes(v: &serde_json::Value) -> millplan_report::html::Notes {
     millplan_report::html::Notes {
         warnings: load_warnings(v, "over_limit_after", "over_limit_lines"),
         verdict,
+        inputs: Vec::new(),
     }
 }
 

@@ -5,10 +5,13 @@ use crate::cmd::{print_diagnostics, read_options, target_for, write_program, Tar
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
 use clap::ValueEnum;
+use millplan_nc::Program;
+use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context, Pass};
+use millplan_plan::reorder::Outcome;
 use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Start, Verdict};
 use millplan_plan::speed::SpeedPass;
-use millplan_report::reorder::reorder_report;
+use millplan_report::reorder::{reorder_report, ReorderInputs};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -144,19 +147,19 @@ pub fn run(a: Args) -> CliResult<i32> {
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = target_for(a.to, &a.output, parsed.program.source)?;
     let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
-    let cx = Context::new(machine).with_part(&mesh);
     let mut program = parsed.program.clone();
+    // Some 100,000 points a second at the least: from there it takes a while.
+    let bar = crate::progress::Phases::new(!a.quiet && program.move_count() >= 100_000);
+    let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
+    let cx = Context::new(machine).with_part(&mesh).with_progress(&hook);
     let mut reorder = ReorderPass::new(params(&a));
     let mut speed = SpeedPass::new(a.cut.params());
     let mut passes: Vec<&mut dyn Pass> = vec![&mut reorder];
     if !a.no_speed {
         passes.push(&mut speed);
     }
-    // Some 100,000 points a second at the least: from there it takes a while.
-    let show = !a.quiet && program.move_count() >= 100_000;
-    let bar = crate::progress::spinner("reordering", show);
     let ran = pipeline::run(&mut passes, &mut program, &cx);
-    bar.finish_and_clear();
+    bar.finish();
     ran.map_err(|e| crate::cmd::pass_error(&a.path, e))?;
     let Some(o) = reorder.outcome else {
         return Err(CliError::internal("the reorder pass left no outcome"));
@@ -164,7 +167,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let out = write_program(&program, cx.machine.write_options(target), &a.path, a.quiet)?;
     outputs.write(&a.output, &out)?;
     if let Some(path) = &a.report {
-        let html = reorder_report(&parsed.program, &program, &o, a.cut.vc);
+        let html = report(&a, (&parsed.program, &program), &o, &cx.machine, &mesh);
         outputs.write(path, html.as_bytes())?;
     }
     outputs.commit()?;
@@ -195,6 +198,32 @@ pub fn run(a: Args) -> CliResult<i32> {
         }
     }
     Ok(EXIT_OK)
+}
+
+/// The HTML report: the inputs, warnings (the part's mesh defects, points
+/// off the part, a spindle that cannot follow), the verdict and both orders.
+fn report(
+    a: &Args,
+    (original, reordered): (&Program, &Program),
+    o: &Outcome,
+    machine: &Machine,
+    mesh: &millplan_geom::TriMesh,
+) -> String {
+    let findings: Vec<_> = millplan_plan::checks::mesh(mesh).into_iter().collect();
+    let run = crate::cmd::speed::report_inputs(
+        (&a.path, original),
+        &a.stl,
+        machine,
+        a.cut,
+        &findings,
+        [o.before.as_run.time_s, o.after.as_run.time_s],
+    );
+    let method = a
+        .method
+        .to_possible_value()
+        .map(|v| v.get_name().to_string())
+        .unwrap_or_default();
+    reorder_report(original, reordered, o, &ReorderInputs { run, method })
 }
 
 fn params(a: &Args) -> ReorderParams {

@@ -269,18 +269,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         outputs.write(out, &bytes)?;
     }
     if let Some(path) = &a.report {
-        let mode = a
-            .tool
-            .as_deref()
-            .map_or("line of sight".to_string(), |t| format!("tool {t}"));
-        let html = millplan_report::setup::setup_report(
-            &a.stl.display().to_string(),
-            &mode,
-            a.clearance,
-            &mesh,
-            &plan,
-            &machine,
-        );
+        let html = report(&a, &mesh, &plan, &machine);
         outputs.write(path, html.as_bytes())?;
     }
     outputs.commit()?;
@@ -295,6 +284,35 @@ pub fn run(a: Args) -> CliResult<i32> {
     } else {
         EXIT_FINDINGS
     })
+}
+
+/// The HTML report, with the part's mesh defects and its winding among the
+/// warnings.
+fn report(
+    a: &Args,
+    mesh: &millplan_geom::TriMesh,
+    plan: &SetupPlan,
+    machine: &Kinematics,
+) -> String {
+    let mut warnings: Vec<String> = millplan_plan::checks::mesh(mesh)
+        .into_iter()
+        .map(|d| d.message)
+        .collect();
+    if plan.flipped {
+        warnings.push(
+            "the facets were wound inward (negative volume) and were turned outward".to_string(),
+        );
+    }
+    let i = millplan_report::setup::SetupInputs {
+        part: a.stl.display().to_string(),
+        mode: a
+            .tool
+            .as_deref()
+            .map_or("line of sight".to_string(), |t| format!("tool {t}")),
+        clearance_deg: a.clearance,
+        warnings,
+    };
+    millplan_report::setup::setup_report(&i, mesh, plan, machine)
 }
 
 fn print_json(a: &Args, s: &Summary, machine: &Kinematics, secs: f64) {

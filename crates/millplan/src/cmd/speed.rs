@@ -233,15 +233,20 @@ pub fn run(a: Args) -> CliResult<i32> {
     let parsed = parsed?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = target(&a, &machine, parsed.program.source)?;
-    let cx = Context::new(machine).with_surface(surface);
+    let bar = crate::progress::Phases::new(!a.quiet && parsed.program.move_count() >= 100_000);
+    let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
+    let cx = Context::new(machine)
+        .with_surface(surface)
+        .with_progress(&hook);
     cx.record("read STL", t_mesh);
     cx.record("surface (BVH, vertex normals)", t_surface);
     cx.record("read toolpath (beside the two above)", t_read);
     let mut program = parsed.program;
     let time_before = millplan_plan::timing::estimate_program(&program, &cx.machine).total_s;
     let mut pass = SpeedPass::new(params(&a));
-    pipeline::run(&mut [&mut pass], &mut program, &cx)
-        .map_err(|e| crate::cmd::pass_error(&a.path, e))?;
+    let ran = pipeline::run(&mut [&mut pass], &mut program, &cx);
+    bar.finish();
+    ran.map_err(|e| crate::cmd::pass_error(&a.path, e))?;
     let Some(summary) = pass.summary.take() else {
         return Err(CliError::internal("the speed pass left no summary"));
     };
