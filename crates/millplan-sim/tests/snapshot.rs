@@ -133,8 +133,8 @@ fn crops_along_a_run_are_the_simulators_at_those_strokes() {
         )
     };
     let picks = [0usize, 5, 13, 14, 30, 36, 43];
-    let window = |_: &Stock, s: &Stroke| {
-        let c = s.p1.truncate();
+    let window = |_: &Stock, i: usize| {
+        let c = list[picks[i]].p1.truncate();
         (c - DVec2::splat(4.0), c + DVec2::splat(4.0))
     };
     let mut stock = block();
@@ -142,12 +142,12 @@ fn crops_along_a_run_are_the_simulators_at_those_strokes() {
     assert_eq!(crops.len(), picks.len());
     let mut sim = Simulator::new(block());
     let mut at = 0;
-    for (k, crop) in picks.iter().zip(&crops) {
+    for (n, (k, crop)) in picks.iter().zip(&crops).enumerate() {
         while at < *k {
             sim.step(&list[at], &tool);
             at += 1;
         }
-        let (lo, hi) = window(&sim.stock, &list[*k]);
+        let (lo, hi) = window(&sim.stock, n);
         let want = sim.stock.crop(lo, hi);
         assert_eq!(want.grid, crop.grid);
         let mut worst = 0.0f64;

@@ -9,28 +9,29 @@
 //! the one before; that changes only how its volume is counted (its start
 //! cap is removed again, where there is no material left), never the stock.
 
-use super::path::{Stroke, Strokes};
+use super::path::Strokes;
 use super::sim::simulate;
 use super::Stock;
 use millplan_geom::DVec2;
 
 /// Runs `strokes` over `stock` up to the last of `picks` (stroke indices,
 /// ascending, no repeats) and returns, for each pick, the cells of the stock
-/// within `window(stock, stroke)` as they are just before that stroke.
+/// within `window(stock, i)` (i the pick's place in `picks`) as they are
+/// just before that stroke.
 /// `stock` is left as it is before the last pick. `progress(done)` counts
 /// strokes.
 pub fn crops_before(
     stock: &mut Stock,
     strokes: &Strokes,
     picks: &[usize],
-    window: impl Fn(&Stock, &Stroke) -> (DVec2, DVec2),
+    window: impl Fn(&Stock, usize) -> (DVec2, DVec2),
     progress: &(dyn Fn(usize) + Sync),
 ) -> Vec<Stock> {
     debug_assert!(picks.windows(2).all(|w| w[0] < w[1]));
     let list = &strokes.strokes;
     let mut out = Vec::with_capacity(picks.len());
     let mut at = 0;
-    for &k in picks {
+    for (i, &k) in picks.iter().enumerate() {
         let k = k.min(list.len().saturating_sub(1));
         if k > at {
             let part = Strokes {
@@ -43,7 +44,7 @@ pub fn crops_before(
             simulate(stock, &part, &|d| progress(base + d));
             at = k;
         }
-        let (lo, hi) = window(stock, &list[k]);
+        let (lo, hi) = window(stock, i);
         out.push(stock.crop(lo, hi));
     }
     progress(at);
