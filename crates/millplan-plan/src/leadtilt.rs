@@ -369,18 +369,7 @@ pub fn choose_with(
                     let j = stock::judge(&model, ss, &points, r, flute_of(r), p, l, t);
                     Some((j.fxy, j.tip > 0))
                 }
-                None => {
-                    let eng =
-                        PlanarRaster::new(&tool, p.ap, Some(p.ae), l.to_radians(), t.to_radians())
-                            .ok()?;
-                    let cut = Cut {
-                        fz: p.fz,
-                        rpm: p.rpm,
-                        lead: l.to_radians(),
-                        tilt: t.to_radians(),
-                    };
-                    Some((model.evaluate(&cut, &eng).summary().fxy_max, false))
-                }
+                None => planar_fxy(&model, p, l, t).map(|f| (f, false)),
             }
         };
         let fxy = |l: f64, t: f64| judge(l, t).map(|j| j.0);
@@ -533,6 +522,29 @@ pub fn choose_with(
         chosen,
         skipped,
     })
+}
+
+/// The force model's lead and tilt (process-models §0: R_wt = Rx(T)·Ry(L),
+/// the axis (sin L, −sin T·cos L, cos T·cos L) in the FCN frame), radians,
+/// of the axis at (lead, tilt) in degrees of variant `v` of
+/// kinematics-access-tools §2.2 (whose tilt leans the axis towards +c).
+pub fn force_angles(lead: f64, tilt: f64, v: Variant) -> (f64, f64) {
+    let a = v.axis(lead, tilt);
+    (a.x.clamp(-1.0, 1.0).asin(), (-a.y).atan2(a.z))
+}
+
+/// F_xy,max of the planar raster pass of `p.ap`, `p.ae` with the tool at
+/// (lead, tilt) in degrees of `p.variant`: the axis the choice writes.
+fn planar_fxy(model: &ForceModel, p: &Params, lead: f64, tilt: f64) -> Option<f64> {
+    let (l, t) = force_angles(lead, tilt, p.variant);
+    let eng = PlanarRaster::new(&model.tool, p.ap, Some(p.ae), l, t).ok()?;
+    let cut = Cut {
+        fz: p.fz,
+        rpm: p.rpm,
+        lead: l,
+        tilt: t,
+    };
+    Some(model.evaluate(&cut, &eng).summary().fxy_max)
 }
 
 /// Puts the tool at (lead, tilt) at every located point of `op`, the ball
@@ -726,6 +738,25 @@ mod tests {
             o.skipped
         );
         assert_eq!(o.program, program());
+    }
+
+    /// The force model's (L, T) of a variant's (lead, tilt) is the same
+    /// tool axis: R_wt(L, T)·z (process-models §0) equals the variant's
+    /// axis (kinematics-access-tools §2.2), so the planar pass is evaluated
+    /// for the orientation that is written.
+    #[test]
+    fn force_angles_give_the_written_axis() {
+        for v in [Variant::LeadThenTilt, Variant::TiltThenLead] {
+            for (l, t) in [(10.0, 24.5), (30.0, -10.0), (0.0, 15.0), (5.0, 0.0)] {
+                let (fl, ft) = force_angles(l, t, v);
+                let m = millplan_models::force::r_wt(fl, ft);
+                let z = DVec3::new(m[0][2], m[1][2], m[2][2]);
+                assert!((z - v.axis(l, t)).length() < 1e-12, "{v:?} ({l}, {t}): {z}");
+            }
+        }
+        // Variant 2 is the force model's with the tilt's sign turned.
+        let (fl, ft) = force_angles(12.0, 7.0, Variant::TiltThenLead);
+        assert!((fl.to_degrees() - 12.0).abs() < 1e-12 && (ft.to_degrees() + 7.0).abs() < 1e-12);
     }
 
     /// A wall beside the path: leaning the holder into it collides, so the
