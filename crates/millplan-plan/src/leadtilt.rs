@@ -39,7 +39,7 @@ use millplan_nc::ir::{known, CutterKind, Orient, Program};
 use rayon::prelude::*;
 
 mod stock;
-pub use stock::StockInput;
+pub use stock::{StockInput, MAX_CROP_BYTES};
 
 /// Where the engagement of the forces comes from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -166,6 +166,9 @@ pub struct OpChoice {
     /// the memory their stock crops hold, bytes.
     pub samples: usize,
     pub sample_bytes: usize,
+    /// Samples whose stock window was narrowed to the memory budget
+    /// ([`StockInput::max_bytes`]).
+    pub clipped_samples: usize,
 }
 
 /// An operation left as it was, and why.
@@ -514,6 +517,9 @@ pub fn choose_with(
             },
             samples: op_samples.as_ref().map_or(0, |s| s.len()),
             sample_bytes: op_samples.as_deref().map_or(0, stock::bytes),
+            clipped_samples: op_samples
+                .as_ref()
+                .map_or(0, |s| s.iter().filter(|x| x.clipped).count()),
         });
     }
     progress(Stage::Operations, total, total);

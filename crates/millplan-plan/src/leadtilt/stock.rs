@@ -25,7 +25,10 @@
 //! above it and at most R + h·sin θ from it across; the crop's half-width is
 //! R + h·sin θ for the largest h at which the flutes can still reach the
 //! highest material near the ball, so a finishing cut keeps about the ball's
-//! footprint: (2R/res)² cells.
+//! footprint: (2R/res)² cells. All crops together hold at most
+//! [`StockInput::max_bytes`] (by default [`MAX_CROP_BYTES`]): a window that would take more than its share is
+//! narrowed to it (never below the ball's footprint), and the sample says it
+//! was clipped (flutes high above the ball may then miss material).
 
 use super::Point;
 use crate::force::StockEngagement;
@@ -35,8 +38,11 @@ use millplan_models::force::{Cut, ForceModel};
 use millplan_sim::stock::path::Strokes;
 use millplan_sim::stock::sim::{per_move, simulate, CUT_EPS};
 use millplan_sim::stock::snapshot::crops_before;
-use millplan_sim::stock::Stock;
+use millplan_sim::stock::{Stock, BYTES_PER_CELL};
 use rayon::prelude::*;
+
+/// The most memory the crops of all samples hold together, bytes.
+pub const MAX_CROP_BYTES: usize = 256 << 20;
 
 /// The stock and the strokes of the program it is cut by.
 pub struct StockInput<'a> {
@@ -48,6 +54,8 @@ pub struct StockInput<'a> {
     pub strokes: &'a Strokes,
     /// Most sample moves per operation.
     pub samples: usize,
+    /// The most memory the samples' crops may hold together, bytes.
+    pub max_bytes: usize,
 }
 
 /// One sample move: the stock around it before it, and how it moves.
@@ -57,6 +65,8 @@ pub(super) struct Sample {
     /// The ball centre's direction of travel on the move's last stroke.
     pub feed: DVec3,
     pub crop: Stock,
+    /// The window was narrowed to the memory budget.
+    pub clipped: bool,
 }
 
 /// What an operation's samples say about one candidate.
@@ -126,12 +136,24 @@ pub(super) fn sample(
     picks.dedup_by_key(|p| p.0);
     let stroke_ix: Vec<usize> = picks.iter().map(|p| p.0).collect();
     let res = input.stock.grid.res;
+    // The widest window a sample's share of the budget allows.
+    let share = input.max_bytes as f64 / picks.len().max(1) as f64;
+    let widest = 0.5 * res * ((share / BYTES_PER_CELL).sqrt() - 2.0).max(0.0);
+    let clipped: Vec<std::cell::Cell<bool>> = picks.iter().map(|_| Default::default()).collect();
     let window = |stock: &Stock, i: usize| {
         let (_, oi, k) = picks[i];
         let q = &points[oi][k];
         let theta = (q.frame.n.z.clamp(-1.0, 1.0).acos() + cone_deg.to_radians())
             .min(std::f64::consts::FRAC_PI_2);
-        crop_window(stock, q.centre, radius[oi], reach[oi], theta, res)
+        let (lo, hi) = crop_window(stock, q.centre, radius[oi], reach[oi], theta, res);
+        let w = 0.5 * (hi.x - lo.x);
+        let cap = widest.max(radius[oi] + 2.0 * res);
+        if w > cap {
+            clipped[i].set(true);
+            let c = q.centre.truncate();
+            return (c - DVec2::splat(cap), c + DVec2::splat(cap));
+        }
+        (lo, hi)
     };
     let mut stock = input.stock;
     let last = stroke_ix.last().copied().unwrap_or(0);
@@ -140,7 +162,7 @@ pub(super) fn sample(
     });
     progress(2 * n, 2 * n);
     let mut out: Vec<Vec<Sample>> = points.iter().map(|_| Vec::new()).collect();
-    for ((k, oi, pi), crop) in picks.into_iter().zip(crops) {
+    for (((k, oi, pi), crop), clipped) in picks.into_iter().zip(crops).zip(clipped) {
         let s = &strokes.strokes[k];
         let r = radius[oi];
         let d = (s.p1 + s.a1 * r) - (s.p0 + s.a0 * r);
@@ -154,6 +176,7 @@ pub(super) fn sample(
                 point: pi,
                 feed,
                 crop,
+                clipped: clipped.get(),
             });
         }
     }

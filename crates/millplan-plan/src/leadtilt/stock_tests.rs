@@ -110,6 +110,7 @@ fn sampled(
             stock,
             strokes: &st,
             samples,
+            max_bytes: MAX_CROP_BYTES,
         },
         &|_, _| {},
     );
@@ -258,6 +259,7 @@ fn a_deep_slot_chooses_otherwise_than_the_planar_pass() {
             stock: block(),
             strokes: &st,
             samples: 32,
+            max_bytes: MAX_CROP_BYTES,
         }),
         &|_, _, _| {},
     )
@@ -289,6 +291,7 @@ fn a_deep_slot_chooses_otherwise_than_the_planar_pass() {
             stock: block(),
             strokes: &st,
             samples: 32,
+            max_bytes: MAX_CROP_BYTES,
         },
         &|_, _| {},
     );
@@ -315,4 +318,61 @@ fn a_deep_slot_chooses_otherwise_than_the_planar_pass() {
     let at = stock::judge(&model, &samples[0], &pts, R, 30.0, &pr, b.lead, b.tilt);
     assert!((at.fxy - b.objective_after).abs() < 1e-9 * at.fxy, "{at:?}");
     assert_eq!(at.tip, 0);
+}
+
+/// The crops' memory budget: with room for less than the ball's footprint
+/// per sample every window is narrowed to that footprint (never below it)
+/// and counted as clipped; the choice still runs, on the ball's material.
+#[test]
+fn crops_beyond_the_budget_are_narrowed_and_counted() {
+    let mut op = ball_op();
+    pass(&mut op, 0.0, -2.0);
+    let mut p = Program::new(Dialect::Fanuc);
+    p.operations.push(op);
+    let st = strokes_of(&p, 0.1);
+    let stock = || {
+        Stock::block(
+            DVec3::new(-20.0, -10.0, -6.0),
+            DVec3::new(20.0, 10.0, 8.0),
+            0.1,
+        )
+    };
+    let run = |max_bytes: usize| {
+        choose_with(
+            &p,
+            &plate(),
+            &Machine::default(),
+            &params(0.5, 0.5),
+            Some(StockInput {
+                stock: stock(),
+                strokes: &st,
+                samples: 8,
+                max_bytes,
+            }),
+            &|_, _, _| {},
+        )
+        .expect("runs")
+    };
+    // Material 10 mm over the ball's centre: the flutes reach it, the
+    // windows are wide.
+    let free = run(MAX_CROP_BYTES);
+    let c = &free.chosen[0];
+    assert_eq!(c.clipped_samples, 0, "{c:?}");
+    let tight = run(1000);
+    let t = &tight.chosen[0];
+    assert_eq!(t.samples, c.samples);
+    assert_eq!(t.clipped_samples, t.samples, "{t:?}");
+    // Each crop is the ball's footprint widened by two cells: (2·5.2/0.1
+    // + 1)² cells at most.
+    let per = t.sample_bytes / t.samples;
+    assert!(
+        t.sample_bytes < c.sample_bytes,
+        "{} vs {}",
+        t.sample_bytes,
+        c.sample_bytes
+    );
+    assert!(
+        per as f64 <= 106.0 * 106.0 * millplan_sim::stock::BYTES_PER_CELL * 1.1,
+        "{per}"
+    );
 }

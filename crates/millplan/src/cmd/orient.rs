@@ -325,6 +325,7 @@ pub fn run(a: Args) -> CliResult<i32> {
                 stock,
                 strokes: st,
                 samples: a.samples,
+                max_bytes: millplan_plan::leadtilt::MAX_CROP_BYTES,
             })
         }
         _ => None,
