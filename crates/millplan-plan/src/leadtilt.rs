@@ -18,7 +18,7 @@
 //! The engagement the forces are evaluated for is either one planar raster
 //! pass of `--ap`/`--ae` per operation (the `cut` model, process-models
 //! §1.4a) or, given the stock ([`StockInput`]), the simulated stock at
-//! sample moves of the operation ([`stock`] says how they are chosen and
+//! sample moves of the operation (`leadtilt/stock.rs` says how they are chosen and
 //! kept); the objective is then the largest F_xy,max over the samples.
 //!
 //! Lead and tilt are taken in each point's FCN frame (kinematics-access-
