@@ -266,6 +266,56 @@ fn program_strokes(p: &millplan_nc::Program, res: f64, rapid: f64) -> Strokes {
     )
 }
 
+/// The program's first cutting spindle speed (for a run without --n).
+fn first_spindle(path: &Path, p: &millplan_nc::Program) -> CliResult<f64> {
+    p.moves()
+        .find(|m| m.is_cutting() && m.spindle > 0.0)
+        .map(|m| m.spindle)
+        .ok_or_else(|| {
+            CliError::input(format!(
+                "{}: the program sets no spindle speed; give --n",
+                path.display()
+            ))
+        })
+}
+
+/// The initial stock and the strokes that cut it, for the choice; a note
+/// on the moves the stock does not see.
+fn stock_input<'a>(
+    a: &Args,
+    spec: &StockSpec,
+    st: &'a Strokes,
+    mesh: &millplan_geom::TriMesh,
+) -> CliResult<StockInput<'a>> {
+    if st.strokes.iter().all(|x| x.rapid) {
+        return Err(CliError::input(format!(
+            "{}: no cutting move can be simulated for --stock (no operation's tool has a shape, or every move is from or to an unknown position)",
+            a.path.display()
+        )));
+    }
+    let unsimulated = st.skipped.total();
+    if unsimulated > 0 && !(a.quiet || a.json) {
+        eprintln!(
+            "{}: note: {unsimulated} moves are not simulated (their tool has no shape, or their position or axis is unknown): the stock does not see them",
+            a.path.display()
+        );
+    }
+    let stock = crate::cmd::simulate::initial_stock(
+        &a.path,
+        a.resolution,
+        spec,
+        st,
+        Some(mesh),
+        a.stl_units,
+    )?;
+    Ok(StockInput {
+        stock,
+        strokes: st,
+        samples: a.samples,
+        max_bytes: millplan_plan::leadtilt::MAX_CROP_BYTES,
+    })
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     let (mut p, n) = params(&a)?;
     let spec = stock_spec(&a)?;
@@ -280,54 +330,15 @@ pub fn run(a: Args) -> CliResult<i32> {
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = target_for(a.to, &a.output, parsed.program.source)?;
     if n <= 0.0 {
-        p.rpm = parsed
-            .program
-            .moves()
-            .find(|m| m.is_cutting() && m.spindle > 0.0)
-            .map(|m| m.spindle)
-            .ok_or_else(|| {
-                CliError::input(format!(
-                    "{}: the program sets no spindle speed; give --n",
-                    a.path.display()
-                ))
-            })?;
+        p.rpm = first_spindle(&a.path, &parsed.program)?;
     }
     let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
-    let show = !(a.quiet || a.json);
     let st = spec
         .as_ref()
         .map(|_| program_strokes(&parsed.program, a.resolution, machine.rapid));
-    let mut unsimulated = 0;
+    let unsimulated = st.as_ref().map_or(0, |s| s.skipped.total());
     let input = match (&spec, &st) {
-        (Some(spec), Some(st)) => {
-            if st.strokes.iter().all(|x| x.rapid) {
-                return Err(CliError::input(format!(
-                    "{}: no cutting move can be simulated for --stock (no operation's tool has a shape, or every move is from or to an unknown position)",
-                    a.path.display()
-                )));
-            }
-            unsimulated = st.skipped.total();
-            if unsimulated > 0 && show {
-                eprintln!(
-                    "{}: note: {unsimulated} moves are not simulated (their tool has no shape, or their position or axis is unknown): the stock does not see them",
-                    a.path.display()
-                );
-            }
-            let stock = crate::cmd::simulate::initial_stock(
-                &a.path,
-                a.resolution,
-                spec,
-                st,
-                Some(&mesh),
-                a.stl_units,
-            )?;
-            Some(StockInput {
-                stock,
-                strokes: st,
-                samples: a.samples,
-                max_bytes: millplan_plan::leadtilt::MAX_CROP_BYTES,
-            })
-        }
+        (Some(spec), Some(st)) => Some(stock_input(&a, spec, st, &mesh)?),
         _ => None,
     };
     let total = parsed.program.operations.len() as u64;
