@@ -4,14 +4,22 @@
 //! with the feed scheduled to the original force level — found by the grid
 //! and steepest descent of [`millplan_models::leadtilt::search`], subject to
 //!
-//! * tip contact (process-models §1.4c): a negative lead makes the
-//!   zero-speed tip cut; zero lead (within 0.01°) does when
-//!   R·(1 − cos T) < ap;
+//! * tip contact (process-models §1.4c): with the planar engagement, a
+//!   negative lead makes the zero-speed tip cut, and zero lead (within
+//!   0.01°) does when R·(1 − cos T) < ap; with the stock's engagement the
+//!   same rule on the lead the feed makes with the axis at each sample, the
+//!   tip cutting where it lies in the stock's material (`stock::judge`);
 //! * the shank and holder clear of the part at every point (the capsule
 //!   tests of the setup analysis, `millplan-sim` `access`; the shank may
 //!   come as near the part as the ball does at that point, so a program's
 //!   own overlap with the STL's chords is not a collision);
 //! * the machine's rotary limits (`Kinematics::reaches`).
+//!
+//! The engagement the forces are evaluated for is either one planar raster
+//! pass of `--ap`/`--ae` per operation (the `cut` model, process-models
+//! §1.4a) or, given the stock ([`StockInput`]), the simulated stock at
+//! sample moves of the operation (`leadtilt/stock.rs` says how they are chosen and
+//! kept); the objective is then the largest F_xy,max over the samples.
 //!
 //! Lead and tilt are taken in each point's FCN frame (kinematics-access-
 //! tools §2.1): n the part's normal at the contact (from the ball centre to
@@ -29,6 +37,28 @@ use millplan_models::force::{Cut, ForceModel, Grid};
 use millplan_models::leadtilt::{search, Fcn, SearchOptions, SearchResult, Variant};
 use millplan_nc::ir::{known, CutterKind, Orient, Program};
 use rayon::prelude::*;
+
+mod stock;
+pub use stock::{StockInput, MAX_CROP_BYTES};
+
+/// Where the engagement of the forces comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum EngagementSource {
+    /// One planar raster pass of `ap` and `ae` (process-models §1.4a).
+    Planar,
+    /// The simulated stock at sample moves (§1.4b).
+    Stock,
+}
+
+/// What the choice is busy with, for progress reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Simulating the stock and keeping the samples (strokes, twice).
+    Stock,
+    /// Choosing per operation.
+    Operations,
+}
 
 /// What to minimise.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -92,6 +122,8 @@ enum Constraint {
     Tip,
     Holder,
     Rotary,
+    /// Not a constraint: the engagement could not be modelled.
+    Unmodelled,
 }
 
 impl Refusals {
@@ -106,6 +138,7 @@ impl Refusals {
                 self.rotary_limits += 1;
                 self.rotary_limits_points += points;
             }
+            Constraint::Unmodelled => {}
         }
     }
 }
@@ -127,6 +160,15 @@ pub struct OpChoice {
     pub objective_after: f64,
     pub search: SearchResult,
     pub refused: Refusals,
+    /// The engagement the forces were evaluated for.
+    pub engagement: EngagementSource,
+    /// Sample moves of the stock's engagement (0 for the planar one), and
+    /// the memory their stock crops hold, bytes.
+    pub samples: usize,
+    pub sample_bytes: usize,
+    /// Samples whose stock window was narrowed to the memory budget
+    /// ([`StockInput::max_bytes`]).
+    pub clipped_samples: usize,
 }
 
 /// An operation left as it was, and why.
@@ -153,7 +195,7 @@ pub enum LeadTiltError {
 }
 
 /// One cutting point of an operation, located on the part.
-struct Point {
+pub(crate) struct Point {
     /// Index of the move.
     index: usize,
     centre: DVec3,
@@ -205,13 +247,32 @@ fn ball_radius(op: &millplan_nc::ir::Operation) -> Option<f64> {
     (ball && c.d > 0.0).then_some(c.d / 2.0)
 }
 
-/// Chooses lead and tilt for every ball-end operation of `program`.
+/// Chooses lead and tilt for every ball-end operation of `program`, the
+/// forces on the planar engagement.
 pub fn choose(
     program: &Program,
     mesh: &TriMesh,
     machine: &Machine,
     p: &Params,
     progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Oriented, LeadTiltError> {
+    choose_with(program, mesh, machine, p, None, &|stage, d, t| {
+        if stage == Stage::Operations {
+            progress(d, t)
+        }
+    })
+}
+
+/// Chooses lead and tilt for every ball-end operation of `program`, the
+/// forces on the stock's engagement when `stock` is given, else on the
+/// planar one.
+pub fn choose_with(
+    program: &Program,
+    mesh: &TriMesh,
+    machine: &Machine,
+    p: &Params,
+    stock: Option<StockInput>,
+    progress: &(dyn Fn(Stage, usize, usize) + Sync),
 ) -> Result<Oriented, LeadTiltError> {
     let ok = |v: f64| v.is_finite() && v > 0.0;
     if !(ok(p.fz) && ok(p.rpm) && ok(p.ap) && ok(p.ae) && ok(p.reach))
@@ -221,45 +282,100 @@ pub fn choose(
             "fz, rpm, ap, ae and the reach must be positive, the holder's size not negative".into(),
         ));
     }
+    if stock.as_ref().is_some_and(|s| s.samples == 0) {
+        return Err(LeadTiltError::Invalid(
+            "the stock's engagement needs at least one sample per operation".into(),
+        ));
+    }
     let bvh = Bvh::build(mesh);
     let mut out = program.clone();
     let mut chosen = Vec::new();
     let mut skipped = Vec::new();
     let total = program.operations.len();
+    let radius: Vec<Option<f64>> = program.operations.iter().map(ball_radius).collect();
+    let located: Vec<Vec<Point>> = program
+        .operations
+        .iter()
+        .zip(&radius)
+        .map(|(op, r)| r.map_or_else(Vec::new, |r| locate(op, r, mesh, &bvh)))
+        .collect();
+    let flute_of = |r: f64| p.reach.max(2.0 * r);
+    let mut samples = match stock {
+        Some(input) => {
+            // Every orientation asked about lies within this angle of the
+            // part's normal: the ranges' corners, and the program's own.
+            let read = located
+                .iter()
+                .enumerate()
+                .flat_map(|(oi, pts)| {
+                    let op = &program.operations[oi];
+                    pts.iter().map(move |q| {
+                        let axis = op.axis(&op.moves[q.index]).unwrap_or(DVec3::Z);
+                        axis.normalize_or(DVec3::Z).dot(q.frame.n)
+                    })
+                })
+                .fold(1.0f64, f64::min);
+            let s = &p.search;
+            let corner = |a: (f64, f64)| a.0.abs().max(a.1.abs()).to_radians();
+            let ranges = corner(s.lead).cos() * corner(s.tilt).cos();
+            let cone = ranges.min(read).clamp(-1.0, 1.0).acos().to_degrees();
+            let rs: Vec<f64> = radius.iter().map(|r| r.unwrap_or(0.0)).collect();
+            let reach: Vec<f64> = rs.iter().map(|r| flute_of(*r)).collect();
+            Some(stock::sample(
+                program,
+                &located,
+                &rs,
+                &reach,
+                cone,
+                input,
+                &|d, t| progress(Stage::Stock, d, t),
+            ))
+        }
+        None => None,
+    };
+    let mut located = located;
     for (oi, op) in program.operations.iter().enumerate() {
-        progress(oi, total);
+        progress(Stage::Operations, oi, total);
         let skip = |reason: &str| OpSkipped {
             operation: oi,
             reason: reason.into(),
         };
-        let Some(r) = ball_radius(op) else {
+        let Some(r) = radius[oi] else {
             skipped.push(skip("not a ball-end mill (or no cutter given)"));
             continue;
         };
-        let points = locate(op, r, mesh, &bvh);
+        let points = std::mem::take(&mut located[oi]);
         if points.is_empty() {
             skipped.push(skip("no cutting point touches the part"));
+            continue;
+        }
+        let op_samples = samples.as_mut().map(|s| std::mem::take(&mut s[oi]));
+        if op_samples.as_ref().is_some_and(|s| s.is_empty()) {
+            skipped.push(skip(
+                "no move that touches the part removes material from the stock",
+            ));
             continue;
         }
         let tool = Tool {
             shape: millplan_models::cutter::Shape::Ball { radius: r },
             flutes: p.flutes,
             helix: p.helix,
-            flute_length: p.reach.max(2.0 * r),
+            flute_length: flute_of(r),
         };
         let model =
             ForceModel::new(tool, p.law, Grid::default()).map_err(LeadTiltError::Invalid)?;
-        let fxy = |l: f64, t: f64| -> Option<f64> {
-            let eng =
-                PlanarRaster::new(&tool, p.ap, Some(p.ae), l.to_radians(), t.to_radians()).ok()?;
-            let cut = Cut {
-                fz: p.fz,
-                rpm: p.rpm,
-                lead: l.to_radians(),
-                tilt: t.to_radians(),
-            };
-            Some(model.evaluate(&cut, &eng).summary().fxy_max)
+        // F_xy,max at (l, t), and whether the stock's engagement reaches
+        // the tip (the planar one's tip rule is among the constraints).
+        let judge = |l: f64, t: f64| -> Option<(f64, bool)> {
+            match &op_samples {
+                Some(ss) => {
+                    let j = stock::judge(&model, ss, &points, r, flute_of(r), p, l, t);
+                    Some((j.fxy, j.tip > 0))
+                }
+                None => planar_fxy(&model, p, l, t).map(|f| (f, false)),
+            }
         };
+        let fxy = |l: f64, t: f64| judge(l, t).map(|j| j.0);
         let (lb, tb) = {
             let (mut sl, mut st) = (0.0, 0.0);
             for q in &points {
@@ -275,8 +391,12 @@ pub fn choose(
         let mut refused = Refusals::default();
         // The constraints at every point; the first that fails, with the
         // points where it does.
+        let planar = op_samples.is_none();
         let feasible = |l: f64, t: f64| -> Result<(), (Constraint, usize)> {
-            if l < -ZERO_LEAD || (l.abs() <= ZERO_LEAD && r * (1.0 - t.to_radians().cos()) < p.ap) {
+            if planar
+                && (l < -ZERO_LEAD
+                    || (l.abs() <= ZERO_LEAD && r * (1.0 - t.to_radians().cos()) < p.ap))
+            {
                 return Err((Constraint::Tip, 0));
             }
             let reach_fail = machine.kinematics().map_or(0, |k| {
@@ -327,20 +447,28 @@ pub fn choose(
             )
             .total_s
         };
-        let objective = |l: f64, t: f64| -> Option<f64> {
-            match p.objective {
-                Objective::Fxy => fxy(l, t),
+        // The objective, or the constraint (with its points) refusing it.
+        let objective = |l: f64, t: f64| -> Result<f64, (Constraint, usize)> {
+            feasible(l, t)?;
+            let f = match judge(l, t) {
+                Some((_, true)) => return Err((Constraint::Tip, 0)),
+                Some((f, false)) => f,
+                // No engagement to evaluate (a planar pass the tool cannot
+                // make): no value, no constraint to blame.
+                None => return Err((Constraint::Unmodelled, 0)),
+            };
+            Ok(match p.objective {
+                Objective::Fxy => f,
                 Objective::Time => {
-                    let f = fxy(l, t)?;
                     let scale = f_before.map_or(1.0, |b| b / f.max(1e-9));
-                    Some(time_of(l, t, scale))
+                    time_of(l, t, scale)
                 }
-            }
+            })
         };
-        let objective_before = feasible(lb, tb).ok().and_then(|_| objective(lb, tb));
+        let objective_before = objective(lb, tb).ok();
         let Some(res) = search(
-            |l, t| match feasible(l, t) {
-                Ok(()) => objective(l, t),
+            |l, t| match objective(l, t) {
+                Ok(v) => Some(v),
                 Err((c, n)) => {
                     refused.count(c, n);
                     None
@@ -382,14 +510,47 @@ pub fn choose(
             objective_after: res.value,
             search: res,
             refused,
+            engagement: if planar {
+                EngagementSource::Planar
+            } else {
+                EngagementSource::Stock
+            },
+            samples: op_samples.as_ref().map_or(0, |s| s.len()),
+            sample_bytes: op_samples.as_deref().map_or(0, stock::bytes),
+            clipped_samples: op_samples
+                .as_ref()
+                .map_or(0, |s| s.iter().filter(|x| x.clipped).count()),
         });
     }
-    progress(total, total);
+    progress(Stage::Operations, total, total);
     Ok(Oriented {
         program: out,
         chosen,
         skipped,
     })
+}
+
+/// The force model's lead and tilt (process-models §0: R_wt = Rx(T)·Ry(L),
+/// the axis (sin L, −sin T·cos L, cos T·cos L) in the FCN frame), radians,
+/// of the axis at (lead, tilt) in degrees of variant `v` of
+/// kinematics-access-tools §2.2 (whose tilt leans the axis towards +c).
+pub fn force_angles(lead: f64, tilt: f64, v: Variant) -> (f64, f64) {
+    let a = v.axis(lead, tilt);
+    (a.x.clamp(-1.0, 1.0).asin(), (-a.y).atan2(a.z))
+}
+
+/// F_xy,max of the planar raster pass of `p.ap`, `p.ae` with the tool at
+/// (lead, tilt) in degrees of `p.variant`: the axis the choice writes.
+fn planar_fxy(model: &ForceModel, p: &Params, lead: f64, tilt: f64) -> Option<f64> {
+    let (l, t) = force_angles(lead, tilt, p.variant);
+    let eng = PlanarRaster::new(&model.tool, p.ap, Some(p.ae), l, t).ok()?;
+    let cut = Cut {
+        fz: p.fz,
+        rpm: p.rpm,
+        lead: l,
+        tilt: t,
+    };
+    Some(model.evaluate(&cut, &eng).summary().fxy_max)
 }
 
 /// Puts the tool at (lead, tilt) at every located point of `op`, the ball
@@ -585,6 +746,25 @@ mod tests {
         assert_eq!(o.program, program());
     }
 
+    /// The force model's (L, T) of a variant's (lead, tilt) is the same
+    /// tool axis: R_wt(L, T)·z (process-models §0) equals the variant's
+    /// axis (kinematics-access-tools §2.2), so the planar pass is evaluated
+    /// for the orientation that is written.
+    #[test]
+    fn force_angles_give_the_written_axis() {
+        for v in [Variant::LeadThenTilt, Variant::TiltThenLead] {
+            for (l, t) in [(10.0, 24.5), (30.0, -10.0), (0.0, 15.0), (5.0, 0.0)] {
+                let (fl, ft) = force_angles(l, t, v);
+                let m = millplan_models::force::r_wt(fl, ft);
+                let z = DVec3::new(m[0][2], m[1][2], m[2][2]);
+                assert!((z - v.axis(l, t)).length() < 1e-12, "{v:?} ({l}, {t}): {z}");
+            }
+        }
+        // Variant 2 is the force model's with the tilt's sign turned.
+        let (fl, ft) = force_angles(12.0, 7.0, Variant::TiltThenLead);
+        assert!((fl.to_degrees() - 12.0).abs() < 1e-12 && (ft.to_degrees() + 7.0).abs() < 1e-12);
+    }
+
     /// A wall beside the path: leaning the holder into it collides, so the
     /// tilt towards the wall is refused.
     #[test]
@@ -607,3 +787,6 @@ mod tests {
         assert!(c.tilt < 20.0, "{c:?}");
     }
 }
+
+#[cfg(test)]
+mod stock_tests;

@@ -126,6 +126,99 @@ fn orient_leans_a_ball_on_a_flat_plate() {
     );
 }
 
+/// The raster of the plate test and its files.
+fn plate_raster(dir: &Path) -> (String, String) {
+    let (stl, apt) = (dir.join("plate.stl"), dir.join("raster.apt"));
+    plate(&stl);
+    let s = |p: &Path| p.to_str().expect("utf8").to_string();
+    let o = bin()
+        .args(["raster", "--stl", &s(&stl), "--tool", "ball:10"])
+        .args(["--stepover", "5", "--step", "2", "-o", &s(&apt)])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    (s(&stl), s(&apt))
+}
+
+/// With --stock the engagement is the simulated stock's (a block 0.5 mm
+/// over the plate, cut by the raster): the summary says so per operation
+/// with the samples' count and memory, the tip rule is judged on the
+/// stock's material (the vertical ball's tip lies in it: refused), and the
+/// choice leans forward.
+#[test]
+fn orient_on_the_stock_reports_its_engagement_and_samples() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let (stl, apt) = plate_raster(dir.path());
+    let out = dir.path().join("oriented.apt");
+    let o = bin()
+        .args(["orient", &apt, "--stl", &stl, "--material", "al7075"])
+        .args(["--n", "8000", "--stock", "box:-6,-6,-5,66,66,0.5"])
+        .args(["--resolution", "0.2", "--samples", "16", "--json", "-q"])
+        .args(["-o", out.to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(j["engagement"], "stock", "{j}");
+    assert_eq!(j["stock"], "box:-6,-6,-5,66,66,0.5");
+    assert_eq!(j["resolution_mm"], 0.2);
+    // The first move comes from a position the program does not give.
+    assert_eq!(j["unsimulated_moves"], 1);
+    let c = &j["operations"][0];
+    assert_eq!(c["engagement"], "stock", "{c}");
+    let n = c["samples"].as_u64().expect("samples");
+    assert!((1..=16).contains(&n), "{c}");
+    assert!(c["sample_bytes"].as_u64() > Some(0), "{c}");
+    assert!(c["objective_before"].is_null(), "{c}");
+    assert!(c["refused"]["tip_contact"].as_u64() > Some(0), "{c}");
+    assert!(c["lead"].as_f64() > Some(1.0), "{c}");
+    assert!(out.exists());
+    // The planar run says so too.
+    let o = bin()
+        .args(["orient", &apt, "--stl", &stl, "--material", "al7075"])
+        .args(["--n", "8000", "--json", "-q", "-o"])
+        .arg(dir.path().join("planar.apt"))
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(j["engagement"], "planar");
+    assert_eq!(j["operations"][0]["engagement"], "planar");
+    assert_eq!(j["operations"][0]["samples"], 0);
+    assert!(j["stock"].is_null() && j["resolution_mm"].is_null());
+}
+
+/// Bad --stock, --resolution or --samples: exit 2 with a message naming
+/// the option, nothing written.
+#[test]
+fn orient_stock_errors_exit_2() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let (stl, apt) = plate_raster(dir.path());
+    let out = dir.path().join("never.apt");
+    for (args, needle) in [
+        (vec!["--stock", "pyramid:3"], "--stock"),
+        (vec!["--stock", "box:1,2,3"], "--stock"),
+        (vec!["--stock", "box:auto:-1"], "--stock"),
+        (vec!["--stock", "stl:/no/such/blank.stl"], "blank.stl"),
+        (
+            vec!["--stock", "box:auto", "--resolution", "0"],
+            "--resolution",
+        ),
+        (vec!["--stock", "box:auto", "--samples", "0"], "--samples"),
+    ] {
+        let o = bin()
+            .args(["orient", &apt, "--stl", &stl, "--material", "al7075"])
+            .args(&args)
+            .args(["-q", "-o", out.to_str().expect("utf8")])
+            .output()
+            .expect("runs");
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?}");
+    }
+}
+
 #[path = "../../millplan-nc/tests/shared_data/mod.rs"]
 mod shared_data;
 

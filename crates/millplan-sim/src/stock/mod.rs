@@ -30,6 +30,7 @@ pub mod path;
 pub mod remaining;
 pub mod run;
 pub mod sim;
+pub mod snapshot;
 pub mod spec;
 pub mod tool;
 
@@ -498,6 +499,49 @@ impl Stock {
     /// Whether any cell has gaps.
     pub fn has_gaps(&self) -> bool {
         self.gaps.iter().any(|g| !g.is_empty())
+    }
+
+    /// A copy of the cells whose squares meet the rectangle `min`–`max`
+    /// (the same cells, heights and gaps; nothing outside). A rectangle
+    /// beside the grid gives one empty cell.
+    pub fn crop(&self, min: DVec2, max: DVec2) -> Stock {
+        let g = &self.grid;
+        let lo = |v: f64, o: f64, n: usize| (floor((v - o) / g.res).max(0.0) as usize).min(n);
+        let hi = |v: f64, o: f64, n: usize| (ceil((v - o) / g.res).max(0.0) as usize).min(n);
+        let (i0, i1) = (lo(min.x, g.x0, g.nx), hi(max.x, g.x0, g.nx));
+        let (j0, j1) = (lo(min.y, g.y0, g.ny), hi(max.y, g.y0, g.ny));
+        if i1 <= i0 || j1 <= j0 {
+            return Stock::empty(Grid {
+                x0: min.x,
+                y0: min.y,
+                res: g.res,
+                nx: 1,
+                ny: 1,
+            });
+        }
+        let grid = Grid {
+            x0: g.x0 + i0 as f64 * g.res,
+            y0: g.y0 + j0 as f64 * g.res,
+            res: g.res,
+            nx: i1 - i0,
+            ny: j1 - j0,
+        };
+        let mut s = Stock::empty(grid);
+        for j in j0..j1 {
+            let (src, dst) = (j * g.nx, (j - j0) * grid.nx);
+            s.top[dst..dst + grid.nx].copy_from_slice(&self.top[src + i0..src + i1]);
+            s.bot[dst..dst + grid.nx].copy_from_slice(&self.bot[src + i0..src + i1]);
+            let row = &self.gaps[j];
+            if !row.is_empty() {
+                s.gaps[j - j0] = row
+                    .iter()
+                    .filter(|(i, _)| (i0..i1).contains(&(**i as usize)))
+                    .map(|(i, v)| (*i - i0 as u32, v.clone()))
+                    .collect();
+            }
+        }
+        s.refresh_bmax();
+        s
     }
 
     /// A copy keeping every `step`-th cell in X and Y (for a lighter mesh).

@@ -6,7 +6,10 @@ use crate::cmd::{arg, print_diagnostics, read_options, target_for, Range, Target
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
 use millplan_models::leadtilt::{SearchOptions, Variant};
-use millplan_plan::leadtilt::{choose, Objective, Oriented, Params};
+use millplan_plan::leadtilt::{choose_with, Objective, Oriented, Params, Stage, StockInput};
+use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
+use millplan_sim::stock::spec::StockSpec;
+use millplan_sim::stock::tool::ToolBody;
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -23,6 +26,16 @@ use std::path::{Path, PathBuf};
 /// shank or holder meets the part at any point, or when the machine's rotary
 /// axes cannot reach it. Writes the re-oriented CL (tool axes on every
 /// point). Exit 3, nothing written, when no operation can be re-oriented.
+///
+/// With --stock the forces are evaluated on the engagement of the simulated
+/// stock instead of one planar pass of --ap and --ae: the program is run
+/// through the stock once as it is (a ball centre kept where the program has
+/// it removes the same material at any orientation), and at up to --samples
+/// moves per operation that remove material (the heaviest cuts, the rest
+/// spread along the operation) the stock before the move is kept around the
+/// ball; a candidate's F_xy,max is the largest at those moves, and its tip
+/// cuts where, with no lead of the feed against the axis, it lies in that
+/// material.
 #[derive(clap::Args)]
 pub struct Args {
     /// Program with ball-end operations (APT/CL or G-code).
@@ -77,6 +90,18 @@ pub struct Args {
     /// Stepover of that engagement, mm.
     #[arg(long, default_value_t = 0.5)]
     pub ae: f64,
+    /// Initial stock, for the engagement of the simulated stock instead of
+    /// --ap/--ae: box:auto or box:auto:MARGIN, box:X0,Y0,Z0,X1,Y1,Z1,
+    /// cylinder:auto or cylinder:auto:MARGIN, cylinder:CX,CY,Z0,Z1,D, stl:FILE
+    /// or offset:MM (the --stl part grown by MM), as in `millplan simulate`.
+    #[arg(long)]
+    pub stock: Option<String>,
+    /// Dexel size of the stock, mm.
+    #[arg(long, default_value_t = 0.1)]
+    pub resolution: f64,
+    /// Most sample moves per operation on the stock.
+    #[arg(long, default_value_t = 48)]
+    pub samples: usize,
     /// The shank's reach: from the ball centre to the holder's face, mm.
     #[arg(long, default_value_t = 30.0)]
     pub reach: f64,
@@ -203,37 +228,150 @@ fn params(a: &Args) -> CliResult<(Params, f64)> {
     ))
 }
 
+/// The checked stock options: the spec, when given.
+fn stock_spec(a: &Args) -> CliResult<Option<StockSpec>> {
+    arg(
+        "--resolution",
+        a.resolution,
+        Range::from(0.005, 100.0, "mm"),
+    )?;
+    if a.samples == 0 || a.samples > 4096 {
+        return Err(CliError::input("--samples: give 1 to 4096"));
+    }
+    a.stock
+        .as_deref()
+        .map(|s| StockSpec::parse(s).map_err(|e| CliError::input(format!("--stock {e}"))))
+        .transpose()
+}
+
+/// The strokes the stock is cut by: every operation whose cutter has a
+/// shape (its flutes up to the tool's height, else the whole tool).
+fn program_strokes(p: &millplan_nc::Program, res: f64, rapid: f64) -> Strokes {
+    strokes(
+        p,
+        |op: &millplan_nc::Operation| {
+            let c = op.tool.as_ref()?.cutter?;
+            let mut b = ToolBody::new(millplan_sim::shape_of(&c)?);
+            if c.h > 0.0 {
+                b.flute = c.h;
+            } else {
+                b.flute = 1e6;
+            }
+            Some(b)
+        },
+        &PathOptions {
+            chord: res / 4.0,
+            rapid_rate: rapid,
+        },
+    )
+}
+
+/// The program's first cutting spindle speed (for a run without --n).
+fn first_spindle(path: &Path, p: &millplan_nc::Program) -> CliResult<f64> {
+    p.moves()
+        .find(|m| m.is_cutting() && m.spindle > 0.0)
+        .map(|m| m.spindle)
+        .ok_or_else(|| {
+            CliError::input(format!(
+                "{}: the program sets no spindle speed; give --n",
+                path.display()
+            ))
+        })
+}
+
+/// The initial stock and the strokes that cut it, for the choice; a note
+/// on the moves the stock does not see.
+fn stock_input<'a>(
+    a: &Args,
+    spec: &StockSpec,
+    st: &'a Strokes,
+    mesh: &millplan_geom::TriMesh,
+) -> CliResult<StockInput<'a>> {
+    if st.strokes.iter().all(|x| x.rapid) {
+        return Err(CliError::input(format!(
+            "{}: no cutting move can be simulated for --stock (no operation's tool has a shape, or every move is from or to an unknown position)",
+            a.path.display()
+        )));
+    }
+    let unsimulated = st.skipped.total();
+    if unsimulated > 0 && !(a.quiet || a.json) {
+        eprintln!(
+            "{}: note: {unsimulated} moves are not simulated (their tool has no shape, or their position or axis is unknown): the stock does not see them",
+            a.path.display()
+        );
+    }
+    let stock = crate::cmd::simulate::initial_stock(
+        &a.path,
+        a.resolution,
+        spec,
+        st,
+        Some(mesh),
+        a.stl_units,
+    )?;
+    Ok(StockInput {
+        stock,
+        strokes: st,
+        samples: a.samples,
+        max_bytes: millplan_plan::leadtilt::MAX_CROP_BYTES,
+    })
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     let (mut p, n) = params(&a)?;
+    let spec = stock_spec(&a)?;
     let mut inputs: Vec<&Path> = vec![&a.path, &a.stl];
     inputs.extend(a.machine.as_deref());
+    if let Some(StockSpec::Stl(b)) = &spec {
+        inputs.push(b);
+    }
     let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], false)?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = target_for(a.to, &a.output, parsed.program.source)?;
     if n <= 0.0 {
-        p.rpm = parsed
-            .program
-            .moves()
-            .find(|m| m.is_cutting() && m.spindle > 0.0)
-            .map(|m| m.spindle)
-            .ok_or_else(|| {
-                CliError::input(format!(
-                    "{}: the program sets no spindle speed; give --n",
-                    a.path.display()
-                ))
-            })?;
+        p.rpm = first_spindle(&a.path, &parsed.program)?;
     }
     let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
+    let st = spec
+        .as_ref()
+        .map(|_| program_strokes(&parsed.program, a.resolution, machine.rapid));
+    let unsimulated = st.as_ref().map_or(0, |s| s.skipped.total());
+    let input = match (&spec, &st) {
+        (Some(spec), Some(st)) => Some(stock_input(&a, spec, st, &mesh)?),
+        _ => None,
+    };
     let total = parsed.program.operations.len() as u64;
+    let strokes_total = st.as_ref().map_or(0, |s| 2 * s.strokes.len()) as u64;
+    let sim_bar = crate::progress::count(
+        strokes_total,
+        "stock",
+        "strokes",
+        !a.quiet && input.is_some(),
+    );
     let bar = crate::progress::count(total, "lead/tilt", "operations", !a.quiet);
-    let o = choose(&parsed.program, &mesh, &machine, &p, &|done, _| {
-        bar.set_position(done as u64)
-    })
+    let o = choose_with(
+        &parsed.program,
+        &mesh,
+        &machine,
+        &p,
+        input,
+        &|stage, done, _| match stage {
+            Stage::Stock => sim_bar.set_position(done as u64),
+            Stage::Operations => {
+                sim_bar.finish_and_clear();
+                bar.set_position(done as u64)
+            }
+        },
+    )
     .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
+    sim_bar.finish_and_clear();
     bar.finish_and_clear();
-    let summary = summary_json(&a, &o, p.objective);
+    let mut summary = summary_json(&a, &o, p.objective);
+    summary["engagement"] = json!(if spec.is_some() { "stock" } else { "planar" });
+    summary["stock"] = json!(a.stock);
+    summary["resolution_mm"] = json!(spec.as_ref().map(|_| a.resolution));
+    summary["unsimulated_moves"] = json!(unsimulated);
     if o.chosen.is_empty() {
         outputs.commit()?;
         report(&a, &summary);
@@ -274,8 +412,12 @@ fn report(a: &Args, s: &serde_json::Value) {
             .map_or("(the orientation read is refused)".to_string(), |v| {
                 format!("{v:.1} {unit}")
             });
+        let source = match c["engagement"].as_str() {
+            Some("stock") => format!("on the stock at {} sample moves", c["samples"]),
+            _ => "on the planar pass".to_string(),
+        };
         outln!(
-            "operation {}: lead {:.2}°, tilt {:.2}° (read: {:.2}°, {:.2}°); {} {} → {:.1} {unit}; refused: {} by tip contact, {} by holder collision, {} by rotary limits",
+            "operation {}: lead {:.2}°, tilt {:.2}° (read: {:.2}°, {:.2}°); {} {} → {:.1} {unit} {source}; refused: {} by tip contact, {} by holder collision, {} by rotary limits",
             c["operation"],
             f("lead"),
             f("tilt"),
