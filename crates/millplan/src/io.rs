@@ -594,7 +594,8 @@ mod tests {
             .flatten()
             .collect();
         assert_eq!(left.len(), 1, "{left:?}");
-        assert!(staged().is_empty());
+        // Other tests of this binary stage their own outputs meanwhile.
+        assert!(!staged().iter().any(|p| p.starts_with(dir.path())));
         // All written: all in place, the replaced file keeps its mode.
         #[cfg(unix)]
         {
