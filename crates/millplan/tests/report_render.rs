@@ -105,28 +105,8 @@ fn speed_report_shows_inputs_warnings_and_verdict() {
         (demo.join("report.html"), "open edges"),
         (report, "do not touch the part"),
     ] {
-        let out = chromium(&dir.path().join("profile"), &page, "--dump-dom");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let dom = String::from_utf8_lossy(&out.stdout).to_string();
-        let at = |needle: &str| {
-            dom.find(needle)
-                .unwrap_or_else(|| panic!("{}: no `{needle}`", page.display()))
-        };
-        let (inputs, warnings, verdict, summary) = (
-            at("id=\"inputs\""),
-            at("id=\"warnings\""),
-            at("id=\"verdict\""),
-            at("<h2>Summary</h2>"),
-        );
-        assert!(
-            inputs < warnings && warnings < verdict && verdict < summary,
-            "{}",
-            page.display()
-        );
+        let (dom, [warnings, verdict, summary]) =
+            rendered_sections(&dir.path().join("profile"), &page);
         let box_text = &dom[warnings..verdict];
         assert!(box_text.contains(warning), "{}: {box_text}", page.display());
         let verdict_text = &dom[verdict..summary];
@@ -150,6 +130,35 @@ fn speed_report_shows_inputs_warnings_and_verdict() {
             "the limit drawn on the speed plot"
         );
     }
+}
+
+/// The page as headless Chromium renders it, with where its warnings box,
+/// verdict and summary start; fails unless the inputs come first and the
+/// four follow in that order.
+fn rendered_sections(profile: &Path, page: &Path) -> (String, [usize; 3]) {
+    let out = chromium(profile, page, "--dump-dom");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let dom = String::from_utf8_lossy(&out.stdout).to_string();
+    let at = |needle: &str| {
+        dom.find(needle)
+            .unwrap_or_else(|| panic!("{}: no `{needle}`", page.display()))
+    };
+    let (inputs, warnings, verdict, summary) = (
+        at("id=\"inputs\""),
+        at("id=\"warnings\""),
+        at("id=\"verdict\""),
+        at("<h2>Summary</h2>"),
+    );
+    assert!(
+        inputs < warnings && warnings < verdict && verdict < summary,
+        "{}",
+        page.display()
+    );
+    (dom, [warnings, verdict, summary])
 }
 
 /// Runs `millplan` with `args`; returns its exit code.
@@ -217,28 +226,8 @@ fn reorder_and_setup_reports_show_inputs_warnings_and_verdict() {
     .into_iter()
     .enumerate()
     {
-        let out = chromium(&dir.path().join(format!("profile{k}")), page, "--dump-dom");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let dom = String::from_utf8_lossy(&out.stdout).to_string();
-        let at = |needle: &str| {
-            dom.find(needle)
-                .unwrap_or_else(|| panic!("{}: no `{needle}`", page.display()))
-        };
-        let (inputs, warnings, said, summary) = (
-            at("id=\"inputs\""),
-            at("id=\"warnings\""),
-            at("id=\"verdict\""),
-            at("<h2>Summary</h2>"),
-        );
-        assert!(
-            inputs < warnings && warnings < said && said < summary,
-            "{}",
-            page.display()
-        );
+        let (dom, [warnings, said, summary]) =
+            rendered_sections(&dir.path().join(format!("profile{k}")), page);
         assert!(
             dom[warnings..said].contains(warning),
             "{}",
