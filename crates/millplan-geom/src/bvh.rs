@@ -626,6 +626,98 @@ impl Bvh {
         hit
     }
 
+    /// How high along unit `n` the mesh reaches at each distance from `c`,
+    /// in rings: with ascending `edges` e₀ < e₁ < … < e_K (e₀ = 0 is
+    /// natural), `out[k]` (k < K) bounds n·x from above for points x of the
+    /// mesh at a distance from `c` of at least e_k: every mesh point x with
+    /// |x − c| < e_K has some k with e_k ≤ |x − c| and n·x ≤ `out[k]` (−∞:
+    /// no point there). What lies at e_K or farther is not looked at.
+    ///
+    /// Every ring starts at `floor` (a caller that only asks whether the
+    /// mesh stays below some level above `floor` loses nothing). The walk
+    /// takes a subtree whole, at the ring of its box's distance and the top
+    /// of its box, where the box's diagonal is at most its distance beyond
+    /// `near`; others are opened down to their triangles, each at the ring
+    /// of its bounding sphere's distance and its highest corner. A subtree
+    /// that cannot raise its ring is skipped. A margin of 1e-12 of the
+    /// coordinates' scale covers rounding.
+    pub fn rings_along(
+        &self,
+        c: DVec3,
+        n: DVec3,
+        near: f64,
+        floor: f64,
+        edges: &[f64],
+        out: &mut [f64],
+    ) {
+        assert_eq!(edges.len(), out.len() + 1, "one bound per ring");
+        out.fill(floor);
+        let Some(&far) = edges.last() else { return };
+        if self.order.is_empty() || out.is_empty() {
+            return;
+        }
+        let b = self.bounds;
+        let scale = b.min.abs().max(b.max.abs()).max_element() + c.abs().max_element() + far;
+        let margin = 1e-12 * scale;
+        // The ring of a distance known from below (rounded down by the margin).
+        let last = out.len() - 1;
+        let ring = |dist: f64| {
+            let d = dist - margin;
+            (d < far).then(|| edges[1..].partition_point(|&e| e <= d).min(last))
+        };
+        let shapes = self.shapes();
+        let wide = self.wide();
+        let mut stack: Vec<u32> = Vec::with_capacity(64);
+        stack.push(0);
+        while let Some(at) = stack.pop() {
+            let node = &wide[at as usize];
+            let (lo4, hi4) = (
+                node.min.map(|v| v.to_array()),
+                node.max.map(|v| v.to_array()),
+            );
+            for lane in 0..4 {
+                if node.valid & (1 << lane) == 0 {
+                    continue;
+                }
+                let (mut d2, mut top, mut diag2) = (0.0f64, 0.0f64, 0.0f64);
+                for a in 0..3 {
+                    let (lo, hi) = (lo4[a][lane] as f64, hi4[a][lane] as f64);
+                    let g = (lo - c[a]).max(c[a] - hi).max(0.0);
+                    d2 += g * g;
+                    top += (n[a] * lo).max(n[a] * hi);
+                    diag2 += (hi - lo) * (hi - lo);
+                }
+                let dist = d2.sqrt();
+                let Some(k) = ring(dist) else { continue };
+                let top = top + margin;
+                if top <= out[k] {
+                    continue;
+                }
+                let count = node.count[lane] as usize;
+                // Small beside its distance beyond `near`: taken whole.
+                let whole = dist > near && diag2 <= (dist - near) * (dist - near);
+                if whole {
+                    out[k] = top;
+                } else if count > 0 {
+                    let start = node.child[lane] as usize;
+                    for (i, sh) in shapes.iter().enumerate().skip(start).take(count) {
+                        let [p, q, r] = self.tris.get(i);
+                        let h = n.dot(p).max(n.dot(q)).max(n.dot(r)) + margin;
+                        // Nothing to raise: every ring starts at `floor`.
+                        if h <= floor {
+                            continue;
+                        }
+                        if let Some(k) = ring((sh.centre - c).length() - sh.rho) {
+                            out[k] = out[k].max(h);
+                        }
+                    }
+                } else {
+                    stack.push(node.child[lane]);
+                }
+            }
+        }
+    }
+
     /// Any-hit traversal of the closest-point tree: calls `hit(position in
     /// order, corners)` for the triangles of every leaf whose box may come
     /// within squared distance `r2` of `p` (the boxes' bounds never exceed
@@ -1497,6 +1589,77 @@ mod tests {
         let spin = f * 2.4;
         let side = u * spin.cos() + n.cross(u) * spin.sin();
         (a, n * tilt.cos() + side * tilt.sin(), r, f)
+    }
+
+    #[test]
+    fn rings_bound_every_point_of_the_mesh_and_are_tight_on_a_plane() {
+        // Every point of every triangle (corners, edge midpoints, centroid)
+        // nearer than the last edge lies below the bound of some ring whose
+        // inner edge is not beyond it; brute force over the whole mesh,
+        // about facets of the demo surface, along their normals and tilted.
+        let mesh = tessellate(&DemoSurface::default(), 0.8);
+        let bvh = Bvh::build(&mesh);
+        let edges = [0.0, 2.0, 2.05, 2.2, 2.6, 3.5, 5.0, 8.0, 14.0, 25.0];
+        let mut out = [0.0; 9];
+        let mut points = 0;
+        for i in 0..60 {
+            let t = (i * 4099) % mesh.len();
+            let [p, q, s] = mesh.corners(t);
+            let n0 = mesh.facet_normal(t);
+            let n = (n0 + DVec3::new(0.1, -0.05, 0.0) * (i % 3) as f64).normalize();
+            let c = (p + q + s) / 3.0 + n0 * 2.0;
+            let floor = [f64::NEG_INFINITY, n.dot(p)][i % 2];
+            bvh.rings_along(c, n, 2.0, floor, &edges, &mut out);
+            for k in 0..mesh.len() {
+                let [a, b, d] = mesh.corners(k);
+                let samples = [
+                    a,
+                    b,
+                    d,
+                    (a + b) / 2.0,
+                    (b + d) / 2.0,
+                    (d + a) / 2.0,
+                    (a + b + d) / 3.0,
+                ];
+                for x in samples {
+                    let dist = (x - c).length();
+                    if dist >= edges[9] {
+                        continue;
+                    }
+                    points += 1;
+                    let bound = (0..9)
+                        .filter(|&k| edges[k] <= dist)
+                        .map(|k| out[k])
+                        .fold(f64::NEG_INFINITY, f64::max);
+                    assert!(n.dot(x) <= bound, "facet {t}, point {x} at {dist}");
+                }
+            }
+        }
+        assert!(points > 10_000, "{points}");
+        // A flat plate seen along its normal: every ring reaching the plate
+        // bounds it at its height, up to the widening of the tree's
+        // single-precision boxes (1e-5 of the part's size).
+        let plate = tessellate(&Plane, 0.5);
+        let bvh = Bvh::build(&plate);
+        let c = DVec3::new(20.0, 20.0, 3.0);
+        bvh.rings_along(c, DVec3::Z, 2.9, f64::NEG_INFINITY, &edges, &mut out);
+        for (k, o) in out.iter().enumerate().skip(1) {
+            assert!((1.5..1.5 + 1e-3).contains(o), "ring {k}: {o}");
+        }
+    }
+
+    /// The plane z = 1.5 over 40 × 40 mm.
+    struct Plane;
+    impl crate::analytic::HeightField for Plane {
+        fn z(&self, _: f64, _: f64) -> f64 {
+            1.5
+        }
+        fn grad(&self, _: f64, _: f64) -> crate::DVec2 {
+            crate::DVec2::ZERO
+        }
+        fn domain(&self) -> (crate::DVec2, crate::DVec2) {
+            (crate::DVec2::ZERO, crate::DVec2::splat(40.0))
+        }
     }
 
     #[test]
