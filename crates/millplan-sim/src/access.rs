@@ -561,9 +561,6 @@ fn accessibility_mapped(
         .map(|(v, _)| *v)
         .collect();
     let dirs: Vec<DVec3> = (0..cells).map(|c| grid.direction(c)).collect();
-    // Per facet, how high the mesh reaches along its normal at each distance
-    // from its ball's centre: what proves shanks free without a capsule test.
-    let rings = Rings::new(bvh, tool, test.tol(), &facets);
     // One word of 64 directions at a time: their views side by side, then
     // the facets in chunks, so that both cores stay busy to the end (the
     // cost of a facet varies tenfold with its slope and neighbourhood).
@@ -574,17 +571,13 @@ fn accessibility_mapped(
             .collect();
         let col: Vec<u64> = facets
             .par_iter()
-            .enumerate()
             .with_min_len(256)
-            .map(|(t, f)| {
+            .map(|f| {
                 let Some((p, n)) = *f else { return 0 };
                 let mut bits = 0u64;
                 let mut hints = Hints::default();
-                let around = rings.of(t);
                 for (k, view) in views.iter().enumerate() {
-                    if view.d.dot(n) > test.min_dot
-                        && view.free(&test, p, n, &rings, around, &mut hints)
-                    {
+                    if view.d.dot(n) > test.min_dot && view.free(&test, p, n, &mut hints) {
                         bits |= 1 << k;
                     }
                 }
@@ -887,15 +880,7 @@ impl ToolView {
     /// `hints` carry the triangles that last blocked the holder and the
     /// shank for this facet: neighbouring directions are often blocked by
     /// the same one, which is then tried first (the answer is the same).
-    fn free(
-        &self,
-        test: &DirectionTest,
-        p: DVec3,
-        n: DVec3,
-        rings: &Rings,
-        around: &[f64],
-        hints: &mut Hints,
-    ) -> bool {
+    fn free(&self, test: &DirectionTest, p: DVec3, n: DVec3, hints: &mut Hints) -> bool {
         let centre = p + n * self.radius;
         let (u, v) = (centre.dot(self.e1), centre.dot(self.e2));
         let base = centre.dot(self.d);
@@ -941,95 +926,13 @@ impl ToolView {
         // that radius when s is chosen so, and the map then proves it free.
         // Only the lower, short piece needs the capsule test; it meets the
         // mesh only where the whole shank does.
-        // Either piece, the rings around the facet first.
-        let cos = self.d.dot(n);
-        let proved = |s: f64| rings.clear(around, n.dot(p), cos, s, self.eps);
         if let Some(z) = near {
             let s = z - base + self.shank_radius + 4.0 * eps;
             if s < 0.75 * self.reach {
-                return proved(s) || test.shank_piece_clear(p, n, self.d, s, &mut hints.shank);
+                return test.shank_piece_clear(p, n, self.d, s, &mut hints.shank);
             }
         }
-        proved(self.reach) || test.shank_clear_from(p, n, self.d, &mut hints.shank)
-    }
-}
-
-/// How high the mesh reaches along each facet's normal n, in rings about its
-/// ball's centre c = p + r·n ([`Bvh::rings_along`]): what proves a shank
-/// free without a capsule test, whatever its direction.
-///
-/// A point x of the shank's capsule (radius r_s, axis d from c, with
-/// d·n = cos θ positive) outside the ball lies at x − c = τ·d + w with
-/// τ ≥ 0 and |w| < r_s across d, so |x − c|² < τ² + r_s² and n·(x − p) =
-/// r + τ·cos θ + n·w, more than r − r_s·sin θ + cos θ·√(|x − c|² − r_s²).
-/// A ring whose mesh stays below
-/// that at its inner edge, for every ring the capsule reaches (it lies
-/// within s + r_s of c), leaves the capsule free: the ball was tested free,
-/// and nothing else of the capsule lies nearer c than r_s. Near a steeply
-/// leaning tool the shank skims the surface by less than any map cell;
-/// there the rings decide most of what the maps leave to the capsule test.
-struct Rings {
-    /// e₀ = 0 < e₁ = r_s < … : the rings' inner edges and the last outer one.
-    edges: Vec<f64>,
-    /// Per facet, the highest n·x of the mesh in each ring (−∞ when empty
-    /// or the facet cannot be served).
-    tops: Vec<f64>,
-    radius: f64,
-    shank_radius: f64,
-}
-
-impl Rings {
-    fn new(bvh: &Bvh, tool: &ToolModel, tol: f64, facets: &[Option<(DVec3, DVec3)>]) -> Rings {
-        let (r, rs) = (tool.radius, tool.radius - tol);
-        // Fine next to the ball, where the shank's clearance grows as the
-        // square root of the distance, then wider by half at each ring.
-        let mut edges = vec![0.0, rs];
-        let mut f = 0.01;
-        while r * f < tool.reach {
-            edges.push(rs + r * f);
-            f *= 1.5;
-        }
-        edges.push(rs + tool.reach);
-        let k = edges.len() - 1;
-        let mut tops = vec![f64::NEG_INFINITY; facets.len() * k];
-        tops.par_chunks_mut(k)
-            .zip(facets.par_iter())
-            .with_min_len(64)
-            .for_each(|(out, f)| {
-                if let Some((p, n)) = *f {
-                    bvh.rings_along(p + n * r, n, rs, n.dot(p), &edges, out);
-                }
-            });
-        Rings {
-            edges,
-            tops,
-            radius: r,
-            shank_radius: rs,
-        }
-    }
-
-    /// Facet t's rings.
-    fn of(&self, t: usize) -> &[f64] {
-        let k = self.edges.len() - 1;
-        &self.tops[t * k..(t + 1) * k]
-    }
-
-    /// Whether `tops` (a facet's rings, its centroid at height `np` along
-    /// its normal) prove the shank's capsule from the ball's centre to `s`
-    /// along an axis at cos θ to the normal free; `eps` covers rounding.
-    fn clear(&self, tops: &[f64], np: f64, cos: f64, s: f64, eps: f64) -> bool {
-        let rs = self.shank_radius;
-        let reach = s + rs;
-        if cos <= 0.0 || !(reach < self.edges[self.edges.len() - 1]) {
-            return false;
-        }
-        let sin = (1.0 - cos * cos).max(0.0).sqrt();
-        let floor = np + self.radius - rs * sin - eps;
-        self.edges
-            .iter()
-            .zip(tops)
-            .take_while(|(e, _)| **e < reach)
-            .all(|(e, top)| *top < floor + cos * (e * e - rs * rs).max(0.0).sqrt())
+        test.shank_clear_from(p, n, self.d, &mut hints.shank)
     }
 }
 
@@ -2131,79 +2034,6 @@ mod tests {
             free > 500 && by_capsules * 2 > free,
             "{free} free, {by_capsules} by the capsule tests"
         );
-    }
-
-    #[test]
-    fn rings_prove_only_shanks_that_brute_force_finds_free() {
-        // Spec §3.4, tool model: the shank's capsule is free when every
-        // triangle lies at least its radius from its axis segment. Brute
-        // force over every triangle (the whole capsule, nothing left out)
-        // wherever the rings about a facet prove a shank free: on the steep
-        // bumps and on the demo surface, tilted from the normal to grazing,
-        // short lower pieces to the whole reach.
-        let g = Icosphere::new(1);
-        let bumps = millplan_geom::analytic::tessellate(&Bumps, 2.5);
-        let demo = millplan_geom::analytic::tessellate(
-            &millplan_geom::analytic::DemoSurface::default(),
-            3.0,
-        );
-        for (m, tool) in [
-            (
-                &bumps,
-                ToolModel {
-                    radius: 3.0,
-                    reach: 12.0,
-                    holder_radius: 8.0,
-                    holder_length: 20.0,
-                },
-            ),
-            (
-                &demo,
-                ToolModel {
-                    radius: 5.0,
-                    reach: 40.0,
-                    holder_radius: 20.0,
-                    holder_length: 60.0,
-                },
-            ),
-        ] {
-            let b = Bvh::build(m);
-            let test = DirectionTest::tool(m, &b, 0.0, &tool);
-            let facets: Vec<Option<(DVec3, DVec3)>> = (0..m.len())
-                .map(|t| {
-                    let (p, n) = test.facet(t)?;
-                    test.usable_at(t, p, n).then_some((p, n))
-                })
-                .collect();
-            let rings = Rings::new(&b, &tool, test.tol(), &facets);
-            let rs = tool.radius - test.tol();
-            let eps = 1e-9 * (m.bounds().diagonal() + 100.0);
-            let (mut proved, mut open) = (0, 0);
-            for (t, f) in facets.iter().enumerate().step_by(4) {
-                let Some((p, n)) = *f else { continue };
-                let c = p + n * tool.radius;
-                for cell in 0..g.len() {
-                    let d = g.direction(cell);
-                    if d.dot(n) <= 0.0 {
-                        continue;
-                    }
-                    for s in [0.4, 4.0, tool.reach] {
-                        if !rings.clear(rings.of(t), n.dot(p), d.dot(n), s, eps) {
-                            open += 1;
-                            continue;
-                        }
-                        proved += 1;
-                        let top = c + d * s;
-                        for k in 0..m.len() {
-                            let [x, y, z] = m.corners(k);
-                            let d2 = millplan_geom::bvh::segment_triangle_dist2(c, top, x, y, z);
-                            assert!(d2 >= rs * rs, "facet {t}, cell {cell}, s {s}: triangle {k}");
-                        }
-                    }
-                }
-            }
-            assert!(proved > 500 && open > 100, "{proved} proved, {open} open");
-        }
     }
 
     #[test]
