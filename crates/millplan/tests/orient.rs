@@ -40,28 +40,11 @@ fn plate(path: &Path) {
 #[test]
 fn orient_leans_a_ball_on_a_flat_plate() {
     let dir = tempfile::tempdir().expect("tmp");
-    let (stl, apt, out) = (
-        dir.path().join("plate.stl"),
-        dir.path().join("raster.apt"),
-        dir.path().join("oriented.apt"),
-    );
-    plate(&stl);
+    let (stl, apt) = plate_raster(dir.path());
+    let out = dir.path().join("oriented.apt");
     let s = |p: &Path| p.to_str().expect("utf8").to_string();
     let o = bin()
-        .args(["raster", "--stl", &s(&stl), "--tool", "ball:10"])
-        .args(["--stepover", "5", "--step", "2", "-o", &s(&apt)])
-        .output()
-        .expect("runs");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let o = bin()
-        .args([
-            "orient",
-            &s(&apt),
-            "--stl",
-            &s(&stl),
-            "--material",
-            "al7075",
-        ])
+        .args(["orient", &apt, "--stl", &stl, "--material", "al7075"])
         .args([
             "--n",
             "8000",
