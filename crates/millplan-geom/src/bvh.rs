@@ -387,7 +387,7 @@ impl Bvh {
         let above = |d2: f64| (d2 * (1.0 + 1e-6)) as f32;
         let mut best32 = above(best_d2);
         // Each entry keeps the lower bound computed when it was pushed.
-        let mut stack: [(u32, f32); 64] = [(0, 0.0); 64];
+        let mut stack: [(u32, f32); 128] = [(0, 0.0); 128];
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;
@@ -397,21 +397,9 @@ impl Bvh {
             }
             let node = &self.near[at as usize];
             let lower = node.lower_bounds(p);
-            let mut mask = lower.cmple(Vec4::splat(best32)).bitmask() & node.valid;
+            let mask = lower.cmple(Vec4::splat(best32)).bitmask() & node.valid;
+            let (lanes, m) = nearest_first(lower, mask);
             let lower = lower.to_array();
-            // The children left, nearest first.
-            let (mut lanes, mut m) = ([0usize; 4], 0);
-            while mask != 0 {
-                let l = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                let mut j = m;
-                while j > 0 && lower[lanes[j - 1]] > lower[l] {
-                    lanes[j] = lanes[j - 1];
-                    j -= 1;
-                }
-                lanes[j] = l;
-                m += 1;
-            }
             // Leaves at once, nearest first (each may lower the bound) ...
             for &l in &lanes[..m] {
                 let count = node.count[l] as usize;
@@ -451,6 +439,26 @@ impl Bvh {
         }
         best
     }
+}
+
+/// The lanes set in `mask`, ordered by their `lower` bound, least first,
+/// and how many there are.
+#[inline]
+fn nearest_first(lower: Vec4, mut mask: u32) -> ([usize; 4], usize) {
+    let lower = lower.to_array();
+    let (mut lanes, mut m) = ([0usize; 4], 0);
+    while mask != 0 {
+        let l = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        let mut j = m;
+        while j > 0 && lower[lanes[j - 1]] > lower[l] {
+            lanes[j] = lanes[j - 1];
+            j -= 1;
+        }
+        lanes[j] = l;
+        m += 1;
+    }
+    (lanes, m)
 }
 
 /// What the capsule query's cheap tests read of one triangle pqr: its
@@ -493,7 +501,7 @@ impl Bvh {
     /// than `skip` (an any-hit occlusion query: it stops at the first hit).
     /// Triangles are hit from both sides; `dir` need not be unit.
     pub fn occluded(&self, origin: DVec3, dir: DVec3, max_s: f64, skip: Option<u32>) -> bool {
-        self.any_near_ray(origin, dir, max_s, 0.0, None, false, |k, [a, b, c]| {
+        self.any_near_ray(origin, dir, max_s, |k, [a, b, c]| {
             // The skipped triangle is looked up only on a hit.
             ray_triangle(origin, dir, *a, *b, *c).is_some_and(|s| s > 0.0 && s < max_s)
                 && skip != Some(self.order[k])
@@ -611,15 +619,11 @@ impl Bvh {
             }
             yes
         };
-        // A ball (a point segment) over all triangles: the closest-point
-        // tree's oriented boxes bound the distance far tighter than the
-        // ray tree's boxes where the ball stands on a finely tessellated
-        // surface; each triangle gets the very same test.
-        let hit = if ab2 == 0.0 && above.is_none() {
-            self.any_within(a, r2, test)
-        } else {
-            self.any_near_ray(a, b - a, 1.0, radius, above, axis.is_some(), test)
-        };
+        // The closest-point tree's oriented boxes bound the distance far
+        // tighter than axis-aligned boxes where a ball stands on a finely
+        // tessellated surface or a shank leans along it; each triangle gets
+        // the very same test.
+        let hit = self.any_within(a, b, r2, above, test);
         if hit {
             *hint = found;
         }
@@ -628,38 +632,54 @@ impl Bvh {
 
     /// Any-hit traversal of the closest-point tree: calls `hit(position in
     /// order, corners)` for the triangles of every leaf whose box may come
-    /// within squared distance `r2` of `p` (the boxes' bounds never exceed
-    /// the true distance, and a relative margin covers single precision),
-    /// until `hit` says yes.
+    /// within squared distance `r2` of the segment ab (the boxes' bounds never
+    /// exceed the true distance, and a relative margin covers single
+    /// precision) and, with `above` = (n, h), reaches above n·x = h, until
+    /// `hit` says yes. The nearest children are opened first: where the
+    /// answer is yes, they are the likeliest to hold a hit.
     fn any_within(
         &self,
-        p: DVec3,
+        a: DVec3,
+        b: DVec3,
         r2: f64,
+        above: Option<(DVec3, f64)>,
         mut hit: impl FnMut(usize, &[DVec3; 3]) -> bool,
     ) -> bool {
         if self.order.is_empty() {
             return false;
         }
-        let bound = Vec4::splat((r2 * (1.0 + 1e-6)) as f32);
-        let mut stack: [u32; 64] = [0; 64];
+        let bound = (r2 * (1.0 + 1e-6)) as f32;
+        let reach = r2.sqrt() as f32;
+        // Up to three entries per level stay behind on the stack; the median
+        // splits keep the depth under 42 for any mesh that fits in memory.
+        let mut stack: [u32; 128] = [0; 128];
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;
             let node = &self.near[stack[sp] as usize];
-            let mut mask = node.lower_bounds(p).cmple(bound).bitmask() & node.valid;
-            while mask != 0 {
-                let lane = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                let count = node.count[lane] as usize;
+            let lower = node.segment_lower_bounds(a, b, reach);
+            let mut mask = lower.cmple(Vec4::splat(bound)).bitmask() & node.valid;
+            if mask == 0 {
+                continue;
+            }
+            if let Some((n, h)) = above {
+                mask &= node.reaches_above(n, h);
+            }
+            let (lanes, m) = nearest_first(lower, mask);
+            for &l in &lanes[..m] {
+                let count = node.count[l] as usize;
                 if count > 0 {
-                    let start = node.child[lane] as usize;
+                    let start = node.child[l] as usize;
                     for k in start..start + count {
                         if hit(k, &self.tris.get(k)) {
                             return true;
                         }
                     }
-                } else if sp < stack.len() {
-                    stack[sp] = node.child[lane];
+                }
+            }
+            for &l in lanes[..m].iter().rev() {
+                if node.count[l] == 0 && sp < stack.len() {
+                    stack[sp] = node.child[l];
                     sp += 1;
                 }
             }
@@ -668,19 +688,13 @@ impl Bvh {
     }
 
     /// Any-hit traversal: calls `hit(position in order, corners)` for the
-    /// triangles of every leaf whose box, grown by `pad`, the ray
-    /// `origin + s·dir` (0 ≤ s ≤ max_s) meets, until `hit` says yes. With
-    /// `beside`, boxes are also tested across the axis (worth it where what
-    /// is near the capsule mostly lies beside it, not against its end).
-    #[allow(clippy::too_many_arguments)] // private; each query passes all
+    /// triangles of every leaf whose box the ray `origin + s·dir`
+    /// (0 ≤ s ≤ max_s) meets, until `hit` says yes.
     fn any_near_ray(
         &self,
         origin: DVec3,
         dir: DVec3,
         max_s: f64,
-        pad: f64,
-        above: Option<(DVec3, f64)>,
-        beside: bool,
         mut hit: impl FnMut(usize, &[DVec3; 3]) -> bool,
     ) -> bool {
         if self.order.is_empty() {
@@ -694,50 +708,7 @@ impl Bvh {
         let inv32 = Vec3A::from(inv.clamp(DVec3::splat(-1e30), DVec3::splat(1e30)).as_vec3());
         let o32 = Vec3A::from(origin.as_vec3());
         let [o, inv] = [o32, inv32].map(|v| [v.x, v.y, v.z].map(Vec4::splat));
-        let (pad4, far) = (Vec4::splat(pad as f32), Vec4::splat(max_s as f32));
-        // A box lies wholly in n·x ≤ h when its highest corner along n does; the
-        // margin covers the single-precision rounding of that test.
-        let cull = above.map(|(n, h)| {
-            let b = self.bounds;
-            let mag = b.min.abs().max(b.max.abs()).max_element() + h.abs();
-            let h32 = (h - 8.0 * f32::EPSILON as f64 * mag) as f32;
-            let n32 = n.as_vec3();
-            (
-                [n32.x, n32.y, n32.z].map(Vec4::splat),
-                [n32.x, n32.y, n32.z].map(|c| glam::BVec4A::splat(c > 0.0)),
-                Vec4::splat(h32),
-            )
-        });
-        // Capsules (pad > 0): each child box is also tested by its bounding
-        // sphere against the segment origin + s·dir, 0 ≤ s ≤ max_s — far tighter
-        // than the padded box for a wide capsule passing a box's corner.
-        let seg = (pad > 0.0).then(|| {
-            let d = (dir * max_s).as_vec3();
-            let len2 = d.length_squared().max(f32::MIN_POSITIVE);
-            (
-                [d.x, d.y, d.z].map(Vec4::splat),
-                Vec4::splat(1.0 / len2),
-                Vec4::splat(pad as f32),
-            )
-        });
-        // Capsules with a length: each child box is also tested across the
-        // axis, along the direction g from the axis to the box's centre: the
-        // capsule lies within `pad` of the axis along g, the box no nearer
-        // than its centre's distance less its extent along g. For the flat
-        // boxes of a surface beside the axis this is far tighter than the
-        // bounding sphere. Its margin covers the single-precision rounding of
-        // the origin, the axis and the centres.
-        let across = (pad > 0.0 && beside)
-            .then(|| (dir * max_s).normalize_or_zero())
-            .filter(|u| *u != DVec3::ZERO)
-            .map(|u| {
-                let u = u.as_vec3();
-                let scale = origin.abs().max_element() + (dir * max_s).length() + pad;
-                (
-                    [u.x, u.y, u.z].map(Vec4::splat),
-                    Vec4::splat((16.0 * f32::EPSILON as f64 * scale + 1e-6) as f32),
-                )
-            });
+        let far = Vec4::splat(max_s as f32);
         let wide = self.wide();
         let mut stack: [u32; 128] = [0; 128];
         let mut sp = 1;
@@ -747,63 +718,12 @@ impl Bvh {
             // The slab test of the four child boxes at once.
             let (mut lo, mut hi) = (Vec4::ZERO, far);
             for a in 0..3 {
-                let t1 = (node.min[a] - pad4 - o[a]) * inv[a];
-                let t2 = (node.max[a] + pad4 - o[a]) * inv[a];
+                let t1 = (node.min[a] - o[a]) * inv[a];
+                let t2 = (node.max[a] - o[a]) * inv[a];
                 lo = lo.max(t1.min(t2));
                 hi = hi.min(t1.max(t2));
             }
             let mut mask = lo.cmple(hi).bitmask() & node.valid;
-            // The further tests only narrow the mask: none when it is empty.
-            if mask == 0 {
-                continue;
-            }
-            if let Some((d, inv_len2, r)) = &seg {
-                // Centre and half diagonal per lane; the nearest point of the
-                // segment to the centre.
-                let (mut t, mut e2) = (Vec4::ZERO, Vec4::ZERO);
-                let mut c = [Vec4::ZERO; 3];
-                for a in 0..3 {
-                    c[a] = (node.min[a] + node.max[a]) * 0.5 - o[a];
-                    let e = (node.max[a] - node.min[a]) * 0.5;
-                    e2 += e * e;
-                    t += c[a] * d[a];
-                }
-                let t = (t * *inv_len2).clamp(Vec4::ZERO, Vec4::ONE);
-                let mut dist2 = Vec4::ZERO;
-                for a in 0..3 {
-                    let g = d[a] * t - c[a];
-                    dist2 += g * g;
-                }
-                // A relative margin for single precision.
-                let reach = (*r + e2.sqrt()) * 1.0001 + Vec4::splat(1e-6);
-                mask &= dist2.cmplt(reach * reach).bitmask();
-                if mask == 0 {
-                    continue;
-                }
-                if let Some((u, slack)) = &across {
-                    let mut tu = Vec4::ZERO;
-                    for a in 0..3 {
-                        tu += c[a] * u[a];
-                    }
-                    let (mut l2, mut ext) = (Vec4::ZERO, Vec4::ZERO);
-                    for a in 0..3 {
-                        let l = c[a] - u[a] * tu;
-                        l2 += l * l;
-                        ext += l.abs() * (node.max[a] - node.min[a]) * 0.5;
-                    }
-                    // Extent along g = l/|l|; at |l| = 0 nothing is ruled out.
-                    let l = l2.sqrt();
-                    let reach = (*r + ext / l.max(Vec4::splat(1e-30))) * 1.0001 + *slack;
-                    mask &= l.cmple(reach).bitmask();
-                }
-            }
-            if let Some((n, up, h)) = &cull {
-                let mut top = Vec4::ZERO;
-                for a in 0..3 {
-                    top += Vec4::select(up[a], node.max[a], node.min[a]) * n[a];
-                }
-                mask &= top.cmpgt(*h).bitmask();
-            }
             while mask != 0 {
                 let lane = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
@@ -1047,6 +967,71 @@ impl NearNode {
 }
 
 impl NearNode {
+    /// Lower bounds of the squared distance from the segment ab to each
+    /// child, where it may come within `reach` (elsewhere +∞). In each
+    /// box's own axes: the part of the segment inside the box grown by
+    /// `reach` along every axis (a slab test), then per axis the gap between
+    /// that part's extent and the box's, squared and summed: at every point
+    /// of the part each axis's share of the distance is at least its gap.
+    /// For a = b this is the point's bound. Relative to the node's centre in
+    /// single precision; `err` and a relative margin on `reach` cover the
+    /// rounding, so no bound exceeds the true value.
+    #[inline]
+    fn segment_lower_bounds(&self, a: DVec3, b: DVec3, reach: f32) -> Vec4 {
+        let (qa, qb) = (a - self.centre, b - self.centre);
+        let err = Vec4::splat(
+            16.0 * f32::EPSILON * (qa.abs().max(qb.abs()).max_element() as f32 + self.scale),
+        );
+        let pad = Vec4::splat(reach * 1.0001) + err;
+        let (qa, qd) = (qa.as_vec3(), (qb - qa).as_vec3());
+        let qa = [qa.x, qa.y, qa.z].map(Vec4::splat);
+        let qd = [qd.x, qd.y, qd.z].map(Vec4::splat);
+        let (mut x0, mut dx) = ([Vec4::ZERO; 3], [Vec4::ZERO; 3]);
+        let (mut t0, mut t1) = (Vec4::ZERO, Vec4::ONE);
+        for k in 0..3 {
+            let ax = &self.axes[k];
+            x0[k] = ax[0] * qa[0] + ax[1] * qa[1] + ax[2] * qa[2];
+            dx[k] = ax[0] * qd[0] + ax[1] * qd[1] + ax[2] * qd[2];
+            let (lo, hi) = (self.lo[k] - pad, self.hi[k] + pad);
+            let inv = Vec4::ONE / dx[k];
+            // Along an axis across the segment (a step too small to divide
+            // by, which 0·∞ would turn into NaN) the slab holds all of the
+            // segment or none of it.
+            let flat = inv.abs().cmpeq(Vec4::INFINITY);
+            let inside = x0[k].cmpge(lo) & x0[k].cmple(hi);
+            let (enter, leave) = (
+                Vec4::select(inside, Vec4::NEG_INFINITY, Vec4::INFINITY),
+                Vec4::select(inside, Vec4::INFINITY, Vec4::NEG_INFINITY),
+            );
+            let (u, v) = ((lo - x0[k]) * inv, (hi - x0[k]) * inv);
+            t0 = t0.max(Vec4::select(flat, enter, u.min(v)));
+            t1 = t1.min(Vec4::select(flat, leave, u.max(v)));
+        }
+        let mut lower = Vec4::ZERO;
+        for k in 0..3 {
+            let (xl, xh) = (x0[k] + dx[k] * t0, x0[k] + dx[k] * t1);
+            let d = ((self.lo[k] - xl.max(xh)).max(xl.min(xh) - self.hi[k]) - err).max(Vec4::ZERO);
+            lower += d * d;
+        }
+        Vec4::select(t0.cmple(t1), lower, Vec4::INFINITY)
+    }
+
+    /// Per child (bit k for child k), whether some point of its box may lie
+    /// above the plane n·x = h: a doubt within the rounding answers yes.
+    #[inline]
+    fn reaches_above(&self, n: DVec3, h: f64) -> u32 {
+        let rel = h - n.dot(self.centre);
+        let err = 16.0 * f32::EPSILON * (rel.abs() as f32 + 2.0 * self.scale);
+        let n32 = n.as_vec3();
+        let mut top = Vec4::ZERO;
+        for k in 0..3 {
+            let ax = &self.axes[k];
+            let c = ax[0] * n32.x + ax[1] * n32.y + ax[2] * n32.z;
+            top += (c * self.lo[k]).max(c * self.hi[k]);
+        }
+        top.cmpgt(Vec4::splat(rel as f32 - err)).bitmask()
+    }
+
     /// Lower bounds of the squared distance from `p` to each child. Relative to
     /// the node's centre in single precision; `err` covers the rounding of the
     /// query point and of the projections, so no bound exceeds the true value.
@@ -1822,6 +1807,119 @@ mod tests {
             }
         }
         assert!(checked > 1000);
+    }
+
+    #[test]
+    fn segment_bounds_never_exceed_the_distance() {
+        // Far from the origin, segments from points on, just above and just
+        // below the triangles, along the axes exactly (a zero step across
+        // two of an axis-aligned box's slabs), along the facet's normal and
+        // across it, and of zero length: wherever a child's triangles come
+        // within reach of the segment, its bound stays at or below the true
+        // squared distance. Planes a hair below a corner of the child's
+        // triangles always keep it.
+        let bvh = Bvh::build(&far_mesh(0.5));
+        let mut seed = 11u64;
+        let (mut near, mut far, mut planes) = (0, 0, 0);
+        for at in (0..bvh.near.len()).step_by(5) {
+            for lane in 0..4 {
+                if bvh.near[at].valid & (1 << lane) == 0 {
+                    continue;
+                }
+                let mut tris = Vec::new();
+                lane_triangles(&bvh, at, lane, &mut tris);
+                let seed = lcg(&mut seed);
+                let [a, b, c] = bvh.tris.get(tris[(seed >> 33) as usize % tris.len()]);
+                let f = |k: u32| ((seed >> k) & 0x3ff) as f64 / 1023.0;
+                let n = (b - a).cross(c - a).normalize();
+                let reach = 0.2 + 6.0 * f(30);
+                let starts = [
+                    a,
+                    a + n * (reach * f(0)),
+                    a - n * 0.01 * f(10),
+                    a + n * (reach * (1.0 + f(20))),
+                ];
+                let dirs = [
+                    DVec3::X,
+                    -DVec3::Y,
+                    DVec3::Z,
+                    n,
+                    (b - a).normalize(),
+                    DVec3::new(f(0) - 0.5, f(10) - 0.5, f(20) - 0.5).normalize(),
+                    DVec3::ZERO,
+                ];
+                for p in starts {
+                    for d in dirs {
+                        let q = p + d * (1.0 + 20.0 * f(40));
+                        let d2 = tris
+                            .iter()
+                            .map(|&t| {
+                                let [a, b, c] = bvh.tris.get(t);
+                                segment_triangle_dist2(p, q, a, b, c)
+                            })
+                            .fold(f64::INFINITY, f64::min);
+                        let lb = bvh.near[at].segment_lower_bounds(p, q, reach as f32)[lane] as f64;
+                        if d2 <= reach * reach {
+                            assert!(lb <= d2, "node {at} lane {lane}: bound {lb:e} > {d2:e}");
+                            near += 1;
+                        } else {
+                            far += (lb > reach * reach) as usize;
+                        }
+                    }
+                }
+                // The plane across a direction a hair below the child's
+                // highest corner along it.
+                for d in [DVec3::Z, -DVec3::X, n, dirs[5]] {
+                    let top = tris
+                        .iter()
+                        .flat_map(|&t| bvh.tris.get(t))
+                        .map(|v| d.dot(v))
+                        .fold(f64::NEG_INFINITY, f64::max);
+                    let h = top - 1e-9 * top.abs().max(1.0);
+                    assert!(
+                        bvh.near[at].reaches_above(d, h) & (1 << lane) != 0,
+                        "node {at} lane {lane}: plane at {h} culls a corner at {top}"
+                    );
+                    planes += 1;
+                }
+            }
+        }
+        assert!(
+            near > 2000 && far > 2000 && planes > 1000,
+            "{near} {far} {planes}"
+        );
+    }
+
+    #[test]
+    fn axis_aligned_capsules_far_from_the_origin_agree_with_brute_force() {
+        // Shank-like capsules thousands of millimetres from the origin with
+        // axes exactly along the coordinate axes (two slabs of every
+        // axis-aligned box see no step) and grazing ones, standing a radius
+        // (a hair more or less) off a facet, with and without the plane
+        // across the axis through the start.
+        let mesh = far_mesh(0.8);
+        let bvh = Bvh::build(&mesh);
+        let (mut hits, mut free) = (0, 0);
+        for i in 0..500 {
+            let (a, grazing, r, f) = near_facet_capsule(&mesh, i);
+            let axis = match i % 4 {
+                0 => DVec3::Z,
+                1 => DVec3::X,
+                2 => -DVec3::Y,
+                _ => grazing,
+            };
+            let b = a + axis * (r + (f * 1.3) % 30.0);
+            let above = (i % 8 < 4).then(|| (axis, axis.dot(a)));
+            let brute = (0..mesh.len()).any(|k| {
+                let [p, q, s] = mesh.corners(k);
+                above.is_none_or(|(n, h)| [p, q, s].iter().any(|v| n.dot(*v) > h))
+                    && segment_triangle_dist2(a, b, p, q, s) < r * r
+            });
+            assert_eq!(bvh.capsule_hits_above(a, b, r, None, above), brute, "{i}");
+            hits += brute as usize;
+            free += !brute as usize;
+        }
+        assert!(hits > 50 && free > 50, "{hits} hits, {free} free");
     }
 
     #[test]
