@@ -151,10 +151,10 @@ pub struct Closest {
 
 /// A BVH over the triangles of one mesh, built by median splits on the longest
 /// axis of the centroid bounds (leaves of up to eight triangles), with boxes
-/// merged from the leaves up. Closest-point queries walk a four-wide tree of
-/// oriented boxes collapsed from it (the binary tree is then dropped); rays
-/// and capsules a four-wide tree of axis-aligned boxes of the same shape,
-/// built on first use.
+/// merged from the leaves up. Closest-point and capsule queries walk a
+/// four-wide tree of oriented boxes collapsed from it (the binary tree is
+/// then dropped); rays a four-wide tree of axis-aligned boxes of the same
+/// shape, built on first use.
 #[derive(Clone, Debug)]
 pub struct Bvh {
     /// The box of the whole mesh.
@@ -317,7 +317,7 @@ impl Bvh {
         }
     }
 
-    /// The ray tree, built on the first ray or capsule query (closest-point
+    /// The ray tree, built on the first ray query (closest-point and capsule
     /// work never needs it).
     fn wide(&self) -> &[WideNode] {
         self.wide.get_or_init(|| {
