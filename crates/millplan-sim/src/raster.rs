@@ -85,6 +85,14 @@ fn along(
     out
 }
 
+/// Points between p and q (pushed to `out` in order) that keep the chords
+/// within `tol` of the drop surface, halving up to 12 times. A chord is
+/// halved where a sample lies above it, and where it is steep and one half
+/// holds nearly all of its rise: a step of the drop surface (a vertical
+/// wall, the cutter dropping off its edge) that samples on the low side
+/// cannot see. Where halving cannot close it, the path rises or falls
+/// vertically at the lower end, to the highest height seen between them,
+/// and never cuts the corner.
 fn refine(
     part: &DropMesh,
     sh: &Shape,
@@ -94,24 +102,38 @@ fn refine(
     depth: u32,
     out: &mut Vec<Option<DVec3>>,
 ) {
-    if depth >= 12 {
-        return;
-    }
     let at = |t: f64| {
         let xy = DVec2::new(p.x + (q.x - p.x) * t, p.y + (q.y - p.y) * t);
         part.drop(sh, xy).map(|d| DVec3::new(xy.x, xy.y, d.z))
     };
     let checks = [0.25, 0.5, 0.75].map(|t| (t, at(t)));
-    let bad = checks.iter().any(|(t, m)| match m {
+    let above = checks.iter().any(|(t, m)| match m {
         Some(m) => m.z - (p.z + (q.z - p.z) * t) > tol,
         None => false,
     });
-    if bad {
-        if let Some(m) = checks[1].1 {
-            refine(part, sh, p, m, tol, depth + 1, out);
-            out.push(Some(m));
-            refine(part, sh, m, q, tol, depth + 1, out);
-        }
+    let rise = (q.z - p.z).abs();
+    let step = checks[1].1.is_some_and(|m| {
+        rise > 4.0 * tol
+            && rise > DVec2::new(q.x - p.x, q.y - p.y).length()
+            && (m.z - p.z).abs().max((q.z - m.z).abs()) > 0.75 * rise
+    });
+    if !(above || step) {
+        return;
+    }
+    if depth >= 12 {
+        // Any height at or above a point's drop height is clear there.
+        let top = checks
+            .iter()
+            .filter_map(|(_, m)| m.map(|m| m.z))
+            .fold(p.z.max(q.z), f64::max);
+        let low = if p.z <= q.z { p } else { q };
+        out.push(Some(DVec3::new(low.x, low.y, top)));
+        return;
+    }
+    if let Some(m) = checks[1].1 {
+        refine(part, sh, p, m, tol, depth + 1, out);
+        out.push(Some(m));
+        refine(part, sh, m, q, tol, depth + 1, out);
     }
 }
 

@@ -126,3 +126,56 @@ fn progress_counts_every_sample_point() {
     assert_eq!(plain.points_checked, total);
     assert_eq!(plain.gouges.len(), rep.gouges.len());
 }
+
+/// A raster over the Bézier vase, whose rim has a vertical inner wall: the
+/// drop surface steps there (the cutter drops off the rim into the vase),
+/// and a chord across the step from the floor up to the rim cuts through
+/// the rim's corner. Rasters at several angles, with every cutter shape,
+/// are clean by the gouge check, and they do cross the wall: some moves
+/// rise steeply at its foot.
+#[test]
+fn rasters_over_a_vertical_wall_climb_it_without_cutting_the_corner() {
+    use millplan_sim::raster::{raster, RasterParams};
+    let mesh = millplan_geom::bezier::tessellate_patches(&millplan_geom::bezier::vase(), 8);
+    let part = DropMesh::new(&mesh);
+    let shapes = [
+        Shape::Ball { radius: 5.0 },
+        Shape::Flat { radius: 4.0 },
+        Shape::Bull {
+            radius: 5.0,
+            corner: 1.0,
+        },
+    ];
+    for sh in shapes {
+        for angle in [0.0, 30.0, 90.0] {
+            let p = RasterParams {
+                angle_deg: angle,
+                stepover: 4.0,
+                step: 0.5,
+                ..RasterParams::new(sh)
+            };
+            let prog = raster(&part, &mesh.bounds(), &p);
+            let moves = &prog.operations[0].moves;
+            // Cutting moves rising more than 5 mm over less than 0.1 mm.
+            let climbs = moves
+                .windows(2)
+                .filter(|w| {
+                    let d = w[1].end - w[0].end;
+                    w[1].is_cutting() && d.z > 5.0 && d.truncate().length() < 0.1
+                })
+                .count();
+            assert!(
+                climbs > 0,
+                "{sh:?} at {angle}°: the raster never meets the wall"
+            );
+            let rep = check(&prog, &part, |_| Some(sh), &GougeParams::default());
+            assert!(rep.points_checked > 10_000, "{}", rep.points_checked);
+            assert!(
+                rep.gouges.is_empty(),
+                "{sh:?} at {angle}°: {} gouges, first {:?}",
+                rep.gouges.len(),
+                rep.gouges.first()
+            );
+        }
+    }
+}
