@@ -39,6 +39,15 @@ fn box_mesh() -> DropMesh {
     DropMesh::new(&mesh)
 }
 
+/// A flat end, a ball and a bull-nose cutter of one radius.
+fn shapes(radius: f64, corner: f64) -> [Shape; 3] {
+    [
+        Shape::Flat { radius },
+        Shape::Ball { radius },
+        Shape::Bull { radius, corner },
+    ]
+}
+
 /// A pass along the wall y = 10 at depth -20 with the tool axis at `y`.
 fn pass(y: f64) -> Program {
     let src = format!(
@@ -53,15 +62,7 @@ fn pass(y: f64) -> Program {
 fn a_tool_at_a_wall_gouges_only_when_inside_it() {
     let part = box_mesh();
     let g = GougeParams::default();
-    let shapes = [
-        Shape::Flat { radius: 7.0 },
-        Shape::Ball { radius: 7.0 },
-        Shape::Bull {
-            radius: 7.0,
-            corner: 2.0,
-        },
-    ];
-    for sh in shapes {
+    for sh in shapes(7.0, 2.0) {
         for (inside, gouges) in [
             (-0.01, false),
             (0.0, false),
@@ -138,15 +139,7 @@ fn rasters_over_a_vertical_wall_climb_it_without_cutting_the_corner() {
     use millplan_sim::raster::{raster, RasterParams};
     let mesh = millplan_geom::bezier::tessellate_patches(&millplan_geom::bezier::vase(), 8);
     let part = DropMesh::new(&mesh);
-    let shapes = [
-        Shape::Ball { radius: 5.0 },
-        Shape::Flat { radius: 4.0 },
-        Shape::Bull {
-            radius: 5.0,
-            corner: 1.0,
-        },
-    ];
-    for sh in shapes {
+    for sh in shapes(5.0, 1.0) {
         for angle in [0.0, 30.0, 90.0] {
             let p = RasterParams {
                 angle_deg: angle,
