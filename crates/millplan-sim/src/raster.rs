@@ -112,10 +112,17 @@ fn refine(
         None => false,
     });
     let rise = (q.z - p.z).abs();
+    // A steep chord is halved too where a sample lies off it (below as well
+    // as above): a rim's corner and the steep slope below it can hide a
+    // step or a knee near one end whose samples all lie below the chord.
+    let off = checks.iter().any(|(t, m)| match m {
+        Some(m) => (m.z - (p.z + (q.z - p.z) * t)).abs() > tol,
+        None => false,
+    });
     let step = checks[1].1.is_some_and(|m| {
         rise > 4.0 * tol
             && rise > DVec2::new(q.x - p.x, q.y - p.y).length()
-            && (m.z - p.z).abs().max((q.z - m.z).abs()) > 0.75 * rise
+            && (off || (m.z - p.z).abs().max((q.z - m.z).abs()) > 0.75 * rise)
     });
     if !(above || step) {
         return;

@@ -172,3 +172,52 @@ fn rasters_over_a_vertical_wall_climb_it_without_cutting_the_corner() {
         }
     }
 }
+
+/// A plateau (z 0, x up to 0) whose wall drops 5 mm and runs on as a 100:1
+/// slope down to a floor 25 mm below: for a flat cutter of radius 2 the drop
+/// surface steps at x = 2 and then falls steeply. The raster's points lie
+/// at x = 1.97 + 0.25 k, so the step sits in the first quarter of a chord
+/// whose quarter points all lie on the slope, below the chord, and whose
+/// rise is spread over both halves (Interface-glue.STL and mount_rush.STL
+/// showed it). Refined, the chord is halved until the path climbs at the
+/// step; unrefined it cut 2.5 mm into the plateau's edge.
+#[test]
+fn a_step_hidden_in_a_chords_first_quarter_above_a_steep_slope_is_refined() {
+    use millplan_sim::raster::{raster, RasterParams};
+    let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let (x0, x1, y0, y1) = (-10.03, 9.97, -5.0, 5.0);
+    // The profile in x, z (plateau, wall, slope, floor) run out along y.
+    let profile = [
+        (x0, 0.0),
+        (0.0, 0.0),
+        (0.0, -5.0),
+        (0.2, -25.0),
+        (x1, -25.0),
+    ];
+    let mut soup = Vec::new();
+    for w in profile.windows(2) {
+        let ((xa, za), (xb, zb)) = (w[0], w[1]);
+        let (a, b) = (v(xa, y0, za), v(xb, y0, zb));
+        let (c, d) = (v(xb, y1, zb), v(xa, y1, za));
+        soup.push([a, b, c]);
+        soup.push([a, c, d]);
+    }
+    let (mesh, _) = TriMesh::from_soup(&soup);
+    let part = DropMesh::new(&mesh);
+    let sh = Shape::Flat { radius: 2.0 };
+    let p = RasterParams {
+        stepover: 2.0,
+        step: 0.25,
+        ..RasterParams::new(sh)
+    };
+    let prog = raster(&part, &mesh.bounds(), &p);
+    let rep = check(&prog, &part, |_| Some(sh), &GougeParams::default());
+    assert!(rep.moves_checked > 100, "{}", rep.moves_checked);
+    assert!(
+        rep.gouges.is_empty(),
+        "{} gouges, deepest {:.3} mm, first {:?}",
+        rep.gouges.len(),
+        rep.max_depth,
+        rep.gouges.first()
+    );
+}
