@@ -87,12 +87,13 @@ fn along(
 
 /// Points between p and q (pushed to `out` in order) that keep the chords
 /// within `tol` of the drop surface, halving up to 12 times. A chord is
-/// halved where a sample lies above it, and where it is steep and one half
+/// halved where a sample lies more than `tol` off it, above or below: a
+/// plateau's edge or a step near one end can stand above the chord while
+/// every sample lies below it. A steep chord is halved too where one half
 /// holds nearly all of its rise: a step of the drop surface (a vertical
-/// wall, the cutter dropping off its edge) that samples on the low side
-/// cannot see. Where halving cannot close it, the path rises or falls
-/// vertically at the lower end, to the highest height seen between them,
-/// and never cuts the corner.
+/// wall, the cutter dropping off its edge). Where halving cannot close it,
+/// the path rises or falls vertically at the lower end, to the highest
+/// height seen between them, and never cuts the corner.
 fn refine(
     part: &DropMesh,
     sh: &Shape,
@@ -107,24 +108,17 @@ fn refine(
         part.drop(sh, xy).map(|d| DVec3::new(xy.x, xy.y, d.z))
     };
     let checks = [0.25, 0.5, 0.75].map(|t| (t, at(t)));
-    let above = checks.iter().any(|(t, m)| match m {
-        Some(m) => m.z - (p.z + (q.z - p.z) * t) > tol,
-        None => false,
-    });
-    let rise = (q.z - p.z).abs();
-    // A steep chord is halved too where a sample lies off it (below as well
-    // as above): a rim's corner and the steep slope below it can hide a
-    // step or a knee near one end whose samples all lie below the chord.
     let off = checks.iter().any(|(t, m)| match m {
         Some(m) => (m.z - (p.z + (q.z - p.z) * t)).abs() > tol,
         None => false,
     });
+    let rise = (q.z - p.z).abs();
     let step = checks[1].1.is_some_and(|m| {
         rise > 4.0 * tol
             && rise > DVec2::new(q.x - p.x, q.y - p.y).length()
-            && (off || (m.z - p.z).abs().max((q.z - m.z).abs()) > 0.75 * rise)
+            && (m.z - p.z).abs().max((q.z - m.z).abs()) > 0.75 * rise
     });
-    if !(above || step) {
+    if !(off || step) {
         return;
     }
     if depth >= 12 {

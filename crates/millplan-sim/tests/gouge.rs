@@ -183,10 +183,8 @@ fn rasters_over_a_vertical_wall_climb_it_without_cutting_the_corner() {
 /// step; unrefined it cut 2.5 mm into the plateau's edge.
 #[test]
 fn a_step_hidden_in_a_chords_first_quarter_above_a_steep_slope_is_refined() {
-    use millplan_sim::raster::{raster, RasterParams};
-    let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
-    let (x0, x1, y0, y1) = (-10.03, 9.97, -5.0, 5.0);
-    // The profile in x, z (plateau, wall, slope, floor) run out along y.
+    // The profile in x, z (plateau, wall, slope, floor).
+    let (x0, x1) = (-10.03, 9.97);
     let profile = [
         (x0, 0.0),
         (0.0, 0.0),
@@ -194,6 +192,62 @@ fn a_step_hidden_in_a_chords_first_quarter_above_a_steep_slope_is_refined() {
         (0.2, -25.0),
         (x1, -25.0),
     ];
+    let rep = flat_raster_over_profile(&profile, 0.25, &GougeParams::default());
+    assert!(rep.moves_checked > 100, "{}", rep.moves_checked);
+    assert!(
+        rep.gouges.is_empty(),
+        "{} gouges, deepest {:.3} mm, first {:?}",
+        rep.gouges.len(),
+        rep.max_depth,
+        rep.gouges.first()
+    );
+}
+
+/// A gentle 1:10 slope with a thin fin on it (0.02 mm wide, its top 0.55
+/// mm up): for a flat cutter of radius 2 the drop surface is a plateau at
+/// the fin's top out to x = 2.02, then falls 0.15 mm back onto the slope.
+/// The raster's points lie at x = 1.98 + 0.2 k, so a chord from the
+/// plateau's last 0.04 mm down to the slope is neither steep nor has a
+/// quarter point above it (all three lie on the slope, 0.04-0.11 mm below
+/// it), while the plateau stands 0.03 mm above it over its first fifth
+/// (mount_rush.stl showed it). A chord whose samples lie off it, either
+/// way, is halved: the path keeps within --tol of the drop surface and
+/// does not cut the plateau's edge (found by sampling every 2 µm).
+#[test]
+fn a_chord_whose_samples_all_lie_below_it_is_refined() {
+    let (x0, x1) = (-10.02, 9.98);
+    let profile = [
+        (x0, 0.1 * x0),
+        (0.0, 0.0),
+        (0.0, 0.55),
+        (0.02, 0.55),
+        (0.02, 0.002),
+        (x1, 0.1 * x1),
+    ];
+    let fine = GougeParams {
+        step: 0.002,
+        ..GougeParams::default()
+    };
+    let rep = flat_raster_over_profile(&profile, 0.2, &fine);
+    assert!(
+        rep.gouges.is_empty(),
+        "{} gouges, deepest {:.3} mm, first {:?}",
+        rep.gouges.len(),
+        rep.max_depth,
+        rep.gouges.first()
+    );
+}
+
+/// The profile (x, z) run out along y from -5 to 5, rastered along x with
+/// a flat cutter of radius 2 at `step` (2 mm stepover), then gouge-checked.
+fn flat_raster_over_profile(
+    profile: &[(f64, f64)],
+    step: f64,
+    g: &GougeParams,
+) -> millplan_sim::gouge::GougeReport {
+    use millplan_sim::raster::{raster, RasterParams};
+    let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let (y0, y1) = (-5.0, 5.0);
     let mut soup = Vec::new();
     for w in profile.windows(2) {
         let ((xa, za), (xb, zb)) = (w[0], w[1]);
@@ -207,17 +261,9 @@ fn a_step_hidden_in_a_chords_first_quarter_above_a_steep_slope_is_refined() {
     let sh = Shape::Flat { radius: 2.0 };
     let p = RasterParams {
         stepover: 2.0,
-        step: 0.25,
+        step,
         ..RasterParams::new(sh)
     };
     let prog = raster(&part, &mesh.bounds(), &p);
-    let rep = check(&prog, &part, |_| Some(sh), &GougeParams::default());
-    assert!(rep.moves_checked > 100, "{}", rep.moves_checked);
-    assert!(
-        rep.gouges.is_empty(),
-        "{} gouges, deepest {:.3} mm, first {:?}",
-        rep.gouges.len(),
-        rep.max_depth,
-        rep.gouges.first()
-    );
+    check(&prog, &part, |_| Some(sh), g)
 }

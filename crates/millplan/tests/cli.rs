@@ -394,6 +394,45 @@ fn demo_runs_and_its_outputs_read() {
     }
 }
 
+/// `-q` as on every other command: the same files, one line printed.
+#[test]
+fn quiet_demo_writes_the_same_files_and_one_line() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let listing = |quiet: bool| {
+        let out = dir.path().join(if quiet { "q" } else { "loud" });
+        let mut cmd = bin();
+        cmd.args(["demo", "-o", out.to_str().expect("utf8")]);
+        if quiet {
+            cmd.arg("-q");
+        }
+        let o = cmd.output().expect("runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(&out)
+            .expect("folder")
+            .map(|e| {
+                let e = e.expect("entry");
+                let name = e.file_name().to_string_lossy().into_owned();
+                (name, std::fs::read(e.path()).expect("reads"))
+            })
+            .collect();
+        files.sort();
+        (String::from_utf8(o.stdout).expect("utf8"), files)
+    };
+    let (loud, all) = listing(false);
+    let (quiet, same) = listing(true);
+    assert!(loud.lines().count() > all.len(), "{loud}");
+    assert_eq!(quiet.lines().count(), 1, "{quiet}");
+    assert!(quiet.contains("report.html"), "{quiet}");
+    let names = |f: &[(String, Vec<u8>)]| f.iter().map(|x| x.0.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&all), names(&same));
+    // The report names its folder; every other file is the same byte for byte.
+    for ((name, a), (_, b)) in all.iter().zip(&same) {
+        if name != "report.html" {
+            assert!(a == b, "{name}");
+        }
+    }
+}
+
 #[test]
 fn help_explains_every_command() {
     for c in [

@@ -27,6 +27,10 @@ pub struct Args {
     /// as JSON on standard error.
     #[arg(long)]
     pub json: bool,
+    /// Print one line (the folder and the report to open) instead of the
+    /// summary and every file written.
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 /// Writes every file, all of them or none.
@@ -206,6 +210,15 @@ fn print_summary(
             },
         });
         crate::cmd::print_json(json);
+        return;
+    }
+    if a.quiet {
+        outln!(
+            "millplan demo: {} files in {}; open {} for the plots",
+            written.len(),
+            a.output.display(),
+            a.output.join("report.html").display()
+        );
         return;
     }
     outln!(
