@@ -1443,11 +1443,7 @@ mod tests {
                 DVec3::new(0.3, -0.2, 1.0).normalize()
             };
             let h = n.dot(a) - (f * 0.53) % 3.0;
-            let brute = (0..mesh.len()).any(|t| {
-                let [p, q, s] = mesh.corners(t);
-                [p, q, s].iter().any(|v| n.dot(*v) > h)
-                    && segment_triangle_dist2(a, b, p, q, s) < r * r
-            });
+            let brute = brute_capsule(&mesh, a, b, r, Some((n, h)));
             assert_eq!(
                 bvh.capsule_hits_above(a, b, r, None, Some((n, h))),
                 brute,
@@ -1471,15 +1467,28 @@ mod tests {
         for i in 0..300 {
             let (a, axis, r, f) = near_facet_capsule(&mesh, i);
             let b = a + axis * (5.0 + (f * 1.3) % 30.0);
-            let brute = (0..mesh.len()).any(|k| {
-                let [p, q, s] = mesh.corners(k);
-                segment_triangle_dist2(a, b, p, q, s) < r * r
-            });
+            let brute = brute_capsule(&mesh, a, b, r, None);
             assert_eq!(bvh.capsule_hits(a, b, r, None), brute, "capsule {i}");
             hits += brute as usize;
             free += !brute as usize;
         }
         assert!(hits > 30 && free > 30, "{hits} hits, {free} free");
+    }
+
+    /// Whether any triangle of `mesh` (reaching above `above`, when given)
+    /// comes closer than r to the segment ab, every triangle tested.
+    fn brute_capsule(
+        mesh: &TriMesh,
+        a: DVec3,
+        b: DVec3,
+        r: f64,
+        above: Option<(DVec3, f64)>,
+    ) -> bool {
+        (0..mesh.len()).any(|k| {
+            let [p, q, s] = mesh.corners(k);
+            above.is_none_or(|(n, h)| [p, q, s].iter().any(|v| n.dot(*v) > h))
+                && segment_triangle_dist2(a, b, p, q, s) < r * r
+        })
     }
 
     /// Case `i` of the capsule tests: a start a radius (a hair more or
@@ -1512,10 +1521,7 @@ mod tests {
             let (mut hits, mut free) = (0, 0);
             for i in 0..400 {
                 let (a, _, r, _) = near_facet_capsule(&mesh, i);
-                let brute = (0..mesh.len()).any(|k| {
-                    let [p, q, s] = mesh.corners(k);
-                    segment_triangle_dist2(a, a, p, q, s) < r * r
-                });
+                let brute = brute_capsule(&mesh, a, a, r, None);
                 assert_eq!(bvh.capsule_hits(a, a, r, None), brute, "{i}");
                 hits += brute as usize;
                 free += !brute as usize;
@@ -1540,11 +1546,7 @@ mod tests {
             let (a, axis, r, f) = near_facet_capsule(&mesh, i);
             let b = a + axis * (r + (f * 1.3) % 30.0);
             let h = axis.dot(a);
-            let brute = (0..mesh.len()).any(|k| {
-                let [p, q, s] = mesh.corners(k);
-                [p, q, s].iter().any(|v| axis.dot(*v) > h)
-                    && segment_triangle_dist2(a, b, p, q, s) < r * r
-            });
+            let brute = brute_capsule(&mesh, a, b, r, Some((axis, h)));
             let above = Some((axis, h));
             assert_eq!(bvh.capsule_hits_above(a, b, r, None, above), brute, "{i}");
             if i % 2 == 1 {
@@ -1926,11 +1928,7 @@ mod tests {
             };
             let b = a + axis * (r + (f * 1.3) % 30.0);
             let above = (i % 8 < 4).then(|| (axis, axis.dot(a)));
-            let brute = (0..mesh.len()).any(|k| {
-                let [p, q, s] = mesh.corners(k);
-                above.is_none_or(|(n, h)| [p, q, s].iter().any(|v| n.dot(*v) > h))
-                    && segment_triangle_dist2(a, b, p, q, s) < r * r
-            });
+            let brute = brute_capsule(&mesh, a, b, r, above);
             assert_eq!(bvh.capsule_hits_above(a, b, r, None, above), brute, "{i}");
             hits += brute as usize;
             free += !brute as usize;
@@ -2050,10 +2048,7 @@ mod tests {
             } else {
                 a + DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 4.0
             };
-            let brute = (0..soup.len()).any(|k| {
-                let [p, q, s] = soup.corners(k);
-                segment_triangle_dist2(a, b, p, q, s) < r * r
-            });
+            let brute = brute_capsule(&soup, a, b, r, None);
             assert_eq!(bvh.capsule_hits(a, b, r, None), brute, "{i}");
             hits += brute as usize;
             free += !brute as usize;
