@@ -470,9 +470,10 @@ fn nearest_first(lower: Vec4, mut mask: u32) -> ([usize; 4], usize) {
 struct TriShape {
     m: DVec3,
     m_len: f64,
-    /// Bounds the rounding of m·x for any x (componentwise |x| ≤ 1): each
-    /// component of m is rounded by at most a few ε·|q − p|·|r − p|, which
-    /// on a sliver or a needle is all there is of m.
+    /// Bounds, with room to spare, how far the computed m·x may be from
+    /// the true one, per unit of |x|: each component of m is rounded by a
+    /// few ε·|q − p|·|r − p|, which on a sliver or a needle is all there
+    /// is of m.
     noise: f64,
     centre: DVec3,
     rho: f64,
@@ -522,8 +523,9 @@ impl Bvh {
 
     /// [`capsule_hits`](Self::capsule_hits) among the triangles that reach
     /// above `above` = (n, h), n a unit vector: those lying wholly in the
-    /// half-space n·x ≤ h are left out. A tool's shank capsule starting at the ball centre c, with
-    /// (d, d·c) for its axis d, leaves out exactly what only the ball could touch.
+    /// half-space n·x ≤ h are left out. A tool's shank capsule starting at
+    /// the ball centre c, with (d, d·c) for its axis d, leaves out exactly
+    /// what only the ball could touch.
     pub fn capsule_hits_above(
         &self,
         a: DVec3,
