@@ -146,3 +146,78 @@ fn inspect_estimates_the_time_with_the_machines_acceleration() {
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("estimated with acceleration"), "{text}");
 }
+
+/// The dialect written by `speed` and `feed`, which both read a machine
+/// file: the demo machine's Fanuc control where the file name does not
+/// contradict it, refused with exit 2 and nothing written where it does
+/// (`.mpf` is Sinumerik), and `--to` deciding over both.
+#[test]
+fn speed_and_feed_refuse_a_file_name_that_contradicts_the_machine() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let d = dir.path().join("demo");
+    let o = bin()
+        .args(["demo", "-q", "-o", d.to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let p = |f: &str| d.join(f).to_str().expect("utf8").to_string();
+    let speed = [
+        "speed",
+        &p("finish.apt"),
+        "--stl",
+        &p("part.stl"),
+        "--vc",
+        "63",
+        "--fz",
+        "0.125",
+        "--ap",
+        "0.3",
+    ];
+    let feed = [
+        "feed",
+        &p("finish.apt"),
+        "--stl",
+        &p("part.stl"),
+        "--stock",
+        "offset:0.3",
+        "--resolution",
+        "0.5",
+        "--material",
+        "al7075",
+    ];
+    for cmd in [&speed[..], &feed[..]] {
+        let run = |out: &str, to: Option<&str>| {
+            let mut c = bin();
+            c.args(cmd)
+                .args(["--machine", &p("machine.toml"), "-q", "-o"])
+                .arg(dir.path().join(out));
+            if let Some(t) = to {
+                c.args(["--to", t]);
+            }
+            c.output().expect("runs")
+        };
+        let name = cmd[0];
+        let bad = run(&format!("{name}.mpf"), None);
+        assert_eq!(bad.status.code(), Some(2), "{name}");
+        let msg = String::from_utf8_lossy(&bad.stderr);
+        assert!(msg.contains("the machine file says"), "{name}: {msg}");
+        assert!(!dir.path().join(format!("{name}.mpf")).exists(), "{name}");
+        let forced = run(&format!("{name}_to.mpf"), Some("sinumerik"));
+        assert!(
+            forced.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&forced.stderr)
+        );
+        let fanuc = run(&format!("{name}.nc"), None);
+        assert!(
+            fanuc.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&fanuc.stderr)
+        );
+        let text = std::fs::read_to_string(dir.path().join(format!("{name}.nc"))).expect("written");
+        assert!(
+            text.starts_with('%'),
+            "{name}: a Fanuc program opens with %"
+        );
+    }
+}

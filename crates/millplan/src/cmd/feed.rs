@@ -4,8 +4,7 @@
 use crate::cmd::cut::load_materials;
 use crate::cmd::simulate::initial_stock;
 use crate::cmd::{
-    arg, print_diagnostics, read_options, target_for, tool_shape, write_program_file, Range,
-    TargetArg, UnitArg,
+    arg, print_diagnostics, read_options, tool_shape, write_program_file, Range, TargetArg, UnitArg,
 };
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
@@ -332,26 +331,6 @@ fn feed_params(a: &Args, p: &Prepared) -> CliResult<FeedParams> {
     })
 }
 
-/// The dialect to write: --to, else the machine file's control (which the
-/// output's extension must not contradict), else the output's extension.
-fn feed_target(a: &Args, p: &Prepared) -> CliResult<millplan_nc::write::Target> {
-    Ok(match (a.to, p.machine.target()) {
-        (None, Some(t)) => {
-            let by_name = target_for(None, &a.output, p.program.source)?;
-            if by_name != t && a.output.extension().is_some() {
-                return Err(CliError::input(format!(
-                    "{}: the machine file says {} but the file name says {}: give --to",
-                    a.output.display(),
-                    t.name(),
-                    by_name.name()
-                )));
-            }
-            t
-        }
-        (to, _) => target_for(to, &a.output, p.program.source)?,
-    })
-}
-
 pub fn run(a: Args) -> CliResult<i32> {
     let m = &a.model;
     let mut inputs: Vec<&Path> = vec![&a.path];
@@ -369,7 +348,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let p = prepare(&a.path, m)?;
     let params = feed_params(&a, &p)?;
     let limits = params.limits;
-    let target = feed_target(&a, &p)?;
+    let target = crate::cmd::target_with_machine(a.to, &a.output, &p.machine, p.program.source)?;
     let mut out = p.program.clone();
     let mut pass = FeedPass::new(params, p.stock.clone(), body_fn(m)?);
     let bar = crate::progress::Phases::new(!(m.quiet || m.json));

@@ -221,6 +221,32 @@ pub fn target_for(
     })
 }
 
+/// The dialect to write for a command that reads a machine file: `--to`;
+/// else the machine's control, which the output's extension must not
+/// contradict; else as [`target_for`].
+pub fn target_with_machine(
+    to: Option<TargetArg>,
+    output: &std::path::Path,
+    machine: &millplan_plan::machine::Machine,
+    source: millplan_nc::Dialect,
+) -> crate::error::CliResult<Target> {
+    match (to, machine.target()) {
+        (None, Some(t)) => {
+            let by_name = target_for(None, output, source)?;
+            if by_name != t && output.extension().is_some() {
+                return Err(crate::error::CliError::input(format!(
+                    "{}: the machine file says {} but the file name says {}: give --to",
+                    output.display(),
+                    t.name(),
+                    by_name.name()
+                )));
+            }
+            Ok(t)
+        }
+        (to, _) => target_for(to, output, source),
+    }
+}
+
 /// Writes a program for `o.target` as the output `path` of `outputs`, a few
 /// megabytes at a time: a large program is never held whole as text. Words
 /// written as comments under `--lossy` are printed as warnings located in

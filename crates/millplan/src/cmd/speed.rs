@@ -1,8 +1,8 @@
 //! `millplan speed`: constant-cutting-speed spindle control for ball-end finishing.
 
 use crate::cmd::{
-    arg, print_diagnostics, read_options, target_for, write_program_file, Range, TargetArg,
-    UnitArg, MAX_TOOL_D, MAX_VC,
+    arg, print_diagnostics, read_options, write_program_file, Range, TargetArg, UnitArg,
+    MAX_TOOL_D, MAX_VC,
 };
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
@@ -10,7 +10,6 @@ use clap::ValueEnum;
 use millplan_models::contact::{Convention, NormalMode, Surface};
 use millplan_nc::write::Target;
 use millplan_plan::checks;
-use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context};
 use millplan_plan::speed::{FeedCoupling, SpeedParams, SpeedPass, Summary};
 use std::path::PathBuf;
@@ -173,26 +172,6 @@ fn params(a: &Args) -> SpeedParams {
     p
 }
 
-/// The dialect to write: --to; else the machine's, which the file name must
-/// not contradict; else the file name's or the source's.
-fn target(a: &Args, machine: &Machine, source: millplan_nc::Dialect) -> CliResult<Target> {
-    match (a.to, machine.target()) {
-        (None, Some(t)) => {
-            let by_name = target_for(None, &a.output, source)?;
-            if by_name != t && a.output.extension().is_some() {
-                return Err(CliError::input(format!(
-                    "{}: the machine file says {} but the file name says {}: give --to",
-                    a.output.display(),
-                    t.name(),
-                    by_name.name()
-                )));
-            }
-            Ok(t)
-        }
-        (to, _) => target_for(to, &a.output, source),
-    }
-}
-
 /// The program, table and report, checked against each other and the inputs
 /// before any work.
 fn plan_outputs(a: &Args) -> CliResult<Outputs> {
@@ -232,7 +211,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let (parsed, t_read) = join(reader);
     let parsed = parsed?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
-    let target = target(&a, &machine, parsed.program.source)?;
+    let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
     let bar = crate::progress::Phases::new(!a.quiet && parsed.program.move_count() >= 100_000);
     let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
     let cx = Context::new(machine)
