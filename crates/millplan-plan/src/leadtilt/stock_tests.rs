@@ -3,7 +3,6 @@
 
 use super::*;
 use crate::force::LIFT_SHARE;
-use millplan_models::force::coeffs::Coeffs;
 use millplan_models::force::engage::{Engagement, FnEngagement};
 use millplan_nc::ir::{Cutter, Dialect, Move, Operation, Tool as NcTool};
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
@@ -48,21 +47,16 @@ fn pass(op: &mut Operation, y: f64, z: f64) {
     op.moves.push(Move::rapid(DVec3::new(25.0, y, 20.0)));
 }
 
+/// The planar tests' tool and cut at `ap`, `ae`, tilt before lead, with
+/// no holder.
 fn params(ap: f64, ae: f64) -> Params {
     Params {
-        search: SearchOptions::default(),
         variant: Variant::TiltThenLead,
-        objective: Objective::Fxy,
-        law: Law::Rta(Coeffs::rta(1750.0, 550.0, 640.0, 24.0, 43.0, 0.0)),
-        flutes: 2,
-        helix: 30f64.to_radians(),
-        fz: 0.1,
-        rpm: 8000.0,
         ap,
         ae,
-        reach: 30.0,
         holder_radius: 0.0,
         holder_length: 0.0,
+        ..super::tests::params()
     }
 }
 
