@@ -9,6 +9,9 @@ fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_millplan"))
 }
 
+/// The paper's test conditions for `speed`.
+const CUT: [&str; 6] = ["--vc", "63", "--fz", "0.125", "--ap", "0.3"];
+
 fn example() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/machine.toml")
 }
@@ -26,7 +29,7 @@ fn speed(dir: &Path, machine: &Path) -> Output {
     bin()
         .args(["speed", d.join("finish.apt").to_str().expect("utf8")])
         .args(["--stl", d.join("part.stl").to_str().expect("utf8")])
-        .args(["--vc", "63", "--fz", "0.125", "--ap", "0.3"])
+        .args(CUT)
         .args(["--json", "-q", "--to", "apt"])
         .args(["--machine", machine.to_str().expect("utf8")])
         .args(["-o", dir.join("out.apt").to_str().expect("utf8")])
@@ -77,18 +80,8 @@ fn a_bad_machine_file_is_located() {
     .expect("write");
     // No program is read: the machine file is checked first.
     let o = bin()
-        .args([
-            "speed",
-            "missing.apt",
-            "--stl",
-            "missing.stl",
-            "--vc",
-            "63",
-            "--fz",
-            "0.125",
-            "--ap",
-            "0.3",
-        ])
+        .args(["speed", "missing.apt", "--stl", "missing.stl"])
+        .args(CUT)
         .args(["--machine", bad.to_str().expect("utf8"), "-o"])
         .arg(dir.path().join("out.apt"))
         .output()
@@ -161,23 +154,13 @@ fn speed_and_feed_refuse_a_file_name_that_contradicts_the_machine() {
         .expect("runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let p = |f: &str| d.join(f).to_str().expect("utf8").to_string();
-    let speed = [
-        "speed",
-        &p("finish.apt"),
-        "--stl",
-        &p("part.stl"),
-        "--vc",
-        "63",
-        "--fz",
-        "0.125",
-        "--ap",
-        "0.3",
-    ];
+    let (apt, stl) = (p("finish.apt"), p("part.stl"));
+    let speed = [&["speed", &apt, "--stl", &stl][..], &CUT].concat();
     let feed = [
         "feed",
-        &p("finish.apt"),
+        &apt,
         "--stl",
-        &p("part.stl"),
+        &stl,
         "--stock",
         "offset:0.3",
         "--resolution",
