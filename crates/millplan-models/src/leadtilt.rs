@@ -340,9 +340,17 @@ mod tests {
     fn positive_lead_leans_towards_the_feed_positive_tilt_away_from_c() {
         for v in [Variant::LeadThenTilt, Variant::TiltThenLead] {
             let a = v.axis(10.0, 0.0);
-            near(a, [10f64.to_radians().sin(), 0.0, 10f64.to_radians().cos()], 1e-15);
+            near(
+                a,
+                [10f64.to_radians().sin(), 0.0, 10f64.to_radians().cos()],
+                1e-15,
+            );
             let a = v.axis(0.0, 10.0);
-            near(a, [0.0, -10f64.to_radians().sin(), 10f64.to_radians().cos()], 1e-15);
+            near(
+                a,
+                [0.0, -10f64.to_radians().sin(), 10f64.to_radians().cos()],
+                1e-15,
+            );
             // Both together: the shank ahead (+f) and on the −c side.
             let a = v.axis(20.0, 15.0);
             assert!(a.x > 0.0 && a.y < 0.0, "{v:?}: {a}");
@@ -351,7 +359,10 @@ mod tests {
         for (l, t) in [(10.0, -10.0), (25.0, 26.4), (-5.0, 30.0)] {
             let m = crate::force::r_wt(f64::to_radians(l), f64::to_radians(t));
             let z = DVec3::new(m[0][2], m[1][2], m[2][2]);
-            assert!((z - Variant::default().axis(l, t)).length() < 1e-15, "({l}, {t})");
+            assert!(
+                (z - Variant::default().axis(l, t)).length() < 1e-15,
+                "({l}, {t})"
+            );
         }
     }
 
@@ -380,20 +391,31 @@ mod tests {
         let kappa = |l: f64, t: f64| {
             let cut = Variant::default().cut(0.1, 8000.0, l, t);
             let e = PlanarRaster::new(&tool, 0.5, Some(0.5), cut.lead, cut.tilt).expect("raster");
-            m.evaluate(&cut, &e).kappa_min.expect("engaged").to_degrees()
+            m.evaluate(&cut, &e)
+                .kappa_min
+                .expect("engaged")
+                .to_degrees()
         };
         // The lowest slice's centre (z = dz/2 = 0.025 mm) is at κ = 5.73°
         // (no higher on a finer grid); with a lead L the chip needs
         // tan κ·sin φ > tan L, so κ > L.
         let lowest = (1.0 - Grid::default().dz / 2.0 / 5.0).acos().to_degrees();
         for t in [-20.0, 0.0, 20.0] {
-            assert!(kappa(10.0, t) > 10.0, "lead 10, tilt {t}: {}", kappa(10.0, t));
+            assert!(
+                kappa(10.0, t) > 10.0,
+                "lead 10, tilt {t}: {}",
+                kappa(10.0, t)
+            );
         }
         for t in [0.0, 20.0] {
             let k = kappa(-10.0, t);
             assert!(k <= lowest + 1e-9, "lead −10, tilt {t}: {k}");
         }
-        assert!(kappa(-10.0, -20.0) > 2.0 * lowest, "{}", kappa(-10.0, -20.0));
+        assert!(
+            kappa(-10.0, -20.0) > 2.0 * lowest,
+            "{}",
+            kappa(-10.0, -20.0)
+        );
     }
 
     /// Spec §2.2: the variants differ only when both angles are non-zero,
