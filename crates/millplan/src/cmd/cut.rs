@@ -65,8 +65,8 @@ pub struct Args {
     /// feed seen from the shank).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub tilt: f64,
-    /// Order of the two turns, as in `orient`: tilt-then-lead (process-
-    /// models §0, R = Rx(tilt)·Ry(lead), axis (sin L, −cos L·sin T,
+    /// Order of the two turns, as in `orient`: tilt-then-lead
+    /// (process-models §0, R = Rx(tilt)·Ry(lead), axis (sin L, −cos L·sin T,
     /// cos L·cos T)) or lead-then-tilt (R = Ry(lead)·Rx(tilt), axis
     /// (sin L·cos T, −sin T, cos L·cos T)); same signs either way.
     #[arg(long, value_enum, default_value = "tilt-then-lead")]

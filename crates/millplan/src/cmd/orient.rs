@@ -26,8 +26,8 @@ use std::path::{Path, PathBuf};
 /// R = Rx(tilt)·Ry(lead) by default; a positive lead leans the shank toward
 /// the feed (the tip trails), a positive tilt toward −c (right of the feed,
 /// seen from the shank). `millplan cut` with the lead and tilt reported
-/// (and the same --variant, tool, --fz, --n, --ap, --ae) gives the
-/// F_xy,max reported. A candidate is refused when the zero-speed tip would
+/// (and the same --variant, tool, --flutes, --helix, --fz, --n, --ap,
+/// --ae) gives the F_xy,max reported. A candidate is refused when the zero-speed tip would
 /// cut (negative lead; zero lead, within 0.01°, unless R·(1 − cos tilt) ≥ --ap), when the
 /// shank or holder meets the part at any point, or when the machine's rotary
 /// axes cannot reach it. Writes the re-oriented CL (tool axes on every
@@ -75,11 +75,12 @@ pub struct Args {
     /// scaled to the original force level).
     #[arg(long, value_enum, default_value = "fxy")]
     pub objective: ObjectiveArg,
-    /// Order of the two turns: tilt-then-lead (process-models §0, R =
-    /// Rx(tilt)·Ry(lead), axis (sin L, −cos L·sin T, cos L·cos T); variant 2
-    /// of kinematics-access-tools §2.2) or lead-then-tilt (R = Ry(lead)·
-    /// Rx(tilt), axis (sin L·cos T, −sin T, cos L·cos T); variant 1); same
-    /// signs either way, and `cut --variant` takes the same.
+    /// Order of the two turns: tilt-then-lead (process-models §0,
+    /// R = Rx(tilt)·Ry(lead), axis (sin L, −cos L·sin T, cos L·cos T);
+    /// variant 2 of kinematics-access-tools §2.2) or lead-then-tilt
+    /// (R = Ry(lead)·Rx(tilt), axis (sin L·cos T, −sin T, cos L·cos T);
+    /// variant 1); same signs either way, and `cut --variant` takes the
+    /// same.
     #[arg(long, value_enum, default_value = "tilt-then-lead")]
     pub variant: VariantArg,
     /// Feed per tooth the forces are evaluated at, mm.
