@@ -1,12 +1,26 @@
 //! Lead and tilt: the local feed / cross-feed / normal frame at a cutter
 //! contact point, both conversions between (lead, tilt) and a tool axis, and
 //! the lead/tilt search (spec kinematics-access-tools §2.1–§2.2,
-//! process-models §2.4).
+//! process-models §0 and §2.4).
+//!
+//! **The one convention** (process-models §0; paper 003: lead a rotation
+//! about the cross-feed axis C, tilt one about the feed axis F), used by
+//! `cut`, `orient` and the force model alike: in the FCN frame (f the feed,
+//! n the outward normal, c = n × f) lead is a right-handed rotation about c
+//! and tilt a right-handed rotation about f. A positive lead leans the shank
+//! towards +f (ahead of the tip, which trails and does not cut); a positive
+//! tilt leans it towards −c = f × n (to the right of the feed, seen from
+//! the shank). The default composition is §0's R_wt = Rx(tilt)·Ry(lead),
+//! the tool axis (sin L, −cos L·sin T, cos L·cos T) in FCN
+//! ([`Variant::TiltThenLead`]). Kinematics-access-tools §2.1 writes the
+//! tilt towards +c instead; process-models §0 is followed here, so that
+//! spec's worked example holds with the tilt's sign turned.
 //!
 //! Pure geometry and a generic search: it knows no IR and no part, so the
 //! force model, the planner's `orient` command and tests share it. Angles
 //! are in degrees at the API, as users bound them.
 
+use crate::force::Cut;
 use millplan_geom::{DMat3, DVec3};
 
 /// The FCN frame at a cutter-contact point (§2.1): f the feed direction in
@@ -60,19 +74,22 @@ impl Fcn {
 }
 
 /// The composition order of the two rotations (§2.2); they do not commute.
+/// Both keep the signs of the convention above (lead about +c, tilt about
+/// +f, right-handed).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Variant {
-    /// Variant 1 of §2.2 (tilt about f, then lead about c, fixed axes).
-    /// Lead first, then tilt about the moved feed axis (the axis swings
-    /// towards c on a great circle): t = (sinL·cosT, sinT, cosL·cosT). The
-    /// default, as the spec recommends: FeatureCAM's "lead first, then
-    /// lean", and arcsin on the tilt, the angle users bound tightly.
-    #[default]
+    /// Variant 1 of kinematics-access-tools §2.2: R = Ry(lead)·Rx(tilt)
+    /// (tilt about f, then lead about c, fixed axes; or lead first, then
+    /// tilt about the moved feed axis, the axis swinging on a great circle):
+    /// t = (sinL·cosT, −sinT, cosL·cosT). FeatureCAM's "lead first, then
+    /// lean"; arcsin on the tilt.
     LeadThenTilt,
-    /// Variant 2 of §2.2 (lead about c, then tilt about f, fixed axes).
-    /// Tilt first, then lead about the moved cross-feed axis:
-    /// t = (sinL, cosL·sinT, cosL·cosT).
+    /// Variant 2 of §2.2 and process-models §0, the default and the force
+    /// model's own: R_wt = Rx(tilt)·Ry(lead) (lead about c, then tilt about
+    /// f, fixed axes; or tilt first, then lead about the moved cross-feed
+    /// axis): t = (sinL, −cosL·sinT, cosL·cosT).
+    #[default]
     TiltThenLead,
 }
 
@@ -82,18 +99,47 @@ impl Variant {
         let (sl, cl) = lead.to_radians().sin_cos();
         let (st, ct) = tilt.to_radians().sin_cos();
         match self {
-            Variant::LeadThenTilt => DVec3::new(sl * ct, st, cl * ct),
-            Variant::TiltThenLead => DVec3::new(sl, cl * st, cl * ct),
+            Variant::LeadThenTilt => DVec3::new(sl * ct, -st, cl * ct),
+            Variant::TiltThenLead => DVec3::new(sl, -cl * st, cl * ct),
         }
     }
 
     /// (lead, tilt) in degrees of a unit tool axis in FCN coordinates.
     pub fn angles(self, t: DVec3) -> (f64, f64) {
         let (l, tt) = match self {
-            Variant::LeadThenTilt => (t.x.atan2(t.z), t.y.clamp(-1.0, 1.0).asin()),
-            Variant::TiltThenLead => (t.x.clamp(-1.0, 1.0).asin(), t.y.atan2(t.z)),
+            Variant::LeadThenTilt => (t.x.atan2(t.z), (-t.y).clamp(-1.0, 1.0).asin()),
+            Variant::TiltThenLead => (t.x.clamp(-1.0, 1.0).asin(), (-t.y).atan2(t.z)),
         };
         (l.to_degrees(), tt.to_degrees())
+    }
+
+    /// The force model's lead and tilt, radians, of the tool at (`lead`,
+    /// `tilt`) degrees of this variant: the (L, T) whose R_wt(L, T)·ẑ
+    /// (process-models §0) is [`Variant::axis`]. The same angles for
+    /// [`Variant::TiltThenLead`]; for [`Variant::LeadThenTilt`] the same
+    /// axis, the tool turned about it (which changes no load: F_xy, torque
+    /// and power do not depend on where the spindle angle is counted from).
+    pub fn force_angles(self, lead: f64, tilt: f64) -> (f64, f64) {
+        match self {
+            Variant::TiltThenLead => (lead.to_radians(), tilt.to_radians()),
+            Variant::LeadThenTilt => {
+                let a = self.axis(lead, tilt);
+                (a.x.clamp(-1.0, 1.0).asin(), (-a.y).atan2(a.z))
+            }
+        }
+    }
+
+    /// The force model's cutting conditions for the tool at (`lead`,
+    /// `tilt`) degrees of this variant, at feed per tooth `fz` and spindle
+    /// speed `rpm`: what `cut` and `orient` both evaluate.
+    pub fn cut(self, fz: f64, rpm: f64, lead: f64, tilt: f64) -> Cut {
+        let (lead, tilt) = self.force_angles(lead, tilt);
+        Cut {
+            fz,
+            rpm,
+            lead,
+            tilt,
+        }
     }
 }
 
@@ -270,16 +316,105 @@ mod tests {
     /// 0.866025), f = (1, 0, 0), c = (0, 0.866025, 0.5); variant 1 (lead
     /// first, then tilt about the moved feed axis) with L = 10°, T = 5°
     /// gives t_W = (0.172987, −0.415051, 0.893201), and back (10°, 5°).
+    /// That spec leans a positive tilt towards +c; the convention here is
+    /// process-models §0's (towards −c), so the same axis is (10°, −5°).
     #[test]
     fn spec_worked_example() {
         let fr = Fcn::new(DVec3::new(0.0, -0.5, 0.866025), DVec3::X).expect("frame");
         near(fr.c, [0.0, 0.866025, 0.5], 1e-6);
-        let t = fr.axis(10.0, 5.0, Variant::LeadThenTilt);
+        let t = fr.axis(10.0, -5.0, Variant::LeadThenTilt);
         near(t, [0.172987, -0.415051, 0.893201], 2e-6);
         let (l, tt) = fr.angles(t, Variant::LeadThenTilt);
         assert!(
-            (l - 10.0).abs() < 1e-9 && (tt - 5.0).abs() < 1e-9,
+            (l - 10.0).abs() < 1e-9 && (tt + 5.0).abs() < 1e-9,
             "{l} {tt}"
+        );
+    }
+
+    /// The signs of process-models §0 ("a positive lead leans the shank
+    /// toward +x_w: the tip trails and does not cut"; R_wt = Rx(tilt)·
+    /// Ry(lead), so a positive tilt turns the axis about +x_w, towards
+    /// −y_w = −c) and paper 003 (lead about C, tilt about F), in both
+    /// variants; and the default is §0's matrix itself.
+    #[test]
+    fn positive_lead_leans_towards_the_feed_positive_tilt_away_from_c() {
+        for v in [Variant::LeadThenTilt, Variant::TiltThenLead] {
+            let a = v.axis(10.0, 0.0);
+            near(
+                a,
+                [10f64.to_radians().sin(), 0.0, 10f64.to_radians().cos()],
+                1e-15,
+            );
+            let a = v.axis(0.0, 10.0);
+            near(
+                a,
+                [0.0, -10f64.to_radians().sin(), 10f64.to_radians().cos()],
+                1e-15,
+            );
+            // Both together: the shank ahead (+f) and on the −c side.
+            let a = v.axis(20.0, 15.0);
+            assert!(a.x > 0.0 && a.y < 0.0, "{v:?}: {a}");
+        }
+        assert_eq!(Variant::default(), Variant::TiltThenLead);
+        for (l, t) in [(10.0, -10.0), (25.0, 26.4), (-5.0, 30.0)] {
+            let m = crate::force::r_wt(f64::to_radians(l), f64::to_radians(t));
+            let z = DVec3::new(m[0][2], m[1][2], m[2][2]);
+            assert!(
+                (z - Variant::default().axis(l, t)).length() < 1e-15,
+                "({l}, {t})"
+            );
+        }
+    }
+
+    /// Process-models §1.4c, the tip-contact test §0 asks the convention to
+    /// be asserted with: on the planar raster a positive lead keeps every
+    /// engaged element off the tip (κ well above 0: h = −fz·sin L < 0
+    /// there) at any tilt. A negative lead cuts with the tip where the tip
+    /// lies in material: upright, and at a positive tilt, which leans the
+    /// shank toward −c and so moves the tip toward +c, the uncut side (the
+    /// earlier passes lie on −c, §1.4a); a negative tilt moves it onto the
+    /// earlier passes' side, 1.7 mm out, below their scallops' reach.
+    #[test]
+    fn a_positive_lead_keeps_the_tip_out_of_the_cut() {
+        use crate::force::coeffs::{Coeffs, Law};
+        use crate::force::edge::Tool;
+        use crate::force::engage::PlanarRaster;
+        use crate::force::{ForceModel, Grid};
+        let tool = Tool {
+            shape: crate::cutter::Shape::Ball { radius: 5.0 },
+            flutes: 2,
+            helix: 30f64.to_radians(),
+            flute_length: 30.0,
+        };
+        let law = Law::Rta(Coeffs::rta(1750.0, 550.0, 640.0, 0.0, 0.0, 0.0));
+        let m = ForceModel::new(tool, law, Grid::default()).expect("model");
+        let kappa = |l: f64, t: f64| {
+            let cut = Variant::default().cut(0.1, 8000.0, l, t);
+            let e = PlanarRaster::new(&tool, 0.5, Some(0.5), cut.lead, cut.tilt).expect("raster");
+            m.evaluate(&cut, &e)
+                .kappa_min
+                .expect("engaged")
+                .to_degrees()
+        };
+        // The lowest slice's centre (z = dz/2 = 0.025 mm) is at κ = 5.73°
+        // (no higher on a finer grid); with a lead L the chip needs
+        // tan κ·sin φ > tan L, so κ > L.
+        let lowest = (1.0 - Grid::default().dz / 2.0 / 5.0).acos().to_degrees();
+        for t in [-20.0, 0.0, 20.0] {
+            assert!(
+                kappa(10.0, t) > 10.0,
+                "lead 10, tilt {t}: {}",
+                kappa(10.0, t)
+            );
+        }
+        for t in [0.0, 20.0] {
+            let k = kappa(-10.0, t);
+            assert!(k <= lowest + 1e-9, "lead −10, tilt {t}: {k}");
+        }
+        assert!(
+            kappa(-10.0, -20.0) > 2.0 * lowest,
+            "{}",
+            kappa(-10.0, -20.0)
         );
     }
 
@@ -318,6 +453,30 @@ mod tests {
                 prop_assert!((axis.length() - 1.0).abs() < 1e-12);
                 let (l2, t2) = fr.angles(axis, v);
                 prop_assert!((l2 - l).abs() < 1e-7 && (t2 - t).abs() < 1e-7, "{v:?}: {l2} {t2}");
+            }
+        }
+
+        /// The two code paths build one tool axis: the axis `orient` writes
+        /// and `post` turns into machine angles (`Fcn::axis`) is the one the
+        /// force model of `cut` evaluates (R_wt of `Variant::cut`'s angles,
+        /// process-models §0, taken into the world through the same frame),
+        /// for any lead, tilt, feed direction and normal, in both variants;
+        /// and the feed the force model sees is the frame's feed direction.
+        #[test]
+        fn orient_and_cut_build_the_same_axis(l in -80.0f64..80.0, t in -80.0f64..80.0,
+                       nx in -1.0f64..1.0, ny in -1.0f64..1.0, dx in -1.0f64..1.0, dy in -1.0f64..1.0) {
+            let Some(fr) = Fcn::new(DVec3::new(nx, ny, 1.5), DVec3::new(dx, dy, 0.1)) else { return Ok(()); };
+            for v in [Variant::LeadThenTilt, Variant::TiltThenLead] {
+                let cut = v.cut(0.1, 6000.0, l, t);
+                let m = crate::force::r_wt(cut.lead, cut.tilt);
+                let col = |k: usize| DVec3::new(m[0][k], m[1][k], m[2][k]);
+                let written = fr.axis(l, t, v);
+                prop_assert!((fr.to_world(col(2)) - written).length() < 1e-12, "{v:?}");
+                // fz·R_wtᵀ·x̂ (§1.2) is the world feed fz·f in the tool frame.
+                let fv = DVec3::from_array(cut.feed_vector());
+                let tool_in_world = [col(0), col(1), col(2)].map(|c| fr.to_world(c));
+                let feed = tool_in_world[0] * fv.x + tool_in_world[1] * fv.y + tool_in_world[2] * fv.z;
+                prop_assert!((feed - fr.f * 0.1).length() < 1e-12, "{v:?}: {feed}");
             }
         }
     }

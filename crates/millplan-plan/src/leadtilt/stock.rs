@@ -275,11 +275,14 @@ pub(super) fn judge(
             let tip = q.centre - axis * r;
             let eng = StockEngagement::new(&s.crop, r, tip, axis, s.feed, flute);
             let (x, _, z) = eng.frame();
+            // The chip depends on the feed's lead at the sample alone; the
+            // tilt (the force model's, of the candidate) only turns the
+            // workpiece-frame forces.
             let cut = Cut {
                 fz: p.fz,
                 rpm: p.rpm,
                 lead: s.feed.dot(z).atan2(s.feed.dot(x)),
-                tilt: tilt.to_radians(),
+                tilt: p.variant.force_angles(lead, tilt).1,
             };
             let ev = model.evaluate(&cut, &eng);
             let tip = cut.lead.to_degrees() <= super::ZERO_LEAD && eng.contains([0.0; 3]);

@@ -4,6 +4,7 @@
 use super::*;
 use crate::force::LIFT_SHARE;
 use millplan_models::force::engage::{Engagement, FnEngagement};
+use millplan_models::force::Cut;
 use millplan_nc::ir::{Cutter, Dialect, Move, Operation, Tool as NcTool};
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
 use millplan_sim::stock::tool::ToolBody;
@@ -136,10 +137,9 @@ fn model(pr: &Params) -> (ForceModel, Tool) {
 /// scallop's edge); against the raster itself it is never higher, and
 /// within 10 %.
 ///
-/// The lead and tilt of the force model (§0: R_wt = Rx(T)·Ry(L), the axis
-/// (sin L, −sin T·cos L, cos T·cos L) in the feed frame) are variant 2 of
-/// kinematics-access-tools §2.2 with the tilt's sign turned: the planar
-/// model at (L, T) is the stock at (L, −T).
+/// One convention (process-models §0): the force model's R_wt = Rx(T)·
+/// Ry(L) is variant 2 (`TiltThenLead`), so the planar model at (L, T) is
+/// the stock at (L, T).
 #[test]
 fn the_stocks_objective_on_a_planar_raster_is_the_planar_ones() {
     let (ap, ae) = (0.5, 0.5);
@@ -170,7 +170,7 @@ fn the_stocks_objective_on_a_planar_raster_is_the_planar_ones() {
         (15.0, -10.0),
         (25.0, 20.0),
     ] {
-        let s = stock::judge(&m, &samples[1], &pts[1], R, 30.0, &pr, l, -t);
+        let s = stock::judge(&m, &samples[1], &pts[1], R, 30.0, &pr, l, t);
         let (planar, lifted) = {
             let (lr, tr) = (l.to_radians(), t.to_radians());
             let e = PlanarRaster::new(&tool, ap, Some(ae), lr, tr).expect("raster");

@@ -9,7 +9,8 @@ use millplan_models::force::coeffs::{Coeffs, Law};
 use millplan_models::force::deflect::{Cantilever, DE_RATIO, E_CARBIDE};
 use millplan_models::force::edge::Tool;
 use millplan_models::force::materials::Materials;
-use millplan_models::force::{Cut, Grid, MinMax};
+use millplan_models::force::{Grid, MinMax};
+use millplan_models::leadtilt::Variant;
 use millplan_report::svg::{line_plot, Series};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -17,6 +18,16 @@ use std::path::{Path, PathBuf};
 /// Cutting forces of one engagement (spec process-models.md §1–§2): a ball,
 /// flat or bull end mill in a planar raster pass of depth --ap, the earlier
 /// pass --ae away (or a slot), with lead and tilt for ball-end mills.
+///
+/// Lead and tilt (process-models §0, the convention of `millplan orient`):
+/// in the feed frame (f the feed, n the surface normal, c = n × f, the side
+/// the earlier passes are not on) lead turns the tool about c and tilt about
+/// f, both right-handed, composed as R = Rx(tilt)·Ry(lead): the axis is
+/// (sin L, −cos L·sin T, cos L·cos T). A positive lead leans the shank
+/// toward the feed (the tip trails and does not cut); a positive tilt leans
+/// it toward −c, the earlier passes' side (right of the feed, seen from the
+/// shank). The lead and tilt `orient` reports give here the F_xy,max it
+/// reported (same --variant).
 ///
 /// Prints F_xy,max, the Fx/Fy/Fz ranges over a revolution in the tool frame
 /// (x feed, z toward the shank; forces on the tool) and in the workpiece
@@ -38,18 +49,28 @@ pub struct Args {
     /// Axial depth of cut, mm.
     #[arg(long)]
     pub ap: f64,
-    /// Stepover to the earlier pass, mm (the earlier passes lie on −y).
+    /// Stepover to the earlier pass, mm (the earlier passes lie on −y, the
+    /// −c side of the feed frame).
     #[arg(long, conflicts_with = "slot", required_unless_present = "slot")]
     pub ae: Option<f64>,
     /// Full slot: no earlier pass.
     #[arg(long)]
     pub slot: bool,
-    /// Lead angle, degrees (positive leans the shank toward the feed).
+    /// Lead angle, degrees: a right-handed turn about the cross-feed c;
+    /// positive leans the shank toward the feed (+f), the tip trailing.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub lead: f64,
-    /// Tilt angle, degrees.
+    /// Tilt angle, degrees: a right-handed turn about the feed f; positive
+    /// leans the shank toward −c (the earlier passes' side, right of the
+    /// feed seen from the shank).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub tilt: f64,
+    /// Order of the two turns, as in `orient`: tilt-then-lead
+    /// (process-models §0, R = Rx(tilt)·Ry(lead), axis (sin L, −cos L·sin T,
+    /// cos L·cos T)) or lead-then-tilt (R = Ry(lead)·Rx(tilt), axis
+    /// (sin L·cos T, −sin T, cos L·cos T)); same signs either way.
+    #[arg(long, value_enum, default_value = "tilt-then-lead")]
+    pub variant: VariantArg,
     /// Gauge length from the holder face to the tip, mm (default 3·D).
     #[arg(long)]
     pub stickout: Option<f64>,
@@ -106,9 +127,20 @@ pub fn run(a: Args) -> CliResult<i32> {
     }
     outputs.commit()?;
     if a.json {
-        crate::cmd::print_json(to_json(&r));
+        let mut j = to_json(&r);
+        j["orientation"] = orientation_json(&a);
+        crate::cmd::print_json(j);
     } else {
         print_text(&r);
+        if a.lead != 0.0 || a.tilt != 0.0 {
+            let t = Variant::from(a.variant).axis(a.lead, a.tilt);
+            outln!(
+                "axis     ({:.4}, {:.4}, {:.4}) in the feed frame (f, c, n)",
+                t.x,
+                t.y,
+                t.z
+            );
+        }
     }
     Ok(EXIT_OK)
 }
@@ -176,12 +208,7 @@ fn build_case(a: &Args, materials: &Materials) -> CliResult<CutCase> {
             dz: a.dz,
             dphi: a.dphi.to_radians(),
         },
-        cut: Cut {
-            fz: a.fz,
-            rpm: n,
-            lead: a.lead.to_radians(),
-            tilt: a.tilt.to_radians(),
-        },
+        cut: Variant::from(a.variant).cut(a.fz, n, a.lead, a.tilt),
         ap: a.ap,
         ae: if a.slot { None } else { a.ae },
         holding: Cantilever {
@@ -191,6 +218,34 @@ fn build_case(a: &Args, materials: &Materials) -> CliResult<CutCase> {
             flute_length: a.flute_length,
             e: a.modulus,
         },
+    })
+}
+
+/// The order of the lead and tilt turns (`--variant` of `cut` and `orient`).
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum VariantArg {
+    LeadThenTilt,
+    TiltThenLead,
+}
+
+impl From<VariantArg> for Variant {
+    fn from(v: VariantArg) -> Variant {
+        match v {
+            VariantArg::LeadThenTilt => Variant::LeadThenTilt,
+            VariantArg::TiltThenLead => Variant::TiltThenLead,
+        }
+    }
+}
+
+/// The lead, tilt and variant as given and the tool axis they make in the
+/// feed frame (f, c, n).
+fn orientation_json(a: &Args) -> serde_json::Value {
+    let v = Variant::from(a.variant);
+    json!({
+        "lead_deg": a.lead,
+        "tilt_deg": a.tilt,
+        "variant": v,
+        "axis_fcn": v.axis(a.lead, a.tilt).to_array(),
     })
 }
 

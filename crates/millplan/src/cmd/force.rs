@@ -19,6 +19,11 @@ use std::path::{Path, PathBuf};
 /// program: spindle speed, feed, feed per tooth = feed/(n·--flutes). With
 /// --limit fxy=…,power=… the moves over a limit are listed (exit 3); the
 /// machine's spindle chart limits power and torque at each block's speed.
+/// The tool's orientation is the program's tool axis; each stroke's lead
+/// (`lead_deg` of the table) is the feed's angle out of the plane normal to
+/// the axis, positive when the shank leans toward the feed, the sign of
+/// `cut --lead` and `orient` (process-models §0). The chip depends on that
+/// lead alone, so no tilt is taken.
 ///
 /// `millplan force calibrate` and `millplan force materials` are the model's
 /// data; a program file named `calibrate` or `materials` is given as

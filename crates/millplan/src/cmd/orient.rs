@@ -1,7 +1,7 @@
 //! `millplan orient`: lead and tilt per operation by the force model or the
 //! machining time (spec process-models §2.4).
 
-use crate::cmd::cut::load_materials;
+use crate::cmd::cut::{load_materials, VariantArg};
 use crate::cmd::{arg, print_diagnostics, read_options, target_for, Range, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
@@ -19,9 +19,15 @@ use std::path::{Path, PathBuf};
 /// time estimated with acceleration, the feed scaled to keep the original
 /// F_xy,max (--objective time).
 ///
-/// Lead and tilt are taken in each point's frame of feed, cross-feed and the
-/// part's normal (from the STL at the contact), the ball centre kept where
-/// the program has it. A candidate is refused when the zero-speed tip would
+/// Lead and tilt are taken in each point's frame of feed f, cross-feed
+/// c = n × f and the part's normal n (from the STL at the contact), the
+/// ball centre kept where the program has it. The convention is `cut`'s
+/// (process-models §0): lead a right-handed turn about c, tilt one about f,
+/// R = Rx(tilt)·Ry(lead) by default; a positive lead leans the shank toward
+/// the feed (the tip trails), a positive tilt toward −c (right of the feed,
+/// seen from the shank). `millplan cut` with the lead and tilt reported
+/// (and the same --variant, tool, --flutes, --helix, --fz, --n, --ap,
+/// --ae) gives the F_xy,max reported. A candidate is refused when the zero-speed tip would
 /// cut (negative lead; zero lead, within 0.01°, unless R·(1 − cos tilt) ≥ --ap), when the
 /// shank or holder meets the part at any point, or when the machine's rotary
 /// axes cannot reach it. Writes the re-oriented CL (tool axes on every
@@ -58,19 +64,24 @@ pub struct Args {
     /// A TOML file of further materials (same form as the built-in table).
     #[arg(long)]
     pub materials: Option<PathBuf>,
-    /// Lead range LO:HI, degrees.
+    /// Lead range LO:HI, degrees (positive: the shank toward the feed).
     #[arg(long, default_value = "0:30", allow_hyphen_values = true)]
     pub lead_range: String,
-    /// Tilt range LO:HI, degrees.
+    /// Tilt range LO:HI, degrees (positive: the shank toward −c, right of
+    /// the feed seen from the shank).
     #[arg(long, default_value = "-30:30", allow_hyphen_values = true)]
     pub tilt_range: String,
     /// What to minimise: fxy (F_xy,max at --fz) or time (with the feed
     /// scaled to the original force level).
     #[arg(long, value_enum, default_value = "fxy")]
     pub objective: ObjectiveArg,
-    /// Order of the two rotations: lead-then-tilt (variant 1 of spec
-    /// kinematics-access-tools §2.2) or tilt-then-lead (variant 2).
-    #[arg(long, value_enum, default_value = "lead-then-tilt")]
+    /// Order of the two turns: tilt-then-lead (process-models §0,
+    /// R = Rx(tilt)·Ry(lead), axis (sin L, −cos L·sin T, cos L·cos T);
+    /// variant 2 of kinematics-access-tools §2.2) or lead-then-tilt
+    /// (R = Ry(lead)·Rx(tilt), axis (sin L·cos T, −sin T, cos L·cos T);
+    /// variant 1); same signs either way, and `cut --variant` takes the
+    /// same.
+    #[arg(long, value_enum, default_value = "tilt-then-lead")]
     pub variant: VariantArg,
     /// Feed per tooth the forces are evaluated at, mm.
     #[arg(long, default_value_t = 0.1)]
@@ -130,12 +141,6 @@ pub struct Args {
 pub enum ObjectiveArg {
     Fxy,
     Time,
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub enum VariantArg {
-    LeadThenTilt,
-    TiltThenLead,
 }
 
 /// `LO:HI` in degrees, within ±89°.
@@ -205,10 +210,7 @@ fn params(a: &Args) -> CliResult<(Params, f64)> {
                 tilt,
                 ..SearchOptions::default()
             },
-            variant: match a.variant {
-                VariantArg::LeadThenTilt => Variant::LeadThenTilt,
-                VariantArg::TiltThenLead => Variant::TiltThenLead,
-            },
+            variant: Variant::from(a.variant),
             objective: match a.objective {
                 ObjectiveArg::Fxy => Objective::Fxy,
                 ObjectiveArg::Time => Objective::Time,
