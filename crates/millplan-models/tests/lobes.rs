@@ -104,15 +104,15 @@ fn brute(s: &Setup) -> Brute {
 
 /// The brute force's frequency step for a setup: 1/50 of the narrowest
 /// ζ·fn and 1/100 of the tooth-passing frequency at `n` (the step only
-/// has to separate the roots, each then found by bisection; at 1/20 and
-/// 1/50 it misses pairs of close roots).
+/// has to separate a root's crossings of the real axis, each then found by
+/// bisection; at 1/20 and 1/40 it misses some).
 fn brute_step(s: &Setup, n: f64) -> f64 {
     let narrow =
         s.x.iter()
             .chain(s.y.iter())
             .map(|m| m.zeta * m.fn_hz)
             .fold(f64::INFINITY, f64::min);
-    (narrow / 20.0).min(s.flutes as f64 * n / 60.0 / 40.0)
+    (narrow / 50.0).min(s.flutes as f64 * n / 60.0 / 100.0)
 }
 
 #[test]
@@ -438,8 +438,10 @@ fn too_many_lobes_are_refused_with_the_start_that_works() {
     };
     assert!(lobes > 10_000.0 && n_min > 1.0 && n_min < 3000.0);
     let st = s.stability(n_min * 1.0001, 3000.0).expect("accepted");
-    assert!(st.envelope.len() as f64 <= 32.0 * MAX_LOBES + 1.0);
+    // 32 speeds per lobe and the top of each pocket.
+    assert!(st.envelope.len() as f64 <= 34.0 * MAX_LOBES);
     let (lo, hi) = st.lobes().expect("lobes");
     assert!(hi - lo > 300, "lobes {lo}…{hi}");
     assert!(st.exact_below_mm <= CEILING_MM || st.envelope.iter().all(|p| p.chatter.is_some()));
 }
+

@@ -101,10 +101,9 @@ pub struct EnvPoint {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stability {
     /// Ascending speeds, uniform in the tooth period (so every lobe gets
-    /// the same number of points).
+    /// the same number of points), and the refined top of every pocket.
     pub envelope: Vec<EnvPoint>,
-    /// The deepest stable cut: the maximum of the envelope over the range,
-    /// refined between the grid's speeds.
+    /// The deepest stable cut: the maximum of the envelope over the range.
     pub deepest: EnvPoint,
     /// The chatter band searched \[Hz\]: from 0 to this.
     pub band_hz: f64,
@@ -383,12 +382,19 @@ impl Setup {
                 .for_each(|(h, &p)| t.scan(p, from, h));
             hits.iter().map(|h| h.a_mm).fold(0.0, f64::max)
         })?;
-        let envelope: Vec<EnvPoint> = speeds
+        let mut envelope: Vec<EnvPoint> = speeds
             .iter()
             .zip(&hits)
             .map(|(&n, &h)| point(n, h, bound))
             .collect();
-        let deepest = self.deepest(&table, &envelope, bound);
+        let peaks = self.peaks(&table, &envelope, bound);
+        envelope.extend(peaks);
+        envelope.sort_by(|p, q| p.rpm.total_cmp(&q.rpm));
+        let deepest = envelope
+            .iter()
+            .copied()
+            .max_by(|p, q| p.a_lim_mm.total_cmp(&q.a_lim_mm))
+            .unwrap_or(point(n_lo, NO_HIT, bound));
         if !deepest.a_lim_mm.is_finite() {
             return Err(LobesError::Invalid(
                 "no chatter frequency gives a finite depth limit in this speed range".into(),
@@ -440,26 +446,24 @@ impl Setup {
         point(n, h, bound)
     }
 
-    /// The maximum of the envelope: the best grid speed, refined between its
-    /// neighbours by golden section (one cusp or one lobe flank at most lies
-    /// there, so the envelope is unimodal on it).
-    fn deepest(&self, table: &Table, env: &[EnvPoint], bound: f64) -> EnvPoint {
-        let Some((b, grid)) = env
-            .iter()
-            .enumerate()
-            .max_by(|x, y| x.1.a_lim_mm.total_cmp(&y.1.a_lim_mm))
-        else {
-            return point(0.0, NO_HIT, bound);
-        };
-        let lo = env[b.saturating_sub(1)].rpm;
-        let hi = env[(b + 1).min(env.len() - 1)].rpm;
-        let f = |n: f64| self.at_speed(table, n, bound).a_lim_mm;
-        let (n, a) = golden_max(&f, lo, hi, 1e-9 * hi, 200);
-        if a > grid.a_lim_mm {
-            self.at_speed(table, n, bound)
-        } else {
-            *grid
-        }
+    /// The tops of the envelope's pockets: each local maximum of the grid,
+    /// refined between its neighbours by golden section (one cusp or one
+    /// lobe flank at most lies there, so the envelope is unimodal on it),
+    /// where that finds more than the grid.
+    fn peaks(&self, table: &Table, env: &[EnvPoint], bound: f64) -> Vec<EnvPoint> {
+        let a = |i: usize| env[i].a_lim_mm;
+        let last = env.len().saturating_sub(1);
+        let tops: Vec<usize> = (0..env.len())
+            .filter(|&i| (i == 0 || a(i) >= a(i - 1)) && (i == last || a(i) > a(i + 1)))
+            .collect();
+        tops.par_iter()
+            .filter_map(|&i| {
+                let (lo, hi) = (env[i.saturating_sub(1)].rpm, env[(i + 1).min(last)].rpm);
+                let f = |n: f64| self.at_speed(table, n, bound).a_lim_mm;
+                let (n, v) = golden_max(&f, lo, hi, 1e-7 * hi, 100);
+                (v > a(i)).then(|| self.at_speed(table, n, bound))
+            })
+            .collect()
     }
 
     /// Speed \[1/min\] of lobe k at a point: n_k = 60·ω/(N·(ε + 2kπ)).

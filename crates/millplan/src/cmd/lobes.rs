@@ -77,8 +77,9 @@ pub struct Args {
     #[arg(long)]
     pub n_max: Option<f64>,
     /// Write the stability limit over the speed range as SVG (the envelope
-    /// of all lobes, not each lobe; clipped at 10 times the smallest limit in
-    /// the range, the deepest stable cut marked).
+    /// of all lobes, not each lobe, however many the range spans; clipped
+    /// at 10 times the smallest limit in the range or just above the
+    /// deepest stable cut, which is marked).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Print JSON: the smallest limit, the deepest stable cut in the range,
@@ -263,15 +264,24 @@ fn mm(v: f64) -> String {
 }
 
 /// The envelope (every lobe's minimum, one curve, however many lobes the
-/// range spans), clipped at 10 times its smallest value so that the
-/// pockets stay readable, and a vertical line at the deepest stable cut.
+/// range spans), clipped at 10 times its smallest value or 1.25 times the
+/// deepest cut, whichever is higher, unless that cut lies above 100 times
+/// the smallest value, so that the pockets stay readable; and a vertical
+/// line at the deepest stable cut.
 fn plot(st: &Stability) -> String {
     let floor = st
         .envelope
         .iter()
         .map(|p| p.a_lim_mm)
         .fold(f64::INFINITY, f64::min);
-    let cap = 10.0 * floor;
+    // Room for the deepest cut unless it towers over the pockets (above
+    // lobe 0 the limit grows without end).
+    let deepest = st.deepest.a_lim_mm;
+    let cap = if deepest <= 100.0 * floor {
+        (10.0 * floor).max(1.25 * deepest)
+    } else {
+        10.0 * floor
+    };
     let clipped = st.envelope.iter().any(|p| p.a_lim_mm > cap);
     let name = if clipped {
         format!("stability limit (clipped at {cap:.3} mm)")
