@@ -444,4 +444,3 @@ fn too_many_lobes_are_refused_with_the_start_that_works() {
     assert!(hi - lo > 300, "lobes {lo}…{hi}");
     assert!(st.exact_below_mm <= CEILING_MM || st.envelope.iter().all(|p| p.chatter.is_some()));
 }
-
