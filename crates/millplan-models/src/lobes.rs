@@ -2,8 +2,17 @@
 //! Budak 1995; spec `process-models.md` §3). SI units inside, as in the
 //! source: stiffness N/m, cutting coefficient N/m², FRF m/N; the depth limit is
 //! returned in mm.
+//!
+//! A lobe k is the curve (n_k(ω), a_lim(ω)) over chatter frequencies ω; the
+//! stability limit at a spindle speed is the smallest a_lim over *every*
+//! lobe and eigenvalue branch that reaches that speed. [`Setup::stability`]
+//! computes it that way (see `envelope`): no lobe count is chosen, so none
+//! can be left out.
 
 use std::f64::consts::PI;
+
+mod envelope;
+pub use envelope::{Chatter, EnvPoint, LobePoint, LobesError, Stability, CEILING_MM, MAX_LOBES};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct C {
@@ -71,23 +80,38 @@ impl Mode {
         C::new(1.0, 0.0).div(C::new(self.k * (1.0 - r * r), self.k * 2.0 * self.zeta * r))
     }
 
+    /// Plausible modes only: 1 Hz to 100 kHz, 1 to 10¹⁵ N/m, damping ratio
+    /// from 10⁻⁴ to below 1 (the ranges keep every FRF value finite and the
+    /// frequency table of the envelope small).
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.fn_hz > 0.0 && self.fn_hz < 1e6) {
+        if !(self.fn_hz >= 1.0 && self.fn_hz <= 1e5) {
             return Err(format!(
-                "natural frequency {} Hz: must be above 0 and under 1 MHz",
-                self.fn_hz
+                "natural frequency {} Hz: must be from 1 Hz to 100 kHz",
+                num(self.fn_hz)
             ));
         }
-        if !(self.k > 0.0 && self.k < 1e15) {
-            return Err(format!("stiffness {} N/m: must be positive", self.k));
-        }
-        if !(self.zeta > 0.0 && self.zeta < 1.0) {
+        if !(self.k >= 1.0 && self.k <= 1e15) {
             return Err(format!(
-                "damping ratio {}: must be between 0 and 1",
-                self.zeta
+                "stiffness {} N/m: must be from 1 to 1e15 N/m",
+                num(self.k)
+            ));
+        }
+        if !(self.zeta >= 1e-4 && self.zeta < 1.0) {
+            return Err(format!(
+                "damping ratio {}: must be from 0.0001 to below 1",
+                num(self.zeta)
             ));
         }
         Ok(())
+    }
+}
+
+/// A number as written in a message: 1e-18, not eighteen zeros.
+fn num(v: f64) -> String {
+    if v != 0.0 && (v.abs() < 1e-4 || v.abs() >= 1e9) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
     }
 }
 
@@ -135,25 +159,6 @@ pub struct Setup {
     pub ex: f64,
 }
 
-/// One point of a lobe.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LobePoint {
-    /// Chatter frequency \[Hz\].
-    pub fc_hz: f64,
-    /// Spindle speed [1/min].
-    pub rpm: f64,
-    /// Limiting axial depth \[mm\].
-    pub a_lim_mm: f64,
-}
-
-/// A lobe: lobe number k and eigenvalue branch (0 or 1).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Lobe {
-    pub k: usize,
-    pub branch: usize,
-    pub points: Vec<LobePoint>,
-}
-
 impl Setup {
     pub fn validate(&self) -> Result<(), String> {
         if self.x.is_none() && self.y.is_none() {
@@ -165,11 +170,13 @@ impl Setup {
         if self.flutes == 0 || self.flutes > 64 {
             return Err("the flute count must be from 1 to 64".into());
         }
-        if !(self.kt > 0.0 && self.kt.is_finite() && self.kr.is_finite() && self.kr >= 0.0) {
-            return Err("Kt must be positive and Kr/Kt non-negative".into());
+        if !(self.kt >= 1e6 && self.kt <= 1e11 && self.kr >= 0.0 && self.kr <= 10.0) {
+            return Err(
+                "Kt must be from 1e6 to 1e11 N/m² (1 to 1e5 N/mm²) and Kr/Kt from 0 to 10".into(),
+            );
         }
-        if !(self.ex > self.st) {
-            return Err("the exit angle must follow the entry angle".into());
+        if !(self.st >= 0.0 && self.ex <= PI && self.ex > self.st) {
+            return Err("the immersion must run forward within 0…π".into());
         }
         Ok(())
     }
@@ -198,105 +205,43 @@ impl Setup {
 
     /// a_lim \[mm\] and phase ε \[rad\] of each root at ω (None where a_lim ≤ 0).
     pub fn limits_at(&self, w: f64) -> Vec<Option<(f64, f64)>> {
-        self.eigen(w)
-            .into_iter()
-            .map(|l| {
-                if l.re == 0.0 {
-                    return None;
-                }
-                let kappa = l.im / l.re;
-                let a = -2.0 * PI * l.re / (self.flutes as f64 * self.kt) * (1.0 + kappa * kappa);
-                let eps = PI - 2.0 * kappa.atan();
-                (a > 0.0 && a.is_finite()).then_some((a * 1000.0, eps))
-            })
-            .collect()
+        self.eigen(w).into_iter().map(|l| self.limit(l)).collect()
     }
 
-    /// Lobes k = 0..lobes over chatter frequencies fc_lo..fc_hi \[Hz\] in
-    /// `steps` steps.
-    pub fn lobes(&self, fc_lo: f64, fc_hi: f64, steps: usize, lobes: usize) -> Vec<Lobe> {
-        let mut out: Vec<Lobe> = (0..lobes)
-            .flat_map(|k| {
-                (0..2).map(move |branch| Lobe {
-                    k,
-                    branch,
-                    points: Vec::new(),
-                })
-            })
-            .collect();
-        let steps = steps.max(2);
-        for i in 0..steps {
-            let fc = fc_lo + (fc_hi - fc_lo) * i as f64 / (steps - 1) as f64;
-            let w = 2.0 * PI * fc;
-            // Branch 0 is the lower limit at this frequency, branch 1 the higher.
-            let mut roots: Vec<(f64, f64)> = self.limits_at(w).into_iter().flatten().collect();
-            roots.sort_by(|a, b| a.0.total_cmp(&b.0));
-            for (b, (a, eps)) in roots.into_iter().enumerate() {
-                for k in 0..lobes {
-                    // Tooth period T = (ε + 2kπ)/ω_c, n = 60/(N·T).
-                    let rpm = 60.0 * w / (self.flutes as f64 * (eps + 2.0 * PI * k as f64));
-                    out[2 * k + b].points.push(LobePoint {
-                        fc_hz: fc,
-                        rpm,
-                        a_lim_mm: a,
-                    });
-                }
-            }
+    /// a_lim \[mm\] and ε of one root Λ (§3): a_lim = −2πΛ_R(1 + κ²)/(N·Ktc),
+    /// ε = π − 2·atan κ; None unless a_lim is positive and finite.
+    fn limit(&self, l: C) -> Option<(f64, f64)> {
+        if l.re == 0.0 {
+            return None;
         }
-        out.retain(|l| !l.points.is_empty());
-        out
+        let kappa = l.im / l.re;
+        let a = -2.0 * PI * l.re / (self.flutes as f64 * self.kt) * (1.0 + kappa * kappa);
+        let eps = PI - 2.0 * kappa.atan();
+        (a > 0.0 && (a * 1000.0).is_finite()).then_some((a * 1000.0, eps))
     }
 
-    /// The default chatter-frequency band: from half the lowest to twice the
-    /// highest natural frequency.
-    pub fn band(&self) -> (f64, f64) {
-        let f: Vec<f64> = self
-            .x
-            .iter()
-            .chain(self.y.iter())
-            .map(|m| m.fn_hz)
-            .collect();
-        let lo = f.iter().cloned().fold(f64::INFINITY, f64::min);
-        let hi = f.iter().cloned().fold(0.0, f64::max);
-        (0.5 * lo, 2.0 * hi)
+    /// The modes of the flexible directions.
+    fn modes(&self) -> impl Iterator<Item = &Mode> {
+        self.x.iter().chain(self.y.iter())
     }
-}
 
-/// The smallest a_lim \[mm\] over all lobes at spindle speed `rpm` (linear
-/// interpolation along each lobe); None where no lobe covers the speed.
-pub fn a_lim_at(lobes: &[Lobe], rpm: f64) -> Option<f64> {
-    let mut best: Option<f64> = None;
-    for l in lobes {
-        for w in l.points.windows(2) {
-            let (p, q) = (w[0], w[1]);
-            let (lo, hi) = (p.rpm.min(q.rpm), p.rpm.max(q.rpm));
-            if rpm < lo || rpm > hi || hi - lo <= 0.0 {
-                continue;
-            }
-            let t = (rpm - p.rpm) / (q.rpm - p.rpm);
-            let a = p.a_lim_mm + t * (q.a_lim_mm - p.a_lim_mm);
-            best = Some(best.map_or(a, |b: f64| b.min(a)));
-        }
+    /// The highest natural frequency \[Hz\].
+    pub fn max_fn(&self) -> f64 {
+        self.modes().map(|m| m.fn_hz).fold(0.0, f64::max)
     }
-    best
-}
 
-/// The smallest a_lim over all lobes and the point where it occurs.
-pub fn minimum(lobes: &[Lobe]) -> Option<LobePoint> {
-    lobes
-        .iter()
-        .flat_map(|l| l.points.iter().copied())
-        .min_by(|a, b| a.a_lim_mm.total_cmp(&b.a_lim_mm))
-}
-
-/// The stability limit over spindle speeds n_lo..n_hi [1/min] in `steps`
-/// steps: (n, smallest a_lim over the lobes) where a lobe covers n.
-pub fn envelope(lobes: &[Lobe], n_lo: f64, n_hi: f64, steps: usize) -> Vec<(f64, f64)> {
-    let steps = steps.max(2);
-    (0..steps)
-        .filter_map(|i| {
-            let n = n_lo + (n_hi - n_lo) * i as f64 / (steps - 1) as f64;
-            a_lim_at(lobes, n).map(|a| (n, a))
-        })
-        .collect()
+    /// A lower bound of a_lim \[mm\] at every chatter frequency above
+    /// `f_hz`, which must lie above every natural frequency: −1/Λ is an
+    /// eigenvalue of [A]·[G], so |Λ| ≥ 1/(‖A‖_F·max|G|), and a_lim =
+    /// 2π|Λ|²/(N·Ktc·|Λ_R|) ≥ 2π|Λ|/(N·Ktc); above its resonance every |G|
+    /// falls with ω.
+    pub fn bound_above(&self, f_hz: f64) -> f64 {
+        let a = directional(self.kr, self.st, self.ex);
+        let norm = a.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let g = self
+            .modes()
+            .map(|m| m.g(2.0 * PI * f_hz).norm())
+            .fold(0.0, f64::max);
+        2.0 * PI / (self.flutes as f64 * self.kt * norm * g) * 1000.0
+    }
 }

@@ -371,4 +371,92 @@ fn lobes_match_t10e_t10f_and_plot() {
         ],
         "--d",
     );
+    let svg = std::fs::read_to_string(&svg).expect("svg");
+    assert!(svg.contains("stability limit") && svg.contains("deepest stable cut"));
+}
+
+/// The Insperger & Stépán benchmark of spec §3 in a slot, with `extra`.
+fn benchmark(extra: &[&str]) -> Vec<String> {
+    let mut a: Vec<String> = [
+        "lobes",
+        "--fn",
+        "922",
+        "--k",
+        "1.34005e6",
+        "--zeta",
+        "0.011",
+        "--flutes",
+        "2",
+        "--kt",
+        "600",
+        "--kr",
+        "0.3333333333",
+        "--slot",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    a.extend(extra.iter().map(|s| s.to_string()));
+    a
+}
+
+fn refs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
+
+/// Issue 30 item 3: with lobes 0…9 only, 2000…3000 1/min gave a deepest
+/// stable cut of 127.29 mm at 2,677 1/min, read from a gap between lobes;
+/// the zero-order limit there is 0.17 mm at about 2,770 1/min.
+#[test]
+fn lobes_deepest_cut_takes_every_lobe() {
+    let j = json(&refs(&benchmark(&[
+        "--n-min", "2000", "--n-max", "3000", "--json",
+    ])));
+    let d = &j["deepest"];
+    assert!(f(&d["a_lim_mm"]) <= 0.2, "{d}");
+    assert!((2700.0..=2800.0).contains(&f(&d["rpm"])), "{d}");
+    for p in j["envelope"].as_array().expect("envelope") {
+        let (n, a) = (f(&p[0]), f(&p[1]));
+        assert!(!(2700.0..=2800.0).contains(&n) || a <= 0.2, "{n}: {a}");
+    }
+    let lobes = j["lobes"].as_array().expect("lobes");
+    assert!(f(&lobes[1]) >= 13.0, "lobes {lobes:?}");
+    let text = run(&refs(&benchmark(&["--n-min", "2000", "--n-max", "3000"])));
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains("deepest stable cut is 0.17"), "{text}");
+    // The old default range's start: 0.41 mm then, 0.11 mm with every lobe.
+    let j = json(&refs(&benchmark(&[
+        "--n-min", "2735.16", "--n-max", "3000", "--json",
+    ])));
+    let first = f(&j["envelope"][0][1]);
+    assert!((first - 0.11).abs() < 0.01, "first point {first}");
+}
+
+/// Issue 34: absurd modes and ranges are refused at the option (exit 2),
+/// never a multi-gigabyte allocation; `--lobes` is gone (every lobe counts).
+#[test]
+fn lobes_refuse_absurd_inputs() {
+    let fails = |extra: &[&str], needle: &str| fails_with_2(&refs(&benchmark(extra)), needle);
+    let b = benchmark(&[]);
+    let mut tiny = refs(&b);
+    tiny[2] = "1e-18";
+    fails_with_2(&tiny, "natural frequency");
+    let mut weak = refs(&b);
+    weak[10] = "1e-308";
+    fails_with_2(&weak, "--kt");
+    fails(
+        &["--n-min", "10", "--n-max", "3000"],
+        "start it at 67.6 1/min",
+    );
+    fails(&["--n-min", "3000", "--n-max", "2000"], "--n-max");
+    fails(&["--lobes", "30"], "--lobes");
+    let o = run(&refs(&benchmark(&[
+        "--n-min", "67.7", "--n-max", "3000", "--json",
+    ])));
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 }
