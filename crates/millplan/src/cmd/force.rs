@@ -104,7 +104,7 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
         ],
         false,
     )?;
-    let limits = load_limits(1.0, (0.0, f64::INFINITY))?;
+    let limits = load_limits(1.0, 0.0, Some(f64::INFINITY), None)?;
     let p = prepare(path, m)?;
     let run = run_forces(&p, &p.program, &p.strokes, m.quiet || m.json)?;
     let over = run.over_limits(&limits, &p.machine);
@@ -124,6 +124,8 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
         "max": run.maxima(),
         "max_lines": {"fxy": worst(|x| x.fxy_max), "torque": worst(|x| x.torque_max), "power": worst(|x| x.power_w), "deflection": worst(|x| x.deflection_mm)},
         "over_limit": over.len(), "over_limit_lines": over.iter().take(20).map(|x| x.line).collect::<Vec<_>>(),
+        "within_tolerance": run.within_tolerance(&limits, &p.machine).len(),
+        "limit_tolerance": millplan_plan::force::LIMIT_TOLERANCE,
         "stock": p.stock_name,
     });
     if let Some(t) = &m.table {
