@@ -437,9 +437,8 @@ impl ForceRun {
         lim: &FeedLimits,
         m: &crate::machine::Machine,
     ) -> Vec<&MoveForces> {
-        self.by_limit_ratio(lim, m, |r| {
-            r < 1.0 - 1e-9 && r >= 1.0 / (1.0 + LIMIT_TOLERANCE)
-        })
+        let lowest = 1.0 / (1.0 + LIMIT_TOLERANCE);
+        self.by_limit_ratio(lim, m, |r| (lowest..1.0 - 1e-9).contains(&r))
     }
 
     /// Modelled cutting moves whose tightest ratio limit/load passes `keep`.
