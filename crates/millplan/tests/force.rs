@@ -462,4 +462,11 @@ fn feed_loads_a_slot_along_its_move_and_what_it_wrote_stays_under_the_limit() {
     );
     let text = std::fs::read_to_string(d.join("out2.nc")).expect("written");
     assert!(text.contains("Z-3. F2500."), "{text}");
+    // The chip loads are listed with the materials.
+    let list = json(&["force", "materials", "--json"]);
+    let al = list
+        .as_array()
+        .and_then(|a| a.iter().find(|m| m["name"] == "al7075"))
+        .expect("al7075");
+    assert_eq!(al["fz_max"][5], serde_json::json!([10.0, 0.08]), "{al}");
 }

@@ -67,7 +67,8 @@ pub struct ModelArgs {
     /// Young's modulus of the tool, N/mm².
     #[arg(long, default_value_t = E_CARBIDE)]
     pub modulus: f64,
-    /// Dexel size of the stock, mm.
+    /// Dexel size of the stock, mm; also the spacing of the poses each move
+    /// is loaded at along its length.
     #[arg(long, default_value_t = 0.1)]
     pub resolution: f64,
     /// Axial slice height of the force model, mm.

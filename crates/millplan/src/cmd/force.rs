@@ -311,7 +311,10 @@ fn list(m: &Materials, json: bool) -> CliResult<i32> {
         let v: Vec<_> = m
             .by_name
             .values()
-            .map(|x| json!({"name": x.name, "note": x.note}))
+            .map(|x| {
+                json!({"name": x.name, "note": x.note,
+                    "fz_max": x.chip_loads.as_ref().map(|c| c.rows()), "fz_note": x.fz_note})
+            })
             .collect();
         crate::cmd::print_json(serde_json::Value::from(v));
     } else {
