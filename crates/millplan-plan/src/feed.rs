@@ -3,8 +3,11 @@
 //! ([`crate::force::simulate`]); every cutting stroke gets the feed per tooth
 //! at which its tightest limit (F_xy, torque, power, bending stress, tip
 //! deflection, the spindle chart's power and torque at the block's speed) is
-//! met; a block takes the smallest of its strokes'. Blocks whose edge meets
-//! no material run at the machine's feed limit. Feeds then stay within the
+//! met; a block takes the smallest of its strokes' and their samples' along
+//! them ([`crate::force::sample_distances`]). Blocks whose edge meets no
+//! material run at the air feed ([`air_feed`]: the machine file's
+//! `[feed] air`, else the tool's largest feed per tooth at the block's
+//! speed, at most the machine's feed limit). Feeds then stay within the
 //! machine's feed range, and changes between neighbouring blocks are brought
 //! within the feed acceleration by lowering feeds only (a block decelerates
 //! to its successor's feed within its own length, and reaches its own feed
@@ -47,7 +50,8 @@ pub struct FeedParams {
 pub struct FeedChanges {
     /// Cutting blocks that got a feed from the forces.
     pub blocks: usize,
-    /// Cutting blocks in air, set to the machine's feed limit.
+    /// Cutting blocks in air, set to the air feed ([`air_feed`]; still
+    /// counted here when the feed acceleration lowers them).
     pub air_blocks: usize,
     /// Cutting blocks that keep their feed (canned cycles, moves not
     /// simulated, material the model could not load).
@@ -123,7 +127,7 @@ impl Pass for FeedPass {
             .map_err(input)?;
         cx.progress("feed: forces", total, total);
         let changes = cx.time("feeds smoothed and written", || {
-            apply(p, &run, m, &self.params)
+            apply(p, &run, m, &self.params, &self.body)
         });
         self.before = Some(run);
         self.changes = Some(changes);
@@ -140,10 +144,32 @@ pub fn machine_accel(m: &Machine) -> Option<f64> {
         .min_by(f64::total_cmp)
 }
 
-/// The feed (mm/min) each block asks for and why, before smoothing.
-fn target(mf: &MoveForces, m: &Machine, flutes: f64) -> (f64, &'static str) {
+/// The feed-per-tooth range of every tool of a run.
+pub fn fz_ranges(limits: &FeedLimits, tools: &[ToolBody]) -> Vec<crate::force::FzRange> {
+    tools
+        .iter()
+        .map(|t| limits.fz_range(2.0 * t.radius()))
+        .collect()
+}
+
+/// The feed (mm/min) of a cutting block that meets no material, at spindle
+/// speed `rpm` with a tool of `flutes` whose largest feed per tooth is
+/// `fz_max`: the machine file's `[feed] air`, else fz_max·z·n (with the
+/// spindle stopped, `programmed`), within the machine's feed range.
+pub fn air_feed(m: &Machine, fz_max: f64, flutes: f64, rpm: f64, programmed: f64) -> f64 {
+    let v = m.feed_air.unwrap_or(if rpm > 0.0 {
+        fz_max * flutes * rpm
+    } else {
+        programmed
+    });
+    v.clamp(m.feed_min, m.feed_max)
+}
+
+/// The feed (mm/min) each block asks for and why, before smoothing; `fz_max`
+/// is the largest feed per tooth of the block's tool.
+fn target(mf: &MoveForces, m: &Machine, flutes: f64, fz_max: f64) -> (f64, &'static str) {
     if mf.air {
-        return (m.feed_max, "air");
+        return (air_feed(m, fz_max, flutes, mf.rpm, mf.feed), "air");
     }
     match mf.fz_allowed {
         Some(fz) if !mf.unmodelled => {
@@ -162,8 +188,15 @@ fn target(mf: &MoveForces, m: &Machine, flutes: f64) -> (f64, &'static str) {
     }
 }
 
-/// Sets the feeds of `p` from `run` (see the module docs).
-pub fn apply(p: &mut Program, run: &ForceRun, m: &Machine, params: &FeedParams) -> FeedChanges {
+/// Sets the feeds of `p` from `run` (see the module docs); `body` gives the
+/// tool of an operation (its diameter decides the air feed's fz_max).
+pub fn apply(
+    p: &mut Program,
+    run: &ForceRun,
+    m: &Machine,
+    params: &FeedParams,
+    body: &BodyFn,
+) -> FeedChanges {
     let flutes = params.setup.flutes as f64;
     let by_index: BTreeMap<u32, &MoveForces> = run.moves.iter().map(|x| (x.index, x)).collect();
     let mut ch = FeedChanges {
@@ -173,6 +206,8 @@ pub fn apply(p: &mut Program, run: &ForceRun, m: &Machine, params: &FeedParams) 
     };
     let mut first = 0u32;
     for op in &mut p.operations {
+        let d = body(op).map_or(0.0, |b| 2.0 * b.radius());
+        let fz_max = params.limits.fz_range(d).fz_max;
         // Chains of consecutive feed blocks: (move index, length, feed, why).
         let mut chain: Vec<(usize, f64, f64, &'static str)> = Vec::new();
         let mut chains = Vec::new();
@@ -184,7 +219,7 @@ pub fn apply(p: &mut Program, run: &ForceRun, m: &Machine, params: &FeedParams) 
                 matches!(mv.kind, MoveKind::Linear | MoveKind::Arc(_)) && mv.feed > 0.0;
             match (schedulable, mf, len) {
                 (true, Some(mf), Some(len)) if len > 0.0 => {
-                    let (v, why) = target(mf, m, flutes);
+                    let (v, why) = target(mf, m, flutes, fz_max);
                     chain.push((i, len, v, why));
                 }
                 _ => {
@@ -223,7 +258,7 @@ pub fn apply(p: &mut Program, run: &ForceRun, m: &Machine, params: &FeedParams) 
 
 /// Lowers feeds (mm/min) so that neighbouring blocks differ by no more than
 /// the acceleration `accel` (mm/s²) allows over a block's length; a lowered
-/// block is marked `accel`.
+/// block is marked `accel` (an air block stays `air`, a kept one `kept`).
 fn smooth(c: &mut [(usize, f64, f64, &'static str)], accel: f64) {
     if !(accel > 0.0 && accel.is_finite()) {
         return;
@@ -247,7 +282,7 @@ fn smooth(c: &mut [(usize, f64, f64, &'static str)], accel: f64) {
     }
     for (e, l) in c.iter_mut().zip(lowered) {
         // Only a clear change counts as the acceleration's doing.
-        if l && e.3 != "kept" {
+        if l && e.3 != "kept" && e.3 != "air" {
             e.3 = "accel";
         }
     }

@@ -2,10 +2,14 @@
 //! program runs stroke by stroke through its stock, and every cutting stroke's
 //! engagement is handed to the force model before the stroke is removed.
 //!
-//! The engagement of a stroke is the tool at the stroke's *end* pose against
-//! the stock as the strokes before it left it ([`StockEngagement`]): the model
-//! asks only about edge points where the chip is positive, the half of the
-//! tool ahead of the feed, which is material this stroke has not yet removed.
+//! A stroke is loaded all along it: the tool is placed at its end and then
+//! every dexel back toward its start ([`sample_distances`]), each pose against
+//! the stock as the strokes before it left it ([`StockEngagement`]); the
+//! model asks only about edge points where the chip is positive, the half of
+//! the tool ahead of the feed, which is material this stroke has not yet
+//! removed. A move's loads are the largest of its samples', and the feed it
+//! is allowed meets every sample's limits, so a long move through material
+//! that ends in air is loaded where it cuts.
 //!
 //! Cutting data per stroke: the spindle speed of its IR move, the feed from
 //! the stroke's length and time (so per-minute, per-revolution and
@@ -24,11 +28,12 @@ use millplan_models::force::deflect::{Cantilever, DE_RATIO, E_CARBIDE};
 use millplan_models::force::edge::Tool;
 use millplan_models::force::engage::Engagement;
 use millplan_models::force::feed::{Limits, Loads};
+use millplan_models::force::materials::{fz_max_for, ChipLoads, FzSource};
 use millplan_models::force::{Cut, Engaged, ForceModel, Grid, Summary};
 use millplan_nc::{Move, Program};
 use millplan_sim::stock::engage::tool_frame;
 use millplan_sim::stock::path::{Stroke, Strokes};
-use millplan_sim::stock::sim::{Simulator, CUT_EPS};
+use millplan_sim::stock::sim::{continues, Simulator, CUT_EPS};
 use millplan_sim::stock::tool::ToolBody;
 use millplan_sim::stock::{Stock, RADIAL_SLACK};
 
@@ -230,19 +235,60 @@ pub struct FeedLimits {
     pub deflection: Option<f64>,
     /// Factor of safety on power, torque and stress.
     pub fos: f64,
-    /// Feed per tooth range, mm.
+    /// Smallest feed per tooth, mm (never above a tool's largest).
+    pub fz_min: f64,
+    /// Largest feed per tooth for every tool, mm; `None`: each tool's from
+    /// `chip_loads` at its diameter.
+    pub fz_max: Option<f64>,
+    /// The material's chip loads by tool diameter; `None`: the documented
+    /// fallback
+    /// [`millplan_models::force::materials::FALLBACK_FZ_SHARE`]·D.
+    pub chip_loads: Option<ChipLoads>,
+}
+
+/// How far over a limit a load may be and still count as meeting it: 0.5 %,
+/// within the model's own resolution (the chip at the force grid's angular
+/// step, the dexels' sampling of the engagement, the §2.3 iteration's 1 %
+/// stop). A move over by less is reported as within the resolution, not as
+/// over the limit.
+pub const LIMIT_TOLERANCE: f64 = 0.005;
+
+/// The feed-per-tooth range of one tool, and where its top came from.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct FzRange {
+    /// Tool diameter, mm.
+    pub diameter: f64,
     pub fz_min: f64,
     pub fz_max: f64,
+    pub source: FzSource,
 }
 
 impl FeedLimits {
-    /// The iteration's limits at spindle speed `rpm` on `machine`.
-    pub fn at(&self, rpm: f64, machine: &crate::machine::Machine) -> Limits {
+    /// The feed-per-tooth range of a tool of diameter `d` (mm): `fz_max`
+    /// as given, else the material's chip load, else 0.02·D; `fz_min` no
+    /// higher than that.
+    pub fn fz_range(&self, d: f64) -> FzRange {
+        let (fz_max, source) = match self.fz_max {
+            Some(f) => (f, FzSource::Given),
+            None => fz_max_for(self.chip_loads.as_ref(), d),
+        };
+        FzRange {
+            diameter: d,
+            fz_min: self.fz_min.min(fz_max),
+            fz_max,
+            source,
+        }
+    }
+
+    /// The iteration's limits at spindle speed `rpm` on `machine` for a tool
+    /// of diameter `d` (mm).
+    pub fn at(&self, rpm: f64, d: f64, machine: &crate::machine::Machine) -> Limits {
         let chart = machine.spindle_limit(rpm);
         let min = |a: Option<f64>, b: Option<f64>| match (a, b) {
             (Some(a), Some(b)) => Some(a.min(b)),
             (a, b) => a.or(b),
         };
+        let fz = self.fz_range(d);
         Limits {
             fxy: self.fxy,
             torque: min(self.torque, chart.map(|c| c.torque * 1000.0)),
@@ -250,9 +296,20 @@ impl FeedLimits {
             stress: self.stress,
             deflection: self.deflection,
             fos: self.fos,
-            fz_min: self.fz_min,
-            fz_max: self.fz_max,
+            fz_min: fz.fz_min,
+            fz_max: fz.fz_max,
         }
+    }
+
+    /// The tightest ratio limit/load of `loads` at spindle speed `rpm` (the
+    /// feed range plays no part) and its constraint.
+    pub fn ratio(
+        &self,
+        rpm: f64,
+        machine: &crate::machine::Machine,
+        loads: &Loads,
+    ) -> Option<(f64, millplan_models::force::feed::Constraint)> {
+        self.at(rpm, 1.0, machine).ratio(loads)
     }
 }
 
@@ -367,15 +424,36 @@ impl ForceRun {
     }
 
     /// Moves whose loads exceed their limits (the factor of safety and the
-    /// spindle chart at their speed included).
+    /// spindle chart at their speed included) by more than
+    /// [`LIMIT_TOLERANCE`].
     pub fn over_limits(&self, lim: &FeedLimits, m: &crate::machine::Machine) -> Vec<&MoveForces> {
+        self.by_limit_ratio(lim, m, |r| r < 1.0 / (1.0 + LIMIT_TOLERANCE))
+    }
+
+    /// Moves over a limit by no more than [`LIMIT_TOLERANCE`]: within the
+    /// model's resolution.
+    pub fn within_tolerance(
+        &self,
+        lim: &FeedLimits,
+        m: &crate::machine::Machine,
+    ) -> Vec<&MoveForces> {
+        let lowest = 1.0 / (1.0 + LIMIT_TOLERANCE);
+        self.by_limit_ratio(lim, m, |r| (lowest..1.0 - 1e-9).contains(&r))
+    }
+
+    /// Modelled cutting moves whose tightest ratio limit/load passes `keep`.
+    fn by_limit_ratio(
+        &self,
+        lim: &FeedLimits,
+        m: &crate::machine::Machine,
+        keep: impl Fn(f64) -> bool,
+    ) -> Vec<&MoveForces> {
         self.moves
             .iter()
             .filter(|x| !x.rapid && !x.unmodelled)
             .filter(|x| {
-                lim.at(x.rpm, m)
-                    .ratio(&x.loads())
-                    .is_some_and(|(r, _)| r < 1.0 - 1e-9)
+                lim.ratio(x.rpm, m, &x.loads())
+                    .is_some_and(|(r, _)| keep(r))
             })
             .collect()
     }
@@ -522,7 +600,8 @@ impl PartContext<'_> {
             moves: Vec::new(),
             evaluated: 0,
         };
-        for (k, s) in self.strokes.strokes[range].iter().enumerate() {
+        let (all, range_start) = (&self.strokes.strokes[..], range.start);
+        for (k, s) in all[range].iter().enumerate() {
             if k % 4096 == 4095 {
                 (self.progress)(self.done.fetch_add(4096, Ordering::Relaxed) + 4096);
             }
@@ -547,10 +626,13 @@ impl PartContext<'_> {
             m.seconds += s.minutes * 60.0;
             let body = &self.strokes.tools[s.tool as usize];
             if !s.rapid {
+                let g = range_start + k;
+                let from_cut = continues(all, g) && !all[g - 1].rapid;
                 if let Some(n) = stroke_forces(
                     &self.tools[s.tool as usize],
                     &sim.stock,
                     s,
+                    from_cut,
                     m,
                     self.schedule,
                 ) {
@@ -594,11 +676,39 @@ fn part_bounds(
     b
 }
 
-/// Evaluates one cutting stroke into its move; the number of evaluations.
+/// Most poses one stroke is evaluated at: a longer stroke's samples spread
+/// wider than the dexel size (work stays bounded by the stroke count).
+pub const MAX_SAMPLES: usize = 4096;
+
+/// Where along a stroke of length `len` (mm) its load is evaluated: the
+/// distances from its start, the end first, then every `step` (the stock's
+/// dexel size, widened to `len / MAX_SAMPLES` on a very long stroke) back
+/// toward the start, so the tool is seen where it enters material, all
+/// along it, and where it leaves. A stroke that continues a cutting stroke
+/// (`from_cut`) starts inside the cut the tool just made: there samples
+/// closer than one step to the start are left out, since the dexels cannot
+/// tell the chip ahead of the tool from that cut; a stroke from air is
+/// sampled down to its start.
+pub fn sample_distances(len: f64, step: f64, from_cut: bool) -> impl Iterator<Item = f64> {
+    let h = step.max(len / MAX_SAMPLES as f64).max(1e-9);
+    let lowest = if from_cut { h * (1.0 - 1e-9) } else { 1e-9 };
+    // The end always; then back toward the start.
+    std::iter::once(len).chain(
+        (1..=MAX_SAMPLES)
+            .map(move |j| len - j as f64 * h)
+            .take_while(move |d| *d >= lowest),
+    )
+}
+
+/// Evaluates one cutting stroke into its move at every sample along it
+/// ([`sample_distances`]): the move's loads are the largest of its samples',
+/// its allowed feed per tooth the one that meets every sample's limits.
+/// Returns the number of evaluations.
 fn stroke_forces(
     tf: &ToolForces,
     stock: &Stock,
     s: &Stroke,
+    from_cut: bool,
     m: &mut MoveForces,
     schedule: Option<(&FeedLimits, &crate::machine::Machine)>,
 ) -> Option<usize> {
@@ -613,48 +723,68 @@ fn stroke_forces(
     if !(m.rpm > 0.0) {
         return None;
     }
-    let eng = StockEngagement::new(stock, tf.radius, s.p1, s.a1, d, tf.flute);
-    let (x, _, z) = eng.frame();
-    let lead = d.dot(z).atan2(d.dot(x));
-    m.lead_deg = lead.to_degrees();
     let fz = v / (m.rpm * flutes);
     m.fz = m.fz.max(fz);
-    let cut = Cut {
-        fz,
-        rpm: m.rpm,
-        lead,
-        tilt: 0.0,
-    };
-    let cells = tf.model.engaged(&cut, &eng);
-    if cells.is_empty() {
-        return Some(0);
-    }
-    let load_at = |fz: f64| -> (Summary, Loads) {
-        let s = tf
-            .model
-            .evaluate_engaged(&Cut { fz, ..cut }, &cells)
-            .summary();
-        let l = Loads::new(&s, &tf.holding);
-        (s, l)
-    };
-    let (sum, loads) = load_at(fz);
-    m.merge(&sum, &loads, cells.len());
-    let mut evals = 1;
-    if let Some((lim, machine)) = schedule {
-        let (f, c, n) = allowed_fz(&cut, &cells, tf, &lim.at(m.rpm, machine));
-        evals += n;
-        if m.fz_allowed.is_none_or(|a| f < a) {
-            m.fz_allowed = Some(f);
-            m.binding = Some(c);
+    let limits = schedule.map(|(lim, machine)| lim.at(m.rpm, 2.0 * tf.radius, machine));
+    let mut evals = 0;
+    for dist in sample_distances(len, stock.grid.res, from_cut) {
+        let t = dist / len;
+        let eng = StockEngagement::new(stock, tf.radius, s.p0 + d * t, s.axis_at(t), d, tf.flute);
+        let (x, _, z) = eng.frame();
+        let lead = d.dot(z).atan2(d.dot(x));
+        m.lead_deg = lead.to_degrees();
+        let cut = Cut {
+            fz,
+            rpm: m.rpm,
+            lead,
+            tilt: 0.0,
+        };
+        let cells = tf.model.engaged(&cut, &eng);
+        if cells.is_empty() {
+            continue;
+        }
+        let sum = tf.model.evaluate_engaged(&cut, &cells).summary();
+        m.merge(&sum, &Loads::new(&sum, &tf.holding), cells.len());
+        evals += 1;
+        if let Some(lim) = &limits {
+            evals += tighten(&cut, &cells, tf, lim, m);
         }
     }
     Some(evals)
 }
 
+/// Lowers the move's allowed feed per tooth until this sample's limits are
+/// met there too (feeds only lower the loads, so every earlier sample stays
+/// within its limits). Returns the evaluations used.
+fn tighten(cut: &Cut, cells: &Engaged, tf: &ToolForces, lim: &Limits, m: &mut MoveForces) -> usize {
+    let mut evals = 0;
+    let start = match m.fz_allowed {
+        Some(a) => {
+            let s = tf
+                .model
+                .evaluate_engaged(&Cut { fz: a, ..*cut }, cells)
+                .summary();
+            evals += 1;
+            match lim.ratio(&Loads::new(&s, &tf.holding)) {
+                Some((r, _)) if r < 1.0 && a > lim.fz_min => a,
+                _ => return evals,
+            }
+        }
+        None => cut.fz,
+    };
+    let (f, c, n) = allowed_fz(&Cut { fz: start, ..*cut }, cells, tf, lim);
+    if m.fz_allowed.is_none_or(|a| f < a) {
+        m.fz_allowed = Some(f);
+        m.binding = Some(c);
+    }
+    evals + n
+}
+
 /// The feed per tooth at which the tightest limit is met (§2.3), never above
-/// it: the iteration stops within 1 %, and a feed still over a limit is
-/// lowered until it is not (or sits on fz_min). Returns the feed, the
-/// binding constraint's name and the evaluations used.
+/// it: the iteration from `cut.fz` stops within 1 %, and a feed still over a
+/// limit (its loads evaluated at that very feed) is lowered until it is not
+/// (or sits on fz_min). Returns the feed, the binding constraint's name and
+/// the evaluations used.
 fn allowed_fz(
     cut: &Cut,
     cells: &Engaged,
@@ -673,7 +803,13 @@ fn allowed_fz(
     let mut fz = sched.fz;
     let mut n = sched.sequence.len();
     let mut binding = sched.binding.map_or("none", |c| c.name());
-    let mut loads = sched.loads;
+    // An iteration stopped by its count left its last feed unevaluated.
+    let mut loads = if sched.converged {
+        sched.loads
+    } else {
+        n += 1;
+        Some(eval(fz))
+    };
     for _ in 0..20 {
         let Some((r, _)) = loads.and_then(|l| lim.ratio(&l)) else {
             break;
@@ -714,6 +850,105 @@ fn finish_move(m: &mut MoveForces) {
 mod tests {
     use super::*;
     use millplan_models::force::engage::FnEngagement;
+
+    #[test]
+    fn a_load_within_half_a_percent_of_its_limit_is_within_the_resolution() {
+        let limits = FeedLimits {
+            fxy: Some(100.0),
+            torque: None,
+            power: None,
+            stress: None,
+            deflection: None,
+            fos: 1.0,
+            fz_min: 0.01,
+            fz_max: None,
+            chip_loads: None,
+        };
+        let mv = |index: u32, fxy_max: f64| MoveForces {
+            index,
+            line: index + 10,
+            rpm: 6000.0,
+            fxy_max,
+            ..MoveForces::default()
+        };
+        let run = ForceRun {
+            moves: vec![
+                mv(0, 99.0),
+                mv(1, 100.0),
+                mv(2, 100.04),
+                mv(3, 100.49),
+                mv(4, 100.6),
+            ],
+            ..ForceRun::default()
+        };
+        let m = crate::machine::Machine::default();
+        let lines = |v: Vec<&MoveForces>| v.iter().map(|x| x.index).collect::<Vec<_>>();
+        assert_eq!(lines(run.over_limits(&limits, &m)), [4]);
+        assert_eq!(lines(run.within_tolerance(&limits, &m)), [2, 3]);
+    }
+
+    #[test]
+    fn the_largest_feed_per_tooth_comes_from_the_material_by_diameter() {
+        let materials = millplan_models::force::materials::Materials::builtin();
+        let chip = |name: &str| materials.get(name).expect("built in").chip_loads;
+        let limits = |fz_max: Option<f64>, name: &str| FeedLimits {
+            fxy: None,
+            torque: None,
+            power: None,
+            stress: None,
+            deflection: None,
+            fos: 1.0,
+            fz_min: 0.01,
+            fz_max,
+            chip_loads: chip(name),
+        };
+        // Issue 30: a D16 tool in Ti6Al4V got 0.02·D = 0.32 mm per tooth;
+        // the table's 12–16 mm column gives 0.06 mm.
+        let ti = limits(None, "ti6al4v").fz_range(16.0);
+        assert_eq!((ti.fz_max, ti.source), (0.06, FzSource::Material));
+        // Between the table's rows, linear in D; below the first, in
+        // proportion to D, with fz_min never above fz_max.
+        let al = limits(None, "al7075");
+        assert!((al.fz_range(9.0).fz_max - 0.07).abs() < 1e-12);
+        let small = al.fz_range(1.5);
+        assert!((small.fz_max - 0.005).abs() < 1e-12 && small.fz_min == small.fz_max);
+        assert_eq!(al.fz_range(40.0).fz_max, 0.16);
+        // A material without chip loads: the documented 0.02·D.
+        let hss = limits(None, "al7075-hss").fz_range(10.0);
+        assert!((hss.fz_max - 0.2).abs() < 1e-12 && hss.source == FzSource::Diameter);
+        // The user's value wins for every tool.
+        let given = limits(Some(0.1), "ti6al4v").fz_range(16.0);
+        assert_eq!((given.fz_max, given.source), (0.1, FzSource::Given));
+    }
+
+    #[test]
+    fn samples_run_from_a_strokes_end_back_to_its_start() {
+        let near = |a: Vec<f64>, b: &[f64]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12)
+        };
+        let from_air: Vec<f64> = sample_distances(0.35, 0.1, false).collect();
+        assert!(
+            near(from_air.clone(), &[0.35, 0.25, 0.15, 0.05]),
+            "{from_air:?}"
+        );
+        // After a cut, not within a step of the start.
+        let after_cut: Vec<f64> = sample_distances(0.35, 0.1, true).collect();
+        assert!(
+            near(after_cut.clone(), &[0.35, 0.25, 0.15]),
+            "{after_cut:?}"
+        );
+        // A short stroke in a chain: its end, as before sampling.
+        let short: Vec<f64> = sample_distances(0.19, 0.1, true).collect();
+        assert!(near(short.clone(), &[0.19]), "{short:?}");
+        let tiny: Vec<f64> = sample_distances(0.01, 0.1, true).collect();
+        assert!(near(tiny.clone(), &[0.01]), "{tiny:?}");
+        // A very long stroke: at most MAX_SAMPLES, evenly spread to its start.
+        let long: Vec<f64> = sample_distances(1000.0, 0.01, false).collect();
+        assert!(long.len() <= MAX_SAMPLES + 1 && long.len() >= MAX_SAMPLES - 1);
+        assert!(long
+            .last()
+            .is_some_and(|d| *d < 1000.0 / MAX_SAMPLES as f64 + 1e-9));
+    }
 
     #[test]
     fn skipping_slices_by_the_rings_never_changes_the_engaged_cells() {

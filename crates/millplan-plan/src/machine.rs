@@ -34,6 +34,10 @@ pub struct Machine {
     pub feed_min: f64,
     /// Highest cutting feed, mm/min.
     pub feed_max: f64,
+    /// Feed of cutting blocks that meet no material (`[feed] air`), mm/min;
+    /// `None`: the tool's largest feed per tooth at the block's speed (the
+    /// feed pass's rule, [`crate::feed`]).
+    pub feed_air: Option<f64>,
     /// Rapid traverse rate, mm/min.
     pub rapid: f64,
     pub control: Control,
@@ -437,6 +441,8 @@ impl serde::Serialize for Machine {
             spindle_accel: f64,
             feed_min: f64,
             feed_max: f64,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            feed_air: Option<f64>,
             rapid: f64,
             dialect: Option<&'static str>,
             #[serde(skip_serializing_if = "Option::is_none")]
@@ -465,6 +471,7 @@ impl serde::Serialize for Machine {
             spindle_accel: self.spindle_accel,
             feed_min: self.feed_min,
             feed_max: self.feed_max,
+            feed_air: self.feed_air,
             rapid: self.rapid,
             dialect: c.dialect.map(Target::name),
             spindle_curve: self.spindle_curve.as_ref().map(SpindleCurve::points),
@@ -492,6 +499,7 @@ impl Default for Machine {
             spindle_curve: None,
             feed_min: 1.0,
             feed_max: 20000.0,
+            feed_air: None,
             rapid: 15000.0,
             control: Control::default(),
             kinematics: None,
@@ -628,6 +636,15 @@ impl Machine {
             format!("must be finite and above the lowest feed, {f0} (mm/min), got {f1}"),
         )?;
         positive(self.rapid, "feed.rapid", "mm/min")?;
+        if let Some(v) = self.feed_air {
+            need(
+                v.is_finite() && v >= f0 && v <= f1,
+                "feed.air",
+                format!(
+                    "must be a feed from the lowest, {f0}, to the highest, {f1} (mm/min), got {v}"
+                ),
+            )?;
+        }
         if let Some(d) = self.control.spindle_decimals {
             // The writers print at most 6 (and would silently cap more).
             need(
@@ -900,6 +917,9 @@ mod tests {
         bad(&|m| m.feed_max = f64::INFINITY, "feed.max");
         bad(&|m| m.feed_max = 0.5, "feed.max");
         bad(&|m| m.rapid = -15000.0, "feed.rapid");
+        bad(&|m| m.feed_air = Some(f64::NAN), "feed.air");
+        bad(&|m| m.feed_air = Some(30000.0), "feed.air");
+        bad(&|m| m.feed_air = Some(0.5), "feed.air");
         bad(
             &|m| m.control.spindle_decimals = Some(7),
             "control.spindle_decimals",

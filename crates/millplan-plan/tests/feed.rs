@@ -48,7 +48,8 @@ fn limits() -> FeedLimits {
         deflection: Some(0.05),
         fos: 1.0,
         fz_min: 0.01,
-        fz_max: 0.25,
+        fz_max: Some(0.25),
+        chip_loads: None,
     }
 }
 
@@ -199,7 +200,7 @@ fn scheduled_feeds_meet_the_limits_within_the_machine_and_save_time() {
         assert!(x.power_w <= l.power.unwrap_or(f64::INFINITY) * (1.0 + 1e-9));
         assert!(x.deflection_mm <= l.deflection.unwrap_or(f64::INFINITY) * (1.0 + 1e-9));
         if x.fz > 0.0 && x.fxy_max > 0.0 {
-            assert!(x.fz <= l.fz_max * (1.0 + 1e-9), "fz {}", x.fz);
+            assert!(x.fz <= 0.25 * (1.0 + 1e-9), "fz {}", x.fz);
         }
     }
     // 1000 mm/min at 10000 1/min is 0.05 mm per tooth: conservative here.
@@ -280,5 +281,141 @@ fn a_pass_through_the_stock_loads_the_tool_as_the_planar_raster_does() {
     assert!(
         (sim - want).abs() < 0.02 * want,
         "F_xy,max {sim:.1} N in the stock, {want:.1} N analytic"
+    );
+}
+
+/// The full slot of issue 30, fault 1: a D10 flat end mill enters a box at
+/// X −10 and leaves it at X 50 in one move, `G1 X60 F1120`. The move ends in
+/// air, so a load taken only at its end is zero and the move keeps its
+/// feed; loaded along the move, its F_xy is the analytic slot's (§1.4(a)
+/// without a stepover), and the scheduled feed keeps it under the limit when
+/// the written program is simulated again.
+fn slot_case() -> (Program, Stock) {
+    use millplan_geom::DVec3;
+    use millplan_nc::{Move, Operation};
+    let mut op = Operation {
+        tool: Some(millplan_nc::Tool {
+            number: Some(1),
+            name: Some("FLAT D10".into()),
+            cutter: None,
+            line: 0,
+        }),
+        start: DVec3::new(-20.0, 0.0, 5.0),
+        ..Operation::default()
+    };
+    for m in [
+        Move::rapid(DVec3::new(-20.0, 0.0, 5.0)),
+        Move::linear(DVec3::new(-20.0, 0.0, -SLOT_AP), 500.0),
+        Move::linear(DVec3::new(60.0, 0.0, -SLOT_AP), 1120.0),
+        Move::rapid(DVec3::new(60.0, 0.0, 5.0)),
+    ] {
+        op.moves.push(Move {
+            spindle: SLOT_RPM,
+            ..m
+        });
+    }
+    let mut p = Program::new(millplan_nc::Dialect::AptIso);
+    p.operations.push(op);
+    let stock = Stock::block(
+        DVec3::new(-10.0, -20.0, -10.0),
+        DVec3::new(50.0, 20.0, 0.0),
+        0.1,
+    );
+    (p, stock)
+}
+
+const SLOT_AP: f64 = 3.0;
+const SLOT_RPM: f64 = 8000.0;
+
+fn flat(_: &millplan_nc::Operation) -> Option<ToolBody> {
+    Some(ToolBody::new(Shape::Flat { radius: 5.0 }))
+}
+
+fn slot_forces(p: &Program, stock: Stock) -> ForceRun {
+    let s = strokes(
+        p,
+        flat,
+        &PathOptions {
+            chord: 0.025,
+            rapid_rate: 15000.0,
+        },
+    );
+    simulate(p, &s, stock, &setup(), None, &|_| {}).expect("simulates")
+}
+
+/// F_xy,max of the analytic full slot at feed `f` (mm/min).
+fn analytic_slot_fxy(f: f64) -> f64 {
+    use millplan_models::force::engage::PlanarRaster;
+    use millplan_models::force::{Cut, ForceModel};
+    let s = setup();
+    let edge = millplan_models::force::edge::Tool {
+        shape: Shape::Flat { radius: 5.0 },
+        flutes: 2,
+        helix: s.helix,
+        flute_length: 30.0,
+    };
+    let model = ForceModel::new(edge, s.law, s.grid).expect("model");
+    let slot = PlanarRaster::new(&edge, SLOT_AP, None, 0.0, 0.0).expect("slot");
+    let cut = Cut {
+        fz: f / (2.0 * SLOT_RPM),
+        rpm: SLOT_RPM,
+        lead: 0.0,
+        tilt: 0.0,
+    };
+    model.evaluate(&cut, &slot).summary().fxy_max
+}
+
+#[test]
+fn a_slot_that_ends_in_air_is_loaded_along_its_move() {
+    let (p, stock) = slot_case();
+    let run = slot_forces(&p, stock);
+    let slot = run.moves.iter().find(|m| m.index == 2).expect("the slot");
+    let want = analytic_slot_fxy(1120.0);
+    assert!(!slot.air && !slot.unmodelled, "{slot:?}");
+    assert!(
+        (slot.fxy_max - want).abs() < 0.03 * want,
+        "F_xy,max {:.1} N along the slot, {want:.1} N analytic",
+        slot.fxy_max
+    );
+    // The plunge beside the box cuts nothing.
+    assert!(run
+        .moves
+        .iter()
+        .find(|m| m.index == 1)
+        .is_some_and(|m| m.air));
+}
+
+#[test]
+fn a_slot_that_ends_in_air_is_scheduled_under_the_limit() {
+    let (mut p, stock) = slot_case();
+    let m = Machine::default();
+    let limit = 0.7 * analytic_slot_fxy(1120.0);
+    let params = FeedParams {
+        setup: setup(),
+        limits: FeedLimits {
+            fxy: Some(limit),
+            power: None,
+            deflection: None,
+            fz_max: Some(0.2),
+            ..limits()
+        },
+        accel: 2000.0,
+        chord: 0.025,
+    };
+    let mut pass = FeedPass::new(params, stock.clone(), Box::new(flat));
+    let cx = Context::new(m.clone()).verifying();
+    pipeline::run(&mut [&mut pass], &mut p, &cx).expect("the pass runs");
+    let ch = pass.changes.expect("changes");
+    assert_eq!(ch.binding.get("fxy"), Some(&1), "{ch:?}");
+    assert_eq!(ch.kept_blocks, 0, "{ch:?}");
+    let feed = p.operations[0].moves[2].feed;
+    assert!(feed < 1120.0, "the slot's feed {feed} was not lowered");
+    // The written program simulated again: loaded, at the limit, not over.
+    let after = slot_forces(&p, stock);
+    let slot = after.moves.iter().find(|m| m.index == 2).expect("the slot");
+    assert!(
+        slot.fxy_max <= limit * (1.0 + 1e-9) && slot.fxy_max > 0.97 * limit,
+        "F_xy,max {:.1} N against a limit of {limit:.1} N",
+        slot.fxy_max
     );
 }

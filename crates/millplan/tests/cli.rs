@@ -696,6 +696,10 @@ fn feed_schedules_a_generated_finishing_raster() {
             &[
                 "--limit",
                 "fxy=150,deflection=0.05",
+                // A finishing pass: the tool maker's chip load, above the
+                // material table's roughing value (0.08 mm at D10).
+                "--fz-max",
+                "0.2",
                 "-o",
                 &s("out.apt"),
                 "--json",

@@ -460,3 +460,101 @@ fn lobes_refuse_absurd_inputs() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+const SLOT: &str = "%\nO0030\nG21 G90 G17 G94\nT1 M6\nS8000 M3\nG0 X-20. Y0. Z5.\n\
+G1 Z-3. F500.\nG1 X60. F1120.\nG0 Z5.\nM30\n%\n";
+
+/// Issue 30, fault 1: a full slot `G1 X60 F1120` that enters the stock at
+/// X −10 and leaves it at X 50 ends in air. `force` loads it along the move,
+/// `feed` lowers its feed to the F_xy limit (it was `kept` at 1120 when only
+/// the move's end was looked at), and `force` on the program `feed` wrote
+/// finds it at the limit, not over. The plunge beside the stock is an air
+/// block at fz_max·z·n, or at the machine file's `[feed] air`.
+#[test]
+fn feed_loads_a_slot_along_its_move_and_what_it_wrote_stays_under_the_limit() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let d = dir.path();
+    let s = |p: &str| d.join(p).display().to_string();
+    std::fs::write(d.join("slot.nc"), SLOT).expect("written");
+    let model = [
+        "--stock",
+        "box:-10,-20,-10,50,20,0",
+        "--tool",
+        "flat:10",
+        "--material",
+        "al7075",
+        "--json",
+        "-q",
+    ];
+    let before = json(&[&["force", &s("slot.nc")][..], &model].concat());
+    let f0 = f(&before["max"]["fxy"]);
+    assert!(f0 > 100.0, "the slot is loaded: {before}");
+    assert_eq!(
+        before["air_moves"], 1,
+        "only the plunge is in air: {before}"
+    );
+    let limit = format!("fxy={:.1}", 0.7 * f0);
+    let lim = (0.7 * f0 * 10.0).round() / 10.0;
+    let j = json(
+        &[
+            &["feed", &s("slot.nc")][..],
+            &model,
+            &["--limit", &limit, "--fz-max", "0.2", "-o", &s("out.nc")],
+        ]
+        .concat(),
+    );
+    assert_eq!(j["binding"]["fxy"], 1, "{j}");
+    assert_eq!(
+        (j["kept_blocks"].as_u64(), j["air_blocks"].as_u64()),
+        (Some(0), Some(1)),
+        "{j}"
+    );
+    assert_eq!(j["over_limit_after"], 0, "{j}");
+    assert_eq!(j["fz_by_tool"][0]["source"], "given", "{j}");
+    let text = std::fs::read_to_string(d.join("out.nc")).expect("written");
+    // The plunge in air at 0.2 mm · 2 flutes · 8000 1/min.
+    assert!(text.contains("Z-3. F3200."), "{text}");
+    let after = json(&[&["force", &s("out.nc")][..], &model, &["--limit", &limit]].concat());
+    let f1 = f(&after["max"]["fxy"]);
+    assert!(
+        f1 <= lim * (1.0 + 1e-6) && f1 > 0.97 * lim,
+        "F_xy,max {f1:.1} N after, limit {lim:.1} N"
+    );
+    assert_eq!(after["over_limit"], 0, "{after}");
+    // The machine file names the air feed; without --fz-max the material's
+    // chip load for a D10 tool (0.08 mm in al7075) tops the range.
+    std::fs::write(
+        d.join("m.toml"),
+        "[spindle]\nmin = 500\nmax = 18000\naccel = 6000\n[feed]\nmax = 20000\nair = 2500\n",
+    )
+    .expect("written");
+    let j = json(
+        &[
+            &["feed", &s("slot.nc")][..],
+            &model,
+            &[
+                "--limit",
+                &limit,
+                "--machine",
+                &s("m.toml"),
+                "-o",
+                &s("out2.nc"),
+            ],
+        ]
+        .concat(),
+    );
+    assert_eq!(j["fz_by_tool"][0]["source"], "material", "{j}");
+    assert!(
+        (f(&j["fz_by_tool"][0]["fz_max"]) - 0.08).abs() < 1e-12,
+        "{j}"
+    );
+    let text = std::fs::read_to_string(d.join("out2.nc")).expect("written");
+    assert!(text.contains("Z-3. F2500."), "{text}");
+    // The chip loads are listed with the materials.
+    let list = json(&["force", "materials", "--json"]);
+    let al = list
+        .as_array()
+        .and_then(|a| a.iter().find(|m| m["name"] == "al7075"))
+        .expect("al7075");
+    assert_eq!(al["fz_max"][5], serde_json::json!([10.0, 0.08]), "{al}");
+}

@@ -35,6 +35,9 @@ struct Entry {
     chip: Option<toml::Value>,
     h_min: Option<f64>,
     beta: Option<String>,
+    fz_max: Option<Vec<[f64; 2]>>,
+    #[serde(default)]
+    fz_note: String,
 }
 
 /// A named material.
@@ -43,6 +46,114 @@ pub struct Material {
     pub name: String,
     pub note: String,
     pub law: Law,
+    /// The largest feed per tooth by tool diameter (`fz_max`), if the table
+    /// gives one.
+    pub chip_loads: Option<ChipLoads>,
+    /// Where the chip loads come from (`fz_note`).
+    pub fz_note: String,
+}
+
+/// Rows a chip-load table may have.
+pub const CHIP_LOAD_ROWS: usize = 24;
+
+/// The share of the tool diameter taken as the largest feed per tooth where
+/// the material gives no chip loads: 0.02·D, a tool maker's rule of thumb for
+/// aluminium with small radial engagement, high for harder materials.
+pub const FALLBACK_FZ_SHARE: f64 = 0.02;
+
+/// A material's largest feed per tooth by tool diameter (the `fz_max`
+/// column: rows `[D mm, fz mm]`, diameters strictly increasing). Between rows
+/// the value is interpolated linearly in D; below the first row it falls in
+/// proportion to D (a chip load scales with the edge's size); above the last
+/// it stays at the last row's (no extrapolation beyond what the source
+/// gives). Fixed-size so that the limits holding it stay `Copy`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChipLoads {
+    rows: [[f64; 2]; CHIP_LOAD_ROWS],
+    len: usize,
+}
+
+impl ChipLoads {
+    /// The table from its rows, checked: 1 to [`CHIP_LOAD_ROWS`] rows,
+    /// diameters finite, positive and strictly increasing, feeds per tooth
+    /// finite, positive and at most 5 mm.
+    pub fn new(rows: &[[f64; 2]]) -> Result<ChipLoads, String> {
+        if rows.is_empty() || rows.len() > CHIP_LOAD_ROWS {
+            return Err(format!(
+                "`fz_max` needs 1 to {CHIP_LOAD_ROWS} rows [D mm, fz mm], got {}",
+                rows.len()
+            ));
+        }
+        let mut out = ChipLoads {
+            rows: [[0.0; 2]; CHIP_LOAD_ROWS],
+            len: rows.len(),
+        };
+        for (k, &[d, fz]) in rows.iter().enumerate() {
+            if !(d.is_finite() && d > 0.0 && d <= 1000.0) {
+                return Err(format!(
+                    "`fz_max` row {}: diameter {d} must be above 0 and at most 1000 mm",
+                    k + 1
+                ));
+            }
+            if k > 0 && d <= rows[k - 1][0] {
+                return Err(format!(
+                    "`fz_max` row {}: diameters must increase ({d} after {})",
+                    k + 1,
+                    rows[k - 1][0]
+                ));
+            }
+            if !(fz.is_finite() && fz > 0.0 && fz <= 5.0) {
+                return Err(format!(
+                    "`fz_max` row {}: feed per tooth {fz} must be above 0 and at most 5 mm",
+                    k + 1
+                ));
+            }
+            out.rows[k] = [d, fz];
+        }
+        Ok(out)
+    }
+
+    /// The rows `[D, fz]`.
+    pub fn rows(&self) -> &[[f64; 2]] {
+        &self.rows[..self.len]
+    }
+
+    /// The largest feed per tooth of a tool of diameter `d`, mm.
+    pub fn at(&self, d: f64) -> f64 {
+        let r = self.rows();
+        let [d0, f0] = r[0];
+        if d <= d0 {
+            return f0 * (d / d0).max(0.0);
+        }
+        for w in r.windows(2) {
+            let ([da, fa], [db, fb]) = (w[0], w[1]);
+            if d <= db {
+                return fa + (fb - fa) * (d - da) / (db - da);
+            }
+        }
+        r[r.len() - 1][1]
+    }
+}
+
+/// Where a largest feed per tooth came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FzSource {
+    /// Given by the user.
+    Given,
+    /// The material's chip-load table at the tool's diameter.
+    Material,
+    /// No table: [`FALLBACK_FZ_SHARE`]·D.
+    Diameter,
+}
+
+/// The largest feed per tooth of a tool of diameter `d` in a material with
+/// chip loads `chip` (None: the [`FALLBACK_FZ_SHARE`]·D rule), and its source.
+pub fn fz_max_for(chip: Option<&ChipLoads>, d: f64) -> (f64, FzSource) {
+    match chip {
+        Some(c) => (c.at(d), FzSource::Material),
+        None => (FALLBACK_FZ_SHARE * d, FzSource::Diameter),
+    }
 }
 
 /// The materials known by name.
@@ -68,7 +179,14 @@ impl Materials {
         let table: BTreeMap<String, Entry> =
             toml::from_str(text).map_err(|e| format!("{origin}: {}", e.message()))?;
         for (name, e) in table {
-            let law = law(&e).map_err(|m| format!("{origin}: material `{name}`: {m}"))?;
+            let at = |m: String| format!("{origin}: material `{name}`: {m}");
+            let law = law(&e).map_err(at)?;
+            let chip_loads = e
+                .fz_max
+                .as_deref()
+                .map(ChipLoads::new)
+                .transpose()
+                .map_err(at)?;
             let name = name.to_ascii_lowercase();
             self.by_name.insert(
                 name.clone(),
@@ -76,6 +194,8 @@ impl Materials {
                     name,
                     note: e.note,
                     law,
+                    chip_loads,
+                    fz_note: e.fz_note,
                 },
             );
         }
@@ -151,5 +271,60 @@ fn law(e: &Entry) -> Result<Law, String> {
         m => Err(format!(
             "model `{m}`: use \"linear\", \"oblique\" or \"flute-segment\""
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chip_loads_read_interpolate_and_refuse_bad_rows() {
+        let mut m = Materials::default();
+        let base = "[x]\nmodel = \"linear\"\nkc = [1.0, 1.0, 0.0]\nke = [0.0, 0.0, 0.0]\n";
+        m.add_toml(
+            &format!("{base}fz_max = [[4.0, 0.02], [8.0, 0.06]]\nfz_note = \"shop\"\n"),
+            "f",
+        )
+        .expect("valid");
+        let x = m.get("x").expect("added");
+        let c = x.chip_loads.expect("chip loads");
+        assert_eq!(x.fz_note, "shop");
+        assert_eq!(c.rows(), &[[4.0, 0.02], [8.0, 0.06]]);
+        for (d, want) in [
+            (2.0, 0.01),
+            (4.0, 0.02),
+            (6.0, 0.04),
+            (8.0, 0.06),
+            (20.0, 0.06),
+        ] {
+            assert!((c.at(d) - want).abs() < 1e-12, "D{d}: {}", c.at(d));
+        }
+        assert_eq!(fz_max_for(Some(&c), 6.0).1, FzSource::Material);
+        assert!((fz_max_for(None, 10.0).0 - 0.2).abs() < 1e-12);
+        for (rows, needle) in [
+            ("[]", "1 to 24 rows"),
+            ("[[4.0, 0.02], [4.0, 0.03]]", "must increase"),
+            ("[[0.0, 0.02]]", "diameter"),
+            ("[[4.0, -0.02]]", "feed per tooth"),
+            ("[[4.0, nan]]", "feed per tooth"),
+        ] {
+            let e = Materials::default()
+                .add_toml(&format!("{base}fz_max = {rows}\n"), "f")
+                .expect_err(rows);
+            assert!(
+                e.contains("material `x`") && e.contains(needle),
+                "{rows}: {e}"
+            );
+        }
+        // Every built-in table reads, its rows as documented.
+        let b = Materials::builtin();
+        let ti = b
+            .get("ti6al4v")
+            .expect("built in")
+            .chip_loads
+            .expect("rows");
+        assert_eq!(ti.at(16.0), 0.06);
+        assert!(b.get("al7075-hss").expect("built in").chip_loads.is_none());
     }
 }

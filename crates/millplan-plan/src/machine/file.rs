@@ -293,6 +293,7 @@ pub(super) fn write(m: &Machine) -> Result<String, MachineError> {
         feed: FeedFile {
             min: m.feed_min,
             max: m.feed_max,
+            air: m.feed_air,
             rapid: m.rapid,
         },
         kinematics: m.kinematics.clone(),
@@ -442,6 +443,8 @@ struct FeedFile {
     #[serde(default = "default_feed_min")]
     min: f64,
     max: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    air: Option<f64>,
     #[serde(default = "default_rapid")]
     rapid: f64,
 }
@@ -505,6 +508,7 @@ impl MachineFile {
             spindle_curve: self.spindle.curve.map(SpindleCurve::new).transpose()?,
             feed_min: self.feed.min,
             feed_max: self.feed.max,
+            feed_air: self.feed.air,
             rapid: self.feed.rapid,
             control: Control {
                 dialect: self.control.dialect.as_deref().map(target).transpose()?,
@@ -811,6 +815,7 @@ mod tests {
             spindle_curve,
             feed_min: _,
             feed_max: _,
+            feed_air,
             rapid: _,
             control:
                 Control {
@@ -833,7 +838,7 @@ mod tests {
         } = &m;
         assert_ne!(name, "machine");
         assert_ne!(*post, PostSettings::default(), "the example sets [post]");
-        assert!(dialect.is_some() && spindle_decimals.is_some());
+        assert!(dialect.is_some() && spindle_decimals.is_some() && feed_air.is_some());
         let curve = spindle_curve.as_ref().expect("curve");
         assert!(curve
             .points()

@@ -109,7 +109,7 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
         ],
         false,
     )?;
-    let limits = load_limits(1.0, (0.0, f64::INFINITY))?;
+    let limits = load_limits(1.0, 0.0, Some(f64::INFINITY), None)?;
     let p = prepare(path, m)?;
     let run = run_forces(&p, &p.program, &p.strokes, m.quiet || m.json)?;
     let over = run.over_limits(&limits, &p.machine);
@@ -129,6 +129,8 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
         "max": run.maxima(),
         "max_lines": {"fxy": worst(|x| x.fxy_max), "torque": worst(|x| x.torque_max), "power": worst(|x| x.power_w), "deflection": worst(|x| x.deflection_mm)},
         "over_limit": over.len(), "over_limit_lines": over.iter().take(20).map(|x| x.line).collect::<Vec<_>>(),
+        "within_tolerance": run.within_tolerance(&limits, &p.machine).len(),
+        "limit_tolerance": millplan_plan::force::LIMIT_TOLERANCE,
         "stock": p.stock_name,
     });
     if let Some(t) = &m.table {
@@ -314,7 +316,10 @@ fn list(m: &Materials, json: bool) -> CliResult<i32> {
         let v: Vec<_> = m
             .by_name
             .values()
-            .map(|x| json!({"name": x.name, "note": x.note}))
+            .map(|x| {
+                json!({"name": x.name, "note": x.note,
+                    "fz_max": x.chip_loads.as_ref().map(|c| c.rows()), "fz_note": x.fz_note})
+            })
             .collect();
         crate::cmd::print_json(serde_json::Value::from(v));
     } else {
