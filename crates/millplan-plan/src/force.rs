@@ -20,6 +20,7 @@
 
 use millplan_geom::{DVec2, DVec3};
 use millplan_models::force::coeffs::Law;
+use millplan_models::force::converge::{ConvergedModel, Refine};
 use millplan_models::force::deflect::{Cantilever, DE_RATIO, E_CARBIDE};
 use millplan_models::force::edge::Tool;
 use millplan_models::force::engage::Engagement;
@@ -151,7 +152,12 @@ pub struct ForceSetup {
     pub flutes: usize,
     /// Helix angle, rad.
     pub helix: f64,
+    /// The steps of the force integrals: the coarsest with `refine`, else
+    /// exactly these.
     pub grid: Grid,
+    /// Refine the steps per stroke until the peaks converge
+    /// ([`ConvergedModel`]; on by default).
+    pub refine: Option<Refine>,
     /// Gauge length from the holder face to the tip, mm (default 3·D).
     pub stickout: Option<f64>,
     /// Fluted length, mm: a stepped cantilever (default: the whole
@@ -168,6 +174,7 @@ impl ForceSetup {
             flutes,
             helix: 30f64.to_radians(),
             grid: Grid::default(),
+            refine: Some(Refine::default()),
             stickout: None,
             flute_length: None,
             modulus: E_CARBIDE,
@@ -197,8 +204,13 @@ impl ForceSetup {
             e: self.modulus,
         };
         holding.validate()?;
+        // Without refinement the model never halves a step.
+        let refine = self.refine.unwrap_or(Refine {
+            halvings: 0,
+            ..Refine::default()
+        });
         Ok(ToolForces {
-            model: ForceModel::new(tool, self.law, self.grid)?,
+            model: ConvergedModel::new(tool, self.law, self.grid, refine)?,
             holding,
             radius: body.radius(),
             flute,
@@ -207,7 +219,7 @@ impl ForceSetup {
 }
 
 struct ToolForces {
-    model: ForceModel,
+    model: ConvergedModel,
     holding: Cantilever,
     radius: f64,
     flute: f64,
@@ -280,6 +292,10 @@ pub struct MoveForces {
     pub lead_deg: f64,
     /// Engaged edge cells (slice × angle) of the most loaded stroke.
     pub cells: usize,
+    /// The steps the force integrals chose for the most loaded stroke: slice
+    /// height, mm, and rotation step, degrees.
+    pub dz_mm: f64,
+    pub dphi_deg: f64,
     pub removed_mm3: f64,
     /// F_xy,max, N.
     pub fxy_max: f64,
@@ -301,7 +317,7 @@ pub struct MoveForces {
 }
 
 impl MoveForces {
-    fn merge(&mut self, s: &Summary, l: &Loads, cells: usize) {
+    fn merge(&mut self, s: &Summary, l: &Loads, cells: usize, model: &ForceModel) {
         let mm =
             |a: [f64; 2], m: millplan_models::force::MinMax| [a[0].min(m.min), a[1].max(m.max)];
         self.fx = mm(self.fx, s.tool[0]);
@@ -309,6 +325,8 @@ impl MoveForces {
         self.fz_force = mm(self.fz_force, s.tool[2]);
         if l.fxy_max >= self.fxy_max {
             self.cells = cells;
+            self.dz_mm = model.dz();
+            self.dphi_deg = model.dphi().to_degrees();
         }
         self.fxy_max = self.fxy_max.max(l.fxy_max);
         self.torque_max = self.torque_max.max(l.torque_max);
@@ -352,7 +370,42 @@ pub struct Maxima {
     pub deflection: f64,
 }
 
+/// The steps the force integrals chose over a run (of the most loaded
+/// stroke of every loaded move).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Steps {
+    /// Smallest and largest slice height, mm.
+    pub dz_mm: [f64; 2],
+    /// Smallest and largest rotation step, degrees.
+    pub dphi_deg: [f64; 2],
+    /// Loaded moves whose steps were refined below the given grid's.
+    pub refined_moves: usize,
+    pub loaded_moves: usize,
+}
+
 impl ForceRun {
+    /// The steps chosen, against the coarsest `grid`.
+    pub fn steps(&self, grid: &Grid) -> Steps {
+        let mut s = Steps {
+            dz_mm: [f64::INFINITY, 0.0],
+            dphi_deg: [f64::INFINITY, 0.0],
+            ..Steps::default()
+        };
+        for m in self.moves.iter().filter(|m| m.cells > 0) {
+            s.loaded_moves += 1;
+            s.dz_mm = [s.dz_mm[0].min(m.dz_mm), s.dz_mm[1].max(m.dz_mm)];
+            s.dphi_deg = [s.dphi_deg[0].min(m.dphi_deg), s.dphi_deg[1].max(m.dphi_deg)];
+            // A model's steps are the grid's or shorter by less than a third
+            // (whole slices fill the flute, whole angles a tooth period).
+            let finer = m.dz_mm < 0.75 * grid.dz || m.dphi_deg < 0.75 * grid.dphi.to_degrees();
+            s.refined_moves += usize::from(finer);
+        }
+        if s.loaded_moves == 0 {
+            (s.dz_mm, s.dphi_deg) = ([0.0; 2], [0.0; 2]);
+        }
+        s
+    }
+
     /// The largest loads over every move.
     pub fn maxima(&self) -> Maxima {
         let mut x = Maxima::default();
@@ -608,7 +661,7 @@ fn stroke_forces(
         return None;
     }
     let v = len / s.minutes;
-    let flutes = tf.model.tool.flutes as f64;
+    let flutes = tf.model.tool().flutes as f64;
     m.feed = m.feed.max(v);
     if !(m.rpm > 0.0) {
         return None;
@@ -625,23 +678,18 @@ fn stroke_forces(
         lead,
         tilt: 0.0,
     };
-    let cells = tf.model.engaged(&cut, &eng);
+    let conv = tf.model.converge(&cut, &eng);
+    let (model, cells) = (conv.model, &conv.cells);
     if cells.is_empty() {
         return Some(0);
     }
-    let load_at = |fz: f64| -> (Summary, Loads) {
-        let s = tf
-            .model
-            .evaluate_engaged(&Cut { fz, ..cut }, &cells)
-            .summary();
-        let l = Loads::new(&s, &tf.holding);
-        (s, l)
-    };
-    let (sum, loads) = load_at(fz);
-    m.merge(&sum, &loads, cells.len());
-    let mut evals = 1;
+    // The converged evaluation is at the stroke's own feed per tooth.
+    let sum = conv.evaluation.summary();
+    let loads = Loads::new(&sum, &tf.holding);
+    m.merge(&sum, &loads, cells.len(), model);
+    let mut evals = 1 + (conv.halvings.0 + conv.halvings.1) as usize;
     if let Some((lim, machine)) = schedule {
-        let (f, c, n) = allowed_fz(&cut, &cells, tf, &lim.at(m.rpm, machine));
+        let (f, c, n) = allowed_fz(&cut, cells, model, &tf.holding, &lim.at(m.rpm, machine));
         evals += n;
         if m.fz_allowed.is_none_or(|a| f < a) {
             m.fz_allowed = Some(f);
@@ -658,16 +706,14 @@ fn stroke_forces(
 fn allowed_fz(
     cut: &Cut,
     cells: &Engaged,
-    tf: &ToolForces,
+    model: &ForceModel,
+    holding: &Cantilever,
     lim: &Limits,
 ) -> (f64, &'static str, usize) {
     use millplan_models::force::feed::iterate_feed;
     let eval = |fz: f64| {
-        let s = tf
-            .model
-            .evaluate_engaged(&Cut { fz, ..*cut }, cells)
-            .summary();
-        Loads::new(&s, &tf.holding)
+        let s = model.evaluate_engaged(&Cut { fz, ..*cut }, cells).summary();
+        Loads::new(&s, holding)
     };
     let sched = iterate_feed(cut.fz, lim, 0.01, 20, eval);
     let mut fz = sched.fz;
@@ -780,10 +826,10 @@ mod tests {
                 z_hi: eng.z_hi,
                 f: |p| eng.contains(p),
             };
-            let fast = tf.model.engaged(&cut, &eng);
+            let fast = tf.model.base().engaged(&cut, &eng);
             assert_eq!(
                 fast,
-                tf.model.engaged(&cut, &every),
+                tf.model.base().engaged(&cut, &every),
                 "tip {tip}, feed {feed}"
             );
             pruned += (0..200)

@@ -125,6 +125,7 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
         "max_lines": {"fxy": worst(|x| x.fxy_max), "torque": worst(|x| x.torque_max), "power": worst(|x| x.power_w), "deflection": worst(|x| x.deflection_mm)},
         "over_limit": over.len(), "over_limit_lines": over.iter().take(20).map(|x| x.line).collect::<Vec<_>>(),
         "stock": p.stock_name,
+        "steps": run.steps(&p.setup.grid),
     });
     if let Some(t) = &m.table {
         outputs.write(t, millplan_report::forces::moves_csv(&run.moves).as_bytes())?;
