@@ -207,12 +207,13 @@ pub(crate) fn error_estimates(rows: &[[f64; 10]]) -> (f64, f64) {
         }
     }
     let (mut dz, mut dphi) = (0.0f64, 0.0f64);
+    // Per quantity (F_xy, T): [all, even, odd, even angles, odd angles, boundary].
+    let [all, even, odd, at_even, at_odd, boundary] = peak;
     for c in 0..2 {
-        let all = peak[0][c];
-        if all > 0.0 {
-            let halves = 0.5 * (peak[1][c] - peak[2][c]).abs();
-            dz = dz.max(halves.max(BOUNDARY_SHARE * peak[5][c]) / all);
-            dphi = dphi.max((peak[3][c] - peak[4][c]).abs() / all);
+        if all[c] > 0.0 {
+            let halves = 0.5 * (even[c] - odd[c]).abs();
+            dz = dz.max(halves.max(BOUNDARY_SHARE * boundary[c]) / all[c]);
+            dphi = dphi.max((at_even[c] - at_odd[c]).abs() / all[c]);
         }
     }
     (dz, dphi)
