@@ -24,6 +24,7 @@
 
 use millplan_geom::{DVec2, DVec3};
 use millplan_models::force::coeffs::Law;
+use millplan_models::force::converge::{ConvergedModel, Refine};
 use millplan_models::force::deflect::{Cantilever, DE_RATIO, E_CARBIDE};
 use millplan_models::force::edge::Tool;
 use millplan_models::force::engage::Engagement;
@@ -156,7 +157,12 @@ pub struct ForceSetup {
     pub flutes: usize,
     /// Helix angle, rad.
     pub helix: f64,
+    /// The steps of the force integrals: the coarsest with `refine`, else
+    /// exactly these.
     pub grid: Grid,
+    /// Refine the steps per stroke until the peaks converge
+    /// ([`ConvergedModel`]; on by default).
+    pub refine: Option<Refine>,
     /// Gauge length from the holder face to the tip, mm (default 3·D).
     pub stickout: Option<f64>,
     /// Fluted length, mm: a stepped cantilever (default: the whole
@@ -173,6 +179,7 @@ impl ForceSetup {
             flutes,
             helix: 30f64.to_radians(),
             grid: Grid::default(),
+            refine: Some(Refine::default()),
             stickout: None,
             flute_length: None,
             modulus: E_CARBIDE,
@@ -202,8 +209,13 @@ impl ForceSetup {
             e: self.modulus,
         };
         holding.validate()?;
+        // Without refinement the model never halves a step.
+        let refine = self.refine.unwrap_or(Refine {
+            halvings: 0,
+            ..Refine::default()
+        });
         Ok(ToolForces {
-            model: ForceModel::new(tool, self.law, self.grid)?,
+            model: ConvergedModel::new(tool, self.law, self.grid, refine)?,
             holding,
             radius: body.radius(),
             flute,
@@ -212,7 +224,7 @@ impl ForceSetup {
 }
 
 struct ToolForces {
-    model: ForceModel,
+    model: ConvergedModel,
     holding: Cantilever,
     radius: f64,
     flute: f64,
@@ -337,6 +349,10 @@ pub struct MoveForces {
     pub lead_deg: f64,
     /// Engaged edge cells (slice × angle) of the most loaded stroke.
     pub cells: usize,
+    /// The steps the force integrals chose for the most loaded stroke: slice
+    /// height, mm, and rotation step, degrees.
+    pub dz_mm: f64,
+    pub dphi_deg: f64,
     pub removed_mm3: f64,
     /// F_xy,max, N.
     pub fxy_max: f64,
@@ -358,7 +374,7 @@ pub struct MoveForces {
 }
 
 impl MoveForces {
-    fn merge(&mut self, s: &Summary, l: &Loads, cells: usize) {
+    fn merge(&mut self, s: &Summary, l: &Loads, cells: usize, model: &ForceModel) {
         let mm =
             |a: [f64; 2], m: millplan_models::force::MinMax| [a[0].min(m.min), a[1].max(m.max)];
         self.fx = mm(self.fx, s.tool[0]);
@@ -366,6 +382,8 @@ impl MoveForces {
         self.fz_force = mm(self.fz_force, s.tool[2]);
         if l.fxy_max >= self.fxy_max {
             self.cells = cells;
+            self.dz_mm = model.dz();
+            self.dphi_deg = model.dphi().to_degrees();
         }
         self.fxy_max = self.fxy_max.max(l.fxy_max);
         self.torque_max = self.torque_max.max(l.torque_max);
@@ -409,7 +427,42 @@ pub struct Maxima {
     pub deflection: f64,
 }
 
+/// The steps the force integrals chose over a run (of the most loaded
+/// stroke of every loaded move).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Steps {
+    /// Smallest and largest slice height, mm.
+    pub dz_mm: [f64; 2],
+    /// Smallest and largest rotation step, degrees.
+    pub dphi_deg: [f64; 2],
+    /// Loaded moves whose steps were refined below the given grid's.
+    pub refined_moves: usize,
+    pub loaded_moves: usize,
+}
+
 impl ForceRun {
+    /// The steps chosen, against the coarsest `grid`.
+    pub fn steps(&self, grid: &Grid) -> Steps {
+        let mut s = Steps {
+            dz_mm: [f64::INFINITY, 0.0],
+            dphi_deg: [f64::INFINITY, 0.0],
+            ..Steps::default()
+        };
+        for m in self.moves.iter().filter(|m| m.cells > 0) {
+            s.loaded_moves += 1;
+            s.dz_mm = [s.dz_mm[0].min(m.dz_mm), s.dz_mm[1].max(m.dz_mm)];
+            s.dphi_deg = [s.dphi_deg[0].min(m.dphi_deg), s.dphi_deg[1].max(m.dphi_deg)];
+            // A model's steps are the grid's or shorter by less than a third
+            // (whole slices fill the flute, whole angles a tooth period).
+            let finer = m.dz_mm < 0.75 * grid.dz || m.dphi_deg < 0.75 * grid.dphi.to_degrees();
+            s.refined_moves += usize::from(finer);
+        }
+        if s.loaded_moves == 0 {
+            (s.dz_mm, s.dphi_deg) = ([0.0; 2], [0.0; 2]);
+        }
+        s
+    }
+
     /// The largest loads over every move.
     pub fn maxima(&self) -> Maxima {
         let mut x = Maxima::default();
@@ -718,7 +771,7 @@ fn stroke_forces(
         return None;
     }
     let v = len / s.minutes;
-    let flutes = tf.model.tool.flutes as f64;
+    let flutes = tf.model.tool().flutes as f64;
     m.feed = m.feed.max(v);
     if !(m.rpm > 0.0) {
         return None;
@@ -739,15 +792,18 @@ fn stroke_forces(
             lead,
             tilt: 0.0,
         };
-        let cells = tf.model.engaged(&cut, &eng);
+        // The grid refined until this sample's peaks converge; the
+        // converged evaluation is at the stroke's own feed per tooth.
+        let conv = tf.model.converge(&cut, &eng);
+        evals += 1 + (conv.halvings.0 + conv.halvings.1) as usize;
+        let (model, cells) = (conv.model, &conv.cells);
         if cells.is_empty() {
             continue;
         }
-        let sum = tf.model.evaluate_engaged(&cut, &cells).summary();
-        m.merge(&sum, &Loads::new(&sum, &tf.holding), cells.len());
-        evals += 1;
+        let sum = conv.evaluation.summary();
+        m.merge(&sum, &Loads::new(&sum, &tf.holding), cells.len(), model);
         if let Some(lim) = &limits {
-            evals += tighten(&cut, &cells, tf, lim, m);
+            evals += tighten(&cut, cells, model, &tf.holding, lim, m);
         }
     }
     Some(evals)
@@ -756,23 +812,27 @@ fn stroke_forces(
 /// Lowers the move's allowed feed per tooth until this sample's limits are
 /// met there too (feeds only lower the loads, so every earlier sample stays
 /// within its limits). Returns the evaluations used.
-fn tighten(cut: &Cut, cells: &Engaged, tf: &ToolForces, lim: &Limits, m: &mut MoveForces) -> usize {
+fn tighten(
+    cut: &Cut,
+    cells: &Engaged,
+    model: &ForceModel,
+    holding: &Cantilever,
+    lim: &Limits,
+    m: &mut MoveForces,
+) -> usize {
     let mut evals = 0;
     let start = match m.fz_allowed {
         Some(a) => {
-            let s = tf
-                .model
-                .evaluate_engaged(&Cut { fz: a, ..*cut }, cells)
-                .summary();
+            let s = model.evaluate_engaged(&Cut { fz: a, ..*cut }, cells).summary();
             evals += 1;
-            match lim.ratio(&Loads::new(&s, &tf.holding)) {
+            match lim.ratio(&Loads::new(&s, holding)) {
                 Some((r, _)) if r < 1.0 && a > lim.fz_min => a,
                 _ => return evals,
             }
         }
         None => cut.fz,
     };
-    let (f, c, n) = allowed_fz(&Cut { fz: start, ..*cut }, cells, tf, lim);
+    let (f, c, n) = allowed_fz(&Cut { fz: start, ..*cut }, cells, model, holding, lim);
     if m.fz_allowed.is_none_or(|a| f < a) {
         m.fz_allowed = Some(f);
         m.binding = Some(c);
@@ -788,16 +848,14 @@ fn tighten(cut: &Cut, cells: &Engaged, tf: &ToolForces, lim: &Limits, m: &mut Mo
 fn allowed_fz(
     cut: &Cut,
     cells: &Engaged,
-    tf: &ToolForces,
+    model: &ForceModel,
+    holding: &Cantilever,
     lim: &Limits,
 ) -> (f64, &'static str, usize) {
     use millplan_models::force::feed::iterate_feed;
     let eval = |fz: f64| {
-        let s = tf
-            .model
-            .evaluate_engaged(&Cut { fz, ..*cut }, cells)
-            .summary();
-        Loads::new(&s, &tf.holding)
+        let s = model.evaluate_engaged(&Cut { fz, ..*cut }, cells).summary();
+        Loads::new(&s, holding)
     };
     let sched = iterate_feed(cut.fz, lim, 0.01, 20, eval);
     let mut fz = sched.fz;
@@ -1015,10 +1073,10 @@ mod tests {
                 z_hi: eng.z_hi,
                 f: |p| eng.contains(p),
             };
-            let fast = tf.model.engaged(&cut, &eng);
+            let fast = tf.model.base().engaged(&cut, &eng);
             assert_eq!(
                 fast,
-                tf.model.engaged(&cut, &every),
+                tf.model.base().engaged(&cut, &every),
                 "tip {tip}, feed {feed}"
             );
             pruned += (0..200)

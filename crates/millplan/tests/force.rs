@@ -47,7 +47,8 @@ const T4_ROW2: [&str; 14] = [
     "--ap",
     "1",
     "--coeffs",
-    "1750,550,640,24,43,0",
+    // T4's Kac in the spec's §1.3 frame is −Kac in the model's (T1a's sign).
+    "1750,550,-640,24,43,0",
     "--json",
 ];
 
@@ -68,6 +69,10 @@ fn cut_reports_the_t4_row_at_the_default_grid() {
         "power_w",
         "stress_mpa",
         "deflection_mm",
+        "dz_mm",
+        "dphi_deg",
+        "error_dz",
+        "error_dphi",
     ] {
         assert!(!j[k].is_null(), "missing {k}");
     }
@@ -249,9 +254,59 @@ fn user_materials_file_extends_the_table() {
 }
 
 #[test]
+fn cut_refines_its_grid_until_the_peaks_converge() {
+    // Issue 30, item 2: at the fixed default grid (0.05 mm, 1°) this case
+    // was 51.8 N against 57.9 N at 0.01 mm / 0.25°. By default the steps are
+    // refined: the result lies within 1 % of a fixed grid with both chosen
+    // steps about four times finer, and the JSON says which steps were used.
+    let case = [
+        "cut",
+        "--tool",
+        "ball:10",
+        "--flutes",
+        "2",
+        "--fz",
+        ".1",
+        "--ap",
+        ".5",
+        "--ae",
+        ".5",
+        "--lead",
+        "10",
+        "--tilt",
+        "25",
+        "--material",
+        "al7075",
+        "--n",
+        "6000",
+        "--json",
+    ];
+    let j = json(&case);
+    let (dz, dphi) = (f(&j["dz_mm"]), f(&j["dphi_deg"]));
+    assert!(dz < 0.05 && dphi <= 1.0, "steps {dz} mm, {dphi}°");
+    // Four times finer, within the finest --dz the command takes (0.001 mm;
+    // the JSON rounds the chosen 0.003125 mm).
+    let (dz4, dphi4) = ((dz / 4.0).max(0.001).to_string(), (dphi / 4.0).to_string());
+    let mut fine = case.to_vec();
+    fine.extend(["--fixed-grid", "--dz", &dz4, "--dphi", &dphi4]);
+    let r = json(&fine);
+    for k in ["fxy_max", "torque_max"] {
+        let (a, b) = (f(&j[k]), f(&r[k]));
+        assert!((a - b).abs() <= 0.01 * b, "{k}: {a} against {b}");
+    }
+    let mut coarse = case.to_vec();
+    coarse.push("--fixed-grid");
+    let c = json(&coarse);
+    assert_eq!((f(&c["dz_mm"]), f(&c["dphi_deg"])), (0.05, 1.0));
+    assert!(f(&c["fxy_max"]) < 0.95 * f(&r["fxy_max"]));
+}
+
+#[test]
 fn calibrate_recovers_coefficients_from_cut_means() {
-    // §1.5b end to end: mean slot forces of a flat end mill from `cut` at four
-    // feeds, then `force calibrate` gives the coefficients back.
+    // §1.5b end to end: mean slot forces of a flat end mill with a 30° helix
+    // from `cut` at four feeds, then `force calibrate` gives the coefficients
+    // back within 0.5 % (edge terms on the helical edge length gave
+    // 28.9/34.6/2.3 for 25/30/2), Kac and Kae with T1a's sign.
     let dir = tempfile::tempdir().expect("tmp");
     let mut csv = String::from("# slot tests\nfeed,fx,fy,fz,note\n");
     for c in ["0.05", "0.1", "0.15", "0.2"] {
@@ -262,7 +317,7 @@ fn calibrate_recovers_coefficients_from_cut_means() {
             "--flutes",
             "4",
             "--helix",
-            "0",
+            "30",
             "--fz",
             c,
             "--ap",
@@ -295,7 +350,7 @@ fn calibrate_recovers_coefficients_from_cut_means() {
         assert!((f(&j[k]) - want).abs() < 0.005 * want, "{k} = {}", j[k]);
     }
     for (k, want) in [("kte", 25.0), ("kre", 30.0), ("kae", 2.0)] {
-        assert!((f(&j[k]) - want).abs() < 0.05 * want, "{k} = {}", j[k]);
+        assert!((f(&j[k]) - want).abs() < 0.005 * want, "{k} = {}", j[k]);
     }
     assert!(f(&j["fit_y"]["r2"]) > 0.99999);
     std::fs::write(&p, "feed,fx,fy,fz\n0.1,1,2,x\n").expect("write");

@@ -2,6 +2,7 @@
 //! raster pass, with the loads that follow (§1.4a, §2).
 
 use super::coeffs::Law;
+use super::converge::{ConvergedModel, Refine};
 use super::deflect::{Bending, Cantilever};
 use super::edge::Tool;
 use super::engage::{Engagement, PlanarRaster};
@@ -14,7 +15,10 @@ use rayon::prelude::*;
 pub struct CutCase {
     pub tool: Tool,
     pub law: Law,
+    /// The steps: exactly these without `refine`, else the coarsest.
     pub grid: Grid,
+    /// Refine the steps until the peaks converge ([`ConvergedModel`]).
+    pub refine: Option<Refine>,
     pub cut: Cut,
     /// Axial depth \[mm\].
     pub ap: f64,
@@ -44,9 +48,11 @@ pub fn evaluate_case(c: &CutCase) -> Result<CaseResult, String> {
     if !(c.cut.rpm > 0.0 && c.cut.rpm.is_finite()) {
         return Err("the spindle speed must be a positive number".into());
     }
-    let model = ForceModel::new(c.tool, c.law, c.grid)?;
     let eng = PlanarRaster::new(&c.tool, c.ap, c.ae, c.cut.lead, c.cut.tilt)?;
-    let evaluation = model.evaluate(&c.cut, &eng);
+    let evaluation = match c.refine {
+        Some(r) => ConvergedModel::new(c.tool, c.law, c.grid, r)?.evaluate(&c.cut, &eng),
+        None => ForceModel::new(c.tool, c.law, c.grid)?.evaluate(&c.cut, &eng),
+    };
     let summary = evaluation.summary();
     Ok(CaseResult {
         bending: c.holding.bend(summary.fxy_max),

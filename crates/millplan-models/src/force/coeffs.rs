@@ -128,6 +128,19 @@ pub struct Oblique {
     pub chip: ChipRule,
 }
 
+impl Oblique {
+    /// (Ktc, Krc, Kac) on this crate's tangential, radial and axial
+    /// channels at chip thickness h \[mm\] and inclination i \[rad\]. The
+    /// oblique model's axial force of a right-hand helix (Kac > 0 in
+    /// [`Orthogonal::oblique`]) presses the rake face toward the tip, along
+    /// −z on the cylinder (Lee & Altintas' frame, §1.3); the model's axial
+    /// channel is +z there (T1a's sign), so Kac enters with its sign turned.
+    pub fn coefficients(&self, h: f64, i: f64) -> [f64; 3] {
+        let [t, r, a] = self.db.oblique(self.rake_deg, h, i, self.beta);
+        [t, r, -a]
+    }
+}
+
 /// The elemental force law.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Law {
@@ -204,12 +217,14 @@ pub struct Calibration {
 }
 
 /// Mechanistic calibration from mean slot forces of a flat end mill with
-/// `flutes` flutes at axial depth `a` mm (§1.5b). In this library's frame
-/// (forces on the tool, +z toward the shank, §1.3) the slot means are
+/// `flutes` flutes at axial depth `a` mm (§1.5b), in the textbook form the
+/// model follows (forces on the tool, +z toward the shank, T1a):
 /// F̄x = −(Na/4)·Krc·c − Na·Kre/π, F̄y = (Na/4)·Ktc·c + Na·Kte/π and
-/// F̄z = −(Na/π)·(Kac·c + Kae·π/2): the z sign is the opposite of the
-/// textbook form, so that coefficients calibrated here reproduce the
-/// measurements through \[`super::evaluate`\].
+/// F̄z = (Na/π)·(Kac·c + Kae·π/2). None of them depends on the helix: the
+/// cutting terms of a slot average over the lag, and the edge terms act on
+/// the axial depth (T1a, "helix irrelevant"), so coefficients calibrated
+/// here reproduce the measurements through [`super::ForceModel`] at any
+/// helix.
 pub fn calibrate_slot(tests: &[SlotTest], flutes: usize, a: f64) -> Result<Calibration, String> {
     if tests.len() < 2 {
         return Err(format!(
@@ -233,10 +248,10 @@ pub fn calibrate_slot(tests: &[SlotTest], flutes: usize, a: f64) -> Result<Calib
     let coeffs = Coeffs::rta(
         4.0 * fy.slope / na,
         -4.0 * fx.slope / na,
-        -pi * fz.slope / na,
+        pi * fz.slope / na,
         pi * fy.intercept / na,
         -pi * fx.intercept / na,
-        -2.0 * fz.intercept / na,
+        2.0 * fz.intercept / na,
     );
     Ok(Calibration {
         coeffs,

@@ -1,8 +1,7 @@
 //! Closed-form mean forces of a flat end mill over a revolution (spec
 //! `process-models.md` T1, T2; Altintas ch. 2), in the textbook form: forces on
 //! the tool, x feed, y as in §0, and F̄z with the textbook sign (the axial
-//! force taken along +z). The numeric model of this crate gives the opposite
-//! F̄z on the cylinder (§1.3 caveat: dFz = −dFa there).
+//! force taken along +z), as the numeric model of this crate gives it.
 
 use super::coeffs::Coeffs;
 use std::f64::consts::PI;

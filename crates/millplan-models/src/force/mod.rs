@@ -21,6 +21,8 @@
 //! - [`case`]: one planar-raster engagement with its loads (`millplan cut`).
 //! - [`edge`]: tool description and edge discretisation (§1.1).
 //! - [`coeffs`]: coefficients, oblique transformation, calibration (§1.5).
+//! - [`converge`]: the steps chosen from the engagement, refined until the
+//!   peaks converge (the user's grid the coarsest).
 //! - [`engage`]: the engagement interface and the analytic planar raster (§1.4a).
 //! - [`flat`]: closed-form mean forces of a flat end mill (T1, T2).
 //! - [`deflect`]: bending stress and deflection of the tool (§2.2).
@@ -29,6 +31,7 @@
 
 pub mod case;
 pub mod coeffs;
+pub mod converge;
 pub mod deflect;
 pub mod edge;
 pub mod engage;
@@ -37,6 +40,7 @@ pub mod flat;
 pub mod materials;
 
 use coeffs::{ChipRule, Law};
+use converge::error_estimates;
 use edge::{Slice, Tool};
 use engage::Engagement;
 use std::f64::consts::PI;
@@ -160,6 +164,13 @@ pub struct ForceModel {
 pub struct Evaluation {
     /// Rotation step actually used \[rad\].
     pub dphi: f64,
+    /// Slice height actually used \[mm\].
+    pub dz: f64,
+    /// Estimated relative discretisation error of F_xy,max and T_max (the
+    /// larger of the two) from the slice height and from the rotation step
+    /// ([`Evaluation::error`]).
+    pub error_dz: f64,
+    pub error_dphi: f64,
     pub flutes: usize,
     pub rpm: f64,
     /// R_wt of the engagement.
@@ -265,6 +276,12 @@ impl ForceModel {
         })
     }
 
+    /// Slice height actually used \[mm\] (the grid's, shortened so that
+    /// whole slices fill the flute).
+    pub fn dz(&self) -> f64 {
+        self.dz
+    }
+
     /// Rotation step actually used \[rad\].
     pub fn dphi(&self) -> f64 {
         2.0 * PI / self.m as f64
@@ -280,10 +297,22 @@ impl ForceModel {
     /// tilt), not on the feed per tooth, so one set serves every feed of the
     /// §2.3 iteration without asking the engagement again.
     pub fn engaged<E: Engagement + ?Sized>(&self, cut: &Cut, eng: &E) -> Engaged {
+        self.engaged_in(cut, eng, (f64::NEG_INFINITY, f64::INFINITY))
+    }
+
+    /// [`ForceModel::engaged`] on the slices whose centres lie in `band`
+    /// (heights above the tip, mm) and in the engagement's own range.
+    pub fn engaged_in<E: Engagement + ?Sized>(
+        &self,
+        cut: &Cut,
+        eng: &E,
+        band: (f64, f64),
+    ) -> Engaged {
         let m = self.m;
         let dir = Cut { fz: 1.0, ..*cut };
         let f = dir.feed_vector();
         let (z_lo, z_hi) = eng.z_range(&self.tool);
+        let (z_lo, z_hi) = (z_lo.max(band.0), z_hi.min(band.1));
         let first = ((z_lo.max(0.0) / self.dz).floor() as usize).min(self.slices.len());
         let last = ((z_hi.max(0.0) / self.dz).ceil() as usize).min(self.slices.len());
         let mut cells = Vec::new();
@@ -302,6 +331,7 @@ impl ForceModel {
                 }
             }
         }
+        mark_boundaries(&mut cells, m, self.slices.len());
         Engaged {
             lead: cut.lead,
             tilt: cut.tilt,
@@ -316,7 +346,10 @@ impl ForceModel {
         debug_assert!(e.lead == cut.lead && e.tilt == cut.tilt);
         let m = self.m;
         let f = cut.feed_vector();
-        let mut table = vec![[0.0f64; 4]; m];
+        // Columns: Fx, Fy, Fz, T of every cell, then Fx, Fy, T of the odd
+        // slices' cells and of the boundary cells (for the error estimates
+        // of the slice height).
+        let mut table = vec![[0.0f64; 10]; m];
         let mut kappa_min = f64::INFINITY;
         let mut z_max = f64::NEG_INFINITY;
         let oblique = match self.law {
@@ -329,7 +362,8 @@ impl ForceModel {
         let mut last_slice = u32::MAX;
         for &(si, k) in &e.cells {
             let s = &self.slices[si as usize];
-            let k = k as usize;
+            let boundary = k & BOUNDARY != 0;
+            let k = (k & !BOUNDARY) as usize;
             if si != last_slice {
                 last_slice = si;
                 kappa_min = kappa_min.min(s.kappa);
@@ -338,7 +372,7 @@ impl ForceModel {
             let (st, ct) = self.rotated(s, k);
             let h = (f[0] * s.ny * st + f[1] * s.ny * ct + f[2] * s.nz).max(0.0);
             let kc = match oblique {
-                Some((o, h_min)) => o.db.oblique(o.rake_deg, h.max(h_min), s.incl, o.beta),
+                Some((o, h_min)) => o.coefficients(h.max(h_min), s.incl),
                 None => s.kc,
             };
             let wc = h * s.w_cut;
@@ -351,31 +385,50 @@ impl ForceModel {
             }
             // Rotate from θ = 0 to θ: (a, b, c) → (a cθ + b sθ, −a sθ + b cθ, c).
             let row = &mut table[k];
-            row[0] += f0[0] * ct + f0[1] * st;
-            row[1] += -f0[0] * st + f0[1] * ct;
+            let (fx, fy, t) = (
+                f0[0] * ct + f0[1] * st,
+                -f0[0] * st + f0[1] * ct,
+                -s.r * f0[0],
+            );
+            row[0] += fx;
+            row[1] += fy;
             row[2] += f0[2];
-            row[3] -= s.r * f0[0];
+            row[3] += t;
+            if si & 1 == 1 {
+                row[4] += fx;
+                row[5] += fy;
+                row[6] += t;
+            }
+            if boundary {
+                row[7] += fx;
+                row[8] += fy;
+                row[9] += t;
+            }
         }
         let n = self.tool.flutes;
         let p = m / n;
-        let period = (0..p)
+        let sums: Vec<[f64; 10]> = (0..p)
             .map(|i| {
-                let mut acc = [0.0; 4];
+                let mut acc = [0.0; 10];
                 for j in 0..n {
                     let t = &table[(i + j * p) % m];
-                    for c in 0..4 {
+                    for c in 0..10 {
                         acc[c] += t[c];
                     }
                 }
                 acc
             })
             .collect();
+        let (error_dz, error_dphi) = error_estimates(&sums);
         Evaluation {
             dphi: self.dphi(),
+            dz: self.dz,
+            error_dz,
+            error_dphi,
             flutes: n,
             rpm: cut.rpm,
             r_wt: r_wt(cut.lead, cut.tilt),
-            period,
+            period: sums.iter().map(|r| [r[0], r[1], r[2], r[3]]).collect(),
             cells: e.cells.len(),
             kappa_min: kappa_min.is_finite().then_some(kappa_min),
             z_max: z_max.is_finite().then_some(z_max),
@@ -390,6 +443,52 @@ impl ForceModel {
             sk * s.cos_psi - ck * s.sin_psi,
             ck * s.cos_psi + sk * s.sin_psi,
         )
+    }
+}
+
+/// The flag of a boundary cell, in the angle index of [`Engaged::cells`].
+const BOUNDARY: u32 = 1 << 31;
+
+/// Flags ([`BOUNDARY`]) the cells where a run of engaged slices at one angle
+/// index ends: at one spindle angle a flute's edge is the column of cells of
+/// one angle index, and it enters or leaves material somewhere between such
+/// a cell and its unengaged neighbour. Runs ending with the edge itself (the
+/// first and the last slice of the flute) have no boundary there. `cells`
+/// are ordered by slice.
+fn mark_boundaries(cells: &mut [(u32, u32)], m: usize, slices: usize) {
+    let words = m.div_ceil(64);
+    let (mut prev, mut cur) = (vec![0u64; words], vec![0u64; words]);
+    let bit = |v: &[u64], k: u32| v[(k >> 6) as usize] >> (k & 63) & 1 == 1;
+    let last = slices as u32 - 1;
+    let (mut prev_s, mut prev_range) = (u32::MAX, 0..0);
+    let mut i = 0;
+    while i < cells.len() {
+        let s = cells[i].0;
+        let j = i + cells[i..].iter().take_while(|c| c.0 == s).count();
+        for c in &cells[i..j] {
+            cur[(c.1 >> 6) as usize] |= 1 << (c.1 & 63);
+        }
+        let adjacent = prev_s.wrapping_add(1) == s;
+        for c in &mut cells[i..j] {
+            if s > 0 && !(adjacent && bit(&prev, c.1)) {
+                c.1 |= BOUNDARY;
+            }
+        }
+        for c in &mut cells[prev_range.clone()] {
+            let k = c.1 & !BOUNDARY;
+            if prev_s < last && !(adjacent && bit(&cur, k)) {
+                c.1 |= BOUNDARY;
+            }
+            prev[(k >> 6) as usize] = 0;
+        }
+        std::mem::swap(&mut prev, &mut cur);
+        (prev_s, prev_range) = (s, i..j);
+        i = j;
+    }
+    for c in &mut cells[prev_range] {
+        if prev_s < last {
+            c.1 |= BOUNDARY;
+        }
     }
 }
 
@@ -441,18 +540,29 @@ fn slice_k(s: &Slice, law: &Law) -> SliceK {
     let (sk, ck) = (s.sin_k, s.cos_k);
     let nrm = s.normal;
     let t = s.tangent;
-    // Altintas directions at θ = 0 (§1.3): tangential (−1, 0, 0), radial −n,
-    // axial (−cos κ sin p, −cos κ cos p, −sin κ).
-    let rta = [[-1.0, 0.0, 0.0], [0.0, -sk, ck], [0.0, -ck, -sk]];
+    // Directions at θ = 0: tangential (−1, 0, 0) against the cutting
+    // velocity, radial −n, and axial along the meridian toward the shank,
+    // (cos κ sin p, cos κ cos p, sin κ): on the cylinder a positive axial
+    // force is +z, the textbook sign of T1a (F̄z = (Na/π)(Kac·c + Kae·π/2)).
+    // Lee & Altintas' matrix of §1.3 takes the axial direction the other
+    // way (dFz = −dFa on the cylinder, its caveat); its Kac is −Kac here.
+    let rta = [[-1.0, 0.0, 0.0], [0.0, -sk, ck], [0.0, ck, sk]];
     let incl = s.edge.tan_i.atan();
-    let (dirs, w_cut, kc, ke) = match *law {
-        Law::Rta(c) => (rta, s.db, c.kc, c.ke),
+    // The edge terms of the linear law act on the width of cut db = dz/sin κ
+    // (the edge's length in the meridian plane): the textbook end-mill
+    // model, with which every published coefficient set was calibrated,
+    // gives Ke·dz on a flat end whatever the helix (T1a: "helix
+    // irrelevant"); §1.3's dS would lengthen it by 1/cos i0 there. On a
+    // ball the two differ by sqrt(1 + sin⁴κ·tan²i0): under 1 % up to κ = 40°
+    // at i0 = 30°.
+    let (dirs, w_cut, w_edge, kc, ke) = match *law {
+        Law::Rta(c) => (rta, s.db, s.db, c.kc, c.ke),
         Law::Oblique(o) => {
             let kc = match o.chip {
-                ChipRule::Fixed(h) => o.db.oblique(o.rake_deg, h, incl, o.beta),
+                ChipRule::Fixed(h) => o.coefficients(h, incl),
                 ChipRule::PerElement { .. } => [0.0; 3],
             };
-            (rta, s.db, kc, o.db.ke)
+            (rta, s.db, s.db, kc, o.db.ke)
         }
         Law::FluteSegment(c) => {
             // d = t × v / |…| = the outward normal; n = d × t (along v).
@@ -464,7 +574,7 @@ fn slice_k(s: &Slice, law: &Law) -> SliceK {
             ];
             let l = (nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2]).sqrt();
             let nv = [nv[0] / l, nv[1] / l, nv[2] / l];
-            ([t, d, nv], s.ds, c.kc, c.ke)
+            ([t, d, nv], s.ds, s.ds, c.kc, c.ke)
         }
     };
     SliceK {
@@ -478,7 +588,7 @@ fn slice_k(s: &Slice, law: &Law) -> SliceK {
         nz: nrm[2],
         dirs,
         w_cut,
-        w_edge: s.ds,
+        w_edge,
         kc,
         ke,
         incl,

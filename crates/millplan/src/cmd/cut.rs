@@ -6,13 +6,13 @@ use crate::io::Outputs;
 use millplan_models::cutter::Shape;
 use millplan_models::force::case::{evaluate_case, CaseResult, CutCase};
 use millplan_models::force::coeffs::{Coeffs, Law};
+use millplan_models::force::converge::Refine;
 use millplan_models::force::deflect::{Cantilever, DE_RATIO, E_CARBIDE};
 use millplan_models::force::edge::Tool;
 use millplan_models::force::materials::Materials;
 use millplan_models::force::{Grid, MinMax};
 use millplan_models::leadtilt::Variant;
 use millplan_report::svg::{line_plot, Series};
-use serde_json::json;
 use std::path::{Path, PathBuf};
 
 /// Cutting forces of one engagement (spec process-models.md §1–§2): a ball,
@@ -93,12 +93,16 @@ pub struct Args {
     /// Spindle speed, 1/min.
     #[arg(long)]
     pub n: f64,
-    /// Axial slice height, mm.
+    /// Axial slice height, mm: the largest used. The model halves it (up to
+    /// four times) until F_xy,max and T_max are estimated within 0.4 %.
     #[arg(long, default_value_t = 0.05)]
     pub dz: f64,
-    /// Rotation step, degrees.
+    /// Rotation step, degrees: the largest used, halved like --dz.
     #[arg(long, default_value_t = 1.0)]
     pub dphi: f64,
+    /// Use exactly --dz and --dphi, without refining them.
+    #[arg(long)]
+    pub fixed_grid: bool,
     /// Write the force curves over one revolution as CSV.
     #[arg(long)]
     pub csv: Option<PathBuf>,
@@ -208,6 +212,7 @@ fn build_case(a: &Args, materials: &Materials) -> CliResult<CutCase> {
             dz: a.dz,
             dphi: a.dphi.to_radians(),
         },
+        refine: (!a.fixed_grid).then(Refine::default),
         cut: Variant::from(a.variant).cut(a.fz, n, a.lead, a.tilt),
         ap: a.ap,
         ae: if a.slot { None } else { a.ae },
@@ -253,20 +258,65 @@ fn pair(m: MinMax) -> [f64; 2] {
     [m.min, m.max]
 }
 
+/// Ranges in the workpiece frame.
+#[derive(serde::Serialize)]
+struct WorkJson {
+    fx: [f64; 2],
+    fy: [f64; 2],
+    fz: [f64; 2],
+}
+
+/// `cut --json`.
+#[derive(serde::Serialize)]
+struct CutJson {
+    fxy_max: f64,
+    fx: [f64; 2],
+    fy: [f64; 2],
+    fz: [f64; 2],
+    mean: [f64; 3],
+    workpiece: WorkJson,
+    torque_max: f64,
+    torque_mean: f64,
+    power_w: f64,
+    power_peak_w: f64,
+    stress_mpa: f64,
+    deflection_mm: f64,
+    kappa_min_deg: Option<f64>,
+    z_max: Option<f64>,
+    /// The steps the integrals used, and their estimated relative errors.
+    dz_mm: f64,
+    dphi_deg: f64,
+    error_dz: f64,
+    error_dphi: f64,
+}
+
 fn to_json(r: &CaseResult) -> serde_json::Value {
-    let s = &r.summary;
-    json!({
-        "fxy_max": s.fxy_max,
-        "fx": pair(s.tool[0]), "fy": pair(s.tool[1]), "fz": pair(s.tool[2]),
-        "mean": s.mean,
-        "workpiece": {"fx": pair(s.work[0]), "fy": pair(s.work[1]), "fz": pair(s.work[2])},
-        "torque_max": s.torque_max, "torque_mean": s.torque_mean,
-        "power_w": s.power_w, "power_peak_w": s.power_peak_w,
-        "stress_mpa": r.bending.stress, "deflection_mm": r.bending.deflection,
-        "kappa_min_deg": r.evaluation.kappa_min.map(f64::to_degrees),
-        "z_max": r.evaluation.z_max,
-        "dphi_deg": r.evaluation.dphi.to_degrees(),
-    })
+    let (s, e) = (&r.summary, &r.evaluation);
+    let j = CutJson {
+        fxy_max: s.fxy_max,
+        fx: pair(s.tool[0]),
+        fy: pair(s.tool[1]),
+        fz: pair(s.tool[2]),
+        mean: s.mean,
+        workpiece: WorkJson {
+            fx: pair(s.work[0]),
+            fy: pair(s.work[1]),
+            fz: pair(s.work[2]),
+        },
+        torque_max: s.torque_max,
+        torque_mean: s.torque_mean,
+        power_w: s.power_w,
+        power_peak_w: s.power_peak_w,
+        stress_mpa: r.bending.stress,
+        deflection_mm: r.bending.deflection,
+        kappa_min_deg: e.kappa_min.map(f64::to_degrees),
+        z_max: e.z_max,
+        dz_mm: e.dz,
+        dphi_deg: e.dphi.to_degrees(),
+        error_dz: e.error_dz,
+        error_dphi: e.error_dphi,
+    };
+    serde_json::to_value(j).unwrap_or_default()
 }
 
 fn print_text(r: &CaseResult) {
@@ -293,6 +343,13 @@ fn print_text(r: &CaseResult) {
         r.bending.stress_holder,
         r.bending.stress_flute_root,
         r.bending.deflection * 1000.0
+    );
+    outln!(
+        "grid     dz {} mm, dφ {}° (estimated error {:.2} % from dz, {:.2} % from dφ)",
+        r.evaluation.dz,
+        r.evaluation.dphi.to_degrees(),
+        100.0 * r.evaluation.error_dz,
+        100.0 * r.evaluation.error_dphi
     );
     if r.evaluation.cells == 0 {
         outln!("note: the edge touches no material in this engagement");

@@ -71,12 +71,18 @@ pub struct ModelArgs {
     /// is loaded at along its length.
     #[arg(long, default_value_t = 0.1)]
     pub resolution: f64,
-    /// Axial slice height of the force model, mm.
+    /// Axial slice height of the force model, mm: the largest used. Per
+    /// stroke the model halves it (up to four times) until F_xy,max and
+    /// T_max are estimated within 0.4 %.
     #[arg(long, default_value_t = 0.05)]
     pub dz: f64,
-    /// Rotation step of the force model, degrees.
+    /// Rotation step of the force model, degrees: the largest used, halved
+    /// like --dz.
     #[arg(long, default_value_t = 1.0)]
     pub dphi: f64,
+    /// Use exactly --dz and --dphi, without refining them.
+    #[arg(long)]
+    pub fixed_grid: bool,
     /// Units of a program that does not say.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
@@ -145,6 +151,9 @@ pub fn force_setup(m: &ModelArgs) -> CliResult<ForceSetup> {
         dz: m.dz,
         dphi: m.dphi.to_radians(),
     };
+    if m.fixed_grid {
+        s.refine = None;
+    }
     s.stickout = m.stickout;
     s.flute_length = m.flute_length;
     s.modulus = m.modulus;
@@ -448,6 +457,7 @@ fn feed_summary(
         "over_limit_after": over.len(), "over_limit_lines": over.iter().take(20).map(|x| x.line).collect::<Vec<_>>(),
         "stock": p.stock_name, "output": a.output.display().to_string(), "dialect": target.name(),
         "operations": per_operation(out, before, after),
+        "steps": before.steps(&p.setup.grid),
     })
 }
 

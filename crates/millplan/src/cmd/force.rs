@@ -132,6 +132,7 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
         "within_tolerance": run.within_tolerance(&limits, &p.machine).len(),
         "limit_tolerance": millplan_plan::force::LIMIT_TOLERANCE,
         "stock": p.stock_name,
+        "steps": run.steps(&p.setup.grid),
     });
     if let Some(t) = &m.table {
         outputs.write(t, millplan_report::forces::moves_csv(&run.moves).as_bytes())?;

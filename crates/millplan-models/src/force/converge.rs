@@ -1,0 +1,220 @@
+//! Steps chosen from the engagement: the force integrals refine their slice
+//! height and rotation step until the peaks they report have converged, the
+//! grid the user gives being the coarsest allowed.
+//!
+//! One evaluation carries its own error estimate ([`Evaluation::error_dz`],
+//! [`Evaluation::error_dphi`]):
+//!
+//! - *slice height*: at every spindle angle the force is a midpoint sum over
+//!   the slices, whose integrand jumps where the flute enters and leaves
+//!   material (a first-order error in dz). The even and the odd slices alone,
+//!   each doubled, are two sums at twice the height; half their difference
+//!   in F_xy,max (and T_max) estimates the error of the whole sum. Where the
+//!   integrand is the same on every slice (a flat end mill under a plane)
+//!   the halves agree whatever the error, so the boundary cells, where the
+//!   flute enters or leaves material, count too: a quarter of their force
+//!   ([`BOUNDARY_SHARE`]).
+//! - *rotation step*: the force at a spindle angle is exact for the cells it
+//!   sums, but the peak over a tooth period is sampled every dφ; the peaks
+//!   over the even and the odd angles alone differ by about what sampling
+//!   at dφ misses.
+//!
+//! [`ConvergedModel`] halves the step whose estimate is above the tolerance
+//! and evaluates again, on the slices around the engaged band of the coarser
+//! grid only (one coarse slice more on each side), until both estimates are
+//! within it or the steps reach their floor.
+
+use super::engage::Engagement;
+use super::{coeffs::Law, edge::Tool, Cut, Engaged, Evaluation, ForceModel, Grid};
+use std::sync::OnceLock;
+
+/// How far [`ConvergedModel`] refines.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Refine {
+    /// Estimated relative error of F_xy,max and T_max to reach.
+    pub tol: f64,
+    /// Halvings of each step at most (4: sixteen times finer).
+    pub halvings: u32,
+}
+
+impl Default for Refine {
+    /// 0.4 % (so that the result lies within 1 % of a grid four times finer
+    /// in both steps, tests/force.rs) and four halvings.
+    fn default() -> Refine {
+        Refine {
+            tol: 0.004,
+            halvings: 4,
+        }
+    }
+}
+
+/// The finest slice height refinement goes to, mm.
+pub const DZ_FLOOR: f64 = 0.001;
+/// The finest rotation step refinement goes to, rad (0.02°: 18,000 angles
+/// per revolution).
+pub const DPHI_FLOOR: f64 = 0.02 * std::f64::consts::PI / 180.0;
+
+/// A tool and law with the grids from the user's (`grid`, the coarsest) to
+/// its steps halved `refine.halvings` times, each built when first needed.
+#[derive(Debug)]
+pub struct ConvergedModel {
+    tool: Tool,
+    law: Law,
+    /// The user's grid: upper bounds of the steps.
+    pub grid: Grid,
+    pub refine: Refine,
+    /// Grid (a, b) (dz/2^a, dφ/2^b) at a·(halvings + 1) + b; `None` where
+    /// it cannot be built (too many slices).
+    levels: Vec<OnceLock<Option<ForceModel>>>,
+}
+
+/// A converged evaluation with the grid's model and engaged cells, so that
+/// the same engagement can be evaluated again at other feeds per tooth.
+#[derive(Clone, Debug)]
+pub struct Converged<'a> {
+    pub model: &'a ForceModel,
+    pub cells: Engaged,
+    pub evaluation: Evaluation,
+    /// Halvings of the slice height and of the rotation step used.
+    pub halvings: (u32, u32),
+}
+
+impl ConvergedModel {
+    /// Checks the tool, law and coarsest grid.
+    pub fn new(tool: Tool, law: Law, grid: Grid, refine: Refine) -> Result<Self, String> {
+        let base = ForceModel::new(tool, law, grid)?;
+        if !(refine.tol > 0.0 && refine.halvings <= 8) {
+            return Err("refinement: the tolerance must be positive, halvings at most 8".into());
+        }
+        let n = refine.halvings as usize + 1;
+        let levels: Vec<OnceLock<Option<ForceModel>>> =
+            (0..n * n).map(|_| OnceLock::new()).collect();
+        let _ = levels[0].set(Some(base));
+        Ok(ConvergedModel {
+            tool,
+            law,
+            grid,
+            refine,
+            levels,
+        })
+    }
+
+    /// The tool being modelled.
+    pub fn tool(&self) -> &Tool {
+        &self.tool
+    }
+
+    /// The model on the user's grid.
+    pub fn base(&self) -> &ForceModel {
+        self.level(0, 0).expect("built in new")
+    }
+
+    fn level(&self, a: u32, b: u32) -> Option<&ForceModel> {
+        let n = self.refine.halvings + 1;
+        self.levels[(a * n + b) as usize]
+            .get_or_init(|| {
+                let grid = Grid {
+                    dz: self.grid.dz / f64::from(1u32 << a),
+                    dphi: self.grid.dphi / f64::from(1u32 << b),
+                };
+                ForceModel::new(self.tool, self.law, grid).ok()
+            })
+            .as_ref()
+    }
+
+    /// Whether the step may be halved once more from `k` halvings.
+    fn may_halve(&self, k: u32, step: f64, floor: f64) -> bool {
+        k < self.refine.halvings && step / f64::from(2u32 << k) >= floor
+    }
+
+    /// Forces of one engagement on the coarsest grid that meets the
+    /// tolerance (see the module docs).
+    pub fn converge<E: Engagement + ?Sized>(&self, cut: &Cut, eng: &E) -> Converged<'_> {
+        let (mut a, mut b) = (0, 0);
+        let mut band = (f64::NEG_INFINITY, f64::INFINITY);
+        loop {
+            let model = self.level(a, b).expect("the coarser grid was built");
+            let cells = model.engaged_in(cut, eng, band);
+            let evaluation = model.evaluate_engaged(cut, &cells);
+            let tol = self.refine.tol;
+            let z = evaluation.error_dz > tol && self.may_halve(a, self.grid.dz, DZ_FLOOR);
+            let p = evaluation.error_dphi > tol && self.may_halve(b, self.grid.dphi, DPHI_FLOOR);
+            let next = (a + u32::from(z), b + u32::from(p));
+            if cells.is_empty() || !(z || p) || self.level(next.0, next.1).is_none() {
+                return Converged {
+                    model,
+                    cells,
+                    evaluation,
+                    halvings: (a, b),
+                };
+            }
+            band = model.band(&cells);
+            (a, b) = next;
+        }
+    }
+
+    /// The converged evaluation alone.
+    pub fn evaluate<E: Engagement + ?Sized>(&self, cut: &Cut, eng: &E) -> Evaluation {
+        self.converge(cut, eng).evaluation
+    }
+}
+
+impl ForceModel {
+    /// Heights (mm above the tip) from one slice below the lowest engaged
+    /// slice to one above the highest.
+    fn band(&self, e: &Engaged) -> (f64, f64) {
+        match (e.cells.first(), e.cells.last()) {
+            (Some(lo), Some(hi)) => (
+                self.slices[lo.0 as usize].z - 1.5 * self.dz,
+                self.slices[hi.0 as usize].z + 1.5 * self.dz,
+            ),
+            _ => (0.0, 0.0),
+        }
+    }
+}
+
+/// The share of a boundary cell's force taken as the error of the slice
+/// height it adds: the flute enters or leaves material somewhere in the cell,
+/// which counts whole or not at all by its centre; a quarter is the mean
+/// error for a boundary anywhere in it (a half the largest).
+pub const BOUNDARY_SHARE: f64 = 0.25;
+
+/// Relative error estimates (slice height, rotation step) of the peaks
+/// F_xy,max and T_max over one tooth period. Rows: Fx, Fy, Fz, T of every
+/// cell, then Fx, Fy, T of the odd slices' cells and of the boundary cells.
+pub(crate) fn error_estimates(rows: &[[f64; 10]]) -> (f64, f64) {
+    // Peaks of (F_xy, |T|): every slice, the even ones doubled, the odd ones
+    // doubled; every slice at the even and at the odd angles; the boundary
+    // cells.
+    let mut peak = [[0.0f64; 2]; 6];
+    for (i, r) in rows.iter().enumerate() {
+        let q = [
+            [r[0].hypot(r[1]), r[3].abs()],
+            [
+                2.0 * (r[0] - r[4]).hypot(r[1] - r[5]),
+                2.0 * (r[3] - r[6]).abs(),
+            ],
+            [2.0 * r[4].hypot(r[5]), 2.0 * r[6].abs()],
+        ];
+        let b = [r[7].hypot(r[8]), r[9].abs()];
+        for c in 0..2 {
+            for (w, v) in q.iter().enumerate() {
+                peak[w][c] = peak[w][c].max(v[c]);
+            }
+            let at = 3 + i % 2;
+            peak[at][c] = peak[at][c].max(q[0][c]);
+            peak[5][c] = peak[5][c].max(b[c]);
+        }
+    }
+    let (mut dz, mut dphi) = (0.0f64, 0.0f64);
+    // Per quantity (F_xy, T): [all, even, odd, even angles, odd angles, boundary].
+    let [all, even, odd, at_even, at_odd, boundary] = peak;
+    for c in 0..2 {
+        if all[c] > 0.0 {
+            let halves = 0.5 * (even[c] - odd[c]).abs();
+            dz = dz.max(halves.max(BOUNDARY_SHARE * boundary[c]) / all[c]);
+            dphi = dphi.max((at_even[c] - at_odd[c]).abs() / all[c]);
+        }
+    }
+    (dz, dphi)
+}
