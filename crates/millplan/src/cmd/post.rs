@@ -3,7 +3,9 @@
 use crate::cmd::{arg, print_diagnostics, print_json, read_options, Range, TargetArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, Outputs};
-use millplan_nc::equiv::{compare, Tolerance};
+use millplan_nc::equiv::Tolerance;
+use millplan_nc::readback::read_back;
+use millplan_nc::write::Target;
 use millplan_plan::machine::Machine;
 use millplan_plan::post::{for_target, post, PostError, PostOptions, PostReport, Posted};
 use serde_json::{json, Value};
@@ -121,20 +123,23 @@ fn post_error(path: &Path, e: PostError) -> CliError {
 }
 
 /// Reads the written program back: it must command what the posted IR does.
-fn check_output(posted: &millplan_nc::ir::Program, out: &[u8], a: &Args) -> CliResult<()> {
-    let text = String::from_utf8_lossy(out);
-    let back =
-        millplan_nc::parse_program(&text, millplan_nc::ReadOptions::default()).map_err(|e| {
-            CliError::internal(format!(
-                "{}: the posted program does not read back ({e}); not written",
-                a.output.display()
-            ))
-        })?;
+fn check_output(
+    posted: &millplan_nc::ir::Program,
+    out: &[u8],
+    target: Target,
+    a: &Args,
+) -> CliResult<()> {
     let tol = Tolerance {
         position: a.tol.max(Tolerance::default().position),
         ..Tolerance::default()
     };
-    compare(posted, &back.program, &tol).map_err(|m| {
+    let back = read_back(out, target, posted, &tol).map_err(|e| {
+        CliError::internal(format!(
+            "{}: the posted program does not read back ({e}); not written",
+            a.output.display()
+        ))
+    })?;
+    back.equiv.map_err(|m| {
         CliError::internal(format!(
             "{}:{}: the posted program would not command what the post made ({m}); not written",
             a.input.display(),
@@ -186,7 +191,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     // The post states TCP itself, per operation, when asked for it.
     wo.auto_tcp = false;
     let out = crate::cmd::write_program(&program, wo, &a.input, a.quiet)?;
-    check_output(&program, &out, &a)?;
+    check_output(&program, &out, target, &a)?;
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
     let j = summary(&a, &o, &machine, target.name(), &report);
