@@ -17,8 +17,9 @@
 //! check says how much it looked at (`checked`, in `unit`). A finding names
 //! the output's source line; a finding the input already had carries
 //! `in_input`. Collisions on the stock are refused whether or not the input
-//! had them; a gouge the input had in the same move, no deeper, is reported
-//! but does not refuse.
+//! had them (one is the input's where an input move with the same ends had
+//! it); a gouge whose deepest point lies on the input's path is reported as
+//! the input's but does not refuse.
 //!
 //! The read-back of the written bytes ([`millplan_nc::readback`]) is the
 //! check that ties the bytes to the IR these checks run on;
@@ -123,6 +124,7 @@ impl<F: Fn(&Program) -> Vec<Load> + Sync> LoadCheck for F {
 
 /// What the checks compare: the output against its input, on the machine,
 /// the stock and the part.
+#[derive(Clone, Copy)]
 pub struct Inputs<'a> {
     /// The program the pass read.
     pub input: &'a Program,
@@ -191,40 +193,85 @@ impl Check {
         }
     }
 
+    /// The findings that refuse the output: none of a check that passed;
+    /// of one that failed, all but the gouges the input had.
+    pub fn refusing(&self) -> impl Iterator<Item = &Finding> {
+        // A gouge the input had is reported, not refused.
+        let kept = move |f: &&Finding| !(self.name == "gouge" && f.in_input);
+        let all = if self.ok { &[][..] } else { &self.findings[..] };
+        all.iter().filter(kept)
+    }
+
     /// The first finding that refuses the output.
     pub fn refusal(&self) -> Option<&Finding> {
-        if self.ok {
-            return None;
-        }
-        self.findings
-            .iter()
-            .find(|f| !(self.name == "gouge" && f.in_input))
+        self.refusing().next()
     }
 }
 
 /// Runs every check the inputs allow (see the module docs), in the order
 /// `ir`, `machine`, `tip`, `stock`, `gouge`, `loads`.
 pub fn check(inputs: &Inputs) -> Vec<Check> {
-    vec![
+    check_with_gouges(inputs).0
+}
+
+/// [`check`], and the gouge check's report of the output when a part was
+/// given (for a command that prints its own gouge summary).
+pub fn check_with_gouges(inputs: &Inputs) -> (Vec<Check>, Option<GougeReport>) {
+    let (gouge, report) = match inputs.part {
+        Some(p) => {
+            let (c, r) = gouges_with_report(inputs, p);
+            (c, Some(r))
+        }
+        None => (Check::skip("gouge", "samples", "no part given"), None),
+    };
+    let checks = vec![
         ir(inputs.output),
-        match inputs.machine {
-            Some(m) => machine(inputs.output, m, &inputs.tol),
-            None => Check::skip("machine", "moves", "no machine given"),
-        },
+        machine_check(inputs),
         tip(inputs),
         match inputs.stock {
             Some(s) => stock(inputs, s),
             None => Check::skip("stock", "strokes", "no stock given"),
         },
-        match inputs.part {
-            Some(p) => gouges(inputs, p),
-            None => Check::skip("gouge", "samples", "no part given"),
-        },
-        match inputs.loads {
-            Some(l) => loads(inputs.output, l, inputs.tol.load),
-            None => Check::skip("loads", "loads", "no load model given"),
-        },
+        gouge,
+        loads_check(inputs),
+    ];
+    (checks, report)
+}
+
+/// [`check`] for a pass that changes speeds and feeds only (`speed`, under
+/// [`TipRule::Kept`]): where the tip check finds every position kept, the
+/// program cuts what the input cut where the input cut it, and the stock
+/// and gouge checks are not run again (skipped, saying so); otherwise all
+/// of [`check`].
+pub fn check_feeds_only(inputs: &Inputs) -> Vec<Check> {
+    let t = tip(inputs);
+    if !t.ok || !matches!(inputs.tip, TipRule::Kept) {
+        return check(inputs);
+    }
+    let why =
+        "positions kept (tip check): what the input cut, where it cut it; not simulated again";
+    vec![
+        ir(inputs.output),
+        machine_check(inputs),
+        t,
+        Check::skip("stock", "strokes", why),
+        Check::skip("gouge", "samples", why),
+        loads_check(inputs),
     ]
+}
+
+fn machine_check(i: &Inputs) -> Check {
+    match i.machine {
+        Some(m) => machine(i.output, m, &i.tol),
+        None => Check::skip("machine", "moves", "no machine given"),
+    }
+}
+
+fn loads_check(i: &Inputs) -> Check {
+    match i.loads {
+        Some(l) => loads(i.output, l, i.tol.load),
+        None => Check::skip("loads", "loads", "no load model given"),
+    }
 }
 
 /// Whether no check refuses.
@@ -604,22 +651,105 @@ fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
 /// coordinates, in order (a spline span read from one line makes several).
 type Segments = rustc_hash::FxHashMap<u32, Vec<(DVec3, DVec3)>>;
 
-fn input_segments(input: &Program) -> Segments {
+/// `tol`: arcs are cut into chords within a quarter of it.
+fn input_segments(input: &Program, tol: f64) -> Segments {
     let mut map = Segments::default();
     for op in &input.operations {
         for (i, m) in op.moves.iter().enumerate() {
             if m.kind == MoveKind::Rapid || m.line == 0 {
                 continue;
             }
-            if let Some(e) = known(m.end) {
-                let s = op.known_start(i).unwrap_or(e);
-                map.entry(m.line)
-                    .or_default()
-                    .push((part_point(op, s), part_point(op, e)));
-            }
+            let v = map.entry(m.line).or_default();
+            move_segments(op, i, tol, &mut |a, b| v.push((a, b)));
         }
     }
     map
+}
+
+/// The straight pieces of move `i` of `op` in part coordinates (an arc as
+/// chords within `tol`/4); nothing for a move from or to an unknown
+/// position or a canned cycle.
+fn move_segments(op: &Operation, i: usize, tol: f64, out: &mut dyn FnMut(DVec3, DVec3)) {
+    let m = &op.moves[i];
+    let (Some(s), Some(e)) = (op.known_start(i), known(m.end)) else {
+        return;
+    };
+    if m.cycle().is_some() {
+        return;
+    }
+    match op.arc(m) {
+        Some(a) => {
+            let sag = (tol / 4.0).min(a.radius);
+            let step = 2.0 * (1.0 - sag / a.radius).acos();
+            let n = ((a.sweep / step.max(1e-6)).ceil() as usize).clamp(1, 4096);
+            let mut p0 = s;
+            for k in 1..=n {
+                let p1 = a.point_at(s, e, k as f64 / n as f64);
+                out(part_point(op, p0), part_point(op, p1));
+                p0 = p1;
+            }
+        }
+        None => out(part_point(op, s), part_point(op, e)),
+    }
+}
+
+/// A program's path (every move with known ends, arcs as chords) in a
+/// uniform grid of points sampled along it: was the tool ever here?
+struct PathIndex {
+    cell: f64,
+    segs: Vec<(DVec3, DVec3)>,
+    grid: rustc_hash::FxHashMap<[i64; 3], Vec<u32>>,
+}
+
+impl PathIndex {
+    /// Near within `tol` (cells of at least 4·`tol`, at most some four
+    /// million samples).
+    fn new(p: &Program, tol: f64) -> PathIndex {
+        let mut segs = Vec::new();
+        for op in &p.operations {
+            for i in 0..op.moves.len() {
+                move_segments(op, i, tol, &mut |a, b| segs.push((a, b)));
+            }
+        }
+        let total: f64 = segs.iter().map(|(a, b)| (*b - *a).length()).sum();
+        let cell = (total / 2e6).max(4.0 * tol).max(0.5);
+        let mut grid: rustc_hash::FxHashMap<[i64; 3], Vec<u32>> = Default::default();
+        for (k, (a, b)) in segs.iter().enumerate() {
+            let n = ((*b - *a).length() / (cell / 2.0)).ceil() as usize;
+            let mut last = None;
+            for j in 0..=n {
+                let key = Self::key(cell, a.lerp(*b, j as f64 / n.max(1) as f64));
+                if last != Some(key) {
+                    grid.entry(key).or_default().push(k as u32);
+                    last = Some(key);
+                }
+            }
+        }
+        PathIndex { cell, segs, grid }
+    }
+
+    fn key(cell: f64, p: DVec3) -> [i64; 3] {
+        [p.x, p.y, p.z].map(|v| (v / cell).floor() as i64)
+    }
+
+    /// Whether some segment passes within `tol` of `q`.
+    fn near(&self, q: DVec3, tol: f64) -> bool {
+        let k = Self::key(self.cell, q);
+        (-1..=1).any(|dx| {
+            (-1..=1).any(|dy| {
+                (-1..=1).any(|dz| {
+                    self.grid
+                        .get(&[k[0] + dx, k[1] + dy, k[2] + dz])
+                        .is_some_and(|v| {
+                            v.iter().any(|&i| {
+                                let (a, b) = self.segs[i as usize];
+                                segment_distance(q, a, b) <= tol
+                            })
+                        })
+                })
+            })
+        })
+    }
 }
 
 /// How far `t` is from the input's moves of one line: from their last end
@@ -637,7 +767,7 @@ fn line_distance(t: DVec3, segs: &[(DVec3, DVec3)], last: bool) -> f64 {
 
 fn tip_moved_by(input: &Program, output: &Program, k: &Kinematics, tol: f64) -> Check {
     let mut c = Check::new("tip", "moves");
-    let segs = input_segments(input);
+    let segs = input_segments(input, tol);
     let mut unmatched = 0usize;
     for op in &output.operations {
         let tcp = op.events.iter().any(|e| e.kind == EventKind::Tcp(true));
@@ -789,10 +919,17 @@ fn gouge_report(i: &Inputs, p: &Program, part: &DropMesh) -> GougeReport {
     gouge::check(p, part, |op| (i.tool_body)(op).map(|b| b.shape), &g)
 }
 
-/// Gouges of the output into the part (rapids included). A gouge in a move
-/// with the ends of an input move that gouged at least as deep (within the
-/// gouge tolerance) is the input's: reported `in_input`, not refused.
+/// Gouges of the output into the part (rapids included). A gouge whose
+/// deepest point lies on the input's path (within [`Tolerances::tip`]) is
+/// the input's, the same tool having been there: reported `in_input`, not
+/// refused. A move of the output that leaves the input's path (a new link)
+/// and gouges deepest off it is new.
 pub fn gouges(i: &Inputs, part: &DropMesh) -> Check {
+    gouges_with_report(i, part).0
+}
+
+/// [`gouges`] and the output's gouge report.
+fn gouges_with_report(i: &Inputs, part: &DropMesh) -> (Check, GougeReport) {
     let mut c = Check::new("gouge", "samples");
     let out = gouge_report(i, i.output, part);
     c.checked = out.points_checked;
@@ -804,19 +941,13 @@ pub fn gouges(i: &Inputs, part: &DropMesh) -> Check {
         ));
     }
     if out.gouges.is_empty() {
-        return c;
+        return (c, out);
     }
-    let old = gouge_report(i, i.input, part);
+    // The deepest point of a gouge lies where the input's tool also went:
+    // the same tool at the same place cuts the part as deep.
+    let old = PathIndex::new(i.input, i.tol.tip);
     for g in &out.gouges {
-        let e = move_ends(i.output, (g.operation as u32, g.mv as u32));
-        let in_input = old.gouges.iter().any(|o| {
-            o.depth + i.tol.gouge >= g.depth
-                && same_ends(
-                    move_ends(i.input, (o.operation as u32, o.mv as u32)),
-                    e,
-                    i.tol.tip,
-                )
-        });
+        let in_input = old.near(DVec3::from_array(g.at), i.tol.tip);
         c.ok &= in_input;
         c.findings.push(Finding {
             line: line_of(g.line),
@@ -831,7 +962,7 @@ pub fn gouges(i: &Inputs, part: &DropMesh) -> Check {
             in_input,
         });
     }
-    c
+    (c, out)
 }
 
 /// The output's per-move peak loads against their limits, each allowed
