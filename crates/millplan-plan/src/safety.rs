@@ -17,8 +17,8 @@
 //! check says how much it looked at (`checked`, in `unit`). A finding names
 //! the output's source line; a finding the input already had carries
 //! `in_input`. Collisions on the stock are refused whether or not the input
-//! had them (one is the input's where an input move with the same ends had
-//! it); a gouge whose deepest point lies on the input's path is reported as
+//! had them (one is the input's where an input move with the same ends or
+//! the same source line had it); a gouge whose deepest point lies on the input's path is reported as
 //! the input's but does not refuse.
 //!
 //! The read-back of the written bytes ([`millplan_nc::readback`]) is the
@@ -873,7 +873,8 @@ struct Simulated {
 
 /// Rapids through material and the shank or holder in material, simulated
 /// on the initial stock; the input is run the same way and a collision at a
-/// move with the input's ends is marked `in_input` (and still refused).
+/// move with the ends or the source line of one of the input's is marked
+/// `in_input` (and still refused).
 pub fn stock(i: &Inputs, stock: &Stock) -> Check {
     let mut c = Check::new("stock", "strokes");
     let out = collisions(i, i.output, stock);
@@ -886,10 +887,15 @@ pub fn stock(i: &Inputs, stock: &Stock) -> Check {
     }
     let old = collisions(i, i.input, stock);
     let (oi, ii) = (move_index(i.output), move_index(i.input));
+    // The input's: a collision of the same kind at a move with the same
+    // ends, or from the same source line (a pass that moves the tip, such
+    // as `orient`, keeps the lines).
     let was = |col: &Collision, old: &[Collision]| {
         let e = move_ends(i.output, oi[col.mv as usize]);
-        old.iter()
-            .any(|o| same_ends(move_ends(i.input, ii[o.mv as usize]), e, i.tol.tip))
+        old.iter().any(|o| {
+            (col.line != 0 && o.line == col.line)
+                || same_ends(move_ends(i.input, ii[o.mv as usize]), e, i.tol.tip)
+        })
     };
     for (list, old, what) in [
         (&out.rapid, &old.rapid, "rapid through material"),

@@ -156,7 +156,7 @@ fn speed_pass(
     cx: &Context,
     input: &millplan_nc::Program,
 ) -> CliResult<(millplan_nc::Program, SpeedPass)> {
-    let mut program = input.clone();
+    let mut program = cx.time("copy of the input for the checks", || input.clone());
     let mut pass = SpeedPass::new(params(a));
     pipeline::run(&mut [&mut pass], &mut program, cx)
         .map_err(|e| crate::cmd::pass_error(&a.path, e))?;
