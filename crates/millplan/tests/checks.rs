@@ -2,10 +2,12 @@
 //! output fails a check exits 3 naming the line and the check, and writes
 //! nothing unless --force; the checks that ran are in the JSON.
 
-mod common;
-
-use common::bin;
 use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_millplan"))
+}
 
 fn s(p: &Path) -> &str {
     p.to_str().expect("utf8")
