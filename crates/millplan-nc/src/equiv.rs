@@ -10,8 +10,8 @@
 //! reached. An axis unknown in one must be unknown in the other: a writer
 //! that invents a position, drops a G90 or loses a rotary axis fails here.
 //!
-//! `millplan convert` runs this on every program it writes (re-read from its
-//! own output) and refuses to write one that differs.
+//! [`crate::readback`] runs this on every program a command writes (re-read
+//! from its own output with the target's reader) before it is written.
 
 use crate::ir::*;
 use crate::write::{cycle_moves, CycleStep};

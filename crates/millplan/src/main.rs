@@ -25,6 +25,7 @@ mod io;
 mod limits;
 mod progress;
 mod round;
+mod verdict;
 
 use clap::{Parser, Subcommand};
 use error::{EXIT_BAD_INPUT, EXIT_FINDINGS, EXIT_INTERNAL, EXIT_OK};

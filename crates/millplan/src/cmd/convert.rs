@@ -3,7 +3,9 @@
 use crate::cmd::{print_diagnostics, read_options, target_for, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, Outputs};
-use millplan_nc::equiv::{compare, Tolerance};
+use millplan_nc::equiv::Tolerance;
+use millplan_nc::readback::read_back;
+use millplan_nc::write::Target;
 use millplan_nc::LengthUnit;
 use millplan_plan::orient::ResolveOrientation;
 use millplan_plan::pipeline::{self, Context};
@@ -68,16 +70,14 @@ pub struct Args {
 /// interpreter: a program that would command something else is not written
 /// (with --lossy, where words were dropped on purpose, it is, with a warning,
 /// and the run ends with exit 3). Returns whether the output is equivalent.
-fn check_output(p: &millplan_nc::Program, out: &[u8], a: &Args) -> CliResult<bool> {
-    let text = String::from_utf8_lossy(out);
-    let back =
-        millplan_nc::parse_program(&text, millplan_nc::ReadOptions::default()).map_err(|e| {
-            CliError::internal(format!(
-                "{}: the program written does not read back ({e}); not written",
-                a.output.display()
-            ))
-        })?;
-    match compare(p, &back.program, &Tolerance::default()) {
+fn check_output(p: &millplan_nc::Program, out: &[u8], target: Target, a: &Args) -> CliResult<bool> {
+    let back = read_back(out, target, p, &Tolerance::default()).map_err(|e| {
+        CliError::internal(format!(
+            "{}: the program written does not read back ({e}); not written",
+            a.output.display()
+        ))
+    })?;
+    match back.equiv {
         Ok(_) => Ok(true),
         Err(m) if a.lossy => {
             // Said even with --quiet: the exit code alone does not say why.
@@ -126,7 +126,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     o.line_numbers = a.line_numbers;
     o.lossy = a.lossy;
     let out = write_program(&p, o, &a.input, a.quiet)?;
-    let equivalent = check_output(&p, &out, &a)?;
+    let equivalent = check_output(&p, &out, target, &a)?;
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
     if a.json {

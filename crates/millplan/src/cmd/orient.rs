@@ -7,9 +7,13 @@ use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
 use millplan_models::leadtilt::{SearchOptions, Variant};
 use millplan_plan::leadtilt::{choose_with, Objective, Oriented, Params, Stage, StockInput};
+use millplan_plan::machine::Machine;
+use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
+use millplan_sim::dropcutter::DropMesh;
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
 use millplan_sim::stock::spec::StockSpec;
 use millplan_sim::stock::tool::ToolBody;
+use millplan_sim::stock::Stock;
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -42,6 +46,13 @@ use std::path::{Path, PathBuf};
 /// ball; a candidate's F_xy,max is the largest at those moves, and its tip
 /// cuts where, with no lead of the feed against the axis, it lies in that
 /// material.
+///
+/// Before it is written the program is checked: the IR verifier, S and F
+/// within the machine, every ball centre where the input put it, with
+/// --stock no rapid through material and no shank in it (refused also when
+/// the input did it, named as the input's), and no gouge into the part the
+/// input did not have (three-axis moves). A check that fails names its line
+/// and exits 3 with nothing written, unless --force.
 #[derive(clap::Args)]
 pub struct Args {
     /// Program with ball-end operations (APT/CL or G-code).
@@ -135,6 +146,11 @@ pub struct Args {
     /// Print no warnings, notes or progress (errors still print).
     #[arg(long, short)]
     pub quiet: bool,
+    /// Write the program even when a check before writing refuses it (a
+    /// ball centre moved, a rapid or shank in the stock, a new gouge, an S
+    /// or F outside the machine); the run then ends with exit 3.
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -251,21 +267,49 @@ fn stock_spec(a: &Args) -> CliResult<Option<StockSpec>> {
 fn program_strokes(p: &millplan_nc::Program, res: f64, rapid: f64) -> Strokes {
     strokes(
         p,
-        |op: &millplan_nc::Operation| {
-            let c = op.tool.as_ref()?.cutter?;
-            let mut b = ToolBody::new(millplan_sim::shape_of(&c)?);
-            if c.h > 0.0 {
-                b.flute = c.h;
-            } else {
-                b.flute = 1e6;
-            }
-            Some(b)
-        },
+        tool_body,
         &PathOptions {
             chord: res / 4.0,
             rapid_rate: rapid,
         },
     )
+}
+
+/// The body of an operation's tool: its cutter, flutes up to the tool's
+/// height (else the whole tool cuts).
+fn tool_body(op: &millplan_nc::Operation) -> Option<ToolBody> {
+    let c = op.tool.as_ref()?.cutter?;
+    let mut b = ToolBody::new(millplan_sim::shape_of(&c)?);
+    b.flute = if c.h > 0.0 { c.h } else { 1e6 };
+    Some(b)
+}
+
+/// The re-oriented program against the input: the IR verifier, S and F
+/// within the machine, every ball centre where the input put it, rapids and
+/// shanks on the initial stock (with --stock), no gouge into the part the
+/// input did not have (three-axis moves; tilted ones are counted as left
+/// out). A refusal ends the run (exit 3) unless --force.
+fn check_oriented(
+    a: &Args,
+    (input, output): (&millplan_nc::Program, &millplan_nc::Program),
+    mesh: &millplan_geom::TriMesh,
+    stock: Option<&Stock>,
+    machine: &Machine,
+) -> CliResult<(Vec<Check>, bool)> {
+    let part = DropMesh::new(mesh);
+    let checks = safety::check(&Inputs {
+        input,
+        output,
+        part: Some(&part),
+        stock,
+        tool_body: &tool_body,
+        machine: Some(machine),
+        tip: TipRule::CentreKept,
+        tol: Tolerances::default(),
+        loads: None,
+    });
+    let ok = crate::verdict::enforce(&checks, &a.path, a.force)?;
+    Ok((checks, ok))
 }
 
 /// The program's first cutting spindle speed (for a run without --n).
@@ -343,6 +387,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         (Some(spec), Some(st)) => Some(stock_input(&a, spec, st, &mesh)?),
         _ => None,
     };
+    let initial = input.as_ref().map(|i| i.stock.clone());
     let total = parsed.program.operations.len() as u64;
     let strokes_total = st.as_ref().map_or(0, |s| 2 * s.strokes.len()) as u64;
     let sim_bar = crate::progress::count(
@@ -369,16 +414,20 @@ pub fn run(a: Args) -> CliResult<i32> {
     .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
     sim_bar.finish_and_clear();
     bar.finish_and_clear();
-    let mut summary = summary_json(&a, &o, p.objective);
-    summary["engagement"] = json!(if spec.is_some() { "stock" } else { "planar" });
-    summary["stock"] = json!(a.stock);
-    summary["resolution_mm"] = json!(spec.as_ref().map(|_| a.resolution));
-    summary["unsimulated_moves"] = json!(unsimulated);
+    let mut summary = summary_json(&a, &o, p.objective, (spec.is_some(), unsimulated));
     if o.chosen.is_empty() {
         outputs.commit()?;
         report(&a, &summary);
         return Ok(EXIT_FINDINGS);
     }
+    let (checks, checked) = check_oriented(
+        &a,
+        (&parsed.program, &o.program),
+        &mesh,
+        initial.as_ref(),
+        &machine,
+    )?;
+    summary["checks"] = json!(checks);
     crate::cmd::write_program_file(
         &o.program,
         machine.write_options(target),
@@ -389,15 +438,26 @@ pub fn run(a: Args) -> CliResult<i32> {
     )?;
     outputs.commit()?;
     report(&a, &summary);
-    Ok(EXIT_OK)
+    Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
 }
 
-fn summary_json(a: &Args, o: &Oriented, objective: Objective) -> serde_json::Value {
+/// The summary; `stock`: whether the engagement is the stock's, and the
+/// moves it does not see.
+fn summary_json(
+    a: &Args,
+    o: &Oriented,
+    objective: Objective,
+    (stock, unsimulated): (bool, usize),
+) -> serde_json::Value {
     json!({
         "objective": objective,
         "operations": o.chosen,
         "skipped": o.skipped,
         "output": (!o.chosen.is_empty()).then(|| a.output.display().to_string()),
+        "engagement": if stock { "stock" } else { "planar" },
+        "stock": a.stock,
+        "resolution_mm": stock.then_some(a.resolution),
+        "unsimulated_moves": unsimulated,
     })
 }
 

@@ -3,9 +3,12 @@
 use crate::cmd::{arg, print_diagnostics, print_json, read_options, Range, TargetArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, Outputs};
-use millplan_nc::equiv::{compare, Tolerance};
+use millplan_nc::equiv::Tolerance;
+use millplan_nc::readback::read_back;
+use millplan_nc::write::Target;
 use millplan_plan::machine::Machine;
 use millplan_plan::post::{for_target, post, PostError, PostOptions, PostReport, Posted};
+use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
@@ -25,7 +28,10 @@ use std::path::{Path, PathBuf};
 /// axis faster than the machine file's top speed is slowed. An orientation
 /// or position out of an axis's travel stops the run (exit 3, nothing
 /// written), naming the CL line and the axis. The output is read back and
-/// checked before it is written.
+/// checked before it is written: the IR verifier, S and F within the
+/// machine, and every posted tip through the forward kinematics (as written
+/// under --tcp) on the CL path within --tol; a check that fails names the
+/// CL line and exits 3 with nothing written, unless --force.
 #[derive(clap::Args)]
 pub struct Args {
     /// Input CL file (APT/CLSF with tool axes) or G-code with tool vectors.
@@ -75,6 +81,11 @@ pub struct Args {
     /// as JSON on standard error.
     #[arg(long)]
     pub json: bool,
+    /// Write the program even when a check before writing refuses it (a
+    /// tip off the CL path, an S or F outside the machine); the run then
+    /// ends with exit 3.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// The post's options: the command line's, else the machine file's `[post]`.
@@ -121,20 +132,23 @@ fn post_error(path: &Path, e: PostError) -> CliError {
 }
 
 /// Reads the written program back: it must command what the posted IR does.
-fn check_output(posted: &millplan_nc::ir::Program, out: &[u8], a: &Args) -> CliResult<()> {
-    let text = String::from_utf8_lossy(out);
-    let back =
-        millplan_nc::parse_program(&text, millplan_nc::ReadOptions::default()).map_err(|e| {
-            CliError::internal(format!(
-                "{}: the posted program does not read back ({e}); not written",
-                a.output.display()
-            ))
-        })?;
+fn check_output(
+    posted: &millplan_nc::ir::Program,
+    out: &[u8],
+    target: Target,
+    a: &Args,
+) -> CliResult<()> {
     let tol = Tolerance {
         position: a.tol.max(Tolerance::default().position),
         ..Tolerance::default()
     };
-    compare(posted, &back.program, &tol).map_err(|m| {
+    let back = read_back(out, target, posted, &tol).map_err(|e| {
+        CliError::internal(format!(
+            "{}: the posted program does not read back ({e}); not written",
+            a.output.display()
+        ))
+    })?;
+    back.equiv.map_err(|m| {
         CliError::internal(format!(
             "{}:{}: the posted program would not command what the post made ({m}); not written",
             a.input.display(),
@@ -142,6 +156,34 @@ fn check_output(posted: &millplan_nc::ir::Program, out: &[u8], a: &Args) -> CliR
         ))
     })?;
     Ok(())
+}
+
+/// The posted program against the CL file: the IR verifier, S and F within
+/// the machine, and every posted tip (through the machine's forward
+/// kinematics, or as written under TCP) on the CL path within --tol.
+fn check_posted(
+    cl: &millplan_nc::Program,
+    posted: &millplan_nc::Program,
+    machine: &Machine,
+    tol: f64,
+) -> Vec<Check> {
+    let Some(kin) = machine.kinematics() else {
+        return Vec::new();
+    };
+    safety::check(&Inputs {
+        input: cl,
+        output: posted,
+        part: None,
+        stock: None,
+        tool_body: &|_| None,
+        machine: Some(machine),
+        tip: TipRule::MovedBy(kin),
+        tol: Tolerances {
+            tip: tol,
+            ..Tolerances::default()
+        },
+        loads: None,
+    })
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -171,10 +213,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet || a.json);
     let bar = crate::progress::spinner("posting", !a.quiet && !a.json);
     let posted = post(&parsed.program, &machine, &o).map_err(|e| post_error(&a.input, e))?;
-    // The CL program and the posted blocks (timed inside the post) are not
-    // needed any more: their memory goes before the written program and its
-    // read-back take theirs.
-    drop(parsed);
+    // The posted blocks (timed inside the post) are not needed any more:
+    // their memory goes before the written program and its read-back take
+    // theirs. The CL program stays for the tip check.
     let Posted {
         mut program,
         report,
@@ -186,16 +227,20 @@ pub fn run(a: Args) -> CliResult<i32> {
     // The post states TCP itself, per operation, when asked for it.
     wo.auto_tcp = false;
     let out = crate::cmd::write_program(&program, wo, &a.input, a.quiet)?;
-    check_output(&program, &out, &a)?;
+    check_output(&program, &out, target, &a)?;
+    let checks = check_posted(&parsed.program, &program, &machine, o.tol);
+    drop(parsed);
+    let checked = crate::verdict::enforce(&checks, &a.input, a.force)?;
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
-    let j = summary(&a, &o, &machine, target.name(), &report);
+    let mut j = summary(&a, &o, &machine, target.name(), &report);
+    j["checks"] = serde_json::to_value(&checks).unwrap_or_default();
     if a.json {
         print_json(j);
     } else {
         print_text(&a, &j, &report);
     }
-    Ok(EXIT_OK)
+    Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
 }
 
 fn summary(a: &Args, o: &PostOptions, machine: &Machine, target: &str, r: &PostReport) -> Value {

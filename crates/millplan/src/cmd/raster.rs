@@ -7,10 +7,18 @@ use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_surface, Outputs};
 use millplan_geom::limits::{amount, Exceeded};
 use millplan_geom::Aabb;
+use millplan_models::cutter::Shape;
+use millplan_nc::equiv::Tolerance;
+use millplan_nc::readback::read_back;
+use millplan_nc::write::Target;
+use millplan_nc::{Dialect, Program};
 use millplan_plan::checks;
+use millplan_plan::machine::Machine;
+use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
 use millplan_sim::dropcutter::DropMesh;
-use millplan_sim::gouge::{check, GougeParams};
+use millplan_sim::gouge::{GougeParams, GougeReport};
 use millplan_sim::raster::{estimate, raster, RasterParams};
+use millplan_sim::stock::tool::ToolBody;
 use std::path::PathBuf;
 
 /// Generate a finishing raster over a part: parallel passes at --angle, every
@@ -19,8 +27,12 @@ use std::path::PathBuf;
 /// Zig-zag passes are linked along the surface; one-way passes retract to a
 /// clearance plane. Writes APT/CL (or a G-code dialect with --to).
 ///
-/// The raster is then checked for gouges as `millplan gouge` would check it;
-/// one that cuts into the part is not written (exit 3) unless --force.
+/// The raster is then checked before it is written: read back from its
+/// bytes, the IR verifier, S and F within the machine (--machine, else a
+/// typical HSC machine), and gouges as `millplan gouge` would check it
+/// (rapids too). A raster that fails a check is not written (exit 3, the
+/// line of the program it would have written and the check named) unless
+/// --force.
 #[derive(clap::Args)]
 pub struct Args {
     /// Part surface (STL).
@@ -74,8 +86,10 @@ pub struct Args {
     /// default target and its S-word decimals are used.
     #[arg(long)]
     pub machine: Option<PathBuf>,
-    /// Write the raster even when its own gouge check finds it cutting into
-    /// the part (a mesh with holes or seams can make drop-cutter miss material).
+    /// Write the raster even when a check refuses it (its own gouge check
+    /// finds it cutting into the part: a mesh with holes or seams can make
+    /// drop-cutter miss material; an S or F outside the machine); the run
+    /// then ends with exit 3.
     #[arg(long)]
     pub force: bool,
     /// Print no warnings or notes about the inputs (errors still print).
@@ -193,34 +207,58 @@ pub fn run(a: Args) -> CliResult<i32> {
         Some(t) => t,
         None => target_for(None, &a.output, millplan_nc::Dialect::Generated)?,
     };
-    // The raster checked as `millplan gouge` would check it.
-    let rep = check(&prog, &part, |_| Some(p.shape), &GougeParams::default());
-    if !rep.gouges.is_empty() {
-        eprintln!(
-            "{}: the raster's own gouge check finds {} moves cutting into the part, deepest {:.3} mm{}",
-            a.stl.display(),
-            rep.gouges.len(),
-            rep.max_depth,
-            if a.force { "; written anyway (--force)" } else { "; not written (--force writes it)" }
-        );
-        if !a.force {
-            return Ok(EXIT_FINDINGS);
-        }
-    }
     let out = write_program(&prog, machine.write_options(target), &a.stl, a.quiet)?;
+    let (checks, rep) = check_raster(&a, (&prog, &out), target, &part, &machine, p.shape)?;
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
     let est = millplan_plan::timing::estimate_program(&prog, &machine);
-    Ok(print_result(&a, &prog, &rep, &est))
+    Ok(print_result(&a, &prog, (&rep, &checks), &est))
+}
+
+/// The raster checked before it is written, read back from its bytes (so
+/// findings name lines of the written program): the IR verifier, S and F
+/// within the machine, and its gouge check as `millplan gouge` would run it
+/// (rapids too). A refusal ends the run (exit 3) unless --force.
+fn check_raster(
+    a: &Args,
+    (prog, out): (&Program, &[u8]),
+    target: Target,
+    part: &DropMesh,
+    machine: &Machine,
+    shape: Shape,
+) -> CliResult<(Vec<Check>, GougeReport)> {
+    let back = read_back(out, target, prog, &Tolerance::default()).map_err(|e| {
+        CliError::internal(format!(
+            "{}: the raster written does not read back ({e}); not written",
+            a.output.display()
+        ))
+    })?;
+    // A generated program: every finding is the raster's own.
+    let none = Program::new(Dialect::Generated);
+    let (mut checks, rep) = safety::check_with_gouges(&Inputs {
+        input: &none,
+        output: &back.program,
+        part: Some(part),
+        stock: None,
+        tool_body: &|_| Some(ToolBody::new(shape)),
+        machine: Some(machine),
+        tip: TipRule::Free,
+        tol: Tolerances::default(),
+        loads: None,
+    });
+    checks.insert(0, safety::read_back_check(&back));
+    crate::verdict::enforce(&checks, &a.output, a.force)?;
+    Ok((checks, rep.unwrap_or_default()))
 }
 
 /// What was written and what the gouge check found; the exit code.
 fn print_result(
     a: &Args,
     prog: &millplan_nc::Program,
-    rep: &millplan_sim::gouge::GougeReport,
+    (rep, checks): (&GougeReport, &[Check]),
     est: &millplan_plan::timing::TimeEstimate,
 ) -> i32 {
+    let ok = safety::passed(checks);
     let s = millplan_nc::stats::summarize(prog, 15000.0);
     if a.json {
         let json = serde_json::json!({
@@ -235,13 +273,10 @@ fn print_result(
                 "gouges": rep.gouges.len(),
                 "max_depth_mm": rep.max_depth,
             },
+            "checks": checks,
         });
         crate::cmd::print_json(json);
-        return if rep.gouges.is_empty() {
-            EXIT_OK
-        } else {
-            EXIT_FINDINGS
-        };
+        return if ok { EXIT_OK } else { EXIT_FINDINGS };
     }
     outln!(
         "wrote {}: {} moves, {:.0} mm cutting, {:.0} s estimated with acceleration ({:.0} s at {} mm/min); gouge check: {} moves at {} points, {}",
@@ -255,7 +290,7 @@ fn print_result(
         rep.points_checked,
         if rep.gouges.is_empty() { "clean" } else { "gouges" }
     );
-    if rep.gouges.is_empty() {
+    if ok {
         EXIT_OK
     } else {
         EXIT_FINDINGS

@@ -2,7 +2,7 @@
 //! least between successive points (paper 000, thesis 5), with safe links.
 
 use crate::cmd::{print_diagnostics, read_options, target_for, write_program, TargetArg, UnitArg};
-use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
 use clap::ValueEnum;
 use millplan_nc::Program;
@@ -10,8 +10,10 @@ use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context, Pass};
 use millplan_plan::reorder::Outcome;
 use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Start, Verdict};
+use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
 use millplan_plan::speed::SpeedPass;
 use millplan_report::reorder::{reorder_report, ReorderInputs};
+use millplan_sim::stock::tool::ToolBody;
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -51,6 +53,12 @@ pub enum StartArg {
 /// the tool retracts, rapids and plunges. Spindle control (as `millplan speed`)
 /// is applied to the result unless --no-speed. The JSON summary compares the
 /// original and the reordered order.
+///
+/// Before it is written the program is read back from its bytes and checked:
+/// the IR verifier, every cutting point of the input cut, S and F within the
+/// machine, and no gouge into the part the input did not have (rapids and
+/// links too). A check that fails names its line and exits 3 with nothing
+/// written, unless --force.
 #[derive(clap::Args)]
 pub struct Args {
     /// Program to reorder (APT/CL or G-code).
@@ -119,9 +127,15 @@ pub struct Args {
     /// Print no warnings or notes about the inputs (errors still print).
     #[arg(long, short)]
     pub quiet: bool,
+    /// Write the program even when a check before writing refuses it (a
+    /// cutting point of the input not cut, a gouge the input did not have,
+    /// an S or F outside the machine); the run then ends with exit 3.
+    #[arg(long)]
+    pub force: bool,
 }
 
-pub fn run(a: Args) -> CliResult<i32> {
+/// The arguments checked and the outputs planned, before any work.
+fn plan(a: &Args) -> CliResult<Outputs> {
     crate::cmd::arg(
         "--max-step",
         a.max_step,
@@ -137,11 +151,15 @@ pub fn run(a: Args) -> CliResult<i32> {
     .into_iter()
     .flatten()
     .collect();
-    let mut outputs = Outputs::plan(
+    Outputs::plan(
         &inputs,
         &[("-o", Some(&a.output)), ("--report", a.report.as_deref())],
         false,
-    )?;
+    )
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    let mut outputs = plan(&a)?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
@@ -165,6 +183,9 @@ pub fn run(a: Args) -> CliResult<i32> {
         return Err(CliError::internal("the reorder pass left no outcome"));
     };
     let out = write_program(&program, cx.machine.write_options(target), &a.path, a.quiet)?;
+    crate::verdict::read_back(&out, target, &program, &a.output)?;
+    let checks = cx.time("checks", || check_reordered(&parsed.program, &program, &cx));
+    let checked = crate::verdict::enforce(&checks, &a.path, a.force)?;
     outputs.write(&a.output, &out)?;
     if let Some(path) = &a.report {
         let html = report(&a, (&parsed.program, &program), &o, &cx.machine, &mesh);
@@ -176,7 +197,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             .method
             .to_possible_value()
             .map(|v| v.get_name().to_string());
-        let j = json!({ "method": method, "verdict": o.verdict, "original": o.before, "reordered": o.after, "stats": o.stats, "tried": o.tried, "output": a.output.display().to_string() });
+        let j = json!({ "method": method, "verdict": o.verdict, "original": o.before, "reordered": o.after, "stats": o.stats, "tried": o.tried, "output": a.output.display().to_string(), "checks": checks });
         crate::cmd::print_json(j);
     } else {
         outln!("  {:<28} {:>16} {:>16}", "", "original", "reordered");
@@ -197,7 +218,28 @@ pub fn run(a: Args) -> CliResult<i32> {
             ),
         }
     }
-    Ok(EXIT_OK)
+    Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
+}
+
+/// The reordered program against the input: the IR verifier, every
+/// cutting point of the input still cut, S and F within the machine, no
+/// gouge into the part the input did not have (rapids and links included).
+fn check_reordered(input: &Program, output: &Program, cx: &Context) -> Vec<Check> {
+    let body = |op: &millplan_nc::Operation| {
+        let c = op.tool.as_ref()?.cutter?;
+        millplan_sim::shape_of(&c).map(ToolBody::new)
+    };
+    safety::check(&Inputs {
+        input,
+        output,
+        part: cx.drop_mesh(),
+        stock: None,
+        tool_body: &body,
+        machine: Some(&cx.machine),
+        tip: TipRule::SamePoints,
+        tol: Tolerances::default(),
+        loads: None,
+    })
 }
 
 /// The HTML report: the inputs, warnings (the part's mesh defects, points

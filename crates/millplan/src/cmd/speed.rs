@@ -11,6 +11,7 @@ use millplan_models::contact::{Convention, NormalMode, Surface};
 use millplan_nc::write::Target;
 use millplan_plan::checks;
 use millplan_plan::pipeline::{self, Context};
+use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
 use millplan_plan::speed::{FeedCoupling, SpeedParams, SpeedPass, Summary};
 use std::path::PathBuf;
 
@@ -41,6 +42,11 @@ pub enum NormalArg {
 /// Exit code 3 (the program is still written) when more than 5 % of the
 /// cutting points do not touch the part: the part does not match the program,
 /// or the CL points are not what --convention says, and the speeds mean nothing.
+///
+/// Before it is written the program is checked: the IR verifier, every S
+/// within the machine's spindle range, every cutting F above 0 and at most
+/// the machine's maximum, every position the input's. A check that fails
+/// names its line and exits 3 with nothing written, unless --force.
 #[derive(clap::Args)]
 pub struct Args {
     /// Toolpath: APT/CL or G-code with a ball-end tool.
@@ -111,6 +117,59 @@ pub struct Args {
     /// Print no warnings or notes about the inputs (errors still print).
     #[arg(long, short)]
     pub quiet: bool,
+    /// Write the program even when a check before writing refuses it (an S
+    /// or F outside the machine, a position changed); the findings are
+    /// printed and the run ends with exit 3.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// The checks of the written program against the input (speeds and feeds
+/// only change): printed, and a refusal ends the run unless --force.
+/// Returns them and whether they passed.
+fn safety_checks(
+    a: &Args,
+    cx: &Context,
+    input: &millplan_nc::Program,
+    output: &millplan_nc::Program,
+) -> CliResult<(Vec<Check>, bool)> {
+    let checks = cx.time("checks (IR, machine, positions)", || {
+        safety::check_feeds_only(&Inputs {
+            input,
+            output,
+            part: None,
+            stock: None,
+            tool_body: &|_| None,
+            machine: Some(&cx.machine),
+            tip: TipRule::Kept,
+            tol: Tolerances::default(),
+            loads: None,
+        })
+    });
+    let ok = crate::verdict::enforce(&checks, &a.path, a.force)?;
+    Ok((checks, ok))
+}
+
+/// The speed pass on a copy of the input.
+fn speed_pass(
+    a: &Args,
+    cx: &Context,
+    input: &millplan_nc::Program,
+) -> CliResult<(millplan_nc::Program, SpeedPass)> {
+    let mut program = cx.time("copy of the input for the checks", || input.clone());
+    let mut pass = SpeedPass::new(params(a));
+    pipeline::run(&mut [&mut pass], &mut program, cx)
+        .map_err(|e| crate::cmd::pass_error(&a.path, e))?;
+    Ok((program, pass))
+}
+
+fn cutting_data(a: &Args) -> super::CuttingData {
+    super::CuttingData {
+        vc: a.vc,
+        fz: a.fz,
+        flutes: a.flutes,
+        ap: a.ap,
+    }
 }
 
 type Reader = std::thread::JoinHandle<(CliResult<millplan_nc::Parsed>, f64)>;
@@ -220,12 +279,13 @@ pub fn run(a: Args) -> CliResult<i32> {
     cx.record("read STL", t_mesh);
     cx.record("surface (BVH, vertex normals)", t_surface);
     cx.record("read toolpath (beside the two above)", t_read);
-    let mut program = parsed.program;
-    let time_before = millplan_plan::timing::estimate_program(&program, &cx.machine).total_s;
-    let mut pass = SpeedPass::new(params(&a));
-    let ran = pipeline::run(&mut [&mut pass], &mut program, &cx);
+    let input = parsed.program;
+    let time_before = millplan_plan::timing::estimate_program(&input, &cx.machine).total_s;
+    let ran = speed_pass(&a, &cx, &input);
     bar.finish();
-    ran.map_err(|e| crate::cmd::pass_error(&a.path, e))?;
+    let (program, mut pass) = ran?;
+    let (checks, checked) = safety_checks(&a, &cx, &input, &program)?;
+    drop(input);
     let Some(summary) = pass.summary.take() else {
         return Err(CliError::internal("the speed pass left no summary"));
     };
@@ -245,12 +305,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             a.quiet,
         )
     })?;
-    let cut = super::CuttingData {
-        vc: a.vc,
-        fz: a.fz,
-        flutes: a.flutes,
-        ap: a.ap,
-    };
+    let cut = cutting_data(&a);
     let time_after = millplan_plan::timing::estimate_program(&program, &cx.machine).total_s;
     let inputs = || {
         report_inputs(
@@ -265,8 +320,8 @@ pub fn run(a: Args) -> CliResult<i32> {
     write_table_and_report(&a, &mut outputs, &summary, &pass.rows, inputs)?;
     outputs.commit()?;
     let times = [time_before, time_after];
-    print_outcome(&a, &cx, t0, &summary, &findings, target, times);
-    Ok(if checks::untrusted(&summary) {
+    print_outcome(&a, &cx, t0, (&summary, &checks), &findings, target, times);
+    Ok(if checks::untrusted(&summary) || !checked {
         EXIT_FINDINGS
     } else {
         EXIT_OK
@@ -278,7 +333,7 @@ fn print_outcome(
     a: &Args,
     cx: &Context,
     t0: std::time::Instant,
-    summary: &Summary,
+    (summary, safety): (&Summary, &[Check]),
     findings: &[millplan_nc::Diagnostic],
     target: Target,
     [time_before, time_after]: [f64; 2],
@@ -299,6 +354,7 @@ fn print_outcome(
         j["machine"] = serde_json::to_value(&cx.machine).unwrap_or_default();
         j["findings"] = serde_json::to_value(findings).unwrap_or_default();
         j["trusted"] = serde_json::json!(!checks::untrusted(summary));
+        j["checks"] = serde_json::to_value(safety).unwrap_or_default();
         j["time_before_s"] = serde_json::json!(time_before);
         j["time_after_s"] = serde_json::json!(time_after);
         j["time_model"] = serde_json::json!("acceleration");
