@@ -9,7 +9,7 @@ use millplan_models::leadtilt::{SearchOptions, Variant};
 use millplan_plan::leadtilt::{choose_with, Objective, Oriented, Params, Stage, StockInput};
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
 use millplan_sim::stock::spec::StockSpec;
-use millplan_sim::stock::tool::ToolBody;
+use millplan_sim::stock::tool::{BodyOptions, ToolBody};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -249,16 +249,7 @@ fn stock_spec(a: &Args) -> CliResult<Option<StockSpec>> {
 fn program_strokes(p: &millplan_nc::Program, res: f64, rapid: f64) -> Strokes {
     strokes(
         p,
-        |op: &millplan_nc::Operation| {
-            let c = op.tool.as_ref()?.cutter?;
-            let mut b = ToolBody::new(millplan_sim::shape_of(&c)?);
-            if c.h > 0.0 {
-                b.flute = c.h;
-            } else {
-                b.flute = 1e6;
-            }
-            Some(b)
-        },
+        |op: &millplan_nc::Operation| ToolBody::for_operation(op, &BodyOptions::default()),
         &PathOptions {
             chord: res / 4.0,
             rapid_rate: rapid,
