@@ -98,12 +98,19 @@ pub fn read_back(out: &Program, bytes: &[u8]) -> (Option<Program>, Check) {
 
 /// A dialect that names tools by number only (G-code) loses their shape:
 /// the re-read program's operations take the shapes of the program written,
-/// so every later check runs with the same tools.
+/// so every later check runs with the same tools; and where its moves are
+/// those written one for one, their source lines, so findings name the
+/// input's lines.
 fn same_tools(back: &mut Program, out: &Program) {
     if back.operations.len() != out.operations.len() {
         return;
     }
     for (b, o) in back.operations.iter_mut().zip(&out.operations) {
+        if b.moves.len() == o.moves.len() {
+            for (x, y) in b.moves.iter_mut().zip(&o.moves) {
+                x.line = y.line;
+            }
+        }
         let Some(ot) = &o.tool else { continue };
         match &mut b.tool {
             Some(bt) if bt.cutter.is_none() => bt.cutter = ot.cutter,

@@ -81,7 +81,7 @@ fn pass<'a>(j: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
 fn demo_is_optimised_verified_and_faster() {
     let dir = tempfile::tempdir().expect("tmp");
     let (stl, apt, machine) = demo(dir.path());
-    let out = dir.path().join("opt.apt");
+    let out = dir.path().join("opt.nc");
     let report = dir.path().join("opt.html");
     let o = run(&[
         "optimise",
@@ -159,7 +159,7 @@ fn demo_is_optimised_verified_and_faster() {
 fn a_pass_without_its_input_prints_the_reason() {
     let dir = tempfile::tempdir().expect("tmp");
     let (_, apt, machine) = demo(dir.path());
-    let out = dir.path().join("o.apt");
+    let out = dir.path().join("o.nc");
     let o = run(&[
         "optimise",
         s(&apt),
@@ -231,7 +231,7 @@ fn a_rapid_through_the_stock_is_refused() {
 fn passes_one_by_one_give_the_same_program() {
     let dir = tempfile::tempdir().expect("tmp");
     let (stl, apt, machine) = demo(dir.path());
-    let opt = dir.path().join("opt.apt");
+    let opt = dir.path().join("opt.nc");
     let common = ["--stl", s(&stl), "--machine", s(&machine)];
     let o = bin()
         .args([
@@ -259,7 +259,7 @@ fn passes_one_by_one_give_the_same_program() {
     let j = json(&o);
     let (vc, ap, flutes) = (setting(&j, "vc"), setting(&j, "ap"), setting(&j, "flutes"));
     let (fz_min, fz_max) = (setting(&j, "fz_min"), setting(&j, "fz_max"));
-    let sp = dir.path().join("speed.apt");
+    let sp = dir.path().join("speed.nc");
     let first = read(&apt);
     let m = first
         .moves()
@@ -287,7 +287,7 @@ fn passes_one_by_one_give_the_same_program() {
         .output()
         .expect("runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let fd = dir.path().join("feed.apt");
+    let fd = dir.path().join("feed.nc");
     let o = bin()
         .args([
             "feed",
@@ -300,6 +300,8 @@ fn passes_one_by_one_give_the_same_program() {
             &fz_min,
             "--fz-max",
             &fz_max,
+            "--tool",
+            "ball:10",
             "-o",
             s(&fd),
             "-q",
