@@ -15,6 +15,7 @@ pub mod orient;
 pub mod pipeline;
 pub mod post;
 pub mod reorder;
+pub mod safety;
 pub mod setup;
 pub mod speed;
 pub mod timing;

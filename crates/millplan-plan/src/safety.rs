@@ -1,0 +1,866 @@
+//! The checks of a written program against its input, before it is renamed
+//! into place: what a shop must be able to bet a machine on.
+//!
+//! [`check`] runs every check the [`Inputs`] allow and returns one [`Check`]
+//! each, in a fixed order:
+//!
+//! | check | refuses | needs |
+//! |---|---|---|
+//! | `ir` | a broken IR invariant ([`millplan_nc::verify`]) in the output | — |
+//! | `machine` | an S outside the machine's spindle range; a cutting feed ≤ 0 or above its maximum | a machine |
+//! | `tip` | a tool tip away from where the input put it (per [`TipRule`]) | — |
+//! | `stock` | a rapid through material, the shank or holder in material, on the initial stock — also when the input did it (marked `in_input`) | a stock |
+//! | `gouge` | a gouge into the part the input did not have | a part |
+//! | `loads` | a per-move peak load over its limit by more than [`Tolerances::load`] | a [`LoadCheck`] |
+//!
+//! A check whose inputs are missing says so (`skipped`) and passes; every
+//! check says how much it looked at (`checked`, in `unit`). A finding names
+//! the output's source line; a finding the input already had carries
+//! `in_input`. Collisions on the stock are refused whether or not the input
+//! had them; a gouge the input had in the same move, no deeper, is reported
+//! but does not refuse.
+//!
+//! The read-back of the written bytes ([`millplan_nc::readback`]) is the
+//! check that ties the bytes to the IR these checks run on;
+//! [`read_back_check`] reports it in the same form.
+
+use crate::machine::Machine;
+use millplan_geom::DVec3;
+use millplan_models::cutter::Shape;
+use millplan_models::kinematics::{Joints, Kinematics};
+use millplan_nc::readback::ReadBack;
+use millplan_nc::{known, EventKind, FeedMode, MoveKind, Operation, Program};
+use millplan_sim::dropcutter::DropMesh;
+use millplan_sim::gouge::{self, GougeParams, GougeReport};
+use millplan_sim::stock::path::{strokes, PathOptions};
+use millplan_sim::stock::run::{run as run_sim, Collision};
+use millplan_sim::stock::tool::ToolBody;
+use millplan_sim::stock::Stock;
+
+/// Where the output's tool tips must be.
+#[derive(Clone, Copy, Debug)]
+pub enum TipRule<'a> {
+    /// Move by move where the input put it (same operations, same moves, each
+    /// end within [`Tolerances::tip`]; tool axes too where both give one):
+    /// `speed`, `feed`, `convert`.
+    Kept,
+    /// Every cutting point of the input is a cutting point of the output, in
+    /// any order (`reorder`: the links between them may change).
+    SamePoints,
+    /// The pass wrote machine positions (`post`): the tip of every output
+    /// cutting move, through the machine's forward kinematics (or as written
+    /// where the operation runs under TCP), lies on the input move of the
+    /// same source line within the tolerance, and the last output move of a
+    /// source line ends at that input move's end.
+    MovedBy(&'a Kinematics),
+    /// The ball centre stays where the input put it and the tool axis may
+    /// turn (`orient`): for ball-end operations (by [`Inputs::tool_body`])
+    /// tip + R·axis is compared move by move, other operations as `Kept`.
+    CentreKept,
+    /// Nothing can be checked against the input (`raster` has no input
+    /// program).
+    Free,
+}
+
+/// Tolerances of the checks, mm unless said.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Tolerances {
+    /// How far an output tip may be from the input's.
+    pub tip: f64,
+    /// Material deeper than this met by a rapid, shank or holder is a collision.
+    pub collision: f64,
+    /// A tip lower than the drop-cutter height by more than this is a gouge.
+    pub gouge: f64,
+    /// Sampling step of the gouge check along each move.
+    pub gouge_step: f64,
+    /// Relative: a load may exceed its limit by this share (the resolution
+    /// of the force models, issue 30: 0.5 %).
+    pub load: f64,
+    /// Relative: an F may exceed the machine's maximum by this share (the
+    /// written decimals).
+    pub feed: f64,
+}
+
+impl Default for Tolerances {
+    fn default() -> Self {
+        Tolerances {
+            tip: 0.001,
+            collision: 0.01,
+            gouge: 0.005,
+            gouge_step: 0.1,
+            load: 0.005,
+            feed: 1e-6,
+        }
+    }
+}
+
+/// One peak load of one output move: what the feed engineer's model says.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Load {
+    /// Operation and move index of the output program.
+    pub op: usize,
+    #[serde(rename = "move")]
+    pub mv: usize,
+    /// What is limited (`fxy`, `torque`, `power`, `deflection`, ...).
+    pub name: String,
+    /// The move's peak value and its limit, in the same unit.
+    pub value: f64,
+    pub limit: f64,
+}
+
+/// Per-move peak loads of a program under the caller's force model: the
+/// check compares them with their limits without knowing the model.
+pub trait LoadCheck: Sync {
+    /// Every (move, limited quantity) the model evaluated on `output`.
+    fn loads(&self, output: &Program) -> Vec<Load>;
+}
+
+impl<F: Fn(&Program) -> Vec<Load> + Sync> LoadCheck for F {
+    fn loads(&self, output: &Program) -> Vec<Load> {
+        self(output)
+    }
+}
+
+/// What the checks compare: the output against its input, on the machine,
+/// the stock and the part.
+pub struct Inputs<'a> {
+    /// The program the pass read.
+    pub input: &'a Program,
+    /// The program written (the IR the bytes were written from; the
+    /// read-back ties the bytes to it). Its source lines name findings.
+    pub output: &'a Program,
+    /// The part's drop-cutter mesh (gouge check); `None` skips it.
+    pub part: Option<&'a DropMesh>,
+    /// The initial stock (collision check); `None` skips it. Cloned, not changed.
+    pub stock: Option<&'a Stock>,
+    /// The tool body of an operation: cutter, flutes, shank, holder (`None`
+    /// leaves the operation out of the stock and gouge checks, counted).
+    pub tool_body: &'a (dyn Fn(&Operation) -> Option<ToolBody> + Sync),
+    /// The machine: spindle range, maximum feed, rapid rate; `None` skips
+    /// the `machine` check (and simulates rapids at the default rate).
+    pub machine: Option<&'a Machine>,
+    pub tip: TipRule<'a>,
+    pub tol: Tolerances,
+    /// The output's per-move peak loads; `None` skips the `loads` check.
+    pub loads: Option<&'a dyn LoadCheck>,
+}
+
+/// One finding of a check.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Finding {
+    /// Source line of the output's move (`None`: the program as a whole, or
+    /// a generated move).
+    pub line: Option<u32>,
+    pub message: String,
+    /// The input has the same fault at the same move.
+    pub in_input: bool,
+}
+
+/// The outcome of one check.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Check {
+    /// `ir`, `machine`, `tip`, `stock`, `gouge`, `loads` or `read-back`.
+    pub name: &'static str,
+    /// No finding refuses the output.
+    pub ok: bool,
+    /// How much was checked, in `unit`.
+    pub checked: usize,
+    /// `moves`, `samples`, `strokes`, `loads`, `steps`.
+    pub unit: &'static str,
+    /// What was left out and why (`None`: nothing).
+    pub skipped: Option<String>,
+    pub findings: Vec<Finding>,
+}
+
+impl Check {
+    fn new(name: &'static str, unit: &'static str) -> Check {
+        Check {
+            name,
+            ok: true,
+            checked: 0,
+            unit,
+            skipped: None,
+            findings: Vec::new(),
+        }
+    }
+
+    fn skip(name: &'static str, unit: &'static str, why: &str) -> Check {
+        Check {
+            skipped: Some(why.to_string()),
+            ..Check::new(name, unit)
+        }
+    }
+
+    /// The first finding that refuses the output.
+    pub fn refusal(&self) -> Option<&Finding> {
+        if self.ok {
+            return None;
+        }
+        self.findings
+            .iter()
+            .find(|f| !(self.name == "gouge" && f.in_input))
+    }
+}
+
+/// Runs every check the inputs allow (see the module docs), in the order
+/// `ir`, `machine`, `tip`, `stock`, `gouge`, `loads`.
+pub fn check(inputs: &Inputs) -> Vec<Check> {
+    vec![
+        ir(inputs.output),
+        match inputs.machine {
+            Some(m) => machine(inputs.output, m, &inputs.tol),
+            None => Check::skip("machine", "moves", "no machine given"),
+        },
+        tip(inputs),
+        match inputs.stock {
+            Some(s) => stock(inputs, s),
+            None => Check::skip("stock", "strokes", "no stock given"),
+        },
+        match inputs.part {
+            Some(p) => gouges(inputs, p),
+            None => Check::skip("gouge", "samples", "no part given"),
+        },
+        match inputs.loads {
+            Some(l) => loads(inputs.output, l, inputs.tol.load),
+            None => Check::skip("loads", "loads", "no load model given"),
+        },
+    ]
+}
+
+/// Whether no check refuses.
+pub fn passed(checks: &[Check]) -> bool {
+    checks.iter().all(|c| c.ok)
+}
+
+/// The first refusing finding of the first failed check.
+pub fn first_refusal(checks: &[Check]) -> Option<(&Check, &Finding)> {
+    checks.iter().find_map(|c| c.refusal().map(|f| (c, f)))
+}
+
+fn line_of(l: u32) -> Option<u32> {
+    (l > 0).then_some(l)
+}
+
+/// The read-back of the written bytes as a check: refused when the bytes
+/// command something other than the program written.
+pub fn read_back_check(r: &ReadBack) -> Check {
+    let mut c = Check::new("read-back", "steps");
+    match &r.equiv {
+        Ok(w) => c.checked = w.steps + w.intermediate,
+        Err(m) => {
+            c.ok = false;
+            c.findings.push(Finding {
+                line: line_of(m.line_b),
+                message: format!(
+                    "the written program does not command what was written (line {} of the program written: {})",
+                    m.line_a, m.message
+                ),
+                in_input: false,
+            });
+        }
+    }
+    c
+}
+
+/// The IR verifier on `p`.
+pub fn ir(p: &Program) -> Check {
+    let mut c = Check::new("ir", "moves");
+    c.checked = p.move_count();
+    if let Err(v) = millplan_nc::verify::verify(p) {
+        c.ok = false;
+        for v in v {
+            let line =
+                v.mv.and_then(|m| p.operations.get(v.op)?.moves.get(m))
+                    .and_then(|m| line_of(m.line));
+            c.findings.push(Finding {
+                line,
+                message: format!("IR invariant {:?} broken: {v}", v.rule),
+                in_input: false,
+            });
+        }
+    }
+    c
+}
+
+/// Every S > 0 within the machine's spindle range; every cutting feed > 0
+/// and, as a tip speed (per minute, or per revolution times S), at most the
+/// machine's maximum feed. Inverse-time feeds are checked for F > 0 only
+/// (their tip speed depends on the axes' motion). S = 0 (not given, as in a
+/// CL file without SPINDL) is left to the passes that need it.
+pub fn machine(p: &Program, m: &Machine, tol: &Tolerances) -> Check {
+    let mut c = Check::new("machine", "moves");
+    let max_f = m.feed_max * (1.0 + tol.feed);
+    let (lo, hi) = (m.spindle_min - 0.5, m.spindle_max + 0.5);
+    for op in &p.operations {
+        for mv in &op.moves {
+            c.checked += 1;
+            let mut bad = |message: String| {
+                c.findings.push(Finding {
+                    line: line_of(mv.line),
+                    message,
+                    in_input: false,
+                })
+            };
+            if mv.spindle > 0.0 && !(lo..=hi).contains(&mv.spindle) {
+                bad(format!(
+                    "S{} outside the machine's spindle range {}..{} 1/min",
+                    mv.spindle, m.spindle_min, m.spindle_max
+                ));
+            }
+            if mv.kind == MoveKind::Rapid {
+                continue;
+            }
+            let feed = match op.cycle(mv) {
+                Some(cy) => cy.feed,
+                None => mv.feed,
+            };
+            if !(feed > 0.0) {
+                bad(format!("cutting feed F{feed} is not positive"));
+                continue;
+            }
+            let tip = match mv.feed_mode {
+                FeedMode::PerMinute => Some(feed),
+                FeedMode::PerRev => (mv.spindle > 0.0).then_some(feed * mv.spindle),
+                FeedMode::InverseTime => None,
+            };
+            if let Some(f) = tip.filter(|f| *f > max_f) {
+                bad(format!(
+                    "cutting feed {f} mm/min above the machine's maximum {} mm/min",
+                    m.feed_max
+                ));
+            }
+        }
+    }
+    c.ok = c.findings.is_empty();
+    c
+}
+
+/// The tip of an operation's move in part coordinates.
+fn part_point(op: &Operation, v: DVec3) -> DVec3 {
+    op.frame.map_or(v, |f| f.to_parent(v))
+}
+
+/// Tool tips against the input under [`Inputs::tip`], within [`Tolerances::tip`].
+pub fn tip(i: &Inputs) -> Check {
+    let tol = i.tol.tip;
+    match i.tip {
+        TipRule::Kept => tip_kept(i.input, i.output, tol, &|_| None),
+        TipRule::CentreKept => {
+            let ball = |op: &Operation| match (i.tool_body)(op)?.shape {
+                Shape::Ball { radius } => Some(radius),
+                _ => None,
+            };
+            tip_kept(i.input, i.output, tol, &ball)
+        }
+        TipRule::SamePoints => tip_same_points(i.input, i.output, tol),
+        TipRule::MovedBy(k) => tip_moved_by(i.input, i.output, k, tol),
+        TipRule::Free => Check::skip("tip", "moves", "no input program to compare with"),
+    }
+}
+
+/// Move by move; where `ball` gives an operation's ball radius, the ball
+/// centres are compared instead of the tips and the axis may turn.
+fn tip_kept(
+    input: &Program,
+    output: &Program,
+    tol: f64,
+    ball: &dyn Fn(&Operation) -> Option<f64>,
+) -> Check {
+    let mut c = Check::new("tip", "moves");
+    let finding = |line: u32, message: String| Finding {
+        line: line_of(line),
+        message,
+        in_input: false,
+    };
+    if input.operations.len() != output.operations.len() {
+        c.ok = false;
+        c.findings.push(finding(
+            0,
+            format!(
+                "{} operations written where the input has {}",
+                output.operations.len(),
+                input.operations.len()
+            ),
+        ));
+        return c;
+    }
+    let mut unknown_axis = 0;
+    for (oi, (a, b)) in input.operations.iter().zip(&output.operations).enumerate() {
+        if a.moves.len() != b.moves.len() {
+            let line = b.moves.first().map_or(0, |m| m.line);
+            c.findings.push(finding(
+                line,
+                format!(
+                    "operation {}: {} moves written where the input has {}",
+                    oi + 1,
+                    b.moves.len(),
+                    a.moves.len()
+                ),
+            ));
+            continue;
+        }
+        let r = ball(b);
+        for (ma, mb) in a.moves.iter().zip(&b.moves) {
+            let differs = match r {
+                None => tip_differs(a, ma, b, mb, tol),
+                Some(r) => match (centre(a, ma, r), centre(b, mb, r)) {
+                    (Some(ca), Some(cb)) => centre_differs(ca, cb, tol),
+                    _ => {
+                        unknown_axis += 1;
+                        continue;
+                    }
+                },
+            };
+            c.checked += 1;
+            if let Some(m) = differs {
+                c.findings.push(finding(mb.line, m));
+            }
+        }
+    }
+    if unknown_axis > 0 {
+        c.skipped = Some(format!(
+            "{unknown_axis} moves with the tool axis known only as machine angles"
+        ));
+    }
+    c.ok = c.findings.is_empty();
+    c
+}
+
+/// The tool axis of a move in part coordinates: +Z without an orientation,
+/// `None` when only machine angles say where it points.
+fn axis_part(op: &Operation, m: &millplan_nc::Move) -> Option<DVec3> {
+    let a = match op.orient(m) {
+        Some(o) => match o.axis {
+            Some(v) => v,
+            None if o.is_tilted() => return None,
+            None => DVec3::Z,
+        },
+        None => DVec3::Z,
+    };
+    Some(op.frame.map_or(a, |f| f.dir_to_parent(a)))
+}
+
+/// The ball centre of a move of a ball of radius `r`, part coordinates.
+fn centre(op: &Operation, m: &millplan_nc::Move, r: f64) -> Option<DVec3> {
+    Some(part_point(op, m.end) + axis_part(op, m)? * r)
+}
+
+fn centre_differs(a: DVec3, b: DVec3, tol: f64) -> Option<String> {
+    let d = (a - b).length();
+    if (0..3).any(|k| a[k].is_nan() != b[k].is_nan()) {
+        return Some(
+            "the ball centre is known where the input's is not, or not where it is".into(),
+        );
+    }
+    let d = if d.is_nan() {
+        (0..3)
+            .filter(|&k| !a[k].is_nan())
+            .map(|k| (a[k] - b[k]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    } else {
+        d
+    };
+    (d > tol).then(|| {
+        format!(
+            "the ball centre ends {d:.4} mm from where the input put it ({:.4}, {:.4}, {:.4})",
+            a.x, a.y, a.z
+        )
+    })
+}
+
+/// Why move `mb` of `b` is not where move `ma` of `a` was.
+fn tip_differs(
+    a: &Operation,
+    ma: &millplan_nc::Move,
+    b: &Operation,
+    mb: &millplan_nc::Move,
+    tol: f64,
+) -> Option<String> {
+    let (pa, pb) = (part_point(a, ma.end), part_point(b, mb.end));
+    for k in 0..3 {
+        if pa[k].is_nan() != pb[k].is_nan() {
+            return Some(format!(
+                "axis {} is {} where the input's is {}",
+                ["X", "Y", "Z"][k],
+                if pb[k].is_nan() { "unknown" } else { "set" },
+                if pa[k].is_nan() { "unknown" } else { "set" }
+            ));
+        }
+    }
+    let d = (0..3)
+        .filter(|&k| !pa[k].is_nan())
+        .map(|k| (pa[k] - pb[k]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    if d > tol {
+        return Some(format!(
+            "the tip ends {d:.4} mm from where the input put it ({:.4}, {:.4}, {:.4})",
+            pa.x, pa.y, pa.z
+        ));
+    }
+    if let (Some(ka), Some(kb)) = (axis_part(a, ma), axis_part(b, mb)) {
+        let dev = (ka - kb).length();
+        if dev > 1e-6 {
+            return Some(format!(
+                "the tool axis turned by {:.4}° from the input's",
+                2.0 * (dev / 2.0).min(1.0).asin().to_degrees()
+            ));
+        }
+    }
+    None
+}
+
+/// The known ends of the cutting moves of `p`, part coordinates, with lines.
+fn cutting_points(p: &Program) -> Vec<(DVec3, u32)> {
+    let mut v = Vec::new();
+    for op in &p.operations {
+        for m in &op.moves {
+            if m.kind != MoveKind::Rapid {
+                if let Some(e) = known(part_point(op, m.end)) {
+                    v.push((e, m.line));
+                }
+            }
+        }
+    }
+    v
+}
+
+fn tip_same_points(input: &Program, output: &Program, tol: f64) -> Check {
+    let mut c = Check::new("tip", "moves");
+    let cell = tol.max(1e-9) * 2.0;
+    let key = |p: DVec3| [p.x, p.y, p.z].map(|v| (v / cell).floor() as i64);
+    let mut grid: rustc_hash::FxHashMap<[i64; 3], Vec<DVec3>> = Default::default();
+    for (p, _) in cutting_points(output) {
+        grid.entry(key(p)).or_default().push(p);
+    }
+    let near = |p: DVec3| {
+        let k = key(p);
+        (-1..=1).any(|dx| {
+            (-1..=1).any(|dy| {
+                (-1..=1).any(|dz| {
+                    grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz])
+                        .is_some_and(|v| v.iter().any(|q| (*q - p).length() <= tol))
+                })
+            })
+        })
+    };
+    for (p, line) in cutting_points(input) {
+        c.checked += 1;
+        if !near(p) {
+            c.findings.push(Finding {
+                line: None,
+                message: format!(
+                    "the input's cutting point of line {line} ({:.4}, {:.4}, {:.4}) is not cut by the output",
+                    p.x, p.y, p.z
+                ),
+                in_input: false,
+            });
+        }
+    }
+    c.ok = c.findings.is_empty();
+    c
+}
+
+/// The index (0 A, 1 B, 2 C) of a rotary axis letter.
+fn letter_index(c: char) -> usize {
+    match c {
+        'A' => 0,
+        'B' => 1,
+        _ => 2,
+    }
+}
+
+/// The tool tip of an output move in the workpiece frame: as written under
+/// TCP, else through the forward kinematics of its joints.
+fn posted_tip(op: &Operation, m: &millplan_nc::Move, k: &Kinematics, tcp: bool) -> Option<DVec3> {
+    let end = known(m.end)?;
+    if tcp {
+        return Some(part_point(op, end));
+    }
+    let [f, s] = k.kind.rotary_names().map(letter_index);
+    let angles = op.orient(m).map_or([None; 3], |o| o.angles);
+    let j = Joints {
+        xyz: end,
+        first: angles[f].unwrap_or(0.0).to_degrees(),
+        second: angles[s].unwrap_or(0.0).to_degrees(),
+    };
+    Some(k.tip(&j))
+}
+
+/// Distance from `p` to the segment `a`–`b`.
+fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let ab = b - a;
+    let l2 = ab.length_squared();
+    let t = if l2 > 0.0 {
+        ((p - a).dot(ab) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a + ab * t - p).length()
+}
+
+/// The input's cutting moves by source line: (start, end) in part
+/// coordinates, in order (a spline span read from one line makes several).
+type Segments = rustc_hash::FxHashMap<u32, Vec<(DVec3, DVec3)>>;
+
+fn input_segments(input: &Program) -> Segments {
+    let mut map = Segments::default();
+    for op in &input.operations {
+        for (i, m) in op.moves.iter().enumerate() {
+            if m.kind == MoveKind::Rapid || m.line == 0 {
+                continue;
+            }
+            if let Some(e) = known(m.end) {
+                let s = op.known_start(i).unwrap_or(e);
+                map.entry(m.line)
+                    .or_default()
+                    .push((part_point(op, s), part_point(op, e)));
+            }
+        }
+    }
+    map
+}
+
+/// How far `t` is from the input's moves of one line: from their last end
+/// when `last`, else from the nearest of them.
+fn line_distance(t: DVec3, segs: &[(DVec3, DVec3)], last: bool) -> f64 {
+    if last {
+        return segs
+            .last()
+            .map_or(f64::INFINITY, |(_, e)| (t - *e).length());
+    }
+    segs.iter()
+        .map(|(s, e)| segment_distance(t, *s, *e))
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn tip_moved_by(input: &Program, output: &Program, k: &Kinematics, tol: f64) -> Check {
+    let mut c = Check::new("tip", "moves");
+    let segs = input_segments(input);
+    let mut unmatched = 0usize;
+    for op in &output.operations {
+        let tcp = op.events.iter().any(|e| e.kind == EventKind::Tcp(true));
+        for (i, m) in op.moves.iter().enumerate() {
+            if m.kind == MoveKind::Rapid {
+                continue;
+            }
+            let (Some(sg), Some(t)) = (segs.get(&m.line), posted_tip(op, m, k, tcp)) else {
+                unmatched += 1;
+                continue;
+            };
+            c.checked += 1;
+            let last = op.moves.get(i + 1).is_none_or(|n| n.line != m.line);
+            let d = line_distance(t, sg, last);
+            if d > tol {
+                c.findings.push(Finding {
+                    line: line_of(m.line),
+                    message: format!(
+                        "the tip by forward kinematics is {d:.4} mm from the input's {} (tolerance {tol} mm)",
+                        if last { "point" } else { "move" }
+                    ),
+                    in_input: false,
+                });
+            }
+        }
+    }
+    if unmatched > 0 {
+        c.skipped = Some(format!(
+            "{unmatched} cutting moves with no input cutting move of their line or an unknown position"
+        ));
+    }
+    c.ok = c.findings.is_empty();
+    c
+}
+
+/// Global move index → (operation, move) of `p`.
+fn move_index(p: &Program) -> Vec<(u32, u32)> {
+    let mut v = Vec::with_capacity(p.move_count());
+    for (oi, op) in p.operations.iter().enumerate() {
+        v.extend((0..op.moves.len()).map(|i| (oi as u32, i as u32)));
+    }
+    v
+}
+
+/// The (start, end) of a move in part coordinates, unknown axes as NaN.
+fn move_ends(p: &Program, at: (u32, u32)) -> (DVec3, DVec3) {
+    let op = &p.operations[at.0 as usize];
+    let i = at.1 as usize;
+    (
+        part_point(op, op.move_start(i)),
+        part_point(op, op.moves[i].end),
+    )
+}
+
+fn same_ends(a: (DVec3, DVec3), b: (DVec3, DVec3), tol: f64) -> bool {
+    let close = |p: DVec3, q: DVec3| {
+        (0..3).all(|k| (p[k].is_nan() && q[k].is_nan()) || (p[k] - q[k]).abs() <= tol)
+    };
+    close(a.0, b.0) && close(a.1, b.1)
+}
+
+/// The rapid and holder collisions of `p` on a copy of `stock`.
+fn collisions(i: &Inputs, p: &Program, stock: &Stock) -> Simulated {
+    let rapid = i.machine.map_or(Machine::default().rapid, |m| m.rapid);
+    let s = strokes(
+        p,
+        |op| (i.tool_body)(op),
+        &PathOptions {
+            chord: stock.grid.res / 4.0,
+            rapid_rate: rapid,
+        },
+    );
+    let mut st = stock.clone();
+    let rep = run_sim(&mut st, &s, i.tol.collision, &|_| {});
+    let sk = s.skipped;
+    let skipped = if sk.total() > 0 {
+        format!(
+            "{} moves not simulated: {} with no tool body, {} from or to an unknown position, {} with the axis known only as machine angles",
+            sk.total(),
+            sk.no_tool,
+            sk.unknown_position,
+            sk.unknown_axis
+        )
+    } else {
+        String::new()
+    };
+    Simulated {
+        rapid: rep.rapid_collisions,
+        holder: rep.holder_collisions,
+        skipped,
+        strokes: s.strokes.len(),
+    }
+}
+
+/// What [`collisions`] found.
+struct Simulated {
+    rapid: Vec<Collision>,
+    holder: Vec<Collision>,
+    /// Why moves were not simulated (empty: none was left out).
+    skipped: String,
+    strokes: usize,
+}
+
+/// Rapids through material and the shank or holder in material, simulated
+/// on the initial stock; the input is run the same way and a collision at a
+/// move with the input's ends is marked `in_input` (and still refused).
+pub fn stock(i: &Inputs, stock: &Stock) -> Check {
+    let mut c = Check::new("stock", "strokes");
+    let out = collisions(i, i.output, stock);
+    c.checked = out.strokes;
+    if !out.skipped.is_empty() {
+        c.skipped = Some(out.skipped.clone());
+    }
+    if out.rapid.is_empty() && out.holder.is_empty() {
+        return c;
+    }
+    let old = collisions(i, i.input, stock);
+    let (oi, ii) = (move_index(i.output), move_index(i.input));
+    let was = |col: &Collision, old: &[Collision]| {
+        let e = move_ends(i.output, oi[col.mv as usize]);
+        old.iter()
+            .any(|o| same_ends(move_ends(i.input, ii[o.mv as usize]), e, i.tol.tip))
+    };
+    for (list, old, what) in [
+        (&out.rapid, &old.rapid, "rapid through material"),
+        (&out.holder, &old.holder, "shank or holder in material"),
+    ] {
+        for col in list {
+            c.findings.push(Finding {
+                line: line_of(col.line),
+                message: format!(
+                    "{what}, {:.3} mm deep ({:.3} mm³)",
+                    col.depth, col.volume_mm3
+                ),
+                in_input: was(col, old),
+            });
+        }
+    }
+    c.ok = false;
+    c
+}
+
+fn gouge_report(i: &Inputs, p: &Program, part: &DropMesh) -> GougeReport {
+    let g = GougeParams {
+        step: i.tol.gouge_step,
+        tol: i.tol.gouge,
+        rapids: true,
+    };
+    gouge::check(p, part, |op| (i.tool_body)(op).map(|b| b.shape), &g)
+}
+
+/// Gouges of the output into the part (rapids included). A gouge in a move
+/// with the ends of an input move that gouged at least as deep (within the
+/// gouge tolerance) is the input's: reported `in_input`, not refused.
+pub fn gouges(i: &Inputs, part: &DropMesh) -> Check {
+    let mut c = Check::new("gouge", "samples");
+    let out = gouge_report(i, i.output, part);
+    c.checked = out.points_checked;
+    let s = out.skipped;
+    if s.total() > 0 {
+        c.skipped = Some(format!(
+            "{} moves not checked: {} with no tool body, {} with a tilted tool, {} canned cycles, {} from or to an unknown position",
+            s.total(), s.no_tool, s.tilted, s.cycles, s.unknown_position
+        ));
+    }
+    if out.gouges.is_empty() {
+        return c;
+    }
+    let old = gouge_report(i, i.input, part);
+    for g in &out.gouges {
+        let e = move_ends(i.output, (g.operation as u32, g.mv as u32));
+        let in_input = old.gouges.iter().any(|o| {
+            o.depth + i.tol.gouge >= g.depth
+                && same_ends(
+                    move_ends(i.input, (o.operation as u32, o.mv as u32)),
+                    e,
+                    i.tol.tip,
+                )
+        });
+        c.ok &= in_input;
+        c.findings.push(Finding {
+            line: line_of(g.line),
+            message: format!(
+                "gouge {:.4} mm deep into the part at ({:.3}, {:.3}, {:.3}){}",
+                g.depth,
+                g.at[0],
+                g.at[1],
+                g.at[2],
+                if in_input { ", as in the input" } else { "" }
+            ),
+            in_input,
+        });
+    }
+    c
+}
+
+/// The output's per-move peak loads against their limits, each allowed
+/// `tol` (relative) over.
+pub fn loads(output: &Program, l: &dyn LoadCheck, tol: f64) -> Check {
+    let mut c = Check::new("loads", "loads");
+    let all = l.loads(output);
+    c.checked = all.len();
+    for x in &all {
+        if !(x.value <= x.limit * (1.0 + tol)) {
+            let line = output
+                .operations
+                .get(x.op)
+                .and_then(|op| op.moves.get(x.mv))
+                .map_or(0, |m| m.line);
+            c.findings.push(Finding {
+                line: line_of(line),
+                message: format!(
+                    "{} {:.4} over its limit {:.4} by {:.2} % (tolerance {:.2} %)",
+                    x.name,
+                    x.value,
+                    x.limit,
+                    (x.value / x.limit - 1.0) * 100.0,
+                    tol * 100.0
+                ),
+                in_input: false,
+            });
+        }
+    }
+    c.ok = c.findings.is_empty();
+    c
+}
