@@ -1,12 +1,16 @@
 //! The optimised program written, re-read from its bytes and checked; the
 //! verdict and the measures after.
 
-use crate::checks::{self, Check};
+use crate::checks;
 use crate::job::{Job, JobError, Setting};
 use crate::run::{Loads, Measures, Outcome, PassOutcome};
+use millplan_nc::equiv::Tolerance;
+use millplan_nc::readback::read_back;
 use millplan_nc::write::{write_program, WriteOptions};
 use millplan_nc::{Diagnostic, Program};
 use millplan_plan::force::ForceRun;
+use millplan_plan::safety::{self, Check, Inputs, LoadCheck, TipRule, Tolerances};
+use millplan_sim::dropcutter::DropMesh;
 use serde::Serialize;
 
 /// What a run concluded.
@@ -55,10 +59,8 @@ pub struct Written {
 impl Summary {
     /// The first check that refuses the output: its name, line and words.
     pub fn refusal(&self) -> Option<(&'static str, u32, String)> {
-        self.checks.iter().find_map(|c| {
-            c.first_refusal()
-                .map(|f| (c.name, f.line, f.message.clone()))
-        })
+        safety::first_refusal(&self.checks)
+            .map(|(c, f)| (c.name, f.line.unwrap_or(0), f.message.clone()))
     }
 }
 
@@ -68,10 +70,12 @@ impl Job {
     pub fn finish(&self, o: &Outcome, wo: WriteOptions) -> Result<Written, JobError> {
         let (bytes, warnings) = write_program(&o.program, wo)
             .map_err(|e| JobError(format!("{}: {}", e.line, e.message)))?;
-        let (back, rb) = checks::read_back(&o.program, &bytes);
-        let read = back.unwrap_or_else(|| o.program.clone());
+        let back = read_back(&bytes, wo.target, &o.program, &Tolerance::default())
+            .map_err(|e| JobError(format!("the program written does not read back: {e}")))?;
+        let mut list = vec![safety::read_back_check(&back)];
+        let mut read = back.program;
+        checks::same_tools(&mut read, &o.program);
         let forces_after = self.forces(&read)?;
-        let mut list = vec![rb];
         list.extend(self.checks(o, &read, forces_after.as_ref()));
         let cx = self.context();
         let after = self.measure(&read, forces_after.as_ref(), &cx);
@@ -85,31 +89,35 @@ impl Job {
         })
     }
 
+    /// `safety::check` on the program read back, with the job's tools,
+    /// stock, part, machine and limits.
     fn checks(&self, o: &Outcome, read: &Program, after: Option<&ForceRun>) -> Vec<Check> {
-        let input = &self.inputs.program;
-        let mut v = vec![
-            checks::machine(read, &self.inputs.machine),
-            checks::tips(input, read, o.reordered, self.tol.max(1e-3)),
-        ];
-        if let Some(stock) = &self.stock {
-            v.push(checks::collisions(
-                stock,
-                &self.strokes(input),
-                &self.strokes(read),
-                self.tol,
-            ));
-        }
-        if let (Some(a), Some(b)) = (after, &o.forces_before) {
-            v.push(checks::loads(a, b, &self.limits, &self.inputs.machine));
-        }
-        if let Some(part) = &self.inputs.part {
-            let body = self.body;
-            let shape = move |op: &millplan_nc::Operation| {
-                millplan_sim::stock::tool::ToolBody::for_operation(op, &body).map(|b| b.shape)
-            };
-            v.push(checks::gouges(part, input, read, &shape, self.tol));
-        }
-        v
+        let drop = self.inputs.part.as_ref().map(DropMesh::new);
+        let body = |op: &millplan_nc::Operation| self.body_of(op);
+        let loads = after.map(|run| {
+            let v = checks::loads_of(read, run, &self.limits, &self.inputs.machine);
+            move |_: &Program| v.clone()
+        });
+        let tol = Tolerances {
+            collision: self.tol,
+            gouge: self.tol.min(Tolerances::default().gouge),
+            ..Tolerances::default()
+        };
+        safety::check(&Inputs {
+            input: &self.inputs.program,
+            output: read,
+            part: drop.as_ref(),
+            stock: self.stock.as_ref(),
+            tool_body: &body,
+            machine: Some(&self.inputs.machine),
+            tip: if o.reordered {
+                TipRule::SamePoints
+            } else {
+                TipRule::Kept
+            },
+            tol,
+            loads: loads.as_ref().map(|l| l as &dyn LoadCheck),
+        })
     }
 
     fn summary(

@@ -104,26 +104,28 @@ fn rows(s: &Summary) -> Vec<(String, String)> {
         let found = if c.findings.is_empty() {
             "none".to_string()
         } else {
+            let line = |l: Option<u32>| l.map_or("–".to_string(), |l| l.to_string());
+            let words = |f: &millplan_plan::safety::Finding| {
+                let own = if f.in_input { " (in the input)" } else { "" };
+                format!("line {}: {}{own}", line(f.line), f.message)
+            };
             c.findings
                 .iter()
                 .take(5)
-                .map(|f| {
-                    format!(
-                        "line {}: {}{}",
-                        f.line,
-                        f.message,
-                        if f.in_input { " (in the input)" } else { "" }
-                    )
-                })
+                .map(words)
                 .collect::<Vec<_>>()
                 .join("; ")
         };
+        let state = if c.ok { "ok" } else { "FAILED" };
+        let skipped = c
+            .skipped
+            .as_deref()
+            .map_or(String::new(), |w| format!("; skipped: {w}"));
         r.push((
             format!("check {}", c.name),
             format!(
-                "{} ({}); findings: {found}",
-                if c.ok { "ok" } else { "FAILED" },
-                c.checked
+                "{state} ({} {}{skipped}); findings: {found}",
+                c.checked, c.unit
             ),
         ));
     }
@@ -148,7 +150,9 @@ fn notes(s: &Summary, n: &InputNames) -> Notes {
             c.findings.iter().filter(|f| f.in_input).map(move |f| {
                 format!(
                     "the input already has this ({}): line {}: {}",
-                    c.name, f.line, f.message
+                    c.name,
+                    f.line.unwrap_or(0),
+                    f.message
                 )
             })
         })

@@ -99,6 +99,8 @@ fn demo_is_optimised_verified_and_faster() {
         "--report",
         s(&report),
         "--json",
+        "--limit",
+        "fxy=120",
     ]);
     assert_eq!(
         o.status.code(),
@@ -139,6 +141,9 @@ fn demo_is_optimised_verified_and_faster() {
         .as_str()
         .expect("r")
         .contains("three-axis"));
+    // The limit given binds: F_xy 170 N at the input's feeds, at most 120 N after.
+    assert!(j["max_before"]["fxy"].as_f64().expect("fxy") > 120.0);
+    assert!(j["max_after"]["fxy"].as_f64().expect("fxy") <= 120.0 * 1.005);
     for k in ["fxy", "torque", "power", "deflection"] {
         assert!(
             j["max_before"][k].is_number() && j["max_after"][k].is_number(),
@@ -215,7 +220,7 @@ fn a_rapid_through_the_stock_is_refused() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(3), "{err}");
     assert!(
-        err.contains(":9: check rapids-and-holder failed: rapid into material"),
+        err.contains(":9: check stock failed: rapid into material"),
         "{err}"
     );
     assert!(!out.exists(), "nothing written");

@@ -329,11 +329,16 @@ fn print_summary(a: &Args, w: &Written, path: &Path, output: &Path, withheld: bo
     }
     outln!("{}", report::verdict_line(s));
     for c in &s.checks {
+        let skipped = c
+            .skipped
+            .as_deref()
+            .map_or(String::new(), |w| format!(" (skipped: {w})"));
         outln!(
-            "  check {:<18} {}  {}",
+            "  check {:<10} {:<6} {} {}{skipped}",
             c.name,
             if c.ok { "ok" } else { "FAILED" },
-            c.checked
+            c.checked,
+            c.unit
         );
     }
     if withheld {
