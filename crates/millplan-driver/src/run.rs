@@ -70,6 +70,10 @@ impl Job {
         let mut p = SpeedParams::new(self.vc, fz, self.flutes as u32, self.ap);
         p.feed = FeedCoupling::ChipLoad;
         p.keep_rows = false;
+        // A G-code program names its tools by number only: `--tool ball:D`.
+        if let Some(millplan_models::cutter::Shape::Ball { radius }) = self.body.shape {
+            p.ball_d = Some(2.0 * radius);
+        }
         p
     }
 
