@@ -130,7 +130,6 @@ impl Job {
         let mut s = Vec::new();
         let body = BodyOptions {
             shape: o.tool,
-            no_cone: true,
             ..BodyOptions::default()
         };
         let d = first_diameter(&inputs.program, &body).ok_or_else(|| {
@@ -233,17 +232,26 @@ impl Job {
         ToolBody::for_operation(op, &self.body)
     }
 
-    /// The tool-body rule as the passes take it.
+    /// The tool bodies the force model can load (no cones: drills are left
+    /// out), as the feed pass takes them.
     pub fn body_fn(&self) -> millplan_plan::feed::BodyFn {
-        let o = self.body;
+        let o = BodyOptions {
+            no_cone: true,
+            ..self.body
+        };
         Box::new(move |op: &Operation| ToolBody::for_operation(op, &o))
     }
 
-    /// The strokes of `p` through the stock at this job's resolution.
-    pub fn strokes(&self, p: &Program) -> Strokes {
+    /// The strokes of `p` through the stock at this job's resolution, of
+    /// every tool (`forces`: only those the force model can load).
+    pub fn strokes(&self, p: &Program, forces: bool) -> Strokes {
+        let o = BodyOptions {
+            no_cone: forces,
+            ..self.body
+        };
         strokes(
             p,
-            |op: &Operation| self.body_of(op),
+            |op: &Operation| ToolBody::for_operation(op, &o),
             &PathOptions {
                 chord: self.resolution / 4.0,
                 rapid_rate: self.inputs.machine.rapid,
@@ -255,7 +263,7 @@ impl Job {
         let Some(spec) = &self.inputs.stock else {
             return Ok(None);
         };
-        let s = self.strokes(&self.inputs.program);
+        let s = self.strokes(&self.inputs.program, false);
         let memory = self
             .inputs
             .options

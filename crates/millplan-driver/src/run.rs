@@ -93,7 +93,7 @@ impl Job {
         let (Some(stock), Some(setup)) = (&self.stock, &self.setup) else {
             return Ok(None);
         };
-        let s = self.strokes(p);
+        let s = self.strokes(p, true);
         force::simulate(p, &s, stock.clone(), setup, None, &|_| {})
             .map(Some)
             .map_err(JobError)
