@@ -41,8 +41,6 @@ pub struct Options {
     /// Dexel size, mm.
     pub resolution: Option<f64>,
     pub limits: UserLimits,
-    /// Post five-axis programs with inverse-time feed (G93).
-    pub g93: bool,
     /// Tolerance of the checks, mm.
     pub tol: Option<f64>,
     /// Memory the stock may take, bytes.

@@ -74,7 +74,7 @@ impl PassName {
         let (changes, does) = match (self, lib) {
             (_, Some(p)) => (p.changes, p.does.to_string()),
             (PassName::Orient, _) => (Changes::What, "lead and tilt per ball-end operation from the forces on the simulated stock (§2.4)".into()),
-            _ => (Changes::What, "five-axis CL through the machine's kinematics to joint positions (G93 with --g93)".into()),
+            _ => (Changes::What, "five-axis CL through the machine's kinematics to joint positions".into()),
         };
         PassRow {
             name: self.name(),

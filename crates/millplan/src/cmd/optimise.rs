@@ -90,9 +90,6 @@ pub struct Args {
     /// Print the pass table (what each pass needs and changes) and stop.
     #[arg(long)]
     pub list_passes: bool,
-    /// Inverse-time feed (G93) for posted five-axis programs.
-    #[arg(long)]
-    pub g93: bool,
     /// Output program.
     #[arg(short, long, required_unless_present = "list_passes")]
     pub output: Option<PathBuf>,
@@ -140,7 +137,6 @@ fn options(a: &Args) -> CliResult<Options> {
             .map(|v| arg("--resolution", v, Range::from(0.005, 100.0, "mm")))
             .transpose()?,
         limits: user_limits()?,
-        g93: a.g93,
         tol: a
             .tol
             .map(|v| arg("--tol", v, Range::from(0.0, 100.0, "mm")))
