@@ -453,8 +453,8 @@ fn help_explains_every_command() {
 
 /// ARCHITECTURE.md's dependency rule, read from `cargo metadata`: each
 /// library crate depends only on the crates below it
-/// (geom ← nc; geom ← models; nc + models ← sim ← plan ← report; tooldb
-/// alone), and no library on the command-line, terminal or temporary-file
+/// (geom ← nc; geom ← models; nc + models ← sim ← plan ← report ← driver;
+/// tooldb alone, below driver), and no library on the command-line, terminal or temporary-file
 /// crates that only the binary uses.
 #[test]
 fn crate_dependencies_point_one_way() {
@@ -504,6 +504,18 @@ fn crate_dependencies_point_one_way() {
             ],
         ),
         ("millplan-tooldb", &[]),
+        (
+            "millplan-driver",
+            &[
+                "millplan-geom",
+                "millplan-nc",
+                "millplan-models",
+                "millplan-sim",
+                "millplan-plan",
+                "millplan-report",
+                "millplan-tooldb",
+            ],
+        ),
     ];
     let binary_only = [
         "clap",

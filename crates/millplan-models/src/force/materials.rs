@@ -173,6 +173,17 @@ impl Materials {
         m
     }
 
+    /// The built-in table with the materials of `extra` (a TOML text and
+    /// the name of where it came from) added or replacing those of the same
+    /// name: every command's materials.
+    pub fn load(extra: Option<(&str, &str)>) -> Result<Materials, String> {
+        let mut m = Materials::builtin();
+        if let Some((text, origin)) = extra {
+            m.add_toml(text, origin)?;
+        }
+        Ok(m)
+    }
+
     /// Adds (or replaces) the materials of a TOML text; `origin` names it in
     /// errors.
     pub fn add_toml(&mut self, text: &str, origin: &str) -> Result<(), String> {

@@ -103,6 +103,126 @@ impl StockSpec {
     }
 }
 
+/// Why a stock cannot be built from its spec.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StockError {
+    /// `box:auto`/`cylinder:auto` on a program without a cutting move.
+    NoCut,
+    /// `offset:MM` without the part.
+    NeedsPart,
+    /// `stl:FILE` whose mesh is empty or not closed.
+    Blank(String),
+    /// The dexels would take more memory than the limit.
+    Memory(millplan_geom::limits::Exceeded),
+}
+
+impl std::fmt::Display for StockError {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self {
+            StockError::NoCut => write!(f, "no cutting move to take the stock's bounds from"),
+            StockError::NeedsPart => write!(f, "--stock offset:MM needs the part: give --stl"),
+            StockError::Blank(m) => write!(f, "{m}"),
+            StockError::Memory(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for StockError {}
+
+impl StockSpec {
+    /// The stock before the program whose cutting strokes are `s`, as this
+    /// spec names it, at cell size `res`: `part` is the part for `offset:`,
+    /// `blank` the mesh of `stl:FILE` (read by the caller). Refused before
+    /// any allocation when its dexels would take more than `memory` bytes.
+    pub fn build(
+        &self,
+        res: f64,
+        s: &Strokes,
+        part: Option<&TriMesh>,
+        blank: Option<&TriMesh>,
+        memory: u64,
+    ) -> Result<Stock, StockError> {
+        let check = |min: DVec2, max: DVec2| {
+            let g = Grid::covering(min, max, res);
+            let bytes = g.cells() as f64 * super::BYTES_PER_CELL;
+            if bytes <= memory as f64 {
+                return Ok(());
+            }
+            let needs = format!(
+                "a stock of {} × {} dexels at --resolution {res} would take about {} MB",
+                g.nx,
+                g.ny,
+                millplan_geom::limits::amount((bytes / 1e6).ceil())
+            );
+            let limit = (memory / 1_000_000) as f64;
+            Err(StockError::Memory(millplan_geom::limits::Exceeded::new(
+                "memory", needs, limit,
+            )))
+        };
+        Ok(match self {
+            StockSpec::BoxAuto { margin } => {
+                let (lo, hi) = auto_box(s, *margin).ok_or(StockError::NoCut)?;
+                check(lo.truncate(), hi.truncate())?;
+                Stock::block(lo, hi, res)
+            }
+            StockSpec::Box { min, max } => {
+                check(min.truncate(), max.truncate())?;
+                Stock::block(*min, *max, res)
+            }
+            StockSpec::CylinderAuto { margin } => {
+                let (lo, hi) = auto_box(s, *margin).ok_or(StockError::NoCut)?;
+                let c = (lo.truncate() + hi.truncate()) / 2.0;
+                let r = (hi.truncate() - c).length();
+                check(c - DVec2::splat(r), c + DVec2::splat(r))?;
+                Stock::cylinder(c, r, lo.z, hi.z, res)
+            }
+            StockSpec::Cylinder { centre, z0, z1, d } => {
+                check(
+                    *centre - DVec2::splat(d / 2.0),
+                    *centre + DVec2::splat(d / 2.0),
+                )?;
+                Stock::cylinder(*centre, d / 2.0, *z0, *z1, res)
+            }
+            StockSpec::Stl(p) => {
+                let mesh = blank.ok_or_else(|| {
+                    StockError::Blank(format!("{}: the blank was not read", p.display()))
+                })?;
+                closed_blank(p, mesh)?;
+                let b = mesh.bounds();
+                check(b.min.truncate(), b.max.truncate())?;
+                Stock::from_solid(mesh, res)
+            }
+            StockSpec::Offset(mm) => {
+                let part = part.ok_or(StockError::NeedsPart)?;
+                let b = part.bounds();
+                let e = DVec2::splat(*mm);
+                check(b.min.truncate() - e, b.max.truncate() + e)?;
+                offset_stock(part, *mm, res)
+            }
+        })
+    }
+}
+
+/// A cast blank must be a non-empty closed mesh.
+fn closed_blank(p: &std::path::Path, mesh: &TriMesh) -> Result<(), StockError> {
+    if mesh.is_empty() {
+        return Err(StockError::Blank(format!(
+            "{}: no triangles: not a blank",
+            p.display()
+        )));
+    }
+    let e = mesh.edge_report();
+    if e.open > 0 || e.non_manifold > 0 {
+        return Err(StockError::Blank(format!(
+            "{}: a stock blank must be a closed mesh; this one has {} open and {} non-manifold edges",
+            p.display(),
+            e.open,
+            e.non_manifold
+        )));
+    }
+    Ok(())
+}
+
 /// The bounds of the cutting strokes' tips, XY widened by each stroke's tool
 /// radius; `None` without cutting strokes.
 pub fn cutting_bounds(s: &Strokes) -> Option<(DVec3, DVec3)> {

@@ -5,6 +5,25 @@
 use millplan_geom::{DVec2, DVec3};
 use millplan_models::cutter::Shape;
 
+/// Flute length of a tool whose flutes nobody gives: the whole tool cuts.
+pub const UNKNOWN_FLUTE: f64 = 1e6;
+
+/// What a command says of its tools beyond the program (see
+/// [`ToolBody::for_operation`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BodyOptions {
+    /// Cutter for operations whose tool has no geometry, or to override it.
+    pub shape: Option<Shape>,
+    /// Cutting length from the tip, mm.
+    pub flute: Option<f64>,
+    /// Shank radius above the flutes, mm.
+    pub shank_r: Option<f64>,
+    /// Holder radius and stick-out from the tip to its face, mm.
+    pub holder: Option<(f64, f64)>,
+    /// Leave out cone cutters (the force model has none).
+    pub no_cone: bool,
+}
+
 /// A tool body, coaxial parts from the tip up. Lengths from the tip, mm.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ToolBody {
@@ -35,6 +54,34 @@ impl ToolBody {
 
     pub fn radius(&self) -> f64 {
         self.shape.radius()
+    }
+
+    /// The body of an operation's tool, the one rule every command uses: the
+    /// cutter from `o.shape` or the program's CUTTER record (`None` when
+    /// neither gives a shape, or a cone where `o.no_cone`); the flutes up to
+    /// `o.flute`, else the tool's height when it gives one, else the whole
+    /// tool cuts (no shank collision); the shank of `o.shank_r`, else the
+    /// cutter's radius; the holder of `o.holder` (radius, stick-out from the
+    /// tip, never below the flutes), else none.
+    pub fn for_operation(op: &millplan_nc::Operation, o: &BodyOptions) -> Option<ToolBody> {
+        let cutter = op.tool.as_ref().and_then(|t| t.cutter);
+        let shape = o
+            .shape
+            .or_else(|| cutter.and_then(|c| crate::shape_of(&c)))?;
+        if o.no_cone && matches!(shape, Shape::Cone { .. }) {
+            return None;
+        }
+        let mut b = ToolBody::new(shape);
+        b.flute = o
+            .flute
+            .or_else(|| cutter.map(|c| c.h).filter(|h| *h > 0.0))
+            .unwrap_or(UNKNOWN_FLUTE);
+        b.shank_r = o.shank_r.unwrap_or(shape.radius());
+        if let Some((r, l)) = o.holder {
+            b.holder_r = r;
+            b.stickout = l.max(b.flute.min(1e5));
+        }
+        Some(b)
     }
 
     /// Largest radius of any part that can meet material.

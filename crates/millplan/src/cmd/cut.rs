@@ -151,14 +151,15 @@ pub fn run(a: Args) -> CliResult<i32> {
 
 /// The built-in materials plus those of `--materials`.
 pub fn load_materials(path: Option<&Path>) -> CliResult<Materials> {
-    let mut m = Materials::builtin();
-    if let Some(p) = path {
-        let text = std::fs::read_to_string(p)
-            .map_err(|e| CliError::input(format!("{}: cannot read: {e}", p.display())))?;
-        m.add_toml(&text, &p.display().to_string())
-            .map_err(CliError::input)?;
-    }
-    Ok(m)
+    let text = match path {
+        Some(p) => Some(
+            std::fs::read_to_string(p)
+                .map_err(|e| CliError::input(format!("{}: cannot read: {e}", p.display())))?,
+        ),
+        None => None,
+    };
+    let origin = path.map(|p| p.display().to_string()).unwrap_or_default();
+    Materials::load(text.as_deref().map(|t| (t, origin.as_str()))).map_err(CliError::input)
 }
 
 fn build_case(a: &Args, materials: &Materials) -> CliResult<CutCase> {
@@ -246,7 +247,7 @@ impl From<VariantArg> for Variant {
 /// feed frame (f, c, n).
 fn orientation_json(a: &Args) -> serde_json::Value {
     let v = Variant::from(a.variant);
-    json!({
+    serde_json::json!({
         "lead_deg": a.lead,
         "tilt_deg": a.tilt,
         "variant": v,

@@ -17,7 +17,7 @@ use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context};
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
 use millplan_sim::stock::spec::StockSpec;
-use millplan_sim::stock::tool::ToolBody;
+use millplan_sim::stock::tool::{BodyOptions, ToolBody};
 use millplan_sim::stock::Stock;
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -170,18 +170,14 @@ pub fn body_fn(m: &ModelArgs) -> CliResult<BodyFn> {
     if matches!(fallback, Some(Shape::Cone { .. })) {
         return Err(CliError::input("--tool: use ball:D, flat:D or bull:D:R"));
     }
-    let flute = m.flute_length;
+    let o = BodyOptions {
+        shape: fallback,
+        flute: m.flute_length,
+        no_cone: true,
+        ..BodyOptions::default()
+    };
     Ok(Box::new(move |op: &millplan_nc::Operation| {
-        let cutter = op.tool.as_ref().and_then(|t| t.cutter);
-        let shape = fallback.or_else(|| cutter.and_then(|c| millplan_sim::shape_of(&c)))?;
-        if matches!(shape, Shape::Cone { .. }) {
-            return None;
-        }
-        let mut b = ToolBody::new(shape);
-        b.flute = flute
-            .or_else(|| cutter.map(|c| c.h).filter(|h| *h > 0.0))
-            .unwrap_or(1e6);
-        Some(b)
+        ToolBody::for_operation(op, &o)
     }))
 }
 

@@ -11,6 +11,7 @@ pub mod force;
 pub mod gouge;
 pub mod inspect;
 pub mod lobes;
+pub mod optimise;
 pub mod orient;
 pub mod post;
 pub mod raster;
@@ -230,21 +231,8 @@ pub fn target_with_machine(
     machine: &millplan_plan::machine::Machine,
     source: millplan_nc::Dialect,
 ) -> crate::error::CliResult<Target> {
-    match (to, machine.target()) {
-        (None, Some(t)) => {
-            let by_name = target_for(None, output, source)?;
-            if by_name != t && output.extension().is_some() {
-                return Err(crate::error::CliError::input(format!(
-                    "{}: the machine file says {} but the file name says {}: give --to",
-                    output.display(),
-                    t.name(),
-                    by_name.name()
-                )));
-            }
-            Ok(t)
-        }
-        (to, _) => target_for(to, output, source),
-    }
+    millplan_driver::target::output_target(to.map(Into::into), output, Some(machine), source)
+        .map_err(crate::error::CliError::input)
 }
 
 /// Writes a program for `o.target` as the output `path` of `outputs`, a few

@@ -12,7 +12,7 @@ use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
 use millplan_sim::dropcutter::DropMesh;
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
 use millplan_sim::stock::spec::StockSpec;
-use millplan_sim::stock::tool::ToolBody;
+use millplan_sim::stock::tool::{BodyOptions, ToolBody};
 use millplan_sim::stock::Stock;
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -278,10 +278,7 @@ fn program_strokes(p: &millplan_nc::Program, res: f64, rapid: f64) -> Strokes {
 /// The body of an operation's tool: its cutter, flutes up to the tool's
 /// height (else the whole tool cuts).
 fn tool_body(op: &millplan_nc::Operation) -> Option<ToolBody> {
-    let c = op.tool.as_ref()?.cutter?;
-    let mut b = ToolBody::new(millplan_sim::shape_of(&c)?);
-    b.flute = if c.h > 0.0 { c.h } else { 1e6 };
-    Some(b)
+    ToolBody::for_operation(op, &BodyOptions::default())
 }
 
 /// The re-oriented program against the input: the IR verifier, S and F

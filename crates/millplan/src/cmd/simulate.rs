@@ -3,13 +3,13 @@
 use crate::cmd::{print_diagnostics, read_options, Range, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_mesh, read_program, read_surface, Outputs};
-use millplan_geom::{DVec2, TriMesh};
+use millplan_geom::TriMesh;
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
 use millplan_sim::stock::remaining::{remaining, Remaining};
 use millplan_sim::stock::run::{run as run_sim, SimReport};
-use millplan_sim::stock::spec::{auto_box, offset_stock, StockSpec};
-use millplan_sim::stock::tool::ToolBody;
-use millplan_sim::stock::{Grid, Stock, BYTES_PER_CELL};
+use millplan_sim::stock::spec::{StockError, StockSpec};
+use millplan_sim::stock::tool::{BodyOptions, ToolBody};
+use millplan_sim::stock::Stock;
 use std::path::{Path, PathBuf};
 
 /// Run the program over its stock: material removal, engagement per move,
@@ -161,9 +161,9 @@ pub fn run(a: Args) -> CliResult<i32> {
 }
 
 /// The tool body of an operation: its cutter (or --tool), flutes, shank and
-/// holder from the options.
+/// holder from the options (`ToolBody::for_operation`).
 fn tool_body(a: &Args) -> CliResult<impl Fn(&millplan_nc::Operation) -> Option<ToolBody>> {
-    let fallback = match &a.tool {
+    let shape = match &a.tool {
         Some(s) => Some(crate::cmd::tool_shape("--tool", s)?),
         None => None,
     };
@@ -188,22 +188,14 @@ fn tool_body(a: &Args) -> CliResult<impl Fn(&millplan_nc::Operation) -> Option<T
             crate::cmd::arg(flag, v, Range::from(0.001, 10_000.0, "mm"))?;
         }
     }
-    let (flute, shank) = (a.flute_length, a.shank);
-    Ok(move |op: &millplan_nc::Operation| {
-        let cutter = op.tool.as_ref().and_then(|t| t.cutter);
-        let shape = fallback.or_else(|| cutter.and_then(|c| millplan_sim::shape_of(&c)))?;
-        let mut b = ToolBody::new(shape);
-        // Unknown flute length: the whole tool cuts (no shank collision).
-        b.flute = flute
-            .or_else(|| cutter.map(|c| c.h).filter(|h| *h > 0.0))
-            .unwrap_or(1e6);
-        b.shank_r = shank.map_or(shape.radius(), |d| d / 2.0);
-        if let Some((r, l)) = holder {
-            b.holder_r = r;
-            b.stickout = l.max(b.flute.min(1e5));
-        }
-        Some(b)
-    })
+    let o = BodyOptions {
+        shape,
+        flute: a.flute_length,
+        shank_r: a.shank.map(|d| d / 2.0),
+        holder,
+        no_cone: false,
+    };
+    Ok(move |op: &millplan_nc::Operation| ToolBody::for_operation(op, &o))
 }
 
 fn program_strokes(a: &Args, p: &millplan_nc::Program, rapid: f64) -> CliResult<Strokes> {
@@ -234,7 +226,7 @@ fn program_strokes(a: &Args, p: &millplan_nc::Program, rapid: f64) -> CliResult<
 }
 
 /// The stock before the program at `program` runs, as `spec` names it, at
-/// cell size `res`.
+/// cell size `res` (`StockSpec::build`; an `stl:` blank read here).
 pub fn initial_stock(
     program: &Path,
     res: f64,
@@ -243,85 +235,20 @@ pub fn initial_stock(
     part: Option<&TriMesh>,
     stl_units: Option<UnitArg>,
 ) -> CliResult<Stock> {
-    let check = |min: DVec2, max: DVec2| {
-        let g = Grid::covering(min, max, res);
-        crate::limits::check_memory(
-            &format!(
-                "a stock of {} × {} dexels at --resolution {res}",
-                g.nx, g.ny
-            ),
-            g.cells() as f64 * BYTES_PER_CELL,
-        )
+    let blank = match spec {
+        StockSpec::Stl(p) => {
+            let (mut mesh, _) = read_mesh(p)?;
+            crate::cmd::stl_to_mm(&mut mesh, stl_units);
+            Some(mesh)
+        }
+        _ => None,
     };
-    let no_cut = || {
-        CliError::input(format!(
-            "{}: no cutting move to take the stock's bounds from",
-            program.display()
-        ))
-    };
-    Ok(match spec {
-        StockSpec::BoxAuto { margin } => {
-            let (lo, hi) = auto_box(s, *margin).ok_or_else(no_cut)?;
-            check(lo.truncate(), hi.truncate())?;
-            Stock::block(lo, hi, res)
-        }
-        StockSpec::Box { min, max } => {
-            check(min.truncate(), max.truncate())?;
-            Stock::block(*min, *max, res)
-        }
-        StockSpec::CylinderAuto { margin } => {
-            let (lo, hi) = auto_box(s, *margin).ok_or_else(no_cut)?;
-            let c = (lo.truncate() + hi.truncate()) / 2.0;
-            let r = (hi.truncate() - c).length();
-            check(c - DVec2::splat(r), c + DVec2::splat(r))?;
-            Stock::cylinder(c, r, lo.z, hi.z, res)
-        }
-        StockSpec::Cylinder { centre, z0, z1, d } => {
-            check(
-                *centre - DVec2::splat(d / 2.0),
-                *centre + DVec2::splat(d / 2.0),
-            )?;
-            Stock::cylinder(*centre, d / 2.0, *z0, *z1, res)
-        }
-        StockSpec::Stl(p) => blank(p, stl_units, res, &check)?,
-        StockSpec::Offset(mm) => {
-            let part = part
-                .ok_or_else(|| CliError::input("--stock offset:MM needs the part: give --stl"))?;
-            let b = part.bounds();
-            let e = DVec2::splat(*mm);
-            check(b.min.truncate() - e, b.max.truncate() + e)?;
-            offset_stock(part, *mm, res)
-        }
-    })
-}
-
-/// A cast blank: a closed mesh.
-fn blank(
-    p: &Path,
-    units: Option<UnitArg>,
-    res: f64,
-    check: &dyn Fn(DVec2, DVec2) -> CliResult<()>,
-) -> CliResult<Stock> {
-    let (mut mesh, _) = read_mesh(p)?;
-    crate::cmd::stl_to_mm(&mut mesh, units);
-    if mesh.is_empty() {
-        return Err(CliError::input(format!(
-            "{}: no triangles: not a blank",
-            p.display()
-        )));
-    }
-    let e = mesh.edge_report();
-    if e.open > 0 || e.non_manifold > 0 {
-        return Err(CliError::input(format!(
-            "{}: a stock blank must be a closed mesh; this one has {} open and {} non-manifold edges",
-            p.display(),
-            e.open,
-            e.non_manifold
-        )));
-    }
-    let b = mesh.bounds();
-    check(b.min.truncate(), b.max.truncate())?;
-    Ok(Stock::from_solid(&mesh, res))
+    let memory = crate::limits::get().memory;
+    spec.build(res, s, part, blank.as_ref(), memory)
+        .map_err(|e| match e {
+            StockError::NoCut => CliError::input(format!("{}: {e}", program.display())),
+            e => CliError::input(e.to_string()),
+        })
 }
 
 fn write_outputs(

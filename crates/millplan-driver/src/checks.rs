@@ -1,0 +1,118 @@
+//! The checks of a written program, run on the program re-read from its own
+//! bytes (`millplan_nc::readback`) before it is renamed into place: the
+//! read-back itself, then `millplan_plan::safety::check` (IR, machine, tip,
+//! stock, gouge, loads) with the job's tools, stock, part and limits.
+
+use millplan_nc::Program;
+use millplan_plan::force::{FeedLimits, ForceRun};
+use millplan_plan::machine::Machine;
+use millplan_plan::safety::Load;
+
+/// A dialect that names tools by number only (G-code) loses their shape:
+/// the re-read program's operations take the shapes of the program written,
+/// so every later check runs with the same tools; and where its moves are
+/// those written one for one, their source lines, so findings name the
+/// input's lines.
+pub fn same_tools(back: &mut Program, out: &Program) {
+    if back.operations.len() != out.operations.len() {
+        return;
+    }
+    for (b, o) in back.operations.iter_mut().zip(&out.operations) {
+        if b.moves.len() == o.moves.len() {
+            for (x, y) in b.moves.iter_mut().zip(&o.moves) {
+                x.line = y.line;
+            }
+        }
+        let Some(ot) = &o.tool else { continue };
+        match &mut b.tool {
+            Some(bt) if bt.cutter.is_none() => bt.cutter = ot.cutter,
+            None => b.tool = Some(ot.clone()),
+            _ => {}
+        }
+    }
+}
+
+/// Every limited load of every modelled cutting move of `run` (forces of
+/// `p`), with its limit at the move's spindle speed (the machine's chart
+/// included; power, torque and stress divided by the factor of safety).
+pub fn loads_of(p: &Program, run: &ForceRun, l: &FeedLimits, m: &Machine) -> Vec<Load> {
+    let mut at = Vec::with_capacity(p.move_count());
+    for (oi, op) in p.operations.iter().enumerate() {
+        at.extend((0..op.moves.len()).map(|mi| (oi, mi)));
+    }
+    let mut v = Vec::new();
+    for x in run.moves.iter().filter(|x| !x.rapid && !x.unmodelled) {
+        let Some(&(op, mv)) = at.get(x.index as usize) else {
+            continue;
+        };
+        // The job always gives its fz range (`fz_max` set), so the tool's
+        // diameter, which only picks a material's chip load, is not consulted.
+        let lim = l.at(x.rpm, f64::NAN, m);
+        let fos = lim.fos.max(1.0);
+        let pairs = [
+            ("fxy", x.fxy_max, lim.fxy),
+            ("torque", x.torque_max, lim.torque.map(|t| t / fos)),
+            ("power", x.power_w, lim.power.map(|t| t / fos)),
+            ("stress", x.stress_mpa, lim.stress.map(|t| t / fos)),
+            ("deflection", x.deflection_mm, lim.deflection),
+        ];
+        for (name, value, limit) in pairs {
+            if let Some(limit) = limit {
+                let name = name.to_string();
+                v.push(Load {
+                    op,
+                    mv,
+                    name,
+                    value,
+                    limit,
+                });
+            }
+        }
+    }
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use millplan_nc::{parse_program, ReadOptions};
+    use millplan_plan::force::MoveForces;
+
+    fn program(src: &str) -> Program {
+        parse_program(src, ReadOptions::default())
+            .expect("reads")
+            .program
+    }
+
+    #[test]
+    fn loads_name_their_move_and_the_charts_limit() {
+        let p = program("G21 G90\nT1 M6\nS6000 M3\nG0 X0 Y0 Z5\nG1 Z-1 F300\nG1 X10\nM30\n");
+        let mv = |index: u32, fxy: f64| MoveForces {
+            index,
+            rpm: 6000.0,
+            fxy_max: fxy,
+            ..MoveForces::default()
+        };
+        let run = ForceRun {
+            moves: vec![mv(1, 90.0), mv(2, 120.0)],
+            ..ForceRun::default()
+        };
+        let l = FeedLimits {
+            fxy: Some(100.0),
+            torque: None,
+            power: None,
+            stress: None,
+            deflection: None,
+            fos: 1.0,
+            fz_min: 0.01,
+            fz_max: 0.1,
+        };
+        let v = loads_of(&p, &run, &l, &Machine::default());
+        let fxy: Vec<_> = v.iter().filter(|x| x.name == "fxy").collect();
+        assert_eq!(fxy.len(), 2);
+        assert_eq!((fxy[1].op, fxy[1].mv, fxy[1].value), (0, 2, 120.0));
+        let c = millplan_plan::safety::loads(&p, &|_: &Program| v.clone(), 0.005);
+        assert!(!c.ok);
+        assert_eq!(c.findings[0].line, Some(6), "the move over its limit");
+    }
+}

@@ -1,0 +1,377 @@
+//! A job: the resolved inputs of one optimising run, each built once.
+
+use crate::defaults::{self, Defaults};
+use millplan_geom::TriMesh;
+use millplan_models::cutter::Shape;
+use millplan_models::force::materials::Materials;
+use millplan_models::force::Grid;
+use millplan_nc::{Operation, Program};
+use millplan_plan::feed::machine_accel;
+use millplan_plan::force::{FeedLimits, ForceSetup};
+use millplan_plan::machine::Machine;
+use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
+use millplan_sim::stock::spec::StockSpec;
+use millplan_sim::stock::tool::{BodyOptions, ToolBody};
+use millplan_sim::stock::Stock;
+use serde::Serialize;
+
+/// Limits the user gives (`--limit NAME=VALUE`): each adds a limit or
+/// tightens the default one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct UserLimits {
+    pub fxy: Option<f64>,
+    pub torque: Option<f64>,
+    pub power: Option<f64>,
+    pub stress: Option<f64>,
+    pub deflection: Option<f64>,
+    pub fz_min: Option<f64>,
+    pub fz_max: Option<f64>,
+}
+
+/// What the user chose over the defaults; `None` takes the default.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// Cutting speed, m/min.
+    pub vc: Option<f64>,
+    /// Spindle speed of cutting moves without S, 1/min.
+    pub spindle: Option<f64>,
+    /// Cutter of operations whose tool has no geometry, or overriding it.
+    pub tool: Option<Shape>,
+    pub flutes: Option<usize>,
+    /// Dexel size, mm.
+    pub resolution: Option<f64>,
+    pub limits: UserLimits,
+    /// Tolerance of the checks, mm.
+    pub tol: Option<f64>,
+    /// Memory the stock may take, bytes.
+    pub memory: Option<u64>,
+}
+
+/// The inputs as read (the caller does all file access).
+pub struct Inputs {
+    pub program: Program,
+    pub part: Option<TriMesh>,
+    pub stock: Option<StockSpec>,
+    /// The mesh of an `stl:` stock.
+    pub blank: Option<TriMesh>,
+    pub machine: Machine,
+    /// Whether the machine came from a file (else millplan's default).
+    pub machine_given: bool,
+    pub materials: Materials,
+    pub material: Option<String>,
+    pub options: Options,
+}
+
+/// One resolved setting and where its value came from.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Setting {
+    pub name: &'static str,
+    pub value: String,
+    /// `option`, `program`, `machine`, `material table`, `default`, …
+    pub from: String,
+}
+
+/// Why a job cannot be built.
+#[derive(Debug, PartialEq)]
+pub struct JobError(pub String);
+
+impl std::fmt::Display for JobError {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for JobError {}
+
+/// A job: the inputs, every default resolved, the tool bodies' rule, the
+/// stock and the force model built once.
+pub struct Job {
+    pub inputs: Inputs,
+    /// Every setting with its source, for the report.
+    pub settings: Vec<Setting>,
+    pub vc: f64,
+    pub flutes: usize,
+    pub resolution: f64,
+    pub tol: f64,
+    /// Finishing allowance of the speed pass, mm.
+    pub ap: f64,
+    pub body: BodyOptions,
+    /// The stock before the program (with `--stock`).
+    pub stock: Option<Stock>,
+    /// The force model (with `--material`).
+    pub setup: Option<ForceSetup>,
+    pub limits: FeedLimits,
+    pub feed_accel: f64,
+}
+
+fn set(v: &mut Vec<Setting>, name: &'static str, value: String, from: &str) {
+    v.push(Setting {
+        name,
+        value,
+        from: from.to_string(),
+    });
+}
+
+/// The first cutting operation's tool diameter, mm.
+fn first_diameter(p: &Program, body: &BodyOptions) -> Option<f64> {
+    p.operations
+        .iter()
+        .filter(|op| op.moves.iter().any(|m| m.is_cutting()))
+        .find_map(|op| ToolBody::for_operation(op, body))
+        .map(|b| 2.0 * b.radius())
+}
+
+impl Job {
+    /// Resolves every default and builds the stock and the force model.
+    pub fn new(inputs: Inputs) -> Result<Job, JobError> {
+        let o = inputs.options.clone();
+        let mut s = Vec::new();
+        let body = BodyOptions {
+            shape: o.tool,
+            ..BodyOptions::default()
+        };
+        let d = first_diameter(&inputs.program, &body).ok_or_else(|| {
+            JobError("the program has no cutting move with a tool of known shape: give --tool ball:D, flat:D or bull:D:R".into())
+        })?;
+        let material = inputs.material.as_deref().map(str::to_ascii_lowercase);
+        let (cut, fallback) = defaults::cutting(material.as_deref().unwrap_or("default"));
+        let table = if fallback {
+            "cutting table [default]"
+        } else {
+            "cutting table"
+        };
+        let vc = o.vc.unwrap_or(cut.vc);
+        set(
+            &mut s,
+            "vc",
+            format!("{vc} m/min"),
+            if o.vc.is_some() { "option" } else { table },
+        );
+        let flutes = o.flutes.unwrap_or(Defaults::FLUTES);
+        set(
+            &mut s,
+            "flutes",
+            flutes.to_string(),
+            if o.flutes.is_some() {
+                "option"
+            } else {
+                "default"
+            },
+        );
+        let resolution = o.resolution.unwrap_or(Defaults::RESOLUTION);
+        set(
+            &mut s,
+            "resolution",
+            format!("{resolution} mm"),
+            if o.resolution.is_some() {
+                "option"
+            } else {
+                "default"
+            },
+        );
+        let tol = o.tol.unwrap_or(Defaults::TOL);
+        set(
+            &mut s,
+            "tol",
+            format!("{tol} mm"),
+            if o.tol.is_some() { "option" } else { "default" },
+        );
+        let ap = match &inputs.stock {
+            Some(StockSpec::Offset(mm)) if *mm > 0.0 => (*mm).min(d / 2.0),
+            _ => Defaults::AP.min(d / 2.0),
+        };
+        let ap_from = if matches!(inputs.stock, Some(StockSpec::Offset(_))) {
+            "stock offset"
+        } else {
+            "default"
+        };
+        set(&mut s, "ap", format!("{ap} mm"), ap_from);
+        let limits = limits(&o.limits, cut.fz(d), &mut s);
+        let feed_accel = machine_accel(&inputs.machine).unwrap_or(Defaults::FEED_ACCEL);
+        let accel_from = if machine_accel(&inputs.machine).is_some() {
+            "machine"
+        } else {
+            "default"
+        };
+        set(
+            &mut s,
+            "feed_accel",
+            format!("{feed_accel} mm/s²"),
+            accel_from,
+        );
+        let chart = if inputs.machine.spindle_curve.is_some() {
+            "the machine's spindle chart"
+        } else {
+            "none (the machine file has no spindle chart)"
+        };
+        set(&mut s, "spindle_chart", chart.into(), "machine");
+        let setup = force_setup(&inputs, flutes)?;
+        let mut job = Job {
+            inputs,
+            settings: s,
+            vc,
+            flutes,
+            resolution,
+            tol,
+            ap,
+            body,
+            stock: None,
+            setup,
+            limits,
+            feed_accel,
+        };
+        job.default_spindle(d);
+        job.stock = job.build_stock()?;
+        Ok(job)
+    }
+
+    /// The tool body of an operation (holder included when one is given).
+    pub fn body_of(&self, op: &Operation) -> Option<ToolBody> {
+        ToolBody::for_operation(op, &self.body)
+    }
+
+    /// The tool bodies the force model can load (no cones: drills are left
+    /// out), as the feed pass takes them.
+    pub fn body_fn(&self) -> millplan_plan::feed::BodyFn {
+        let o = BodyOptions {
+            no_cone: true,
+            ..self.body
+        };
+        Box::new(move |op: &Operation| ToolBody::for_operation(op, &o))
+    }
+
+    /// The strokes of `p` through the stock at this job's resolution, of
+    /// every tool (`forces`: only those the force model can load).
+    pub fn strokes(&self, p: &Program, forces: bool) -> Strokes {
+        let o = BodyOptions {
+            no_cone: forces,
+            ..self.body
+        };
+        strokes(
+            p,
+            |op: &Operation| ToolBody::for_operation(op, &o),
+            &PathOptions {
+                chord: self.resolution / 4.0,
+                rapid_rate: self.inputs.machine.rapid,
+            },
+        )
+    }
+
+    fn build_stock(&self) -> Result<Option<Stock>, JobError> {
+        let Some(spec) = &self.inputs.stock else {
+            return Ok(None);
+        };
+        let s = self.strokes(&self.inputs.program, false);
+        let memory = self
+            .inputs
+            .options
+            .memory
+            .unwrap_or(millplan_geom::limits::Limits::default().memory);
+        spec.build(
+            self.resolution,
+            &s,
+            self.inputs.part.as_ref(),
+            self.inputs.blank.as_ref(),
+            memory,
+        )
+        .map(Some)
+        .map_err(|e| JobError(format!("--stock: {e}")))
+    }
+
+    /// Cutting moves without a spindle speed get `--spindle`, else the
+    /// speed of the cutting speed on their tool's diameter.
+    fn default_spindle(&mut self, d: f64) {
+        let missing = self
+            .inputs
+            .program
+            .moves()
+            .any(|m| m.is_cutting() && !(m.spindle > 0.0));
+        if !missing {
+            set(
+                &mut self.settings,
+                "spindle",
+                "as programmed".into(),
+                "program",
+            );
+            return;
+        }
+        let (o, vc, body) = (self.inputs.options.spindle, self.vc, self.body);
+        for op in &mut self.inputs.program.operations {
+            let dia = ToolBody::for_operation(op, &body).map_or(d, |b| 2.0 * b.radius());
+            let n = o.unwrap_or_else(|| defaults::spindle_for(vc, dia));
+            for m in op
+                .moves
+                .iter_mut()
+                .filter(|m| m.is_cutting() && !(m.spindle > 0.0))
+            {
+                m.spindle = n.clamp(
+                    self.inputs.machine.spindle_min,
+                    self.inputs.machine.spindle_max,
+                );
+            }
+        }
+        let (value, from) = match o {
+            Some(n) => (format!("{n} 1/min where the program has no S"), "option"),
+            None => (
+                "1000·vc/(π·D) where the program has no S".to_string(),
+                "default",
+            ),
+        };
+        set(&mut self.settings, "spindle", value, from);
+    }
+}
+
+/// The force model of the material, `None` without one.
+fn force_setup(inputs: &Inputs, flutes: usize) -> Result<Option<ForceSetup>, JobError> {
+    let Some(name) = &inputs.material else {
+        return Ok(None);
+    };
+    let law = inputs
+        .materials
+        .get(name)
+        .map_err(|e| JobError(format!("--material: {e}")))?
+        .law;
+    let mut s = ForceSetup::new(law, flutes);
+    s.helix = Defaults::HELIX_DEG.to_radians();
+    s.grid = Grid::default();
+    Ok(Some(s))
+}
+
+/// The load limits: the user's, the feed-per-tooth range of the material
+/// for the tool (tightened by the user's), the spindle chart applied per
+/// block by [`FeedLimits::at`].
+fn limits(u: &UserLimits, (fz_lo, fz_hi): (f64, f64), s: &mut Vec<Setting>) -> FeedLimits {
+    let fz_min = u.fz_min.map_or(fz_lo, |v| v.max(fz_lo));
+    let fz_max = u.fz_max.map_or(fz_hi, |v| v.min(fz_hi)).max(fz_min);
+    let from = |x: Option<f64>| {
+        if x.is_some() {
+            "option"
+        } else {
+            "cutting table"
+        }
+    };
+    set(s, "fz_min", format!("{fz_min:.4} mm"), from(u.fz_min));
+    set(s, "fz_max", format!("{fz_max:.4} mm"), from(u.fz_max));
+    for (name, v) in [
+        ("fxy", u.fxy),
+        ("torque", u.torque),
+        ("power", u.power),
+        ("stress", u.stress),
+        ("deflection", u.deflection),
+    ] {
+        if let Some(v) = v {
+            set(s, name, v.to_string(), "option");
+        }
+    }
+    FeedLimits {
+        fxy: u.fxy,
+        torque: u.torque,
+        power: u.power,
+        stress: u.stress,
+        deflection: u.deflection,
+        fos: 1.0,
+        fz_min,
+        fz_max: Some(fz_max),
+        chip_loads: None,
+    }
+}

@@ -1,0 +1,152 @@
+//! The passes `optimise` can run, what each needs and changes, and which of
+//! them a job's inputs allow.
+
+use crate::job::Job;
+use millplan_plan::pipeline::{Changes, PASSES};
+use serde::Serialize;
+
+/// A pass of the driver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PassName {
+    Speed,
+    Reorder,
+    Orient,
+    Feed,
+    Post,
+}
+
+/// Every pass in the order a default run takes them.
+pub const ORDER: [PassName; 5] = [
+    PassName::Speed,
+    PassName::Reorder,
+    PassName::Orient,
+    PassName::Feed,
+    PassName::Post,
+];
+
+/// One row of `--list-passes`.
+#[derive(Clone, Debug, Serialize)]
+pub struct PassRow {
+    pub name: &'static str,
+    pub needs: &'static str,
+    pub changes: Changes,
+    pub does: String,
+}
+
+impl PassName {
+    pub fn name(self) -> &'static str {
+        match self {
+            PassName::Speed => "speed",
+            PassName::Reorder => "reorder",
+            PassName::Orient => "orient",
+            PassName::Feed => "feed",
+            PassName::Post => "post",
+        }
+    }
+
+    pub fn parse(s: &str) -> Result<PassName, String> {
+        ORDER
+            .into_iter()
+            .find(|p| p.name() == s.trim())
+            .ok_or_else(|| {
+                format!("unknown pass `{s}` (known: speed, reorder, orient, feed, post)")
+            })
+    }
+
+    /// What the pass needs of the job, in words.
+    pub fn needs(self) -> &'static str {
+        match self {
+            PassName::Speed => "part (--stl), a ball-end operation",
+            PassName::Reorder => "part (--stl), a three-axis ball-end operation",
+            PassName::Orient => "part (--stl), stock, material, five-axis CL (tool axes)",
+            PassName::Feed => "stock (--stock), material (--material)",
+            PassName::Post => "machine kinematics (--machine with [kinematics]), five-axis CL",
+        }
+    }
+
+    /// The row of the pass table: the library's own words where the
+    /// pipeline lists the pass (`PASSES`).
+    pub fn row(self) -> PassRow {
+        let lib = PASSES
+            .iter()
+            .find(|p| p.name == self.name() && self != PassName::Orient);
+        let (changes, does) = match (self, lib) {
+            (_, Some(p)) => (p.changes, p.does.to_string()),
+            (PassName::Orient, _) => (Changes::What, "lead and tilt per ball-end operation from the forces on the simulated stock (§2.4)".into()),
+            _ => (Changes::What, "five-axis CL through the machine's kinematics to joint positions".into()),
+        };
+        PassRow {
+            name: self.name(),
+            needs: self.needs(),
+            changes,
+            does: if self == PassName::Reorder {
+                format!("{does}; the speed pass runs again on a new order")
+            } else {
+                does
+            },
+        }
+    }
+}
+
+/// The pass table, in [`ORDER`].
+pub fn table() -> Vec<PassRow> {
+    ORDER.iter().map(|p| p.row()).collect()
+}
+
+/// Parses `--passes a,b,c`: known names, each once, in the order given.
+pub fn parse_list(s: &str) -> Result<Vec<PassName>, String> {
+    let mut v: Vec<PassName> = Vec::new();
+    for w in s.split(',').filter(|w| !w.trim().is_empty()) {
+        let p = PassName::parse(w)?;
+        if v.contains(&p) {
+            return Err(format!("pass `{}` given twice", p.name()));
+        }
+        v.push(p);
+    }
+    if v.is_empty() {
+        return Err("--passes: name at least one pass".into());
+    }
+    Ok(v)
+}
+
+fn has_ball(job: &Job, three_axis: bool) -> bool {
+    job.inputs.program.operations.iter().any(|op| {
+        let ball = job
+            .body_of(op)
+            .is_some_and(|b| matches!(b.shape, millplan_models::cutter::Shape::Ball { .. }));
+        ball && op.moves.iter().any(|m| m.is_cutting())
+            && (!three_axis || op.moves.iter().all(|m| m.orient.is_none()))
+    })
+}
+
+fn five_axis(job: &Job) -> bool {
+    job.inputs
+        .program
+        .moves()
+        .any(|m| m.is_cutting() && m.orient.is_some())
+}
+
+/// Why `pass` cannot run on this job, `None` when it can.
+pub fn missing(job: &Job, pass: PassName) -> Option<String> {
+    let i = &job.inputs;
+    let part = i.part.is_some();
+    let why = match pass {
+        PassName::Speed if !part => "no part (--stl): the working diameter needs the surface",
+        PassName::Speed if !has_ball(job, false) => "no ball-end operation",
+        PassName::Reorder if !part => "no part (--stl)",
+        PassName::Reorder if !has_ball(job, true) => "no three-axis ball-end operation",
+        PassName::Orient if !five_axis(job) => "a three-axis program: no tool axes to lean",
+        PassName::Orient => {
+            "lead/tilt on the stock is not part of optimise yet: run `millplan orient` first"
+        }
+        PassName::Feed if job.stock.is_none() => "no stock (--stock)",
+        PassName::Feed if job.setup.is_none() => "no material (--material)",
+        PassName::Post if !five_axis(job) => "a three-axis program: nothing to post",
+        PassName::Post if i.machine.kinematics().is_none() => {
+            "the machine file has no [kinematics]"
+        }
+        _ => return None,
+    };
+    Some(why.to_string())
+}

@@ -1,0 +1,254 @@
+//! The optimise report: one page (millplan-report's layout) that opens with
+//! the verdict and the inputs, then the passes, before → after, the checks
+//! and the plots of spindle speed, feed and F_xy along the program.
+
+use crate::finish::{Summary, Verdict};
+use crate::run::Loads;
+use millplan_nc::Program;
+use millplan_plan::force::ForceRun;
+use millplan_plan::machine::Machine;
+use millplan_report::html::{report_page, Notes};
+use millplan_report::svg::{line_plot, Series};
+
+/// The names of the inputs as the report shows them.
+#[derive(Clone, Debug, Default)]
+pub struct InputNames {
+    pub program: String,
+    pub part: Option<String>,
+    pub stock: Option<String>,
+    pub machine: String,
+    pub material: Option<String>,
+    pub output: String,
+}
+
+/// What the report draws: both programs and their forces.
+pub struct Plotted<'a> {
+    pub before: &'a Program,
+    pub after: &'a Program,
+    pub forces_before: Option<&'a ForceRun>,
+    pub forces_after: Option<&'a ForceRun>,
+    pub machine: &'a Machine,
+}
+
+fn pct(a: f64, b: f64) -> String {
+    format!("{:+.1} %", 100.0 * (b / a.max(1e-12) - 1.0))
+}
+
+/// The verdict in words.
+pub fn verdict_line(s: &Summary) -> String {
+    let t = format!(
+        "cycle time {:.1} s → {:.1} s ({})",
+        s.time_before_s,
+        s.time_after_s,
+        pct(s.time_before_s, s.time_after_s)
+    );
+    match (s.verdict, s.refusal()) {
+        (Verdict::Refused, Some((check, line, m))) => {
+            format!("Refused: check `{check}` failed at line {line}: {m}; {t}")
+        }
+        (Verdict::Improved, _) => format!("Improved: {t}, every check passed"),
+        _ => format!("Kept: nothing measured better ({t}); every check passed"),
+    }
+}
+
+fn loads_row(b: Option<Loads>, a: Option<Loads>) -> Vec<(String, String)> {
+    let (Some(b), Some(a)) = (b, a) else {
+        return vec![(
+            "loads".into(),
+            "not computed (no stock or no material)".into(),
+        )];
+    };
+    vec![
+        ("max F_xy, N".into(), format!("{:.1} → {:.1}", b.fxy, a.fxy)),
+        (
+            "max torque, N·mm".into(),
+            format!("{:.1} → {:.1}", b.torque, a.torque),
+        ),
+        (
+            "max power, W".into(),
+            format!("{:.1} → {:.1}", b.power, a.power),
+        ),
+        (
+            "max deflection, mm".into(),
+            format!("{:.4} → {:.4}", b.deflection, a.deflection),
+        ),
+    ]
+}
+
+fn rows(s: &Summary) -> Vec<(String, String)> {
+    let mut r = Vec::new();
+    for p in &s.passes {
+        let state = if p.ran {
+            format!("ran, {:.2} s", p.seconds)
+        } else {
+            "skipped".into()
+        };
+        r.push((format!("pass {}", p.name), format!("{state}: {}", p.reason)));
+    }
+    r.push((
+        "cycle time (with acceleration), s".into(),
+        format!(
+            "{:.1} → {:.1} ({})",
+            s.time_before_s,
+            s.time_after_s,
+            pct(s.time_before_s, s.time_after_s)
+        ),
+    ));
+    r.extend(loads_row(s.max_before, s.max_after));
+    let share = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{:.1} %", 100.0 * v));
+    r.push((
+        "points off the cutting speed".into(),
+        format!("{} → {}", share(s.vc_off_before), share(s.vc_off_after)),
+    ));
+    for c in &s.checks {
+        let found = if c.findings.is_empty() {
+            "none".to_string()
+        } else {
+            let line = |l: Option<u32>| l.map_or("–".to_string(), |l| l.to_string());
+            let words = |f: &millplan_plan::safety::Finding| {
+                let own = if f.in_input { " (in the input)" } else { "" };
+                format!("line {}: {}{own}", line(f.line), f.message)
+            };
+            c.findings
+                .iter()
+                .take(5)
+                .map(words)
+                .collect::<Vec<_>>()
+                .join("; ")
+        };
+        let state = if c.ok { "ok" } else { "FAILED" };
+        let skipped = c
+            .skipped
+            .as_deref()
+            .map_or(String::new(), |w| format!("; skipped: {w}"));
+        r.push((
+            format!("check {}", c.name),
+            format!(
+                "{state} ({} {}{skipped}); findings: {found}",
+                c.checked, c.unit
+            ),
+        ));
+    }
+    r
+}
+
+fn notes(s: &Summary, n: &InputNames) -> Notes {
+    let mut inputs = vec![("program".to_string(), n.program.clone())];
+    let opt = |v: &Option<String>| v.clone().unwrap_or_else(|| "not given".into());
+    inputs.push(("part".into(), opt(&n.part)));
+    inputs.push(("stock".into(), opt(&n.stock)));
+    inputs.push(("machine".into(), n.machine.clone()));
+    inputs.push(("material".into(), opt(&n.material)));
+    inputs.push(("output".into(), format!("{} ({})", n.output, s.dialect)));
+    for x in &s.settings {
+        inputs.push((x.name.to_string(), format!("{} ({})", x.value, x.from)));
+    }
+    let warnings = s
+        .checks
+        .iter()
+        .flat_map(|c| {
+            c.findings.iter().filter(|f| f.in_input).map(move |f| {
+                format!(
+                    "the input already has this ({}): line {}: {}",
+                    c.name,
+                    f.line.unwrap_or(0),
+                    f.message
+                )
+            })
+        })
+        .take(20)
+        .collect();
+    Notes {
+        inputs,
+        warnings,
+        verdict: vec![verdict_line(s)],
+    }
+}
+
+/// (time from the start, value) of every cutting move of a force run.
+fn along(f: &ForceRun, v: impl Fn(&millplan_plan::force::MoveForces) -> f64) -> Vec<(f64, f64)> {
+    f.moves
+        .iter()
+        .filter(|m| !m.rapid)
+        .map(|m| (m.t_start_s, v(m)))
+        .collect()
+}
+
+/// (time from the start, value) of every cutting move of a program, the
+/// time estimated with acceleration.
+fn along_program(
+    p: &Program,
+    m: &Machine,
+    v: impl Fn(&millplan_nc::Move) -> f64,
+) -> Vec<(f64, f64)> {
+    let e = millplan_plan::timing::estimate_program(p, m);
+    let mut t = 0.0;
+    let mut out = Vec::new();
+    for (mv, dt) in p
+        .moves()
+        .zip(e.per_move_s.iter().chain(std::iter::repeat(&0.0)))
+    {
+        if mv.is_cutting() {
+            out.push((t, v(mv)));
+        }
+        t += dt;
+    }
+    out
+}
+
+fn plot(title: &str, ylabel: &str, b: Vec<(f64, f64)>, a: Vec<(f64, f64)>) -> (String, String) {
+    let series = [
+        Series {
+            name: "input",
+            color: "#888",
+            points: b,
+        },
+        Series {
+            name: "optimised",
+            color: "#c33",
+            points: a,
+        },
+    ];
+    (
+        title.to_string(),
+        line_plot(title, "time from the start, s", ylabel, &series),
+    )
+}
+
+fn figures(p: &Plotted) -> Vec<(String, String)> {
+    let m = p.machine;
+    let mut v = vec![
+        plot(
+            "spindle speed",
+            "1/min",
+            along_program(p.before, m, |x| x.spindle),
+            along_program(p.after, m, |x| x.spindle),
+        ),
+        plot(
+            "feed",
+            "mm/min",
+            along_program(p.before, m, |x| x.feed),
+            along_program(p.after, m, |x| x.feed),
+        ),
+    ];
+    if let (Some(b), Some(a)) = (p.forces_before, p.forces_after) {
+        v.push(plot(
+            "F_xy,max per move (at the programmed feeds' times)",
+            "N",
+            along(b, |x| x.fxy_max),
+            along(a, |x| x.fxy_max),
+        ));
+    }
+    v
+}
+
+/// The report page.
+pub fn html(s: &Summary, names: &InputNames, p: &Plotted) -> String {
+    report_page(
+        &format!("millplan optimise: {}", names.program),
+        "The program through the passes its inputs allow, written, read back from its own bytes and checked before it was put in place.",
+        &notes(s, names),
+        &rows(s),
+        &figures(p),
+    )
+}

@@ -1,0 +1,270 @@
+//! `Job::run`: the passes over the job's program, each verified and timed,
+//! with the measures before and after.
+
+use crate::job::{Job, JobError};
+use crate::passes::{missing, PassName};
+use millplan_nc::Program;
+use millplan_plan::feed::{FeedChanges, FeedParams, FeedPass};
+use millplan_plan::force::{self, ForceRun};
+use millplan_plan::pipeline::{self, Context, Pass};
+use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Verdict};
+use millplan_plan::speed::{deviates, FeedCoupling, SpeedParams, SpeedPass};
+use serde::Serialize;
+use std::time::Instant;
+
+/// What one pass did.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PassOutcome {
+    pub name: &'static str,
+    pub ran: bool,
+    /// Why it was skipped, or what it changed.
+    pub reason: String,
+    pub seconds: f64,
+}
+
+/// The largest loads of a program.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Loads {
+    pub fxy: f64,
+    pub torque: f64,
+    pub power: f64,
+    pub deflection: f64,
+}
+
+/// A program's measures.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Measures {
+    /// Cycle time estimated with acceleration, s.
+    pub time_s: f64,
+    /// Largest loads (with a stock and a material).
+    pub max: Option<Loads>,
+    /// Share of the ball-end cutting points whose spindle speed misses the
+    /// constant-cutting-speed target by more than 5 % (with a part).
+    pub vc_off_share: Option<f64>,
+}
+
+/// The optimised program and what was done to it.
+pub struct Outcome {
+    pub program: Program,
+    pub passes: Vec<PassOutcome>,
+    pub before: Measures,
+    /// The input's forces (for the plots).
+    pub forces_before: Option<ForceRun>,
+    /// Whether a pass changed the order of the cutting points.
+    pub reordered: bool,
+}
+
+impl Job {
+    /// The speed pass's settings: the job's vc, flutes and allowance; the
+    /// feed follows the speed at the program's own chip load (its first
+    /// cutting block's F/(S·z)), within the fz range.
+    pub fn speed_params(&self) -> SpeedParams {
+        let z = self.flutes as f64;
+        let fz_max = self.limits.fz_max.unwrap_or(self.limits.fz_min);
+        let fz = self
+            .inputs
+            .program
+            .moves()
+            .find(|m| m.is_cutting() && m.spindle > 0.0 && m.feed > 0.0)
+            .map_or(fz_max, |m| m.feed / (m.spindle * z))
+            .clamp(self.limits.fz_min, fz_max);
+        let mut p = SpeedParams::new(self.vc, fz, self.flutes as u32, self.ap);
+        p.feed = FeedCoupling::ChipLoad;
+        p.keep_rows = false;
+        // A G-code program names its tools by number only: `--tool ball:D`.
+        if let Some(millplan_models::cutter::Shape::Ball { radius }) = self.body.shape {
+            p.ball_d = Some(2.0 * radius);
+        }
+        p
+    }
+
+    /// The pipeline's context: the machine, the part, the verifier after
+    /// every pass (release builds too).
+    pub fn context(&self) -> Context<'_> {
+        let cx = Context::new(self.inputs.machine.clone()).verifying();
+        match &self.inputs.part {
+            Some(m) => cx.with_part(m),
+            None => cx,
+        }
+    }
+
+    /// The largest loads of `p` on the job's stock, `None` without a stock
+    /// or a material.
+    pub fn forces(&self, p: &Program) -> Result<Option<ForceRun>, JobError> {
+        let (Some(stock), Some(setup)) = (&self.stock, &self.setup) else {
+            return Ok(None);
+        };
+        let s = self.strokes(p, true);
+        force::simulate(p, &s, stock.clone(), setup, None, &|_| {})
+            .map(Some)
+            .map_err(JobError)
+    }
+
+    /// The share of ball-end cutting points of `p` off the cutting speed.
+    pub fn vc_off_share(&self, p: &Program, cx: &Context) -> Option<f64> {
+        let surface = cx.surface()?;
+        let mut q = p.clone();
+        let mut params = self.speed_params();
+        params.keep_rows = true;
+        let (rows, _, _) =
+            millplan_plan::speed::apply_in_place(&mut q, surface, &cx.machine, &params).ok()?;
+        let off = rows
+            .iter()
+            .filter(|r| deviates(p.operations[r.op].moves[r.mv].spindle, r.n_target))
+            .count();
+        (!rows.is_empty()).then(|| off as f64 / rows.len() as f64)
+    }
+
+    /// The measures of `p` (its forces when already known).
+    pub fn measure(&self, p: &Program, forces: Option<&ForceRun>, cx: &Context) -> Measures {
+        let max = forces.map(|f| {
+            let m = f.maxima();
+            Loads {
+                fxy: m.fxy,
+                torque: m.torque,
+                power: m.power,
+                deflection: m.deflection,
+            }
+        });
+        Measures {
+            time_s: millplan_plan::timing::estimate_program(p, &self.inputs.machine).total_s,
+            max,
+            vc_off_share: self.vc_off_share(p, cx),
+        }
+    }
+
+    /// Runs `passes` in their order over the job's program: a pass whose
+    /// inputs are missing is skipped with its reason.
+    pub fn run(&self, passes: &[PassName]) -> Result<Outcome, JobError> {
+        let cx = self.context();
+        let input = &self.inputs.program;
+        let forces_before = self.forces(input)?;
+        let before = self.measure(input, forces_before.as_ref(), &cx);
+        let mut p = input.clone();
+        let mut out = Vec::new();
+        let mut reordered = false;
+        for &pass in passes {
+            let t = Instant::now();
+            let (ran, reason) = match missing(self, pass) {
+                Some(why) => (false, why),
+                None => (
+                    true,
+                    self.run_pass(pass, &mut p, &cx, passes, &mut reordered)?,
+                ),
+            };
+            out.push(PassOutcome {
+                name: pass.name(),
+                ran,
+                reason,
+                seconds: t.elapsed().as_secs_f64(),
+            });
+        }
+        Ok(Outcome {
+            program: p,
+            passes: out,
+            before,
+            forces_before,
+            reordered,
+        })
+    }
+
+    fn run_pass(
+        &self,
+        pass: PassName,
+        p: &mut Program,
+        cx: &Context,
+        all: &[PassName],
+        reordered: &mut bool,
+    ) -> Result<String, JobError> {
+        match pass {
+            PassName::Speed => self.speed(p, cx),
+            PassName::Reorder => {
+                let (said, changed) = self.reorder(p, cx)?;
+                *reordered |= changed;
+                // A new order needs its speeds again (as `millplan reorder` does).
+                if changed && all.contains(&PassName::Speed) {
+                    return Ok(format!("{said}; {}", self.speed(p, cx)?));
+                }
+                Ok(said)
+            }
+            PassName::Feed => self.feed(p, cx),
+            PassName::Orient | PassName::Post => Err(JobError(format!(
+                "{}: not runnable here (a bug: `missing` lets it through)",
+                pass.name()
+            ))),
+        }
+    }
+
+    fn pipeline(&self, pass: &mut dyn Pass, p: &mut Program, cx: &Context) -> Result<(), JobError> {
+        pipeline::run(&mut [pass], p, cx).map_err(|e| JobError(e.to_string()))
+    }
+
+    fn speed(&self, p: &mut Program, cx: &Context) -> Result<String, JobError> {
+        let mut pass = SpeedPass::new(self.speed_params());
+        self.pipeline(&mut pass, p, cx)?;
+        let s = pass
+            .summary
+            .ok_or_else(|| JobError("speed: no summary".into()))?;
+        Ok(format!(
+            "spindle {:.0}–{:.0} 1/min on {} points ({:.1} % off vc: clamped or rate-limited)",
+            s.spindle.min,
+            s.spindle.max,
+            s.points,
+            100.0 * s.vc_deviation_share
+        ))
+    }
+
+    fn reorder(&self, p: &mut Program, cx: &Context) -> Result<(String, bool), JobError> {
+        let mut rp = ReorderParams::new(Method::AsRun);
+        rp.ap = self.ap;
+        rp.vc = self.vc;
+        rp.speed = self.speed_params();
+        let mut pass = ReorderPass::new(rp);
+        self.pipeline(&mut pass, p, cx)?;
+        let o = pass
+            .outcome
+            .ok_or_else(|| JobError("reorder: no outcome".into()))?;
+        Ok(match o.verdict {
+            Some(Verdict::Improved) => (
+                format!(
+                    "new order: {:.1} s → {:.1} s as run, {} direct links, {} retracts",
+                    o.before.as_run.time_s,
+                    o.after.as_run.time_s,
+                    o.stats.direct_links,
+                    o.stats.retracts
+                ),
+                true,
+            ),
+            _ => ("no order wins: the original order kept".into(), false),
+        })
+    }
+
+    /// The feed pass's settings.
+    pub fn feed_params(&self) -> Option<FeedParams> {
+        Some(FeedParams {
+            setup: self.setup?,
+            limits: self.limits,
+            accel: self.feed_accel,
+            chord: self.resolution / 4.0,
+        })
+    }
+
+    fn feed(&self, p: &mut Program, cx: &Context) -> Result<String, JobError> {
+        let (Some(params), Some(stock)) = (self.feed_params(), &self.stock) else {
+            return Err(JobError("feed: no stock or material".into()));
+        };
+        let mut pass = FeedPass::new(params, stock.clone(), self.body_fn());
+        self.pipeline(&mut pass, p, cx)?;
+        let c: FeedChanges = pass.changes.unwrap_or_default();
+        let binding: Vec<String> = c.binding.iter().map(|(k, v)| format!("{k} {v}")).collect();
+        Ok(format!(
+            "{} blocks from the forces, {} in air, {} kept; F {:.0}–{:.0} mm/min; deciding: {}",
+            c.blocks,
+            c.air_blocks,
+            c.kept_blocks,
+            c.feed_min,
+            c.feed_max,
+            binding.join(", ")
+        ))
+    }
+}

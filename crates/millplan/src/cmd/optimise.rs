@@ -1,0 +1,345 @@
+//! `millplan optimise`: the compiler driver — parses, reads the files,
+//! builds a `millplan_driver::Job`, runs it and prints.
+
+use crate::cmd::{arg, print_diagnostics, read_options, tool_shape, Range, TargetArg, UnitArg};
+use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::io::{read_mesh, read_program, read_surface, Outputs};
+use millplan_driver::passes::{self, ORDER};
+use millplan_driver::report::{self, InputNames, Plotted};
+use millplan_driver::{Inputs, Job, Options, Outcome, UserLimits, Verdict, Written};
+use millplan_sim::stock::spec::StockSpec;
+use std::path::{Path, PathBuf};
+
+/// Take a CAM program to a verified, better program for one machine, stock,
+/// material and part: every pass the inputs allow, the result written,
+/// re-read from its own bytes and checked before it is put in place.
+///
+/// Passes, in order (`--list-passes` prints what each needs and changes):
+/// speed (constant cutting speed for ball-end operations; needs --stl),
+/// reorder (the order as it will run, kept unless it wins; needs --stl),
+/// orient (lead/tilt of five-axis CL), feed (a feed per block from the
+/// forces on the stock under the machine's spindle chart and --limit; needs
+/// --stock and --material), post (five-axis CL through the machine's
+/// kinematics). A pass whose inputs are missing is skipped and says why.
+///
+/// Defaults (each printed in the report with where it came from): vc from
+/// the material's cutting data, the spindle speed of moves without S from
+/// vc, the feed-per-tooth range from the material for the tool, the load
+/// limits from the machine's spindle chart (--limit fxy=N,torque=N·mm,
+/// power=W,stress=MPa,deflection=mm adds limits).
+///
+/// Checks of what is written, on the program re-read from its bytes:
+/// read-back (parses, commands what the optimised program does, IR
+/// verifier), machine (S and F within the machine), tip (the tool tip where
+/// the input put it), rapids-and-holder (on the stock: refused even when the
+/// input had it), loads (under every limit within 0.5 %), gouge (no gouge
+/// the input did not have).
+///
+/// Exit codes: 0 written; 2 bad input; 3 a check failed (the check and line
+/// are named; nothing written unless --force).
+#[derive(clap::Args)]
+pub struct Args {
+    /// Program (APT/CL or G-code).
+    #[arg(required_unless_present = "list_passes")]
+    pub path: Option<PathBuf>,
+    /// Part surface (STL) in the program's coordinates.
+    #[arg(long)]
+    pub stl: Option<PathBuf>,
+    /// Unit of the STL files' numbers: mm (default) or inch.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<UnitArg>,
+    /// Initial stock: box:auto[:MARGIN], box:X0,Y0,Z0,X1,Y1,Z1,
+    /// cylinder:auto[:MARGIN], cylinder:CX,CY,Z0,Z1,D, stl:FILE or offset:MM
+    /// (the --stl part grown by MM), as in `millplan simulate`.
+    #[arg(long)]
+    pub stock: Option<String>,
+    /// Machine file (TOML; examples/machine.toml documents it): spindle and
+    /// feed ranges, spindle chart, axes, control dialect, kinematics.
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
+    /// Named material (`millplan force materials` lists them).
+    #[arg(long)]
+    pub material: Option<String>,
+    /// A TOML file of further materials.
+    #[arg(long)]
+    pub materials: Option<PathBuf>,
+    /// Cutter for operations whose tool has no geometry, or to override it:
+    /// ball:D, flat:D or bull:D:R.
+    #[arg(long)]
+    pub tool: Option<String>,
+    /// Flutes of every tool (default 2).
+    #[arg(long)]
+    pub flutes: Option<usize>,
+    /// Cutting speed, m/min (default: the material's cutting data).
+    #[arg(long)]
+    pub vc: Option<f64>,
+    /// Spindle speed of cutting moves without S, 1/min (default: from vc
+    /// on the tool's diameter).
+    #[arg(long)]
+    pub spindle: Option<f64>,
+    /// Dexel size of the stock, mm (default 0.1).
+    #[arg(long)]
+    pub resolution: Option<f64>,
+    /// Tolerance of the checks, mm (default 0.01).
+    #[arg(long)]
+    pub tol: Option<f64>,
+    /// Passes to run, in this order, comma-separated (default: all the
+    /// inputs allow, in the order above).
+    #[arg(long, value_name = "LIST")]
+    pub passes: Option<String>,
+    /// Print the pass table (what each pass needs and changes) and stop.
+    #[arg(long)]
+    pub list_passes: bool,
+    /// Output program.
+    #[arg(short, long, required_unless_present = "list_passes")]
+    pub output: Option<PathBuf>,
+    /// Output dialect (default: the machine file's, else the file name's,
+    /// else the input's).
+    #[arg(long, value_enum)]
+    pub to: Option<TargetArg>,
+    /// HTML report: verdict, inputs, passes, before → after, checks, plots.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Write the program even when a check fails (the exit code stays 3).
+    #[arg(long)]
+    pub force: bool,
+    /// Units of a program that does not say.
+    #[arg(long, value_enum)]
+    pub units: Option<UnitArg>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// No warnings or notes on standard error.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+fn options(a: &Args) -> CliResult<Options> {
+    let pos = |flag: &str, v: Option<f64>, hi: f64, unit: &'static str| {
+        v.map(|v| arg(flag, v, Range::positive(hi, unit)))
+            .transpose()
+    };
+    let tool = a
+        .tool
+        .as_deref()
+        .map(|s| tool_shape("--tool", s))
+        .transpose()?;
+    if let Some(f) = a.flutes {
+        arg("--flutes", f as f64, Range::from(1.0, 64.0, ""))?;
+    }
+    Ok(Options {
+        vc: pos("--vc", a.vc, crate::cmd::MAX_VC, "m/min")?,
+        spindle: pos("--spindle", a.spindle, crate::cmd::MAX_SPINDLE, "1/min")?,
+        tool,
+        flutes: a.flutes,
+        resolution: a
+            .resolution
+            .map(|v| arg("--resolution", v, Range::from(0.005, 100.0, "mm")))
+            .transpose()?,
+        limits: user_limits()?,
+        tol: a
+            .tol
+            .map(|v| arg("--tol", v, Range::from(0.0, 100.0, "mm")))
+            .transpose()?,
+        memory: Some(crate::limits::get().memory),
+    })
+}
+
+/// The load limits of `--limit`.
+fn user_limits() -> CliResult<UserLimits> {
+    let mut l = UserLimits::default();
+    for (name, value) in crate::limits::loads() {
+        let v: f64 = value
+            .parse()
+            .map_err(|_| CliError::input(format!("--limit {name}={value}: not a number")))?;
+        let v = Some(arg(
+            &format!("--limit {name}"),
+            v,
+            Range::positive(1e9, "(N, N·mm, W, MPa or mm)"),
+        )?);
+        match name.as_str() {
+            "fxy" => l.fxy = v,
+            "torque" => l.torque = v,
+            "power" => l.power = v,
+            "stress" => l.stress = v,
+            _ => l.deflection = v,
+        }
+    }
+    Ok(l)
+}
+
+fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
+    let parsed = read_program(path, read_options(a.units, None)?)?;
+    print_diagnostics(path, &parsed.diagnostics, a.quiet || a.json);
+    let part = a
+        .stl
+        .as_deref()
+        .map(|p| read_surface(p, a.stl_units).map(|r| r.0))
+        .transpose()?;
+    let stock = a
+        .stock
+        .as_deref()
+        .map(|s| StockSpec::parse(s).map_err(|e| CliError::input(format!("--stock {e}"))))
+        .transpose()?;
+    let blank = match &stock {
+        Some(StockSpec::Stl(p)) => {
+            let (mut m, _) = read_mesh(p)?;
+            crate::cmd::stl_to_mm(&mut m, a.stl_units);
+            Some(m)
+        }
+        _ => None,
+    };
+    Ok(Inputs {
+        program: parsed.program,
+        part,
+        stock,
+        blank,
+        machine: crate::cmd::load_machine(a.machine.as_deref())?,
+        machine_given: a.machine.is_some(),
+        materials: crate::cmd::cut::load_materials(a.materials.as_deref())?,
+        material: a.material.clone(),
+        options: options(a)?,
+    })
+}
+
+fn list_passes(json: bool) {
+    let t = passes::table();
+    if json {
+        crate::cmd::print_json(serde_json::to_value(&t).unwrap_or_default());
+        return;
+    }
+    for r in t {
+        outln!(
+            "{:<8} needs: {}\n         changes: {:?}; {}",
+            r.name,
+            r.needs,
+            r.changes,
+            r.does
+        );
+    }
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    let (Some(path), Some(output)) = (a.path.clone(), a.output.clone()) else {
+        list_passes(a.json);
+        return Ok(EXIT_OK);
+    };
+    if a.list_passes {
+        list_passes(a.json);
+        return Ok(EXIT_OK);
+    }
+    let order = match &a.passes {
+        Some(s) => passes::parse_list(s).map_err(|e| CliError::input(format!("--passes: {e}")))?,
+        None => ORDER.to_vec(),
+    };
+    let mut inputs: Vec<&Path> = vec![&path];
+    inputs.extend(a.stl.as_deref());
+    inputs.extend(a.machine.as_deref());
+    let mut outputs = Outputs::plan(
+        &inputs,
+        &[("-o", Some(&output)), ("--report", a.report.as_deref())],
+        false,
+    )?;
+    let job = Job::new(read_inputs(&a, &path)?)
+        .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
+    let machine = job.inputs.machine_given.then_some(&job.inputs.machine);
+    let target = millplan_driver::target::output_target(
+        a.to.map(Into::into),
+        &output,
+        machine,
+        job.inputs.program.source,
+    )
+    .map_err(CliError::input)?;
+    let outcome = job
+        .run(&order)
+        .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
+    say_skipped(&a, &outcome);
+    let wo = millplan_nc::write::WriteOptions {
+        limits: crate::limits::get(),
+        ..job.inputs.machine.write_options(target)
+    };
+    let w = job
+        .finish(&outcome, wo)
+        .map_err(|e| CliError::input(format!("{}:{e}", path.display())))?;
+    print_diagnostics(&path, &w.warnings, a.quiet || a.json);
+    let refused = w.summary.verdict == Verdict::Refused;
+    if !refused || a.force {
+        outputs.write(&output, &w.bytes)?;
+    }
+    if let Some(r) = &a.report {
+        outputs.write(r, page(&a, &job, &outcome, &w, &path, &output).as_bytes())?;
+    }
+    outputs.commit()?;
+    print_summary(&a, &w, &path, &output, refused && !a.force);
+    Ok(if refused { EXIT_FINDINGS } else { EXIT_OK })
+}
+
+fn say_skipped(a: &Args, o: &Outcome) {
+    if a.quiet || a.json {
+        return;
+    }
+    for p in o.passes.iter().filter(|p| !p.ran) {
+        eprintln!("note: pass {} skipped: {}", p.name, p.reason);
+    }
+}
+
+fn page(a: &Args, job: &Job, o: &Outcome, w: &Written, path: &Path, output: &Path) -> String {
+    let name = |p: &Path| p.display().to_string();
+    let names = InputNames {
+        program: name(path),
+        part: a.stl.as_deref().map(name),
+        stock: a.stock.clone(),
+        machine: a
+            .machine
+            .as_deref()
+            .map_or_else(|| format!("{} (built-in)", job.inputs.machine.name), name),
+        material: a.material.clone(),
+        output: name(output),
+    };
+    let plotted = Plotted {
+        before: &job.inputs.program,
+        after: &w.program,
+        forces_before: o.forces_before.as_ref(),
+        forces_after: w.forces_after.as_ref(),
+        machine: &job.inputs.machine,
+    };
+    report::html(&w.summary, &names, &plotted)
+}
+
+fn print_summary(a: &Args, w: &Written, path: &Path, output: &Path, withheld: bool) {
+    let s = &w.summary;
+    if let Some((check, line, m)) = s.refusal() {
+        eprintln!("{}:{line}: check {check} failed: {m}", path.display());
+    }
+    if a.json {
+        crate::cmd::print_json(serde_json::to_value(s).unwrap_or_default());
+        return;
+    }
+    for p in &s.passes {
+        let state = if p.ran {
+            format!("{:>7.2} s", p.seconds)
+        } else {
+            "skipped".into()
+        };
+        outln!("  {:<8} {state}  {}", p.name, p.reason);
+    }
+    outln!("{}", report::verdict_line(s));
+    for c in &s.checks {
+        let skipped = c
+            .skipped
+            .as_deref()
+            .map_or(String::new(), |w| format!(" (skipped: {w})"));
+        outln!(
+            "  check {:<10} {:<6} {} {}{skipped}",
+            c.name,
+            if c.ok { "ok" } else { "FAILED" },
+            c.checked,
+            c.unit
+        );
+    }
+    if withheld {
+        outln!("nothing written (give --force to write it anyway)");
+    } else {
+        outln!("wrote {} ({})", output.display(), s.dialect);
+    }
+}

@@ -1,0 +1,432 @@
+//! `millplan optimise` end to end: the demo part, a planted fault, the
+//! passes one by one with the existing commands, and the real CAM samples
+//! of `../shared/data` (skipped, and said so, when they are not there).
+
+#[path = "../../millplan-nc/tests/shared_data/mod.rs"]
+mod shared_data;
+
+use millplan_nc::equiv::{compare, Tolerance};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_millplan"))
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf8")
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("runs")
+}
+
+fn json(o: &Output) -> serde_json::Value {
+    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| {
+        panic!(
+            "{e}: {}\n{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        )
+    })
+}
+
+/// `millplan demo` into `dir/demo`: its part, finishing raster and machine.
+fn demo(dir: &Path) -> (PathBuf, PathBuf, PathBuf) {
+    let d = dir.join("demo");
+    assert!(run(&["demo", "-o", s(&d), "-q"]).status.success());
+    (
+        d.join("part.stl"),
+        d.join("finish.apt"),
+        d.join("machine.toml"),
+    )
+}
+
+fn read(p: &Path) -> millplan_nc::Program {
+    let text = std::fs::read_to_string(p).expect("written");
+    millplan_nc::parse_program(&text, millplan_nc::ReadOptions::default())
+        .expect("reads")
+        .program
+}
+
+fn setting(j: &serde_json::Value, name: &str) -> String {
+    let v = j["settings"]
+        .as_array()
+        .expect("settings")
+        .iter()
+        .find(|x| x["name"] == name)
+        .unwrap_or_else(|| panic!("setting {name}"));
+    v["value"]
+        .as_str()
+        .expect("value")
+        .split(' ')
+        .next()
+        .expect("number")
+        .to_string()
+}
+
+fn pass<'a>(j: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    j["passes"]
+        .as_array()
+        .expect("passes")
+        .iter()
+        .find(|p| p["name"] == name)
+        .unwrap_or_else(|| panic!("pass {name}"))
+}
+
+/// Issue 31, done-when 1: on the demo part `optimise` writes a program that
+/// passes its own verification, runs faster than the input and meets every
+/// limit; the JSON keys scripts rely on are there.
+#[test]
+fn demo_is_optimised_verified_and_faster() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let (stl, apt, machine) = demo(dir.path());
+    let out = dir.path().join("opt.nc");
+    let report = dir.path().join("opt.html");
+    let o = run(&[
+        "optimise",
+        s(&apt),
+        "--stl",
+        s(&stl),
+        "--stock",
+        "offset:0.3",
+        "--machine",
+        s(&machine),
+        "--material",
+        "al7075",
+        "-o",
+        s(&out),
+        "--report",
+        s(&report),
+        "--json",
+        "--limit",
+        "fxy=120",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let j = json(&o);
+    assert_eq!(j["verdict"], "improved");
+    let (t0, t1) = (
+        j["time_before_s"].as_f64().expect("t0"),
+        j["time_after_s"].as_f64().expect("t1"),
+    );
+    assert!(t1 < t0, "{t0} → {t1}");
+    for c in j["checks"].as_array().expect("checks") {
+        assert_eq!(c["ok"], true, "{c}");
+    }
+    let names: Vec<&str> = j["checks"]
+        .as_array()
+        .expect("c")
+        .iter()
+        .map(|c| c["name"].as_str().expect("n"))
+        .collect();
+    for n in [
+        "read-back",
+        "machine",
+        "tip",
+        "ir",
+        "stock",
+        "loads",
+        "gouge",
+    ] {
+        assert!(names.contains(&n), "{n} in {names:?}");
+    }
+    assert_eq!(pass(&j, "speed")["ran"], true);
+    assert_eq!(pass(&j, "feed")["ran"], true);
+    assert_eq!(pass(&j, "post")["ran"], false);
+    assert!(pass(&j, "post")["reason"]
+        .as_str()
+        .expect("r")
+        .contains("three-axis"));
+    // The limit given binds: F_xy 170 N at the input's feeds, at most 120 N after.
+    assert!(j["max_before"]["fxy"].as_f64().expect("fxy") > 120.0);
+    assert!(j["max_after"]["fxy"].as_f64().expect("fxy") <= 120.0 * 1.005);
+    for k in ["fxy", "torque", "power", "deflection"] {
+        assert!(
+            j["max_before"][k].is_number() && j["max_after"][k].is_number(),
+            "{k}"
+        );
+    }
+    assert!(j["vc_off_after"].as_f64().expect("vc") < j["vc_off_before"].as_f64().expect("vc"));
+    let html = std::fs::read_to_string(&report).expect("report");
+    assert!(
+        html.contains("Improved: cycle time") && html.contains("<svg"),
+        "report"
+    );
+    assert!(read(&out).move_count() > 1000);
+}
+
+/// A pass whose input is missing says why and the run goes on.
+#[test]
+fn a_pass_without_its_input_prints_the_reason() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let (_, apt, machine) = demo(dir.path());
+    let out = dir.path().join("o.nc");
+    let o = run(&[
+        "optimise",
+        s(&apt),
+        "--machine",
+        s(&machine),
+        "--passes",
+        "speed,feed",
+        "-o",
+        s(&out),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains("pass speed skipped: no part (--stl)"), "{err}");
+    assert!(
+        err.contains("pass feed skipped: no stock (--stock)"),
+        "{err}"
+    );
+    let o = run(&["optimise", s(&apt), "--passes", "speed,warp", "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown pass `warp`"));
+    let o = run(&["optimise", "--list-passes"]);
+    let t = String::from_utf8_lossy(&o.stdout);
+    for p in ["speed", "reorder", "orient", "feed", "post"] {
+        assert!(t.contains(p), "{t}");
+    }
+}
+
+/// A rapid through the stock is refused whether or not the input had it:
+/// exit 3 naming the check and the line, nothing written; --force writes.
+#[test]
+fn a_rapid_through_the_stock_is_refused() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let nc = dir.path().join("p.nc");
+    std::fs::write(
+        &nc,
+        "%\nO1\nG21 G90 G17\nT1 M6\nS8000 M3\nG0 X-20 Y10 Z5\nG1 Z-1 F500\nG1 X50 F1000\nG0 X120\nG0 Z5\nM30\n%\n",
+    )
+    .expect("write");
+    let out = dir.path().join("o.nc");
+    let args = [
+        "optimise",
+        s(&nc),
+        "--tool",
+        "flat:10",
+        "--stock",
+        "box:0,0,-10,100,20,0",
+        "--material",
+        "al7075",
+        "-o",
+        s(&out),
+    ];
+    let o = run(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains(":9: check stock failed: rapid through material"),
+        "{err}"
+    );
+    assert!(!out.exists(), "nothing written");
+    let o = bin().args(args).arg("--force").output().expect("runs");
+    assert_eq!(o.status.code(), Some(3));
+    assert!(out.exists(), "written with --force");
+}
+
+/// Issue 31: running the passes one by one with the existing commands
+/// (`speed`, then `feed`) gives the same program as `optimise`: positions,
+/// S and F to the written precision.
+#[test]
+fn passes_one_by_one_give_the_same_program() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let (stl, apt, machine) = demo(dir.path());
+    let opt = dir.path().join("opt.nc");
+    let common = ["--stl", s(&stl), "--machine", s(&machine)];
+    let o = bin()
+        .args([
+            "optimise",
+            s(&apt),
+            "--stock",
+            "offset:0.3",
+            "--material",
+            "al7075",
+            "--passes",
+            "speed,feed",
+            "-o",
+            s(&opt),
+            "--json",
+        ])
+        .args(common)
+        .output()
+        .expect("runs");
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let j = json(&o);
+    let (vc, ap, flutes) = (setting(&j, "vc"), setting(&j, "ap"), setting(&j, "flutes"));
+    let (fz_min, fz_max) = (setting(&j, "fz_min"), setting(&j, "fz_max"));
+    let sp = dir.path().join("speed.nc");
+    let first = read(&apt);
+    let m = first
+        .moves()
+        .find(|m| m.is_cutting() && m.spindle > 0.0)
+        .expect("cut");
+    let fz =
+        (m.feed / (m.spindle * 2.0)).clamp(fz_min.parse().expect("f"), fz_max.parse().expect("f"));
+    let o = bin()
+        .args([
+            "speed",
+            s(&apt),
+            "--vc",
+            &vc,
+            "--fz",
+            &fz.to_string(),
+            "--flutes",
+            &flutes,
+            "--ap",
+            &ap,
+            "-o",
+            s(&sp),
+            "-q",
+        ])
+        .args(common)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let fd = dir.path().join("feed.nc");
+    let o = bin()
+        .args([
+            "feed",
+            s(&sp),
+            "--stock",
+            "offset:0.3",
+            "--material",
+            "al7075",
+            "--fz-min",
+            &fz_min,
+            "--fz-max",
+            &fz_max,
+            "--tool",
+            "ball:10",
+            "-o",
+            s(&fd),
+            "-q",
+        ])
+        .args(common)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let tol = Tolerance {
+        feed: 2e-3,
+        spindle: 1.0,
+        ..Tolerance::default()
+    };
+    if let Err(m) = compare(&read(&opt), &read(&fd), &tol) {
+        panic!("optimise and speed → feed differ: {m}");
+    }
+}
+
+/// The SOLIDWORKS CAM pair on its 135 × 135 × 30 stock (PROVENANCE.md).
+/// Simulated on that box, the input's own drill cycle rapids between its
+/// holes 3 mm above a hole point 6.8 mm under the stock's top (lines
+/// 18–23), and its path runs inside this STL (another revision of the
+/// part): the stock check refuses the output (a rapid through material is
+/// refused even when the input has it) and names those findings as the
+/// input's; the gouges are all the input's. With --force the faster program
+/// is written and the exit code stays 3.
+#[test]
+fn swcam_interface_glue_is_faster_and_its_own_faults_are_named() {
+    let (Some(apt), Some(stl)) = (
+        shared_data::file("swcam-apt-stl-pairs/Interface-glue.apt"),
+        shared_data::file("swcam-apt-stl-pairs/Interface-glue.STL"),
+    ) else {
+        return;
+    };
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("glue.apt");
+    let o = run(&[
+        "optimise",
+        s(&apt),
+        "--stl",
+        s(&stl),
+        "--stock",
+        "box:0,0,-30,135,135,0",
+        "--material",
+        "al7075",
+        "--passes",
+        "speed,feed",
+        "-o",
+        s(&out),
+        "--json",
+        "--force",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let j = json(&o);
+    eprintln!("{}", serde_json::to_string(&j).unwrap_or_default());
+    assert_eq!(j["verdict"], "refused");
+    let checks = j["checks"].as_array().expect("checks");
+    for c in checks {
+        let own = c["findings"]
+            .as_array()
+            .expect("f")
+            .iter()
+            .all(|f| f["in_input"] == true);
+        assert!(c["ok"] == true || (c["name"] == "stock" && own), "{c}");
+    }
+    assert!(j["time_after_s"].as_f64() < j["time_before_s"].as_f64());
+    assert!(out.exists(), "written with --force");
+}
+
+/// The NX ball-end NURBS program (no STL exists for it): its part is the
+/// surface the program itself leaves on a box (`simulate -o`), its stock that
+/// part grown by 0.3 mm.
+#[test]
+fn nx_nurbs_is_optimised_on_its_own_surface() {
+    let Some(clsf) = shared_data::file("nx-clsf-ballend-nurbs/nurbs.clsf") else {
+        return;
+    };
+    let dir = tempfile::tempdir().expect("tmp");
+    let part = dir.path().join("part.stl");
+    let o = run(&[
+        "simulate",
+        s(&clsf),
+        "--stock",
+        "box:auto:2",
+        "--resolution",
+        "0.5",
+        "-o",
+        s(&part),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.path().join("nx.apt");
+    let o = run(&[
+        "optimise",
+        s(&clsf),
+        "--stl",
+        s(&part),
+        "--stock",
+        "offset:0.3",
+        "--resolution",
+        "0.5",
+        "--material",
+        "al7075",
+        "-o",
+        s(&out),
+        "--json",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let j = json(&o);
+    eprintln!("{}", serde_json::to_string(&j).unwrap_or_default());
+    assert_eq!(j["verdict"], "improved");
+}
