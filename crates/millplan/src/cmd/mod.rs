@@ -387,7 +387,7 @@ pub fn print_diagnostics(path: &std::path::Path, diags: &[millplan_nc::Diagnosti
     for d in diags {
         eprintln!(
             "{}",
-            crate::error::shorten(&d.located(&path.display().to_string()))
+            crate::error::text(&d.located(&path.display().to_string()))
         );
     }
 }

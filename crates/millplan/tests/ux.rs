@@ -1,0 +1,122 @@
+//! What a CAM programmer meets: messages that keep their location, wording a
+//! user understands, quiet ends of a closed pipe (issue "round two").
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_millplan"))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("runs")
+}
+
+/// A folder under `root` whose path is long enough that `root/…/name` is
+/// `len` characters, as on a shop's file server.
+fn deep_folder(root: &Path, name: &str, len: usize) -> PathBuf {
+    let mut dir = root.to_path_buf();
+    let mut i = 0;
+    while dir.to_str().expect("utf8").len() + 1 + name.len() < len {
+        let room = len - (dir.to_str().expect("utf8").len() + 1 + name.len()) - 1;
+        let seg = format!("project_{i}_{}", "x".repeat(40));
+        dir.push(&seg[..seg.len().min(room.max(1))]);
+        i += 1;
+    }
+    std::fs::create_dir_all(&dir).expect("mkdir");
+    dir
+}
+
+/// Every reader, a malformed file at a 250-character path: the text names
+/// `…/file:line:col:` (only the folder's middle shortened) and the JSON error
+/// gives the whole path, the line and the column.
+#[test]
+fn locations_are_never_cut_on_long_paths() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let mut binary = vec![0u8; 84 + 50];
+    binary[80] = 7; // claims 7 facets, holds 1
+    let cases: [(&str, &[u8], &[&str], (Option<u64>, Option<u64>)); 6] = [
+        (
+            "file.apt",
+            b"UNITS/MM\nFEDRAT/100,MMPM\nGOTO/1,2\n",
+            &["inspect"],
+            (Some(3), Some(6)),
+        ),
+        (
+            "file.nc",
+            b"G21\nG90\nT1 M6\nS1000 M3\nG0 X0 Y0\nG1 X1..5 F100\n",
+            &["inspect"],
+            (Some(6), Some(4)),
+        ),
+        (
+            "file.h",
+            b"0 BEGIN PGM P MM\n1 TOOL CALL 1 Z S1000\n2 L X+1..5 R0 FMAX\n3 END PGM P MM\n",
+            &["inspect"],
+            (Some(3), None),
+        ),
+        (
+            "file.stl",
+            b"solid p\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 zz\n",
+            &["inspect"],
+            (Some(5), None),
+        ),
+        ("binary.stl", &binary, &["inspect"], (None, Some(80))),
+        (
+            "machine.toml",
+            b"name = \"m\"\n[spindle]\nmax_rpm = \"fast\"\n",
+            &["inspect", "--machine"],
+            (Some(3), None),
+        ),
+    ];
+    let ok_apt = tmp.path().join("ok.apt");
+    std::fs::write(
+        &ok_apt,
+        "UNITS/MM\nCUTTER/10,5\nFEDRAT/100,MMPM\nGOTO/0,0,0\nGOTO/1,0,0\n",
+    )
+    .expect("write");
+    for (name, bytes, cmd, (line, col)) in cases {
+        let dir = deep_folder(tmp.path(), name, 250);
+        let file = dir.join(name);
+        let path = file.to_str().expect("utf8");
+        assert_eq!(path.len(), 250, "{path}");
+        std::fs::write(&file, bytes).expect("write");
+        let mut args: Vec<&str> = cmd.to_vec();
+        args.push(path);
+        if name == "machine.toml" {
+            args.push(ok_apt.to_str().expect("utf8"));
+        }
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2), "{name}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        let first = err.lines().next().unwrap_or("");
+        let place = match (line, col) {
+            (Some(l), Some(c)) => format!("/{name}:{l}:{c}: "),
+            (Some(l), None) => format!("/{name}:{l}:"),
+            (None, Some(b)) => format!("/{name}:byte {b}: "),
+            (None, None) => unreachable!(),
+        };
+        assert!(first.contains(&place), "{name}: {first}");
+        // The folder's middle is what went, its start stays.
+        let start = &path[..12];
+        assert!(first.starts_with(&format!("error: {start}")), "{first}");
+        assert!(first.contains('…'), "{name}: {first}");
+        let folder = &first[..first.find(&place).expect("place")];
+        assert!(folder.chars().count() < 90, "{name}: {first}");
+        assert!(!first.contains("bytes]"), "{name}: {first}");
+
+        args.push("--json");
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2), "{name}");
+        let v: serde_json::Value =
+            serde_json::from_str(String::from_utf8_lossy(&o.stderr).trim()).expect("json error");
+        let e = &v["error"];
+        assert_eq!(e["file"], path, "{name}: {v}");
+        if let Some(l) = line {
+            assert_eq!(e["line"].as_u64(), Some(l), "{name}: {v}");
+            assert!(e["col"].as_u64().is_some(), "{name}: {v}");
+        }
+        if let Some(c) = col {
+            assert_eq!(e["col"].as_u64(), Some(c), "{name}: {v}");
+        }
+    }
+}
