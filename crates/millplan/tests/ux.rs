@@ -120,3 +120,93 @@ fn locations_are_never_cut_on_long_paths() {
         }
     }
 }
+
+fn demo(dir: &Path) -> PathBuf {
+    let d = dir.join("demo");
+    let o = run(&["demo", "-q", "-o", d.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    d
+}
+
+/// `inspect` on the demo's own program speaks words: no debug spelling
+/// (`Mm (Declared)`, `Ball`), no "unknown 1 moves", operations counted from 1
+/// as `feed` counts them.
+#[test]
+fn inspect_speaks_words() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let d = demo(tmp.path());
+    let o = run(&["inspect", d.join("finish.apt").to_str().expect("utf8")]);
+    assert!(o.status.success());
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("units       mm (as the program declares)"),
+        "{out}"
+    );
+    assert!(
+        !out.contains("Declared") && !out.contains(" Ball "),
+        "{out}"
+    );
+    assert!(!out.contains("unknown     1 moves"), "{out}");
+    assert!(
+        out.contains("1 move starts where the machine stands"),
+        "{out}"
+    );
+    let ops: Vec<&str> = out
+        .lines()
+        .skip_while(|l| !l.starts_with("  operations"))
+        .skip(1)
+        .take_while(|l| l.starts_with("    "))
+        .collect();
+    assert_eq!(ops.len(), 1, "{out}");
+    assert!(ops[0].trim_start().starts_with("1 "), "{out}");
+}
+
+/// A file that is not what its option asks for is named for what it is.
+#[test]
+fn wrong_kinds_of_file_are_named() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let d = demo(tmp.path());
+    let apt = d.join("finish.apt");
+    let apt = apt.to_str().expect("utf8");
+    // An APT program as the part: not "header declares 741354549 facets".
+    let o = run(&["gouge", apt, "--stl", apt]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("not an STL"), "{err}");
+    assert!(err.contains("APT/CL or G-code"), "{err}");
+    assert!(!err.contains("facets"), "{err}");
+    // An HTML page as the program: not "raise --limit line-bytes".
+    let html = d.join("report.html");
+    let o = run(&["inspect", html.to_str().expect("utf8")]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("report.html:1:1: an HTML or XML document"),
+        "{err}"
+    );
+    assert!(!err.contains("--limit"), "{err}");
+}
+
+/// `--vc -5` meets the range check, which names the option and its range,
+/// not the parser's "use `-- -5`".
+#[test]
+fn negative_numbers_meet_the_range_check() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let d = demo(tmp.path());
+    let apt = d.join("finish.apt");
+    let stl = d.join("part.stl");
+    for opt in ["--vc", "--fz", "--ap"] {
+        let o = run(&[
+            "directions",
+            apt.to_str().expect("utf8"),
+            "--stl",
+            stl.to_str().expect("utf8"),
+            opt,
+            "-5",
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{opt}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(opt), "{opt}: {err}");
+        assert!(!err.contains("-- -5"), "{opt}: {err}");
+    }
+}
