@@ -4,6 +4,9 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+#[path = "../../millplan-nc/tests/shared_data/mod.rs"]
+mod shared_data;
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_millplan"))
 }
@@ -209,4 +212,77 @@ fn negative_numbers_meet_the_range_check() {
         assert!(err.contains(opt), "{opt}: {err}");
         assert!(!err.contains("-- -5"), "{opt}: {err}");
     }
+}
+
+/// Run by [`skip_file_is_rewritten_per_run`] in a process of its own: one
+/// skip. Does nothing in a plain `--ignored` run.
+#[test]
+#[ignore]
+fn one_skip_probe() {
+    if std::env::var_os("MILLPLAN_SKIP_PROBE").is_some_and(|v| v == "1") {
+        shared_data::skipped("a probe of the skip file");
+    }
+}
+
+/// The skip file counts the last run, not every run since the target was
+/// made (it grew 86 → 172 across two runs).
+#[test]
+fn skip_file_is_rewritten_per_run() {
+    let log = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(shared_data::SKIP_DIR)
+        .join("millplan-ux.txt");
+    for _ in 0..2 {
+        let o = Command::new(std::env::current_exe().expect("exe"))
+            .args(["--ignored", "--exact", "one_skip_probe"])
+            .env("MILLPLAN_SKIP_PROBE", "1")
+            .env_remove("MILLPLAN_REQUIRE_DATA")
+            .output()
+            .expect("runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let text = std::fs::read_to_string(&log).expect("skip file");
+    let _ = std::fs::remove_file(&log);
+    assert_eq!(text.lines().count(), 1, "{text}");
+    assert!(
+        text.contains("one_skip_probe: a probe of the skip file"),
+        "{text}"
+    );
+}
+
+/// `speed --ap 50` on a D10 ball read D_w = 10 everywhere: the ball's model
+/// needs ap ≤ R, so the option is refused naming itself and the tool.
+#[test]
+fn speed_refuses_ap_beyond_the_ball_radius() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let d = demo(tmp.path());
+    let out = tmp.path().join("out.apt");
+    let speed = |ap: &str| {
+        run(&[
+            "speed",
+            d.join("finish.apt").to_str().expect("utf8"),
+            "--stl",
+            d.join("part.stl").to_str().expect("utf8"),
+            "--vc",
+            "63",
+            "--fz",
+            "0.1",
+            "--flutes",
+            "2",
+            "--ap",
+            ap,
+            "-o",
+            out.to_str().expect("utf8"),
+        ])
+    };
+    let o = speed("50");
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--ap 50 mm is more than the radius 5 mm"),
+        "{err}"
+    );
+    assert!(err.contains("T1, D10"), "{err}");
+    assert!(!out.exists());
+    let o = speed("5");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
