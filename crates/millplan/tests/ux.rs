@@ -30,6 +30,10 @@ fn deep_folder(root: &Path, name: &str, len: usize) -> PathBuf {
     dir
 }
 
+/// A malformed file: its name, bytes, the command that reads it, and the
+/// line and column (or byte) of the error.
+type Case<'a> = (&'a str, &'a [u8], &'a [&'a str], (Option<u64>, Option<u64>));
+
 /// Every reader, a malformed file at a 250-character path: the text names
 /// `…/file:line:col:` (only the folder's middle shortened) and the JSON error
 /// gives the whole path, the line and the column.
@@ -38,7 +42,7 @@ fn locations_are_never_cut_on_long_paths() {
     let tmp = tempfile::tempdir().expect("tmp");
     let mut binary = vec![0u8; 84 + 50];
     binary[80] = 7; // claims 7 facets, holds 1
-    let cases: [(&str, &[u8], &[&str], (Option<u64>, Option<u64>)); 6] = [
+    let cases: [Case; 6] = [
         (
             "file.apt",
             b"UNITS/MM\nFEDRAT/100,MMPM\nGOTO/1,2\n",
