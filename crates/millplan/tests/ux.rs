@@ -290,3 +290,31 @@ fn speed_refuses_ap_beyond_the_ball_radius() {
     let o = speed("5");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// `gouge` counts operations from 1, as `inspect` and `feed` do.
+#[test]
+fn gouge_counts_operations_from_one() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let d = demo(tmp.path());
+    let apt = tmp.path().join("plunge.apt");
+    std::fs::write(
+        &apt,
+        "UNITS/MM\nCUTTER/10,5\nFEDRAT/100,MMPM\nGOTO/30,30,50\nGOTO/30,30,-5\n",
+    )
+    .expect("write");
+    let o = run(&[
+        "gouge",
+        apt.to_str().expect("utf8"),
+        "--stl",
+        d.join("part.stl").to_str().expect("utf8"),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("(operation 1, move"), "{out}");
+    assert!(!out.contains("(operation 0,"), "{out}");
+}
