@@ -114,6 +114,9 @@ pub fn read_stl_limited(bytes: &[u8], limits: &Limits) -> Result<(TriMesh, StlRe
     if looks_ascii(bytes) {
         return read_ascii(bytes, limits);
     }
+    if let Some(e) = text_not_stl(bytes) {
+        return Err(e);
+    }
     if bytes.len() < 84 {
         return Err(StlError {
             location: StlLocation::Byte(bytes.len() as u64),
@@ -135,6 +138,33 @@ pub fn read_stl_limited(bytes: &[u8], limits: &Limits) -> Result<(TriMesh, StlRe
         message: format!(
             "binary STL header declares {n} facets ({need} bytes) but the file has {have} bytes: \
              truncated file or wrong facet count"
+        ),
+    })
+}
+
+/// A text file that is not ASCII STL (it does not start with `solid`): an
+/// APT/CL or G-code program or a document given as a mesh. Its binary
+/// "header" would be read as a nonsense facet count; say what it is instead.
+fn text_not_stl(bytes: &[u8]) -> Option<StlError> {
+    let head = &bytes[..bytes.len().min(4096)];
+    let text = head
+        .iter()
+        .all(|&b| b.is_ascii_graphic() || b.is_ascii_whitespace() || b >= 0x80);
+    if !text {
+        return None;
+    }
+    let first = String::from_utf8_lossy(head);
+    let first = first.trim_start().lines().next().unwrap_or("").trim();
+    let what = if first.starts_with('<') {
+        "an HTML or XML document"
+    } else {
+        "text that looks like an APT/CL or G-code program"
+    };
+    let shown: String = first.chars().take(40).collect();
+    Some(StlError {
+        location: StlLocation::Text { line: 1, col: 1 },
+        message: format!(
+            "not an STL: the file is {what} (it starts `{shown}`); an STL is binary or starts with `solid`"
         ),
     })
 }

@@ -305,6 +305,30 @@ fn is_ball(op: &millplan_nc::Operation, fallback: Option<f64>) -> Option<f64> {
     }
 }
 
+/// The working-diameter model of a ball holds for stock no thicker than the
+/// ball's radius (ap ≤ R); beyond it every point would read D_w = D.
+fn ap_within_radius(
+    op: &millplan_nc::Operation,
+    oi: usize,
+    d: f64,
+    ap: f64,
+) -> Result<(), SpeedError> {
+    if ap <= d / 2.0 {
+        return Ok(());
+    }
+    let tool = op
+        .tool
+        .as_ref()
+        .and_then(|t| t.number)
+        .map_or(String::new(), |n| format!("T{n}, "));
+    Err(SpeedError::Invalid(format!(
+        "--ap {ap} mm is more than the radius {} mm of the ball ({tool}D{d}) of operation {}: \
+         the working diameter needs the stock no thicker than the ball's radius",
+        d / 2.0,
+        oi + 1
+    )))
+}
+
 /// Applies spindle control to every ball-end operation.
 ///
 /// The demo's free-form part and a D10 ball-end raster over it, at the
@@ -493,6 +517,7 @@ pub fn apply_in_place_with(
         let Some(d) = is_ball(op, p.ball_d) else {
             continue;
         };
+        ap_within_radius(op, oi, d, p.ap)?;
         ops += 1;
         let (pts, idx) = cutting_points(op);
         if pts.is_empty() {

@@ -59,8 +59,8 @@ pub type CliResult<T> = Result<T, CliError>;
 const LONGEST_WORD: usize = 80;
 
 /// `message` with every word (a run without whitespace) longer than
-/// [`LONGEST_WORD`] bytes shortened to its first 40 characters, `…` and its
-/// length in bytes.
+/// [`LONGEST_WORD`] bytes shortened: a path to the middle of its folder, any
+/// other word to its first 40 characters, `…` and its length in bytes.
 pub fn shorten(message: &str) -> std::borrow::Cow<'_, str> {
     let long = |w: &str| w.len() > LONGEST_WORD;
     if !message.split_whitespace().any(long) {
@@ -76,7 +76,10 @@ pub fn shorten(message: &str) -> std::borrow::Cow<'_, str> {
         rest = &rest[ws..];
         let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
         let word = &rest[..end];
-        if long(word) {
+        if long(word) && word.len() - word.rfind(['/', '\\']).unwrap_or(0) <= LONGEST_WORD {
+            // A path: its folder's middle goes, its file name stays.
+            out.push_str(&shorten_path(word));
+        } else if long(word) {
             let head: String = word.chars().take(40).collect();
             out.push_str(&format!("{head}…[{} bytes]", word.len()));
         } else {
@@ -85,6 +88,41 @@ pub fn shorten(message: &str) -> std::borrow::Cow<'_, str> {
         rest = &rest[end..];
     }
     std::borrow::Cow::Owned(out)
+}
+
+/// Longest path printed whole in a text message.
+const LONGEST_PATH: usize = 72;
+
+/// `path` as printed in a text message: whole when short, else with only the
+/// middle of its folder replaced by `…`; the file name is never cut.
+fn shorten_path(path: &str) -> std::borrow::Cow<'_, str> {
+    if path.chars().count() <= LONGEST_PATH {
+        return std::borrow::Cow::Borrowed(path);
+    }
+    let Some(slash) = path.rfind(['/', '\\']) else {
+        return std::borrow::Cow::Borrowed(path);
+    };
+    let (dir, name) = path.split_at(slash);
+    let n = dir.chars().count();
+    let keep = LONGEST_PATH.saturating_sub(name.chars().count()).max(16) / 2;
+    if n <= 2 * keep {
+        return std::borrow::Cow::Borrowed(path);
+    }
+    let head: String = dir.chars().take(keep).collect();
+    let tail: String = dir.chars().skip(n - keep).collect();
+    std::borrow::Cow::Owned(format!("{head}…{tail}{name}"))
+}
+
+/// A message as printed in text: the located file (`file:line:col: `,
+/// `file:byte N: `, `file: `) with only the middle of its folder shortened,
+/// its location whole, and the long words of the rest cut by [`shorten`].
+pub fn text(message: &str) -> String {
+    let (file, _, _, rest) = locate(message);
+    let Some(file) = file else {
+        return shorten(message).into_owned();
+    };
+    let place = &message[file.len()..message.len() - rest.len()];
+    format!("{}{place}{}", shorten_path(file), shorten(rest))
 }
 
 /// The stable name of an exit code in a JSON error: `usage` (arguments
@@ -136,9 +174,11 @@ fn locate(message: &str) -> (Option<&str>, Option<u64>, Option<u64>, &str) {
 
 /// An error as one line of JSON, `{"error": {"file", "line", "col", "code",
 /// "exit", "message"}}`, for standard error under `--json`; what the message
-/// does not say is null.
+/// does not say is null. The file is given whole, the long words of the
+/// message are cut by [`shorten`].
 pub fn json(message: &str, exit: i32, usage: bool) -> String {
     let (file, line, col, rest) = locate(message);
+    let rest = shorten(rest);
     serde_json::json!({
         "error": {
             "file": file,
@@ -179,6 +219,27 @@ mod tests {
             serde_json::from_str(&json("/no/such.apt: cannot open", 2, false)).expect("json");
         assert_eq!(v["error"]["file"], "/no/such.apt");
         assert_eq!(v["error"]["message"], "cannot open");
+    }
+
+    /// A long folder loses its middle; file name, line and column stay.
+    #[test]
+    fn long_paths_keep_their_location() {
+        let dir = format!("/srv/cam/{}/last", "d".repeat(200));
+        let m = format!("{dir}/part 1.nc:6:4: `1..5` is not a number");
+        let t = text(&m);
+        assert!(t.starts_with("/srv/cam/ddd"), "{t}");
+        assert!(
+            t.ends_with("d/last/part 1.nc:6:4: `1..5` is not a number"),
+            "{t}"
+        );
+        assert!(t.chars().count() < 120, "{t}");
+        assert_eq!(text("a.nc:1:2: short"), "a.nc:1:2: short");
+        let m = format!("--stl {dir}/p.stl: no triangles");
+        let t = text(&m);
+        assert!(
+            t.ends_with("/last/p.stl: no triangles") && t.contains('…'),
+            "{t}"
+        );
     }
 
     /// Issue 17: "error messages echo a whole 1 MB token".

@@ -187,6 +187,12 @@ pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
         )));
     }
     let head = String::from_utf8_lossy(head);
+    if head.trim_start().starts_with('<') {
+        return Err(CliError::input(format!(
+            "{}:1:1: an HTML or XML document (it starts `<`), not an APT/CL or G-code program",
+            path.display()
+        )));
+    }
     if let Some(e) = millplan_nc::detect::krl_refusal(&head) {
         return Err(CliError::input(format!("{}:{e}", path.display())));
     }

@@ -160,9 +160,9 @@ fn json_requested() -> bool {
 /// one line `{"error": {…}}`.
 fn print_error(message: &str, exit: i32, usage: bool, json: bool) {
     if json {
-        eprintln!("{}", error::json(&error::shorten(message), exit, usage));
+        eprintln!("{}", error::json(message, exit, usage));
     } else {
-        eprintln!("error: {}", error::shorten(message));
+        eprintln!("error: {}", error::text(message));
     }
 }
 

@@ -2,8 +2,10 @@
 //! copied into it) and a skip that is never silent.
 //!
 //! A test that cannot run for want of a sample calls [`skipped`]: it prints
-//! `SKIPPED:` and appends a line to `shared-data-skipped.txt` in the target's
-//! `tmp` folder, which `.ci/run` counts into its closing line. With
+//! `SKIPPED:` and appends a line to this test binary's file in
+//! `shared-data-skipped/` of the target's `tmp` folder, which `.ci/run`
+//! counts into its closing line. Each run of a test binary starts its file
+//! afresh (on its first use of this module), so the count is the last run's. With
 //! `MILLPLAN_REQUIRE_DATA=1` (`.ci/run` sets it when the folder is there) a
 //! skip fails the test instead: a sample that went missing is an error, not a
 //! pass. Shared by the test crates of `millplan-nc`, `millplan-sim` and
@@ -14,11 +16,28 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// The file `.ci/run` counts the skips in.
-pub const SKIP_LOG: &str = "shared-data-skipped.txt";
+/// The folder `.ci/run` counts the skips in: one file per test binary.
+pub const SKIP_DIR: &str = "shared-data-skipped";
+
+/// This test binary's skip file, emptied the first time a run asks for it.
+fn skip_log() -> PathBuf {
+    static FRESH: std::sync::Once = std::sync::Once::new();
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(SKIP_DIR);
+    let log = dir.join(format!(
+        "{}-{}.txt",
+        env!("CARGO_PKG_NAME"),
+        env!("CARGO_CRATE_NAME")
+    ));
+    FRESH.call_once(|| {
+        let _ = std::fs::create_dir_all(&dir);
+        let _ = std::fs::remove_file(&log);
+    });
+    log
+}
 
 /// `../shared/data`, when it is there.
 pub fn dir() -> Option<PathBuf> {
+    skip_log();
     let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
     if d.is_dir() {
         Some(d)
@@ -30,6 +49,7 @@ pub fn dir() -> Option<PathBuf> {
 
 /// The sample at `rel` under `../shared/data`, when it is there.
 pub fn file(rel: &str) -> Option<PathBuf> {
+    skip_log();
     let p = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../../shared/data")
         .join(rel);
@@ -52,7 +72,7 @@ pub fn skipped(why: &str) {
         panic!("{test}: {why} (MILLPLAN_REQUIRE_DATA=1 requires the shared data)");
     }
     eprintln!("SKIPPED: {test}: {why}");
-    let log = Path::new(env!("CARGO_TARGET_TMPDIR")).join(SKIP_LOG);
+    let log = skip_log();
     let line = format!("{} {test}: {why}\n", env!("CARGO_PKG_NAME"));
     if let Ok(mut f) = std::fs::OpenOptions::new()
         .create(true)

@@ -158,7 +158,7 @@ fn print_report(a: &Args, rep: &GougeReport) {
             gg.at[0],
             gg.at[1],
             gg.at[2],
-            gg.operation,
+            gg.operation + 1,
             gg.mv
         );
     }

@@ -255,6 +255,22 @@ fn print_mesh(path: &std::path::Path, j: &Value) {
     }
 }
 
+/// The unit of a program and how it is known, in words.
+fn units_text(u: millplan_nc::ir::Units) -> String {
+    use millplan_nc::ir::{LengthUnit, UnitsOrigin};
+    let unit = match u.source {
+        LengthUnit::Mm => "mm",
+        LengthUnit::Inch => "inch",
+    };
+    let how = match u.origin {
+        UnitsOrigin::Declared => "as the program declares",
+        UnitsOrigin::InferredFromFeed => "from the program's feed words",
+        UnitsOrigin::Assumed => "assumed: the program does not say; --units sets it",
+        UnitsOrigin::Override => "given by --units",
+    };
+    format!("{unit} ({how})")
+}
+
 fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
     outln!(
         "{}: {} ({})",
@@ -262,9 +278,9 @@ fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
         j["format"].as_str().unwrap_or(""),
         p.source.name()
     );
-    outln!("  units       {:?} ({:?})", p.units.source, p.units.origin);
+    outln!("  units       {}", units_text(p.units));
     outln!("  operations  {}", p.operations.len());
-    for (i, op) in p.operations.iter().enumerate() {
+    for (i, op) in (1..).zip(&p.operations) {
         let t = op.tool.as_ref();
         let tool = match t {
             Some(t) => {
@@ -273,7 +289,8 @@ fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
                     s += &format!(" {n}");
                 }
                 if let Some(c) = &t.cutter {
-                    s += &format!(" {:?} D{:.3} R{:.3}", c.kind, c.d, c.r);
+                    let kind = format!("{:?}", c.kind).to_lowercase();
+                    s += &format!(" ({kind} D{:.3} R{:.3})", c.d, c.r);
                 }
                 s
             }
@@ -315,8 +332,12 @@ fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
     );
     let unknown = j["unknown_moves"].as_u64().unwrap_or(0);
     if unknown > 0 {
+        let what = match unknown {
+            1 => "1 move starts".to_string(),
+            n => format!("{n} moves start or end"),
+        };
         outln!(
-            "  unknown     {unknown} moves from or to a position the program has not set (left out of lengths, bounds and time)"
+            "  unset start {what} where the machine stands before the program, a position the program never sets: left out of lengths, bounds and time"
         );
     }
     let t = j["time_s"].as_f64().unwrap_or(0.0);

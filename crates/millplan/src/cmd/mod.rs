@@ -131,20 +131,21 @@ pub fn tool_shape(flag: &str, s: &str) -> CliResult<millplan_models::cutter::Sha
 }
 
 /// Cutting data for the commands that evaluate spindle control along the way;
-/// the defaults are the paper's test conditions.
+/// the defaults are the paper's test conditions. A negative number is taken
+/// as a value so that the range check, not the parser, answers it.
 #[derive(clap::Args, Clone, Copy, Debug)]
 pub struct CuttingData {
     /// Cutting speed, m/min.
-    #[arg(long, default_value_t = 63.0)]
+    #[arg(long, default_value_t = 63.0, allow_negative_numbers = true)]
     pub vc: f64,
     /// Feed per tooth, mm.
-    #[arg(long, default_value_t = 0.125)]
+    #[arg(long, default_value_t = 0.125, allow_negative_numbers = true)]
     pub fz: f64,
     /// Number of flutes.
     #[arg(long, default_value_t = 2)]
     pub flutes: u32,
     /// Stock thickness along the surface normal (finishing allowance), mm.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true)]
     pub ap: f64,
 }
 
@@ -375,7 +376,7 @@ pub fn print_diagnostics(path: &std::path::Path, diags: &[millplan_nc::Diagnosti
     for d in diags {
         eprintln!(
             "{}",
-            crate::error::shorten(&d.located(&path.display().to_string()))
+            crate::error::text(&d.located(&path.display().to_string()))
         );
     }
 }

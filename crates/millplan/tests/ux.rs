@@ -1,0 +1,320 @@
+//! What a CAM programmer meets: messages that keep their location, wording a
+//! user understands, quiet ends of a closed pipe (issue "round two").
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+#[path = "../../millplan-nc/tests/shared_data/mod.rs"]
+mod shared_data;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_millplan"))
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("runs")
+}
+
+/// A folder under `root` whose path is long enough that `root/…/name` is
+/// `len` characters, as on a shop's file server.
+fn deep_folder(root: &Path, name: &str, len: usize) -> PathBuf {
+    let mut dir = root.to_path_buf();
+    let mut i = 0;
+    while dir.to_str().expect("utf8").len() + 1 + name.len() < len {
+        let room = len - (dir.to_str().expect("utf8").len() + 1 + name.len()) - 1;
+        let seg = format!("project_{i}_{}", "x".repeat(40));
+        dir.push(&seg[..seg.len().min(room.max(1))]);
+        i += 1;
+    }
+    std::fs::create_dir_all(&dir).expect("mkdir");
+    dir
+}
+
+/// A malformed file: its name, bytes, the command that reads it, and the
+/// line and column (or byte) of the error.
+type Case<'a> = (&'a str, &'a [u8], &'a [&'a str], (Option<u64>, Option<u64>));
+
+/// Every reader, a malformed file at a 250-character path: the text names
+/// `…/file:line:col:` (only the folder's middle shortened) and the JSON error
+/// gives the whole path, the line and the column.
+#[test]
+fn locations_are_never_cut_on_long_paths() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let mut binary = vec![0u8; 84 + 50];
+    binary[80] = 7; // claims 7 facets, holds 1
+    let cases: [Case; 6] = [
+        (
+            "file.apt",
+            b"UNITS/MM\nFEDRAT/100,MMPM\nGOTO/1,2\n",
+            &["inspect"],
+            (Some(3), Some(6)),
+        ),
+        (
+            "file.nc",
+            b"G21\nG90\nT1 M6\nS1000 M3\nG0 X0 Y0\nG1 X1..5 F100\n",
+            &["inspect"],
+            (Some(6), Some(4)),
+        ),
+        (
+            "file.h",
+            b"0 BEGIN PGM P MM\n1 TOOL CALL 1 Z S1000\n2 L X+1..5 R0 FMAX\n3 END PGM P MM\n",
+            &["inspect"],
+            (Some(3), None),
+        ),
+        (
+            "file.stl",
+            b"solid p\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 zz\n",
+            &["inspect"],
+            (Some(5), None),
+        ),
+        ("binary.stl", &binary, &["inspect"], (None, Some(80))),
+        (
+            "machine.toml",
+            b"name = \"m\"\n[spindle]\nmax_rpm = \"fast\"\n",
+            &["inspect", "--machine"],
+            (Some(3), None),
+        ),
+    ];
+    let ok_apt = tmp.path().join("ok.apt");
+    std::fs::write(
+        &ok_apt,
+        "UNITS/MM\nCUTTER/10,5\nFEDRAT/100,MMPM\nGOTO/0,0,0\nGOTO/1,0,0\n",
+    )
+    .expect("write");
+    for (name, bytes, cmd, (line, col)) in cases {
+        let dir = deep_folder(tmp.path(), name, 250);
+        let file = dir.join(name);
+        let path = file.to_str().expect("utf8");
+        assert_eq!(path.len(), 250, "{path}");
+        std::fs::write(&file, bytes).expect("write");
+        let mut args: Vec<&str> = cmd.to_vec();
+        args.push(path);
+        if name == "machine.toml" {
+            args.push(ok_apt.to_str().expect("utf8"));
+        }
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2), "{name}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        let first = err.lines().next().unwrap_or("");
+        let place = match (line, col) {
+            (Some(l), Some(c)) => format!("/{name}:{l}:{c}: "),
+            (Some(l), None) => format!("/{name}:{l}:"),
+            (None, Some(b)) => format!("/{name}:byte {b}: "),
+            (None, None) => unreachable!(),
+        };
+        assert!(first.contains(&place), "{name}: {first}");
+        // The folder's middle is what went, its start stays.
+        let start = &path[..12];
+        assert!(first.starts_with(&format!("error: {start}")), "{first}");
+        assert!(first.contains('…'), "{name}: {first}");
+        let folder = &first[..first.find(&place).expect("place")];
+        assert!(folder.chars().count() < 90, "{name}: {first}");
+        assert!(!first.contains("bytes]"), "{name}: {first}");
+
+        args.push("--json");
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2), "{name}");
+        let v: serde_json::Value =
+            serde_json::from_str(String::from_utf8_lossy(&o.stderr).trim()).expect("json error");
+        let e = &v["error"];
+        assert_eq!(e["file"], path, "{name}: {v}");
+        if let Some(l) = line {
+            assert_eq!(e["line"].as_u64(), Some(l), "{name}: {v}");
+            assert!(e["col"].as_u64().is_some(), "{name}: {v}");
+        }
+        if let Some(c) = col {
+            assert_eq!(e["col"].as_u64(), Some(c), "{name}: {v}");
+        }
+    }
+}
+
+fn demo(dir: &Path) -> PathBuf {
+    let d = dir.join("demo");
+    let o = run(&["demo", "-q", "-o", d.to_str().expect("utf8")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    d
+}
+
+/// `inspect` on the demo's own program speaks words: no debug spelling
+/// (`Mm (Declared)`, `Ball`), no "unknown 1 moves", operations counted from 1
+/// as `feed` counts them.
+#[test]
+fn inspect_speaks_words() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let d = demo(tmp.path());
+    let o = run(&["inspect", d.join("finish.apt").to_str().expect("utf8")]);
+    assert!(o.status.success());
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("units       mm (as the program declares)"),
+        "{out}"
+    );
+    assert!(
+        !out.contains("Declared") && !out.contains(" Ball "),
+        "{out}"
+    );
+    assert!(!out.contains("unknown     1 moves"), "{out}");
+    assert!(
+        out.contains("1 move starts where the machine stands"),
+        "{out}"
+    );
+    let ops: Vec<&str> = out
+        .lines()
+        .skip_while(|l| !l.starts_with("  operations"))
+        .skip(1)
+        .take_while(|l| l.starts_with("    "))
+        .collect();
+    assert_eq!(ops.len(), 1, "{out}");
+    assert!(ops[0].trim_start().starts_with("1 "), "{out}");
+}
+
+/// A file that is not what its option asks for is named for what it is.
+#[test]
+fn wrong_kinds_of_file_are_named() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let d = demo(tmp.path());
+    let apt = d.join("finish.apt");
+    let apt = apt.to_str().expect("utf8");
+    // An APT program as the part: not "header declares 741354549 facets".
+    let o = run(&["gouge", apt, "--stl", apt]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("not an STL"), "{err}");
+    assert!(err.contains("APT/CL or G-code"), "{err}");
+    assert!(!err.contains("facets"), "{err}");
+    // An HTML page as the program: not "raise --limit line-bytes".
+    let html = d.join("report.html");
+    let o = run(&["inspect", html.to_str().expect("utf8")]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("report.html:1:1: an HTML or XML document"),
+        "{err}"
+    );
+    assert!(!err.contains("--limit"), "{err}");
+}
+
+/// `--vc -5` meets the range check, which names the option and its range,
+/// not the parser's "use `-- -5`".
+#[test]
+fn negative_numbers_meet_the_range_check() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let d = demo(tmp.path());
+    let apt = d.join("finish.apt");
+    let stl = d.join("part.stl");
+    for opt in ["--vc", "--fz", "--ap"] {
+        let o = run(&[
+            "directions",
+            apt.to_str().expect("utf8"),
+            "--stl",
+            stl.to_str().expect("utf8"),
+            opt,
+            "-5",
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{opt}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(opt), "{opt}: {err}");
+        assert!(!err.contains("-- -5"), "{opt}: {err}");
+    }
+}
+
+/// Run by [`skip_file_is_rewritten_per_run`] in a process of its own: one
+/// skip. Does nothing in a plain `--ignored` run.
+#[test]
+#[ignore]
+fn one_skip_probe() {
+    if std::env::var_os("MILLPLAN_SKIP_PROBE").is_some_and(|v| v == "1") {
+        shared_data::skipped("a probe of the skip file");
+    }
+}
+
+/// The skip file counts the last run, not every run since the target was
+/// made (it grew 86 → 172 across two runs).
+#[test]
+fn skip_file_is_rewritten_per_run() {
+    let log = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(shared_data::SKIP_DIR)
+        .join("millplan-ux.txt");
+    for _ in 0..2 {
+        let o = Command::new(std::env::current_exe().expect("exe"))
+            .args(["--ignored", "--exact", "one_skip_probe"])
+            .env("MILLPLAN_SKIP_PROBE", "1")
+            .env_remove("MILLPLAN_REQUIRE_DATA")
+            .output()
+            .expect("runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let text = std::fs::read_to_string(&log).expect("skip file");
+    let _ = std::fs::remove_file(&log);
+    assert_eq!(text.lines().count(), 1, "{text}");
+    assert!(
+        text.contains("one_skip_probe: a probe of the skip file"),
+        "{text}"
+    );
+}
+
+/// `speed --ap 50` on a D10 ball read D_w = 10 everywhere: the ball's model
+/// needs ap ≤ R, so the option is refused naming itself and the tool.
+#[test]
+fn speed_refuses_ap_beyond_the_ball_radius() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let d = demo(tmp.path());
+    let out = tmp.path().join("out.apt");
+    let speed = |ap: &str| {
+        run(&[
+            "speed",
+            d.join("finish.apt").to_str().expect("utf8"),
+            "--stl",
+            d.join("part.stl").to_str().expect("utf8"),
+            "--vc",
+            "63",
+            "--fz",
+            "0.1",
+            "--flutes",
+            "2",
+            "--ap",
+            ap,
+            "-o",
+            out.to_str().expect("utf8"),
+        ])
+    };
+    let o = speed("50");
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--ap 50 mm is more than the radius 5 mm"),
+        "{err}"
+    );
+    assert!(err.contains("T1, D10"), "{err}");
+    assert!(!out.exists());
+    let o = speed("5");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// `gouge` counts operations from 1, as `inspect` and `feed` do.
+#[test]
+fn gouge_counts_operations_from_one() {
+    let tmp = tempfile::tempdir().expect("tmp");
+    let d = demo(tmp.path());
+    let apt = tmp.path().join("plunge.apt");
+    std::fs::write(
+        &apt,
+        "UNITS/MM\nCUTTER/10,5\nFEDRAT/100,MMPM\nGOTO/30,30,50\nGOTO/30,30,-5\n",
+    )
+    .expect("write");
+    let o = run(&[
+        "gouge",
+        apt.to_str().expect("utf8"),
+        "--stl",
+        d.join("part.stl").to_str().expect("utf8"),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("(operation 1, move"), "{out}");
+    assert!(!out.contains("(operation 0,"), "{out}");
+}
