@@ -77,7 +77,7 @@ pub const NAMES: [(&str, &str); 7] = [
     ("line-bytes", "bytes in one line of an NC program"),
     (
         "expression-depth",
-        "nesting of parentheses and signs in one expression",
+        "nesting of parentheses and signs in one expression (at most 1000)",
     ),
     ("stl-triangles", "facets of one STL file"),
     ("stl-extent", "largest STL coordinate, mm"),
@@ -213,10 +213,10 @@ mod tests {
     fn every_name_sets_and_reads_back() {
         let mut l = Limits::default();
         for (name, _) in NAMES {
-            l.set(name, "2k").expect(name);
-            assert_eq!(l.get(name), Some(2000.0), "{name}");
+            l.set(name, "1k").expect(name);
+            assert_eq!(l.get(name), Some(1000.0), "{name}");
         }
-        assert_eq!(l.memory, 2_000_000_000);
+        assert_eq!(l.memory, 1_000_000_000);
         l.set("moves", "1.5M").expect("moves");
         assert_eq!(l.moves, 1_500_000);
     }
@@ -231,6 +231,12 @@ mod tests {
         for v in ["", "0", "-5", "nan", "inf", "1e400", "5x", "0.5"] {
             assert!(l.set("moves", v).is_err(), "{v}");
         }
+        assert_eq!(l, Limits::default());
+        // Issue 34: a deeper limit let an input overflow the parser's stack.
+        let e = l
+            .set("expression-depth", "100000")
+            .expect_err("over the cap");
+        assert!(e.contains("1 to 1000"), "{e}");
         assert_eq!(l, Limits::default());
     }
 
