@@ -11,8 +11,10 @@ use crate::diag::ParseError;
 use crate::ir::{MoveKind, Operation, Program};
 use millplan_geom::limits::{NC_EXTENT, NC_RATE};
 
+/// Finite and beyond `limit` (a number that is not finite is refused by
+/// [`crate::write::preflight::finite`] with its own message).
 fn over(v: f64, limit: f64) -> bool {
-    v.abs() > limit
+    v.is_finite() && v.abs() > limit
 }
 
 fn refuse(line: u32, what: &str, v: f64, limit: f64, unit: &str) -> ParseError {
