@@ -147,7 +147,7 @@ fn writable_op(op: &Operation) -> Result<(), WriteError> {
             ));
         }
     }
-    for c in op.cycles.iter().filter(|c| !(c.feed > 0.0)) {
+    if let Some(c) = op.cycles.iter().find(|c| !(c.feed > 0.0)) {
         return Err(WriteError::new(
             c.line,
             format!(
