@@ -105,7 +105,8 @@ mod tests {
             deflection: None,
             fos: 1.0,
             fz_min: 0.01,
-            fz_max: 0.1,
+            fz_max: Some(0.1),
+            chip_loads: None,
         };
         let v = loads_of(&p, &run, &l, &Machine::default());
         let fxy: Vec<_> = v.iter().filter(|x| x.name == "fxy").collect();

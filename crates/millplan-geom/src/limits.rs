@@ -9,16 +9,35 @@
 //! | `moves` | 50,000,000 | moves of one program: generated (raster points, counted from the grid before any drop) or written (with arcs written as lines and canned cycles spelled out, counted before the first byte) |
 //! | `expansion` | 10,000 | moves one element becomes: one NURBS span sampled to the chord tolerance, one arc written as lines |
 //! | `line-bytes` | 65,536 | bytes in one line of an NC program |
-//! | `expression-depth` | 64 | nesting of parentheses and signs in one expression (Sinumerik, LinuxCNC) |
+//! | `expression-depth` | 64 | nesting of parentheses and signs in one expression (Sinumerik, LinuxCNC); at most [`MAX_EXPRESSION_DEPTH`] (1,000), so the recursive parser never overflows its stack |
 //! | `stl-triangles` | 50,000,000 | facets of one STL file (a binary file's count is checked before anything is allocated) |
 //! | `stl-extent` | 1,000,000 | largest coordinate of an STL vertex, mm |
 //! | `memory` | 4,000 | MB the work estimated up front may take (the grid of a raster, the samples of a gouge check); the `millplan` binary sets it to half the machine's memory |
+//!
+//! The numbers an NC program gives are bounded apart, by [`NC_EXTENT`]
+//! (coordinates, mm, and rotary positions, degrees: 1,000,000) and
+//! [`NC_RATE`] (feeds and spindle speeds: 1,000,000).
 //!
 //! The pecks of one canned-cycle hole are bounded apart, by
 //! `millplan_nc::MAX_PECKS` (1,000): a peck that small is below what any
 //! target can write.
 
 use std::fmt;
+
+/// The plausibility limit on a coordinate, arc radius or cycle height an NC
+/// program gives (mm), and on a rotary axis position (degrees): like the STL
+/// extent, a number beyond it is no machine's and is refused at its line.
+pub const NC_EXTENT: f64 = 1e6;
+
+/// The plausibility limit on a feed (mm/min, mm/rev or the inverse time's
+/// 1/min) and a spindle speed (1/min) an NC program gives.
+pub const NC_RATE: f64 = 1e6;
+
+/// The highest `expression-depth` that `--limit` accepts: the expression
+/// parser recurses once per level, and 1,000 levels take well under the
+/// main thread's stack even in a debug build (tested with 1,000 nested
+/// functions); a deeper limit would let an input overflow the stack.
+pub const MAX_EXPRESSION_DEPTH: u64 = 1_000;
 
 /// The limits in force. [`Limits::default`] is the documented table.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,7 +77,7 @@ pub const NAMES: [(&str, &str); 7] = [
     ("line-bytes", "bytes in one line of an NC program"),
     (
         "expression-depth",
-        "nesting of parentheses and signs in one expression",
+        "nesting of parentheses and signs in one expression (at most 1000)",
     ),
     ("stl-triangles", "facets of one STL file"),
     ("stl-extent", "largest STL coordinate, mm"),
@@ -83,7 +102,15 @@ impl Limits {
             "moves" => self.moves = count()?,
             "expansion" => self.expansion = count()?,
             "line-bytes" => self.line_bytes = count()?,
-            "expression-depth" => self.expression_depth = count()?,
+            "expression-depth" => {
+                let d = count()?;
+                if d > MAX_EXPRESSION_DEPTH {
+                    return Err(format!(
+                        "`{value}` must be from 1 to {MAX_EXPRESSION_DEPTH} (deeper nesting would overflow the parser's stack)"
+                    ));
+                }
+                self.expression_depth = d;
+            }
             "stl-triangles" => self.stl_triangles = count()?,
             "stl-extent" => {
                 if !(v > 0.0 && v <= 1e30) {
@@ -186,10 +213,10 @@ mod tests {
     fn every_name_sets_and_reads_back() {
         let mut l = Limits::default();
         for (name, _) in NAMES {
-            l.set(name, "2k").expect(name);
-            assert_eq!(l.get(name), Some(2000.0), "{name}");
+            l.set(name, "1k").expect(name);
+            assert_eq!(l.get(name), Some(1000.0), "{name}");
         }
-        assert_eq!(l.memory, 2_000_000_000);
+        assert_eq!(l.memory, 1_000_000_000);
         l.set("moves", "1.5M").expect("moves");
         assert_eq!(l.moves, 1_500_000);
     }
@@ -204,6 +231,12 @@ mod tests {
         for v in ["", "0", "-5", "nan", "inf", "1e400", "5x", "0.5"] {
             assert!(l.set("moves", v).is_err(), "{v}");
         }
+        assert_eq!(l, Limits::default());
+        // Issue 34: a deeper limit let an input overflow the parser's stack.
+        let e = l
+            .set("expression-depth", "100000")
+            .expect_err("over the cap");
+        assert!(e.contains("1 to 1000"), "{e}");
         assert_eq!(l, Limits::default());
     }
 

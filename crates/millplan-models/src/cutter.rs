@@ -59,7 +59,21 @@ impl Shape {
         if !(d > 0.0 && d.is_finite()) {
             return Err(format!("`{s}`: the diameter must be a positive number"));
         }
-        let shape = match parts[0].to_ascii_lowercase().as_str() {
+        let kind = parts[0].to_ascii_lowercase();
+        let fields = match kind.as_str() {
+            "ball" | "flat" | "end" => 2,
+            _ => 3,
+        };
+        if parts.len() > fields {
+            return Err(format!(
+                "`{s}`: {kind} takes {} value{} ({}); `{}` is one too many",
+                fields - 1,
+                if fields > 2 { "s" } else { "" },
+                if fields > 2 { "D:R or D:ANGLE" } else { "D" },
+                parts[fields..].join(":")
+            ));
+        }
+        let shape = match kind.as_str() {
             "ball" => Shape::Ball { radius: d / 2.0 },
             "flat" | "end" => Shape::Flat { radius: d / 2.0 },
             "bull" | "torus" => {

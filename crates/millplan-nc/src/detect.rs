@@ -213,12 +213,16 @@ impl Reader {
         }
     }
 
+    /// The program read, with every number within the plausibility limits
+    /// of [`crate::plausible`].
     pub fn finish(self) -> Result<Parsed, ParseError> {
-        match self {
+        let parsed = match self {
             Reader::Apt(r) => r.finish(),
             Reader::Gcode(r) => r.finish(),
             Reader::Heidenhain(r) => r.finish(),
-        }
+        }?;
+        crate::plausible::check(&parsed.program)?;
+        Ok(parsed)
     }
 }
 

@@ -12,6 +12,7 @@ pub mod gcode;
 pub mod generate;
 pub mod ir;
 pub mod lines;
+pub mod plausible;
 pub mod readback;
 pub mod stats;
 pub mod text;

@@ -183,3 +183,110 @@ fn tiny_pecks_are_refused_in_every_dialect() {
         }
     }
 }
+
+// ---------------------------------------------------------------------------
+// Issue 34, "Hostile inputs, round two".
+
+use millplan_nc::write::{write_program, Target, WriteOptions};
+
+/// Issue 34: "`convert nan_num.nc --to fanuc` and `feed` copy `XNAN YINF` /
+/// `ZINF` verbatim into the output (README: no writer writes a non-finite
+/// number)". A block the reader keeps verbatim is refused by every writer at
+/// the source's line.
+#[test]
+fn verbatim_non_finite_words_are_refused_by_every_writer() {
+    let src = "G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z0 F100\nG28 XNAN YINF\nG1 X10\nM30\n";
+    let p = parse_program(src, ReadOptions::default()).expect("reads");
+    for t in Target::ALL {
+        let e = write_program(&p.program, WriteOptions::new(t)).expect_err(t.name());
+        assert_eq!(e.line, 5, "{}: {e}", t.name());
+        assert!(e.message.contains("`XNAN`"), "{}: {e}", t.name());
+    }
+    assert_eq!(
+        millplan_nc::write::preflight::non_finite_word("G28 X-inf (NAN in a comment)"),
+        Some("X-inf")
+    );
+    for fine in ["G28 X0 Y0", "(XNAN)", "M INFO", "G0 X1 ; YINF", "MINFEED=3"] {
+        assert_eq!(
+            millplan_nc::write::preflight::non_finite_word(fine),
+            None,
+            "{fine}"
+        );
+    }
+}
+
+/// Issue 34: "`feed` on an APT with one GOTO at z = −1e308 writes
+/// `FEDRAT/0`; a Heidenhain `FU1e308` block becomes `G95 F0.`" and "`feed`
+/// on a Heidenhain program with `A+1e308` writes `Ainf`". A coordinate,
+/// rotary position or feed that is finite but absurd is refused at its line
+/// under the plausibility limits (1e6 mm, degrees, per minute).
+#[test]
+fn absurd_finite_numbers_are_refused_at_their_line() {
+    let cases: [(&str, &str, u32); 5] = [
+        ("fanuc", "G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-2000000 F100\nM30\n", 4),
+        ("fanuc", "G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 X10 F1000001\nM30\n", 4),
+        (
+            "apt",
+            "UNITS/MM\nCUTTER/10,5\nFEDRAT/500\nGOTO/10,10,50\nGOTO/10,10,-1e308\nFINI\n",
+            5,
+        ),
+        (
+            "heidenhain FU",
+            "0 BEGIN PGM T MM\n1 TOOL CALL 1 Z S1000\n2 L X+0 Y+0 Z+5 FMAX M3\n3 L Z+0 FU1e308\n4 END PGM T MM\n",
+            4,
+        ),
+        (
+            "heidenhain A",
+            "0 BEGIN PGM T MM\n1 TOOL CALL 1 Z S1000\n2 L X+0 Y+0 Z+5 FMAX M3\n3 L A+1e308 F100\n4 END PGM T MM\n",
+            4,
+        ),
+    ];
+    for (what, src, line) in cases {
+        let e = parse_program(src, ReadOptions::default()).expect_err(what);
+        assert_eq!(e.line, line, "{what}: {e}");
+        assert!(e.message.contains("plausibility limit"), "{what}: {e}");
+    }
+    // Rotary words may exceed 360°, coordinates may be zero or negative.
+    let ok = "G21 G90\nT1 M6\nG0 X0 Y0 Z5 A0\nG1 X-999999 A7200 F100\nM30\n";
+    parse_program(ok, ReadOptions::default()).expect("plausible");
+}
+
+/// Issue 34: "`X1e5` in G-code reads as `X1` and a word `E5`, with no
+/// warning". It still reads so (G-code has no exponent), with a warning at
+/// the word.
+#[test]
+fn an_exponent_in_a_gcode_word_is_warned_about() {
+    let src = "G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 X1e5 F100\nM30\n";
+    let p = parse_program(src, ReadOptions::default()).expect("reads");
+    let d = p
+        .diagnostics
+        .iter()
+        .find(|d| d.message.contains("no exponent"))
+        .unwrap_or_else(|| panic!("no warning: {:?}", p.diagnostics));
+    assert_eq!((d.line, d.col), (4, 4), "{d:?}");
+    assert!(d.message.contains("`X1e5` reads as `X1`"), "{d:?}");
+    let plain = "G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 X1 E5 F100\nM30\n";
+    let p = parse_program(plain, ReadOptions::default()).expect("reads");
+    assert!(!p.diagnostics.iter().any(|d| d.message.contains("exponent")));
+}
+
+/// Issue 34: "`orient … --ap 0.01` writes `FEDRAT/0,MMPM`". No writer writes
+/// a feed move with a feed of 0 or below; it is refused at the move's line.
+#[test]
+fn no_writer_writes_a_zero_feed_on_a_feed_move() {
+    let src = "G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z0 F100\nG1 X10\nM30\n";
+    let mut p = parse_program(src, ReadOptions::default())
+        .expect("reads")
+        .program;
+    let m = p.operations[0]
+        .moves
+        .iter_mut()
+        .find(|m| m.line == 5)
+        .expect("move of line 5");
+    m.feed = 0.0;
+    for t in Target::ALL {
+        let e = write_program(&p, WriteOptions::new(t)).expect_err(t.name());
+        assert_eq!(e.line, 5, "{}: {e}", t.name());
+        assert!(e.message.contains("not above 0"), "{}: {e}", t.name());
+    }
+}

@@ -765,6 +765,7 @@ mod tests {
                     },
                     law: pr.law,
                     grid: Grid::default(),
+                    refine: None,
                     cut: v.cut(pr.fz, pr.rpm, c.lead, tilt),
                     ap: pr.ap,
                     ae: Some(pr.ae),

@@ -119,3 +119,23 @@ fn a_gouge_check_is_counted_before_it_is_made() {
     };
     assert!(samples(&prog, |_| Some(ball()), &g) > 1e11);
 }
+
+/// Issue 34: "`--stock box:0,0,0,429496729.6,429496729.6,1`: the memory
+/// estimate wraps". A 2³² × 2³² grid counted 0 cells, so the estimate made
+/// before allocating passed any limit; the count now saturates and the byte
+/// estimate is made in floating point.
+#[test]
+fn huge_stock_grid_estimate_never_wraps() {
+    use millplan_sim::stock::{Grid, BYTES_PER_CELL};
+    let g = Grid::covering(DVec2::ZERO, DVec2::new(429_496_729.6, 429_496_729.6), 0.1);
+    assert_eq!((g.nx, g.ny), (1 << 32, 1 << 32));
+    assert_eq!(g.cells(), usize::MAX);
+    assert!(g.cells() as f64 * BYTES_PER_CELL > 1e19);
+    assert!((g.stock_bytes() / (2f64.powi(64) * BYTES_PER_CELL) - 1.0).abs() < 1e-12);
+    // `box:auto:1e18`: the width is beyond usize, the count saturates.
+    let g = Grid::covering(DVec2::splat(-1e18), DVec2::splat(1e18), 0.1);
+    assert_eq!(g.cells(), usize::MAX);
+    let g = Grid::covering(DVec2::splat(-1e308), DVec2::splat(1e308), 0.1);
+    assert_eq!(g.cells(), usize::MAX);
+    assert!(g.stock_bytes() > 1e30);
+}

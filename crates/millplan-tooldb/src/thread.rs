@@ -14,13 +14,18 @@ pub enum ThreadError {
     Unknown(String, String, String),
 }
 
+/// The finest thread pitch a thread-mill insert is taken to have, mm: ISO 261
+/// starts at M1×0.2, and a pitch below it would round to nothing in the
+/// micrometre arithmetic of [`pz`].
+pub const MIN_PITCH: f64 = 0.2;
+
 /// PZ = (INSL − ([INSL/TP] − 1)·TP) / 2 (paper 002, formula 2): the distance from
 /// the insert's end to the first tooth's profile axis. Computed in whole
 /// micrometres so exact multiples (14.0/1.0, 4.2/0.7) are not lost to rounding.
 pub fn pz(insl: f64, tp: f64) -> Result<f64, ThreadError> {
-    if !(tp > 0.0) || !tp.is_finite() {
+    if !(tp >= MIN_PITCH) || !tp.is_finite() {
         return Err(ThreadError::Invalid(format!(
-            "pitch TP must be positive, got {tp}"
+            "pitch TP must be a finite number of at least {MIN_PITCH} mm (the finest ISO metric pitch), got {tp}"
         )));
     }
     if !(insl >= tp) || !insl.is_finite() {
@@ -146,6 +151,9 @@ mod tests {
         assert_eq!((4.2f64 / 0.7).floor(), 6.0);
         assert_eq!((2.1f64 / 0.7).floor(), 3.0);
         assert!(pz(1.0, 0.0).is_err() && pz(1.0, -1.0).is_err() && pz(0.5, 1.0).is_err());
+        // Issue 34: a pitch that rounds to 0 µm divided by zero.
+        assert!(pz(14.0, 1e-4).is_err() && pz(14.0, 4.9e-4).is_err() && pz(14.0, 0.19).is_err());
+        assert!(pz(14.0, MIN_PITCH).is_ok());
     }
 
     #[test]

@@ -1297,3 +1297,201 @@ fn limits_hold_under_a_memory_cap() {
         assert!(stderr(&o).contains(needle), "{cmd}: {}", stderr(&o));
     }
 }
+
+// ---------------------------------------------------------------------------
+// Issue 34, "Hostile inputs, round two".
+
+/// Issue 34: "`simulate finish.apt --stock box:auto:1e18` (also
+/// `offset:1e308`, `cylinder:0,0,0,1,1e19`): capacity overflow in
+/// `Stock::empty`" and "`--stock box:0,0,0,429496729.6,429496729.6,1`: the
+/// memory estimate wraps". Each is refused under the memory limit, named,
+/// before anything is allocated.
+#[test]
+fn a_huge_stock_is_refused_under_the_memory_limit() {
+    let b = Bench::new();
+    for stock in [
+        "box:auto:1e18",
+        "cylinder:0,0,0,1,1e19",
+        "box:0,0,0,429496729.6,429496729.6,1",
+        "box:0,0,0,1e12,1e12,1",
+    ] {
+        let e = b.refused(
+            &["simulate", "ball.apt", "--stock", stock],
+            "over the memory limit",
+        );
+        assert!(e.contains("dexels"), "{stock}: {e}");
+    }
+    b.refused(
+        &[
+            "simulate",
+            "ball.apt",
+            "--stl",
+            "part.stl",
+            "--stock",
+            "offset:1e308",
+        ],
+        "over the memory limit",
+    );
+}
+
+/// Issue 34: "`tool pz --insl 14 --tp 1e-4` and `tool add` with `--tp` below
+/// 5e-4: attempt to divide by zero (thread.rs:33)". A pitch below the finest
+/// ISO metric pitch, 0.2 mm, is refused at the option.
+#[test]
+fn an_implausible_thread_pitch_is_refused() {
+    let b = Bench::new();
+    let o = b.run(&["tool", "add", "--db", "t.db", "1", "--name", "E"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    for tp in ["1e-4", "4e-4", "0.1"] {
+        b.refused(
+            &["tool", "pz", "--insl", "14", "--tp", tp],
+            "at least 0.2 mm",
+        );
+        b.refused(
+            &[
+                "tool",
+                "add",
+                "--db",
+                "t.db",
+                "7",
+                "--name",
+                "TM",
+                "--kind",
+                "thread-mill",
+                "--insl",
+                "14",
+                "--tp",
+                tp,
+            ],
+            "at least 0.2 mm",
+        );
+    }
+    let o = b.run(&["tool", "pz", "--insl", "14", "--tp", "0.2"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+/// Issue 34: "`inspect` of 30,000 nested functions with `--limit
+/// expression-depth=100000`: stack overflow". The limit is capped at 1,000
+/// (documented in the limits table); at the cap the parser holds on the
+/// reading thread of `speed` and on `inspect`'s.
+#[test]
+fn the_expression_depth_limit_is_capped() {
+    let b = Bench::new();
+    let deep = |n: usize| {
+        format!(
+            "N10 G710 G90\nN20 TRAORI\nN30 DEF REAL _Z\nN40 T=\"BALL\" D1\nN50 G1 X1 Y1 Z={}5{} F100\nN60 M30\n",
+            "(-".repeat(n),
+            ")".repeat(n)
+        )
+    };
+    b.write("deep.mpf", deep(30_000).as_bytes());
+    let e = b.refused(
+        &[
+            "inspect",
+            "deep.mpf",
+            "--limit",
+            "expression-depth=100000",
+            "--limit",
+            "line-bytes=1M",
+        ],
+        "expression-depth",
+    );
+    assert!(e.contains("1000"), "{e}");
+    b.write("cap.mpf", deep(499).as_bytes());
+    for args in [
+        &["inspect", "cap.mpf", "--limit", "expression-depth=1000"][..],
+        &[
+            "speed",
+            "cap.mpf",
+            "--stl",
+            "part.stl",
+            "--vc",
+            "63",
+            "--fz",
+            "0.1",
+            "--ap",
+            "0.3",
+            "--ball-d",
+            "10",
+            "-o",
+            "s.nc",
+            "--limit",
+            "expression-depth=1000",
+        ][..],
+    ] {
+        let o = b.run(args);
+        let err = stderr(&o);
+        assert!(
+            matches!(o.status.code(), Some(0 | 2 | 3)),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("expression-depth"), "{args:?}: {err}");
+        assert!(!err.contains("overflow"), "{args:?}: {err}");
+    }
+}
+
+/// Issue 34: "Negative tangential and radial cutting coefficients (K_tc,
+/// K_rc, K_te, K_re) are accepted (negative power and torque); axial ones may
+/// legitimately be negative". Refused at the file's line, exit 2.
+#[test]
+fn negative_tangential_or_radial_coefficients_are_refused_at_their_line() {
+    let b = Bench::new();
+    for (kc, ke, line) in [
+        ("[-2100, 800, 500]", "[30, 40, 0]", 4),
+        ("[2100, -800, 500]", "[30, 40, 0]", 4),
+        ("[2100, 800, 500]", "[-30, 40, 0]", 5),
+        ("[2100, 800, 500]", "[30, -40, 0]", 5),
+    ] {
+        b.write(
+            "m.toml",
+            format!("[c45]\nmodel = \"linear\"\nnote = \"shop\"\nkc = {kc}\nke = {ke}\n")
+                .as_bytes(),
+        );
+        let e = b.refused(
+            &["force", "materials", "--materials", "m.toml"],
+            &format!("m.toml:{line}: material `c45`"),
+        );
+        assert!(e.contains("must not be negative"), "{e}");
+    }
+    b.write(
+        "m.toml",
+        b"[ob]\nmodel = \"oblique\"\ntau_s = 300.0\nbeta_a = [20.0, 0.3]\nrc_c0 = [0.3, 0.01]\nrc_a = [0.2, 0.0]\nke = [-24.0, 43.0, 0.0]\n",
+    );
+    b.refused(
+        &["force", "materials", "--materials", "m.toml"],
+        "m.toml:7: material `ob`",
+    );
+    // A negative axial coefficient is a real case and stays accepted.
+    b.write(
+        "m.toml",
+        b"[c45]\nmodel = \"linear\"\nkc = [2100, 800, -50]\nke = [30, 40, -2]\n",
+    );
+    let o = b.run(&["force", "materials", "--materials", "m.toml"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+/// Issue 34: "`--tool ball:10:3` silently ignores its extra field".
+#[test]
+fn a_tool_spec_with_an_extra_field_is_refused() {
+    let b = Bench::new();
+    for tool in ["ball:10:3", "flat:10:1", "bull:10:2:1", "cone:6:118:4"] {
+        b.refused(
+            &[
+                "cut",
+                "--tool",
+                tool,
+                "--fz",
+                "0.1",
+                "--ap",
+                "2",
+                "--ae",
+                "5",
+                "--n",
+                "3000",
+                "--material",
+                "c45",
+            ],
+            "one too many",
+        );
+    }
+}

@@ -190,7 +190,10 @@ impl Materials {
         let table: BTreeMap<String, Entry> =
             toml::from_str(text).map_err(|e| format!("{origin}: {}", e.message()))?;
         for (name, e) in table {
-            let at = |m: String| format!("{origin}: material `{name}`: {m}");
+            let at = |m: String| {
+                let at = line_of(text, &name, &m).map_or(String::new(), |l| format!(":{l}"));
+                format!("{origin}{at}: material `{name}`: {m}")
+            };
             let law = law(&e).map_err(at)?;
             let chip_loads = e
                 .fz_max
@@ -231,12 +234,50 @@ fn finite<const N: usize>(v: Option<[f64; N]>, what: &str) -> Result<[f64; N], S
     Ok(v)
 }
 
+/// The tangential and radial coefficients (the first two of `v`) must not
+/// be negative: they would give negative power and torque. The axial one
+/// may legitimately be either sign.
+fn not_negative(v: &[f64; 3], what: &str, names: &str) -> Result<(), String> {
+    if v[0] < 0.0 || v[1] < 0.0 {
+        return Err(format!(
+            "`{what}` = [{}, {}, {}]: the tangential and radial coefficients ({names}) must not be negative (only the axial one may be)",
+            v[0], v[1], v[2]
+        ));
+    }
+    Ok(())
+}
+
+/// The 1-based line of the key a validation message names (its first
+/// `quoted` word) inside the table `[name]` of `text`, or of the table's
+/// header when the key is not written there.
+fn line_of(text: &str, name: &str, msg: &str) -> Option<usize> {
+    let key = msg.split('`').nth(1).unwrap_or("");
+    let header = |l: &str| {
+        let t = l.trim();
+        t.starts_with('[') && t.trim_matches(['[', ']', ' ', '"']) == name
+    };
+    let start = text.lines().position(header)?;
+    let key_line = text
+        .lines()
+        .enumerate()
+        .skip(start + 1)
+        .take_while(|(_, l)| !l.trim_start().starts_with('['))
+        .find(|(_, l)| {
+            let t = l.trim_start();
+            !key.is_empty() && t.starts_with(key) && t[key.len()..].trim_start().starts_with('=')
+        })
+        .map(|(i, _)| i);
+    Some(key_line.unwrap_or(start) + 1)
+}
+
 fn law(e: &Entry) -> Result<Law, String> {
     match e.model.as_str() {
-        "linear" => Ok(Law::Rta(Coeffs {
-            kc: finite(e.kc, "kc")?,
-            ke: finite(e.ke, "ke")?,
-        })),
+        "linear" => {
+            let (kc, ke) = (finite(e.kc, "kc")?, finite(e.ke, "ke")?);
+            not_negative(&kc, "kc", "Ktc, Krc")?;
+            not_negative(&ke, "ke", "Kte, Kre")?;
+            Ok(Law::Rta(Coeffs { kc, ke }))
+        }
         "flute-segment" => Ok(Law::FluteSegment(Coeffs {
             kc: finite(e.kc, "kc")?,
             ke: finite(e.ke, "ke")?,
@@ -253,6 +294,7 @@ fn law(e: &Entry) -> Result<Law, String> {
                 rc_a: finite(e.rc_a, "rc_a")?,
                 ke: finite(e.ke, "ke")?,
             };
+            not_negative(&db.ke, "ke", "Kte, Kre")?;
             let rake_deg = e.rake.unwrap_or(0.0);
             if !(rake_deg.abs() < 45.0) {
                 return Err("`rake` must be within ±45 degrees".into());

@@ -35,6 +35,10 @@ struct Lexed {
     comments: Vec<String>,
     /// The block starts with `/`: it runs or not as the operator's switch says.
     block_delete: bool,
+    /// A number word directly followed by `E` and digits (`X1e5`): its
+    /// column and text. G-code numbers have no exponent, so it reads as `X1`
+    /// and a word `E5`, which the reader warns about.
+    exponent: Option<(u32, String)>,
 }
 
 /// Splits a block into tokens and comments. `(..)` comments may nest (some posts
@@ -45,6 +49,7 @@ fn lex(line: &str, ln: u32) -> Result<Lexed, ParseError> {
     let mut toks = Vec::with_capacity(8);
     let mut comments = Vec::new();
     let mut block_delete = false;
+    let mut exponent = None;
     while i < b.len() {
         let c = b[i];
         let col = (i + 1) as u32;
@@ -130,6 +135,19 @@ fn lex(line: &str, ln: u32) -> Result<Lexed, ParseError> {
                     continue;
                 }
                 let num = &line[s..j];
+                let mut e = j + 1;
+                if e < b.len() && matches!(b[e], b'-' | b'+') {
+                    e += 1;
+                }
+                if exponent.is_none()
+                    && matches!(b.get(j), Some(b'e' | b'E'))
+                    && b.get(e).is_some_and(|d| d.is_ascii_digit())
+                {
+                    let end = (e..b.len())
+                        .find(|&k| !b[k].is_ascii_digit())
+                        .unwrap_or(b.len());
+                    exponent = Some((col, line[i..end].to_string()));
+                }
                 match parse_num(num) {
                     Some(v) => toks.push((Tok::Word(c.to_ascii_uppercase() as char, v), col)),
                     None => {
@@ -211,6 +229,7 @@ fn lex(line: &str, ln: u32) -> Result<Lexed, ParseError> {
         toks,
         comments,
         block_delete,
+        exponent,
     })
 }
 
@@ -557,6 +576,18 @@ impl GcodeReader {
         }
         let lexed = lex(raw, ln)?;
         self.saw_content = true;
+        if let Some((col, w)) = &lexed.exponent {
+            let (word, exp) = w.split_at(w.find(['e', 'E']).unwrap_or(w.len()));
+            self.diags.warn(
+                Code::UnknownWord,
+                ln,
+                *col,
+                format!(
+                    "`{w}` reads as `{word}` and a word `{exp}`: G-code numbers have no exponent (write the number out if {} was meant)",
+                    &w[1..]
+                ),
+            );
+        }
         for c in lexed.comments {
             if !c.is_empty() {
                 self.op.push_event(ln, EventKind::Comment(c));

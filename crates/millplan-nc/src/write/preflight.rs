@@ -13,6 +13,7 @@ use millplan_geom::DVec3;
 /// form would exceed the limits of `o`, at the source line that asks for it.
 pub fn check(p: &Program, o: &WriteOptions) -> Result<(), WriteError> {
     finite(p)?;
+    p.operations.iter().try_for_each(writable_op)?;
     let mut lines: f64 = 0.0;
     for op in &p.operations {
         lines += written_moves(op, o)?;
@@ -90,6 +91,87 @@ fn written_moves(op: &Operation, o: &WriteOptions) -> Result<f64, WriteError> {
     Ok(n)
 }
 
+/// The first word of verbatim block text whose value is not a finite
+/// number (`XNAN`, `Y-INF`, `Z=inf`, `Finfinity`), outside comments: a
+/// letter at a word's start, an optional `=` and sign, then NaN or
+/// inf(inity) ending the word.
+pub fn non_finite_word(text: &str) -> Option<&str> {
+    let b = text.as_bytes();
+    let mut i = 0;
+    let mut paren = 0u32;
+    while i < b.len() {
+        match b[i] {
+            b';' if paren == 0 => return None,
+            b'(' => paren += 1,
+            b')' => paren = paren.saturating_sub(1),
+            c if paren == 0
+                && c.is_ascii_alphabetic()
+                && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_')) =>
+            {
+                let mut j = i + 1;
+                while j < b.len() && matches!(b[j], b'=' | b'+' | b'-' | b' ') {
+                    j += 1;
+                }
+                for name in ["infinity", "inf", "nan"] {
+                    let end = j + name.len();
+                    if b.get(j..end)
+                        .is_some_and(|w| w.eq_ignore_ascii_case(name.as_bytes()))
+                        && !b
+                            .get(end)
+                            .is_some_and(|c| c.is_ascii_alphanumeric() || *c == b'_')
+                    {
+                        return Some(&text[i..end]);
+                    }
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    None
+}
+
+/// What a writer refuses beyond non-finite numbers, at the source line: a
+/// feed move (linear or arc) whose feed is not above 0 (`F0`, `FEDRAT/0`
+/// stop a control or run at an undefined rate), and text copied verbatim
+/// whose words are not finite numbers (`XNAN`, `ZINF`).
+fn writable_op(op: &Operation) -> Result<(), WriteError> {
+    for m in &op.moves {
+        if matches!(m.kind, MoveKind::Linear | MoveKind::Arc(_)) && !(m.feed > 0.0) {
+            return Err(WriteError::new(
+                m.line,
+                format!(
+                    "this feed move has a feed of {} (not above 0): no target writes it (a control stops or moves at an undefined rate)",
+                    m.feed
+                ),
+            ));
+        }
+    }
+    if let Some(c) = op.cycles.iter().find(|c| !(c.feed > 0.0)) {
+        return Err(WriteError::new(
+            c.line,
+            format!(
+                "cycle {} has a feed of {} (not above 0): no target writes it",
+                c.name, c.feed
+            ),
+        ));
+    }
+    for e in &op.events {
+        if let EventKind::Passthrough(Passthrough { text, .. }) | EventKind::Insert(text) = &e.kind
+        {
+            if let Some(w) = non_finite_word(text) {
+                return Err(WriteError::new(
+                    e.line,
+                    format!(
+                        "the block copied verbatim from the source holds `{w}`, not a finite number: no target writes it"
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 fn infinite(v: DVec3) -> bool {
     v.to_array().iter().any(|c| c.is_infinite())
 }
@@ -156,6 +238,7 @@ fn finite_op(op: &Operation) -> Result<(), WriteError> {
         if !m.feed.is_finite() {
             return Err(bad(m.line, "the feed of this move", m.feed));
         }
+
         if !m.spindle.is_finite() {
             return Err(bad(m.line, "the spindle speed of this move", m.spindle));
         }

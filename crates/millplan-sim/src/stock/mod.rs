@@ -64,8 +64,17 @@ impl Grid {
         }
     }
 
+    /// The number of cells, saturating at `usize::MAX`: a memory estimate
+    /// made from it before allocating never wraps to a small number (a
+    /// 2³² × 2³² grid is not 0 cells).
     pub fn cells(&self) -> usize {
-        self.nx * self.ny
+        self.nx.saturating_mul(self.ny)
+    }
+
+    /// The memory a stock on this grid takes before any gap is cut, bytes,
+    /// in floating point so that no grid, however large, wraps it.
+    pub fn stock_bytes(&self) -> f64 {
+        self.nx as f64 * self.ny as f64 * BYTES_PER_CELL
     }
 
     #[inline]

@@ -54,7 +54,7 @@ pub enum ToolCommand {
         /// Insert length INSL, mm (ISO 13399).
         #[arg(long)]
         insl: f64,
-        /// Thread pitch TP of the insert, mm.
+        /// Thread pitch TP of the insert, mm (at least 0.2, the finest ISO metric pitch).
         #[arg(long)]
         tp: f64,
     },
@@ -106,7 +106,7 @@ pub enum ToolCommand {
         /// Insert length INSL, mm (ISO 13399).
         #[arg(long)]
         insl: f64,
-        /// Thread pitch TP of the insert, mm.
+        /// Thread pitch TP of the insert, mm (at least 0.2, the finest ISO metric pitch).
         #[arg(long)]
         tp: f64,
     },
@@ -159,7 +159,7 @@ pub struct AddArgs {
     /// Insert length INSL (thread mills), mm.
     #[arg(long)]
     pub insl: Option<f64>,
-    /// Insert thread pitch TP, mm.
+    /// Insert thread pitch TP, mm (at least 0.2, the finest ISO metric pitch).
     #[arg(long)]
     pub tp: Option<f64>,
     /// Any ISO 13399 property, SYMBOL=VALUE (repeatable).
