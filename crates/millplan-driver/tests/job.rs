@@ -150,7 +150,10 @@ fn a_run_without_options_has_every_default_and_says_where_from() {
     assert_eq!(from("vc"), "cutting table");
     assert_eq!(j.vc, 300.0, "al7075 in data/cutting.toml");
     assert_eq!(from("fz_max"), "cutting table");
-    assert!((j.limits.fz_max.expect("given") - 0.015 * 10.0).abs() < 1e-12, "fz_per_d·D");
+    assert!(
+        (j.limits.fz_max.expect("given") - 0.015 * 10.0).abs() < 1e-12,
+        "fz_per_d·D"
+    );
     assert_eq!(from("spindle"), "program");
     assert_eq!(from("flutes"), "default");
     // The feed pass runs, the others say why not.

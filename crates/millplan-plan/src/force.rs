@@ -823,7 +823,9 @@ fn tighten(
     let mut evals = 0;
     let start = match m.fz_allowed {
         Some(a) => {
-            let s = model.evaluate_engaged(&Cut { fz: a, ..*cut }, cells).summary();
+            let s = model
+                .evaluate_engaged(&Cut { fz: a, ..*cut }, cells)
+                .summary();
             evals += 1;
             match lim.ratio(&Loads::new(&s, holding)) {
                 Some((r, _)) if r < 1.0 && a > lim.fz_min => a,
