@@ -334,6 +334,9 @@ fn force_setup(inputs: &Inputs, flutes: usize) -> Result<Option<ForceSetup>, Job
     let mut s = ForceSetup::new(law, flutes);
     s.helix = Defaults::HELIX_DEG.to_radians();
     s.grid = Grid::default();
+    // The user's grid as given (`feed --converge` refines it): converging
+    // every load sample costs tens of times the evaluations.
+    s.refine = None;
     Ok(Some(s))
 }
 
