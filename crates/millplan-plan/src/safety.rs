@@ -365,7 +365,15 @@ pub fn machine(p: &Program, m: &Machine, tol: &Tolerances) -> Check {
                 bad(format!("cutting feed F{feed} is not positive"));
                 continue;
             }
+            // A block that also turns a rotary axis: its F is the feed of
+            // the axes together (degrees counted as mm) unless the control
+            // runs TCP, not the tip's; the post bounds each axis's speed and
+            // the tip's feed itself (`post::post`), so it is not read here.
+            let rotary = op
+                .orient(mv)
+                .is_some_and(|o| o.angles.iter().any(Option::is_some));
             let tip = match mv.feed_mode {
+                FeedMode::PerMinute if rotary => None,
                 FeedMode::PerMinute => Some(feed),
                 FeedMode::PerRev => (mv.spindle > 0.0).then_some(feed * mv.spindle),
                 FeedMode::InverseTime => None,
@@ -775,7 +783,10 @@ fn tip_moved_by(input: &Program, output: &Program, k: &Kinematics, tol: f64) -> 
             if m.kind == MoveKind::Rapid {
                 continue;
             }
-            let (Some(sg), Some(t)) = (segs.get(&m.line), posted_tip(op, m, k, tcp)) else {
+            // A line whose input moves have no known ends (the first move
+            // from an unknown position) has nothing to compare with.
+            let sg = segs.get(&m.line).filter(|s| !s.is_empty());
+            let (Some(sg), Some(t)) = (sg, posted_tip(op, m, k, tcp)) else {
                 unmatched += 1;
                 continue;
             };

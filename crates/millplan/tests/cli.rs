@@ -108,7 +108,8 @@ fn feed_on_a_real_program_meets_its_limits_and_speeds_up_the_conservative_operat
                 .expect("a feed")
         })
         .collect();
-    assert!(feeds.len() > 100, "{} feeds written", feeds.len());
+    // FEDRAT is written where the feed changes (air blocks share one feed).
+    assert!(feeds.len() > 50, "{} feeds written", feeds.len());
     assert!(
         feeds.iter().all(|v| (1.0..=20000.0).contains(v)),
         "{feeds:?}"

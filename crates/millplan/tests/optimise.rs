@@ -351,6 +351,8 @@ fn swcam_interface_glue_is_faster_and_its_own_faults_are_named() {
         s(&stl),
         "--stock",
         "box:0,0,-30,135,135,0",
+        "--resolution",
+        "0.5",
         "--material",
         "al7075",
         "--passes",

@@ -279,6 +279,8 @@ fn orient_then_cut(dir: &Path, variant: &str) -> (f64, f64, f64, impl Fn(f64) ->
             .args(["cut", "--tool", "ball:10", "--flutes", "2", "--helix", "30"])
             .args(["--fz", "0.1", "--ap", "0.5", "--ae", "0.5", "--n", "8000"])
             .args(["--material", "al7075", "--variant", &variant, "--json"])
+            // orient judges its candidates on the given grid, unrefined.
+            .arg("--fixed-grid")
             .arg(format!("--lead={lead}"))
             .arg(format!("--tilt={t}"))
             .output()

@@ -9,7 +9,6 @@ use millplan_models::leadtilt::{SearchOptions, Variant};
 use millplan_plan::leadtilt::{choose_with, Objective, Oriented, Params, Stage, StockInput};
 use millplan_plan::machine::Machine;
 use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
-use millplan_sim::dropcutter::DropMesh;
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
 use millplan_sim::stock::spec::StockSpec;
 use millplan_sim::stock::tool::{BodyOptions, ToolBody};
@@ -283,21 +282,20 @@ fn tool_body(op: &millplan_nc::Operation) -> Option<ToolBody> {
 
 /// The re-oriented program against the input: the IR verifier, S and F
 /// within the machine, every ball centre where the input put it, rapids and
-/// shanks on the initial stock (with --stock), no gouge into the part the
-/// input did not have (three-axis moves; tilted ones are counted as left
-/// out). A refusal ends the run (exit 3) unless --force.
+/// shanks on the initial stock (with --stock). No gouge check against the
+/// part: with every ball centre kept (checked) the ball meets the part
+/// exactly where the input's did, and the three-axis gouge check cannot
+/// see a tilted shank. A refusal ends the run (exit 3) unless --force.
 fn check_oriented(
     a: &Args,
     (input, output): (&millplan_nc::Program, &millplan_nc::Program),
-    mesh: &millplan_geom::TriMesh,
     stock: Option<&Stock>,
     machine: &Machine,
 ) -> CliResult<(Vec<Check>, bool)> {
-    let part = DropMesh::new(mesh);
     let checks = safety::check(&Inputs {
         input,
         output,
-        part: Some(&part),
+        part: None,
         stock,
         tool_body: &tool_body,
         machine: Some(machine),
@@ -420,7 +418,6 @@ pub fn run(a: Args) -> CliResult<i32> {
     let (checks, checked) = check_oriented(
         &a,
         (&parsed.program, &o.program),
-        &mesh,
         initial.as_ref(),
         &machine,
     )?;
