@@ -232,7 +232,7 @@ impl Setup {
 
     /// A lower bound of a_lim \[mm\] at every chatter frequency above
     /// `f_hz`, which must lie above every natural frequency: −1/Λ is an
-    /// eigenvalue of [A]·[G], so |Λ| ≥ 1/(‖A‖_F·max|G|), and a_lim =
+    /// eigenvalue of \[A\]·\[G\], so |Λ| ≥ 1/(‖A‖_F·max|G|), and a_lim =
     /// 2π|Λ|²/(N·Ktc·|Λ_R|) ≥ 2π|Λ|/(N·Ktc); above its resonance every |G|
     /// falls with ω.
     pub fn bound_above(&self, f_hz: f64) -> f64 {

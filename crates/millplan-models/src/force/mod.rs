@@ -168,7 +168,7 @@ pub struct Evaluation {
     pub dz: f64,
     /// Estimated relative discretisation error of F_xy,max and T_max (the
     /// larger of the two) from the slice height and from the rotation step
-    /// ([`Evaluation::error`]).
+    /// (see [`converge`]).
     pub error_dz: f64,
     pub error_dphi: f64,
     pub flutes: usize,

@@ -48,8 +48,8 @@ pub struct Args {
     /// Unit of the STL files' numbers: mm (default) or inch.
     #[arg(long, value_enum)]
     pub stl_units: Option<UnitArg>,
-    /// Initial stock: box:auto[:MARGIN], box:X0,Y0,Z0,X1,Y1,Z1,
-    /// cylinder:auto[:MARGIN], cylinder:CX,CY,Z0,Z1,D, stl:FILE or offset:MM
+    /// Initial stock: box:auto or box:auto:MARGIN, box:X0,Y0,Z0,X1,Y1,Z1,
+    /// cylinder:auto or cylinder:auto:MARGIN, cylinder:CX,CY,Z0,Z1,D, stl:FILE or offset:MM
     /// (the --stl part grown by MM), as in `millplan simulate`.
     #[arg(long)]
     pub stock: Option<String>,
