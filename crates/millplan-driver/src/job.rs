@@ -333,10 +333,10 @@ fn force_setup(inputs: &Inputs, flutes: usize) -> Result<Option<ForceSetup>, Job
         .law;
     let mut s = ForceSetup::new(law, flutes);
     s.helix = Defaults::HELIX_DEG.to_radians();
+    // The given grid, unrefined (`ForceSetup::new`; `feed --converge`
+    // refines it): converging every load sample costs tens of times the
+    // evaluations.
     s.grid = Grid::default();
-    // The user's grid as given (`feed --converge` refines it): converging
-    // every load sample costs tens of times the evaluations.
-    s.refine = None;
     Ok(Some(s))
 }
 

@@ -179,7 +179,9 @@ impl ForceSetup {
             flutes,
             helix: 30f64.to_radians(),
             grid: Grid::default(),
-            refine: Some(Refine::default()),
+            // The given grid: converging every load sample costs tens of
+            // times the evaluations (`feed --converge` asks for it).
+            refine: None,
             stickout: None,
             flute_length: None,
             modulus: E_CARBIDE,

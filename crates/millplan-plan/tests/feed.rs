@@ -265,15 +265,24 @@ fn a_pass_through_the_stock_loads_the_tool_as_the_planar_raster_does() {
         helix: s.helix,
         flute_length: 30.0,
     };
-    // Both with the steps converged per engagement. The stock counts an edge
-    // point as material only LIFT_SHARE of a dexel below a column's top
-    // (force.rs): the analytic pass to compare with is that much shallower
-    // (on the fixed 0.05 mm slices, centred 0.025 mm below the top, the
-    // 0.02 mm did not show).
+    // Both on the setup's steps. The stock counts an edge point as material
+    // only LIFT_SHARE of a dexel below a column's top (force.rs): with the
+    // steps converged per engagement the analytic pass to compare with is
+    // that much shallower; on the fixed 0.05 mm slices, centred 0.025 mm
+    // below the top, the 0.02 mm does not show.
     let lift = millplan_plan::force::LIFT_SHARE * 0.1;
-    let refine = s.refine.expect("refined by default");
+    let (refine, depth) = match s.refine {
+        Some(r) => (r, ap - lift),
+        None => (
+            millplan_models::force::converge::Refine {
+                halvings: 0,
+                ..Default::default()
+            },
+            ap,
+        ),
+    };
     let model = ConvergedModel::new(edge, s.law, s.grid, refine).expect("model");
-    let raster = PlanarRaster::new(&edge, ap - lift, Some(ae), 0.0, 0.0).expect("raster");
+    let raster = PlanarRaster::new(&edge, depth, Some(ae), 0.0, 0.0).expect("raster");
     let want = model
         .evaluate(
             &Cut {

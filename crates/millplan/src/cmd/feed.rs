@@ -155,8 +155,8 @@ pub fn force_setup(m: &ModelArgs) -> CliResult<ForceSetup> {
         dz: m.dz,
         dphi: m.dphi.to_radians(),
     };
-    if !m.converge {
-        s.refine = None;
+    if m.converge {
+        s.refine = Some(millplan_models::force::converge::Refine::default());
     }
     s.stickout = m.stickout;
     s.flute_length = m.flute_length;
