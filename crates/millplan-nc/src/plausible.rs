@@ -5,7 +5,7 @@
 //! a zero feed or `Ainf` in a written program. The limits are
 //! [`millplan_geom::limits::NC_EXTENT`] (coordinates and arc radii, mm;
 //! rotary positions, degrees) and [`millplan_geom::limits::NC_RATE`] (feeds
-//! and spindle speeds), documented in the README's limits table.
+//! and spindle speeds), documented in the limits table of docs/usage.md.
 
 use crate::diag::ParseError;
 use crate::ir::{MoveKind, Operation, Program};

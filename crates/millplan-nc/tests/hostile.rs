@@ -190,7 +190,7 @@ fn tiny_pecks_are_refused_in_every_dialect() {
 use millplan_nc::write::{write_program, Target, WriteOptions};
 
 /// Issue 34: "`convert nan_num.nc --to fanuc` and `feed` copy `XNAN YINF` /
-/// `ZINF` verbatim into the output (README: no writer writes a non-finite
+/// `ZINF` verbatim into the output (docs/usage.md: no writer writes a non-finite
 /// number)". A block the reader keeps verbatim is refused by every writer at
 /// the source's line.
 #[test]

@@ -1,7 +1,7 @@
 //! A machining-time estimate that knows the controller: every block is timed
 //! the way a look-ahead controller moves it, not as length / feed.
 //!
-//! The model (README, "Time estimate"):
+//! The model (docs/time.md):
 //!
 //! * Blocks are straight lines in machine-axis space (X Y Z mm, A B C
 //!   degrees), interpolated linearly as a controller without TCP does. A

@@ -42,7 +42,7 @@ static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
 /// disk, a closed standard output); 2 bad input or arguments (the message
 /// names file:line:col); 3 a check ran and found problems.
 ///
-/// Resource limits (what a small input may ask for) are in README.md; raise
+/// Resource limits (what a small input may ask for) are in docs/usage.md; raise
 /// one with --limit NAME=VALUE or MILLPLAN_LIMITS=NAME=VALUE,….
 #[derive(Parser)]
 #[command(name = "millplan", version, about, long_about, next_line_help = true)]

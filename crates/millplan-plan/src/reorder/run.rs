@@ -979,7 +979,7 @@ mod tests {
         // at least, and lowers Σ|Δn|, within 3 % more time. The time is
         // estimated with acceleration on a high-speed machining centre (the
         // paper's kind of machine); on the built-in machine's conservative
-        // 1000 mm/s² retracts cost more and the gain is smaller (README).
+        // 1000 mm/s² retracts cost more and the gain is smaller (docs/benchmarks.md).
         let (prog, _) = raster(
             &DemoSurface::default(),
             &Raster {
