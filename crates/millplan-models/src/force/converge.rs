@@ -25,6 +25,7 @@
 //! within it or the steps reach their floor.
 
 use super::engage::Engagement;
+use super::quadrature::{BISECTIONS, COLUMNS};
 use super::{coeffs::Law, edge::Tool, Cut, Engaged, Evaluation, ForceModel, Grid};
 use std::sync::OnceLock;
 
@@ -163,40 +164,81 @@ impl ForceModel {
     /// Heights (mm above the tip) from one slice below the lowest engaged
     /// slice to one above the highest.
     fn band(&self, e: &Engaged) -> (f64, f64) {
-        match (e.cells.first(), e.cells.last()) {
-            (Some(lo), Some(hi)) => (
-                self.slices[lo.0 as usize].z - 1.5 * self.dz,
-                self.slices[hi.0 as usize].z + 1.5 * self.dz,
-            ),
+        let lo = e.cells.iter().map(|c| c.slice).min();
+        let hi = e.cells.iter().map(|c| c.slice).max();
+        match (lo, hi) {
+            (Some(lo), Some(hi)) => {
+                let z = |u: f64| super::edge::height(&self.tool.shape, u);
+                (
+                    z(self.slices[lo as usize].u - 1.5 * self.dz),
+                    z(self.slices[hi as usize].u + 1.5 * self.dz),
+                )
+            }
             _ => (0.0, 0.0),
         }
     }
 }
 
-/// The share of a boundary cell's force taken as the error of the slice
-/// height it adds: the flute enters or leaves material somewhere in the cell,
-/// which counts whole or not at all by its centre; a quarter is the mean
-/// error for a boundary anywhere in it (a half the largest).
-pub const BOUNDARY_SHARE: f64 = 0.25;
+/// The share of the even/odd difference taken as the error of the slice
+/// height: half the difference is the error of a quadrature at twice the
+/// height, whose error falls with the square of the height
+/// ([`super::quadrature`]); a half of that (not the quarter the square
+/// gives) keeps a margin where the integrand is not smooth.
+pub const HALVES_SHARE: f64 = 0.25;
+
+/// The share of a boundary cell's force (counted whole) taken as the error
+/// of locating its boundary: bisection leaves the point within
+/// 2^-[`BISECTIONS`] of a slice, so half of that is the largest error.
+pub const BOUNDARY_SHARE: f64 = 0.5 / (1u32 << BISECTIONS) as f64;
+
+/// The share of [`tent_excess`] taken as the error of the rotation step.
+pub const TENT_SHARE: f64 = 0.5;
+
+/// How far the peak of quantity `c` (0: F_xy, 1: |T|) over the tooth period
+/// may lie above its largest sample when it is a kink (a flute entering or
+/// leaving material): the lines through the two samples on each side of the
+/// largest, extended to where they meet between its neighbours. The
+/// samples at the even and the odd angles alone can agree while both miss
+/// such a peak.
+fn tent_excess(rows: &[[f64; COLUMNS]], c: usize) -> f64 {
+    let p = rows.len();
+    if p < 5 {
+        return 0.0;
+    }
+    let v = |i: usize| {
+        let r = &rows[i % p];
+        if c == 0 {
+            r[0].hypot(r[1])
+        } else {
+            r[3].abs()
+        }
+    };
+    let top = (0..p).max_by(|a, b| v(*a).total_cmp(&v(*b))).unwrap_or(0) + p;
+    let (l2, l1, f, r1, r2) = (v(top - 2), v(top - 1), v(top), v(top + 1), v(top + 2));
+    // Rising slope on the left, falling slope on the right, per step.
+    let (a, b) = (l1 - l2, r1 - r2);
+    if !(a > 0.0 && b > 0.0) {
+        return 0.0;
+    }
+    let x = ((r1 - l1 + b - a) / (a + b)).clamp(-1.0, 1.0);
+    (l1 + a * (x + 1.0)).min(r1 + b * (1.0 - x)).max(f) - f
+}
 
 /// Relative error estimates (slice height, rotation step) of the peaks
-/// F_xy,max and T_max over one tooth period. Rows: Fx, Fy, Fz, T of every
-/// cell, then Fx, Fy, T of the odd slices' cells and of the boundary cells.
-pub(crate) fn error_estimates(rows: &[[f64; 10]]) -> (f64, f64) {
-    // Peaks of (F_xy, |T|): every slice, the even ones doubled, the odd ones
-    // doubled; every slice at the even and at the odd angles; the boundary
-    // cells.
+/// F_xy,max and T_max over one tooth period, from the table of
+/// [`super::quadrature::COLUMNS`].
+pub(crate) fn error_estimates(rows: &[[f64; COLUMNS]]) -> (f64, f64) {
+    // Peaks of (F_xy, |T|): the quadrature, the odd and the even slices'
+    // quadratures; the quadrature at the even and at the odd angles; the
+    // boundary cells.
     let mut peak = [[0.0f64; 2]; 6];
     for (i, r) in rows.iter().enumerate() {
         let q = [
             [r[0].hypot(r[1]), r[3].abs()],
-            [
-                2.0 * (r[0] - r[4]).hypot(r[1] - r[5]),
-                2.0 * (r[3] - r[6]).abs(),
-            ],
-            [2.0 * r[4].hypot(r[5]), 2.0 * r[6].abs()],
+            [r[4].hypot(r[5]), r[6].abs()],
+            [r[7].hypot(r[8]), r[9].abs()],
         ];
-        let b = [r[7].hypot(r[8]), r[9].abs()];
+        let b = [r[10].hypot(r[11]), r[12].abs()];
         for c in 0..2 {
             for (w, v) in q.iter().enumerate() {
                 peak[w][c] = peak[w][c].max(v[c]);
@@ -207,13 +249,15 @@ pub(crate) fn error_estimates(rows: &[[f64; 10]]) -> (f64, f64) {
         }
     }
     let (mut dz, mut dphi) = (0.0f64, 0.0f64);
-    // Per quantity (F_xy, T): [all, even, odd, even angles, odd angles, boundary].
-    let [all, even, odd, at_even, at_odd, boundary] = peak;
+    // Per quantity (F_xy, T): [all, odd, even, even angles, odd angles, boundary].
+    let [all, odd, even, at_even, at_odd, boundary] = peak;
     for c in 0..2 {
         if all[c] > 0.0 {
-            let halves = 0.5 * (even[c] - odd[c]).abs();
-            dz = dz.max(halves.max(BOUNDARY_SHARE * boundary[c]) / all[c]);
-            dphi = dphi.max((at_even[c] - at_odd[c]).abs() / all[c]);
+            let halves = HALVES_SHARE * (even[c] - odd[c]).abs();
+            dz = dz.max((halves + BOUNDARY_SHARE * boundary[c]) / all[c]);
+            let sampled = (at_even[c] - at_odd[c]).abs();
+            let kink = TENT_SHARE * tent_excess(rows, c);
+            dphi = dphi.max(sampled.max(kink) / all[c]);
         }
     }
     (dz, dphi)
