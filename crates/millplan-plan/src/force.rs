@@ -160,8 +160,8 @@ pub struct ForceSetup {
     /// The steps of the force integrals: the coarsest with `refine`, else
     /// exactly these.
     pub grid: Grid,
-    /// Refine the steps per stroke until the peaks converge
-    /// ([`ConvergedModel`]; on by default).
+    /// Refine the steps per load sample until the peaks converge
+    /// ([`ConvergedModel`]; on by default, `None` uses `grid` as it is).
     pub refine: Option<Refine>,
     /// Gauge length from the holder face to the tip, mm (default 3·D).
     pub stickout: Option<f64>,
@@ -179,9 +179,10 @@ impl ForceSetup {
             flutes,
             helix: 30f64.to_radians(),
             grid: Grid::default(),
-            // The given grid: converging every load sample costs tens of
-            // times the evaluations (`feed --converge` asks for it).
-            refine: None,
+            // Converged per load sample: with the weighted ends of
+            // `force::quadrature` the slice height rarely needs halving,
+            // and a sample starts from the steps of the one before.
+            refine: Some(Refine::default()),
             stickout: None,
             flute_length: None,
             modulus: E_CARBIDE,
@@ -655,6 +656,7 @@ impl PartContext<'_> {
             moves: Vec::new(),
             evaluated: 0,
         };
+        let mut levels = (0, 0);
         let (all, range_start) = (&self.strokes.strokes[..], range.start);
         for (k, s) in all[range].iter().enumerate() {
             if k % 4096 == 4095 {
@@ -690,6 +692,7 @@ impl PartContext<'_> {
                     from_cut,
                     m,
                     self.schedule,
+                    &mut levels,
                 ) {
                     part.evaluated += n;
                 }
@@ -766,6 +769,7 @@ fn stroke_forces(
     from_cut: bool,
     m: &mut MoveForces,
     schedule: Option<(&FeedLimits, &crate::machine::Machine)>,
+    levels: &mut (u32, u32),
 ) -> Option<usize> {
     let d = s.p1 - s.p0;
     let len = d.length();
@@ -794,10 +798,22 @@ fn stroke_forces(
             lead,
             tilt: 0.0,
         };
-        // The grid refined until this sample's peaks converge; the
-        // converged evaluation is at the stroke's own feed per tooth.
-        let conv = tf.model.converge(&cut, &eng);
-        evals += 1 + (conv.halvings.0 + conv.halvings.1) as usize;
+        // The grid refined until this sample's peaks converge, from the
+        // steps the sample before needed; the converged evaluation is at the
+        // stroke's own feed per tooth. A sample whose loads, with their
+        // estimated error, stay below the move's largest so far cannot
+        // decide the move's loads or its feed: it is not refined further.
+        let (fxy, torque, power) = (m.fxy_max, m.torque_max, m.power_w);
+        let below = |e: &millplan_models::force::Evaluation| {
+            let s = e.summary();
+            let k = 1.0 + EARLY_MARGIN * (e.error_dz + e.error_dphi);
+            s.fxy_max * k < fxy && s.torque_max * k < torque && s.power_w * k < power
+        };
+        let conv = tf.model.converge_from(&cut, &eng, *levels, below);
+        evals += 1
+            + (conv.halvings.0 - levels.0.min(conv.halvings.0)) as usize
+            + (conv.halvings.1 - levels.1.min(conv.halvings.1)) as usize;
+        *levels = next_levels(&conv, tf.model.refine.tol);
         let (model, cells) = (conv.model, &conv.cells);
         if cells.is_empty() {
             continue;
@@ -809,6 +825,26 @@ fn stroke_forces(
         }
     }
     Some(evals)
+}
+
+/// How many times its estimated error a sample's loads must stay below the
+/// move's largest so far for its grid not to be refined further.
+pub const EARLY_MARGIN: f64 = 3.0;
+
+/// The halvings the next sample starts from: this sample's, each one coarser
+/// where its estimate is well within the tolerance (so that a grid refined
+/// for one hard pose does not stay fine along the whole move).
+fn next_levels(c: &millplan_models::force::converge::Converged, tol: f64) -> (u32, u32) {
+    let (a, b) = c.halvings;
+    let e = &c.evaluation;
+    let coarser = |k: u32, err: f64| {
+        if err < 0.25 * tol {
+            k.saturating_sub(1)
+        } else {
+            k
+        }
+    };
+    (coarser(a, e.error_dz), coarser(b, e.error_dphi))
 }
 
 /// Lowers the move's allowed feed per tooth until this sample's limits are

@@ -131,7 +131,26 @@ impl ConvergedModel {
     /// Forces of one engagement on the coarsest grid that meets the
     /// tolerance (see the module docs).
     pub fn converge<E: Engagement + ?Sized>(&self, cut: &Cut, eng: &E) -> Converged<'_> {
-        let (mut a, mut b) = (0, 0);
+        self.converge_from(cut, eng, (0, 0), |_| false)
+    }
+
+    /// [`ConvergedModel::converge`] starting from the grid with `start`
+    /// halvings (a neighbouring engagement's, say: along a move the
+    /// engagement changes slowly), and stopping early where `enough` says
+    /// that an evaluation, with its error estimates, settles what the caller
+    /// needs to know.
+    pub fn converge_from<E: Engagement + ?Sized>(
+        &self,
+        cut: &Cut,
+        eng: &E,
+        start: (u32, u32),
+        enough: impl Fn(&Evaluation) -> bool,
+    ) -> Converged<'_> {
+        let h = self.refine.halvings;
+        let (mut a, mut b) = (start.0.min(h), start.1.min(h));
+        if self.level(a, b).is_none() {
+            (a, b) = (0, 0);
+        }
         let mut band = (f64::NEG_INFINITY, f64::INFINITY);
         loop {
             let model = self.level(a, b).expect("the coarser grid was built");
@@ -141,7 +160,11 @@ impl ConvergedModel {
             let z = evaluation.error_dz > tol && self.may_halve(a, self.grid.dz, DZ_FLOOR);
             let p = evaluation.error_dphi > tol && self.may_halve(b, self.grid.dphi, DPHI_FLOOR);
             let next = (a + u32::from(z), b + u32::from(p));
-            if cells.is_empty() || !(z || p) || self.level(next.0, next.1).is_none() {
+            if cells.is_empty()
+                || !(z || p)
+                || self.level(next.0, next.1).is_none()
+                || enough(&evaluation)
+            {
                 return Converged {
                     model,
                     cells,

@@ -71,22 +71,22 @@ pub struct ModelArgs {
     /// is loaded at along its length.
     #[arg(long, default_value_t = 0.1)]
     pub resolution: f64,
-    /// Axial slice height of the force model, mm (with --converge the
-    /// largest used: per load sample the model halves it, up to four
-    /// times, until F_xy,max and T_max are estimated within 0.4 %).
+    /// Slice length of the force model along the tool's profile, mm: the
+    /// largest used (per load sample the model halves it, up to four times,
+    /// until F_xy,max and T_max are estimated within 0.4 %), unless
+    /// --fixed-grid.
     #[arg(long, default_value_t = 0.05)]
     pub dz: f64,
     /// Rotation step of the force model, degrees: the largest used, halved
     /// like --dz.
     #[arg(long, default_value_t = 1.0)]
     pub dphi: f64,
-    /// Refine --dz and --dphi per load sample until F_xy,max and T_max
-    /// converge (within 0.4 %). The default grid can under-predict F_xy,max
-    /// of a ball-end cut by 10-20 %; converging costs tens of times the
-    /// force evaluations, so it is off by default. Use it to check a
-    /// schedule whose loads sit close to their limits.
+    /// Use --dz and --dphi as given instead of refining them per load
+    /// sample until F_xy,max and T_max converge. Faster on engagements
+    /// with sharp force peaks, where the given steps can miss a peak by a
+    /// few per cent.
     #[arg(long)]
-    pub converge: bool,
+    pub fixed_grid: bool,
     /// Units of a program that does not say.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
@@ -155,8 +155,8 @@ pub fn force_setup(m: &ModelArgs) -> CliResult<ForceSetup> {
         dz: m.dz,
         dphi: m.dphi.to_radians(),
     };
-    if m.converge {
-        s.refine = Some(millplan_models::force::converge::Refine::default());
+    if m.fixed_grid {
+        s.refine = None;
     }
     s.stickout = m.stickout;
     s.flute_length = m.flute_length;
