@@ -519,23 +519,83 @@ fn need(ok: bool, field: &str, message: String) -> Result<(), MachineError> {
     }
 }
 
-/// Finite and above zero; NaN fails every comparison, so `!(v > 0.0)` catches it.
-fn positive(v: f64, field: &str, unit: &str) -> Result<(), MachineError> {
+/// Finite and within `range`; NaN fails every comparison, so it fails too.
+fn plausible(v: f64, range: Plausible, field: &str) -> Result<(), MachineError> {
+    let (lo, hi, unit) = range;
     need(
-        v.is_finite() && v > 0.0,
+        v >= lo && v <= hi,
         field,
-        format!("must be finite and positive ({unit}), got {v}"),
+        format!("must be from {lo} to {hi} {unit}, got {}", shown(v)),
     )
+}
+
+/// A number as written in a message: 1e-300, not three hundred zeros.
+fn shown(v: f64) -> String {
+    if v != 0.0 && (v.abs() < 1e-4 || v.abs() >= 1e9) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// A plausibility range of a machine file's number: lowest, highest, unit.
+pub type Plausible = (f64, f64, &'static str);
+
+/// The plausibility ranges of a machine file's rates. A number outside its
+/// range is no machine's and is refused at its line: a velocity of 1e-300
+/// would make every move last forever (an infinite time), a jerk of 1e308 is
+/// none. Feeds and speeds share the limit of a program's (`NC_RATE`).
+pub mod ranges {
+    use super::Plausible;
+    use millplan_geom::limits::NC_RATE;
+    /// `feed.min`, `feed.max`, `feed.rapid`.
+    pub const FEED: Plausible = (0.001, NC_RATE, "mm/min");
+    /// `spindle.max` (the lowest speed may be 0).
+    pub const SPINDLE: Plausible = (1.0, NC_RATE, "1/min");
+    /// `spindle.accel`.
+    pub const SPINDLE_ACCEL: Plausible = (1.0, 1e7, "1/min per second");
+    /// A linear axis's velocity, acceleration and jerk.
+    pub const LINEAR: [Plausible; 3] = [
+        (1.0, NC_RATE, "mm/min"),
+        (1.0, 1e7, "mm/s²"),
+        (1.0, 1e12, "mm/s³"),
+    ];
+    /// A rotary axis's velocity, acceleration and jerk.
+    pub const ROTARY: [Plausible; 3] = [
+        (1.0, NC_RATE, "degrees/min"),
+        (1.0, 1e8, "degrees/s²"),
+        (1.0, 1e13, "degrees/s³"),
+    ];
+    /// A structural mode's natural frequency (as `lobes`).
+    pub const FREQUENCY: Plausible = (1.0, 1e5, "Hz");
+    /// A structural mode's stiffness (as `lobes`).
+    pub const STIFFNESS: Plausible = (1.0, 1e15, "N/m");
+}
+
+/// An axis's velocity, acceleration and jerk, each where given, in `ranges`.
+fn check_rates(
+    vaj: [Option<f64>; 3],
+    ranges: [Plausible; 3],
+    f: impl Fn(&str) -> String,
+) -> Result<(), MachineError> {
+    let ends = ["velocity", "accel", "jerk"];
+    for ((v, range), end) in vaj.into_iter().zip(ranges).zip(ends) {
+        if let Some(v) = v {
+            plausible(v, range, &f(end))?;
+        }
+    }
+    Ok(())
 }
 
 fn check_linear(a: &LinearAxis, name: char) -> Result<(), MachineError> {
     let f = |end: &str| format!("axes.{}.{end}", name.to_ascii_lowercase());
     for (end, v) in [("min", a.min), ("max", a.max)] {
         if let Some(v) = v {
+            let far = millplan_geom::limits::NC_EXTENT;
             need(
-                v.is_finite(),
+                v.abs() <= far,
                 &f(end),
-                format!("must be a finite position (mm), got {v}"),
+                format!("must be a position within ±{far} mm, got {v}"),
             )?;
         }
     }
@@ -546,15 +606,7 @@ fn check_linear(a: &LinearAxis, name: char) -> Result<(), MachineError> {
             format!("must be above min ({hi} ≤ {lo})"),
         )?;
     }
-    if let Some(v) = a.velocity {
-        positive(v, &f("velocity"), "mm/min")?;
-    }
-    if let Some(v) = a.accel {
-        positive(v, &f("accel"), "mm/s²")?;
-    }
-    if let Some(v) = a.jerk {
-        positive(v, &f("jerk"), "mm/s³")?;
-    }
+    check_rates([a.velocity, a.accel, a.jerk], ranges::LINEAR, f)?;
     Ok(())
 }
 
@@ -611,12 +663,13 @@ impl Machine {
             "spindle.min",
             format!("must be a finite speed ≥ 0 (1/min), got {n0}"),
         )?;
+        plausible(n1, ranges::SPINDLE, "spindle.max")?;
         need(
-            n1.is_finite() && n1 > n0,
+            n1 > n0,
             "spindle.max",
             format!("must be finite and above the lowest speed, {n0} (1/min), got {n1}"),
         )?;
-        positive(self.spindle_accel, "spindle.accel", "1/min per second")?;
+        plausible(self.spindle_accel, ranges::SPINDLE_ACCEL, "spindle.accel")?;
         if let Some(c) = &self.spindle_curve {
             let (lo, hi) = c.range();
             need(
@@ -629,13 +682,14 @@ impl Machine {
             )?;
         }
         let (f0, f1) = (self.feed_min, self.feed_max);
-        positive(f0, "feed.min", "mm/min")?;
+        plausible(f0, ranges::FEED, "feed.min")?;
+        plausible(f1, ranges::FEED, "feed.max")?;
         need(
-            f1.is_finite() && f1 > f0,
+            f1 > f0,
             "feed.max",
             format!("must be finite and above the lowest feed, {f0} (mm/min), got {f1}"),
         )?;
-        positive(self.rapid, "feed.rapid", "mm/min")?;
+        plausible(self.rapid, ranges::FEED, "feed.rapid")?;
         if let Some(v) = self.feed_air {
             need(
                 v.is_finite() && v >= f0 && v <= f1,
@@ -669,15 +723,7 @@ impl Machine {
             Some(k) => {
                 for (d, name) in drives.iter().zip(k.kind.rotary_names()) {
                     let f = |end: &str| format!("axes.{}.{end}", name.to_ascii_lowercase());
-                    if let Some(v) = d.velocity {
-                        positive(v, &f("velocity"), "degrees/min")?;
-                    }
-                    if let Some(v) = d.accel {
-                        positive(v, &f("accel"), "degrees/s²")?;
-                    }
-                    if let Some(v) = d.jerk {
-                        positive(v, &f("jerk"), "degrees/s³")?;
-                    }
+                    check_rates([d.velocity, d.accel, d.jerk], ranges::ROTARY, f)?;
                 }
             }
             None => need(
@@ -695,14 +741,14 @@ impl Machine {
                 )?;
                 for (i, mode) in modes.iter().enumerate() {
                     let f = |v: &str| format!("modal.{dir}[{i}].{v}");
-                    positive(mode.frequency, &f("frequency"), "Hz")?;
+                    plausible(mode.frequency, ranges::FREQUENCY, &f("frequency"))?;
                     let z = mode.damping;
                     need(
                         z > 0.0 && z < 1.0,
                         &f("damping"),
                         format!("must be a ratio between 0 and 1 (a structural mode is underdamped), got {z}"),
                     )?;
-                    positive(mode.stiffness, &f("stiffness"), "N/m")?;
+                    plausible(mode.stiffness, ranges::STIFFNESS, &f("stiffness"))?;
                 }
             }
         }

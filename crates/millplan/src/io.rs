@@ -27,8 +27,24 @@ pub enum Input {
     Mesh(TriMesh, StlReport),
 }
 
+/// Opens an input. A device (`/dev/zero`, `/dev/urandom`) or socket is
+/// refused: it has no end, and a program or mesh is a file (a pipe, such as
+/// `<(zcat part.stl.gz)`, is read).
 fn open(path: &Path) -> CliResult<File> {
-    File::open(path).map_err(|e| CliError::input(format!("{}: cannot open: {e}", path.display())))
+    let f = File::open(path)
+        .map_err(|e| CliError::input(format!("{}: cannot open: {e}", path.display())))?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let t = f.metadata().map(|m| m.file_type());
+        if t.is_ok_and(|t| t.is_char_device() || t.is_block_device() || t.is_socket()) {
+            return Err(CliError::input(format!(
+                "{}: a device or socket, not a file: millplan reads programs and meshes from files (or pipes)",
+                path.display()
+            )));
+        }
+    }
+    Ok(f)
 }
 
 /// Asks the kernel to start reading all of `f` now, in large requests, ahead
@@ -251,6 +267,29 @@ fn staged() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
     STAGED.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// The outputs renamed into place by this process: what a signal's message
+/// names as written.
+static REPLACED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn replaced() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    REPLACED.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// What a run stopped by a signal left: nothing, or the outputs it had
+/// already renamed into place (all of one commit: [`Outputs::commit`]
+/// holds the staged list while it renames, so a signal waits for it).
+fn stopped_message(sig: i32) -> String {
+    let done = replaced();
+    if done.is_empty() {
+        return format!("millplan: stopped by signal {sig}; no output written");
+    }
+    let names: Vec<String> = done.iter().map(|p| p.display().to_string()).collect();
+    crate::error::escape_controls(&format!(
+        "millplan: stopped by signal {sig} after its outputs were written: {}",
+        names.join(", ")
+    ))
+}
+
 /// On SIGINT, SIGTERM or SIGHUP: removes the outputs staged so far and ends
 /// the run with 128 + the signal's number.
 pub fn remove_staged_on_signals() {
@@ -263,7 +302,7 @@ pub fn remove_staged_on_signals() {
                     for p in staged().drain(..) {
                         let _ = std::fs::remove_file(p);
                     }
-                    eprintln!("millplan: stopped by signal {sig}; no output written");
+                    eprintln!("{}", stopped_message(sig));
                     std::process::exit(128 + sig);
                 }
             });
@@ -428,6 +467,11 @@ impl Outputs {
     ) -> CliResult<()> {
         let target = match self.dest(path)? {
             Dest::Stdout => {
+                if stdout_was_closed() {
+                    return Err(CliError::internal(
+                        "standard output is closed: nothing written (name a file with -o)",
+                    ));
+                }
                 let mut out = std::io::stdout().lock();
                 return fill(&mut out)
                     .and_then(|()| out.flush())
@@ -469,7 +513,10 @@ impl Outputs {
         Ok(())
     }
 
-    /// Renames every staged output into place (after all were written).
+    /// Renames every staged output into place (after all were written),
+    /// holding the staged list: a signal arriving meanwhile waits until
+    /// every rename is done, and then says what was written. A rename that
+    /// fails says which outputs it had already replaced.
     pub fn commit(mut self) -> CliResult<()> {
         // What became a special file or a folder while the run worked is
         // still not replaced: all are checked before the first rename.
@@ -481,18 +528,49 @@ impl Outputs {
                 )));
             }
         }
-        for mut s in std::mem::take(&mut self.staged) {
+        let mut all = std::mem::take(&mut self.staged);
+        let mut guard = staged();
+        for s in &mut all {
             let Some(f) = s.file.take() else { continue };
-            f.persist(&s.target).map_err(|e| {
-                CliError::internal(format!(
-                    "{}: cannot rename into place: {}",
+            if let Err(e) = f.persist(&s.target) {
+                let done = replaced().clone();
+                let done: Vec<String> = done.iter().map(|p| p.display().to_string()).collect();
+                return Err(CliError::internal(format!(
+                    "{}: cannot rename into place: {}; {}",
                     s.target.display(),
-                    e.error
-                ))
-            })?;
+                    e.error,
+                    match done.len() {
+                        0 => "no output replaced".to_string(),
+                        _ => format!("already replaced: {}", done.join(", ")),
+                    }
+                )));
+            }
+            guard.retain(|p| *p != s.path);
+            replaced().push(s.target.clone());
         }
+        drop(guard);
         Ok(())
     }
+}
+
+/// Whether standard output was closed when millplan started (`>&-`): Rust's
+/// runtime puts `/dev/null`, opened for reading and writing, in its place,
+/// and the program would be written to nothing while the run said it wrote
+/// it. A shell's `> /dev/null` opens it for writing only.
+fn stdout_was_closed() -> bool {
+    #[cfg(target_os = "linux")]
+    {
+        use rustix::fs::{fcntl_getfl, fstat, major, minor, FileType, OFlags};
+        let out = std::io::stdout();
+        let Ok(st) = fstat(&out) else {
+            return true;
+        };
+        let null = FileType::from_raw_mode(st.st_mode) == FileType::CharacterDevice
+            && (major(st.st_rdev), minor(st.st_rdev)) == (1, 3);
+        null && fcntl_getfl(&out).is_ok_and(|f| f & OFlags::RWMODE == OFlags::RDWR)
+    }
+    #[cfg(not(target_os = "linux"))]
+    false
 }
 
 /// Checks one output file: a regular file or a new name in an existing

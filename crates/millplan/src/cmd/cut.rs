@@ -119,7 +119,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let case = build_case(&a, &materials)?;
     let r = evaluate_case(&case).map_err(CliError::input)?;
     let mut outputs = Outputs::plan(
-        &[],
+        &a.materials.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
         &[("--csv", a.csv.as_deref()), ("--svg", a.svg.as_deref())],
         true,
     )?;
@@ -181,7 +181,8 @@ fn build_case(a: &Args, materials: &Materials) -> CliResult<CutCase> {
     arg("--dphi", a.dphi, Range::from(0.01, 10.0, "degrees"))?;
     let stickout = a.stickout.unwrap_or(3.0 * d);
     arg("--stickout", stickout, Range::positive(100.0 * d, "mm"))?;
-    arg("--modulus", a.modulus, Range::positive(2e6, "N/mm²"))?;
+    let (lo, hi) = millplan_models::force::deflect::MODULUS_RANGE;
+    arg("--modulus", a.modulus, Range::from(lo, hi, "N/mm²"))?;
     if !(1..=64).contains(&a.flutes) {
         return Err(CliError::input(format!(
             "--flutes {}: must be from 1 to 64",

@@ -135,7 +135,8 @@ pub fn force_setup(m: &ModelArgs) -> CliResult<ForceSetup> {
     arg("--helix", m.helix, Range::from(-70.0, 70.0, "degrees"))?;
     arg("--dz", m.dz, Range::from(0.001, 1.0, "mm"))?;
     arg("--dphi", m.dphi, Range::from(0.01, 10.0, "degrees"))?;
-    arg("--modulus", m.modulus, Range::positive(2e6, "N/mm²"))?;
+    let (lo, hi) = millplan_models::force::deflect::MODULUS_RANGE;
+    arg("--modulus", m.modulus, Range::from(lo, hi, "N/mm²"))?;
     arg(
         "--resolution",
         m.resolution,
@@ -223,6 +224,18 @@ pub fn prepare(path: &Path, m: &ModelArgs) -> CliResult<Prepared> {
         machine,
         stock_name,
     })
+}
+
+/// Refuses a run with a move that cut with the spindle stopped, at its line.
+pub fn stopped_spindle(path: &Path, run: &ForceRun) -> CliResult<()> {
+    match run.stopped_spindle() {
+        Some(line) => Err(CliError::input(format!(
+            "{}:{line}:1: {}",
+            path.display(),
+            millplan_plan::force::STOPPED_SPINDLE
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// Forces of the prepared program, with a progress bar.
@@ -364,6 +377,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     let mut inputs: Vec<&Path> = vec![&a.path];
     inputs.extend(m.stl.as_deref());
     inputs.extend(m.machine.as_deref());
+    inputs.extend(m.materials.as_deref());
+    let blank = m.stock.as_deref().and_then(StockSpec::file_of);
+    inputs.extend(blank.as_deref());
     let mut outputs = Outputs::plan(
         &inputs,
         &[
@@ -388,6 +404,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let (Some(before), Some(changes)) = (pass.before.take(), pass.changes.take()) else {
         return Err(CliError::internal("the feed pass left no result"));
     };
+    stopped_spindle(&a.path, &before)?;
     let s2 = strokes(
         &out,
         body_fn(m)?,

@@ -235,6 +235,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     let mut inputs: Vec<&Path> = vec![&path];
     inputs.extend(a.stl.as_deref());
     inputs.extend(a.machine.as_deref());
+    inputs.extend(a.materials.as_deref());
+    let blank = a.stock.as_deref().and_then(StockSpec::file_of);
+    inputs.extend(blank.as_deref());
     let mut outputs = Outputs::plan(
         &inputs,
         &[("-o", Some(&output)), ("--report", a.report.as_deref())],

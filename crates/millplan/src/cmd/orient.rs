@@ -362,6 +362,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let spec = stock_spec(&a)?;
     let mut inputs: Vec<&Path> = vec![&a.path, &a.stl];
     inputs.extend(a.machine.as_deref());
+    inputs.extend(a.materials.as_deref());
     if let Some(StockSpec::Stl(b)) = &spec {
         inputs.push(b);
     }

@@ -112,6 +112,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let mut inputs: Vec<&Path> = vec![&a.path];
     inputs.extend(a.stl.as_deref());
+    inputs.extend(a.machine.as_deref());
     if let StockSpec::Stl(p) = &spec {
         inputs.push(p);
     }
@@ -127,6 +128,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let strokes = program_strokes(&a, &parsed.program, machine.rapid)?;
+    if !(a.quiet || a.json) {
+        note_default_flute(&body_options(&a)?, &parsed.program);
+    }
     let part = match &a.stl {
         Some(p) => Some(read_surface(p, a.stl_units)?.0),
         None => None,
@@ -160,9 +164,26 @@ pub fn run(a: Args) -> CliResult<i32> {
     )
 }
 
+/// Says which flute length the shank and holder were simulated above when
+/// neither `--flute-length` nor the program's cutter gave one.
+fn note_default_flute(o: &BodyOptions, p: &millplan_nc::Program) {
+    if let Some(f) = p.operations.iter().find_map(|op| o.default_flute(op)) {
+        eprintln!(
+            "note: no flute length given (--flute-length, or the CUTTER record's height): the shank and holder are simulated above {f:.3} mm of flutes ({}·D)",
+            millplan_sim::stock::tool::DEFAULT_FLUTE_DIAMETERS
+        );
+    }
+}
+
 /// The tool body of an operation: its cutter (or --tool), flutes, shank and
 /// holder from the options (`ToolBody::for_operation`).
 fn tool_body(a: &Args) -> CliResult<impl Fn(&millplan_nc::Operation) -> Option<ToolBody>> {
+    let o = body_options(a)?;
+    Ok(move |op: &millplan_nc::Operation| ToolBody::for_operation(op, &o))
+}
+
+/// The tool options of the command line.
+fn body_options(a: &Args) -> CliResult<BodyOptions> {
     let shape = match &a.tool {
         Some(s) => Some(crate::cmd::tool_shape("--tool", s)?),
         None => None,
@@ -188,14 +209,13 @@ fn tool_body(a: &Args) -> CliResult<impl Fn(&millplan_nc::Operation) -> Option<T
             crate::cmd::arg(flag, v, Range::from(0.001, 10_000.0, "mm"))?;
         }
     }
-    let o = BodyOptions {
+    Ok(BodyOptions {
         shape,
         flute: a.flute_length,
         shank_r: a.shank.map(|d| d / 2.0),
         holder,
         no_cone: false,
-    };
-    Ok(move |op: &millplan_nc::Operation| ToolBody::for_operation(op, &o))
+    })
 }
 
 fn program_strokes(a: &Args, p: &millplan_nc::Program, rapid: f64) -> CliResult<Strokes> {

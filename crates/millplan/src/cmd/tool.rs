@@ -256,6 +256,16 @@ pub fn default_db() -> CliResult<PathBuf> {
     Ok(base.join("millplan").join("tools.db"))
 }
 
+/// [`default_db`] with its folder created (a `--db` folder never is).
+fn default_db_created() -> CliResult<PathBuf> {
+    let p = default_db()?;
+    if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| CliError::input(format!("{}: cannot create: {e}", dir.display())))?;
+    }
+    Ok(p)
+}
+
 /// A library error with the library's path: exit 2 when the arguments or the
 /// file are at fault, 1 when the system refused.
 fn db_err(path: &Path, e: DbError) -> CliError {
@@ -333,7 +343,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     }
     let path = match a.db.clone() {
         Some(p) => p,
-        None => default_db()?,
+        None => default_db_created()?,
     };
     let mut db = ToolDb::open(&path).map_err(|e| db_err(&path, e))?;
     let lib = Lib {
