@@ -130,7 +130,7 @@ impl Robot {
     /// the limits allow. `hint4` is A4 where the wrist is singular.
     pub fn ik_all(&self, tcp: &Pose, hint4: f64) -> Vec<Joints> {
         let mut out = Vec::new();
-        for q in self.ik_base(tcp, hint4) {
+        for (q, _) in self.ik_base(tcp, hint4) {
             self.windings(q, &mut out);
         }
         out
@@ -194,8 +194,41 @@ impl Robot {
         }
     }
 
-    /// Up to eight solutions, angles wrapped into (−π, π].
-    fn ik_base(&self, tcp: &Pose, hint4: f64) -> Vec<Joints> {
+    /// The solution with Status `status` (windings aside: A1, A4, A6 in
+    /// (−π, π]), when it exists and some winding of it is [`Robot::feasible`].
+    /// What a deflection needs: the winding does not change the pose.
+    pub fn ik_status(&self, tcp: &Pose, status: u8) -> Option<Joints> {
+        let stretched = -self.ik.gamma0 / self.ik.rate[2];
+        self.ik_base(tcp, 0.0)
+            .into_iter()
+            .filter(|(q, over)| {
+                let s = u8::from(*over)
+                    | (u8::from(q[2] >= stretched) << 1)
+                    | (u8::from(q[4] <= 0.0) << 2);
+                s == status
+            })
+            .map(|(q, _)| q)
+            .find(|q| self.feasible_winding(q).is_some())
+    }
+
+    /// `q` with A1, A4, A6 turned by whole turns into the limits less the
+    /// margin, if it can be, and [`Robot::feasible`].
+    pub fn feasible_winding(&self, q: &Joints) -> Option<Joints> {
+        let mut out = *q;
+        let m = self.margin;
+        for i in [0, 3, 5] {
+            let [lo, hi] = self.limits[i];
+            out[i] = [0.0, TAU, -TAU]
+                .iter()
+                .map(|k| q[i] + k)
+                .find(|a| *a >= lo + m && *a <= hi - m)?;
+        }
+        self.feasible(&out).then_some(out)
+    }
+
+    /// Up to eight solutions, angles wrapped into (−π, π], each with whether
+    /// it is in the overhead area.
+    fn ik_base(&self, tcp: &Pose, hint4: f64) -> Vec<(Joints, bool)> {
         let g = &self.ik;
         let flange = tcp.mul(&self.tool.inverse());
         let wc = flange.apply(g.wc_in_flange);
@@ -217,7 +250,7 @@ impl Robot {
                 let q3 = wrap((gamma - g.gamma0) / g.rate[2]);
                 for flip in [false, true] {
                     if let Some(q) = self.wrist([q1, q2, q3, 0.0, 0.0, 0.0], &flange, flip, hint4) {
-                        out.push(q);
+                        out.push((q, overhead));
                     }
                 }
             }

@@ -8,8 +8,13 @@
 //!   wrist with KUKA's Status and Turn, the feasibility of a configuration.
 //! - [`stiffness`]: the compliance Jacobian (one axis per joint, 6×8, or three
 //!   torsional axes per joint, 6×24), C = J K⁻¹ Jᵀ and the deflection C·w.
+//! - [`machining`]: a toolpath on the robot: the load along it, the
+//!   deflection at each point, offline compensation, KRL of the compensated
+//!   path, the workpiece placement search ([`anneal`]).
 
+pub mod anneal;
 pub mod kin;
+pub mod machining;
 pub mod pose;
 pub mod robot;
 pub mod stiffness;
@@ -18,3 +23,8 @@ pub use kin::{Config, IkError, Joints};
 pub use pose::Pose;
 pub use robot::{Robot, RobotError};
 pub use stiffness::{Compliance, Deflection, Spring, Torsional, Variant};
+
+/// A `$VEL.CP` in m/s to the 6 decimals it is written with.
+pub fn round_vel(v: f64) -> f64 {
+    (v * 1e6).round() / 1e6
+}
