@@ -157,6 +157,36 @@ pub fn resample(run: &[PathPoint], step: f64) -> Vec<PathPoint> {
     out
 }
 
+/// Points every `step` mm of length along a run (the first and last
+/// kept; corners in between are not): the paper's 10 mm samples.
+pub fn sample_every(run: &[PathPoint], step: f64) -> Vec<PathPoint> {
+    let mut out = vec![run[0]];
+    let mut next = step; // length at which the next sample lies
+    let mut walked = 0.0;
+    for w in run.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let len = (b.p - a.p).length();
+        while next <= walked + len && len > 0.0 {
+            let t = (next - walked) / len;
+            let axis = a.axis.lerp(b.axis, t).try_normalize().unwrap_or(b.axis);
+            out.push(PathPoint {
+                p: a.p.lerp(b.p, t),
+                axis,
+                ..b
+            });
+            next += step;
+        }
+        walked += len;
+    }
+    if out
+        .last()
+        .is_some_and(|l| (l.p - run[run.len() - 1].p).length() > 1e-9)
+    {
+        out.push(run[run.len() - 1]);
+    }
+    out
+}
+
 /// The feed direction at each point: toward the next (the last: from the
 /// one before), perpendicular to the tool axis.
 pub fn feed_dirs(run: &[PathPoint]) -> Vec<DVec3> {
@@ -408,4 +438,114 @@ pub fn place(
         max: d.max,
         evaluations: best.evaluations,
     })
+}
+
+/// A program compensated for the robot's deflection.
+#[derive(Clone, Debug)]
+pub struct Compensated {
+    /// The commanded runs, p_cmd = p_ideal − Δp, every `spacing` mm.
+    pub runs: Vec<Vec<PathPoint>>,
+    /// Mean and largest |Δp| over all points before compensation, mm.
+    pub mean: f64,
+    pub max: f64,
+    pub points: usize,
+}
+
+/// Compensates every cutting run of `prog` (in the workpiece frame, placed
+/// at `place`): resampled every `spacing` mm (0.3 in the paper), Δp from
+/// the nominal path, p_cmd = p − Δp, one Status throughout each run.
+pub fn compensate_program(
+    robot: &Robot,
+    variant: Variant,
+    prog: &Program,
+    place: &Placement,
+    load: &Load,
+    spacing: f64,
+) -> Result<Compensated, MachiningError> {
+    let mut runs = Vec::new();
+    let (mut sum, mut max, mut points) = (0.0, 0.0f64, 0);
+    for run in cutting_runs(prog)? {
+        let ideal = resample(&run, spacing);
+        let d = robot.deflections(variant, place, &ideal, load, None)?;
+        sum += d.mean * ideal.len() as f64;
+        max = max.max(d.max);
+        points += ideal.len();
+        runs.push(compensate(&ideal, &d.dp));
+    }
+    Ok(Compensated {
+        runs,
+        mean: sum / points as f64,
+        max,
+        points,
+    })
+}
+
+/// The cutting runs of `prog` resampled every 10 mm (the paper's placement
+/// objective), as one list.
+pub fn placement_samples(prog: &Program) -> Result<Vec<PathPoint>, MachiningError> {
+    Ok(cutting_runs(prog)?
+        .iter()
+        .flat_map(|r| resample(r, 10.0))
+        .collect())
+}
+
+/// Schnoes & Zaeh Table 3 (process-models §1.5e): the flute-segment
+/// coefficients for EN AW-2007, (k_e N/mm, k_c N/mm²) along the flute (t),
+/// outward (d) and along the cutting velocity (n).
+pub const EN_AW_2007: [(f64, f64); 3] = [(4.63, 57.5), (-11.8, -76.5), (-11.0, -672.0)];
+
+/// The mean force on a flat end mill cutting a full slot with the
+/// flute-segment law of Equation 10 and the EN AW-2007 coefficients:
+/// straight flutes (the helix shifts the phase, not the mean),
+/// h = f_z·sin φ, φ from 0 to π, `flutes` flutes, depth `ap` mm. In closed
+/// form, per revolution: F_feed = N·ap/(2π)·(2k_de + k_dc·f_z·π/2),
+/// F_cross = N·ap/(2π)·(−2k_ne − k_nc·f_z·π/2), F_axial = N·ap/(2π)·(π·k_te + 2k_tc·f_z).
+pub fn slot_mean_load(flutes: f64, ap: f64, fz: f64) -> Load {
+    let [(kte, ktc), (kde, kdc), (kne, knc)] = EN_AW_2007;
+    let k = flutes * ap / std::f64::consts::TAU;
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    Load {
+        feed: k * (2.0 * kde + kdc * fz * half_pi),
+        cross: k * (-2.0 * kne - knc * fz * half_pi),
+        axial: k * (std::f64::consts::PI * kte + 2.0 * ktc * fz),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The closed form against Equation 10 summed edge element by edge
+    /// element over a revolution (radial r̂ = (sin φ, cos φ), cutting
+    /// velocity v̂ = (cos φ, −sin φ), feed +x).
+    #[test]
+    fn slot_load_is_equation_10_averaged() {
+        let (n, ap, fz) = (3.0, 6.0, 0.08);
+        let [(kte, ktc), (kde, kdc), (kne, knc)] = EN_AW_2007;
+        let steps = 200_000;
+        let mut f = DVec3::ZERO;
+        for i in 0..steps {
+            let phi = (i as f64 + 0.5) / steps as f64 * std::f64::consts::TAU;
+            if phi > std::f64::consts::PI {
+                continue;
+            }
+            let h = fz * phi.sin();
+            let d = DVec3::new(phi.sin(), phi.cos(), 0.0);
+            let v = DVec3::new(phi.cos(), -phi.sin(), 0.0);
+            f += (DVec3::Z * (kte + ktc * h) + d * (kde + kdc * h) + v * (kne + knc * h)) * ap;
+        }
+        f *= n / steps as f64;
+        let l = slot_mean_load(n, ap, fz);
+        assert!(
+            (f - DVec3::new(l.feed, l.cross, l.axial)).length() < 1e-6,
+            "{f} vs {l:?}"
+        );
+        // The paper's slot (a_e 12, a_p 6, f_z 0.08, three flutes): about a third of a kilonewton.
+        assert!(
+            (l.feed + 95.1).abs() < 0.1
+                && (l.cross - 305.0).abs() < 0.5
+                && (l.axial - 68.0).abs() < 0.1,
+            "{l:?}"
+        );
+    }
 }

@@ -1,7 +1,8 @@
 //! `millplan robot`: the compliant-joint robot model through the binary.
 
-mod common;
-use common::bin;
+fn bin() -> std::process::Command {
+    std::process::Command::new(env!("CARGO_BIN_EXE_millplan"))
+}
 
 fn run(args: &[&str]) -> std::process::Output {
     bin().args(args).output().expect("runs")
@@ -114,4 +115,109 @@ fn deflect_refuses_bad_input_with_exit_2() {
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("arm.toml:1:8:"), "{err}");
+}
+
+/// A 100 mm × 50 mm zig-zag at z 0, tool vertical, as APT.
+fn zigzag_apt(dir: &std::path::Path) -> std::path::PathBuf {
+    let mut s = String::from("CUTTER/12\nGOTO/0,0,10,0,0,1\nFEDRAT/1200\n");
+    for row in 0..3 {
+        let y = row as f64 * 25.0;
+        let (a, b) = if row % 2 == 0 {
+            (0.0, 100.0)
+        } else {
+            (100.0, 0.0)
+        };
+        s.push_str(&format!("GOTO/{a},{y},0,0,0,1\nGOTO/{b},{y},0,0,0,1\n"));
+    }
+    let p = dir.join("zigzag.apt");
+    std::fs::write(&p, s).expect("write");
+    p
+}
+
+/// `robot compensate`: the JSON keys of the issue, and the KRL it writes
+/// reads back with one commanded point per 0.3 mm, moved by less than the
+/// largest deflection.
+#[test]
+fn compensate_writes_krl_and_reports() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let apt = zigzag_apt(dir.path());
+    let out = dir.path().join("slot.src");
+    let j = json(&[
+        "robot",
+        "compensate",
+        apt.to_str().expect("utf8"),
+        "--pose",
+        "1300,-100,300,0",
+        "--load",
+        "-60,150,40",
+        "-o",
+        out.to_str().expect("utf8"),
+        "--json",
+    ]);
+    let (mean, max) = (
+        j["mean_deflection_mm"].as_f64().expect("mean"),
+        j["max_deflection_mm"].as_f64().expect("max"),
+    );
+    assert!(mean > 0.0 && max >= mean && max < 2.0, "{j}");
+    let points = j["points"].as_u64().expect("points") as usize;
+    // 250 mm of cutting (plus the plunge) at 0.3 mm.
+    assert!(points > 250.0_f64.div_euclid(0.3) as usize, "{points}");
+    let text = std::fs::read_to_string(&out).expect("written");
+    let k = millplan_nc::krl::read(&text, &mut |_| None).expect("KRL reads back");
+    assert_eq!(
+        k.statements
+            .iter()
+            .filter(|l| matches!(l.statement, millplan_nc::krl::Statement::Move { .. }))
+            .count(),
+        points
+    );
+    assert!(text.contains("$VEL.CP = 0.020000"), "1200 mm/min in m/s");
+    // Out of reach: located at the first line it cannot machine, exit 2.
+    let o = run(&[
+        "robot",
+        "compensate",
+        apt.to_str().expect("utf8"),
+        "--pose",
+        "5000,0,0,0",
+        "--load",
+        "0,100,0",
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("zigzag.apt:"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// `robot place`: the JSON keys of the issue, feasible, reproducible for a seed.
+#[test]
+fn place_is_seeded() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let apt = zigzag_apt(dir.path());
+    let args = [
+        "robot",
+        "place",
+        apt.to_str().expect("utf8"),
+        "--load",
+        "-60,150,40",
+        "--seed",
+        "3",
+        "--restarts",
+        "1",
+        "--json",
+    ];
+    let a = json(&args);
+    assert_eq!(a["feasible"], true);
+    for k in ["x", "y", "z", "rz"] {
+        assert!(a["pose"][k].is_number(), "{a}");
+    }
+    assert!(a["evaluations"].as_u64().expect("evaluations") > 100);
+    assert!(
+        a["mean_deflection_mm"].as_f64().expect("mean")
+            <= a["max_deflection_mm"].as_f64().expect("max")
+    );
+    assert_eq!(json(&args), a);
 }

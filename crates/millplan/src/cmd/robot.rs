@@ -5,6 +5,7 @@ use crate::cmd::{arg, Range};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use clap::{Subcommand, ValueEnum};
 use millplan_geom::DVec3;
+use millplan_robot::machining::{self, Load, Placement};
 use millplan_robot::{Robot, Variant};
 use serde::Serialize;
 use std::path::Path;
@@ -31,6 +32,80 @@ pub enum RobotCommand {
     /// The deflection of the tool centre point at one pose under a force
     /// (and moment) acting at it, in the robot's base frame.
     Deflect(DeflectArgs),
+    /// Offline compensation of a toolpath (APT/CL or G-code, in the
+    /// workpiece frame): the path resampled, the deflection under the load
+    /// at every point, the commanded points moved by minus the deflection,
+    /// written as a KUKA KRL program.
+    Compensate(CompensateArgs),
+    /// Where to place the workpiece in the robot's workspace so that the
+    /// mean deflection along the path (sampled every 10 mm) is smallest:
+    /// constrained simulated annealing over x, y, z and the turn about the
+    /// vertical, seeded and reproducible.
+    Place(PlaceArgs),
+}
+
+/// The robot and the process load, shared by `compensate` and `place`.
+#[derive(clap::Args)]
+pub struct ProcessArgs {
+    /// The robot: `kr240` for the bundled KUKA KR 240 R2500, or a robot file.
+    #[arg(long, default_value = "kr240")]
+    pub robot: String,
+    /// The process force on the tool in newtons, in each point's feed frame:
+    /// along the feed, across it (to the left seen from the spindle), along
+    /// the tool axis (toward the spindle).
+    #[arg(long, allow_hyphen_values = true, value_name = "FEED,CROSS,AXIAL")]
+    pub load: String,
+    /// Compliant axes per frame: three (x, y, z) or one (the joint's).
+    #[arg(long, value_enum, default_value = "three")]
+    pub axes: VariantArg,
+    /// Print JSON on standard output; errors too, as JSON on standard error.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(clap::Args)]
+pub struct CompensateArgs {
+    /// The toolpath (APT/CL or G-code), coordinates in the workpiece frame.
+    pub path: std::path::PathBuf,
+    #[command(flatten)]
+    pub process: ProcessArgs,
+    /// The workpiece frame in the robot base: origin X,Y,Z in mm and the
+    /// turn RZ about the vertical in degrees (as `robot place` prints it).
+    #[arg(long, allow_hyphen_values = true, value_name = "X,Y,Z,RZ")]
+    pub pose: String,
+    /// Distance between the commanded points, mm (the paper: 0.3).
+    #[arg(long, default_value_t = 0.3)]
+    pub spacing: f64,
+    /// Motions per KRL sub-program (a main program calls them); 0 writes
+    /// one file.
+    #[arg(long, default_value_t = 5000)]
+    pub max_points: usize,
+    /// The KRL program to write (.src); sub-programs go beside it.
+    #[arg(short = 'o', long)]
+    pub output: std::path::PathBuf,
+}
+
+#[derive(clap::Args)]
+pub struct PlaceArgs {
+    /// The toolpath (APT/CL or G-code), coordinates in the workpiece frame.
+    pub path: std::path::PathBuf,
+    #[command(flatten)]
+    pub process: ProcessArgs,
+    /// The box the workpiece origin may be placed in, in the robot base:
+    /// X0,Y0,Z0,X1,Y1,Z1 in mm.
+    #[arg(
+        long = "box",
+        allow_hyphen_values = true,
+        value_name = "X0,Y0,Z0,X1,Y1,Z1",
+        default_value = "800,-800,0,1800,800,800"
+    )]
+    pub bounds: String,
+    /// Seed of the search: the same seed gives the same placement.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Independent runs of the search from random starts; the best is kept.
+    #[arg(long, default_value_t = 4)]
+    pub restarts: usize,
 }
 
 /// Which compliant axes each frame of the chain has.
@@ -68,6 +143,8 @@ pub struct DeflectArgs {
 pub fn run(a: Args) -> CliResult<i32> {
     match a.command {
         RobotCommand::Deflect(d) => deflect(d),
+        RobotCommand::Compensate(c) => compensate(c),
+        RobotCommand::Place(p) => place(p),
     }
 }
 
@@ -192,4 +269,219 @@ fn sig(x: f64, digits: i32) -> f64 {
     }
     let scale = 10f64.powi(digits - 1 - x.abs().log10().floor() as i32);
     (x * scale).round() / scale
+}
+
+fn variant(v: VariantArg) -> Variant {
+    match v {
+        VariantArg::Three => Variant::ThreeAxis,
+        VariantArg::One => Variant::OneAxis,
+    }
+}
+
+fn process(p: &ProcessArgs) -> CliResult<(Robot, Load, Variant)> {
+    let robot = load_robot(&p.robot)?;
+    let l = numbers(
+        "--load",
+        &p.load,
+        &["FEED", "CROSS", "AXIAL"],
+        Range::from(-1e5, 1e5, "N"),
+    )?;
+    Ok((
+        robot,
+        Load {
+            feed: l[0],
+            cross: l[1],
+            axial: l[2],
+        },
+        variant(p.axes),
+    ))
+}
+
+fn read_path(path: &Path) -> CliResult<millplan_nc::Program> {
+    let parsed = crate::io::read_program(path, millplan_nc::ReadOptions::default())?;
+    Ok(parsed.program)
+}
+
+fn machining_error(path: &Path, e: machining::MachiningError) -> CliError {
+    match e {
+        machining::MachiningError::Unreachable { line, .. }
+        | machining::MachiningError::Program { line, .. } => {
+            let msg = e.to_string();
+            let rest = msg.split_once(": ").map_or(msg.as_str(), |(_, r)| r);
+            CliError::input(format!("{}:{line}:1: {rest}", path.display()))
+        }
+        machining::MachiningError::Empty => CliError::input(format!("{}: {e}", path.display())),
+    }
+}
+
+#[derive(Serialize)]
+struct CompensateJson {
+    mean_deflection_mm: f64,
+    max_deflection_mm: f64,
+    points: usize,
+    files: Vec<String>,
+}
+
+fn compensate(a: CompensateArgs) -> CliResult<i32> {
+    let (robot, load, variant) = process(&a.process)?;
+    let pose = numbers(
+        "--pose",
+        &a.pose,
+        &["X", "Y", "Z", "RZ"],
+        Range::from(-1e5, 1e5, "mm or degrees"),
+    )?;
+    arg("--spacing", a.spacing, Range::from(0.01, 100.0, "mm"))?;
+    let place = Placement {
+        x: pose[0],
+        y: pose[1],
+        z: pose[2],
+        rz: pose[3].to_radians(),
+    };
+    crate::io::Outputs::plan(&[a.path.as_path()], &[("-o", Some(&a.output))], false)?;
+    let prog = read_path(&a.path)?;
+    let c = machining::compensate_program(&robot, variant, &prog, &place, &load, a.spacing)
+        .map_err(|e| machining_error(&a.path, e))?;
+    let stem = a
+        .output
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("millplan");
+    let k = machining::krl_program(stem, &c.runs, &place, a.spacing / 2.0);
+    let o = millplan_nc::write::krl::KrlOptions {
+        name: stem.into(),
+        max_points: a.max_points,
+        ..Default::default()
+    };
+    let files = millplan_nc::write::krl::write(&k, &o);
+    let paths: Vec<std::path::PathBuf> = files
+        .iter()
+        .enumerate()
+        .map(|(i, (name, _))| {
+            if i == 0 {
+                a.output.clone()
+            } else {
+                a.output.with_file_name(format!("{name}.src"))
+            }
+        })
+        .collect();
+    let planned: Vec<(&str, Option<&Path>)> =
+        paths.iter().map(|p| ("-o", Some(p.as_path()))).collect();
+    let mut outputs = crate::io::Outputs::plan(&[a.path.as_path()], &planned, false)?;
+    for (p, (_, text)) in paths.iter().zip(&files) {
+        outputs.write(p, text.as_bytes())?;
+    }
+    outputs.commit()?;
+    let out = CompensateJson {
+        mean_deflection_mm: sig(c.mean, 6),
+        max_deflection_mm: sig(c.max, 6),
+        points: c.points,
+        files: paths.iter().map(|p| p.display().to_string()).collect(),
+    };
+    if a.process.json {
+        outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
+    } else {
+        outln!(
+            "deflection before compensation: mean {} mm, max {} mm over {} points",
+            out.mean_deflection_mm,
+            out.max_deflection_mm,
+            out.points
+        );
+        outln!("wrote {}", out.files.join(", "));
+    }
+    Ok(EXIT_OK)
+}
+
+#[derive(Serialize)]
+struct PoseJson {
+    x: f64,
+    y: f64,
+    z: f64,
+    rz: f64,
+}
+
+#[derive(Serialize)]
+struct PlaceJson {
+    pose: PoseJson,
+    mean_deflection_mm: f64,
+    max_deflection_mm: f64,
+    feasible: bool,
+    evaluations: usize,
+}
+
+fn place(a: PlaceArgs) -> CliResult<i32> {
+    let (robot, load, variant) = process(&a.process)?;
+    let b = numbers(
+        "--box",
+        &a.bounds,
+        &["X0", "Y0", "Z0", "X1", "Y1", "Z1"],
+        Range::from(-1e5, 1e5, "mm"),
+    )?;
+    if !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]) {
+        return Err(CliError::input(format!(
+            "--box {}: each lower corner coordinate must be below the upper",
+            a.bounds
+        )));
+    }
+    arg("--restarts", a.restarts as f64, Range::from(1.0, 100.0, ""))?;
+    let prog = read_path(&a.path)?;
+    let samples = machining::placement_samples(&prog).map_err(|e| machining_error(&a.path, e))?;
+    let search = machining::PlaceSearch {
+        lo: DVec3::new(b[0], b[1], b[2]),
+        hi: DVec3::new(b[3], b[4], b[5]),
+        settings: millplan_robot::anneal::Settings {
+            seed: a.seed,
+            restarts: a.restarts,
+            ..Default::default()
+        },
+    };
+    let found = machining::place(&robot, variant, &samples, &load, &search);
+    let out = match &found {
+        Some(p) => PlaceJson {
+            pose: PoseJson {
+                x: sig(p.place.x, 7),
+                y: sig(p.place.y, 7),
+                z: sig(p.place.z, 7),
+                rz: sig(p.place.rz.to_degrees(), 6),
+            },
+            mean_deflection_mm: sig(p.mean, 6),
+            max_deflection_mm: sig(p.max, 6),
+            feasible: true,
+            evaluations: p.evaluations,
+        },
+        None => PlaceJson {
+            pose: PoseJson {
+                x: 0.0,
+                y: 0.0,
+                z: 0.0,
+                rz: 0.0,
+            },
+            mean_deflection_mm: 0.0,
+            max_deflection_mm: 0.0,
+            feasible: false,
+            evaluations: 0,
+        },
+    };
+    if a.process.json {
+        outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
+    } else if out.feasible {
+        let p = &out.pose;
+        outln!(
+            "placement: X {} Y {} Z {} mm, RZ {} degrees",
+            p.x,
+            p.y,
+            p.z,
+            p.rz
+        );
+        outln!(
+            "deflection: mean {} mm, max {} mm ({} evaluations)",
+            out.mean_deflection_mm,
+            out.max_deflection_mm,
+            out.evaluations
+        );
+    } else {
+        outln!(
+            "no feasible placement in the box: the robot cannot machine the path anywhere in it"
+        );
+    }
+    Ok(if out.feasible { EXIT_OK } else { 3 })
 }
