@@ -16,11 +16,11 @@ use millplan_robot::machining::{
 use millplan_robot::{Robot, Variant};
 use std::time::Instant;
 
-/// A raster of `rows` passes `len` mm long, 10 mm apart, at `step` spacing.
-fn raster(rows: usize, len: f64, step: f64) -> Vec<PathPoint> {
+/// A raster of `rows` passes `len` mm long, `gap` mm apart, at `step` spacing.
+fn raster(rows: usize, len: f64, step: f64, gap: f64) -> Vec<PathPoint> {
     let mut v = Vec::new();
     for r in 0..rows {
-        let y = r as f64 * 10.0;
+        let y = r as f64 * gap;
         let (a, b) = if r % 2 == 0 { (0.0, len) } else { (len, 0.0) };
         v.push(PathPoint {
             p: DVec3::new(a, y, 0.0),
@@ -77,7 +77,7 @@ fn main() {
     };
 
     // 1. One million points.
-    let big = raster(10, 30_000.0, 0.3);
+    let big = raster(500, 600.0, 0.3, 1.0);
     println!("path of {} points", big.len());
     let t = Instant::now();
     let d = robot
@@ -99,7 +99,7 @@ fn main() {
     );
 
     // 2. Placement on a 10,000-point path.
-    let path = raster(10, 300.0, 0.3);
+    let path = raster(10, 300.0, 0.3, 10.0);
     let samples = machining::sample_every(&path, 10.0);
     let search = PlaceSearch {
         lo: DVec3::new(800.0, -800.0, 0.0),

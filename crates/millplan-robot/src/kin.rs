@@ -198,15 +198,8 @@ impl Robot {
     /// (−π, π]), when it exists and some winding of it is [`Robot::feasible`].
     /// What a deflection needs: the winding does not change the pose.
     pub fn ik_status(&self, tcp: &Pose, status: u8) -> Option<Joints> {
-        let stretched = -self.ik.gamma0 / self.ik.rate[2];
-        self.ik_base(tcp, 0.0)
+        self.ik_base_for(tcp, 0.0, Some(status))
             .into_iter()
-            .filter(|(q, over)| {
-                let s = u8::from(*over)
-                    | (u8::from(q[2] >= stretched) << 1)
-                    | (u8::from(q[4] <= 0.0) << 2);
-                s == status
-            })
             .map(|(q, _)| q)
             .find(|q| self.feasible_winding(q).is_some())
     }
@@ -229,11 +222,22 @@ impl Robot {
     /// Up to eight solutions, angles wrapped into (−π, π], each with whether
     /// it is in the overhead area.
     fn ik_base(&self, tcp: &Pose, hint4: f64) -> Vec<(Joints, bool)> {
+        self.ik_base_for(tcp, hint4, None)
+    }
+
+    /// As [`Robot::ik_base`], only the branches of Status `want` when given
+    /// (the arm and wrist branches are chosen before they are solved).
+    fn ik_base_for(&self, tcp: &Pose, hint4: f64, want: Option<u8>) -> Vec<(Joints, bool)> {
         let g = &self.ik;
+        let stretched = -g.gamma0 / g.rate[2];
+        let bit = |b: u8| want.map(|s| s & b != 0);
         let flange = tcp.mul(&self.tool.inverse());
         let wc = flange.apply(g.wc_in_flange);
         let mut out = Vec::with_capacity(8);
         for overhead in [false, true] {
+            if bit(1).is_some_and(|o| o != overhead) {
+                continue;
+            }
             let rho = wc.x.hypot(wc.y) * if overhead { -1.0 } else { 1.0 };
             let psi = wc.y.atan2(wc.x) + if overhead { PI } else { 0.0 };
             let du = rho - g.shoulder[0];
@@ -248,9 +252,18 @@ impl Robot {
                 let q1 = wrap(psi / g.rate[0]);
                 let q2 = wrap((a2 - g.angle2) / g.rate[1]);
                 let q3 = wrap((gamma - g.gamma0) / g.rate[2]);
+                if bit(2).is_some_and(|b| b != (q3 >= stretched)) {
+                    continue;
+                }
                 for flip in [false, true] {
                     if let Some(q) = self.wrist([q1, q2, q3, 0.0, 0.0, 0.0], &flange, flip, hint4) {
+                        if bit(4).is_some_and(|b| b != (q[4] <= 0.0)) {
+                            continue;
+                        }
                         out.push((q, overhead));
+                        if want.is_some() {
+                            break;
+                        }
                     }
                 }
             }
