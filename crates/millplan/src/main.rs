@@ -80,6 +80,7 @@ enum Command {
     Setup(cmd::setup::Args),
     Simulate(cmd::simulate::Args),
     Tool(cmd::tool::Args),
+    Robot(cmd::robot::Args),
     Thread(cmd::thread::Args),
     Explain(cmd::explain::Args),
     #[command(name = "wd-sweep")]
@@ -242,6 +243,7 @@ fn run(command: Command) -> error::CliResult<i32> {
         Command::Setup(a) => cmd::setup::run(a),
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Tool(a) => cmd::tool::run(a),
+        Command::Robot(a) => cmd::robot::run(a),
         Command::Thread(a) => cmd::thread::run(a),
         Command::Explain(a) => cmd::explain::run(a),
         Command::Completions(a) => cmd::completions::run(a),

@@ -455,7 +455,7 @@ fn help_explains_every_command() {
 /// ARCHITECTURE.md's dependency rule, read from `cargo metadata`: each
 /// library crate depends only on the crates below it
 /// (geom ← nc; geom ← models; nc + models ← sim ← plan ← report ← driver;
-/// tooldb alone, below driver), and no library on the command-line, terminal or temporary-file
+/// tooldb alone, below driver; geom + nc ← robot), and no library on the command-line, terminal or temporary-file
 /// crates that only the binary uses.
 #[test]
 fn crate_dependencies_point_one_way() {
@@ -505,6 +505,7 @@ fn crate_dependencies_point_one_way() {
             ],
         ),
         ("millplan-tooldb", &[]),
+        ("millplan-robot", &["millplan-geom", "millplan-nc"]),
         (
             "millplan-driver",
             &[

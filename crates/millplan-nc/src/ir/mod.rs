@@ -98,6 +98,9 @@ pub enum Dialect {
     Heidenhain,
     /// Made by millplan (a generator or a pass), not read from a file.
     Generated,
+    /// A KUKA KRL robot program (read by `krl`, not by the NC front ends;
+    /// not in [`Dialect::ALL`]).
+    Krl,
 }
 
 impl Dialect {
@@ -131,6 +134,7 @@ impl Dialect {
             Dialect::LinuxCnc => "linuxcnc",
             Dialect::Heidenhain => "heidenhain",
             Dialect::Generated => "generated",
+            Dialect::Krl => "krl",
         }
     }
 

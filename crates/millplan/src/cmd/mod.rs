@@ -16,6 +16,7 @@ pub mod orient;
 pub mod post;
 pub mod raster;
 pub mod reorder;
+pub mod robot;
 pub mod setup;
 pub mod simulate;
 pub mod speed;
