@@ -8,7 +8,9 @@
 //! reports it ([`report`]). The binary parses arguments, reads the files,
 //! builds the job, calls it and prints; it decides nothing.
 
+pub mod check;
 pub mod checks;
+pub mod command_defaults;
 pub mod defaults;
 pub mod finish;
 pub mod job;

@@ -7,7 +7,7 @@ use millplan_models::cutter::Shape;
 use millplan_models::force::case::{evaluate_case, CaseResult, CutCase};
 use millplan_models::force::coeffs::{Coeffs, Law};
 use millplan_models::force::converge::Refine;
-use millplan_models::force::deflect::{Cantilever, DE_RATIO, E_CARBIDE};
+use millplan_models::force::deflect::{Cantilever, DE_RATIO};
 use millplan_models::force::edge::Tool;
 use millplan_models::force::materials::Materials;
 use millplan_models::force::{Grid, MinMax};
@@ -38,10 +38,10 @@ pub struct Args {
     #[arg(long)]
     pub tool: String,
     /// Number of flutes.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cut::FLUTES)]
     pub flutes: usize,
     /// Helix angle, degrees.
-    #[arg(long, default_value_t = 30.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cut::HELIX_DEG, allow_hyphen_values = true)]
     pub helix: f64,
     /// Feed per tooth, mm.
     #[arg(long)]
@@ -58,12 +58,12 @@ pub struct Args {
     pub slot: bool,
     /// Lead angle, degrees: a right-handed turn about the cross-feed c;
     /// positive leans the shank toward the feed (+f), the tip trailing.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cut::LEAD_DEG, allow_hyphen_values = true)]
     pub lead: f64,
     /// Tilt angle, degrees: a right-handed turn about the feed f; positive
     /// leans the shank toward −c (the earlier passes' side, right of the
     /// feed seen from the shank).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cut::TILT_DEG, allow_hyphen_values = true)]
     pub tilt: f64,
     /// Order of the two turns, as in `orient`: tilt-then-lead
     /// (process-models §0, R = Rx(tilt)·Ry(lead), axis (sin L, −cos L·sin T,
@@ -79,7 +79,7 @@ pub struct Args {
     #[arg(long)]
     pub flute_length: Option<f64>,
     /// Young's modulus of the tool, N/mm².
-    #[arg(long, default_value_t = E_CARBIDE)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cut::MODULUS)]
     pub modulus: f64,
     /// Named material (`millplan force materials` lists them).
     #[arg(long, conflicts_with = "coeffs", required_unless_present = "coeffs")]
@@ -95,10 +95,10 @@ pub struct Args {
     pub n: f64,
     /// Axial slice height, mm: the largest used. The model halves it (up to
     /// four times) until F_xy,max and T_max are estimated within 0.4 %.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cut::DZ)]
     pub dz: f64,
     /// Rotation step, degrees: the largest used, halved like --dz.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cut::DPHI_DEG)]
     pub dphi: f64,
     /// Use exactly --dz and --dphi, without refining them.
     #[arg(long)]
@@ -179,7 +179,9 @@ fn build_case(a: &Args, materials: &Materials) -> CliResult<CutCase> {
     let n = arg("--n", a.n, Range::positive(MAX_SPINDLE, "1/min"))?;
     arg("--dz", a.dz, Range::from(0.001, 1.0, "mm"))?;
     arg("--dphi", a.dphi, Range::from(0.01, 10.0, "degrees"))?;
-    let stickout = a.stickout.unwrap_or(3.0 * d);
+    let stickout = a
+        .stickout
+        .unwrap_or(millplan_driver::command_defaults::cut::STICKOUT_PER_D * d);
     arg("--stickout", stickout, Range::positive(100.0 * d, "mm"))?;
     arg("--modulus", a.modulus, Range::positive(2e6, "N/mm²"))?;
     if !(1..=64).contains(&a.flutes) {

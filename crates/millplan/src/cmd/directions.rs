@@ -41,10 +41,10 @@ pub struct Args {
     #[arg(long, default_value = "ball:10")]
     pub tool: String,
     /// Stepover of generated rasters, mm.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::directions::STEPOVER)]
     pub stepover: f64,
     /// Point spacing of generated rasters, mm.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::directions::STEP)]
     pub step: f64,
     /// Part surface (STL) in the same coordinates as the paths.
     #[arg(long)]

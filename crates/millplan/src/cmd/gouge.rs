@@ -31,10 +31,10 @@ pub struct Args {
     #[arg(long, value_enum)]
     pub stl_units: Option<UnitArg>,
     /// Depth that counts as a gouge, mm.
-    #[arg(long, default_value_t = 0.005)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::gouge::TOL)]
     pub tol: f64,
     /// Sampling step along the moves, mm.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::gouge::STEP)]
     pub step: f64,
     /// Check rapid moves too.
     #[arg(long)]

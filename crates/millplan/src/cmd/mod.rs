@@ -136,16 +136,16 @@ pub fn tool_shape(flag: &str, s: &str) -> CliResult<millplan_models::cutter::Sha
 #[derive(clap::Args, Clone, Copy, Debug)]
 pub struct CuttingData {
     /// Cutting speed, m/min.
-    #[arg(long, default_value_t = 63.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cutting::VC, allow_negative_numbers = true)]
     pub vc: f64,
     /// Feed per tooth, mm.
-    #[arg(long, default_value_t = 0.125, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cutting::FZ, allow_negative_numbers = true)]
     pub fz: f64,
     /// Number of flutes.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cutting::FLUTES)]
     pub flutes: u32,
     /// Stock thickness along the surface normal (finishing allowance), mm.
-    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cutting::AP, allow_negative_numbers = true)]
     pub ap: f64,
 }
 

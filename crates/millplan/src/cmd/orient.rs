@@ -75,11 +75,11 @@ pub struct Args {
     #[arg(long)]
     pub materials: Option<PathBuf>,
     /// Lead range LO:HI, degrees (positive: the shank toward the feed).
-    #[arg(long, default_value = "0:30", allow_hyphen_values = true)]
+    #[arg(long, default_value = millplan_driver::command_defaults::orient::LEAD_RANGE, allow_hyphen_values = true)]
     pub lead_range: String,
     /// Tilt range LO:HI, degrees (positive: the shank toward −c, right of
     /// the feed seen from the shank).
-    #[arg(long, default_value = "-30:30", allow_hyphen_values = true)]
+    #[arg(long, default_value = millplan_driver::command_defaults::orient::TILT_RANGE, allow_hyphen_values = true)]
     pub tilt_range: String,
     /// What to minimise: fxy (F_xy,max at --fz) or time (with the feed
     /// scaled to the original force level).
@@ -94,22 +94,22 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "tilt-then-lead")]
     pub variant: VariantArg,
     /// Feed per tooth the forces are evaluated at, mm.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::FZ)]
     pub fz: f64,
     /// Spindle speed, 1/min (default: the program's first cutting S word).
     #[arg(long)]
     pub n: Option<f64>,
     /// Number of flutes.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::FLUTES)]
     pub flutes: usize,
     /// Helix angle, degrees.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::HELIX_DEG)]
     pub helix: f64,
     /// Axial depth of the engagement the forces are evaluated for, mm.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::AP)]
     pub ap: f64,
     /// Stepover of that engagement, mm.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::AE)]
     pub ae: f64,
     /// Initial stock, for the engagement of the simulated stock instead of
     /// --ap/--ae: box:auto or box:auto:MARGIN, box:X0,Y0,Z0,X1,Y1,Z1,
@@ -118,13 +118,13 @@ pub struct Args {
     #[arg(long)]
     pub stock: Option<String>,
     /// Dexel size of the stock, mm.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::RESOLUTION)]
     pub resolution: f64,
     /// Most sample moves per operation on the stock.
-    #[arg(long, default_value_t = 48)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::SAMPLES)]
     pub samples: usize,
     /// The shank's reach: from the ball centre to the holder's face, mm.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::REACH)]
     pub reach: f64,
     /// Holder as DIAMETER:LENGTH, mm (default: no holder, the shank alone).
     #[arg(long)]

@@ -53,7 +53,7 @@ pub struct Args {
     pub g93: bool,
     /// Tolerance, mm: how far the tool tip may leave the CL segment while
     /// the rotaries move, and the chord tolerance of arcs.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::post::TOL)]
     pub tol: f64,
     /// Half-angle of the cone about the pole (the tool along the turning
     /// axis) inside which the turning axis is held, degrees (default: the

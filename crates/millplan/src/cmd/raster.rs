@@ -46,7 +46,7 @@ pub struct Args {
     #[arg(long)]
     pub tool: String,
     /// Feed direction, degrees from +X.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::raster::ANGLE_DEG, allow_hyphen_values = true)]
     pub angle: f64,
     /// Distance between passes, mm.
     #[arg(long)]
@@ -61,19 +61,19 @@ pub struct Args {
     #[arg(long)]
     pub oneway: bool,
     /// Margin inside the part's XY bounds (negative: beyond), mm.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::raster::BOUNDARY, allow_hyphen_values = true)]
     pub boundary: f64,
     /// Chord tolerance of the adaptive refinement, mm (0: none).
-    #[arg(long, default_value_t = 0.002)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::raster::TOL)]
     pub tol: f64,
     /// Clearance above the part for rapids, mm.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::raster::CLEARANCE)]
     pub clearance: f64,
     /// Cutting feed written on every cutting move, mm/min.
-    #[arg(long, default_value_t = 1500.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::raster::FEED)]
     pub feed: f64,
     /// Spindle speed written with the tool, 1/min.
-    #[arg(long, default_value_t = 6000.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::raster::SPINDLE)]
     pub spindle: f64,
     /// Output dialect; default: from the output's extension (.apt/.cls APT,
     /// .nc Fanuc, .mpf Sinumerik, .h Heidenhain, .ngc LinuxCNC).

@@ -82,19 +82,19 @@ pub struct Args {
     #[arg(long)]
     pub start_index: Option<usize>,
     /// Seed of --start random: the same seed picks the same start point.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::reorder::SEED)]
     pub seed: u64,
     /// Minimum number of candidates of the paper's search.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::reorder::N_MIN)]
     pub n_min: usize,
     /// D_w differences within this are ties, broken by continuing straight, mm.
-    #[arg(long, default_value_t = 0.001)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::reorder::TIE)]
     pub tie: f64,
     /// Step guard of the paper search, mm: when every candidate would change
     /// D_w by more than this, the search looks farther (up to 32 × its radius)
     /// for one that does not, linking to it by a retract where it is not a
     /// neighbour. 0 runs the search exactly as published.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::reorder::MAX_STEP)]
     pub max_step: f64,
     #[command(flatten)]
     pub cut: super::CuttingData,

@@ -57,14 +57,14 @@ pub struct Args {
     pub grid: GridArg,
     /// Approximate number of grid cells (latlon: bands × sectors × 2 with 3 sectors
     /// per 2 bands; icosphere: 20·4^k; healpix: 12·N²).
-    #[arg(long, default_value_t = 1200)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::setup::CELLS)]
     pub cells: usize,
     /// Tool mode: a ball-end mill `D,REACH[,HOLDER_D,HOLDER_LENGTH]` in mm (REACH
     /// from the ball centre to the holder). Without it, line of sight.
     #[arg(long, allow_hyphen_values = true)]
     pub tool: Option<String>,
     /// A direction must leave the facet's surface by more than this, degrees.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::setup::CLEARANCE_DEG)]
     pub clearance: f64,
     /// The part stands on its bottom face (the facets facing down at its lowest
     /// Z): leave those out and keep that face on the table (the search then only

@@ -63,11 +63,11 @@ pub struct Args {
     #[arg(long, value_enum)]
     pub stl_units: Option<UnitArg>,
     /// Dexel size, mm.
-    #[arg(long, default_value_t = 0.1, value_name = "MM")]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::simulate::RESOLUTION, value_name = "MM")]
     pub resolution: f64,
     /// Material deeper than this (mm) met by a rapid, shank or holder is a
     /// collision; on the part, cut deeper than this is a gouge.
-    #[arg(long, default_value_t = 0.01, value_name = "MM")]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::simulate::TOL, value_name = "MM")]
     pub tol: f64,
     /// Machine file (TOML) for the rapid rate.
     #[arg(long)]

@@ -65,7 +65,7 @@ pub struct Args {
     #[arg(long)]
     pub fz: f64,
     /// Number of flutes.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cutting::FLUTES)]
     pub flutes: u32,
     /// Stock thickness along the surface normal (finishing allowance), mm.
     #[arg(long)]
@@ -88,7 +88,7 @@ pub struct Args {
     #[arg(long)]
     pub keep_feed: bool,
     /// Write a new S only when the speed changes by more than this, 1/min.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::speed::S_THRESHOLD)]
     pub s_threshold: f64,
     /// Which tool point the CL points are.
     #[arg(long, value_enum, default_value = "auto")]

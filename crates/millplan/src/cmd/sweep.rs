@@ -19,19 +19,19 @@ pub struct Args {
     #[arg(short, long, default_value = "wd-sweep")]
     pub output: PathBuf,
     /// Tool diameters, mm.
-    #[arg(long, value_delimiter = ',', default_value = "6,8,10")]
+    #[arg(long, value_delimiter = ',', default_value = millplan_driver::command_defaults::sweep::D)]
     pub d: Vec<f64>,
     /// Depths of cut, mm.
-    #[arg(long, value_delimiter = ',', default_value = "0.1,0.25,0.5,0.75,1.0")]
+    #[arg(long, value_delimiter = ',', default_value = millplan_driver::command_defaults::sweep::AP)]
     pub ap: Vec<f64>,
     /// Stepover to the machined neighbour, mm (0 = no neighbour).
-    #[arg(long, value_delimiter = ',', default_value = "1")]
+    #[arg(long, value_delimiter = ',', default_value = millplan_driver::command_defaults::sweep::AE)]
     pub ae: Vec<f64>,
     /// Inclinations, degrees.
-    #[arg(long, value_delimiter = ',', default_value = "0,10,20,30,45,60")]
+    #[arg(long, value_delimiter = ',', default_value = millplan_driver::command_defaults::sweep::ALPHA)]
     pub alpha: Vec<f64>,
     /// Feed-direction step over 0–180°, degrees.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::sweep::AF_STEP)]
     pub af_step: f64,
     /// Also fit the regression surrogate and print R², RMSE and MAPE.
     #[arg(long)]

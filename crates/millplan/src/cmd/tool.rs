@@ -194,7 +194,7 @@ pub struct MeasureArgs {
     #[arg(long)]
     pub pz: Option<f64>,
     /// Setup tolerance between presetter and first measurement, mm.
-    #[arg(long, default_value_t = 0.02)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::tool::SETUP_TOL)]
     pub dset: f64,
     /// Pallet in the machine (locked when the tool breaks).
     #[arg(long)]
@@ -228,7 +228,7 @@ pub struct CycleArgs {
     #[arg(long, value_enum, default_value = "both")]
     pub measure: MeasureArg,
     /// Clearance height above the laser, mm.
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::tool::CLEARANCE)]
     pub clearance: f64,
     /// Measure every tooth.
     #[arg(long)]
