@@ -11,6 +11,7 @@
 pub mod check;
 pub mod checks;
 pub mod command_defaults;
+pub mod cut;
 pub mod defaults;
 pub mod finish;
 pub mod job;
@@ -23,3 +24,9 @@ pub use finish::{Summary, Verdict, Written};
 pub use job::{Inputs, Job, JobError, Options, UserLimits};
 pub use passes::PassName;
 pub use run::Outcome;
+
+/// A cutter by its profile, as `--tool` names it.
+pub use millplan_models::cutter::Shape;
+/// The named materials of the force model (the built-in table and a user's
+/// TOML), as the commands load them.
+pub use millplan_models::force::materials::Materials;

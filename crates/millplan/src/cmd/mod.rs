@@ -29,105 +29,22 @@ use clap::ValueEnum;
 use millplan_nc::write::{Target, WriteOptions};
 use millplan_nc::{LengthUnit, ReadOptions};
 
-/// The physical range of a numeric argument: above (or from) `lo`, up to
-/// `hi`, in `unit`.
-#[derive(Clone, Copy, Debug)]
-pub struct Range {
-    pub lo: f64,
-    /// `lo` itself is outside (a positive quantity).
-    pub lo_open: bool,
-    pub hi: f64,
-    pub unit: &'static str,
-}
-
-impl Range {
-    /// Above 0, at most `hi`.
-    pub const fn positive(hi: f64, unit: &'static str) -> Range {
-        Range {
-            lo: 0.0,
-            lo_open: true,
-            hi,
-            unit,
-        }
-    }
-
-    /// From `lo` to `hi`, both included.
-    pub const fn from(lo: f64, hi: f64, unit: &'static str) -> Range {
-        Range {
-            lo,
-            lo_open: false,
-            hi,
-            unit,
-        }
-    }
-
-    fn holds(&self, v: f64) -> bool {
-        let above = if self.lo_open {
-            v > self.lo
-        } else {
-            v >= self.lo
-        };
-        above && v <= self.hi
-    }
-}
+pub use millplan_driver::check::{Range, MAX_FEED, MAX_SPINDLE, MAX_TOOL_D, MAX_VC};
 
 /// A raster's `--stepover` (from D/1000) and `--step` for a tool of diameter `d`.
 pub fn raster_spacing(d: f64, stepover: f64, step: f64) -> CliResult<()> {
-    arg(
-        "--stepover",
-        stepover,
-        Range::from((d / 1000.0).max(0.001), 1000.0, "mm (from D/1000)"),
-    )?;
-    arg("--step", step, Range::from(0.001, 1000.0, "mm"))?;
-    Ok(())
+    millplan_driver::check::raster_spacing(d, stepover, step).map_err(CliError::input)
 }
 
 /// Checks a numeric argument: finite and in its range, else an error naming
 /// the option, the value and the range (exit 2).
 pub fn arg(flag: &str, v: f64, r: Range) -> CliResult<f64> {
-    if v.is_finite() && r.holds(v) {
-        return Ok(v);
-    }
-    let unit = if r.unit.is_empty() {
-        String::new()
-    } else {
-        format!(" {}", r.unit)
-    };
-    let lo = millplan_geom::limits::amount(r.lo);
-    let hi = millplan_geom::limits::amount(r.hi);
-    // 1e-300 as written, not three hundred zeros.
-    let v = if v != 0.0 && (v.abs() < 1e-4 || v.abs() >= 1e9) {
-        format!("{v:e}")
-    } else {
-        format!("{v}")
-    };
-    Err(CliError::input(if r.lo_open {
-        format!("{flag} {v}: must be a number above {lo} and at most {hi}{unit}")
-    } else {
-        format!("{flag} {v}: must be a number from {lo} to {hi}{unit}")
-    }))
+    millplan_driver::check::arg(flag, v, r).map_err(CliError::input)
 }
 
-/// Largest tool diameter any argument may give, mm.
-pub const MAX_TOOL_D: f64 = 1000.0;
-/// Largest feed, mm/min.
-pub const MAX_FEED: f64 = 1e6;
-/// Largest spindle speed, 1/min.
-pub const MAX_SPINDLE: f64 = 1e6;
-/// Largest cutting speed, m/min.
-pub const MAX_VC: f64 = 1e4;
-
 /// Checks a cutter from `--tool`: its diameter at most [`MAX_TOOL_D`].
-pub fn tool_shape(flag: &str, s: &str) -> CliResult<millplan_models::cutter::Shape> {
-    let shape = millplan_models::cutter::Shape::parse(s)
-        .map_err(|e| CliError::input(format!("{flag} {e}")))?;
-    let d = 2.0 * shape.radius();
-    if !(d <= MAX_TOOL_D) {
-        return Err(CliError::input(format!(
-            "{flag} {s}: the diameter must be at most {MAX_TOOL_D} mm"
-        )));
-    }
-    Ok(shape)
+pub fn tool_shape(flag: &str, s: &str) -> CliResult<millplan_driver::Shape> {
+    millplan_driver::check::tool_shape(flag, s).map_err(CliError::input)
 }
 
 /// Cutting data for the commands that evaluate spindle control along the way;
