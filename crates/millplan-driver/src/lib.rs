@@ -15,6 +15,7 @@ pub mod cut;
 pub mod defaults;
 pub mod finish;
 pub mod job;
+pub mod orient;
 pub mod passes;
 pub mod report;
 pub mod run;
@@ -30,3 +31,7 @@ pub use millplan_models::cutter::Shape;
 /// The named materials of the force model (the built-in table and a user's
 /// TOML), as the commands load them.
 pub use millplan_models::force::materials::Materials;
+/// A program cut into strokes for the stock.
+pub use millplan_sim::stock::path::Strokes;
+/// A stock as the user names it (`box:…`, `offset:MM`, `stl:FILE`).
+pub use millplan_sim::stock::spec::StockSpec;
