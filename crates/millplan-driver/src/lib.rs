@@ -17,6 +17,7 @@ pub mod finish;
 pub mod job;
 pub mod orient;
 pub mod passes;
+pub mod reorder;
 pub mod report;
 pub mod run;
 pub mod target;
