@@ -2,6 +2,7 @@
 
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::Outputs;
+use millplan_driver::command_defaults::cutting;
 use millplan_geom::analytic::{tessellate, DemoSurface};
 use millplan_nc::generate::{raster, Raster};
 use millplan_nc::write::{write_program, Target, WriteOptions};
@@ -115,7 +116,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         MACHINE_TOML.as_bytes().to_vec(),
     ));
     // Spindle control on the same part and path.
-    let params = SpeedParams::new(63.0, 0.125, 2, 0.3);
+    let params = SpeedParams::new(cutting::VC, cutting::FZ, cutting::FLUTES, cutting::AP);
     let res =
         apply(&program, &mesh, &machine, &params).map_err(|e| CliError::internal(e.to_string()))?;
     let (controlled, _) = write_program(&res.program, WriteOptions::new(Target::Fanuc))
@@ -149,11 +150,11 @@ fn report(
     .into_iter()
     .flatten()
     .collect();
-    let cut = crate::cmd::CuttingData {
-        vc: 63.0,
-        fz: 0.125,
-        flutes: 2,
-        ap: 0.3,
+    let cut = millplan_driver::speed::Cutting {
+        vc: cutting::VC,
+        fz: cutting::FZ,
+        flutes: cutting::FLUTES,
+        ap: cutting::AP,
     };
     let inputs = crate::cmd::speed::report_inputs(
         (std::path::Path::new("finish.apt"), &res.program),

@@ -76,6 +76,16 @@ impl CuttingData {
         Ok(())
     }
 
+    /// The values, as the library takes them.
+    pub fn cutting(&self) -> millplan_driver::speed::Cutting {
+        millplan_driver::speed::Cutting {
+            vc: self.vc,
+            fz: self.fz,
+            flutes: self.flutes,
+            ap: self.ap,
+        }
+    }
+
     /// Spindle-control settings for commands that read only the summary and
     /// the program (no per-point rows).
     pub fn params(&self) -> millplan_plan::speed::SpeedParams {

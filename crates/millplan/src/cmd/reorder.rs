@@ -219,7 +219,7 @@ fn report(
         (&a.path, original),
         &a.stl,
         machine,
-        a.cut,
+        a.cut.cutting(),
         &findings,
         [o.before.as_run.time_s, o.after.as_run.time_s],
     );
