@@ -20,6 +20,7 @@ pub mod passes;
 pub mod reorder;
 pub mod report;
 pub mod run;
+pub mod setup;
 pub mod speed;
 pub mod target;
 
