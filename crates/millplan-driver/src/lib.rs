@@ -21,6 +21,7 @@ pub mod reorder;
 pub mod report;
 pub mod run;
 pub mod setup;
+pub mod simulate;
 pub mod speed;
 pub mod target;
 
@@ -36,5 +37,10 @@ pub use millplan_models::cutter::Shape;
 pub use millplan_models::force::materials::Materials;
 /// A program cut into strokes for the stock.
 pub use millplan_sim::stock::path::Strokes;
+/// The stock, why one cannot be built, and a run's report over it.
+pub use millplan_sim::stock::remaining::Remaining;
+pub use millplan_sim::stock::run::{run as simulate_stock, SimReport};
+pub use millplan_sim::stock::spec::StockError;
 /// A stock as the user names it (`box:…`, `offset:MM`, `stl:FILE`).
 pub use millplan_sim::stock::spec::StockSpec;
+pub use millplan_sim::stock::Stock;
