@@ -14,6 +14,7 @@ pub mod command_defaults;
 pub mod cut;
 pub mod defaults;
 pub mod finish;
+pub mod gouge;
 pub mod job;
 pub mod orient;
 pub mod passes;

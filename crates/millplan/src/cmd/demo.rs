@@ -176,6 +176,38 @@ fn report(
     .into_bytes()
 }
 
+/// The demo's summary as JSON; `times` the estimate with acceleration and
+/// the time at programmed feeds.
+fn summary_json(
+    a: &Args,
+    written: &[(PathBuf, Vec<u8>)],
+    (triangles, program): (usize, &millplan_nc::Program),
+    cutting_mm: f64,
+    (time_s, time_nominal_s): (f64, f64),
+    r: &millplan_plan::speed::Summary,
+) -> serde_json::Value {
+    let files: Vec<_> = written
+        .iter()
+        .map(|(p, b)| serde_json::json!({"path": p.display().to_string(), "bytes": b.len()}))
+        .collect();
+    serde_json::json!({
+        "folder": a.output.display().to_string(),
+        "triangles": triangles,
+        "points": program.move_count(),
+        "cutting_mm": cutting_mm,
+        "time_s": time_s,
+        "time_nominal_s": time_nominal_s,
+        "files": files,
+        "spindle_control": {
+            "d_w_mm": [r.d_w.min, r.d_w.max],
+            "spindle_rpm": [r.spindle.min, r.spindle.max],
+            "vc_controlled_m_min": [r.vc_controlled.min, r.vc_controlled.max],
+            "vc_constant_m_min": [r.vc_constant.min, r.vc_constant.max],
+            "constant_spindle_rpm": r.constant_spindle,
+        },
+    })
+}
+
 /// What the demo made and where, and what spindle control did on it.
 fn print_summary(
     a: &Args,
@@ -184,33 +216,22 @@ fn print_summary(
     program: &millplan_nc::Program,
     r: &millplan_plan::speed::Summary,
 ) {
-    let s = millplan_nc::stats::summarize(program, 15000.0);
+    let s =
+        millplan_nc::stats::summarize(program, millplan_plan::machine::Machine::default().rapid);
     let est = millplan_plan::timing::estimate_program(
         program,
         &millplan_plan::machine::Machine::default(),
     );
     if a.json {
-        let files: Vec<_> = written
-            .iter()
-            .map(|(p, b)| serde_json::json!({"path": p.display().to_string(), "bytes": b.len()}))
-            .collect();
-        let json = serde_json::json!({
-            "folder": a.output.display().to_string(),
-            "triangles": triangles,
-            "points": program.move_count(),
-            "cutting_mm": s.cutting_mm,
-            "time_s": est.total_s,
-            "time_nominal_s": s.time_s,
-            "files": files,
-            "spindle_control": {
-                "d_w_mm": [r.d_w.min, r.d_w.max],
-                "spindle_rpm": [r.spindle.min, r.spindle.max],
-                "vc_controlled_m_min": [r.vc_controlled.min, r.vc_controlled.max],
-                "vc_constant_m_min": [r.vc_constant.min, r.vc_constant.max],
-                "constant_spindle_rpm": r.constant_spindle,
-            },
-        });
-        crate::cmd::print_json(json);
+        let times = (est.total_s, s.time_s);
+        crate::cmd::print_json(summary_json(
+            a,
+            written,
+            (triangles, program),
+            s.cutting_mm,
+            times,
+            r,
+        ));
         return;
     }
     if a.quiet {
