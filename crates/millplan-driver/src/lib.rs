@@ -15,6 +15,7 @@ pub mod cut;
 pub mod defaults;
 pub mod finish;
 pub mod gouge;
+pub mod inspect;
 pub mod job;
 pub mod orient;
 pub mod passes;
@@ -25,6 +26,7 @@ pub mod setup;
 pub mod simulate;
 pub mod speed;
 pub mod target;
+pub mod wd;
 
 pub use finish::{Summary, Verdict, Written};
 pub use job::{Inputs, Job, JobError, Options, UserLimits};
@@ -36,6 +38,8 @@ pub use millplan_models::cutter::Shape;
 /// The named materials of the force model (the built-in table and a user's
 /// TOML), as the commands load them.
 pub use millplan_models::force::materials::Materials;
+/// A check of a written program and its findings.
+pub use millplan_plan::safety::Check;
 /// A program cut into strokes for the stock.
 pub use millplan_sim::stock::path::Strokes;
 /// The stock, why one cannot be built, and a run's report over it.

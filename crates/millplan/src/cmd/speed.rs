@@ -251,37 +251,68 @@ pub fn run(a: Args) -> CliResult<i32> {
         )
     })?;
     let time_after = millplan_plan::timing::estimate_program(&program, &cx.machine).total_s;
-    let times = [time_before, time_after];
+    let run = Ran {
+        program: &program,
+        summary: &summary,
+        rows: &pass.rows,
+        checks: &checks,
+        findings: &findings,
+        times: [time_before, time_after],
+    };
+    report_run(&a, &req, &cx, &run, outputs, target)?;
+    print_timings(&a, &cx, t0);
+    Ok(if checks::untrusted(&summary) || !checked {
+        EXIT_FINDINGS
+    } else {
+        EXIT_OK
+    })
+}
+
+/// What a run made: the program, the pass's summary and rows, the checks,
+/// the part's findings and the times before and after.
+struct Ran<'a> {
+    program: &'a millplan_nc::Program,
+    summary: &'a Summary,
+    rows: &'a [millplan_plan::speed::PointRow],
+    checks: &'a [millplan_driver::Check],
+    findings: &'a [millplan_nc::Diagnostic],
+    times: [f64; 2],
+}
+
+/// The table and report written, the outputs committed, the summary printed.
+fn report_run(
+    a: &Args,
+    req: &SpeedRequest,
+    cx: &Context,
+    r: &Ran,
+    mut outputs: Outputs,
+    target: millplan_nc::write::Target,
+) -> CliResult<()> {
     let inputs = || {
         report_inputs(
-            (&a.path, &program),
+            (&a.path, r.program),
             &a.stl,
             &cx.machine,
             req.cut,
-            &findings,
-            times,
+            r.findings,
+            r.times,
         )
     };
-    write_table_and_report(&a, &mut outputs, &summary, &pass.rows, inputs)?;
+    write_table_and_report(a, &mut outputs, r.summary, r.rows, inputs)?;
     outputs.commit()?;
-    print_timings(&a, &cx, t0);
     let out = lib::Report::new(
-        (&summary, &checks),
+        (r.summary, r.checks),
         (a.output.display().to_string(), target),
         &cx.machine,
-        &findings,
-        times,
+        r.findings,
+        r.times,
     );
     if a.json {
         crate::cmd::print_json(serde_json::to_value(&out).unwrap_or_default());
     } else {
         out!("{}", out.render_text());
     }
-    Ok(if checks::untrusted(&summary) || !checked {
-        EXIT_FINDINGS
-    } else {
-        EXIT_OK
-    })
+    Ok(())
 }
 
 /// The phases' timings on standard error (with --timings).
