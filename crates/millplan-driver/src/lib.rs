@@ -13,6 +13,7 @@ pub mod checks;
 pub mod command_defaults;
 pub mod cut;
 pub mod defaults;
+pub mod directions;
 pub mod finish;
 pub mod gouge;
 pub mod inspect;

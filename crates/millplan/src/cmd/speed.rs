@@ -200,6 +200,22 @@ fn surface_and_program<'m>(
     Ok((surface, parsed, [t_surface, t_read]))
 }
 
+/// The part, read while the program is read beside it; a program error is
+/// still reported first.
+fn read_part(a: &Args, reader: Reader) -> CliResult<(millplan_geom::TriMesh, Reader)> {
+    match read_surface(&a.stl, a.stl_units) {
+        Ok((m, _)) => Ok((m, reader)),
+        Err(e) => Err(join(reader).0.err().unwrap_or(e)),
+    }
+}
+
+/// The reading phases' times in the context's timings.
+fn record_reading(cx: &Context, [t_mesh, t_surface, t_read]: [f64; 3]) {
+    cx.record("read STL", t_mesh);
+    cx.record("surface (BVH, vertex normals)", t_surface);
+    cx.record("read toolpath (beside the two above)", t_read);
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     let req = request(&a);
     lib::check(&req).map_err(CliError::input)?;
@@ -207,11 +223,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let t0 = std::time::Instant::now();
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let reader = spawn_reader(&a, t0)?;
-    let mesh = match read_surface(&a.stl, a.stl_units) {
-        Ok((m, _)) => m,
-        // A program error is still reported first.
-        Err(e) => return Err(join(reader).0.err().unwrap_or(e)),
-    };
+    let (mesh, reader) = read_part(&a, reader)?;
     let t_mesh = t0.elapsed().as_secs_f64();
     let (surface, parsed, [t_surface, t_read]) = surface_and_program(&a, reader, &mesh, t0)?;
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
@@ -220,9 +232,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let cx = Context::new(machine)
         .with_surface(surface)
         .with_progress(&hook);
-    cx.record("read STL", t_mesh);
-    cx.record("surface (BVH, vertex normals)", t_surface);
-    cx.record("read toolpath (beside the two above)", t_read);
+    record_reading(&cx, [t_mesh, t_surface, t_read]);
     let input = parsed.program;
     let time_before = millplan_plan::timing::estimate_program(&input, &cx.machine).total_s;
     let ran = lib::run(&req, &cx, &input).map_err(|e| crate::cmd::pass_error(&a.path, e));
