@@ -222,8 +222,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let mut outputs = plan_outputs(&a)?;
     let t0 = std::time::Instant::now();
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let reader = spawn_reader(&a, t0)?;
-    let (mesh, reader) = read_part(&a, reader)?;
+    let (mesh, reader) = read_part(&a, spawn_reader(&a, t0)?)?;
     let t_mesh = t0.elapsed().as_secs_f64();
     let (surface, parsed, [t_surface, t_read]) = surface_and_program(&a, reader, &mesh, t0)?;
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
