@@ -26,6 +26,7 @@ pub mod run;
 pub mod setup;
 pub mod simulate;
 pub mod speed;
+pub mod sweep;
 pub mod target;
 pub mod wd;
 
