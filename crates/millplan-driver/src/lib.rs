@@ -20,6 +20,7 @@ pub mod inspect;
 pub mod job;
 pub mod orient;
 pub mod passes;
+pub mod raster;
 pub mod reorder;
 pub mod report;
 pub mod run;

@@ -31,11 +31,6 @@ use millplan_nc::{LengthUnit, ReadOptions};
 
 pub use millplan_driver::check::{Range, MAX_FEED, MAX_SPINDLE, MAX_TOOL_D, MAX_VC};
 
-/// A raster's `--stepover` (from D/1000) and `--step` for a tool of diameter `d`.
-pub fn raster_spacing(d: f64, stepover: f64, step: f64) -> CliResult<()> {
-    millplan_driver::check::raster_spacing(d, stepover, step).map_err(CliError::input)
-}
-
 /// Checks a numeric argument: finite and in its range, else an error naming
 /// the option, the value and the range (exit 2).
 pub fn arg(flag: &str, v: f64, r: Range) -> CliResult<f64> {
