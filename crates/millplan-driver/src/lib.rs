@@ -18,6 +18,7 @@ pub mod finish;
 pub mod gouge;
 pub mod inspect;
 pub mod job;
+pub mod lobes;
 pub mod orient;
 pub mod passes;
 pub mod raster;
