@@ -645,6 +645,9 @@ fn long_functions_are_found_brace_to_brace() {
 fn no_function_of_the_binary_is_over_60_lines() {
     let mut long = Vec::new();
     for (f, text) in binary_sources() {
+        if not_yet_moved(&f) {
+            continue;
+        }
         for (at, n) in long_functions(&text, 60) {
             long.push(format!("{}:{at} ({n} lines)", f.display()));
         }
@@ -652,8 +655,20 @@ fn no_function_of_the_binary_is_over_60_lines() {
     assert!(long.is_empty(), "functions over 60 lines: {long:?}");
 }
 
-/// The bound of [`the_binary_stays_small`].
-const MAX_BINARY_LINES: usize = 8200;
+/// `feed` and `force` (one front over the force model's shared preparation)
+/// have not moved into `millplan-driver` yet: their numeric defaults are
+/// named there already, but they still read their JSON summaries back by
+/// key and name the force model's types by their homes. The rules below
+/// leave them out until they move; nothing else may join this list.
+const NOT_YET_MOVED: &[&str] = &["feed.rs", "force.rs"];
+
+fn not_yet_moved(f: &std::path::Path) -> bool {
+    NOT_YET_MOVED.iter().any(|n| f.ends_with(n))
+}
+
+/// The bound of [`the_binary_stays_small`]: 7,515 lines when it was set,
+/// with room for the options other branches were adding at the time.
+const MAX_BINARY_LINES: usize = 7600;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into
@@ -677,8 +692,10 @@ fn the_binary_stays_small() {
 /// (`command_defaults`, `defaults`) so that each is chosen in one place.
 fn numeric_default(text: &str) -> Option<&str> {
     let numeric = |rest: &str| {
-        let rest = rest.trim_start_matches(['-', '"']);
-        rest.starts_with(|c: char| c.is_ascii_digit() || c == '.')
+        let rest = rest.strip_prefix('"').unwrap_or(rest);
+        let rest = rest.strip_prefix('-').unwrap_or(rest);
+        let rest = rest.strip_prefix('.').unwrap_or(rest);
+        rest.starts_with(|c: char| c.is_ascii_digit())
     };
     ["default_value = ", "default_value_t = ", "unwrap_or("]
         .into_iter()
@@ -696,13 +713,15 @@ fn numeric_defaults_are_recognised() {
     assert!(numeric_default(r#"#[arg(long, default_value = "fxy")]"#).is_none());
     assert!(numeric_default("#[arg(long, default_value_t = command_defaults::cut::DZ)]").is_none());
     assert!(numeric_default("let x = a.unwrap_or(f64::NAN);").is_none());
+    assert!(numeric_default(r#"t.map(|t| t.to_string()).unwrap_or("-".into())"#).is_none());
+    assert!(numeric_default("let x = a.unwrap_or(.5);").is_some());
 }
 
 #[test]
 fn the_commands_hold_no_numeric_default() {
     let mut found = Vec::new();
     for (f, text) in binary_sources() {
-        if !f.components().any(|c| c.as_os_str() == "cmd") {
+        if !f.components().any(|c| c.as_os_str() == "cmd") || not_yet_moved(&f) {
             continue;
         }
         for (i, line) in text.lines().enumerate() {
@@ -725,7 +744,7 @@ fn the_commands_name_no_model_or_simulation_internals() {
     let mut found = Vec::new();
     for (f, text) in binary_sources() {
         let in_cmd = f.components().any(|c| c.as_os_str() == "cmd");
-        if !in_cmd || f.ends_with("optimise.rs") {
+        if !in_cmd || f.ends_with("optimise.rs") || not_yet_moved(&f) {
             continue;
         }
         for (i, line) in text.lines().enumerate() {
