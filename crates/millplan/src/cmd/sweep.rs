@@ -54,7 +54,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     std::fs::create_dir_all(&a.output)
         .map_err(|e| CliError::input(format!("{}: {e}", a.output.display())))?;
     let (csv, figures) = sweep(&design);
-    let fit = a.fit.then(|| millplan_driver::sweep::fit());
+    let fit = a.fit.then(millplan_driver::sweep::fit);
     if let (Some(f), false) = (&fit, a.json) {
         outln!(
             "regression surrogate: {} samples, R² {:.4}, RMSE {:.4} mm, MAPE {:.2} %",
