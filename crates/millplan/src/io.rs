@@ -179,6 +179,26 @@ fn read_line(r: &mut impl BufRead, buf: &mut Vec<u8>, max: usize) -> std::io::Re
     }
 }
 
+/// The dialect of a program from its first bytes; an empty file, binary
+/// data, an HTML or XML page and a KUKA robot program are refused at 1:1.
+fn dialect_of(path: &Path, head: &[u8]) -> CliResult<millplan_nc::Dialect> {
+    let refuse = |what: &str| Err(CliError::input(format!("{}:1:1: {what}", path.display())));
+    if head.is_empty() {
+        return refuse("empty file");
+    }
+    if is_binary(head) {
+        return refuse("binary data: not an APT/CL or G-code program");
+    }
+    let head = String::from_utf8_lossy(head);
+    if head.trim_start().starts_with('<') {
+        return refuse("an HTML or XML document (it starts `<`), not an APT/CL or G-code program");
+    }
+    if let Some(e) = millplan_nc::detect::krl_refusal(&head) {
+        return Err(CliError::input(format!("{}:{e}", path.display())));
+    }
+    Ok(detect(&head))
+}
+
 /// Reads an APT/CL or G-code program line by line (the file is never held
 /// whole; lines end at LF, CRLF or a lone CR), within the limits of `opts`.
 pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
@@ -190,29 +210,7 @@ pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
     let head = r
         .fill_buf()
         .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
-    if head.is_empty() {
-        return Err(CliError::input(format!(
-            "{}:1:1: empty file",
-            path.display()
-        )));
-    }
-    if is_binary(head) {
-        return Err(CliError::input(format!(
-            "{}:1:1: binary data: not an APT/CL or G-code program",
-            path.display()
-        )));
-    }
-    let head = String::from_utf8_lossy(head);
-    if head.trim_start().starts_with('<') {
-        return Err(CliError::input(format!(
-            "{}:1:1: an HTML or XML document (it starts `<`), not an APT/CL or G-code program",
-            path.display()
-        )));
-    }
-    if let Some(e) = millplan_nc::detect::krl_refusal(&head) {
-        return Err(CliError::input(format!("{}:{e}", path.display())));
-    }
-    let dialect = detect(&head);
+    let dialect = dialect_of(path, head)?;
     // A move takes a line of 20 bytes or more.
     let opts = ReadOptions {
         expect_moves: (size / 20) as usize,

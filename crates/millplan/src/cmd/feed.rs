@@ -9,7 +9,6 @@ use crate::cmd::{
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
 use millplan_models::cutter::Shape;
-use millplan_models::force::deflect::E_CARBIDE;
 use millplan_models::force::Grid;
 use millplan_plan::feed::{machine_accel, BodyFn, FeedParams, FeedPass};
 use millplan_plan::force::{simulate, FeedLimits, ForceRun, ForceSetup, MoveForces};
@@ -52,10 +51,10 @@ pub struct ModelArgs {
     #[arg(long)]
     pub tool: Option<String>,
     /// Flutes of every tool.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::FLUTES)]
     pub flutes: usize,
     /// Helix angle, degrees.
-    #[arg(long, default_value_t = 30.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::HELIX_DEG, allow_hyphen_values = true)]
     pub helix: f64,
     /// Gauge length from the holder face to the tip, mm (default 3·D).
     #[arg(long)]
@@ -65,20 +64,20 @@ pub struct ModelArgs {
     #[arg(long)]
     pub flute_length: Option<f64>,
     /// Young's modulus of the tool, N/mm².
-    #[arg(long, default_value_t = E_CARBIDE)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::MODULUS)]
     pub modulus: f64,
     /// Dexel size of the stock, mm; also the spacing of the poses each move
     /// is loaded at along its length.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::RESOLUTION)]
     pub resolution: f64,
     /// Axial slice height of the force model, mm (with --converge the
     /// largest used: per load sample the model halves it, up to four
     /// times, until F_xy,max and T_max are estimated within 0.4 %).
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::DZ)]
     pub dz: f64,
     /// Rotation step of the force model, degrees: the largest used, halved
     /// like --dz.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::DPHI_DEG)]
     pub dphi: f64,
     /// Refine --dz and --dphi per load sample until F_xy,max and T_max
     /// converge (within 0.4 %). The default grid can under-predict F_xy,max
@@ -327,7 +326,7 @@ pub struct Args {
     #[arg(long, value_enum)]
     pub to: Option<TargetArg>,
     /// Smallest feed per tooth, mm (at most a tool's largest).
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::FZ_MIN)]
     pub fz_min: f64,
     /// Largest feed per tooth, mm, for every tool (the tool maker's chip
     /// load); default: per tool, the material's chip load at its diameter
@@ -335,7 +334,7 @@ pub struct Args {
     #[arg(long)]
     pub fz_max: Option<f64>,
     /// Factor of safety on power, torque and stress.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::FOS)]
     pub fos: f64,
     /// Feed acceleration, mm/s² (default: the machine's smallest linear-axis
     /// acceleration, else 1000).
@@ -361,7 +360,7 @@ fn feed_params(a: &Args, p: &Prepared) -> CliResult<FeedParams> {
     let accel = a
         .feed_accel
         .or_else(|| machine_accel(&p.machine))
-        .unwrap_or(1000.0);
+        .unwrap_or(millplan_driver::defaults::Defaults::FEED_ACCEL);
     arg("--feed-accel", accel, Range::positive(1e6, "mm/s²"))?;
     let limits = load_limits(a.fos, a.fz_min, a.fz_max, chip_loads)?;
     Ok(FeedParams {

@@ -53,7 +53,7 @@ pub struct Args {
     pub g93: bool,
     /// Tolerance, mm: how far the tool tip may leave the CL segment while
     /// the rotaries move, and the chord tolerance of arcs.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::post::TOL)]
     pub tol: f64,
     /// Half-angle of the cone about the pole (the tool along the turning
     /// axis) inside which the turning axis is held, degrees (default: the
@@ -202,10 +202,8 @@ pub fn run(a: Args) -> CliResult<i32> {
             a.machine.display()
         )));
     }
-    let target = match a.to.map(Into::into).or(machine.target()) {
-        Some(t) => t,
-        None => crate::cmd::target_for(None, &a.output, millplan_nc::Dialect::Generated)?,
-    };
+    let generated = millplan_nc::Dialect::Generated;
+    let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, generated)?;
     if !target.is_gcode() {
         return Err(CliError::input("--to apt: a posted program is G-code"));
     }
