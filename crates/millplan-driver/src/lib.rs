@@ -11,6 +11,7 @@
 pub mod checks;
 pub mod defaults;
 pub mod finish;
+pub mod inspect;
 pub mod job;
 pub mod passes;
 pub mod report;

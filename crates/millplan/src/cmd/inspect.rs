@@ -3,10 +3,8 @@
 use crate::cmd::{print_diagnostics, read_options, UnitArg};
 use crate::error::{CliResult, EXIT_OK};
 use crate::io::{read_any, Input};
-use millplan_geom::Aabb;
-use millplan_nc::stats::summarize;
-use millplan_nc::{Dialect, Program};
-use serde_json::{json, Value};
+use millplan_nc::Program;
+use serde_json::Value;
 use std::path::PathBuf;
 
 /// Print what a file holds: format and dialect, units, tools, moves, bounds,
@@ -48,70 +46,9 @@ pub struct Args {
     pub stl_units: Option<UnitArg>,
 }
 
-fn bounds_json(b: &Aabb) -> Value {
-    if b.is_empty() {
-        return Value::Null;
-    }
-    json!({ "min": [b.min.x, b.min.y, b.min.z], "max": [b.max.x, b.max.y, b.max.z] })
-}
-
-/// The rotary axes the program moves, by letter.
-fn rotary_json(r: &[Option<millplan_nc::stats::RotaryUse>; 3]) -> Value {
-    let mut m = serde_json::Map::new();
-    for (name, u) in ["A", "B", "C"].iter().zip(r) {
-        if let Some(u) = u {
-            m.insert(name.to_string(), json!(u));
-        }
-    }
-    Value::Object(m)
-}
-
-fn format_name(d: Dialect) -> &'static str {
-    if d.is_apt() {
-        "apt"
-    } else {
-        "gcode"
-    }
-}
-
+/// The library's summary of a program, as JSON.
 fn program_json(p: &Program, diags: usize, machine: &millplan_plan::machine::Machine) -> Value {
-    let s = summarize(p, machine.rapid);
-    let est = millplan_plan::timing::estimate_program(p, machine);
-    let tools: Vec<Value> = p
-        .operations
-        .iter()
-        .filter_map(|o| o.tool.as_ref())
-        .map(|t| {
-            json!({
-                "number": t.number,
-                "name": t.name,
-                "cutter": t.cutter.map(|c| json!({
-                    "kind": c.kind, "d": c.d, "r": c.r, "e": c.e, "f": c.f,
-                    "alpha_deg": c.alpha.to_degrees(), "beta_deg": c.beta.to_degrees(), "h": c.h
-                })),
-                "line": t.line,
-            })
-        })
-        .collect();
-    json!({
-        "format": format_name(p.source),
-        "dialect": p.source.name(),
-        "name": p.name,
-        "units": match p.units.source { millplan_nc::LengthUnit::Mm => "mm", millplan_nc::LengthUnit::Inch => "inch" },
-        "units_origin": p.units.origin,
-        "operations": p.operations.len(),
-        "tools": tools,
-        "moves": { "rapid": s.moves.rapid, "linear": s.moves.linear, "arc": s.moves.arc, "cycle": s.moves.cycle,
-                   "total": p.move_count(), "five_axis": s.five_axis_moves },
-        "bounds": bounds_json(&s.bounds),
-        "length_mm": { "cutting": s.cutting_mm, "rapid": s.rapid_mm },
-        "time_s": est.total_s,
-        "time_nominal_s": s.time_s,
-        "time": crate::cmd::time_json(&est),
-        "unknown_moves": s.unknown_moves,
-        "rotary": rotary_json(&s.rotary),
-        "diagnostics": diags,
-    })
+    serde_json::to_value(millplan_driver::inspect::program(p, diags, machine)).unwrap_or_default()
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -150,46 +87,14 @@ pub fn run(a: Args) -> CliResult<i32> {
     Ok(EXIT_OK)
 }
 
-/// A part's size says little about its unit: under 8 units across, inches
-/// are the likelier (a part of a few mm is rare); from 8 to 30 both are
-/// common (beet_mm.stl is 28 mm across, a 20-inch plate 20 units), so the
-/// guess says it cannot tell; above, mm.
-fn units_guess(size: millplan_geom::DVec3) -> &'static str {
-    match size.max_element() {
-        s if s < 8.0 => "inch",
-        s if s < 30.0 => "unknown",
-        _ => "mm",
-    }
-}
-
+/// The library's summary of a mesh, as JSON.
 fn mesh_json(
     mesh: &millplan_geom::TriMesh,
     r: &millplan_geom::stl::StlReport,
     given: Option<UnitArg>,
 ) -> Value {
-    let b = mesh.bounds();
-    let given = given.map(|u| match u {
-        UnitArg::Mm => "mm",
-        UnitArg::Inch => "inch",
-    });
-    let edges = mesh.edge_report();
-    json!({
-        "format": "stl",
-        "encoding": match r.format { millplan_geom::stl::StlFormat::Binary => "binary", _ => "ascii" },
-        "header": r.header,
-        "triangles": mesh.len(),
-        "facets_in_file": r.facets_in_file,
-        "vertices": mesh.vertices.len(),
-        "degenerate": r.degenerate,
-        "open_edges": edges.open,
-        "non_manifold_edges": edges.non_manifold,
-        "zero_normals": r.zero_normals,
-        "flipped_normals": r.flipped_normals,
-        "trailing_bytes": r.trailing_bytes,
-        "bounds": bounds_json(&b),
-        "stl_units": given,
-        "units_guess": if given.is_some() { None } else { Some(units_guess(b.size())) },
-    })
+    let summary = millplan_driver::inspect::mesh(mesh, r, given.map(Into::into));
+    serde_json::to_value(summary).unwrap_or_default()
 }
 
 fn print_mesh(path: &std::path::Path, j: &Value) {
@@ -347,17 +252,4 @@ fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
         crate::cmd::hms(t),
         crate::cmd::hms(t0),
     );
-}
-
-#[cfg(test)]
-mod tests {
-    use millplan_geom::DVec3;
-
-    /// Issue 18: beet_mm.stl (28 mm across) was guessed as inch.
-    #[test]
-    fn mid_sized_parts_are_not_guessed_as_inch() {
-        assert_eq!(super::units_guess(DVec3::new(22.2, 28.4, 7.2)), "unknown");
-        assert_eq!(super::units_guess(DVec3::new(3.0, 2.0, 1.0)), "inch");
-        assert_eq!(super::units_guess(DVec3::new(60.0, 60.0, 9.6)), "mm");
-    }
 }

@@ -401,22 +401,6 @@ pub fn load_machine(
     }
 }
 
-/// The controller-aware time estimate in JSON: total and nominal, what the
-/// total is made of, and how many feed blocks the axes hold back.
-pub fn time_json(e: &millplan_plan::timing::TimeEstimate) -> serde_json::Value {
-    serde_json::json!({
-        "model": "acceleration",
-        "total_s": e.total_s,
-        "nominal_s": e.nominal_s,
-        "rapid_s": e.rapid_s,
-        "feed_s": e.feed_s,
-        "dwell_s": e.dwell_s,
-        "overhead": e.overhead(),
-        "velocity_limited_blocks": e.velocity_limited_blocks,
-        "accel_limited_blocks": e.accel_limited_blocks,
-    })
-}
-
 /// Seconds as `123 s (0:02:03)`.
 pub fn hms(t: f64) -> String {
     let t = t.max(0.0);
