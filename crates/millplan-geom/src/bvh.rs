@@ -357,7 +357,12 @@ impl Bvh {
     /// parallel runs of consecutive points, each point starting from the
     /// previous one's triangle (points along a path lie near each other; the
     /// results are those of [`Bvh::closest`] either way).
-    pub fn closest_many(&self, mesh: &TriMesh, pts: &[DVec3], max_dist: f64) -> Vec<Option<Closest>> {
+    pub fn closest_many(
+        &self,
+        mesh: &TriMesh,
+        pts: &[DVec3],
+        max_dist: f64,
+    ) -> Vec<Option<Closest>> {
         pts.par_iter()
             .with_min_len(256)
             .with_max_len(8192)
@@ -1398,7 +1403,11 @@ mod tests {
             .map(|i| {
                 let f = i as f64;
                 let jump = if i % 97 == 0 { 25.0 } else { 0.0 };
-                DVec3::new((f * 0.02 + jump) % 60.0, (f * 0.013) % 60.0, 2.0 + (f * 0.1).sin())
+                DVec3::new(
+                    (f * 0.02 + jump) % 60.0,
+                    (f * 0.013) % 60.0,
+                    2.0 + (f * 0.1).sin(),
+                )
             })
             .collect();
         let got = bvh.closest_many(&mesh, &pts, f64::INFINITY);

@@ -112,7 +112,10 @@ impl Case {
             return Err(format!("d {d}: must be a positive diameter, mm"));
         }
         if !(ap > 0.0 && ap <= d / 2.0) {
-            return Err(format!("ap {ap}: must be above 0 and at most d/2 = {}", d / 2.0));
+            return Err(format!(
+                "ap {ap}: must be above 0 and at most d/2 = {}",
+                d / 2.0
+            ));
         }
         let ae = ae.filter(|a| *a != f64::INFINITY);
         if let Some(a) = ae {
@@ -121,7 +124,9 @@ impl Case {
             }
         }
         if !(0.0..90.0).contains(&alpha_deg) {
-            return Err(format!("alpha {alpha_deg}: must be from 0 to under 90 degrees"));
+            return Err(format!(
+                "alpha {alpha_deg}: must be from 0 to under 90 degrees"
+            ));
         }
         if !af_deg.is_finite() {
             return Err(format!("af {af_deg}: must be a finite angle, degrees"));
@@ -864,14 +869,56 @@ mod from_degrees_tests {
     #[test]
     fn out_of_domain_cases_name_their_argument() {
         let e = |r: Result<Case, String>| r.expect_err("refused");
-        assert!(e(Case::from_degrees(0.0, 0.3, None, false, 0.0, 0.0, Side::Left)).starts_with("d "));
-        assert!(e(Case::from_degrees(10.0, 6.0, None, false, 0.0, 0.0, Side::Left)).starts_with("ap "));
-        assert!(e(Case::from_degrees(10.0, 0.3, Some(-1.0), false, 0.0, 0.0, Side::Left))
-            .starts_with("ae "));
-        assert!(e(Case::from_degrees(10.0, 0.3, None, false, 90.0, 0.0, Side::Left))
-            .starts_with("alpha "));
-        assert!(e(Case::from_degrees(10.0, 0.3, None, false, 0.0, f64::NAN, Side::Left))
-            .starts_with("af "));
+        assert!(e(Case::from_degrees(
+            0.0,
+            0.3,
+            None,
+            false,
+            0.0,
+            0.0,
+            Side::Left
+        ))
+        .starts_with("d "));
+        assert!(e(Case::from_degrees(
+            10.0,
+            6.0,
+            None,
+            false,
+            0.0,
+            0.0,
+            Side::Left
+        ))
+        .starts_with("ap "));
+        assert!(e(Case::from_degrees(
+            10.0,
+            0.3,
+            Some(-1.0),
+            false,
+            0.0,
+            0.0,
+            Side::Left
+        ))
+        .starts_with("ae "));
+        assert!(e(Case::from_degrees(
+            10.0,
+            0.3,
+            None,
+            false,
+            90.0,
+            0.0,
+            Side::Left
+        ))
+        .starts_with("alpha "));
+        assert!(e(Case::from_degrees(
+            10.0,
+            0.3,
+            None,
+            false,
+            0.0,
+            f64::NAN,
+            Side::Left
+        ))
+        .starts_with("af "));
         let c = Case::from_degrees(10.0, 0.3, Some(f64::INFINITY), false, 10.0, 0.0, Side::Left)
             .expect("no neighbour");
         assert_eq!(c.neighbour, Neighbour::None);
