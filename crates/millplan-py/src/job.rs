@@ -109,14 +109,15 @@ pub fn run(r: Request) -> Res<Done> {
             .as_deref()
             .map(crate::program::target)
             .transpose()?;
-        let out = r.output.as_deref().unwrap_or(&r.name);
+        // Without an output file, no file name says a dialect.
+        let out = r.output.as_deref().unwrap_or("");
         let target = millplan_driver::target::output_target(
             to,
             Path::new(out),
             machine,
             job.inputs.program.source,
         )
-        .map_err(|e| err(out, e))?;
+        .map_err(|e| err(&r.name, e.trim_start_matches(": ")))?;
         let outcome = job.run(&order).map_err(|e| err(&r.name, e))?;
         let w = job
             .finish(&outcome, job.inputs.machine.write_options(target))
@@ -144,7 +145,7 @@ pub fn program_arg(p: &pyo3::Bound<'_, pyo3::PyAny>) -> pyo3::PyResult<(Program,
             p.path.clone().unwrap_or_else(|| "<program>".into()),
         ));
     }
-    let path: String = p.extract()?;
+    let path = p.extract::<std::path::PathBuf>()?.display().to_string();
     let r = crate::program::read(&path, None)?;
     Ok(((*r.program).clone(), path))
 }
@@ -158,6 +159,6 @@ pub fn part_arg(p: Option<&pyo3::Bound<'_, pyo3::PyAny>>) -> pyo3::PyResult<Opti
     if let Ok(m) = p.cast::<PyMesh>() {
         return Ok(Some((*m.get().mesh).clone()));
     }
-    let path: String = p.extract()?;
+    let path = p.extract::<std::path::PathBuf>()?.display().to_string();
     Ok(Some((*crate::mesh::read(&path, false)?.mesh).clone()))
 }

@@ -165,6 +165,12 @@ fn optimise(
     Ok((prog, done.text, summary, done.refused))
 }
 
+/// The usual file extension of a dialect's programs (`fanuc` → `nc`).
+#[pyfunction]
+fn dialect_extension(dialect: &str) -> PyResult<&'static str> {
+    Ok(program::target(dialect)?.extension())
+}
+
 #[pymodule]
 fn _millplan(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MillplanError", m.py().get_type::<error::MillplanError>())?;
@@ -176,5 +182,6 @@ fn _millplan(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_stl, m)?)?;
     m.add_function(wrap_pyfunction!(wd::_working_diameter, m)?)?;
     m.add_function(wrap_pyfunction!(optimise, m)?)?;
+    m.add_function(wrap_pyfunction!(dialect_extension, m)?)?;
     Ok(())
 }

@@ -47,11 +47,14 @@ def test_optimise_writes_what_the_command_line_writes(cli, demo, tmp_path):
 
 
 def test_optimise_takes_file_names_and_reports_skipped_passes(demo):
-    prog, o = millplan.optimise(str(demo / "finish_fanuc.nc"), passes="speed,orient")
+    prog, o = millplan.optimise(
+        str(demo / "finish_fanuc.nc"), tools="ball:10", passes="speed,orient"
+    )
     assert o.verdict in ("improved", "kept")
     ran = {p["name"]: p["ran"] for p in o.passes}
     assert ran == {"speed": False, "orient": False}, o.passes
     assert o.max_before is None and o.written is None
+    assert o.dialect == "fanuc" and o.text.startswith("%")
     assert len(prog) > 0
 
 

@@ -36,6 +36,7 @@ __all__ = [
     "read_stl",
     "working_diameter",
     "optimise",
+    "dialect_extension",
 ]
 
 StrPath = Union[str, "PathLike[str]"]
@@ -78,6 +79,12 @@ def write_program(
     A machine file adds its control's settings (spindle decimals, G93 words).
     """
     return _millplan.write_program(program, path, dialect, machine)
+
+
+def dialect_extension(dialect: str) -> str:
+    """The usual file extension of a dialect's programs: fanuc → nc,
+    sinumerik → mpf, heidenhain → h, linuxcnc → ngc, apt → apt."""
+    return _millplan.dialect_extension(dialect)
 
 
 def read_stl(path: StrPath, units: Optional[str] = None) -> Mesh:

@@ -47,18 +47,22 @@ def optimise_one(path: str, options: Dict[str, Any]) -> Dict[str, Any]:
     """Optimise one program; a row of the summary table, never an exception.
 
     ``options`` are :func:`millplan.optimise`'s keyword arguments; an
-    ``output`` folder there receives the program under its own name.
+    ``output`` folder there receives the optimised program (unless a check
+    refused it) under its name with the extension of the dialect written.
     """
     import millplan
 
     opts = dict(options)
     out_dir = opts.pop("output", None)
-    if out_dir is not None:
-        opts["output"] = os.path.join(out_dir, os.path.basename(path))
     row: Dict[str, Any] = {c: None for c in COLUMNS}
     row["file"] = os.path.basename(path)
     try:
         _, o = millplan.optimise(path, **opts)
+        if out_dir is not None and not o.refused:
+            stem = os.path.splitext(os.path.basename(path))[0]
+            name = f"{stem}.{millplan.dialect_extension(o.dialect)}"
+            with open(os.path.join(out_dir, name), "w", newline="") as f:
+                f.write(o.text)
     except Exception as e:  # one file's failure is one row, not the batch's
         row["verdict"] = "error"
         row["error"] = f"{type(e).__name__}: {e}"
