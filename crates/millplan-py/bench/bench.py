@@ -57,7 +57,8 @@ def closest(stl, apt, r=5.0):
 def batch(folder, part, machine):
     from millplan.batch import optimise_folder, optimise_one, programs_in
 
-    opts = dict(part=part, machine=machine, stock="offset:0.5", material="al7075", tools="ball:10")
+    opts = dict(part=part, machine=machine, stock="offset:0.5", material="al7075", tools="ball:10",
+                passes="speed,feed", resolution=0.5)
     files = programs_in(folder)
     t = time.perf_counter()
     rows = [optimise_one(f, opts) for f in files]
