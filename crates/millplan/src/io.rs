@@ -64,15 +64,7 @@ fn prefetch(f: &File) {
 /// Is this an STL by its content (binary by size arithmetic, or ASCII
 /// `solid … facet`)? Never by its name.
 fn is_stl(len: u64, head: &[u8]) -> bool {
-    if head.len() >= 84 {
-        let n = u32::from_le_bytes([head[80], head[81], head[82], head[83]]) as u64;
-        if 84 + 50 * n == len {
-            return true;
-        }
-    }
-    let t = String::from_utf8_lossy(&head[..head.len().min(4096)]);
-    let t = t.trim_start().to_ascii_lowercase();
-    t.starts_with("solid") && (t.contains("facet") || t.contains("endsolid"))
+    millplan_geom::stl::is_stl(len, head)
 }
 
 /// Binary data: a NUL byte in the first 4 KB (no NC program has one).

@@ -73,11 +73,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         }
         Input::Mesh(mut mesh, r) => {
             crate::cmd::stl_to_mm(&mut mesh, a.stl_units);
-            let given = a.stl_units.map(|u| match u {
-                UnitArg::Mm => "mm",
-                UnitArg::Inch => "inch",
-            });
-            let j = lib::mesh_json(&mesh, &r, given);
+            let j = lib::mesh_json(&mesh, &r, a.stl_units.map(Into::into));
             if a.json {
                 crate::cmd::print_json(j);
             } else {
