@@ -15,7 +15,10 @@ use std::path::PathBuf;
 /// The time is an estimate with acceleration: the machine file's axis
 /// velocities, accelerations and jerks (conservative defaults where it has
 /// none), with look-ahead across blocks; the time at programmed feeds is
-/// printed beside it.
+/// printed beside it. The estimate follows the control's planner (the
+/// machine file's `[control] planner`) and honours the program's
+/// path-control mode (exact stop, blending within a tolerance) at every
+/// block; the time under each mode is printed below it.
 ///
 /// The format is detected from the content, not the file name.
 #[derive(clap::Args)]
@@ -347,6 +350,18 @@ fn print_program(path: &std::path::Path, p: &Program, j: &Value) {
         crate::cmd::hms(t),
         crate::cmd::hms(t0),
     );
+    outln!(
+        "  planner     {}",
+        j["time"]["planner"].as_str().unwrap_or("generic")
+    );
+    for m in j["time"]["by_mode"].as_array().into_iter().flatten() {
+        outln!(
+            "    {:<18}{:>10.1} s  {} blocks",
+            m["mode"].as_str().unwrap_or(""),
+            m["time_s"].as_f64().unwrap_or(0.0),
+            m["blocks"].as_u64().unwrap_or(0)
+        );
+    }
 }
 
 #[cfg(test)]

@@ -414,6 +414,8 @@ pub fn time_json(e: &millplan_plan::timing::TimeEstimate) -> serde_json::Value {
         "overhead": e.overhead(),
         "velocity_limited_blocks": e.velocity_limited_blocks,
         "accel_limited_blocks": e.accel_limited_blocks,
+        "planner": e.planner,
+        "by_mode": e.by_mode,
     })
 }
 
