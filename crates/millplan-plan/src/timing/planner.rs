@@ -377,23 +377,27 @@ fn joint(
     lim: &Limits,
 ) -> Joint {
     let lcnc = pl.kind == PlannerKind::LinuxCnc29;
+    let cap = a.vcap.min(b.vcap);
+    // The chords of one arc are one block to the control, whatever the mode.
+    if ca.same_move && a.rotary_only == b.rotary_only {
+        if pl.arc_tangential_share < 1.0 {
+            return Joint::Tangent;
+        }
+        let ell = a.len.min(b.len).min(pl.blend_mm);
+        return Joint::At(junction_len_rule(a, b, cap, ell, lim));
+    }
     if ca.stop_after || ca.mode == PathMode::ExactStop || a.rotary_only != b.rotary_only {
         return Joint::Stop;
     }
     if !lcnc && (a.rapid || b.rapid) {
         return Joint::Stop;
     }
-    if ca.same_move && pl.arc_tangential_share < 1.0 {
-        return Joint::Tangent;
-    }
-    let cap = a.vcap.min(b.vcap);
     if !lcnc || a.rotary_only {
         let tol = match ca.mode {
             PathMode::Blend { tolerance } => tolerance,
             PathMode::ExactStop => None,
         };
         let ell = match tol {
-            _ if ca.same_move => a.len.min(b.len).min(pl.blend_mm),
             None => a.len.min(b.len).min(pl.blend_mm),
             Some(t) => rounding_len(a, b, t),
         };

@@ -18,12 +18,20 @@ def busy():
 
 
 def wait_idle(s, c, timeout):
+    """Until the interpreter is idle and motion in position with nothing
+    queued for half a second on end (under G61 motion is in position for a
+    moment at every block end)."""
     end = time.time() + timeout
     c.wait_complete(timeout)
+    still = None
     while time.time() < end:
         s.poll()
         if s.interp_state == linuxcnc.INTERP_IDLE and s.inpos and s.queue == 0:
-            return True
+            still = still or time.time()
+            if time.time() - still >= 0.5:
+                return True
+        else:
+            still = None
         time.sleep(0.01)
     return False
 
