@@ -82,6 +82,10 @@ pub struct TimeSummary {
     pub overhead: f64,
     pub velocity_limited_blocks: usize,
     pub accel_limited_blocks: usize,
+    /// The planner model of the machine file's `[control] planner`.
+    pub planner: &'static str,
+    /// The time under each path-control mode, in the order they first occur.
+    pub by_mode: Vec<millplan_plan::timing::ModeTime>,
 }
 
 impl TimeSummary {
@@ -96,6 +100,8 @@ impl TimeSummary {
             overhead: e.overhead(),
             velocity_limited_blocks: e.velocity_limited_blocks,
             accel_limited_blocks: e.accel_limited_blocks,
+            planner: e.planner,
+            by_mode: e.by_mode.clone(),
         }
     }
 }
@@ -464,6 +470,20 @@ pub fn render_program(path: &str, p: &Program, j: &Value) -> String {
         hms(t),
         hms(t0),
     );
+    w!(
+        o,
+        "  planner     {}",
+        j["time"]["planner"].as_str().unwrap_or("generic")
+    );
+    for m in j["time"]["by_mode"].as_array().into_iter().flatten() {
+        w!(
+            o,
+            "    {:<18}{:>10.1} s  {} blocks",
+            m["mode"].as_str().unwrap_or(""),
+            m["time_s"].as_f64().unwrap_or(0.0),
+            m["blocks"].as_u64().unwrap_or(0)
+        );
+    }
     o
 }
 

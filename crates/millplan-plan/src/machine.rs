@@ -13,6 +13,7 @@ mod file;
 
 pub use file::Layout;
 
+use crate::timing::Planner;
 use millplan_models::kinematics::Kinematics;
 use millplan_nc::write::{Target, WriteOptions};
 
@@ -98,6 +99,9 @@ pub struct Control {
     /// Decimals of S words; `None`: the dialect's usual (whole numbers for
     /// Fanuc, whose controls refuse `S4200.6`, one decimal elsewhere).
     pub spindle_decimals: Option<u32>,
+    /// How the control plans the path through the blocks (the time
+    /// estimate's model of it); default the generic planner.
+    pub planner: Planner,
 }
 
 impl Default for Control {
@@ -107,6 +111,7 @@ impl Default for Control {
             g93_f: InverseTimeF::InverseMinutes,
             g93_rapids: true,
             spindle_decimals: None,
+            planner: Planner::default(),
         }
     }
 }
@@ -610,6 +615,40 @@ fn check_linear(a: &LinearAxis, name: char) -> Result<(), MachineError> {
     Ok(())
 }
 
+fn check_planner(p: &Planner) -> Result<(), MachineError> {
+    let share = |v: f64, f: &str| {
+        need(
+            v.is_finite() && v > 0.0 && v <= 1.0,
+            f,
+            format!("must be a share above 0 and at most 1, got {v}"),
+        )
+    };
+    share(p.blend_accel_scale, "control.blend_accel_scale")?;
+    share(p.arc_tangential_share, "control.arc_tangential_share")?;
+    for (v, f) in [
+        (p.lookahead, "control.lookahead"),
+        (p.plain_lookahead, "control.plain_lookahead"),
+    ] {
+        need(
+            v <= 1_000_000,
+            f,
+            format!("must be at most 1000000 blocks, got {v}"),
+        )?;
+    }
+    if let Some(j) = p.jerk {
+        plausible(j, ranges::LINEAR[2], "control.jerk")?;
+    }
+    if let Some(a) = p.path_accel {
+        plausible(a, ranges::LINEAR[1], "control.path_accel")?;
+    }
+    need(
+        p.block_time_s.is_finite() && (0.0..=1.0).contains(&p.block_time_s),
+        "control.block_time",
+        format!("must be a time from 0 to 1 s, got {}", p.block_time_s),
+    )?;
+    plausible(p.blend_mm, (1e-6, 1000.0, "mm"), "control.blend_mm")
+}
+
 impl Machine {
     /// Reads a machine file in any of its layouts and validates it.
     pub fn from_toml(text: &str) -> Result<Machine, MachineError> {
@@ -707,6 +746,7 @@ impl Machine {
                 format!("must be 0 to 6, got {d}"),
             )?;
         }
+        check_planner(&self.control.planner)?;
         if let Some(k) = &self.kinematics {
             k.check()
                 .map_err(|e| MachineError::invalid(format!("kinematics.{}", e.field), e.message))?;

@@ -12,7 +12,10 @@ use std::path::PathBuf;
 /// The time is an estimate with acceleration: the machine file's axis
 /// velocities, accelerations and jerks (conservative defaults where it has
 /// none), with look-ahead across blocks; the time at programmed feeds is
-/// printed beside it.
+/// printed beside it. The estimate follows the control's planner (the
+/// machine file's `[control] planner`) and honours the program's
+/// path-control mode (exact stop, blending within a tolerance) at every
+/// block; the time under each mode is printed below it.
 ///
 /// The format is detected from the content, not the file name.
 #[derive(clap::Args)]
