@@ -90,6 +90,8 @@ def run_once(cmd):
 def gate_counts():
     counts = {}
     path = os.path.join(ROOT, "crates", "millplan-bench", "gate-baseline.toml")
+    if not os.path.exists(path):
+        return counts
     for line in open(path):
         m = re.match(r"^(\w+) = ([0-9_]+)", line)
         if m:
