@@ -25,6 +25,7 @@ mod io;
 mod limits;
 mod progress;
 mod round;
+mod timings;
 mod verdict;
 
 use clap::{Parser, Subcommand};

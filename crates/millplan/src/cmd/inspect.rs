@@ -46,25 +46,35 @@ pub struct Args {
     /// to mm; without it the unit is guessed from the part's size.
     #[arg(long, value_enum)]
     pub stl_units: Option<UnitArg>,
+    /// Print the wall time of each phase on standard error (they add up to
+    /// the whole run).
+    #[arg(long)]
+    pub timings: bool,
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    let mut clock = crate::timings::Clock::start();
     let mut machine = crate::cmd::load_machine(a.machine.as_deref())?;
     machine.rapid = crate::cmd::arg(
         "--rapid-rate",
         a.rapid_rate.unwrap_or(machine.rapid),
         crate::cmd::Range::positive(1e7, "mm/min"),
     )?;
+    clock.lap("arguments and machine file");
     let input = read_any(&a.file, read_options(a.units, None)?)?;
+    clock.lap("file read");
     match input {
         Input::Program(parsed) => {
             print_diagnostics(&a.file, &parsed.diagnostics, a.quiet || a.json);
             let p = &parsed.program;
             if a.ir {
                 out!("{}", millplan_nc::text::print(p));
+                clock.lap("IR printed");
+                clock.print(a.timings);
                 return Ok(EXIT_OK);
             }
             let j = lib::program_json(p, parsed.diagnostics.len(), &machine);
+            clock.lap("summary and time estimate");
             if a.json {
                 crate::cmd::print_json(j);
             } else {
@@ -73,10 +83,12 @@ pub fn run(a: Args) -> CliResult<i32> {
                     lib::render_program(&a.file.display().to_string(), p, &j)
                 );
             }
+            drop(parsed);
         }
         Input::Mesh(mut mesh, r) => {
             crate::cmd::stl_to_mm(&mut mesh, a.stl_units);
             let j = lib::mesh_json(&mesh, &r, a.stl_units.map(Into::into));
+            clock.lap("summary (edges, bounds)");
             if a.json {
                 crate::cmd::print_json(j);
             } else {
@@ -84,5 +96,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             }
         }
     }
+    clock.lap("printed");
+    clock.print(a.timings);
     Ok(EXIT_OK)
 }

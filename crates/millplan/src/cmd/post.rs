@@ -86,6 +86,10 @@ pub struct Args {
     /// ends with exit 3.
     #[arg(long)]
     pub force: bool,
+    /// Print the wall time of each phase on standard error (they add up to
+    /// the whole run).
+    #[arg(long)]
+    pub timings: bool,
 }
 
 /// The post's options: the command line's, else the machine file's `[post]`.
@@ -187,6 +191,14 @@ fn check_posted(
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    let mut clock = crate::timings::Clock::start();
+    let code = run_timed(&a, &mut clock)?;
+    clock.lap("summary printed");
+    clock.print(a.timings);
+    Ok(code)
+}
+
+fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
     if a.json && a.output.as_os_str() == "-" {
         return Err(CliError::input(
             "--json: not with -o - (the program itself goes to standard output)",
@@ -195,7 +207,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let inputs = [a.input.as_path(), a.machine.as_path()];
     let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
     let machine = crate::cmd::load_machine(Some(&a.machine))?;
-    let o = options(&a, &machine)?;
+    let o = options(a, &machine)?;
     if machine.kinematics().is_none() {
         return Err(CliError::input(format!(
             "{}: no [kinematics] table: a five-axis post needs the machine's rotary axes",
@@ -207,8 +219,10 @@ pub fn run(a: Args) -> CliResult<i32> {
     if !target.is_gcode() {
         return Err(CliError::input("--to apt: a posted program is G-code"));
     }
+    clock.lap("arguments, machine file and outputs checked");
     let parsed = read_program(&a.input, read_options(a.units, None)?)?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet || a.json);
+    clock.lap("read CL file");
     let bar = crate::progress::spinner("posting", !a.quiet && !a.json);
     let posted = post(&parsed.program, &machine, &o).map_err(|e| post_error(&a.input, e))?;
     // The posted blocks (timed inside the post) are not needed any more:
@@ -219,24 +233,29 @@ pub fn run(a: Args) -> CliResult<i32> {
         report,
         ..
     } = posted;
+    clock.lap("post (IK, DP over the path, linearisation, feeds, time estimates)");
     for_target(&mut program, target).map_err(|e| post_error(&a.input, e))?;
     bar.finish_and_clear();
     let mut wo = machine.write_options(target);
     // The post states TCP itself, per operation, when asked for it.
     wo.auto_tcp = false;
     let out = crate::cmd::write_program(&program, wo, &a.input, a.quiet)?;
-    check_output(&program, &out, target, &a)?;
+    clock.lap("G-code written (in memory)");
+    check_output(&program, &out, target, a)?;
+    clock.lap("written program read back and compared");
     let checks = check_posted(&parsed.program, &program, &machine, o.tol);
     drop(parsed);
     let checked = crate::verdict::enforce(&checks, &a.input, a.force)?;
+    clock.lap("checks (IR, machine, tips through the kinematics)");
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
-    let mut j = summary(&a, &o, &machine, target.name(), &report);
+    clock.lap("program staged, synced and renamed into place");
+    let mut j = summary(a, &o, &machine, target.name(), &report);
     j["checks"] = serde_json::to_value(&checks).unwrap_or_default();
     if a.json {
         print_json(j);
     } else {
-        print_text(&a, &j, &report);
+        print_text(a, &j, &report);
     }
     Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
 }

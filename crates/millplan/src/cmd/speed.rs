@@ -145,19 +145,41 @@ fn request(a: &Args) -> SpeedRequest {
     }
 }
 
-type Reader = std::thread::JoinHandle<(CliResult<millplan_nc::Parsed>, f64)>;
+/// What the reader thread hands back: the program and the cycle time
+/// estimated on it, each with its own wall time.
+struct ReadBeside {
+    parsed: CliResult<millplan_nc::Parsed>,
+    read_s: f64,
+    time_before: f64,
+    estimate_s: f64,
+}
 
-/// Reads the program on its own thread, while the STL is read and its
-/// search trees are built.
-fn spawn_reader(a: &Args, t0: std::time::Instant) -> CliResult<Reader> {
+type Reader = std::thread::JoinHandle<ReadBeside>;
+
+/// Reads the program on its own thread, and estimates its cycle time there,
+/// while the STL is read and its search trees are built.
+fn spawn_reader(a: &Args, machine: &millplan_plan::machine::Machine) -> CliResult<Reader> {
     let (path, opts) = (a.path.clone(), read_options(a.units, None)?);
+    let machine = machine.clone();
     Ok(std::thread::spawn(move || {
+        let t = std::time::Instant::now();
         let parsed = read_program(&path, opts);
-        (parsed, t0.elapsed().as_secs_f64())
+        let read_s = t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
+        let time_before = match &parsed {
+            Ok(p) => millplan_plan::timing::estimate_program(&p.program, &machine).total_s,
+            Err(_) => 0.0,
+        };
+        ReadBeside {
+            parsed,
+            read_s,
+            time_before,
+            estimate_s: t.elapsed().as_secs_f64(),
+        }
     }))
 }
 
-fn join(r: Reader) -> (CliResult<millplan_nc::Parsed>, f64) {
+fn join(r: Reader) -> ReadBeside {
     r.join().unwrap_or_else(|e| std::panic::resume_unwind(e))
 }
 
@@ -183,83 +205,89 @@ fn plan_outputs(a: &Args) -> CliResult<Outputs> {
     )
 }
 
-/// The part's surface, built while the program is read on its own thread,
-/// and the program; the seconds the surface and the reading took.
-fn surface_and_program<'m>(
+/// The part, read while the program is read on its own thread; the STL's
+/// wall time. A program error is still reported first.
+fn read_part(
     a: &Args,
-    reader: Reader,
-    mesh: &'m millplan_geom::TriMesh,
-    t0: std::time::Instant,
-) -> CliResult<(Surface<'m>, millplan_nc::Parsed, [f64; 2])> {
-    let t_mesh = t0.elapsed().as_secs_f64();
-    let surface = Surface::new(mesh);
-    let t_surface = t0.elapsed().as_secs_f64() - t_mesh;
-    let (parsed, t_read) = join(reader);
-    let parsed = parsed?;
-    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
-    Ok((surface, parsed, [t_surface, t_read]))
-}
-
-/// The part, read while the program is read beside it; a program error is
-/// still reported first.
-fn read_part(a: &Args, reader: Reader) -> CliResult<(millplan_geom::TriMesh, Reader)> {
+    machine: &millplan_plan::machine::Machine,
+) -> CliResult<(millplan_geom::TriMesh, Reader, f64)> {
+    let t = std::time::Instant::now();
+    let reader = spawn_reader(a, machine)?;
     match read_surface(&a.stl, a.stl_units) {
-        Ok((m, _)) => Ok((m, reader)),
-        Err(e) => Err(join(reader).0.err().unwrap_or(e)),
+        Ok((m, _)) => Ok((m, reader, t.elapsed().as_secs_f64())),
+        Err(e) => Err(join(reader).parsed.err().unwrap_or(e)),
     }
 }
 
 /// The reading phases' times in the context's timings.
-fn record_reading(cx: &Context, [t_mesh, t_surface, t_read]: [f64; 3]) {
-    cx.record("read STL", t_mesh);
-    cx.record("surface (BVH, vertex normals)", t_surface);
-    cx.record("read toolpath (beside the two above)", t_read);
+fn record_reading(
+    cx: &Context,
+    t_setup: f64,
+    [t_mesh, t_surface, t_inputs]: [f64; 3],
+    read: &ReadBeside,
+) {
+    cx.record("arguments, machine file and outputs checked", t_setup);
+    cx.record("  read STL", t_mesh);
+    cx.record("  surface (BVH, vertex normals)", t_surface);
+    cx.record("  read toolpath (its own thread)", read.read_s);
+    cx.record(
+        "  time estimate of the input (after it, same thread)",
+        read.estimate_s,
+    );
+    cx.record("read STL, surface and toolpath", t_inputs);
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    let t0 = std::time::Instant::now();
     let req = request(&a);
     lib::check(&req).map_err(CliError::input)?;
     let mut outputs = plan_outputs(&a)?;
-    let t0 = std::time::Instant::now();
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let (mesh, reader) = read_part(&a, spawn_reader(&a, t0)?)?;
-    let t_mesh = t0.elapsed().as_secs_f64();
-    let (surface, parsed, [t_surface, t_read]) = surface_and_program(&a, reader, &mesh, t0)?;
+    let t_setup = t0.elapsed().as_secs_f64();
+    let (mesh, reader, t_mesh) = read_part(&a, &machine)?;
+    let t = std::time::Instant::now();
+    let surface = Surface::new(&mesh);
+    let t_surface = t.elapsed().as_secs_f64();
+    let read = join(reader);
+    let t_inputs = t0.elapsed().as_secs_f64() - t_setup;
+    let parsed = match read.parsed {
+        Ok(p) => p,
+        Err(e) => return Err(e),
+    };
+    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
     let bar = crate::progress::Phases::new(!a.quiet && parsed.program.move_count() >= 100_000);
     let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
     let cx = Context::new(machine)
         .with_surface(surface)
         .with_progress(&hook);
-    record_reading(&cx, [t_mesh, t_surface, t_read]);
+    let read_times = ReadBeside {
+        parsed: Err(CliError::internal("taken")),
+        ..read
+    };
+    record_reading(&cx, t_setup, [t_mesh, t_surface, t_inputs], &read_times);
     let input = parsed.program;
-    let time_before = millplan_plan::timing::estimate_program(&input, &cx.machine).total_s;
+    let time_before = read_times.time_before;
     let ran = lib::run(&req, &cx, &input).map_err(|e| crate::cmd::pass_error(&a.path, e));
     bar.finish();
     let (program, mut pass) = ran?;
-    let checks = lib::checks(&cx, &input, &program);
+    let checks = cx.time("checks of the output", || {
+        lib::checks(&cx, &input, &program)
+    });
     let checked = crate::verdict::enforce(&checks, &a.path, a.force)?;
-    drop(input);
+    cx.time("input freed", || drop(input));
     let Some(summary) = pass.summary.take() else {
         return Err(CliError::internal("the speed pass left no summary"));
     };
     // A part that does not match its path makes every speed meaningless.
-    let findings: Vec<_> = [checks::mesh(&mesh), checks::off_surface(&summary)]
-        .into_iter()
-        .flatten()
-        .collect();
+    let findings: Vec<_> = cx.time("part checks (open edges, points off the part)", || {
+        [checks::mesh(&mesh), checks::off_surface(&summary)]
+            .into_iter()
+            .flatten()
+            .collect()
+    });
     print_diagnostics(&a.stl, &findings, a.quiet || a.json);
-    cx.time("program written and synced", || {
-        write_program_file(
-            &program,
-            cx.machine.write_options(target),
-            &mut outputs,
-            &a.output,
-            &a.path,
-            a.quiet,
-        )
-    })?;
-    let time_after = millplan_plan::timing::estimate_program(&program, &cx.machine).total_s;
+    let time_after = write_and_estimate(&a, &cx, &program, target, &mut outputs)?;
     let run = Ran {
         program: &program,
         summary: &summary,
@@ -269,12 +297,56 @@ pub fn run(a: Args) -> CliResult<i32> {
         times: [time_before, time_after],
     };
     report_run(&a, &req, &cx, &run, outputs, target)?;
-    print_timings(&a, &cx, t0);
+    if a.timings {
+        crate::timings::print(&cx.timings(), t0);
+    }
     Ok(if checks::untrusted(&summary) || !checked {
         EXIT_FINDINGS
     } else {
         EXIT_OK
     })
+}
+
+/// Writes the program (staged, synced) while its cycle time is estimated on
+/// another thread; returns the estimate.
+fn write_and_estimate(
+    a: &Args,
+    cx: &Context,
+    program: &millplan_nc::Program,
+    target: millplan_nc::write::Target,
+    outputs: &mut Outputs,
+) -> CliResult<f64> {
+    let t = std::time::Instant::now();
+    let (written, (time_after, estimate_s)) = std::thread::scope(|s| {
+        let estimate = s.spawn(|| {
+            let t = std::time::Instant::now();
+            let total = millplan_plan::timing::estimate_program(program, &cx.machine).total_s;
+            (total, t.elapsed().as_secs_f64())
+        });
+        let written = write_program_file(
+            program,
+            cx.machine.write_options(target),
+            outputs,
+            &a.output,
+            &a.path,
+            a.quiet,
+        );
+        let w = t.elapsed().as_secs_f64();
+        (
+            written.map(|x| (x, w)),
+            estimate
+                .join()
+                .unwrap_or_else(|e| std::panic::resume_unwind(e)),
+        )
+    });
+    let (_, write_s) = written?;
+    cx.record("  program written and synced", write_s);
+    cx.record("  time estimate of the output (beside it)", estimate_s);
+    cx.record(
+        "program written, its time estimated",
+        t.elapsed().as_secs_f64(),
+    );
+    Ok(time_after)
 }
 
 /// What a run made: the program, the pass's summary and rows, the checks,
@@ -307,8 +379,10 @@ fn report_run(
             r.times,
         )
     };
-    write_table_and_report(a, &mut outputs, r.summary, r.rows, inputs)?;
-    outputs.commit()?;
+    cx.time("table and report", || {
+        write_table_and_report(a, &mut outputs, r.summary, r.rows, inputs)
+    })?;
+    cx.time("outputs renamed into place", || outputs.commit())?;
     let out = lib::Report::new(
         (r.summary, r.checks),
         (a.output.display().to_string(), target),
@@ -322,19 +396,6 @@ fn report_run(
         out!("{}", out.render_text());
     }
     Ok(())
-}
-
-/// The phases' timings on standard error (with --timings).
-fn print_timings(a: &Args, cx: &Context, t0: std::time::Instant) {
-    if a.timings {
-        for t in cx.timings() {
-            eprintln!("{:>8.3} s  {}", t.seconds, t.name);
-        }
-        eprintln!(
-            "{:>8.3} s  total until the program is written",
-            t0.elapsed().as_secs_f64()
-        );
-    }
 }
 
 /// The header, warnings and cycle times of a spindle-control report, the
