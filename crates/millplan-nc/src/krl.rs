@@ -55,6 +55,9 @@ pub enum Motion {
 }
 
 /// One statement of a program.
+// A move holds its targets inline: programs are mostly moves, so boxing
+// them would only add an allocation per line.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq)]
 pub enum Statement {
     Move {
@@ -203,6 +206,7 @@ fn read_file(
     Ok(())
 }
 
+#[allow(clippy::large_enum_variant)]
 enum Parsed1 {
     Def(String),
     Ext(String),

@@ -375,7 +375,7 @@ impl IkGeometry {
             gamma0,
             rate,
             wc_in_flange: last.inverse().apply(wc),
-            s5: robot.frames[rows[4]].fixed.r.col(2).y * -1.0,
+            s5: -robot.frames[rows[4]].fixed.r.col(2).y,
         })
     }
 }

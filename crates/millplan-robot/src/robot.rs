@@ -247,7 +247,7 @@ fn limits(l: &LimitsRow) -> Result<Limits, RobotError> {
         ("margin_deg", l.margin_deg),
         ("wrist_margin_deg", l.wrist_margin_deg),
     ] {
-        if !(v >= 0.0 && v < 45.0) {
+        if !(0.0..45.0).contains(&v) {
             return Err(RobotError::Invalid(format!(
                 "limits: {what} must be at least 0 and below 45"
             )));

@@ -168,7 +168,7 @@ fn compensated_program_is_krl() {
         .deflections(Variant::ThreeAxis, &place(), &ideal, &LOAD, None)
         .expect("reachable");
     let cmd = compensate(&ideal, &d.dp);
-    let k = machining::krl_program("slot", &[cmd.clone()], &place(), 0.15);
+    let k = machining::krl_program("slot", std::slice::from_ref(&cmd), &place(), 0.15);
     let files = millplan_nc::write::krl::write(
         &k,
         &millplan_nc::write::krl::KrlOptions {

@@ -179,12 +179,16 @@ fn command(k: usize, stock: &str, n: [&str; 3]) -> Vec<String> {
 fn bad_word(text: &str, feeds: bool) -> Option<String> {
     for w in text.split(|c: char| !(c.is_ascii_alphanumeric() || c == '.' || c == '-' || c == '/'))
     {
-        let body = w.trim_start_matches(|c: char| c.is_ascii_alphabetic() || c == '/');
-        let lower = body.to_ascii_lowercase();
-        if matches!(
-            lower.as_str(),
-            "nan" | "inf" | "-inf" | "infinity" | "-infinity"
-        ) {
+        // `NaN`, `-inf`, or an address letter before it (`Xinf`, `FEDRAT/nan`).
+        let lower = w.rsplit('/').next().unwrap_or(w).to_ascii_lowercase();
+        let non_finite = |b: &str| {
+            matches!(
+                b,
+                "nan" | "inf" | "-inf" | "+inf" | "infinity" | "-infinity"
+            )
+        };
+        let lettered = lower.len() > 1 && lower.as_bytes()[0].is_ascii_alphabetic();
+        if non_finite(&lower) || (lettered && non_finite(&lower[1..])) {
             return Some(w.to_string());
         }
         let feed = w

@@ -302,7 +302,7 @@ fn print_text(a: &Args, j: &Value, r: &PostReport) {
         j["mode"].as_str().unwrap_or(""),
         j["feed_mode"].as_str().unwrap_or("")
     );
-    let lim = |v: Option<f64>, inf: &str| v.map_or(inf.to_string(), |v| format!("{v:.1}"));
+    let lim = |v: Option<f64>| v.map_or("unlimited".to_string(), |v| format!("{v:.1}"));
     let rows: Vec<String> = r
         .rotary
         .iter()
@@ -310,8 +310,8 @@ fn print_text(a: &Args, j: &Value, r: &PostReport) {
             (Some(lo), Some(hi)) => format!(
                 "  {}  used {lo:.3} .. {hi:.3} deg   travel {} .. {}",
                 ax.axis,
-                lim(ax.limit_min, "-inf"),
-                lim(ax.limit_max, "inf")
+                lim(ax.limit_min),
+                lim(ax.limit_max)
             ),
             _ => format!("  {}  not moved", ax.axis),
         })
