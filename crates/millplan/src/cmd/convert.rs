@@ -1,6 +1,6 @@
 //! `millplan convert`: read a program in any supported format, write it in another.
 
-use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
+use crate::cmd::{print_diagnostics, read_options, target_for, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, Outputs};
 use millplan_nc::equiv::Tolerance;
@@ -110,7 +110,11 @@ pub fn run(a: Args) -> CliResult<i32> {
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet);
     let mut p = parsed.program;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, p.source)?;
+    let to = a.to.map(Into::into).or(machine.target());
+    let target = match to {
+        Some(t) => t,
+        None => target_for(None, &a.output, p.source)?,
+    };
     if let Some(k) = machine.kinematics() {
         let cx = Context::new(machine.clone());
         let mut pass = ResolveOrientation::new(k.clone());

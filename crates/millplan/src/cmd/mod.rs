@@ -120,9 +120,35 @@ impl From<TargetArg> for Target {
     }
 }
 
-/// The dialect to write: `--to`; else the machine's control, which the
-/// output's extension must not contradict; else the extension; else the
-/// source's own (`millplan_driver::target`, the one rule).
+/// The dialect an output is written in: `--to`, else the output file's
+/// extension, else the source's own dialect. Never a silent default: a
+/// program whose target none of these names is refused.
+pub fn target_for(
+    to: Option<TargetArg>,
+    output: &std::path::Path,
+    source: millplan_nc::Dialect,
+) -> crate::error::CliResult<Target> {
+    if let Some(t) = to {
+        return Ok(t.into());
+    }
+    if let Some(t) = output
+        .extension()
+        .and_then(|e| e.to_str())
+        .and_then(Target::from_extension)
+    {
+        return Ok(t);
+    }
+    Target::of(source).ok_or_else(|| {
+        crate::error::CliError::input(format!(
+            "{}: say which dialect to write with --to (the file name's extension names none)",
+            output.display()
+        ))
+    })
+}
+
+/// The dialect to write for a command that reads a machine file: `--to`;
+/// else the machine's control, which the output's extension must not
+/// contradict; else as [`target_for`].
 pub fn target_with_machine(
     to: Option<TargetArg>,
     output: &std::path::Path,

@@ -214,8 +214,10 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
             a.machine.display()
         )));
     }
-    let generated = millplan_nc::Dialect::Generated;
-    let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, generated)?;
+    let target = match a.to.map(Into::into).or(machine.target()) {
+        Some(t) => t,
+        None => crate::cmd::target_for(None, &a.output, millplan_nc::Dialect::Generated)?,
+    };
     if !target.is_gcode() {
         return Err(CliError::input("--to apt: a posted program is G-code"));
     }
