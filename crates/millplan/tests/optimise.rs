@@ -432,3 +432,132 @@ fn nx_nurbs_is_optimised_on_its_own_surface() {
     eprintln!("{}", serde_json::to_string(&j).unwrap_or_default());
     assert_eq!(j["verdict"], "improved");
 }
+
+/// A table-table A/C machine whose `[post]` asks for inverse-time feed.
+const TABLE_AC_G93: &str = r#"name = "table A/C, inverse time"
+[control]
+dialect = "fanuc"
+[spindle]
+min = 500.0
+max = 18000.0
+accel = 6000.0
+[feed]
+max = 20000.0
+rapid = 30000.0
+[kinematics]
+kind = "table-ac"
+rot_point = [0.0, 0.0, -100.0]
+offset = [0.0, 5.0, 20.0]
+[kinematics.first]
+min = -120.0
+max = 120.0
+[axes.a]
+velocity = 9000.0
+[axes.c]
+velocity = 18000.0
+[post]
+inverse_time = true
+"#;
+
+/// Distance from `p` to the segment `a`–`b`.
+fn segment_distance(
+    p: millplan_geom::DVec3,
+    a: millplan_geom::DVec3,
+    b: millplan_geom::DVec3,
+) -> f64 {
+    let ab = b - a;
+    let t = if ab.length_squared() > 0.0 {
+        ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a + ab * t - p).length()
+}
+
+/// Issue 31, done-when 2: the NX variable-contour sample optimised for a
+/// table A/C machine whose machine file asks for inverse time is posted in
+/// G93, passes its own checks, and the forward kinematics of every posted
+/// cutting block (computed here from the written A, C and X Y Z words)
+/// lies on the CL path within --tol (plus the written precision).
+#[test]
+fn nx_variable_contour_is_posted_in_g93_and_its_tips_are_the_cl_path() {
+    let Some(cls) = shared_data::file("nx-clsf-5axis-varcontour/ust_a.cls") else {
+        return;
+    };
+    let dir = tempfile::tempdir().expect("tmp");
+    let m = dir.path().join("ac.toml");
+    std::fs::write(&m, TABLE_AC_G93).expect("write");
+    let out = dir.path().join("ust_a.nc");
+    let o = run(&[
+        "optimise",
+        s(&cls),
+        "--machine",
+        s(&m),
+        "--tol",
+        "0.01",
+        "-o",
+        s(&out),
+        "--json",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let j = json(&o);
+    assert_eq!(pass(&j, "post")["ran"], true, "{j}");
+    let tip = j["checks"]
+        .as_array()
+        .expect("checks")
+        .iter()
+        .find(|c| c["name"] == "tip")
+        .expect("tip check");
+    assert_eq!(tip["ok"], true, "{tip}");
+    let text = std::fs::read_to_string(&out).expect("written");
+    assert!(text.lines().any(|l| l.contains("G93")), "no G93 block");
+    // The CL path in the part frame.
+    let cl = read(&cls);
+    let mut segs = Vec::new();
+    for op in &cl.operations {
+        let at = |v: millplan_geom::DVec3| op.frame.map_or(v, |f| f.to_parent(v));
+        let mut prev: Option<millplan_geom::DVec3> = None;
+        for mv in &op.moves {
+            let e = at(mv.end);
+            if let Some(p) = prev.filter(|_| mv.is_cutting()) {
+                segs.push((p, e));
+            }
+            prev = e.is_finite().then_some(e);
+        }
+    }
+    assert!(segs.len() > 100);
+    let kin = millplan_plan::machine::Machine::from_toml(TABLE_AC_G93)
+        .expect("machine")
+        .kinematics()
+        .cloned()
+        .expect("kinematics");
+    let posted = read(&out);
+    let (mut n, mut worst) = (0, 0.0f64);
+    for op in &posted.operations {
+        for mv in op.moves.iter().filter(|m| m.is_cutting()) {
+            let a = op.orient(mv).expect("angles").angles;
+            let j = millplan_models::kinematics::Joints {
+                xyz: mv.end,
+                first: a[0].expect("A").to_degrees(),
+                second: a[2].expect("C").to_degrees(),
+            };
+            let t = kin.forward(&j).0;
+            let d = segs
+                .iter()
+                .map(|&(p, q)| segment_distance(t, p, q))
+                .fold(f64::INFINITY, f64::min);
+            worst = worst.max(d);
+            n += 1;
+        }
+    }
+    assert!(n > 100, "{n} posted cutting blocks");
+    assert!(
+        worst <= 0.01 + 2e-3,
+        "a posted tip {worst} mm off the CL path"
+    );
+}

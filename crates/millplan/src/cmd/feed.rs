@@ -274,6 +274,8 @@ pub fn load_limits(
             "torque" => l.torque = v,
             "power" => l.power = v,
             "stress" => l.stress = v,
+            "fz_min" => l.fz_min = v.unwrap_or(l.fz_min),
+            "fz_max" => l.fz_max = v,
             _ => l.deflection = v,
         }
     }

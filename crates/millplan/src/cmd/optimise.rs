@@ -20,13 +20,20 @@ use std::path::{Path, PathBuf};
 /// orient (lead/tilt of five-axis CL), feed (a feed per block from the
 /// forces on the stock under the machine's spindle chart and --limit; needs
 /// --stock and --material), post (five-axis CL through the machine's
-/// kinematics). A pass whose inputs are missing is skipped and says why.
+/// kinematics to joint positions, feeds in inverse time when the machine
+/// file's [post] says inverse_time = true or --g93 is given; the posted tips
+/// are checked through the forward kinematics). A pass whose inputs are
+/// missing is skipped and says why.
 ///
-/// Defaults (each printed in the report with where it came from): vc from
-/// the material's cutting data, the spindle speed of moves without S from
-/// vc, the feed-per-tooth range from the material for the tool, the load
-/// limits from the machine's spindle chart (--limit fxy=N,torque=N·mm,
-/// power=W,stress=MPa,deflection=mm adds limits).
+/// Defaults (each printed with where it came from): vc from the material's
+/// cutting data; the spindle speed of moves without S from vc on the tool's
+/// diameter (--spindle gives it); the largest feed per tooth from the
+/// material's chip load at each tool's diameter, the smallest 0.01 mm
+/// (--limit fz_min=MM,fz_max=MM set them); torque and power from the
+/// machine's spindle chart at each block's speed; F_xy (and torque and
+/// power when the machine has no chart) no higher than the input's own
+/// largest on the stock. --limit fxy=N,torque=N·mm,power=W,stress=MPa,
+/// deflection=mm gives a limit instead.
 ///
 /// Checks of what is written, on the program re-read from its bytes:
 /// read-back (parses, commands what the optimised program does, IR
@@ -80,9 +87,14 @@ pub struct Args {
     /// Dexel size of the stock, mm (default 0.1).
     #[arg(long)]
     pub resolution: Option<f64>,
-    /// Tolerance of the checks, mm (default 0.01).
+    /// Tolerance of the checks, mm (default 0.01); also how far the post
+    /// lets the tool tip stray from the CL path while the rotaries move.
     #[arg(long)]
     pub tol: Option<f64>,
+    /// Post five-axis programs with inverse-time feed (G93) whatever the
+    /// machine file says.
+    #[arg(long)]
+    pub g93: bool,
     /// Passes to run, in this order, comma-separated (default: all the
     /// inputs allow, in the order above).
     #[arg(long, value_name = "LIST")]
@@ -142,6 +154,7 @@ fn options(a: &Args) -> CliResult<Options> {
             .map(|v| arg("--tol", v, Range::from(0.0, 100.0, "mm")))
             .transpose()?,
         memory: Some(crate::limits::get().memory),
+        g93: a.g93,
     })
 }
 
@@ -162,6 +175,8 @@ fn user_limits() -> CliResult<UserLimits> {
             "torque" => l.torque = v,
             "power" => l.power = v,
             "stress" => l.stress = v,
+            "fz_min" => l.fz_min = v,
+            "fz_max" => l.fz_max = v,
             _ => l.deflection = v,
         }
     }
@@ -314,6 +329,9 @@ fn print_summary(a: &Args, w: &Written, path: &Path, output: &Path, withheld: bo
     if a.json {
         crate::cmd::print_json(serde_json::to_value(s).unwrap_or_default());
         return;
+    }
+    for x in &s.settings {
+        outln!("  {:<13} {}  ({})", x.name, x.value, x.from);
     }
     for p in &s.passes {
         let state = if p.ran {
