@@ -63,6 +63,9 @@ pub struct Inputs {
     pub materials: Materials,
     pub material: Option<String>,
     pub options: Options,
+    /// What the tool library gave each operation (`tools::apply` on the
+    /// program, before the job); empty without a library.
+    pub library: Vec<Option<crate::tools::LibraryTool>>,
 }
 
 /// One resolved setting and where its value came from.
@@ -119,6 +122,97 @@ fn set(v: &mut Vec<Setting>, name: &'static str, value: String, from: &str) {
     });
 }
 
+/// The cutting speed, the flutes and the helix: the options', else the
+/// tool library's, else the cutting table's and the defaults; recorded.
+fn cutting_data(
+    inputs: &Inputs,
+    lib: Option<crate::tools::LibraryTool>,
+    s: &mut Vec<Setting>,
+) -> (f64, usize, f64) {
+    let o = &inputs.options;
+    let material = inputs.material.as_deref().map(str::to_ascii_lowercase);
+    let (cut, fallback) = defaults::cutting(material.as_deref().unwrap_or("default"));
+    let table = if fallback {
+        "cutting table [default]"
+    } else {
+        "cutting table"
+    };
+    let vc = pick(s, "vc", o.vc, None, (cut.vc, table), " m/min");
+    let lib_flutes = lib
+        .and_then(|t| t.flutes)
+        .map(|z| (z as f64, "tool library"));
+    let flutes = o.flutes.map(|z| z as f64);
+    let flutes = pick(
+        s,
+        "flutes",
+        flutes,
+        lib_flutes,
+        (Defaults::FLUTES as f64, "default"),
+        "",
+    ) as usize;
+    let lib_helix = lib.and_then(|t| t.helix_deg).map(|h| (h, "tool library"));
+    let helix = pick(
+        s,
+        "helix",
+        None,
+        lib_helix,
+        (Defaults::HELIX_DEG, "default"),
+        "°",
+    );
+    (vc, flutes, helix)
+}
+
+/// The value `given` (from `option`), else `alt` with its source, else the
+/// default with its; recorded in `s` with `unit`.
+fn pick(
+    s: &mut Vec<Setting>,
+    name: &'static str,
+    given: Option<f64>,
+    alt: Option<(f64, &str)>,
+    default: (f64, &str),
+    unit: &str,
+) -> f64 {
+    let (v, from) = match (given, alt) {
+        (Some(v), _) => (v, "option"),
+        (None, Some(a)) => a,
+        (None, None) => default,
+    };
+    set(s, name, format!("{v}{unit}"), from);
+    v
+}
+
+/// The tool library's tool of the job, recorded.
+fn library_setting(lib: Option<crate::tools::LibraryTool>, s: &mut Vec<Setting>) {
+    let Some(t) = lib else { return };
+    let holder = t.holder.map_or("none given".into(), |(r, l)| {
+        format!("D {} mm from {l} mm above the tip", 2.0 * r)
+    });
+    let v = format!("T{}: holder {holder}", t.number);
+    set(s, "tool", v, "tool library");
+}
+
+/// The finishing allowance of the speed pass: the `offset:` stock's, else
+/// the default; at most the tool's radius.
+fn allowance(i: &Inputs, d: f64, s: &mut Vec<Setting>) -> f64 {
+    let (ap, from) = match &i.stock {
+        Some(StockSpec::Offset(mm)) if *mm > 0.0 => ((*mm).min(d / 2.0), "stock offset"),
+        _ => (Defaults::AP.min(d / 2.0), "default"),
+    };
+    set(s, "ap", format!("{ap} mm"), from);
+    ap
+}
+
+/// What the library gave the first cutting operation's tool (the job's
+/// flutes, helix and holder are one tool's, as its diameter is).
+fn first_library_tool(i: &Inputs) -> Option<crate::tools::LibraryTool> {
+    let op = i
+        .program
+        .operations
+        .iter()
+        .position(|op| op.moves.iter().any(|m| m.is_cutting()))?;
+    i.library.get(op).copied().flatten()
+}
+
 /// The first cutting operation's tool diameter, mm.
 fn first_diameter(p: &Program, body: &BodyOptions) -> Option<f64> {
     p.operations
@@ -133,80 +227,39 @@ impl Job {
     pub fn new(inputs: Inputs) -> Result<Job, JobError> {
         let o = inputs.options.clone();
         let mut s = Vec::new();
+        let lib = first_library_tool(&inputs);
         let body = BodyOptions {
             shape: o.tool,
+            holder: lib.and_then(|t| t.holder),
             ..BodyOptions::default()
         };
         let d = first_diameter(&inputs.program, &body).ok_or_else(|| {
             JobError("the program has no cutting move with a tool of known shape: give --tool ball:D, flat:D or bull:D:R".into())
         })?;
-        let material = inputs.material.as_deref().map(str::to_ascii_lowercase);
-        let (cut, fallback) = defaults::cutting(material.as_deref().unwrap_or("default"));
-        let table = if fallback {
-            "cutting table [default]"
-        } else {
-            "cutting table"
-        };
-        let vc = o.vc.unwrap_or(cut.vc);
-        set(
-            &mut s,
-            "vc",
-            format!("{vc} m/min"),
-            if o.vc.is_some() { "option" } else { table },
-        );
-        let flutes = o.flutes.unwrap_or(Defaults::FLUTES);
-        set(
-            &mut s,
-            "flutes",
-            flutes.to_string(),
-            if o.flutes.is_some() {
-                "option"
-            } else {
-                "default"
-            },
-        );
-        let resolution = o.resolution.unwrap_or(Defaults::RESOLUTION);
-        set(
+        let (vc, flutes, helix) = cutting_data(&inputs, lib, &mut s);
+        library_setting(lib, &mut s);
+        let dflt = |v: f64| (v, "default");
+        let resolution = pick(
             &mut s,
             "resolution",
-            format!("{resolution} mm"),
-            if o.resolution.is_some() {
-                "option"
-            } else {
-                "default"
-            },
+            o.resolution,
+            None,
+            dflt(Defaults::RESOLUTION),
+            " mm",
         );
-        let tol = o.tol.unwrap_or(Defaults::TOL);
-        set(
-            &mut s,
-            "tol",
-            format!("{tol} mm"),
-            if o.tol.is_some() { "option" } else { "default" },
-        );
-        let ap = match &inputs.stock {
-            Some(StockSpec::Offset(mm)) if *mm > 0.0 => (*mm).min(d / 2.0),
-            _ => Defaults::AP.min(d / 2.0),
-        };
-        let ap_from = if matches!(inputs.stock, Some(StockSpec::Offset(_))) {
-            "stock offset"
-        } else {
-            "default"
-        };
-        set(&mut s, "ap", format!("{ap} mm"), ap_from);
+        let tol = pick(&mut s, "tol", o.tol, None, dflt(Defaults::TOL), " mm");
+        let ap = allowance(&inputs, d, &mut s);
         let limits = limits(&o.limits, chip_loads(&inputs)?, d, &mut s);
-        let feed_accel = machine_accel(&inputs.machine).unwrap_or(Defaults::FEED_ACCEL);
-        let accel_from = if machine_accel(&inputs.machine).is_some() {
-            "machine"
-        } else {
-            "default"
-        };
-        set(
+        let accel = machine_accel(&inputs.machine).map(|a| (a, "machine"));
+        let feed_accel = pick(
             &mut s,
             "feed_accel",
-            format!("{feed_accel} mm/s²"),
-            accel_from,
+            None,
+            accel,
+            dflt(Defaults::FEED_ACCEL),
+            " mm/s²",
         );
-        let setup = force_setup(&inputs, flutes)?;
+        let setup = force_setup(&inputs, flutes, helix)?;
         let mut job = Job {
             inputs,
             settings: s,
@@ -374,7 +427,11 @@ impl Job {
 }
 
 /// The force model of the material, `None` without one.
-fn force_setup(inputs: &Inputs, flutes: usize) -> Result<Option<ForceSetup>, JobError> {
+fn force_setup(
+    inputs: &Inputs,
+    flutes: usize,
+    helix_deg: f64,
+) -> Result<Option<ForceSetup>, JobError> {
     let Some(name) = &inputs.material else {
         return Ok(None);
     };
@@ -384,7 +441,7 @@ fn force_setup(inputs: &Inputs, flutes: usize) -> Result<Option<ForceSetup>, Job
         .map_err(|e| JobError(format!("--material: {e}")))?
         .law;
     let mut s = ForceSetup::new(law, flutes);
-    s.helix = Defaults::HELIX_DEG.to_radians();
+    s.helix = helix_deg.to_radians();
     // The given grid, unrefined (`ForceSetup::new`; `feed --converge`
     // refines it): converging every load sample costs tens of times the
     // evaluations.

@@ -16,6 +16,7 @@ pub mod passes;
 pub mod report;
 pub mod run;
 pub mod target;
+pub mod tools;
 
 pub use finish::{Summary, Verdict, Written};
 pub use job::{Inputs, Job, JobError, Options, UserLimits};

@@ -50,6 +50,7 @@ fn job_of(src: &str, limits: UserLimits) -> Job {
             limits,
             ..Options::default()
         },
+        library: Vec::new(),
     })
     .expect("a job")
 }
@@ -240,6 +241,7 @@ fn a_program_without_s_gets_the_speed_of_vc() {
             tool: Some(Shape::Ball { radius: 5.0 }),
             ..Options::default()
         },
+        library: Vec::new(),
     })
     .expect("a job");
     let n = 1000.0 * 300.0 / (std::f64::consts::PI * 10.0);

@@ -561,3 +561,105 @@ fn nx_variable_contour_is_posted_in_g93_and_its_tips_are_the_cl_path() {
         "a posted tip {worst} mm off the CL path"
     );
 }
+
+/// `--tools`: the demo's tool 1 served from a library (`millplan tool add`,
+/// flutes and helix as ISO 13399 properties) gives the run its flutes and
+/// helix, said to come from the library; a library without tool 1 stops the
+/// run at the tool's record (the demo's `CUTTER/` before `LOADTL/1`, line 4)
+/// with exit 2 and nothing written.
+#[test]
+fn the_tool_library_serves_the_tools_and_a_missing_one_is_located() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let (part, apt, machine) = demo(dir.path());
+    let db = dir.path().join("tools.db");
+    let add = |n: &str| {
+        let o = run(&[
+            "tool",
+            "add",
+            n,
+            "--db",
+            s(&db),
+            "--kind",
+            "ball",
+            "--r",
+            "5",
+            "--l",
+            "80",
+            "--iso",
+            "ZEFP=3",
+            "--iso",
+            "FHA=40",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    add("1");
+    let out = dir.path().join("opt.nc");
+    let args = |out: &Path| {
+        vec![
+            "optimise".to_string(),
+            s(&apt).into(),
+            "--stl".into(),
+            s(&part).into(),
+            "--machine".into(),
+            s(&machine).into(),
+            "--tools".into(),
+            s(&db).into(),
+            "--passes".into(),
+            "speed".into(),
+            "-o".into(),
+            s(out).into(),
+            "--json".into(),
+        ]
+    };
+    let o = bin().args(args(&out)).output().expect("runs");
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let j = json(&o);
+    assert_eq!(setting(&j, "flutes"), "3");
+    let from = |n: &str| {
+        j["settings"]
+            .as_array()
+            .expect("settings")
+            .iter()
+            .find(|x| x["name"] == n)
+            .map(|x| x["from"].clone())
+    };
+    assert_eq!(from("flutes"), Some("tool library".into()));
+    assert_eq!(from("helix"), Some("tool library".into()));
+    let other = dir.path().join("other.db");
+    let o = run(&[
+        "tool",
+        "add",
+        "7",
+        "--db",
+        s(&other),
+        "--kind",
+        "ball",
+        "--r",
+        "5",
+    ]);
+    assert!(o.status.success());
+    let out2 = dir.path().join("opt2.nc");
+    let mut a = args(&out2);
+    a[7] = s(&other).into();
+    let o = bin().args(&a).output().expect("runs");
+    assert_eq!(o.status.code(), Some(2));
+    let e: serde_json::Value = serde_json::from_slice(&o.stderr).expect("a JSON error");
+    let e = &e["error"];
+    assert!(
+        e["file"]
+            .as_str()
+            .is_some_and(|f| f.ends_with("finish.apt")),
+        "{e}"
+    );
+    assert_eq!(e["line"], 4, "{e}");
+    assert!(
+        e["message"].as_str().is_some_and(|m| m.contains("tool 1")),
+        "{e}"
+    );
+    assert!(!out2.exists());
+}

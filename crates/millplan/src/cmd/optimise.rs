@@ -6,6 +6,7 @@ use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_mesh, read_program, read_surface, Outputs};
 use millplan_driver::passes::{self, ORDER};
 use millplan_driver::report::{self, InputNames, Plotted};
+use millplan_driver::tools::{self, Library};
 use millplan_driver::{Inputs, Job, Options, Outcome, UserLimits, Verdict, Written};
 use millplan_sim::stock::spec::StockSpec;
 use std::path::{Path, PathBuf};
@@ -70,6 +71,13 @@ pub struct Args {
     /// A TOML file of further materials.
     #[arg(long)]
     pub materials: Option<PathBuf>,
+    /// Tool library (the SQLite file of `millplan tool`): each tool the
+    /// program calls takes its radius and length as measured (R + DR,
+    /// L + DL), flutes, helix, stick-out and holder from it; a tool the
+    /// library lacks, has locked or has worn out stops the run at the tool
+    /// call before any work.
+    #[arg(long, value_name = "LIBRARY.db")]
+    pub tools: Option<PathBuf>,
     /// Cutter for operations whose tool has no geometry, or to override it:
     /// ball:D, flat:D or bull:D:R.
     #[arg(long)]
@@ -183,9 +191,45 @@ fn user_limits() -> CliResult<UserLimits> {
     Ok(l)
 }
 
+/// The tool library of `--tools`, read whole (it must exist).
+fn library(p: &Path) -> CliResult<Library> {
+    use millplan_tooldb::db::ToolDb;
+    if !p.is_file() {
+        return Err(CliError::input(format!(
+            "--tools {}: no such tool library",
+            p.display()
+        )));
+    }
+    let err = |e: millplan_tooldb::db::DbError| {
+        let m = format!("--tools {}: {e}", p.display());
+        if e.is_bad_input() {
+            CliError::input(m)
+        } else {
+            CliError::internal(m)
+        }
+    };
+    let db = ToolDb::open(p).map_err(err)?;
+    let mut lib = Library::default();
+    for t in db.tools().map_err(err)? {
+        lib.tools.insert(t.number, t);
+    }
+    for e in db.events(None).map_err(err)? {
+        if let Some(n) = e.tool {
+            lib.last_decision.insert(n, e.decision);
+        }
+    }
+    Ok(lib)
+}
+
 fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
-    let parsed = read_program(path, read_options(a.units, None)?)?;
+    let mut parsed = read_program(path, read_options(a.units, None)?)?;
     print_diagnostics(path, &parsed.diagnostics, a.quiet || a.json);
+    let from_library = match &a.tools {
+        Some(db) => tools::apply(&mut parsed.program, &library(db)?).map_err(|e| {
+            CliError::input(format!("{}:{}:1: {}", path.display(), e.line, e.message))
+        })?,
+        None => Vec::new(),
+    };
     let part = a
         .stl
         .as_deref()
@@ -214,6 +258,7 @@ fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
         materials: crate::cmd::cut::load_materials(a.materials.as_deref())?,
         material: a.material.clone(),
         options: options(a)?,
+        library: from_library,
     })
 }
 
@@ -250,6 +295,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let mut inputs: Vec<&Path> = vec![&path];
     inputs.extend(a.stl.as_deref());
     inputs.extend(a.machine.as_deref());
+    inputs.extend(a.tools.as_deref());
     let mut outputs = Outputs::plan(
         &inputs,
         &[("-o", Some(&output)), ("--report", a.report.as_deref())],
