@@ -459,7 +459,7 @@ fn chip_loads(inputs: &Inputs) -> Result<Option<ChipLoads>, JobError> {
         .materials
         .get(name)
         .map_err(|e| JobError(format!("--material: {e}")))?;
-    Ok(m.chip_loads.clone())
+    Ok(m.chip_loads)
 }
 
 /// The load limits: the user's; the feed-per-tooth range, its top per tool
