@@ -30,6 +30,7 @@ pub mod simulate;
 pub mod speed;
 pub mod sweep;
 pub mod target;
+pub mod tools;
 pub mod wd;
 
 pub use finish::{Summary, Verdict, Written};

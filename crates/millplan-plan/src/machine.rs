@@ -66,6 +66,10 @@ pub struct PostSettings {
     /// change, mm.
     #[serde(default = "fifty_mm")]
     pub clearance: f64,
+    /// Post feeds as inverse time (G93, an F on every feed block) rather
+    /// than G94 (`millplan optimise`; `millplan post --g93`).
+    #[serde(default)]
+    pub inverse_time: bool,
 }
 
 fn one_degree() -> f64 {
@@ -82,6 +86,7 @@ impl Default for PostSettings {
             pole_cone: one_degree(),
             pole_tol: one_degree(),
             clearance: fifty_mm(),
+            inverse_time: false,
         }
     }
 }

@@ -11,9 +11,18 @@ use std::sync::OnceLock;
 static LIMITS: OnceLock<Limits> = OnceLock::new();
 static LOADS: OnceLock<Vec<(String, String)>> = OnceLock::new();
 
-/// The names `--limit` gives to cutting loads (`millplan feed`, `millplan
-/// force`) rather than to resources.
-pub const LOAD_NAMES: [&str; 5] = ["fxy", "torque", "power", "stress", "deflection"];
+/// The names `--limit` gives to cutting loads and the feed-per-tooth range
+/// (`millplan feed`, `millplan force`, `millplan optimise`) rather than to
+/// resources.
+pub const LOAD_NAMES: [&str; 7] = [
+    "fxy",
+    "torque",
+    "power",
+    "stress",
+    "deflection",
+    "fz_min",
+    "fz_max",
+];
 
 /// The load limits of the command line (`--limit fxy=300,torque=2000`), as
 /// given, in order.

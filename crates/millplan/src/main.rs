@@ -50,10 +50,11 @@ static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
 struct Cli {
     /// Raise (or lower) a resource limit: moves, expansion, line-bytes,
     /// expression-depth, stl-triangles, stl-extent (mm), memory (MB).
-    /// Repeatable; a value may end in k, M or G. For `feed` and `force`
-    /// also the cutting loads: fxy (N), torque (N·mm), power (W), stress
-    /// (MPa), deflection (mm), several per option separated by commas
-    /// (--limit fxy=300,power=2000).
+    /// Repeatable; a value may end in k, M or G. For `feed`, `force` and
+    /// `optimise` also the cutting loads: fxy (N), torque (N·mm), power
+    /// (W), stress (MPa), deflection (mm), and the feed per tooth fz_min,
+    /// fz_max (mm), several per option separated by commas (--limit
+    /// fxy=300,power=2000).
     #[arg(long = "limit", global = true, value_name = "NAME=VALUE")]
     limit: Vec<String>,
     #[command(subcommand)]

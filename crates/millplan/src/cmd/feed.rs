@@ -276,16 +276,15 @@ pub fn load_limits(
             .parse()
             .map_err(|_| CliError::input(format!("--limit {name}={value}: not a number")))?;
         let flag = format!("--limit {name}");
-        let v = Some(arg(
-            &flag,
-            v,
-            Range::positive(1e9, "(N, N·mm, W, MPa or mm)"),
-        )?);
+        let x = arg(&flag, v, Range::positive(1e9, "(N, N·mm, W, MPa or mm)"))?;
+        let v = Some(x);
         match name.as_str() {
             "fxy" => l.fxy = v,
             "torque" => l.torque = v,
             "power" => l.power = v,
             "stress" => l.stress = v,
+            "fz_min" => l.fz_min = x,
+            "fz_max" => l.fz_max = v,
             _ => l.deflection = v,
         }
     }
