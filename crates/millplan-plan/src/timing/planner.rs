@@ -772,7 +772,7 @@ mod tests {
             }
             estimate_controlled([0.0; 6], &m, &c, &l).total_s
         };
-        close(arc(STOP), len / 50.0 + 50.0 / 500.0, 1e-4);
-        close(arc(G64), len / 50.0 + 50.0 / 250.0, 1e-4);
+        close(arc(STOP), len / 50.0 + 50.0 / 500.0, 2e-4);
+        close(arc(G64), len / 50.0 + 50.0 / 250.0, 2e-4);
     }
 }
