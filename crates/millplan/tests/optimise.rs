@@ -238,7 +238,16 @@ fn passes_one_by_one_give_the_same_program() {
     let dir = tempfile::tempdir().expect("tmp");
     let (stl, apt, machine) = demo(dir.path());
     let opt = dir.path().join("opt.nc");
-    let common = ["--stl", s(&stl), "--machine", s(&machine)];
+    // The same limits for both runs: without them optimise would learn its
+    // own from the input's loads, which feed alone does not.
+    let common = [
+        "--stl",
+        s(&stl),
+        "--machine",
+        s(&machine),
+        "--limit",
+        "fxy=150,torque=1500,power=2000",
+    ];
     let o = bin()
         .args([
             "optimise",
