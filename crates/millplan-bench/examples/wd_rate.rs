@@ -13,10 +13,14 @@ use std::time::Instant;
 /// without a neighbour, angles spread by irrational steps.
 fn case(i: usize) -> Case {
     let f = i as f64;
-    let ae = (i % 10 != 0).then(|| 0.25 + (f * 0.569_840_290_998_053).fract());
+    let ae = (!i.is_multiple_of(10)).then(|| 0.25 + (f * 0.569_840_290_998_053).fract());
     let alpha = 80.0 * (f * 0.618_033_988_749_895).fract();
     let af = -180.0 + 360.0 * (f * 0.754_877_666_246_693).fract();
-    let side = if i % 2 == 0 { Side::Left } else { Side::Right };
+    let side = if i.is_multiple_of(2) {
+        Side::Left
+    } else {
+        Side::Right
+    };
     Case::from_degrees(10.0, 0.3, ae, false, alpha, af, side).unwrap_or_else(|e| panic!("{e}"))
 }
 

@@ -170,3 +170,18 @@ pub mod sweep {
     /// Feed-direction step, degrees.
     pub const AF_STEP: f64 = 5.0;
 }
+
+/// `millplan robot compensate` and `robot place`.
+pub mod robot {
+    /// Distance between the commanded points of a compensated path, mm
+    /// (paper 001's spacing).
+    pub const SPACING_MM: f64 = 0.3;
+    /// Motions per KRL sub-program.
+    pub const MAX_POINTS: usize = 5000;
+    /// The box the workpiece origin may be placed in, mm in the robot base.
+    pub const PLACE_BOX: &str = "800,-800,0,1800,800,800";
+    /// Seed of the placement search.
+    pub const SEED: u64 = 1;
+    /// Independent runs of the placement search.
+    pub const RESTARTS: usize = 4;
+}

@@ -4,7 +4,7 @@
 //! the base's vertical through its origin, A2 and A3 parallel and
 //! horizontal, the shoulder, elbow and wrist centre in one plane with A1,
 //! and a spherical wrist (A4, A5, A6 meeting in one point) at the end of the
-//! chain. [`IkGeometry::derive`] checks all of it when a file is read.
+//! chain. `IkGeometry::derive` checks all of it when a file is read.
 //! KUKA's Status and Turn name the solution ([`Config`]).
 
 use crate::pose::Pose;

@@ -667,9 +667,11 @@ fn not_yet_moved(f: &std::path::Path) -> bool {
     NOT_YET_MOVED.iter().any(|n| f.ends_with(n))
 }
 
-/// The bound of [`the_binary_stays_small`]: 7,515 lines when it was set,
-/// with room for the options other branches were adding at the time.
-const MAX_BINARY_LINES: usize = 7600;
+/// The bound of [`the_binary_stays_small`]: 8,456 lines when it was last
+/// set (the `robot` command and the `--timings` phases came in after the
+/// commands moved), with room for small fixes; lowered as `feed`, `force`,
+/// `robot`, `tool` and `post` move into their libraries.
+const MAX_BINARY_LINES: usize = 8600;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into

@@ -1002,7 +1002,7 @@ impl GcodeReader {
         };
         let on = match a.next() {
             Some("_OFF") => false,
-            Some(m) => self.value(m, ln, col).map_or(true, |v| v != 0.0),
+            Some(m) => !self.value(m, ln, col).is_ok_and(|v| v == 0.0),
             None => tol > 0.0,
         };
         let tolerance = if on { tol.max(0.0) * self.scale } else { 0.0 };

@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 /// forces on the stock under the machine's spindle chart and --limit; needs
 /// --stock and --material), post (five-axis CL through the machine's
 /// kinematics to joint positions, feeds in inverse time when the machine
-/// file's [post] says inverse_time = true or --g93 is given; the posted tips
+/// file's `[post]` says `inverse_time = true` or --g93 is given; the posted tips
 /// are checked through the forward kinematics). A pass whose inputs are
 /// missing is skipped and says why.
 ///

@@ -198,16 +198,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     Ok(code)
 }
 
-fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
-    if a.json && a.output.as_os_str() == "-" {
-        return Err(CliError::input(
-            "--json: not with -o - (the program itself goes to standard output)",
-        ));
-    }
-    let inputs = [a.input.as_path(), a.machine.as_path()];
-    let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
-    let machine = crate::cmd::load_machine(Some(&a.machine))?;
-    let o = options(a, &machine)?;
+/// The machine must have kinematics; the output is G-code of `--to`, else
+/// the machine file's control, else the output's file name.
+fn post_target(a: &Args, machine: &Machine) -> CliResult<millplan_nc::write::Target> {
     if machine.kinematics().is_none() {
         return Err(CliError::input(format!(
             "{}: no [kinematics] table: a five-axis post needs the machine's rotary axes",
@@ -221,6 +214,20 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
     if !target.is_gcode() {
         return Err(CliError::input("--to apt: a posted program is G-code"));
     }
+    Ok(target)
+}
+
+fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
+    if a.json && a.output.as_os_str() == "-" {
+        return Err(CliError::input(
+            "--json: not with -o - (the program itself goes to standard output)",
+        ));
+    }
+    let inputs = [a.input.as_path(), a.machine.as_path()];
+    let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
+    let machine = crate::cmd::load_machine(Some(&a.machine))?;
+    let o = options(a, &machine)?;
+    let target = post_target(a, &machine)?;
     clock.lap("arguments, machine file and outputs checked");
     let parsed = read_program(&a.input, read_options(a.units, None)?)?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet || a.json);
@@ -252,14 +259,28 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
     clock.lap("program staged, synced and renamed into place");
-    let mut j = summary(a, &o, &machine, target.name(), &report);
-    j["checks"] = serde_json::to_value(&checks).unwrap_or_default();
+    print_outcome(
+        a,
+        summary(a, &o, &machine, target.name(), &report),
+        &checks,
+        &report,
+    );
+    Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
+}
+
+/// The summary with its checks, as JSON or text.
+fn print_outcome(
+    a: &Args,
+    mut j: Value,
+    checks: &[millplan_plan::safety::Check],
+    report: &PostReport,
+) {
+    j["checks"] = serde_json::to_value(checks).unwrap_or_default();
     if a.json {
         print_json(j);
     } else {
-        print_text(a, &j, &report);
+        print_text(a, &j, report);
     }
-    Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
 }
 
 fn summary(a: &Args, o: &PostOptions, machine: &Machine, target: &str, r: &PostReport) -> Value {

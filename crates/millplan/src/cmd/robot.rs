@@ -74,11 +74,11 @@ pub struct CompensateArgs {
     #[arg(long, allow_hyphen_values = true, value_name = "X,Y,Z,RZ")]
     pub pose: String,
     /// Distance between the commanded points, mm (the paper: 0.3).
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::robot::SPACING_MM)]
     pub spacing: f64,
     /// Motions per KRL sub-program (a main program calls them); 0 writes
     /// one file.
-    #[arg(long, default_value_t = 5000)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::robot::MAX_POINTS)]
     pub max_points: usize,
     /// The KRL program to write (.src); sub-programs go beside it.
     #[arg(short = 'o', long)]
@@ -97,14 +97,14 @@ pub struct PlaceArgs {
         long = "box",
         allow_hyphen_values = true,
         value_name = "X0,Y0,Z0,X1,Y1,Z1",
-        default_value = "800,-800,0,1800,800,800"
+        default_value = millplan_driver::command_defaults::robot::PLACE_BOX
     )]
     pub bounds: String,
     /// Seed of the search: the same seed gives the same placement.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::robot::SEED)]
     pub seed: u64,
     /// Independent runs of the search from random starts; the best is kept.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::robot::RESTARTS)]
     pub restarts: usize,
 }
 
@@ -322,31 +322,19 @@ struct CompensateJson {
     files: Vec<String>,
 }
 
-fn compensate(a: CompensateArgs) -> CliResult<i32> {
-    let (robot, load, variant) = process(&a.process)?;
-    let pose = numbers(
-        "--pose",
-        &a.pose,
-        &["X", "Y", "Z", "RZ"],
-        Range::from(-1e5, 1e5, "mm or degrees"),
-    )?;
-    arg("--spacing", a.spacing, Range::from(0.01, 100.0, "mm"))?;
-    let place = Placement {
-        x: pose[0],
-        y: pose[1],
-        z: pose[2],
-        rz: pose[3].to_radians(),
-    };
-    crate::io::Outputs::plan(&[a.path.as_path()], &[("-o", Some(&a.output))], false)?;
-    let prog = read_path(&a.path)?;
-    let c = machining::compensate_program(&robot, variant, &prog, &place, &load, a.spacing)
-        .map_err(|e| machining_error(&a.path, e))?;
+/// The compensated path written as KRL: the main program at `-o`, its
+/// sub-programs beside it; the paths written.
+fn write_krl(
+    a: &CompensateArgs,
+    c: &machining::Compensated,
+    place: &Placement,
+) -> CliResult<Vec<std::path::PathBuf>> {
     let stem = a
         .output
         .file_stem()
         .and_then(|s| s.to_str())
         .unwrap_or("millplan");
-    let k = machining::krl_program(stem, &c.runs, &place, a.spacing / 2.0);
+    let k = machining::krl_program(stem, &c.runs, place, a.spacing / 2.0);
     let o = millplan_nc::write::krl::KrlOptions {
         name: stem.into(),
         max_points: a.max_points,
@@ -371,6 +359,29 @@ fn compensate(a: CompensateArgs) -> CliResult<i32> {
         outputs.write(p, text.as_bytes())?;
     }
     outputs.commit()?;
+    Ok(paths)
+}
+
+fn compensate(a: CompensateArgs) -> CliResult<i32> {
+    let (robot, load, variant) = process(&a.process)?;
+    let pose = numbers(
+        "--pose",
+        &a.pose,
+        &["X", "Y", "Z", "RZ"],
+        Range::from(-1e5, 1e5, "mm or degrees"),
+    )?;
+    arg("--spacing", a.spacing, Range::from(0.01, 100.0, "mm"))?;
+    let place = Placement {
+        x: pose[0],
+        y: pose[1],
+        z: pose[2],
+        rz: pose[3].to_radians(),
+    };
+    crate::io::Outputs::plan(&[a.path.as_path()], &[("-o", Some(&a.output))], false)?;
+    let prog = read_path(&a.path)?;
+    let c = machining::compensate_program(&robot, variant, &prog, &place, &load, a.spacing)
+        .map_err(|e| machining_error(&a.path, e))?;
+    let paths = write_krl(&a, &c, &place)?;
     let out = CompensateJson {
         mean_deflection_mm: sig(c.mean, 6),
         max_deflection_mm: sig(c.max, 6),
@@ -406,6 +417,32 @@ struct PlaceJson {
     max_deflection_mm: f64,
     feasible: bool,
     evaluations: usize,
+}
+
+/// The placement found, as JSON or text.
+fn print_place(out: &PlaceJson, json: bool) {
+    if json {
+        outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
+    } else if out.feasible {
+        let p = &out.pose;
+        outln!(
+            "placement: X {} Y {} Z {} mm, RZ {} degrees",
+            p.x,
+            p.y,
+            p.z,
+            p.rz
+        );
+        outln!(
+            "deflection: mean {} mm, max {} mm ({} evaluations)",
+            out.mean_deflection_mm,
+            out.max_deflection_mm,
+            out.evaluations
+        );
+    } else {
+        outln!(
+            "no feasible placement in the box: the robot cannot machine the path anywhere in it"
+        );
+    }
 }
 
 fn place(a: PlaceArgs) -> CliResult<i32> {
@@ -461,27 +498,6 @@ fn place(a: PlaceArgs) -> CliResult<i32> {
             evaluations: 0,
         },
     };
-    if a.process.json {
-        outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
-    } else if out.feasible {
-        let p = &out.pose;
-        outln!(
-            "placement: X {} Y {} Z {} mm, RZ {} degrees",
-            p.x,
-            p.y,
-            p.z,
-            p.rz
-        );
-        outln!(
-            "deflection: mean {} mm, max {} mm ({} evaluations)",
-            out.mean_deflection_mm,
-            out.max_deflection_mm,
-            out.evaluations
-        );
-    } else {
-        outln!(
-            "no feasible placement in the box: the robot cannot machine the path anywhere in it"
-        );
-    }
+    print_place(&out, a.process.json);
     Ok(if out.feasible { EXIT_OK } else { 3 })
 }

@@ -131,13 +131,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let path = a.path.display().to_string();
     let strokes = lib::program_strokes(&req, &path, &parsed.program, machine.rapid)
         .map_err(CliError::input)?;
-    if !(a.quiet || a.json) {
-        if let Some(note) =
-            lib::default_flute_note(&req, &parsed.program).map_err(CliError::input)?
-        {
-            eprintln!("note: {note}");
-        }
-    }
+    note_default_flute(&a, &req, &parsed.program)?;
     let part = match &a.stl {
         Some(p) => Some(read_surface(p, a.stl_units)?.0),
         None => None,
@@ -227,6 +221,17 @@ fn write_outputs(
         let title = format!("Stock simulation of {}", a.path.display());
         let html = millplan_report::sim::report(&title, &a.stock, stock, rep, rem.zip(part));
         outputs.write(p, html.as_bytes())?;
+    }
+    Ok(())
+}
+
+/// Says which flute length the shank and holder were simulated above, when
+/// neither `--flute-length` nor the program's cutter gave one.
+fn note_default_flute(a: &Args, req: &SimRequest, p: &millplan_nc::Program) -> CliResult<()> {
+    if !(a.quiet || a.json) {
+        if let Some(note) = lib::default_flute_note(req, p).map_err(CliError::input)? {
+            eprintln!("note: {note}");
+        }
     }
     Ok(())
 }

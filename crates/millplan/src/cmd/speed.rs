@@ -224,15 +224,15 @@ fn record_reading(
     cx: &Context,
     t_setup: f64,
     [t_mesh, t_surface, t_inputs]: [f64; 3],
-    read: &ReadBeside,
+    [read_s, estimate_s]: [f64; 2],
 ) {
     cx.record("arguments, machine file and outputs checked", t_setup);
     cx.record("  read STL", t_mesh);
     cx.record("  surface (BVH, vertex normals)", t_surface);
-    cx.record("  read toolpath (its own thread)", read.read_s);
+    cx.record("  read toolpath (its own thread)", read_s);
     cx.record(
         "  time estimate of the input (after it, same thread)",
-        read.estimate_s,
+        estimate_s,
     );
     cx.record("read STL, surface and toolpath", t_inputs);
 }
@@ -250,10 +250,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let t_surface = t.elapsed().as_secs_f64();
     let read = join(reader);
     let t_inputs = t0.elapsed().as_secs_f64() - t_setup;
-    let parsed = match read.parsed {
-        Ok(p) => p,
-        Err(e) => return Err(e),
-    };
+    let parsed = read.parsed?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
     let bar = crate::progress::Phases::new(!a.quiet && parsed.program.move_count() >= 100_000);
@@ -261,13 +258,14 @@ pub fn run(a: Args) -> CliResult<i32> {
     let cx = Context::new(machine)
         .with_surface(surface)
         .with_progress(&hook);
-    let read_times = ReadBeside {
-        parsed: Err(CliError::internal("taken")),
-        ..read
-    };
-    record_reading(&cx, t_setup, [t_mesh, t_surface, t_inputs], &read_times);
+    let time_before = read.time_before;
+    record_reading(
+        &cx,
+        t_setup,
+        [t_mesh, t_surface, t_inputs],
+        [read.read_s, read.estimate_s],
+    );
     let input = parsed.program;
-    let time_before = read_times.time_before;
     let ran = lib::run(&req, &cx, &input).map_err(|e| crate::cmd::pass_error(&a.path, e));
     bar.finish();
     let (program, mut pass) = ran?;
