@@ -258,7 +258,6 @@ pub fn run(a: Args) -> CliResult<i32> {
     let cx = Context::new(machine)
         .with_surface(surface)
         .with_progress(&hook);
-    let time_before = read.time_before;
     record_reading(
         &cx,
         t_setup,
@@ -278,12 +277,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         return Err(CliError::internal("the speed pass left no summary"));
     };
     // A part that does not match its path makes every speed meaningless.
-    let findings: Vec<_> = cx.time("part checks (open edges, points off the part)", || {
-        [checks::mesh(&mesh), checks::off_surface(&summary)]
-            .into_iter()
-            .flatten()
-            .collect()
-    });
+    let findings = part_findings(&cx, &mesh, &summary);
     print_diagnostics(&a.stl, &findings, a.quiet || a.json);
     let time_after = write_and_estimate(&a, &cx, &program, target, &mut outputs)?;
     let run = Ran {
@@ -292,17 +286,36 @@ pub fn run(a: Args) -> CliResult<i32> {
         rows: &pass.rows,
         checks: &checks,
         findings: &findings,
-        times: [time_before, time_after],
+        times: [read.time_before, time_after],
     };
     report_run(&a, &req, &cx, &run, outputs, target)?;
-    if a.timings {
-        crate::timings::print(&cx.timings(), t0);
-    }
+    print_timings(&a, &cx, t0);
     Ok(if checks::untrusted(&summary) || !checked {
         EXIT_FINDINGS
     } else {
         EXIT_OK
     })
+}
+
+/// The part's own findings: open edges, points off the part.
+fn part_findings(
+    cx: &Context,
+    mesh: &millplan_geom::TriMesh,
+    summary: &Summary,
+) -> Vec<millplan_nc::Diagnostic> {
+    cx.time("part checks (open edges, points off the part)", || {
+        [checks::mesh(mesh), checks::off_surface(summary)]
+            .into_iter()
+            .flatten()
+            .collect()
+    })
+}
+
+/// The phases' timings on standard error (with --timings).
+fn print_timings(a: &Args, cx: &Context, t0: std::time::Instant) {
+    if a.timings {
+        crate::timings::print(&cx.timings(), t0);
+    }
 }
 
 /// Writes the program (staged, synced) while its cycle time is estimated on
