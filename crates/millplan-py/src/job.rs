@@ -91,6 +91,9 @@ fn inputs(r: &Request) -> Res<Inputs> {
             limits: r.limits,
             ..Options::default()
         },
+        // No tool library from Python yet: the cutter comes from the
+        // program or `tools=`.
+        library: Vec::new(),
     })
 }
 
