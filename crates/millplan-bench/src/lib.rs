@@ -2,6 +2,8 @@
 //! over the demo surface, a binary STL of a finely tessellated surface, and the
 //! same path as an in-memory program.
 
+pub mod gate;
+
 use millplan_geom::analytic::{tessellate, DemoSurface, HeightField};
 use millplan_geom::stl::write_binary_stl;
 use millplan_nc::{Cutter, Dialect, Move, Operation, Program, Tool};

@@ -5,8 +5,10 @@
 //! |---|---|---|
 //! | `vc` | per material, [`cutting`] (`data/cutting.toml`) | no `--vc` |
 //! | `spindle` | 1000·vc/(π·D) of each operation's tool | a cutting move has no S and no `--spindle` |
-//! | `fz_min`, `fz_max` | `fz_per_d`·D of the material, [`cutting`] | always (`--limit fz_min=`/`fz_max=` tighten) |
-//! | load limits | the machine file's spindle chart (power, torque at each block's speed) | always (`--limit` adds or tightens) |
+//! | `fz_min` | [`Defaults::FZ_MIN`] mm (as `millplan feed`), at most a tool's `fz_max` | no `--limit fz_min=` |
+//! | `fz_max` | per tool, the material's chip load at its diameter (`fz_max` of the materials table, `millplan_models::force::materials`), else 0.02·D | no `--limit fz_max=` (which sets it for every tool) |
+//! | torque, power | the machine file's spindle chart at each block's speed | the machine file has a chart (`--limit` tightens) |
+//! | F_xy; torque and power without a chart | the input program's own largest load on the stock (`Job::learn_limits`) | no `--limit` for it, a stock and a material given |
 //! | `flutes` | [`Defaults::FLUTES`] | the program and `--flutes` say nothing |
 //! | `helix` | [`Defaults::HELIX_DEG`] | always (force model) |
 //! | `resolution` | [`Defaults::RESOLUTION`] mm | no `--resolution` |
@@ -22,6 +24,8 @@ use std::collections::BTreeMap;
 pub struct Defaults;
 
 impl Defaults {
+    /// Smallest feed per tooth, mm (`millplan feed --fz-min`'s default).
+    pub const FZ_MIN: f64 = 0.01;
     /// Flutes of a tool nobody describes.
     pub const FLUTES: usize = 2;
     /// Helix angle of the force model, degrees.
@@ -42,20 +46,13 @@ impl Defaults {
     pub const LOAD_SLACK: f64 = 0.005;
 }
 
-/// Cutting data of one material for solid carbide (see `data/cutting.toml`).
+/// Cutting data of one material for solid carbide (see `data/cutting.toml`;
+/// the feed per tooth comes from the materials table's chip loads).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Cutting {
     /// Cutting speed, m/min.
     pub vc: f64,
-    /// Feed per tooth range as a fraction of the tool diameter.
-    pub fz_per_d: [f64; 2],
-}
-
-impl Cutting {
-    /// The feed-per-tooth range of a tool of diameter `d`, mm.
-    pub fn fz(&self, d: f64) -> (f64, f64) {
-        (self.fz_per_d[0] * d, self.fz_per_d[1] * d)
-    }
 }
 
 const CUTTING: &str = include_str!("../data/cutting.toml");
@@ -67,10 +64,10 @@ pub fn cutting(material: &str) -> (Cutting, bool) {
     match table.get(&material.to_ascii_lowercase()) {
         Some(c) => (*c, false),
         None => (
-            table.get("default").copied().unwrap_or(Cutting {
-                vc: 100.0,
-                fz_per_d: [0.001, 0.0125],
-            }),
+            table
+                .get("default")
+                .copied()
+                .unwrap_or(Cutting { vc: 100.0 }),
             true,
         ),
     }
@@ -92,7 +89,7 @@ mod tests {
         let known = millplan_models::force::materials::Materials::builtin();
         for (name, c) in &table {
             assert!(name == "default" || known.get(name).is_ok(), "{name}");
-            assert!(c.vc > 0.0 && c.fz_per_d[0] > 0.0 && c.fz_per_d[1] > c.fz_per_d[0]);
+            assert!(c.vc > 0.0, "{name}");
         }
         for name in known.by_name.keys() {
             assert!(!cutting(name).1, "{name} has no cutting data");

@@ -68,17 +68,30 @@ impl Job {
     /// Writes the outcome's program with `wo`, re-reads it from its bytes
     /// and runs every check that applies on what was read.
     pub fn finish(&self, o: &Outcome, wo: WriteOptions) -> Result<Written, JobError> {
-        let (bytes, warnings) = write_program(&o.program, wo)
+        let (program, wo) = self.for_writing(o, wo)?;
+        let program = program.as_ref().unwrap_or(&o.program);
+        let (bytes, warnings) = write_program(program, wo)
             .map_err(|e| JobError(format!("{}: {}", e.line, e.message)))?;
-        let back = read_back(&bytes, wo.target, &o.program, &Tolerance::default())
+        let tol = Tolerance {
+            position: self.tol.max(Tolerance::default().position),
+            ..Tolerance::default()
+        };
+        let back = read_back(&bytes, wo.target, program, &tol)
             .map_err(|e| JobError(format!("the program written does not read back: {e}")))?;
         let mut list = vec![safety::read_back_check(&back)];
         let mut read = back.program;
-        checks::same_tools(&mut read, &o.program);
-        let forces_after = self.forces(&read)?;
-        list.extend(self.checks(o, &read, forces_after.as_ref()));
+        checks::same_tools(&mut read, program);
+        // A posted program is in machine coordinates: the loads, the stock
+        // and the part are checked on the CL program it was posted from,
+        // its tips through the kinematics against the input.
+        let cl = o.posted.as_ref().map_or(&read, |(cl, _)| cl);
+        let forces_after = self.forces(cl)?;
+        list.extend(self.checks(o, cl, forces_after.as_ref()));
+        if o.posted.is_some() {
+            self.posted_checks(&read, &mut list);
+        }
         let cx = self.context();
-        let after = self.measure(&read, forces_after.as_ref(), &cx);
+        let after = self.measure(cl, forces_after.as_ref(), &cx);
         let summary = self.summary(o, &after, list, wo);
         Ok(Written {
             bytes,
@@ -87,6 +100,56 @@ impl Job {
             forces_after,
             program: read,
         })
+    }
+
+    /// A posted program as the target writes it (the TCP words its control
+    /// knows, TCP stated by the post itself), `None` when nothing was posted.
+    fn for_writing(
+        &self,
+        o: &Outcome,
+        mut wo: WriteOptions,
+    ) -> Result<(Option<Program>, WriteOptions), JobError> {
+        if o.posted.is_none() {
+            return Ok((None, wo));
+        }
+        if !wo.target.is_gcode() {
+            return Err(JobError(
+                "a posted program is G-code: give --to with a G-code dialect".into(),
+            ));
+        }
+        let mut p = o.program.clone();
+        millplan_plan::post::for_target(&mut p, wo.target)
+            .map_err(|e| JobError(format!("{}: {e}", e.line())))?;
+        wo.auto_tcp = false;
+        Ok((Some(p), wo))
+    }
+
+    /// The posted program as read back against the input: the IR verifier,
+    /// S and F within the machine (G93 words included), and every posted tip
+    /// through the machine's forward kinematics on the input's path within
+    /// the tolerance; these replace the CL program's checks of the same
+    /// names.
+    fn posted_checks(&self, read: &Program, list: &mut Vec<Check>) {
+        let Some(kin) = self.inputs.machine.kinematics() else {
+            return;
+        };
+        let posted = safety::check(&Inputs {
+            input: &self.inputs.program,
+            output: read,
+            part: None,
+            stock: None,
+            tool_body: &|_| None,
+            machine: Some(&self.inputs.machine),
+            tip: TipRule::MovedBy(kin),
+            tol: Tolerances {
+                tip: self.tol,
+                ..Tolerances::default()
+            },
+            loads: None,
+        });
+        let replaced = ["ir", "machine", "tip"];
+        list.retain(|c| !replaced.contains(&c.name));
+        list.extend(posted.into_iter().filter(|c| replaced.contains(&c.name)));
     }
 
     /// `safety::check` on the program read back, with the job's tools,

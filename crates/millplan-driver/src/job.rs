@@ -3,11 +3,12 @@
 use crate::defaults::{self, Defaults};
 use millplan_geom::TriMesh;
 use millplan_models::cutter::Shape;
+use millplan_models::force::materials::ChipLoads;
 use millplan_models::force::materials::Materials;
 use millplan_models::force::Grid;
 use millplan_nc::{Operation, Program};
 use millplan_plan::feed::machine_accel;
-use millplan_plan::force::{FeedLimits, ForceSetup};
+use millplan_plan::force::{FeedLimits, ForceRun, ForceSetup};
 use millplan_plan::machine::Machine;
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
 use millplan_sim::stock::spec::StockSpec;
@@ -45,6 +46,8 @@ pub struct Options {
     pub tol: Option<f64>,
     /// Memory the stock may take, bytes.
     pub memory: Option<u64>,
+    /// Post with inverse-time feed (G93) whatever the machine file says.
+    pub g93: bool,
 }
 
 /// The inputs as read (the caller does all file access).
@@ -60,6 +63,9 @@ pub struct Inputs {
     pub materials: Materials,
     pub material: Option<String>,
     pub options: Options,
+    /// What the tool library gave each operation (`tools::apply` on the
+    /// program, before the job); empty without a library.
+    pub library: Vec<Option<crate::tools::LibraryTool>>,
 }
 
 /// One resolved setting and where its value came from.
@@ -102,6 +108,10 @@ pub struct Job {
     pub setup: Option<ForceSetup>,
     pub limits: FeedLimits,
     pub feed_accel: f64,
+    /// Diameter of the first cutting operation's tool, mm.
+    pub diameter: f64,
+    /// The forces of the input on the stock (with a stock and a material).
+    pub forces_before: Option<ForceRun>,
 }
 
 fn set(v: &mut Vec<Setting>, name: &'static str, value: String, from: &str) {
@@ -110,6 +120,97 @@ fn set(v: &mut Vec<Setting>, name: &'static str, value: String, from: &str) {
         value,
         from: from.to_string(),
     });
+}
+
+/// The cutting speed, the flutes and the helix: the options', else the
+/// tool library's, else the cutting table's and the defaults; recorded.
+fn cutting_data(
+    inputs: &Inputs,
+    lib: Option<crate::tools::LibraryTool>,
+    s: &mut Vec<Setting>,
+) -> (f64, usize, f64) {
+    let o = &inputs.options;
+    let material = inputs.material.as_deref().map(str::to_ascii_lowercase);
+    let (cut, fallback) = defaults::cutting(material.as_deref().unwrap_or("default"));
+    let table = if fallback {
+        "cutting table [default]"
+    } else {
+        "cutting table"
+    };
+    let vc = pick(s, "vc", o.vc, None, (cut.vc, table), " m/min");
+    let lib_flutes = lib
+        .and_then(|t| t.flutes)
+        .map(|z| (z as f64, "tool library"));
+    let flutes = o.flutes.map(|z| z as f64);
+    let flutes = pick(
+        s,
+        "flutes",
+        flutes,
+        lib_flutes,
+        (Defaults::FLUTES as f64, "default"),
+        "",
+    ) as usize;
+    let lib_helix = lib.and_then(|t| t.helix_deg).map(|h| (h, "tool library"));
+    let helix = pick(
+        s,
+        "helix",
+        None,
+        lib_helix,
+        (Defaults::HELIX_DEG, "default"),
+        "°",
+    );
+    (vc, flutes, helix)
+}
+
+/// The value `given` (from `option`), else `alt` with its source, else the
+/// default with its; recorded in `s` with `unit`.
+fn pick(
+    s: &mut Vec<Setting>,
+    name: &'static str,
+    given: Option<f64>,
+    alt: Option<(f64, &str)>,
+    default: (f64, &str),
+    unit: &str,
+) -> f64 {
+    let (v, from) = match (given, alt) {
+        (Some(v), _) => (v, "option"),
+        (None, Some(a)) => a,
+        (None, None) => default,
+    };
+    set(s, name, format!("{v}{unit}"), from);
+    v
+}
+
+/// The tool library's tool of the job, recorded.
+fn library_setting(lib: Option<crate::tools::LibraryTool>, s: &mut Vec<Setting>) {
+    let Some(t) = lib else { return };
+    let holder = t.holder.map_or("none given".into(), |(r, l)| {
+        format!("D {} mm from {l} mm above the tip", 2.0 * r)
+    });
+    let v = format!("T{}: holder {holder}", t.number);
+    set(s, "tool", v, "tool library");
+}
+
+/// The finishing allowance of the speed pass: the `offset:` stock's, else
+/// the default; at most the tool's radius.
+fn allowance(i: &Inputs, d: f64, s: &mut Vec<Setting>) -> f64 {
+    let (ap, from) = match &i.stock {
+        Some(StockSpec::Offset(mm)) if *mm > 0.0 => ((*mm).min(d / 2.0), "stock offset"),
+        _ => (Defaults::AP.min(d / 2.0), "default"),
+    };
+    set(s, "ap", format!("{ap} mm"), from);
+    ap
+}
+
+/// What the library gave the first cutting operation's tool (the job's
+/// flutes, helix and holder are one tool's, as its diameter is).
+fn first_library_tool(i: &Inputs) -> Option<crate::tools::LibraryTool> {
+    let op = i
+        .program
+        .operations
+        .iter()
+        .position(|op| op.moves.iter().any(|m| m.is_cutting()))?;
+    i.library.get(op).copied().flatten()
 }
 
 /// The first cutting operation's tool diameter, mm.
@@ -126,86 +227,39 @@ impl Job {
     pub fn new(inputs: Inputs) -> Result<Job, JobError> {
         let o = inputs.options.clone();
         let mut s = Vec::new();
+        let lib = first_library_tool(&inputs);
         let body = BodyOptions {
             shape: o.tool,
+            holder: lib.and_then(|t| t.holder),
             ..BodyOptions::default()
         };
         let d = first_diameter(&inputs.program, &body).ok_or_else(|| {
             JobError("the program has no cutting move with a tool of known shape: give --tool ball:D, flat:D or bull:D:R".into())
         })?;
-        let material = inputs.material.as_deref().map(str::to_ascii_lowercase);
-        let (cut, fallback) = defaults::cutting(material.as_deref().unwrap_or("default"));
-        let table = if fallback {
-            "cutting table [default]"
-        } else {
-            "cutting table"
-        };
-        let vc = o.vc.unwrap_or(cut.vc);
-        set(
-            &mut s,
-            "vc",
-            format!("{vc} m/min"),
-            if o.vc.is_some() { "option" } else { table },
-        );
-        let flutes = o.flutes.unwrap_or(Defaults::FLUTES);
-        set(
-            &mut s,
-            "flutes",
-            flutes.to_string(),
-            if o.flutes.is_some() {
-                "option"
-            } else {
-                "default"
-            },
-        );
-        let resolution = o.resolution.unwrap_or(Defaults::RESOLUTION);
-        set(
+        let (vc, flutes, helix) = cutting_data(&inputs, lib, &mut s);
+        library_setting(lib, &mut s);
+        let dflt = |v: f64| (v, "default");
+        let resolution = pick(
             &mut s,
             "resolution",
-            format!("{resolution} mm"),
-            if o.resolution.is_some() {
-                "option"
-            } else {
-                "default"
-            },
+            o.resolution,
+            None,
+            dflt(Defaults::RESOLUTION),
+            " mm",
         );
-        let tol = o.tol.unwrap_or(Defaults::TOL);
-        set(
-            &mut s,
-            "tol",
-            format!("{tol} mm"),
-            if o.tol.is_some() { "option" } else { "default" },
-        );
-        let ap = match &inputs.stock {
-            Some(StockSpec::Offset(mm)) if *mm > 0.0 => (*mm).min(d / 2.0),
-            _ => Defaults::AP.min(d / 2.0),
-        };
-        let ap_from = if matches!(inputs.stock, Some(StockSpec::Offset(_))) {
-            "stock offset"
-        } else {
-            "default"
-        };
-        set(&mut s, "ap", format!("{ap} mm"), ap_from);
-        let limits = limits(&o.limits, cut.fz(d), &mut s);
-        let feed_accel = machine_accel(&inputs.machine).unwrap_or(Defaults::FEED_ACCEL);
-        let accel_from = if machine_accel(&inputs.machine).is_some() {
-            "machine"
-        } else {
-            "default"
-        };
-        set(
+        let tol = pick(&mut s, "tol", o.tol, None, dflt(Defaults::TOL), " mm");
+        let ap = allowance(&inputs, d, &mut s);
+        let limits = limits(&o.limits, chip_loads(&inputs)?, d, &mut s);
+        let accel = machine_accel(&inputs.machine).map(|a| (a, "machine"));
+        let feed_accel = pick(
             &mut s,
             "feed_accel",
-            format!("{feed_accel} mm/s²"),
-            accel_from,
+            None,
+            accel,
+            dflt(Defaults::FEED_ACCEL),
+            " mm/s²",
         );
-        let chart = if inputs.machine.spindle_curve.is_some() {
-            "the machine's spindle chart"
-        } else {
-            "none (the machine file has no spindle chart)"
-        };
-        set(&mut s, "spindle_chart", chart.into(), "machine");
-        let setup = force_setup(&inputs, flutes)?;
+        let setup = force_setup(&inputs, flutes, helix)?;
         let mut job = Job {
             inputs,
             settings: s,
@@ -219,10 +273,61 @@ impl Job {
             setup,
             limits,
             feed_accel,
+            diameter: d,
+            forces_before: None,
         };
         job.default_spindle(d);
         job.stock = job.build_stock()?;
+        job.forces_before = job.forces(&job.inputs.program)?;
+        job.learn_limits();
         Ok(job)
+    }
+
+    /// Load limits nothing else gives (no `--limit`; torque and power not
+    /// from the spindle chart either) take the input's own largest load on
+    /// the stock: the program as its CAM system wrote it is the one the shop
+    /// has proven, so the feeds may rise where it cuts lightly but no cut
+    /// may load the tool more than its hardest one did (VERICUT's "learn
+    /// mode" takes its limits from the program in the same way). Without a
+    /// stock or a material there are no loads to learn.
+    fn learn_limits(&mut self) {
+        let Some(run) = &self.forces_before else {
+            return;
+        };
+        let max = run.maxima();
+        let chart = self.inputs.machine.spindle_curve.is_some();
+        let from = "the input's largest (no --limit, no spindle chart)";
+        let l = &mut self.limits;
+        let mut learned = Vec::new();
+        if l.fxy.is_none() && max.fxy > 0.0 {
+            l.fxy = Some(max.fxy);
+            learned.push(("fxy", format!("{:.1} N", max.fxy)));
+        }
+        if !chart && l.torque.is_none() && max.torque > 0.0 {
+            l.torque = Some(max.torque);
+            learned.push(("torque", format!("{:.1} N·mm", max.torque)));
+        }
+        if !chart && l.power.is_none() && max.power > 0.0 {
+            l.power = Some(max.power);
+            learned.push(("power", format!("{:.1} W", max.power)));
+        }
+        for (name, value) in learned {
+            let from = if name == "fxy" {
+                "the input's largest (no --limit fxy)"
+            } else {
+                from
+            };
+            set(&mut self.settings, name, value, from);
+        }
+        if chart {
+            let v = "at each block's speed".to_string();
+            set(
+                &mut self.settings,
+                "torque, power",
+                v,
+                "the machine's spindle chart",
+            );
+        }
     }
 
     /// The tool body of an operation (holder included when one is given).
@@ -322,7 +427,11 @@ impl Job {
 }
 
 /// The force model of the material, `None` without one.
-fn force_setup(inputs: &Inputs, flutes: usize) -> Result<Option<ForceSetup>, JobError> {
+fn force_setup(
+    inputs: &Inputs,
+    flutes: usize,
+    helix_deg: f64,
+) -> Result<Option<ForceSetup>, JobError> {
     let Some(name) = &inputs.material else {
         return Ok(None);
     };
@@ -332,28 +441,69 @@ fn force_setup(inputs: &Inputs, flutes: usize) -> Result<Option<ForceSetup>, Job
         .map_err(|e| JobError(format!("--material: {e}")))?
         .law;
     let mut s = ForceSetup::new(law, flutes);
-    s.helix = Defaults::HELIX_DEG.to_radians();
+    s.helix = helix_deg.to_radians();
     // The default grid as the coarsest, refined per load sample until the
     // peaks converge (`ForceSetup::new`).
     s.grid = Grid::default();
     Ok(Some(s))
 }
 
-/// The load limits: the user's, the feed-per-tooth range of the material
-/// for the tool (tightened by the user's), the spindle chart applied per
-/// block by [`FeedLimits::at`].
-fn limits(u: &UserLimits, (fz_lo, fz_hi): (f64, f64), s: &mut Vec<Setting>) -> FeedLimits {
-    let fz_min = u.fz_min.map_or(fz_lo, |v| v.max(fz_lo));
-    let fz_max = u.fz_max.map_or(fz_hi, |v| v.min(fz_hi)).max(fz_min);
-    let from = |x: Option<f64>| {
+/// The material's chip loads by tool diameter (`fz_max` of its row in the
+/// materials table), `None` without a material or a row.
+fn chip_loads(inputs: &Inputs) -> Result<Option<ChipLoads>, JobError> {
+    let Some(name) = &inputs.material else {
+        return Ok(None);
+    };
+    let m = inputs
+        .materials
+        .get(name)
+        .map_err(|e| JobError(format!("--material: {e}")))?;
+    Ok(m.chip_loads)
+}
+
+/// The load limits: the user's; the feed-per-tooth range, its top per tool
+/// from the material's chip loads at the tool's diameter (`d` the first
+/// tool's, for the report) unless `--limit fz_max=` gives one for every
+/// tool; the spindle chart applied per block by [`FeedLimits::at`]. The
+/// input's own loads are added by [`Job::learn_limits`].
+fn limits(u: &UserLimits, chip: Option<ChipLoads>, d: f64, s: &mut Vec<Setting>) -> FeedLimits {
+    let mut l = FeedLimits {
+        fxy: u.fxy,
+        torque: u.torque,
+        power: u.power,
+        stress: u.stress,
+        deflection: u.deflection,
+        fos: 1.0,
+        fz_min: u.fz_min.unwrap_or(Defaults::FZ_MIN),
+        fz_max: u.fz_max,
+        chip_loads: chip,
+    };
+    let r = l.fz_range(d);
+    l.fz_min = l.fz_min.min(r.fz_max);
+    let from = |x: Option<f64>, default: &str| {
         if x.is_some() {
-            "option"
+            "option".to_string()
         } else {
-            "cutting table"
+            default.to_string()
         }
     };
-    set(s, "fz_min", format!("{fz_min:.4} mm"), from(u.fz_min));
-    set(s, "fz_max", format!("{fz_max:.4} mm"), from(u.fz_max));
+    set(
+        s,
+        "fz_min",
+        format!("{:.4} mm", l.fz_min),
+        &from(u.fz_min, "default"),
+    );
+    let top = match (u.fz_max, r.source) {
+        (Some(_), _) => "option".to_string(),
+        (None, millplan_models::force::materials::FzSource::Diameter) => {
+            format!(
+                "{}·D (the material has no chip loads)",
+                millplan_models::force::materials::FALLBACK_FZ_SHARE
+            )
+        }
+        (None, _) => "materials table: the chip load at each tool's diameter".into(),
+    };
+    set(s, "fz_max", format!("{:.4} mm at D {d} mm", r.fz_max), &top);
     for (name, v) in [
         ("fxy", u.fxy),
         ("torque", u.torque),
@@ -365,15 +515,5 @@ fn limits(u: &UserLimits, (fz_lo, fz_hi): (f64, f64), s: &mut Vec<Setting>) -> F
             set(s, name, v.to_string(), "option");
         }
     }
-    FeedLimits {
-        fxy: u.fxy,
-        torque: u.torque,
-        power: u.power,
-        stress: u.stress,
-        deflection: u.deflection,
-        fos: 1.0,
-        fz_min,
-        fz_max: Some(fz_max),
-        chip_loads: None,
-    }
+    l
 }

@@ -8,16 +8,49 @@
 //! reports it ([`report`]). The binary parses arguments, reads the files,
 //! builds the job, calls it and prints; it decides nothing.
 
+pub mod check;
 pub mod checks;
+pub mod command_defaults;
+pub mod cut;
 pub mod defaults;
+pub mod directions;
 pub mod finish;
+pub mod gouge;
+pub mod inspect;
 pub mod job;
+pub mod lobes;
+pub mod orient;
 pub mod passes;
+pub mod raster;
+pub mod reorder;
 pub mod report;
 pub mod run;
+pub mod setup;
+pub mod simulate;
+pub mod speed;
+pub mod sweep;
 pub mod target;
+pub mod tools;
+pub mod wd;
 
 pub use finish::{Summary, Verdict, Written};
 pub use job::{Inputs, Job, JobError, Options, UserLimits};
 pub use passes::PassName;
 pub use run::Outcome;
+
+/// A cutter by its profile, as `--tool` names it.
+pub use millplan_models::cutter::Shape;
+/// The named materials of the force model (the built-in table and a user's
+/// TOML), as the commands load them.
+pub use millplan_models::force::materials::Materials;
+/// A check of a written program and its findings.
+pub use millplan_plan::safety::Check;
+/// A program cut into strokes for the stock.
+pub use millplan_sim::stock::path::Strokes;
+/// The stock, why one cannot be built, and a run's report over it.
+pub use millplan_sim::stock::remaining::Remaining;
+pub use millplan_sim::stock::run::{run as simulate_stock, SimReport};
+pub use millplan_sim::stock::spec::StockError;
+/// A stock as the user names it (`box:…`, `offset:MM`, `stl:FILE`).
+pub use millplan_sim::stock::spec::StockSpec;
+pub use millplan_sim::stock::Stock;

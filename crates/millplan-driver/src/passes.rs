@@ -146,6 +146,7 @@ pub fn missing(job: &Job, pass: PassName) -> Option<String> {
         PassName::Post if i.machine.kinematics().is_none() => {
             "the machine file has no [kinematics]"
         }
+        PassName::Post if !i.machine_given => "no machine file (--machine)",
         _ => return None,
     };
     Some(why.to_string())

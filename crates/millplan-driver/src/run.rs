@@ -7,6 +7,7 @@ use millplan_nc::Program;
 use millplan_plan::feed::{FeedChanges, FeedParams, FeedPass};
 use millplan_plan::force::{self, ForceRun};
 use millplan_plan::pipeline::{self, Context, Pass};
+use millplan_plan::post::{post, PostOptions, PostReport};
 use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Verdict};
 use millplan_plan::speed::{deviates, FeedCoupling, SpeedParams, SpeedPass};
 use serde::Serialize;
@@ -52,6 +53,15 @@ pub struct Outcome {
     pub forces_before: Option<ForceRun>,
     /// Whether a pass changed the order of the cutting points.
     pub reordered: bool,
+    /// After the post: the CL program it was made from and its report.
+    pub posted: Option<(Program, PostReport)>,
+}
+
+/// What the passes leave for the checks besides the program.
+#[derive(Default)]
+struct State {
+    reordered: bool,
+    posted: Option<(Program, PostReport)>,
 }
 
 impl Job {
@@ -60,7 +70,7 @@ impl Job {
     /// cutting block's F/(S·z)), within the fz range.
     pub fn speed_params(&self) -> SpeedParams {
         let z = self.flutes as f64;
-        let fz_max = self.limits.fz_max.unwrap_or(self.limits.fz_min);
+        let fz_max = self.limits.fz_range(self.diameter).fz_max;
         let fz = self
             .inputs
             .program
@@ -138,19 +148,16 @@ impl Job {
     pub fn run(&self, passes: &[PassName]) -> Result<Outcome, JobError> {
         let cx = self.context();
         let input = &self.inputs.program;
-        let forces_before = self.forces(input)?;
+        let forces_before = self.forces_before.clone();
         let before = self.measure(input, forces_before.as_ref(), &cx);
         let mut p = input.clone();
         let mut out = Vec::new();
-        let mut reordered = false;
+        let mut st = State::default();
         for &pass in passes {
             let t = Instant::now();
             let (ran, reason) = match missing(self, pass) {
                 Some(why) => (false, why),
-                None => (
-                    true,
-                    self.run_pass(pass, &mut p, &cx, passes, &mut reordered)?,
-                ),
+                None => (true, self.run_pass(pass, &mut p, &cx, passes, &mut st)?),
             };
             out.push(PassOutcome {
                 name: pass.name(),
@@ -164,7 +171,8 @@ impl Job {
             passes: out,
             before,
             forces_before,
-            reordered,
+            reordered: st.reordered,
+            posted: st.posted,
         })
     }
 
@@ -174,13 +182,13 @@ impl Job {
         p: &mut Program,
         cx: &Context,
         all: &[PassName],
-        reordered: &mut bool,
+        st: &mut State,
     ) -> Result<String, JobError> {
         match pass {
             PassName::Speed => self.speed(p, cx),
             PassName::Reorder => {
                 let (said, changed) = self.reorder(p, cx)?;
-                *reordered |= changed;
+                st.reordered |= changed;
                 // A new order needs its speeds again (as `millplan reorder` does).
                 if changed && all.contains(&PassName::Speed) {
                     return Ok(format!("{said}; {}", self.speed(p, cx)?));
@@ -188,7 +196,12 @@ impl Job {
                 Ok(said)
             }
             PassName::Feed => self.feed(p, cx),
-            PassName::Orient | PassName::Post => Err(JobError(format!(
+            PassName::Post => {
+                let (said, cl, report) = self.post(p)?;
+                st.posted = Some((cl, report));
+                Ok(said)
+            }
+            PassName::Orient => Err(JobError(format!(
                 "{}: not runnable here (a bug: `missing` lets it through)",
                 pass.name()
             ))),
@@ -237,6 +250,51 @@ impl Job {
             ),
             _ => ("no order wins: the original order kept".into(), false),
         })
+    }
+
+    /// Whether the post writes inverse-time feed: `--g93`, else the machine
+    /// file's `[post] inverse_time`.
+    pub fn g93(&self) -> bool {
+        self.inputs.options.g93 || self.inputs.machine.post.inverse_time
+    }
+
+    /// The post's settings: the job's tolerance, G93 as [`Job::g93`], the
+    /// machine file's pole cone, pole tolerance and clearance; joint
+    /// positions (no TCP).
+    pub fn post_options(&self) -> PostOptions {
+        let m = &self.inputs.machine.post;
+        PostOptions {
+            tol: self.tol,
+            tcp: false,
+            g93: self.g93(),
+            pole_cone: m.pole_cone,
+            pole_tol: m.pole_tol,
+            clearance: m.clearance,
+        }
+    }
+
+    /// Five-axis CL through the machine's kinematics: `p` becomes the
+    /// posted program; the CL program and the post's report are returned.
+    fn post(&self, p: &mut Program) -> Result<(String, Program, PostReport), JobError> {
+        let posted = post(p, &self.inputs.machine, &self.post_options()).map_err(|e| {
+            if e.line() == 0 {
+                JobError(format!("post: {e}"))
+            } else {
+                JobError(format!("{e}"))
+            }
+        })?;
+        let r = posted.report;
+        let said = format!(
+            "{} blocks in {}, {} flips, {} points inserted, tip within {:.4} mm by the kinematics; {:.1} s as posted",
+            r.blocks,
+            if self.g93() { "G93 (inverse time)" } else { "G94" },
+            r.flips.len(),
+            r.inserted_points,
+            r.max_tip_error_mm,
+            r.time_s
+        );
+        let cl = std::mem::replace(p, posted.program);
+        Ok((said, cl, r))
     }
 
     /// The feed pass's settings.

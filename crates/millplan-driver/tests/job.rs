@@ -26,7 +26,11 @@ fn plate() -> TriMesh {
 }
 
 fn job(limits: UserLimits) -> Job {
-    let program = parse_program(PROGRAM, ReadOptions::default())
+    job_of(PROGRAM, limits)
+}
+
+fn job_of(src: &str, limits: UserLimits) -> Job {
+    let program = parse_program(src, ReadOptions::default())
         .expect("reads")
         .program;
     Job::new(Inputs {
@@ -46,6 +50,7 @@ fn job(limits: UserLimits) -> Job {
             limits,
             ..Options::default()
         },
+        library: Vec::new(),
     })
     .expect("a job")
 }
@@ -149,11 +154,18 @@ fn a_run_without_options_has_every_default_and_says_where_from() {
     };
     assert_eq!(from("vc"), "cutting table");
     assert_eq!(j.vc, 300.0, "al7075 in data/cutting.toml");
-    assert_eq!(from("fz_max"), "cutting table");
-    assert!(
-        (j.limits.fz_max.expect("given") - 0.015 * 10.0).abs() < 1e-12,
-        "fz_per_d·D"
-    );
+    // materials.toml, al7075: the ATA chip load of a D10 end mill, 0.08 mm.
+    assert!(from("fz_max").contains("chip load"), "{}", from("fz_max"));
+    assert_eq!(j.limits.fz_max, None, "per tool, not one for all");
+    assert!((j.limits.fz_range(10.0).fz_max - 0.08).abs() < 1e-12);
+    assert_eq!((from("fz_min"), j.limits.fz_min), ("default".into(), 0.01));
+    // The machine has no spindle chart: F_xy, torque and power are the
+    // input's own largest on the stock.
+    let max = j.forces_before.as_ref().expect("forces").maxima();
+    assert!(max.fxy > 0.0);
+    assert_eq!(j.limits.fxy, Some(max.fxy));
+    assert_eq!(j.limits.torque, Some(max.torque));
+    assert!(from("fxy").contains("input"), "{}", from("fxy"));
     assert_eq!(from("spindle"), "program");
     assert_eq!(from("flutes"), "default");
     // The feed pass runs, the others say why not.
@@ -163,6 +175,51 @@ fn a_run_without_options_has_every_default_and_says_where_from() {
     let ran: Vec<bool> = o.passes.iter().map(|p| p.ran).collect();
     assert_eq!(ran, [true, true, false]);
     assert!(o.passes[2].reason.contains("three-axis"));
+}
+
+/// Without a limit of its own, the feed pass raises the feeds where the
+/// input cuts lightly (here 0.1 mm deep after 0.3 mm, lines 8–9), but no
+/// move is loaded more than the input's hardest (within the model's
+/// resolution), and the written program passes the load check against that
+/// learned limit.
+#[test]
+fn feeds_rise_but_no_load_above_the_inputs_largest() {
+    let src = PROGRAM.replace("G1 X40\n", "G1 Z0.2\nG1 X40\n");
+    let j = job_of(&src, UserLimits::default());
+    let before = j.forces_before.as_ref().expect("forces").maxima();
+    let o = j.run(&[PassName::Feed]).expect("runs");
+    let w = j
+        .finish(&o, WriteOptions::new(Target::Fanuc))
+        .expect("written");
+    let after = w.forces_after.as_ref().expect("forces").maxima();
+    assert!(
+        after.fxy <= before.fxy * 1.005,
+        "{} > {}",
+        after.fxy,
+        before.fxy
+    );
+    let loads = w.summary.checks.iter().find(|c| c.name == "loads");
+    let loads = loads.expect("load check");
+    assert!(loads.ok && loads.checked > 0, "{loads:?}");
+    assert!(w.summary.time_after_s < w.summary.time_before_s);
+}
+
+/// `--limit fz_max=` sets the top of every tool's range and says so.
+#[test]
+fn a_given_fz_max_replaces_the_chip_load() {
+    let j = job(UserLimits {
+        fz_max: Some(0.03),
+        fz_min: Some(0.005),
+        ..UserLimits::default()
+    });
+    assert_eq!(j.limits.fz_range(10.0).fz_max, 0.03);
+    assert_eq!(j.limits.fz_min, 0.005);
+    let from: Vec<_> = j
+        .settings
+        .iter()
+        .filter(|s| s.name.starts_with("fz_"))
+        .collect();
+    assert!(from.iter().all(|s| s.from == "option"), "{from:?}");
 }
 
 #[test]
@@ -184,6 +241,7 @@ fn a_program_without_s_gets_the_speed_of_vc() {
             tool: Some(Shape::Ball { radius: 5.0 }),
             ..Options::default()
         },
+        library: Vec::new(),
     })
     .expect("a job");
     let n = 1000.0 * 300.0 / (std::f64::consts::PI * 10.0);

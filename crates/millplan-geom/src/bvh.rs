@@ -353,6 +353,32 @@ impl Bvh {
         self.closest_near(mesh, p, max_dist, None)
     }
 
+    /// The closest points of the mesh to many points within `max_dist`, in
+    /// parallel runs of consecutive points, each point starting from the
+    /// previous one's triangle (points along a path lie near each other; the
+    /// results are those of [`Bvh::closest`] either way).
+    pub fn closest_many(
+        &self,
+        mesh: &TriMesh,
+        pts: &[DVec3],
+        max_dist: f64,
+    ) -> Vec<Option<Closest>> {
+        pts.par_iter()
+            .with_min_len(256)
+            .with_max_len(8192)
+            .map_init(
+                || None,
+                |hint: &mut Option<u32>, p| {
+                    let c = self.closest_near(mesh, *p, max_dist, *hint);
+                    if let Some(c) = &c {
+                        *hint = Some(c.triangle);
+                    }
+                    c
+                },
+            )
+            .collect()
+    }
+
     /// As [`Bvh::closest`], starting from the distance to triangle `hint` (for
     /// example the previous point's contact along a path): a tight first bound
     /// prunes almost the whole tree. The result is the same with or without it.
@@ -1366,6 +1392,36 @@ mod tests {
                 (closest_on_triangle(p, a, b, c).0 - p).length()
             })
             .fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn closest_many_agrees_with_brute_force_point_by_point() {
+        let mesh = tessellate(&DemoSurface::default(), 3.0);
+        let bvh = Bvh::build(&mesh);
+        // A wandering path (hints help) with jumps (hints mislead).
+        let pts: Vec<DVec3> = (0..3000)
+            .map(|i| {
+                let f = i as f64;
+                let jump = if i % 97 == 0 { 25.0 } else { 0.0 };
+                DVec3::new(
+                    (f * 0.02 + jump) % 60.0,
+                    (f * 0.013) % 60.0,
+                    2.0 + (f * 0.1).sin(),
+                )
+            })
+            .collect();
+        let got = bvh.closest_many(&mesh, &pts, f64::INFINITY);
+        assert_eq!(got.len(), pts.len());
+        for (p, c) in pts.iter().zip(&got) {
+            let c = c.expect("an unbounded query always finds a triangle");
+            assert!((c.distance - brute(&mesh, *p)).abs() < 1e-9, "{p}");
+            assert!(((c.point - *p).length() - c.distance).abs() < 1e-9);
+        }
+        // Within a bound: none beyond it.
+        let near = bvh.closest_many(&mesh, &pts, 0.5);
+        for (p, c) in pts.iter().zip(&near) {
+            assert_eq!(c.is_some(), brute(&mesh, *p) <= 0.5, "{p}");
+        }
     }
 
     #[test]

@@ -12,7 +12,7 @@
 //! | `expression-depth` | 64 | nesting of parentheses and signs in one expression (Sinumerik, LinuxCNC); at most [`MAX_EXPRESSION_DEPTH`] (1,000), so the recursive parser never overflows its stack |
 //! | `stl-triangles` | 50,000,000 | facets of one STL file (a binary file's count is checked before anything is allocated) |
 //! | `stl-extent` | 1,000,000 | largest coordinate of an STL vertex, mm |
-//! | `memory` | 4,000 | MB the work estimated up front may take (the grid of a raster, the samples of a gouge check); the `millplan` binary sets it to half the machine's memory |
+//! | `memory` | 4,000 | MB the work estimated up front may take (the grid of a raster, the samples of a gouge check); the `millplan` binary sets it by [`default_memory`]: half of what the process may really use |
 //!
 //! The numbers an NC program gives are bounded apart, by [`NC_EXTENT`]
 //! (coordinates, mm, and rotary positions, degrees: 1,000,000) and
@@ -38,6 +38,25 @@ pub const NC_RATE: f64 = 1e6;
 /// main thread's stack even in a debug build (tested with 1,000 nested
 /// functions); a deeper limit would let an input overflow the stack.
 pub const MAX_EXPRESSION_DEPTH: u64 = 1_000;
+
+/// The default `memory` limit, bytes: half of the least of what bounds the
+/// process — the machine's physical memory, the address space it may map
+/// (`RLIMIT_AS`, `ulimit -v`) and its control group's `memory.max` — each
+/// given only where the system sets it. Half, because the estimates count
+/// the big arrays only: the program, the allocator's reserve and the
+/// threads' stacks take the rest. With none known, [`Limits::default`]'s.
+pub fn default_memory(
+    physical: Option<u64>,
+    address_space: Option<u64>,
+    cgroup: Option<u64>,
+) -> u64 {
+    [physical, address_space, cgroup]
+        .into_iter()
+        .flatten()
+        .filter(|&b| b > 0)
+        .min()
+        .map_or(Limits::default().memory, |b| b / 2)
+}
 
 /// The limits in force. [`Limits::default`] is the documented table.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -238,6 +257,33 @@ mod tests {
             .expect_err("over the cap");
         assert!(e.contains("1 to 1000"), "{e}");
         assert_eq!(l, Limits::default());
+    }
+
+    /// Issue 34: "`--resolution 0.005` on a 100 mm stock (3,400 MB
+    /// estimated) passes the default memory limit (half the RAM) and aborts
+    /// under a 4 GB address-space limit". The default is half of the least
+    /// bound the process has.
+    #[test]
+    fn the_default_memory_limit_is_half_the_least_bound() {
+        let gib = 1u64 << 30;
+        assert_eq!(default_memory(Some(24 * gib), None, None), 12 * gib);
+        // `ulimit -v 4000000` (KiB) under 24 GiB of RAM.
+        let ulimit = 4_000_000 * 1024;
+        assert_eq!(
+            default_memory(Some(24 * gib), Some(ulimit), None),
+            ulimit / 2
+        );
+        assert!(default_memory(Some(24 * gib), Some(ulimit), None) < 3_400_000_000);
+        assert_eq!(default_memory(Some(24 * gib), None, Some(gib)), gib / 2);
+        assert_eq!(
+            default_memory(Some(24 * gib), Some(8 * gib), Some(2 * gib)),
+            gib
+        );
+        assert_eq!(default_memory(None, None, None), Limits::default().memory);
+        assert_eq!(
+            default_memory(Some(0), None, None),
+            Limits::default().memory
+        );
     }
 
     #[test]

@@ -79,6 +79,21 @@ impl NormalCheck {
     }
 }
 
+/// Is this an STL by its content: a binary file whose facet count matches
+/// its length `len`, or ASCII starting `solid` with a `facet` or `endsolid`
+/// in `head` (the file's first bytes)? Never by its name.
+pub fn is_stl(len: u64, head: &[u8]) -> bool {
+    if head.len() >= 84 {
+        let n = u32::from_le_bytes([head[80], head[81], head[82], head[83]]) as u64;
+        if 84 + 50 * n == len {
+            return true;
+        }
+    }
+    let t = String::from_utf8_lossy(&head[..head.len().min(4096)]);
+    let t = t.trim_start().to_ascii_lowercase();
+    t.starts_with("solid") && (t.contains("facet") || t.contains("endsolid"))
+}
+
 /// Reads an STL file's bytes (within the default [`Limits`]).
 ///
 /// ```

@@ -160,14 +160,18 @@ impl Kinematics {
                 message: message.to_string(),
             })
         };
+        // Within the plausibility limit of a program's coordinates: a
+        // rotation point at 1e20 mm turns every posted point into inf.
+        let far = |x: f64| !(x.abs() <= millplan_geom::limits::NC_EXTENT);
+        const FAR: &str = "must be a finite length within ±1000000 mm";
         for (name, v) in [("rot_point", self.rot_point), ("offset", self.offset)] {
-            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-                return err(format!("{name}[{i}]"), "must be a finite number (mm)");
+            if let Some(i) = v.iter().position(|&x| far(x)) {
+                return err(format!("{name}[{i}]"), FAR);
             }
         }
         for (name, v) in [("tool_offset", self.tool_offset), ("pivot", self.pivot)] {
-            if !v.is_finite() {
-                return err(name.into(), "must be a finite number (mm)");
+            if far(v) {
+                return err(name.into(), FAR);
             }
         }
         for (n, a) in [("first", self.first), ("second", self.second)] {
@@ -175,10 +179,10 @@ impl Kinematics {
                 return err(format!("{n}.sign"), "must be 1 or -1");
             }
             for (end, v) in [("min", a.min), ("max", a.max)] {
-                if v.is_some_and(|v| !v.is_finite()) {
+                if v.is_some_and(|v| !(v.abs() <= millplan_geom::limits::NC_EXTENT)) {
                     return err(
                         format!("{n}.{end}"),
-                        "must be a finite angle (degrees); leave it out for no limit",
+                        "must be a finite angle within ±1000000 degrees; leave it out for no limit",
                     );
                 }
             }

@@ -91,6 +91,60 @@ impl Case {
         };
         (sa * cf, ks, ca)
     }
+
+    /// A case as a user states it: lengths in mm, angles in degrees (`af` any
+    /// finite angle, taken to −180..180), `ae` the distance to the machined
+    /// neighbour (`None` or infinite: no neighbour, the first or an isolated
+    /// pass), `both` whether it lies on both sides. Checked against the
+    /// model's domain: `d` positive, `0 < ap ≤ d/2` (the engaged zone stays
+    /// on the ball), `ae` positive, `0 ≤ alpha < 90`. The error names the
+    /// argument and says what it must be.
+    pub fn from_degrees(
+        d: f64,
+        ap: f64,
+        ae: Option<f64>,
+        both: bool,
+        alpha_deg: f64,
+        af_deg: f64,
+        side: Side,
+    ) -> Result<Case, String> {
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(format!("d {d}: must be a positive diameter, mm"));
+        }
+        if !(ap > 0.0 && ap <= d / 2.0) {
+            return Err(format!(
+                "ap {ap}: must be above 0 and at most d/2 = {}",
+                d / 2.0
+            ));
+        }
+        let ae = ae.filter(|a| *a != f64::INFINITY);
+        if let Some(a) = ae {
+            if !(a > 0.0 && a.is_finite()) {
+                return Err(format!("ae {a}: must be a positive distance, mm"));
+            }
+        }
+        if !(0.0..90.0).contains(&alpha_deg) {
+            return Err(format!(
+                "alpha {alpha_deg}: must be from 0 to under 90 degrees"
+            ));
+        }
+        if !af_deg.is_finite() {
+            return Err(format!("af {af_deg}: must be a finite angle, degrees"));
+        }
+        let af = (af_deg + 180.0).rem_euclid(360.0) - 180.0;
+        Ok(Case {
+            d,
+            ap,
+            neighbour: match (ae, both) {
+                (None, _) => Neighbour::None,
+                (Some(a), false) => Neighbour::One(a),
+                (Some(a), true) => Neighbour::Both(a),
+            },
+            alpha: alpha_deg.to_radians(),
+            af: af.to_radians(),
+            side,
+        })
+    }
 }
 
 /// Diameter at the contact point, D·sin α: the lower bound of the working diameter.
@@ -793,5 +847,80 @@ mod tests {
     #[test]
     fn contact_diameter_is_d_sin_alpha() {
         assert!((contact_diameter(10.0, 30f64.to_radians()) - 5.0).abs() < 1e-12);
+    }
+}
+
+#[cfg(test)]
+mod from_degrees_tests {
+    use super::*;
+
+    /// working-diameter.md §2.3: D 10, ap 0.3, ae 0.25, α 20°, A_f 45°, left → 4.1301 mm.
+    #[test]
+    fn a_case_in_degrees_gives_the_oracle() {
+        let c = Case::from_degrees(10.0, 0.3, Some(0.25), false, 20.0, 45.0, Side::Left)
+            .expect("in the domain");
+        assert!((working_diameter(&c) - 4.1301).abs() < 1e-4);
+        // The same feed direction written one turn later.
+        let c2 = Case::from_degrees(10.0, 0.3, Some(0.25), false, 20.0, 405.0, Side::Left)
+            .expect("in the domain");
+        assert!((c2.af - c.af).abs() < 1e-12);
+    }
+
+    #[test]
+    fn out_of_domain_cases_name_their_argument() {
+        let e = |r: Result<Case, String>| r.expect_err("refused");
+        assert!(e(Case::from_degrees(
+            0.0,
+            0.3,
+            None,
+            false,
+            0.0,
+            0.0,
+            Side::Left
+        ))
+        .starts_with("d "));
+        assert!(e(Case::from_degrees(
+            10.0,
+            6.0,
+            None,
+            false,
+            0.0,
+            0.0,
+            Side::Left
+        ))
+        .starts_with("ap "));
+        assert!(e(Case::from_degrees(
+            10.0,
+            0.3,
+            Some(-1.0),
+            false,
+            0.0,
+            0.0,
+            Side::Left
+        ))
+        .starts_with("ae "));
+        assert!(e(Case::from_degrees(
+            10.0,
+            0.3,
+            None,
+            false,
+            90.0,
+            0.0,
+            Side::Left
+        ))
+        .starts_with("alpha "));
+        assert!(e(Case::from_degrees(
+            10.0,
+            0.3,
+            None,
+            false,
+            0.0,
+            f64::NAN,
+            Side::Left
+        ))
+        .starts_with("af "));
+        let c = Case::from_degrees(10.0, 0.3, Some(f64::INFINITY), false, 10.0, 0.0, Side::Left)
+            .expect("no neighbour");
+        assert_eq!(c.neighbour, Neighbour::None);
     }
 }

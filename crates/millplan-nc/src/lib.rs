@@ -11,6 +11,7 @@ pub mod equiv;
 pub mod gcode;
 pub mod generate;
 pub mod ir;
+pub mod krl;
 pub mod lines;
 pub mod plausible;
 pub mod readback;

@@ -75,6 +75,18 @@ fn check_op(op: &Operation) -> Result<(), ParseError> {
                 "per minute or per revolution",
             ));
         }
+        if m.spindle < 0.0 {
+            // `TOOL CALL 1 Z S-1`: the G-code readers refuse `S-1` as they
+            // read it; a reader that takes the sign is refused here.
+            return Err(ParseError::new(
+                m.line,
+                1,
+                format!(
+                    "the spindle speed of this move, {}, is negative: give the speed and the direction (M3/M4) apart",
+                    m.spindle
+                ),
+            ));
+        }
         if over(m.spindle, NC_RATE) {
             return Err(refuse(
                 m.line,

@@ -272,6 +272,79 @@ fn print_op(s: &mut String, op: &Operation) {
     }
 }
 
+/// `path exact-stop`, `path blend [tol=T]`, `path stop-once`,
+/// `path smoothing ai-contour|look-ahead|high-speed tol=T on|off`, `path soft on|off`.
+fn print_path(s: &mut String, pc: &PathControl) {
+    let on = |b: bool| if b { "on" } else { "off" };
+    match pc {
+        PathControl::ExactStop => s.push_str("path exact-stop"),
+        PathControl::StopOnce => s.push_str("path stop-once"),
+        PathControl::Blend { tolerance } => {
+            s.push_str("path blend");
+            if let Some(t) = tolerance {
+                s.push_str(" tol=");
+                num(s, *t);
+            }
+        }
+        PathControl::Smoothing { kind, on: o } => {
+            s.push_str("path smoothing ");
+            match kind {
+                Smoothing::AiContour => s.push_str("ai-contour"),
+                Smoothing::LookAhead => s.push_str("look-ahead"),
+                Smoothing::HighSpeed { tolerance } => {
+                    s.push_str("high-speed tol=");
+                    num(s, *tolerance);
+                }
+            }
+            let _ = write!(s, " {}", on(*o));
+        }
+        PathControl::Soft(o) => {
+            let _ = write!(s, "path soft {}", on(*o));
+        }
+    }
+}
+
+/// A path-control mode as the text form writes it, without `path `.
+pub fn path_control_name(pc: &PathControl) -> String {
+    let mut s = String::new();
+    print_path(&mut s, pc);
+    s.trim_start_matches("path ").to_string()
+}
+
+fn parse_path(c: &mut Cur) -> Result<PathControl, ParseError> {
+    let on_off: &[(&str, bool)] = &[("on", true), ("off", false)];
+    c.ws();
+    let at = c.i;
+    Ok(match c.token() {
+        "exact-stop" => PathControl::ExactStop,
+        "stop-once" => PathControl::StopOnce,
+        "blend" => PathControl::Blend {
+            tolerance: if c.eat("tol=") { Some(c.num()?) } else { None },
+        },
+        "smoothing" => {
+            let kind = if c.eat("ai-contour") {
+                Smoothing::AiContour
+            } else if c.eat("look-ahead") {
+                Smoothing::LookAhead
+            } else {
+                c.expect("high-speed")?;
+                c.key("tol")?;
+                Smoothing::HighSpeed {
+                    tolerance: c.num()?,
+                }
+            };
+            let on = pick(c, "smoothing state", on_off)?;
+            PathControl::Smoothing { kind, on }
+        }
+        "soft" => PathControl::Soft(pick(c, "soft state", on_off)?),
+        w => {
+            let w = w.to_string();
+            c.i = at;
+            return Err(c.err(format!("`{w}` is not a path-control mode")));
+        }
+    })
+}
+
 fn print_event(s: &mut String, e: &Event) {
     let _ = write!(s, "  L{} event ", e.line);
     match &e.kind {
@@ -322,6 +395,7 @@ fn print_event(s: &mut String, e: &Event) {
             s.push_str("dwell ");
             num(s, *t);
         }
+        EventKind::PathControl(pc) => print_path(s, pc),
         EventKind::Passthrough(p) => {
             s.push_str("pass word=");
             quoted(s, &p.word);
@@ -811,6 +885,7 @@ fn parse_event(c: &mut Cur) -> Result<EventKind, ParseError> {
             optional: pick(c, "stop kind", &[("optional", true), ("program", false)])?,
         },
         "dwell" => EventKind::Dwell(c.num()?),
+        "path" => EventKind::PathControl(parse_path(c)?),
         "pass" => {
             c.key("word")?;
             let word = c.string()?;

@@ -443,7 +443,22 @@ pub struct Steps {
     pub loaded_moves: usize,
 }
 
+/// Why a pass that needs the spindle speed refuses a move that cut with the
+/// spindle stopped (at its line).
+pub const STOPPED_SPINDLE: &str = "this move removes material with the spindle at 0 1/min (S0, the spindle off, or no speed given): its cutting forces need a spindle speed; give the block an S word";
+
 impl ForceRun {
+    /// The line of the first move that removed material with the spindle
+    /// stopped (an `S0` copied from the source, or no speed at all): its
+    /// loads cannot be modelled, so `feed` and `force` refuse it there
+    /// ([`STOPPED_SPINDLE`]) rather than keep or report it as unloaded.
+    pub fn stopped_spindle(&self) -> Option<u32> {
+        self.moves
+            .iter()
+            .find(|m| m.unmodelled && !(m.rpm > 0.0))
+            .map(|m| m.line)
+    }
+
     /// The steps chosen, against the coarsest `grid`.
     pub fn steps(&self, grid: &Grid) -> Steps {
         let mut s = Steps {

@@ -13,6 +13,7 @@ mod file;
 
 pub use file::Layout;
 
+use crate::timing::Planner;
 use millplan_models::kinematics::Kinematics;
 use millplan_nc::write::{Target, WriteOptions};
 
@@ -65,6 +66,10 @@ pub struct PostSettings {
     /// change, mm.
     #[serde(default = "fifty_mm")]
     pub clearance: f64,
+    /// Post feeds as inverse time (G93, an F on every feed block) rather
+    /// than G94 (`millplan optimise`; `millplan post --g93`).
+    #[serde(default)]
+    pub inverse_time: bool,
 }
 
 fn one_degree() -> f64 {
@@ -81,6 +86,7 @@ impl Default for PostSettings {
             pole_cone: one_degree(),
             pole_tol: one_degree(),
             clearance: fifty_mm(),
+            inverse_time: false,
         }
     }
 }
@@ -98,6 +104,9 @@ pub struct Control {
     /// Decimals of S words; `None`: the dialect's usual (whole numbers for
     /// Fanuc, whose controls refuse `S4200.6`, one decimal elsewhere).
     pub spindle_decimals: Option<u32>,
+    /// How the control plans the path through the blocks (the time
+    /// estimate's model of it); default the generic planner.
+    pub planner: Planner,
 }
 
 impl Default for Control {
@@ -107,6 +116,7 @@ impl Default for Control {
             g93_f: InverseTimeF::InverseMinutes,
             g93_rapids: true,
             spindle_decimals: None,
+            planner: Planner::default(),
         }
     }
 }
@@ -519,23 +529,83 @@ fn need(ok: bool, field: &str, message: String) -> Result<(), MachineError> {
     }
 }
 
-/// Finite and above zero; NaN fails every comparison, so `!(v > 0.0)` catches it.
-fn positive(v: f64, field: &str, unit: &str) -> Result<(), MachineError> {
+/// Finite and within `range`; NaN fails every comparison, so it fails too.
+fn plausible(v: f64, range: Plausible, field: &str) -> Result<(), MachineError> {
+    let (lo, hi, unit) = range;
     need(
-        v.is_finite() && v > 0.0,
+        v >= lo && v <= hi,
         field,
-        format!("must be finite and positive ({unit}), got {v}"),
+        format!("must be from {lo} to {hi} {unit}, got {}", shown(v)),
     )
+}
+
+/// A number as written in a message: 1e-300, not three hundred zeros.
+fn shown(v: f64) -> String {
+    if v != 0.0 && (v.abs() < 1e-4 || v.abs() >= 1e9) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// A plausibility range of a machine file's number: lowest, highest, unit.
+pub type Plausible = (f64, f64, &'static str);
+
+/// The plausibility ranges of a machine file's rates. A number outside its
+/// range is no machine's and is refused at its line: a velocity of 1e-300
+/// would make every move last forever (an infinite time), a jerk of 1e308 is
+/// none. Feeds and speeds share the limit of a program's (`NC_RATE`).
+pub mod ranges {
+    use super::Plausible;
+    use millplan_geom::limits::NC_RATE;
+    /// `feed.min`, `feed.max`, `feed.rapid`.
+    pub const FEED: Plausible = (0.001, NC_RATE, "mm/min");
+    /// `spindle.max` (the lowest speed may be 0).
+    pub const SPINDLE: Plausible = (1.0, NC_RATE, "1/min");
+    /// `spindle.accel`.
+    pub const SPINDLE_ACCEL: Plausible = (1.0, 1e7, "1/min per second");
+    /// A linear axis's velocity, acceleration and jerk.
+    pub const LINEAR: [Plausible; 3] = [
+        (1.0, NC_RATE, "mm/min"),
+        (1.0, 1e7, "mm/s²"),
+        (1.0, 1e12, "mm/s³"),
+    ];
+    /// A rotary axis's velocity, acceleration and jerk.
+    pub const ROTARY: [Plausible; 3] = [
+        (1.0, NC_RATE, "degrees/min"),
+        (1.0, 1e8, "degrees/s²"),
+        (1.0, 1e13, "degrees/s³"),
+    ];
+    /// A structural mode's natural frequency (as `lobes`).
+    pub const FREQUENCY: Plausible = (1.0, 1e5, "Hz");
+    /// A structural mode's stiffness (as `lobes`).
+    pub const STIFFNESS: Plausible = (1.0, 1e15, "N/m");
+}
+
+/// An axis's velocity, acceleration and jerk, each where given, in `ranges`.
+fn check_rates(
+    vaj: [Option<f64>; 3],
+    ranges: [Plausible; 3],
+    f: impl Fn(&str) -> String,
+) -> Result<(), MachineError> {
+    let ends = ["velocity", "accel", "jerk"];
+    for ((v, range), end) in vaj.into_iter().zip(ranges).zip(ends) {
+        if let Some(v) = v {
+            plausible(v, range, &f(end))?;
+        }
+    }
+    Ok(())
 }
 
 fn check_linear(a: &LinearAxis, name: char) -> Result<(), MachineError> {
     let f = |end: &str| format!("axes.{}.{end}", name.to_ascii_lowercase());
     for (end, v) in [("min", a.min), ("max", a.max)] {
         if let Some(v) = v {
+            let far = millplan_geom::limits::NC_EXTENT;
             need(
-                v.is_finite(),
+                v.abs() <= far,
                 &f(end),
-                format!("must be a finite position (mm), got {v}"),
+                format!("must be a position within ±{far} mm, got {v}"),
             )?;
         }
     }
@@ -546,16 +616,42 @@ fn check_linear(a: &LinearAxis, name: char) -> Result<(), MachineError> {
             format!("must be above min ({hi} ≤ {lo})"),
         )?;
     }
-    if let Some(v) = a.velocity {
-        positive(v, &f("velocity"), "mm/min")?;
-    }
-    if let Some(v) = a.accel {
-        positive(v, &f("accel"), "mm/s²")?;
-    }
-    if let Some(v) = a.jerk {
-        positive(v, &f("jerk"), "mm/s³")?;
-    }
+    check_rates([a.velocity, a.accel, a.jerk], ranges::LINEAR, f)?;
     Ok(())
+}
+
+fn check_planner(p: &Planner) -> Result<(), MachineError> {
+    let share = |v: f64, f: &str| {
+        need(
+            v.is_finite() && v > 0.0 && v <= 1.0,
+            f,
+            format!("must be a share above 0 and at most 1, got {v}"),
+        )
+    };
+    share(p.blend_accel_scale, "control.blend_accel_scale")?;
+    share(p.arc_tangential_share, "control.arc_tangential_share")?;
+    for (v, f) in [
+        (p.lookahead, "control.lookahead"),
+        (p.plain_lookahead, "control.plain_lookahead"),
+    ] {
+        need(
+            v <= 1_000_000,
+            f,
+            format!("must be at most 1000000 blocks, got {v}"),
+        )?;
+    }
+    if let Some(j) = p.jerk {
+        plausible(j, ranges::LINEAR[2], "control.jerk")?;
+    }
+    if let Some(a) = p.path_accel {
+        plausible(a, ranges::LINEAR[1], "control.path_accel")?;
+    }
+    need(
+        p.block_time_s.is_finite() && (0.0..=1.0).contains(&p.block_time_s),
+        "control.block_time",
+        format!("must be a time from 0 to 1 s, got {}", p.block_time_s),
+    )?;
+    plausible(p.blend_mm, (1e-6, 1000.0, "mm"), "control.blend_mm")
 }
 
 impl Machine {
@@ -611,12 +707,13 @@ impl Machine {
             "spindle.min",
             format!("must be a finite speed ≥ 0 (1/min), got {n0}"),
         )?;
+        plausible(n1, ranges::SPINDLE, "spindle.max")?;
         need(
-            n1.is_finite() && n1 > n0,
+            n1 > n0,
             "spindle.max",
             format!("must be finite and above the lowest speed, {n0} (1/min), got {n1}"),
         )?;
-        positive(self.spindle_accel, "spindle.accel", "1/min per second")?;
+        plausible(self.spindle_accel, ranges::SPINDLE_ACCEL, "spindle.accel")?;
         if let Some(c) = &self.spindle_curve {
             let (lo, hi) = c.range();
             need(
@@ -629,13 +726,14 @@ impl Machine {
             )?;
         }
         let (f0, f1) = (self.feed_min, self.feed_max);
-        positive(f0, "feed.min", "mm/min")?;
+        plausible(f0, ranges::FEED, "feed.min")?;
+        plausible(f1, ranges::FEED, "feed.max")?;
         need(
-            f1.is_finite() && f1 > f0,
+            f1 > f0,
             "feed.max",
             format!("must be finite and above the lowest feed, {f0} (mm/min), got {f1}"),
         )?;
-        positive(self.rapid, "feed.rapid", "mm/min")?;
+        plausible(self.rapid, ranges::FEED, "feed.rapid")?;
         if let Some(v) = self.feed_air {
             need(
                 v.is_finite() && v >= f0 && v <= f1,
@@ -653,6 +751,7 @@ impl Machine {
                 format!("must be 0 to 6, got {d}"),
             )?;
         }
+        check_planner(&self.control.planner)?;
         if let Some(k) = &self.kinematics {
             k.check()
                 .map_err(|e| MachineError::invalid(format!("kinematics.{}", e.field), e.message))?;
@@ -669,15 +768,7 @@ impl Machine {
             Some(k) => {
                 for (d, name) in drives.iter().zip(k.kind.rotary_names()) {
                     let f = |end: &str| format!("axes.{}.{end}", name.to_ascii_lowercase());
-                    if let Some(v) = d.velocity {
-                        positive(v, &f("velocity"), "degrees/min")?;
-                    }
-                    if let Some(v) = d.accel {
-                        positive(v, &f("accel"), "degrees/s²")?;
-                    }
-                    if let Some(v) = d.jerk {
-                        positive(v, &f("jerk"), "degrees/s³")?;
-                    }
+                    check_rates([d.velocity, d.accel, d.jerk], ranges::ROTARY, f)?;
                 }
             }
             None => need(
@@ -695,14 +786,14 @@ impl Machine {
                 )?;
                 for (i, mode) in modes.iter().enumerate() {
                     let f = |v: &str| format!("modal.{dir}[{i}].{v}");
-                    positive(mode.frequency, &f("frequency"), "Hz")?;
+                    plausible(mode.frequency, ranges::FREQUENCY, &f("frequency"))?;
                     let z = mode.damping;
                     need(
                         z > 0.0 && z < 1.0,
                         &f("damping"),
                         format!("must be a ratio between 0 and 1 (a structural mode is underdamped), got {z}"),
                     )?;
-                    positive(mode.stiffness, &f("stiffness"), "N/m")?;
+                    plausible(mode.stiffness, ranges::STIFFNESS, &f("stiffness"))?;
                 }
             }
         }

@@ -359,20 +359,24 @@ pub fn run(passes: &mut [&mut dyn Pass], p: &mut Program, cx: &Context) -> Resul
             return Err(PassError::NeedsPart { pass: info.name });
         }
         let before = if cx.verify {
-            snapshot(p, info.changes)
+            cx.time("what the pass must keep, taken before it", || {
+                snapshot(p, info.changes)
+            })
         } else {
             Before::None
         };
         cx.time(info.name, || pass.run(p, cx))?;
         if cx.verify {
-            verify(p).map_err(|violations| PassError::Verify {
-                pass: info.name,
-                violations,
-            })?;
-            check(&before, p, info.changes).map_err(|message| PassError::Contract {
-                pass: info.name,
-                changes: info.changes,
-                message,
+            cx.time("IR verified, the pass's declared changes checked", || {
+                verify(p).map_err(|violations| PassError::Verify {
+                    pass: info.name,
+                    violations,
+                })?;
+                check(&before, p, info.changes).map_err(|message| PassError::Contract {
+                    pass: info.name,
+                    changes: info.changes,
+                    message,
+                })
             })?;
         }
     }
@@ -436,7 +440,11 @@ op name=-
         let mut pass = Probe(&HOW, |p| p.operations[0].moves[2].spindle = 6000.0);
         run(&mut [&mut pass], &mut p, &cx).expect("speeds may change");
         assert_eq!(p.operations[0].moves[2].spindle, 6000.0);
-        assert_eq!(cx.timings()[0].name, "probe");
+        // Verifying, the snapshot before the pass and the checks after it
+        // are timed too, so that the phases cover the run.
+        let names: Vec<String> = cx.timings().into_iter().map(|t| t.name).collect();
+        assert_eq!(names.len(), 3, "{names:?}");
+        assert_eq!(names[1], "probe");
     }
 
     #[test]

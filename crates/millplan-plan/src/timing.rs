@@ -31,6 +31,10 @@
 //! Unknown limits never read as zero: a machine file without axis data gets
 //! the conservative defaults of [`DEFAULT_LINEAR_ACCEL`] and friends.
 
+mod planner;
+
+pub use planner::{BlockCtl, PathMode, Planner, PlannerKind, Profile};
+
 use crate::machine::Machine;
 use millplan_geom::DVec3;
 use millplan_nc::ir::{self, known, FeedMode, Program};
@@ -93,6 +97,22 @@ pub struct TimeEstimate {
     pub velocity_limited_blocks: usize,
     /// Feed blocks that never reach their programmed (or axis-capped) speed.
     pub accel_limited_blocks: usize,
+    /// The planner model the estimate followed (`generic`, `linuxcnc-2.9`,
+    /// ...); empty for a block sequence timed without a program.
+    pub planner: &'static str,
+    /// Of `total_s` without dwells: the time of the blocks under each
+    /// path-control mode, in the order the modes first occur.
+    pub by_mode: Vec<ModeTime>,
+}
+
+/// The time of the blocks under one path-control mode.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ModeTime {
+    /// `exact stop`, `blend`, `blend 0.01 mm`.
+    pub mode: String,
+    pub time_s: f64,
+    /// Machine blocks (arcs in chords, cycles spelled out).
+    pub blocks: usize,
 }
 
 impl TimeEstimate {
@@ -118,6 +138,8 @@ pub struct Limits {
     pub rapid: f64,
     /// Highest cutting feed (mm/s, along XYZ).
     pub feed_max: f64,
+    /// The control's planner (the machine file's `[control] planner`).
+    pub planner: Planner,
 }
 
 impl Limits {
@@ -130,6 +152,7 @@ impl Limits {
             jerk: [f64::INFINITY; 6],
             rapid,
             feed_max: machine.feed_max / 60.0,
+            planner: machine.control.planner,
         };
         for i in 3..6 {
             l.velocity[i] = DEFAULT_ROTARY_VELOCITY / 60.0;
@@ -292,11 +315,18 @@ pub(crate) fn junction(a: &Block, b: &Block, lim: &Limits) -> f64 {
 }
 
 /// [`junction`] with the lower of the two blocks' caps given.
+#[cfg(test)]
 fn junction_at(a: &Block, b: &Block, cap: f64, lim: &Limits) -> f64 {
     if a.rapid || b.rapid || a.rotary_only != b.rotary_only {
         return 0.0;
     }
-    let blend = a.len.min(b.len).min(BLEND_MM);
+    junction_len_rule(a, b, cap, a.len.min(b.len).min(BLEND_MM), lim)
+}
+
+/// The speed (at most `cap`) at which every axis's velocity change
+/// |Δe_i|·v, spread over the blend length `blend`, stays within its
+/// acceleration.
+pub(crate) fn junction_len_rule(a: &Block, b: &Block, cap: f64, blend: f64, lim: &Limits) -> f64 {
     let mut v = cap;
     for i in 0..6 {
         let de = (b.dir[i] - a.dir[i]).abs();
@@ -444,24 +474,18 @@ fn block_time_at(b: &Block, vc: f64, v0: f64, v1: f64) -> (f64, bool) {
 }
 
 /// The speeds at every junction after the look-ahead: `v[k]` entering block
-/// k, `v[k + 1]` leaving it.
+/// k, `v[k + 1]` leaving it (the generic planner, no modes).
 #[cfg(test)]
 pub(crate) fn plan(blocks: &[Block], stops: &[bool], lim: &Limits) -> Vec<f64> {
     let caps: Vec<f64> = blocks.iter().map(|b| b.vcap).collect();
-    plan_at(blocks, &caps, stops, lim)
+    let s = planner::shape(blocks, &caps, stops, None, &Planner::default(), lim);
+    plan_shaped(&s.blocks, s.vj)
 }
 
-/// [`plan`] with each block's speed cap from `caps`.
-fn plan_at(blocks: &[Block], caps: &[f64], stops: &[bool], lim: &Limits) -> Vec<f64> {
+/// The junction limits `v` made reachable within every block: a backward
+/// and a forward pass.
+fn plan_shaped(blocks: &[Block], mut v: Vec<f64>) -> Vec<f64> {
     let n = blocks.len();
-    let mut v = vec![0.0; n + 1];
-    for k in 1..n {
-        v[k] = if stops[k] {
-            0.0
-        } else {
-            junction_at(&blocks[k - 1], &blocks[k], caps[k - 1].min(caps[k]), lim)
-        };
-    }
     for k in (0..n).rev() {
         v[k] = capped(v[k + 1], v[k], &blocks[k]);
     }
@@ -518,8 +542,21 @@ pub fn estimate_axes_variants(
     let (blocks, stops) = prepare(start, moves, &lim);
     variants
         .par_iter()
-        .map(|m| finish(start, moves, *m, &blocks, &stops, &lim))
+        .map(|m| finish(start, moves, *m, &blocks, &stops, None, &lim))
         .collect()
+}
+
+/// [`estimate_with`] with the program's path-control mode at every block
+/// (`ctl[i]` for `moves[i]`), planned as `lim.planner` plans.
+pub fn estimate_controlled(
+    start: [f64; 6],
+    moves: &[AxisMove],
+    ctl: &[BlockCtl],
+    lim: &Limits,
+) -> TimeEstimate {
+    assert_eq!(ctl.len(), moves.len(), "one mode per block");
+    let (blocks, stops) = prepare(start, moves, lim);
+    finish(start, moves, None, &blocks, &stops, Some(ctl), lim)
 }
 
 fn estimate_at(
@@ -529,7 +566,7 @@ fn estimate_at(
     lim: &Limits,
 ) -> TimeEstimate {
     let (blocks, stops) = prepare(start, moves, lim);
-    finish(start, moves, minutes, &blocks, &stops, lim)
+    finish(start, moves, minutes, &blocks, &stops, None, lim)
 }
 
 /// The estimate of prepared blocks, each feed block asking for the minutes
@@ -540,6 +577,7 @@ fn finish(
     minutes: Option<&[f64]>,
     blocks: &[Block],
     stops: &[bool],
+    ctl: Option<&[BlockCtl]>,
     lim: &Limits,
 ) -> TimeEstimate {
     if let Some(t) = minutes {
@@ -561,15 +599,16 @@ fn finish(
         }
     };
     let caps: Vec<f64> = blocks.iter().map(|b| cap(b).0).collect();
-    let v = plan_at(blocks, &caps, stops, lim);
-    for (k, b) in blocks.iter().enumerate() {
-        let (t, cruise) = block_time_at(b, caps[k], v[k], v[k + 1]);
-        e.per_move_s[b.index] = t;
+    let shaped = planner::shape(blocks, &caps, stops, ctl, &lim.planner, lim);
+    let v = plan_shaped(&shaped.blocks, shaped.vj);
+    for (k, b) in shaped.blocks.iter().enumerate() {
+        let (t, cruise) = block_time_at(b, b.vcap, v[k], v[k + 1]);
+        e.per_move_s[b.index] += t;
         if !b.rapid {
-            e.velocity_limited_blocks += usize::from(cap(b).1);
             e.accel_limited_blocks += usize::from(!cruise);
         }
     }
+    e.velocity_limited_blocks = blocks.iter().filter(|b| !b.rapid && cap(b).1).count();
     let mut here = start;
     for (i, (m, t)) in moves.iter().zip(e.per_move_s.iter_mut()).enumerate() {
         match m.kind {
@@ -623,6 +662,8 @@ const ARC_CHORD_DEG: f64 = 5.0;
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ProgramBlocks {
     pub chains: Vec<([f64; 6], Vec<AxisMove>)>,
+    /// The path-control mode of every block of every chain.
+    pub ctl: Vec<Vec<BlockCtl>>,
     pub loose_dwell_s: f64,
 }
 
@@ -702,25 +743,40 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
         }
         (None, None) => loose.set(loose.get() + t.max(0.0)),
     };
-    let mut flush = |cur: &mut Option<([f64; 6], Vec<AxisMove>)>| {
-        if let Some(c) = cur.take() {
-            if !c.1.is_empty() {
-                chains.push(c);
+    // The path-control mode of every block, in step with the chains: the
+    // blocks of a move take the mode in effect for it when the next move
+    // (or the end) comes.
+    let mut ctls: Vec<Vec<BlockCtl>> = Vec::new();
+    let mut ctl_cur: Vec<BlockCtl> = Vec::new();
+    let mut st = BlockCtl::default();
+    let mut stop_once = false;
+    let mut flush =
+        |cur: &mut Option<([f64; 6], Vec<AxisMove>)>, ctl_cur: &mut Vec<BlockCtl>, st: BlockCtl| {
+            sync_ctl(cur, ctl_cur, st, false);
+            if let Some(c) = cur.take() {
+                if !c.1.is_empty() {
+                    chains.push(c);
+                    ctls.push(std::mem::take(ctl_cur));
+                }
             }
-        }
-    };
+            ctl_cur.clear();
+        };
     for op in &p.operations {
         for (i, m) in op.moves.iter().enumerate() {
             let o = op.orient(m);
             let start = op.known_start(i);
+            sync_ctl(&cur, &mut ctl_cur, st, std::mem::take(&mut stop_once));
             for e in op.events_before(i) {
+                if let ir::EventKind::PathControl(pc) = &e.kind {
+                    apply_path_control(&mut st, &mut stop_once, pc);
+                }
                 if let ir::EventKind::Dwell(t) = &e.kind {
                     dwell(&mut cur, here, *t);
                 }
             }
             if let Some(c) = op.cycle(m) {
                 let Some(at) = known(m.end) else {
-                    flush(&mut cur);
+                    flush(&mut cur, &mut ctl_cur, st);
                     here = None;
                     continue;
                 };
@@ -751,7 +807,7 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
                         across
                     }
                     None => {
-                        flush(&mut cur);
+                        flush(&mut cur, &mut ctl_cur, st);
                         let first = match steps.next() {
                             Some(CycleStep::Rapid(q) | CycleStep::Feed(q, _)) => q,
                             _ => at,
@@ -783,7 +839,7 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
                 continue;
             }
             let (Some(s), Some(e)) = (start, known(m.end)) else {
-                flush(&mut cur);
+                flush(&mut cur, &mut ctl_cur, st);
                 here = None;
                 continue;
             };
@@ -804,8 +860,10 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
                     nominal_min: if total.is_finite() { total * part } else { 0.0 },
                 }
             };
+            let mut arc_radius = None;
             match op.arc(m) {
                 Some(a) if a.sweep.abs() > 1e-12 => {
+                    arc_radius = Some(a.radius);
                     let n = ((a.sweep.abs().to_degrees() / ARC_CHORD_DEG).ceil() as usize).max(1);
                     for k in 1..=n {
                         let t = k as f64 / n as f64;
@@ -822,6 +880,15 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
                 }),
             }
             here = list.last().map(|m| m.target);
+            if let Some(r) = arc_radius {
+                let from = ctl_cur.len();
+                sync_ctl(&cur, &mut ctl_cur, st, false);
+                let last = ctl_cur.len().saturating_sub(1);
+                for (k, c) in ctl_cur.iter_mut().enumerate().skip(from) {
+                    c.arc_radius = r;
+                    c.same_move = k < last;
+                }
+            }
         }
         // Trailing dwells of the operation.
         for ev in op
@@ -834,10 +901,54 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
             }
         }
     }
-    flush(&mut cur);
+    sync_ctl(&cur, &mut ctl_cur, st, stop_once);
+    flush(&mut cur, &mut ctl_cur, st);
     ProgramBlocks {
         chains,
+        ctl: ctls,
         loose_dwell_s: loose.get(),
+    }
+}
+
+/// Gives the blocks of the open chain that have no mode yet `st`; with
+/// `stop_after`, the last block stops at its end (a G09 move's).
+fn sync_ctl(
+    cur: &Option<([f64; 6], Vec<AxisMove>)>,
+    ctl_cur: &mut Vec<BlockCtl>,
+    st: BlockCtl,
+    stop_after: bool,
+) {
+    let n = cur.as_ref().map_or(0, |c| c.1.len());
+    if ctl_cur.len() < n {
+        ctl_cur.resize(n, st);
+    }
+    if stop_after {
+        if let Some(c) = ctl_cur.last_mut() {
+            c.stop_after = true;
+        }
+    }
+}
+
+/// The mode after a path-control event. Sinumerik's high-speed settings
+/// blend within their tolerance while on and leave the control's own
+/// blending when switched off.
+fn apply_path_control(st: &mut BlockCtl, stop_once: &mut bool, pc: &ir::PathControl) {
+    use ir::{PathControl as P, Smoothing};
+    match *pc {
+        P::ExactStop => st.mode = PathMode::ExactStop,
+        P::Blend { tolerance } => st.mode = PathMode::Blend { tolerance },
+        P::StopOnce => *stop_once = true,
+        P::Smoothing {
+            kind: Smoothing::HighSpeed { tolerance },
+            on,
+        } => {
+            st.mode = PathMode::Blend {
+                tolerance: (on && tolerance > 0.0).then_some(tolerance),
+            };
+            st.lookahead_on = on;
+        }
+        P::Smoothing { on, .. } => st.lookahead_on = on,
+        P::Soft(on) => st.soft = Some(on),
     }
 }
 
@@ -854,8 +965,26 @@ pub fn estimate_program(p: &Program, machine: &Machine) -> TimeEstimate {
         dwell_s: blocks.loose_dwell_s,
         ..TimeEstimate::default()
     };
-    for (start, moves) in blocks.chains {
-        let e = estimate_with(start, &moves, &lim);
+    total.planner = lim.planner.kind.name();
+    for ((start, moves), ctl) in blocks.chains.into_iter().zip(&blocks.ctl) {
+        let e = estimate_controlled(start, &moves, ctl, &lim);
+        for ((m, c), t) in moves.iter().zip(ctl).zip(&e.per_move_s) {
+            if matches!(m.kind, MoveKind::Dwell { .. }) {
+                continue;
+            }
+            let label = c.mode.label();
+            match total.by_mode.iter_mut().find(|b| b.mode == label) {
+                Some(b) => {
+                    b.time_s += t;
+                    b.blocks += 1;
+                }
+                None => total.by_mode.push(ModeTime {
+                    mode: label,
+                    time_s: *t,
+                    blocks: 1,
+                }),
+            }
+        }
         total.total_s += e.total_s;
         total.nominal_s += e.nominal_s;
         total.rapid_s += e.rapid_s;
@@ -881,6 +1010,7 @@ mod tests {
             jerk: [f64::INFINITY; 6],
             rapid: 1e6,
             feed_max: 1e6,
+            planner: Planner::default(),
         }
     }
 
@@ -1215,7 +1345,7 @@ mod tests {
             // All at once, the geometry shared: the same two estimates.
             let (blocks, stops) = prepare([0.0; 6], &moves, &l);
             for (m, want) in [(None, &own), (Some(&minutes[..]), &want)] {
-                let got = finish([0.0; 6], &moves, m, &blocks, &stops, &l);
+                let got = finish([0.0; 6], &moves, m, &blocks, &stops, None, &l);
                 assert_eq!(&got, want, "case {case}");
             }
         }

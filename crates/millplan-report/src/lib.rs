@@ -9,3 +9,4 @@ pub mod sim;
 pub mod svg;
 pub mod sweep;
 pub mod table;
+pub mod view3d;

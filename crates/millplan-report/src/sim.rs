@@ -162,6 +162,15 @@ pub fn report(
         ),
     ];
     let mut figures = Vec::new();
+    if let Some(field) = crate::view3d::height_field(stock, part.map(|(_, m)| m)) {
+        figures.push((
+            format!(
+                "The stock after the program in 3-D, coloured by {}.",
+                field.scale.quantity
+            ),
+            crate::view3d::fragment("stock3d", &field),
+        ));
+    }
     if let Some((r, mesh)) = part {
         rows.push((
             "Material left on the part".into(),

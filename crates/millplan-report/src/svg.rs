@@ -7,7 +7,7 @@ const W: f64 = 760.0;
 const H: f64 = 300.0;
 const ML: f64 = 64.0;
 const MR: f64 = 16.0;
-const MT: f64 = 28.0;
+const MT: f64 = 44.0;
 const MB: f64 = 44.0;
 
 /// A series: name, colour and (x, y) points.
@@ -196,7 +196,7 @@ pub fn line_plot(title: &str, xlabel: &str, ylabel: &str, series: &[Series]) -> 
     let f = bounds(series.iter().flat_map(|s| s.points.iter()));
     let mut s = String::new();
     axes(&mut s, &f, title, xlabel, ylabel);
-    for (k, se) in series.iter().enumerate() {
+    for se in series {
         let pts = thin(&se.points, 4000);
         let mut d = String::with_capacity(pts.len() * 14);
         for (i, (x, y)) in pts.iter().enumerate() {
@@ -213,20 +213,27 @@ pub fn line_plot(title: &str, xlabel: &str, ylabel: &str, series: &[Series]) -> 
             r#"<path d="{d}" fill="none" stroke="{}" stroke-width="1"/>"#,
             se.color
         );
-        let ly = MT + 14.0 + 14.0 * k as f64;
-        let _ = write!(
-            s,
-            r#"<rect x="{}" y="{}" width="10" height="10" fill="{}"/><text x="{}" y="{}">{}</text>"#,
-            W - MR - 170.0,
-            ly - 9.0,
-            se.color,
-            W - MR - 156.0,
-            ly,
-            esc(se.name)
-        );
     }
+    let names: Vec<(&str, &str)> = series.iter().map(|se| (se.name, se.color)).collect();
+    legend_row(&mut s, &names);
     s.push_str("</svg>");
     s
+}
+
+/// The legend in one row above the plot frame, never over the data.
+fn legend_row(s: &mut String, entries: &[(&str, &str)]) {
+    let mut x = ML;
+    for (name, color) in entries {
+        let _ = write!(
+            s,
+            r#"<rect x="{x:.1}" y="{}" width="10" height="10" fill="{color}"/><text x="{:.1}" y="{}">{}</text>"#,
+            MT - 19.0,
+            x + 14.0,
+            MT - 10.0,
+            esc(name)
+        );
+        x += 30.0 + 6.5 * name.chars().count() as f64;
+    }
 }
 
 /// Scatter plot (for value against position).
@@ -294,8 +301,13 @@ pub fn histogram(
         y1: ymax * 1.05,
     };
     let mut s = String::new();
-    axes(&mut s, &f, title, xlabel, "points");
-    for (k, ((name, color, _), c)) in series.iter().zip(&counts).enumerate() {
+    // The count is of what the series holds: its name when there is one.
+    let ylabel = match series {
+        [(name, _, _)] => format!("count of {name}"),
+        _ => "count".to_string(),
+    };
+    axes(&mut s, &f, title, xlabel, &ylabel);
+    for ((_, color, _), c) in series.iter().zip(&counts) {
         for (b, n) in c.iter().enumerate() {
             if *n == 0 {
                 continue;
@@ -310,23 +322,22 @@ pub fn histogram(
                 f.py(0.0) - y
             );
         }
-        let ly = MT + 14.0 + 14.0 * k as f64;
-        let _ = write!(
-            s,
-            r#"<rect x="{}" y="{}" width="10" height="10" fill="{color}"/><text x="{}" y="{}">{}</text>"#,
-            W - MR - 220.0,
-            ly - 9.0,
-            W - MR - 206.0,
-            ly,
-            esc(name)
-        );
     }
+    let names: Vec<(&str, &str)> = series.iter().map(|(n, c, _)| (*n, *c)).collect();
+    legend_row(&mut s, &names);
     s.push_str("</svg>");
     s
 }
 
 /// Colour of t ∈ [0, 1] on a blue–green–yellow–red scale.
 pub fn colormap(t: f64) -> String {
+    let [r, g, b] = colormap_rgb(t);
+    format!("rgb({r},{g},{b})")
+}
+
+/// [`colormap`] as RGB bytes (a value outside [0, 1] takes the end colour,
+/// a non-finite one the low end).
+pub fn colormap_rgb(t: f64) -> [u8; 3] {
     let t = if t.is_finite() {
         t.clamp(0.0, 1.0)
     } else {
@@ -342,14 +353,18 @@ pub fn colormap(t: f64) -> String {
         let ((t0, c0), (t1, c1)) = (w[0], w[1]);
         if t <= t1 {
             let u = (t - t0) / (t1 - t0);
-            let l = |a: i32, b: i32| (a as f64 + (b - a) as f64 * u).round() as i32;
-            return format!("rgb({},{},{})", l(c0.0, c1.0), l(c0.1, c1.1), l(c0.2, c1.2));
+            let l = |a: i32, b: i32| (a as f64 + (b - a) as f64 * u).round() as u8;
+            return [l(c0.0, c1.0), l(c0.1, c1.1), l(c0.2, c1.2)];
         }
     }
-    "rgb(215,48,39)".into()
+    [215, 48, 39]
 }
 
-/// Top view (X right, Y up) of points coloured by a value, with a colour bar.
+/// Top view (X right, Y up, equal scales, ticks in mm) of points coloured
+/// by a value, with a colour bar. The colours span the 2nd to 98th
+/// percentile of the values, so that a thin border of extreme values does
+/// not wash out the rest; values beyond take the end colours, and the bar
+/// says so with the full range.
 pub fn map(title: &str, label: &str, points: &[(f64, f64, f64)]) -> String {
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
@@ -357,35 +372,71 @@ pub fn map(title: &str, label: &str, points: &[(f64, f64, f64)]) -> String {
         f64::INFINITY,
         f64::NEG_INFINITY,
     );
-    let (mut v0, mut v1) = (f64::INFINITY, f64::NEG_INFINITY);
-    for (x, y, v) in points {
+    for (x, y, _) in points.iter().filter(|p| p.0.is_finite() && p.1.is_finite()) {
         x0 = x0.min(*x);
         x1 = x1.max(*x);
         y0 = y0.min(*y);
         y1 = y1.max(*y);
-        if v.is_finite() {
-            v0 = v0.min(*v);
-            v1 = v1.max(*v);
-        }
     }
-    let side = 520.0;
+    if !x0.is_finite() {
+        (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
+    }
+    let values: Vec<f64> = points.iter().map(|p| p.2).collect();
+    let scale = crate::view3d::robust_scale("", &values);
+    let (v0, v1) = scale.as_ref().map_or((0.0, 1.0), |s| (s.lo, s.hi));
+    let (left, top, side) = (72.0, 40.0, 500.0);
     let span = (x1 - x0).max(y1 - y0).max(1e-9);
-    let (sx, sy) = (
-        |x: f64| 40.0 + (x - x0) / span * side,
-        |y: f64| 40.0 + side - (y - y0) / span * side,
-    );
+    let sx = |x: f64| left + (x - x0) / span * side;
+    let sy = |y: f64| top + side - (y - y0) / span * side;
     let mut s = String::new();
     let _ = write!(
         s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 720 620" width="720" height="620" font-family="sans-serif" font-size="11"><rect width="720" height="620" fill="white"/>"#
+        r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 760 620" width="760" height="620" font-family="sans-serif" font-size="11"><rect width="760" height="620" fill="white"/><text x="{left}" y="22" font-size="13" font-weight="bold">{}</text>"#,
+        esc(title)
     );
     let _ = write!(
         s,
-        r#"<text x="40" y="22" font-size="13" font-weight="bold">{}</text>"#,
-        esc(title)
+        r##"<rect x="{left}" y="{top}" width="{side}" height="{side}" fill="none" stroke="#444"/>"##
     );
-    let step = (points.len() / 20000).max(1);
-    for (x, y, v) in points.iter().step_by(step) {
+    let step = nice_step(span, 6);
+    let mut x = (x0 / step).ceil() * step;
+    while x <= x0 + span + 1e-9 {
+        let p = sx(x);
+        let _ = write!(
+            s,
+            r##"<line x1="{p:.1}" y1="{}" x2="{p:.1}" y2="{}" stroke="#444"/><text x="{p:.1}" y="{}" text-anchor="middle">{}</text>"##,
+            top + side,
+            top + side + 5.0,
+            top + side + 18.0,
+            fmt_tick(x, step)
+        );
+        x += step;
+    }
+    let mut y = (y0 / step).ceil() * step;
+    while y <= y0 + span + 1e-9 {
+        let p = sy(y);
+        let _ = write!(
+            s,
+            r##"<line x1="{}" y1="{p:.1}" x2="{left}" y2="{p:.1}" stroke="#444"/><text x="{}" y="{:.1}" text-anchor="end">{}</text>"##,
+            left - 5.0,
+            left - 8.0,
+            p + 4.0,
+            fmt_tick(y, step)
+        );
+        y += step;
+    }
+    let _ = write!(
+        s,
+        r#"<text x="{}" y="{}" text-anchor="middle">X (mm)</text><text transform="translate(18,{}) rotate(-90)" text-anchor="middle">Y (mm)</text>"#,
+        left + side / 2.0,
+        top + side + 36.0,
+        top + side / 2.0
+    );
+    let stride = (points.len() / 20000).max(1);
+    for (x, y, v) in points.iter().step_by(stride) {
+        if !(x.is_finite() && y.is_finite()) {
+            continue;
+        }
         let t = (v - v0) / (v1 - v0).max(1e-12);
         let _ = write!(
             s,
@@ -395,29 +446,59 @@ pub fn map(title: &str, label: &str, points: &[(f64, f64, f64)]) -> String {
             colormap(t)
         );
     }
+    colour_bar(&mut s, label, top, side, scale.as_ref());
+    s.push_str("</svg>");
+    s
+}
+
+/// The colour bar of [`map`] right of the plot, with the clipped range.
+fn colour_bar(
+    s: &mut String,
+    label: &str,
+    top: f64,
+    side: f64,
+    scale: Option<&crate::view3d::Scale>,
+) {
+    let bx = 610.0;
     for k in 0..50 {
         let t = k as f64 / 49.0;
         let _ = write!(
             s,
-            r#"<rect x="620" y="{:.1}" width="18" height="11" fill="{}"/>"#,
-            40.0 + side - (k as f64 + 1.0) * side / 50.0,
+            r#"<rect x="{bx}" y="{:.1}" width="18" height="11" fill="{}"/>"#,
+            top + side - (k as f64 + 1.0) * side / 50.0,
             colormap(t)
         );
     }
     let _ = write!(
         s,
-        r#"<text x="642" y="{:.1}">{v1:.3}</text><text x="642" y="{:.1}">{v0:.3}</text><text x="610" y="32">{}</text>"#,
-        48.0,
-        40.0 + side,
+        r#"<text x="{bx}" y="{}">{}</text>"#,
+        top - 8.0,
         esc(label)
     );
-    let _ = write!(
-        s,
-        r#"<text x="40" y="{}">X {x0:.1} … {x1:.1} mm, Y {y0:.1} … {y1:.1} mm</text>"#,
-        40.0 + side + 22.0
-    );
-    s.push_str("</svg>");
-    s
+    if let Some(sc) = scale {
+        let (hi_mark, lo_mark) = (
+            if sc.max > sc.hi { "≥ " } else { "" },
+            if sc.min < sc.lo { "≤ " } else { "" },
+        );
+        let _ = write!(
+            s,
+            r#"<text x="{}" y="{}">{hi_mark}{:.3}</text><text x="{}" y="{}">{lo_mark}{:.3}</text>"#,
+            bx + 22.0,
+            top + 8.0,
+            sc.hi,
+            bx + 22.0,
+            top + side,
+            sc.lo
+        );
+        let _ = write!(
+            s,
+            r#"<text x="{bx}" y="{}">colours: 2nd–98th percentile</text><text x="{bx}" y="{}">all values {:.3} … {:.3}</text>"#,
+            top + side + 18.0,
+            top + side + 32.0,
+            sc.min,
+            sc.max
+        );
+    }
 }
 
 /// How a direction shows on a sphere map.

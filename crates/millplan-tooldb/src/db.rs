@@ -400,11 +400,15 @@ impl ToolDb {
                     .into(),
             ));
         }
+        // A mistyped folder is an error, not a tree of new folders (the
+        // caller creates the default library's folder).
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|source| DbError::Io {
-                path: dir.to_path_buf(),
-                source,
-            })?;
+            if !dir.is_dir() {
+                return Err(DbError::Invalid(format!(
+                    "the folder {} does not exist",
+                    dir.display()
+                )));
+            }
         }
         // SQLite gives special meaning to `:memory:` and `file:…` URIs; `./:memory:`
         // and `./file:…` are plain file names. Absolute paths start with `/`.
@@ -413,8 +417,53 @@ impl ToolDb {
         } else {
             path.to_path_buf()
         };
+        // A library the user may not write is opened read-only: it can be
+        // shown and exported; a change is refused by SQLite.
+        let read_only = path.is_file()
+            && std::fs::OpenOptions::new()
+                .append(true)
+                .open(path)
+                .is_err_and(|e| e.kind() == std::io::ErrorKind::PermissionDenied);
+        if read_only {
+            return Self::open_read_only(&file, busy);
+        }
         let conn = Connection::open(file)?;
         Self::setup(conn, busy)
+    }
+
+    /// Opens a library read-only, as it is: first sharing SQLite's locks,
+    /// else (no `-shm` file and a folder that may not be written either)
+    /// as an unchanging file.
+    fn open_read_only(file: &Path, busy: Duration) -> Result<ToolDb, DbError> {
+        use rusqlite::OpenFlags;
+        let flags = OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX;
+        let shared = Connection::open_with_flags(file, flags).and_then(|c| {
+            version(&c).map_err(|_| rusqlite::Error::InvalidQuery)?;
+            Ok(c)
+        });
+        let conn = match shared {
+            Ok(c) => c,
+            Err(_) => {
+                let enc: String = file
+                    .to_string_lossy()
+                    .chars()
+                    .map(|c| match c {
+                        '%' | '?' | '#' => format!("%{:02X}", c as u32),
+                        c => c.to_string(),
+                    })
+                    .collect();
+                let uri = format!("file:{enc}?immutable=1");
+                Connection::open_with_flags(uri, flags | OpenFlags::SQLITE_OPEN_URI)?
+            }
+        };
+        conn.busy_timeout(busy)?;
+        if Self::check_version(&conn)? != MIGRATIONS.len() as i64 {
+            return Err(DbError::Invalid(
+                "a read-only library of an older version: it must be written to be brought up to date".into(),
+            ));
+        }
+        conn.execute_batch("PRAGMA foreign_keys=ON;")?;
+        Ok(ToolDb { conn })
     }
 
     /// An in-memory library (tests, benchmarks).

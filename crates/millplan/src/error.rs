@@ -116,13 +116,29 @@ fn shorten_path(path: &str) -> std::borrow::Cow<'_, str> {
 /// A message as printed in text: the located file (`file:line:col: `,
 /// `file:byte N: `, `file: `) with only the middle of its folder shortened,
 /// its location whole, and the long words of the rest cut by [`shorten`].
+/// Control characters (an ESC in a file name would drive the terminal) are
+/// written as escapes (`\u{1b}`); line breaks and tabs stay.
 pub fn text(message: &str) -> String {
     let (file, _, _, rest) = locate(message);
     let Some(file) = file else {
-        return shorten(message).into_owned();
+        return escape_controls(&shorten(message));
     };
     let place = &message[file.len()..message.len() - rest.len()];
-    format!("{}{place}{}", shorten_path(file), shorten(rest))
+    escape_controls(&format!("{}{place}{}", shorten_path(file), shorten(rest)))
+}
+
+/// `s` with every control character but a line break or tab escaped.
+pub fn escape_controls(s: &str) -> String {
+    if !s.chars().any(|c| c.is_control() && c != '\n' && c != '\t') {
+        return s.to_string();
+    }
+    s.chars()
+        .map(|c| match c {
+            '\n' | '\t' => c.to_string(),
+            c if c.is_control() => c.escape_unicode().to_string(),
+            c => c.to_string(),
+        })
+        .collect()
 }
 
 /// The stable name of an exit code in a JSON error: `usage` (arguments

@@ -27,8 +27,24 @@ pub enum Input {
     Mesh(TriMesh, StlReport),
 }
 
+/// Opens an input. A device (`/dev/zero`, `/dev/urandom`) or socket is
+/// refused: it has no end, and a program or mesh is a file (a pipe, such as
+/// `<(zcat part.stl.gz)`, is read).
 fn open(path: &Path) -> CliResult<File> {
-    File::open(path).map_err(|e| CliError::input(format!("{}: cannot open: {e}", path.display())))
+    let f = File::open(path)
+        .map_err(|e| CliError::input(format!("{}: cannot open: {e}", path.display())))?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let t = f.metadata().map(|m| m.file_type());
+        if t.is_ok_and(|t| t.is_char_device() || t.is_block_device() || t.is_socket()) {
+            return Err(CliError::input(format!(
+                "{}: a device or socket, not a file: millplan reads programs and meshes from files (or pipes)",
+                path.display()
+            )));
+        }
+    }
+    Ok(f)
 }
 
 /// Asks the kernel to start reading all of `f` now, in large requests, ahead
@@ -48,15 +64,7 @@ fn prefetch(f: &File) {
 /// Is this an STL by its content (binary by size arithmetic, or ASCII
 /// `solid … facet`)? Never by its name.
 fn is_stl(len: u64, head: &[u8]) -> bool {
-    if head.len() >= 84 {
-        let n = u32::from_le_bytes([head[80], head[81], head[82], head[83]]) as u64;
-        if 84 + 50 * n == len {
-            return true;
-        }
-    }
-    let t = String::from_utf8_lossy(&head[..head.len().min(4096)]);
-    let t = t.trim_start().to_ascii_lowercase();
-    t.starts_with("solid") && (t.contains("facet") || t.contains("endsolid"))
+    millplan_geom::stl::is_stl(len, head)
 }
 
 /// Binary data: a NUL byte in the first 4 KB (no NC program has one).
@@ -163,6 +171,26 @@ fn read_line(r: &mut impl BufRead, buf: &mut Vec<u8>, max: usize) -> std::io::Re
     }
 }
 
+/// The dialect of a program from its first bytes; an empty file, binary
+/// data, an HTML or XML page and a KUKA robot program are refused at 1:1.
+fn dialect_of(path: &Path, head: &[u8]) -> CliResult<millplan_nc::Dialect> {
+    let refuse = |what: &str| Err(CliError::input(format!("{}:1:1: {what}", path.display())));
+    if head.is_empty() {
+        return refuse("empty file");
+    }
+    if is_binary(head) {
+        return refuse("binary data: not an APT/CL or G-code program");
+    }
+    let head = String::from_utf8_lossy(head);
+    if head.trim_start().starts_with('<') {
+        return refuse("an HTML or XML document (it starts `<`), not an APT/CL or G-code program");
+    }
+    if let Some(e) = millplan_nc::detect::krl_refusal(&head) {
+        return Err(CliError::input(format!("{}:{e}", path.display())));
+    }
+    Ok(detect(&head))
+}
+
 /// Reads an APT/CL or G-code program line by line (the file is never held
 /// whole; lines end at LF, CRLF or a lone CR), within the limits of `opts`.
 pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
@@ -174,29 +202,7 @@ pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
     let head = r
         .fill_buf()
         .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
-    if head.is_empty() {
-        return Err(CliError::input(format!(
-            "{}:1:1: empty file",
-            path.display()
-        )));
-    }
-    if is_binary(head) {
-        return Err(CliError::input(format!(
-            "{}:1:1: binary data: not an APT/CL or G-code program",
-            path.display()
-        )));
-    }
-    let head = String::from_utf8_lossy(head);
-    if head.trim_start().starts_with('<') {
-        return Err(CliError::input(format!(
-            "{}:1:1: an HTML or XML document (it starts `<`), not an APT/CL or G-code program",
-            path.display()
-        )));
-    }
-    if let Some(e) = millplan_nc::detect::krl_refusal(&head) {
-        return Err(CliError::input(format!("{}:{e}", path.display())));
-    }
-    let dialect = detect(&head);
+    let dialect = dialect_of(path, head)?;
     // A move takes a line of 20 bytes or more.
     let opts = ReadOptions {
         expect_moves: (size / 20) as usize,
@@ -251,6 +257,29 @@ fn staged() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
     STAGED.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// The outputs renamed into place by this process: what a signal's message
+/// names as written.
+static REPLACED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn replaced() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    REPLACED.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// What a run stopped by a signal left: nothing, or the outputs it had
+/// already renamed into place (all of one commit: [`Outputs::commit`]
+/// holds the staged list while it renames, so a signal waits for it).
+fn stopped_message(sig: i32) -> String {
+    let done = replaced();
+    if done.is_empty() {
+        return format!("millplan: stopped by signal {sig}; no output written");
+    }
+    let names: Vec<String> = done.iter().map(|p| p.display().to_string()).collect();
+    crate::error::escape_controls(&format!(
+        "millplan: stopped by signal {sig} after its outputs were written: {}",
+        names.join(", ")
+    ))
+}
+
 /// On SIGINT, SIGTERM or SIGHUP: removes the outputs staged so far and ends
 /// the run with 128 + the signal's number.
 pub fn remove_staged_on_signals() {
@@ -263,7 +292,7 @@ pub fn remove_staged_on_signals() {
                     for p in staged().drain(..) {
                         let _ = std::fs::remove_file(p);
                     }
-                    eprintln!("millplan: stopped by signal {sig}; no output written");
+                    eprintln!("{}", stopped_message(sig));
                     std::process::exit(128 + sig);
                 }
             });
@@ -428,6 +457,11 @@ impl Outputs {
     ) -> CliResult<()> {
         let target = match self.dest(path)? {
             Dest::Stdout => {
+                if stdout_was_closed() {
+                    return Err(CliError::internal(
+                        "standard output is closed: nothing written (name a file with -o)",
+                    ));
+                }
                 let mut out = std::io::stdout().lock();
                 return fill(&mut out)
                     .and_then(|()| out.flush())
@@ -469,7 +503,10 @@ impl Outputs {
         Ok(())
     }
 
-    /// Renames every staged output into place (after all were written).
+    /// Renames every staged output into place (after all were written),
+    /// holding the staged list: a signal arriving meanwhile waits until
+    /// every rename is done, and then says what was written. A rename that
+    /// fails says which outputs it had already replaced.
     pub fn commit(mut self) -> CliResult<()> {
         // What became a special file or a folder while the run worked is
         // still not replaced: all are checked before the first rename.
@@ -481,18 +518,49 @@ impl Outputs {
                 )));
             }
         }
-        for mut s in std::mem::take(&mut self.staged) {
+        let mut all = std::mem::take(&mut self.staged);
+        let mut guard = staged();
+        for s in &mut all {
             let Some(f) = s.file.take() else { continue };
-            f.persist(&s.target).map_err(|e| {
-                CliError::internal(format!(
-                    "{}: cannot rename into place: {}",
+            if let Err(e) = f.persist(&s.target) {
+                let done = replaced().clone();
+                let done: Vec<String> = done.iter().map(|p| p.display().to_string()).collect();
+                return Err(CliError::internal(format!(
+                    "{}: cannot rename into place: {}; {}",
                     s.target.display(),
-                    e.error
-                ))
-            })?;
+                    e.error,
+                    match done.len() {
+                        0 => "no output replaced".to_string(),
+                        _ => format!("already replaced: {}", done.join(", ")),
+                    }
+                )));
+            }
+            guard.retain(|p| *p != s.path);
+            replaced().push(s.target.clone());
         }
+        drop(guard);
         Ok(())
     }
+}
+
+/// Whether standard output was closed when millplan started (`>&-`): Rust's
+/// runtime puts `/dev/null`, opened for reading and writing, in its place,
+/// and the program would be written to nothing while the run said it wrote
+/// it. A shell's `> /dev/null` opens it for writing only.
+fn stdout_was_closed() -> bool {
+    #[cfg(target_os = "linux")]
+    {
+        use rustix::fs::{fcntl_getfl, fstat, major, minor, FileType, OFlags};
+        let out = std::io::stdout();
+        let Ok(st) = fstat(&out) else {
+            return true;
+        };
+        let null = FileType::from_raw_mode(st.st_mode) == FileType::CharacterDevice
+            && (major(st.st_rdev), minor(st.st_rdev)) == (1, 3);
+        null && fcntl_getfl(&out).is_ok_and(|f| f & OFlags::RWMODE == OFlags::RDWR)
+    }
+    #[cfg(not(target_os = "linux"))]
+    false
 }
 
 /// Checks one output file: a regular file or a new name in an existing

@@ -1,18 +1,28 @@
 //! The resource limits of this run (the table is `millplan_geom::limits`):
-//! the defaults, with `memory` set to half of this machine's memory, then
+//! the defaults, with `memory` half of what the process may use (memory,
+//! `ulimit -v`, its cgroup's `memory.max`: the least), then
 //! `$MILLPLAN_LIMITS` (`moves=1e8,memory=8000`), then every `--limit
 //! NAME=VALUE` of the command line, later ones winning.
 
 use crate::error::{CliError, CliResult};
-use millplan_geom::limits::{amount, Exceeded, Limits};
+use millplan_geom::limits::{amount, default_memory, Exceeded, Limits};
 use std::sync::OnceLock;
 
 static LIMITS: OnceLock<Limits> = OnceLock::new();
 static LOADS: OnceLock<Vec<(String, String)>> = OnceLock::new();
 
-/// The names `--limit` gives to cutting loads (`millplan feed`, `millplan
-/// force`) rather than to resources.
-pub const LOAD_NAMES: [&str; 5] = ["fxy", "torque", "power", "stress", "deflection"];
+/// The names `--limit` gives to cutting loads and the feed-per-tooth range
+/// (`millplan feed`, `millplan force`, `millplan optimise`) rather than to
+/// resources.
+pub const LOAD_NAMES: [&str; 7] = [
+    "fxy",
+    "torque",
+    "power",
+    "stress",
+    "deflection",
+    "fz_min",
+    "fz_max",
+];
 
 /// The load limits of the command line (`--limit fxy=300,torque=2000`), as
 /// given, in order.
@@ -25,13 +35,13 @@ pub fn get() -> Limits {
     LIMITS.get().copied().unwrap_or_else(defaults)
 }
 
-/// The documented defaults, with `memory` half of what this machine has.
+/// The documented defaults, with `memory` half of what this process may
+/// really use (`millplan_geom::limits::default_memory`).
 fn defaults() -> Limits {
-    let mut l = Limits::default();
-    if let Some(total) = total_memory() {
-        l.memory = total / 2;
+    Limits {
+        memory: default_memory(total_memory(), address_space(), cgroup_memory()),
+        ..Limits::default()
     }
-    l
 }
 
 /// Physical memory in bytes, where the system says.
@@ -39,7 +49,36 @@ fn total_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
+    Some(kb.saturating_mul(1024))
+}
+
+/// The address space this process may map (`ulimit -v`), where limited.
+fn address_space() -> Option<u64> {
+    #[cfg(target_os = "linux")]
+    {
+        use rustix::process::{getrlimit, Resource};
+        getrlimit(Resource::As).current
+    }
+    #[cfg(not(target_os = "linux"))]
+    None
+}
+
+/// The least `memory.max` of this process's cgroup (v2) and the groups
+/// above it, where one is set (`max` means none).
+fn cgroup_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/self/cgroup").ok()?;
+    let rel = text.lines().find_map(|l| l.strip_prefix("0::"))?;
+    let mut dir = std::path::Path::new("/sys/fs/cgroup").join(rel.trim_start_matches('/'));
+    let mut least: Option<u64> = None;
+    loop {
+        let max = std::fs::read_to_string(dir.join("memory.max")).ok();
+        if let Some(v) = max.and_then(|t| t.trim().parse::<u64>().ok()) {
+            least = Some(least.map_or(v, |l| l.min(v)));
+        }
+        if dir == std::path::Path::new("/sys/fs/cgroup") || !dir.pop() {
+            return least;
+        }
+    }
 }
 
 /// Settles the limits from the environment and the `--limit` arguments.

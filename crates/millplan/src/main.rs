@@ -25,6 +25,7 @@ mod io;
 mod limits;
 mod progress;
 mod round;
+mod timings;
 mod verdict;
 
 use clap::{Parser, Subcommand};
@@ -49,10 +50,11 @@ static ALLOC: mimalloc::MiMalloc = mimalloc::MiMalloc;
 struct Cli {
     /// Raise (or lower) a resource limit: moves, expansion, line-bytes,
     /// expression-depth, stl-triangles, stl-extent (mm), memory (MB).
-    /// Repeatable; a value may end in k, M or G. For `feed` and `force`
-    /// also the cutting loads: fxy (N), torque (N·mm), power (W), stress
-    /// (MPa), deflection (mm), several per option separated by commas
-    /// (--limit fxy=300,power=2000).
+    /// Repeatable; a value may end in k, M or G. For `feed`, `force` and
+    /// `optimise` also the cutting loads: fxy (N), torque (N·mm), power
+    /// (W), stress (MPa), deflection (mm), and the feed per tooth fz_min,
+    /// fz_max (mm), several per option separated by commas (--limit
+    /// fxy=300,power=2000).
     #[arg(long = "limit", global = true, value_name = "NAME=VALUE")]
     limit: Vec<String>,
     #[command(subcommand)]
@@ -80,6 +82,7 @@ enum Command {
     Setup(cmd::setup::Args),
     Simulate(cmd::simulate::Args),
     Tool(cmd::tool::Args),
+    Robot(cmd::robot::Args),
     Thread(cmd::thread::Args),
     Explain(cmd::explain::Args),
     #[command(name = "wd-sweep")]
@@ -242,6 +245,7 @@ fn run(command: Command) -> error::CliResult<i32> {
         Command::Setup(a) => cmd::setup::run(a),
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Tool(a) => cmd::tool::run(a),
+        Command::Robot(a) => cmd::robot::run(a),
         Command::Thread(a) => cmd::thread::run(a),
         Command::Explain(a) => cmd::explain::run(a),
         Command::Completions(a) => cmd::completions::run(a),

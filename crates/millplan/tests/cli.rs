@@ -455,7 +455,7 @@ fn help_explains_every_command() {
 /// ARCHITECTURE.md's dependency rule, read from `cargo metadata`: each
 /// library crate depends only on the crates below it
 /// (geom ← nc; geom ← models; nc + models ← sim ← plan ← report ← driver;
-/// tooldb alone, below driver), and no library on the command-line, terminal or temporary-file
+/// tooldb alone, below driver; geom + nc ← robot), and no library on the command-line, terminal or temporary-file
 /// crates that only the binary uses.
 #[test]
 fn crate_dependencies_point_one_way() {
@@ -505,6 +505,7 @@ fn crate_dependencies_point_one_way() {
             ],
         ),
         ("millplan-tooldb", &[]),
+        ("millplan-robot", &["millplan-geom", "millplan-nc"]),
         (
             "millplan-driver",
             &[
@@ -571,11 +572,8 @@ fn wd_prints_the_oracle_value() {
     );
 }
 
-/// ARCHITECTURE.md: the binary parses arguments, calls the libraries and
-/// prints; decisions live in the library crates. Kept true by keeping every
-/// function of the binary short (under 80 lines, counted brace to brace).
-#[test]
-fn the_binary_stays_thin() {
+/// The binary's sources: every `.rs` file under `src`, with its text.
+fn binary_sources() -> Vec<(PathBuf, String)> {
     fn files(dir: &std::path::Path, out: &mut Vec<PathBuf>) {
         for e in std::fs::read_dir(dir).expect("src").flatten() {
             let p = e.path();
@@ -591,37 +589,190 @@ fn the_binary_stays_thin() {
         &PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src"),
         &mut v,
     );
+    v.sort();
+    v.into_iter()
+        .map(|f| {
+            let text = std::fs::read_to_string(&f).expect("read");
+            (f, text)
+        })
+        .collect()
+}
+
+/// The functions of `text` longer than `max` lines, counted brace to brace,
+/// as (first line, lines).
+fn long_functions(text: &str, max: usize) -> Vec<(usize, usize)> {
+    let lines: Vec<&str> = text.lines().collect();
     let mut long = Vec::new();
-    for f in v {
-        let text = std::fs::read_to_string(&f).expect("read");
-        let lines: Vec<&str> = text.lines().collect();
-        let mut i = 0;
-        while i < lines.len() {
-            let t = lines[i].trim_start();
-            let is_fn = (t.starts_with("fn ")
-                || t.starts_with("pub fn ")
-                || t.starts_with("pub(crate) fn "))
+    let mut i = 0;
+    while i < lines.len() {
+        let t = lines[i].trim_start();
+        let is_fn =
+            (t.starts_with("fn ") || t.starts_with("pub fn ") || t.starts_with("pub(crate) fn "))
                 && !t.ends_with(';');
-            if !is_fn {
-                i += 1;
-                continue;
-            }
-            let indent = lines[i].len() - t.len();
-            let mut j = i + 1;
-            while j < lines.len()
-                && !(lines[j].len() > indent
-                    && lines[j][..indent].trim().is_empty()
-                    && lines[j][indent..].starts_with('}'))
-            {
-                j += 1;
-            }
-            if j - i + 1 >= 80 {
-                long.push(format!("{}:{} ({} lines)", f.display(), i + 1, j - i + 1));
-            }
-            i = j + 1;
+        if !is_fn {
+            i += 1;
+            continue;
+        }
+        let indent = lines[i].len() - t.len();
+        let mut j = i + 1;
+        while j < lines.len()
+            && !(lines[j].len() > indent
+                && lines[j][..indent].trim().is_empty()
+                && lines[j][indent..].starts_with('}'))
+        {
+            j += 1;
+        }
+        if j - i + 1 > max {
+            long.push((i + 1, j - i + 1));
+        }
+        i = j + 1;
+    }
+    long
+}
+
+#[test]
+fn long_functions_are_found_brace_to_brace() {
+    let short = "fn a() {\n    x();\n}\n";
+    assert!(long_functions(short, 3).is_empty());
+    assert_eq!(long_functions(short, 2), vec![(1, 3)]);
+    let nested = "impl A {\n    pub fn b() {\n        y();\n        z();\n    }\n}\n";
+    assert_eq!(long_functions(nested, 3), vec![(2, 4)]);
+}
+
+/// ARCHITECTURE.md: the binary parses arguments, calls the libraries and
+/// prints; decisions live in the library crates. Every function of the
+/// binary is at most 60 lines, counted brace to brace.
+#[test]
+fn no_function_of_the_binary_is_over_60_lines() {
+    let mut long = Vec::new();
+    for (f, text) in binary_sources() {
+        if not_yet_moved(&f) {
+            continue;
+        }
+        for (at, n) in long_functions(&text, 60) {
+            long.push(format!("{}:{at} ({n} lines)", f.display()));
         }
     }
-    assert!(long.is_empty(), "functions of 80 lines or more: {long:?}");
+    assert!(long.is_empty(), "functions over 60 lines: {long:?}");
+}
+
+/// `feed` and `force` (one front over the force model's shared preparation)
+/// have not moved into `millplan-driver` yet: their numeric defaults are
+/// named there already, but they still read their JSON summaries back by
+/// key and name the force model's types by their homes. The rules below
+/// leave them out until they move; nothing else may join this list.
+const NOT_YET_MOVED: &[&str] = &["feed.rs", "force.rs"];
+
+fn not_yet_moved(f: &std::path::Path) -> bool {
+    NOT_YET_MOVED.iter().any(|n| f.ends_with(n))
+}
+
+/// The bound of [`the_binary_stays_small`]: 8,456 lines when it was last
+/// set (the `robot` command and the `--timings` phases came in after the
+/// commands moved), with room for small fixes; lowered as `feed`, `force`,
+/// `robot`, `tool` and `post` move into their libraries.
+const MAX_BINARY_LINES: usize = 8600;
+
+/// The binary's size, all files under `src` counted. Issue 31 sets 5,000
+/// lines as the goal; the bound is lowered as commands move into
+/// `millplan-driver` and never raised.
+#[test]
+fn the_binary_stays_small() {
+    const MAX_LINES: usize = MAX_BINARY_LINES;
+    let total: usize = binary_sources()
+        .iter()
+        .map(|(_, t)| t.lines().count())
+        .sum();
+    assert!(
+        total <= MAX_LINES,
+        "the binary has {total} lines, more than {MAX_LINES}: move the decisions into a library crate"
+    );
+}
+
+/// A numeric literal where `text` (one line) gives a default: a clap
+/// `default_value = "<number…>"` or `default_value_t = <number>`, or an
+/// `unwrap_or(<number>)`. Defaults are named in `millplan_driver`
+/// (`command_defaults`, `defaults`) so that each is chosen in one place.
+fn numeric_default(text: &str) -> Option<&str> {
+    let numeric = |rest: &str| {
+        let rest = rest.strip_prefix('"').unwrap_or(rest);
+        let rest = rest.strip_prefix('-').unwrap_or(rest);
+        let rest = rest.strip_prefix('.').unwrap_or(rest);
+        rest.starts_with(|c: char| c.is_ascii_digit())
+    };
+    ["default_value = ", "default_value_t = ", "unwrap_or("]
+        .into_iter()
+        .find(|pat| {
+            text.match_indices(pat)
+                .any(|(i, _)| numeric(&text[i + pat.len()..]))
+        })
+}
+
+#[test]
+fn numeric_defaults_are_recognised() {
+    assert!(numeric_default(r#"#[arg(long, default_value = "0:30")]"#).is_some());
+    assert!(numeric_default("#[arg(long, default_value_t = -1.5)]").is_some());
+    assert!(numeric_default("let x = a.or(b).unwrap_or(1000.0);").is_some());
+    assert!(numeric_default(r#"#[arg(long, default_value = "fxy")]"#).is_none());
+    assert!(numeric_default("#[arg(long, default_value_t = command_defaults::cut::DZ)]").is_none());
+    assert!(numeric_default("let x = a.unwrap_or(f64::NAN);").is_none());
+    assert!(numeric_default(r#"t.map(|t| t.to_string()).unwrap_or("-".into())"#).is_none());
+    assert!(numeric_default("let x = a.unwrap_or(.5);").is_some());
+}
+
+#[test]
+fn the_commands_hold_no_numeric_default() {
+    let mut found = Vec::new();
+    for (f, text) in binary_sources() {
+        if !f.components().any(|c| c.as_os_str() == "cmd") || not_yet_moved(&f) {
+            continue;
+        }
+        for (i, line) in text.lines().enumerate() {
+            if let Some(what) = numeric_default(line) {
+                found.push(format!("{}:{}: {what}", f.display(), i + 1));
+            }
+        }
+    }
+    assert!(found.is_empty(), "numeric defaults in cmd/: {found:?}");
+}
+
+/// The commands name no internals of the model and simulation crates: what
+/// they need of `millplan-models` and `millplan-sim` reaches them through
+/// the types `millplan_driver` re-exports one by one at its root or in its
+/// command modules (never a whole crate or a glob), and through the plan
+/// and report crates' own APIs. `optimise.rs` is the driver's own front and
+/// still names `StockSpec` by its home.
+#[test]
+fn the_commands_name_no_model_or_simulation_internals() {
+    let mut found = Vec::new();
+    for (f, text) in binary_sources() {
+        let in_cmd = f.components().any(|c| c.as_os_str() == "cmd");
+        if !in_cmd || f.ends_with("optimise.rs") || not_yet_moved(&f) {
+            continue;
+        }
+        for (i, line) in text.lines().enumerate() {
+            if line.contains("millplan_sim") || line.contains("millplan_models") {
+                found.push(format!("{}:{}: {}", f.display(), i + 1, line.trim()));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "cmd/ names model or simulation internals: {found:?}"
+    );
+    let driver = std::fs::read_to_string(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../millplan-driver/src/lib.rs"),
+    )
+    .expect("driver's lib.rs");
+    for line in driver
+        .lines()
+        .filter(|l| l.starts_with("pub use millplan_"))
+    {
+        assert!(
+            !line.ends_with("::*;") && line.matches("::").count() >= 2,
+            "the driver re-exports a whole module or crate: {line}"
+        );
+    }
 }
 
 #[test]

@@ -410,6 +410,27 @@ fn cases(d: &Path, tmp: &Path) -> Vec<Case> {
             ]),
         },
         Case {
+            command: "robot",
+            ok: v(&[
+                "robot",
+                "deflect",
+                "--joints",
+                "0,-90,90,0,30,0",
+                "--force",
+                "0,1000,0",
+                "--json",
+            ]),
+            fails: v(&[
+                "robot",
+                "deflect",
+                "--joints",
+                "0,-90,90,0,30",
+                "--force",
+                "0,1000,0",
+                "--json",
+            ]),
+        },
+        Case {
             command: "explain",
             ok: v(&["explain", "--json"]),
             fails: v(&["explain", "--json", "no-such-code"]),

@@ -90,7 +90,7 @@ fn a_bad_machine_file_is_located() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         err.contains(&format!(
-            "{}:3:7: spindle.max: must be finite",
+            "{}:3:7: spindle.max: must be from 1 to 1000000 1/min, got NaN",
             bad.display()
         )),
         "{err}"

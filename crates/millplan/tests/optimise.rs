@@ -238,7 +238,16 @@ fn passes_one_by_one_give_the_same_program() {
     let dir = tempfile::tempdir().expect("tmp");
     let (stl, apt, machine) = demo(dir.path());
     let opt = dir.path().join("opt.nc");
-    let common = ["--stl", s(&stl), "--machine", s(&machine)];
+    // The same limits for both runs: without them optimise would learn its
+    // own from the input's loads, which feed alone does not.
+    let common = [
+        "--stl",
+        s(&stl),
+        "--machine",
+        s(&machine),
+        "--limit",
+        "fxy=150,torque=1500,power=2000",
+    ];
     let o = bin()
         .args([
             "optimise",
@@ -431,4 +440,235 @@ fn nx_nurbs_is_optimised_on_its_own_surface() {
     let j = json(&o);
     eprintln!("{}", serde_json::to_string(&j).unwrap_or_default());
     assert_eq!(j["verdict"], "improved");
+}
+
+/// A table-table A/C machine whose `[post]` asks for inverse-time feed.
+const TABLE_AC_G93: &str = r#"name = "table A/C, inverse time"
+[control]
+dialect = "fanuc"
+[spindle]
+min = 500.0
+max = 18000.0
+accel = 6000.0
+[feed]
+max = 20000.0
+rapid = 30000.0
+[kinematics]
+kind = "table-ac"
+rot_point = [0.0, 0.0, -100.0]
+offset = [0.0, 5.0, 20.0]
+[kinematics.first]
+min = -120.0
+max = 120.0
+[axes.a]
+velocity = 9000.0
+[axes.c]
+velocity = 18000.0
+[post]
+inverse_time = true
+"#;
+
+/// Distance from `p` to the segment `a`–`b`.
+fn segment_distance(
+    p: millplan_geom::DVec3,
+    a: millplan_geom::DVec3,
+    b: millplan_geom::DVec3,
+) -> f64 {
+    let ab = b - a;
+    let t = if ab.length_squared() > 0.0 {
+        ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a + ab * t - p).length()
+}
+
+/// Issue 31, done-when 2: the NX variable-contour sample optimised for a
+/// table A/C machine whose machine file asks for inverse time is posted in
+/// G93, passes its own checks, and the forward kinematics of every posted
+/// cutting block (computed here from the written A, C and X Y Z words)
+/// lies on the CL path within --tol (plus the written precision).
+#[test]
+fn nx_variable_contour_is_posted_in_g93_and_its_tips_are_the_cl_path() {
+    let Some(cls) = shared_data::file("nx-clsf-5axis-varcontour/ust_a.cls") else {
+        return;
+    };
+    let dir = tempfile::tempdir().expect("tmp");
+    let m = dir.path().join("ac.toml");
+    std::fs::write(&m, TABLE_AC_G93).expect("write");
+    let out = dir.path().join("ust_a.nc");
+    let o = run(&[
+        "optimise",
+        s(&cls),
+        "--machine",
+        s(&m),
+        "--tol",
+        "0.01",
+        "-o",
+        s(&out),
+        "--json",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let j = json(&o);
+    assert_eq!(pass(&j, "post")["ran"], true, "{j}");
+    let tip = j["checks"]
+        .as_array()
+        .expect("checks")
+        .iter()
+        .find(|c| c["name"] == "tip")
+        .expect("tip check");
+    assert_eq!(tip["ok"], true, "{tip}");
+    let text = std::fs::read_to_string(&out).expect("written");
+    assert!(text.lines().any(|l| l.contains("G93")), "no G93 block");
+    // The CL path in the part frame.
+    let cl = read(&cls);
+    let mut segs = Vec::new();
+    for op in &cl.operations {
+        let at = |v: millplan_geom::DVec3| op.frame.map_or(v, |f| f.to_parent(v));
+        let mut prev: Option<millplan_geom::DVec3> = None;
+        for mv in &op.moves {
+            let e = at(mv.end);
+            if let Some(p) = prev.filter(|_| mv.is_cutting()) {
+                segs.push((p, e));
+            }
+            prev = e.is_finite().then_some(e);
+        }
+    }
+    assert!(segs.len() > 100);
+    let kin = millplan_plan::machine::Machine::from_toml(TABLE_AC_G93)
+        .expect("machine")
+        .kinematics()
+        .cloned()
+        .expect("kinematics");
+    let posted = read(&out);
+    let (mut n, mut worst) = (0, 0.0f64);
+    for op in &posted.operations {
+        for mv in op.moves.iter().filter(|m| m.is_cutting()) {
+            let a = op.orient(mv).expect("angles").angles;
+            let j = millplan_models::kinematics::Joints {
+                xyz: mv.end,
+                first: a[0].expect("A").to_degrees(),
+                second: a[2].expect("C").to_degrees(),
+            };
+            let t = kin.forward(&j).0;
+            let d = segs
+                .iter()
+                .map(|&(p, q)| segment_distance(t, p, q))
+                .fold(f64::INFINITY, f64::min);
+            worst = worst.max(d);
+            n += 1;
+        }
+    }
+    assert!(n > 100, "{n} posted cutting blocks");
+    assert!(
+        worst <= 0.01 + 2e-3,
+        "a posted tip {worst} mm off the CL path"
+    );
+}
+
+/// `--tools`: the demo's tool 1 served from a library (`millplan tool add`,
+/// flutes and helix as ISO 13399 properties) gives the run its flutes and
+/// helix, said to come from the library; a library without tool 1 stops the
+/// run at the tool's record (the demo's `CUTTER/` before `LOADTL/1`, line 4)
+/// with exit 2 and nothing written.
+#[test]
+fn the_tool_library_serves_the_tools_and_a_missing_one_is_located() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let (part, apt, machine) = demo(dir.path());
+    let db = dir.path().join("tools.db");
+    let add = |n: &str| {
+        let o = run(&[
+            "tool",
+            "add",
+            n,
+            "--db",
+            s(&db),
+            "--kind",
+            "ball",
+            "--r",
+            "5",
+            "--l",
+            "80",
+            "--iso",
+            "ZEFP=3",
+            "--iso",
+            "FHA=40",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    add("1");
+    let out = dir.path().join("opt.nc");
+    let args = |out: &Path| {
+        vec![
+            "optimise".to_string(),
+            s(&apt).into(),
+            "--stl".into(),
+            s(&part).into(),
+            "--machine".into(),
+            s(&machine).into(),
+            "--tools".into(),
+            s(&db).into(),
+            "--passes".into(),
+            "speed".into(),
+            "-o".into(),
+            s(out).into(),
+            "--json".into(),
+        ]
+    };
+    let o = bin().args(args(&out)).output().expect("runs");
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let j = json(&o);
+    assert_eq!(setting(&j, "flutes"), "3");
+    let from = |n: &str| {
+        j["settings"]
+            .as_array()
+            .expect("settings")
+            .iter()
+            .find(|x| x["name"] == n)
+            .map(|x| x["from"].clone())
+    };
+    assert_eq!(from("flutes"), Some("tool library".into()));
+    assert_eq!(from("helix"), Some("tool library".into()));
+    let other = dir.path().join("other.db");
+    let o = run(&[
+        "tool",
+        "add",
+        "7",
+        "--db",
+        s(&other),
+        "--kind",
+        "ball",
+        "--r",
+        "5",
+    ]);
+    assert!(o.status.success());
+    let out2 = dir.path().join("opt2.nc");
+    let mut a = args(&out2);
+    a[7] = s(&other).into();
+    let o = bin().args(&a).output().expect("runs");
+    assert_eq!(o.status.code(), Some(2));
+    let e: serde_json::Value = serde_json::from_slice(&o.stderr).expect("a JSON error");
+    let e = &e["error"];
+    assert!(
+        e["file"]
+            .as_str()
+            .is_some_and(|f| f.ends_with("finish.apt")),
+        "{e}"
+    );
+    assert_eq!(e["line"], 4, "{e}");
+    assert!(
+        e["message"].as_str().is_some_and(|m| m.contains("tool 1")),
+        "{e}"
+    );
+    assert!(!out2.exists());
 }

@@ -251,6 +251,8 @@ fn reorder_report_has_inputs_warnings_and_verdict() {
         let report = dir.path().join(format!("reorder_{units}.html"));
         let o = bin()
             .args(["reorder", "--json", "--ap", "0.3", "--stl-units", units])
+            // The machine file's control is fanuc: an APT output says so.
+            .args(["--to", "apt"])
             .arg("--stl")
             .arg(demo.join("part.stl"))
             .arg(demo.join("finish.apt"))

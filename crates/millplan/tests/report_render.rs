@@ -241,3 +241,77 @@ fn reorder_and_setup_reports_show_inputs_warnings_and_verdict() {
         assert!(dom.contains(limit), "{}: the limits drawn", page.display());
     }
 }
+
+/// The simulate report's 3-D view of the stock draws in headless Chromium
+/// with software WebGL (SwiftShader): the canvas says it rendered with WebGL 2
+/// and read back a fifth or so of its pixels covered by the stock, and the
+/// page logs no script error. Without WebGL (`--disable-gpu`, no SwiftShader)
+/// the view steps aside and says the 2-D map stands in for it.
+#[test]
+#[ignore = "needs /usr/bin/chromium"]
+fn simulate_report_draws_the_stock_in_3d_or_says_it_cannot() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let demo = dir.path().join("demo");
+    let bin = env!("CARGO_BIN_EXE_millplan");
+    let st = Command::new(bin)
+        .args(["demo", "-o", demo.to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    assert!(st.status.success());
+    let st = Command::new(bin)
+        .current_dir(&demo)
+        .args([
+            "simulate",
+            "finish.apt",
+            "--stock",
+            "offset:0.5",
+            "--stl",
+            "part.stl",
+        ])
+        .args(["--report", "sim.html"])
+        .output()
+        .expect("runs");
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    let page = demo.join("sim.html");
+    let run = |gl: &[&str]| {
+        Command::new("chromium")
+            .args(["--headless", "--no-sandbox", "--no-first-run"])
+            .args([
+                "--disable-background-networking",
+                "--enable-logging=stderr",
+                "--v=0",
+            ])
+            .args(gl)
+            .arg(format!(
+                "--user-data-dir={}",
+                dir.path().join("profile").display()
+            ))
+            .arg("--dump-dom")
+            .arg(format!("file://{}", page.display()))
+            .output()
+            .expect("chromium runs")
+    };
+    let out = run(&["--use-angle=swiftshader", "--enable-unsafe-swiftshader"]);
+    let dom = String::from_utf8_lossy(&out.stdout);
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(dom.contains("data-rendered=\"webgl2\""), "{log}");
+    let painted: f64 = dom
+        .split("data-painted=\"")
+        .nth(1)
+        .and_then(|r| r.split('"').next())
+        .and_then(|v| v.parse().ok())
+        .expect("the view reports what it painted");
+    assert!(painted > 0.05 && painted < 0.95, "painted {painted}");
+    assert!(!log.contains("Uncaught"), "{log}");
+    let out = run(&["--disable-gpu", "--disable-software-rasterizer"]);
+    let dom = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        dom.contains("data-rendered=\"none\"") || dom.contains("data-rendered=\"webgl2\""),
+        "the view neither drew nor stepped aside"
+    );
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("Uncaught"));
+}

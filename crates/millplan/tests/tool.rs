@@ -234,6 +234,8 @@ fn thread_limits_and_checks_of_more_classes() {
 #[test]
 fn a_tool_room_session() {
     let dir = tempfile::tempdir().expect("tmp");
+    // `--db` never creates its folder (issue 34): the shop makes it.
+    std::fs::create_dir(dir.path().join("lib")).expect("mkdir");
     let db = dir.path().join("lib").join("tools.db");
     for n in ["5", "6"] {
         a_thread_mill(&db, n);

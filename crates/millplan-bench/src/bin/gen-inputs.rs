@@ -4,8 +4,20 @@
 //! `five_axis_100k.apt` and `five_axis_1m.apt` (the same raster with 100,000
 //! and 1,000,000 points and a leaning, rolling tool axis), for whole-command
 //! timing and peak memory (`/usr/bin/time -v millplan speed ...`).
+//! `gen-inputs --access FILE` writes the 98,568-triangle surface of the
+//! tool-mode accessibility benchmark (`millplan setup --tool`) instead.
 
 fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if let [flag, file] = args.as_slice() {
+        if flag == "--access" {
+            if let Err(e) = std::fs::write(file, millplan_bench::big_stl(98_568)) {
+                eprintln!("error: {file}: {e}");
+                std::process::exit(1);
+            }
+            return;
+        }
+    }
     let dir = std::env::args()
         .nth(1)
         .unwrap_or_else(|| "bench-inputs".into());

@@ -85,6 +85,45 @@ impl Orthogonal {
         (rc * an.cos() / (1.0 - rc * an.sin())).atan()
     }
 
+    /// Checks that the database gives finite coefficients, the tangential
+    /// and radial ones not negative, at rake `rake_deg` for every chip from
+    /// `h_min` to 2 mm and every inclination from 0 to 60°: a chip ratio
+    /// C0·h^a of 0 or below (`rc_c0 = [0, 0]`) has no shear angle and gives
+    /// NaN. The message names the key at fault.
+    pub fn check(&self, rake_deg: f64, h_min: f64, rule: BetaRule) -> Result<(), String> {
+        let c0 = self.rc_c0[0] + self.rc_c0[1] * rake_deg;
+        if !(c0 > 0.0 && c0 <= 10.0) {
+            return Err(format!(
+                "`rc_c0` gives a chip-ratio factor C0 of {c0} at the rake {rake_deg}°: it must be above 0 and at most 10"
+            ));
+        }
+        let beta = self.beta_a[0] + self.beta_a[1] * rake_deg;
+        if !(0.0..80.0).contains(&beta) {
+            return Err(format!(
+                "`beta_a` gives a friction angle of {beta}° at the rake {rake_deg}°: it must be from 0 to below 80°"
+            ));
+        }
+        let h_min = h_min.clamp(1e-4, 2.0);
+        for k in 0..=16 {
+            let h = h_min * (2.0 / h_min).powf(k as f64 / 16.0);
+            let phi = self.shear_angle(rake_deg, h);
+            if !(phi > 0.0 && phi < std::f64::consts::FRAC_PI_2) {
+                return Err(format!(
+                    "`rc_a` with `rc_c0` gives no shear angle at a chip of {h:.4} mm (chip ratio C0·h^a out of range)"
+                ));
+            }
+            for deg in (0..=60).step_by(10) {
+                let [t, r, a] = self.oblique(rake_deg, h, (deg as f64).to_radians(), rule);
+                if !(t.is_finite() && r.is_finite() && a.is_finite() && t >= 0.0 && r >= 0.0) {
+                    return Err(format!(
+                        "`tau_s` with the chip data gives the coefficients [{t}, {r}, {a}] N/mm² at a chip of {h:.4} mm and a helix of {deg}°: the tangential and radial ones must be finite and not negative"
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Oblique cutting coefficients (Ktc, Krc, Kac) [N/mm²] at rake αn \[deg\],
     /// chip thickness h \[mm\] and inclination i \[rad\], with chip flow η = i.
     pub fn oblique(&self, rake_deg: f64, h: f64, i: f64, rule: BetaRule) -> [f64; 3] {

@@ -7,6 +7,12 @@ use std::f64::consts::PI;
 /// Young's modulus of carbide, the default [N/mm²].
 pub const E_CARBIDE: f64 = 600_000.0;
 
+/// The plausible range of a tool's Young's modulus [N/mm²]: from 10,000
+/// (below any metal a tool is made of; aluminium is 70,000) to 2,000,000
+/// (above diamond's 1,200,000). A modulus of 1e-308 would bend the tool by
+/// an infinite amount.
+pub const MODULUS_RANGE: (f64, f64) = (1e4, 2e6);
+
 /// Equivalent diameter of the fluted part over the nominal one (Kops & Vo).
 pub const DE_RATIO: f64 = 0.8;
 

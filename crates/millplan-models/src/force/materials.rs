@@ -304,16 +304,22 @@ fn law(e: &Entry) -> Result<Law, String> {
                 Some(toml::Value::String(s)) if s == "per-element" => ChipRule::PerElement {
                     h_min: e.h_min.unwrap_or(0.005).max(1e-4),
                 },
-                Some(toml::Value::Float(h)) if *h > 0.0 => ChipRule::Fixed(*h),
-                Some(_) => {
-                    return Err("`chip` must be \"per-element\" or a chip thickness in mm".into())
-                }
+                Some(toml::Value::Float(h)) if *h > 0.0 && *h <= 2.0 => ChipRule::Fixed(*h),
+                Some(_) => return Err(
+                    "`chip` must be \"per-element\" or a chip thickness above 0 and at most 2 mm"
+                        .into(),
+                ),
             };
             let beta = match e.beta.as_deref() {
                 None | Some("converted") => BetaRule::Converted,
                 Some("same") => BetaRule::Same,
                 Some(x) => return Err(format!("`beta = \"{x}\"`: use \"converted\" or \"same\"")),
             };
+            let h_min = match chip {
+                ChipRule::PerElement { h_min } => h_min,
+                ChipRule::Fixed(h) => h,
+            };
+            db.check(rake_deg, h_min, beta)?;
             Ok(Law::Oblique(Oblique {
                 db,
                 rake_deg,

@@ -746,6 +746,9 @@ impl HeidenhainReader {
         let number = words
             .get(2)
             .and_then(|w| w.split('.').next()?.parse::<u32>().ok());
+        if number == Some(32) && self.tolerance_cycle(words, body, ln)? {
+            return Ok(());
+        }
         if !matches!(number, Some(1 | 200..=209 | 240 | 241)) {
             let text = self.raw_block.take().unwrap_or_else(|| body.to_string());
             self.passthrough("CYCL", &text, PassClass::Machine, false, ln);
@@ -848,6 +851,37 @@ impl HeidenhainReader {
         }
         self.passthrough("CYCL", body, PassClass::Info, false, ln);
         Ok(())
+    }
+
+    /// Cycle 32 TOLERANCE: `32.0` opens it, `32.1 T…` sets the contour
+    /// tolerance (without T: the machine's own), read as the blending mode;
+    /// `32.2` (HSC mode, axis tolerance) is kept as written. Returns whether
+    /// the line was taken.
+    fn tolerance_cycle(&mut self, words: &[&str], body: &str, ln: u32) -> Result<bool, ParseError> {
+        match words.get(2).copied() {
+            Some("32.0") => Ok(true),
+            Some("32.1") => {
+                let t = match words.get(3) {
+                    Some(w) => {
+                        let v = w.strip_prefix('T').and_then(parse_num).ok_or_else(|| {
+                            ParseError::new(
+                                ln,
+                                1,
+                                format!("`{w}` in `{}` is not a tolerance T", body.trim()),
+                            )
+                        })?;
+                        (v > 0.0).then_some(v * self.scale)
+                    }
+                    None => None,
+                };
+                self.op.push_event(
+                    ln,
+                    EventKind::PathControl(PathControl::Blend { tolerance: t }),
+                );
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
     }
 
     fn q_params(&mut self, words: &[&str]) {

@@ -476,6 +476,10 @@ struct Words {
     keep_modal: bool,
     /// A kept word acts on the machine (not only a variable assignment).
     keep_machine: bool,
+    /// Sinumerik `ADIS=` and `CTOL=` (rounding distance, contour
+    /// tolerance) with their text, for a G641/G642 of the same block.
+    adis: Option<(f64, String)>,
+    ctol: Option<(f64, String)>,
 }
 
 impl GcodeReader {
@@ -836,6 +840,15 @@ impl GcodeReader {
                         }
                         self.spindle = v;
                     }
+                    "ADIS" | "CTOL" if self.sinumerik() => {
+                        let v = self.value(val, ln, col)?;
+                        let slot = if name == "ADIS" {
+                            &mut w.adis
+                        } else {
+                            &mut w.ctol
+                        };
+                        *slot = Some((v, format!("{name}={val}")));
+                    }
                     "T" => {
                         self.selected_tool =
                             Some((val.trim().parse::<u32>().ok(), Some(val.clone()), ln));
@@ -873,7 +886,9 @@ impl GcodeReader {
                     }
                 },
                 Tok::Call(name, args) => {
-                    if name == "MSG" {
+                    if name == "CYCLE832" && self.high_speed(args, ln, col) {
+                        // Read as a path-control event.
+                    } else if name == "MSG" {
                         let text = args.trim().trim_matches('"').to_string();
                         self.op.push_event(ln, EventKind::Comment(text));
                     } else {
@@ -897,6 +912,9 @@ impl GcodeReader {
                 Tok::Keyword(k) => match k.as_str() {
                     "TRAORI" => self.tcp_event(true, ln),
                     "TRAFOOF" => self.tcp_event(false, ln),
+                    "SOFT" | "BRISK" if self.sinumerik() => self
+                        .op
+                        .push_event(ln, EventKind::PathControl(PathControl::Soft(k == "SOFT"))),
                     _ => {
                         if !KNOWN_KEYWORDS.contains(&k.as_str()) {
                             self.diags.warn(
@@ -913,6 +931,89 @@ impl GcodeReader {
             }
         }
         Ok(())
+    }
+
+    /// The path-control mode a G code (×10) of this dialect sets, given the
+    /// block's words: exact stop, blending (with its tolerance), a
+    /// look-ahead function; `None` when it is no such code here.
+    fn path_code(&self, code: i64, w: &Words) -> Option<PathControl> {
+        let d = self.dialect;
+        let sin = self.sinumerik();
+        let switch = |v: Option<f64>| match v {
+            Some(x) if x == 0.0 || x == 1.0 => Some(x == 1.0),
+            _ => None,
+        };
+        Some(match code {
+            610 | 611 if d == Dialect::LinuxCnc => PathControl::ExactStop,
+            610 if d == Dialect::Fanuc => PathControl::ExactStop,
+            600 if sin => PathControl::ExactStop,
+            90 if sin || d == Dialect::Fanuc => PathControl::StopOnce,
+            640 if d == Dialect::LinuxCnc => PathControl::Blend {
+                tolerance: w.p.filter(|p| *p > 0.0).map(|p| p * self.scale),
+            },
+            640 => PathControl::Blend { tolerance: None },
+            6410 if sin => PathControl::Blend {
+                tolerance: w.adis.as_ref().map(|a| a.0 * self.scale),
+            },
+            6420 if sin => PathControl::Blend {
+                tolerance: w.ctol.as_ref().map(|a| a.0 * self.scale),
+            },
+            51 if d == Dialect::Fanuc => PathControl::Smoothing {
+                kind: Smoothing::AiContour,
+                on: switch(w.q)?,
+            },
+            80 if d == Dialect::Fanuc => PathControl::Smoothing {
+                kind: Smoothing::LookAhead,
+                on: switch(w.p)?,
+            },
+            _ => return None,
+        })
+    }
+
+    /// Takes the words [`Self::path_code`] read for `code` out of the block.
+    fn path_take(&mut self, code: i64, w: &mut Words, ln: u32, col: u32) {
+        match code {
+            640 if self.dialect == Dialect::LinuxCnc => {
+                w.p = None;
+                if w.q.take().is_some() {
+                    self.diags.note(
+                        Code::UnknownWord,
+                        ln,
+                        col,
+                        "G64 Q (the naive-CAM tolerance) is not kept: it follows P when the program is written",
+                    );
+                }
+            }
+            6410 => w.adis = None,
+            6420 => w.ctol = None,
+            51 => w.q = None,
+            80 => w.p = None,
+            _ => {}
+        }
+    }
+
+    /// Sinumerik `CYCLE832(tolerance, mode, …)`: the high-speed settings on
+    /// (mode not 0, `_OFF`) with their contour tolerance, or off. False when
+    /// its tolerance is no number the reader knows (kept verbatim then).
+    fn high_speed(&mut self, args: &str, ln: u32, col: u32) -> bool {
+        let mut a = args.split(',').map(str::trim);
+        let Some(Ok(tol)) = a.next().map(|t| self.value(t, ln, col)) else {
+            return false;
+        };
+        let on = match a.next() {
+            Some("_OFF") => false,
+            Some(m) => !self.value(m, ln, col).is_ok_and(|v| v == 0.0),
+            None => tol > 0.0,
+        };
+        let tolerance = if on { tol.max(0.0) * self.scale } else { 0.0 };
+        self.op.push_event(
+            ln,
+            EventKind::PathControl(PathControl::Smoothing {
+                kind: Smoothing::HighSpeed { tolerance },
+                on,
+            }),
+        );
+        true
     }
 
     fn dwell_p(&self, p: f64) -> f64 {
@@ -984,7 +1085,8 @@ impl GcodeReader {
         let mut cutcom = None;
         let mut tlc: Option<(i64, u32)> = None;
         let mut offset: Option<WorkOffset> = None;
-        for &(code, v, col) in &w.g {
+        let mut path: Vec<PathControl> = Vec::new();
+        for &(code, v, col) in &w.g.clone() {
             match code {
                 0 => {
                     self.motion = Motion::Rapid;
@@ -1032,6 +1134,12 @@ impl GcodeReader {
                 980 => self.return_initial = true,
                 990 => self.return_initial = false,
                 530 | 280 | 300 => machine = Some(col),
+                c if self.path_code(c, &w).is_some() => {
+                    if let Some(pc) = self.path_code(c, &w) {
+                        path.push(pc);
+                    }
+                    self.path_take(c, &mut w, ln, col);
+                }
                 540..=590 if code % 10 == 0 && !(self.sinumerik() && code > 570) => {
                     offset = Some(WorkOffset((code / 10 - 53) as u16))
                 }
@@ -1148,6 +1256,14 @@ impl GcodeReader {
                 _ => w.d.take().and_then(d_register),
             };
             self.op.push_event(ln, EventKind::CutCom { side, register });
+        }
+        for pc in path {
+            self.op.push_event(ln, EventKind::PathControl(pc));
+        }
+        for (v, text) in [w.adis.take(), w.ctol.take()].into_iter().flatten() {
+            // Set for a later block: kept as written.
+            let _ = v;
+            w.keep.push(text);
         }
         if let Some(o) = offset {
             self.op.push_event(ln, EventKind::WorkOffset(o));

@@ -98,6 +98,9 @@ pub enum Dialect {
     Heidenhain,
     /// Made by millplan (a generator or a pass), not read from a file.
     Generated,
+    /// A KUKA KRL robot program (read by `krl`, not by the NC front ends;
+    /// not in [`Dialect::ALL`]).
+    Krl,
 }
 
 impl Dialect {
@@ -131,6 +134,7 @@ impl Dialect {
             Dialect::LinuxCnc => "linuxcnc",
             Dialect::Heidenhain => "heidenhain",
             Dialect::Generated => "generated",
+            Dialect::Krl => "krl",
         }
     }
 
@@ -685,6 +689,39 @@ pub struct Passthrough {
     pub moves: bool,
 }
 
+/// How the control passes the junctions between blocks: its path-control
+/// mode. Modal, except [`PathControl::StopOnce`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PathControl {
+    /// Exact stop at every block end (Fanuc G61, LinuxCNC G61/G61.1,
+    /// Sinumerik G60).
+    ExactStop,
+    /// Continuous path: corners are blended. `tolerance` (mm) is the
+    /// largest deviation from the programmed corner the program allows
+    /// (LinuxCNC G64 P, Sinumerik G641 ADIS= or G642 CTOL=, Heidenhain
+    /// cycle 32 T); `None`: as the control's own settings allow (G64,
+    /// Sinumerik G642 without CTOL, cycle 32 without T).
+    Blend { tolerance: Option<f64> },
+    /// Exact stop at the end of the next move only (Fanuc G09, Sinumerik G9).
+    StopOnce,
+    /// A look-ahead or smoothing function of the control on or off.
+    Smoothing { kind: Smoothing, on: bool },
+    /// Jerk limitation on (Sinumerik SOFT) or off (BRISK).
+    Soft(bool),
+}
+
+/// The look-ahead and smoothing functions of the controls.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Smoothing {
+    /// Fanuc AI contour control (G05.1 Q1 / Q0).
+    AiContour,
+    /// Fanuc look-ahead control (G08 P1 / P0).
+    LookAhead,
+    /// Sinumerik high-speed settings (`CYCLE832`): `tolerance` mm, the
+    /// contour tolerance it sets (0 when it is switched off).
+    HighSpeed { tolerance: f64 },
+}
+
 /// Everything in a program that is not a move.
 #[derive(Clone, Debug, PartialEq)]
 pub enum EventKind {
@@ -713,6 +750,8 @@ pub enum EventKind {
     },
     /// Dwell, seconds.
     Dwell(f64),
+    /// The path-control mode (exact stop, blending, look-ahead).
+    PathControl(PathControl),
     Passthrough(Passthrough),
 }
 

@@ -335,6 +335,16 @@ fn write_events_until(
                 text_line(out, if *optional { "OPSTOP" } else { "STOP" })
             }
             EventKind::Dwell(t) => list(out, "DELAY", &[(*t, COORD)]),
+            EventKind::PathControl(pc) => {
+                let what = crate::text::path_control_name(pc);
+                lossy(
+                    cx.o.lossy,
+                    warnings,
+                    e.line,
+                    format!("APT has no path-control mode (`{what}`)"),
+                )?;
+                text_line(out, &format!("PPRINT path control: {what}"));
+            }
             EventKind::Passthrough(pt) => {
                 let same_unit = cx.o.unit() == cx.p.units.source || super::unit_free(&pt.text);
                 if cx.p.source.is_apt() && same_unit {

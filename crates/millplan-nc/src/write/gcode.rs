@@ -645,6 +645,7 @@ impl W<'_> {
                 Target::LinuxCnc => vec![format!("G4 P{t:.3}")],
                 _ => vec![format!("G4 P{}", (t * 1000.0).round() as i64)],
             }),
+            EventKind::PathControl(pc) => self.path_words(pc, e.line)?,
             EventKind::Passthrough(p) => {
                 let same_unit = self.o.unit() == self.source_unit || super::unit_free(&p.text);
                 if p.word == TOOL_DELTAS && self.deltas_copied()
@@ -697,6 +698,83 @@ impl W<'_> {
                 }
             }
         })
+    }
+
+    /// A path-control mode in the target's words; one it cannot express is
+    /// refused at its line (a comment under `--lossy`).
+    fn path_words(&mut self, pc: &PathControl, line: u32) -> Result<Words, WriteError> {
+        let target = self.target();
+        // A tolerance in the written unit, on the coordinates' grid.
+        let tol = |t: f64| crate::gcode::fmt_num(self.grid(t * self.k));
+        let w: Option<Vec<String>> = match (target, pc) {
+            (Target::Fanuc | Target::LinuxCnc, PathControl::ExactStop) => Some(vec!["G61".into()]),
+            (Target::Sinumerik, PathControl::ExactStop) => Some(vec!["G60".into()]),
+            (Target::Fanuc | Target::Sinumerik, PathControl::Blend { tolerance: None })
+            | (Target::LinuxCnc, PathControl::Blend { tolerance: None }) => {
+                Some(vec!["G64".into()])
+            }
+            (Target::LinuxCnc, PathControl::Blend { tolerance: Some(t) }) => {
+                Some(vec![format!("G64 P{}", tol(*t))])
+            }
+            (Target::Sinumerik, PathControl::Blend { tolerance: Some(t) }) => {
+                Some(vec![format!("G642 CTOL={}", tol(*t))])
+            }
+            (Target::Heidenhain, PathControl::Blend { tolerance }) => Some(vec![
+                "CYCL DEF 32.0 TOLERANCE".into(),
+                match tolerance {
+                    Some(t) => format!("CYCL DEF 32.1 T{}", tol(*t)),
+                    None => "CYCL DEF 32.1".into(),
+                },
+            ]),
+            (Target::Fanuc, PathControl::StopOnce) => Some(vec!["G9".into()]),
+            (Target::Sinumerik, PathControl::StopOnce) => Some(vec!["G9".into()]),
+            (
+                Target::Fanuc,
+                PathControl::Smoothing {
+                    kind: Smoothing::AiContour,
+                    on,
+                },
+            ) => Some(vec![format!("G5.1 Q{}", u8::from(*on))]),
+            (
+                Target::Fanuc,
+                PathControl::Smoothing {
+                    kind: Smoothing::LookAhead,
+                    on,
+                },
+            ) => Some(vec![format!("G8 P{}", u8::from(*on))]),
+            (
+                Target::Sinumerik,
+                PathControl::Smoothing {
+                    kind: Smoothing::HighSpeed { tolerance },
+                    on,
+                },
+            ) => Some(vec![if *on {
+                format!("CYCLE832({},1,1)", tol(*tolerance))
+            } else {
+                "CYCLE832(0,0,1)".into()
+            }]),
+            (Target::Sinumerik, PathControl::Soft(on)) => {
+                Some(vec![if *on { "SOFT" } else { "BRISK" }.into()])
+            }
+            _ => None,
+        };
+        match w {
+            Some(v) if target == Target::Heidenhain => Ok(Words::Lines(v)),
+            Some(v) => Ok(Words::Block(v.join(" "))),
+            None => {
+                let what = crate::text::path_control_name(pc);
+                lossy(
+                    self.o.lossy,
+                    &mut self.warnings,
+                    line,
+                    format!(
+                        "{} cannot express the path-control mode `{what}`",
+                        target.name()
+                    ),
+                )?;
+                Ok(Words::Comment(format!("path control: {what}")))
+            }
+        }
     }
 
     /// Writes the events due before move `i` (`None`: after the last move) and

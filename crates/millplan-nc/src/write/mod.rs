@@ -3,6 +3,7 @@
 
 pub mod apt;
 pub mod gcode;
+pub mod krl;
 pub mod preflight;
 
 use crate::diag::{Code, Diagnostic, Severity};

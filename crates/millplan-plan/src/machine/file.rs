@@ -8,6 +8,7 @@ use super::{
     Axes, Control, CurvePoint, InverseTimeF, LinearAxis, Machine, MachineError, Modal,
     PostSettings, RotaryDrive, SpindleCurve,
 };
+use crate::timing::{Planner, PlannerKind, Profile};
 use millplan_models::kinematics::Kinematics;
 use millplan_nc::write::Target;
 use toml::de::{DeTable, DeValue};
@@ -278,11 +279,16 @@ pub(super) fn write(m: &Machine) -> Result<String, MachineError> {
     }
     let file = MachineFile {
         name: m.name.clone(),
-        control: ControlFile {
-            dialect: m.control.dialect.map(|t| t.name().to_string()),
-            g93_f: m.control.g93_f,
-            g93_rapids: m.control.g93_rapids,
-            spindle_decimals: m.control.spindle_decimals,
+        control: {
+            let mut c = ControlFile {
+                dialect: m.control.dialect.map(|t| t.name().to_string()),
+                g93_f: m.control.g93_f,
+                g93_rapids: m.control.g93_rapids,
+                spindle_decimals: m.control.spindle_decimals,
+                ..ControlFile::default()
+            };
+            c.set_planner(&m.control.planner);
+            c
         },
         spindle: SpindleFile {
             min: m.spindle_min,
@@ -410,6 +416,75 @@ struct ControlFile {
     g93_rapids: bool,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     spindle_decimals: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    planner: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    blend_accel_scale: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    arc_tangential_share: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    lookahead: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    plain_lookahead: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    jerk: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    path_accel: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    profile: Option<Profile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    block_time: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    blend_mm: Option<f64>,
+}
+
+impl ControlFile {
+    /// The planner the file names, its family's defaults where it gives no
+    /// parameter.
+    fn planner(&self) -> Result<Planner, MachineError> {
+        let kind = match self.planner.as_deref() {
+            None => PlannerKind::Generic,
+            Some(n) => PlannerKind::from_name(&n.to_ascii_lowercase()).ok_or_else(|| {
+                MachineError::invalid(
+                    "control.planner",
+                    format!(
+                        "unknown planner `{n}` (generic, linuxcnc-2.9, fanuc, sinumerik, heidenhain)"
+                    ),
+                )
+            })?,
+        };
+        let d = Planner::of(kind);
+        Ok(Planner {
+            kind,
+            blend_accel_scale: self.blend_accel_scale.unwrap_or(d.blend_accel_scale),
+            arc_tangential_share: self.arc_tangential_share.unwrap_or(d.arc_tangential_share),
+            lookahead: self.lookahead.unwrap_or(d.lookahead),
+            plain_lookahead: self.plain_lookahead.unwrap_or(d.plain_lookahead),
+            jerk: self.jerk.or(d.jerk),
+            path_accel: self.path_accel.or(d.path_accel),
+            profile: self.profile.unwrap_or(d.profile),
+            block_time_s: self.block_time.unwrap_or(d.block_time_s),
+            blend_mm: self.blend_mm.unwrap_or(d.blend_mm),
+        })
+    }
+
+    /// The file's `[control]` planner keys for `p`: none for the default
+    /// generic planner, else its name and every parameter.
+    fn set_planner(&mut self, p: &Planner) {
+        if *p == Planner::default() {
+            return;
+        }
+        self.planner = Some(p.kind.name().to_string());
+        self.blend_accel_scale = Some(p.blend_accel_scale);
+        self.arc_tangential_share = Some(p.arc_tangential_share);
+        self.lookahead = Some(p.lookahead);
+        self.plain_lookahead = Some(p.plain_lookahead);
+        self.jerk = p.jerk;
+        self.path_accel = p.path_accel;
+        self.profile = Some(p.profile);
+        self.block_time = Some(p.block_time_s);
+        self.blend_mm = Some(p.blend_mm);
+    }
 }
 
 fn inverse_minutes() -> InverseTimeF {
@@ -423,6 +498,16 @@ impl Default for ControlFile {
             g93_f: inverse_minutes(),
             g93_rapids: true,
             spindle_decimals: None,
+            planner: None,
+            blend_accel_scale: None,
+            arc_tangential_share: None,
+            lookahead: None,
+            plain_lookahead: None,
+            jerk: None,
+            path_accel: None,
+            profile: None,
+            block_time: None,
+            blend_mm: None,
         }
     }
 }
@@ -515,6 +600,7 @@ impl MachineFile {
                 g93_f: self.control.g93_f,
                 g93_rapids: self.control.g93_rapids,
                 spindle_decimals: self.control.spindle_decimals,
+                planner: self.control.planner()?,
             },
             kinematics: self.kinematics,
             axes,
@@ -823,6 +909,7 @@ mod tests {
                     g93_f: _,
                     g93_rapids: _,
                     spindle_decimals,
+                    planner,
                 },
             kinematics,
             axes:
@@ -839,6 +926,26 @@ mod tests {
         assert_ne!(name, "machine");
         assert_ne!(*post, PostSettings::default(), "the example sets [post]");
         assert!(dialect.is_some() && spindle_decimals.is_some() && feed_air.is_some());
+        // The planner and every one of its parameters, each set in the
+        // example (to its family's default or not).
+        assert_eq!(planner.kind, PlannerKind::Fanuc);
+        for key in [
+            "planner",
+            "blend_accel_scale",
+            "arc_tangential_share",
+            "lookahead",
+            "plain_lookahead",
+            "jerk",
+            "path_accel",
+            "profile",
+            "block_time",
+            "blend_mm",
+        ] {
+            assert!(
+                EXAMPLE.lines().any(|l| l.starts_with(&format!("{key} = "))),
+                "examples/machine.toml sets no `{key}`"
+            );
+        }
         let curve = spindle_curve.as_ref().expect("curve");
         assert!(curve
             .points()

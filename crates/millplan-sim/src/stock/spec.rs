@@ -41,6 +41,16 @@ pub enum StockSpec {
 }
 
 impl StockSpec {
+    /// The file a stock specification reads (`stl:FILE`), if any: an input of
+    /// the run, which no output may replace. `None` also for a spec that
+    /// does not parse (its error comes where it is parsed).
+    pub fn file_of(spec: &str) -> Option<PathBuf> {
+        match StockSpec::parse(spec) {
+            Ok(StockSpec::Stl(p)) => Some(p),
+            _ => None,
+        }
+    }
+
     pub fn parse(s: &str) -> Result<StockSpec, String> {
         let (kind, rest) = s.split_once(':').unwrap_or((s, ""));
         let nums = |want: usize| -> Result<Vec<f64>, String> {

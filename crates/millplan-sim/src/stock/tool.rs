@@ -8,6 +8,31 @@ use millplan_models::cutter::Shape;
 /// Flute length of a tool whose flutes nobody gives: the whole tool cuts.
 pub const UNKNOWN_FLUTE: f64 = 1e6;
 
+/// Flute length, in tool diameters, of a tool whose flutes nobody gives
+/// (neither the options nor the program's cutter) when its shank or holder
+/// is simulated: a standard end mill's length of cut. Without it the shank
+/// would start a metre up and the holder never meet material.
+pub const DEFAULT_FLUTE_DIAMETERS: f64 = 3.0;
+
+impl BodyOptions {
+    /// The flute length `op`'s tool takes by [`DEFAULT_FLUTE_DIAMETERS`],
+    /// mm, when it takes it (a holder or shank given, no flute length known);
+    /// commands state it in their output.
+    pub fn default_flute(&self, op: &millplan_nc::Operation) -> Option<f64> {
+        let cutter = op.tool.as_ref().and_then(|t| t.cutter);
+        let known = self
+            .flute
+            .or_else(|| cutter.map(|c| c.h).filter(|h| *h > 0.0));
+        if known.is_some() || (self.holder.is_none() && self.shank_r.is_none()) {
+            return None;
+        }
+        let shape = self
+            .shape
+            .or_else(|| cutter.and_then(|c| crate::shape_of(&c)))?;
+        Some(DEFAULT_FLUTE_DIAMETERS * 2.0 * shape.radius())
+    }
+}
+
 /// What a command says of its tools beyond the program (see
 /// [`ToolBody::for_operation`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -75,6 +100,7 @@ impl ToolBody {
         b.flute = o
             .flute
             .or_else(|| cutter.map(|c| c.h).filter(|h| *h > 0.0))
+            .or_else(|| o.default_flute(op))
             .unwrap_or(UNKNOWN_FLUTE);
         b.shank_r = o.shank_r.unwrap_or(shape.radius());
         if let Some((r, l)) = o.holder {

@@ -2,6 +2,7 @@
 
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::Outputs;
+use millplan_driver::command_defaults::cutting;
 use millplan_geom::analytic::{tessellate, DemoSurface};
 use millplan_nc::generate::{raster, Raster};
 use millplan_nc::write::{write_program, Target, WriteOptions};
@@ -115,7 +116,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         MACHINE_TOML.as_bytes().to_vec(),
     ));
     // Spindle control on the same part and path.
-    let params = SpeedParams::new(63.0, 0.125, 2, 0.3);
+    let params = SpeedParams::new(cutting::VC, cutting::FZ, cutting::FLUTES, cutting::AP);
     let res =
         apply(&program, &mesh, &machine, &params).map_err(|e| CliError::internal(e.to_string()))?;
     let (controlled, _) = write_program(&res.program, WriteOptions::new(Target::Fanuc))
@@ -149,11 +150,11 @@ fn report(
     .into_iter()
     .flatten()
     .collect();
-    let cut = crate::cmd::CuttingData {
-        vc: 63.0,
-        fz: 0.125,
-        flutes: 2,
-        ap: 0.3,
+    let cut = millplan_driver::speed::Cutting {
+        vc: cutting::VC,
+        fz: cutting::FZ,
+        flutes: cutting::FLUTES,
+        ap: cutting::AP,
     };
     let inputs = crate::cmd::speed::report_inputs(
         (std::path::Path::new("finish.apt"), &res.program),
@@ -175,6 +176,38 @@ fn report(
     .into_bytes()
 }
 
+/// The demo's summary as JSON; `times` the estimate with acceleration and
+/// the time at programmed feeds.
+fn summary_json(
+    a: &Args,
+    written: &[(PathBuf, Vec<u8>)],
+    (triangles, program): (usize, &millplan_nc::Program),
+    cutting_mm: f64,
+    (time_s, time_nominal_s): (f64, f64),
+    r: &millplan_plan::speed::Summary,
+) -> serde_json::Value {
+    let files: Vec<_> = written
+        .iter()
+        .map(|(p, b)| serde_json::json!({"path": p.display().to_string(), "bytes": b.len()}))
+        .collect();
+    serde_json::json!({
+        "folder": a.output.display().to_string(),
+        "triangles": triangles,
+        "points": program.move_count(),
+        "cutting_mm": cutting_mm,
+        "time_s": time_s,
+        "time_nominal_s": time_nominal_s,
+        "files": files,
+        "spindle_control": {
+            "d_w_mm": [r.d_w.min, r.d_w.max],
+            "spindle_rpm": [r.spindle.min, r.spindle.max],
+            "vc_controlled_m_min": [r.vc_controlled.min, r.vc_controlled.max],
+            "vc_constant_m_min": [r.vc_constant.min, r.vc_constant.max],
+            "constant_spindle_rpm": r.constant_spindle,
+        },
+    })
+}
+
 /// What the demo made and where, and what spindle control did on it.
 fn print_summary(
     a: &Args,
@@ -183,33 +216,22 @@ fn print_summary(
     program: &millplan_nc::Program,
     r: &millplan_plan::speed::Summary,
 ) {
-    let s = millplan_nc::stats::summarize(program, 15000.0);
+    let s =
+        millplan_nc::stats::summarize(program, millplan_plan::machine::Machine::default().rapid);
     let est = millplan_plan::timing::estimate_program(
         program,
         &millplan_plan::machine::Machine::default(),
     );
     if a.json {
-        let files: Vec<_> = written
-            .iter()
-            .map(|(p, b)| serde_json::json!({"path": p.display().to_string(), "bytes": b.len()}))
-            .collect();
-        let json = serde_json::json!({
-            "folder": a.output.display().to_string(),
-            "triangles": triangles,
-            "points": program.move_count(),
-            "cutting_mm": s.cutting_mm,
-            "time_s": est.total_s,
-            "time_nominal_s": s.time_s,
-            "files": files,
-            "spindle_control": {
-                "d_w_mm": [r.d_w.min, r.d_w.max],
-                "spindle_rpm": [r.spindle.min, r.spindle.max],
-                "vc_controlled_m_min": [r.vc_controlled.min, r.vc_controlled.max],
-                "vc_constant_m_min": [r.vc_constant.min, r.vc_constant.max],
-                "constant_spindle_rpm": r.constant_spindle,
-            },
-        });
-        crate::cmd::print_json(json);
+        let times = (est.total_s, s.time_s);
+        crate::cmd::print_json(summary_json(
+            a,
+            written,
+            (triangles, program),
+            s.cutting_mm,
+            times,
+            r,
+        ));
         return;
     }
     if a.quiet {

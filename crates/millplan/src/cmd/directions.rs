@@ -7,7 +7,6 @@ use crate::io::{read_program, read_surface};
 use clap::ValueEnum;
 use millplan_plan::directions::{rank, raster_candidates, Candidate, RankBy as By};
 use millplan_plan::pipeline::Context;
-use serde_json::json;
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
@@ -41,10 +40,10 @@ pub struct Args {
     #[arg(long, default_value = "ball:10")]
     pub tool: String,
     /// Stepover of generated rasters, mm.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::directions::STEPOVER)]
     pub stepover: f64,
     /// Point spacing of generated rasters, mm.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::directions::STEP)]
     pub step: f64,
     /// Part surface (STL) in the same coordinates as the paths.
     #[arg(long)]
@@ -74,21 +73,10 @@ pub struct Args {
 
 /// The generated rasters' arguments in range, and their points (counted
 /// from the grid) within the limits.
-fn check_rasters(
-    a: &Args,
-    bounds: &millplan_geom::Aabb,
-) -> CliResult<millplan_models::cutter::Shape> {
-    use crate::cmd::{arg, Range};
-    let shape = crate::cmd::tool_shape("--tool", &a.tool)?;
-    let d = 2.0 * shape.radius();
-    for angle in &a.angles {
-        arg("--angles", *angle, Range::from(-360.0, 360.0, "degrees"))?;
-    }
-    crate::cmd::raster_spacing(d, a.stepover, a.step)?;
-    let mut p = millplan_sim::raster::RasterParams::new(shape);
-    (p.stepover, p.step) = (a.stepover, a.step);
-    let e = millplan_sim::raster::estimate(bounds, &p, 0.1);
-    let n = e.points * a.angles.len() as f64;
+fn check_rasters(a: &Args, bounds: &millplan_geom::Aabb) -> CliResult<millplan_driver::Shape> {
+    let (shape, n, bytes) =
+        millplan_driver::directions::rasters(&a.tool, &a.angles, (a.stepover, a.step), bounds)
+            .map_err(CliError::input)?;
     let limit = crate::limits::get().moves as f64;
     if !(n <= limit) {
         let needs = format!(
@@ -102,7 +90,7 @@ fn check_rasters(
             millplan_geom::limits::Exceeded::new("moves", needs, limit).to_string(),
         ));
     }
-    crate::limits::check_memory("the candidate rasters", e.bytes * a.angles.len() as f64)?;
+    crate::limits::check_memory("the candidate rasters", bytes)?;
     Ok(shape)
 }
 
@@ -133,39 +121,10 @@ pub fn run(a: Args) -> CliResult<i32> {
     let ranked = rank(candidates, &cx, &a.cut.params(), by)
         .map_err(|e| crate::cmd::pass_error(&a.stl, e))?;
     if a.json {
-        let rows: Vec<_> = ranked
-            .iter()
-            .map(|r| {
-                let s = &r.summary;
-                json!({ "rank": r.rank, "path": r.name, "indicators": s.indicators, "d_w": s.d_w, "vc_constant": s.vc_constant, "points": s.points })
-            })
-            .collect();
-        let j = json!({ "ranked_by": format!("{:?}", a.by), "candidates": rows });
-        crate::cmd::print_json(j);
+        let j = millplan_driver::directions::Report::new(format!("{:?}", a.by), &ranked);
+        crate::cmd::print_json(serde_json::to_value(j).unwrap_or_default());
     } else {
-        outln!(
-            "{:>4}  {:<40} {:>12} {:>10} {:>12} {:>12} {:>10}",
-            "rank",
-            "path",
-            "Σ|Δn|",
-            "max|Δn|",
-            "max accel",
-            "∫n ds",
-            "σ(D_w)"
-        );
-        for r in &ranked {
-            let (i, s) = (&r.summary.indicators, &r.summary);
-            outln!(
-                "{:>4}  {:<40} {:>12.0} {:>10.0} {:>12.0} {:>12.4e} {:>10.3}",
-                r.rank,
-                r.name,
-                i.total_variation,
-                i.max_step,
-                i.max_accel,
-                i.speed_integral,
-                s.d_w.std
-            );
-        }
+        out!("{}", millplan_driver::directions::render_text(&ranked));
     }
     Ok(EXIT_OK)
 }

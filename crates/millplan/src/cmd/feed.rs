@@ -9,7 +9,6 @@ use crate::cmd::{
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
 use millplan_models::cutter::Shape;
-use millplan_models::force::deflect::E_CARBIDE;
 use millplan_models::force::Grid;
 use millplan_plan::feed::{machine_accel, BodyFn, FeedParams, FeedPass};
 use millplan_plan::force::{simulate, FeedLimits, ForceRun, ForceSetup, MoveForces};
@@ -52,10 +51,10 @@ pub struct ModelArgs {
     #[arg(long)]
     pub tool: Option<String>,
     /// Flutes of every tool.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::FLUTES)]
     pub flutes: usize,
     /// Helix angle, degrees.
-    #[arg(long, default_value_t = 30.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::HELIX_DEG, allow_hyphen_values = true)]
     pub helix: f64,
     /// Gauge length from the holder face to the tip, mm (default 3·D).
     #[arg(long)]
@@ -65,21 +64,21 @@ pub struct ModelArgs {
     #[arg(long)]
     pub flute_length: Option<f64>,
     /// Young's modulus of the tool, N/mm².
-    #[arg(long, default_value_t = E_CARBIDE)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::MODULUS)]
     pub modulus: f64,
     /// Dexel size of the stock, mm; also the spacing of the poses each move
     /// is loaded at along its length.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::RESOLUTION)]
     pub resolution: f64,
     /// Slice length of the force model along the tool's profile, mm: the
     /// largest used (per load sample the model halves it, up to four times,
     /// until F_xy,max and T_max are estimated within 0.4 %), unless
     /// --fixed-grid.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::DZ)]
     pub dz: f64,
     /// Rotation step of the force model, degrees: the largest used, halved
     /// like --dz.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::DPHI_DEG)]
     pub dphi: f64,
     /// Use --dz and --dphi as given instead of refining them per load
     /// sample until F_xy,max and T_max converge. Faster on engagements
@@ -135,7 +134,8 @@ pub fn force_setup(m: &ModelArgs) -> CliResult<ForceSetup> {
     arg("--helix", m.helix, Range::from(-70.0, 70.0, "degrees"))?;
     arg("--dz", m.dz, Range::from(0.001, 1.0, "mm"))?;
     arg("--dphi", m.dphi, Range::from(0.01, 10.0, "degrees"))?;
-    arg("--modulus", m.modulus, Range::positive(2e6, "N/mm²"))?;
+    let (lo, hi) = millplan_models::force::deflect::MODULUS_RANGE;
+    arg("--modulus", m.modulus, Range::from(lo, hi, "N/mm²"))?;
     arg(
         "--resolution",
         m.resolution,
@@ -225,6 +225,18 @@ pub fn prepare(path: &Path, m: &ModelArgs) -> CliResult<Prepared> {
     })
 }
 
+/// Refuses a run with a move that cut with the spindle stopped, at its line.
+pub fn stopped_spindle(path: &Path, run: &ForceRun) -> CliResult<()> {
+    match run.stopped_spindle() {
+        Some(line) => Err(CliError::input(format!(
+            "{}:{line}:1: {}",
+            path.display(),
+            millplan_plan::force::STOPPED_SPINDLE
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// Forces of the prepared program, with a progress bar.
 pub fn run_forces(
     p: &Prepared,
@@ -264,16 +276,15 @@ pub fn load_limits(
             .parse()
             .map_err(|_| CliError::input(format!("--limit {name}={value}: not a number")))?;
         let flag = format!("--limit {name}");
-        let v = Some(arg(
-            &flag,
-            v,
-            Range::positive(1e9, "(N, N·mm, W, MPa or mm)"),
-        )?);
+        let x = arg(&flag, v, Range::positive(1e9, "(N, N·mm, W, MPa or mm)"))?;
+        let v = Some(x);
         match name.as_str() {
             "fxy" => l.fxy = v,
             "torque" => l.torque = v,
             "power" => l.power = v,
             "stress" => l.stress = v,
+            "fz_min" => l.fz_min = x,
+            "fz_max" => l.fz_max = v,
             _ => l.deflection = v,
         }
     }
@@ -314,7 +325,7 @@ pub struct Args {
     #[arg(long, value_enum)]
     pub to: Option<TargetArg>,
     /// Smallest feed per tooth, mm (at most a tool's largest).
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::FZ_MIN)]
     pub fz_min: f64,
     /// Largest feed per tooth, mm, for every tool (the tool maker's chip
     /// load); default: per tool, the material's chip load at its diameter
@@ -322,7 +333,7 @@ pub struct Args {
     #[arg(long)]
     pub fz_max: Option<f64>,
     /// Factor of safety on power, torque and stress.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::FOS)]
     pub fos: f64,
     /// Feed acceleration, mm/s² (default: the machine's smallest linear-axis
     /// acceleration, else 1000).
@@ -348,7 +359,7 @@ fn feed_params(a: &Args, p: &Prepared) -> CliResult<FeedParams> {
     let accel = a
         .feed_accel
         .or_else(|| machine_accel(&p.machine))
-        .unwrap_or(1000.0);
+        .unwrap_or(millplan_driver::defaults::Defaults::FEED_ACCEL);
     arg("--feed-accel", accel, Range::positive(1e6, "mm/s²"))?;
     let limits = load_limits(a.fos, a.fz_min, a.fz_max, chip_loads)?;
     Ok(FeedParams {
@@ -364,6 +375,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     let mut inputs: Vec<&Path> = vec![&a.path];
     inputs.extend(m.stl.as_deref());
     inputs.extend(m.machine.as_deref());
+    inputs.extend(m.materials.as_deref());
+    let blank = m.stock.as_deref().and_then(StockSpec::file_of);
+    inputs.extend(blank.as_deref());
     let mut outputs = Outputs::plan(
         &inputs,
         &[
@@ -388,6 +402,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let (Some(before), Some(changes)) = (pass.before.take(), pass.changes.take()) else {
         return Err(CliError::internal("the feed pass left no result"));
     };
+    stopped_spindle(&a.path, &before)?;
     let s2 = strokes(
         &out,
         body_fn(m)?,

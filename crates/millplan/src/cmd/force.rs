@@ -101,6 +101,12 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
     let mut inputs: Vec<&Path> = vec![path];
     inputs.extend(m.stl.as_deref());
     inputs.extend(m.machine.as_deref());
+    inputs.extend(m.materials.as_deref());
+    let blank = m
+        .stock
+        .as_deref()
+        .and_then(millplan_sim::stock::spec::StockSpec::file_of);
+    inputs.extend(blank.as_deref());
     let mut outputs = crate::io::Outputs::plan(
         &inputs,
         &[
@@ -112,6 +118,7 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
     let limits = load_limits(1.0, 0.0, Some(f64::INFINITY), None)?;
     let p = prepare(path, m)?;
     let run = run_forces(&p, &p.program, &p.strokes, m.quiet || m.json)?;
+    crate::cmd::feed::stopped_spindle(path, &run)?;
     let over = run.over_limits(&limits, &p.machine);
     let cutting = run.moves.iter().filter(|x| !x.rapid).count();
     let last = run.moves.last().map_or(0.0, |x| x.t_start_s + x.seconds);

@@ -16,6 +16,7 @@ pub mod orient;
 pub mod post;
 pub mod raster;
 pub mod reorder;
+pub mod robot;
 pub mod setup;
 pub mod simulate;
 pub mod speed;
@@ -29,105 +30,17 @@ use clap::ValueEnum;
 use millplan_nc::write::{Target, WriteOptions};
 use millplan_nc::{LengthUnit, ReadOptions};
 
-/// The physical range of a numeric argument: above (or from) `lo`, up to
-/// `hi`, in `unit`.
-#[derive(Clone, Copy, Debug)]
-pub struct Range {
-    pub lo: f64,
-    /// `lo` itself is outside (a positive quantity).
-    pub lo_open: bool,
-    pub hi: f64,
-    pub unit: &'static str,
-}
-
-impl Range {
-    /// Above 0, at most `hi`.
-    pub const fn positive(hi: f64, unit: &'static str) -> Range {
-        Range {
-            lo: 0.0,
-            lo_open: true,
-            hi,
-            unit,
-        }
-    }
-
-    /// From `lo` to `hi`, both included.
-    pub const fn from(lo: f64, hi: f64, unit: &'static str) -> Range {
-        Range {
-            lo,
-            lo_open: false,
-            hi,
-            unit,
-        }
-    }
-
-    fn holds(&self, v: f64) -> bool {
-        let above = if self.lo_open {
-            v > self.lo
-        } else {
-            v >= self.lo
-        };
-        above && v <= self.hi
-    }
-}
-
-/// A raster's `--stepover` (from D/1000) and `--step` for a tool of diameter `d`.
-pub fn raster_spacing(d: f64, stepover: f64, step: f64) -> CliResult<()> {
-    arg(
-        "--stepover",
-        stepover,
-        Range::from((d / 1000.0).max(0.001), 1000.0, "mm (from D/1000)"),
-    )?;
-    arg("--step", step, Range::from(0.001, 1000.0, "mm"))?;
-    Ok(())
-}
+pub use millplan_driver::check::{Range, MAX_FEED, MAX_SPINDLE, MAX_TOOL_D, MAX_VC};
 
 /// Checks a numeric argument: finite and in its range, else an error naming
 /// the option, the value and the range (exit 2).
 pub fn arg(flag: &str, v: f64, r: Range) -> CliResult<f64> {
-    if v.is_finite() && r.holds(v) {
-        return Ok(v);
-    }
-    let unit = if r.unit.is_empty() {
-        String::new()
-    } else {
-        format!(" {}", r.unit)
-    };
-    let lo = millplan_geom::limits::amount(r.lo);
-    let hi = millplan_geom::limits::amount(r.hi);
-    // 1e-300 as written, not three hundred zeros.
-    let v = if v != 0.0 && (v.abs() < 1e-4 || v.abs() >= 1e9) {
-        format!("{v:e}")
-    } else {
-        format!("{v}")
-    };
-    Err(CliError::input(if r.lo_open {
-        format!("{flag} {v}: must be a number above {lo} and at most {hi}{unit}")
-    } else {
-        format!("{flag} {v}: must be a number from {lo} to {hi}{unit}")
-    }))
+    millplan_driver::check::arg(flag, v, r).map_err(CliError::input)
 }
 
-/// Largest tool diameter any argument may give, mm.
-pub const MAX_TOOL_D: f64 = 1000.0;
-/// Largest feed, mm/min.
-pub const MAX_FEED: f64 = 1e6;
-/// Largest spindle speed, 1/min.
-pub const MAX_SPINDLE: f64 = 1e6;
-/// Largest cutting speed, m/min.
-pub const MAX_VC: f64 = 1e4;
-
 /// Checks a cutter from `--tool`: its diameter at most [`MAX_TOOL_D`].
-pub fn tool_shape(flag: &str, s: &str) -> CliResult<millplan_models::cutter::Shape> {
-    let shape = millplan_models::cutter::Shape::parse(s)
-        .map_err(|e| CliError::input(format!("{flag} {e}")))?;
-    let d = 2.0 * shape.radius();
-    if !(d <= MAX_TOOL_D) {
-        return Err(CliError::input(format!(
-            "{flag} {s}: the diameter must be at most {MAX_TOOL_D} mm"
-        )));
-    }
-    Ok(shape)
+pub fn tool_shape(flag: &str, s: &str) -> CliResult<millplan_driver::Shape> {
+    millplan_driver::check::tool_shape(flag, s).map_err(CliError::input)
 }
 
 /// Cutting data for the commands that evaluate spindle control along the way;
@@ -136,16 +49,16 @@ pub fn tool_shape(flag: &str, s: &str) -> CliResult<millplan_models::cutter::Sha
 #[derive(clap::Args, Clone, Copy, Debug)]
 pub struct CuttingData {
     /// Cutting speed, m/min.
-    #[arg(long, default_value_t = 63.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cutting::VC, allow_negative_numbers = true)]
     pub vc: f64,
     /// Feed per tooth, mm.
-    #[arg(long, default_value_t = 0.125, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cutting::FZ, allow_negative_numbers = true)]
     pub fz: f64,
     /// Number of flutes.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cutting::FLUTES)]
     pub flutes: u32,
     /// Stock thickness along the surface normal (finishing allowance), mm.
-    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cutting::AP, allow_negative_numbers = true)]
     pub ap: f64,
 }
 
@@ -157,6 +70,16 @@ impl CuttingData {
         arg("--flutes", self.flutes as f64, Range::from(1.0, 1000.0, ""))?;
         arg("--ap", self.ap, Range::positive(MAX_TOOL_D / 2.0, "mm"))?;
         Ok(())
+    }
+
+    /// The values, as the library takes them.
+    pub fn cutting(&self) -> millplan_driver::speed::Cutting {
+        millplan_driver::speed::Cutting {
+            vc: self.vc,
+            fz: self.fz,
+            flutes: self.flutes,
+            ap: self.ap,
+        }
     }
 
     /// Spindle-control settings for commands that read only the summary and
@@ -399,32 +322,4 @@ pub fn load_machine(
         }
         None => Ok(millplan_plan::machine::Machine::default()),
     }
-}
-
-/// The controller-aware time estimate in JSON: total and nominal, what the
-/// total is made of, and how many feed blocks the axes hold back.
-pub fn time_json(e: &millplan_plan::timing::TimeEstimate) -> serde_json::Value {
-    serde_json::json!({
-        "model": "acceleration",
-        "total_s": e.total_s,
-        "nominal_s": e.nominal_s,
-        "rapid_s": e.rapid_s,
-        "feed_s": e.feed_s,
-        "dwell_s": e.dwell_s,
-        "overhead": e.overhead(),
-        "velocity_limited_blocks": e.velocity_limited_blocks,
-        "accel_limited_blocks": e.accel_limited_blocks,
-    })
-}
-
-/// Seconds as `123 s (0:02:03)`.
-pub fn hms(t: f64) -> String {
-    let t = t.max(0.0);
-    format!(
-        "{:.0} s ({}:{:02}:{:02})",
-        t,
-        (t / 3600.0) as u64,
-        ((t / 60.0) as u64) % 60,
-        (t as u64) % 60
-    )
 }

@@ -6,6 +6,7 @@ use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_mesh, read_program, read_surface, Outputs};
 use millplan_driver::passes::{self, ORDER};
 use millplan_driver::report::{self, InputNames, Plotted};
+use millplan_driver::tools::{self, Library};
 use millplan_driver::{Inputs, Job, Options, Outcome, UserLimits, Verdict, Written};
 use millplan_sim::stock::spec::StockSpec;
 use std::path::{Path, PathBuf};
@@ -20,13 +21,20 @@ use std::path::{Path, PathBuf};
 /// orient (lead/tilt of five-axis CL), feed (a feed per block from the
 /// forces on the stock under the machine's spindle chart and --limit; needs
 /// --stock and --material), post (five-axis CL through the machine's
-/// kinematics). A pass whose inputs are missing is skipped and says why.
+/// kinematics to joint positions, feeds in inverse time when the machine
+/// file's `[post]` says `inverse_time = true` or --g93 is given; the posted tips
+/// are checked through the forward kinematics). A pass whose inputs are
+/// missing is skipped and says why.
 ///
-/// Defaults (each printed in the report with where it came from): vc from
-/// the material's cutting data, the spindle speed of moves without S from
-/// vc, the feed-per-tooth range from the material for the tool, the load
-/// limits from the machine's spindle chart (--limit fxy=N,torque=N·mm,
-/// power=W,stress=MPa,deflection=mm adds limits).
+/// Defaults (each printed with where it came from): vc from the material's
+/// cutting data; the spindle speed of moves without S from vc on the tool's
+/// diameter (--spindle gives it); the largest feed per tooth from the
+/// material's chip load at each tool's diameter, the smallest 0.01 mm
+/// (--limit fz_min=MM,fz_max=MM set them); torque and power from the
+/// machine's spindle chart at each block's speed; F_xy (and torque and
+/// power when the machine has no chart) no higher than the input's own
+/// largest on the stock. --limit fxy=N,torque=N·mm,power=W,stress=MPa,
+/// deflection=mm gives a limit instead.
 ///
 /// Checks of what is written, on the program re-read from its bytes:
 /// read-back (parses, commands what the optimised program does, IR
@@ -63,6 +71,13 @@ pub struct Args {
     /// A TOML file of further materials.
     #[arg(long)]
     pub materials: Option<PathBuf>,
+    /// Tool library (the SQLite file of `millplan tool`): each tool the
+    /// program calls takes its radius and length as measured (R + DR,
+    /// L + DL), flutes, helix, stick-out and holder from it; a tool the
+    /// library lacks, has locked or has worn out stops the run at the tool
+    /// call before any work.
+    #[arg(long, value_name = "LIBRARY.db")]
+    pub tools: Option<PathBuf>,
     /// Cutter for operations whose tool has no geometry, or to override it:
     /// ball:D, flat:D or bull:D:R.
     #[arg(long)]
@@ -80,9 +95,14 @@ pub struct Args {
     /// Dexel size of the stock, mm (default 0.1).
     #[arg(long)]
     pub resolution: Option<f64>,
-    /// Tolerance of the checks, mm (default 0.01).
+    /// Tolerance of the checks, mm (default 0.01); also how far the post
+    /// lets the tool tip stray from the CL path while the rotaries move.
     #[arg(long)]
     pub tol: Option<f64>,
+    /// Post five-axis programs with inverse-time feed (G93) whatever the
+    /// machine file says.
+    #[arg(long)]
+    pub g93: bool,
     /// Passes to run, in this order, comma-separated (default: all the
     /// inputs allow, in the order above).
     #[arg(long, value_name = "LIST")]
@@ -142,6 +162,7 @@ fn options(a: &Args) -> CliResult<Options> {
             .map(|v| arg("--tol", v, Range::from(0.0, 100.0, "mm")))
             .transpose()?,
         memory: Some(crate::limits::get().memory),
+        g93: a.g93,
     })
 }
 
@@ -162,15 +183,53 @@ fn user_limits() -> CliResult<UserLimits> {
             "torque" => l.torque = v,
             "power" => l.power = v,
             "stress" => l.stress = v,
+            "fz_min" => l.fz_min = v,
+            "fz_max" => l.fz_max = v,
             _ => l.deflection = v,
         }
     }
     Ok(l)
 }
 
+/// The tool library of `--tools`, read whole (it must exist).
+fn library(p: &Path) -> CliResult<Library> {
+    use millplan_tooldb::db::ToolDb;
+    if !p.is_file() {
+        return Err(CliError::input(format!(
+            "--tools {}: no such tool library",
+            p.display()
+        )));
+    }
+    let err = |e: millplan_tooldb::db::DbError| {
+        let m = format!("--tools {}: {e}", p.display());
+        if e.is_bad_input() {
+            CliError::input(m)
+        } else {
+            CliError::internal(m)
+        }
+    };
+    let db = ToolDb::open(p).map_err(err)?;
+    let mut lib = Library::default();
+    for t in db.tools().map_err(err)? {
+        lib.tools.insert(t.number, t);
+    }
+    for e in db.events(None).map_err(err)? {
+        if let Some(n) = e.tool {
+            lib.last_decision.insert(n, e.decision);
+        }
+    }
+    Ok(lib)
+}
+
 fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
-    let parsed = read_program(path, read_options(a.units, None)?)?;
+    let mut parsed = read_program(path, read_options(a.units, None)?)?;
     print_diagnostics(path, &parsed.diagnostics, a.quiet || a.json);
+    let from_library = match &a.tools {
+        Some(db) => tools::apply(&mut parsed.program, &library(db)?).map_err(|e| {
+            CliError::input(format!("{}:{}:1: {}", path.display(), e.line, e.message))
+        })?,
+        None => Vec::new(),
+    };
     let part = a
         .stl
         .as_deref()
@@ -199,6 +258,7 @@ fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
         materials: crate::cmd::cut::load_materials(a.materials.as_deref())?,
         material: a.material.clone(),
         options: options(a)?,
+        library: from_library,
     })
 }
 
@@ -235,6 +295,10 @@ pub fn run(a: Args) -> CliResult<i32> {
     let mut inputs: Vec<&Path> = vec![&path];
     inputs.extend(a.stl.as_deref());
     inputs.extend(a.machine.as_deref());
+    inputs.extend(a.materials.as_deref());
+    let blank = a.stock.as_deref().and_then(StockSpec::file_of);
+    inputs.extend(blank.as_deref());
+    inputs.extend(a.tools.as_deref());
     let mut outputs = Outputs::plan(
         &inputs,
         &[("-o", Some(&output)), ("--report", a.report.as_deref())],
@@ -314,6 +378,9 @@ fn print_summary(a: &Args, w: &Written, path: &Path, output: &Path, withheld: bo
     if a.json {
         crate::cmd::print_json(serde_json::to_value(s).unwrap_or_default());
         return;
+    }
+    for x in &s.settings {
+        outln!("  {:<13} {}  ({})", x.name, x.value, x.from);
     }
     for p in &s.passes {
         let state = if p.ran {

@@ -2,18 +2,12 @@
 //! machining time (spec process-models §2.4).
 
 use crate::cmd::cut::{load_materials, VariantArg};
-use crate::cmd::{arg, print_diagnostics, read_options, target_for, Range, TargetArg, UnitArg};
+use crate::cmd::{print_diagnostics, read_options, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
-use millplan_models::leadtilt::{SearchOptions, Variant};
-use millplan_plan::leadtilt::{choose_with, Objective, Oriented, Params, Stage, StockInput};
-use millplan_plan::machine::Machine;
-use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
-use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
-use millplan_sim::stock::spec::StockSpec;
-use millplan_sim::stock::tool::{BodyOptions, ToolBody};
-use millplan_sim::stock::Stock;
-use serde_json::json;
+use millplan_driver::orient::{self as lib, OrientRequest, Summary};
+use millplan_driver::StockSpec;
+use millplan_plan::leadtilt::{choose_with, Objective, Stage, StockInput};
 use std::path::{Path, PathBuf};
 
 /// Choose lead and tilt per ball-end operation (spec process-models §2.4):
@@ -75,11 +69,11 @@ pub struct Args {
     #[arg(long)]
     pub materials: Option<PathBuf>,
     /// Lead range LO:HI, degrees (positive: the shank toward the feed).
-    #[arg(long, default_value = "0:30", allow_hyphen_values = true)]
+    #[arg(long, default_value = millplan_driver::command_defaults::orient::LEAD_RANGE, allow_hyphen_values = true)]
     pub lead_range: String,
     /// Tilt range LO:HI, degrees (positive: the shank toward −c, right of
     /// the feed seen from the shank).
-    #[arg(long, default_value = "-30:30", allow_hyphen_values = true)]
+    #[arg(long, default_value = millplan_driver::command_defaults::orient::TILT_RANGE, allow_hyphen_values = true)]
     pub tilt_range: String,
     /// What to minimise: fxy (F_xy,max at --fz) or time (with the feed
     /// scaled to the original force level).
@@ -94,22 +88,22 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "tilt-then-lead")]
     pub variant: VariantArg,
     /// Feed per tooth the forces are evaluated at, mm.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::FZ)]
     pub fz: f64,
     /// Spindle speed, 1/min (default: the program's first cutting S word).
     #[arg(long)]
     pub n: Option<f64>,
     /// Number of flutes.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::FLUTES)]
     pub flutes: usize,
     /// Helix angle, degrees.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::HELIX_DEG)]
     pub helix: f64,
     /// Axial depth of the engagement the forces are evaluated for, mm.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::AP)]
     pub ap: f64,
     /// Stepover of that engagement, mm.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::AE)]
     pub ae: f64,
     /// Initial stock, for the engagement of the simulated stock instead of
     /// --ap/--ae: box:auto or box:auto:MARGIN, box:X0,Y0,Z0,X1,Y1,Z1,
@@ -118,13 +112,13 @@ pub struct Args {
     #[arg(long)]
     pub stock: Option<String>,
     /// Dexel size of the stock, mm.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::RESOLUTION)]
     pub resolution: f64,
     /// Most sample moves per operation on the stock.
-    #[arg(long, default_value_t = 48)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::SAMPLES)]
     pub samples: usize,
     /// The shank's reach: from the ball centre to the holder's face, mm.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::orient::REACH)]
     pub reach: f64,
     /// Holder as DIAMETER:LENGTH, mm (default: no holder, the shank alone).
     #[arg(long)]
@@ -132,7 +126,7 @@ pub struct Args {
     /// Output program (the extension or --to names the dialect).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Dialect to write: fanuc, sinumerik, heidenhain, linuxcnc or apt.
+    /// Output dialect (default: the machine's, else the file name's, else the input's).
     #[arg(long, value_enum)]
     pub to: Option<TargetArg>,
     /// Unit of a program that does not say: mm or inch.
@@ -158,166 +152,28 @@ pub enum ObjectiveArg {
     Time,
 }
 
-/// `LO:HI` in degrees, within ±89°.
-fn range(flag: &str, s: &str) -> CliResult<(f64, f64)> {
-    let bad = || {
-        CliError::input(format!(
-            "{flag} {s}: give LO:HI in degrees, LO ≤ HI, within ±89"
-        ))
-    };
-    let (a, b) = s.split_once(':').ok_or_else(bad)?;
-    let (a, b): (f64, f64) = (
-        a.trim().parse().map_err(|_| bad())?,
-        b.trim().parse().map_err(|_| bad())?,
-    );
-    if !(a.is_finite() && b.is_finite() && a <= b && a >= -89.0 && b <= 89.0) {
-        return Err(bad());
-    }
-    Ok((a, b))
-}
-
-fn holder(s: Option<&str>) -> CliResult<(f64, f64)> {
-    let Some(s) = s else {
-        return Ok((0.0, 0.0));
-    };
-    let bad = || {
-        CliError::input(format!(
-            "--holder {s}: give DIAMETER:LENGTH in mm, both positive"
-        ))
-    };
-    let (d, l) = s.split_once(':').ok_or_else(bad)?;
-    let (d, l): (f64, f64) = (
-        d.trim().parse().map_err(|_| bad())?,
-        l.trim().parse().map_err(|_| bad())?,
-    );
-    if !(d.is_finite() && l.is_finite() && d > 0.0 && l > 0.0) {
-        return Err(bad());
-    }
-    Ok((d / 2.0, l))
-}
-
-/// The inputs checked into the pass's parameters (before any file is read).
-fn params(a: &Args) -> CliResult<(Params, f64)> {
-    let lead = range("--lead-range", &a.lead_range)?;
-    let tilt = range("--tilt-range", &a.tilt_range)?;
-    let fz = arg("--fz", a.fz, Range::positive(10.0, "mm"))?;
-    let ap = arg("--ap", a.ap, Range::positive(1000.0, "mm"))?;
-    let ae = arg("--ae", a.ae, Range::positive(1000.0, "mm"))?;
-    let reach = arg("--reach", a.reach, Range::positive(10_000.0, "mm"))?;
-    let helix = arg("--helix", a.helix, Range::from(0.0, 60.0, "degrees"))?;
-    if a.flutes == 0 || a.flutes > 64 {
-        return Err(CliError::input("--flutes: give 1 to 64"));
-    }
-    let n = match a.n {
-        Some(n) => arg("--n", n, Range::positive(crate::cmd::MAX_SPINDLE, "1/min"))?,
-        None => 0.0,
-    };
-    let (holder_radius, holder_length) = holder(a.holder.as_deref())?;
-    let materials = load_materials(a.materials.as_deref())?;
-    let law = materials
-        .get(&a.material)
-        .map_err(|e| CliError::input(format!("--material: {e}")))?
-        .law;
-    Ok((
-        Params {
-            search: SearchOptions {
-                lead,
-                tilt,
-                ..SearchOptions::default()
-            },
-            variant: Variant::from(a.variant),
-            objective: match a.objective {
-                ObjectiveArg::Fxy => Objective::Fxy,
-                ObjectiveArg::Time => Objective::Time,
-            },
-            law,
-            flutes: a.flutes,
-            helix: helix.to_radians(),
-            fz,
-            rpm: n,
-            ap,
-            ae,
-            reach,
-            holder_radius,
-            holder_length,
+fn request(a: &Args) -> OrientRequest {
+    OrientRequest {
+        lead_range: a.lead_range.clone(),
+        tilt_range: a.tilt_range.clone(),
+        variant: a.variant.into(),
+        objective: match a.objective {
+            ObjectiveArg::Fxy => Objective::Fxy,
+            ObjectiveArg::Time => Objective::Time,
         },
-        n,
-    ))
-}
-
-/// The checked stock options: the spec, when given.
-fn stock_spec(a: &Args) -> CliResult<Option<StockSpec>> {
-    arg(
-        "--resolution",
-        a.resolution,
-        Range::from(0.005, 100.0, "mm"),
-    )?;
-    if a.samples == 0 || a.samples > 4096 {
-        return Err(CliError::input("--samples: give 1 to 4096"));
+        fz: a.fz,
+        n: a.n,
+        flutes: a.flutes,
+        helix: a.helix,
+        ap: a.ap,
+        ae: a.ae,
+        reach: a.reach,
+        holder: a.holder.clone(),
+        material: a.material.clone(),
+        stock: a.stock.clone(),
+        resolution: a.resolution,
+        samples: a.samples,
     }
-    a.stock
-        .as_deref()
-        .map(|s| StockSpec::parse(s).map_err(|e| CliError::input(format!("--stock {e}"))))
-        .transpose()
-}
-
-/// The strokes the stock is cut by: every operation whose cutter has a
-/// shape (its flutes up to the tool's height, else the whole tool).
-fn program_strokes(p: &millplan_nc::Program, res: f64, rapid: f64) -> Strokes {
-    strokes(
-        p,
-        tool_body,
-        &PathOptions {
-            chord: res / 4.0,
-            rapid_rate: rapid,
-        },
-    )
-}
-
-/// The body of an operation's tool: its cutter, flutes up to the tool's
-/// height (else the whole tool cuts).
-fn tool_body(op: &millplan_nc::Operation) -> Option<ToolBody> {
-    ToolBody::for_operation(op, &BodyOptions::default())
-}
-
-/// The re-oriented program against the input: the IR verifier, S and F
-/// within the machine, every ball centre where the input put it, rapids and
-/// shanks on the initial stock (with --stock). No gouge check against the
-/// part: with every ball centre kept (checked) the ball meets the part
-/// exactly where the input's did, and the three-axis gouge check cannot
-/// see a tilted shank. A refusal ends the run (exit 3) unless --force.
-fn check_oriented(
-    a: &Args,
-    (input, output): (&millplan_nc::Program, &millplan_nc::Program),
-    stock: Option<&Stock>,
-    machine: &Machine,
-) -> CliResult<(Vec<Check>, bool)> {
-    let checks = safety::check(&Inputs {
-        input,
-        output,
-        part: None,
-        stock,
-        tool_body: &tool_body,
-        machine: Some(machine),
-        tip: TipRule::CentreKept,
-        tol: Tolerances::default(),
-        loads: None,
-    });
-    let ok = crate::verdict::enforce(&checks, &a.path, a.force)?;
-    Ok((checks, ok))
-}
-
-/// The program's first cutting spindle speed (for a run without --n).
-fn first_spindle(path: &Path, p: &millplan_nc::Program) -> CliResult<f64> {
-    p.moves()
-        .find(|m| m.is_cutting() && m.spindle > 0.0)
-        .map(|m| m.spindle)
-        .ok_or_else(|| {
-            CliError::input(format!(
-                "{}: the program sets no spindle speed; give --n",
-                path.display()
-            ))
-        })
 }
 
 /// The initial stock and the strokes that cut it, for the choice; a note
@@ -325,15 +181,10 @@ fn first_spindle(path: &Path, p: &millplan_nc::Program) -> CliResult<f64> {
 fn stock_input<'a>(
     a: &Args,
     spec: &StockSpec,
-    st: &'a Strokes,
+    st: &'a millplan_driver::Strokes,
     mesh: &millplan_geom::TriMesh,
 ) -> CliResult<StockInput<'a>> {
-    if st.strokes.iter().all(|x| x.rapid) {
-        return Err(CliError::input(format!(
-            "{}: no cutting move can be simulated for --stock (no operation's tool has a shape, or every move is from or to an unknown position)",
-            a.path.display()
-        )));
-    }
+    lib::simulable(st, &a.path.display().to_string()).map_err(CliError::input)?;
     let unsimulated = st.skipped.total();
     if unsimulated > 0 && !(a.quiet || a.json) {
         eprintln!(
@@ -349,19 +200,17 @@ fn stock_input<'a>(
         Some(mesh),
         a.stl_units,
     )?;
-    Ok(StockInput {
-        stock,
-        strokes: st,
-        samples: a.samples,
-        max_bytes: millplan_plan::leadtilt::MAX_CROP_BYTES,
-    })
+    Ok(lib::stock_input(stock, st, a.samples))
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let (mut p, n) = params(&a)?;
-    let spec = stock_spec(&a)?;
+    let req = request(&a);
+    let materials = load_materials(a.materials.as_deref())?;
+    let mut p = lib::params(&req, &materials).map_err(CliError::input)?;
+    let spec = lib::stock_spec(&req).map_err(CliError::input)?;
     let mut inputs: Vec<&Path> = vec![&a.path, &a.stl];
     inputs.extend(a.machine.as_deref());
+    inputs.extend(a.materials.as_deref());
     if let Some(StockSpec::Stl(b)) = &spec {
         inputs.push(b);
     }
@@ -369,59 +218,35 @@ pub fn run(a: Args) -> CliResult<i32> {
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
-    let target = target_for(a.to, &a.output, parsed.program.source)?;
-    if n <= 0.0 {
-        p.rpm = first_spindle(&a.path, &parsed.program)?;
+    let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
+    if p.rpm <= 0.0 {
+        p.rpm = lib::first_spindle(&parsed.program).ok_or_else(|| {
+            CliError::input(format!(
+                "{}: the program sets no spindle speed; give --n",
+                a.path.display()
+            ))
+        })?;
     }
     let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
     let st = spec
         .as_ref()
-        .map(|_| program_strokes(&parsed.program, a.resolution, machine.rapid));
+        .map(|_| lib::program_strokes(&parsed.program, a.resolution, machine.rapid));
     let unsimulated = st.as_ref().map_or(0, |s| s.skipped.total());
     let input = match (&spec, &st) {
         (Some(spec), Some(st)) => Some(stock_input(&a, spec, st, &mesh)?),
         _ => None,
     };
     let initial = input.as_ref().map(|i| i.stock.clone());
-    let total = parsed.program.operations.len() as u64;
-    let strokes_total = st.as_ref().map_or(0, |s| 2 * s.strokes.len()) as u64;
-    let sim_bar = crate::progress::count(
-        strokes_total,
-        "stock",
-        "strokes",
-        !a.quiet && input.is_some(),
-    );
-    let bar = crate::progress::count(total, "lead/tilt", "operations", !a.quiet);
-    let o = choose_with(
-        &parsed.program,
-        &mesh,
-        &machine,
-        &p,
-        input,
-        &|stage, done, _| match stage {
-            Stage::Stock => sim_bar.set_position(done as u64),
-            Stage::Operations => {
-                sim_bar.finish_and_clear();
-                bar.set_position(done as u64)
-            }
-        },
-    )
-    .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
-    sim_bar.finish_and_clear();
-    bar.finish_and_clear();
-    let mut summary = summary_json(&a, &o, p.objective, (spec.is_some(), unsimulated));
+    let o = choose(&a, &parsed.program, &mesh, &machine, &p, input, st.as_ref())?;
+    let mut summary = Summary::new(&req, &o, &a.output.display().to_string(), unsimulated);
     if o.chosen.is_empty() {
         outputs.commit()?;
         report(&a, &summary);
         return Ok(EXIT_FINDINGS);
     }
-    let (checks, checked) = check_oriented(
-        &a,
-        (&parsed.program, &o.program),
-        initial.as_ref(),
-        &machine,
-    )?;
-    summary["checks"] = json!(checks);
+    let checks = lib::check(&parsed.program, &o.program, initial.as_ref(), &machine);
+    let checked = crate::verdict::enforce(&checks, &a.path, a.force)?;
+    summary.checks = Some(checks);
     crate::cmd::write_program_file(
         &o.program,
         machine.write_options(target),
@@ -435,67 +260,49 @@ pub fn run(a: Args) -> CliResult<i32> {
     Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
 }
 
-/// The summary; `stock`: whether the engagement is the stock's, and the
-/// moves it does not see.
-fn summary_json(
+/// The choice, with its progress on two bars (the stock, the operations).
+fn choose(
     a: &Args,
-    o: &Oriented,
-    objective: Objective,
-    (stock, unsimulated): (bool, usize),
-) -> serde_json::Value {
-    json!({
-        "objective": objective,
-        "operations": o.chosen,
-        "skipped": o.skipped,
-        "output": (!o.chosen.is_empty()).then(|| a.output.display().to_string()),
-        "engagement": if stock { "stock" } else { "planar" },
-        "stock": a.stock,
-        "resolution_mm": stock.then_some(a.resolution),
-        "unsimulated_moves": unsimulated,
-    })
+    program: &millplan_nc::Program,
+    mesh: &millplan_geom::TriMesh,
+    machine: &millplan_plan::machine::Machine,
+    p: &millplan_plan::leadtilt::Params,
+    input: Option<StockInput>,
+    st: Option<&millplan_driver::Strokes>,
+) -> CliResult<millplan_plan::leadtilt::Oriented> {
+    let total = program.operations.len() as u64;
+    let strokes_total = st.map_or(0, |s| 2 * s.strokes.len()) as u64;
+    let sim_bar = crate::progress::count(
+        strokes_total,
+        "stock",
+        "strokes",
+        !a.quiet && input.is_some(),
+    );
+    let bar = crate::progress::count(total, "lead/tilt", "operations", !a.quiet);
+    let o = choose_with(
+        program,
+        mesh,
+        machine,
+        p,
+        input,
+        &|stage, done, _| match stage {
+            Stage::Stock => sim_bar.set_position(done as u64),
+            Stage::Operations => {
+                sim_bar.finish_and_clear();
+                bar.set_position(done as u64)
+            }
+        },
+    )
+    .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
+    sim_bar.finish_and_clear();
+    bar.finish_and_clear();
+    Ok(o)
 }
 
-fn report(a: &Args, s: &serde_json::Value) {
+fn report(a: &Args, s: &Summary) {
     if a.json {
-        crate::cmd::print_json(s.clone());
-        return;
-    }
-    let unit = if s["objective"] == "time" { "s" } else { "N" };
-    for c in s["operations"].as_array().into_iter().flatten() {
-        let f = |k: &str| c[k].as_f64().unwrap_or(f64::NAN);
-        let before = c["objective_before"]
-            .as_f64()
-            .map_or("(the orientation read is refused)".to_string(), |v| {
-                format!("{v:.1} {unit}")
-            });
-        let source = match c["engagement"].as_str() {
-            Some("stock") => format!("on the stock at {} sample moves", c["samples"]),
-            _ => "on the planar pass".to_string(),
-        };
-        outln!(
-            "operation {}: lead {:.2}°, tilt {:.2}° (read: {:.2}°, {:.2}°); {} {} → {:.1} {unit} {source}; refused: {} by tip contact, {} by holder collision, {} by rotary limits",
-            c["operation"],
-            f("lead"),
-            f("tilt"),
-            f("lead_before"),
-            f("tilt_before"),
-            s["objective"].as_str().unwrap_or(""),
-            before,
-            f("objective_after"),
-            c["refused"]["tip_contact"],
-            c["refused"]["holder_collision"],
-            c["refused"]["rotary_limits"],
-        );
-    }
-    for k in s["skipped"].as_array().into_iter().flatten() {
-        outln!(
-            "operation {}: left as it was: {}",
-            k["operation"],
-            k["reason"].as_str().unwrap_or("")
-        );
-    }
-    match s["output"].as_str() {
-        Some(o) => outln!("wrote {o}"),
-        None => outln!("no operation could be re-oriented: nothing written"),
+        crate::cmd::print_json(serde_json::to_value(s).unwrap_or_default());
+    } else {
+        out!("{}", s.render_text());
     }
 }

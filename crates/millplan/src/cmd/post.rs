@@ -53,7 +53,7 @@ pub struct Args {
     pub g93: bool,
     /// Tolerance, mm: how far the tool tip may leave the CL segment while
     /// the rotaries move, and the chord tolerance of arcs.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::post::TOL)]
     pub tol: f64,
     /// Half-angle of the cone about the pole (the tool along the turning
     /// axis) inside which the turning axis is held, degrees (default: the
@@ -86,6 +86,10 @@ pub struct Args {
     /// ends with exit 3.
     #[arg(long)]
     pub force: bool,
+    /// Print the wall time of each phase on standard error (they add up to
+    /// the whole run).
+    #[arg(long)]
+    pub timings: bool,
 }
 
 /// The post's options: the command line's, else the machine file's `[post]`.
@@ -187,15 +191,16 @@ fn check_posted(
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    if a.json && a.output.as_os_str() == "-" {
-        return Err(CliError::input(
-            "--json: not with -o - (the program itself goes to standard output)",
-        ));
-    }
-    let inputs = [a.input.as_path(), a.machine.as_path()];
-    let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
-    let machine = crate::cmd::load_machine(Some(&a.machine))?;
-    let o = options(&a, &machine)?;
+    let mut clock = crate::timings::Clock::start();
+    let code = run_timed(&a, &mut clock)?;
+    clock.lap("summary printed");
+    clock.print(a.timings);
+    Ok(code)
+}
+
+/// The machine must have kinematics; the output is G-code of `--to`, else
+/// the machine file's control, else the output's file name.
+fn post_target(a: &Args, machine: &Machine) -> CliResult<millplan_nc::write::Target> {
     if machine.kinematics().is_none() {
         return Err(CliError::input(format!(
             "{}: no [kinematics] table: a five-axis post needs the machine's rotary axes",
@@ -209,8 +214,24 @@ pub fn run(a: Args) -> CliResult<i32> {
     if !target.is_gcode() {
         return Err(CliError::input("--to apt: a posted program is G-code"));
     }
+    Ok(target)
+}
+
+fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
+    if a.json && a.output.as_os_str() == "-" {
+        return Err(CliError::input(
+            "--json: not with -o - (the program itself goes to standard output)",
+        ));
+    }
+    let inputs = [a.input.as_path(), a.machine.as_path()];
+    let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
+    let machine = crate::cmd::load_machine(Some(&a.machine))?;
+    let o = options(a, &machine)?;
+    let target = post_target(a, &machine)?;
+    clock.lap("arguments, machine file and outputs checked");
     let parsed = read_program(&a.input, read_options(a.units, None)?)?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet || a.json);
+    clock.lap("read CL file");
     let bar = crate::progress::spinner("posting", !a.quiet && !a.json);
     let posted = post(&parsed.program, &machine, &o).map_err(|e| post_error(&a.input, e))?;
     // The posted blocks (timed inside the post) are not needed any more:
@@ -221,26 +242,45 @@ pub fn run(a: Args) -> CliResult<i32> {
         report,
         ..
     } = posted;
+    clock.lap("post (IK, DP over the path, linearisation, feeds, time estimates)");
     for_target(&mut program, target).map_err(|e| post_error(&a.input, e))?;
     bar.finish_and_clear();
     let mut wo = machine.write_options(target);
     // The post states TCP itself, per operation, when asked for it.
     wo.auto_tcp = false;
     let out = crate::cmd::write_program(&program, wo, &a.input, a.quiet)?;
-    check_output(&program, &out, target, &a)?;
+    clock.lap("G-code written (in memory)");
+    check_output(&program, &out, target, a)?;
+    clock.lap("written program read back and compared");
     let checks = check_posted(&parsed.program, &program, &machine, o.tol);
     drop(parsed);
     let checked = crate::verdict::enforce(&checks, &a.input, a.force)?;
+    clock.lap("checks (IR, machine, tips through the kinematics)");
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
-    let mut j = summary(&a, &o, &machine, target.name(), &report);
-    j["checks"] = serde_json::to_value(&checks).unwrap_or_default();
+    clock.lap("program staged, synced and renamed into place");
+    print_outcome(
+        a,
+        summary(a, &o, &machine, target.name(), &report),
+        &checks,
+        &report,
+    );
+    Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
+}
+
+/// The summary with its checks, as JSON or text.
+fn print_outcome(
+    a: &Args,
+    mut j: Value,
+    checks: &[millplan_plan::safety::Check],
+    report: &PostReport,
+) {
+    j["checks"] = serde_json::to_value(checks).unwrap_or_default();
     if a.json {
         print_json(j);
     } else {
-        print_text(&a, &j, &report);
+        print_text(a, &j, report);
     }
-    Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
 }
 
 fn summary(a: &Args, o: &PostOptions, machine: &Machine, target: &str, r: &PostReport) -> Value {
@@ -285,7 +325,7 @@ fn print_text(a: &Args, j: &Value, r: &PostReport) {
         j["mode"].as_str().unwrap_or(""),
         j["feed_mode"].as_str().unwrap_or("")
     );
-    let lim = |v: Option<f64>, inf: &str| v.map_or(inf.to_string(), |v| format!("{v:.1}"));
+    let lim = |v: Option<f64>| v.map_or("unlimited".to_string(), |v| format!("{v:.1}"));
     let rows: Vec<String> = r
         .rotary
         .iter()
@@ -293,8 +333,8 @@ fn print_text(a: &Args, j: &Value, r: &PostReport) {
             (Some(lo), Some(hi)) => format!(
                 "  {}  used {lo:.3} .. {hi:.3} deg   travel {} .. {}",
                 ax.axis,
-                lim(ax.limit_min, "-inf"),
-                lim(ax.limit_max, "inf")
+                lim(ax.limit_min),
+                lim(ax.limit_max)
             ),
             _ => format!("  {}  not moved", ax.axis),
         })

@@ -1,20 +1,18 @@
 //! `millplan reorder`: reorder finishing points so the working diameter changes
 //! least between successive points (paper 000, thesis 5), with safe links.
 
-use crate::cmd::{print_diagnostics, read_options, target_for, write_program, TargetArg, UnitArg};
+use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
 use clap::ValueEnum;
+use millplan_driver::reorder::Summary;
 use millplan_nc::Program;
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context, Pass};
 use millplan_plan::reorder::Outcome;
-use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Start, Verdict};
-use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
+use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Start};
 use millplan_plan::speed::SpeedPass;
 use millplan_report::reorder::{reorder_report, ReorderInputs};
-use millplan_sim::stock::tool::ToolBody;
-use serde_json::json;
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -82,19 +80,19 @@ pub struct Args {
     #[arg(long)]
     pub start_index: Option<usize>,
     /// Seed of --start random: the same seed picks the same start point.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::reorder::SEED)]
     pub seed: u64,
     /// Minimum number of candidates of the paper's search.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::reorder::N_MIN)]
     pub n_min: usize,
     /// D_w differences within this are ties, broken by continuing straight, mm.
-    #[arg(long, default_value_t = 0.001)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::reorder::TIE)]
     pub tie: f64,
     /// Step guard of the paper search, mm: when every candidate would change
     /// D_w by more than this, the search looks farther (up to 32 × its radius)
     /// for one that does not, linking to it by a retract where it is not a
     /// neighbour. 0 runs the search exactly as published.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::reorder::MAX_STEP)]
     pub max_step: f64,
     #[command(flatten)]
     pub cut: super::CuttingData,
@@ -163,7 +161,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
-    let target = target_for(a.to, &a.output, parsed.program.source)?;
+    let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
     let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
     let mut program = parsed.program.clone();
     // Some 100,000 points a second at the least: from there it takes a while.
@@ -184,7 +182,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     let out = write_program(&program, cx.machine.write_options(target), &a.path, a.quiet)?;
     crate::verdict::read_back(&out, target, &program, &a.output)?;
-    let checks = cx.time("checks", || check_reordered(&parsed.program, &program, &cx));
+    let checks = cx.time("checks", || {
+        millplan_driver::reorder::check(&parsed.program, &program, &cx)
+    });
     let checked = crate::verdict::enforce(&checks, &a.path, a.force)?;
     outputs.write(&a.output, &out)?;
     if let Some(path) = &a.report {
@@ -192,54 +192,17 @@ pub fn run(a: Args) -> CliResult<i32> {
         outputs.write(path, html.as_bytes())?;
     }
     outputs.commit()?;
+    let method = a
+        .method
+        .to_possible_value()
+        .map(|v| v.get_name().to_string());
+    let summary = Summary::new(method, &o, a.output.display().to_string(), &checks);
     if a.json {
-        let method = a
-            .method
-            .to_possible_value()
-            .map(|v| v.get_name().to_string());
-        let j = json!({ "method": method, "verdict": o.verdict, "original": o.before, "reordered": o.after, "stats": o.stats, "tried": o.tried, "output": a.output.display().to_string(), "checks": checks });
-        crate::cmd::print_json(j);
+        crate::cmd::print_json(serde_json::to_value(&summary).unwrap_or_default());
     } else {
-        outln!("  {:<28} {:>16} {:>16}", "", "original", "reordered");
-        for (k, v) in millplan_report::reorder::rows(&o.before, &o.after) {
-            let (b, r) = v.split_once(" → ").unwrap_or((&v, ""));
-            outln!("  {k:<28} {b:>16} {r:>16}");
-        }
-        match o.verdict {
-            Some(Verdict::Kept) => outln!(
-                "  no order found that runs better and worse on nothing: the original order kept; wrote {}",
-                a.output.display()
-            ),
-            _ => outln!(
-                "  {} direct links, {} retracts; wrote {}",
-                o.stats.direct_links,
-                o.stats.retracts,
-                a.output.display()
-            ),
-        }
+        out!("{}", summary.render_text());
     }
     Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
-}
-
-/// The reordered program against the input: the IR verifier, every
-/// cutting point of the input still cut, S and F within the machine, no
-/// gouge into the part the input did not have (rapids and links included).
-fn check_reordered(input: &Program, output: &Program, cx: &Context) -> Vec<Check> {
-    let body = |op: &millplan_nc::Operation| {
-        let c = op.tool.as_ref()?.cutter?;
-        millplan_sim::shape_of(&c).map(ToolBody::new)
-    };
-    safety::check(&Inputs {
-        input,
-        output,
-        part: cx.drop_mesh(),
-        stock: None,
-        tool_body: &body,
-        machine: Some(&cx.machine),
-        tip: TipRule::SamePoints,
-        tol: Tolerances::default(),
-        loads: None,
-    })
 }
 
 /// The HTML report: the inputs, warnings (the part's mesh defects, points
@@ -256,7 +219,7 @@ fn report(
         (&a.path, original),
         &a.stl,
         machine,
-        a.cut,
+        a.cut.cutting(),
         &findings,
         [o.before.as_run.time_s, o.after.as_run.time_s],
     );

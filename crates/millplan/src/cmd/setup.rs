@@ -4,9 +4,8 @@
 use crate::cmd::UnitArg;
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_surface, Outputs};
-use millplan_models::kinematics::{KinKind, Kinematics, RotaryAxis};
-use millplan_plan::setup::{self, GridKind, SetupParams, SetupPlan, Summary};
-use millplan_sim::access;
+use millplan_driver::setup::{self as lib, Kinematics, MachineType, SetupRequest};
+use millplan_plan::setup::{self, GridKind};
 use std::path::PathBuf;
 
 /// Machinability and setup orientation of a part on a five-axis machine
@@ -57,14 +56,14 @@ pub struct Args {
     pub grid: GridArg,
     /// Approximate number of grid cells (latlon: bands × sectors × 2 with 3 sectors
     /// per 2 bands; icosphere: 20·4^k; healpix: 12·N²).
-    #[arg(long, default_value_t = 1200)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::setup::CELLS)]
     pub cells: usize,
     /// Tool mode: a ball-end mill `D,REACH[,HOLDER_D,HOLDER_LENGTH]` in mm (REACH
     /// from the ball centre to the holder). Without it, line of sight.
     #[arg(long, allow_hyphen_values = true)]
     pub tool: Option<String>,
     /// A direction must leave the facet's surface by more than this, degrees.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::setup::CLEARANCE_DEG)]
     pub clearance: f64,
     /// The part stands on its bottom face (the facets facing down at its lowest
     /// Z): leave those out and keep that face on the table (the search then only
@@ -110,59 +109,6 @@ pub enum GridArg {
     Healpix,
 }
 
-fn parse_tool(s: &str) -> CliResult<access::ToolModel> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| {
-            CliError::input(format!(
-                "--tool `{s}`: expected D,REACH[,HOLDER_D,HOLDER_LENGTH] in mm"
-            ))
-        })?;
-    let ok = v.iter().all(|x| x.is_finite() && *x >= 0.0) && v.first().is_some_and(|d| *d > 0.0);
-    match v[..] {
-        [d, reach] if ok => Ok(access::ToolModel {
-            radius: d / 2.0,
-            reach,
-            holder_radius: 0.0,
-            holder_length: 0.0,
-        }),
-        [d, reach, hd, hl] if ok => Ok(access::ToolModel {
-            radius: d / 2.0,
-            reach,
-            holder_radius: hd / 2.0,
-            holder_length: hl,
-        }),
-        _ => Err(CliError::input(format!(
-            "--tool `{s}`: expected D,REACH[,HOLDER_D,HOLDER_LENGTH], D > 0, none negative"
-        ))),
-    }
-}
-
-fn parse_range(s: &str, what: &str) -> CliResult<RotaryAxis> {
-    if s.trim().eq_ignore_ascii_case("free") {
-        return Ok(RotaryAxis::default());
-    }
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| {
-            CliError::input(format!("{what} `{s}`: expected MIN,MAX in degrees or free"))
-        })?;
-    match v[..] {
-        [lo, hi] if lo <= hi && lo.is_finite() && hi.is_finite() => Ok(RotaryAxis {
-            min: Some(lo),
-            max: Some(hi),
-            sign: 1.0,
-        }),
-        _ => Err(CliError::input(format!(
-            "{what} `{s}`: expected MIN,MAX with MIN ≤ MAX"
-        ))),
-    }
-}
-
 /// The machine from --machine, or --type with --range1/--range2.
 fn machine(a: &Args) -> CliResult<Kinematics> {
     match (&a.machine, a.kind) {
@@ -176,31 +122,29 @@ fn machine(a: &Args) -> CliResult<Kinematics> {
                 ))
             }),
         (None, Some(t)) => {
-            let mut k = Kinematics::new(match t {
-                TypeArg::Ca => KinKind::TableAc,
-                TypeArg::Ab => KinKind::TableAb,
-            });
-            k.first = parse_range(&a.range1, "--range1")?;
-            k.second = parse_range(&a.range2, "--range2")?;
-            Ok(k)
+            let t = match t {
+                TypeArg::Ca => MachineType::Ca,
+                TypeArg::Ab => MachineType::Ab,
+            };
+            lib::machine_of_type(t, &a.range1, &a.range2).map_err(CliError::input)
         }
         (None, None) => Err(CliError::input("give --machine FILE or --type ca|ab")),
     }
 }
 
-fn params(a: &Args) -> CliResult<SetupParams> {
-    Ok(SetupParams {
+fn request(a: &Args) -> SetupRequest {
+    SetupRequest {
         grid: match a.grid {
             GridArg::Latlon => GridKind::LatLon,
             GridArg::Icosphere => GridKind::Icosphere,
             GridArg::Healpix => GridKind::Healpix,
         },
         cells: a.cells,
-        tool: a.tool.as_deref().map(parse_tool).transpose()?,
-        clearance_deg: a.clearance,
+        tool: a.tool.clone(),
+        clearance: a.clearance,
         ignore_bottom: a.ignore_bottom,
         exact: a.exact,
-    })
+    }
 }
 
 /// The setup search, with a bar of the share done and the time left where
@@ -238,18 +182,10 @@ pub fn run(a: Args) -> CliResult<i32> {
         ],
         false,
     )?;
-    crate::cmd::arg(
-        "--clearance",
-        a.clearance,
-        crate::cmd::Range::from(0.0, 89.0, "degrees"),
-    )?;
-    crate::cmd::arg(
-        "--cells",
-        a.cells as f64,
-        crate::cmd::Range::from(8.0, 1e7, "cells"),
-    )?;
+    let req = request(&a);
+    lib::check(&req).map_err(CliError::input)?;
     let machine = machine(&a)?;
-    let p = params(&a)?;
+    let p = lib::params(&req).map_err(CliError::input)?;
     let (mut mesh, _) = read_surface(&a.stl, a.stl_units)?;
     let t0 = std::time::Instant::now();
     let plan = plan_shown(&a, &mut mesh, &machine, &p)?;
@@ -269,145 +205,23 @@ pub fn run(a: Args) -> CliResult<i32> {
         outputs.write(out, &bytes)?;
     }
     if let Some(path) = &a.report {
-        let html = report(&a, &mesh, &plan, &machine);
+        let html = lib::report(&req, a.stl.display().to_string(), &mesh, &plan, &machine);
         outputs.write(path, html.as_bytes())?;
     }
     outputs.commit()?;
     let s = plan.summary(&mesh, &machine);
     if a.json {
-        print_json(&a, &s, &machine, secs);
+        let j = lib::Report::new(&req, &s, &machine, secs);
+        crate::cmd::print_json(serde_json::to_value(j).unwrap_or_default());
     } else {
-        print_text(&a, &s, &plan);
+        out!(
+            "{}",
+            lib::render_text(&req, &a.stl.display().to_string(), &s, &plan)
+        );
     }
     Ok(if plan.feasible {
         EXIT_OK
     } else {
         EXIT_FINDINGS
     })
-}
-
-/// The HTML report, with the part's mesh defects and its winding among the
-/// warnings.
-fn report(
-    a: &Args,
-    mesh: &millplan_geom::TriMesh,
-    plan: &SetupPlan,
-    machine: &Kinematics,
-) -> String {
-    let mut warnings: Vec<String> = millplan_plan::checks::mesh(mesh)
-        .into_iter()
-        .map(|d| d.message)
-        .collect();
-    if plan.flipped {
-        warnings.push(
-            "the facets were wound inward (negative volume) and were turned outward".to_string(),
-        );
-    }
-    let i = millplan_report::setup::SetupInputs {
-        part: a.stl.display().to_string(),
-        mode: a
-            .tool
-            .as_deref()
-            .map_or("line of sight".to_string(), |t| format!("tool {t}")),
-        clearance_deg: a.clearance,
-        warnings,
-    };
-    millplan_report::setup::setup_report(&i, mesh, plan, machine)
-}
-
-fn print_json(a: &Args, s: &Summary, machine: &Kinematics, secs: f64) {
-    let limit = |ax: &RotaryAxis| match (ax.min, ax.max) {
-        (None, None) => serde_json::json!("free"),
-        (lo, hi) => serde_json::json!([lo, hi]),
-    };
-    let ranges = |r: Option<[(f64, f64); 2]>| {
-        r.map(|r| serde_json::json!({ s.axes[0]: [r[0].0, r[0].1], s.axes[1]: [r[1].0, r[1].1] }))
-    };
-    let facets = |v: &[(usize, [f64; 3])]| {
-        v.iter()
-            .map(|(t, c)| serde_json::json!({"facet": t, "centroid": c}))
-            .collect::<Vec<_>>()
-    };
-    let j = serde_json::json!({
-        "feasible": s.feasible,
-        "setup": s.setup,
-        "euler_zyx_deg": s.euler_zyx_deg,
-        "required": ranges(s.required),
-        "would_do": ranges(s.would_do),
-        "max_tilt_deg": s.max_tilt_deg,
-        "usage": s.usage,
-        "machine": { "kind": machine.kind, s.axes[0]: limit(&machine.first), s.axes[1]: limit(&machine.second) },
-        "unreachable": facets(&s.unreachable),
-        "unreachable_area": s.unreachable_area,
-        "out_of_reach": facets(&s.out_of_reach),
-        "out_of_reach_area": s.out_of_reach_area,
-        "facets": s.facets,
-        "ignored": s.ignored,
-        "grid": s.grid,
-        "cells": s.cells,
-        "clearance_deg": a.clearance,
-        "flipped": s.flipped,
-        "mode": if a.tool.is_some() { "tool" } else { "line-of-sight" },
-        "seconds": secs,
-    });
-    crate::cmd::print_json(j);
-}
-
-fn print_text(a: &Args, s: &Summary, plan: &SetupPlan) {
-    outln!(
-        "{}: {} facets, {} grid ({} cells), clearance {}°",
-        a.stl.display(),
-        s.facets,
-        s.grid,
-        s.cells,
-        a.clearance
-    );
-    outln!(
-        "{}",
-        if s.feasible {
-            "feasible in one setup"
-        } else {
-            "NOT feasible in one setup"
-        }
-    );
-    outln!("setup rotation (part → table):");
-    for r in s.setup {
-        outln!("  [{:9.6} {:9.6} {:9.6}]", r[0], r[1], r[2]);
-    }
-    let e = s.euler_zyx_deg;
-    outln!("  Euler Z-Y-X: {:.3}°, {:.3}°, {:.3}°", e[0], e[1], e[2]);
-    let [n0, n1] = s.axes.map(str::to_uppercase);
-    if let Some(r) = s.required {
-        outln!(
-            "required (the least of any setup): {n0} {:.2}..{:.2}°, {n1} {:.2}..{:.2}° (largest tilt {:.2}°, {:.0} % of the machine's ranges)",
-            r[0].0,
-            r[0].1,
-            r[1].0,
-            r[1].1,
-            s.max_tilt_deg,
-            100.0 * s.usage
-        );
-    }
-    if let Some(r) = s.would_do {
-        outln!(
-            "as it lies in the file it would need {n0} {:.2}..{:.2}°, {n1} {:.2}..{:.2}°",
-            r[0].0,
-            r[0].1,
-            r[1].0,
-            r[1].1
-        );
-    }
-    if !s.out_of_reach.is_empty() {
-        outln!(
-            "{} facets ({:.2} mm²) out of the machine's reach",
-            s.out_of_reach.len(),
-            s.out_of_reach_area
-        );
-    }
-    if let Some((t, c)) = s.unreachable.first() {
-        outln!(
-            "{} facets no tool direction can see, no range reaches (the first: facet {t} at {c:?})",
-            plan.inaccessible.len()
-        );
-    }
 }

@@ -1,15 +1,11 @@
 //! `millplan simulate`: the program run over its stock.
 
-use crate::cmd::{print_diagnostics, read_options, Range, UnitArg};
+use crate::cmd::{print_diagnostics, read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_mesh, read_program, read_surface, Outputs};
+use millplan_driver::simulate::{self as lib, SimRequest};
+use millplan_driver::{SimReport, Stock, StockError, StockSpec, Strokes};
 use millplan_geom::TriMesh;
-use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
-use millplan_sim::stock::remaining::{remaining, Remaining};
-use millplan_sim::stock::run::{run as run_sim, SimReport};
-use millplan_sim::stock::spec::{StockError, StockSpec};
-use millplan_sim::stock::tool::{BodyOptions, ToolBody};
-use millplan_sim::stock::Stock;
 use std::path::{Path, PathBuf};
 
 /// Run the program over its stock: material removal, engagement per move,
@@ -63,11 +59,11 @@ pub struct Args {
     #[arg(long, value_enum)]
     pub stl_units: Option<UnitArg>,
     /// Dexel size, mm.
-    #[arg(long, default_value_t = 0.1, value_name = "MM")]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::simulate::RESOLUTION, value_name = "MM")]
     pub resolution: f64,
     /// Material deeper than this (mm) met by a rapid, shank or holder is a
     /// collision; on the part, cut deeper than this is a gouge.
-    #[arg(long, default_value_t = 0.01, value_name = "MM")]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::simulate::TOL, value_name = "MM")]
     pub tol: f64,
     /// Machine file (TOML) for the rapid rate.
     #[arg(long)]
@@ -97,21 +93,27 @@ pub struct Args {
     pub quiet: bool,
 }
 
-pub fn run(a: Args) -> CliResult<i32> {
-    crate::cmd::arg(
-        "--resolution",
-        a.resolution,
-        Range::from(0.005, 100.0, "mm"),
-    )?;
-    crate::cmd::arg("--tol", a.tol, Range::from(0.0, 100.0, "mm"))?;
-    // Checked before any work, not after the simulation.
-    if let Some(m) = a.mesh_resolution {
-        crate::cmd::arg("--mesh-resolution", m, Range::from(0.005, 1000.0, "mm"))?;
+fn request(a: &Args) -> SimRequest {
+    SimRequest {
+        tool: a.tool.clone(),
+        holder: a.holder.clone(),
+        flute_length: a.flute_length,
+        shank: a.shank,
+        resolution: a.resolution,
+        tol: a.tol,
+        mesh_resolution: a.mesh_resolution,
     }
+}
+
+pub fn run(a: Args) -> CliResult<i32> {
+    let req = request(&a);
+    // Checked before any work, not after the simulation.
+    lib::check(&req).map_err(CliError::input)?;
     let spec = StockSpec::parse(&a.stock).map_err(|e| CliError::input(format!("--stock {e}")))?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let mut inputs: Vec<&Path> = vec![&a.path];
     inputs.extend(a.stl.as_deref());
+    inputs.extend(a.machine.as_deref());
     if let StockSpec::Stl(p) = &spec {
         inputs.push(p);
     }
@@ -126,7 +128,10 @@ pub fn run(a: Args) -> CliResult<i32> {
     )?;
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
-    let strokes = program_strokes(&a, &parsed.program, machine.rapid)?;
+    let path = a.path.display().to_string();
+    let strokes = lib::program_strokes(&req, &path, &parsed.program, machine.rapid)
+        .map_err(CliError::input)?;
+    note_default_flute(&a, &req, &parsed.program)?;
     let part = match &a.stl {
         Some(p) => Some(read_surface(p, a.stl_units)?.0),
         None => None,
@@ -139,18 +144,16 @@ pub fn run(a: Args) -> CliResult<i32> {
         part.as_ref(),
         a.stl_units,
     )?;
-    let bar = crate::progress::count(
-        strokes.strokes.len() as u64,
-        "simulating",
-        "strokes",
-        !a.quiet && !a.json && strokes.strokes.len() > 50_000,
-    );
-    let rep = run_sim(&mut stock, &strokes, a.tol, &|d| bar.set_position(d as u64));
-    bar.finish_and_clear();
-    let rem = part.as_ref().map(|p| remaining(&stock, p, 10.0, a.tol));
+    let rep = simulate(&a, &mut stock, &strokes);
+    let rem = part.as_ref().map(|p| lib::remaining_on(&stock, p, a.tol));
     write_outputs(&a, &mut outputs, &stock, &rep, rem.as_ref(), part.as_ref())?;
     outputs.commit()?;
-    print_summary(&a, &rep, rem.as_ref());
+    let report = lib::Report::new(&rep, &a.stock, rem.as_ref());
+    if a.json {
+        crate::cmd::print_json(serde_json::to_value(&report).unwrap_or_default());
+    } else {
+        out!("{}", report.render_text(&path, a.tol));
+    }
     Ok(
         if rep.rapid_collisions.is_empty() && rep.holder_collisions.is_empty() {
             EXIT_OK
@@ -160,69 +163,18 @@ pub fn run(a: Args) -> CliResult<i32> {
     )
 }
 
-/// The tool body of an operation: its cutter (or --tool), flutes, shank and
-/// holder from the options (`ToolBody::for_operation`).
-fn tool_body(a: &Args) -> CliResult<impl Fn(&millplan_nc::Operation) -> Option<ToolBody>> {
-    let shape = match &a.tool {
-        Some(s) => Some(crate::cmd::tool_shape("--tool", s)?),
-        None => None,
-    };
-    let holder = match &a.holder {
-        None => None,
-        Some(s) => {
-            let v: Vec<f64> = s.split(':').filter_map(|x| x.trim().parse().ok()).collect();
-            match v[..] {
-                [d, l] if d > 0.0 && l > 0.0 && d.is_finite() && l.is_finite() => {
-                    Some((d / 2.0, l))
-                }
-                _ => {
-                    return Err(CliError::input(format!(
-                        "--holder {s}: give DIAMETER:STICKOUT in mm, e.g. 32:40"
-                    )))
-                }
-            }
-        }
-    };
-    for (flag, v) in [("--flute-length", a.flute_length), ("--shank", a.shank)] {
-        if let Some(v) = v {
-            crate::cmd::arg(flag, v, Range::from(0.001, 10_000.0, "mm"))?;
-        }
-    }
-    let o = BodyOptions {
-        shape,
-        flute: a.flute_length,
-        shank_r: a.shank.map(|d| d / 2.0),
-        holder,
-        no_cone: false,
-    };
-    Ok(move |op: &millplan_nc::Operation| ToolBody::for_operation(op, &o))
-}
-
-fn program_strokes(a: &Args, p: &millplan_nc::Program, rapid: f64) -> CliResult<Strokes> {
-    let body = tool_body(a)?;
-    let s = strokes(
-        p,
-        body,
-        &PathOptions {
-            chord: a.resolution / 4.0,
-            rapid_rate: rapid,
-        },
+/// The run over the stock, with a bar on a long program.
+fn simulate(a: &Args, stock: &mut Stock, strokes: &Strokes) -> SimReport {
+    let bar = crate::progress::count(
+        strokes.strokes.len() as u64,
+        "simulating",
+        "strokes",
+        !a.quiet && !a.json && strokes.strokes.len() > 50_000,
     );
-    if s.skipped.no_tool > 0 && a.tool.is_none() {
-        return Err(CliError::input(format!(
-            "{}: the program does not say the shape of its tool; give it with --tool (ball:D, flat:D, bull:D:R, cone:D:ANGLE)",
-            a.path.display()
-        )));
-    }
-    if s.strokes.is_empty() {
-        return Err(CliError::input(format!(
-            "{}: no move could be simulated ({} from or to an unknown position, {} with the tool axis known only as machine angles)",
-            a.path.display(),
-            s.skipped.unknown_position,
-            s.skipped.unknown_axis
-        )));
-    }
-    Ok(s)
+    let rep =
+        millplan_driver::simulate_stock(stock, strokes, a.tol, &|d| bar.set_position(d as u64));
+    bar.finish_and_clear();
+    rep
 }
 
 /// The stock before the program at `program` runs, as `spec` names it, at
@@ -256,18 +208,11 @@ fn write_outputs(
     outputs: &mut Outputs,
     stock: &Stock,
     rep: &SimReport,
-    rem: Option<&Remaining>,
+    rem: Option<&millplan_driver::Remaining>,
     part: Option<&TriMesh>,
 ) -> CliResult<()> {
     if let Some(p) = &a.output {
-        let step = match a.mesh_resolution {
-            Some(m) => ((m / stock.grid.res).round() as usize).max(1),
-            None => ((stock.cells() as f64 / 1e6).sqrt().ceil() as usize).max(1),
-        };
-        let mesh = millplan_sim::stock::stock_mesh(&stock.coarsened(step));
-        let mut bytes = Vec::new();
-        millplan_geom::stl::write_binary_stl(&mesh, "millplan stock", &mut bytes);
-        outputs.write(p, &bytes)?;
+        outputs.write(p, &lib::stock_stl(stock, a.mesh_resolution))?;
     }
     if let Some(p) = &a.table {
         outputs.write(p, millplan_report::sim::moves_csv(&rep.per_move).as_bytes())?;
@@ -280,61 +225,13 @@ fn write_outputs(
     Ok(())
 }
 
-fn print_summary(a: &Args, rep: &SimReport, rem: Option<&Remaining>) {
-    if a.json {
-        let mut j = serde_json::to_value(rep).unwrap_or_default();
-        j["stock"] = serde_json::json!(a.stock);
-        if let Some(r) = rem {
-            j["remaining"] = serde_json::json!({
-                "min": r.min, "max": r.max, "mean": r.mean,
-                "facets": r.facets, "gouged": r.gouged, "histogram": r.histogram,
-            });
+/// Says which flute length the shank and holder were simulated above, when
+/// neither `--flute-length` nor the program's cutter gave one.
+fn note_default_flute(a: &Args, req: &SimRequest, p: &millplan_nc::Program) -> CliResult<()> {
+    if !(a.quiet || a.json) {
+        if let Some(note) = lib::default_flute_note(req, p).map_err(CliError::input)? {
+            eprintln!("note: {note}");
         }
-        crate::cmd::print_json(j);
-        return;
     }
-    for c in &rep.rapid_collisions {
-        outln!(
-            "{}:{}: rapid into material, {:.3} mm deep ({:.3} mm³)",
-            a.path.display(),
-            c.line,
-            c.depth,
-            c.volume_mm3
-        );
-    }
-    for c in &rep.holder_collisions {
-        outln!(
-            "{}:{}: shank or holder in material, {:.3} mm deep ({:.3} mm³)",
-            a.path.display(),
-            c.line,
-            c.depth,
-            c.volume_mm3
-        );
-    }
-    outln!(
-        "{} of {} moves simulated at {} mm: removed {:.1} mm³ of {:.1} ({} cutting, {} in air), highest rate {:.0} mm³/min at line {}",
-        rep.simulated, rep.moves, rep.resolution_mm, rep.removed_mm3, rep.stock_before_mm3,
-        rep.cutting_moves, rep.air_moves, rep.max_mrr_mm3_min, rep.max_mrr_line
-    );
-    if rep.skipped.total() > 0 {
-        outln!(
-            "not simulated: {} moves from or to an unknown position, {} with the axis known only as machine angles",
-            rep.skipped.unknown_position, rep.skipped.unknown_axis
-        );
-    }
-    if let Some(r) = rem {
-        outln!(
-            "on the part ({} facets): material left {:.3} to {:.3} mm, mean {:.3}; {} facets cut into by more than {} mm",
-            r.facets, r.min, r.max, r.mean, r.gouged, a.tol
-        );
-    }
-    let hits = rep.rapid_collisions.len() + rep.holder_collisions.len();
-    outln!(
-        "{}",
-        if hits == 0 {
-            "no collisions".to_string()
-        } else {
-            format!("{hits} collisions")
-        }
-    );
+    Ok(())
 }

@@ -1,18 +1,13 @@
 //! `millplan speed`: constant-cutting-speed spindle control for ball-end finishing.
 
-use crate::cmd::{
-    arg, print_diagnostics, read_options, write_program_file, Range, TargetArg, UnitArg,
-    MAX_TOOL_D, MAX_VC,
-};
+use crate::cmd::{print_diagnostics, read_options, write_program_file, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
 use clap::ValueEnum;
-use millplan_models::contact::{Convention, NormalMode, Surface};
-use millplan_nc::write::Target;
+use millplan_driver::speed::{self as lib, Convention, Cutting, NormalMode, SpeedRequest, Surface};
 use millplan_plan::checks;
-use millplan_plan::pipeline::{self, Context};
-use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
-use millplan_plan::speed::{FeedCoupling, SpeedParams, SpeedPass, Summary};
+use millplan_plan::pipeline::Context;
+use millplan_plan::speed::Summary;
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -65,7 +60,7 @@ pub struct Args {
     #[arg(long)]
     pub fz: f64,
     /// Number of flutes.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::cutting::FLUTES)]
     pub flutes: u32,
     /// Stock thickness along the surface normal (finishing allowance), mm.
     #[arg(long)]
@@ -88,7 +83,7 @@ pub struct Args {
     #[arg(long)]
     pub keep_feed: bool,
     /// Write a new S only when the speed changes by more than this, 1/min.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::speed::S_THRESHOLD)]
     pub s_threshold: f64,
     /// Which tool point the CL points are.
     #[arg(long, value_enum, default_value = "auto")]
@@ -124,111 +119,68 @@ pub struct Args {
     pub force: bool,
 }
 
-/// The checks of the written program against the input (speeds and feeds
-/// only change): printed, and a refusal ends the run unless --force.
-/// Returns them and whether they passed.
-fn safety_checks(
-    a: &Args,
-    cx: &Context,
-    input: &millplan_nc::Program,
-    output: &millplan_nc::Program,
-) -> CliResult<(Vec<Check>, bool)> {
-    let checks = cx.time("checks (IR, machine, positions)", || {
-        safety::check_feeds_only(&Inputs {
-            input,
-            output,
-            part: None,
-            stock: None,
-            tool_body: &|_| None,
-            machine: Some(&cx.machine),
-            tip: TipRule::Kept,
-            tol: Tolerances::default(),
-            loads: None,
-        })
-    });
-    let ok = crate::verdict::enforce(&checks, &a.path, a.force)?;
-    Ok((checks, ok))
-}
-
-/// The speed pass on a copy of the input.
-fn speed_pass(
-    a: &Args,
-    cx: &Context,
-    input: &millplan_nc::Program,
-) -> CliResult<(millplan_nc::Program, SpeedPass)> {
-    let mut program = cx.time("copy of the input for the checks", || input.clone());
-    let mut pass = SpeedPass::new(params(a));
-    pipeline::run(&mut [&mut pass], &mut program, cx)
-        .map_err(|e| crate::cmd::pass_error(&a.path, e))?;
-    Ok((program, pass))
-}
-
-fn cutting_data(a: &Args) -> super::CuttingData {
-    super::CuttingData {
-        vc: a.vc,
-        fz: a.fz,
-        flutes: a.flutes,
-        ap: a.ap,
+fn request(a: &Args) -> SpeedRequest {
+    SpeedRequest {
+        cut: Cutting {
+            vc: a.vc,
+            fz: a.fz,
+            flutes: a.flutes,
+            ap: a.ap,
+        },
+        ball_d: a.ball_d,
+        s_threshold: a.s_threshold,
+        keep_feed: a.keep_feed,
+        convention: match a.convention {
+            ConventionArg::Auto => None,
+            ConventionArg::Tip => Some(Convention::Tip),
+            ConventionArg::Centre => Some(Convention::Centre),
+        },
+        normals: match a.normals {
+            NormalArg::Smooth => NormalMode::Smooth,
+            NormalArg::Facet => NormalMode::Facet,
+            NormalArg::Ball => NormalMode::Ball,
+        },
+        nearest_incentre: a.nearest_incentre,
+        keep_rows: a.table.is_some() || a.report.is_some(),
     }
 }
 
-type Reader = std::thread::JoinHandle<(CliResult<millplan_nc::Parsed>, f64)>;
+/// What the reader thread hands back: the program and the cycle time
+/// estimated on it, each with its own wall time.
+struct ReadBeside {
+    parsed: CliResult<millplan_nc::Parsed>,
+    read_s: f64,
+    time_before: f64,
+    estimate_s: f64,
+}
 
-/// Reads the program on its own thread, while the STL is read and its
-/// search trees are built.
-fn spawn_reader(a: &Args, t0: std::time::Instant) -> CliResult<Reader> {
+type Reader = std::thread::JoinHandle<ReadBeside>;
+
+/// Reads the program on its own thread, and estimates its cycle time there,
+/// while the STL is read and its search trees are built.
+fn spawn_reader(a: &Args, machine: &millplan_plan::machine::Machine) -> CliResult<Reader> {
     let (path, opts) = (a.path.clone(), read_options(a.units, None)?);
+    let machine = machine.clone();
     Ok(std::thread::spawn(move || {
+        let t = std::time::Instant::now();
         let parsed = read_program(&path, opts);
-        (parsed, t0.elapsed().as_secs_f64())
+        let read_s = t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
+        let time_before = match &parsed {
+            Ok(p) => millplan_plan::timing::estimate_program(&p.program, &machine).total_s,
+            Err(_) => 0.0,
+        };
+        ReadBeside {
+            parsed,
+            read_s,
+            time_before,
+            estimate_s: t.elapsed().as_secs_f64(),
+        }
     }))
 }
 
-/// Every number in its physical range, naming the option.
-fn check_args(a: &Args) -> CliResult<()> {
-    arg("--vc", a.vc, Range::positive(MAX_VC, "m/min"))?;
-    arg("--fz", a.fz, Range::positive(10.0, "mm"))?;
-    arg("--flutes", a.flutes as f64, Range::from(1.0, 1000.0, ""))?;
-    let d = match a.ball_d {
-        Some(d) => arg("--ball-d", d, Range::positive(MAX_TOOL_D, "mm"))?,
-        None => MAX_TOOL_D,
-    };
-    // The ball model's domain: the stock no thicker than the ball's radius.
-    arg("--ap", a.ap, Range::positive(d / 2.0, "mm (at most D/2)"))?;
-    arg(
-        "--s-threshold",
-        a.s_threshold,
-        Range::from(0.0, 1e5, "1/min"),
-    )?;
-    Ok(())
-}
-
-fn join(r: Reader) -> (CliResult<millplan_nc::Parsed>, f64) {
+fn join(r: Reader) -> ReadBeside {
     r.join().unwrap_or_else(|e| std::panic::resume_unwind(e))
-}
-
-fn params(a: &Args) -> SpeedParams {
-    let mut p = SpeedParams::new(a.vc, a.fz, a.flutes, a.ap);
-    p.feed = if a.keep_feed {
-        FeedCoupling::Programmed
-    } else {
-        FeedCoupling::ChipLoad
-    };
-    p.s_threshold = a.s_threshold.max(0.0);
-    p.convention = match a.convention {
-        ConventionArg::Auto => None,
-        ConventionArg::Tip => Some(Convention::Tip),
-        ConventionArg::Centre => Some(Convention::Centre),
-    };
-    p.normals = match a.normals {
-        NormalArg::Smooth => NormalMode::Smooth,
-        NormalArg::Facet => NormalMode::Facet,
-        NormalArg::Ball => NormalMode::Ball,
-    };
-    p.nearest_incentre = a.nearest_incentre;
-    p.ball_d = a.ball_d;
-    p.keep_rows = a.table.is_some() || a.report.is_some();
-    p
 }
 
 /// The program, table and report, checked against each other and the inputs
@@ -253,22 +205,52 @@ fn plan_outputs(a: &Args) -> CliResult<Outputs> {
     )
 }
 
+/// The part, read while the program is read on its own thread; the STL's
+/// wall time. A program error is still reported first.
+fn read_part(
+    a: &Args,
+    machine: &millplan_plan::machine::Machine,
+) -> CliResult<(millplan_geom::TriMesh, Reader, f64)> {
+    let t = std::time::Instant::now();
+    let reader = spawn_reader(a, machine)?;
+    match read_surface(&a.stl, a.stl_units) {
+        Ok((m, _)) => Ok((m, reader, t.elapsed().as_secs_f64())),
+        Err(e) => Err(join(reader).parsed.err().unwrap_or(e)),
+    }
+}
+
+/// The reading phases' times in the context's timings.
+fn record_reading(
+    cx: &Context,
+    t_setup: f64,
+    [t_mesh, t_surface, t_inputs]: [f64; 3],
+    [read_s, estimate_s]: [f64; 2],
+) {
+    cx.record("arguments, machine file and outputs checked", t_setup);
+    cx.record("  read STL", t_mesh);
+    cx.record("  surface (BVH, vertex normals)", t_surface);
+    cx.record("  read toolpath (its own thread)", read_s);
+    cx.record(
+        "  time estimate of the input (after it, same thread)",
+        estimate_s,
+    );
+    cx.record("read STL, surface and toolpath", t_inputs);
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
-    check_args(&a)?;
+    let t0 = std::time::Instant::now();
+    let req = request(&a);
+    lib::check(&req).map_err(CliError::input)?;
     let mut outputs = plan_outputs(&a)?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let t0 = std::time::Instant::now();
-    let reader = spawn_reader(&a, t0)?;
-    let mesh = match read_surface(&a.stl, a.stl_units) {
-        Ok((m, _)) => m,
-        // A program error is still reported first.
-        Err(e) => return Err(join(reader).0.err().unwrap_or(e)),
-    };
-    let t_mesh = t0.elapsed().as_secs_f64();
+    let t_setup = t0.elapsed().as_secs_f64();
+    let (mesh, reader, t_mesh) = read_part(&a, &machine)?;
+    let t = std::time::Instant::now();
     let surface = Surface::new(&mesh);
-    let t_surface = t0.elapsed().as_secs_f64() - t_mesh;
-    let (parsed, t_read) = join(reader);
-    let parsed = parsed?;
+    let t_surface = t.elapsed().as_secs_f64();
+    let read = join(reader);
+    let t_inputs = t0.elapsed().as_secs_f64() - t_setup;
+    let parsed = read.parsed?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
     let bar = crate::progress::Phases::new(!a.quiet && parsed.program.move_count() >= 100_000);
@@ -276,51 +258,38 @@ pub fn run(a: Args) -> CliResult<i32> {
     let cx = Context::new(machine)
         .with_surface(surface)
         .with_progress(&hook);
-    cx.record("read STL", t_mesh);
-    cx.record("surface (BVH, vertex normals)", t_surface);
-    cx.record("read toolpath (beside the two above)", t_read);
+    record_reading(
+        &cx,
+        t_setup,
+        [t_mesh, t_surface, t_inputs],
+        [read.read_s, read.estimate_s],
+    );
     let input = parsed.program;
-    let time_before = millplan_plan::timing::estimate_program(&input, &cx.machine).total_s;
-    let ran = speed_pass(&a, &cx, &input);
+    let ran = lib::run(&req, &cx, &input).map_err(|e| crate::cmd::pass_error(&a.path, e));
     bar.finish();
     let (program, mut pass) = ran?;
-    let (checks, checked) = safety_checks(&a, &cx, &input, &program)?;
-    drop(input);
+    let checks = cx.time("checks of the output", || {
+        lib::checks(&cx, &input, &program)
+    });
+    let checked = crate::verdict::enforce(&checks, &a.path, a.force)?;
+    cx.time("input freed", || drop(input));
     let Some(summary) = pass.summary.take() else {
         return Err(CliError::internal("the speed pass left no summary"));
     };
     // A part that does not match its path makes every speed meaningless.
-    let findings: Vec<_> = [checks::mesh(&mesh), checks::off_surface(&summary)]
-        .into_iter()
-        .flatten()
-        .collect();
+    let findings = part_findings(&cx, &mesh, &summary);
     print_diagnostics(&a.stl, &findings, a.quiet || a.json);
-    cx.time("program written and synced", || {
-        write_program_file(
-            &program,
-            cx.machine.write_options(target),
-            &mut outputs,
-            &a.output,
-            &a.path,
-            a.quiet,
-        )
-    })?;
-    let cut = cutting_data(&a);
-    let time_after = millplan_plan::timing::estimate_program(&program, &cx.machine).total_s;
-    let inputs = || {
-        report_inputs(
-            (&a.path, &program),
-            &a.stl,
-            &cx.machine,
-            cut,
-            &findings,
-            [time_before, time_after],
-        )
+    let time_after = write_and_estimate(&a, &cx, &program, target, &mut outputs)?;
+    let run = Ran {
+        program: &program,
+        summary: &summary,
+        rows: &pass.rows,
+        checks: &checks,
+        findings: &findings,
+        times: [read.time_before, time_after],
     };
-    write_table_and_report(&a, &mut outputs, &summary, &pass.rows, inputs)?;
-    outputs.commit()?;
-    let times = [time_before, time_after];
-    print_outcome(&a, &cx, t0, (&summary, &checks), &findings, target, times);
+    report_run(&a, &req, &cx, &run, outputs, target)?;
+    print_timings(&a, &cx, t0);
     Ok(if checks::untrusted(&summary) || !checked {
         EXIT_FINDINGS
     } else {
@@ -328,101 +297,141 @@ pub fn run(a: Args) -> CliResult<i32> {
     })
 }
 
-/// The timings (with --timings) and the summary, as JSON or text.
-fn print_outcome(
+/// The part's own findings: open edges, points off the part.
+fn part_findings(
+    cx: &Context,
+    mesh: &millplan_geom::TriMesh,
+    summary: &Summary,
+) -> Vec<millplan_nc::Diagnostic> {
+    cx.time("part checks (open edges, points off the part)", || {
+        [checks::mesh(mesh), checks::off_surface(summary)]
+            .into_iter()
+            .flatten()
+            .collect()
+    })
+}
+
+/// The phases' timings on standard error (with --timings).
+fn print_timings(a: &Args, cx: &Context, t0: std::time::Instant) {
+    if a.timings {
+        crate::timings::print(&cx.timings(), t0);
+    }
+}
+
+/// Writes the program (staged, synced) while its cycle time is estimated on
+/// another thread; returns the estimate.
+fn write_and_estimate(
     a: &Args,
     cx: &Context,
-    t0: std::time::Instant,
-    (summary, safety): (&Summary, &[Check]),
-    findings: &[millplan_nc::Diagnostic],
-    target: Target,
-    [time_before, time_after]: [f64; 2],
-) {
-    if a.timings {
-        for t in cx.timings() {
-            eprintln!("{:>8.3} s  {}", t.seconds, t.name);
-        }
-        eprintln!(
-            "{:>8.3} s  total until the program is written",
-            t0.elapsed().as_secs_f64()
+    program: &millplan_nc::Program,
+    target: millplan_nc::write::Target,
+    outputs: &mut Outputs,
+) -> CliResult<f64> {
+    let t = std::time::Instant::now();
+    let (written, (time_after, estimate_s)) = std::thread::scope(|s| {
+        let estimate = s.spawn(|| {
+            let t = std::time::Instant::now();
+            let total = millplan_plan::timing::estimate_program(program, &cx.machine).total_s;
+            (total, t.elapsed().as_secs_f64())
+        });
+        let written = write_program_file(
+            program,
+            cx.machine.write_options(target),
+            outputs,
+            &a.output,
+            &a.path,
+            a.quiet,
         );
-    }
-    if a.json {
-        let mut j = serde_json::to_value(summary).unwrap_or_default();
-        j["output"] = serde_json::json!(a.output.display().to_string());
-        j["dialect"] = serde_json::json!(target.name());
-        j["machine"] = serde_json::to_value(&cx.machine).unwrap_or_default();
-        j["findings"] = serde_json::to_value(findings).unwrap_or_default();
-        j["trusted"] = serde_json::json!(!checks::untrusted(summary));
-        j["checks"] = serde_json::to_value(safety).unwrap_or_default();
-        j["time_before_s"] = serde_json::json!(time_before);
-        j["time_after_s"] = serde_json::json!(time_after);
-        j["time_model"] = serde_json::json!("acceleration");
-        crate::cmd::print_json(j);
-    } else {
-        print_summary(summary, &a.output, target);
-        outln!(
-            "  time       {:.1} s → {:.1} s, estimated with acceleration on {}",
-            time_before,
-            time_after,
-            cx.machine.name
-        );
-    }
+        let w = t.elapsed().as_secs_f64();
+        (
+            written.map(|x| (x, w)),
+            estimate
+                .join()
+                .unwrap_or_else(|e| std::panic::resume_unwind(e)),
+        )
+    });
+    let (_, write_s) = written?;
+    cx.record("  program written and synced", write_s);
+    cx.record("  time estimate of the output (beside it)", estimate_s);
+    cx.record(
+        "program written, its time estimated",
+        t.elapsed().as_secs_f64(),
+    );
+    Ok(time_after)
 }
 
-/// The tool of the first operation that cuts, as the program names it.
-pub fn tool_name(p: &millplan_nc::Program) -> String {
-    let Some(t) = p
-        .operations
-        .iter()
-        .find(|op| op.moves.iter().any(|m| m.is_cutting()))
-        .and_then(|op| op.tool.as_ref())
-    else {
-        return "not named by the program".to_string();
+/// What a run made: the program, the pass's summary and rows, the checks,
+/// the part's findings and the times before and after.
+struct Ran<'a> {
+    program: &'a millplan_nc::Program,
+    summary: &'a Summary,
+    rows: &'a [millplan_plan::speed::PointRow],
+    checks: &'a [millplan_driver::Check],
+    findings: &'a [millplan_nc::Diagnostic],
+    times: [f64; 2],
+}
+
+/// The table and report written, the outputs committed, the summary printed.
+fn report_run(
+    a: &Args,
+    req: &SpeedRequest,
+    cx: &Context,
+    r: &Ran,
+    mut outputs: Outputs,
+    target: millplan_nc::write::Target,
+) -> CliResult<()> {
+    let inputs = || {
+        report_inputs(
+            (&a.path, r.program),
+            &a.stl,
+            &cx.machine,
+            req.cut,
+            r.findings,
+            r.times,
+        )
     };
-    let mut words = Vec::new();
-    if let Some(n) = t.number {
-        words.push(format!("T{n}"));
+    cx.time("table and report", || {
+        write_table_and_report(a, &mut outputs, r.summary, r.rows, inputs)
+    })?;
+    cx.time("outputs renamed into place", || outputs.commit())?;
+    let out = lib::Report::new(
+        (r.summary, r.checks),
+        (a.output.display().to_string(), target),
+        &cx.machine,
+        r.findings,
+        r.times,
+    );
+    if a.json {
+        crate::cmd::print_json(serde_json::to_value(&out).unwrap_or_default());
+    } else {
+        out!("{}", out.render_text());
     }
-    if let Some(n) = &t.name {
-        words.push(n.clone());
-    }
-    if let Some(c) = &t.cutter {
-        words.push(format!("D{:.3} R{:.3}", c.d, c.r));
-    }
-    words.join(" ")
+    Ok(())
 }
 
-/// The header, warnings and cycle times of a spindle-control report.
+/// The header, warnings and cycle times of a spindle-control report, the
+/// program and the part named by their file names.
 pub fn report_inputs(
     program: (&std::path::Path, &millplan_nc::Program),
     part: &std::path::Path,
     machine: &millplan_plan::machine::Machine,
-    cut: super::CuttingData,
+    cut: Cutting,
     findings: &[millplan_nc::Diagnostic],
-    [time_before_s, time_after_s]: [f64; 2],
+    times: [f64; 2],
 ) -> millplan_report::html::SpeedInputs {
     let name = |p: &std::path::Path| {
         p.file_name()
             .map(|f| f.to_string_lossy().into_owned())
             .unwrap_or_default()
     };
-    millplan_report::html::SpeedInputs {
-        program: name(program.0),
-        part: name(part),
-        tool: tool_name(program.1),
-        machine: machine.name.clone(),
-        spindle: (machine.spindle_min, machine.spindle_max),
-        spindle_accel: machine.spindle_accel,
-        feed_max: machine.feed_max,
-        vc: cut.vc,
-        fz: cut.fz,
-        flutes: cut.flutes,
-        ap: cut.ap,
-        time_before_s: Some(time_before_s),
-        time_after_s: Some(time_after_s),
-        warnings: findings.iter().map(|d| d.message.clone()).collect(),
-    }
+    lib::report_inputs(
+        (name(program.0), program.1),
+        name(part),
+        machine,
+        cut,
+        findings,
+        times,
+    )
 }
 
 /// The per-point table (--table) and the report (--report), when asked for.
@@ -449,43 +458,4 @@ fn write_table_and_report(
         outputs.write(r, html.as_bytes())?;
     }
     Ok(())
-}
-
-fn print_summary(s: &Summary, output: &std::path::Path, target: Target) {
-    outln!(
-        "{} cutting points in {} ball-end operation(s), CL points read as {:?}",
-        s.points,
-        s.operations,
-        s.convention
-    );
-    outln!(
-        "  D_w        {:.3} … {:.3} mm (mean {:.3})",
-        s.d_w.min,
-        s.d_w.max,
-        s.d_w.mean
-    );
-    outln!(
-        "  spindle    {:.0} … {:.0} 1/min",
-        s.spindle.min,
-        s.spindle.max
-    );
-    outln!(
-        "  vc         {:.1} … {:.1} m/min with control; {:.1} … {:.1} at constant {:.0} 1/min",
-        s.vc_controlled.min,
-        s.vc_controlled.max,
-        s.vc_constant.min,
-        s.vc_constant.max,
-        s.constant_spindle
-    );
-    outln!(
-        "  limits     {} clamped, {} rate-limited, {} held under the S threshold, {} feeds clamped",
-        s.clamped,
-        s.rate_limited,
-        s.held,
-        s.feed_clamped
-    );
-    if s.gap_flagged > 0 {
-        outln!("  warning    {} points are not R from the surface (gouge, wrong convention or a different part)", s.gap_flagged);
-    }
-    outln!("  wrote      {} ({})", output.display(), target.name());
 }

@@ -2,8 +2,8 @@
 
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::Outputs;
-use millplan_models::regression::{samples, Surrogate};
-use millplan_report::sweep::{page, sweep, Design};
+use millplan_driver::sweep::Design;
+use millplan_report::sweep::{page, sweep};
 use std::path::PathBuf;
 
 /// Tabulate and plot the working diameter over tool diameter, depth of cut,
@@ -19,19 +19,19 @@ pub struct Args {
     #[arg(short, long, default_value = "wd-sweep")]
     pub output: PathBuf,
     /// Tool diameters, mm.
-    #[arg(long, value_delimiter = ',', default_value = "6,8,10")]
+    #[arg(long, value_delimiter = ',', default_value = millplan_driver::command_defaults::sweep::D)]
     pub d: Vec<f64>,
     /// Depths of cut, mm.
-    #[arg(long, value_delimiter = ',', default_value = "0.1,0.25,0.5,0.75,1.0")]
+    #[arg(long, value_delimiter = ',', default_value = millplan_driver::command_defaults::sweep::AP)]
     pub ap: Vec<f64>,
     /// Stepover to the machined neighbour, mm (0 = no neighbour).
-    #[arg(long, value_delimiter = ',', default_value = "1")]
+    #[arg(long, value_delimiter = ',', default_value = millplan_driver::command_defaults::sweep::AE)]
     pub ae: Vec<f64>,
     /// Inclinations, degrees.
-    #[arg(long, value_delimiter = ',', default_value = "0,10,20,30,45,60")]
+    #[arg(long, value_delimiter = ',', default_value = millplan_driver::command_defaults::sweep::ALPHA)]
     pub alpha: Vec<f64>,
     /// Feed-direction step over 0–180°, degrees.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::sweep::AF_STEP)]
     pub af_step: f64,
     /// Also fit the regression surrogate and print R², RMSE and MAPE.
     #[arg(long)]
@@ -42,27 +42,7 @@ pub struct Args {
     pub json: bool,
 }
 
-/// Every value in its range: a feed-direction step of 1e-300 would never end.
-fn check(a: &Args) -> CliResult<()> {
-    use crate::cmd::{arg, Range, MAX_TOOL_D};
-    for d in &a.d {
-        arg("--d", *d, Range::positive(MAX_TOOL_D, "mm"))?;
-    }
-    for ap in &a.ap {
-        arg("--ap", *ap, Range::positive(MAX_TOOL_D / 2.0, "mm"))?;
-    }
-    for ae in &a.ae {
-        arg("--ae", *ae, Range::from(0.0, MAX_TOOL_D, "mm"))?;
-    }
-    for al in &a.alpha {
-        arg("--alpha", *al, Range::from(0.0, 89.9, "degrees"))?;
-    }
-    arg("--af-step", a.af_step, Range::from(0.1, 180.0, "degrees"))?;
-    Ok(())
-}
-
 pub fn run(a: Args) -> CliResult<i32> {
-    check(&a)?;
     let design = Design {
         d: a.d,
         ap: a.ap,
@@ -70,11 +50,11 @@ pub fn run(a: Args) -> CliResult<i32> {
         alpha: a.alpha,
         af_step: a.af_step,
     };
-    design.check().map_err(CliError::input)?;
+    millplan_driver::sweep::check(&design).map_err(CliError::input)?;
     std::fs::create_dir_all(&a.output)
         .map_err(|e| CliError::input(format!("{}: {e}", a.output.display())))?;
     let (csv, figures) = sweep(&design);
-    let fit = a.fit.then(|| Surrogate::fit(&samples()).fit);
+    let fit = a.fit.then(millplan_driver::sweep::fit);
     if let (Some(f), false) = (&fit, a.json) {
         outln!(
             "regression surrogate: {} samples, R² {:.4}, RMSE {:.4} mm, MAPE {:.2} %",

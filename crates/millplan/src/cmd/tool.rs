@@ -194,7 +194,7 @@ pub struct MeasureArgs {
     #[arg(long)]
     pub pz: Option<f64>,
     /// Setup tolerance between presetter and first measurement, mm.
-    #[arg(long, default_value_t = 0.02)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::tool::SETUP_TOL)]
     pub dset: f64,
     /// Pallet in the machine (locked when the tool breaks).
     #[arg(long)]
@@ -228,7 +228,7 @@ pub struct CycleArgs {
     #[arg(long, value_enum, default_value = "both")]
     pub measure: MeasureArg,
     /// Clearance height above the laser, mm.
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = millplan_driver::command_defaults::tool::CLEARANCE)]
     pub clearance: f64,
     /// Measure every tooth.
     #[arg(long)]
@@ -254,6 +254,16 @@ pub fn default_db() -> CliResult<PathBuf> {
         .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/share")))
         .unwrap_or_else(|| PathBuf::from("."));
     Ok(base.join("millplan").join("tools.db"))
+}
+
+/// [`default_db`] with its folder created (a `--db` folder never is).
+fn default_db_created() -> CliResult<PathBuf> {
+    let p = default_db()?;
+    if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| CliError::input(format!("{}: cannot create: {e}", dir.display())))?;
+    }
+    Ok(p)
 }
 
 /// A library error with the library's path: exit 2 when the arguments or the
@@ -323,17 +333,11 @@ fn describe(t: &ToolRecord) -> String {
 pub fn run(a: Args) -> CliResult<i32> {
     // PZ needs no library.
     if let ToolCommand::Pz { insl, tp } = a.command {
-        let v = pz(insl, tp).map_err(|e| CliError::input(e.to_string()))?;
-        print(
-            a.json,
-            json!({ "pz": v, "insl": insl, "tp": tp }),
-            format!("PZ = {v:.3} mm (INSL {insl}, TP {tp})"),
-        )?;
-        return Ok(EXIT_OK);
+        return print_pz(a.json, insl, tp);
     }
     let path = match a.db.clone() {
         Some(p) => p,
-        None => default_db()?,
+        None => default_db_created()?,
     };
     let mut db = ToolDb::open(&path).map_err(|e| db_err(&path, e))?;
     let lib = Lib {
@@ -369,22 +373,36 @@ pub fn run(a: Args) -> CliResult<i32> {
         ToolCommand::Show { number } => show(&db, &lib, number),
         ToolCommand::Log { number } => log(&db, &lib, number),
         ToolCommand::Import { file } => import(&mut db, &lib, &file),
-        ToolCommand::Export { format, output } => {
-            let text = match format {
-                ExportFormat::Csv => db.export_csv(),
-                ExportFormat::Json => db.export_json(),
-                ExportFormat::ToolT => db.export_tool_t(),
-            }
-            .map_err(|e| lib.err(e))?;
-            write_output(
-                &lib,
-                &output,
-                &text,
-                json!({ "output": output.display().to_string() }),
-            )
-        }
+        ToolCommand::Export { format, output } => export(&db, &lib, format, &output),
         ToolCommand::Cycle(x) => cycle(&db, &lib, x),
     }
+}
+
+/// The PZ of an insert (no library needed).
+fn print_pz(json_out: bool, insl: f64, tp: f64) -> CliResult<i32> {
+    let v = pz(insl, tp).map_err(|e| CliError::input(e.to_string()))?;
+    print(
+        json_out,
+        json!({ "pz": v, "insl": insl, "tp": tp }),
+        format!("PZ = {v:.3} mm (INSL {insl}, TP {tp})"),
+    )?;
+    Ok(EXIT_OK)
+}
+
+/// The library written as CSV, JSON or a TOOL.T table.
+fn export(db: &ToolDb, lib: &Lib, format: ExportFormat, output: &Path) -> CliResult<i32> {
+    let text = match format {
+        ExportFormat::Csv => db.export_csv(),
+        ExportFormat::Json => db.export_json(),
+        ExportFormat::ToolT => db.export_tool_t(),
+    }
+    .map_err(|e| lib.err(e))?;
+    write_output(
+        lib,
+        output,
+        &text,
+        json!({ "output": output.display().to_string() }),
+    )
 }
 
 /// The library a subcommand works on, and how it prints.

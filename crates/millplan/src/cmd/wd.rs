@@ -1,10 +1,8 @@
 //! `millplan wd`: the working diameter of one case.
 
-use crate::cmd::{arg, Range, MAX_TOOL_D, MAX_VC};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use clap::ValueEnum;
-use millplan_models::wd::{self, Case, Neighbour, Side};
-use serde_json::json;
+use millplan_driver::wd::{Side, WdRequest};
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum SideArg {
@@ -66,63 +64,25 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    arg("--d", a.d, Range::positive(MAX_TOOL_D, "mm"))?;
-    // The ball model's domain: the stock no thicker than the ball's radius.
-    arg("--ap", a.ap, Range::positive(a.d / 2.0, "mm (at most D/2)"))?;
-    if let Some(ae) = a.ae {
-        arg("--ae", ae, Range::positive(MAX_TOOL_D, "mm"))?;
-    }
-    if !(0.0..90.0).contains(&a.alpha) {
-        return Err(CliError::input(format!(
-            "--alpha {}: must be a number from 0 to under 90 degrees",
-            a.alpha
-        )));
-    }
-    arg("--af", a.af, Range::from(-360.0, 360.0, "degrees"))?;
-    if let Some(vc) = a.vc {
-        arg("--vc", vc, Range::positive(MAX_VC, "m/min"))?;
-    }
-    if a.both && a.ae.is_none() {
-        return Err(CliError::input("--both needs --ae"));
-    }
-    let neighbour = match (a.ae, a.both) {
-        (None, _) => Neighbour::None,
-        (Some(x), false) => Neighbour::One(x),
-        (Some(x), true) => Neighbour::Both(x),
-    };
-    let af = (a.af + 180.0).rem_euclid(360.0) - 180.0;
-    let c = Case {
+    let req = WdRequest {
         d: a.d,
         ap: a.ap,
-        neighbour,
-        alpha: a.alpha.to_radians(),
-        af: af.to_radians(),
+        ae: a.ae,
+        both: a.both,
+        alpha: a.alpha,
+        af: a.af,
         side: match a.side {
             SideArg::Left => Side::Left,
             SideArg::Right => Side::Right,
         },
+        vc: a.vc,
+        regression: matches!(a.model, ModelArg::Regression),
     };
-    let dw = match a.model {
-        ModelArg::Geometric => wd::working_diameter(&c),
-        ModelArg::Regression => millplan_models::regression::Surrogate::standard().predict(&c),
-    };
-    let dcc = wd::contact_diameter(a.d, c.alpha);
-    let d_mean_area = wd::mean_diameter(&c, wd::MeanWeighting::Area, 300);
-    let d_mean_chip = wd::mean_diameter(&c, wd::MeanWeighting::ChipThickness, 300);
-    let n = a.vc.map(|vc| wd::spindle_speed(vc, dw));
+    let o = millplan_driver::wd::run(&req).map_err(CliError::input)?;
     if a.json {
-        let j = json!({
-            "d_w": dw, "d_cc": dcc, "d_mean_area": d_mean_area, "d_mean_chip": d_mean_chip,
-            "n": n, "model": format!("{:?}", a.model).to_lowercase()
-        });
-        crate::cmd::print_json(j);
+        crate::cmd::print_json(serde_json::to_value(&o).unwrap_or_default());
     } else {
-        outln!("D_w  {dw:.3} mm  (working diameter, highest engaged point)");
-        outln!("D_cc {dcc:.3} mm  (diameter at the contact point)");
-        outln!("D_mean {d_mean_area:.3} mm by area, {d_mean_chip:.3} mm by chip thickness (over the engaged region)");
-        if let Some(n) = n {
-            outln!("n    {n:.0} 1/min for vc = {} m/min", a.vc.unwrap_or(0.0));
-        }
+        out!("{}", o.render_text());
     }
     Ok(EXIT_OK)
 }

@@ -1,0 +1,148 @@
+//! `millplan gouge`: the checked options, the cutter per operation, the
+//! sample count before any work, the check and the typed summary.
+
+use crate::check::{arg, tool_shape, Range};
+use millplan_models::cutter::Shape;
+use millplan_nc::{Operation, Program};
+use millplan_sim::dropcutter::DropMesh;
+use millplan_sim::gouge::{check_with_progress, samples, Skipped};
+pub use millplan_sim::gouge::{GougeParams, GougeReport, BYTES_PER_SAMPLE};
+use serde::Serialize;
+use std::fmt::Write as _;
+
+/// The options of `millplan gouge`.
+#[derive(Clone, Debug)]
+pub struct GougeRequest {
+    pub tol: f64,
+    pub step: f64,
+    pub rapids: bool,
+    /// The cutter of operations that name none.
+    pub tool: Option<String>,
+}
+
+/// The options checked: the check's parameters and the fallback cutter.
+pub fn params(a: &GougeRequest) -> Result<(GougeParams, Option<Shape>), String> {
+    arg("--tol", a.tol, Range::from(0.0, 100.0, "mm"))?;
+    arg("--step", a.step, Range::from(0.001, 1000.0, "mm"))?;
+    let fallback = a
+        .tool
+        .as_deref()
+        .map(|s| tool_shape("--tool", s))
+        .transpose()?;
+    let g = GougeParams {
+        step: a.step,
+        tol: a.tol,
+        rapids: a.rapids,
+    };
+    Ok((g, fallback))
+}
+
+/// Without a fallback cutter, an operation that cuts must name its own:
+/// else an error at the tool's line in `path`.
+pub fn shape_is_known(path: &str, program: &Program) -> Result<(), String> {
+    if let Some(op) = program.operations.iter().find(|op| {
+        op.moves.iter().any(|m| m.is_cutting()) && op.tool.as_ref().and_then(|t| t.cutter).is_none()
+    }) {
+        let line = op.tool.as_ref().map_or(0, |t| t.line);
+        return Err(format!(
+            "{path}:{line}:1: the program does not say the shape of its tool; give it with --tool (ball:D, flat:D, bull:D:R, cone:D:ANGLE)"
+        ));
+    }
+    Ok(())
+}
+
+/// The cutter of an operation: its own, else the fallback.
+fn shape(fallback: Option<Shape>) -> impl Fn(&Operation) -> Option<Shape> {
+    move |op: &Operation| match op.tool.as_ref().and_then(|t| t.cutter) {
+        Some(c) => millplan_sim::shape_of(&c),
+        None => fallback,
+    }
+}
+
+/// The points the check will sample (counted before it runs).
+pub fn sample_count(p: &Program, fallback: Option<Shape>, g: &GougeParams) -> f64 {
+    samples(p, shape(fallback), g)
+}
+
+/// The check of `p` against `part`, reporting the points done.
+pub fn check(
+    p: &Program,
+    part: &millplan_geom::TriMesh,
+    fallback: Option<Shape>,
+    g: &GougeParams,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> GougeReport {
+    let part = DropMesh::new(part);
+    check_with_progress(p, &part, shape(fallback), g, progress)
+}
+
+/// The moves skipped, by reason.
+pub fn skipped(s: &Skipped) -> String {
+    format!(
+        "{} without a tool shape, {} with a tilted or unknown tool axis, {} canned-cycle holes, {} from or to an unknown position",
+        s.no_tool, s.tilted, s.cycles, s.unknown_position
+    )
+}
+
+/// What `gouge --json` prints.
+#[derive(Serialize)]
+pub struct Report<'a> {
+    #[serde(flatten)]
+    pub check: &'a GougeReport,
+    pub clean: bool,
+    pub tol: f64,
+}
+
+impl<'a> Report<'a> {
+    pub fn new(check: &'a GougeReport, tol: f64) -> Self {
+        Report {
+            check,
+            clean: check.gouges.is_empty() && check.moves_checked > 0,
+            tol,
+        }
+    }
+
+    /// Each gouge at its line in `path`, then the counts.
+    pub fn render_text(&self, path: &str) -> String {
+        let rep = self.check;
+        let mut o = String::new();
+        for gg in &rep.gouges {
+            let _ = writeln!(
+                o,
+                "{path}:{}: gouge {:.3} mm deep at X{:.3} Y{:.3} Z{:.3} (operation {}, move {})",
+                gg.line,
+                gg.depth,
+                gg.at[0],
+                gg.at[1],
+                gg.at[2],
+                gg.operation + 1,
+                gg.mv
+            );
+        }
+        let verdict = if rep.moves_checked == 0 {
+            "nothing checked".to_string()
+        } else if rep.gouges.is_empty() {
+            "clean".to_string()
+        } else {
+            format!(
+                "{} gouging moves, deepest {:.3} mm",
+                rep.gouges.len(),
+                rep.max_depth
+            )
+        };
+        let _ = writeln!(
+            o,
+            "{} moves checked at {} points: {verdict}",
+            rep.moves_checked, rep.points_checked
+        );
+        if rep.moves_skipped > 0 {
+            let _ = writeln!(
+                o,
+                "{} moves not checked: {}",
+                rep.moves_skipped,
+                skipped(&rep.skipped)
+            );
+        }
+        o
+    }
+}

@@ -1,0 +1,285 @@
+//! `millplan orient`: the request checked into the lead/tilt pass's
+//! parameters, the stock the choice runs on, the checks of the re-oriented
+//! program and the summary it prints.
+
+use crate::check::{arg, Range, MAX_SPINDLE};
+use millplan_models::force::materials::Materials;
+use millplan_models::leadtilt::{SearchOptions, Variant};
+use millplan_nc::{Operation, Program};
+use millplan_plan::leadtilt::{Objective, OpChoice, OpSkipped, Oriented, Params, StockInput};
+use millplan_plan::machine::Machine;
+use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
+use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
+use millplan_sim::stock::spec::StockSpec;
+use millplan_sim::stock::tool::{BodyOptions, ToolBody};
+use millplan_sim::stock::Stock;
+use serde::Serialize;
+use std::fmt::Write as _;
+
+/// The options of `millplan orient` as given.
+#[derive(Clone, Debug)]
+pub struct OrientRequest {
+    /// `LO:HI`, degrees.
+    pub lead_range: String,
+    pub tilt_range: String,
+    pub variant: Variant,
+    pub objective: Objective,
+    pub fz: f64,
+    /// Spindle speed; `None`: the program's first cutting S.
+    pub n: Option<f64>,
+    pub flutes: usize,
+    /// Degrees.
+    pub helix: f64,
+    pub ap: f64,
+    pub ae: f64,
+    pub reach: f64,
+    /// `DIAMETER:LENGTH`, mm.
+    pub holder: Option<String>,
+    pub material: String,
+    pub stock: Option<String>,
+    pub resolution: f64,
+    pub samples: usize,
+}
+
+/// `LO:HI` in degrees, within ±89°.
+fn range(flag: &str, s: &str) -> Result<(f64, f64), String> {
+    let bad = || format!("{flag} {s}: give LO:HI in degrees, LO ≤ HI, within ±89");
+    let (a, b) = s.split_once(':').ok_or_else(bad)?;
+    let (a, b): (f64, f64) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if !(a.is_finite() && b.is_finite() && a <= b && a >= -89.0 && b <= 89.0) {
+        return Err(bad());
+    }
+    Ok((a, b))
+}
+
+/// `DIAMETER:LENGTH` as (radius, length); none given: no holder.
+fn holder(s: Option<&str>) -> Result<(f64, f64), String> {
+    let Some(s) = s else {
+        return Ok((0.0, 0.0));
+    };
+    let bad = || format!("--holder {s}: give DIAMETER:LENGTH in mm, both positive");
+    let (d, l) = s.split_once(':').ok_or_else(bad)?;
+    let (d, l): (f64, f64) = (
+        d.trim().parse().map_err(|_| bad())?,
+        l.trim().parse().map_err(|_| bad())?,
+    );
+    if !(d.is_finite() && l.is_finite() && d > 0.0 && l > 0.0) {
+        return Err(bad());
+    }
+    Ok((d / 2.0, l))
+}
+
+/// The request checked into the pass's parameters (before any program is
+/// read); `rpm` is 0 when the program's own speed is to be taken
+/// ([`first_spindle`]).
+pub fn params(a: &OrientRequest, materials: &Materials) -> Result<Params, String> {
+    let lead = range("--lead-range", &a.lead_range)?;
+    let tilt = range("--tilt-range", &a.tilt_range)?;
+    let fz = arg("--fz", a.fz, Range::positive(10.0, "mm"))?;
+    let ap = arg("--ap", a.ap, Range::positive(1000.0, "mm"))?;
+    let ae = arg("--ae", a.ae, Range::positive(1000.0, "mm"))?;
+    let reach = arg("--reach", a.reach, Range::positive(10_000.0, "mm"))?;
+    let helix = arg("--helix", a.helix, Range::from(0.0, 60.0, "degrees"))?;
+    if a.flutes == 0 || a.flutes > 64 {
+        return Err("--flutes: give 1 to 64".into());
+    }
+    let rpm = match a.n {
+        Some(n) => arg("--n", n, Range::positive(MAX_SPINDLE, "1/min"))?,
+        None => 0.0,
+    };
+    let (holder_radius, holder_length) = holder(a.holder.as_deref())?;
+    let law = materials
+        .get(&a.material)
+        .map_err(|e| format!("--material: {e}"))?
+        .law;
+    Ok(Params {
+        search: SearchOptions {
+            lead,
+            tilt,
+            ..SearchOptions::default()
+        },
+        variant: a.variant,
+        objective: a.objective,
+        law,
+        flutes: a.flutes,
+        helix: helix.to_radians(),
+        fz,
+        rpm,
+        ap,
+        ae,
+        reach,
+        holder_radius,
+        holder_length,
+    })
+}
+
+/// The checked stock options: the spec, when given.
+pub fn stock_spec(a: &OrientRequest) -> Result<Option<StockSpec>, String> {
+    arg(
+        "--resolution",
+        a.resolution,
+        Range::from(0.005, 100.0, "mm"),
+    )?;
+    if a.samples == 0 || a.samples > 4096 {
+        return Err("--samples: give 1 to 4096".into());
+    }
+    a.stock
+        .as_deref()
+        .map(|s| StockSpec::parse(s).map_err(|e| format!("--stock {e}")))
+        .transpose()
+}
+
+/// The strokes the stock is cut by: every operation whose cutter has a
+/// shape (its flutes up to the tool's height, else the whole tool).
+pub fn program_strokes(p: &Program, res: f64, rapid: f64) -> Strokes {
+    strokes(
+        p,
+        tool_body,
+        &PathOptions {
+            chord: res / 4.0,
+            rapid_rate: rapid,
+        },
+    )
+}
+
+/// The body of an operation's tool: its cutter, flutes up to the tool's
+/// height (else the whole tool cuts).
+fn tool_body(op: &Operation) -> Option<ToolBody> {
+    ToolBody::for_operation(op, &BodyOptions::default())
+}
+
+/// Whether the strokes hold a cutting move the stock can see; the error
+/// names `program`.
+pub fn simulable(st: &Strokes, program: &str) -> Result<(), String> {
+    if st.strokes.iter().all(|x| x.rapid) {
+        return Err(format!(
+            "{program}: no cutting move can be simulated for --stock (no operation's tool has a shape, or every move is from or to an unknown position)"
+        ));
+    }
+    Ok(())
+}
+
+/// The choice's stock input: the initial stock and the strokes that cut it.
+pub fn stock_input(stock: Stock, st: &Strokes, samples: usize) -> StockInput<'_> {
+    StockInput {
+        stock,
+        strokes: st,
+        samples,
+        max_bytes: millplan_plan::leadtilt::MAX_CROP_BYTES,
+    }
+}
+
+/// The program's first cutting spindle speed (for a run without --n).
+pub fn first_spindle(p: &Program) -> Option<f64> {
+    p.moves()
+        .find(|m| m.is_cutting() && m.spindle > 0.0)
+        .map(|m| m.spindle)
+}
+
+/// The re-oriented program against the input: the IR verifier, S and F
+/// within the machine, every ball centre where the input put it, rapids and
+/// shanks on the initial stock (with a stock). No gouge check against the
+/// part: with every ball centre kept (checked) the ball meets the part
+/// exactly where the input's did, and the three-axis gouge check cannot
+/// see a tilted shank.
+pub fn check(
+    input: &Program,
+    output: &Program,
+    stock: Option<&Stock>,
+    machine: &Machine,
+) -> Vec<Check> {
+    safety::check(&Inputs {
+        input,
+        output,
+        part: None,
+        stock,
+        tool_body: &tool_body,
+        machine: Some(machine),
+        tip: TipRule::CentreKept,
+        tol: Tolerances::default(),
+        loads: None,
+    })
+}
+
+/// What `orient` reports (`--json`).
+#[derive(Serialize)]
+pub struct Summary {
+    pub objective: Objective,
+    pub operations: Vec<OpChoice>,
+    pub skipped: Vec<OpSkipped>,
+    /// The file written; `None` when no operation could be re-oriented.
+    pub output: Option<String>,
+    /// `stock` or `planar`.
+    pub engagement: &'static str,
+    pub stock: Option<String>,
+    pub resolution_mm: Option<f64>,
+    pub unsimulated_moves: usize,
+    /// The checks of the written program (absent when nothing is written).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub checks: Option<Vec<Check>>,
+}
+
+impl Summary {
+    /// The summary of an outcome written to `output`; `unsimulated`: the
+    /// moves the stock does not see (with a stock).
+    pub fn new(a: &OrientRequest, o: &Oriented, output: &str, unsimulated: usize) -> Summary {
+        let stock = a.stock.is_some();
+        Summary {
+            objective: a.objective,
+            operations: o.chosen.clone(),
+            skipped: o.skipped.clone(),
+            output: (!o.chosen.is_empty()).then(|| output.to_string()),
+            engagement: if stock { "stock" } else { "planar" },
+            stock: a.stock.clone(),
+            resolution_mm: stock.then_some(a.resolution),
+            unsimulated_moves: unsimulated,
+            checks: None,
+        }
+    }
+
+    /// The text report: a line per operation, then what was written.
+    pub fn render_text(&self) -> String {
+        let mut o = String::new();
+        let time = self.objective == Objective::Time;
+        let (name, unit) = if time { ("time", "s") } else { ("fxy", "N") };
+        for c in &self.operations {
+            let before = c
+                .objective_before
+                .map_or("(the orientation read is refused)".to_string(), |v| {
+                    format!("{v:.1} {unit}")
+                });
+            let source = match c.engagement {
+                millplan_plan::leadtilt::EngagementSource::Stock => {
+                    format!("on the stock at {} sample moves", c.samples)
+                }
+                _ => "on the planar pass".to_string(),
+            };
+            let _ = writeln!(
+                o,
+                "operation {}: lead {:.2}°, tilt {:.2}° (read: {:.2}°, {:.2}°); {name} {before} → {:.1} {unit} {source}; refused: {} by tip contact, {} by holder collision, {} by rotary limits",
+                c.operation,
+                c.lead,
+                c.tilt,
+                c.lead_before,
+                c.tilt_before,
+                c.objective_after,
+                c.refused.tip_contact,
+                c.refused.holder_collision,
+                c.refused.rotary_limits,
+            );
+        }
+        for k in &self.skipped {
+            let _ = writeln!(o, "operation {}: left as it was: {}", k.operation, k.reason);
+        }
+        match &self.output {
+            Some(p) => {
+                let _ = writeln!(o, "wrote {p}");
+            }
+            None => o.push_str("no operation could be re-oriented: nothing written\n"),
+        }
+        o
+    }
+}

@@ -1,0 +1,232 @@
+//! `millplan simulate`: the tool bodies from the options, the strokes the
+//! stock is cut by, the stock mesh written, and the summary printed.
+
+use crate::check::{arg, tool_shape, Range};
+use millplan_nc::{Operation, Program};
+use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
+use millplan_sim::stock::remaining::{remaining, Bin, Remaining};
+use millplan_sim::stock::run::SimReport;
+use millplan_sim::stock::tool::{BodyOptions, ToolBody};
+use millplan_sim::stock::Stock;
+use serde::Serialize;
+use std::fmt::Write as _;
+
+/// The options of `millplan simulate` that shape the tool and the run.
+#[derive(Clone, Debug)]
+pub struct SimRequest {
+    /// `--tool` (`ball:D`, …): the cutter of a program that names none.
+    pub tool: Option<String>,
+    /// `DIAMETER:STICKOUT`, mm.
+    pub holder: Option<String>,
+    pub flute_length: Option<f64>,
+    /// Shank diameter, mm.
+    pub shank: Option<f64>,
+    pub resolution: f64,
+    pub tol: f64,
+    pub mesh_resolution: Option<f64>,
+}
+
+/// The numbers in their ranges, before any work.
+pub fn check(a: &SimRequest) -> Result<(), String> {
+    arg(
+        "--resolution",
+        a.resolution,
+        Range::from(0.005, 100.0, "mm"),
+    )?;
+    arg("--tol", a.tol, Range::from(0.0, 100.0, "mm"))?;
+    if let Some(m) = a.mesh_resolution {
+        arg("--mesh-resolution", m, Range::from(0.005, 1000.0, "mm"))?;
+    }
+    Ok(())
+}
+
+fn holder(s: &str) -> Result<(f64, f64), String> {
+    let v: Vec<f64> = s.split(':').filter_map(|x| x.trim().parse().ok()).collect();
+    match v[..] {
+        [d, l] if d > 0.0 && l > 0.0 && d.is_finite() && l.is_finite() => Ok((d / 2.0, l)),
+        _ => Err(format!(
+            "--holder {s}: give DIAMETER:STICKOUT in mm, e.g. 32:40"
+        )),
+    }
+}
+
+/// The tool options of the request: cutter (or --tool), flutes, shank and
+/// holder, checked.
+pub fn body_options(a: &SimRequest) -> Result<BodyOptions, String> {
+    let shape = a
+        .tool
+        .as_deref()
+        .map(|s| tool_shape("--tool", s))
+        .transpose()?;
+    let holder = a.holder.as_deref().map(holder).transpose()?;
+    for (flag, v) in [("--flute-length", a.flute_length), ("--shank", a.shank)] {
+        if let Some(v) = v {
+            arg(flag, v, Range::from(0.001, 10_000.0, "mm"))?;
+        }
+    }
+    Ok(BodyOptions {
+        shape,
+        flute: a.flute_length,
+        shank_r: a.shank.map(|d| d / 2.0),
+        holder,
+        no_cone: false,
+    })
+}
+
+/// The tool body of an operation from the request's options
+/// (`ToolBody::for_operation`).
+pub fn tool_body(a: &SimRequest) -> Result<impl Fn(&Operation) -> Option<ToolBody>, String> {
+    let o = body_options(a)?;
+    Ok(move |op: &Operation| ToolBody::for_operation(op, &o))
+}
+
+/// The note that says which flute length the shank and holder were
+/// simulated above, when neither `--flute-length` nor the program's cutter
+/// gave one.
+pub fn default_flute_note(a: &SimRequest, p: &Program) -> Result<Option<String>, String> {
+    let o = body_options(a)?;
+    Ok(p.operations.iter().find_map(|op| o.default_flute(op)).map(|f| {
+        format!(
+            "no flute length given (--flute-length, or the CUTTER record's height): the shank and holder are simulated above {f:.3} mm of flutes ({}·D)",
+            millplan_sim::stock::tool::DEFAULT_FLUTE_DIAMETERS
+        )
+    }))
+}
+
+/// The strokes of the program at `path` (its name in errors): every move
+/// whose tool has a shape, at chords of a quarter cell.
+pub fn program_strokes(
+    a: &SimRequest,
+    path: &str,
+    p: &Program,
+    rapid: f64,
+) -> Result<Strokes, String> {
+    let body = tool_body(a)?;
+    let s = strokes(
+        p,
+        body,
+        &PathOptions {
+            chord: a.resolution / 4.0,
+            rapid_rate: rapid,
+        },
+    );
+    if s.skipped.no_tool > 0 && a.tool.is_none() {
+        return Err(format!(
+            "{path}: the program does not say the shape of its tool; give it with --tool (ball:D, flat:D, bull:D:R, cone:D:ANGLE)"
+        ));
+    }
+    if s.strokes.is_empty() {
+        return Err(format!(
+            "{path}: no move could be simulated ({} from or to an unknown position, {} with the tool axis known only as machine angles)",
+            s.skipped.unknown_position, s.skipped.unknown_axis
+        ));
+    }
+    Ok(s)
+}
+
+/// The stock's surface as binary STL, at `mesh_resolution` (else coarse
+/// enough for about a million cells).
+pub fn stock_stl(stock: &Stock, mesh_resolution: Option<f64>) -> Vec<u8> {
+    let step = match mesh_resolution {
+        Some(m) => ((m / stock.grid.res).round() as usize).max(1),
+        None => ((stock.cells() as f64 / 1e6).sqrt().ceil() as usize).max(1),
+    };
+    let mesh = millplan_sim::stock::stock_mesh(&stock.coarsened(step));
+    let mut bytes = Vec::new();
+    millplan_geom::stl::write_binary_stl(&mesh, "millplan stock", &mut bytes);
+    bytes
+}
+
+/// How far along each facet's normal the material left is measured, mm.
+pub const REMAINING_REACH: f64 = 10.0;
+
+/// The material left on `part` after the run (`tol` the gouge depth).
+pub fn remaining_on(stock: &Stock, part: &millplan_geom::TriMesh, tol: f64) -> Remaining {
+    remaining(stock, part, REMAINING_REACH, tol)
+}
+
+/// The material left on the part.
+#[derive(Serialize)]
+pub struct RemainingJson<'a> {
+    min: f64,
+    max: f64,
+    mean: f64,
+    facets: usize,
+    gouged: usize,
+    histogram: &'a [Bin],
+}
+
+/// What `simulate --json` prints.
+#[derive(Serialize)]
+pub struct Report<'a> {
+    #[serde(flatten)]
+    pub run: &'a SimReport,
+    pub stock: &'a str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub remaining: Option<RemainingJson<'a>>,
+}
+
+impl<'a> Report<'a> {
+    pub fn new(run: &'a SimReport, stock: &'a str, rem: Option<&'a Remaining>) -> Self {
+        Report {
+            run,
+            stock,
+            remaining: rem.map(|r| RemainingJson {
+                min: r.min,
+                max: r.max,
+                mean: r.mean,
+                facets: r.facets,
+                gouged: r.gouged,
+                histogram: &r.histogram,
+            }),
+        }
+    }
+
+    /// The collisions at their lines in `path`, then the removal and what is
+    /// left on the part (`tol` the gouge depth).
+    pub fn render_text(&self, path: &str, tol: f64) -> String {
+        let rep = self.run;
+        let mut o = String::new();
+        for c in &rep.rapid_collisions {
+            let _ = writeln!(
+                o,
+                "{path}:{}: rapid into material, {:.3} mm deep ({:.3} mm³)",
+                c.line, c.depth, c.volume_mm3
+            );
+        }
+        for c in &rep.holder_collisions {
+            let _ = writeln!(
+                o,
+                "{path}:{}: shank or holder in material, {:.3} mm deep ({:.3} mm³)",
+                c.line, c.depth, c.volume_mm3
+            );
+        }
+        let _ = writeln!(
+            o,
+            "{} of {} moves simulated at {} mm: removed {:.1} mm³ of {:.1} ({} cutting, {} in air), highest rate {:.0} mm³/min at line {}",
+            rep.simulated, rep.moves, rep.resolution_mm, rep.removed_mm3, rep.stock_before_mm3,
+            rep.cutting_moves, rep.air_moves, rep.max_mrr_mm3_min, rep.max_mrr_line
+        );
+        if rep.skipped.total() > 0 {
+            let _ = writeln!(
+                o,
+                "not simulated: {} moves from or to an unknown position, {} with the axis known only as machine angles",
+                rep.skipped.unknown_position, rep.skipped.unknown_axis
+            );
+        }
+        if let Some(r) = &self.remaining {
+            let _ = writeln!(
+                o,
+                "on the part ({} facets): material left {:.3} to {:.3} mm, mean {:.3}; {} facets cut into by more than {tol} mm",
+                r.facets, r.min, r.max, r.mean, r.gouged
+            );
+        }
+        let hits = rep.rapid_collisions.len() + rep.holder_collisions.len();
+        if hits == 0 {
+            o.push_str("no collisions\n");
+        } else {
+            let _ = writeln!(o, "{hits} collisions");
+        }
+        o
+    }
+}

@@ -1,0 +1,251 @@
+//! `millplan speed` (and the spindle-control reports of `reorder`): the
+//! request checked into the pass's parameters, the pass on a copy of the
+//! input, the checks of its output, the report's header and the summary.
+
+use crate::check::{arg, Range, MAX_TOOL_D, MAX_VC};
+pub use millplan_models::contact::{Convention, NormalMode, Surface};
+use millplan_nc::write::Target;
+use millplan_nc::{Diagnostic, Program};
+use millplan_plan::machine::Machine;
+use millplan_plan::pipeline::{self, Context, PassError};
+use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
+use millplan_plan::speed::{FeedCoupling, SpeedParams, SpeedPass, Summary};
+use serde::Serialize;
+use std::fmt::Write as _;
+
+/// The cutting data of a spindle-control run, as given.
+#[derive(Clone, Copy, Debug)]
+pub struct Cutting {
+    /// m/min.
+    pub vc: f64,
+    /// mm.
+    pub fz: f64,
+    pub flutes: u32,
+    /// Stock thickness along the surface normal, mm.
+    pub ap: f64,
+}
+
+/// The options of `millplan speed` as given.
+#[derive(Clone, Copy, Debug)]
+pub struct SpeedRequest {
+    pub cut: Cutting,
+    pub ball_d: Option<f64>,
+    pub s_threshold: f64,
+    pub keep_feed: bool,
+    /// `None`: decided from the part.
+    pub convention: Option<Convention>,
+    pub normals: NormalMode,
+    pub nearest_incentre: bool,
+    /// Keep the per-point rows (for a table or a report).
+    pub keep_rows: bool,
+}
+
+/// Every number in its physical range, naming the option.
+pub fn check(a: &SpeedRequest) -> Result<(), String> {
+    arg("--vc", a.cut.vc, Range::positive(MAX_VC, "m/min"))?;
+    arg("--fz", a.cut.fz, Range::positive(10.0, "mm"))?;
+    arg(
+        "--flutes",
+        a.cut.flutes as f64,
+        Range::from(1.0, 1000.0, ""),
+    )?;
+    let d = match a.ball_d {
+        Some(d) => arg("--ball-d", d, Range::positive(MAX_TOOL_D, "mm"))?,
+        None => MAX_TOOL_D,
+    };
+    // The ball model's domain: the stock no thicker than the ball's radius.
+    arg(
+        "--ap",
+        a.cut.ap,
+        Range::positive(d / 2.0, "mm (at most D/2)"),
+    )?;
+    arg(
+        "--s-threshold",
+        a.s_threshold,
+        Range::from(0.0, 1e5, "1/min"),
+    )?;
+    Ok(())
+}
+
+/// The pass's parameters.
+pub fn params(a: &SpeedRequest) -> SpeedParams {
+    let c = a.cut;
+    let mut p = SpeedParams::new(c.vc, c.fz, c.flutes, c.ap);
+    p.feed = if a.keep_feed {
+        FeedCoupling::Programmed
+    } else {
+        FeedCoupling::ChipLoad
+    };
+    p.s_threshold = a.s_threshold.max(0.0);
+    p.convention = a.convention;
+    p.normals = a.normals;
+    p.nearest_incentre = a.nearest_incentre;
+    p.ball_d = a.ball_d;
+    p.keep_rows = a.keep_rows;
+    p
+}
+
+/// The speed pass on a copy of the input.
+pub fn run(
+    a: &SpeedRequest,
+    cx: &Context,
+    input: &Program,
+) -> Result<(Program, SpeedPass), PassError> {
+    let mut program = cx.time("copy of the input for the checks", || input.clone());
+    let mut pass = SpeedPass::new(params(a));
+    pipeline::run(&mut [&mut pass], &mut program, cx)?;
+    Ok((program, pass))
+}
+
+/// The checks of a program whose speeds and feeds are all that changed:
+/// the IR verifier, S and F within the machine, every position kept.
+pub fn checks(cx: &Context, input: &Program, output: &Program) -> Vec<Check> {
+    cx.time("checks (IR, machine, positions)", || {
+        safety::check_feeds_only(&Inputs {
+            input,
+            output,
+            part: None,
+            stock: None,
+            tool_body: &|_| None,
+            machine: Some(&cx.machine),
+            tip: TipRule::Kept,
+            tol: Tolerances::default(),
+            loads: None,
+        })
+    })
+}
+
+/// The tool of the first operation that cuts, as the program names it.
+pub fn tool_name(p: &Program) -> String {
+    let Some(t) = p
+        .operations
+        .iter()
+        .find(|op| op.moves.iter().any(|m| m.is_cutting()))
+        .and_then(|op| op.tool.as_ref())
+    else {
+        return "not named by the program".to_string();
+    };
+    let mut words = Vec::new();
+    if let Some(n) = t.number {
+        words.push(format!("T{n}"));
+    }
+    if let Some(n) = &t.name {
+        words.push(n.clone());
+    }
+    if let Some(c) = &t.cutter {
+        words.push(format!("D{:.3} R{:.3}", c.d, c.r));
+    }
+    words.join(" ")
+}
+
+/// The header, warnings and cycle times of a spindle-control report; the
+/// program and the part by their file names.
+pub fn report_inputs(
+    (program_name, program): (String, &Program),
+    part: String,
+    machine: &Machine,
+    cut: Cutting,
+    findings: &[Diagnostic],
+    [time_before_s, time_after_s]: [f64; 2],
+) -> millplan_report::html::SpeedInputs {
+    millplan_report::html::SpeedInputs {
+        program: program_name,
+        part,
+        tool: tool_name(program),
+        machine: machine.name.clone(),
+        spindle: (machine.spindle_min, machine.spindle_max),
+        spindle_accel: machine.spindle_accel,
+        feed_max: machine.feed_max,
+        vc: cut.vc,
+        fz: cut.fz,
+        flutes: cut.flutes,
+        ap: cut.ap,
+        time_before_s: Some(time_before_s),
+        time_after_s: Some(time_after_s),
+        warnings: findings.iter().map(|d| d.message.clone()).collect(),
+    }
+}
+
+/// What `speed --json` prints: the pass's summary and the run around it.
+#[derive(Serialize)]
+pub struct Report<'a> {
+    #[serde(flatten)]
+    pub summary: &'a Summary,
+    pub output: String,
+    pub dialect: &'static str,
+    pub machine: &'a Machine,
+    pub findings: &'a [Diagnostic],
+    pub trusted: bool,
+    pub checks: &'a [Check],
+    pub time_before_s: f64,
+    pub time_after_s: f64,
+    pub time_model: &'static str,
+}
+
+impl<'a> Report<'a> {
+    pub fn new(
+        (summary, checks): (&'a Summary, &'a [Check]),
+        (output, target): (String, Target),
+        machine: &'a Machine,
+        findings: &'a [Diagnostic],
+        [time_before_s, time_after_s]: [f64; 2],
+    ) -> Self {
+        Report {
+            summary,
+            output,
+            dialect: target.name(),
+            machine,
+            findings,
+            trusted: !millplan_plan::checks::untrusted(summary),
+            checks,
+            time_before_s,
+            time_after_s,
+            time_model: "acceleration",
+        }
+    }
+
+    /// The text summary.
+    pub fn render_text(&self) -> String {
+        let s = self.summary;
+        let mut o = String::new();
+        let _ = writeln!(
+            o,
+            "{} cutting points in {} ball-end operation(s), CL points read as {:?}",
+            s.points, s.operations, s.convention
+        );
+        let _ = writeln!(
+            o,
+            "  D_w        {:.3} … {:.3} mm (mean {:.3})",
+            s.d_w.min, s.d_w.max, s.d_w.mean
+        );
+        let _ = writeln!(
+            o,
+            "  spindle    {:.0} … {:.0} 1/min",
+            s.spindle.min, s.spindle.max
+        );
+        let _ = writeln!(
+            o,
+            "  vc         {:.1} … {:.1} m/min with control; {:.1} … {:.1} at constant {:.0} 1/min",
+            s.vc_controlled.min,
+            s.vc_controlled.max,
+            s.vc_constant.min,
+            s.vc_constant.max,
+            s.constant_spindle
+        );
+        let _ = writeln!(
+            o,
+            "  limits     {} clamped, {} rate-limited, {} held under the S threshold, {} feeds clamped",
+            s.clamped, s.rate_limited, s.held, s.feed_clamped
+        );
+        if s.gap_flagged > 0 {
+            let _ = writeln!(o, "  warning    {} points are not R from the surface (gouge, wrong convention or a different part)", s.gap_flagged);
+        }
+        let _ = writeln!(o, "  wrote      {} ({})", self.output, self.dialect);
+        let _ = writeln!(
+            o,
+            "  time       {:.1} s → {:.1} s, estimated with acceleration on {}",
+            self.time_before_s, self.time_after_s, self.machine.name
+        );
+        o
+    }
+}

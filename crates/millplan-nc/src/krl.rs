@@ -1,0 +1,660 @@
+//! KUKA KRL robot programs (`.SRC`): the reader (process-models §5).
+//!
+//! A program is read into a [`KrlProgram`]: its motions (`PTP`, `LIN`,
+//! `CIRC` with `E6POS` aggregates `{X, Y, Z, A, B, C, E1..E6, S, T}`, the
+//! approximation `C_DIS`/`C_VEL`/`C_ORI`), the path speed `$VEL.CP` (m/s)
+//! and approximation distance `$APO.CDIS` (mm) in force at each, `$TOOL` and
+//! `$BASE`, and every other statement kept verbatim (user calls such as
+//! `MMPM(30000.0)`, `BAS(...)`, FOLD lines). A main program that calls
+//! sub-programs declared with `EXT` reads each one beside it through the
+//! caller's resolver; a missing one is named with its calling line and the
+//! rest is read. [`KrlProgram::to_ir`] turns it into the toolpath IR for the
+//! other dialects: the orientation A, B, C (R = Rz(A)·Ry(B)·Rx(C), the
+//! tool along the tool frame's x) becomes a tool axis, external axes are
+//! refused at their line unless lossy. `write::krl` writes it back.
+
+use crate::diag::{Code, Diagnostic, ParseError, Parsed, Severity};
+use crate::ir::{Dialect, EventKind, FeedMode, Move, MoveKind, Operation, Orient, Program};
+use crate::ir::{PassClass, Passthrough};
+use millplan_geom::{DMat3, DVec3};
+
+/// A Cartesian KRL target: position (mm), orientation A, B, C (degrees),
+/// external axes E1..E6, Status and Turn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KrlPos {
+    pub xyz: DVec3,
+    pub abc: [f64; 3],
+    pub e: [Option<f64>; 6],
+    pub s: Option<u32>,
+    pub t: Option<u32>,
+}
+
+/// The approximation tag of a motion.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Approx {
+    Exact,
+    Dis,
+    Vel,
+    Ori,
+}
+
+/// A motion's target.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Motion {
+    Lin(KrlPos),
+    /// Through `aux` to `end`.
+    Circ {
+        aux: KrlPos,
+        end: KrlPos,
+    },
+    /// Point to point to a Cartesian target.
+    Ptp(KrlPos),
+    /// Point to point to joint angles or a named position (`XHOME`,
+    /// `$POS_ACT`): where it ends is not known to the reader.
+    PtpOther(String),
+}
+
+/// One statement of a program.
+// A move holds its targets inline: programs are mostly moves, so boxing
+// them would only add an allocation per line.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Debug, PartialEq)]
+pub enum Statement {
+    Move {
+        motion: Motion,
+        approx: Approx,
+        /// `$VEL.CP` in force, m/s (`None`: never set in the program).
+        vel_cp: Option<f64>,
+    },
+    VelCp(f64),
+    ApoCdis(f64),
+    /// `$TOOL = …` / `$BASE = …`: the right-hand side as written.
+    Tool(String),
+    Base(String),
+    /// Anything else, as written (comments included).
+    Verbatim(String),
+}
+
+/// A statement and where it was read: the file (0 = the main program, else
+/// `files[file]`) and its 1-based line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Located {
+    pub file: usize,
+    pub line: u32,
+    pub statement: Statement,
+}
+
+/// A KRL program with the sub-programs its main calls, in call order.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct KrlProgram {
+    /// The main program's name (its `DEF`).
+    pub name: String,
+    /// The names of the files read: the main first, then each sub-program.
+    pub files: Vec<String>,
+    pub statements: Vec<Located>,
+    /// Sub-programs called but not found: (name, file index, calling line).
+    pub missing: Vec<(String, usize, u32)>,
+}
+
+/// An error in one of the files of a program.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KrlError {
+    /// The sub-program's name, `None` for the main program.
+    pub file: Option<String>,
+    pub error: ParseError,
+}
+
+/// Sub-programs are read at most this deep (a main calling sub-programs
+/// that call their own).
+const MAX_DEPTH: usize = 8;
+
+/// Whether `src` is a KRL program (its header or `DEF`).
+pub fn is_krl(src: &str) -> bool {
+    crate::detect::krl_refusal(src).is_some()
+}
+
+/// Reads a main program; `resolve(name)` gives the text of a sub-program
+/// declared with `EXT name(…)` and called, or `None` when it is not there.
+pub fn read(
+    src: &str,
+    resolve: &mut dyn FnMut(&str) -> Option<String>,
+) -> Result<KrlProgram, KrlError> {
+    let mut p = KrlProgram::default();
+    let mut vel = None;
+    read_file(src, 0, 0, resolve, &mut p, &mut vel)?;
+    p.name = p.files.first().cloned().unwrap_or_default();
+    Ok(p)
+}
+
+fn read_file(
+    src: &str,
+    file: usize,
+    depth: usize,
+    resolve: &mut dyn FnMut(&str) -> Option<String>,
+    p: &mut KrlProgram,
+    vel: &mut Option<f64>,
+) -> Result<(), KrlError> {
+    let fail = |p: &KrlProgram, e: ParseError| KrlError {
+        file: if file == 0 {
+            None
+        } else {
+            p.files.get(file).cloned()
+        },
+        error: e,
+    };
+    if p.files.len() <= file {
+        p.files.push(String::new());
+    }
+    let mut ext: Vec<String> = Vec::new();
+    for (k, raw) in crate::lines::split(src).enumerate() {
+        let line = u32::try_from(k + 1).unwrap_or(u32::MAX);
+        let st = parse_line(raw, line).map_err(|e| fail(p, e))?;
+        let Some(st) = st else { continue };
+        match st {
+            Parsed1::Def(name) => {
+                if p.files[file].is_empty() {
+                    p.files[file] = name;
+                }
+            }
+            Parsed1::Ext(name) => ext.push(name.to_ascii_uppercase()),
+            Parsed1::Call(name, text) if ext.contains(&name.to_ascii_uppercase()) => {
+                if depth >= MAX_DEPTH {
+                    return Err(fail(
+                        p,
+                        ParseError::new(
+                            line,
+                            1,
+                            "sub-programs call each other deeper than 8 levels",
+                        ),
+                    ));
+                }
+                match resolve(&name) {
+                    Some(sub) => {
+                        let idx = p.files.len();
+                        p.files.push(name.clone());
+                        read_file(&sub, idx, depth + 1, resolve, p, vel)?;
+                    }
+                    None => {
+                        p.missing.push((name, file, line));
+                        p.statements.push(Located {
+                            file,
+                            line,
+                            statement: Statement::Verbatim(text),
+                        });
+                    }
+                }
+            }
+            Parsed1::Call(_, text) => p.statements.push(Located {
+                file,
+                line,
+                statement: Statement::Verbatim(text),
+            }),
+            Parsed1::St(mut s) => {
+                match &mut s {
+                    Statement::VelCp(v) => *vel = Some(*v),
+                    Statement::Move { vel_cp, .. } => *vel_cp = *vel,
+                    _ => {}
+                }
+                p.statements.push(Located {
+                    file,
+                    line,
+                    statement: s,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+#[allow(clippy::large_enum_variant)]
+enum Parsed1 {
+    Def(String),
+    Ext(String),
+    /// A call `name(…)`: the name and the statement as written.
+    Call(String, String),
+    St(Statement),
+}
+
+/// One line: `None` for blank lines, headers and `END`.
+fn parse_line(raw: &str, line: u32) -> Result<Option<Parsed1>, ParseError> {
+    let text = raw.trim();
+    let code = text.split(';').next().unwrap_or("").trim();
+    if text.is_empty() || text.starts_with('&') {
+        return Ok(None);
+    }
+    if code.is_empty() {
+        return Ok(Some(Parsed1::St(Statement::Verbatim(text.to_string()))));
+    }
+    let up = code.to_ascii_uppercase();
+    let word = up
+        .split(|c: char| c.is_whitespace() || c == '(' || c == '{')
+        .next()
+        .unwrap_or("");
+    let col = |needle: &str| raw.find(needle).map_or(1, |i| i + 1) as u32;
+    match word {
+        "DEF" | "GLOBAL" if up.contains("DEF ") => {
+            let name = name_before_paren(&code[up.find("DEF ").unwrap_or(0) + 4..]);
+            Ok(Some(Parsed1::Def(name)))
+        }
+        "END" => Ok(None),
+        "EXT" => Ok(Some(Parsed1::Ext(name_before_paren(&code[3..])))),
+        "LIN" | "PTP" | "CIRC" => motion(word, code, line, col(code)).map(|s| Some(Parsed1::St(s))),
+        _ => Ok(Some(assignment_or_call(code, text, &up, line, col(code))?)),
+    }
+}
+
+fn name_before_paren(s: &str) -> String {
+    s.trim().split('(').next().unwrap_or("").trim().to_string()
+}
+
+fn assignment_or_call(
+    code: &str,
+    text: &str,
+    up: &str,
+    line: u32,
+    col: u32,
+) -> Result<Parsed1, ParseError> {
+    if let Some((lhs, rhs)) = code.split_once('=') {
+        let (l, r) = (lhs.trim().to_ascii_uppercase(), rhs.trim());
+        let number = |what: &str| {
+            r.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite() && *v >= 0.0)
+                .ok_or_else(|| {
+                    ParseError::new(
+                        line,
+                        col,
+                        format!("{what} = {r}: a number from 0 up was expected"),
+                    )
+                })
+        };
+        match l.as_str() {
+            "$VEL.CP" => return Ok(Parsed1::St(Statement::VelCp(number("$VEL.CP")?))),
+            "$APO.CDIS" => return Ok(Parsed1::St(Statement::ApoCdis(number("$APO.CDIS")?))),
+            "$TOOL" => return Ok(Parsed1::St(Statement::Tool(r.to_string()))),
+            "$BASE" => return Ok(Parsed1::St(Statement::Base(r.to_string()))),
+            _ => {}
+        }
+    }
+    let is_call = up.ends_with(')')
+        && up.split('(').next().is_some_and(|n| {
+            let n = n.trim();
+            !n.is_empty() && n.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_')
+        });
+    if is_call {
+        return Ok(Parsed1::Call(name_before_paren(code), text.to_string()));
+    }
+    Ok(Parsed1::St(Statement::Verbatim(text.to_string())))
+}
+
+fn motion(word: &str, code: &str, line: u32, col: u32) -> Result<Statement, ParseError> {
+    let rest = code[word.len()..].trim();
+    let (targets, tail) = match rest.rfind('}') {
+        Some(end) if rest.starts_with('{') => (&rest[..=end], rest[end + 1..].trim()),
+        _ => ("", rest),
+    };
+    let approx = match tail.to_ascii_uppercase().split_whitespace().last() {
+        Some("C_DIS") => Approx::Dis,
+        Some("C_VEL") => Approx::Vel,
+        Some("C_ORI") => Approx::Ori,
+        _ => Approx::Exact,
+    };
+    let motion = match word {
+        "PTP" if targets.is_empty() || targets.to_ascii_uppercase().contains("A1 ") => {
+            Motion::PtpOther(rest.to_string())
+        }
+        "PTP" => Motion::Ptp(aggregate(targets, line, col)?),
+        "LIN" => {
+            if targets.is_empty() {
+                return Err(ParseError::new(
+                    line,
+                    col,
+                    "LIN to a named position: only aggregates {X …} are read",
+                ));
+            }
+            Motion::Lin(aggregate(targets, line, col)?)
+        }
+        _ => {
+            let (a, b) = targets.split_once("},").ok_or_else(|| {
+                ParseError::new(
+                    line,
+                    col,
+                    "CIRC needs an auxiliary point and a target: {…},{…}",
+                )
+            })?;
+            Motion::Circ {
+                aux: aggregate(&format!("{a}}}"), line, col)?,
+                end: aggregate(b.trim(), line, col)?,
+            }
+        }
+    };
+    Ok(Statement::Move {
+        motion,
+        approx,
+        vel_cp: None,
+    })
+}
+
+/// `{X 1, Y 2, Z 3, A 0, B 90, C 0, E1 10, S 6, T 27}` (E6POS; X, Y, Z needed).
+fn aggregate(s: &str, line: u32, col: u32) -> Result<KrlPos, ParseError> {
+    let inner = s
+        .trim()
+        .strip_prefix('{')
+        .and_then(|r| r.strip_suffix('}'))
+        .ok_or_else(|| {
+            ParseError::new(
+                line,
+                col,
+                format!("{s}: an aggregate {{X …, Y …, Z …}} was expected"),
+            )
+        })?;
+    let inner = inner.split_once(':').map_or(inner, |(_, r)| r); // `{E6POS: X …}`
+    let mut xyz = [f64::NAN; 3];
+    let mut p = KrlPos {
+        xyz: DVec3::NAN,
+        abc: [0.0; 3],
+        e: [None; 6],
+        s: None,
+        t: None,
+    };
+    for part in inner.split(',') {
+        let mut it = part.split_whitespace();
+        let (Some(key), Some(val)) = (it.next(), it.next()) else {
+            return Err(ParseError::new(
+                line,
+                col,
+                format!("{part:?}: a component `NAME value` was expected"),
+            ));
+        };
+        let key = key.to_ascii_uppercase();
+        let num = || -> Result<f64, ParseError> {
+            let v = if let Some(b) = val
+                .strip_prefix('\'')
+                .and_then(|v| v.strip_prefix('B').or(v.strip_prefix('b')))
+            {
+                u32::from_str_radix(b.trim_end_matches('\''), 2)
+                    .map(f64::from)
+                    .ok()
+            } else {
+                val.parse::<f64>().ok()
+            };
+            v.filter(|v| v.is_finite())
+                .ok_or_else(|| ParseError::new(line, col, format!("{key} {val}: not a number")))
+        };
+        match key.as_str() {
+            "X" => xyz[0] = num()?,
+            "Y" => xyz[1] = num()?,
+            "Z" => xyz[2] = num()?,
+            "A" => p.abc[0] = num()?,
+            "B" => p.abc[1] = num()?,
+            "C" => p.abc[2] = num()?,
+            "S" => p.s = Some(num()? as u32),
+            "T" => p.t = Some(num()? as u32),
+            k if k.len() == 2 && k.starts_with('E') && (b'1'..=b'6').contains(&k.as_bytes()[1]) => {
+                p.e[(k.as_bytes()[1] - b'1') as usize] = Some(num()?)
+            }
+            _ => {
+                return Err(ParseError::new(
+                    line,
+                    col,
+                    format!("{key}: not a component of a Cartesian KRL position"),
+                ))
+            }
+        }
+    }
+    if xyz.iter().any(|v| v.is_nan()) {
+        return Err(ParseError::new(
+            line,
+            col,
+            "a KRL position needs X, Y and Z",
+        ));
+    }
+    p.xyz = DVec3::from_array(xyz);
+    Ok(p)
+}
+
+/// The statement a line of KRL is (a `$VEL.CP`, `$TOOL`, … kept by the IR
+/// as text), or `None` for a line that is not one statement.
+pub fn statement_of(text: &str) -> Option<Statement> {
+    match parse_line(text, 1).ok()?? {
+        Parsed1::St(s) => Some(s),
+        Parsed1::Call(_, t) => Some(Statement::Verbatim(t)),
+        _ => None,
+    }
+}
+
+/// KUKA's orientation R = Rz(A)·Ry(B)·Rx(C), degrees.
+pub fn abc_matrix(abc: [f64; 3]) -> DMat3 {
+    let [a, b, c] = abc.map(f64::to_radians);
+    DMat3::from_rotation_z(a) * DMat3::from_rotation_y(b) * DMat3::from_rotation_x(c)
+}
+
+/// The tool axis (tip toward the spindle) of a KRL orientation: KUKA's tool
+/// points along its frame's x, so the axis is −x.
+pub fn tool_axis(abc: [f64; 3]) -> DVec3 {
+    -(abc_matrix(abc) * DVec3::X)
+}
+
+/// An orientation whose tool axis is `axis`: the frame of A = C = 0, B = 90°
+/// (tool pointing down, axis +z) turned by the shortest rotation onto it.
+pub fn abc_for_axis(axis: DVec3) -> [f64; 3] {
+    let down = abc_matrix([0.0, 90.0, 0.0]);
+    let r = glam::DQuat::from_rotation_arc(DVec3::Z, axis.normalize());
+    let m = DMat3::from_quat(r) * down;
+    let cb = m.col(0).x.hypot(m.col(0).y);
+    let b = (-m.col(0).z).atan2(cb);
+    let (a, c) = if cb > 1e-12 {
+        (m.col(0).y.atan2(m.col(0).x), m.col(1).z.atan2(m.col(2).z))
+    } else {
+        ((-m.col(1).x).atan2(m.col(1).y), 0.0)
+    };
+    [a.to_degrees(), b.to_degrees(), c.to_degrees()]
+}
+
+impl KrlProgram {
+    /// Where statement `i` was read: `NAME:LINE` of its file.
+    pub fn place(&self, l: &Located) -> String {
+        format!(
+            "{}:{}",
+            self.files.get(l.file).map_or("?", String::as_str),
+            l.line
+        )
+    }
+
+    /// The toolpath IR of the program, for writing it in another dialect.
+    /// The first motion's `$VEL.CP` unset: `default_feed` (mm/min) and a
+    /// finding. External axes E1..E6 are refused at their statement unless
+    /// `lossy` (then a finding each, once per file).
+    pub fn to_ir(&self, default_feed: f64, lossy: bool) -> Result<Parsed, KrlError> {
+        let mut prog = Program::new(Dialect::Krl);
+        prog.name = Some(self.name.clone());
+        let mut op = Operation {
+            tool: Some(self.tool()),
+            ..Operation::default()
+        };
+        let mut diags = Vec::new();
+        let mut warned_feed = false;
+        let mut warned_e = false;
+        for l in &self.statements {
+            let Statement::Move { motion, vel_cp, .. } = &l.statement else {
+                self.event(l, &mut op);
+                continue;
+            };
+            let feed = match vel_cp {
+                Some(v) => v * 60_000.0,
+                None => {
+                    if !warned_feed {
+                        warned_feed = true;
+                        diags.push(diag(Code::FeedMissing, l.line, format!(
+                            "{}: no $VEL.CP before the first motion: {default_feed} mm/min assumed", self.place(l))));
+                    }
+                    default_feed
+                }
+            };
+            let target = match motion {
+                Motion::Lin(p) | Motion::Ptp(p) => Some(p),
+                Motion::Circ { end, .. } => Some(end),
+                Motion::PtpOther(_) => None,
+            };
+            if let Some(p) = target {
+                if p.e.iter().any(Option::is_some) {
+                    if !lossy {
+                        return Err(KrlError { file: self.file_name(l), error: ParseError::new(l.line, 1,
+                            "an external axis (E1..E6) has no place in the target dialect: --lossy drops it") });
+                    }
+                    if !warned_e {
+                        warned_e = true;
+                        diags.push(diag(
+                            Code::LossyWord,
+                            l.line,
+                            format!("{}: external axes E1..E6 dropped", self.place(l)),
+                        ));
+                    }
+                }
+            }
+            self.push_move(l, motion, feed, &mut op);
+        }
+        for (name, file, line) in &self.missing {
+            diags.push(diag(
+                Code::UnknownPosition,
+                *line,
+                format!(
+                "{}:{line}: sub-program {name} is called but not beside the main program: not read",
+                self.files.get(*file).map_or("?", String::as_str)),
+            ));
+        }
+        prog.operations.push(op);
+        Ok(Parsed {
+            program: prog,
+            diagnostics: diags,
+        })
+    }
+
+    /// The tool of the first `$TOOL = TOOL_DATA[n]`, else an unnamed one.
+    fn tool(&self) -> crate::ir::Tool {
+        let first = self.statements.iter().find_map(|l| match &l.statement {
+            Statement::Tool(t) => Some((l.line, t.clone())),
+            _ => None,
+        });
+        let number = first.as_ref().and_then(|(_, t)| {
+            let inner = t.split('[').nth(1)?.split(']').next()?;
+            inner.trim().parse::<u32>().ok()
+        });
+        crate::ir::Tool {
+            number,
+            name: Some(
+                first
+                    .as_ref()
+                    .map_or("robot tool ($TOOL not set)".into(), |(_, t)| t.clone()),
+            ),
+            cutter: None,
+            line: first.map_or(0, |(l, _)| l),
+        }
+    }
+
+    fn file_name(&self, l: &Located) -> Option<String> {
+        if l.file == 0 {
+            None
+        } else {
+            self.files.get(l.file).cloned()
+        }
+    }
+
+    fn event(&self, l: &Located, op: &mut Operation) {
+        let text = match &l.statement {
+            Statement::VelCp(v) => format!("$VEL.CP = {v}"),
+            Statement::ApoCdis(v) => format!("$APO.CDIS = {v}"),
+            Statement::Tool(t) => format!("$TOOL = {t}"),
+            Statement::Base(b) => format!("$BASE = {b}"),
+            Statement::Verbatim(t) if t.starts_with(';') => {
+                op.push_event(
+                    l.line,
+                    EventKind::Comment(t.trim_start_matches(';').trim().to_string()),
+                );
+                return;
+            }
+            Statement::Verbatim(t) => t.clone(),
+            Statement::Move { .. } => return,
+        };
+        let word = text
+            .split(|c: char| c.is_whitespace() || c == '(' || c == '=')
+            .next()
+            .unwrap_or("")
+            .to_string();
+        // Speeds, approximation and frames are the robot's; the writers of
+        // other dialects keep them as comments.
+        op.push_event(
+            l.line,
+            EventKind::Passthrough(Passthrough {
+                word,
+                text,
+                class: PassClass::Info,
+                modal: false,
+                moves: false,
+            }),
+        );
+    }
+
+    fn push_move(&self, l: &Located, motion: &Motion, feed: f64, op: &mut Operation) {
+        let (end, kind, rapid) = match motion {
+            Motion::Lin(p) => (p, MoveKind::Linear, false),
+            Motion::Ptp(p) => (p, MoveKind::Rapid, true),
+            Motion::Circ { aux, end } => {
+                let start = op.moves.last().map_or(DVec3::NAN, |m| m.end);
+                match circle(start, aux.xyz, end.xyz) {
+                    Some(arc) => {
+                        let id = op.push_arc(arc);
+                        (end, MoveKind::Arc(id), false)
+                    }
+                    None => (end, MoveKind::Linear, false),
+                }
+            }
+            Motion::PtpOther(text) => {
+                op.push_event(
+                    l.line,
+                    EventKind::Passthrough(Passthrough {
+                        word: "PTP".into(),
+                        text: format!("PTP {text}"),
+                        class: PassClass::Machine,
+                        modal: false,
+                        moves: true,
+                    }),
+                );
+                return;
+            }
+        };
+        let orient = op.intern_orient(Orient::vector(tool_axis(end.abc)));
+        op.moves.push(Move {
+            end: end.xyz,
+            feed: if rapid { 0.0 } else { feed },
+            spindle: 0.0,
+            line: l.line,
+            kind,
+            orient: Some(orient),
+            feed_mode: FeedMode::PerMinute,
+        });
+    }
+}
+
+fn diag(code: Code, line: u32, message: String) -> Diagnostic {
+    Diagnostic {
+        severity: Severity::Warning,
+        code,
+        line,
+        col: 0,
+        message,
+    }
+}
+
+/// The arc from `a` through `b` to `c`, or `None` when they are in a line.
+fn circle(a: DVec3, b: DVec3, c: DVec3) -> Option<crate::ir::Arc> {
+    let (u, v) = (b - a, c - a);
+    let n = u.cross(v);
+    if !a.is_finite() || n.length_squared() < 1e-18 * u.length_squared() * v.length_squared() {
+        return None;
+    }
+    let centre = a
+        + (n.cross(u) * v.length_squared() + v.cross(n) * u.length_squared())
+            / (2.0 * n.length_squared());
+    crate::ir::Arc::from_points(a, c, centre, n, false)
+}

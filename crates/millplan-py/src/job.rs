@@ -1,0 +1,167 @@
+//! `optimise`: the job API of `millplan optimise` (millplan-driver), the
+//! inputs given as objects or file names, run with the GIL released.
+
+use crate::error::{guard, Located, Place, Res};
+use crate::mesh::PyMesh;
+use crate::program::PyProgram;
+use millplan_driver::passes::{self, ORDER};
+use millplan_driver::{Inputs, Job, Options, UserLimits, Verdict};
+use millplan_geom::TriMesh;
+use millplan_models::cutter::Shape;
+use millplan_models::force::materials::Materials;
+use millplan_nc::Program;
+use millplan_sim::stock::spec::StockSpec;
+use std::path::Path;
+
+/// What `optimise` was given, before any file is read.
+pub struct Request {
+    pub program: Program,
+    pub name: String,
+    pub part: Option<TriMesh>,
+    pub stock: Option<String>,
+    pub machine: Option<String>,
+    pub material: Option<String>,
+    pub tool: Option<String>,
+    pub flutes: Option<usize>,
+    pub vc: Option<f64>,
+    pub resolution: Option<f64>,
+    pub passes: Option<String>,
+    pub limits: UserLimits,
+    pub dialect: Option<String>,
+    pub output: Option<String>,
+}
+
+/// The written program, its text and the summary (as JSON).
+pub struct Done {
+    pub program: Program,
+    pub text: String,
+    pub summary_json: String,
+    pub refused: bool,
+}
+
+fn err(place: &str, e: impl std::fmt::Display) -> Located {
+    Located::new(Place::file(place), e.to_string())
+}
+
+/// A number given must be finite and within `lo..=hi`.
+fn within(name: &str, v: Option<f64>, lo: f64, hi: f64) -> Res<()> {
+    match v {
+        Some(x) if !(x >= lo && x <= hi) => {
+            Err(err(name, format!("{x}: must be from {lo} to {hi}")))
+        }
+        _ => Ok(()),
+    }
+}
+
+fn inputs(r: &Request) -> Res<Inputs> {
+    within("vc", r.vc, 1e-3, 1e4)?;
+    within("resolution", r.resolution, 0.005, 100.0)?;
+    within("flutes", r.flutes.map(|f| f as f64), 1.0, 64.0)?;
+    let stock = r
+        .stock
+        .as_deref()
+        .map(|s| StockSpec::parse(s).map_err(|e| err("stock", e)))
+        .transpose()?;
+    let blank = match &stock {
+        Some(StockSpec::Stl(p)) => {
+            let p = p.display().to_string();
+            Some((*crate::mesh::read(&p, false)?.mesh).clone())
+        }
+        _ => None,
+    };
+    let tool = r
+        .tool
+        .as_deref()
+        .map(|s| Shape::parse(s).map_err(|e| err("tools", e)))
+        .transpose()?;
+    Ok(Inputs {
+        program: r.program.clone(),
+        part: r.part.clone(),
+        stock,
+        blank,
+        machine: crate::program::machine(r.machine.as_deref())?,
+        machine_given: r.machine.is_some(),
+        materials: Materials::load(None).map_err(|e| err("material", e))?,
+        material: r.material.clone(),
+        options: Options {
+            vc: r.vc,
+            resolution: r.resolution,
+            tool,
+            flutes: r.flutes,
+            limits: r.limits,
+            ..Options::default()
+        },
+        // No tool library from Python yet: the cutter comes from the
+        // program or `tools=`.
+        library: Vec::new(),
+    })
+}
+
+/// Runs the job as `millplan optimise` does: the passes, the written
+/// program re-read and checked; written to `output` unless refused.
+pub fn run(r: Request) -> Res<Done> {
+    guard(&r.name.clone(), || {
+        let order = match &r.passes {
+            Some(s) => passes::parse_list(s).map_err(|e| err("passes", e))?,
+            None => ORDER.to_vec(),
+        };
+        let job = Job::new(inputs(&r)?).map_err(|e| err(&r.name, e))?;
+        let machine = job.inputs.machine_given.then_some(&job.inputs.machine);
+        let to = r
+            .dialect
+            .as_deref()
+            .map(crate::program::target)
+            .transpose()?;
+        // Without an output file, no file name says a dialect.
+        let out = r.output.as_deref().unwrap_or("");
+        let target = millplan_driver::target::output_target(
+            to,
+            Path::new(out),
+            machine,
+            job.inputs.program.source,
+        )
+        .map_err(|e| err(&r.name, e.trim_start_matches(": ")))?;
+        let outcome = job.run(&order).map_err(|e| err(&r.name, e))?;
+        let w = job
+            .finish(&outcome, job.inputs.machine.write_options(target))
+            .map_err(|e| err(&r.name, e))?;
+        let refused = w.summary.verdict == Verdict::Refused;
+        if let (Some(o), false) = (&r.output, refused) {
+            crate::error::write_bytes(o, &w.bytes)?;
+        }
+        Ok(Done {
+            summary_json: serde_json::to_string(&w.summary).map_err(|e| err(&r.name, e))?,
+            text: String::from_utf8_lossy(&w.bytes).into_owned(),
+            program: w.program,
+            refused,
+        })
+    })
+}
+
+/// A program argument: a `Program` or a file name.
+pub fn program_arg(p: &pyo3::Bound<'_, pyo3::PyAny>) -> pyo3::PyResult<(Program, String)> {
+    use pyo3::prelude::*;
+    if let Ok(p) = p.cast::<PyProgram>() {
+        let p = p.get();
+        return Ok((
+            (*p.program).clone(),
+            p.path.clone().unwrap_or_else(|| "<program>".into()),
+        ));
+    }
+    let path = p.extract::<std::path::PathBuf>()?.display().to_string();
+    let r = crate::program::read(&path, None)?;
+    Ok(((*r.program).clone(), path))
+}
+
+/// A part argument: a `Mesh`, a file name or None.
+pub fn part_arg(p: Option<&pyo3::Bound<'_, pyo3::PyAny>>) -> pyo3::PyResult<Option<TriMesh>> {
+    use pyo3::prelude::*;
+    let Some(p) = p.filter(|p| !p.is_none()) else {
+        return Ok(None);
+    };
+    if let Ok(m) = p.cast::<PyMesh>() {
+        return Ok(Some((*m.get().mesh).clone()));
+    }
+    let path = p.extract::<std::path::PathBuf>()?.display().to_string();
+    Ok(Some((*crate::mesh::read(&path, false)?.mesh).clone()))
+}

@@ -1,0 +1,187 @@
+//! The extension module `millplan._millplan`: thin wrappers over millplan's
+//! library crates. Every decision and default lives in those crates; here
+//! arguments become library values, results become NumPy arrays or dicts,
+//! errors become `MillplanError` with their file, line and column, and the
+//! long computations run with the GIL released. The Python package
+//! (`python/millplan`) re-exports these with docstrings and type stubs.
+
+mod error;
+mod job;
+mod mesh;
+mod program;
+mod wd;
+
+use error::{Located, Place};
+use millplan_driver::UserLimits;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// JSON text (a library summary serialised by serde) as Python objects.
+pub(crate) fn json_to_py(py: Python<'_>, json: &str) -> PyResult<Py<PyAny>> {
+    Ok(py.import("json")?.call_method1("loads", (json,))?.unbind())
+}
+
+/// What a file holds, as `millplan inspect --json` prints it.
+#[pyfunction]
+#[pyo3(signature = (path, machine=None, units=None))]
+fn inspect(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+    machine: Option<std::path::PathBuf>,
+    units: Option<&str>,
+) -> PyResult<Py<PyAny>> {
+    let path = path.display().to_string();
+    let machine = machine.map(|m| m.display().to_string());
+    let units = program::unit(units)?;
+    let json = py.detach(|| {
+        error::guard(&path, || {
+            program::inspect_json(&path, machine.as_deref(), units)
+        })
+    })?;
+    json_to_py(py, &json)
+}
+
+/// Reads an APT/CL or G-code program (format detected from the content).
+#[pyfunction]
+#[pyo3(signature = (path, units=None))]
+fn read_program(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+    units: Option<&str>,
+) -> PyResult<program::PyProgram> {
+    let path = path.display().to_string();
+    let units = program::unit(units)?;
+    Ok(py.detach(|| error::guard(&path, || program::read(&path, units)))?)
+}
+
+/// Writes a program; returns the dialect written.
+#[pyfunction]
+#[pyo3(signature = (program, path, dialect=None, machine=None))]
+fn write_program(
+    py: Python<'_>,
+    program: &program::PyProgram,
+    path: std::path::PathBuf,
+    dialect: Option<&str>,
+    machine: Option<std::path::PathBuf>,
+) -> PyResult<&'static str> {
+    let path = path.display().to_string();
+    let m = machine
+        .map(|m| program::machine(Some(&m.display().to_string())))
+        .transpose()?;
+    let p = program.program.clone();
+    let t = py.detach(|| error::guard(&path, || program::write(&p, &path, dialect, m.as_ref())))?;
+    Ok(t.name())
+}
+
+/// Reads an STL part.
+#[pyfunction]
+#[pyo3(signature = (path, units=None))]
+fn read_stl(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+    units: Option<&str>,
+) -> PyResult<mesh::PyMesh> {
+    let path = path.display().to_string();
+    let inch = program::unit(units)? == Some(millplan_nc::LengthUnit::Inch);
+    Ok(py.detach(|| error::guard(&path, || mesh::read(&path, inch)))?)
+}
+
+/// The load limits given as a dict (fxy N, torque N·mm, power W, stress
+/// MPa, deflection mm).
+fn limits(d: Option<&Bound<'_, PyDict>>) -> PyResult<UserLimits> {
+    let mut l = UserLimits::default();
+    let Some(d) = d else { return Ok(l) };
+    for (k, v) in d.iter() {
+        let name: String = k.extract()?;
+        let v: f64 = v.extract()?;
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(Located::new(
+                Place::file("limits"),
+                format!("{name} {v}: must be positive"),
+            )
+            .into());
+        }
+        let slot = match name.as_str() {
+            "fxy" => &mut l.fxy,
+            "torque" => &mut l.torque,
+            "power" => &mut l.power,
+            "stress" => &mut l.stress,
+            "deflection" => &mut l.deflection,
+            _ => {
+                let m = format!("{name:?}: not a limit (fxy, torque, power, stress, deflection)");
+                return Err(Located::new(Place::file("limits"), m).into());
+            }
+        };
+        *slot = Some(v);
+    }
+    Ok(l)
+}
+
+/// The job of `millplan optimise`; returns (program, text, summary JSON, refused).
+#[pyfunction]
+#[pyo3(signature = (program, part=None, stock=None, machine=None, material=None, tools=None,
+                    flutes=None, vc=None, resolution=None, passes=None, limits=None, dialect=None, output=None))]
+#[allow(clippy::too_many_arguments)]
+fn optimise(
+    py: Python<'_>,
+    program: &Bound<'_, PyAny>,
+    part: Option<&Bound<'_, PyAny>>,
+    stock: Option<String>,
+    machine: Option<std::path::PathBuf>,
+    material: Option<String>,
+    tools: Option<String>,
+    flutes: Option<usize>,
+    vc: Option<f64>,
+    resolution: Option<f64>,
+    passes: Option<String>,
+    limits: Option<&Bound<'_, PyDict>>,
+    dialect: Option<String>,
+    output: Option<std::path::PathBuf>,
+) -> PyResult<(program::PyProgram, String, Py<PyAny>, bool)> {
+    let (p, name) = job::program_arg(program)?;
+    let req = job::Request {
+        program: p,
+        name: name.clone(),
+        part: job::part_arg(part)?,
+        stock,
+        machine: machine.map(|m| m.display().to_string()),
+        material,
+        tool: tools,
+        flutes,
+        vc,
+        resolution,
+        passes,
+        limits: self::limits(limits)?,
+        dialect,
+        output: output.map(|o| o.display().to_string()),
+    };
+    let done = py.detach(|| job::run(req))?;
+    let summary = json_to_py(py, &done.summary_json)?;
+    let prog = program::PyProgram {
+        program: std::sync::Arc::new(done.program),
+        diagnostics: Vec::new(),
+        path: None,
+    };
+    Ok((prog, done.text, summary, done.refused))
+}
+
+/// The usual file extension of a dialect's programs (`fanuc` → `nc`).
+#[pyfunction]
+fn dialect_extension(dialect: &str) -> PyResult<&'static str> {
+    Ok(program::target(dialect)?.extension())
+}
+
+#[pymodule]
+fn _millplan(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("MillplanError", m.py().get_type::<error::MillplanError>())?;
+    m.add_class::<program::PyProgram>()?;
+    m.add_class::<mesh::PyMesh>()?;
+    m.add_function(wrap_pyfunction!(inspect, m)?)?;
+    m.add_function(wrap_pyfunction!(read_program, m)?)?;
+    m.add_function(wrap_pyfunction!(write_program, m)?)?;
+    m.add_function(wrap_pyfunction!(read_stl, m)?)?;
+    m.add_function(wrap_pyfunction!(wd::_working_diameter, m)?)?;
+    m.add_function(wrap_pyfunction!(optimise, m)?)?;
+    m.add_function(wrap_pyfunction!(dialect_extension, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,200 @@
+//! Deflection along a path, compensation (T14) and placement (§4.5) on the
+//! paper's KR 240.
+
+use millplan_geom::DVec3;
+use millplan_robot::anneal::Settings;
+use millplan_robot::machining::{
+    self, compensate, resample, Load, PathPoint, PlaceSearch, Placement,
+};
+use millplan_robot::{Robot, Variant};
+
+/// A 200 mm × 100 mm zig-zag slot pattern at 0.3 mm spacing, tool vertical.
+fn zigzag(step: f64) -> Vec<PathPoint> {
+    let mut run = Vec::new();
+    for row in 0..5 {
+        let y = row as f64 * 25.0;
+        let xs = [0.0, 200.0];
+        let (a, b) = if row % 2 == 0 {
+            (xs[0], xs[1])
+        } else {
+            (xs[1], xs[0])
+        };
+        for p in [a, b] {
+            run.push(PathPoint {
+                p: DVec3::new(p, y, 0.0),
+                axis: DVec3::Z,
+                feed: 1200.0,
+                line: row + 1,
+            });
+        }
+    }
+    resample(&run, step)
+}
+
+const LOAD: Load = Load {
+    feed: -60.0,
+    cross: 150.0,
+    axial: 40.0,
+};
+
+fn place() -> Placement {
+    Placement {
+        x: 1300.0,
+        y: -100.0,
+        z: 300.0,
+        rz: 0.0,
+    }
+}
+
+#[test]
+fn resampling_keeps_the_path_and_the_spacing() {
+    let pts = zigzag(0.3);
+    for w in pts.windows(2) {
+        let d = (w[1].p - w[0].p).length();
+        assert!(d <= 0.3 + 1e-9, "{d}");
+    }
+    let len: f64 = pts.windows(2).map(|w| (w[1].p - w[0].p).length()).sum();
+    assert!((len - (5.0 * 200.0 + 4.0 * 25.0)).abs() < 1e-6, "{len}");
+}
+
+/// T14 (process-models §6): with p_cmd = p − Δp(p) the robot, pushed back
+/// by the same load, lands on p; one fixed-point refinement
+/// p_cmd ← p − Δp(p_cmd) changes p_cmd by under 1 % of |Δp|.
+#[test]
+fn t14_compensation_identity_and_fixed_point() {
+    let robot = Robot::kr240();
+    let ideal = zigzag(5.0);
+    let d = robot
+        .deflections(Variant::ThreeAxis, &place(), &ideal, &LOAD, None)
+        .expect("reachable");
+    assert!(d.mean > 0.01 && d.max < 2.0, "{} {}", d.mean, d.max);
+    let cmd = compensate(&ideal, &d.dp);
+    let dirs = machining::feed_dirs(&ideal);
+    let at_cmd = robot
+        .deflections_along(
+            Variant::ThreeAxis,
+            &place(),
+            &cmd,
+            &dirs,
+            &LOAD,
+            Some(d.status),
+        )
+        .expect("reachable");
+    for i in 0..ideal.len() {
+        let landed = cmd[i].p + at_cmd.dp[i];
+        let refined = ideal[i].p - at_cmd.dp[i];
+        let size = d.dp[i].length();
+        assert!(
+            (landed - ideal[i].p).length() < 0.01 * size,
+            "point {i}: {} vs {}",
+            landed,
+            ideal[i].p
+        );
+        assert!((refined - cmd[i].p).length() < 0.01 * size);
+    }
+}
+
+/// The paper's anisotropy (§7): the same load across the arm (y₀) deflects
+/// more than along it (x₀): turning the workpiece by 90° changes the mean.
+#[test]
+fn deflection_depends_on_the_placement() {
+    let robot = Robot::kr240();
+    let path = zigzag(10.0);
+    let a = robot
+        .deflections(Variant::ThreeAxis, &place(), &path, &LOAD, None)
+        .expect("a");
+    let turned = Placement {
+        rz: std::f64::consts::FRAC_PI_2,
+        x: 1400.0,
+        y: -100.0,
+        ..place()
+    };
+    let b = robot
+        .deflections(Variant::ThreeAxis, &turned, &path, &LOAD, None)
+        .expect("b");
+    assert!(
+        (a.mean - b.mean).abs() > 0.01 * a.mean,
+        "{} {}",
+        a.mean,
+        b.mean
+    );
+    // Out of reach: an error naming the line.
+    let far = Placement {
+        x: 5000.0,
+        ..place()
+    };
+    let e = robot
+        .deflections(Variant::ThreeAxis, &far, &path, &LOAD, None)
+        .expect_err("far");
+    assert!(e.to_string().starts_with("line 1:"), "{e}");
+}
+
+/// §4.5: the annealing placement is reproducible for a seed and no worse
+/// than a hand-picked feasible placement inside its box.
+#[test]
+fn placement_search_is_seeded_and_improves() {
+    let robot = Robot::kr240();
+    let path = zigzag(10.0);
+    let search = PlaceSearch {
+        lo: DVec3::new(800.0, -800.0, 0.0),
+        hi: DVec3::new(1800.0, 800.0, 800.0),
+        settings: Settings {
+            seed: 7,
+            restarts: 2,
+            ..Settings::default()
+        },
+    };
+    let a = machining::place(&robot, Variant::ThreeAxis, &path, &LOAD, &search).expect("placed");
+    let b = machining::place(&robot, Variant::ThreeAxis, &path, &LOAD, &search).expect("placed");
+    assert_eq!(a.place, b.place);
+    let hand = robot
+        .deflections(Variant::ThreeAxis, &place(), &path, &LOAD, None)
+        .expect("hand");
+    eprintln!(
+        "hand {:.4} mean / {:.4} max; placed {:?}: {:.4} / {:.4} after {} evaluations",
+        hand.mean, hand.max, a.place, a.mean, a.max, a.evaluations
+    );
+    assert!(a.mean <= hand.mean, "{} > {}", a.mean, hand.mean);
+    assert!(a.evaluations > 100);
+}
+
+/// The compensated program in KRL: one LIN per point, the first a PTP, the
+/// speed in m/s; it reads back to the compensated points.
+#[test]
+fn compensated_program_is_krl() {
+    let robot = Robot::kr240();
+    let ideal = zigzag(0.3);
+    let d = robot
+        .deflections(Variant::ThreeAxis, &place(), &ideal, &LOAD, None)
+        .expect("reachable");
+    let cmd = compensate(&ideal, &d.dp);
+    let k = machining::krl_program("slot", std::slice::from_ref(&cmd), &place(), 0.15);
+    let files = millplan_nc::write::krl::write(
+        &k,
+        &millplan_nc::write::krl::KrlOptions {
+            max_points: 0,
+            ..Default::default()
+        },
+    );
+    let text = &files[0].1;
+    assert!(text.contains("$VEL.CP = 0.020000"));
+    assert_eq!(
+        text.lines().filter(|l| l.starts_with("LIN ")).count(),
+        cmd.len() - 1
+    );
+    let back = millplan_nc::krl::read(text, &mut |_| None).expect("reads");
+    let pts: Vec<DVec3> = back
+        .statements
+        .iter()
+        .filter_map(|l| match &l.statement {
+            millplan_nc::krl::Statement::Move {
+                motion: millplan_nc::krl::Motion::Lin(p) | millplan_nc::krl::Motion::Ptp(p),
+                ..
+            } => Some(p.xyz),
+            _ => None,
+        })
+        .collect();
+    for (a, b) in pts.iter().zip(&cmd) {
+        assert!((*a - b.p).length() < 1e-3);
+    }
+}

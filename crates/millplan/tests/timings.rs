@@ -1,0 +1,147 @@
+//! `--timings`: the phases a command prints add up to its wall time, so no
+//! work goes unnamed. Each command runs on a moderately sized input; the
+//! phases' sum is compared with the total the command prints and with the
+//! wall time of the process as this test sees it, within 5 %. Scheduling on
+//! a busy machine can only lengthen the wall time between two phases or
+//! around the process, never make a phase go missing, so a run is repeated
+//! up to three times before the test fails.
+
+mod common;
+
+use common::{bin, demo_raster};
+use std::time::Instant;
+
+/// The phases (the lines that are not indented, before the total) and the
+/// total from a `--timings` table.
+fn parse(stderr: &str) -> (Vec<(String, f64)>, Option<f64>) {
+    let mut phases = Vec::new();
+    let mut total = None;
+    for line in stderr.lines() {
+        // "   0.123 s  name"; parts are indented two more.
+        let Some((num, name)) = line.split_once(" s  ") else {
+            continue;
+        };
+        let Ok(s) = num.trim().parse::<f64>() else {
+            continue;
+        };
+        if name.starts_with("total") {
+            total = Some(s);
+        } else if num.len() <= 8 {
+            phases.push((name.to_string(), s));
+        }
+    }
+    (phases, total)
+}
+
+/// Runs `args` with `--timings` until the phases add up to the total and the
+/// total to the wall time within 5 % (up to three runs); the last run's
+/// figures in the failure message.
+fn assert_phases_cover(args: &[&str], ok_codes: &[i32]) {
+    let mut last = String::new();
+    for _ in 0..3 {
+        let t = Instant::now();
+        let o = bin().args(args).arg("--timings").output().expect("runs");
+        let wall = t.elapsed().as_secs_f64();
+        let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(
+            o.status.code().is_some_and(|c| ok_codes.contains(&c)),
+            "{args:?}: {stderr}"
+        );
+        let (phases, total) = parse(&stderr);
+        let total = total.unwrap_or_else(|| panic!("{args:?}: no total in\n{stderr}"));
+        assert!(phases.len() >= 3, "{args:?}: too few phases in\n{stderr}");
+        let sum: f64 = phases.iter().map(|p| p.1).sum();
+        if (sum - total).abs() <= 0.05 * total && (wall - total).abs() <= 0.05 * wall {
+            return;
+        }
+        last = format!("phases {sum:.3} s, total {total:.3} s, wall {wall:.3} s\n{stderr}");
+    }
+    panic!("{args:?}: the phases do not add up to the wall time: {last}");
+}
+
+#[test]
+fn speed_phases_add_up_to_the_wall_time() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (stl, apt) = demo_raster(dir.path(), &["--stepover", "0.25", "--step", "0.25"]);
+    let out = dir.path().join("out.apt");
+    let (stl, apt, out) = (
+        stl.to_str().expect("utf8"),
+        apt.to_str().expect("utf8"),
+        out.to_str().expect("utf8"),
+    );
+    let args = [
+        "speed", apt, "--stl", stl, "--vc", "63", "--fz", "0.125", "--ap", "0.3", "-o", out, "-q",
+    ];
+    assert_phases_cover(&args, &[0, 3]);
+}
+
+/// An APT file of `n` GOTOs on a zig-zag over a wavy surface; with `axes`
+/// each with a tool axis leaning up to 15° to the side (five-axis CL).
+fn apt(n: usize, axes: bool) -> String {
+    use std::fmt::Write;
+    let mut s = String::from("PARTNO TIMINGS\nUNITS/MM\nMULTAX/ON\nCUTTER/10,5,0,5,0,0,0\nLOADTL/1\nSPINDL/6000,RPM,CLW\nFEDRAT/1500,MMPM\n");
+    for i in 0..n {
+        let (row, k) = (i / 500, i % 500);
+        let k = if row % 2 == 0 { k } else { 499 - k };
+        let (x, y) = (k as f64 * 0.1, row as f64 * 0.1);
+        let z = (x * 0.2).sin() + (y * 0.15).cos();
+        let roll = 0.26 * (i as f64 * 0.002).sin();
+        if axes {
+            let _ = writeln!(
+                s,
+                "GOTO/{x:.4},{y:.4},{z:.4},0,{:.7},{:.7}",
+                roll.sin(),
+                roll.cos()
+            );
+        } else {
+            let _ = writeln!(s, "GOTO/{x:.4},{y:.4},{z:.4}");
+        }
+    }
+    s.push_str("FINI\n");
+    s
+}
+
+#[test]
+fn inspect_phases_add_up_to_the_wall_time() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let f = dir.path().join("big.apt");
+    std::fs::write(&f, apt(400_000, false)).expect("write");
+    assert_phases_cover(&["inspect", "--json", f.to_str().expect("utf8")], &[0]);
+}
+
+const TRUNNION: &str = "name = \"A/C trunnion\"\n[spindle]\nmin = 500.0\nmax = 18000.0\naccel = 6000.0\n[feed]\nmax = 20000.0\nrapid = 40000.0\n[kinematics]\nkind = \"table-ac\"\nrot_point = [0.0, 0.0, -100.0]\n[kinematics.first]\nmin = -120.0\nmax = 120.0\n[axes.a]\nvelocity = 9000.0\n[axes.c]\nvelocity = 18000.0\n";
+
+#[test]
+fn post_phases_add_up_to_the_wall_time() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (cl, m, out) = (
+        dir.path().join("five.apt"),
+        dir.path().join("m.toml"),
+        dir.path().join("out.nc"),
+    );
+    std::fs::write(&cl, apt(50_000, true)).expect("write");
+    std::fs::write(&m, TRUNNION).expect("write");
+    let args = [
+        "post",
+        cl.to_str().expect("utf8"),
+        "--machine",
+        m.to_str().expect("utf8"),
+        "--g93",
+        "-o",
+        out.to_str().expect("utf8"),
+        "-q",
+    ];
+    assert_phases_cover(&args, &[0]);
+}
+
+#[test]
+fn the_table_parses_phases_parts_and_total() {
+    let (phases, total) = parse(
+        "   0.500 s  read\n   0.250 s  speed\n     0.100 s  contact\n   0.800 s  total (wall time of the run)\n",
+    );
+    assert_eq!(
+        phases,
+        [("read".to_string(), 0.5), ("speed".to_string(), 0.25)]
+    );
+    assert_eq!(total, Some(0.8));
+}
