@@ -24,13 +24,13 @@
 
 use millplan_geom::{DVec2, DVec3};
 use millplan_models::force::coeffs::Law;
-use millplan_models::force::converge::{ConvergedModel, Refine};
+use millplan_models::force::converge::{Converged, ConvergedModel, Refine};
 use millplan_models::force::deflect::{Cantilever, DE_RATIO, E_CARBIDE};
 use millplan_models::force::edge::Tool;
 use millplan_models::force::engage::Engagement;
 use millplan_models::force::feed::{Limits, Loads};
 use millplan_models::force::materials::{fz_max_for, ChipLoads, FzSource};
-use millplan_models::force::{Cut, Engaged, ForceModel, Grid, Summary};
+use millplan_models::force::{Cut, ForceModel, Grid, Summary};
 use millplan_nc::{Move, Program};
 use millplan_sim::stock::engage::tool_frame;
 use millplan_sim::stock::path::{Stroke, Strokes};
@@ -827,16 +827,15 @@ fn stroke_forces(
         let conv = tf.model.converge_from(&cut, &eng, *levels, below);
         evals += 1
             + (conv.halvings.0 - levels.0.min(conv.halvings.0)) as usize
-            + (conv.halvings.1 - levels.1.min(conv.halvings.1)) as usize;
+            + conv.halvings.1 as usize;
         *levels = next_levels(&conv, tf.model.refine.tol);
-        let (model, cells) = (conv.model, &conv.cells);
-        if cells.is_empty() {
+        if conv.cells.is_empty() {
             continue;
         }
         let sum = conv.evaluation.summary();
-        m.merge(&sum, &Loads::new(&sum, &tf.holding), cells.len(), model);
+        m.merge(&sum, &Loads::new(&sum, &tf.holding), conv.cells.len(), conv.model);
         if let Some(lim) = &limits {
-            evals += tighten(&cut, cells, model, &tf.holding, lim, m);
+            evals += tighten(&cut, &conv, &tf.holding, lim, m);
         }
     }
     Some(evals)
@@ -846,20 +845,18 @@ fn stroke_forces(
 /// move's largest so far for its grid not to be refined further.
 pub const EARLY_MARGIN: f64 = 3.0;
 
-/// The halvings the next sample starts from: this sample's, each one coarser
-/// where its estimate is well within the tolerance (so that a grid refined
-/// for one hard pose does not stay fine along the whole move).
-fn next_levels(c: &millplan_models::force::converge::Converged, tol: f64) -> (u32, u32) {
-    let (a, b) = c.halvings;
-    let e = &c.evaluation;
-    let coarser = |k: u32, err: f64| {
-        if err < 0.25 * tol {
-            k.saturating_sub(1)
-        } else {
-            k
-        }
-    };
-    (coarser(a, e.error_dz), coarser(b, e.error_dphi))
+/// The halvings the next sample starts from: this sample's slice length,
+/// one coarser where its estimate is well within the tolerance (so that a
+/// grid refined for one hard pose does not stay fine along the whole move),
+/// and the coarsest rotation step (refined around the peaks only, which
+/// costs a few angles, where starting fine would cost every angle).
+fn next_levels(c: &Converged, tol: f64) -> (u32, u32) {
+    let a = c.halvings.0;
+    if c.evaluation.error_dz < 0.25 * tol {
+        (a.saturating_sub(1), 0)
+    } else {
+        (a, 0)
+    }
 }
 
 /// Lowers the move's allowed feed per tooth until this sample's limits are
@@ -867,8 +864,7 @@ fn next_levels(c: &millplan_models::force::converge::Converged, tol: f64) -> (u3
 /// within its limits). Returns the evaluations used.
 fn tighten(
     cut: &Cut,
-    cells: &Engaged,
-    model: &ForceModel,
+    conv: &Converged,
     holding: &Cantilever,
     lim: &Limits,
     m: &mut MoveForces,
@@ -876,9 +872,7 @@ fn tighten(
     let mut evals = 0;
     let start = match m.fz_allowed {
         Some(a) => {
-            let s = model
-                .evaluate_engaged(&Cut { fz: a, ..*cut }, cells)
-                .summary();
+            let s = conv.evaluate_at(&Cut { fz: a, ..*cut }).summary();
             evals += 1;
             match lim.ratio(&Loads::new(&s, holding)) {
                 Some((r, _)) if r < 1.0 && a > lim.fz_min => a,
@@ -887,7 +881,7 @@ fn tighten(
         }
         None => cut.fz,
     };
-    let (f, c, n) = allowed_fz(&Cut { fz: start, ..*cut }, cells, model, holding, lim);
+    let (f, c, n) = allowed_fz(&Cut { fz: start, ..*cut }, conv, holding, lim);
     if m.fz_allowed.is_none_or(|a| f < a) {
         m.fz_allowed = Some(f);
         m.binding = Some(c);
@@ -902,14 +896,13 @@ fn tighten(
 /// the evaluations used.
 fn allowed_fz(
     cut: &Cut,
-    cells: &Engaged,
-    model: &ForceModel,
+    conv: &Converged,
     holding: &Cantilever,
     lim: &Limits,
 ) -> (f64, &'static str, usize) {
     use millplan_models::force::feed::iterate_feed;
     let eval = |fz: f64| {
-        let s = model.evaluate_engaged(&Cut { fz, ..*cut }, cells).summary();
+        let s = conv.evaluate_at(&Cut { fz, ..*cut }).summary();
         Loads::new(&s, holding)
     };
     let sched = iterate_feed(cut.fz, lim, 0.01, 20, eval);

@@ -19,10 +19,15 @@
 //!   over the even and the odd angles alone differ by about what sampling
 //!   at dφ misses.
 //!
-//! [`ConvergedModel`] halves the step whose estimate is above the tolerance
-//! and evaluates again, on the slices around the engaged band of the coarser
-//! grid only (one coarse slice more on each side), until both estimates are
-//! within it or the steps reach their floor.
+//! [`ConvergedModel`] halves the slice height while its estimate is above
+//! the tolerance and evaluates again, on the slices around the engaged band
+//! of the coarser grid only (one coarse slice more on each side). Then it
+//! halves the rotation step around the peaks only: the angles between the
+//! samples of F_xy and |T| within a few error estimates of their peak (and
+//! between those and their neighbours) are evaluated, the coarser grid's
+//! samples stand elsewhere (interpolated between them), until the estimate
+//! is within the tolerance or the step reaches its floor. A refinement then
+//! costs a few angles instead of every angle of the revolution.
 
 use super::engage::Engagement;
 use super::quadrature::{BISECTIONS, COLUMNS};
@@ -78,6 +83,98 @@ pub struct Converged<'a> {
     pub evaluation: Evaluation,
     /// Halvings of the slice height and of the rotation step used.
     pub halvings: (u32, u32),
+    /// The grids evaluated, the last one evaluated at every angle first.
+    steps: Vec<Step<'a>>,
+}
+
+/// One grid of a converged evaluation: its model, the cells it evaluated,
+/// and where the rotation step was refined around the peaks, the angle
+/// indices of the tooth period it evaluated (elsewhere the coarser grid's
+/// samples stand, [`merge_window`]).
+#[derive(Clone, Debug)]
+struct Step<'a> {
+    model: &'a ForceModel,
+    cells: Engaged,
+    window: Option<Vec<bool>>,
+}
+
+impl Converged<'_> {
+    /// The same engagement at the feed per tooth and spindle speed of `cut`
+    /// (its lead and tilt those the engagement was converged with), on the
+    /// same grids.
+    pub fn evaluate_at(&self, cut: &Cut) -> Evaluation {
+        let mut rows = Vec::new();
+        let mut stats = (f64::INFINITY, f64::NEG_INFINITY);
+        let mut cells = 0;
+        for s in &self.steps {
+            match &s.window {
+                None => {
+                    (rows, stats) = s.model.rows(cut, &s.cells);
+                    cells = s.cells.len();
+                }
+                Some(w) => rows = merge_window(s.model.rows(cut, &s.cells).0, w, &rows),
+            }
+        }
+        self.model.finish(cut, &rows, stats, cells)
+    }
+}
+
+/// The rows of a grid with twice the angles of `coarse`: its own (`fine`)
+/// at the indices in `window`, elsewhere the coarser grid's samples (at the
+/// even indices, the same angles) and the mean of the two around (at the
+/// odd). The means change neither the period's mean nor its extremes.
+fn merge_window(
+    mut fine: Vec<[f64; COLUMNS]>,
+    window: &[bool],
+    coarse: &[[f64; COLUMNS]],
+) -> Vec<[f64; COLUMNS]> {
+    let p = coarse.len();
+    debug_assert_eq!(fine.len(), 2 * p);
+    for (i, row) in fine.iter_mut().enumerate() {
+        if window[i] {
+            continue;
+        }
+        *row = if i % 2 == 0 {
+            coarse[i / 2]
+        } else {
+            let (a, b) = (&coarse[i / 2], &coarse[(i / 2 + 1) % p]);
+            std::array::from_fn(|c| 0.5 * (a[c] + b[c]))
+        };
+    }
+    fine
+}
+
+/// How close to its peak (relative) a sample of F_xy or |T| must be for
+/// the intervals around it to be refined, given the rotation step's error
+/// estimate: a peak between two samples rises above them by about that
+/// estimate, so a sample further below than four times it cannot hide the
+/// peak; never less than [`WINDOW_FLOOR`].
+fn window_margin(error_dphi: f64) -> f64 {
+    (4.0 * error_dphi).clamp(WINDOW_FLOOR, 1.0)
+}
+
+/// The least margin of [`window_margin`].
+pub const WINDOW_FLOOR: f64 = 0.01;
+
+/// The angle indices of a grid with twice the angles of `rows` to
+/// evaluate: the two between every sample of F_xy or |T| within `margin`
+/// of its peak and its neighbours, and that sample itself where `exact`
+/// says it was interpolated.
+fn window(rows: &[[f64; COLUMNS]], exact: &[bool], margin: f64) -> Vec<bool> {
+    let p = rows.len();
+    let mut w = vec![false; 2 * p];
+    for c in 0..2 {
+        let v = |r: &[f64; COLUMNS]| if c == 0 { r[0].hypot(r[1]) } else { r[3].abs() };
+        let top = rows.iter().map(v).fold(0.0, f64::max);
+        for (i, r) in rows.iter().enumerate() {
+            if top > 0.0 && v(r) >= top * (1.0 - margin) {
+                w[(2 * i + 2 * p - 1) % (2 * p)] = true;
+                w[2 * i + 1] = true;
+                w[2 * i] |= !exact[i];
+            }
+        }
+    }
+    w
 }
 
 impl ConvergedModel {
@@ -114,9 +211,15 @@ impl ConvergedModel {
         let n = self.refine.halvings + 1;
         self.levels[(a * n + b) as usize]
             .get_or_init(|| {
+                // Rotation steps halve the base model's own step, so that
+                // every grid's angles are the next coarser grid's and one
+                // between each two (a refinement around the peaks keeps the
+                // coarser grid's samples elsewhere).
+                let base = self.levels[0].get().and_then(Option::as_ref);
+                let dphi = base.map_or(self.grid.dphi, ForceModel::dphi);
                 let grid = Grid {
                     dz: self.grid.dz / f64::from(1u32 << a),
-                    dphi: self.grid.dphi / f64::from(1u32 << b),
+                    dphi: dphi / f64::from(1u32 << b),
                 };
                 ForceModel::new(self.tool, self.law, grid).ok()
             })
@@ -147,33 +250,93 @@ impl ConvergedModel {
         enough: impl Fn(&Evaluation) -> bool,
     ) -> Converged<'_> {
         let h = self.refine.halvings;
-        let (mut a, mut b) = (start.0.min(h), start.1.min(h));
+        let (mut a, b) = (start.0.min(h), start.1.min(h));
+        let b = if self.level(a, b).is_some() { b } else { 0 };
         if self.level(a, b).is_none() {
-            (a, b) = (0, 0);
+            a = 0;
         }
+        let tol = self.refine.tol;
+        // The slice length: whole evaluations, each on the band of heights
+        // the one before found engaged.
         let mut band = (f64::NEG_INFINITY, f64::INFINITY);
-        loop {
+        let (model, cells, rows, stats, evaluation) = loop {
             let model = self.level(a, b).expect("the coarser grid was built");
             let cells = model.engaged_in(cut, eng, band);
-            let evaluation = model.evaluate_engaged(cut, &cells);
-            let tol = self.refine.tol;
-            let z = evaluation.error_dz > tol && self.may_halve(a, self.grid.dz, DZ_FLOOR);
-            let p = evaluation.error_dphi > tol && self.may_halve(b, self.grid.dphi, DPHI_FLOOR);
-            let next = (a + u32::from(z), b + u32::from(p));
-            if cells.is_empty()
-                || !(z || p)
-                || self.level(next.0, next.1).is_none()
-                || enough(&evaluation)
-            {
-                return Converged {
-                    model,
-                    cells,
-                    evaluation,
-                    halvings: (a, b),
-                };
+            let (rows, stats) = model.rows(cut, &cells);
+            let evaluation = model.finish(cut, &rows, stats, cells.len());
+            let z = evaluation.error_dz > tol
+                && self.may_halve(a, self.grid.dz, DZ_FLOOR)
+                && self.level(a + 1, b).is_some();
+            if cells.is_empty() || !z || enough(&evaluation) {
+                break (model, cells, rows, stats, evaluation);
             }
             band = model.band(&cells);
-            (a, b) = next;
+            a += 1;
+        };
+        let mut c = Converged {
+            model,
+            cells: cells.clone(),
+            evaluation,
+            halvings: (a, b),
+            steps: vec![Step {
+                model,
+                cells,
+                window: None,
+            }],
+        };
+        if !c.cells.is_empty() && !enough(&c.evaluation) {
+            self.refine_peaks(&mut c, cut, eng, band, rows, stats, &enough);
+        }
+        c
+    }
+
+    /// The rotation step: halved around the peaks of F_xy and |T| only
+    /// ([`window`]) until its error estimate is within the tolerance, the
+    /// samples elsewhere kept from the coarser grid (a peak is where the
+    /// step matters: the mean over the period and the extremes elsewhere
+    /// are not what the estimate measures). `rows` and `stats` are those
+    /// of `c`'s evaluation, `band` the heights its cells were sought in.
+    #[allow(clippy::too_many_arguments)]
+    fn refine_peaks<'a, E: Engagement + ?Sized>(
+        &'a self,
+        c: &mut Converged<'a>,
+        cut: &Cut,
+        eng: &E,
+        band: (f64, f64),
+        mut rows: Vec<[f64; COLUMNS]>,
+        stats: (f64, f64),
+        enough: &impl Fn(&Evaluation) -> bool,
+    ) {
+        let (a, mut b) = c.halvings;
+        let mut exact = vec![true; rows.len()];
+        while c.evaluation.error_dphi > self.refine.tol
+            && self.may_halve(b, self.grid.dphi, DPHI_FLOOR)
+        {
+            let Some(fine) = self.level(a, b + 1) else {
+                break;
+            };
+            let p = rows.len();
+            if fine.per_tooth() != 2 * p {
+                break;
+            }
+            let todo = window(&rows, &exact, window_margin(c.evaluation.error_dphi));
+            let cells = fine.engaged_where(cut, eng, band, |k| todo[k % (2 * p)]);
+            rows = merge_window(fine.rows(cut, &cells).0, &todo, &rows);
+            exact = (0..2 * p)
+                .map(|i| todo[i] || (i % 2 == 0 && exact[i / 2]))
+                .collect();
+            b += 1;
+            c.evaluation = fine.finish(cut, &rows, stats, c.cells.len());
+            c.model = fine;
+            c.halvings = (a, b);
+            c.steps.push(Step {
+                model: fine,
+                cells,
+                window: Some(todo),
+            });
+            if enough(&c.evaluation) {
+                break;
+            }
         }
     }
 

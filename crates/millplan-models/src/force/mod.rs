@@ -313,6 +313,18 @@ impl ForceModel {
         eng: &E,
         band: (f64, f64),
     ) -> Engaged {
+        self.engaged_where(cut, eng, band, |_| true)
+    }
+
+    /// [`ForceModel::engaged_in`] at the angle indices `keep` accepts only
+    /// (each a whole column of the edge at one spindle angle).
+    pub(crate) fn engaged_where<E: Engagement + ?Sized>(
+        &self,
+        cut: &Cut,
+        eng: &E,
+        band: (f64, f64),
+        keep: impl Fn(usize) -> bool,
+    ) -> Engaged {
         let m = self.m;
         let dir = Cut { fz: 1.0, ..*cut };
         let f = dir.feed_vector();
@@ -329,6 +341,9 @@ impl ForceModel {
             let (lo, count) = self.chip_window(s, f);
             for i in 0..count {
                 let k = if lo + i >= m { lo + i - m } else { lo + i };
+                if !keep(k) {
+                    continue;
+                }
                 let (st, ct) = self.rotated(s, k);
                 // h = f·n(θ), n(θ) = (ny sθ, ny cθ, nz)
                 let h = f[0] * s.ny * st + f[1] * s.ny * ct + f[2] * s.nz;
@@ -348,6 +363,14 @@ impl ForceModel {
     /// and spindle speed of `cut` (its lead and tilt must be those the cells
     /// were found with).
     pub fn evaluate_engaged(&self, cut: &Cut, e: &Engaged) -> Evaluation {
+        let (rows, stats) = self.rows(cut, e);
+        self.finish(cut, &rows, stats, e.cells.len())
+    }
+
+    /// The per-angle table of an engagement over one tooth period
+    /// ([`quadrature::COLUMNS`]), and the smallest κ and the highest slice
+    /// top of its cells.
+    pub(crate) fn rows(&self, cut: &Cut, e: &Engaged) -> (Vec<[f64; COLUMNS]>, (f64, f64)) {
         debug_assert!(e.lead == cut.lead && e.tilt == cut.tilt);
         let m = self.m;
         let f = cut.feed_vector();
@@ -403,20 +426,38 @@ impl ForceModel {
                 acc
             })
             .collect();
-        let (error_dz, error_dphi) = error_estimates(&sums);
+        (sums, (kappa_min, z_max))
+    }
+
+    /// The evaluation from the per-angle table `rows` of one tooth period
+    /// ([`ForceModel::rows`]), with the smallest κ and highest slice top of
+    /// its `cells` cells.
+    pub(crate) fn finish(
+        &self,
+        cut: &Cut,
+        rows: &[[f64; COLUMNS]],
+        (kappa_min, z_max): (f64, f64),
+        cells: usize,
+    ) -> Evaluation {
+        let (error_dz, error_dphi) = error_estimates(rows);
         Evaluation {
             dphi: self.dphi(),
             dz: self.dz,
             error_dz,
             error_dphi,
-            flutes: n,
+            flutes: self.tool.flutes,
             rpm: cut.rpm,
             r_wt: r_wt(cut.lead, cut.tilt),
-            period: sums.iter().map(|r| [r[0], r[1], r[2], r[3]]).collect(),
-            cells: e.cells.len(),
+            period: rows.iter().map(|r| [r[0], r[1], r[2], r[3]]).collect(),
+            cells,
             kappa_min: kappa_min.is_finite().then_some(kappa_min),
             z_max: z_max.is_finite().then_some(z_max),
         }
+    }
+
+    /// Angles per tooth period.
+    pub(crate) fn per_tooth(&self) -> usize {
+        self.m / self.tool.flutes
     }
 
     /// sin θ and cos θ of slice `s` at angle index `k`: θ = kδ − ψ.

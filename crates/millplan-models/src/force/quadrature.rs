@@ -123,12 +123,12 @@ impl ForceModel {
         let lo_open = a > 0;
         let hi_open = b + 1 < self.slices.len();
         let z_lo = if lo_open {
-            self.boundary(k, z(a - 1), z(a), eng, f)
+            self.boundary(k, a - 1, a, eng, f)
         } else {
             z(a) - 0.5 * dz
         };
         let z_hi = if hi_open {
-            self.boundary(k, z(b + 1), z(b), eng, f)
+            self.boundary(k, b + 1, b, eng, f)
         } else {
             z(b) + 0.5 * dz
         };
@@ -156,46 +156,42 @@ impl ForceModel {
         }
     }
 
-    /// Where between meridian lengths `out` (not engaged) and `inside`
-    /// (engaged) the
-    /// edge of angle index `k` enters material with a positive chip.
+    /// Where between the centres of the neighbouring slices `out` (not
+    /// engaged) and `inside` (engaged) the edge of angle index `k` enters
+    /// material with a positive chip, as a meridian length.
     fn boundary<E: Engagement + ?Sized>(
         &self,
         k: usize,
-        out: f64,
-        inside: f64,
+        out: usize,
+        inside: usize,
         eng: &E,
         f: [f64; 3],
     ) -> f64 {
-        let (mut o, mut i) = (out, inside);
+        let (a, b) = (&self.slices[out], &self.slices[inside]);
+        // The edge between two slice centres, linear in the share t from
+        // `out` toward `inside`: its geometry is smooth there (the ball's
+        // tip, where it is not, is the first slice, which has no neighbour
+        // below), and the interpolation's error, of order dz² times the
+        // profile's curvature, is far below the bisection's last step.
+        let (sk, ck) = (self.sin_t[k], self.cos_t[k]);
+        let at = |t: f64| {
+            let l = |x: f64, y: f64| x + t * (y - x);
+            let (sp, cp) = (l(a.sin_psi, b.sin_psi), l(a.cos_psi, b.cos_psi));
+            // θ = kδ − ψ.
+            let (st, ct) = (sk * cp - ck * sp, ck * cp + sk * sp);
+            let (ny, nz, r, z) = (l(a.ny, b.ny), l(a.nz, b.nz), l(a.r, b.r), l(a.z, b.z));
+            let h = f[0] * ny * st + f[1] * ny * ct + f[2] * nz;
+            h > 0.0 && eng.contains([r * st, r * ct, z])
+        };
+        let (mut o, mut i) = (0.0, 1.0);
         for _ in 0..BISECTIONS {
             let mid = 0.5 * (o + i);
-            if self.engaged_at(k, mid, eng, f) {
+            if at(mid) {
                 i = mid;
             } else {
                 o = mid;
             }
         }
-        0.5 * (o + i)
-    }
-
-    /// Whether the edge at meridian length `u` and angle index `k` cuts
-    /// material.
-    fn engaged_at<E: Engagement + ?Sized>(&self, k: usize, u: f64, eng: &E, f: [f64; 3]) -> bool {
-        let z = super::edge::height(&self.tool.shape, u);
-        if !(z > 0.0 && z < self.tool.flute_length) {
-            return false;
-        }
-        let e = self.tool.edge(z);
-        let (ny, nz) = {
-            let (s, c) = e.kappa.sin_cos();
-            (s, -c)
-        };
-        let (sp, cp) = e.psi.sin_cos();
-        let (sk, ck) = (self.sin_t[k], self.cos_t[k]);
-        // θ = kδ − ψ.
-        let (st, ct) = (sk * cp - ck * sp, ck * cp + sk * sp);
-        let h = f[0] * ny * st + f[1] * ny * ct + f[2] * nz;
-        h > 0.0 && eng.contains([e.r * st, e.r * ct, z])
+        a.u + 0.5 * (o + i) * (b.u - a.u)
     }
 }
