@@ -181,7 +181,7 @@ impl ForceSetup {
             grid: Grid::default(),
             // Converged per load sample: with the weighted ends of
             // `force::quadrature` the slice height rarely needs halving,
-            // and a sample starts from the steps of the one before.
+            // and the rotation step is refined around the peaks only.
             refine: Some(Refine::default()),
             stickout: None,
             flute_length: None,
@@ -671,7 +671,6 @@ impl PartContext<'_> {
             moves: Vec::new(),
             evaluated: 0,
         };
-        let mut levels = (0, 0);
         let (all, range_start) = (&self.strokes.strokes[..], range.start);
         for (k, s) in all[range].iter().enumerate() {
             if k % 4096 == 4095 {
@@ -707,7 +706,6 @@ impl PartContext<'_> {
                     from_cut,
                     m,
                     self.schedule,
-                    &mut levels,
                 ) {
                     part.evaluated += n;
                 }
@@ -784,7 +782,6 @@ fn stroke_forces(
     from_cut: bool,
     m: &mut MoveForces,
     schedule: Option<(&FeedLimits, &crate::machine::Machine)>,
-    levels: &mut (u32, u32),
 ) -> Option<usize> {
     let d = s.p1 - s.p0;
     let len = d.length();
@@ -813,9 +810,8 @@ fn stroke_forces(
             lead,
             tilt: 0.0,
         };
-        // The grid refined until this sample's peaks converge, from the
-        // steps the sample before needed; the converged evaluation is at the
-        // stroke's own feed per tooth. A sample whose loads, with their
+        // The grid refined until this sample's peaks converge; the
+        // converged evaluation is at the stroke's own feed per tooth. A sample whose loads, with their
         // estimated error, stay below the move's largest so far cannot
         // decide the move's loads or its feed: it is not refined further.
         let (fxy, torque, power) = (m.fxy_max, m.torque_max, m.power_w);
@@ -824,16 +820,21 @@ fn stroke_forces(
             let k = 1.0 + EARLY_MARGIN * (e.error_dz + e.error_dphi);
             s.fxy_max * k < fxy && s.torque_max * k < torque && s.power_w * k < power
         };
-        let conv = tf.model.converge_from(&cut, &eng, *levels, below);
-        evals += 1
-            + (conv.halvings.0 - levels.0.min(conv.halvings.0)) as usize
-            + conv.halvings.1 as usize;
-        *levels = next_levels(&conv, tf.model.refine.tol);
+        // Every sample from the coarsest grid, so that its loads do not
+        // depend on the samples before it (nor on where the program was
+        // split over the threads).
+        let conv = tf.model.converge_from(&cut, &eng, (0, 0), below);
+        evals += 1 + (conv.halvings.0 + conv.halvings.1) as usize;
         if conv.cells.is_empty() {
             continue;
         }
         let sum = conv.evaluation.summary();
-        m.merge(&sum, &Loads::new(&sum, &tf.holding), conv.cells.len(), conv.model);
+        m.merge(
+            &sum,
+            &Loads::new(&sum, &tf.holding),
+            conv.cells.len(),
+            conv.model,
+        );
         if let Some(lim) = &limits {
             evals += tighten(&cut, &conv, &tf.holding, lim, m);
         }
@@ -844,20 +845,6 @@ fn stroke_forces(
 /// How many times its estimated error a sample's loads must stay below the
 /// move's largest so far for its grid not to be refined further.
 pub const EARLY_MARGIN: f64 = 3.0;
-
-/// The halvings the next sample starts from: this sample's slice length,
-/// one coarser where its estimate is well within the tolerance (so that a
-/// grid refined for one hard pose does not stay fine along the whole move),
-/// and the coarsest rotation step (refined around the peaks only, which
-/// costs a few angles, where starting fine would cost every angle).
-fn next_levels(c: &Converged, tol: f64) -> (u32, u32) {
-    let a = c.halvings.0;
-    if c.evaluation.error_dz < 0.25 * tol {
-        (a.saturating_sub(1), 0)
-    } else {
-        (a, 0)
-    }
-}
 
 /// Lowers the move's allowed feed per tooth until this sample's limits are
 /// met there too (feeds only lower the loads, so every earlier sample stays

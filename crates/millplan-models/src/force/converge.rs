@@ -320,7 +320,12 @@ impl ConvergedModel {
                 break;
             }
             let todo = window(&rows, &exact, window_margin(c.evaluation.error_dphi));
-            let cells = fine.engaged_where(cut, eng, band, |k| todo[k % (2 * p)]);
+            // The window's angle indices over every flute's tooth period.
+            let angles: Vec<usize> = (0..2 * p)
+                .filter(|i| todo[*i])
+                .flat_map(|i| (0..fine.tool.flutes).map(move |j| i + j * 2 * p))
+                .collect();
+            let cells = fine.engaged_where(cut, eng, band, Some(&angles));
             rows = merge_window(fine.rows(cut, &cells).0, &todo, &rows);
             exact = (0..2 * p)
                 .map(|i| todo[i] || (i % 2 == 0 && exact[i / 2]))

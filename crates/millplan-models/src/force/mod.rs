@@ -313,17 +313,18 @@ impl ForceModel {
         eng: &E,
         band: (f64, f64),
     ) -> Engaged {
-        self.engaged_where(cut, eng, band, |_| true)
+        self.engaged_where(cut, eng, band, None)
     }
 
-    /// [`ForceModel::engaged_in`] at the angle indices `keep` accepts only
-    /// (each a whole column of the edge at one spindle angle).
+    /// [`ForceModel::engaged_in`], at the angle indices `angles` only where
+    /// given (each a whole column of the edge at one spindle angle; a few,
+    /// so each slice looks at those instead of its whole chip window).
     pub(crate) fn engaged_where<E: Engagement + ?Sized>(
         &self,
         cut: &Cut,
         eng: &E,
         band: (f64, f64),
-        keep: impl Fn(usize) -> bool,
+        angles: Option<&[usize]>,
     ) -> Engaged {
         let m = self.m;
         let dir = Cut { fz: 1.0, ..*cut };
@@ -339,17 +340,22 @@ impl ForceModel {
                 continue;
             }
             let (lo, count) = self.chip_window(s, f);
-            for i in 0..count {
-                let k = if lo + i >= m { lo + i - m } else { lo + i };
-                if !keep(k) {
-                    continue;
-                }
+            let mut test = |k: usize| {
                 let (st, ct) = self.rotated(s, k);
                 // h = f·n(θ), n(θ) = (ny sθ, ny cθ, nz)
                 let h = f[0] * s.ny * st + f[1] * s.ny * ct + f[2] * s.nz;
                 if h > 0.0 && eng.contains([s.r * st, s.r * ct, s.z]) {
                     raw.push(((first + si) as u32, k as u32));
                 }
+            };
+            match angles {
+                None => {
+                    (0..count).for_each(|i| test(if lo + i >= m { lo + i - m } else { lo + i }))
+                }
+                Some(ks) => ks
+                    .iter()
+                    .filter(|&&k| (k + m - lo) % m < count)
+                    .for_each(|&k| test(k)),
             }
         }
         Engaged {
