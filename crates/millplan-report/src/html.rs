@@ -647,3 +647,58 @@ pub fn report_page(
     h.push_str("</body></html>");
     h
 }
+
+#[cfg(test)]
+mod verdict_tests {
+    use super::*;
+
+    /// The one rule: red on a failed check whatever else holds; amber on a
+    /// kept input, a warning or a worse measure; green only without any.
+    #[test]
+    fn the_level_follows_the_one_rule() {
+        let e = |failed: bool, kept: bool, worse: bool| Evidence {
+            failed: if failed {
+                vec!["check gouge".into()]
+            } else {
+                vec![]
+            },
+            kept,
+            worse: if worse {
+                vec!["time 1 → 2 s".into()]
+            } else {
+                vec![]
+            },
+        };
+        assert_eq!(Level::of(&e(false, false, false), 0), Level::Green);
+        assert_eq!(Level::of(&e(false, true, false), 0), Level::Amber);
+        assert_eq!(Level::of(&e(false, false, true), 0), Level::Amber);
+        assert_eq!(Level::of(&e(false, false, false), 1), Level::Amber);
+        assert_eq!(Level::of(&e(true, false, false), 0), Level::Red);
+        assert_eq!(Level::of(&e(true, true, true), 3), Level::Red);
+        let h = headline(&e(true, false, true), 2);
+        assert_eq!(
+            h,
+            "Red: failed: check gouge; worse: time 1 → 2 s; 2 warnings apply."
+        );
+        assert!(headline(&e(false, false, false), 0).starts_with("Green: every check passed"));
+    }
+
+    /// The page names the level and colours the verdict box by it.
+    #[test]
+    fn the_page_shows_the_level_in_colour() {
+        let n = Notes::judged(
+            Vec::new(),
+            vec!["a warning".into()],
+            &Evidence::default(),
+            vec!["words".into()],
+        );
+        assert_eq!(n.level, Level::Amber);
+        let page = report_page("t", "i", &n, &[], &[]);
+        assert!(page.contains("data-level=\"amber\""), "{page}");
+        assert!(page.contains("border-left-color:#ef8f00"), "{page}");
+        assert!(
+            page.contains("<p>Amber: a warning applies.</p><p>words</p>"),
+            "{page}"
+        );
+    }
+}

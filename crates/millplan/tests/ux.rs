@@ -357,6 +357,11 @@ fn every_reader_keeps_the_location_on_long_paths() {
     let bm = bad_machine.to_str().expect("utf8").to_string();
     let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<String>>();
     let o_nc = out("nc");
+    let five_axis = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/machine.toml")
+        .to_str()
+        .expect("utf8")
+        .to_string();
     let cases: Vec<(Vec<String>, &str, &str)> = vec![
         (s(&["inspect", &nc]), &nc, "6:4"),
         (s(&["convert", &nc, "-o", &o_nc]), &nc, "6:4"),
@@ -420,7 +425,7 @@ fn every_reader_keeps_the_location_on_long_paths() {
             "6:4",
         ),
         (
-            s(&["post", &nc, "--machine", &machine, "-o", &o_nc]),
+            s(&["post", &nc, "--machine", &five_axis, "-o", &o_nc]),
             &nc,
             "6:4",
         ),
@@ -445,12 +450,33 @@ fn every_reader_keeps_the_location_on_long_paths() {
         (s(&["directions", &nc, "--stl", &stl]), &nc, "6:4"),
         (s(&["gouge", &apt, "--stl", &bstl]), &bstl, "5:"),
         (
-            s(&["raster", "--stl", &bstl, "--tool", "ball:10", "-o", &o_nc]),
+            s(&[
+                "raster",
+                "--stl",
+                &bstl,
+                "--tool",
+                "ball:10",
+                "--stepover",
+                "1",
+                "--step",
+                "0.5",
+                "-o",
+                &o_nc,
+            ]),
             &bstl,
             "5:",
         ),
         (
-            s(&["gouge", &apt, "--stl", &stl, "--machine", &bm]),
+            s(&[
+                "reorder",
+                &apt,
+                "--stl",
+                &stl,
+                "--machine",
+                &bm,
+                "-o",
+                &o_nc,
+            ]),
             &bm,
             "3:",
         ),
