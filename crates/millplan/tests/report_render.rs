@@ -545,10 +545,10 @@ fn tour_simulate_report_is_readable() {
         &[0, 3],
     );
     readable(&profile("sim"), &page);
-    // A plunge into the part: a failed check, so red.
+    // A plunge into the part: a cut into it is a failed check, so red.
     std::fs::write(
         demo().join("plunge.apt"),
-        "UNITS/MM\nCUTTER/10,5\nFEDRAT/100,MMPM\nRAPID\nGOTO/30,30,50\nRAPID\nGOTO/30,30,-5\n",
+        "UNITS/MM\nCUTTER/10,5\nFEDRAT/100,MMPM\nGOTO/30,30,50\nGOTO/30,30,-5\n",
     )
     .expect("write");
     let page = report_of(
