@@ -446,6 +446,26 @@ pub struct Steps {
 /// spindle stopped (at its line).
 pub const STOPPED_SPINDLE: &str = "this move removes material with the spindle at 0 1/min (S0, the spindle off, or no speed given): its cutting forces need a spindle speed; give the block an S word";
 
+/// What a user who runs `feed` or `force` on a program without S words is
+/// told besides [`STOPPED_SPINDLE`]: the option that supplies the speed.
+pub const SPINDLE_OPTION: &str =
+    "or, for a program that gives no spindle speed at all, give it with --spindle RPM";
+
+/// Gives every move of `p` that runs with the spindle at 0 (the program
+/// wrote no S word for it) the spindle speed `rpm`, as a user states it for
+/// a program without S words; moves with a speed keep theirs. Returns how
+/// many moves got `rpm`.
+pub fn supply_spindle(p: &mut Program, rpm: f64) -> usize {
+    let mut n = 0;
+    for m in p.operations.iter_mut().flat_map(|o| o.moves.iter_mut()) {
+        if !(m.spindle > 0.0) {
+            m.spindle = rpm;
+            n += 1;
+        }
+    }
+    n
+}
+
 impl ForceRun {
     /// The line of the first move that removed material with the spindle
     /// stopped (an `S0` copied from the source, or no speed at all): its

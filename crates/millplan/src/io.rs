@@ -607,7 +607,10 @@ fn keep_mode(f: &File, target: &Path) {
 // Standard output.
 
 /// The first error writing standard output; later output is dropped.
-static STDOUT_ERROR: Mutex<Option<String>> = Mutex::new(None);
+static STDOUT_ERROR: Mutex<Option<(std::io::ErrorKind, String)>> = Mutex::new(None);
+
+/// Whether a reader that stops early (`| head`) is the run's normal end.
+static CUT_SHORT_IS_FINE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 /// Writes to standard output, never panicking: the first failure (a closed
 /// pipe, a full disk) is kept for [`stdout_failure`] and later output dropped.
@@ -621,8 +624,15 @@ pub fn out(args: std::fmt::Arguments, newline: bool) {
         .write_fmt(args)
         .and_then(|()| if newline { o.write_all(b"\n") } else { Ok(()) });
     if let Err(e) = r {
-        *err = Some(e.to_string());
+        *err = Some((e.kind(), e.to_string()));
     }
+}
+
+/// For output a reader may take only the start of (a completion script, as
+/// `millplan completions bash | head -1`): a pipe closed by the reader
+/// is then no failure, as for `cat`.
+pub fn reader_may_stop_early() {
+    CUT_SHORT_IS_FINE.store(true, std::sync::atomic::Ordering::Relaxed);
 }
 
 /// Flushes standard output; what went wrong writing it, if anything.
@@ -630,10 +640,14 @@ pub fn stdout_failure() -> Option<String> {
     let mut err = STDOUT_ERROR.lock().unwrap_or_else(|e| e.into_inner());
     if err.is_none() {
         if let Err(e) = std::io::stdout().lock().flush() {
-            *err = Some(e.to_string());
+            *err = Some((e.kind(), e.to_string()));
         }
     }
-    err.clone()
+    let fine = CUT_SHORT_IS_FINE.load(std::sync::atomic::Ordering::Relaxed);
+    match &*err {
+        Some((std::io::ErrorKind::BrokenPipe, _)) if fine => None,
+        e => e.as_ref().map(|(_, m)| m.clone()),
+    }
 }
 
 #[cfg(test)]

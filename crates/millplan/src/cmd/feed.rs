@@ -86,6 +86,11 @@ pub struct ModelArgs {
     /// schedule whose loads sit close to their limits.
     #[arg(long)]
     pub converge: bool,
+    /// Spindle speed, 1/min, for the moves of a program that gives none (no
+    /// S word, as some CAM systems write finishing programs): the forces
+    /// need one. Moves with an S word keep theirs.
+    #[arg(long, value_name = "RPM")]
+    pub spindle: Option<f64>,
     /// Units of a program that does not say.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
@@ -192,8 +197,12 @@ pub fn prepare(path: &Path, m: &ModelArgs) -> CliResult<Prepared> {
     let spec =
         StockSpec::parse(&stock_name).map_err(|e| CliError::input(format!("--stock {e}")))?;
     let machine = crate::cmd::load_machine(m.machine.as_deref())?;
-    let parsed = read_program(path, read_options(m.units, None)?)?;
+    let mut parsed = read_program(path, read_options(m.units, None)?)?;
     print_diagnostics(path, &parsed.diagnostics, m.quiet || m.json);
+    if let Some(n) = m.spindle {
+        arg("--spindle", n, Range::positive(1.0e6, "1/min"))?;
+        millplan_plan::force::supply_spindle(&mut parsed.program, n);
+    }
     let body = body_fn(m)?;
     let s = strokes(
         &parsed.program,
@@ -229,9 +238,10 @@ pub fn prepare(path: &Path, m: &ModelArgs) -> CliResult<Prepared> {
 pub fn stopped_spindle(path: &Path, run: &ForceRun) -> CliResult<()> {
     match run.stopped_spindle() {
         Some(line) => Err(CliError::input(format!(
-            "{}:{line}:1: {}",
+            "{}:{line}:1: {}, {}",
             path.display(),
-            millplan_plan::force::STOPPED_SPINDLE
+            millplan_plan::force::STOPPED_SPINDLE,
+            millplan_plan::force::SPINDLE_OPTION
         ))),
         None => Ok(()),
     }
@@ -291,8 +301,8 @@ pub fn load_limits(
     Ok(l)
 }
 
-/// A feed per block from the cutting forces (spec process-models.md §2.3,
-/// issue 21 part 5).
+/// A feed per block from the cutting forces (the feed iteration of
+/// docs/forces.md).
 ///
 /// The program runs stroke by stroke through its stock; each cutting stroke
 /// gets the feed per tooth at which the tightest limit is met: --limit
@@ -604,10 +614,11 @@ fn load_warnings(v: &serde_json::Value, over: &str, lines: &str) -> Vec<String> 
 /// The force report's warnings and verdict.
 pub fn force_notes(v: &serde_json::Value) -> millplan_report::html::Notes {
     let f = |a: &str, b: &str| v[a][b].as_f64().unwrap_or(0.0);
-    millplan_report::html::Notes {
-        warnings: load_warnings(v, "over_limit", "over_limit_lines"),
-        inputs: Vec::new(),
-        verdict: vec![format!(
+    millplan_report::html::Notes::judged(
+        Vec::new(),
+        load_warnings(v, "over_limit", "over_limit_lines"),
+        &millplan_report::forces::force_evidence(v["over_limit"].as_u64().unwrap_or(0)),
+        vec![format!(
             "Largest loads: F_xy {:.1} N (line {}), torque {:.1} N·mm (line {}), power {:.1} W (line {}), tip deflection {:.4} mm (line {}), over {:.1} s of program.",
             f("max", "fxy"),
             v["max_lines"]["fxy"],
@@ -619,7 +630,7 @@ pub fn force_notes(v: &serde_json::Value) -> millplan_report::html::Notes {
             v["max_lines"]["deflection"],
             v["time_s"].as_f64().unwrap_or(0.0)
         )],
-    }
+    )
 }
 
 /// One entry of the summary's `operations` in words.
@@ -654,18 +665,19 @@ fn feed_notes(v: &serde_json::Value) -> millplan_report::html::Notes {
     for o in v["operations"].as_array().into_iter().flatten() {
         verdict.push(format!("{}.", operation_line(o)));
     }
-    millplan_report::html::Notes {
-        warnings: load_warnings(v, "over_limit_after", "over_limit_lines"),
-        verdict,
-        inputs: Vec::new(),
-    }
+    let n = |k: &str| v[k].as_u64().unwrap_or(0);
+    let e = millplan_report::forces::feed_evidence(
+        n("over_limit_after"),
+        n("blocks") + n("air_blocks"),
+        [t0, t1],
+    );
+    let warnings = load_warnings(v, "over_limit_after", "over_limit_lines");
+    millplan_report::html::Notes::judged(Vec::new(), warnings, &e, verdict)
 }
 
 /// The summary's scalar entries as table rows.
 pub fn summary_rows(v: &serde_json::Value) -> Vec<(String, String)> {
-    v.as_object()
-        .map(|o| o.iter().map(|(k, v)| (k.clone(), v.to_string())).collect())
-        .unwrap_or_default()
+    millplan_report::forces::summary_table(v)
 }
 
 /// The plotted quantities with their limits (user and spindle chart).

@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 /// The tool's orientation is the program's tool axis; each stroke's lead
 /// (`lead_deg` of the table) is the feed's angle out of the plane normal to
 /// the axis, positive when the shank leans toward the feed, the sign of
-/// `cut --lead` and `orient` (process-models §0). The chip depends on that
+/// `cut --lead` and `orient` (docs/leadtilt.md). The chip depends on that
 /// lead alone, so no tilt is taken.
 ///
 /// `millplan force calibrate` and `millplan force materials` are the model's
@@ -45,7 +45,7 @@ pub enum Sub {
     Materials(MaterialsArgs),
 }
 
-/// Mechanistic calibration (spec process-models.md §1.5b): fits the six
+/// Mechanistic calibration (docs/forces.md): fits the six
 /// coefficients of the linear edge-force model to mean slot forces of a flat
 /// end mill measured at several feeds, and reports R² of each fit.
 ///

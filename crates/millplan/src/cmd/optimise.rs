@@ -390,7 +390,7 @@ fn print_summary(a: &Args, w: &Written, path: &Path, output: &Path, withheld: bo
         };
         outln!("  {:<8} {state}  {}", p.name, p.reason);
     }
-    outln!("{}", report::verdict_line(s));
+    outln!("{}", report::verdict_text(s));
     for c in &s.checks {
         let skipped = c
             .skipped
