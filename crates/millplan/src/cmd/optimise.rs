@@ -314,17 +314,11 @@ pub fn run(a: Args) -> CliResult<i32> {
         job.inputs.program.source,
     )
     .map_err(CliError::input)?;
-    let outcome = job
-        .run(&order)
-        .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
-    say_skipped(&a, &outcome);
     let wo = millplan_nc::write::WriteOptions {
         limits: crate::limits::get(),
         ..job.inputs.machine.write_options(target)
     };
-    let w = job
-        .finish(&outcome, wo)
-        .map_err(|e| CliError::input(format!("{}:{e}", path.display())))?;
+    let (outcome, w) = passes_and_checks(&a, &job, &order, wo, &path)?;
     print_diagnostics(&path, &w.warnings, a.quiet || a.json);
     let refused = w.summary.verdict == Verdict::Refused;
     if !refused || a.force {
@@ -336,6 +330,28 @@ pub fn run(a: Args) -> CliResult<i32> {
     outputs.commit()?;
     print_summary(&a, &w, &path, &output, refused && !a.force);
     Ok(if refused { EXIT_FINDINGS } else { EXIT_OK })
+}
+
+/// The passes, then the written program's checks, under one bar on a
+/// terminal (none with -q or --json).
+fn passes_and_checks(
+    a: &Args,
+    job: &Job,
+    order: &[passes::PassName],
+    wo: millplan_nc::write::WriteOptions,
+    path: &Path,
+) -> CliResult<(Outcome, Written)> {
+    let bar = crate::progress::Phases::new(!(a.quiet || a.json));
+    let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
+    let outcome = job.run_with(order, Some(&hook));
+    let outcome = outcome.map_err(|e| CliError::input(format!("{}: {e}", path.display())));
+    let outcome = outcome.inspect_err(|_| bar.finish())?;
+    bar.report("optimise: checks of the written program", 0, 1);
+    let w = job.finish(&outcome, wo);
+    bar.finish();
+    say_skipped(a, &outcome);
+    let w = w.map_err(|e| CliError::input(format!("{}:{e}", path.display())))?;
+    Ok((outcome, w))
 }
 
 fn say_skipped(a: &Args, o: &Outcome) {
