@@ -106,6 +106,9 @@ pub enum TargetArg {
     Heidenhain,
     Linuxcnc,
     Apt,
+    /// KUKA KRL, a robot program (.src): one LIN per point after a PTP
+    /// approach, the tool axis as the orientation A, B, C.
+    Krl,
 }
 
 impl From<TargetArg> for Target {
@@ -116,6 +119,7 @@ impl From<TargetArg> for Target {
             TargetArg::Heidenhain => Target::Heidenhain,
             TargetArg::Linuxcnc => Target::LinuxCnc,
             TargetArg::Apt => Target::Apt,
+            TargetArg::Krl => Target::Krl,
         }
     }
 }
