@@ -86,7 +86,7 @@ impl Robot {
         let mut t = Pose::IDENTITY;
         for f in &self.frames[..n] {
             t = t.mul(&f.fixed);
-            t.r = t.r * DMat3::from_rotation_z(f.theta(q));
+            t.r *= DMat3::from_rotation_z(f.theta(q));
         }
         t
     }

@@ -288,6 +288,53 @@ impl Robot {
         load: &Load,
         status: Option<u8>,
     ) -> Result<Deflections, MachiningError> {
+        if dirs.len() != run.len() {
+            return Err(MachiningError::Program {
+                line: run.first().map_or(0, |p| p.line),
+                message: format!("{} feed directions for {} points", dirs.len(), run.len()),
+            });
+        }
+        self.deflections_by(variant, place, run, status, |i, pt| {
+            let f = dirs[i];
+            let c = pt.axis.cross(f);
+            f * load.feed + c * load.cross + pt.axis * load.axial
+        })
+    }
+
+    /// The deflection along a run under a force of its own at every point
+    /// (N, in the workpiece frame: what the force model gives along the
+    /// path), turned into the base with the placement.
+    pub fn deflections_under(
+        &self,
+        variant: Variant,
+        place: &Placement,
+        run: &[PathPoint],
+        forces: &[DVec3],
+        status: Option<u8>,
+    ) -> Result<Deflections, MachiningError> {
+        if forces.len() != run.len() {
+            return Err(MachiningError::Program {
+                line: run.first().map_or(0, |p| p.line),
+                message: format!(
+                    "{} forces for {} points: one force a point was expected",
+                    forces.len(),
+                    run.len()
+                ),
+            });
+        }
+        self.deflections_by(variant, place, run, status, |i, _| forces[i])
+    }
+
+    /// The deflection along a run, `force(i, point)` the force on the tool
+    /// at point i in the workpiece frame (N).
+    fn deflections_by(
+        &self,
+        variant: Variant,
+        place: &Placement,
+        run: &[PathPoint],
+        status: Option<u8>,
+        force: impl Fn(usize, &PathPoint) -> DVec3 + Sync,
+    ) -> Result<Deflections, MachiningError> {
         let pose = place.pose();
         let first = run.first().ok_or(MachiningError::Empty)?;
         let status = match status {
@@ -301,9 +348,8 @@ impl Robot {
         };
         let dp: Vec<DVec3> = run
             .par_iter()
-            .zip(dirs)
             .enumerate()
-            .map_init(Scratch::default, |s, (i, (pt, f))| {
+            .map_init(Scratch::default, |s, (i, pt)| {
                 let tcp = s.tcp_pose(&pose, pt.p, pt.axis);
                 let q = self
                     .ik_status(&tcp, status)
@@ -311,10 +357,8 @@ impl Robot {
                         line: pt.line,
                         index: i,
                     })?;
-                let c = pt.axis.cross(*f);
-                let force = pose.r * (*f * load.feed + c * load.cross + pt.axis * load.axial);
-                let (at, d) = self.deflect_with(&q, variant, force, DVec3::ZERO, &mut s.frames);
-                debug_assert!((at.t - tcp.t).length() < 1e-6);
+                let base = pose.r * force(i, pt);
+                let (_, d) = self.deflect_with(&q, variant, base, DVec3::ZERO, &mut s.frames);
                 Ok(pose.r.transpose() * d.dp)
             })
             .collect::<Result<_, MachiningError>>()?;

@@ -235,8 +235,8 @@ fn path_deflection_equals_the_compliance_matrix_pose_by_pose() {
                 .find(|q| robot.config(q).status == d.status && robot.feasible_winding(q).is_some())
                 .expect("a solution of the path's Status");
             let f = dirs[i];
-            let force = pose.r
-                * (f * load.feed + pt.axis.cross(f) * load.cross + pt.axis * load.axial);
+            let force =
+                pose.r * (f * load.feed + pt.axis.cross(f) * load.cross + pt.axis * load.axial);
             let c = robot.compliance(&q, variant).apply(force, DVec3::ZERO);
             let want = pose.r.transpose() * c.dp;
             assert!(
@@ -246,4 +246,45 @@ fn path_deflection_equals_the_compliance_matrix_pose_by_pose() {
             );
         }
     }
+}
+
+/// A force of its own at every point (the force model's, in the workpiece
+/// frame): the fixed feed-frame load given point by point deflects exactly
+/// as the fixed load; Equation 2 is linear, so a point's force doubled
+/// doubles its Δp and leaves the others; one force a point is required.
+#[test]
+fn deflection_under_a_force_per_point() {
+    let run = resample(&zigzag(0.3), 10.0);
+    let (robot, place) = (Robot::kr240(), place());
+    let load = Load {
+        feed: -95.0,
+        cross: 305.0,
+        axial: 68.0,
+    };
+    let dirs = machining::feed_dirs(&run);
+    let forces: Vec<DVec3> = run
+        .iter()
+        .zip(&dirs)
+        .map(|(p, f)| *f * load.feed + p.axis.cross(*f) * load.cross + p.axis * load.axial)
+        .collect();
+    let fixed = robot
+        .deflections(Variant::ThreeAxis, &place, &run, &load, None)
+        .expect("reachable");
+    let each = robot
+        .deflections_under(Variant::ThreeAxis, &place, &run, &forces, None)
+        .expect("reachable");
+    assert_eq!(each.dp, fixed.dp);
+    assert_eq!((each.mean, each.max), (fixed.mean, fixed.max));
+    let mut doubled = forces.clone();
+    doubled[3] *= 2.0;
+    let d = robot
+        .deflections_under(Variant::ThreeAxis, &place, &run, &doubled, None)
+        .expect("reachable");
+    assert!((d.dp[3] - fixed.dp[3] * 2.0).length() < 1e-12);
+    assert_eq!(d.dp[4], fixed.dp[4]);
+    assert!(d.max >= fixed.max);
+    let e = robot
+        .deflections_under(Variant::ThreeAxis, &place, &run, &forces[1..], None)
+        .expect_err("one short");
+    assert!(e.to_string().contains("one force a point"), "{e}");
 }
