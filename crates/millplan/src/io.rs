@@ -188,9 +188,20 @@ fn dialect_of(path: &Path, head: &[u8]) -> CliResult<millplan_nc::Dialect> {
     Ok(detect(&head))
 }
 
+/// Reads an APT/CL, G-code or KUKA KRL program (see [`read_source`]).
+pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
+    read_source(path, opts).map(|(p, _)| p)
+}
+
 /// Reads an APT/CL or G-code program line by line (the file is never held
 /// whole; lines end at LF, CRLF or a lone CR), within the limits of `opts`.
-pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
+/// A KUKA KRL program is read whole, with its sub-programs, and also
+/// returned as KRL (poses, external axes and statements as written, which
+/// the IR does not hold).
+pub fn read_source(
+    path: &Path,
+    opts: ReadOptions,
+) -> CliResult<(Parsed, Option<millplan_nc::krl::KrlProgram>)> {
     let located = |e: millplan_nc::ParseError| CliError::input(format!("{}:{e}", path.display()));
     let f = open(path)?;
     prefetch(&f);
@@ -201,7 +212,7 @@ pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
         .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
     let dialect = dialect_of(path, head)?;
     if dialect == millplan_nc::Dialect::Krl {
-        return read_krl(path, &opts).map(|(p, _)| p);
+        return read_krl(path, &opts).map(|(p, k)| (p, Some(k)));
     }
     // A move takes a line of 20 bytes or more.
     let opts = ReadOptions {
@@ -243,26 +254,7 @@ pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
                 .replace("no target can write it", "out of range once in mm")
         ))
     })?;
-    Ok(parsed)
-}
-
-/// A program as [`read_program`] reads it and, for a KUKA KRL program, the
-/// KRL program itself (poses, external axes and statements as written, which
-/// the IR does not hold).
-pub fn read_source(
-    path: &Path,
-    opts: ReadOptions,
-) -> CliResult<(Parsed, Option<millplan_nc::krl::KrlProgram>)> {
-    let mut head = Vec::with_capacity(4096);
-    open(path)?
-        .take(4096)
-        .read_to_end(&mut head)
-        .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
-    if millplan_nc::detect::krl_line(&String::from_utf8_lossy(&head)).is_some() {
-        let (p, k) = read_krl(path, &opts)?;
-        return Ok((p, Some(k)));
-    }
-    Ok((read_program(path, opts)?, None))
+    Ok((parsed, None))
 }
 
 /// A KRL program and the sub-programs its main calls, each read from the

@@ -154,12 +154,8 @@ pub fn run(a: Args) -> CliResult<i32> {
             })
         );
     } else {
-        eprintln!(
-            "wrote {} ({} moves, {})",
-            a.output.display(),
-            p.move_count(),
-            target.name()
-        );
+        let (path, moves) = (a.output.display(), p.move_count());
+        eprintln!("wrote {path} ({moves} moves, {})", target.name());
     }
     Ok(if equivalent { EXIT_OK } else { EXIT_FINDINGS })
 }

@@ -106,8 +106,7 @@ pub enum TargetArg {
     Heidenhain,
     Linuxcnc,
     Apt,
-    /// KUKA KRL, a robot program (.src): one LIN per point after a PTP
-    /// approach, the tool axis as the orientation A, B, C.
+    /// KUKA KRL, a robot program (.src): one LIN per point after a PTP approach.
     Krl,
 }
 
