@@ -790,22 +790,22 @@ fn explain_takes_a_code_as_it_is_printed() {
     assert_eq!(out.status.code(), Some(2));
 }
 
-/// Issue 18: a KUKA robot program is named as such, not a parse error at `&ACCESS`.
+/// Issue 18, then issue 35: a KUKA robot program is read as KRL, its
+/// errors at their line, not a parse error at `&ACCESS` (the PowerMILL
+/// sample's `inspect` is in tests/convert_krl.rs).
 #[test]
-fn krl_programs_are_refused_as_krl() {
+fn krl_programs_are_read_as_krl() {
     let dir = tempfile::tempdir().expect("tmp");
     let src = dir.path().join("ROBOT.SRC");
-    std::fs::write(&src, "&ACCESS RVP\r\n&REL 2\r\nDEF robot()\r\nEND\r\n").expect("write");
+    std::fs::write(
+        &src,
+        "&ACCESS RVP\r\n&REL 2\r\nDEF robot()\r\nLIN {X 1}\r\nEND\r\n",
+    )
+    .expect("write");
     fails_with_2(
         &["inspect", src.to_str().expect("utf8")],
-        "ROBOT.SRC:1:1: a KUKA KRL robot program: KRL is not read yet",
+        "ROBOT.SRC:4:1: a KRL position needs X, Y and Z",
     );
-    if let Some(real) = shared_data::file("kuka-krl-powermill-ballnose/f1_Kuka_APT2_Main.SRC") {
-        fails_with_2(
-            &["inspect", real.to_str().expect("utf8")],
-            "KRL is not read yet",
-        );
-    }
 }
 
 /// `millplan feed` on a generated ball-end finishing case: the program it
