@@ -23,6 +23,7 @@ pub mod job;
 pub mod lobes;
 pub mod orient;
 pub mod passes;
+pub mod post;
 pub mod raster;
 pub mod reorder;
 pub mod report;
