@@ -33,6 +33,7 @@ pub mod simulate;
 pub mod speed;
 pub mod sweep;
 pub mod target;
+pub mod tool;
 pub mod tools;
 pub mod wd;
 
