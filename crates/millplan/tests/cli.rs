@@ -653,11 +653,11 @@ fn no_function_of_the_binary_is_over_60_lines() {
     assert!(long.is_empty(), "functions over 60 lines: {long:?}");
 }
 
-/// The bound of [`the_binary_stays_small`]: 8,456 lines when it was last
-/// set (the `robot` command and the `--timings` phases came in after the
-/// commands moved), with room for small fixes; lowered as `feed`, `force`,
-/// `robot`, `tool` and `post` move into their libraries.
-const MAX_BINARY_LINES: usize = 8600;
+/// The bound of [`the_binary_stays_small`]: 7,610 lines when it was last
+/// set (`feed`, `force`, `post` and `tool` moved into `millplan-driver`),
+/// with room for small fixes; lowered as `robot`, `speed` and the argument
+/// groups shared by the commands move.
+const MAX_BINARY_LINES: usize = 7650;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into
