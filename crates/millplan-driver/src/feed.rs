@@ -720,3 +720,44 @@ pub fn feed_report(
         &quantities(limits, machine),
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn loads(v: &[(&str, &str)]) -> Vec<(String, String)> {
+        v.iter()
+            .map(|(k, x)| (k.to_string(), x.to_string()))
+            .collect()
+    }
+
+    #[test]
+    fn limits_take_each_named_load_and_refuse_what_is_no_number() {
+        let l = load_limits(
+            1.5,
+            0.01,
+            None,
+            None,
+            &loads(&[("fxy", "300"), ("power", "2000"), ("fz_max", "0.1")]),
+        )
+        .expect("limits");
+        assert_eq!(
+            (l.fxy, l.power, l.torque),
+            (Some(300.0), Some(2000.0), None)
+        );
+        assert_eq!((l.fos, l.fz_min, l.fz_max), (1.5, 0.01, Some(0.1)));
+        let e = force_limits(&loads(&[("fxy", "abc")])).unwrap_err();
+        assert_eq!(e, "--limit fxy=abc: not a number");
+        assert!(force_limits(&loads(&[("torque", "-1")])).is_err());
+        let f = force_limits(&[]).expect("none");
+        assert_eq!((f.fz_min, f.fz_max), (0.0, Some(f64::INFINITY)));
+    }
+
+    #[test]
+    fn json_text_prints_what_the_summary_prints() {
+        assert_eq!(json_text(&None::<u32>), "null");
+        assert_eq!(json_text(&vec![3u32, 5]), "[3,5]");
+        let b: BTreeMap<&str, usize> = [("fxy", 2), ("air", 1)].into_iter().collect();
+        assert_eq!(json_text(&b), r#"{"air":1,"fxy":2}"#);
+    }
+}

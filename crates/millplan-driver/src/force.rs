@@ -330,3 +330,22 @@ pub fn material_text(m: &Materials) -> String {
     }
     o
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slot_tests_read_by_their_header_and_refused_at_their_line() {
+        let text = "# slot tests\nnote;FZ;Fy;feed;fx\nx;-1;2;0.1;-3\n\nx;-4;5;0.2;-6\n";
+        let t = parse_tests(text, "s.csv").expect("reads");
+        assert_eq!(t.len(), 2);
+        assert_eq!((t[1].c, t[1].fx, t[1].fy, t[1].fz), (0.2, -6.0, 5.0, -4.0));
+        let bad = parse_tests("feed,fx,fy,fz\n0.1,1,2,3\n0.1,1,x,3\n", "s.csv");
+        assert_eq!(bad.unwrap_err(), "s.csv:3: `x` is not a number");
+        let no_header = parse_tests("feed,fx,fy\n", "s.csv");
+        assert!(no_header.unwrap_err().starts_with("s.csv:1: the header"));
+        let fz = parse_tests("feed,fx,fy,fz\n12,1,2,3\n", "s.csv");
+        assert!(fz.unwrap_err().starts_with("s.csv:2: the feed per tooth"));
+    }
+}
