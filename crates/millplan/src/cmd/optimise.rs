@@ -7,8 +7,8 @@ use crate::io::{read_mesh, read_program, read_surface, Outputs};
 use millplan_driver::passes::{self, ORDER};
 use millplan_driver::report::{self, InputNames, Plotted};
 use millplan_driver::tools::{self, Library};
+use millplan_driver::StockSpec;
 use millplan_driver::{Inputs, Job, Options, Outcome, UserLimits, Verdict, Written};
-use millplan_sim::stock::spec::StockSpec;
 use std::path::{Path, PathBuf};
 
 /// Take a CAM program to a verified, better program for one machine, stock,

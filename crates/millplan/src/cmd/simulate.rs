@@ -4,7 +4,7 @@ use crate::cmd::{print_diagnostics, read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_mesh, read_program, read_surface, Outputs};
 use millplan_driver::simulate::{self as lib, SimRequest};
-use millplan_driver::{SimReport, Stock, StockError, StockSpec, Strokes};
+use millplan_driver::{SimReport, Stock, StockSpec, Strokes};
 use millplan_geom::TriMesh;
 use std::path::{Path, PathBuf};
 
@@ -178,7 +178,7 @@ fn simulate(a: &Args, stock: &mut Stock, strokes: &Strokes) -> SimReport {
 }
 
 /// The stock before the program at `program` runs, as `spec` names it, at
-/// cell size `res` (`StockSpec::build`; an `stl:` blank read here).
+/// cell size `res` (`StockSpec::build` in the driver; an `stl:` blank read here).
 pub fn initial_stock(
     program: &Path,
     res: f64,
@@ -196,11 +196,8 @@ pub fn initial_stock(
         _ => None,
     };
     let memory = crate::limits::get().memory;
-    spec.build(res, s, part, blank.as_ref(), memory)
-        .map_err(|e| match e {
-            StockError::NoCut => CliError::input(format!("{}: {e}", program.display())),
-            e => CliError::input(e.to_string()),
-        })
+    let name = program.display().to_string();
+    lib::build_stock(&name, res, spec, s, (part, blank.as_ref()), memory).map_err(CliError::input)
 }
 
 fn write_outputs(
