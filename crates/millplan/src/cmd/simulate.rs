@@ -91,6 +91,10 @@ pub struct Args {
     /// No progress bar or warnings.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Print the wall time of each phase on standard error (they add up to
+    /// the whole run).
+    #[arg(long)]
+    pub timings: bool,
 }
 
 fn request(a: &Args) -> SimRequest {
@@ -106,7 +110,15 @@ fn request(a: &Args) -> SimRequest {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let req = request(&a);
+    let mut clock = crate::timings::Clock::start();
+    let code = run_timed(&a, &mut clock)?;
+    clock.lap("summary printed");
+    clock.print(a.timings);
+    Ok(code)
+}
+
+fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
+    let req = request(a);
     // Checked before any work, not after the simulation.
     lib::check(&req).map_err(CliError::input)?;
     let spec = StockSpec::parse(&a.stock).map_err(|e| CliError::input(format!("--stock {e}")))?;
@@ -126,12 +138,15 @@ pub fn run(a: Args) -> CliResult<i32> {
         ],
         false,
     )?;
+    clock.lap("arguments, machine file and outputs checked");
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    clock.lap("program read");
     let path = a.path.display().to_string();
     let strokes = lib::program_strokes(&req, &path, &parsed.program, machine.rapid)
         .map_err(CliError::input)?;
-    note_default_flute(&a, &req, &parsed.program)?;
+    note_default_flute(a, &req, &parsed.program)?;
+    clock.lap("strokes (tool bodies, moves in chords)");
     let part = match &a.stl {
         Some(p) => Some(read_surface(p, a.stl_units)?.0),
         None => None,
@@ -144,10 +159,14 @@ pub fn run(a: Args) -> CliResult<i32> {
         part.as_ref(),
         a.stl_units,
     )?;
-    let rep = simulate(&a, &mut stock, &strokes);
+    clock.lap("part read and stock built");
+    let rep = simulate(a, &mut stock, &strokes);
+    clock.lap("material removal");
     let rem = part.as_ref().map(|p| lib::remaining_on(&stock, p, a.tol));
-    write_outputs(&a, &mut outputs, &stock, &rep, rem.as_ref(), part.as_ref())?;
+    clock.lap("material left on the part");
+    write_outputs(a, &mut outputs, &stock, &rep, rem.as_ref(), part.as_ref())?;
     outputs.commit()?;
+    clock.lap("outputs written, synced and renamed into place");
     let report = lib::Report::new(&rep, &a.stock, rem.as_ref());
     if a.json {
         crate::cmd::print_json(serde_json::to_value(&report).unwrap_or_default());
