@@ -222,6 +222,9 @@ impl Reader {
             Reader::Heidenhain(r) => r.finish(),
         }?;
         crate::plausible::check(&parsed.program)?;
+        let mut parsed = parsed;
+        let warnings = crate::plausible::warnings(&parsed.program);
+        parsed.diagnostics.extend(warnings);
         Ok(parsed)
     }
 }

@@ -88,7 +88,8 @@ fn sinumerik_modes_time_as_the_planner_says() {
 
 #[test]
 fn heidenhain_tolerance_cycle_times_as_the_planner_says() {
-    let plain = "0 BEGIN PGM T MM\n1 L X+0 Y+0 Z+0 FMAX\n2 L X+50 F3000\n3 L Y+50\n4 END PGM T MM\n";
+    let plain =
+        "0 BEGIN PGM T MM\n1 L X+0 Y+0 Z+0 FMAX\n2 L X+50 F3000\n3 L Y+50\n4 END PGM T MM\n";
     close(time(plain), blended(0.2), "no cycle 32");
     let cycle = "0 BEGIN PGM T MM\n1 CYCL DEF 32.0 TOLERANCE\n2 CYCL DEF 32.1 T0.01\n3 L X+0 Y+0 Z+0 FMAX\n4 L X+50 F3000\n5 L Y+50\n6 END PGM T MM\n";
     close(time(cycle), blended(rounding(0.01)), "CYCL DEF 32.1 T0.01");

@@ -271,8 +271,10 @@ pub(crate) fn shape(
         .collect();
     let mut joints = vec![Joint::Stop; n + 1];
     let mut trimmed = vec![0.0f64; n];
-    // The share of its acceleration a kink takes from each block.
-    let mut kinked = vec![0.0f64; n];
+    // The share of its acceleration a kink takes from each block (LinuxCNC
+    // only: the other planners allocate nothing for it).
+    let lcnc = pl.kind == PlannerKind::LinuxCnc29;
+    let mut kinked = vec![0.0f64; if lcnc { n } else { 0 }];
     for k in 1..n {
         if stops[k] {
             continue;
@@ -287,45 +289,69 @@ pub(crate) fn shape(
             lim,
         );
         joints[k] = j;
-        kinked[k - 1] = kinked[k - 1].max(reduce);
-        kinked[k] = kinked[k].max(reduce);
+        if reduce > 0.0 {
+            kinked[k - 1] = kinked[k - 1].max(reduce);
+            kinked[k] = kinked[k].max(reduce);
+        }
         if let Joint::Arc(a) = joints[k] {
             trimmed[k] = a.trim;
         }
     }
-    // The acceleration along blocks that blend without an arc (LinuxCNC's
-    // parabolic blends, and a blending block at the end of its chain).
-    if pl.kind == PlannerKind::LinuxCnc29 {
-        let mut half: Vec<bool> = (0..n)
-            .map(|k| {
-                let c = ctl_of(k);
-                let parabolic_end = c.mode != PathMode::ExactStop
-                    && !c.stop_after
-                    && !matches!(
-                        joints[k + 1],
-                        Joint::Tangent | Joint::Arc(_) | Joint::Kink(_) | Joint::HardStop
-                    );
-                parabolic_end || matches!(joints[k], Joint::Parabolic(_))
-            })
-            .collect();
-        // The chords of one arc are one segment to LinuxCNC: all or none.
-        for k in (0..n.saturating_sub(1)).rev() {
-            if ctl_of(k).same_move && half[k + 1] {
-                half[k] = true;
-            }
-        }
-        for k in 1..n {
-            if ctl_of(k - 1).same_move && half[k - 1] {
-                half[k] = true;
-            }
-        }
-        for ((b, h), r) in bs.iter_mut().zip(half).zip(&kinked) {
-            if h {
-                b.accel *= pl.blend_accel_scale;
-            }
-            b.accel *= 1.0 - r;
+    if lcnc {
+        linuxcnc_accels(&mut bs, &joints, &kinked, &ctl_of, pl);
+    }
+    let mut out = emit(&bs, &joints, &trimmed);
+    lookahead(&mut out, ctl, pl);
+    out
+}
+
+/// LinuxCNC's acceleration along each block (`tcGetOverallMaxAccel`): the
+/// blend share on blocks that blend without an arc (parabolic blends, and
+/// a blending block at the end of its chain), less the share its kinks
+/// take (`kinked`).
+fn linuxcnc_accels(
+    bs: &mut [Block],
+    joints: &[Joint],
+    kinked: &[f64],
+    ctl_of: &dyn Fn(usize) -> BlockCtl,
+    pl: &Planner,
+) {
+    let n = bs.len();
+    let mut half: Vec<bool> = (0..n)
+        .map(|k| {
+            let c = ctl_of(k);
+            let parabolic_end = c.mode != PathMode::ExactStop
+                && !c.stop_after
+                && !matches!(
+                    joints[k + 1],
+                    Joint::Tangent | Joint::Arc(_) | Joint::Kink(_) | Joint::HardStop
+                );
+            parabolic_end || matches!(joints[k], Joint::Parabolic(_))
+        })
+        .collect();
+    // The chords of one arc are one segment to LinuxCNC: all or none.
+    for k in (0..n.saturating_sub(1)).rev() {
+        if ctl_of(k).same_move && half[k + 1] {
+            half[k] = true;
         }
     }
+    for k in 1..n {
+        if ctl_of(k - 1).same_move && half[k - 1] {
+            half[k] = true;
+        }
+    }
+    for ((b, h), r) in bs.iter_mut().zip(half).zip(kinked) {
+        if h {
+            b.accel *= pl.blend_accel_scale;
+        }
+        b.accel *= 1.0 - r;
+    }
+}
+
+/// The blocks the control runs (blend arcs between their trimmed
+/// neighbours) and the speed limit at each junction.
+fn emit(bs: &[Block], joints: &[Joint], trimmed: &[f64]) -> Shaped {
+    let n = bs.len();
     let mut out = Shaped {
         blocks: Vec::with_capacity(n),
         vj: Vec::with_capacity(n + 1),
@@ -361,7 +387,6 @@ pub(crate) fn shape(
     if let Some(last) = out.vj.last_mut() {
         *last = 0.0;
     }
-    lookahead(&mut out, ctl, pl);
     out
 }
 
@@ -474,7 +499,14 @@ fn planar_accel(a: &Block, b: &Block, lim: &Limits) -> f64 {
 /// (doubled where an arc takes part: its tangential share). `None` where
 /// LinuxCNC does not look for a kink: between a rapid and a feed move, and
 /// at a reversal within 2° (a sharp corner: the motion stops).
-fn kink(a: &Block, b: &Block, ca: &BlockCtl, cb: &BlockCtl, pl: &Planner, lim: &Limits) -> Option<f64> {
+fn kink(
+    a: &Block,
+    b: &Block,
+    ca: &BlockCtl,
+    cb: &BlockCtl,
+    pl: &Planner,
+    lim: &Limits,
+) -> Option<f64> {
     let sum: f64 = (0..3).map(|i| (a.dir[i] + b.dir[i]).powi(2)).sum();
     if a.rapid != b.rapid || sum < (2f64.to_radians()).powi(2) || pl.block_time_s <= 0.0 {
         return None;
@@ -539,11 +571,9 @@ fn linuxcnc_blend(
     pl: &Planner,
     lim: &Limits,
 ) -> Joint {
-    use std::f64::consts::{FRAC_PI_2, PI};
+    // Nearly tangent blocks never come here: their kink passes them.
+    use std::f64::consts::PI;
     let th = half_angle(a, b);
-    if FRAC_PI_2 - th < 1e-6 {
-        return Joint::Tangent;
-    }
     let a_max = planar_accel(a, b, lim);
     let a_par = a_max * pl.blend_accel_scale;
     let parabolic = parabolic_speed(a, b, ca, a_par, th);
