@@ -77,12 +77,15 @@ fn fanuc_modes_time_as_the_planner_says() {
 
 #[test]
 fn sinumerik_modes_time_as_the_planner_says() {
-    let sin = |head: &str| time(&gcode("G71 G90 G17\n", head, "M30\n"));
+    // SOFT says the dialect (the axes have no jerk limit: the same
+    // trapezoids); G60 is
+    // exact stop only to a Sinumerik.
+    let sin = |head: &str| time(&gcode("G71 G90 G17\nSOFT\n", head, "M30\n"));
     close(sin("G60"), exact_stop(), "G60");
     close(sin("G64"), blended(0.2), "G64");
     close(sin("G641 ADIS=0.01"), blended(rounding(0.01)), "G641 ADIS");
     close(sin("CTOL=0.01 G642"), blended(rounding(0.01)), "G642 CTOL");
-    let once = time("G71 G90 G17\nG64\nG0 X0 Y0 Z0\nG1 X50 F3000 G9\nG1 Y50\nM30\n");
+    let once = time("G71 G90 G17\nSOFT\nG64\nG0 X0 Y0 Z0\nG1 X50 F3000 G9\nG1 Y50\nM30\n");
     close(once, exact_stop(), "G9");
 }
 
