@@ -78,8 +78,7 @@ fn fanuc_modes_time_as_the_planner_says() {
 #[test]
 fn sinumerik_modes_time_as_the_planner_says() {
     // SOFT says the dialect (the axes have no jerk limit: the same
-    // trapezoids); G60 is
-    // exact stop only to a Sinumerik.
+    // trapezoids); G60 is exact stop only to a Sinumerik.
     let sin = |head: &str| time(&gcode("G71 G90 G17\nSOFT\n", head, "M30\n"));
     close(sin("G60"), exact_stop(), "G60");
     close(sin("G64"), blended(0.2), "G64");
