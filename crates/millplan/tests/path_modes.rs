@@ -6,8 +6,9 @@
 //! by are checked against closed forms in millplan-plan's
 //! `tests/path_modes.rs`.
 
-mod common;
-use common::bin;
+fn bin() -> std::process::Command {
+    std::process::Command::new(env!("CARGO_BIN_EXE_millplan"))
+}
 
 const MACHINE: &str = "[control]\nplanner = \"linuxcnc-2.9\"\n[spindle]\nmin = 0\nmax = 24000\naccel = 10000\n[feed]\nmax = 12000\nrapid = 12000\n";
 
