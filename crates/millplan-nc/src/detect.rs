@@ -231,6 +231,9 @@ impl Reader {
             Reader::Krl(text, opts) => read_krl(&text, &opts),
         }?;
         crate::plausible::check(&parsed.program)?;
+        let mut parsed = parsed;
+        let warnings = crate::plausible::warnings(&parsed.program);
+        parsed.diagnostics.extend(warnings);
         Ok(parsed)
     }
 }

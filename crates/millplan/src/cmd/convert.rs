@@ -101,6 +101,16 @@ fn check_output(p: &millplan_nc::Program, out: &[u8], target: Target, a: &Args) 
     }
 }
 
+/// The reader's warnings (an `S0` before a cut, words not understood), each
+/// at its place, for `--json`.
+fn json_warnings(input: &std::path::Path, d: &[millplan_nc::Diagnostic]) -> Vec<String> {
+    let file = input.display().to_string();
+    d.iter()
+        .filter(|d| d.severity == millplan_nc::diag::Severity::Warning)
+        .map(|d| d.located(&file))
+        .collect()
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     if a.json && a.output.as_os_str() == "-" {
         return Err(CliError::input(
@@ -114,6 +124,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
     let (parsed, krl) = crate::io::read_source(&a.input, read_options(a.units, a.feed)?)?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet);
+    let warnings = json_warnings(&a.input, &parsed.diagnostics);
     let mut p = parsed.program;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let to = a.to.map(Into::into).or(machine.target());
@@ -151,6 +162,7 @@ pub fn run(a: Args) -> CliResult<i32> {
                 "target": target.name(),
                 "moves": p.move_count(),
                 "equivalent": equivalent,
+                "warnings": warnings,
             })
         );
     } else {
