@@ -208,7 +208,11 @@ impl Prepared {
 /// `--spindle` (checked first); without the option nothing changes.
 pub fn supply_spindle(m: &ModelRequest, program: &mut Program) -> Result<(), String> {
     if let Some(n) = m.spindle {
-        crate::check::arg("--spindle", n, crate::check::Range::positive(1.0e6, "1/min"))?;
+        crate::check::arg(
+            "--spindle",
+            n,
+            crate::check::Range::positive(1.0e6, "1/min"),
+        )?;
         millplan_plan::force::supply_spindle(program, n);
     }
     Ok(())
