@@ -123,21 +123,7 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
     lib::check(&req).map_err(CliError::input)?;
     let spec = StockSpec::parse(&a.stock).map_err(|e| CliError::input(format!("--stock {e}")))?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let mut inputs: Vec<&Path> = vec![&a.path];
-    inputs.extend(a.stl.as_deref());
-    inputs.extend(a.machine.as_deref());
-    if let StockSpec::Stl(p) = &spec {
-        inputs.push(p);
-    }
-    let mut outputs = Outputs::plan(
-        &inputs,
-        &[
-            ("-o", a.output.as_deref()),
-            ("--table", a.table.as_deref()),
-            ("--report", a.report.as_deref()),
-        ],
-        false,
-    )?;
+    let mut outputs = plan_outputs(a, &spec)?;
     clock.lap("arguments, machine file and outputs checked");
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
@@ -179,6 +165,25 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
         } else {
             EXIT_FINDINGS
         },
+    )
+}
+
+/// The outputs of the run, checked against every file it reads.
+fn plan_outputs(a: &Args, spec: &StockSpec) -> CliResult<Outputs> {
+    let mut inputs: Vec<&Path> = vec![&a.path];
+    inputs.extend(a.stl.as_deref());
+    inputs.extend(a.machine.as_deref());
+    if let StockSpec::Stl(p) = spec {
+        inputs.push(p);
+    }
+    Outputs::plan(
+        &inputs,
+        &[
+            ("-o", a.output.as_deref()),
+            ("--table", a.table.as_deref()),
+            ("--report", a.report.as_deref()),
+        ],
+        false,
     )
 }
 
