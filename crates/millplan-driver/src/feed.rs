@@ -251,35 +251,18 @@ pub fn load_limits(
     chip_loads: Option<ChipLoads>,
     loads: &[(String, String)],
 ) -> Result<FeedLimits, String> {
-    let mut l = FeedLimits {
-        fxy: None,
-        torque: None,
-        power: None,
-        stress: None,
-        deflection: None,
+    let u = crate::job::UserLimits::parse(loads)?;
+    Ok(FeedLimits {
+        fxy: u.fxy,
+        torque: u.torque,
+        power: u.power,
+        stress: u.stress,
+        deflection: u.deflection,
         fos,
-        fz_min,
-        fz_max,
+        fz_min: u.fz_min.unwrap_or(fz_min),
+        fz_max: u.fz_max.or(fz_max),
         chip_loads,
-    };
-    for (name, value) in loads {
-        let v: f64 = value
-            .parse()
-            .map_err(|_| format!("--limit {name}={value}: not a number"))?;
-        let flag = format!("--limit {name}");
-        let x = arg(&flag, v, Range::positive(1e9, "(N, N·mm, W, MPa or mm)"))?;
-        let v = Some(x);
-        match name.as_str() {
-            "fxy" => l.fxy = v,
-            "torque" => l.torque = v,
-            "power" => l.power = v,
-            "stress" => l.stress = v,
-            "fz_min" => l.fz_min = x,
-            "fz_max" => l.fz_max = v,
-            _ => l.deflection = v,
-        }
-    }
-    Ok(l)
+    })
 }
 
 /// The limits `force PATH` checks: only those of `--limit` (`loads`).

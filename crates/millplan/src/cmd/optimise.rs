@@ -156,7 +156,7 @@ fn options(a: &Args) -> CliResult<Options> {
             .resolution
             .map(|v| arg("--resolution", v, Range::from(0.005, 100.0, "mm")))
             .transpose()?,
-        limits: user_limits()?,
+        limits: UserLimits::parse(&crate::limits::loads()).map_err(CliError::input)?,
         tol: a
             .tol
             .map(|v| arg("--tol", v, Range::from(0.0, 100.0, "mm")))
@@ -164,31 +164,6 @@ fn options(a: &Args) -> CliResult<Options> {
         memory: Some(crate::limits::get().memory),
         g93: a.g93,
     })
-}
-
-/// The load limits of `--limit`.
-fn user_limits() -> CliResult<UserLimits> {
-    let mut l = UserLimits::default();
-    for (name, value) in crate::limits::loads() {
-        let v: f64 = value
-            .parse()
-            .map_err(|_| CliError::input(format!("--limit {name}={value}: not a number")))?;
-        let v = Some(arg(
-            &format!("--limit {name}"),
-            v,
-            Range::positive(1e9, "(N, N·mm, W, MPa or mm)"),
-        )?);
-        match name.as_str() {
-            "fxy" => l.fxy = v,
-            "torque" => l.torque = v,
-            "power" => l.power = v,
-            "stress" => l.stress = v,
-            "fz_min" => l.fz_min = v,
-            "fz_max" => l.fz_max = v,
-            _ => l.deflection = v,
-        }
-    }
-    Ok(l)
 }
 
 /// The tool library of `--tools`, read whole (it must exist).
