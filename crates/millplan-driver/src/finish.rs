@@ -29,6 +29,10 @@ pub enum Verdict {
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
     pub verdict: Verdict,
+    /// The verdict's level by the one rule of every report
+    /// (`millplan_report::html::Level::of`): red when a check failed, amber
+    /// when the input was kept, a warning applies or a measure got worse.
+    pub level: millplan_report::html::Level,
     pub passes: Vec<PassOutcome>,
     pub time_before_s: f64,
     pub time_after_s: f64,
@@ -201,8 +205,9 @@ impl Job {
         } else {
             Verdict::Kept
         };
-        Summary {
+        let mut s = Summary {
             verdict,
+            level: millplan_report::html::Level::Green,
             passes: o.passes.clone(),
             time_before_s: b.time_s,
             time_after_s: after.time_s,
@@ -214,6 +219,8 @@ impl Job {
             settings: self.settings.clone(),
             dialect: wo.target.name().to_string(),
             moves: o.program.move_count(),
-        }
+        };
+        s.level = crate::report::level(&s);
+        s
     }
 }

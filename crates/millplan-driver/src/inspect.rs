@@ -109,7 +109,7 @@ impl TimeSummary {
 /// What a program holds.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ProgramSummary {
-    /// `apt` or `gcode`.
+    /// `apt`, `gcode` or `krl` (a KUKA robot program).
     pub format: &'static str,
     pub dialect: &'static str,
     pub name: Option<String>,
@@ -163,7 +163,11 @@ pub fn program(p: &Program, diagnostics: usize, machine: &Machine) -> ProgramSum
         .filter_map(|(n, u)| u.map(|u| (n, u)))
         .collect();
     ProgramSummary {
-        format: if p.source.is_apt() { "apt" } else { "gcode" },
+        format: match p.source {
+            d if d.is_apt() => "apt",
+            millplan_nc::Dialect::Krl => "krl",
+            _ => "gcode",
+        },
         dialect: p.source.name(),
         name: p.name.clone(),
         units: match p.units.source {

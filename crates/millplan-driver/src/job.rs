@@ -29,6 +29,32 @@ pub struct UserLimits {
     pub fz_max: Option<f64>,
 }
 
+impl UserLimits {
+    /// The limits of `--limit NAME=VALUE` (`loads`: fxy, torque, power,
+    /// stress, deflection, fz_min, fz_max), each a positive number.
+    pub fn parse(loads: &[(String, String)]) -> Result<UserLimits, String> {
+        let mut l = UserLimits::default();
+        for (name, value) in loads {
+            let v: f64 = value
+                .parse()
+                .map_err(|_| format!("--limit {name}={value}: not a number"))?;
+            let flag = format!("--limit {name}");
+            let range = crate::check::Range::positive(1e9, "(N, N·mm, W, MPa or mm)");
+            let v = Some(crate::check::arg(&flag, v, range)?);
+            match name.as_str() {
+                "fxy" => l.fxy = v,
+                "torque" => l.torque = v,
+                "power" => l.power = v,
+                "stress" => l.stress = v,
+                "fz_min" => l.fz_min = v,
+                "fz_max" => l.fz_max = v,
+                _ => l.deflection = v,
+            }
+        }
+        Ok(l)
+    }
+}
+
 /// What the user chose over the defaults; `None` takes the default.
 #[derive(Clone, Debug, Default)]
 pub struct Options {

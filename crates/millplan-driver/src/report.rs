@@ -7,7 +7,7 @@ use crate::run::Loads;
 use millplan_nc::Program;
 use millplan_plan::force::ForceRun;
 use millplan_plan::machine::Machine;
-use millplan_report::html::{report_page, Notes};
+use millplan_report::html::{report_page, worse_words, Evidence, Notes, TIME_WORSE};
 use millplan_report::svg::{line_plot, Series};
 
 /// The names of the inputs as the report shows them.
@@ -132,19 +132,9 @@ fn rows(s: &Summary) -> Vec<(String, String)> {
     r
 }
 
-fn notes(s: &Summary, n: &InputNames) -> Notes {
-    let mut inputs = vec![("program".to_string(), n.program.clone())];
-    let opt = |v: &Option<String>| v.clone().unwrap_or_else(|| "not given".into());
-    inputs.push(("part".into(), opt(&n.part)));
-    inputs.push(("stock".into(), opt(&n.stock)));
-    inputs.push(("machine".into(), n.machine.clone()));
-    inputs.push(("material".into(), opt(&n.material)));
-    inputs.push(("output".into(), format!("{} ({})", n.output, s.dialect)));
-    for x in &s.settings {
-        inputs.push((x.name.to_string(), format!("{} ({})", x.value, x.from)));
-    }
-    let warnings = s
-        .checks
+/// The warnings of a run: what the checks found in the input itself.
+fn warnings(s: &Summary) -> Vec<String> {
+    s.checks
         .iter()
         .flat_map(|c| {
             c.findings.iter().filter(|f| f.in_input).map(move |f| {
@@ -157,11 +147,85 @@ fn notes(s: &Summary, n: &InputNames) -> Notes {
             })
         })
         .take(20)
+        .collect()
+}
+
+/// The verdict as the text summary prints it: its level and why (what
+/// failed, what got worse), then the words of [`verdict_line`].
+pub fn verdict_text(s: &Summary) -> String {
+    format!(
+        "{} {}",
+        millplan_report::html::headline(&evidence(s), warnings(s).len()),
+        verdict_line(s)
+    )
+}
+
+/// The level of a run's verdict, by the one rule of every report.
+pub fn level(s: &Summary) -> millplan_report::html::Level {
+    millplan_report::html::Level::of(&evidence(s), warnings(s).len())
+}
+
+fn notes(s: &Summary, n: &InputNames) -> Notes {
+    let mut inputs = vec![("program".to_string(), n.program.clone())];
+    let opt = |v: &Option<String>| v.clone().unwrap_or_else(|| "not given".into());
+    inputs.push(("part".into(), opt(&n.part)));
+    inputs.push(("stock".into(), opt(&n.stock)));
+    inputs.push(("machine".into(), n.machine.clone()));
+    inputs.push(("material".into(), opt(&n.material)));
+    inputs.push(("output".into(), format!("{} ({})", n.output, s.dialect)));
+    for x in &s.settings {
+        inputs.push((x.name.to_string(), format!("{} ({})", x.value, x.from)));
+    }
+    let warnings = warnings(s);
+    Notes::judged(inputs, warnings, &evidence(s), vec![verdict_line(s)])
+}
+
+/// What the optimise verdict is decided from: the checks of the written
+/// program, whether the input was kept, and the measures the passes exist
+/// for (cycle time, points off the cutting speed) that got worse.
+pub fn evidence(s: &Summary) -> Evidence {
+    let failed = s
+        .checks
+        .iter()
+        .filter(|c| !c.ok)
+        .map(|c| {
+            let first = c.findings.iter().find(|f| !f.in_input);
+            match first {
+                Some(f) => format!(
+                    "check {} at line {}: {}",
+                    c.name,
+                    f.line.unwrap_or(0),
+                    f.message
+                ),
+                None => format!("check {}", c.name),
+            }
+        })
         .collect();
-    Notes {
-        inputs,
-        warnings,
-        verdict: vec![verdict_line(s)],
+    let mut worse = Vec::new();
+    if s.time_after_s > s.time_before_s * (1.0 + TIME_WORSE) {
+        worse.push(worse_words(
+            "cycle time",
+            s.time_before_s,
+            s.time_after_s,
+            1,
+            "s",
+        ));
+    }
+    if let (Some(b), Some(a)) = (s.vc_off_before, s.vc_off_after) {
+        if a > b {
+            worse.push(worse_words(
+                "points off the cutting speed",
+                100.0 * b,
+                100.0 * a,
+                1,
+                "%",
+            ));
+        }
+    }
+    Evidence {
+        failed,
+        kept: s.verdict == Verdict::Kept,
+        worse,
     }
 }
 

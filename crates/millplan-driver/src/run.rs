@@ -6,12 +6,15 @@ use crate::passes::{missing, PassName};
 use millplan_nc::Program;
 use millplan_plan::feed::{FeedChanges, FeedParams, FeedPass};
 use millplan_plan::force::{self, ForceRun};
-use millplan_plan::pipeline::{self, Context, Pass};
+use millplan_plan::pipeline::{self, Context, Pass, Progress};
 use millplan_plan::post::{post, PostOptions, PostReport};
 use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Verdict};
 use millplan_plan::speed::{deviates, FeedCoupling, SpeedParams, SpeedPass};
 use serde::Serialize;
 use std::time::Instant;
+
+/// The phase [`Job::run_with`] counts the passes in.
+pub const PASSES_PHASE: &str = "optimise: passes";
 
 /// What one pass did.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -146,14 +149,29 @@ impl Job {
     /// Runs `passes` in their order over the job's program: a pass whose
     /// inputs are missing is skipped with its reason.
     pub fn run(&self, passes: &[PassName]) -> Result<Outcome, JobError> {
-        let cx = self.context();
+        self.run_with(passes, None)
+    }
+
+    /// [`Job::run`] reporting to `progress` (a bar, say): the phase
+    /// `passes` counts the passes done, and each pass reports its own
+    /// phases between them.
+    pub fn run_with(
+        &self,
+        passes: &[PassName],
+        progress: Option<&Progress>,
+    ) -> Result<Outcome, JobError> {
+        let cx = match progress {
+            Some(f) => self.context().with_progress(f),
+            None => self.context(),
+        };
         let input = &self.inputs.program;
         let forces_before = self.forces_before.clone();
         let before = self.measure(input, forces_before.as_ref(), &cx);
         let mut p = input.clone();
         let mut out = Vec::new();
         let mut st = State::default();
-        for &pass in passes {
+        for (k, &pass) in passes.iter().enumerate() {
+            cx.progress(PASSES_PHASE, k, passes.len());
             let t = Instant::now();
             let (ran, reason) = match missing(self, pass) {
                 Some(why) => (false, why),
@@ -166,6 +184,7 @@ impl Job {
                 seconds: t.elapsed().as_secs_f64(),
             });
         }
+        cx.progress(PASSES_PHASE, passes.len(), passes.len());
         Ok(Outcome {
             program: p,
             passes: out,

@@ -2,10 +2,12 @@
 //! stock is cut by, the stock mesh written, and the summary printed.
 
 use crate::check::{arg, tool_shape, Range};
+use millplan_geom::TriMesh;
 use millplan_nc::{Operation, Program};
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
 use millplan_sim::stock::remaining::{remaining, Bin, Remaining};
 use millplan_sim::stock::run::SimReport;
+use millplan_sim::stock::spec::{StockError, StockSpec};
 use millplan_sim::stock::tool::{BodyOptions, ToolBody};
 use millplan_sim::stock::Stock;
 use serde::Serialize;
@@ -122,6 +124,24 @@ pub fn program_strokes(
         ));
     }
     Ok(s)
+}
+
+/// The stock before the program at `program` (its name in errors) runs, as
+/// `spec` names it, at cell size `res` (`StockSpec::build`; `blank` the mesh
+/// of an `stl:` blank, `memory` the bytes it may take).
+pub fn build_stock(
+    program: &str,
+    res: f64,
+    spec: &StockSpec,
+    s: &Strokes,
+    (part, blank): (Option<&TriMesh>, Option<&TriMesh>),
+    memory: u64,
+) -> Result<Stock, String> {
+    spec.build(res, s, part, blank, memory)
+        .map_err(|e| match e {
+            StockError::NoCut => format!("{program}: {e}"),
+            e => e.to_string(),
+        })
 }
 
 /// The stock's surface as binary STL, at `mesh_resolution` (else coarse

@@ -115,16 +115,42 @@ pub fn checks(cx: &Context, input: &Program, output: &Program) -> Vec<Check> {
     })
 }
 
-/// The tool of the first operation that cuts, as the program names it.
+/// The tools spindle control works with, as the program names them: those
+/// of its cutting ball-end operations (a multi-tool program's drill and flat
+/// mill are not the tool of the report), each once; the first cutting
+/// operation's tool when none is a ball.
 pub fn tool_name(p: &Program) -> String {
-    let Some(t) = p
+    let cutting: Vec<&millplan_nc::Tool> = p
         .operations
         .iter()
-        .find(|op| op.moves.iter().any(|m| m.is_cutting()))
-        .and_then(|op| op.tool.as_ref())
-    else {
-        return "not named by the program".to_string();
+        .filter(|op| op.moves.iter().any(|m| m.is_cutting()))
+        .filter_map(|op| op.tool.as_ref())
+        .collect();
+    let is_ball = |t: &&millplan_nc::Tool| {
+        t.cutter
+            .is_some_and(|c| c.kind == millplan_nc::CutterKind::Ball)
     };
+    let mut shown: Vec<String> = Vec::new();
+    let balls: Vec<&millplan_nc::Tool> = cutting.iter().copied().filter(is_ball).collect();
+    let tools = if balls.is_empty() {
+        cutting.into_iter().take(1).collect()
+    } else {
+        balls
+    };
+    for t in tools {
+        let words = tool_words(t);
+        if !shown.contains(&words) {
+            shown.push(words);
+        }
+    }
+    if shown.is_empty() {
+        return "not named by the program".to_string();
+    }
+    shown.join("; ")
+}
+
+/// A tool in words: `T8 BALL D14.000 R7.000 (ball)`.
+fn tool_words(t: &millplan_nc::Tool) -> String {
     let mut words = Vec::new();
     if let Some(n) = t.number {
         words.push(format!("T{n}"));
@@ -133,7 +159,11 @@ pub fn tool_name(p: &Program) -> String {
         words.push(n.clone());
     }
     if let Some(c) = &t.cutter {
-        words.push(format!("D{:.3} R{:.3}", c.d, c.r));
+        let kind = match c.kind {
+            millplan_nc::CutterKind::Ball => " (ball)",
+            _ => "",
+        };
+        words.push(format!("D{:.3} R{:.3}{kind}", c.d, c.r));
     }
     words.join(" ")
 }

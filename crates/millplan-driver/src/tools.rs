@@ -30,6 +30,22 @@ pub struct Library {
     pub last_decision: BTreeMap<u32, String>,
 }
 
+impl Library {
+    /// Every tool of an open library and the last decision logged for each.
+    pub fn read(db: &millplan_tooldb::db::ToolDb) -> Result<Library, millplan_tooldb::db::DbError> {
+        let mut lib = Library::default();
+        for t in db.tools()? {
+            lib.tools.insert(t.number, t);
+        }
+        for e in db.events(None)? {
+            if let Some(n) = e.tool {
+                lib.last_decision.insert(n, e.decision);
+            }
+        }
+        Ok(lib)
+    }
+}
+
 /// What one library tool gives a job beyond its cutter.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LibraryTool {

@@ -250,3 +250,34 @@ fn a_program_without_s_gets_the_speed_of_vc() {
         assert!((m.spindle - want).abs() < 1e-9, "{}", m.spindle);
     }
 }
+
+/// `Job::run_with` tells its hook how far the passes have come (the bar of
+/// `millplan optimise`): the pass count from 0 to the number of passes, and
+/// between them the phases the passes report themselves (the feed pass's
+/// forces); `Job::run` gives the same program without a hook.
+#[test]
+fn the_progress_hook_hears_the_passes_and_their_phases() {
+    let j = job(UserLimits::default());
+    let heard = std::sync::Mutex::new(Vec::<(String, usize, usize)>::new());
+    let hook = |phase: &str, done: usize, total: usize| {
+        heard
+            .lock()
+            .expect("not poisoned")
+            .push((phase.to_string(), done, total));
+    };
+    let order = [PassName::Speed, PassName::Feed];
+    let with = j.run_with(&order, Some(&hook)).expect("runs");
+    let heard = heard.into_inner().expect("not poisoned");
+    let passes: Vec<(usize, usize)> = heard
+        .iter()
+        .filter(|h| h.0 == millplan_driver::run::PASSES_PHASE)
+        .map(|h| (h.1, h.2))
+        .collect();
+    assert_eq!(passes, [(0, 2), (1, 2), (2, 2)], "{heard:?}");
+    assert!(
+        heard.iter().any(|h| h.0 == "feed: forces"),
+        "the feed pass's own phase: {heard:?}"
+    );
+    let without = j.run(&order).expect("runs");
+    assert_eq!(with.program, without.program);
+}

@@ -8,11 +8,11 @@ use crate::gcode::GcodeReader;
 use crate::ir::Dialect;
 use crate::ReadOptions;
 
-/// The error for a KUKA KRL robot program (`.SRC`), which no front end reads
-/// yet: `None` for anything else. KRL opens with `&ACCESS`/`&REL`/`&PARAM`
-/// header lines or `DEF name(`/`DEFDAT name` (Sinumerik's `DEF REAL X` has
-/// no parenthesis), after `;` comments.
-pub fn krl_refusal(head: &str) -> Option<ParseError> {
+/// The line (from 1) that shows a KUKA KRL robot program (`.SRC`), `None`
+/// for anything else. KRL opens with `&ACCESS`/`&REL`/`&PARAM` header lines
+/// or `DEF name(`/`DEFDAT name` (Sinumerik's `DEF REAL X` has no
+/// parenthesis), after `;` comments.
+pub fn krl_line(head: &str) -> Option<u32> {
     for (k, line) in crate::lines::split(head).enumerate().take(50) {
         let t = line.trim();
         if t.is_empty() || t.starts_with(';') {
@@ -31,12 +31,7 @@ pub fn krl_refusal(head: &str) -> Option<ParseError> {
             .iter()
             .any(|h| up.starts_with(h));
         if header || def_call || up.starts_with("DEFDAT ") {
-            let line = u32::try_from(k + 1).unwrap_or(u32::MAX);
-            return Some(ParseError::new(
-                line,
-                1,
-                "a KUKA KRL robot program: KRL is not read yet (millplan reads APT/CL and G-code)",
-            ));
+            return Some(u32::try_from(k + 1).unwrap_or(u32::MAX));
         }
         return None;
     }
@@ -45,6 +40,9 @@ pub fn krl_refusal(head: &str) -> Option<ParseError> {
 
 /// Guesses the dialect from the first part of a file (a few kB are plenty).
 pub fn detect(head: &str) -> Dialect {
+    if krl_line(head).is_some() {
+        return Dialect::Krl;
+    }
     let mut apt = 0i32;
     let mut gcode = 0i32;
     let mut heidenhain = 0i32;
@@ -194,6 +192,10 @@ pub enum Reader {
     Apt(Box<AptReader>),
     Gcode(Box<GcodeReader>),
     Heidenhain(Box<HeidenhainReader>),
+    /// KRL is read whole (a program is statements, not blocks): the lines
+    /// gathered, read at the end without its sub-programs (those a main
+    /// calls are named as not read).
+    Krl(String, ReadOptions),
 }
 
 impl Reader {
@@ -201,6 +203,7 @@ impl Reader {
         match dialect {
             d if d.is_apt() => Reader::Apt(Box::new(AptReader::new(d, opts))),
             Dialect::Heidenhain => Reader::Heidenhain(Box::new(HeidenhainReader::new(opts))),
+            Dialect::Krl => Reader::Krl(String::new(), opts),
             d => Reader::Gcode(Box::new(GcodeReader::new(d, opts))),
         }
     }
@@ -210,6 +213,11 @@ impl Reader {
             Reader::Apt(r) => r.line(line),
             Reader::Gcode(r) => r.line(line),
             Reader::Heidenhain(r) => r.line(line),
+            Reader::Krl(text, _) => {
+                text.push_str(line);
+                text.push('\n');
+                Ok(())
+            }
         }
     }
 
@@ -220,10 +228,23 @@ impl Reader {
             Reader::Apt(r) => r.finish(),
             Reader::Gcode(r) => r.finish(),
             Reader::Heidenhain(r) => r.finish(),
+            Reader::Krl(text, opts) => read_krl(&text, &opts),
         }?;
         crate::plausible::check(&parsed.program)?;
+        let mut parsed = parsed;
+        let warnings = crate::plausible::warnings(&parsed.program);
+        parsed.diagnostics.extend(warnings);
         Ok(parsed)
     }
+}
+
+/// A KRL program into the IR (external axes dropped with a finding: a
+/// writer of another dialect is asked through [`crate::write::krl::from_krl`]
+/// whether they may be).
+fn read_krl(text: &str, opts: &ReadOptions) -> Result<Parsed, ParseError> {
+    crate::krl::read(text, &mut |_| None)
+        .and_then(|k| k.to_ir(opts.default_feed, true))
+        .map_err(|e| e.error)
 }
 
 #[cfg(test)]
@@ -240,22 +261,25 @@ mod tests {
 
     /// Issue 18: a KUKA `.SRC` got "1:1: unexpected `&ACCESS`".
     #[test]
-    fn krl_is_refused_by_name() {
+    fn krl_is_told_by_its_head() {
         let krl = "&ACCESS RVP\n&REL 2\nDEF f1_Kuka()\nPTP $AXIS_ACT\nEND\n";
-        let e = krl_refusal(krl).expect("refused");
-        assert_eq!((e.line, e.col), (1, 1));
-        assert!(e.message.contains("KRL is not read yet"), "{e}");
+        assert_eq!(krl_line(krl), Some(1));
+        assert_eq!(detect(krl), Dialect::Krl);
         let bare = "; generated\nDEF main( )\n  LIN {X 1}\nEND\n";
-        assert_eq!(krl_refusal(bare).map(|e| e.line), Some(2));
-        let e = crate::parse_program(krl, ReadOptions::default()).expect_err("refused");
-        assert!(e.message.contains("KRL"), "{e}");
+        assert_eq!(krl_line(bare), Some(2));
+        // Read by the KRL reader: its error at the statement's line.
+        let e = crate::parse_program(bare, ReadOptions::default()).expect_err("no Y, Z");
+        assert_eq!(e.line, 3, "{e}");
+        assert!(e.message.contains("X, Y and Z"), "{e}");
+        let p = crate::parse_program(krl, ReadOptions::default()).expect("reads");
+        assert_eq!(p.program.source, Dialect::Krl);
         for not_krl in [
             "N10 DEF REAL DEPTH=2\nN20 G0 X1\n",
             "G21 G90\nG1 X1 F100\n",
             "TOOL PATH/ROUGH\nGOTO/1,2,3\n",
             "0 BEGIN PGM X MM\n",
         ] {
-            assert!(krl_refusal(not_krl).is_none(), "{not_krl}");
+            assert!(krl_line(not_krl).is_none(), "{not_krl}");
         }
     }
 }

@@ -32,10 +32,11 @@ pub enum Code {
     LossyWord,
     OpenMesh,
     OffSurface,
+    SpindleStopped,
 }
 
 impl Code {
-    pub const ALL: [Code; 18] = [
+    pub const ALL: [Code; 19] = [
         Code::UnknownWord,
         Code::UnitsAssumed,
         Code::UnitsChange,
@@ -54,6 +55,7 @@ impl Code {
         Code::LossyWord,
         Code::OpenMesh,
         Code::OffSurface,
+        Code::SpindleStopped,
     ];
 
     /// The code as printed: `unknown-word`.
@@ -77,6 +79,7 @@ impl Code {
             Code::LossyWord => "lossy-word",
             Code::OpenMesh => "open-mesh",
             Code::OffSurface => "off-surface",
+            Code::SpindleStopped => "spindle-stopped",
         }
     }
 
@@ -101,6 +104,7 @@ impl Code {
             Code::LossyWord => "with --lossy, a word the target dialect cannot express was written as a comment: the output does less than the source",
             Code::OpenMesh => "the part mesh has open or non-manifold edges; checks against it can miss material at holes and seams",
             Code::OffSurface => "tool positions do not touch the part surface within tolerance; the part may not match the program",
+            Code::SpindleStopped => "the spindle is started at speed 0 (S0 M03, as some posts write) and the program cuts before it gets a speed: copied as written; a pass that needs the spindle speed (feed, force) refuses such a move at its line",
         }
     }
 

@@ -110,7 +110,7 @@ const MAX_DEPTH: usize = 8;
 
 /// Whether `src` is a KRL program (its header or `DEF`).
 pub fn is_krl(src: &str) -> bool {
-    crate::detect::krl_refusal(src).is_some()
+    crate::detect::krl_line(src).is_some()
 }
 
 /// Reads a main program; `resolve(name)` gives the text of a sub-program

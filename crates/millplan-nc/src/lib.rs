@@ -72,9 +72,6 @@ impl Default for ReadOptions {
 /// assert_eq!((e.line, e.col), (2, 8));
 /// ```
 pub fn parse_program(src: &str, opts: ReadOptions) -> Result<Parsed, ParseError> {
-    if let Some(e) = detect::krl_refusal(src) {
-        return Err(e);
-    }
     // A move takes a line of 20 bytes or more.
     let opts = ReadOptions {
         expect_moves: if opts.expect_moves > 0 {

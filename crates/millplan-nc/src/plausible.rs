@@ -7,9 +7,33 @@
 //! rotary positions, degrees) and [`millplan_geom::limits::NC_RATE`] (feeds
 //! and spindle speeds), documented in the limits table of docs/usage.md.
 
-use crate::diag::ParseError;
-use crate::ir::{MoveKind, Operation, Program};
+use crate::diag::{Code, Diagnostic, ParseError, Severity};
+use crate::ir::{EventKind, MoveKind, Operation, Program, SpindleDir};
 use millplan_geom::limits::{NC_EXTENT, NC_RATE};
+
+/// The smallest feed a feed move may ask for, mm/min or mm/rev (a block
+/// time of a million minutes under inverse time, 1e-6 1/min): a positive
+/// feed below it (`FEDRAT/1e-300`) is absurd, and a writer's three
+/// decimals would turn it into `F0.`.
+pub const MIN_FEED: f64 = 1e-3;
+const MIN_INVERSE_TIME: f64 = 1e-6;
+
+/// Positive and below the smallest plausible feed of its mode.
+fn too_slow(feed: f64, mode: crate::ir::FeedMode) -> bool {
+    let min = match mode {
+        crate::ir::FeedMode::InverseTime => MIN_INVERSE_TIME,
+        _ => MIN_FEED,
+    };
+    feed > 0.0 && feed < min
+}
+
+fn refuse_slow(line: u32, what: &str, v: f64) -> ParseError {
+    ParseError::new(
+        line,
+        1,
+        format!("{what} {v:e} is below the smallest plausible feed ({MIN_FEED} mm/min or mm/rev, {MIN_INVERSE_TIME} 1/min under inverse time): no machine cuts that slowly"),
+    )
+}
 
 /// Finite and beyond `limit` (a number that is not finite is refused by
 /// [`crate::write::preflight::finite`] with its own message).
@@ -46,6 +70,9 @@ fn check_op(op: &Operation) -> Result<(), ParseError> {
                 ));
             }
         }
+        if too_slow(c.feed, crate::ir::FeedMode::PerMinute) {
+            return Err(refuse_slow(c.line, "the feed of this cycle,", c.feed));
+        }
         if over(c.feed, NC_RATE) {
             return Err(refuse(
                 c.line,
@@ -65,6 +92,9 @@ fn check_op(op: &Operation) -> Result<(), ParseError> {
                 NC_EXTENT,
                 "mm",
             ));
+        }
+        if !matches!(m.kind, MoveKind::Rapid) && too_slow(m.feed, m.feed_mode) {
+            return Err(refuse_slow(m.line, "the feed of this move,", m.feed));
         }
         if over(m.feed, NC_RATE) {
             return Err(refuse(
@@ -124,4 +154,80 @@ fn check_op(op: &Operation) -> Result<(), ParseError> {
         }
     }
     Ok(())
+}
+
+/// A warning at each spindle start (M3/M4, `SPINDL/…,CLW`) whose speed is 0
+/// (`S0 M03`, as real NX posts write) and after which a feed move runs
+/// before the speed is given: the program is copied as written, and a pass
+/// that needs the spindle speed refuses that move at its line (issue 34).
+pub fn warnings(p: &Program) -> Vec<Diagnostic> {
+    let mut out = Vec::new();
+    for op in &p.operations {
+        for e in &op.events {
+            if !matches!(e.kind, EventKind::Spindle(SpindleDir::Cw | SpindleDir::Ccw)) {
+                continue;
+            }
+            let after = op.moves.iter().skip(e.at as usize);
+            let first_cut = after
+                .take_while(|m| m.spindle == 0.0)
+                .find(|m| !matches!(m.kind, MoveKind::Rapid));
+            if let Some(m) = first_cut {
+                out.push(Diagnostic {
+                    severity: Severity::Warning,
+                    code: Code::SpindleStopped,
+                    line: e.line,
+                    col: 0,
+                    message: format!(
+                        "the spindle starts at speed 0 and the move at line {} cuts before a speed is given: copied as written; feed and force refuse that move",
+                        m.line
+                    ),
+                });
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(src: &str) -> Vec<Diagnostic> {
+        let parsed = crate::parse_program(src, crate::ReadOptions::default()).expect("reads");
+        parsed
+            .diagnostics
+            .into_iter()
+            .filter(|d| d.code == Code::SpindleStopped)
+            .collect()
+    }
+
+    /// Issue 34's fuzz campaign: `feed` on an APT with `FEDRAT/1e-300`
+    /// wrote `FEDRAT/0`. The reader refuses the feed at its line.
+    #[test]
+    fn an_absurdly_slow_feed_is_refused_at_its_line() {
+        let src = "UNITS/MM\nCUTTER/10,5\nFEDRAT/1e-300\nGOTO/0,0,50\nGOTO/0,0,19\nFINI\n";
+        let e = crate::parse_program(src, crate::ReadOptions::default()).expect_err("refused");
+        assert_eq!(e.line, 4, "{e}");
+        assert!(e.to_string().contains("smallest plausible feed"), "{e}");
+        let g = "G21 G90\nG0 X0 Y0 Z5\nG1 Z0 F0.0001\nM30\n";
+        let e = crate::parse_program(g, crate::ReadOptions::default()).expect_err("refused");
+        assert_eq!(e.line, 3, "{e}");
+        // A slow but real feed reads.
+        let ok = "G21 G90\nG0 X0 Y0 Z5\nG1 Z0 F0.5\nM30\n";
+        assert!(crate::parse_program(ok, crate::ReadOptions::default()).is_ok());
+    }
+
+    #[test]
+    fn s0_before_a_cut_is_a_warning_at_its_line() {
+        let w = read("G21 G90\nT1 M6\nS0 M3\nG0 X0 Y0 Z5\nG1 Z-1 F100\nM30\n");
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!(w[0].line, 3);
+        assert!(w[0].message.contains("line 5"), "{}", w[0].message);
+        // NX's `S0 M03` on the rotary move, the speed given before the cut.
+        let given = read("G21 G90\nT1 M6\nG0 B-90. C270. S0 M03\nS6000\nG1 X1 F100\nM30\n");
+        assert!(given.is_empty(), "{given:?}");
+        // Only rapids before the spindle stops again: nothing cut at 0.
+        let rapids = read("G21 G90\nT1 M6\nS0 M3\nG0 X1\nM5\nM30\n");
+        assert!(rapids.is_empty(), "{rapids:?}");
+    }
 }

@@ -43,6 +43,7 @@ pub fn reader_dialect(target: Target, written: &str) -> Dialect {
         Target::Sinumerik => Dialect::Sinumerik,
         Target::Heidenhain => Dialect::Heidenhain,
         Target::LinuxCnc => Dialect::LinuxCnc,
+        Target::Krl => Dialect::Krl,
         Target::Apt => {
             let head = &written[..floor_char_boundary(written, 16 * 1024)];
             match detect::detect(head) {

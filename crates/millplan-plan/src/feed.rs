@@ -12,8 +12,13 @@
 //! within the feed acceleration by lowering feeds only (a block decelerates
 //! to its successor's feed within its own length, and reaches its own feed
 //! from its predecessor's within its length), so no block ends up above the
-//! feed its limits allow. Spindle speeds, positions and feed modes are kept;
-//! canned cycles and moves the simulation could not follow keep their feeds.
+//! feed its limits allow. Positions and feed modes are kept, and spindle
+//! speeds but where the power stays over its limit at the smallest feed per
+//! tooth (a constant-cutting-speed pass may have raised the speed that
+//! far): at a given chip the power is proportional to the speed, so that
+//! block's speed is lowered by the share that meets the limit
+//! ([`MoveForces::speed_share`]). Canned cycles and moves the simulation
+//! could not follow keep their feeds.
 
 use crate::force::{self, FeedLimits, ForceRun, ForceSetup, MoveForces};
 use crate::machine::Machine;
@@ -57,7 +62,9 @@ pub struct FeedChanges {
     /// simulated, material the model could not load).
     pub kept_blocks: usize,
     /// What decided each block's feed: a limit's name, `feed-range` (fz or
-    /// the machine's feed range), `accel` (lowered for the feed
+    /// the machine's feed range), `power-speed` (the power over its limit
+    /// even at the smallest feed per tooth: the spindle speed lowered in
+    /// proportion, the feed per tooth kept), `accel` (lowered for the feed
     /// acceleration), `air`, `kept`.
     pub binding: BTreeMap<&'static str, usize>,
     /// Feeds written, mm/min.
@@ -165,26 +172,35 @@ pub fn air_feed(m: &Machine, fz_max: f64, flutes: f64, rpm: f64, programmed: f64
     v.clamp(m.feed_min, m.feed_max)
 }
 
-/// The feed (mm/min) each block asks for and why, before smoothing; `fz_max`
-/// is the largest feed per tooth of the block's tool.
-fn target(mf: &MoveForces, m: &Machine, flutes: f64, fz_max: f64) -> (f64, &'static str) {
+/// The feed (mm/min) each block asks for and why, before smoothing, and the
+/// lower spindle speed of a block whose power the feed alone cannot bring
+/// within its limit ([`MoveForces::speed_share`], no lower than the
+/// machine's smallest); `fz_max` is the largest feed per tooth of the
+/// block's tool.
+fn target(
+    mf: &MoveForces,
+    m: &Machine,
+    flutes: f64,
+    fz_max: f64,
+) -> (f64, &'static str, Option<f64>) {
     if mf.air {
-        return (air_feed(m, fz_max, flutes, mf.rpm, mf.feed), "air");
+        return (air_feed(m, fz_max, flutes, mf.rpm, mf.feed), "air", None);
     }
     match mf.fz_allowed {
         Some(fz) if !mf.unmodelled => {
-            let v = fz * mf.rpm * flutes;
+            let rpm = mf
+                .speed_share
+                .map(|s| (mf.rpm * s).clamp(m.spindle_min.min(mf.rpm), mf.rpm));
+            let v = fz * rpm.unwrap_or(mf.rpm) * flutes;
             let c = v.clamp(m.feed_min, m.feed_max);
-            (
-                c,
-                if c != v {
-                    "feed-range"
-                } else {
-                    mf.binding.unwrap_or("none")
-                },
-            )
+            let why = match (c != v, rpm) {
+                (true, _) => "feed-range",
+                (false, Some(_)) => "power-speed",
+                (false, None) => mf.binding.unwrap_or("none"),
+            };
+            (c, why, rpm)
         }
-        _ => (mf.feed, "kept"),
+        _ => (mf.feed, "kept", None),
     }
 }
 
@@ -219,7 +235,10 @@ pub fn apply(
                 matches!(mv.kind, MoveKind::Linear | MoveKind::Arc(_)) && mv.feed > 0.0;
             match (schedulable, mf, len) {
                 (true, Some(mf), Some(len)) if len > 0.0 => {
-                    let (v, why) = target(mf, m, flutes, fz_max);
+                    let (v, why, rpm) = target(mf, m, flutes, fz_max);
+                    if let Some(n) = rpm {
+                        op.moves[i].spindle = n;
+                    }
                     chain.push((i, len, v, why));
                 }
                 _ => {
@@ -303,6 +322,34 @@ fn set_feed(op: &mut Operation, i: usize, len: f64, v: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_block_over_its_power_at_the_smallest_chip_runs_slower_at_that_chip() {
+        let m = Machine::default();
+        let mf = MoveForces {
+            rpm: 16000.0,
+            fz_allowed: Some(0.01),
+            binding: Some("feed-range"),
+            speed_share: Some(0.8),
+            ..MoveForces::default()
+        };
+        let (v, why, rpm) = target(&mf, &m, 2.0, 0.08);
+        assert_eq!(rpm, Some(12800.0));
+        assert!((v - 0.01 * 12800.0 * 2.0).abs() < 1e-9, "{v}");
+        assert_eq!(why, "power-speed");
+        // Never below the machine's smallest speed.
+        let slow = MoveForces {
+            speed_share: Some(1e-4),
+            ..mf
+        };
+        assert_eq!(target(&slow, &m, 2.0, 0.08).2, Some(m.spindle_min));
+        // Without a shortfall the speed stays.
+        let ok = MoveForces {
+            speed_share: None,
+            ..mf
+        };
+        assert_eq!(target(&ok, &m, 2.0, 0.08).2, None);
+    }
 
     #[test]
     fn smoothing_only_lowers_and_keeps_within_the_acceleration() {

@@ -374,6 +374,13 @@ pub struct MoveForces {
     pub fz_allowed: Option<f64>,
     /// The constraint that binds there.
     pub binding: Option<&'static str>,
+    /// Where even the smallest feed per tooth leaves the power over its
+    /// limit (scheduling only): the share of the move's spindle speed at
+    /// which it is met. At a given chip the torque does not depend on the
+    /// speed, so the power is proportional to it; after a constant-cutting-
+    /// speed pass has raised the speed, the feed alone cannot always bring
+    /// the power back down.
+    pub speed_share: Option<f64>,
 }
 
 impl MoveForces {
@@ -446,6 +453,26 @@ pub struct Steps {
 /// Why a pass that needs the spindle speed refuses a move that cut with the
 /// spindle stopped (at its line).
 pub const STOPPED_SPINDLE: &str = "this move removes material with the spindle at 0 1/min (S0, the spindle off, or no speed given): its cutting forces need a spindle speed; give the block an S word";
+
+/// What a user who runs `feed` or `force` on a program without S words is
+/// told besides [`STOPPED_SPINDLE`]: the option that supplies the speed.
+pub const SPINDLE_OPTION: &str =
+    "or, for a program that gives no spindle speed at all, give it with --spindle RPM";
+
+/// Gives every move of `p` that runs with the spindle at 0 (the program
+/// wrote no S word for it) the spindle speed `rpm`, as a user states it for
+/// a program without S words; moves with a speed keep theirs. Returns how
+/// many moves got `rpm`.
+pub fn supply_spindle(p: &mut Program, rpm: f64) -> usize {
+    let mut n = 0;
+    for m in p.operations.iter_mut().flat_map(|o| o.moves.iter_mut()) {
+        if !(m.spindle > 0.0) {
+            m.spindle = rpm;
+            n += 1;
+        }
+    }
+    n
+}
 
 impl ForceRun {
     /// The line of the first move that removed material with the spindle
@@ -861,32 +888,58 @@ fn tighten(
         Some(a) => {
             let s = conv.evaluate_at(&Cut { fz: a, ..*cut }).summary();
             evals += 1;
-            match lim.ratio(&Loads::new(&s, holding)) {
+            let loads = Loads::new(&s, holding);
+            match lim.ratio(&loads) {
                 Some((r, _)) if r < 1.0 && a > lim.fz_min => a,
+                Some((r, _)) if r < 1.0 => {
+                    slow_for_power(lim, &loads, m);
+                    return evals;
+                }
                 _ => return evals,
             }
         }
         None => cut.fz,
     };
-    let (f, c, n) = allowed_fz(&Cut { fz: start, ..*cut }, conv, holding, lim);
+    let (f, c, n, loads) = allowed_fz(&Cut { fz: start, ..*cut }, conv, holding, lim);
     if m.fz_allowed.is_none_or(|a| f < a) {
         m.fz_allowed = Some(f);
         m.binding = Some(c);
     }
+    if let Some(l) = loads.filter(|_| m.fz_allowed == Some(f)) {
+        slow_for_power(lim, &l, m);
+    }
     evals + n
+}
+
+/// Where the loads at the move's allowed feed per tooth still leave the
+/// power over its limit, the share of the spindle speed that meets it
+/// (power ∝ speed at a given chip; 0.1 % under, as [`allowed_fz`] does),
+/// the smallest over the move's samples.
+fn slow_for_power(lim: &Limits, loads: &Loads, m: &mut MoveForces) {
+    let power = Limits {
+        fxy: None,
+        torque: None,
+        stress: None,
+        deflection: None,
+        ..*lim
+    };
+    if let Some((r, _)) = power.ratio(loads).filter(|(r, _)| *r < 1.0) {
+        let share = r * 0.999;
+        m.speed_share = Some(m.speed_share.map_or(share, |s| s.min(share)));
+    }
 }
 
 /// The feed per tooth at which the tightest limit is met (§2.3), never above
 /// it: the iteration from `cut.fz` stops within 1 %, and a feed still over a
 /// limit (its loads evaluated at that very feed) is lowered until it is not
-/// (or sits on fz_min). Returns the feed, the binding constraint's name and
-/// the evaluations used.
+/// (or sits on fz_min). Returns the feed, the binding constraint's name,
+/// the evaluations used and the loads at the feed returned.
 fn allowed_fz(
     cut: &Cut,
     conv: &Converged,
     holding: &Cantilever,
     lim: &Limits,
-) -> (f64, &'static str, usize) {
+) -> (f64, &'static str, usize, Option<Loads>) {
     use millplan_models::force::feed::iterate_feed;
     let eval = |fz: f64| {
         let s = conv.evaluate_at(&Cut { fz, ..*cut }).summary();
@@ -917,7 +970,7 @@ fn allowed_fz(
         loads = Some(eval(fz));
         n += 1;
     }
-    (fz, binding, n)
+    (fz, binding, n, loads)
 }
 
 fn finish_move(m: &mut MoveForces) {

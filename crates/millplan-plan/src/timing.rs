@@ -952,6 +952,18 @@ fn apply_path_control(st: &mut BlockCtl, stop_once: &mut bool, pc: &ir::PathCont
     }
 }
 
+/// The same mode to the last bit (so the same label: a tolerance of -0 and
+/// one of 0 are labelled apart, as they are told apart here).
+fn same_mode(a: PathMode, b: PathMode) -> bool {
+    match (a, b) {
+        (PathMode::ExactStop, PathMode::ExactStop) => true,
+        (PathMode::Blend { tolerance: x }, PathMode::Blend { tolerance: y }) => {
+            x.map(f64::to_bits) == y.map(f64::to_bits)
+        }
+        _ => false,
+    }
+}
+
 /// The controller-aware time of a tool-tip program on `machine`: every chain
 /// of known moves ([`program_axis_moves`]) timed by [`estimate_axes`], the
 /// figures summed. `per_move_s` is per machine block (arcs split into
@@ -966,24 +978,37 @@ pub fn estimate_program(p: &Program, machine: &Machine) -> TimeEstimate {
         ..TimeEstimate::default()
     };
     total.planner = lim.planner.kind.name();
+    // The entry of `by_mode` the last block went to, by its mode's bits: a
+    // run of blocks under one mode is summed without naming it again.
+    let mut last: Option<(PathMode, usize)> = None;
     for ((start, moves), ctl) in blocks.chains.into_iter().zip(&blocks.ctl) {
         let e = estimate_controlled(start, &moves, ctl, &lim);
         for ((m, c), t) in moves.iter().zip(ctl).zip(&e.per_move_s) {
             if matches!(m.kind, MoveKind::Dwell { .. }) {
                 continue;
             }
-            let label = c.mode.label();
-            match total.by_mode.iter_mut().find(|b| b.mode == label) {
-                Some(b) => {
-                    b.time_s += t;
-                    b.blocks += 1;
+            let at = match last {
+                Some((mode, i)) if same_mode(mode, c.mode) => i,
+                _ => {
+                    let label = c.mode.label();
+                    let i = match total.by_mode.iter().position(|b| b.mode == label) {
+                        Some(i) => i,
+                        None => {
+                            total.by_mode.push(ModeTime {
+                                mode: label,
+                                time_s: 0.0,
+                                blocks: 0,
+                            });
+                            total.by_mode.len() - 1
+                        }
+                    };
+                    last = Some((c.mode, i));
+                    i
                 }
-                None => total.by_mode.push(ModeTime {
-                    mode: label,
-                    time_s: *t,
-                    blocks: 1,
-                }),
-            }
+            };
+            let b = &mut total.by_mode[at];
+            b.time_s += t;
+            b.blocks += 1;
         }
         total.total_s += e.total_s;
         total.nominal_s += e.nominal_s;

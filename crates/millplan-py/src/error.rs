@@ -115,3 +115,29 @@ pub fn write_bytes(path: &str, bytes: &[u8]) -> Res<()> {
     std::fs::write(path, bytes)
         .map_err(|e| Located::new(Place::file(path), format!("cannot write: {e}")))
 }
+
+/// A command-line option's error (`--tol 500: …`) as the keyword
+/// argument's (`tol 500: …`), placed at that argument; a message naming
+/// no single option first has no place.
+pub fn option_error(e: &str) -> Located {
+    let Some(e) = e.strip_prefix("--") else {
+        // A message about several options: their names without dashes.
+        return Located::new(Place::default(), e.replace("--", ""));
+    };
+    let (flag, rest) = e.split_at(e.find([' ', ':']).unwrap_or(e.len()));
+    let name = flag.replace('-', "_");
+    Located::new(Place::file(&name), format!("{name}{rest}"))
+}
+
+/// A library's `file:line:col: message` text as a located error (the
+/// place parsed back out; the whole text as the message when it has none).
+pub fn located(e: &str) -> Located {
+    let mut parts = e.splitn(4, ':');
+    let (f, l, c, m) = (parts.next(), parts.next(), parts.next(), parts.next());
+    if let (Some(f), Some(Ok(l)), Some(Ok(c)), Some(m)) =
+        (f, l.map(str::parse::<u32>), c.map(str::parse::<u32>), m)
+    {
+        return Located::new(Place::at(f, l, c), m.trim_start());
+    }
+    Located::new(Place::default(), e)
+}

@@ -29,6 +29,31 @@ pub struct Request {
     pub limits: UserLimits,
     pub dialect: Option<String>,
     pub output: Option<String>,
+    /// A tool library: each tool the program calls takes its geometry.
+    pub library: Option<millplan_driver::tools::Library>,
+}
+
+impl Request {
+    /// A request for `program` with every option at its default.
+    pub fn new(program: Program, name: String) -> Request {
+        Request {
+            program,
+            name,
+            part: None,
+            stock: None,
+            machine: None,
+            material: None,
+            tool: None,
+            flutes: None,
+            vc: None,
+            resolution: None,
+            passes: None,
+            limits: UserLimits::default(),
+            dialect: None,
+            output: None,
+            library: None,
+        }
+    }
 }
 
 /// The written program, its text and the summary (as JSON).
@@ -53,7 +78,7 @@ fn within(name: &str, v: Option<f64>, lo: f64, hi: f64) -> Res<()> {
     }
 }
 
-fn inputs(r: &Request) -> Res<Inputs> {
+pub fn inputs(r: &Request) -> Res<Inputs> {
     within("vc", r.vc, 1e-3, 1e4)?;
     within("resolution", r.resolution, 0.005, 100.0)?;
     within("flutes", r.flutes.map(|f| f as f64), 1.0, 64.0)?;
@@ -74,8 +99,14 @@ fn inputs(r: &Request) -> Res<Inputs> {
         .as_deref()
         .map(|s| Shape::parse(s).map_err(|e| err("tools", e)))
         .transpose()?;
+    let mut program = r.program.clone();
+    let library = match &r.library {
+        Some(l) => millplan_driver::tools::apply(&mut program, l)
+            .map_err(|e| Located::new(Place::at(&r.name, e.line, 1), e.message))?,
+        None => Vec::new(),
+    };
     Ok(Inputs {
-        program: r.program.clone(),
+        program,
         part: r.part.clone(),
         stock,
         blank,
@@ -91,9 +122,7 @@ fn inputs(r: &Request) -> Res<Inputs> {
             limits: r.limits,
             ..Options::default()
         },
-        // No tool library from Python yet: the cutter comes from the
-        // program or `tools=`.
-        library: Vec::new(),
+        library,
     })
 }
 
@@ -164,4 +193,10 @@ pub fn part_arg(p: Option<&pyo3::Bound<'_, pyo3::PyAny>>) -> pyo3::PyResult<Opti
     }
     let path = p.extract::<std::path::PathBuf>()?.display().to_string();
     Ok(Some((*crate::mesh::read(&path, false)?.mesh).clone()))
+}
+
+/// A part that must be given: a `Mesh` or a file name.
+pub fn mesh_arg(p: &pyo3::Bound<'_, pyo3::PyAny>) -> pyo3::PyResult<TriMesh> {
+    part_arg(Some(p))?
+        .ok_or_else(|| Located::new(Place::file("part"), "a Mesh or an STL file is needed").into())
 }

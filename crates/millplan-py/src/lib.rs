@@ -5,16 +5,27 @@
 //! long computations run with the GIL released. The Python package
 //! (`python/millplan`) re-exports these with docstrings and type stubs.
 
+mod cut;
 mod error;
+mod force;
+mod gouge;
 mod job;
 mod mesh;
 mod program;
+mod raster;
+mod reorder;
+mod simulate;
+mod speed;
+mod tools;
 mod wd;
 
 use error::{Located, Place};
 use millplan_driver::UserLimits;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+
+/// A named column of a table of rows `R`: its name and the value of a row.
+pub(crate) type Column<R, T> = (&'static str, fn(&R) -> T);
 
 /// JSON text (a library summary serialised by serde) as Python objects.
 pub(crate) fn json_to_py(py: Python<'_>, json: &str) -> PyResult<Py<PyAny>> {
@@ -120,7 +131,8 @@ fn limits(d: Option<&Bound<'_, PyDict>>) -> PyResult<UserLimits> {
 /// The job of `millplan optimise`; returns (program, text, summary JSON, refused).
 #[pyfunction]
 #[pyo3(signature = (program, part=None, stock=None, machine=None, material=None, tools=None,
-                    flutes=None, vc=None, resolution=None, passes=None, limits=None, dialect=None, output=None))]
+                    flutes=None, vc=None, resolution=None, passes=None, limits=None, dialect=None, output=None,
+                    library=None))]
 #[allow(clippy::too_many_arguments)]
 fn optimise(
     py: Python<'_>,
@@ -137,6 +149,7 @@ fn optimise(
     limits: Option<&Bound<'_, PyDict>>,
     dialect: Option<String>,
     output: Option<std::path::PathBuf>,
+    library: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<(program::PyProgram, String, Py<PyAny>, bool)> {
     let (p, name) = job::program_arg(program)?;
     let req = job::Request {
@@ -154,14 +167,11 @@ fn optimise(
         limits: self::limits(limits)?,
         dialect,
         output: output.map(|o| o.display().to_string()),
+        library: tools::library_arg(library)?,
     };
     let done = py.detach(|| job::run(req))?;
     let summary = json_to_py(py, &done.summary_json)?;
-    let prog = program::PyProgram {
-        program: std::sync::Arc::new(done.program),
-        diagnostics: Vec::new(),
-        path: None,
-    };
+    let prog = program::PyProgram::of(done.program);
     Ok((prog, done.text, summary, done.refused))
 }
 
@@ -176,6 +186,7 @@ fn _millplan(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MillplanError", m.py().get_type::<error::MillplanError>())?;
     m.add_class::<program::PyProgram>()?;
     m.add_class::<mesh::PyMesh>()?;
+    m.add_class::<tools::PyToolLibrary>()?;
     m.add_function(wrap_pyfunction!(inspect, m)?)?;
     m.add_function(wrap_pyfunction!(read_program, m)?)?;
     m.add_function(wrap_pyfunction!(write_program, m)?)?;
@@ -183,5 +194,13 @@ fn _millplan(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(wd::_working_diameter, m)?)?;
     m.add_function(wrap_pyfunction!(optimise, m)?)?;
     m.add_function(wrap_pyfunction!(dialect_extension, m)?)?;
+    m.add_function(wrap_pyfunction!(speed::speed, m)?)?;
+    m.add("SIDES", speed::SIDES.to_vec())?;
+    m.add_function(wrap_pyfunction!(gouge::gouge, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(force::force, m)?)?;
+    m.add_function(wrap_pyfunction!(cut::cut, m)?)?;
+    m.add_function(wrap_pyfunction!(raster::raster, m)?)?;
+    m.add_function(wrap_pyfunction!(reorder::reorder, m)?)?;
     Ok(())
 }

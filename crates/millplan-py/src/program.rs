@@ -133,6 +133,15 @@ fn kind_code(k: MoveKind) -> u8 {
 }
 
 impl PyProgram {
+    /// A program made by millplan (no file, no reader's notes).
+    pub fn of(program: Program) -> PyProgram {
+        PyProgram {
+            program: Arc::new(program),
+            diagnostics: Vec::new(),
+            path: None,
+        }
+    }
+
     fn n(&self) -> usize {
         self.program.move_count()
     }

@@ -37,17 +37,14 @@ def test_the_batch_on_two_workers_agrees_with_one_process(demo, folder, tmp_path
     broken = df[df["file"] == "broken.nc"].iloc[0]
     assert broken["verdict"] == "error" and "broken.nc:2:8" in broken["error"]
     good = df[df["file"] != "broken.nc"]
-    # Each program gets the verdict its own run gives: improved with every
-    # check passed, or refused with the failed checks named (the constant-vc
-    # program's first cut stays over the power learned from the input).
-    assert good["verdict"].isin(["improved", "refused"]).all(), good
-    improved = good[good["verdict"] == "improved"]
-    assert len(improved) >= 5, good
+    # Each program is improved with every check passed (the constant-vc
+    # program too: a block still over its power at the smallest chip runs at
+    # a lower spindle speed).
+    assert (good["verdict"] == "improved").all(), good
+    improved = good
     assert (improved["time_after_s"] < improved["time_before_s"]).all()
     assert (improved["failed_checks"] == "").all()
-    assert (good[good["verdict"] == "refused"]["failed_checks"] != "").all()
-    # Written in the machine's dialect (Fanuc), under their own names;
-    # nothing for a refused program.
+    # Written in the machine's dialect (Fanuc), under their own names.
     stems = sorted(f.rsplit(".", 1)[0] + ".nc" for f in improved["file"])
     assert sorted(p.name for p in out.iterdir()) == stems
     # The same table, computed in this process one program after another.

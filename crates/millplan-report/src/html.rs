@@ -63,6 +63,48 @@ fn share_off_vc_constant(s: &Summary, rows: &[PointRow], vc: f64) -> f64 {
     off as f64 / rows.len() as f64
 }
 
+/// A time that grew by more than this share counts as worse in a verdict
+/// (below it: the estimate's rounding).
+pub const TIME_WORSE: f64 = 0.005;
+
+/// `before → after unit (±x %)` of a measure that got worse, for a verdict.
+pub fn worse_words(name: &str, before: f64, after: f64, decimals: usize, unit: &str) -> String {
+    let pct = if before.abs() > 1e-12 {
+        format!(" ({:+.1} %)", 100.0 * (after - before) / before)
+    } else {
+        String::new()
+    };
+    format!("{name} {before:.decimals$} → {after:.decimals$} {unit}{pct}")
+}
+
+/// What the spindle-control verdict is decided from: the pass kept the
+/// input when it found no ball-end point to act on; worse when more points
+/// miss the cutting speed than at the program's constant speed, or the time
+/// grew.
+pub fn speed_evidence(i: &SpeedInputs, s: &Summary, rows: &[PointRow]) -> Evidence {
+    let mut e = Evidence {
+        kept: s.points == 0,
+        ..Evidence::default()
+    };
+    let before = 100.0 * share_off_vc_constant(s, rows, i.vc);
+    let after = 100.0 * s.vc_deviation_share;
+    if after > before {
+        e.worse.push(worse_words(
+            "points off the cutting speed",
+            before,
+            after,
+            1,
+            "%",
+        ));
+    }
+    if let (Some(b), Some(a)) = (i.time_before_s, i.time_after_s) {
+        if a > b * (1.0 + TIME_WORSE) {
+            e.worse.push(worse_words("cycle time", b, a, 1, "s"));
+        }
+    }
+    e
+}
+
 /// The verdict in words: what changed, what it buys, what to look at.
 pub fn speed_verdict(i: &SpeedInputs, s: &Summary, rows: &[PointRow]) -> Vec<String> {
     let pct = |n: usize| {
@@ -173,11 +215,12 @@ pub fn speed_report(title: &str, i: &SpeedInputs, s: &Summary, rows: &[PointRow]
     );
     notes(
         &mut h,
-        &Notes {
-            inputs: speed_inputs_rows(i),
-            warnings: i.warnings.clone(),
-            verdict: speed_verdict(i, s, rows),
-        },
+        &Notes::judged(
+            speed_inputs_rows(i),
+            i.warnings.clone(),
+            &speed_evidence(i, s, rows),
+            speed_verdict(i, s, rows),
+        ),
     );
     let row = |h: &mut String, name: &str, v: String| {
         let _ = write!(h, "<tr><td>{}</td><td>{v}</td></tr>", esc(name));
@@ -394,16 +437,132 @@ pub(crate) fn limit_line(n: usize, y: f64) -> Vec<(f64, f64)> {
     vec![(0.0, y), (n.saturating_sub(1) as f64, y)]
 }
 
+/// How a verdict reads at a glance; one rule ([`Level::of`]) for every
+/// report and text summary.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Level {
+    /// Every check passed and the result is better by the measures its
+    /// pass exists for, with no warning.
+    #[default]
+    Green,
+    /// The input was kept (nothing measured better, or nothing to act on),
+    /// a warning applies, or a measure got worse.
+    Amber,
+    /// A check failed.
+    Red,
+}
+
+/// What a verdict is decided from.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Evidence {
+    /// The checks that failed, each in words (what and how much).
+    pub failed: Vec<String>,
+    /// The result is the input as it was, or there was nothing to act on.
+    pub kept: bool,
+    /// The measures a pass exists for that got worse, each in words
+    /// (`cycle time 10.0 → 10.2 s`).
+    pub worse: Vec<String>,
+}
+
+impl Level {
+    /// The one rule: red when a check failed; amber when the input was kept,
+    /// a warning applies or a measure got worse; green otherwise.
+    pub fn of(e: &Evidence, warnings: usize) -> Level {
+        if !e.failed.is_empty() {
+            Level::Red
+        } else if e.kept || warnings > 0 || !e.worse.is_empty() {
+            Level::Amber
+        } else {
+            Level::Green
+        }
+    }
+
+    /// The level's name as text and JSON print it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Level::Green => "green",
+            Level::Amber => "amber",
+            Level::Red => "red",
+        }
+    }
+
+    /// (border, background) colours of the verdict box.
+    fn colours(self) -> (&'static str, &'static str) {
+        match self {
+            Level::Green => ("#2e7d32", "#f1f8e9"),
+            Level::Amber => ("#ef8f00", "#fff8e1"),
+            Level::Red => ("#c62828", "#fdecea"),
+        }
+    }
+}
+
+/// The verdict's first sentence: its level and why, naming what failed and
+/// what got worse.
+pub fn headline(e: &Evidence, warnings: usize) -> String {
+    let level = Level::of(e, warnings);
+    let mut why = Vec::new();
+    if !e.failed.is_empty() {
+        why.push(format!("failed: {}", e.failed.join("; ")));
+    }
+    if !e.worse.is_empty() {
+        why.push(format!("worse: {}", e.worse.join("; ")));
+    }
+    if e.kept {
+        why.push("the input is kept as it was".to_string());
+    }
+    match warnings {
+        0 => {}
+        1 => why.push("a warning applies".to_string()),
+        n => why.push(format!("{n} warnings apply")),
+    }
+    if why.is_empty() {
+        why.push("every check passed and the result is better by its measures".to_string());
+    }
+    let name = level.name();
+    let mut first = name.chars();
+    let cap: String = first
+        .next()
+        .map(|c| c.to_ascii_uppercase())
+        .into_iter()
+        .chain(first)
+        .collect();
+    format!("{cap}: {}.", why.join("; "))
+}
+
 /// What a report says before its tables: the inputs it was made from (a
 /// header table), warnings (shown in a red box: what to look at before using
-/// the result) and a verdict in words (what changed and what it buys). Any
-/// may be empty.
+/// the result) and a verdict: its level by the one rule, then in words (what
+/// changed and what it buys). Any may be empty.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Notes {
     /// Header rows: name, value (files, tool, machine limits, cutting data).
     pub inputs: Vec<(String, String)>,
     pub warnings: Vec<String>,
+    /// The verdict's level, from [`Level::of`] (see [`Notes::judged`]).
+    pub level: Level,
     pub verdict: Vec<String>,
+}
+
+impl Notes {
+    /// Notes whose verdict is decided from `evidence` and the warnings: the
+    /// level, then [`headline`], then the words of `verdict`.
+    pub fn judged(
+        inputs: Vec<(String, String)>,
+        warnings: Vec<String>,
+        evidence: &Evidence,
+        verdict: Vec<String>,
+    ) -> Notes {
+        let level = Level::of(evidence, warnings.len());
+        let mut lines = vec![headline(evidence, warnings.len())];
+        lines.extend(verdict);
+        Notes {
+            inputs,
+            warnings,
+            level,
+            verdict: lines,
+        }
+    }
 }
 
 /// The page's head (style, title) up to the heading.
@@ -437,7 +596,12 @@ fn notes(h: &mut String, n: &Notes) {
         h.push_str("</ul></div>");
     }
     if !n.verdict.is_empty() {
-        h.push_str("<div class=\"verdict\" id=\"verdict\"><strong>Verdict</strong>");
+        let (border, background) = n.level.colours();
+        let _ = write!(
+            h,
+            "<div class=\"verdict {name}\" id=\"verdict\" data-level=\"{name}\" style=\"border-left-color:{border};background:{background}\"><strong>Verdict: {name}</strong>",
+            name = n.level.name()
+        );
         for p in &n.verdict {
             let _ = write!(h, "<p>{}</p>", esc(p));
         }
@@ -482,4 +646,59 @@ pub fn report_page(
     }
     h.push_str("</body></html>");
     h
+}
+
+#[cfg(test)]
+mod verdict_tests {
+    use super::*;
+
+    /// The one rule: red on a failed check whatever else holds; amber on a
+    /// kept input, a warning or a worse measure; green only without any.
+    #[test]
+    fn the_level_follows_the_one_rule() {
+        let e = |failed: bool, kept: bool, worse: bool| Evidence {
+            failed: if failed {
+                vec!["check gouge".into()]
+            } else {
+                vec![]
+            },
+            kept,
+            worse: if worse {
+                vec!["time 1 → 2 s".into()]
+            } else {
+                vec![]
+            },
+        };
+        assert_eq!(Level::of(&e(false, false, false), 0), Level::Green);
+        assert_eq!(Level::of(&e(false, true, false), 0), Level::Amber);
+        assert_eq!(Level::of(&e(false, false, true), 0), Level::Amber);
+        assert_eq!(Level::of(&e(false, false, false), 1), Level::Amber);
+        assert_eq!(Level::of(&e(true, false, false), 0), Level::Red);
+        assert_eq!(Level::of(&e(true, true, true), 3), Level::Red);
+        let h = headline(&e(true, false, true), 2);
+        assert_eq!(
+            h,
+            "Red: failed: check gouge; worse: time 1 → 2 s; 2 warnings apply."
+        );
+        assert!(headline(&e(false, false, false), 0).starts_with("Green: every check passed"));
+    }
+
+    /// The page names the level and colours the verdict box by it.
+    #[test]
+    fn the_page_shows_the_level_in_colour() {
+        let n = Notes::judged(
+            Vec::new(),
+            vec!["a warning".into()],
+            &Evidence::default(),
+            vec!["words".into()],
+        );
+        assert_eq!(n.level, Level::Amber);
+        let page = report_page("t", "i", &n, &[], &[]);
+        assert!(page.contains("data-level=\"amber\""), "{page}");
+        assert!(page.contains("border-left-color:#ef8f00"), "{page}");
+        assert!(
+            page.contains("<p>Amber: a warning applies.</p><p>words</p>"),
+            "{page}"
+        );
+    }
 }

@@ -1,7 +1,10 @@
 //! The reordering report: its inputs, the warnings, the verdict in words and
 //! both orders side by side.
 
-use crate::html::{limit_line, report_page, speed_inputs_rows, Notes, SpeedInputs};
+use crate::html::{
+    limit_line, report_page, speed_inputs_rows, worse_words, Evidence, Notes, SpeedInputs,
+    TIME_WORSE,
+};
 use crate::svg::{histogram, line_plot, map, Series};
 use millplan_nc::Program;
 use millplan_plan::reorder::{OrderIndicators, Outcome, Verdict};
@@ -84,28 +87,12 @@ pub fn reorder_notes(o: &Outcome, i: &ReorderInputs) -> Notes {
             o.stats.direct_links, o.stats.retracts
         ));
     }
-    let worse: Vec<&str> = [
-        (
-            a.vc_deviation_points > b.vc_deviation_points,
-            "the share off the cutting speed",
-        ),
-        (
-            a.total_variation_n > b.total_variation_n * (1.0 + 1e-9),
-            "Σ|Δn|",
-        ),
-        (
-            a.time_s > b.time_s * 1.03,
-            "the time (more than 3 % longer)",
-        ),
-    ]
-    .into_iter()
-    .filter_map(|(w, name)| w.then_some(name))
-    .collect();
-    if !worse.is_empty() {
-        verdict.push(format!(
-            "Worse than the original on {}: compare with the default method (as-run) before using it.",
-            worse.join(", ")
-        ));
+    let evidence = reorder_evidence(o);
+    if !evidence.worse.is_empty() && o.verdict.is_none() {
+        verdict.push(
+            "Compare with the default method (as-run) before using it: it never writes an order worse on any of these measures."
+                .to_string(),
+        );
     }
     if !warnings.is_empty() {
         verdict.push("Look at the warnings above before using the program.".to_string());
@@ -119,11 +106,51 @@ pub fn reorder_notes(o: &Outcome, i: &ReorderInputs) -> Notes {
     }
     let mut inputs = speed_inputs_rows(&i.run);
     inputs.push(("method".into(), i.method.clone()));
-    Notes {
-        inputs,
-        warnings,
-        verdict,
+    Notes::judged(inputs, warnings, &evidence, verdict)
+}
+
+/// What the reordering verdict is decided from: kept when the original
+/// order is written; worse on each of the measures the pass exists for
+/// (the share off the cutting speed, Σ|Δn|, the time as the machine runs
+/// it) that grew.
+pub fn reorder_evidence(o: &Outcome) -> Evidence {
+    let (b, a) = (&o.before.as_run, &o.after.as_run);
+    let mut e = Evidence {
+        kept: o.verdict == Some(Verdict::Kept),
+        ..Evidence::default()
+    };
+    if a.vc_deviation_points > b.vc_deviation_points {
+        e.worse.push(worse_words(
+            "points off the cutting speed",
+            100.0 * b.vc_deviation_share,
+            100.0 * a.vc_deviation_share,
+            1,
+            "%",
+        ));
     }
+    if a.total_variation_n > b.total_variation_n * (1.0 + 1e-9) {
+        e.worse.push(worse_words(
+            "Σ|Δn|",
+            b.total_variation_n,
+            a.total_variation_n,
+            0,
+            "1/min",
+        ));
+    }
+    if a.max_delta_n > b.max_delta_n * (1.0 + 1e-9) {
+        e.worse.push(worse_words(
+            "max |Δn|",
+            b.max_delta_n,
+            a.max_delta_n,
+            0,
+            "1/min",
+        ));
+    }
+    if a.time_s > b.time_s * (1.0 + TIME_WORSE) {
+        e.worse
+            .push(worse_words("time", b.time_s, a.time_s, 1, "s"));
+    }
+    e
 }
 
 /// The XY of the cutting moves of the ball-end operations, in program order.

@@ -2,7 +2,7 @@
 //! sphere map of tool directions with the machine's rotary limits and the part
 //! coloured by the tilt its facets need.
 
-use crate::html::{report_page, Notes};
+use crate::html::{report_page, Evidence, Notes};
 use crate::svg::{map, sphere_map, DirClass};
 use millplan_geom::{DVec3, TriMesh};
 use millplan_models::kinematics::{Kinematics, RotaryAxis};
@@ -169,8 +169,19 @@ pub fn setup_notes(
     } else if !warnings.is_empty() {
         verdict.push("Look at the warnings above before clamping the part.".to_string());
     }
-    Notes {
-        inputs: vec![
+    let evidence = Evidence {
+        failed: if plan.feasible {
+            Vec::new()
+        } else {
+            vec![format!(
+                "one setup reaches every facet ({} facets out of reach)",
+                best.unreachable.len()
+            )]
+        },
+        ..Evidence::default()
+    };
+    Notes::judged(
+        vec![
             ("part".into(), format!("{} ({} facets)", i.part, mesh.len())),
             (
                 "machine".into(),
@@ -193,8 +204,9 @@ pub fn setup_notes(
             ),
         ],
         warnings,
+        &evidence,
         verdict,
-    }
+    )
 }
 
 /// The report page.

@@ -1,6 +1,6 @@
 //! The stock simulation's table and report.
 
-use crate::html::{report_page, Notes};
+use crate::html::{report_page, Evidence, Notes};
 use crate::svg::{self, Series};
 use millplan_geom::TriMesh;
 use millplan_sim::stock::remaining::Remaining;
@@ -8,6 +8,31 @@ use millplan_sim::stock::run::SimReport;
 use millplan_sim::stock::sim::MoveCut;
 use millplan_sim::stock::Stock;
 use std::fmt::Write;
+
+/// What the simulation's verdict is decided from: a rapid, shank or holder
+/// in material, or a cut into the part, is a failed check.
+pub fn sim_evidence(rep: &SimReport, part: Option<(&Remaining, &TriMesh)>) -> Evidence {
+    let mut e = Evidence::default();
+    if !rep.rapid_collisions.is_empty() {
+        e.failed
+            .push(format!("{} rapids in material", rep.rapid_collisions.len()));
+    }
+    if !rep.holder_collisions.is_empty() {
+        e.failed.push(format!(
+            "{} moves with the shank or holder in material",
+            rep.holder_collisions.len()
+        ));
+    }
+    if let Some((r, _)) = part {
+        if r.gouged > 0 {
+            e.failed.push(format!(
+                "{} facets cut into the part, down to {:.3} mm",
+                r.gouged, -r.min
+            ));
+        }
+    }
+    e
+}
 
 /// One row per simulated move. Lengths in mm to the µm, volumes in mm³ to
 /// 0.001, rates in mm³/min to 0.1.
@@ -235,11 +260,7 @@ pub fn report(
     report_page(
         title,
         &intro,
-        &Notes {
-            warnings,
-            verdict,
-            ..Notes::default()
-        },
+        &Notes::judged(Vec::new(), warnings, &sim_evidence(rep, part), verdict),
         &rows,
         &figures,
     )

@@ -103,20 +103,20 @@ fn axes(s: &mut String, f: &Frame, title: &str, xlabel: &str, ylabel: &str) {
     }
     let _ = write!(
         s,
-        r##"<rect x="{ML}" y="{MT}" width="{}" height="{}" fill="none" stroke="#444"/>"##,
+        r##"<rect class="plot-area" x="{ML}" y="{MT}" width="{}" height="{}" fill="none" stroke="#444"/>"##,
         W - ML - MR,
         H - MT - MB
     );
     let _ = write!(
         s,
-        r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
+        r#"<text class="axis-label" x="{}" y="{}" text-anchor="middle">{}</text>"#,
         (ML + W - MR) / 2.0,
         H - 8.0,
         esc(xlabel)
     );
     let _ = write!(
         s,
-        r#"<text transform="translate(14,{}) rotate(-90)" text-anchor="middle">{}</text>"#,
+        r#"<text class="axis-label" transform="translate(14,{}) rotate(-90)" text-anchor="middle">{}</text>"#,
         (MT + H - MB) / 2.0,
         esc(ylabel)
     );
@@ -222,6 +222,7 @@ pub fn line_plot(title: &str, xlabel: &str, ylabel: &str, series: &[Series]) -> 
 
 /// The legend in one row above the plot frame, never over the data.
 fn legend_row(s: &mut String, entries: &[(&str, &str)]) {
+    s.push_str(r#"<g class="legend">"#);
     let mut x = ML;
     for (name, color) in entries {
         let _ = write!(
@@ -234,6 +235,7 @@ fn legend_row(s: &mut String, entries: &[(&str, &str)]) {
         );
         x += 30.0 + 6.5 * name.chars().count() as f64;
     }
+    s.push_str("</g>");
 }
 
 /// Scatter plot (for value against position).
@@ -396,7 +398,7 @@ pub fn map(title: &str, label: &str, points: &[(f64, f64, f64)]) -> String {
     );
     let _ = write!(
         s,
-        r##"<rect x="{left}" y="{top}" width="{side}" height="{side}" fill="none" stroke="#444"/>"##
+        r##"<rect class="plot-area map-area" x="{left}" y="{top}" width="{side}" height="{side}" fill="none" stroke="#444"/>"##
     );
     let step = nice_step(span, 6);
     let mut x = (x0 / step).ceil() * step;
@@ -427,7 +429,7 @@ pub fn map(title: &str, label: &str, points: &[(f64, f64, f64)]) -> String {
     }
     let _ = write!(
         s,
-        r#"<text x="{}" y="{}" text-anchor="middle">X (mm)</text><text transform="translate(18,{}) rotate(-90)" text-anchor="middle">Y (mm)</text>"#,
+        r#"<text class="axis-label" x="{}" y="{}" text-anchor="middle">X (mm)</text><text class="axis-label" transform="translate(18,{}) rotate(-90)" text-anchor="middle">Y (mm)</text>"#,
         left + side / 2.0,
         top + side + 36.0,
         top + side / 2.0

@@ -80,6 +80,17 @@ impl Robot {
         t.mul(&self.tool)
     }
 
+    /// The pose of frame `n − 1` for `q` (the identity for `n = 0`), as
+    /// [`Robot::frames`] gives it, without the frames after it.
+    pub(crate) fn pose_before(&self, q: &Joints, n: usize) -> Pose {
+        let mut t = Pose::IDENTITY;
+        for f in &self.frames[..n] {
+            t = t.mul(&f.fixed);
+            t.r *= DMat3::from_rotation_z(f.theta(q));
+        }
+        t
+    }
+
     /// The TCP's pose in the base for `q`.
     pub fn fk(&self, q: &Joints) -> Pose {
         let mut t = Pose::IDENTITY;
@@ -274,13 +285,7 @@ impl Robot {
     /// A4, A5, A6 that turn the last frame onto `flange`, the arm at `q`.
     fn wrist(&self, mut q: Joints, flange: &Pose, flip: bool, hint4: f64) -> Option<Joints> {
         let rows = self.axis_rows();
-        let mut frames = Vec::with_capacity(self.frames.len());
-        self.frames(&q, &mut frames);
-        let before = if rows[3] == 0 {
-            Pose::IDENTITY
-        } else {
-            frames[rows[3] - 1]
-        };
+        let before = self.pose_before(&q, rows[3]);
         let r_pre = before.r * self.frames[rows[3]].fixed.r;
         let m = r_pre.transpose() * flange.r;
         let e = |i: usize, j: usize| m.col(j)[i];

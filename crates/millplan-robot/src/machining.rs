@@ -12,7 +12,7 @@ use crate::anneal::{self, Settings};
 use crate::kin::Joints;
 use crate::pose::Pose;
 use crate::robot::Robot;
-use crate::stiffness::{deflect, Variant};
+use crate::stiffness::Variant;
 use millplan_geom::{DMat3, DVec3};
 use millplan_nc::ir::{MoveKind, Program};
 use millplan_nc::krl::{
@@ -213,6 +213,30 @@ pub fn tcp_pose(place: &Pose, p: DVec3, axis: DVec3) -> Pose {
     Pose::new(place.r * abc_matrix(abc_for_axis(axis)), place.apply(p))
 }
 
+/// What a thread keeps between the points of a path: the chain's frames
+/// and the last tool axis with its rotation (a path's axis seldom changes,
+/// and turning it into KUKA's A, B, C and back costs a dozen sines).
+#[derive(Default)]
+struct Scratch {
+    frames: Vec<Pose>,
+    axis: Option<(DVec3, DMat3)>,
+}
+
+impl Scratch {
+    /// [`tcp_pose`], the rotation of the last axis reused.
+    fn tcp_pose(&mut self, place: &Pose, p: DVec3, axis: DVec3) -> Pose {
+        let r = match self.axis {
+            Some((a, r)) if a == axis => r,
+            _ => {
+                let r = place.r * abc_matrix(abc_for_axis(axis));
+                self.axis = Some((axis, r));
+                r
+            }
+        };
+        Pose::new(r, place.apply(p))
+    }
+}
+
 /// The deflection along a run: Δp (workpiece frame, mm) per point.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Deflections {
@@ -264,6 +288,53 @@ impl Robot {
         load: &Load,
         status: Option<u8>,
     ) -> Result<Deflections, MachiningError> {
+        if dirs.len() != run.len() {
+            return Err(MachiningError::Program {
+                line: run.first().map_or(0, |p| p.line),
+                message: format!("{} feed directions for {} points", dirs.len(), run.len()),
+            });
+        }
+        self.deflections_by(variant, place, run, status, |i, pt| {
+            let f = dirs[i];
+            let c = pt.axis.cross(f);
+            f * load.feed + c * load.cross + pt.axis * load.axial
+        })
+    }
+
+    /// The deflection along a run under a force of its own at every point
+    /// (N, in the workpiece frame: what the force model gives along the
+    /// path), turned into the base with the placement.
+    pub fn deflections_under(
+        &self,
+        variant: Variant,
+        place: &Placement,
+        run: &[PathPoint],
+        forces: &[DVec3],
+        status: Option<u8>,
+    ) -> Result<Deflections, MachiningError> {
+        if forces.len() != run.len() {
+            return Err(MachiningError::Program {
+                line: run.first().map_or(0, |p| p.line),
+                message: format!(
+                    "{} forces for {} points: one force a point was expected",
+                    forces.len(),
+                    run.len()
+                ),
+            });
+        }
+        self.deflections_by(variant, place, run, status, |i, _| forces[i])
+    }
+
+    /// The deflection along a run, `force(i, point)` the force on the tool
+    /// at point i in the workpiece frame (N).
+    fn deflections_by(
+        &self,
+        variant: Variant,
+        place: &Placement,
+        run: &[PathPoint],
+        status: Option<u8>,
+        force: impl Fn(usize, &PathPoint) -> DVec3 + Sync,
+    ) -> Result<Deflections, MachiningError> {
         let pose = place.pose();
         let first = run.first().ok_or(MachiningError::Empty)?;
         let status = match status {
@@ -275,26 +346,22 @@ impl Robot {
                     index: 0,
                 })?,
         };
-        let dp: Vec<Result<DVec3, MachiningError>> = run
+        let dp: Vec<DVec3> = run
             .par_iter()
-            .zip(dirs)
             .enumerate()
-            .map_init(Vec::new, |springs, (i, (pt, f))| {
-                let tcp = tcp_pose(&pose, pt.p, pt.axis);
+            .map_init(Scratch::default, |s, (i, pt)| {
+                let tcp = s.tcp_pose(&pose, pt.p, pt.axis);
                 let q = self
                     .ik_status(&tcp, status)
                     .ok_or(MachiningError::Unreachable {
                         line: pt.line,
                         index: i,
                     })?;
-                self.springs(&q, variant, springs);
-                let c = pt.axis.cross(*f);
-                let force = pose.r * (*f * load.feed + c * load.cross + pt.axis * load.axial);
-                let d = deflect(springs, tcp.t, force, DVec3::ZERO);
+                let base = pose.r * force(i, pt);
+                let (_, d) = self.deflect_with(&q, variant, base, DVec3::ZERO, &mut s.frames);
                 Ok(pose.r.transpose() * d.dp)
             })
-            .collect();
-        let dp = dp.into_iter().collect::<Result<Vec<_>, _>>()?;
+            .collect::<Result<_, MachiningError>>()?;
         let lens = dp.iter().map(|d| d.length());
         let max = lens.clone().fold(0.0, f64::max);
         let mean = lens.sum::<f64>() / dp.len() as f64;

@@ -144,6 +144,36 @@ impl Robot {
         tcp
     }
 
+    /// [`Robot::deflect`] with the chain's frames computed into `frames`
+    /// (kept between calls: no allocation per pose), the springs taken one
+    /// by one as [`deflect`] sums them; also the TCP's pose.
+    pub fn deflect_with(
+        &self,
+        q: &Joints,
+        variant: Variant,
+        force: DVec3,
+        moment: DVec3,
+        frames: &mut Vec<Pose>,
+    ) -> (Pose, Deflection) {
+        let tcp = self.frames(q, frames);
+        let axes: &[usize] = match variant {
+            Variant::OneAxis => &[2],
+            Variant::ThreeAxis => &[0, 1, 2],
+        };
+        let mut dp = DVec3::ZERO;
+        let mut dtheta = DVec3::ZERO;
+        for (f, row) in frames.iter().zip(&self.frames) {
+            for &a in axes {
+                let u = f.r.col(a);
+                let v = u.cross(tcp.t - f.t);
+                let tau = (v.dot(force) + u.dot(moment)) / row.k[a];
+                dp += v * tau;
+                dtheta += u * tau;
+            }
+        }
+        (tcp, Deflection { dp, dtheta })
+    }
+
     /// The compliance Jacobian's columns at `q` (6×8 or 6×24 for the KR 240).
     pub fn jacobian(&self, q: &Joints, variant: Variant) -> Vec<[f64; 6]> {
         let mut springs = Vec::new();

@@ -198,3 +198,93 @@ fn compensated_program_is_krl() {
         assert!((*a - b.p).length() < 1e-3);
     }
 }
+
+/// The path's deflections (one thread's frames and tool rotation kept from
+/// point to point, in parallel) equal, point by point, the slow route of
+/// Equation 2: every IK solution of the pose, the one of the path's Status,
+/// the full 6×6 C = J K⁻¹ Jᵀ built and applied to the wrench, to 1e-9 mm.
+#[test]
+fn path_deflection_equals_the_compliance_matrix_pose_by_pose() {
+    let mut run = resample(&zigzag(0.3), 5.0);
+    // The axis tilts along the path (the kept rotation must follow it).
+    for (i, p) in run.iter_mut().enumerate() {
+        let t = (i as f64 * 0.05).sin() * 0.02;
+        p.axis = DVec3::new(t.sin(), 0.0, t.cos());
+        if i % 7 < 3 {
+            p.axis = DVec3::Z;
+        }
+    }
+    let place = place();
+    let load = Load {
+        feed: -95.0,
+        cross: 305.0,
+        axial: 68.0,
+    };
+    let robot = Robot::kr240();
+    let pose = place.pose();
+    let dirs = machining::feed_dirs(&run);
+    for variant in [Variant::ThreeAxis, Variant::OneAxis] {
+        let d = robot
+            .deflections(variant, &place, &run, &load, None)
+            .expect("reachable");
+        for (i, pt) in run.iter().enumerate() {
+            let tcp = machining::tcp_pose(&pose, pt.p, pt.axis);
+            let q = robot
+                .ik_all(&tcp, 0.0)
+                .into_iter()
+                .find(|q| robot.config(q).status == d.status && robot.feasible_winding(q).is_some())
+                .expect("a solution of the path's Status");
+            let f = dirs[i];
+            let force =
+                pose.r * (f * load.feed + pt.axis.cross(f) * load.cross + pt.axis * load.axial);
+            let c = robot.compliance(&q, variant).apply(force, DVec3::ZERO);
+            let want = pose.r.transpose() * c.dp;
+            assert!(
+                (want - d.dp[i]).length() <= 1e-9,
+                "{variant:?} point {i}: {} vs {want}",
+                d.dp[i]
+            );
+        }
+    }
+}
+
+/// A force of its own at every point (the force model's, in the workpiece
+/// frame): the fixed feed-frame load given point by point deflects exactly
+/// as the fixed load; Equation 2 is linear, so a point's force doubled
+/// doubles its Δp and leaves the others; one force a point is required.
+#[test]
+fn deflection_under_a_force_per_point() {
+    let run = resample(&zigzag(0.3), 10.0);
+    let (robot, place) = (Robot::kr240(), place());
+    let load = Load {
+        feed: -95.0,
+        cross: 305.0,
+        axial: 68.0,
+    };
+    let dirs = machining::feed_dirs(&run);
+    let forces: Vec<DVec3> = run
+        .iter()
+        .zip(&dirs)
+        .map(|(p, f)| *f * load.feed + p.axis.cross(*f) * load.cross + p.axis * load.axial)
+        .collect();
+    let fixed = robot
+        .deflections(Variant::ThreeAxis, &place, &run, &load, None)
+        .expect("reachable");
+    let each = robot
+        .deflections_under(Variant::ThreeAxis, &place, &run, &forces, None)
+        .expect("reachable");
+    assert_eq!(each.dp, fixed.dp);
+    assert_eq!((each.mean, each.max), (fixed.mean, fixed.max));
+    let mut doubled = forces.clone();
+    doubled[3] *= 2.0;
+    let d = robot
+        .deflections_under(Variant::ThreeAxis, &place, &run, &doubled, None)
+        .expect("reachable");
+    assert!((d.dp[3] - fixed.dp[3] * 2.0).length() < 1e-12);
+    assert_eq!(d.dp[4], fixed.dp[4]);
+    assert!(d.max >= fixed.max);
+    let e = robot
+        .deflections_under(Variant::ThreeAxis, &place, &run, &forces[1..], None)
+        .expect_err("one short");
+    assert!(e.to_string().contains("one force a point"), "{e}");
+}

@@ -185,15 +185,23 @@ fn dialect_of(path: &Path, head: &[u8]) -> CliResult<millplan_nc::Dialect> {
     if head.trim_start().starts_with('<') {
         return refuse("an HTML or XML document (it starts `<`), not an APT/CL or G-code program");
     }
-    if let Some(e) = millplan_nc::detect::krl_refusal(&head) {
-        return Err(CliError::input(format!("{}:{e}", path.display())));
-    }
     Ok(detect(&head))
+}
+
+/// Reads an APT/CL, G-code or KUKA KRL program (see [`read_source`]).
+pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
+    read_source(path, opts).map(|(p, _)| p)
 }
 
 /// Reads an APT/CL or G-code program line by line (the file is never held
 /// whole; lines end at LF, CRLF or a lone CR), within the limits of `opts`.
-pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
+/// A KUKA KRL program is read whole, with its sub-programs, and also
+/// returned as KRL (poses, external axes and statements as written, which
+/// the IR does not hold).
+pub fn read_source(
+    path: &Path,
+    opts: ReadOptions,
+) -> CliResult<(Parsed, Option<millplan_nc::krl::KrlProgram>)> {
     let located = |e: millplan_nc::ParseError| CliError::input(format!("{}:{e}", path.display()));
     let f = open(path)?;
     prefetch(&f);
@@ -203,6 +211,9 @@ pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
         .fill_buf()
         .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
     let dialect = dialect_of(path, head)?;
+    if dialect == millplan_nc::Dialect::Krl {
+        return read_krl(path, &opts).map(|(p, k)| (p, Some(k)));
+    }
     // A move takes a line of 20 bytes or more.
     let opts = ReadOptions {
         expect_moves: (size / 20) as usize,
@@ -243,7 +254,65 @@ pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
                 .replace("no target can write it", "out of range once in mm")
         ))
     })?;
-    Ok(parsed)
+    Ok((parsed, None))
+}
+
+/// A KRL program and the sub-programs its main calls, each read from the
+/// `.src` file of its name beside it (in any case); a missing one is a
+/// finding at its calling line. External axes are dropped from the IR with
+/// a finding (`read_source` keeps them in the KRL program).
+fn read_krl(path: &Path, opts: &ReadOptions) -> CliResult<(Parsed, millplan_nc::krl::KrlProgram)> {
+    let text = read_krl_file(path, opts)?;
+    let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let mut failed: Option<CliError> = None;
+    let mut resolve = |name: &str| {
+        let p = sibling_src(&dir, name)?;
+        read_krl_file(&p, opts).map_err(|e| failed = Some(e)).ok()
+    };
+    let k = millplan_nc::krl::read(&text, &mut resolve);
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    let at = |e| krl_error(path, e);
+    let k = k.map_err(at)?;
+    let parsed = k.to_ir(opts.default_feed, true).map_err(at)?;
+    Ok((parsed, k))
+}
+
+/// An error of the KRL program whose main is `main`, at `file:line:col` of
+/// the file it is in (a sub-program's beside the main).
+pub fn krl_error(main: &Path, e: millplan_nc::krl::KrlError) -> CliError {
+    let dir = main.parent().unwrap_or(Path::new("."));
+    let file = (e.file.as_deref())
+        .and_then(|n| sibling_src(dir, n))
+        .unwrap_or_else(|| main.to_path_buf());
+    CliError::input(format!("{}:{}", file.display(), e.error))
+}
+
+/// One KRL file as text, its lines within the limits.
+fn read_krl_file(path: &Path, opts: &ReadOptions) -> CliResult<String> {
+    let mut bytes = Vec::new();
+    open(path)?
+        .take(opts.limits.memory)
+        .read_to_end(&mut bytes)
+        .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
+    let text = String::from_utf8(bytes)
+        .unwrap_or_else(|e| e.into_bytes().iter().map(|&b| b as char).collect());
+    for (k, line) in millplan_nc::lines::split(&text).enumerate() {
+        millplan_nc::check_line_length(line.len(), k + 1, &opts.limits)
+            .map_err(|e| CliError::input(format!("{}:{e}", path.display())))?;
+    }
+    Ok(text)
+}
+
+/// The file `NAME.src` in `dir`, name and extension in any case.
+fn sibling_src(dir: &Path, name: &str) -> Option<PathBuf> {
+    std::fs::read_dir(dir).ok()?.flatten().find_map(|e| {
+        let p = e.path();
+        let stem = p.file_stem()?.to_str()?;
+        let ext = p.extension()?.to_str()?;
+        (stem.eq_ignore_ascii_case(name) && ext.eq_ignore_ascii_case("src")).then_some(p)
+    })
 }
 
 // ---------------------------------------------------------------------------
@@ -607,7 +676,10 @@ fn keep_mode(f: &File, target: &Path) {
 // Standard output.
 
 /// The first error writing standard output; later output is dropped.
-static STDOUT_ERROR: Mutex<Option<String>> = Mutex::new(None);
+static STDOUT_ERROR: Mutex<Option<(std::io::ErrorKind, String)>> = Mutex::new(None);
+
+/// Whether a reader that stops early (`| head`) is the run's normal end.
+static CUT_SHORT_IS_FINE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 /// Writes to standard output, never panicking: the first failure (a closed
 /// pipe, a full disk) is kept for [`stdout_failure`] and later output dropped.
@@ -621,8 +693,15 @@ pub fn out(args: std::fmt::Arguments, newline: bool) {
         .write_fmt(args)
         .and_then(|()| if newline { o.write_all(b"\n") } else { Ok(()) });
     if let Err(e) = r {
-        *err = Some(e.to_string());
+        *err = Some((e.kind(), e.to_string()));
     }
+}
+
+/// For output a reader may take only the start of (a completion script, as
+/// `millplan completions bash | head -1`): a pipe closed by the reader
+/// is then no failure, as for `cat`.
+pub fn reader_may_stop_early() {
+    CUT_SHORT_IS_FINE.store(true, std::sync::atomic::Ordering::Relaxed);
 }
 
 /// Flushes standard output; what went wrong writing it, if anything.
@@ -630,10 +709,14 @@ pub fn stdout_failure() -> Option<String> {
     let mut err = STDOUT_ERROR.lock().unwrap_or_else(|e| e.into_inner());
     if err.is_none() {
         if let Err(e) = std::io::stdout().lock().flush() {
-            *err = Some(e.to_string());
+            *err = Some((e.kind(), e.to_string()));
         }
     }
-    err.clone()
+    let fine = CUT_SHORT_IS_FINE.load(std::sync::atomic::Ordering::Relaxed);
+    match &*err {
+        Some((std::io::ErrorKind::BrokenPipe, _)) if fine => None,
+        e => e.as_ref().map(|(_, m)| m.clone()),
+    }
 }
 
 #[cfg(test)]

@@ -7,7 +7,8 @@
 //! and leaves every input as it was.
 //!
 //! CI runs a few cases with its fixed seed (`PROPTEST_RNG_SEED` in
-//! `.ci/run`); `PROPTEST_CASES=20000` runs the long campaign.
+//! `.ci/run`); `PROPTEST_CASES=20000` runs the long campaign, with
+//! `MILLPLAN_FUZZ_BIN` naming a copy of the binary to test.
 
 use millplan_geom::analytic::{tessellate, DemoSurface};
 use millplan_geom::stl::write_binary_stl;
@@ -213,7 +214,7 @@ fn run_checked(dir: &Path, args: &[String]) -> Result<i32, TestCaseError> {
         .iter()
         .map(|f| std::fs::read(dir.join(f)).expect("in"))
         .collect();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_millplan"))
+    let mut child = Command::new(binary())
         .current_dir(dir)
         .args(args)
         .stdin(Stdio::null())
@@ -278,6 +279,12 @@ fn run_checked(dir: &Path, args: &[String]) -> Result<i32, TestCaseError> {
         prop_assert!(!n.starts_with(".millplan-"), "{args:?} left {n}");
     }
     Ok(code)
+}
+
+/// The binary under test: `MILLPLAN_FUZZ_BIN` names a copy for a long
+/// campaign, so that builds made while it runs do not change what it tests.
+fn binary() -> std::ffi::OsString {
+    std::env::var_os("MILLPLAN_FUZZ_BIN").unwrap_or_else(|| env!("CARGO_BIN_EXE_millplan").into())
 }
 
 fn cases() -> u32 {

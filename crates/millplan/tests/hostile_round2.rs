@@ -310,6 +310,137 @@ fn a_cut_with_the_spindle_at_zero_is_refused_by_the_force_passes() {
     b.refused(&[&["force", "s0.nc"][..], &model].concat(), "s0.nc:6:1:");
 }
 
+/// Issue 34: "An `S0` in a source (real NX posts carry `S0 M03`) is copied
+/// with a warning": `convert` keeps it, says so at the line of the spindle
+/// start on standard error and in `--json`'s warnings, and `speed` (which
+/// sets the spindle speeds itself) runs; `feed` refuses the cut at its line
+/// (the test above).
+#[test]
+fn an_s0_is_copied_with_a_warning() {
+    let b = Bench::new();
+    b.write(
+        "s0.nc",
+        "G21 G90\nT1 M6\nS0 M3\nG0 X-20 Y0 Z5\nG1 Z15 F100\nG1 X60\nG0 Z50\nM30\n",
+    );
+    let o = b.run(&["convert", "s0.nc", "--to", "fanuc", "-o", "c.nc"]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{e}");
+    assert!(
+        e.contains("s0.nc:3:1: warning[spindle-stopped]") && e.contains("line 5"),
+        "{e}"
+    );
+    let out = std::fs::read_to_string(b.path("c.nc")).expect("written");
+    assert!(out.contains("S0"), "{out}");
+    let o = b.run(&["convert", "s0.nc", "--to", "fanuc", "-o", "j.nc", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let w = j["warnings"].as_array().expect("warnings");
+    assert!(
+        w.iter().any(|w| w
+            .as_str()
+            .is_some_and(|w| w.contains("s0.nc:3:1: warning[spindle-stopped]"))),
+        "{j}"
+    );
+    // Without S0 there is nothing to say.
+    b.write(
+        "s6.nc",
+        "G21 G90\nT1 M6\nS6000 M3\nG0 X-20 Y0 Z5\nG1 Z15 F100\nM30\n",
+    );
+    let o = b.run(&[
+        "convert", "s6.nc", "--to", "fanuc", "-o", "s6o.nc", "--json",
+    ]);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(j["warnings"].as_array().map(Vec::len), Some(0), "{j}");
+}
+
+/// Issue 34: "`orient … --objective time --ap 0.01` (any `--ap` ≤ 0.02)
+/// writes `FEDRAT/0,MMPM`; the program's own reader then refuses it".
+/// Whatever `orient` decides for so thin a cut, it writes no feed of 0.
+#[test]
+fn orient_for_time_on_a_thin_cut_writes_no_zero_feed() {
+    use millplan_geom::analytic::{tessellate, DemoSurface};
+    let b = Bench::new();
+    let mut stl = Vec::new();
+    millplan_geom::stl::write_binary_stl(
+        &tessellate(&DemoSurface::default(), 4.0),
+        "part",
+        &mut stl,
+    );
+    std::fs::write(b.path("part.stl"), &stl).expect("stl");
+    for ap in ["0.01", "0.02"] {
+        let o = b.run(&[
+            "orient",
+            "slot.apt",
+            "--stl",
+            "part.stl",
+            "--material",
+            "c45",
+            "--materials",
+            "m.toml",
+            "--machine",
+            "machine.toml",
+            "--fz",
+            "0.1",
+            "--ap",
+            ap,
+            "--ae",
+            "1",
+            "--objective",
+            "time",
+            "-o",
+            "o.apt",
+            "-q",
+        ]);
+        let e = stderr(&o);
+        assert!(matches!(o.status.code(), Some(0 | 2 | 3)), "--ap {ap}: {e}");
+        if let Ok(out) = std::fs::read_to_string(b.path("o.apt")) {
+            let zero = out.lines().find(|l| {
+                l.strip_prefix("FEDRAT/")
+                    .and_then(|f| f.split(',').next())
+                    .and_then(|f| f.parse::<f64>().ok())
+                    .is_some_and(|f| f <= 0.0)
+            });
+            assert!(zero.is_none(), "--ap {ap}: {zero:?}\n{out}");
+            // The program's own reader takes it back.
+            let back = b.run(&["inspect", "o.apt"]);
+            assert_eq!(back.status.code(), Some(0), "{}", stderr(&back));
+        }
+        let _ = std::fs::remove_file(b.path("o.apt"));
+    }
+}
+
+/// Issue 34: "`convert` of `SPINDL/0` … exit 1": an APT spindle start at 0
+/// is copied with the warning of an `S0`, exit 0.
+#[test]
+fn an_apt_spindle_at_zero_is_copied_with_a_warning() {
+    let b = Bench::new();
+    b.write("s0.apt", &SLOT.replace("SPINDL/6000,CLW", "SPINDL/0,CLW"));
+    let o = b.run(&["convert", "s0.apt", "--to", "apt", "-o", "c.apt"]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{e}");
+    assert!(e.contains("s0.apt:4:1: warning[spindle-stopped]"), "{e}");
+}
+
+/// Issue 34's 20,000-case campaign (docs/usage.md): `feed` on an APT with
+/// `FEDRAT/1e-300` wrote `FEDRAT/0`. Every reader refuses a positive feed
+/// below the smallest plausible one at its line.
+#[test]
+fn an_absurdly_slow_feed_is_refused_at_its_line() {
+    let b = Bench::new();
+    b.write("slow.apt", &SLOT.replace("FEDRAT/500", "FEDRAT/1e-300"));
+    let model = ["--stock", BOX, "--material", "al7075"];
+    let e = b.refused(
+        &[&["feed", "slow.apt", "-o", "f.apt"][..], &model].concat(),
+        "smallest plausible feed",
+    );
+    assert!(e.contains("slow.apt:"), "{e}");
+    assert!(!b.path("f.apt").exists());
+    b.refused(
+        &["convert", "slow.apt", "--to", "fanuc", "-o", "c.nc"],
+        "smallest plausible feed",
+    );
+}
+
 /// Issue 34: "`simulate --holder 59:30` is ignored unless `--flute-length`
 /// is given: 'no collisions' where 6,087 exist". The flutes default to
 /// 3·D, said in the output, and the holder meets the stock.

@@ -160,6 +160,79 @@ fn demo_is_optimised_verified_and_faster() {
     assert!(read(&out).move_count() > 1000);
 }
 
+/// The demo's constant-cutting-speed program (written at S ≈ 4200) with
+/// `speed` raising its plunge to S ≈ 16900: at the smallest feed per tooth
+/// the plunge still drew 244.6 W against the 206.4 W learned from the
+/// input (the edge forces do not shrink with the chip; power grows with the
+/// speed), and the check refused line 12. The feed pass now lowers that
+/// block's spindle speed by the share that meets the limit: every check
+/// passes, the power stays under what the input drew, and the run is faster.
+#[test]
+fn demo_constant_vc_program_meets_the_power_learned_from_the_input() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let (stl, _, machine) = demo(dir.path());
+    let nc = dir.path().join("demo").join("finish_constant_vc_fanuc.nc");
+    let out = dir.path().join("opt.nc");
+    let o = run(&[
+        "optimise",
+        s(&nc),
+        "--stl",
+        s(&stl),
+        "--stock",
+        "offset:0.5",
+        "--material",
+        "al7075",
+        "--tool",
+        "ball:10",
+        "--passes",
+        "speed,feed",
+        "--resolution",
+        "0.5",
+        "--machine",
+        s(&machine),
+        "-o",
+        s(&out),
+        "--json",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let j = json(&o);
+    assert_eq!(j["verdict"], "improved", "{j}");
+    for c in j["checks"].as_array().expect("checks") {
+        assert_eq!(c["ok"], true, "{c}");
+    }
+    let power = |k: &str| j[k]["power"].as_f64().expect("power");
+    assert!(
+        power("max_after") <= power("max_before") * 1.005,
+        "{} W after, {} W learned",
+        power("max_after"),
+        power("max_before")
+    );
+    assert!(j["time_after_s"].as_f64() < j["time_before_s"].as_f64());
+    let feed = pass(&j, "feed")["reason"]
+        .as_str()
+        .expect("reason")
+        .to_string();
+    assert!(feed.contains("power-speed"), "{feed}");
+    // The plunge (line 12) runs slower than the speed pass set it, and
+    // still at the smallest feed per tooth (0.01 mm, 2 flutes).
+    let p = read(&out);
+    let plunge = p.moves().find(|m| m.is_cutting()).expect("a cut");
+    let next = p.moves().filter(|m| m.is_cutting()).nth(1).expect("cuts");
+    assert!(
+        plunge.spindle < next.spindle * 0.95,
+        "{} {}",
+        plunge.spindle,
+        next.spindle
+    );
+    let fz = plunge.feed / (plunge.spindle * 2.0);
+    assert!((fz - 0.01).abs() < 1e-4, "fz {fz}");
+}
+
 /// A pass whose input is missing says why and the run goes on.
 #[test]
 fn a_pass_without_its_input_prints_the_reason() {

@@ -75,6 +75,25 @@ fn speed_phases_add_up_to_the_wall_time() {
     assert_phases_cover(&args, &[0, 3]);
 }
 
+#[test]
+fn simulate_phases_add_up_to_the_wall_time() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (stl, apt) = demo_raster(dir.path(), &["--stepover", "0.25", "--step", "0.25"]);
+    let (stl, apt) = (stl.to_str().expect("utf8"), apt.to_str().expect("utf8"));
+    let args = [
+        "simulate",
+        apt,
+        "--stock",
+        "box:auto",
+        "--resolution",
+        "0.2",
+        "--stl",
+        stl,
+        "-q",
+    ];
+    assert_phases_cover(&args, &[0, 3]);
+}
+
 /// An APT file of `n` GOTOs on a zig-zag over a wavy surface; with `axes`
 /// each with a tool axis leaning up to 15° to the side (five-axis CL).
 fn apt(n: usize, axes: bool) -> String {

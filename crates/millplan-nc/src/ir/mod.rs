@@ -9,8 +9,8 @@
 //! Moves are small plain values (64 bytes) so a million-point finishing path fits
 //! in memory comfortably. Arcs, canned cycles and tool orientations live in
 //! per-operation side tables and moves name them by typed ids ([`ArcId`],
-//! [`CycleId`], [`OrientId`]); analysis results live in [`MoveTable`]s keyed by
-//! [`MoveRef`].
+//! [`CycleId`], [`OrientId`]). Analyses keep their results beside the program,
+//! per move in program order (a move's index counted over the operations).
 //!
 //! **Unknown is not zero.** A program does not know where the tool starts, nor
 //! where a reference-point return, a machine-coordinate move or a tool change
@@ -19,10 +19,6 @@
 //! bounds leave the unknown out, and writers never write an unknown axis.
 //!
 //! Units inside: millimetres, mm/min, 1/min, radians. Readers convert inch files.
-
-mod table;
-
-pub use table::{MoveRef, MoveTable};
 
 use millplan_geom::{Aabb, DVec3, Frame};
 use std::num::NonZeroU32;

@@ -511,7 +511,7 @@ impl W<'_> {
                     }),
                     // Heidenhain and CL data compensate the called tool's length
                     // always; only switching it off cannot be said.
-                    Target::Heidenhain | Target::Apt => {
+                    Target::Heidenhain | Target::Apt | Target::Krl => {
                         if new.is_none() && was.is_some() {
                             lossy(
                                 self.o.lossy,
@@ -583,7 +583,7 @@ impl W<'_> {
                         self.st.tcp = false;
                         Words::Comment(format!("TCP {}", if *on { "on" } else { "off" }))
                     }
-                    Target::Apt => Words::Nothing,
+                    Target::Apt | Target::Krl => Words::Nothing,
                 }
             }
             EventKind::WorkOffset(WorkOffset(n)) => {

@@ -75,8 +75,17 @@ pub fn write(p: &KrlProgram, o: &KrlOptions) -> KrlFiles {
         .iter()
         .filter(|l| matches!(l.statement, Statement::Move { .. }))
         .count();
+    let mut missing: Vec<String> = Vec::new();
+    for (m, _, _) in &p.missing {
+        if !missing.contains(m) {
+            missing.push(m.clone());
+        }
+    }
     if o.max_points == 0 || motions <= o.max_points {
-        return vec![(name.clone(), file(&name, &[], p.statements.iter()))];
+        return vec![(
+            name.clone(),
+            file(&name, &missing, &[], p.statements.iter()),
+        )];
     }
     // Everything before the first motion stays in the main; the rest is cut
     // into chunks of `max_points` motions.
@@ -102,18 +111,26 @@ pub fn write(p: &KrlProgram, o: &KrlOptions) -> KrlFiles {
         .collect();
     let mut out = vec![(
         name.clone(),
-        file(&name, &subs, p.statements[..first].iter()),
+        file(&name, &missing, &subs, p.statements[..first].iter()),
     )];
     for (s, chunk) in subs.iter().zip(chunks) {
-        out.push((s.clone(), file(s, &[], chunk.into_iter())));
+        out.push((s.clone(), file(s, &missing, &[], chunk.into_iter())));
     }
     out
 }
 
-fn file<'a>(name: &str, calls: &[String], body: impl Iterator<Item = &'a Located>) -> String {
+/// One file: `ext` the sub-programs its statements call that were not read
+/// (declared again, so that the calls kept stay calls), `calls` those it
+/// calls at its end.
+fn file<'a>(
+    name: &str,
+    ext: &[String],
+    calls: &[String],
+    body: impl Iterator<Item = &'a Located>,
+) -> String {
     let mut s = String::with_capacity(1 << 16);
     let _ = writeln!(s, "&ACCESS RVP\n&REL 1\nDEF {name}()");
-    for c in calls {
+    for c in ext.iter().chain(calls) {
         let _ = writeln!(s, "EXT {c}()");
     }
     for l in body {
@@ -377,4 +394,53 @@ fn auto_cdis(prog: &Program) -> f64 {
     let mid = steps.len() / 2;
     let (_, m, _) = steps.select_nth_unstable_by(mid, f64::total_cmp);
     ((*m / 2.0).min(1.0) * 1000.0).floor() / 1000.0
+}
+
+/// The writer of [`super::write_program_to`] for [`super::Target::Krl`]: a
+/// toolpath as one KRL file (no sub-programs: one output, one file), named
+/// after the program.
+pub(crate) fn write_ir_to(
+    prog: &Program,
+    o: &super::WriteOptions,
+    out: &mut Vec<u8>,
+    sink: Option<super::Sink>,
+) -> Result<super::Written, super::WriteError> {
+    let ko = KrlOptions {
+        name: prog.name.clone().unwrap_or_else(|| "millplan".into()),
+        max_points: 0,
+        lossy: o.lossy,
+        ..KrlOptions::default()
+    };
+    let k = from_ir(prog, &ko).map_err(|e| super::WriteError::new(e.line, e.message))?;
+    let (_, text) = write(&k, &ko).swap_remove(0);
+    out.extend_from_slice(text.as_bytes());
+    if let Some(s) = sink {
+        s(out)?;
+        out.clear();
+    }
+    Ok(Vec::new())
+}
+
+/// A program read as KRL, written for `target`. KRL itself: from the program
+/// as read, one file (`Some`): poses A, B, C, external axes, Status and
+/// Turn, speeds and verbatim lines kept, the sub-programs read inline and
+/// those missing still called. Another dialect is written from the IR
+/// (`None`), an external axis being refused at its line unless `lossy`.
+pub fn from_krl(
+    k: &KrlProgram,
+    target: super::Target,
+    lossy: bool,
+) -> Result<Option<String>, crate::krl::KrlError> {
+    if target == super::Target::Krl {
+        let o = KrlOptions {
+            name: k.name.clone(),
+            max_points: 0,
+            ..KrlOptions::default()
+        };
+        return Ok(Some(write(k, &o).swap_remove(0).1));
+    }
+    if !lossy {
+        k.to_ir(1.0, false)?;
+    }
+    Ok(None)
 }

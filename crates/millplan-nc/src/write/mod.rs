@@ -20,9 +20,13 @@ pub enum Target {
     Heidenhain,
     LinuxCnc,
     Apt,
+    /// KUKA KRL, a robot's `.SRC` program (not in [`Target::ALL`], the NC
+    /// dialects: a robot program has no spindle, coolant or tool change).
+    Krl,
 }
 
 impl Target {
+    /// The NC dialects.
     pub const ALL: [Target; 5] = [
         Target::Fanuc,
         Target::Sinumerik,
@@ -38,11 +42,15 @@ impl Target {
             Target::Heidenhain => "heidenhain",
             Target::LinuxCnc => "linuxcnc",
             Target::Apt => "apt",
+            Target::Krl => "krl",
         }
     }
 
     pub fn from_name(s: &str) -> Option<Target> {
-        Target::ALL.into_iter().find(|t| t.name() == s)
+        Target::ALL
+            .into_iter()
+            .chain([Target::Krl])
+            .find(|t| t.name() == s)
     }
 
     /// The usual file extension of the target's programs.
@@ -53,6 +61,7 @@ impl Target {
             Target::Heidenhain => "h",
             Target::LinuxCnc => "ngc",
             Target::Apt => "apt",
+            Target::Krl => "src",
         }
     }
 
@@ -64,6 +73,7 @@ impl Target {
             "h" => Some(Target::Heidenhain),
             "ngc" => Some(Target::LinuxCnc),
             "apt" | "cl" | "cls" | "clsf" | "aptsource" => Some(Target::Apt),
+            "src" => Some(Target::Krl),
             _ => None,
         }
     }
@@ -76,6 +86,7 @@ impl Target {
             Dialect::Heidenhain => Some(Target::Heidenhain),
             Dialect::LinuxCnc => Some(Target::LinuxCnc),
             d if d.is_apt() => Some(Target::Apt),
+            Dialect::Krl => Some(Target::Krl),
             _ => None,
         }
     }
@@ -86,7 +97,7 @@ impl Target {
     }
 
     pub fn is_gcode(self) -> bool {
-        self != Target::Apt
+        !matches!(self, Target::Apt | Target::Krl)
     }
 }
 
@@ -238,10 +249,10 @@ pub fn write_program_to(
     sink: Option<Sink>,
 ) -> Result<Written, WriteError> {
     preflight::check(p, &o)?;
-    if o.target == Target::Apt {
-        apt::write_apt_to(p, o, out, sink)
-    } else {
-        gcode::write_gcode_to(p, o, out, sink)
+    match o.target {
+        Target::Apt => apt::write_apt_to(p, o, out, sink),
+        Target::Krl => krl::write_ir_to(p, &o, out, sink),
+        _ => gcode::write_gcode_to(p, o, out, sink),
     }
 }
 

@@ -84,8 +84,9 @@ pub struct Planner {
     pub plain_lookahead: usize,
     /// Path jerk, mm/s³, on top of the axes' jerks; `None`: the axes' alone.
     pub jerk: Option<f64>,
-    /// Highest acceleration along the path, mm/s² (LinuxCNC's
-    /// `[TRAJ] MAX_LINEAR_ACCELERATION`); `None`: the axes' alone.
+    /// Highest acceleration along the path, mm/s², a cap some controls put
+    /// on top of the axes' (LinuxCNC 2.9's planner has none); `None`: the
+    /// axes' alone.
     pub path_accel: Option<f64>,
     /// The speed profile when the program does not choose one (Sinumerik
     /// SOFT/BRISK do).
@@ -217,6 +218,10 @@ pub(crate) struct Shaped {
 enum Joint {
     /// The motion stops.
     Stop,
+    /// The motion stops and the first block ends at rest whatever the mode
+    /// (LinuxCNC's `TC_TERM_COND_STOP`: a rapid next to a feed move, a sharp
+    /// reversal), so it does not blend at its end.
+    HardStop,
     /// Tangent: at the lower of the two caps.
     Tangent,
     /// At the given speed, the blocks' accelerations as they are.
@@ -226,7 +231,17 @@ enum Joint {
     Parabolic(f64),
     /// LinuxCNC blend arc between the two blocks.
     Arc(BlendArc),
+    /// LinuxCNC approximate tangent (`tpSetupTangent`): the corner is passed
+    /// at the given speed as if the blocks were tangent, no blend.
+    Kink(f64),
 }
+
+/// LinuxCNC 2.9's `[TRAJ] ARC_BLEND_KINK_RATIO` default: the share of the
+/// acceleration a kink between nearly tangent blocks may take.
+const KINK_RATIO: f64 = 0.1;
+/// LinuxCNC's `TP_MIN_SEGMENT_CYCLES`: a block lasts at least this many
+/// servo periods (`block_time_s` is as many periods).
+const MIN_SEGMENT_CYCLES: f64 = 1.02;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct BlendArc {
@@ -256,11 +271,15 @@ pub(crate) fn shape(
         .collect();
     let mut joints = vec![Joint::Stop; n + 1];
     let mut trimmed = vec![0.0f64; n];
+    // The share of its acceleration a kink takes from each block (LinuxCNC
+    // only: the other planners allocate nothing for it).
+    let lcnc = pl.kind == PlannerKind::LinuxCnc29;
+    let mut kinked = vec![0.0f64; if lcnc { n } else { 0 }];
     for k in 1..n {
         if stops[k] {
             continue;
         }
-        joints[k] = joint(
+        let (j, reduce) = joint(
             &bs[k - 1],
             &bs[k],
             &ctl_of(k - 1),
@@ -269,39 +288,70 @@ pub(crate) fn shape(
             pl,
             lim,
         );
+        joints[k] = j;
+        if reduce > 0.0 {
+            kinked[k - 1] = kinked[k - 1].max(reduce);
+            kinked[k] = kinked[k].max(reduce);
+        }
         if let Joint::Arc(a) = joints[k] {
             trimmed[k] = a.trim;
         }
     }
-    // The acceleration along blocks that blend without an arc (LinuxCNC's
-    // parabolic blends, and a blending block at the end of its chain).
-    if pl.kind == PlannerKind::LinuxCnc29 {
-        let mut half: Vec<bool> = (0..n)
-            .map(|k| {
-                let c = ctl_of(k);
-                let parabolic_end = c.mode != PathMode::ExactStop
-                    && !c.stop_after
-                    && !matches!(joints[k + 1], Joint::Tangent | Joint::Arc(_));
-                parabolic_end || matches!(joints[k], Joint::Parabolic(_))
-            })
-            .collect();
-        // The chords of one arc are one segment to LinuxCNC: all or none.
-        for k in (0..n.saturating_sub(1)).rev() {
-            if ctl_of(k).same_move && half[k + 1] {
-                half[k] = true;
-            }
-        }
-        for k in 1..n {
-            if ctl_of(k - 1).same_move && half[k - 1] {
-                half[k] = true;
-            }
-        }
-        for (b, h) in bs.iter_mut().zip(half) {
-            if h {
-                b.accel *= pl.blend_accel_scale;
-            }
+    if lcnc {
+        linuxcnc_accels(&mut bs, &joints, &kinked, &ctl_of, pl);
+    }
+    let mut out = emit(&bs, &joints, &trimmed);
+    lookahead(&mut out, ctl, pl);
+    out
+}
+
+/// LinuxCNC's acceleration along each block (`tcGetOverallMaxAccel`): the
+/// blend share on blocks that blend without an arc (parabolic blends, and
+/// a blending block at the end of its chain), less the share its kinks
+/// take (`kinked`).
+fn linuxcnc_accels(
+    bs: &mut [Block],
+    joints: &[Joint],
+    kinked: &[f64],
+    ctl_of: &dyn Fn(usize) -> BlockCtl,
+    pl: &Planner,
+) {
+    let n = bs.len();
+    let mut half: Vec<bool> = (0..n)
+        .map(|k| {
+            let c = ctl_of(k);
+            let parabolic_end = c.mode != PathMode::ExactStop
+                && !c.stop_after
+                && !matches!(
+                    joints[k + 1],
+                    Joint::Tangent | Joint::Arc(_) | Joint::Kink(_) | Joint::HardStop
+                );
+            parabolic_end || matches!(joints[k], Joint::Parabolic(_))
+        })
+        .collect();
+    // The chords of one arc are one segment to LinuxCNC: all or none.
+    for k in (0..n.saturating_sub(1)).rev() {
+        if ctl_of(k).same_move && half[k + 1] {
+            half[k] = true;
         }
     }
+    for k in 1..n {
+        if ctl_of(k - 1).same_move && half[k - 1] {
+            half[k] = true;
+        }
+    }
+    for ((b, h), r) in bs.iter_mut().zip(half).zip(kinked) {
+        if h {
+            b.accel *= pl.blend_accel_scale;
+        }
+        b.accel *= 1.0 - r;
+    }
+}
+
+/// The blocks the control runs (blend arcs between their trimmed
+/// neighbours) and the speed limit at each junction.
+fn emit(bs: &[Block], joints: &[Joint], trimmed: &[f64]) -> Shaped {
+    let n = bs.len();
     let mut out = Shaped {
         blocks: Vec::with_capacity(n),
         vj: Vec::with_capacity(n + 1),
@@ -327,15 +377,16 @@ pub(crate) fn shape(
                 out.blocks.push(arc);
                 out.vj.push(a.vcap.min(next_cap));
             }
-            Joint::Stop => out.vj.push(0.0),
+            Joint::Stop | Joint::HardStop => out.vj.push(0.0),
             Joint::Tangent => out.vj.push(b.vcap.min(next_cap)),
-            Joint::At(v) | Joint::Parabolic(v) => out.vj.push(v.min(b.vcap).min(next_cap)),
+            Joint::At(v) | Joint::Parabolic(v) | Joint::Kink(v) => {
+                out.vj.push(v.min(b.vcap).min(next_cap))
+            }
         }
     }
     if let Some(last) = out.vj.last_mut() {
         *last = 0.0;
     }
-    lookahead(&mut out, ctl, pl);
     out
 }
 
@@ -366,7 +417,8 @@ fn own_block(b: &Block, cap: f64, c: &BlockCtl, pl: &Planner) -> Block {
     b
 }
 
-/// How the junction from `a` to `b` is passed.
+/// How the junction from `a` to `b` is passed, and the share of their
+/// acceleration it takes from both blocks (LinuxCNC's kinks).
 fn joint(
     a: &Block,
     b: &Block,
@@ -375,35 +427,42 @@ fn joint(
     a_trimmed: f64,
     pl: &Planner,
     lim: &Limits,
-) -> Joint {
+) -> (Joint, f64) {
     let lcnc = pl.kind == PlannerKind::LinuxCnc29;
     let cap = a.vcap.min(b.vcap);
     // The chords of one arc are one block to the control, whatever the mode.
     if ca.same_move && a.rotary_only == b.rotary_only {
         if pl.arc_tangential_share < 1.0 {
-            return Joint::Tangent;
+            return (Joint::Tangent, 0.0);
         }
         let ell = a.len.min(b.len).min(pl.blend_mm);
-        return Joint::At(junction_len_rule(a, b, cap, ell, lim));
+        return (Joint::At(junction_len_rule(a, b, cap, ell, lim)), 0.0);
     }
-    if ca.stop_after || ca.mode == PathMode::ExactStop || a.rotary_only != b.rotary_only {
-        return Joint::Stop;
+    if ca.stop_after || a.rotary_only != b.rotary_only {
+        return (Joint::Stop, 0.0);
     }
-    if !lcnc && (a.rapid || b.rapid) {
-        return Joint::Stop;
+    if lcnc && !a.rotary_only {
+        return linuxcnc_joint(a, b, ca, cb, a_trimmed, pl, lim);
     }
-    if !lcnc || a.rotary_only {
-        let tol = match ca.mode {
-            PathMode::Blend { tolerance } => tolerance,
-            PathMode::ExactStop => None,
-        };
-        let ell = match tol {
-            None => a.len.min(b.len).min(pl.blend_mm),
-            Some(t) => rounding_len(a, b, t),
-        };
-        return Joint::At(junction_len_rule(a, b, cap, ell, lim));
+    if ca.mode == PathMode::ExactStop || (!lcnc && (a.rapid || b.rapid)) {
+        return (Joint::Stop, 0.0);
     }
-    linuxcnc_joint(a, b, ca, cb, a_trimmed, pl, lim)
+    (generic_joint(a, b, ca, pl, lim), 0.0)
+}
+
+/// The generic rule: the corner blended over the control's distance or the
+/// rounding arc of the program's tolerance.
+fn generic_joint(a: &Block, b: &Block, ca: &BlockCtl, pl: &Planner, lim: &Limits) -> Joint {
+    let cap = a.vcap.min(b.vcap);
+    let tol = match ca.mode {
+        PathMode::Blend { tolerance } => tolerance,
+        PathMode::ExactStop => None,
+    };
+    let ell = match tol {
+        None => a.len.min(b.len).min(pl.blend_mm),
+        Some(t) => rounding_len(a, b, t),
+    };
+    Joint::At(junction_len_rule(a, b, cap, ell, lim))
 }
 
 /// Half the angle between the reversed first direction and the second (0:
@@ -433,10 +492,46 @@ fn planar_accel(a: &Block, b: &Block, lim: &Limits) -> f64 {
         .fold(lim.planner.path_accel.unwrap_or(f64::INFINITY), f64::min)
 }
 
-/// LinuxCNC 2.9's choice at a junction under G64: tangent blocks pass at
-/// speed; otherwise a blend arc within the tolerance (`blendmath.c`,
-/// `blendComputeParameters`), unless a parabolic blend is faster or no arc
-/// fits.
+/// The kink of LinuxCNC's `tpSetupTangent` between two XYZ blocks: the
+/// largest share of an axis's acceleration the change of direction takes
+/// when the speed `v` (the lower of the two caps) turns within one servo
+/// period T, each axis's jump |Δe_i|·(v/T + a_b) over its acceleration
+/// (doubled where an arc takes part: its tangential share). `None` where
+/// LinuxCNC does not look for a kink: between a rapid and a feed move, and
+/// at a reversal within 2° (a sharp corner: the motion stops).
+fn kink(
+    a: &Block,
+    b: &Block,
+    ca: &BlockCtl,
+    cb: &BlockCtl,
+    pl: &Planner,
+    lim: &Limits,
+) -> Option<f64> {
+    let sum: f64 = (0..3).map(|i| (a.dir[i] + b.dir[i]).powi(2)).sum();
+    if a.rapid != b.rapid || sum < (2f64.to_radians()).powi(2) || pl.block_time_s <= 0.0 {
+        return None;
+    }
+    let period = pl.block_time_s / MIN_SEGMENT_CYCLES;
+    let b_accel = (0..3)
+        .filter(|&i| b.dir[i].abs() > 1e-12)
+        .map(|i| lim.accel[i] / b.dir[i].abs())
+        .fold(f64::INFINITY, f64::min);
+    let a_inst = a.vcap.min(b.vcap) / period + b_accel;
+    let mut scale = (0..3)
+        .map(|i| a_inst * (b.dir[i] - a.dir[i]).abs() / lim.accel[i])
+        .fold(0.0, f64::max);
+    if ca.arc_radius > 0.0 || cb.arc_radius > 0.0 {
+        scale /= pl.arc_tangential_share;
+    }
+    Some(scale)
+}
+
+/// LinuxCNC 2.9's choice at a junction of XYZ blocks (`tpHandleBlendArc`):
+/// a rapid next to a feed move and a sharp reversal stop; nearly tangent
+/// blocks, whose kink takes less than `KINK_RATIO` of the acceleration,
+/// pass at speed with their acceleration reduced by that share, under G61
+/// too (LinuxCNC's "exact path"); any other corner under G61 stops, its
+/// blocks' acceleration still reduced by `KINK_RATIO`.
 fn linuxcnc_joint(
     a: &Block,
     b: &Block,
@@ -445,12 +540,40 @@ fn linuxcnc_joint(
     a_trimmed: f64,
     pl: &Planner,
     lim: &Limits,
-) -> Joint {
-    use std::f64::consts::{FRAC_PI_2, PI};
-    let th = half_angle(a, b);
-    if FRAC_PI_2 - th < 1e-6 {
-        return Joint::Tangent;
+) -> (Joint, f64) {
+    let Some(scale) = kink(a, b, ca, cb, pl, lim) else {
+        return (Joint::HardStop, 0.0);
+    };
+    if scale < KINK_RATIO {
+        return (Joint::Kink(a.vcap.min(b.vcap)), scale);
     }
+    if ca.mode == PathMode::ExactStop {
+        return (Joint::Stop, KINK_RATIO);
+    }
+    let kink_vel = a.vcap.min(b.vcap) * KINK_RATIO / scale;
+    match linuxcnc_blend(a, b, ca, cb, a_trimmed, pl, lim) {
+        Joint::Parabolic(v) if v / 2.0 >= kink_vel => (Joint::Parabolic(v), 0.0),
+        Joint::Arc(arc) if arc.vcap >= kink_vel => (Joint::Arc(arc), 0.0),
+        _ => (Joint::Kink(kink_vel), KINK_RATIO),
+    }
+}
+
+/// LinuxCNC 2.9's blend under G64 (`tpChooseBestBlend` between these two):
+/// a blend arc within the tolerance (`blendmath.c`,
+/// `blendComputeParameters`), unless a parabolic blend is faster or no arc
+/// fits.
+fn linuxcnc_blend(
+    a: &Block,
+    b: &Block,
+    ca: &BlockCtl,
+    cb: &BlockCtl,
+    a_trimmed: f64,
+    pl: &Planner,
+    lim: &Limits,
+) -> Joint {
+    // Nearly tangent blocks never come here: their kink passes them.
+    use std::f64::consts::PI;
+    let th = half_angle(a, b);
     let a_max = planar_accel(a, b, lim);
     let a_par = a_max * pl.blend_accel_scale;
     let parabolic = parabolic_speed(a, b, ca, a_par, th);
@@ -647,14 +770,84 @@ mod tests {
                 1e-9,
             );
         }
-        // With the path acceleration capped at 1000 (LinuxCNC's [TRAJ]
-        // MAX_LINEAR_ACCELERATION): 20·(L/v + v/1000) = 6.472 s (LinuxCNC
-        // measured 6.460 s).
-        let mut l = lim(PlannerKind::LinuxCnc29);
-        l.planner.path_accel = Some(1000.0);
+        // LinuxCNC's G61 is exact path: at every corner too sharp for a
+        // kink, tpSetupTangent leaves both blocks' acceleration reduced by
+        // the kink ratio (tcGetOverallMaxAccel), 0.9·1118 mm/s²:
+        // 20·(L/v + v/(0.9·a)) = 6.460 s (LinuxCNC measured 6.460 s).
+        let l = lim(PlannerKind::LinuxCnc29);
         let c = vec![ctl(STOP); m.len()];
         let t = estimate_controlled([0.0; 6], &m, &c, &l).total_s;
-        close(t, 20.0 * (len / 100.0 + 0.1), 1e-9);
+        close(t, 20.0 * (len / 100.0 + 100.0 / (0.9 * a)), 1e-9);
+        close(t, 6.460, 2e-4);
+    }
+
+    /// Two 50 mm blocks at 100 mm/s, the second turned by `delta` rad in
+    /// X-Y.
+    fn bent(delta: f64) -> Vec<AxisMove> {
+        let end = [50.0 + 50.0 * delta.cos(), 50.0 * delta.sin()];
+        vec![
+            feed(50.0, 0.0, [0.0, 0.0], 100.0),
+            feed(end[0], end[1], [50.0, 0.0], 100.0),
+        ]
+    }
+
+    #[test]
+    fn linuxcnc_exact_path_passes_a_kink_at_speed() {
+        // tp.c, tpSetupTangent: the jump of each axis's velocity at the
+        // kink, |Δe_i|·(v/T + a_b) with T the 1 ms servo period and a_b the
+        // second block's acceleration (1000/cos δ), is 101,000·sin δ mm/s²
+        // on Y: 0.0505 of Y's 1000 mm/s² at δ = 0.0005 rad, below the kink
+        // ratio 0.1. Under G61 the blocks pass the kink at 100 mm/s, both
+        // with their acceleration reduced by that share: one trapezoid,
+        // L/v + v/(2·a_1) + v/(2·a_2).
+        let l = lim(PlannerKind::LinuxCnc29);
+        let delta = 0.0005f64;
+        let m = bent(delta);
+        let a_b = 1000.0 / delta.cos();
+        let share = (100.0 / 0.001 + a_b) * delta.sin() / 1000.0;
+        assert!(share < 0.1, "{share}");
+        let (a1, a2) = (1000.0 * (1.0 - share), a_b * (1.0 - share));
+        let want = 100.0 / 100.0 + 100.0 / (2.0 * a1) + 100.0 / (2.0 * a2);
+        let t = estimate_controlled([0.0; 6], &m, &[ctl(STOP); 2], &l).total_s;
+        close(t, want, 1e-9);
+        // Turned by 0.002 rad (a share of 0.202): too sharp for a kink, the
+        // motion stops, each block at 0.9 of its acceleration.
+        let m = bent(0.002);
+        let a_b = 1000.0 / 0.002f64.cos();
+        let want = 1.0 + 100.0 / 900.0 + 100.0 / (0.9 * a_b);
+        let t = estimate_controlled([0.0; 6], &m, &[ctl(STOP); 2], &l).total_s;
+        close(t, want, 1e-9);
+        // A reversal within 2° (here 0.57°) stops under G64 too, the
+        // first block at rest at its end, neither reduced nor halved; the
+        // last halved (its end blends with nothing).
+        let back = [
+            feed(50.0, 0.0, [0.0, 0.0], 100.0),
+            feed(0.0, 0.5, [50.0, 0.0], 100.0),
+        ];
+        let len2 = (50.0f64 * 50.0 + 0.25).sqrt();
+        let a2 = 1000.0 * len2 / 50.0;
+        let t = estimate_controlled([0.0; 6], &back, &[ctl(G64); 2], &l).total_s;
+        close(t, 0.5 + 0.1 + len2 / 100.0 + 100.0 / (0.5 * a2), 1e-9);
+    }
+
+    #[test]
+    fn linuxcnc_blending_takes_a_kink_where_it_is_the_fastest_blend() {
+        // Under G64 P0.01 the same 0.0005 rad kink is passed at 100 mm/s
+        // (tpChooseBestBlend: the kink's speed beats the blend arc's), the
+        // last block at half its acceleration (it ends in a parabolic
+        // blend with nothing), both reduced by the kink's share.
+        let l = lim(PlannerKind::LinuxCnc29);
+        let delta = 0.0005f64;
+        let m = bent(delta);
+        let a_b = 1000.0 / delta.cos();
+        let share = (100.0 / 0.001 + a_b) * delta.sin() / 1000.0;
+        let (a1, a2) = (1000.0 * (1.0 - share), 0.5 * a_b * (1.0 - share));
+        let want = 1.0 + 100.0 / (2.0 * a1) + 100.0 / (2.0 * a2);
+        let p = ctl(PathMode::Blend {
+            tolerance: Some(0.01),
+        });
+        let t = estimate_controlled([0.0; 6], &m, &[p; 2], &l).total_s;
+        close(t, want, 1e-9);
     }
 
     #[test]

@@ -18,17 +18,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from os import PathLike
-from typing import Any, Dict, List, Optional, Union
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
 from . import _millplan
-from ._millplan import Mesh, MillplanError, Program
+from ._millplan import Mesh, MillplanError, Program, ToolLibrary
 
 __all__ = [
     "MillplanError",
     "Program",
     "Mesh",
+    "ToolLibrary",
     "Outcome",
     "inspect",
     "read_program",
@@ -37,6 +38,13 @@ __all__ = [
     "working_diameter",
     "optimise",
     "dialect_extension",
+    "speed",
+    "gouge",
+    "simulate",
+    "force",
+    "cut",
+    "raster",
+    "reorder",
 ]
 
 StrPath = Union[str, "PathLike[str]"]
@@ -209,6 +217,7 @@ def optimise(
     limits: Optional[Dict[str, float]] = None,
     dialect: Optional[str] = None,
     output: Optional[StrPath] = None,
+    library: Union[ToolLibrary, StrPath, None] = None,
 ) -> "tuple[Program, Outcome]":
     """Take a CAM program to a verified, better program: ``millplan optimise``.
 
@@ -223,6 +232,10 @@ def optimise(
     post'), limits (dict of fxy, torque, power, stress, deflection) as in
     the command. dialect: of the output (default as ``write_program``).
     output: a file to write the program to unless a check refuses it.
+    library: a tool library (:class:`ToolLibrary` or its file, as the
+    command's ``--tools``): each tool the program calls takes the library's
+    geometry, flutes, helix and holder; a tool it lacks, has locked or has
+    worn out raises MillplanError at the tool call's line.
 
     Returns the written program (read back from its own text) and the
     :class:`Outcome`. Runs with the GIL released.
@@ -241,6 +254,7 @@ def optimise(
         limits,
         dialect,
         output,
+        library,
     )
     outcome = Outcome(
         verdict=summary["verdict"],
@@ -256,3 +270,311 @@ def optimise(
         written=None if (output is None or refused) else str(output),
     )
     return prog, outcome
+
+
+def _table(columns: Dict[str, np.ndarray], pandas: Optional[bool]) -> Any:
+    """Columns as a pandas DataFrame when pandas is installed (or asked for
+    with ``pandas=True``), else the dict of arrays."""
+    if pandas is False:
+        return columns
+    try:
+        import pandas as pd
+    except ImportError:
+        if pandas:
+            raise
+        return columns
+    return pd.DataFrame(columns)
+
+
+def speed(
+    program: Union[Program, StrPath],
+    part: Union[Mesh, StrPath],
+    vc: float,
+    fz: float,
+    flutes: int,
+    ap: float,
+    machine: Optional[StrPath] = None,
+    *,
+    ball_d: Optional[float] = None,
+    keep_feed: bool = False,
+    s_threshold: Optional[float] = None,
+    convention: Optional[str] = None,
+    normals: Optional[str] = None,
+    pandas: Optional[bool] = None,
+) -> "Tuple[Program, Any, Dict[str, Any]]":
+    """Constant-cutting-speed spindle control: ``millplan speed``.
+
+    For every cutting point of every ball-end operation of ``program`` (a
+    Program or a file) the contact with ``part`` (a Mesh or an STL file) is
+    found, the working diameter D_w computed and the spindle speed set to
+    n = 1000·vc/(π·D_w) within the machine's range and acceleration; the feed
+    follows, F = n·flutes·fz, unless ``keep_feed``. Only speeds and feeds
+    change, never positions.
+
+    vc: cutting speed, m/min. fz: feed per tooth, mm. flutes: number of
+    flutes. ap: stock thickness along the surface normal, mm (at most D/2).
+    machine: a machine file (default: the built-in machine). ball_d: ball
+    diameter for operations whose tool has no geometry. s_threshold: write a
+    new S only when it changes by more than this, 1/min (default as the
+    command). convention: which tool point the CL points are, 'auto',
+    'tip' or 'centre'. normals: 'smooth', 'facet' or 'ball'.
+
+    Returns ``(new_program, table, report)``. ``table`` has one row per
+    cutting point with the columns of the command's ``--table`` CSV (line;
+    CL point x, y, z; contact cx, cy, cz; normal nx, ny, nz;
+    inclination_deg, feed_angle_deg, uncut_side, ae (NaN: no neighbouring
+    pass), d_w, n, feed, n_target, gap, clamped, rate_limited, held,
+    gap_flag, corner) and operation, move and the ball diameter d: a pandas
+    DataFrame when pandas is installed (``pandas=False``: always the dict
+    of NumPy arrays). ``report`` is what ``millplan speed --json`` prints
+    (the summary, the checks, the findings, the times before and after)
+    without the output file's name and dialect. Runs with the GIL released.
+    """
+    prog, cols, report = _millplan.speed(
+        program, part, vc, fz, ap, flutes, machine, ball_d, keep_feed,
+        s_threshold, convention, normals,
+    )
+    cols["uncut_side"] = np.asarray(_millplan.SIDES)[cols["uncut_side"]]
+    report.pop("output", None)
+    report.pop("dialect", None)
+    return prog, _table(cols, pandas), report
+
+
+def gouge(
+    program: Union[Program, StrPath],
+    part: Union[Mesh, StrPath],
+    tol: Optional[float] = None,
+    step: Optional[float] = None,
+    *,
+    rapids: bool = False,
+    tools: Optional[str] = None,
+) -> Dict[str, Any]:
+    """Gouge check: ``millplan gouge``.
+
+    Drops each operation's cutter onto ``part`` (a Mesh or an STL file)
+    every ``step`` mm (default 0.1) along every cutting move of ``program``
+    (and the rapids with ``rapids=True``); a tool tip more than ``tol`` mm
+    (default 0.005) below the drop height is a gouge. ``tools``: the cutter
+    of operations that name none ('ball:10', 'flat:8', 'bull:10:2',
+    'cone:D:ANGLE').
+
+    Returns what ``millplan gouge --json`` prints: moves and points checked,
+    the moves skipped by reason, each gouge (operation, move, line, tip
+    position ``at``, depth), the deepest, ``clean`` and ``tol``. Raises
+    MillplanError when no move could be checked. Runs with the GIL released.
+    """
+    return _millplan.gouge(program, part, tol, step, rapids, tools)
+
+
+def simulate(
+    program: Union[Program, StrPath],
+    stock: str,
+    part: Union[Mesh, StrPath, None] = None,
+    machine: Optional[StrPath] = None,
+    tools: Optional[str] = None,
+    *,
+    holder: Optional[str] = None,
+    flute_length: Optional[float] = None,
+    shank: Optional[float] = None,
+    resolution: Optional[float] = None,
+    tol: Optional[float] = None,
+    mesh_resolution: Optional[float] = None,
+    output: Optional[StrPath] = None,
+    pandas: Optional[bool] = None,
+) -> "Tuple[Any, Dict[str, Any]]":
+    """Stock simulation: ``millplan simulate``.
+
+    Cuts ``stock`` ('box:auto', 'box:X0,Y0,Z0,X1,Y1,Z1', 'cylinder:auto',
+    'stl:FILE', 'offset:MM' around ``part``) with every move of
+    ``program`` on a dexel grid of ``resolution`` mm (default 0.1). tools:
+    the cutter of operations that name none. holder: 'DIAMETER:STICKOUT',
+    mm; flute_length and shank (diameter), mm: the tool body above the
+    flutes, for the collision check. tol: material deeper than this (mm,
+    default 0.01) met by a rapid or the shank/holder is a collision.
+    machine: its rapid rate times the rapids. output: write the stock left
+    as a binary STL (at ``mesh_resolution`` mm).
+
+    Returns ``(moves, report)``. ``moves`` has one row per simulated move,
+    the columns of the command's ``--table`` CSV: index (over the program),
+    line, removed_mm3, mrr (mm³/min), ap and ae (the engagement, mm), air,
+    rapid, holder_depth, depth, minutes; a DataFrame when pandas is
+    installed (``pandas=False``: the dict of arrays). ``report`` is what
+    ``millplan simulate --json`` prints (volumes, collisions, and with a
+    part the material left on it). Runs with the GIL released.
+    """
+    cols, report = _millplan.simulate(
+        program, stock, part, machine, tools, holder, flute_length, shank,
+        resolution, tol, mesh_resolution, output,
+    )
+    return _table(cols, pandas), report
+
+
+def force(
+    program: Union[Program, StrPath],
+    stock: str,
+    material: str,
+    part: Union[Mesh, StrPath, None] = None,
+    machine: Optional[StrPath] = None,
+    tools: Optional[str] = None,
+    *,
+    flutes: Optional[int] = None,
+    resolution: Optional[float] = None,
+    pandas: Optional[bool] = None,
+) -> "Tuple[Any, Dict[str, Any]]":
+    """Cutting forces along a program: ``millplan force PATH``.
+
+    The program runs stroke by stroke through ``stock`` (as in
+    :func:`simulate`; 'offset:MM' needs ``part``) on a dexel grid of
+    ``resolution`` mm (default 0.1); every cutting stroke's engagement gives
+    the forces, torque, power, bending stress and tip deflection over a
+    revolution with the coefficients of ``material`` (a name of ``millplan
+    force materials``); per move the largest of its strokes. Cutting data
+    from the program: spindle speed, feed, fz = feed/(n·flutes) (flutes
+    default 2). tools: the cutter of operations that name none.
+
+    Returns ``(moves, summary)``. ``moves`` has one row per simulated move
+    with the columns of ``millplan force --table`` (index, line, t_s,
+    seconds, rapid, air, unmodelled, rpm, feed, fz, lead_deg, cells, dz_mm,
+    dphi_deg, removed_mm3, fxy_max, fx_min … fz_max (N, tool frame),
+    torque_max, torque_mean (N·mm), power_w, stress_mpa, deflection_mm,
+    fz_allowed): a DataFrame when pandas is installed. ``summary`` has the
+    counts and the largest loads (``max``: fxy, torque, power, stress,
+    deflection) as ``millplan force --json`` gives them. Runs with the GIL
+    released.
+    """
+    cols, summary = _millplan.force(
+        program, stock, material, part, machine, tools, flutes, resolution
+    )
+    return _table(cols, pandas), summary
+
+
+def cut(
+    tool: str,
+    fz: float,
+    ap: float,
+    n: float,
+    ae: Optional[float] = None,
+    material: Optional[str] = None,
+    *,
+    coeffs: Optional[str] = None,
+    flutes: Optional[int] = None,
+    helix: Optional[float] = None,
+    lead: Optional[float] = None,
+    tilt: Optional[float] = None,
+    variant: Optional[str] = None,
+    stickout: Optional[float] = None,
+    flute_length: Optional[float] = None,
+    modulus: Optional[float] = None,
+    dz: Optional[float] = None,
+    dphi: Optional[float] = None,
+    fixed_grid: bool = False,
+    pandas: Optional[bool] = None,
+) -> "Tuple[Dict[str, Any], Any]":
+    """Forces of one engagement: ``millplan cut``.
+
+    tool: 'ball:D', 'flat:D' or 'bull:D:R' (mm). fz: feed per tooth, mm.
+    ap: axial depth, mm. n: spindle speed, 1/min. ae: stepover to the
+    earlier pass, mm; None for a full slot. material: a name of ``millplan
+    force materials``, or coeffs 'KTC,KRC,KAC,KTE,KRE,KAE'. flutes (default
+    4), helix (degrees, default 30), lead and tilt (degrees, default 0) and
+    their variant ('tilt-then-lead', the default, or 'lead-then-tilt'),
+    stickout (mm, default 3·D), flute_length, modulus (N/mm², default
+    carbide), dz (mm) and dphi (degrees): the integration steps, refined
+    until F_xy,max and T_max converge unless ``fixed_grid``.
+
+    Returns ``(figures, curves)``: ``figures`` is what ``millplan cut
+    --json`` prints (force ranges in the tool and workpiece frame, F_xy,max,
+    torque, power, bending stress, deflection, the steps used);
+    ``curves`` the forces over one revolution as the command's ``--csv``
+    (phi_deg, fx, fy, fz, fx_w, fy_w, fz_w, torque): a DataFrame when
+    pandas is installed.
+    """
+    figures, curves = _millplan.cut(
+        tool, fz, ap, n, ae, material, coeffs, flutes, helix, lead, tilt,
+        variant, stickout, flute_length, modulus, dz, dphi, fixed_grid,
+    )
+    return figures, _table(curves, pandas)
+
+
+def raster(
+    part: Union[Mesh, StrPath],
+    tool: str,
+    stepover: float,
+    step: float,
+    *,
+    angle: Optional[float] = None,
+    oneway: bool = False,
+    boundary: Optional[float] = None,
+    tol: Optional[float] = None,
+    clearance: Optional[float] = None,
+    feed: Optional[float] = None,
+    spindle: Optional[float] = None,
+    machine: Optional[StrPath] = None,
+    dialect: Optional[str] = None,
+    force: bool = False,
+) -> "Tuple[Program, Dict[str, Any]]":
+    """Raster finishing path by drop-cutter: ``millplan raster``.
+
+    Drops ``tool`` ('ball:D', 'flat:D', 'bull:D:R') onto ``part`` (a Mesh or
+    an STL file) along parallel lines ``stepover`` mm apart (at ``angle``
+    degrees from X, default 0), every ``step`` mm along them, zigzag unless
+    ``oneway``; ``boundary`` mm inside the part's XY box (negative:
+    outside); points added where the path would leave the surface by more
+    than ``tol`` mm (default 0.002; 0: none); rapids ``clearance`` mm above
+    the part (default 5); ``feed`` mm/min (default 1500), ``spindle`` 1/min
+    (default 6000).
+
+    The program is written in ``dialect`` (default the machine's, else
+    apt), read back and checked (read-back, machine limits, gouges) as the
+    command does; a failed check raises MillplanError unless ``force``.
+    Returns ``(program, report)``, the report as ``millplan raster --json``
+    prints it without the output's name. Write the program with
+    :func:`write_program`. Runs with the GIL released.
+    """
+    prog, report = _millplan.raster(
+        part, tool, stepover, step, angle, oneway, boundary, tol, clearance,
+        feed, spindle, machine, dialect, force,
+    )
+    report.pop("output", None)
+    return prog, report
+
+
+def reorder(
+    program: Union[Program, StrPath],
+    part: Union[Mesh, StrPath],
+    method: Optional[str] = None,
+    *,
+    start: Optional[str] = None,
+    start_index: Optional[int] = None,
+    seed: Optional[int] = None,
+    n_min: Optional[int] = None,
+    tie: Optional[float] = None,
+    max_step: Optional[float] = None,
+    vc: Optional[float] = None,
+    fz: Optional[float] = None,
+    flutes: Optional[int] = None,
+    ap: Optional[float] = None,
+    speed: bool = True,
+    machine: Optional[StrPath] = None,
+) -> "Tuple[Program, Dict[str, Any]]":
+    """Reorder finishing points so the working diameter changes least
+    between successive points, with safe links: ``millplan reorder``.
+
+    method: 'as-run' (default: the order that runs best, the original kept
+    when none is better), 'paper' or 'optimised'. start: 'lowest'
+    (default), 'highest' or 'random' (with ``seed``), or ``start_index``.
+    n_min, tie (mm), max_step (mm; 0: no limit) tune the search as the
+    command's options do. Unless ``speed=False`` the constant-cutting-speed
+    pass runs after it with vc (m/min), fz (mm), flutes and ap (mm)
+    (defaults 63, 0.125, 2, 0.3). ``part``: a Mesh or an STL file.
+
+    Returns ``(program, summary)``, the summary as ``millplan reorder
+    --json`` prints it (both orders' indicators, the verdict, the checks)
+    without the output's name. Runs with the GIL released.
+    """
+    prog, summary = _millplan.reorder(
+        program, part, method, start, start_index, seed, n_min, tie, max_step,
+        vc, fz, flutes, ap, speed, machine,
+    )
+    summary.pop("output", None)
+    return prog, summary

@@ -85,6 +85,31 @@ class Mesh:
         """Tool-tip height of cutter dropped at each (x, y), NaN: no contact."""
     def __len__(self) -> int: ...
 
+class ToolLibrary:
+    """A tool library file (``millplan tool``'s), read when opened; a
+    missing file raises MillplanError (it is never taken for an empty one)."""
+
+    def __init__(self, path: StrPath) -> None: ...
+    @property
+    def tools(self) -> List[Dict[str, Any]]:
+        """Every tool, as ``millplan tool show --json`` lists them."""
+    @property
+    def numbers(self) -> List[int]:
+        """The tool numbers, ascending."""
+    @property
+    def path(self) -> str:
+        """The library's file."""
+    def cutter(self, number: int) -> Optional[Dict[str, Any]]:
+        """The cutter the library gives the tool: d, r (corner radius),
+        flute_length (mm); None for a kind millplan cannot shape."""
+    def decision(self, number: int) -> Optional[str]:
+        """The last decision logged about the tool (worn, broken, ...)."""
+    def log(self, number: Optional[int] = None) -> List[Dict[str, Any]]:
+        """The decision log, as ``millplan tool log --json``."""
+    def __getitem__(self, number: int) -> Dict[str, Any]: ...
+    def __contains__(self, number: int) -> bool: ...
+    def __len__(self) -> int: ...
+
 def inspect(
     path: StrPath, machine: Optional[StrPath] = None, units: Optional[str] = None
 ) -> Dict[str, Any]: ...
@@ -119,5 +144,114 @@ def optimise(
     limits: Optional[Dict[str, float]],
     dialect: Optional[str],
     output: Optional[StrPath],
+    library: Union[ToolLibrary, StrPath, None] = None,
 ) -> Tuple[Program, str, Dict[str, Any], bool]: ...
 def dialect_extension(dialect: str) -> str: ...
+SIDES: List[str]
+def speed(
+    program: Union[Program, StrPath],
+    part: Union[Mesh, StrPath],
+    vc: float,
+    fz: float,
+    ap: float,
+    flutes: Optional[int] = None,
+    machine: Optional[StrPath] = None,
+    ball_d: Optional[float] = None,
+    keep_feed: bool = False,
+    s_threshold: Optional[float] = None,
+    convention: Optional[str] = None,
+    normals: Optional[str] = None,
+) -> Tuple[Program, Dict[str, npt.NDArray[Any]], Dict[str, Any]]:
+    """The speed pass: new program, per-point columns (uncut_side as codes
+    into SIDES), the report of ``millplan speed --json``."""
+def gouge(
+    program: Union[Program, StrPath],
+    part: Union[Mesh, StrPath],
+    tol: Optional[float] = None,
+    step: Optional[float] = None,
+    rapids: bool = False,
+    tools: Optional[str] = None,
+) -> Dict[str, Any]:
+    """The gouge check's report, as ``millplan gouge --json``."""
+def simulate(
+    program: Union[Program, StrPath],
+    stock: str,
+    part: Union[Mesh, StrPath, None] = None,
+    machine: Optional[StrPath] = None,
+    tools: Optional[str] = None,
+    holder: Optional[str] = None,
+    flute_length: Optional[float] = None,
+    shank: Optional[float] = None,
+    resolution: Optional[float] = None,
+    tol: Optional[float] = None,
+    mesh_resolution: Optional[float] = None,
+    output: Optional[StrPath] = None,
+) -> Tuple[Dict[str, npt.NDArray[Any]], Dict[str, Any]]:
+    """Per-move columns and the report of ``millplan simulate --json``."""
+def force(
+    program: Union[Program, StrPath],
+    stock: str,
+    material: str,
+    part: Union[Mesh, StrPath, None] = None,
+    machine: Optional[StrPath] = None,
+    tools: Optional[str] = None,
+    flutes: Optional[int] = None,
+    resolution: Optional[float] = None,
+) -> Tuple[Dict[str, npt.NDArray[Any]], Dict[str, Any]]:
+    """Per-move load columns and the counts and maxima of ``millplan force --json``."""
+def cut(
+    tool: str,
+    fz: float,
+    ap: float,
+    n: float,
+    ae: Optional[float] = None,
+    material: Optional[str] = None,
+    coeffs: Optional[str] = None,
+    flutes: Optional[int] = None,
+    helix: Optional[float] = None,
+    lead: Optional[float] = None,
+    tilt: Optional[float] = None,
+    variant: Optional[str] = None,
+    stickout: Optional[float] = None,
+    flute_length: Optional[float] = None,
+    modulus: Optional[float] = None,
+    dz: Optional[float] = None,
+    dphi: Optional[float] = None,
+    fixed_grid: bool = False,
+) -> Tuple[Dict[str, Any], Dict[str, npt.NDArray[np.float64]]]:
+    """The figures of ``millplan cut --json`` and the curves over a revolution."""
+def raster(
+    part: Union[Mesh, StrPath],
+    tool: str,
+    stepover: float,
+    step: float,
+    angle: Optional[float] = None,
+    oneway: bool = False,
+    boundary: Optional[float] = None,
+    tol: Optional[float] = None,
+    clearance: Optional[float] = None,
+    feed: Optional[float] = None,
+    spindle: Optional[float] = None,
+    machine: Optional[StrPath] = None,
+    dialect: Optional[str] = None,
+    force: bool = False,
+) -> Tuple[Program, Dict[str, Any]]:
+    """The raster program and the report of ``millplan raster --json``."""
+def reorder(
+    program: Union[Program, StrPath],
+    part: Union[Mesh, StrPath],
+    method: Optional[str] = None,
+    start: Optional[str] = None,
+    start_index: Optional[int] = None,
+    seed: Optional[int] = None,
+    n_min: Optional[int] = None,
+    tie: Optional[float] = None,
+    max_step: Optional[float] = None,
+    vc: Optional[float] = None,
+    fz: Optional[float] = None,
+    flutes: Optional[int] = None,
+    ap: Optional[float] = None,
+    speed: bool = True,
+    machine: Optional[StrPath] = None,
+) -> Tuple[Program, Dict[str, Any]]:
+    """The reordered program and the summary of ``millplan reorder --json``."""

@@ -42,6 +42,7 @@ pub fn script(shell: ShellArg) -> Vec<u8> {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    crate::io::reader_may_stop_early();
     let s = script(a.shell);
     if a.json {
         let json = serde_json::json!({

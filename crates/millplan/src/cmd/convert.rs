@@ -2,16 +2,16 @@
 
 use crate::cmd::{print_diagnostics, read_options, target_for, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_program, Outputs};
+use crate::io::Outputs;
 use millplan_nc::equiv::Tolerance;
 use millplan_nc::readback::read_back;
-use millplan_nc::write::Target;
+use millplan_nc::write::{self, Target};
 use millplan_nc::LengthUnit;
 use millplan_plan::orient::ResolveOrientation;
 use millplan_plan::pipeline::{self, Context};
 use std::path::PathBuf;
 
-/// Convert an NC program (APT/CL or G-code) to another dialect.
+/// Convert an NC program (APT/CL, G-code or KUKA KRL) to another dialect.
 ///
 /// Every block of the output means what its source block meant: moves, arcs,
 /// feeds and feed modes (G93/G94/G95), spindle, coolant, tool-length and
@@ -20,7 +20,12 @@ use std::path::PathBuf;
 /// verbatim are copied into the same dialect, and a word another dialect
 /// cannot express stops the conversion at its line (--lossy: a comment and a
 /// warning instead, exit 3 when the output commands less than the source). Arcs outside the XY/ZX/YZ planes and canned cycles are
-/// written as straight lines. The output is written to a temporary file and
+/// written as straight lines. A KRL program (.src) is read with the
+/// sub-programs its main calls from beside it (a missing one named with its
+/// calling line); KRL to KRL keeps the poses, external axes and speeds as
+/// read, in one file; into another dialect the orientation A, B, C becomes
+/// a tool axis and an external axis (E1..E6) stops the conversion at its
+/// line (--lossy: dropped with a warning). The output is written to a temporary file and
 /// renamed, so a failed run leaves nothing behind.
 #[derive(clap::Args)]
 pub struct Args {
@@ -30,7 +35,8 @@ pub struct Args {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Target dialect; default: from the output's extension (.nc Fanuc, .mpf
-    /// Sinumerik, .h Heidenhain, .ngc LinuxCNC, .apt/.cls APT), else the input's own.
+    /// Sinumerik, .h Heidenhain, .ngc LinuxCNC, .apt/.cls APT, .src KRL),
+    /// else the input's own.
     #[arg(long, value_enum)]
     pub to: Option<TargetArg>,
     /// Unit of the source when the file does not say.
@@ -95,6 +101,16 @@ fn check_output(p: &millplan_nc::Program, out: &[u8], target: Target, a: &Args) 
     }
 }
 
+/// The reader's warnings (an `S0` before a cut, words not understood), each
+/// at its place, for `--json`.
+fn json_warnings(input: &std::path::Path, d: &[millplan_nc::Diagnostic]) -> Vec<String> {
+    let file = input.display().to_string();
+    d.iter()
+        .filter(|d| d.severity == millplan_nc::diag::Severity::Warning)
+        .map(|d| d.located(&file))
+        .collect()
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     if a.json && a.output.as_os_str() == "-" {
         return Err(CliError::input(
@@ -106,8 +122,9 @@ pub fn run(a: Args) -> CliResult<i32> {
         .flatten()
         .collect();
     let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
-    let parsed = read_program(&a.input, read_options(a.units, a.feed)?)?;
+    let (parsed, krl) = crate::io::read_source(&a.input, read_options(a.units, a.feed)?)?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet);
+    let warnings = json_warnings(&a.input, &parsed.diagnostics);
     let mut p = parsed.program;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let to = a.to.map(Into::into).or(machine.target());
@@ -125,7 +142,14 @@ pub fn run(a: Args) -> CliResult<i32> {
     o.unit = a.out_units.map(LengthUnit::from);
     o.line_numbers = a.line_numbers;
     o.lossy = a.lossy;
-    let out = write_program(&p, o, &a.input, a.quiet)?;
+    let out = match krl
+        .as_ref()
+        .map(|k| write::krl::from_krl(k, target, a.lossy))
+    {
+        Some(Ok(Some(text))) => text.into_bytes(),
+        Some(Err(e)) => return Err(crate::io::krl_error(&a.input, e)),
+        _ => write_program(&p, o, &a.input, a.quiet)?,
+    };
     let equivalent = check_output(&p, &out, target, &a)?;
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
@@ -138,15 +162,12 @@ pub fn run(a: Args) -> CliResult<i32> {
                 "target": target.name(),
                 "moves": p.move_count(),
                 "equivalent": equivalent,
+                "warnings": warnings,
             })
         );
     } else {
-        eprintln!(
-            "wrote {} ({} moves, {})",
-            a.output.display(),
-            p.move_count(),
-            target.name()
-        );
+        let (path, moves) = (a.output.display(), p.move_count());
+        eprintln!("wrote {path} ({moves} moves, {})", target.name());
     }
     Ok(if equivalent { EXIT_OK } else { EXIT_FINDINGS })
 }

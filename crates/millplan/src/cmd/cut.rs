@@ -6,11 +6,12 @@ use millplan_driver::cut::{CutRequest, Variant};
 use millplan_driver::Materials;
 use std::path::{Path, PathBuf};
 
-/// Cutting forces of one engagement (spec process-models.md §1–§2): a ball,
+/// Cutting forces of one engagement (the mechanistic edge-force model, see
+/// docs/forces.md): a ball,
 /// flat or bull end mill in a planar raster pass of depth --ap, the earlier
 /// pass --ae away (or a slot), with lead and tilt for ball-end mills.
 ///
-/// Lead and tilt (process-models §0, the convention of `millplan orient`):
+/// Lead and tilt (the convention of `millplan orient`, docs/leadtilt.md):
 /// in the feed frame (f the feed, n the surface normal, c = n × f, the side
 /// the earlier passes are not on) lead turns the tool about c and tilt about
 /// f, both right-handed, composed as R = Rx(tilt)·Ry(lead): the axis is
@@ -57,7 +58,7 @@ pub struct Args {
     #[arg(long, default_value_t = millplan_driver::command_defaults::cut::TILT_DEG, allow_hyphen_values = true)]
     pub tilt: f64,
     /// Order of the two turns, as in `orient`: tilt-then-lead
-    /// (process-models §0, R = Rx(tilt)·Ry(lead), axis (sin L, −cos L·sin T,
+    /// (R = Rx(tilt)·Ry(lead), axis (sin L, −cos L·sin T,
     /// cos L·cos T)) or lead-then-tilt (R = Ry(lead)·Rx(tilt), axis
     /// (sin L·cos T, −sin T, cos L·cos T)); same signs either way.
     #[arg(long, value_enum, default_value = "tilt-then-lead")]

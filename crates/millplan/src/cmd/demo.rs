@@ -258,6 +258,9 @@ fn print_summary(
         outln!("  wrote {} ({} bytes)", path.display(), bytes.len());
     }
     outln!(
+        "  part.stl is an open surface by design (the part's top, no sides or bottom): the other commands note its open border as note[open-mesh]; expected here"
+    );
+    outln!(
         "spindle control: D_w {:.2}…{:.2} mm, n {:.0}…{:.0} 1/min; vc {:.1}…{:.1} m/min with control vs {:.1}…{:.1} at a constant {:.0} 1/min",
         r.d_w.min, r.d_w.max, r.spindle.min, r.spindle.max, r.vc_controlled.min, r.vc_controlled.max, r.vc_constant.min, r.vc_constant.max, r.constant_spindle
     );

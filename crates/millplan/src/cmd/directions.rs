@@ -24,7 +24,7 @@ pub enum RankBy {
 /// Evaluate several finishing paths of the same surface (for example rasters in
 /// five feed directions) under spindle control and rank them by the dynamic-load
 /// indicators: the milling direction whose spindle speed changes least is the
-/// one thesis 3 recommends.
+/// one to choose (docs/usage.md says where the rule comes from).
 ///
 /// Give the candidate paths, or let millplan make drop-cutter rasters with
 /// --angles (with --tool, --stepover and --step).

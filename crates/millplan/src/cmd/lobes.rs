@@ -5,8 +5,8 @@ use crate::io::Outputs;
 use millplan_driver::lobes::LobesRequest;
 use std::path::PathBuf;
 
-/// Stability lobes (zero-order approximation, Altintas & Budak; spec
-/// process-models.md §3): the axial depth limit a_lim over spindle speed for
+/// Stability lobes (the zero-order approximation of Altintas and Budak, see
+/// docs/forces.md): the axial depth limit a_lim over spindle speed for
 /// a tool with one mode per direction.
 ///
 /// The mode of --fn/--k/--zeta is taken for x (feed) and, unless --fn-y or

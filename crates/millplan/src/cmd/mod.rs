@@ -106,6 +106,8 @@ pub enum TargetArg {
     Heidenhain,
     Linuxcnc,
     Apt,
+    /// KUKA KRL, a robot program (.src): one LIN per point after a PTP approach.
+    Krl,
 }
 
 impl From<TargetArg> for Target {
@@ -116,6 +118,7 @@ impl From<TargetArg> for Target {
             TargetArg::Heidenhain => Target::Heidenhain,
             TargetArg::Linuxcnc => Target::LinuxCnc,
             TargetArg::Apt => Target::Apt,
+            TargetArg::Krl => Target::Krl,
         }
     }
 }

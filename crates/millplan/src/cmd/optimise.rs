@@ -7,8 +7,8 @@ use crate::io::{read_mesh, read_program, read_surface, Outputs};
 use millplan_driver::passes::{self, ORDER};
 use millplan_driver::report::{self, InputNames, Plotted};
 use millplan_driver::tools::{self, Library};
+use millplan_driver::StockSpec;
 use millplan_driver::{Inputs, Job, Options, Outcome, UserLimits, Verdict, Written};
-use millplan_sim::stock::spec::StockSpec;
 use std::path::{Path, PathBuf};
 
 /// Take a CAM program to a verified, better program for one machine, stock,
@@ -156,7 +156,7 @@ fn options(a: &Args) -> CliResult<Options> {
             .resolution
             .map(|v| arg("--resolution", v, Range::from(0.005, 100.0, "mm")))
             .transpose()?,
-        limits: user_limits()?,
+        limits: UserLimits::parse(&crate::limits::loads()).map_err(CliError::input)?,
         tol: a
             .tol
             .map(|v| arg("--tol", v, Range::from(0.0, 100.0, "mm")))
@@ -164,31 +164,6 @@ fn options(a: &Args) -> CliResult<Options> {
         memory: Some(crate::limits::get().memory),
         g93: a.g93,
     })
-}
-
-/// The load limits of `--limit`.
-fn user_limits() -> CliResult<UserLimits> {
-    let mut l = UserLimits::default();
-    for (name, value) in crate::limits::loads() {
-        let v: f64 = value
-            .parse()
-            .map_err(|_| CliError::input(format!("--limit {name}={value}: not a number")))?;
-        let v = Some(arg(
-            &format!("--limit {name}"),
-            v,
-            Range::positive(1e9, "(N, N·mm, W, MPa or mm)"),
-        )?);
-        match name.as_str() {
-            "fxy" => l.fxy = v,
-            "torque" => l.torque = v,
-            "power" => l.power = v,
-            "stress" => l.stress = v,
-            "fz_min" => l.fz_min = v,
-            "fz_max" => l.fz_max = v,
-            _ => l.deflection = v,
-        }
-    }
-    Ok(l)
 }
 
 /// The tool library of `--tools`, read whole (it must exist).
@@ -314,17 +289,11 @@ pub fn run(a: Args) -> CliResult<i32> {
         job.inputs.program.source,
     )
     .map_err(CliError::input)?;
-    let outcome = job
-        .run(&order)
-        .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
-    say_skipped(&a, &outcome);
     let wo = millplan_nc::write::WriteOptions {
         limits: crate::limits::get(),
         ..job.inputs.machine.write_options(target)
     };
-    let w = job
-        .finish(&outcome, wo)
-        .map_err(|e| CliError::input(format!("{}:{e}", path.display())))?;
+    let (outcome, w) = passes_and_checks(&a, &job, &order, wo, &path)?;
     print_diagnostics(&path, &w.warnings, a.quiet || a.json);
     let refused = w.summary.verdict == Verdict::Refused;
     if !refused || a.force {
@@ -336,6 +305,28 @@ pub fn run(a: Args) -> CliResult<i32> {
     outputs.commit()?;
     print_summary(&a, &w, &path, &output, refused && !a.force);
     Ok(if refused { EXIT_FINDINGS } else { EXIT_OK })
+}
+
+/// The passes, then the written program's checks, under one bar on a
+/// terminal (none with -q or --json).
+fn passes_and_checks(
+    a: &Args,
+    job: &Job,
+    order: &[passes::PassName],
+    wo: millplan_nc::write::WriteOptions,
+    path: &Path,
+) -> CliResult<(Outcome, Written)> {
+    let bar = crate::progress::Phases::new(!(a.quiet || a.json));
+    let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
+    let outcome = job.run_with(order, Some(&hook));
+    let outcome = outcome.map_err(|e| CliError::input(format!("{}: {e}", path.display())));
+    let outcome = outcome.inspect_err(|_| bar.finish())?;
+    bar.report("optimise: checks of the written program", 0, 1);
+    let w = job.finish(&outcome, wo);
+    bar.finish();
+    say_skipped(a, &outcome);
+    let w = w.map_err(|e| CliError::input(format!("{}:{e}", path.display())))?;
+    Ok((outcome, w))
 }
 
 fn say_skipped(a: &Args, o: &Outcome) {
@@ -390,7 +381,7 @@ fn print_summary(a: &Args, w: &Written, path: &Path, output: &Path, withheld: bo
         };
         outln!("  {:<8} {state}  {}", p.name, p.reason);
     }
-    outln!("{}", report::verdict_line(s));
+    outln!("{}", report::verdict_text(s));
     for c in &s.checks {
         let skipped = c
             .skipped

@@ -10,7 +10,7 @@ use millplan_driver::StockSpec;
 use millplan_plan::leadtilt::{choose_with, Objective, Stage, StockInput};
 use std::path::{Path, PathBuf};
 
-/// Choose lead and tilt per ball-end operation (spec process-models §2.4):
+/// Choose lead and tilt per ball-end operation (docs/leadtilt.md):
 /// a 5° grid over the ranges, then steepest descent from its best node, on
 /// F_xy,max of the force model at --fz (--objective fxy) or on the machining
 /// time estimated with acceleration, the feed scaled to keep the original
@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 /// Lead and tilt are taken in each point's frame of feed f, cross-feed
 /// c = n × f and the part's normal n (from the STL at the contact), the
 /// ball centre kept where the program has it. The convention is `cut`'s
-/// (process-models §0): lead a right-handed turn about c, tilt one about f,
+/// (docs/leadtilt.md): lead a right-handed turn about c, tilt one about f,
 /// R = Rx(tilt)·Ry(lead) by default; a positive lead leans the shank toward
 /// the feed (the tip trails), a positive tilt toward −c (right of the feed,
 /// seen from the shank). `millplan cut` with the lead and tilt reported
@@ -79,11 +79,10 @@ pub struct Args {
     /// scaled to the original force level).
     #[arg(long, value_enum, default_value = "fxy")]
     pub objective: ObjectiveArg,
-    /// Order of the two turns: tilt-then-lead (process-models §0,
-    /// R = Rx(tilt)·Ry(lead), axis (sin L, −cos L·sin T, cos L·cos T);
-    /// variant 2 of kinematics-access-tools §2.2) or lead-then-tilt
-    /// (R = Ry(lead)·Rx(tilt), axis (sin L·cos T, −sin T, cos L·cos T);
-    /// variant 1); same signs either way, and `cut --variant` takes the
+    /// Order of the two turns: tilt-then-lead (R = Rx(tilt)·Ry(lead),
+    /// axis (sin L, −cos L·sin T, cos L·cos T)) or lead-then-tilt
+    /// (R = Ry(lead)·Rx(tilt), axis (sin L·cos T, −sin T, cos L·cos T));
+    /// same signs either way, and `cut --variant` takes the
     /// same.
     #[arg(long, value_enum, default_value = "tilt-then-lead")]
     pub variant: VariantArg,

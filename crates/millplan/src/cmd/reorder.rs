@@ -35,7 +35,8 @@ pub enum StartArg {
 }
 
 /// Reorder the points of 3-axis ball-end finishing operations so the spindle,
-/// driven for a constant cutting speed, runs better (paper 000, thesis 5).
+/// driven for a constant cutting speed, runs better (docs/usage.md says
+/// where the method comes from).
 ///
 /// The default judges an order by its machining as it will run: the speeds
 /// after the machine's range and acceleration, the share of points where they
@@ -44,7 +45,8 @@ pub enum StartArg {
 /// look-ahead, as `inspect` prints it). It writes the best candidate (start corners, one-way, planned pass
 /// directions and splits) that is worse than the original on none of these
 /// (time within 3 %), or, when none is better, the original order (verdict
-/// kept). --method paper runs the thesis's search over single points.
+/// kept). --method paper runs the published greedy search over single
+/// points.
 ///
 /// Every cutting point is kept; links between points that are not neighbours
 /// are direct only when the drop-cutter check proves them gouge-free, otherwise
@@ -69,7 +71,8 @@ pub struct Args {
     #[arg(long, value_enum)]
     pub stl_units: Option<UnitArg>,
     /// How the order is searched: as-run (default) measures candidate orders as the
-    /// machine will run them; paper is the thesis's greedy search; optimised keeps
+    /// machine will run them; paper is the published greedy search over single
+    /// points; optimised keeps
     /// passes whole.
     #[arg(long, value_enum, default_value = "as-run")]
     pub method: MethodArg,

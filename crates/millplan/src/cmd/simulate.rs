@@ -4,7 +4,7 @@ use crate::cmd::{print_diagnostics, read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_mesh, read_program, read_surface, Outputs};
 use millplan_driver::simulate::{self as lib, SimRequest};
-use millplan_driver::{SimReport, Stock, StockError, StockSpec, Strokes};
+use millplan_driver::{SimReport, Stock, StockSpec, Strokes};
 use millplan_geom::TriMesh;
 use std::path::{Path, PathBuf};
 
@@ -91,6 +91,10 @@ pub struct Args {
     /// No progress bar or warnings.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Print the wall time of each phase on standard error (they add up to
+    /// the whole run).
+    #[arg(long)]
+    pub timings: bool,
 }
 
 fn request(a: &Args) -> SimRequest {
@@ -106,32 +110,29 @@ fn request(a: &Args) -> SimRequest {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let req = request(&a);
+    let mut clock = crate::timings::Clock::start();
+    let code = run_timed(&a, &mut clock)?;
+    clock.lap("summary printed");
+    clock.print(a.timings);
+    Ok(code)
+}
+
+fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
+    let req = request(a);
     // Checked before any work, not after the simulation.
     lib::check(&req).map_err(CliError::input)?;
     let spec = StockSpec::parse(&a.stock).map_err(|e| CliError::input(format!("--stock {e}")))?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let mut inputs: Vec<&Path> = vec![&a.path];
-    inputs.extend(a.stl.as_deref());
-    inputs.extend(a.machine.as_deref());
-    if let StockSpec::Stl(p) = &spec {
-        inputs.push(p);
-    }
-    let mut outputs = Outputs::plan(
-        &inputs,
-        &[
-            ("-o", a.output.as_deref()),
-            ("--table", a.table.as_deref()),
-            ("--report", a.report.as_deref()),
-        ],
-        false,
-    )?;
+    let mut outputs = plan_outputs(a, &spec)?;
+    clock.lap("arguments, machine file and outputs checked");
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    clock.lap("program read");
     let path = a.path.display().to_string();
     let strokes = lib::program_strokes(&req, &path, &parsed.program, machine.rapid)
         .map_err(CliError::input)?;
-    note_default_flute(&a, &req, &parsed.program)?;
+    note_default_flute(a, &req, &parsed.program)?;
+    clock.lap("strokes (tool bodies, moves in chords)");
     let part = match &a.stl {
         Some(p) => Some(read_surface(p, a.stl_units)?.0),
         None => None,
@@ -144,10 +145,14 @@ pub fn run(a: Args) -> CliResult<i32> {
         part.as_ref(),
         a.stl_units,
     )?;
-    let rep = simulate(&a, &mut stock, &strokes);
+    clock.lap("part read and stock built");
+    let rep = simulate(a, &mut stock, &strokes);
+    clock.lap("material removal");
     let rem = part.as_ref().map(|p| lib::remaining_on(&stock, p, a.tol));
-    write_outputs(&a, &mut outputs, &stock, &rep, rem.as_ref(), part.as_ref())?;
+    clock.lap("material left on the part");
+    write_outputs(a, &mut outputs, &stock, &rep, rem.as_ref(), part.as_ref())?;
     outputs.commit()?;
+    clock.lap("outputs written, synced and renamed into place");
     let report = lib::Report::new(&rep, &a.stock, rem.as_ref());
     if a.json {
         crate::cmd::print_json(serde_json::to_value(&report).unwrap_or_default());
@@ -160,6 +165,25 @@ pub fn run(a: Args) -> CliResult<i32> {
         } else {
             EXIT_FINDINGS
         },
+    )
+}
+
+/// The outputs of the run, checked against every file it reads.
+fn plan_outputs(a: &Args, spec: &StockSpec) -> CliResult<Outputs> {
+    let mut inputs: Vec<&Path> = vec![&a.path];
+    inputs.extend(a.stl.as_deref());
+    inputs.extend(a.machine.as_deref());
+    if let StockSpec::Stl(p) = spec {
+        inputs.push(p);
+    }
+    Outputs::plan(
+        &inputs,
+        &[
+            ("-o", a.output.as_deref()),
+            ("--table", a.table.as_deref()),
+            ("--report", a.report.as_deref()),
+        ],
+        false,
     )
 }
 
@@ -178,7 +202,7 @@ fn simulate(a: &Args, stock: &mut Stock, strokes: &Strokes) -> SimReport {
 }
 
 /// The stock before the program at `program` runs, as `spec` names it, at
-/// cell size `res` (`StockSpec::build`; an `stl:` blank read here).
+/// cell size `res` (`StockSpec::build` in the driver; an `stl:` blank read here).
 pub fn initial_stock(
     program: &Path,
     res: f64,
@@ -196,11 +220,8 @@ pub fn initial_stock(
         _ => None,
     };
     let memory = crate::limits::get().memory;
-    spec.build(res, s, part, blank.as_ref(), memory)
-        .map_err(|e| match e {
-            StockError::NoCut => CliError::input(format!("{}: {e}", program.display())),
-            e => CliError::input(e.to_string()),
-        })
+    let name = program.display().to_string();
+    lib::build_stock(&name, res, spec, s, (part, blank.as_ref()), memory).map_err(CliError::input)
 }
 
 fn write_outputs(

@@ -25,7 +25,7 @@ pub enum NormalArg {
 }
 
 /// Set the spindle speed per block so the cutting speed stays constant
-/// (paper 000, thesis 3).
+/// from the working diameter of the ball at each point (docs/usage.md).
 ///
 /// For every cutting point of every ball-end operation millplan finds where the
 /// ball touches the part (STL), the surface inclination, the feed direction and

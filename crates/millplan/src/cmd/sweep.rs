@@ -7,12 +7,12 @@ use millplan_report::sweep::{page, sweep};
 use std::path::PathBuf;
 
 /// Tabulate and plot the working diameter over tool diameter, depth of cut,
-/// stepover, feed direction, inclination and up/down milling — the study design of
-/// thesis 1 (D 6-8-10 mm, ap 0.1–1.0 mm, ae 1 mm, A_f 0–180°).
+/// stepover, feed direction, inclination and up/down milling — the published
+/// study design (D 6-8-10 mm, ap 0.1–1.0 mm, ae 1 mm, A_f 0–180°).
 ///
 /// Writes OUT/wd_sweep.csv (one row per case) and OUT/wd_sweep.html with one SVG
 /// plot per tool diameter and milling side; with --fit also reports how well the
-/// regression surrogate (thesis 2) matches the geometric model.
+/// regression surrogate (a fitted formula for the working diameter) matches the geometric model.
 #[derive(clap::Args)]
 pub struct Args {
     /// Output folder.

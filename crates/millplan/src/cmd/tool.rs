@@ -3,11 +3,11 @@
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::Outputs;
 use clap::{Subcommand, ValueEnum};
-use millplan_tooldb::control::{record, Kind, Measurement, Settings};
-use millplan_tooldb::cycles::{self, CycleOptions, Measure};
+use millplan_driver::tool::{self as t, describe, ImportedJson, InsertJson, PzJson, WrittenJson};
+use millplan_tooldb::control::{record, Settings};
+use millplan_tooldb::cycles;
 use millplan_tooldb::db::{DbError, ToolDb, ToolEdit, ToolRecord};
 use millplan_tooldb::thread::pz;
-use serde_json::json;
 use std::path::{Path, PathBuf};
 
 /// The tool library and thread-mill control, for the tool room.
@@ -241,19 +241,13 @@ pub struct CycleArgs {
 /// The library's default location: $MILLPLAN_DB, else under $XDG_DATA_HOME or
 /// ~/.local/share. An empty $MILLPLAN_DB is an error, not a temporary library.
 pub fn default_db() -> CliResult<PathBuf> {
-    if let Some(p) = std::env::var_os("MILLPLAN_DB") {
-        if p.is_empty() {
-            return Err(CliError::input(
-                "MILLPLAN_DB is set but empty: name the tool library file, or unset it",
-            ));
-        }
-        return Ok(PathBuf::from(p));
-    }
-    let base = std::env::var_os("XDG_DATA_HOME")
-        .map(PathBuf::from)
-        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/share")))
-        .unwrap_or_else(|| PathBuf::from("."));
-    Ok(base.join("millplan").join("tools.db"))
+    use std::env::var_os;
+    t::default_db(
+        var_os("MILLPLAN_DB"),
+        var_os("XDG_DATA_HOME"),
+        var_os("HOME"),
+    )
+    .map_err(CliError::input)
 }
 
 /// [`default_db`] with its folder created (a `--db` folder never is).
@@ -275,11 +269,6 @@ fn db_err(path: &Path, e: DbError) -> CliError {
     } else {
         CliError::internal(message)
     }
-}
-
-fn insert_pz(t: &ToolRecord) -> Option<f64> {
-    let g = |k: &str| t.iso.get(k).and_then(|v| v.parse::<f64>().ok());
-    pz(g("INSL")?, g("TP")?).ok()
 }
 
 fn to_json<T: serde::Serialize>(v: &T) -> CliResult<serde_json::Value> {
@@ -311,25 +300,6 @@ fn write_output(lib: &Lib, path: &Path, text: &str, j: serde_json::Value) -> Cli
     lib.print(j, format!("wrote {}", path.display()))
 }
 
-fn describe(t: &ToolRecord) -> String {
-    format!(
-        "T{:<5} {:<28} {:<12} L {:>9.4} R {:>8.4} DL {:+.4} DR {:+.4} tol L {:.3}/{:.3} R {:.3}/{:.3}{}{}",
-        t.number,
-        t.name,
-        t.kind,
-        t.l,
-        t.r,
-        t.dl,
-        t.dr,
-        t.ltol,
-        t.lbreak,
-        t.rtol,
-        t.rbreak,
-        t.sister.map(|s| format!(" sister T{s}")).unwrap_or_default(),
-        if t.locked { "  LOCKED" } else { "" }
-    )
-}
-
 pub fn run(a: Args) -> CliResult<i32> {
     // PZ needs no library.
     if let ToolCommand::Pz { insl, tp } = a.command {
@@ -356,8 +326,15 @@ pub fn run(a: Args) -> CliResult<i32> {
             let pz = db
                 .add_insert(number, &designation, insl, tp)
                 .map_err(|e| lib.err(e))?;
+            let j = InsertJson {
+                tool: number,
+                designation: &designation,
+                insl,
+                tp,
+                pz,
+            };
             lib.print(
-                json!({ "tool": number, "designation": designation, "insl": insl, "tp": tp, "pz": pz }),
+                to_json(&j)?,
                 format!("T{number}: insert {designation}, PZ {pz:.3} mm"),
             )
         }
@@ -383,7 +360,7 @@ fn print_pz(json_out: bool, insl: f64, tp: f64) -> CliResult<i32> {
     let v = pz(insl, tp).map_err(|e| CliError::input(e.to_string()))?;
     print(
         json_out,
-        json!({ "pz": v, "insl": insl, "tp": tp }),
+        to_json(&PzJson { pz: v, insl, tp })?,
         format!("PZ = {v:.3} mm (INSL {insl}, TP {tp})"),
     )?;
     Ok(EXIT_OK)
@@ -401,7 +378,10 @@ fn export(db: &ToolDb, lib: &Lib, format: ExportFormat, output: &Path) -> CliRes
         lib,
         output,
         &text,
-        json!({ "output": output.display().to_string() }),
+        to_json(&WrittenJson {
+            output: output.display().to_string(),
+            pz: None,
+        })?,
     )
 }
 
@@ -450,38 +430,24 @@ fn add(db: &mut ToolDb, lib: &Lib, x: AddArgs) -> CliResult<i32> {
 }
 
 fn measure(db: &mut ToolDb, lib: &Lib, x: MeasureArgs) -> CliResult<i32> {
-    use crate::cmd::{arg, Range};
-    arg("--dset", x.dset, Range::from(0.0, 10.0, "mm"))?;
-    if let Some(pz) = x.pz {
-        arg("--pz", pz, Range::from(0.0, 1000.0, "mm"))?;
-    }
-    let t = db.tool(x.number).map_err(|e| lib.err(e))?;
-    let m = Measurement {
-        tool: x.number,
-        kind: if x.first {
-            Kind::First
-        } else {
-            Kind::Inspection
-        },
+    let req = t::MeasureRequest {
+        number: x.number,
+        first: x.first,
         l: x.l,
         r: x.r,
-        per_tooth: x.teeth,
-        pz: x.pz.or_else(|| insert_pz(&t)),
+        teeth: x.teeth,
+        pz: x.pz,
+        dset: x.dset,
     };
+    t::check_measure(&req).map_err(CliError::input)?;
+    let tool = db.tool(x.number).map_err(|e| lib.err(e))?;
+    let m = t::measurement(req, &tool);
     let settings = Settings {
         dset: x.dset,
         pallet: x.pallet,
     };
     let o = record(db, &m, &settings).map_err(|e| lib.err(e))?;
-    let text = format!(
-        "{}: {}{}",
-        o.decision.as_str().to_uppercase(),
-        o.reason,
-        o.switch_to
-            .map(|n| format!("\nnext: use T{n}"))
-            .unwrap_or_default()
-    );
-    lib.print(to_json(&o)?, text)?;
+    lib.print(to_json(&o)?, t::outcome_text(&o))?;
     Ok(if o.decision.is_problem() {
         EXIT_FINDINGS
     } else {
@@ -494,29 +460,13 @@ fn show(db: &ToolDb, lib: &Lib, number: Option<u32>) -> CliResult<i32> {
         Some(n) => vec![db.tool(n).map_err(|e| lib.err(e))?],
         None => db.tools().map_err(|e| lib.err(e))?,
     };
-    let text = if tools.is_empty() {
-        format!("{}: no tools yet", lib.path.display())
-    } else {
-        tools.iter().map(describe).collect::<Vec<_>>().join("\n")
-    };
+    let text = t::tools_text(&tools, &lib.path.display().to_string());
     lib.print(to_json(&tools)?, text)
 }
 
 fn log(db: &ToolDb, lib: &Lib, number: Option<u32>) -> CliResult<i32> {
     let ev = db.events(number).map_err(|e| lib.err(e))?;
-    let text = ev
-        .iter()
-        .map(|e| {
-            format!(
-                "{} T{} {}: {}",
-                e.time,
-                e.tool.map(|t| t.to_string()).unwrap_or("-".into()),
-                e.decision,
-                e.reason
-            )
-        })
-        .collect::<Vec<_>>()
-        .join("\n");
+    let text = t::events_text(&ev);
     lib.print(to_json(&ev)?, text)
 }
 
@@ -534,41 +484,27 @@ fn import(db: &mut ToolDb, lib: &Lib, file: &Path) -> CliResult<i32> {
         e => lib.err(e),
     })?;
     lib.print(
-        json!({ "imported": n }),
+        to_json(&ImportedJson { imported: n })?,
         format!("imported {n} tools into {}", lib.path.display()),
     )
 }
 
 fn cycle(db: &ToolDb, lib: &Lib, x: CycleArgs) -> CliResult<i32> {
-    crate::cmd::arg(
-        "--clearance",
-        x.clearance,
-        crate::cmd::Range::positive(10_000.0, "mm"),
-    )?;
-    let t = db.tool(x.number).map_err(|e| lib.err(e))?;
-    let o = CycleOptions {
-        kind: if x.first {
-            Kind::First
-        } else {
-            Kind::Inspection
-        },
-        measure: match x.measure {
-            MeasureArg::Length => Measure::Length,
-            MeasureArg::Radius => Measure::Radius,
-            MeasureArg::Both => Measure::Both,
-        },
-        clearance: x.clearance,
-        per_tooth: x.per_tooth,
-        pz: insert_pz(&t),
+    t::check_clearance(x.clearance).map_err(CliError::input)?;
+    let tool = db.tool(x.number).map_err(|e| lib.err(e))?;
+    let measured = match x.measure {
+        MeasureArg::Length => t::Measured::Length,
+        MeasureArg::Radius => t::Measured::Radius,
+        MeasureArg::Both => t::Measured::Both,
     };
+    let o = t::cycle_options(&tool, x.first, measured, x.clearance, x.per_tooth);
     let text = match x.control {
-        Control::Heidenhain => cycles::heidenhain(&t, &o),
-        Control::Fanuc => cycles::fanuc(&t, &o),
+        Control::Heidenhain => cycles::heidenhain(&tool, &o),
+        Control::Fanuc => cycles::fanuc(&tool, &o),
     };
-    write_output(
-        lib,
-        &x.output,
-        &text,
-        json!({ "output": x.output.display().to_string(), "pz": o.pz }),
-    )
+    let j = WrittenJson {
+        output: x.output.display().to_string(),
+        pz: Some(o.pz),
+    };
+    write_output(lib, &x.output, &text, to_json(&j)?)
 }

@@ -18,8 +18,8 @@ pub enum ModelArg {
     Regression,
 }
 
-/// Working diameter of a ball-end mill for one case (paper 000; spec
-/// working-diameter.md §1): the tool diameter at the highest engaged point of the
+/// Working diameter of a ball-end mill for one case (the boundary method of
+/// docs/usage.md): the tool diameter at the highest engaged point of the
 /// ball on a locally planar surface.
 ///
 /// Angles in degrees: --alpha is the surface inclination (0 = flat); --af the feed
