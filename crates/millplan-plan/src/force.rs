@@ -837,25 +837,34 @@ fn stroke_forces(
             lead,
             tilt: 0.0,
         };
-        // The grid refined until this sample's peaks converge; the
-        // converged evaluation is at the stroke's own feed per tooth. A sample whose loads, with their
+        // The grid refined until this sample's peaks converge. When
+        // scheduling, it is converged at the highest feed per tooth the
+        // schedule may give the move (the loads there are the largest the
+        // schedule can meet) and evaluated again at the move's own; else
+        // at the move's own. A sample whose loads there, with their
         // estimated error, stay below the move's largest so far cannot
-        // decide the move's loads or its feed: it is not refined further.
-        let (fxy, torque, power) = (m.fxy_max, m.torque_max, m.power_w);
-        let below = |e: &millplan_models::force::Evaluation| {
-            let s = e.summary();
-            let k = 1.0 + EARLY_MARGIN * (e.error_dz + e.error_dphi);
-            s.fxy_max * k < fxy && s.torque_max * k < torque && s.power_w * k < power
-        };
+        // decide the move's loads or its feed, nor one whose loads stay
+        // below every limit: it is not refined further.
+        let top = limits.as_ref().map_or(fz, |l| l.fz_max.max(fz));
+        let most = (m.fxy_max, m.torque_max, m.power_w);
+        let below =
+            |e: &millplan_models::force::Evaluation| settled(e, most, limits.as_ref(), &tf.holding);
         // Every sample from the coarsest grid, so that its loads do not
         // depend on the samples before it (nor on where the program was
         // split over the threads).
-        let conv = tf.model.converge_from(&cut, &eng, (0, 0), below);
+        let conv = tf
+            .model
+            .converge_from(&Cut { fz: top, ..cut }, &eng, (0, 0), below);
         evals += 1 + (conv.halvings.0 + conv.halvings.1) as usize;
         if conv.cells.is_empty() {
             continue;
         }
-        let sum = conv.evaluation.summary();
+        let sum = if top == fz {
+            conv.evaluation.summary()
+        } else {
+            evals += 1;
+            conv.evaluate_at(&cut).summary()
+        };
         m.merge(
             &sum,
             &Loads::new(&sum, &tf.holding),
@@ -872,6 +881,23 @@ fn stroke_forces(
 /// How many times its estimated error a sample's loads must stay below the
 /// move's largest so far for its grid not to be refined further.
 pub const EARLY_MARGIN: f64 = 3.0;
+
+/// Whether a load sample's evaluation `e` settles what its move needs
+/// without refining further: its loads with their estimated error (times
+/// [`EARLY_MARGIN`]) stay below the move's largest so far (`fxy`, `torque`,
+/// `power`), or, when scheduling (`limits`), below every limit.
+fn settled(
+    e: &millplan_models::force::Evaluation,
+    (fxy, torque, power): (f64, f64, f64),
+    limits: Option<&Limits>,
+    holding: &Cantilever,
+) -> bool {
+    let s = e.summary();
+    let k = 1.0 + EARLY_MARGIN * (e.error_dz + e.error_dphi);
+    let under_move = s.fxy_max * k < fxy && s.torque_max * k < torque && s.power_w * k < power;
+    under_move
+        || limits.is_some_and(|l| l.ratio(&Loads::new(&s, holding)).is_none_or(|(r, _)| r > k))
+}
 
 /// Lowers the move's allowed feed per tooth until this sample's limits are
 /// met there too (feeds only lower the loads, so every earlier sample stays

@@ -21,8 +21,12 @@
 //!
 //! [`ConvergedModel`] halves the slice height while its estimate is above
 //! the tolerance and evaluates again, on the slices around the engaged band
-//! of the coarser grid only (one coarse slice more on each side). Then it
-//! halves the rotation step around the peaks only: the angles between the
+//! of the coarsest grid only (one and a half of its slices more on each
+//! side) and at the angles around the peaks only: the samples of F_xy and
+//! |T| within a few error estimates of their peak and their neighbours; the
+//! coarser grid's samples stand elsewhere, where they lie further below the
+//! peaks than their error can lift them. Then it halves the rotation step
+//! around the peaks only: the angles between the
 //! samples of F_xy and |T| within a few error estimates of their peak (and
 //! between those and their neighbours) are evaluated, the coarser grid's
 //! samples stand elsewhere (interpolated between them), until the estimate
@@ -74,28 +78,45 @@ pub struct ConvergedModel {
     levels: Vec<OnceLock<Option<ForceModel>>>,
 }
 
-/// A converged evaluation with the grid's model and engaged cells, so that
-/// the same engagement can be evaluated again at other feeds per tooth.
+/// A converged evaluation with the grids it used, so that the same
+/// engagement can be evaluated again at other feeds per tooth
+/// ([`Converged::evaluate_at`]).
 #[derive(Clone, Debug)]
 pub struct Converged<'a> {
+    /// The finest grid used.
     pub model: &'a ForceModel,
+    /// The engaged cells on the coarsest grid, at every angle (the finer
+    /// grids look at the angles around the peaks only).
     pub cells: Engaged,
     pub evaluation: Evaluation,
     /// Halvings of the slice height and of the rotation step used.
     pub halvings: (u32, u32),
-    /// The grids evaluated, the last one evaluated at every angle first.
+    /// The grids evaluated, the coarsest (at every angle) first.
     steps: Vec<Step<'a>>,
 }
 
 /// One grid of a converged evaluation: its model, the cells it evaluated,
-/// and where the rotation step was refined around the peaks, the angle
-/// indices of the tooth period it evaluated (elsewhere the coarser grid's
-/// samples stand, [`merge_window`]).
+/// and where it was evaluated around the peaks only, which angle indices of
+/// the tooth period it evaluated (elsewhere the coarser grid's samples
+/// stand).
 #[derive(Clone, Debug)]
 struct Step<'a> {
     model: &'a ForceModel,
     cells: Engaged,
-    window: Option<Vec<bool>>,
+    window: Window,
+}
+
+/// Which angles of the tooth period a grid evaluated.
+#[derive(Clone, Debug)]
+enum Window {
+    /// Every angle.
+    All,
+    /// The slice length halved at these angles (same angles as the grid
+    /// before, [`merge_slices`]).
+    Slices(Vec<bool>),
+    /// The rotation step halved, evaluated at these angles of twice as many
+    /// ([`merge_window`]).
+    Angles(Vec<bool>),
 }
 
 impl Converged<'_> {
@@ -108,11 +129,12 @@ impl Converged<'_> {
         let mut cells = 0;
         for s in &self.steps {
             match &s.window {
-                None => {
+                Window::All => {
                     (rows, stats) = s.model.rows(cut, &s.cells);
                     cells = s.cells.len();
                 }
-                Some(w) => rows = merge_window(s.model.rows(cut, &s.cells).0, w, &rows),
+                Window::Slices(w) => rows = merge_slices(s.model.rows(cut, &s.cells).0, w, &rows),
+                Window::Angles(w) => rows = merge_window(s.model.rows(cut, &s.cells).0, w, &rows),
             }
         }
         self.model.finish(cut, &rows, stats, cells)
@@ -142,6 +164,54 @@ fn merge_window(
         };
     }
     fine
+}
+
+/// The rows of a grid with half the slice length of `coarse`'s (the same
+/// angles): its own (`fine`) at the indices in `window`, elsewhere the
+/// coarser grid's, whose parity and boundary columns are made those of a
+/// converged row (the odd and the even slices' quadratures each equal to
+/// the whole, no boundary): outside the window a row lies further below
+/// the peaks than its error can lift it, so it must not count in the
+/// error estimate of the peaks ([`error_estimates`]).
+fn merge_slices(
+    mut fine: Vec<[f64; COLUMNS]>,
+    window: &[bool],
+    coarse: &[[f64; COLUMNS]],
+) -> Vec<[f64; COLUMNS]> {
+    debug_assert_eq!(fine.len(), coarse.len());
+    for (i, row) in fine.iter_mut().enumerate() {
+        if !window[i] {
+            let c = coarse[i];
+            *row = c;
+            for at in [4, 7] {
+                row[at] = c[0];
+                row[at + 1] = c[1];
+                row[at + 2] = c[3];
+            }
+            row[10..13].fill(0.0);
+        }
+    }
+    fine
+}
+
+/// The angle indices of the tooth period to evaluate again at half the
+/// slice length: every sample of F_xy or |T| within `margin` of its peak,
+/// and its neighbours (a peak may move by a sample as the slices refine).
+fn slice_window(rows: &[[f64; COLUMNS]], margin: f64) -> Vec<bool> {
+    let p = rows.len();
+    let mut w = vec![false; p];
+    for c in 0..2 {
+        let v = |r: &[f64; COLUMNS]| if c == 0 { r[0].hypot(r[1]) } else { r[3].abs() };
+        let top = rows.iter().map(v).fold(0.0, f64::max);
+        for (i, r) in rows.iter().enumerate() {
+            if top > 0.0 && v(r) >= top * (1.0 - margin) {
+                w[(i + p - 1) % p] = true;
+                w[i] = true;
+                w[(i + 1) % p] = true;
+            }
+        }
+    }
+    w
 }
 
 /// How close to its peak (relative) a sample of F_xy or |T| must be for
@@ -255,24 +325,13 @@ impl ConvergedModel {
         if self.level(a, b).is_none() {
             a = 0;
         }
-        let tol = self.refine.tol;
-        // The slice length: whole evaluations, each on the band of heights
-        // the one before found engaged.
-        let mut band = (f64::NEG_INFINITY, f64::INFINITY);
-        let (model, cells, rows, stats, evaluation) = loop {
-            let model = self.level(a, b).expect("the coarser grid was built");
-            let cells = model.engaged_in(cut, eng, band);
-            let (rows, stats) = model.rows(cut, &cells);
-            let evaluation = model.finish(cut, &rows, stats, cells.len());
-            let z = evaluation.error_dz > tol
-                && self.may_halve(a, self.grid.dz, DZ_FLOOR)
-                && self.level(a + 1, b).is_some();
-            if cells.is_empty() || !z || enough(&evaluation) {
-                break (model, cells, rows, stats, evaluation);
-            }
-            band = model.band(&cells);
-            a += 1;
-        };
+        let model = self.level(a, b).expect("the coarser grid was built");
+        let cells = model.engaged(cut, eng);
+        let (rows, stats) = model.rows(cut, &cells);
+        let evaluation = model.finish(cut, &rows, stats, cells.len());
+        // Finer grids look for cells on the heights the coarsest found
+        // engaged (and one and a half of its slices more on each side).
+        let band = model.band(&cells);
         let mut c = Converged {
             model,
             cells: cells.clone(),
@@ -281,13 +340,64 @@ impl ConvergedModel {
             steps: vec![Step {
                 model,
                 cells,
-                window: None,
+                window: Window::All,
             }],
         };
-        if !c.cells.is_empty() && !enough(&c.evaluation) {
+        if c.cells.is_empty() || enough(&c.evaluation) {
+            return c;
+        }
+        let rows = self.refine_slices(&mut c, cut, eng, band, rows, stats, &enough);
+        if !enough(&c.evaluation) {
             self.refine_peaks(&mut c, cut, eng, band, rows, stats, &enough);
         }
         c
+    }
+
+    /// The slice length: halved around the peaks of F_xy and |T| only
+    /// ([`slice_window`]) while its error estimate is over the tolerance,
+    /// the rows elsewhere kept from the coarser grid ([`merge_slices`]).
+    /// Returns the rows of the last grid.
+    #[allow(clippy::too_many_arguments)]
+    fn refine_slices<'a, E: Engagement + ?Sized>(
+        &'a self,
+        c: &mut Converged<'a>,
+        cut: &Cut,
+        eng: &E,
+        band: (f64, f64),
+        mut rows: Vec<[f64; COLUMNS]>,
+        stats: (f64, f64),
+        enough: &impl Fn(&Evaluation) -> bool,
+    ) -> Vec<[f64; COLUMNS]> {
+        let (mut a, b) = c.halvings;
+        while c.evaluation.error_dz > self.refine.tol && self.may_halve(a, self.grid.dz, DZ_FLOOR) {
+            let Some(fine) = self.level(a + 1, b) else {
+                break;
+            };
+            let p = rows.len();
+            if fine.per_tooth() != p {
+                break;
+            }
+            let todo = slice_window(&rows, window_margin(c.evaluation.error_dz));
+            let angles: Vec<usize> = (0..p)
+                .filter(|i| todo[*i])
+                .flat_map(|i| (0..fine.tool.flutes).map(move |j| i + j * p))
+                .collect();
+            let cells = fine.engaged_where(cut, eng, band, Some(&angles));
+            rows = merge_slices(fine.rows(cut, &cells).0, &todo, &rows);
+            a += 1;
+            c.evaluation = fine.finish(cut, &rows, stats, c.cells.len());
+            c.model = fine;
+            c.halvings = (a, b);
+            c.steps.push(Step {
+                model: fine,
+                cells,
+                window: Window::Slices(todo),
+            });
+            if enough(&c.evaluation) {
+                break;
+            }
+        }
+        rows
     }
 
     /// The rotation step: halved around the peaks of F_xy and |T| only
@@ -337,7 +447,7 @@ impl ConvergedModel {
             c.steps.push(Step {
                 model: fine,
                 cells,
-                window: Some(todo),
+                window: Window::Angles(todo),
             });
             if enough(&c.evaluation) {
                 break;
