@@ -369,6 +369,7 @@ impl ConvergedModel {
         enough: &impl Fn(&Evaluation) -> bool,
     ) -> Vec<[f64; COLUMNS]> {
         let (mut a, b) = c.halvings;
+        let mut refined = vec![false; rows.len()];
         while c.evaluation.error_dz > self.refine.tol && self.may_halve(a, self.grid.dz, DZ_FLOOR) {
             let Some(fine) = self.level(a + 1, b) else {
                 break;
@@ -377,7 +378,14 @@ impl ConvergedModel {
             if fine.per_tooth() != p {
                 break;
             }
-            let todo = slice_window(&rows, window_margin(c.evaluation.error_dz));
+            // A row refined once stays in the window: its error is that of
+            // its own grid, not the peaks' estimate the margin comes from,
+            // so it must not be left behind at a coarser grid.
+            let mut todo = slice_window(&rows, window_margin(c.evaluation.error_dz));
+            for (t, r) in todo.iter_mut().zip(&refined) {
+                *t |= *r;
+            }
+            refined.clone_from(&todo);
             let angles: Vec<usize> = (0..p)
                 .filter(|i| todo[*i])
                 .flat_map(|i| (0..fine.tool.flutes).map(move |j| i + j * p))
