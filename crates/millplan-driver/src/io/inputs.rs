@@ -385,23 +385,17 @@ mod tests {
         std::fs::write(&empty, "").expect("write");
         std::fs::write(&bad, "G0 X0 Y0 Z5\nG1 X1..5 F100\n").expect("write");
         let none = &mut |_: u64, _: u64| {};
-        let e = read_source(&empty, ReadOptions::default(), none)
-            .err()
-            .expect("empty");
+        let e = read_source(&empty, ReadOptions::default(), none).expect_err("empty");
         assert_eq!((e.line, e.col), (Some(1), Some(1)));
         assert_eq!(e.message, format!("{}:1:1: empty file", empty.display()));
-        let e = read_source(&bad, ReadOptions::default(), none)
-            .err()
-            .expect("bad");
+        let e = read_source(&bad, ReadOptions::default(), none).expect_err("bad");
         assert_eq!((e.file.as_deref(), e.line), (Some(bad.as_path()), Some(2)));
         assert!(
             e.message.starts_with(&format!("{}:2:", bad.display())),
             "{e}"
         );
         let gone = dir.join("gone.nc");
-        let e = read_source(&gone, ReadOptions::default(), none)
-            .err()
-            .expect("gone");
+        let e = read_source(&gone, ReadOptions::default(), none).expect_err("gone");
         assert_eq!(
             (e.line, e.col, e.kind),
             (None, None, super::super::IoErrorKind::BadInput)
