@@ -37,6 +37,7 @@ pub mod simulate;
 pub mod speed;
 pub mod sweep;
 pub mod target;
+pub mod thread;
 pub mod timings;
 pub mod tool;
 pub mod tools;

@@ -315,19 +315,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             designation,
             insl,
             tp,
-        } => {
-            let pz = lib.insert(number, &designation, insl, tp)?;
-            let (tool, designation) = (number, designation.as_str());
-            let j = InsertJson {
-                tool,
-                designation,
-                insl,
-                tp,
-                pz,
-            };
-            let text = format!("T{number}: insert {designation}, PZ {pz:.3} mm");
-            done(json, to_json(&j)?, text)
-        }
+        } => insert(&mut lib, json, number, &designation, (insl, tp)),
         ToolCommand::Preset { number, l, r } => {
             let t = lib.preset(number, l, r)?;
             let text = format!("presetter values recorded: {}", describe(&t));
@@ -354,6 +342,26 @@ pub fn run(a: Args) -> CliResult<i32> {
         }
         ToolCommand::Cycle(x) => cycle(&lib, json, x),
     }
+}
+
+/// Records the insert of a thread mill; says its PZ.
+fn insert(
+    lib: &mut Library,
+    json: bool,
+    tool: u32,
+    designation: &str,
+    (insl, tp): (f64, f64),
+) -> CliResult<i32> {
+    let pz = lib.insert(tool, designation, insl, tp)?;
+    let j = InsertJson {
+        tool,
+        designation,
+        insl,
+        tp,
+        pz,
+    };
+    let text = format!("T{tool}: insert {designation}, PZ {pz:.3} mm");
+    done(json, to_json(&j)?, text)
 }
 
 /// The PZ of an insert (no library needed).
