@@ -3,6 +3,7 @@
 use crate::cmd::{print_diagnostics, read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_mesh, read_program, read_surface, Outputs};
+use crate::timings::Table as _;
 use millplan_driver::simulate::{self as lib, SimRequest};
 use millplan_driver::{SimReport, Stock, StockSpec, Strokes};
 use millplan_geom::TriMesh;
