@@ -18,7 +18,8 @@
 #   PYTHON    a Python with the release wheel, numpy, pandas and
 #             dask[distributed] installed (default: python3)
 #
-# About 3 minutes on a quiet 2-core machine, most of it (c). The load
+# About 2 minutes on a quiet 2-core machine, most of it (c); 4 minutes at
+# load 12-14. The load
 # average before and after each part is in the table: above about 0.5 per
 # core the figures say more about the other work than about millplan.
 set -euo pipefail
@@ -50,7 +51,7 @@ echo "load_b $(load)" >>"$W/loads"
 "$PY" "$HERE/bench.py" raster "$W/demo/part.stl" "$W/r1m.apt" >"$W/raster"
 "$PY" "$HERE/bench.py" closest "$W/demo/part.stl" "$W/r1m.apt" >"$W/closest"
 { time "$MILLPLAN" speed "$W/r1m.apt" --stl "$W/demo/part.stl" -o "$W/r1m-speed.apt" \
-    --vc 63 --fz 0.125 --ap 0.3 --timings -q 2>"$W/speed_timings"; } 2>"$W/speed_time"
+    --vc 63 --fz 0.125 --ap 0.3 --timings -q >/dev/null 2>"$W/speed_timings"; } 2>"$W/speed_time"
 
 echo "(c) Dask batch" >&2
 echo "load_c $(load)" >>"$W/loads"
