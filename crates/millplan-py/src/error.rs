@@ -155,3 +155,14 @@ pub fn located_in(file: &str, e: &str) -> Located {
         .unwrap_or(e);
     Located::new(Place::file(file), rest)
 }
+
+/// The driver's error choosing the output's dialect (worded for `--to` and
+/// the output file `out`, which may be none) as the `dialect` keyword's.
+pub fn dialect_error(out: &str, e: &str) -> Located {
+    let e = e.replace("--to", "dialect");
+    match e.strip_prefix(": ") {
+        Some(rest) => Located::new(Place::file("dialect"), rest),
+        None if out.is_empty() => Located::new(Place::file("dialect"), e),
+        None => located_in(out, &e),
+    }
+}

@@ -69,7 +69,7 @@ fn target(g: &Given, p: &Prepared) -> Res<Target> {
     let out = g.output.as_deref().unwrap_or("");
     let machine = g.machine.is_some().then_some(&p.machine);
     millplan_driver::target::output_target(to, Path::new(out), machine, p.program.source)
-        .map_err(|e| Located::new(Place::file(out), e.trim_start_matches(": ")))
+        .map_err(|e| crate::error::dialect_error(out, &e))
 }
 
 /// The run of `millplan feed`: prepared, scheduled, the written program's

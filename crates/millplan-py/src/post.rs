@@ -60,7 +60,10 @@ fn run(r: &PostRequest, g: &Given) -> Res<(Program, String, String)> {
         let to = g.dialect.map(crate::program::target).transpose()?;
         let out = g.output.unwrap_or("");
         let target: Target = lib::target(to, Path::new(out), g.machine, Path::new(g.machine_path))
-            .map_err(|e| crate::error::located_in(g.machine_path, &e))?;
+            .map_err(|e| match e.strip_prefix(&format!("{}: ", g.machine_path)) {
+                Some(rest) => Located::new(Place::file(g.machine_path), rest),
+                None => crate::error::dialect_error(out, &e),
+            })?;
         let Posted {
             mut program,
             report,

@@ -48,6 +48,12 @@ def test_post_without_kinematics_is_refused(cl, demo):
     assert e.value.file == str(demo / "machine.toml")
 
 
+def test_post_writes_g_code_only(cl):
+    with pytest.raises(millplan.MillplanError, match="G-code") as e:
+        millplan.post(cl, MACHINE, dialect="apt")
+    assert e.value.file == "dialect"
+
+
 def test_post_beyond_the_tilt_stops_at_the_cl_line(cli, tmp_path):
     p = tmp_path / "steep.apt"
     p.write_text("UNITS/MM\nFEDRAT/1000,MMPM\nSPINDL/8000,RPM,CLW\nGOTO/0,0,-100,0,0,1\n"
