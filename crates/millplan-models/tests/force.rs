@@ -855,17 +855,13 @@ fn move_mean_force_is_the_slot_closed_form() {
     assert_eq!(m.mean(), [0.0; 3], "no poses, no force");
     m.add(&s);
     m.add(&s);
-    for k in 0..3 {
-        close(m.mean()[k], want[k], 2e-3, "slot mean numeric");
+    for (got, w) in m.mean().iter().zip(want) {
+        close(*got, w, 2e-3, "slot mean numeric");
     }
     m.add_air();
     assert_eq!(m.poses(), 3);
-    for k in 0..3 {
-        close(
-            m.mean()[k],
-            want[k] * 2.0 / 3.0,
-            2e-3,
-            "two poses in the slot, one in air",
-        );
+    for (got, w) in m.mean().iter().zip(want) {
+        let what = "two poses in the slot, one in air";
+        close(*got, w * 2.0 / 3.0, 2e-3, what);
     }
 }

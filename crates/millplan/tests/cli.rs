@@ -516,6 +516,7 @@ fn crate_dependencies_point_one_way() {
                 "millplan-plan",
                 "millplan-report",
                 "millplan-tooldb",
+                "millplan-robot",
             ],
         ),
     ];

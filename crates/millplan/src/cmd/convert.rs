@@ -138,6 +138,26 @@ fn krl_files(a: &Args, target: Target, out: &[u8]) -> CliResult<Option<KrlFiles>
         .map_err(|e| CliError::internal(format!("{}: {e}; not written", a.output.display())))
 }
 
+/// Writes `out` at -o, or with --max-points its KRL split (a main program
+/// and sub-programs beside it).
+fn write_out(
+    a: &Args,
+    inputs: &[&std::path::Path],
+    mut outputs: Outputs,
+    target: Target,
+    out: &[u8],
+) -> CliResult<()> {
+    match krl_files(a, target, out)? {
+        Some(files) => crate::cmd::robot::stage_krl(inputs, &a.output, &files, 0)?
+            .0
+            .commit(),
+        None => {
+            outputs.write(&a.output, out)?;
+            outputs.commit()
+        }
+    }
+}
+
 /// The reader's warnings (an `S0` before a cut, words not understood), each
 /// at its place, for `--json`.
 fn json_warnings(input: &std::path::Path, d: &[millplan_nc::Diagnostic]) -> Vec<String> {
@@ -188,18 +208,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         _ => write_program(&p, o, &a.input, a.quiet)?,
     };
     let equivalent = check_output(&p, &out, target, &a)?;
-    match krl_files(&a, target, &out)? {
-        Some(files) => {
-            drop(outputs);
-            crate::cmd::robot::stage_krl(&inputs, &a.output, &files, 0)?
-                .0
-                .commit()?
-        }
-        None => {
-            outputs.write(&a.output, &out)?;
-            outputs.commit()?;
-        }
-    }
+    write_out(&a, &inputs, outputs, target, &out)?;
     if a.json {
         outln!(
             "{}",
