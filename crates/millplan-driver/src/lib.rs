@@ -30,6 +30,8 @@ pub mod post;
 pub mod raster;
 pub mod reorder;
 pub mod report;
+pub mod robot;
+pub mod robot_pass;
 pub mod round;
 pub mod run;
 pub mod setup;

@@ -362,6 +362,10 @@ pub struct MoveForces {
     pub fx: [f64; 2],
     pub fy: [f64; 2],
     pub fz_force: [f64; 2],
+    /// The mean force over the move's loaded poses (each a mean over a
+    /// revolution, a pose in air zero), tool frame: the static load.
+    #[serde(skip)]
+    pub mean: millplan_models::force::mean::MeanForce,
     /// N·mm.
     pub torque_max: f64,
     pub torque_mean: f64,
@@ -842,9 +846,11 @@ fn stroke_forces(
         evals += 1 + (conv.halvings.0 + conv.halvings.1) as usize;
         let (model, cells) = (conv.model, &conv.cells);
         if cells.is_empty() {
+            m.mean.add_air();
             continue;
         }
         let sum = conv.evaluation.summary();
+        m.mean.add(&sum);
         m.merge(&sum, &Loads::new(&sum, &tf.holding), cells.len(), model);
         if let Some(lim) = &limits {
             evals += tighten(&cut, cells, model, &tf.holding, lim, m);

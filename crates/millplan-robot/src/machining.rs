@@ -31,6 +31,9 @@ pub struct PathPoint {
     pub feed: f64,
     /// Source line.
     pub line: u32,
+    /// Index of the move over the whole program (operations in order), the
+    /// key of a per-move load.
+    pub mv: u32,
 }
 
 /// The workpiece frame in the robot base: a translation (mm) and a turn
@@ -63,6 +66,41 @@ pub struct Load {
     pub axial: f64,
 }
 
+impl Load {
+    /// The force in the workpiece frame at a point with tool axis `axis`
+    /// (unit) feeding along `feed` (unit, normal to the axis).
+    pub fn force(&self, axis: DVec3, feed: DVec3) -> DVec3 {
+        feed * self.feed + axis.cross(feed) * self.cross + axis * self.axial
+    }
+}
+
+/// The process load along a path, in the feed frame of each point: the same
+/// everywhere, or one per move of the program (what the force model with
+/// the stock gives: the mean over a revolution, averaged along the move;
+/// zero in air), indexed by [`PathPoint::mv`]; a move past the end has
+/// none.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PathLoad {
+    Fixed(Load),
+    PerMove(Vec<Load>),
+}
+
+const NO_LOAD: Load = Load {
+    feed: 0.0,
+    cross: 0.0,
+    axial: 0.0,
+};
+
+impl PathLoad {
+    /// The load at `pt`.
+    pub fn at(&self, pt: &PathPoint) -> Load {
+        match self {
+            PathLoad::Fixed(l) => *l,
+            PathLoad::PerMove(v) => v.get(pt.mv as usize).copied().unwrap_or(NO_LOAD),
+        }
+    }
+}
+
 /// Why a point cannot be machined.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum MachiningError {
@@ -78,16 +116,20 @@ pub enum MachiningError {
 /// arcs as chords within 0.01 mm).
 pub fn cutting_runs(prog: &Program) -> Result<Vec<Vec<PathPoint>>, MachiningError> {
     let mut runs = Vec::new();
+    let mut index = 0u32;
     for op in &prog.operations {
         let mut run: Vec<PathPoint> = Vec::new();
         let mut last = op.start;
         for m in &op.moves {
             let axis = op.axis(m).unwrap_or(DVec3::Z);
+            let mv = index;
+            index += 1;
             let point = |p: DVec3| PathPoint {
                 p,
                 axis,
                 feed: m.feed,
                 line: m.line,
+                mv,
             };
             match m.kind {
                 MoveKind::Rapid => {
@@ -295,9 +337,32 @@ impl Robot {
             });
         }
         self.deflections_by(variant, place, run, status, |i, pt| {
-            let f = dirs[i];
-            let c = pt.axis.cross(f);
-            f * load.feed + c * load.cross + pt.axis * load.axial
+            load.force(pt.axis, dirs[i])
+        })
+    }
+
+    /// As [`Robot::deflections_along`] under a [`PathLoad`]: each point's
+    /// load in its feed frame (`dirs`, the nominal path's).
+    pub fn deflections_loaded(
+        &self,
+        variant: Variant,
+        place: &Placement,
+        run: &[PathPoint],
+        dirs: &[DVec3],
+        load: &PathLoad,
+        status: Option<u8>,
+    ) -> Result<Deflections, MachiningError> {
+        if let PathLoad::Fixed(l) = load {
+            return self.deflections_along(variant, place, run, dirs, l, status);
+        }
+        if dirs.len() != run.len() {
+            return Err(MachiningError::Program {
+                line: run.first().map_or(0, |p| p.line),
+                message: format!("{} feed directions for {} points", dirs.len(), run.len()),
+            });
+        }
+        self.deflections_by(variant, place, run, status, |i, pt| {
+            load.at(pt).force(pt.axis, dirs[i])
         })
     }
 
@@ -474,9 +539,10 @@ pub fn place(
     robot: &Robot,
     variant: Variant,
     samples: &[PathPoint],
-    load: &Load,
+    load: &PathLoad,
     search: &PlaceSearch,
 ) -> Option<Placed> {
+    let dirs = feed_dirs(samples);
     let placement = |x: &[f64]| Placement {
         x: x[0],
         y: x[1],
@@ -485,7 +551,7 @@ pub fn place(
     };
     let f = |x: &[f64]| {
         robot
-            .deflections(variant, &placement(x), samples, load, None)
+            .deflections_loaded(variant, &placement(x), samples, &dirs, load, None)
             .ok()
             .map(|d| d.mean)
     };
@@ -498,7 +564,9 @@ pub fn place(
         &search.settings,
     )?;
     let p = placement(&best.x);
-    let d = robot.deflections(variant, &p, samples, load, None).ok()?;
+    let d = robot
+        .deflections_loaded(variant, &p, samples, &dirs, load, None)
+        .ok()?;
     Some(Placed {
         place: p,
         mean: d.mean,
@@ -512,39 +580,82 @@ pub fn place(
 pub struct Compensated {
     /// The commanded runs, p_cmd = p_ideal − Δp, every `spacing` mm.
     pub runs: Vec<Vec<PathPoint>>,
+    /// The nominal runs they were computed from, point for point.
+    pub ideal: Vec<Vec<PathPoint>>,
     /// Mean and largest |Δp| over all points before compensation, mm.
     pub mean: f64,
     pub max: f64,
+    /// Mean and largest distance of the tip from the nominal path after
+    /// compensation, mm: the robot commanded to p_cmd and pushed by the
+    /// same loads (the model against itself, T14).
+    pub residual_mean: f64,
+    pub residual_max: f64,
     pub points: usize,
 }
 
 /// Compensates every cutting run of `prog` (in the workpiece frame, placed
 /// at `place`): resampled every `spacing` mm (0.3 in the paper), Δp from
-/// the nominal path, p_cmd = p − Δp, one Status throughout each run.
+/// the nominal path, p_cmd = p − Δp, one Status throughout each run; then
+/// the deflection again at the commanded points under the nominal path's
+/// loads, for the residual.
 pub fn compensate_program(
     robot: &Robot,
     variant: Variant,
     prog: &Program,
     place: &Placement,
-    load: &Load,
+    load: &PathLoad,
     spacing: f64,
 ) -> Result<Compensated, MachiningError> {
-    let mut runs = Vec::new();
+    let (mut runs, mut ideals) = (Vec::new(), Vec::new());
     let (mut sum, mut max, mut points) = (0.0, 0.0f64, 0);
+    let (mut rsum, mut rmax) = (0.0, 0.0f64);
     for run in cutting_runs(prog)? {
         let ideal = resample(&run, spacing);
-        let d = robot.deflections(variant, place, &ideal, load, None)?;
+        let dirs = feed_dirs(&ideal);
+        let d = robot.deflections_loaded(variant, place, &ideal, &dirs, load, None)?;
         sum += d.mean * ideal.len() as f64;
         max = max.max(d.max);
         points += ideal.len();
-        runs.push(compensate(&ideal, &d.dp));
+        let cmd = compensate(&ideal, &d.dp);
+        let at = robot.deflections_loaded(variant, place, &cmd, &dirs, load, Some(d.status))?;
+        for ((c, a), i) in cmd.iter().zip(&at.dp).zip(&ideal) {
+            let r = (c.p + *a - i.p).length();
+            rsum += r;
+            rmax = rmax.max(r);
+        }
+        runs.push(cmd);
+        ideals.push(ideal);
     }
     Ok(Compensated {
         runs,
+        ideal: ideals,
         mean: sum / points as f64,
         max,
+        residual_mean: rsum / points as f64,
+        residual_max: rmax,
         points,
     })
+}
+
+/// The largest distance of the deflected tip from the nominal path when the
+/// robot is commanded to `cmd` (runs point for point with `c.ideal`, e.g.
+/// the commanded points read back from the KRL written) under `load`, mm.
+pub fn residual_max(
+    robot: &Robot,
+    variant: Variant,
+    place: &Placement,
+    c: &Compensated,
+    cmd: &[Vec<PathPoint>],
+    load: &PathLoad,
+) -> Result<f64, MachiningError> {
+    let mut max = 0.0f64;
+    for (ideal, run) in c.ideal.iter().zip(cmd) {
+        let d = robot.deflections_loaded(variant, place, run, &feed_dirs(ideal), load, None)?;
+        for ((p, dp), i) in run.iter().zip(&d.dp).zip(ideal) {
+            max = max.max((p.p + *dp - i.p).length());
+        }
+    }
+    Ok(max)
 }
 
 /// The cutting runs of `prog` resampled every 10 mm (the paper's placement

@@ -4,7 +4,7 @@
 use millplan_geom::DVec3;
 use millplan_robot::anneal::Settings;
 use millplan_robot::machining::{
-    self, compensate, resample, Load, PathPoint, PlaceSearch, Placement,
+    self, compensate, resample, Load, PathLoad, PathPoint, PlaceSearch, Placement,
 };
 use millplan_robot::{Robot, Variant};
 
@@ -25,6 +25,7 @@ fn zigzag(step: f64) -> Vec<PathPoint> {
                 axis: DVec3::Z,
                 feed: 1200.0,
                 line: row + 1,
+                mv: row,
             });
         }
     }
@@ -144,8 +145,22 @@ fn placement_search_is_seeded_and_improves() {
             ..Settings::default()
         },
     };
-    let a = machining::place(&robot, Variant::ThreeAxis, &path, &LOAD, &search).expect("placed");
-    let b = machining::place(&robot, Variant::ThreeAxis, &path, &LOAD, &search).expect("placed");
+    let a = machining::place(
+        &robot,
+        Variant::ThreeAxis,
+        &path,
+        &machining::PathLoad::Fixed(LOAD),
+        &search,
+    )
+    .expect("placed");
+    let b = machining::place(
+        &robot,
+        Variant::ThreeAxis,
+        &path,
+        &machining::PathLoad::Fixed(LOAD),
+        &search,
+    )
+    .expect("placed");
     assert_eq!(a.place, b.place);
     let hand = robot
         .deflections(Variant::ThreeAxis, &place(), &path, &LOAD, None)
@@ -287,4 +302,59 @@ fn deflection_under_a_force_per_point() {
         .deflections_under(Variant::ThreeAxis, &place, &run, &forces[1..], None)
         .expect_err("one short");
     assert!(e.to_string().contains("one force a point"), "{e}");
+}
+
+/// A load per move (`PathLoad::PerMove`, what the force model with the
+/// stock gives): the same load for every move deflects exactly as the
+/// fixed load; a move with no load (in air) does not deflect, the others
+/// as before; a move past the list has none.
+#[test]
+fn deflection_under_a_load_per_move() {
+    let run = zigzag(0.3);
+    let (robot, place) = (Robot::kr240(), place());
+    let dirs = machining::feed_dirs(&run);
+    let moves = run.iter().map(|p| p.mv).max().expect("points") as usize + 1;
+    let fixed = robot
+        .deflections_loaded(
+            Variant::ThreeAxis,
+            &place,
+            &run,
+            &dirs,
+            &PathLoad::Fixed(LOAD),
+            None,
+        )
+        .expect("reachable");
+    let same = PathLoad::PerMove(vec![LOAD; moves]);
+    let each = robot
+        .deflections_loaded(Variant::ThreeAxis, &place, &run, &dirs, &same, None)
+        .expect("reachable");
+    assert_eq!(each.dp, fixed.dp);
+    let mut air = vec![LOAD; moves];
+    air[2] = Load {
+        feed: 0.0,
+        cross: 0.0,
+        axial: 0.0,
+    };
+    let d = robot
+        .deflections_loaded(
+            Variant::ThreeAxis,
+            &place,
+            &run,
+            &dirs,
+            &PathLoad::PerMove(air),
+            None,
+        )
+        .expect("reachable");
+    for (i, p) in run.iter().enumerate() {
+        if p.mv == 2 {
+            assert_eq!(d.dp[i], DVec3::ZERO, "point {i}");
+        } else {
+            assert_eq!(d.dp[i], fixed.dp[i], "point {i}");
+        }
+    }
+    let none = PathLoad::PerMove(Vec::new());
+    let d = robot
+        .deflections_loaded(Variant::ThreeAxis, &place, &run, &dirs, &none, None)
+        .expect("reachable");
+    assert_eq!((d.mean, d.max), (0.0, 0.0));
 }

@@ -132,6 +132,8 @@ pub struct Args {
     /// No warnings or notes on standard error.
     #[arg(long, short)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub robot: crate::cmd::robot::OptimiseRobotArgs,
 }
 
 fn options(a: &Args) -> CliResult<Options> {
@@ -263,7 +265,15 @@ pub fn run(a: Args) -> CliResult<i32> {
         limits: crate::limits::get(),
         ..job.inputs.machine.write_options(target)
     };
-    let (outcome, w) = passes_and_checks(&a, &job, &order, wo, &path)?;
+    let (outcome, mut w) = passes_and_checks(&a, &job, &order, wo, &path)?;
+    let quiet = a.quiet || a.json;
+    crate::cmd::robot::after_optimise(
+        &a.robot,
+        (&job, &outcome),
+        &mut w,
+        (&inputs, &output),
+        (a.force, quiet),
+    )?;
     print_diagnostics(&path, &w.warnings, a.quiet || a.json);
     let refused = w.summary.verdict == Verdict::Refused;
     if !refused || a.force {
