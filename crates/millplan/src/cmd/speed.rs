@@ -381,14 +381,16 @@ fn report_run(
     target: millplan_nc::write::Target,
 ) -> CliResult<()> {
     let inputs = || {
-        report_inputs(
+        let mut i = report_inputs(
             (&a.path, r.program),
             &a.stl,
             &cx.machine,
             req.cut,
             r.findings,
             r.times,
-        )
+        );
+        i.failed = lib::failed_checks(r.checks);
+        i
     };
     cx.time("table and report", || {
         write_table_and_report(a, &mut outputs, r.summary, r.rows, inputs)
