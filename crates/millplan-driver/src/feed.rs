@@ -503,6 +503,8 @@ pub struct FeedSummary {
     pub over_limit_lines: Vec<u32>,
     pub within_tolerance_after: usize,
     pub stock: String,
+    /// A cutting move of the input meets the stock (else nothing to act on).
+    pub stock_contact: bool,
     pub output: String,
     pub dialect: &'static str,
     pub operations: Vec<OperationJson>,
@@ -535,14 +537,18 @@ impl FeedSummary {
         let over = after.over_limits(&limits, &p.machine);
         let c = &s.changes;
         let over_lines = first_lines(&over);
-        let verdict = Verdict::of(
-            &millplan_report::forces::feed_evidence(
-                over.len() as u64,
-                (c.blocks + c.air_blocks) as u64,
-                [t0.total_s, t1.total_s],
-            ),
-            load_warnings(over.len(), &over_lines, 0, 0),
+        let mut e = millplan_report::forces::feed_evidence(
+            over.len() as u64,
+            (c.blocks + c.air_blocks) as u64,
+            [t0.total_s, t1.total_s],
         );
+        let mut warnings = load_warnings(over.len(), &over_lines, 0, 0);
+        let stock_contact = meets_stock(&s.before);
+        if !stock_contact {
+            e.kept = true;
+            warnings.push(no_contact(&p.stock_name));
+        }
+        let verdict = Verdict::of(&e, warnings);
         FeedSummary {
             time_before_s: t0.total_s,
             time_after_s: t1.total_s,
@@ -572,12 +578,19 @@ impl FeedSummary {
             over_limit_lines: over_lines,
             within_tolerance_after: after.within_tolerance(&limits, &p.machine).len(),
             stock: p.stock_name.clone(),
+            stock_contact,
             output: output.to_string(),
             dialect,
             operations: per_operation(&s.program, &s.before, after),
             steps: s.before.steps(&p.setup.grid),
             verdict,
         }
+    }
+
+    /// Whether the run found problems (exit 3): moves still over a limit,
+    /// or no cutting move that meets the stock.
+    pub fn findings(&self) -> bool {
+        self.over_limit_after > 0 || !self.stock_contact
     }
 
     /// The summary in words, as `feed` prints it.
@@ -716,6 +729,17 @@ fn per_operation(p: &Program, before: &ForceRun, after: &ForceRun) -> Vec<Operat
             fxy_max_after: a.fxy[1],
         })
         .collect()
+}
+
+/// Whether a cutting move of `run` meets the stock.
+pub fn meets_stock(run: &ForceRun) -> bool {
+    run.moves.iter().any(|m| !m.rapid && !m.air)
+}
+
+/// The warning of a run whose cutting moves all pass through air: nothing
+/// to load, the stock (`stock`, as given) is likely not the one cut.
+pub fn no_contact(stock: &str) -> String {
+    format!("no cutting move meets the stock (--stock {stock}): there is no load to act on; is it the stock this program cuts?")
 }
 
 /// Warnings shared by `force` and `feed`: moves over a limit (`over` of

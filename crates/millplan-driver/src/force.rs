@@ -3,7 +3,7 @@
 //! measured slot forces, and the list of named materials.
 
 use crate::check::{arg, Range};
-use crate::feed::{load_warnings, quantities, summary_rows, Prepared};
+use crate::feed::{load_warnings, meets_stock, no_contact, quantities, summary_rows, Prepared};
 use millplan_models::force::coeffs::{calibrate_slot, Calibration, Line, SlotTest};
 use millplan_models::force::materials::Materials;
 use millplan_plan::force::{FeedLimits, ForceRun, Maxima, MoveForces, Steps};
@@ -37,6 +37,8 @@ pub struct ForceSummary {
     pub within_tolerance: usize,
     pub limit_tolerance: f64,
     pub stock: String,
+    /// A cutting move meets the stock (else nothing to act on).
+    pub stock_contact: bool,
     pub steps: Steps,
     /// The verdict by the one rule: red when a move is over a limit, amber
     /// on a warning (loads missing), green otherwise.
@@ -55,10 +57,14 @@ impl ForceSummary {
         };
         let unmodelled = run.moves.iter().filter(|x| x.unmodelled).count();
         let over_lines: Vec<u32> = over.iter().take(20).map(|x| x.line).collect();
-        let verdict = Verdict::of(
-            &millplan_report::forces::force_evidence(over.len() as u64),
-            load_warnings(over.len(), &over_lines, unmodelled, run.skipped),
-        );
+        let mut e = millplan_report::forces::force_evidence(over.len() as u64);
+        let mut warnings = load_warnings(over.len(), &over_lines, unmodelled, run.skipped);
+        let stock_contact = meets_stock(run);
+        if !stock_contact {
+            e.kept = true;
+            warnings.push(no_contact(&p.stock_name));
+        }
+        let verdict = Verdict::of(&e, warnings);
         ForceSummary {
             moves: run.moves.len(),
             cutting_moves: run.moves.iter().filter(|x| !x.rapid).count(),
@@ -79,9 +85,16 @@ impl ForceSummary {
             within_tolerance: run.within_tolerance(limits, &p.machine).len(),
             limit_tolerance: millplan_plan::force::LIMIT_TOLERANCE,
             stock: p.stock_name.clone(),
+            stock_contact,
             steps: run.steps(&p.setup.grid),
             verdict,
         }
+    }
+
+    /// Whether the run found problems (exit 3): a move over a limit, or no
+    /// cutting move that meets the stock.
+    pub fn findings(&self) -> bool {
+        self.over_limit > 0 || !self.stock_contact
     }
 
     /// The force report's warnings and verdict.

@@ -330,7 +330,8 @@ impl Summary {
         self.verdict = Verdict::of(&e, warnings);
     }
 
-    /// The text report: a line per operation, then what was written.
+    /// The text report: a line per operation (counted from 1, as `inspect`,
+    /// `gouge` and `feed` count them), then what was written and the verdict.
     pub fn render_text(&self) -> String {
         let mut o = String::new();
         let time = self.objective == Objective::Time;
@@ -350,7 +351,7 @@ impl Summary {
             let _ = writeln!(
                 o,
                 "operation {}: lead {:.2}°, tilt {:.2}° (read: {:.2}°, {:.2}°); {name} {before} → {:.1} {unit} {source}; refused: {} by tip contact, {} by holder collision, {} by rotary limits",
-                c.operation,
+                c.operation + 1,
                 c.lead,
                 c.tilt,
                 c.lead_before,
@@ -362,7 +363,12 @@ impl Summary {
             );
         }
         for k in &self.skipped {
-            let _ = writeln!(o, "operation {}: left as it was: {}", k.operation, k.reason);
+            let _ = writeln!(
+                o,
+                "operation {}: left as it was: {}",
+                k.operation + 1,
+                k.reason
+            );
         }
         match &self.output {
             Some(p) => {

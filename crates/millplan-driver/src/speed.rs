@@ -117,6 +117,32 @@ pub fn checks(cx: &Context, input: &Program, output: &Program) -> Vec<Check> {
     })
 }
 
+/// Why spindle control has nothing to act on in `p`, when so: no cutting
+/// move, or every cutting operation's cutter is known and none is a ball.
+/// A tool the program gives no shape is no such finding: `--ball-d` names
+/// its ball, and without it the pass asks for the option (the input's lack).
+pub fn nothing_to_control(p: &Program) -> Option<String> {
+    let cutters: Vec<Option<millplan_nc::Cutter>> = p
+        .operations
+        .iter()
+        .filter(|op| op.moves.iter().any(|m| m.is_cutting()))
+        .map(|op| op.tool.as_ref().and_then(|t| t.cutter))
+        .collect();
+    if cutters.is_empty() {
+        return Some("the program has no cutting move: nothing for spindle control to act on; nothing written".into());
+    }
+    let ball = cutters.iter().any(|c| match c {
+        Some(c) => c.kind == millplan_nc::CutterKind::Ball,
+        None => true,
+    });
+    (!ball).then(|| {
+        format!(
+            "the program has no ball-end operation (its cutters: {}): nothing for spindle control to act on; nothing written",
+            cutting_tools(p)
+        )
+    })
+}
+
 /// The tools of the program's cutting operations, in their order.
 fn cutting_op_tools(p: &Program) -> Vec<&millplan_nc::Tool> {
     p.operations
@@ -126,12 +152,13 @@ fn cutting_op_tools(p: &Program) -> Vec<&millplan_nc::Tool> {
         .collect()
 }
 
-/// `tools` in words, each once, joined by `; `.
+/// `tools` in words, each once, joined by `; ` (a tool the program gives
+/// neither number, name nor shape is not shown).
 fn distinct_words(tools: &[&millplan_nc::Tool]) -> String {
     let mut shown: Vec<String> = Vec::new();
     for t in tools {
         let words = tool_words(t);
-        if !shown.contains(&words) {
+        if !words.is_empty() && !shown.contains(&words) {
             shown.push(words);
         }
     }

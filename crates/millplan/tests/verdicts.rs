@@ -246,6 +246,9 @@ fn orient_says_its_verdict() {
     ];
     let v = verdict(d.path(), &args, None, 0);
     assert_eq!(v["level"], "green", "{v}");
+    // Operations count from 1 in the text, as in `inspect`, `gouge`, `feed`.
+    let text = String::from_utf8_lossy(&run(d.path(), &args).stdout).to_string();
+    assert!(text.starts_with("operation 1: lead"), "{text}");
     std::fs::write(
         d.path().join("flat.apt"),
         "UNITS/MM\nCUTTER/10\nSPINDL/8000,RPM,CLW\nFEDRAT/500,MMPM\nGOTO/0,0,5\nGOTO/0,0,-1\nGOTO/40,0,-1\n",
@@ -315,4 +318,64 @@ fn post_says_its_verdict() {
     assert!(v["failed"][0]
         .as_str()
         .is_some_and(|f| f.contains("check machine") && f.contains("spindle")));
+}
+
+/// Nothing to act on is no silent success: `force` and `feed` whose stock
+/// no cutting move meets say so, amber with the input kept, exit 3; `speed`
+/// on a program whose only cutter is a flat end mill says there is no
+/// ball-end operation, exit 3, nothing written.
+#[test]
+fn nothing_to_act_on_says_so_and_exits_3() {
+    let d = demo();
+    slot(d.path());
+    let far = [
+        "--stock",
+        "box:-30,-30,-50,70,70,-40",
+        "--tool",
+        "ball:10",
+        "--material",
+        "al7075",
+        "--resolution",
+        "0.5",
+    ];
+    for cmd in ["force", "feed"] {
+        let mut args = vec![cmd, "slot.nc"];
+        args.extend(far);
+        if cmd == "feed" {
+            args.extend(["-o", "air.nc"]);
+        }
+        let v = verdict(d.path(), &args, None, 3);
+        assert_eq!(v["kept"], true, "{cmd}: {v}");
+        assert!(
+            v["warnings"].as_array().into_iter().flatten().any(|w| w
+                .as_str()
+                .is_some_and(|w| w.starts_with("no cutting move meets the stock"))),
+            "{cmd}: {v}"
+        );
+    }
+    std::fs::write(
+        d.path().join("flat.apt"),
+        "UNITS/MM\nCUTTER/10\nSPINDL/8000,RPM,CLW\nFEDRAT/500,MMPM\nGOTO/0,0,5\nGOTO/0,0,-1\nGOTO/40,0,-1\n",
+    )
+    .expect("write");
+    let o = run(
+        d.path(),
+        &[
+            "speed", "flat.apt", "--stl", "part.stl", "--vc", "63", "--fz", "0.1", "--ap", "0.3",
+            "-o", "s.apt",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(
+            "flat.apt: the program has no ball-end operation (its cutters: D10.000 R0.000)"
+        ),
+        "{err}"
+    );
+    assert!(
+        err.contains("nothing for spindle control to act on"),
+        "{err}"
+    );
+    assert!(!d.path().join("s.apt").exists());
 }

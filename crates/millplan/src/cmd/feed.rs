@@ -259,10 +259,10 @@ pub fn run(a: Args) -> CliResult<i32> {
     } else {
         out!("{}", summary.render_text());
     }
-    Ok(if summary.over_limit_after == 0 {
-        EXIT_OK
-    } else {
+    Ok(if summary.findings() {
         EXIT_FINDINGS
+    } else {
+        EXIT_OK
     })
 }
 

@@ -125,10 +125,10 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
     } else {
         out!("{}", summary.render_text(&name, &over));
     }
-    Ok(if over.is_empty() {
-        EXIT_OK
-    } else {
+    Ok(if summary.findings() {
         crate::error::EXIT_FINDINGS
+    } else {
+        EXIT_OK
     })
 }
 

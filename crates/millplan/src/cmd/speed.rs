@@ -237,6 +237,21 @@ fn record_reading(
     cx.record("read STL, surface and toolpath", t_inputs);
 }
 
+/// The program, unless spindle control finds nothing to act on in it: then
+/// that, named, exit 3 and nothing written.
+fn something_to_control(
+    path: &std::path::Path,
+    parsed: millplan_nc::Parsed,
+) -> CliResult<millplan_nc::Parsed> {
+    match lib::nothing_to_control(&parsed.program) {
+        Some(why) => Err(CliError {
+            code: EXIT_FINDINGS,
+            message: format!("{}: {why}", path.display()),
+        }),
+        None => Ok(parsed),
+    }
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     let t0 = std::time::Instant::now();
     let req = request(&a);
@@ -250,7 +265,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let t_surface = t.elapsed().as_secs_f64();
     let read = join(reader);
     let t_inputs = t0.elapsed().as_secs_f64() - t_setup;
-    let parsed = read.parsed?;
+    let parsed = something_to_control(&a.path, read.parsed?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
     let bar = crate::progress::Phases::new(!a.quiet && parsed.program.move_count() >= 100_000);
