@@ -215,6 +215,24 @@ pub struct InputNames {
     pub part: Option<String>,
 }
 
+impl InputNames {
+    /// The names of the program at `program` and the part at `part`.
+    pub fn of(program: &std::path::Path, part: Option<&std::path::Path>) -> InputNames {
+        InputNames {
+            program: file_name(program),
+            part: part.map(file_name),
+        }
+    }
+}
+
+/// A file's name without its folder, as a report's header shows it.
+pub fn file_name(f: &std::path::Path) -> String {
+    f.file_name().map_or_else(
+        || f.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
 /// The header rows of a `force` or `feed` report: program, part, stock,
 /// the tools the program cuts with, material, machine, the model's options
 /// and the load limits.

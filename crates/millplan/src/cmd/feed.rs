@@ -125,16 +125,7 @@ impl ModelArgs {
         p: &Prepared,
         limits: &millplan_driver::feed::FeedLimits,
     ) -> Vec<(String, String)> {
-        let name = |f: &Path| {
-            f.file_name().map_or_else(
-                || f.display().to_string(),
-                |n| n.to_string_lossy().into_owned(),
-            )
-        };
-        let names = lib::InputNames {
-            program: name(path),
-            part: self.stl.as_deref().map(name),
-        };
+        let names = lib::InputNames::of(path, self.stl.as_deref());
         lib::model_inputs(&names, &self.request(), p, limits)
     }
 
