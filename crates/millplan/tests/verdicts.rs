@@ -379,3 +379,21 @@ fn nothing_to_act_on_says_so_and_exits_3() {
     );
     assert!(!d.path().join("s.apt").exists());
 }
+
+/// `speed --help` names the machine file's reference, not the keys of the
+/// single-purpose file it replaced (`spindle_min`, `feed_max`, …).
+#[test]
+fn speed_help_documents_the_machine_file_of_today() {
+    let o = run(Path::new("."), &["speed", "--help"]);
+    let help = String::from_utf8_lossy(&o.stdout);
+    assert!(help.contains("examples/machine.toml"), "{help}");
+    for old in [
+        "spindle_min",
+        "spindle_max",
+        "spindle_accel",
+        "feed_min",
+        "feed_max",
+    ] {
+        assert!(!help.contains(old), "{old}: {help}");
+    }
+}

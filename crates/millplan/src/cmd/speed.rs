@@ -65,8 +65,9 @@ pub struct Args {
     /// Stock thickness along the surface normal (finishing allowance), mm.
     #[arg(long)]
     pub ap: f64,
-    /// Machine description (TOML: spindle_min, spindle_max, spindle_accel,
-    /// feed_min, feed_max, rapid, dialect); a typical HSC machine by default.
+    /// Machine file (examples/machine.toml): the spindle range and
+    /// acceleration, the feed range and rapid rate, the control's dialect
+    /// and its axes for the time estimate; a typical HSC machine by default.
     #[arg(long)]
     pub machine: Option<PathBuf>,
     /// Output program.
