@@ -150,7 +150,7 @@ fn motions(p: &KrlProgram) -> Vec<&Statement> {
         .collect()
 }
 
-/// A one-file KRL text split by [`write`] with `o` (a main program calling
+/// A one-file KRL text split by [`write()`] with `o` (a main program calling
 /// sub-programs of `o.max_points` motions), checked: the files read back,
 /// the main finding its sub-programs among them, command the motions of
 /// `text` (poses, approximation, `$VEL.CP`) in the same order.
