@@ -83,6 +83,7 @@ contact = sum(map(float, re.findall(r"([\d.]+) s  contact and working diameter",
 swall, su, ss = map(float, t("speed_time").split())
 b = t("batch_out")
 one, two, nprog = num(r"one process ([\d.]+) s", b), num(r"1 thread ([\d.]+) s", b), num(r"(\d+) programs", b)
+warm, start = num(r"warm ([\d.]+) s", b), num(r"its start took ([\d.]+) s", b)
 rows = [
     ("(a) `working_diameter`, 1,000,000 cases, 1 thread, CPU: one Python call vs one pass of `wd_rate`",
      f"{py_cpu:.3f} s vs {rust_cpu:.3f} s (a tenth of its {ru + rs:.2f} s for 10 passes and building "
@@ -97,7 +98,9 @@ rows = [
      f"{contact:.3f} s wall (Python's closest points: {100 * cwall / contact:.0f} % of it); "
      f"whole run {swall:.1f} s wall, {su + ss:.1f} s CPU", loads["load_b"]),
     (f"(c) {nprog:.0f} programs (speed, feed), RAYON_NUM_THREADS=1: one process vs Dask 2 workers x 1 thread",
-     f"{one:.1f} s vs {two:.1f} s: {one / two:.2f}x", loads["load_c"]),
+     f"{one:.1f} s vs {two:.1f} s: {one / two:.2f}x (the cluster's start included)", loads["load_c"]),
+    ("(c) the same on a running cluster (started, millplan imported in each worker, before the clock)",
+     f"{one:.1f} s vs {warm:.1f} s: {one / warm:.2f}x (the start took {start:.1f} s)", loads["load_c"]),
 ]
 print("| what | figure | load (1 min) |\n|---|---|---|")
 for what, fig, load in rows:
