@@ -198,6 +198,15 @@ pub struct CompensateSummary {
     pub max_deflection_mm: f64,
     pub residual_mean_mm: f64,
     pub residual_max_mm: f64,
+    /// The tool's turn under the load before compensation, degrees.
+    pub mean_rotation_deg: f64,
+    pub max_rotation_deg: f64,
+    /// The angle between the deflected tool at the commanded points and
+    /// the nominal tool, degrees: the turn itself unless `orientation`.
+    pub residual_rotation_mean_deg: f64,
+    pub residual_rotation_max_deg: f64,
+    /// Whether the orientation was corrected (`--orientation`).
+    pub orientation: bool,
     pub points: usize,
     pub files: Vec<String>,
     /// With --stock: the moves the force model loaded and the largest mean
@@ -213,6 +222,11 @@ impl CompensateSummary {
             max_deflection_mm: sig(c.max, 6),
             residual_mean_mm: sig(c.residual_mean, 6),
             residual_max_mm: sig(c.residual_max, 6),
+            mean_rotation_deg: sig(c.rot_mean_deg, 6),
+            max_rotation_deg: sig(c.rot_max_deg, 6),
+            residual_rotation_mean_deg: sig(c.residual_rot_mean_deg, 6),
+            residual_rotation_max_deg: sig(c.residual_rot_max_deg, 6),
+            orientation: c.orientation,
             points: c.points,
             files,
             loads: LoadSummary::of(load),
@@ -237,6 +251,19 @@ impl CompensateSummary {
             o,
             "after compensation (the model against itself): mean {} mm, max {} mm",
             self.residual_mean_mm, self.residual_max_mm
+        );
+        let _ = writeln!(
+            o,
+            "tool turned by the load: mean {}°, max {}°; after compensation ({}): mean {}°, max {}°",
+            self.mean_rotation_deg,
+            self.max_rotation_deg,
+            if self.orientation {
+                "orientation corrected"
+            } else {
+                "orientation not corrected"
+            },
+            self.residual_rotation_mean_deg,
+            self.residual_rotation_max_deg
         );
         let _ = writeln!(o, "wrote {}", self.files.join(", "));
         o

@@ -28,6 +28,7 @@ fn raster(rows: usize, len: f64, step: f64, gap: f64) -> Vec<PathPoint> {
             feed: 5310.0 * 3.0 * 0.08,
             line: r as u32 + 1,
             mv: r as u32,
+            tilt: DVec3::ZERO,
         });
         v.push(PathPoint {
             p: DVec3::new(b, y, 0.0),
@@ -35,6 +36,7 @@ fn raster(rows: usize, len: f64, step: f64, gap: f64) -> Vec<PathPoint> {
             feed: 5310.0 * 3.0 * 0.08,
             line: r as u32 + 1,
             mv: r as u32,
+            tilt: DVec3::ZERO,
         });
     }
     resample(&v, step)

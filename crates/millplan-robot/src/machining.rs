@@ -10,7 +10,7 @@
 
 use crate::anneal::{self, Settings};
 use crate::kin::Joints;
-use crate::pose::Pose;
+use crate::pose::{matrix_to_abc, rotation_vector, Pose};
 use crate::robot::Robot;
 use crate::stiffness::Variant;
 use millplan_geom::{DMat3, DVec3};
@@ -34,6 +34,39 @@ pub struct PathPoint {
     /// Index of the move over the whole program (operations in order), the
     /// key of a per-move load.
     pub mv: u32,
+    /// A rotation of the tool's orientation on top of the one its axis
+    /// gives (rotation vector, rad, workpiece frame, applied on the left):
+    /// zero on a nominal path, −Δθ where the compensation corrects the
+    /// orientation.
+    pub tilt: DVec3,
+}
+
+impl PathPoint {
+    /// The tool's orientation in the workpiece frame (KUKA: the tool along
+    /// the frame's x): that of the axis, turned by the tilt.
+    pub fn orientation(&self) -> DMat3 {
+        let r = abc_matrix(abc_for_axis(self.axis));
+        if self.tilt == DVec3::ZERO {
+            r
+        } else {
+            rotation(self.tilt) * r
+        }
+    }
+
+    /// KUKA's A, B, C (degrees) of the orientation: exactly those of the
+    /// axis when there is no tilt.
+    pub fn abc(&self) -> [f64; 3] {
+        if self.tilt == DVec3::ZERO {
+            abc_for_axis(self.axis)
+        } else {
+            matrix_to_abc(&self.orientation())
+        }
+    }
+}
+
+/// The rotation of a rotation vector (axis times angle, rad).
+pub fn rotation(v: DVec3) -> DMat3 {
+    DMat3::from_quat(glam::DQuat::from_scaled_axis(v))
 }
 
 /// The workpiece frame in the robot base: a translation (mm) and a turn
@@ -130,6 +163,7 @@ pub fn cutting_runs(prog: &Program) -> Result<Vec<Vec<PathPoint>>, MachiningErro
                 feed: m.feed,
                 line: m.line,
                 mv,
+                tilt: DVec3::ZERO,
             };
             match m.kind {
                 MoveKind::Rapid => {
@@ -256,33 +290,37 @@ pub fn tcp_pose(place: &Pose, p: DVec3, axis: DVec3) -> Pose {
 }
 
 /// What a thread keeps between the points of a path: the chain's frames
-/// and the last tool axis with its rotation (a path's axis seldom changes,
-/// and turning it into KUKA's A, B, C and back costs a dozen sines).
+/// and the last tool axis and tilt with their rotation (a path's axis
+/// seldom changes, and turning it into KUKA's A, B, C and back costs a
+/// dozen sines).
 #[derive(Default)]
 struct Scratch {
     frames: Vec<Pose>,
-    axis: Option<(DVec3, DMat3)>,
+    axis: Option<(DVec3, DVec3, DMat3)>,
 }
 
 impl Scratch {
-    /// [`tcp_pose`], the rotation of the last axis reused.
-    fn tcp_pose(&mut self, place: &Pose, p: DVec3, axis: DVec3) -> Pose {
+    /// The TCP's pose in the base at `pt` ([`tcp_pose`] with the tilt), the
+    /// rotation of the last axis and tilt reused.
+    fn tcp_pose(&mut self, place: &Pose, pt: &PathPoint) -> Pose {
         let r = match self.axis {
-            Some((a, r)) if a == axis => r,
+            Some((a, t, r)) if a == pt.axis && t == pt.tilt => r,
             _ => {
-                let r = place.r * abc_matrix(abc_for_axis(axis));
-                self.axis = Some((axis, r));
+                let r = place.r * pt.orientation();
+                self.axis = Some((pt.axis, pt.tilt, r));
                 r
             }
         };
-        Pose::new(r, place.apply(p))
+        Pose::new(r, place.apply(pt.p))
     }
 }
 
-/// The deflection along a run: Δp (workpiece frame, mm) per point.
+/// The deflection along a run: Δp (workpiece frame, mm) and Δθ (the
+/// rotation vector of the tool, workpiece frame, rad) per point.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Deflections {
     pub dp: Vec<DVec3>,
+    pub dtheta: Vec<DVec3>,
     pub mean: f64,
     pub max: f64,
     /// KUKA Status of the configuration used throughout.
@@ -405,17 +443,20 @@ impl Robot {
         let status = match status {
             Some(s) => s,
             None => self
-                .choose_status(&tcp_pose(&pose, first.p, first.axis))
+                .choose_status(&Pose::new(
+                    pose.r * first.orientation(),
+                    pose.apply(first.p),
+                ))
                 .ok_or(MachiningError::Unreachable {
                     line: first.line,
                     index: 0,
                 })?,
         };
-        let dp: Vec<DVec3> = run
+        let d: Vec<(DVec3, DVec3)> = run
             .par_iter()
             .enumerate()
             .map_init(Scratch::default, |s, (i, pt)| {
-                let tcp = s.tcp_pose(&pose, pt.p, pt.axis);
+                let tcp = s.tcp_pose(&pose, pt);
                 let q = self
                     .ik_status(&tcp, status)
                     .ok_or(MachiningError::Unreachable {
@@ -424,14 +465,17 @@ impl Robot {
                     })?;
                 let base = pose.r * force(i, pt);
                 let (_, d) = self.deflect_with(&q, variant, base, DVec3::ZERO, &mut s.frames);
-                Ok(pose.r.transpose() * d.dp)
+                let back = pose.r.transpose();
+                Ok((back * d.dp, back * d.dtheta))
             })
             .collect::<Result<_, MachiningError>>()?;
+        let (dp, dtheta): (Vec<DVec3>, Vec<DVec3>) = d.into_iter().unzip();
         let lens = dp.iter().map(|d| d.length());
         let max = lens.clone().fold(0.0, f64::max);
         let mean = lens.sum::<f64>() / dp.len() as f64;
         Ok(Deflections {
             dp,
+            dtheta,
             mean,
             max,
             status,
@@ -445,6 +489,40 @@ pub fn compensate(run: &[PathPoint], dp: &[DVec3]) -> Vec<PathPoint> {
         .zip(dp)
         .map(|(p, d)| PathPoint { p: p.p - *d, ..*p })
         .collect()
+}
+
+/// p_cmd = p_ideal − Δp and the orientation turned by −Δθ (the small-angle
+/// rotation vector taken as a rotation, composed on the left: in the
+/// workpiece frame, which is the base's turned about the vertical, so the
+/// same as in the base), in one step as the position.
+pub fn compensate_pose(run: &[PathPoint], d: &Deflections) -> Vec<PathPoint> {
+    run.iter()
+        .zip(d.dp.iter().zip(&d.dtheta))
+        .map(|(p, (dp, dth))| {
+            let tilt = if p.tilt == DVec3::ZERO {
+                -*dth
+            } else {
+                rotation_vector(&(rotation(-*dth) * rotation(p.tilt)))
+            };
+            PathPoint {
+                p: p.p - *dp,
+                tilt,
+                ..*p
+            }
+        })
+        .collect()
+}
+
+/// The angle (rad) between the deflected tool, commanded with tilt `cmd`
+/// and turned by `dtheta`, and the nominal tool with tilt `ideal` (the same
+/// axis): |dtheta| itself when neither is tilted.
+fn orientation_residual(dtheta: DVec3, cmd: DVec3, ideal: DVec3) -> f64 {
+    if cmd == DVec3::ZERO && ideal == DVec3::ZERO {
+        return dtheta.length();
+    }
+    let q = |v: DVec3| glam::DQuat::from_scaled_axis(v);
+    let r = q(dtheta) * q(cmd) * q(ideal).inverse();
+    2.0 * r.xyz().length().atan2(r.w.abs())
 }
 
 /// A KRL program of compensated runs: the workpiece frame as `BASE_DATA`
@@ -479,7 +557,7 @@ pub fn krl_program(
         for (i, p) in run.iter().enumerate() {
             let pos = KrlPos {
                 xyz: p.p,
-                abc: abc_for_axis(p.axis),
+                abc: p.abc(),
                 e: [None; 6],
                 s: None,
                 t: None,
@@ -590,7 +668,36 @@ pub struct Compensated {
     /// same loads (the model against itself, T14).
     pub residual_mean: f64,
     pub residual_max: f64,
+    /// Mean and largest |Δθ|, the tool's turn under the load, before
+    /// compensation, degrees.
+    pub rot_mean_deg: f64,
+    pub rot_max_deg: f64,
+    /// Mean and largest angle between the deflected tool at the commanded
+    /// points and the nominal tool, degrees: |Δθ| there when the
+    /// orientation is not corrected.
+    pub residual_rot_mean_deg: f64,
+    pub residual_rot_max_deg: f64,
+    /// Whether the orientation was corrected too.
+    pub orientation: bool,
     pub points: usize,
+}
+
+/// Sums and maxima of the distances and angles over the points.
+#[derive(Default)]
+struct Tally {
+    sum: f64,
+    max: f64,
+    rot_sum: f64,
+    rot_max: f64,
+}
+
+impl Tally {
+    fn add(&mut self, dist: f64, angle: f64) {
+        self.sum += dist;
+        self.max = self.max.max(dist);
+        self.rot_sum += angle;
+        self.rot_max = self.rot_max.max(angle);
+    }
 }
 
 /// Compensates every cutting run of `prog` (in the workpiece frame, placed
@@ -606,33 +713,57 @@ pub fn compensate_program(
     load: &PathLoad,
     spacing: f64,
 ) -> Result<Compensated, MachiningError> {
+    compensate_program_with(robot, variant, prog, place, load, spacing, false)
+}
+
+/// [`compensate_program`], with `orientation` the tool's orientation
+/// corrected as well ([`compensate_pose`]).
+pub fn compensate_program_with(
+    robot: &Robot,
+    variant: Variant,
+    prog: &Program,
+    place: &Placement,
+    load: &PathLoad,
+    spacing: f64,
+    orientation: bool,
+) -> Result<Compensated, MachiningError> {
     let (mut runs, mut ideals) = (Vec::new(), Vec::new());
-    let (mut sum, mut max, mut points) = (0.0, 0.0f64, 0);
-    let (mut rsum, mut rmax) = (0.0, 0.0f64);
+    let (mut before, mut after, mut points) = (Tally::default(), Tally::default(), 0);
     for run in cutting_runs(prog)? {
         let ideal = resample(&run, spacing);
         let dirs = feed_dirs(&ideal);
         let d = robot.deflections_loaded(variant, place, &ideal, &dirs, load, None)?;
-        sum += d.mean * ideal.len() as f64;
-        max = max.max(d.max);
+        for (dp, dth) in d.dp.iter().zip(&d.dtheta) {
+            before.add(dp.length(), dth.length());
+        }
         points += ideal.len();
-        let cmd = compensate(&ideal, &d.dp);
+        let cmd = match orientation {
+            true => compensate_pose(&ideal, &d),
+            false => compensate(&ideal, &d.dp),
+        };
         let at = robot.deflections_loaded(variant, place, &cmd, &dirs, load, Some(d.status))?;
-        for ((c, a), i) in cmd.iter().zip(&at.dp).zip(&ideal) {
-            let r = (c.p + *a - i.p).length();
-            rsum += r;
-            rmax = rmax.max(r);
+        for (((c, a), th), i) in cmd.iter().zip(&at.dp).zip(&at.dtheta).zip(&ideal) {
+            after.add(
+                (c.p + *a - i.p).length(),
+                orientation_residual(*th, c.tilt, i.tilt),
+            );
         }
         runs.push(cmd);
         ideals.push(ideal);
     }
+    let n = points as f64;
     Ok(Compensated {
         runs,
         ideal: ideals,
-        mean: sum / points as f64,
-        max,
-        residual_mean: rsum / points as f64,
-        residual_max: rmax,
+        mean: before.sum / n,
+        max: before.max,
+        residual_mean: after.sum / n,
+        residual_max: after.max,
+        rot_mean_deg: (before.rot_sum / n).to_degrees(),
+        rot_max_deg: before.rot_max.to_degrees(),
+        residual_rot_mean_deg: (after.rot_sum / n).to_degrees(),
+        residual_rot_max_deg: after.rot_max.to_degrees(),
+        orientation,
         points,
     })
 }

@@ -192,6 +192,81 @@ fn compensate_writes_krl_and_reports() {
     );
 }
 
+/// The commanded poses of a KRL file: X, Y, Z and A, B, C.
+fn krl_poses(path: &std::path::Path) -> Vec<([f64; 3], [f64; 3])> {
+    let text = std::fs::read_to_string(path).expect("written");
+    let k = millplan_nc::krl::read(&text, &mut |_| None).expect("KRL reads back");
+    k.statements
+        .iter()
+        .filter_map(|l| match &l.statement {
+            millplan_nc::krl::Statement::Move {
+                motion: millplan_nc::krl::Motion::Lin(p) | millplan_nc::krl::Motion::Ptp(p),
+                ..
+            } => Some((p.xyz.to_array(), p.abc)),
+            _ => None,
+        })
+        .collect()
+}
+
+/// `robot compensate --orientation`: the same positions, the tool turned
+/// back; the deflected tool then stays within a thousandth of the load's
+/// turn of the nominal orientation (without: off by the whole turn, a
+/// hundredth of a degree here), and the tip within a thousandth of the
+/// largest deflection of the path.
+#[test]
+fn compensate_corrects_the_orientation_on_request() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let apt = zigzag_apt(dir.path());
+    let go = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "robot",
+            "compensate",
+            apt.to_str().expect("utf8"),
+            "--pose",
+            "1300,-100,300,0",
+            "--load",
+            "-60,150,40",
+            "--max-points",
+            "0",
+            "-o",
+            out.to_str().expect("utf8"),
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        (json(&args), krl_poses(&out))
+    };
+    let (plain, plain_krl) = go("plain.src", &[]);
+    let (posed, posed_krl) = go("posed.src", &["--orientation"]);
+    let f = |j: &serde_json::Value, k: &str| j[k].as_f64().expect(k);
+    let turn = f(&plain, "max_rotation_deg");
+    assert!(turn > 1e-3 && turn < 1.0, "{plain}");
+    assert_eq!(turn, f(&posed, "max_rotation_deg"));
+    assert_eq!(plain["orientation"], false);
+    assert_eq!(posed["orientation"], true);
+    let plain_off = f(&plain, "residual_rotation_max_deg");
+    assert!((plain_off - turn).abs() < 0.01 * turn, "{plain}");
+    assert!(
+        f(&posed, "residual_rotation_max_deg") < 1e-3 * turn,
+        "{posed}"
+    );
+    let max = f(&plain, "max_deflection_mm");
+    for j in [&plain, &posed] {
+        assert!(f(j, "residual_max_mm") < 1e-3 * max, "{j}");
+    }
+    assert_eq!(plain_krl.len(), posed_krl.len());
+    let mut turned = 0;
+    for ((p, a), (q, b)) in plain_krl.iter().zip(&posed_krl) {
+        assert_eq!(p, q, "the positions do not change");
+        turned += usize::from(a.iter().zip(b).any(|(x, y)| (x - y).abs() > 1e-4));
+    }
+    assert!(
+        turned > plain_krl.len() / 2,
+        "{turned} of {}",
+        plain_krl.len()
+    );
+}
+
 /// `robot place`: the JSON keys of the issue, feasible, reproducible for a seed.
 #[test]
 fn place_is_seeded() {

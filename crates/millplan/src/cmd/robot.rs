@@ -89,6 +89,12 @@ pub struct CompensateArgs {
     /// one file.
     #[arg(long, default_value_t = millplan_driver::command_defaults::robot::MAX_POINTS)]
     pub max_points: usize,
+    /// Correct the tool's orientation too: each point is commanded turned
+    /// back by the angle the load turns the tool there (A, B, C written from
+    /// the turned frame). Without it only the position is corrected and the
+    /// tool stays tilted by that angle, a few hundredths of a degree.
+    #[arg(long)]
+    pub orientation: bool,
     /// The KRL program to write (.src); sub-programs go beside it.
     #[arg(short = 'o', long)]
     pub output: std::path::PathBuf,
@@ -378,8 +384,16 @@ fn compensate(a: CompensateArgs) -> CliResult<i32> {
     arg("--spacing", a.spacing, Range::from(0.01, 100.0, "mm"))?;
     crate::io::Outputs::plan(&[a.path.as_path()], &[("-o", Some(&a.output))], false)?;
     let (robot, prog, load, variant) = process(&a.path, &a.process)?;
-    let c = machining::compensate_program(&robot, variant, &prog, &place, &load, a.spacing)
-        .map_err(|e| machining_error(&a.path, e))?;
+    let c = machining::compensate_program_with(
+        &robot,
+        variant,
+        &prog,
+        &place,
+        &load,
+        a.spacing,
+        a.orientation,
+    )
+    .map_err(|e| machining_error(&a.path, e))?;
     let paths = write_krl(&a, &c, &place)?;
     let files = paths.iter().map(|p| p.display().to_string()).collect();
     let out = millplan_driver::robot::CompensateSummary::new(&c, &load, files);
