@@ -135,6 +135,10 @@ pub struct CouplingArgs {
     /// Part surface (STL), for --stock offset:MM.
     #[arg(long)]
     pub stl: Option<std::path::PathBuf>,
+    /// Unit of the STL file's numbers (an STL does not say): mm (default) or
+    /// inch, converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<crate::cmd::UnitArg>,
     /// Named material (`millplan force materials`; en-aw-2007: the paper's).
     #[arg(long, requires = "stock")]
     pub material: Option<String>,
@@ -165,7 +169,7 @@ impl CouplingArgs {
         crate::cmd::feed::ModelArgs {
             stock: self.stock.clone(),
             stl: self.stl.clone(),
-            stl_units: None,
+            stl_units: self.stl_units,
             material: self.material.clone(),
             materials: self.materials.clone(),
             machine: None,
