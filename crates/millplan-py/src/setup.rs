@@ -73,7 +73,8 @@ fn run(
         })?;
         let secs = t0.elapsed().as_secs_f64();
         let s = found.summary(&mesh, k);
-        let report = lib::Report::new(req, &s, k, secs);
+        let verdict = lib::verdict(req, &mesh, &found);
+        let report = lib::Report::new(req, &s, k, (secs, verdict));
         let json = serde_json::to_string(&report)
             .map_err(|e| Located::new(Place::file(name), e.to_string()))?;
         let r = found.best.setup;
