@@ -10,10 +10,13 @@ use millplan_models::force::Grid;
 use millplan_nc::{Operation, Program};
 pub use millplan_plan::feed::FeedParams;
 use millplan_plan::feed::{machine_accel, BodyFn, FeedChanges, FeedPass};
-use millplan_plan::force::{simulate, FeedLimits, ForceSetup, FzRange, MoveForces};
+/// The load limits of a run.
+pub use millplan_plan::force::FeedLimits;
+use millplan_plan::force::{simulate, ForceSetup, FzRange, MoveForces};
 use millplan_plan::force::{Maxima, Steps};
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context, PassError, Progress};
+use millplan_report::html::Verdict;
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
 use millplan_sim::stock::spec::StockSpec;
 use millplan_sim::stock::tool::{BodyOptions, ToolBody};
@@ -203,6 +206,110 @@ impl Prepared {
             chip_loads: chip_loads(m, materials)?,
         })
     }
+}
+
+/// The files a `force` or `feed` run read, by the names a report shows
+/// (file names, not folders).
+pub struct InputNames {
+    pub program: String,
+    /// The part (`--stl`), when given.
+    pub part: Option<String>,
+}
+
+impl InputNames {
+    /// The names of the program at `program` and the part at `part`.
+    pub fn of(program: &std::path::Path, part: Option<&std::path::Path>) -> InputNames {
+        InputNames {
+            program: file_name(program),
+            part: part.map(file_name),
+        }
+    }
+}
+
+/// A file's name without its folder, as a report's header shows it.
+pub fn file_name(f: &std::path::Path) -> String {
+    f.file_name().map_or_else(
+        || f.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
+/// The header rows of a `force` or `feed` report: program, part, stock,
+/// the tools the program cuts with, material, machine, the model's options
+/// and the load limits.
+pub fn model_inputs(
+    names: &InputNames,
+    m: &ModelRequest,
+    p: &Prepared,
+    limits: &FeedLimits,
+) -> Vec<(String, String)> {
+    let mut tools = crate::speed::cutting_tools(&p.program);
+    if let Some(t) = &m.tool {
+        tools.push_str(&format!(" (--tool {t} where the program gives no shape)"));
+    }
+    let mc = &p.machine;
+    let mut options = format!(
+        "{} flutes, helix {}°, resolution {} mm, force grid dz {} mm × dφ {}°",
+        m.flutes, m.helix, m.resolution, m.dz, m.dphi
+    );
+    if let Some(n) = m.spindle {
+        options.push_str(&format!(", spindle {n} 1/min where the program gives none"));
+    }
+    vec![
+        ("program".into(), names.program.clone()),
+        (
+            "part".into(),
+            names.part.clone().unwrap_or_else(|| "none given".into()),
+        ),
+        ("stock".into(), p.stock_name.clone()),
+        ("tools".into(), tools),
+        (
+            "material".into(),
+            m.material.clone().unwrap_or_else(|| "–".into()),
+        ),
+        (
+            "machine".into(),
+            format!(
+                "{}: spindle {:.0}–{:.0} 1/min, feed up to {:.0} mm/min",
+                mc.name, mc.spindle_min, mc.spindle_max, mc.feed_max
+            ),
+        ),
+        ("options".into(), options),
+        ("load limits".into(), limits_words(limits)),
+    ]
+}
+
+/// The load limits in words: each given limit with its unit, the factor of
+/// safety and the feed per tooth's range.
+pub fn limits_words(l: &FeedLimits) -> String {
+    let named = [
+        ("F_xy", l.fxy, "N"),
+        ("torque", l.torque, "N·mm"),
+        ("power", l.power, "W"),
+        ("stress", l.stress, "MPa"),
+        ("deflection", l.deflection, "mm"),
+    ];
+    let mut w: Vec<String> = named
+        .iter()
+        .filter_map(|(k, v, u)| v.map(|v| format!("{k} {} {u}", millplan_report::forces::round(v))))
+        .collect();
+    if w.is_empty() {
+        w.push("none given (the machine's spindle chart only)".into());
+    }
+    w.push(format!(
+        "factor of safety {}",
+        millplan_report::forces::round(l.fos)
+    ));
+    let fz_max = match l.fz_max {
+        Some(f) if f.is_finite() => format!("{} mm", millplan_report::forces::round(f)),
+        Some(_) => "unbounded".into(),
+        None => "per tool from the material's chip loads".into(),
+    };
+    w.push(format!(
+        "feed per tooth from {} mm to {fz_max}",
+        millplan_report::forces::round(l.fz_min)
+    ));
+    w.join(", ")
 }
 
 /// Gives the moves of `program` without a spindle speed the request's
@@ -415,10 +522,16 @@ pub struct FeedSummary {
     pub over_limit_lines: Vec<u32>,
     pub within_tolerance_after: usize,
     pub stock: String,
+    /// A cutting move of the input meets the stock (else nothing to act on).
+    pub stock_contact: bool,
     pub output: String,
     pub dialect: &'static str,
     pub operations: Vec<OperationJson>,
     pub steps: Steps,
+    /// The verdict by the one rule: red when a move is still over a limit,
+    /// amber when no block's feed changed, a warning applies or the cycle
+    /// time grew, green otherwise.
+    pub verdict: Verdict,
 }
 
 /// The lines of the first 20 moves of `over`.
@@ -442,6 +555,19 @@ impl FeedSummary {
         let (t0, t1) = (t(&p.program), t(&s.program));
         let over = after.over_limits(&limits, &p.machine);
         let c = &s.changes;
+        let over_lines = first_lines(&over);
+        let mut e = millplan_report::forces::feed_evidence(
+            over.len() as u64,
+            (c.blocks + c.air_blocks) as u64,
+            [t0.total_s, t1.total_s],
+        );
+        let mut warnings = load_warnings(over.len(), &over_lines, 0, 0);
+        let stock_contact = meets_stock(&s.before);
+        if !stock_contact {
+            e.kept = true;
+            warnings.push(no_contact(&p.stock_name));
+        }
+        let verdict = Verdict::of(&e, warnings);
         FeedSummary {
             time_before_s: t0.total_s,
             time_after_s: t1.total_s,
@@ -468,14 +594,22 @@ impl FeedSummary {
                 fos: limits.fos,
             },
             over_limit_after: over.len(),
-            over_limit_lines: first_lines(&over),
+            over_limit_lines: over_lines,
             within_tolerance_after: after.within_tolerance(&limits, &p.machine).len(),
             stock: p.stock_name.clone(),
+            stock_contact,
             output: output.to_string(),
             dialect,
             operations: per_operation(&s.program, &s.before, after),
             steps: s.before.steps(&p.setup.grid),
+            verdict,
         }
+    }
+
+    /// Whether the run found problems (exit 3): moves still over a limit,
+    /// or no cutting move that meets the stock.
+    pub fn findings(&self) -> bool {
+        self.over_limit_after > 0 || !self.stock_contact
     }
 
     /// The summary in words, as `feed` prints it.
@@ -539,10 +673,11 @@ impl FeedSummary {
             );
         }
         let _ = writeln!(o, "wrote {} ({})", self.output, self.dialect);
+        o.push_str(&self.verdict.text());
     }
 
     /// The feed report's warnings and verdict.
-    pub fn notes(&self) -> millplan_report::html::Notes {
+    pub fn notes(&self, inputs: Vec<(String, String)>) -> millplan_report::html::Notes {
         let (t0, t1) = (self.time_before_s, self.time_after_s);
         let mut verdict = vec![format!(
             "Time {t0:.1} s → {t1:.1} s ({:+.1} %); F_xy max {:.1} → {:.1} N, tip deflection {:.4} → {:.4} mm; deciding per block: {}.",
@@ -556,13 +691,7 @@ impl FeedSummary {
         for op in &self.operations {
             verdict.push(format!("{}.", op.text()));
         }
-        let e = millplan_report::forces::feed_evidence(
-            self.over_limit_after as u64,
-            (self.blocks + self.air_blocks) as u64,
-            [t0, t1],
-        );
-        let warnings = load_warnings(self.over_limit_after, &self.over_limit_lines, 0, 0);
-        millplan_report::html::Notes::judged(Vec::new(), warnings, &e, verdict)
+        millplan_report::html::Notes::of_verdict(inputs, &self.verdict, verdict)
     }
 }
 
@@ -619,6 +748,17 @@ fn per_operation(p: &Program, before: &ForceRun, after: &ForceRun) -> Vec<Operat
             fxy_max_after: a.fxy[1],
         })
         .collect()
+}
+
+/// Whether a cutting move of `run` meets the stock.
+pub fn meets_stock(run: &ForceRun) -> bool {
+    run.moves.iter().any(|m| !m.rapid && !m.air)
+}
+
+/// The warning of a run whose cutting moves all pass through air: nothing
+/// to load, the stock (`stock`, as given) is likely not the one cut.
+pub fn no_contact(stock: &str) -> String {
+    format!("no cutting move meets the stock (--stock {stock}): there is no load to act on; is it the stock this program cuts?")
 }
 
 /// Warnings shared by `force` and `feed`: moves over a limit (`over` of
@@ -706,6 +846,7 @@ pub fn loads_csv(run: &ForceRun) -> String {
 
 /// The feed report: loads before and after against time, the limits drawn.
 pub fn feed_report(
+    inputs: Vec<(String, String)>,
     summary: &FeedSummary,
     before: &ForceRun,
     after: &ForceRun,
@@ -715,7 +856,7 @@ pub fn feed_report(
     millplan_report::forces::report(
         "millplan feed: loads before and after",
         "Per move, the largest load of its strokes against the time the move starts; the black line is the limit at the move's spindle speed.",
-        &summary.notes(),
+        &summary.notes(inputs),
         &summary_rows(summary),
         &[("input", &before.moves), ("output", &after.moves)],
         &quantities(limits, machine),

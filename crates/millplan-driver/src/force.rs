@@ -3,10 +3,11 @@
 //! measured slot forces, and the list of named materials.
 
 use crate::check::{arg, Range};
-use crate::feed::{load_warnings, quantities, summary_rows, Prepared};
+use crate::feed::{load_warnings, meets_stock, no_contact, quantities, summary_rows, Prepared};
 use millplan_models::force::coeffs::{calibrate_slot, Calibration, Line, SlotTest};
 use millplan_models::force::materials::Materials;
 use millplan_plan::force::{FeedLimits, ForceRun, Maxima, MoveForces, Steps};
+use millplan_report::html::Verdict;
 use serde::Serialize;
 use std::fmt::Write as _;
 
@@ -36,7 +37,12 @@ pub struct ForceSummary {
     pub within_tolerance: usize,
     pub limit_tolerance: f64,
     pub stock: String,
+    /// A cutting move meets the stock (else nothing to act on).
+    pub stock_contact: bool,
     pub steps: Steps,
+    /// The verdict by the one rule: red when a move is over a limit, amber
+    /// on a warning (loads missing), green otherwise.
+    pub verdict: Verdict,
 }
 
 impl ForceSummary {
@@ -49,11 +55,21 @@ impl ForceSummary {
                 .max_by(|a, b| f(a).total_cmp(&f(b)))
                 .map_or(0, |x| x.line)
         };
+        let unmodelled = run.moves.iter().filter(|x| x.unmodelled).count();
+        let over_lines: Vec<u32> = over.iter().take(20).map(|x| x.line).collect();
+        let mut e = millplan_report::forces::force_evidence(over.len() as u64);
+        let mut warnings = load_warnings(over.len(), &over_lines, unmodelled, run.skipped);
+        let stock_contact = meets_stock(run);
+        if !stock_contact {
+            e.kept = true;
+            warnings.push(no_contact(&p.stock_name));
+        }
+        let verdict = Verdict::of(&e, warnings);
         ForceSummary {
             moves: run.moves.len(),
             cutting_moves: run.moves.iter().filter(|x| !x.rapid).count(),
             air_moves: run.moves.iter().filter(|x| x.air).count(),
-            unmodelled_moves: run.moves.iter().filter(|x| x.unmodelled).count(),
+            unmodelled_moves: unmodelled,
             skipped_moves: run.skipped,
             evaluations: run.evaluated,
             time_s: run.moves.last().map_or(0.0, |x| x.t_start_s + x.seconds),
@@ -65,26 +81,28 @@ impl ForceSummary {
                 deflection: worst(|x| x.deflection_mm),
             },
             over_limit: over.len(),
-            over_limit_lines: over.iter().take(20).map(|x| x.line).collect(),
+            over_limit_lines: over_lines,
             within_tolerance: run.within_tolerance(limits, &p.machine).len(),
             limit_tolerance: millplan_plan::force::LIMIT_TOLERANCE,
             stock: p.stock_name.clone(),
+            stock_contact,
             steps: run.steps(&p.setup.grid),
+            verdict,
         }
     }
 
+    /// Whether the run found problems (exit 3): a move over a limit, or no
+    /// cutting move that meets the stock.
+    pub fn findings(&self) -> bool {
+        self.over_limit > 0 || !self.stock_contact
+    }
+
     /// The force report's warnings and verdict.
-    pub fn notes(&self) -> millplan_report::html::Notes {
+    pub fn notes(&self, inputs: Vec<(String, String)>) -> millplan_report::html::Notes {
         let (m, l) = (&self.max, &self.max_lines);
-        millplan_report::html::Notes::judged(
-            Vec::new(),
-            load_warnings(
-                self.over_limit,
-                &self.over_limit_lines,
-                self.unmodelled_moves,
-                self.skipped_moves,
-            ),
-            &millplan_report::forces::force_evidence(self.over_limit as u64),
+        millplan_report::html::Notes::of_verdict(
+            inputs,
+            &self.verdict,
             vec![format!(
                 "Largest loads: F_xy {:.1} N (line {}), torque {:.1} N·mm (line {}), power {:.1} W (line {}), tip deflection {:.4} mm (line {}), over {:.1} s of program.",
                 m.fxy, l.fxy, m.torque, l.torque, m.power, l.power, m.deflection, l.deflection, self.time_s
@@ -122,6 +140,7 @@ impl ForceSummary {
         if !over.is_empty() {
             let _ = writeln!(o, "{} moves over a limit", over.len());
         }
+        o.push_str(&self.verdict.text());
         o
     }
 }
@@ -130,6 +149,7 @@ impl ForceSummary {
 /// limits drawn.
 pub fn report(
     path: &str,
+    inputs: Vec<(String, String)>,
     summary: &ForceSummary,
     run: &ForceRun,
     limits: &FeedLimits,
@@ -138,7 +158,7 @@ pub fn report(
     millplan_report::forces::report(
         &format!("millplan force: {path}"),
         "Per move, the largest load of its strokes against the time the move starts; the black line is the limit at the move's spindle speed.",
-        &summary.notes(),
+        &summary.notes(inputs),
         &summary_rows(summary),
         &[("program", &run.moves)],
         &quantities(limits, &p.machine),

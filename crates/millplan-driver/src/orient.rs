@@ -9,6 +9,7 @@ use millplan_nc::{Operation, Program};
 use millplan_plan::leadtilt::{Objective, OpChoice, OpSkipped, Oriented, Params, StockInput};
 use millplan_plan::machine::Machine;
 use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
+use millplan_report::html::{failed_checks, worse_words, Evidence, Verdict};
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
 use millplan_sim::stock::spec::StockSpec;
 use millplan_sim::stock::tool::{BodyOptions, ToolBody};
@@ -204,6 +205,10 @@ pub fn check(
     })
 }
 
+/// An operation's objective that grew by more than this share counts as
+/// worse in the verdict (below it: the search's resolution).
+pub const OBJECTIVE_WORSE: f64 = 0.005;
+
 /// What `orient` reports (`--json`).
 #[derive(Serialize)]
 pub struct Summary {
@@ -220,6 +225,43 @@ pub struct Summary {
     /// The checks of the written program (absent when nothing is written).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub checks: Option<Vec<Check>>,
+    /// The verdict by the one rule: red when a check of the written program
+    /// failed; amber when nothing was re-oriented, an operation's objective
+    /// got worse, a ball-end operation was left as it was or moves are not
+    /// simulated; green otherwise.
+    pub verdict: Verdict,
+}
+
+/// The warnings of a choice: ball-end operations left as they were (the
+/// pass applies to them; other tools are not its business) and moves the
+/// stock does not see.
+fn warnings(o: &Oriented, unsimulated: usize) -> Vec<String> {
+    let is_ball = |k: usize| {
+        o.program
+            .operations
+            .get(k)
+            .and_then(|op| op.tool.as_ref())
+            .and_then(|t| t.cutter)
+            .is_some_and(|c| c.kind == millplan_nc::CutterKind::Ball)
+    };
+    let mut w: Vec<String> = o
+        .skipped
+        .iter()
+        .filter(|k| is_ball(k.operation))
+        .map(|k| {
+            format!(
+                "operation {} (a ball-end mill) is left as it was: {}",
+                k.operation + 1,
+                k.reason
+            )
+        })
+        .collect();
+    if unsimulated > 0 {
+        w.push(format!(
+            "{unsimulated} moves are not simulated (their tool has no shape, or their position or axis is unknown): the stock does not see them"
+        ));
+    }
+    w
 }
 
 impl Summary {
@@ -227,7 +269,7 @@ impl Summary {
     /// moves the stock does not see (with a stock).
     pub fn new(a: &OrientRequest, o: &Oriented, output: &str, unsimulated: usize) -> Summary {
         let stock = a.stock.is_some();
-        Summary {
+        let mut s = Summary {
             objective: a.objective,
             operations: o.chosen.clone(),
             skipped: o.skipped.clone(),
@@ -237,10 +279,59 @@ impl Summary {
             resolution_mm: stock.then_some(a.resolution),
             unsimulated_moves: unsimulated,
             checks: None,
-        }
+            verdict: Verdict {
+                warnings: warnings(o, unsimulated),
+                ..Verdict::default()
+            },
+        };
+        s.judge();
+        s
     }
 
-    /// The text report: a line per operation, then what was written.
+    /// The summary with the checks of the written program, judged again.
+    pub fn with_checks(mut self, checks: Vec<Check>) -> Summary {
+        self.checks = Some(checks);
+        self.judge();
+        self
+    }
+
+    /// The verdict from the checks, what was chosen and the warnings.
+    fn judge(&mut self) {
+        let (name, unit) = match self.objective {
+            Objective::Time => ("time", "s"),
+            Objective::Fxy => ("F_xy,max", "N"),
+        };
+        let worse = self
+            .operations
+            .iter()
+            .filter_map(|c| {
+                let b = c.objective_before?;
+                (c.objective_after > b * (1.0 + OBJECTIVE_WORSE)).then(|| {
+                    worse_words(
+                        &format!("operation {} {name}", c.operation + 1),
+                        b,
+                        c.objective_after,
+                        1,
+                        unit,
+                    )
+                })
+            })
+            .collect();
+        let e = Evidence {
+            failed: self
+                .checks
+                .as_deref()
+                .map(failed_checks)
+                .unwrap_or_default(),
+            kept: self.operations.is_empty(),
+            worse,
+        };
+        let warnings = std::mem::take(&mut self.verdict.warnings);
+        self.verdict = Verdict::of(&e, warnings);
+    }
+
+    /// The text report: a line per operation (counted from 1, as `inspect`,
+    /// `gouge` and `feed` count them), then what was written and the verdict.
     pub fn render_text(&self) -> String {
         let mut o = String::new();
         let time = self.objective == Objective::Time;
@@ -260,7 +351,7 @@ impl Summary {
             let _ = writeln!(
                 o,
                 "operation {}: lead {:.2}°, tilt {:.2}° (read: {:.2}°, {:.2}°); {name} {before} → {:.1} {unit} {source}; refused: {} by tip contact, {} by holder collision, {} by rotary limits",
-                c.operation,
+                c.operation + 1,
                 c.lead,
                 c.tilt,
                 c.lead_before,
@@ -272,7 +363,12 @@ impl Summary {
             );
         }
         for k in &self.skipped {
-            let _ = writeln!(o, "operation {}: left as it was: {}", k.operation, k.reason);
+            let _ = writeln!(
+                o,
+                "operation {}: left as it was: {}",
+                k.operation + 1,
+                k.reason
+            );
         }
         match &self.output {
             Some(p) => {
@@ -280,6 +376,7 @@ impl Summary {
             }
             None => o.push_str("no operation could be re-oriented: nothing written\n"),
         }
+        o.push_str(&self.verdict.text());
         o
     }
 }

@@ -10,6 +10,7 @@ use millplan_nc::Program;
 use millplan_plan::machine::Machine;
 use millplan_plan::post::{AxisRange, Flip, PostError, PostOptions, PostReport};
 use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
+use millplan_report::html::Verdict;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -174,8 +175,30 @@ pub struct PostSummary<'a> {
     pub nominal_g94_s: f64,
     pub rotary: &'a [AxisRange],
     pub checks: &'a [Check],
+    /// The verdict by the one rule: red when a check of the posted program
+    /// failed (written only under `--force`), amber when blocks near the
+    /// pole deviate beyond the pole tolerance, green otherwise.
+    pub verdict: Verdict,
     #[serde(skip)]
     report: &'a PostReport,
+}
+
+/// The verdict of a post: its checks, and the pole blocks whose
+/// orientation deviates beyond `pole_tol` degrees as a warning.
+pub fn verdict(r: &PostReport, checks: &[Check], pole_tol: f64) -> Verdict {
+    let mut warnings = Vec::new();
+    if let Some(first) = r.pole_flagged.first() {
+        warnings.push(format!(
+            "{} blocks near the pole deviate in orientation by more than {pole_tol}° (the first at line {first}; largest {:.3}°)",
+            r.pole_flagged.len(),
+            r.max_orientation_deviation_deg
+        ));
+    }
+    let e = millplan_report::html::Evidence {
+        failed: millplan_report::html::failed_checks(checks),
+        ..Default::default()
+    };
+    Verdict::of(&e, warnings)
 }
 
 impl<'a> PostSummary<'a> {
@@ -219,6 +242,7 @@ impl<'a> PostSummary<'a> {
             nominal_g94_s: r.nominal_g94_s,
             rotary: &r.rotary,
             checks,
+            verdict: verdict(r, checks, o.pole_tol),
             report: r,
         }
     }
@@ -268,6 +292,7 @@ impl<'a> PostSummary<'a> {
             "time {:.1} s estimated ({:.1} s nominal); at the CL tip feed (G93) {:.1} s, a plain G94 post {:.1} s",
             r.time_s, r.nominal_s, r.time_g93_s, r.time_g94_s
         );
+        o.push_str(&self.verdict.text());
         o
     }
 }

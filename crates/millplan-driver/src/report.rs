@@ -184,23 +184,7 @@ fn notes(s: &Summary, n: &InputNames) -> Notes {
 /// program, whether the input was kept, and the measures the passes exist
 /// for (cycle time, points off the cutting speed) that got worse.
 pub fn evidence(s: &Summary) -> Evidence {
-    let failed = s
-        .checks
-        .iter()
-        .filter(|c| !c.ok)
-        .map(|c| {
-            let first = c.findings.iter().find(|f| !f.in_input);
-            match first {
-                Some(f) => format!(
-                    "check {} at line {}: {}",
-                    c.name,
-                    f.line.unwrap_or(0),
-                    f.message
-                ),
-                None => format!("check {}", c.name),
-            }
-        })
-        .collect();
+    let failed = millplan_report::html::failed_checks(&s.checks);
     let mut worse = Vec::new();
     if s.time_after_s > s.time_before_s * (1.0 + TIME_WORSE) {
         worse.push(worse_words(

@@ -6,6 +6,7 @@ use millplan_geom::TriMesh;
 pub use millplan_models::kinematics::Kinematics;
 use millplan_models::kinematics::{KinKind, RotaryAxis};
 use millplan_plan::setup::{GridKind, SetupParams, SetupPlan, Summary};
+use millplan_report::html::Verdict;
 use millplan_sim::access::ToolModel;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -121,6 +122,22 @@ pub fn report(
     plan: &SetupPlan,
     machine: &Kinematics,
 ) -> String {
+    millplan_report::setup::setup_report(&inputs(a, part, mesh, plan), mesh, plan, machine)
+}
+
+/// The verdict of the search, as the report's: text and JSON print it.
+pub fn verdict(a: &SetupRequest, mesh: &TriMesh, plan: &SetupPlan) -> Verdict {
+    millplan_report::setup::setup_verdict(&inputs(a, String::new(), mesh, plan), mesh, plan)
+}
+
+/// What the report and the verdict are made from: the part's name, the
+/// mode, and the mesh's defects and winding among the warnings.
+fn inputs(
+    a: &SetupRequest,
+    part: String,
+    mesh: &TriMesh,
+    plan: &SetupPlan,
+) -> millplan_report::setup::SetupInputs {
     let mut warnings: Vec<String> = millplan_plan::checks::mesh(mesh)
         .into_iter()
         .map(|d| d.message)
@@ -130,7 +147,7 @@ pub fn report(
             "the facets were wound inward (negative volume) and were turned outward".to_string(),
         );
     }
-    let i = millplan_report::setup::SetupInputs {
+    millplan_report::setup::SetupInputs {
         part,
         mode: a
             .tool
@@ -138,8 +155,7 @@ pub fn report(
             .map_or("line of sight".to_string(), |t| format!("tool {t}")),
         clearance_deg: a.clearance,
         warnings,
-    };
-    millplan_report::setup::setup_report(&i, mesh, plan, machine)
+    }
 }
 
 /// A rotary axis's limits: `free`, or `[min, max]`.
@@ -188,6 +204,8 @@ pub struct Report {
     flipped: bool,
     mode: &'static str,
     seconds: f64,
+    /// The verdict by the one rule, as the report's ([`verdict`]).
+    verdict: Verdict,
 }
 
 fn facets(v: &[(usize, [f64; 3])]) -> Vec<FacetJson> {
@@ -198,7 +216,12 @@ fn facets(v: &[(usize, [f64; 3])]) -> Vec<FacetJson> {
 
 impl Report {
     /// The summary of a search that took `seconds`.
-    pub fn new(a: &SetupRequest, s: &Summary, machine: &Kinematics, seconds: f64) -> Report {
+    pub fn new(
+        a: &SetupRequest,
+        s: &Summary,
+        machine: &Kinematics,
+        (seconds, verdict): (f64, Verdict),
+    ) -> Report {
         let limit = |ax: &RotaryAxis| match (ax.min, ax.max) {
             (None, None) => Limit::Free("free"),
             (lo, hi) => Limit::Range([lo, hi]),
@@ -240,12 +263,18 @@ impl Report {
                 "line-of-sight"
             },
             seconds,
+            verdict,
         }
     }
 }
 
 /// The text summary of the search on `part` (its name as printed).
-pub fn render_text(a: &SetupRequest, part: &str, s: &Summary, plan: &SetupPlan) -> String {
+pub fn render_text(
+    a: &SetupRequest,
+    part: &str,
+    (s, v): (&Summary, &Verdict),
+    plan: &SetupPlan,
+) -> String {
     let mut o = String::new();
     let _ = writeln!(
         o,
@@ -294,5 +323,6 @@ pub fn render_text(a: &SetupRequest, part: &str, s: &Summary, plan: &SetupPlan) 
             plan.inaccessible.len()
         );
     }
+    o.push_str(&v.text());
     o
 }

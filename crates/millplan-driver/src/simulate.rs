@@ -28,6 +28,33 @@ pub struct SimRequest {
     pub mesh_resolution: Option<f64>,
 }
 
+/// The header rows of a simulation report: the program and the part by
+/// their file names (`part` none when not given), the stock as given, the
+/// dexel size and the tool (`--tool`, else the program's own).
+pub fn report_inputs(
+    (program, part): (&std::path::Path, Option<&std::path::Path>),
+    stock: &str,
+    a: &SimRequest,
+) -> Vec<(String, String)> {
+    vec![
+        ("program".into(), crate::feed::file_name(program)),
+        (
+            "part".into(),
+            part.map_or("none given".into(), crate::feed::file_name),
+        ),
+        ("stock".into(), stock.to_string()),
+        ("resolution".into(), format!("{} mm", a.resolution)),
+        (
+            "tool".into(),
+            a.tool
+                .clone()
+                .map_or("as each operation of the program gives it".into(), |t| {
+                    format!("{t} (--tool, where the program gives no shape)")
+                }),
+        ),
+    ]
+}
+
 /// The numbers in their ranges, before any work.
 pub fn check(a: &SimRequest) -> Result<(), String> {
     arg(

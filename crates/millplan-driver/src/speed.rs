@@ -10,6 +10,8 @@ use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context, PassError};
 use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
 use millplan_plan::speed::{FeedCoupling, SpeedParams, SpeedPass, Summary};
+pub use millplan_report::html::failed_checks;
+use millplan_report::html::Verdict;
 use serde::Serialize;
 use std::fmt::Write as _;
 
@@ -115,31 +117,48 @@ pub fn checks(cx: &Context, input: &Program, output: &Program) -> Vec<Check> {
     })
 }
 
-/// The tools spindle control works with, as the program names them: those
-/// of its cutting ball-end operations (a multi-tool program's drill and flat
-/// mill are not the tool of the report), each once; the first cutting
-/// operation's tool when none is a ball.
-pub fn tool_name(p: &Program) -> String {
-    let cutting: Vec<&millplan_nc::Tool> = p
+/// Why spindle control has nothing to act on in `p`, when so: no cutting
+/// move, or every cutting operation's cutter is known and none is a ball.
+/// A tool the program gives no shape is no such finding: `--ball-d` names
+/// its ball, and without it the pass asks for the option (the input's lack).
+pub fn nothing_to_control(p: &Program) -> Option<String> {
+    let cutters: Vec<Option<millplan_nc::Cutter>> = p
         .operations
         .iter()
         .filter(|op| op.moves.iter().any(|m| m.is_cutting()))
-        .filter_map(|op| op.tool.as_ref())
+        .map(|op| op.tool.as_ref().and_then(|t| t.cutter))
         .collect();
-    let is_ball = |t: &&millplan_nc::Tool| {
-        t.cutter
-            .is_some_and(|c| c.kind == millplan_nc::CutterKind::Ball)
-    };
+    if cutters.is_empty() {
+        return Some("the program has no cutting move: nothing for spindle control to act on; nothing written".into());
+    }
+    let ball = cutters.iter().any(|c| match c {
+        Some(c) => c.kind == millplan_nc::CutterKind::Ball,
+        None => true,
+    });
+    (!ball).then(|| {
+        format!(
+            "the program has no ball-end operation (its cutters: {}): nothing for spindle control to act on; nothing written",
+            cutting_tools(p)
+        )
+    })
+}
+
+/// The tools of the program's cutting operations, in their order.
+fn cutting_op_tools(p: &Program) -> Vec<&millplan_nc::Tool> {
+    p.operations
+        .iter()
+        .filter(|op| op.moves.iter().any(|m| m.is_cutting()))
+        .filter_map(|op| op.tool.as_ref())
+        .collect()
+}
+
+/// `tools` in words, each once, joined by `; ` (a tool the program gives
+/// neither number, name nor shape is not shown).
+fn distinct_words(tools: &[&millplan_nc::Tool]) -> String {
     let mut shown: Vec<String> = Vec::new();
-    let balls: Vec<&millplan_nc::Tool> = cutting.iter().copied().filter(is_ball).collect();
-    let tools = if balls.is_empty() {
-        cutting.into_iter().take(1).collect()
-    } else {
-        balls
-    };
     for t in tools {
         let words = tool_words(t);
-        if !shown.contains(&words) {
+        if !words.is_empty() && !shown.contains(&words) {
             shown.push(words);
         }
     }
@@ -147,6 +166,33 @@ pub fn tool_name(p: &Program) -> String {
         return "not named by the program".to_string();
     }
     shown.join("; ")
+}
+
+/// The tools spindle control works with, as the program names them: those
+/// of its cutting ball-end operations (a multi-tool program's drill and flat
+/// mill are not the tool of the report), each once; the first cutting
+/// operation's tool when none is a ball.
+pub fn tool_name(p: &Program) -> String {
+    let cutting = cutting_op_tools(p);
+    let balls: Vec<&millplan_nc::Tool> = cutting
+        .iter()
+        .copied()
+        .filter(|t| {
+            t.cutter
+                .is_some_and(|c| c.kind == millplan_nc::CutterKind::Ball)
+        })
+        .collect();
+    if balls.is_empty() {
+        distinct_words(&cutting[..cutting.len().min(1)])
+    } else {
+        distinct_words(&balls)
+    }
+}
+
+/// Every tool the program cuts with, as it names them, each once, in the
+/// order the operations use them (`force` and `feed` load them all).
+pub fn cutting_tools(p: &Program) -> String {
+    distinct_words(&cutting_op_tools(p))
 }
 
 /// A tool in words: `T8 BALL D14.000 R7.000 (ball)`.
@@ -169,7 +215,8 @@ fn tool_words(t: &millplan_nc::Tool) -> String {
 }
 
 /// The header, warnings and cycle times of a spindle-control report; the
-/// program and the part by their file names.
+/// program and the part by their file names. No check failed: a caller
+/// with the written program's checks sets `failed` ([`failed_checks`]).
 pub fn report_inputs(
     (program_name, program): (String, &Program),
     part: String,
@@ -193,6 +240,7 @@ pub fn report_inputs(
         time_before_s: Some(time_before_s),
         time_after_s: Some(time_after_s),
         warnings: findings.iter().map(|d| d.message.clone()).collect(),
+        failed: Vec::new(),
     }
 }
 
@@ -210,6 +258,11 @@ pub struct Report<'a> {
     pub time_before_s: f64,
     pub time_after_s: f64,
     pub time_model: &'static str,
+    /// The verdict by the one rule, as the report's: red when a check of
+    /// the written program failed; amber when no ball-end point was found,
+    /// a warning applies, more points miss the cutting speed than at the
+    /// constant speed or the cycle time grew; green otherwise.
+    pub verdict: Verdict,
 }
 
 impl<'a> Report<'a> {
@@ -220,6 +273,14 @@ impl<'a> Report<'a> {
         findings: &'a [Diagnostic],
         [time_before_s, time_after_s]: [f64; 2],
     ) -> Self {
+        let verdict = Verdict::of(
+            &millplan_report::html::speed_evidence(
+                summary,
+                &millplan_report::html::failed_checks(checks),
+                [Some(time_before_s), Some(time_after_s)],
+            ),
+            findings.iter().map(|d| d.message.clone()).collect(),
+        );
         Report {
             summary,
             output,
@@ -231,6 +292,7 @@ impl<'a> Report<'a> {
             time_before_s,
             time_after_s,
             time_model: "acceleration",
+            verdict,
         }
     }
 
@@ -276,6 +338,7 @@ impl<'a> Report<'a> {
             "  time       {:.1} s → {:.1} s, estimated with acceleration on {}",
             self.time_before_s, self.time_after_s, self.machine.name
         );
+        o.push_str(&self.verdict.text());
         o
     }
 }

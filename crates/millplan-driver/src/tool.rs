@@ -3,13 +3,216 @@
 //! JSON of what a subcommand did.
 
 use crate::check::{arg, Range};
-use millplan_tooldb::control::{Kind, Measurement, Outcome};
-use millplan_tooldb::cycles::{CycleOptions, Measure};
-use millplan_tooldb::db::{EventRecord, ToolRecord};
+use millplan_tooldb::control::{record, Kind, Measurement, Outcome, Settings};
+use millplan_tooldb::cycles::{self, CycleOptions, Measure};
+use millplan_tooldb::db::{DbError, EventRecord, ToolDb, ToolEdit, ToolRecord};
 use millplan_tooldb::thread::pz;
 use serde::Serialize;
 use std::ffi::OsString;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+/// A failure of a library operation, its message naming the library (or
+/// the imported file, at its line and column): the arguments' or the
+/// file's fault (`bad_input`, exit 2), or the system's (locked for too
+/// long, read-only, an I/O error: exit 1).
+#[derive(Debug)]
+pub struct ToolError {
+    pub bad_input: bool,
+    pub message: String,
+}
+
+impl ToolError {
+    /// The arguments' fault.
+    pub fn input(message: impl Into<String>) -> ToolError {
+        ToolError {
+            bad_input: true,
+            message: message.into(),
+        }
+    }
+}
+
+impl std::fmt::Display for ToolError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for ToolError {}
+
+/// The library file: `--db` as given, else [`default_db`] from the
+/// environment with its folder created (a `--db` folder never is).
+pub fn library_path(
+    db: Option<PathBuf>,
+    millplan_db: Option<OsString>,
+    xdg_data_home: Option<OsString>,
+    home: Option<OsString>,
+) -> Result<PathBuf, ToolError> {
+    if let Some(p) = db {
+        return Ok(p);
+    }
+    let p = default_db(millplan_db, xdg_data_home, home).map_err(ToolError::input)?;
+    if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| ToolError::input(format!("{}: cannot create: {e}", dir.display())))?;
+    }
+    Ok(p)
+}
+
+/// The formats `tool export` writes.
+#[derive(Clone, Copy, Debug)]
+pub enum ExportFormat {
+    Csv,
+    Json,
+    /// Heidenhain TOOL.T-style table.
+    ToolT,
+}
+
+/// The controls `tool cycle` writes a measuring program for.
+#[derive(Clone, Copy, Debug)]
+pub enum CycleControl {
+    Heidenhain,
+    Fanuc,
+}
+
+/// The options of `tool cycle`.
+#[derive(Clone, Copy, Debug)]
+pub struct CycleRequest {
+    pub number: u32,
+    pub control: CycleControl,
+    pub first: bool,
+    pub measured: Measured,
+    pub clearance: f64,
+    pub per_tooth: bool,
+}
+
+/// An open tool library and where it is: each subcommand's decisions.
+pub struct Library {
+    pub path: PathBuf,
+    db: ToolDb,
+}
+
+impl Library {
+    /// Opens (or creates) the library at `path`; a file that is not one is
+    /// an error, never taken for an empty library.
+    pub fn open(path: PathBuf) -> Result<Library, ToolError> {
+        let db = ToolDb::open(&path).map_err(|e| db_error(&path, e))?;
+        Ok(Library { path, db })
+    }
+
+    fn err(&self, e: DbError) -> ToolError {
+        db_error(&self.path, e)
+    }
+
+    /// Registers tool `number`, or changes it (values not given stay). Only
+    /// a tool the library does not have is new; a row that cannot be read
+    /// is an error, never overwritten by a fresh record.
+    pub fn add(&mut self, number: u32, edit: ToolEdit) -> Result<ToolRecord, ToolError> {
+        let found = self.db.find_tool(number).map_err(|e| self.err(e))?;
+        let mut t = found.unwrap_or_else(|| ToolRecord::new(number, ""));
+        t.apply(edit)
+            .map_err(|e| ToolError::input(format!("insert data: {e}")))?;
+        self.db.put_tool(&t).map_err(|e| self.err(e))?;
+        Ok(t)
+    }
+
+    /// Records the insert on a thread mill; its PZ.
+    pub fn insert(
+        &mut self,
+        number: u32,
+        designation: &str,
+        insl: f64,
+        tp: f64,
+    ) -> Result<f64, ToolError> {
+        let r = self.db.add_insert(number, designation, insl, tp);
+        r.map_err(|e| self.err(e))
+    }
+
+    /// Records the presetter's values; the tool as it now is.
+    pub fn preset(&mut self, number: u32, l: f64, r: f64) -> Result<ToolRecord, ToolError> {
+        self.db
+            .record_presetter(number, l, r)
+            .map_err(|e| self.err(e))?;
+        self.db.tool(number).map_err(|e| self.err(e))
+    }
+
+    /// Records a laser measurement and decides (wear, worn, broken).
+    pub fn measure(
+        &mut self,
+        req: MeasureRequest,
+        pallet: Option<String>,
+    ) -> Result<Outcome, ToolError> {
+        check_measure(&req).map_err(ToolError::input)?;
+        let tool = self.db.tool(req.number).map_err(|e| self.err(e))?;
+        let settings = Settings {
+            dset: req.dset,
+            pallet,
+        };
+        let m = measurement(req, &tool);
+        record(&mut self.db, &m, &settings).map_err(|e| self.err(e))
+    }
+
+    /// One tool, or all.
+    pub fn show(&self, number: Option<u32>) -> Result<Vec<ToolRecord>, ToolError> {
+        match number {
+            Some(n) => self.db.tool(n).map(|t| vec![t]),
+            None => self.db.tools(),
+        }
+        .map_err(|e| self.err(e))
+    }
+
+    /// The decision log (one tool's, or all).
+    pub fn log(&self, number: Option<u32>) -> Result<Vec<EventRecord>, ToolError> {
+        self.db.events(number).map_err(|e| self.err(e))
+    }
+
+    /// Imports the tools of `file` (JSON when it starts `[`, else CSV), all
+    /// or nothing; how many. Errors in the file are located in it.
+    pub fn import(&mut self, file: &Path) -> Result<usize, ToolError> {
+        let text = std::fs::read_to_string(file)
+            .map_err(|e| ToolError::input(format!("{}: {e}", file.display())))?;
+        let n = if text.trim_start().starts_with('[') {
+            self.db.import_json(&text)
+        } else {
+            self.db.import_csv(&text)
+        };
+        n.map_err(|e| match e {
+            // Located in the imported file (line:column).
+            DbError::Invalid(_) => ToolError::input(format!("{}:{e}", file.display())),
+            e => self.err(e),
+        })
+    }
+
+    /// The library as CSV, JSON or a TOOL.T table.
+    pub fn export(&self, format: ExportFormat) -> Result<String, ToolError> {
+        match format {
+            ExportFormat::Csv => self.db.export_csv(),
+            ExportFormat::Json => self.db.export_json(),
+            ExportFormat::ToolT => self.db.export_tool_t(),
+        }
+        .map_err(|e| self.err(e))
+    }
+
+    /// The measuring program for the laser, and the insert's PZ it uses.
+    pub fn cycle(&self, x: CycleRequest) -> Result<(String, Option<f64>), ToolError> {
+        check_clearance(x.clearance).map_err(ToolError::input)?;
+        let tool = self.db.tool(x.number).map_err(|e| self.err(e))?;
+        let o = cycle_options(&tool, x.first, x.measured, x.clearance, x.per_tooth);
+        let text = match x.control {
+            CycleControl::Heidenhain => cycles::heidenhain(&tool, &o),
+            CycleControl::Fanuc => cycles::fanuc(&tool, &o),
+        };
+        Ok((text, o.pz))
+    }
+}
+
+/// A library error with the library's path: bad input when the arguments
+/// or the file are at fault, else the system's.
+fn db_error(path: &Path, e: DbError) -> ToolError {
+    ToolError {
+        bad_input: e.is_bad_input(),
+        message: format!("{}: {e}", path.display()),
+    }
+}
 
 /// The library's default location from `$MILLPLAN_DB`, `$XDG_DATA_HOME` and
 /// `$HOME` (as given): the first, else `millplan/tools.db` under the second
@@ -203,4 +406,73 @@ pub struct WrittenJson {
 #[derive(Serialize)]
 pub struct ImportedJson {
     pub imported: usize,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A tool added is shown, exported and measured for; the failures say
+    /// whose fault they are and where.
+    #[test]
+    fn library_operations_decide_and_locate_their_errors() {
+        let dir = tempfile::tempdir().expect("tmp");
+        let path = dir.path().join("tools.db");
+        let mut lib = Library::open(path.clone()).expect("created");
+        let edit = ToolEdit {
+            name: Some("ball 10".into()),
+            kind: Some("ball".into()),
+            l: Some(80.0),
+            r: Some(5.0),
+            ..ToolEdit::default()
+        };
+        let t = lib.add(7, edit).expect("added");
+        assert_eq!((t.number, t.r), (7, 5.0));
+        assert_eq!(lib.show(None).expect("all").len(), 1);
+        assert!(lib
+            .export(ExportFormat::Csv)
+            .expect("csv")
+            .contains("ball 10"));
+        let e = lib.show(Some(8)).expect_err("unknown");
+        assert!(
+            e.bad_input && e.message.starts_with(&path.display().to_string()),
+            "{e}"
+        );
+        // An import's error is located in the imported file.
+        let csv = dir.path().join("bad.csv");
+        std::fs::write(&csv, "name\nx\n").expect("write");
+        let e = lib.import(&csv).expect_err("no number column");
+        assert!(
+            e.message.starts_with(&format!("{}:1:1: ", csv.display())),
+            "{e}"
+        );
+        let x = CycleRequest {
+            number: 7,
+            control: CycleControl::Heidenhain,
+            first: true,
+            measured: Measured::Both,
+            clearance: -1.0,
+            per_tooth: false,
+        };
+        assert!(lib.cycle(x).expect_err("clearance").bad_input);
+        let (text, pz) = lib
+            .cycle(CycleRequest {
+                clearance: 20.0,
+                ..x
+            })
+            .expect("cycle");
+        assert!(!text.is_empty() && pz.is_none());
+        // A file that is no library is refused, never taken for an empty one.
+        let junk = dir.path().join("junk.db");
+        std::fs::write(&junk, vec![b'x'; 4096]).expect("write");
+        assert!(Library::open(junk).is_err());
+        // `--db` is taken as given; an empty $MILLPLAN_DB is refused.
+        let given = library_path(Some(path.clone()), None, None, None).expect("given");
+        assert_eq!(given, path);
+        assert!(
+            library_path(None, Some("".into()), None, None)
+                .expect_err("empty")
+                .bad_input
+        );
+    }
 }

@@ -31,6 +31,21 @@ pub struct Library {
 }
 
 impl Library {
+    /// The library file of `--tools`, read whole (it must exist); the error
+    /// names the option and the file, the file's fault or the system's.
+    pub fn open(p: &std::path::Path) -> Result<Library, crate::tool::ToolError> {
+        if !p.is_file() {
+            let m = format!("--tools {}: no such tool library", p.display());
+            return Err(crate::tool::ToolError::input(m));
+        }
+        let err = |e: millplan_tooldb::db::DbError| crate::tool::ToolError {
+            bad_input: e.is_bad_input(),
+            message: format!("--tools {}: {e}", p.display()),
+        };
+        let db = millplan_tooldb::db::ToolDb::open(p).map_err(err)?;
+        Library::read(&db).map_err(err)
+    }
+
     /// Every tool of an open library and the last decision logged for each.
     pub fn read(db: &millplan_tooldb::db::ToolDb) -> Result<Library, millplan_tooldb::db::DbError> {
         let mut lib = Library::default();

@@ -29,6 +29,11 @@ use std::fmt;
 /// extent, a number beyond it is no machine's and is refused at its line.
 pub const NC_EXTENT: f64 = 1e6;
 
+/// The plausibility range of a tool diameter a user gives (mm): below a
+/// micrometre no tool exists and no NC format writes the size back (APT
+/// writes six decimals); above the coordinate limit no machine holds it.
+pub const TOOL_DIAMETER: (f64, f64) = (1e-3, NC_EXTENT);
+
 /// The plausibility limit on a feed (mm/min, mm/rev or the inverse time's
 /// 1/min) and a spindle speed (1/min) an NC program gives.
 pub const NC_RATE: f64 = 1e6;

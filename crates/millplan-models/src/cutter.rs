@@ -56,8 +56,14 @@ impl Shape {
                 .map_err(|_| format!("`{s}`: `{}` is not a number", parts[i]))
         };
         let d = num(1)?;
+        let (d_min, d_max) = millplan_geom::limits::TOOL_DIAMETER;
         if !(d > 0.0 && d.is_finite()) {
             return Err(format!("`{s}`: the diameter must be a positive number"));
+        }
+        if !(d_min..=d_max).contains(&d) {
+            return Err(format!(
+                "`{s}`: a diameter of {d} mm is no tool's (between {d_min} and {d_max} mm)"
+            ));
         }
         let kind = parts[0].to_ascii_lowercase();
         let fields = match kind.as_str() {
@@ -269,6 +275,19 @@ mod tests {
             Shape::parse("bull:10:6").is_err()
                 && Shape::parse("spoon:3").is_err()
                 && Shape::parse("ball:-1").is_err()
+        );
+    }
+
+    /// A diameter no writer can give back (the fuzz run's `ball:1e-300`,
+    /// written as `d=0` and refused when read back) is refused where it is
+    /// given; a micrometre tool is still one.
+    #[test]
+    fn diameters_outside_the_plausible_range_are_refused() {
+        assert!(Shape::parse("ball:1e-300").is_err());
+        assert!(Shape::parse("flat:1e7").is_err());
+        assert_eq!(
+            Shape::parse("ball:0.001"),
+            Ok(Shape::Ball { radius: 0.0005 })
         );
     }
 }

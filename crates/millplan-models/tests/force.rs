@@ -850,3 +850,49 @@ fn engaged_cells_serve_every_feed() {
         }
     }
 }
+
+/// The mean force of a move (`force::mean`): T1a's slot means
+/// (process-models §6, T1a closed form, `flat::mean_forces`) for the
+/// flute-segment law of EN AW-2007 (§1.5e: on straight flutes it is the
+/// tangential/radial/axial law with Ktc = −k_n, Krc = −k_d, Kac = −k_t),
+/// the paper's slot: 12 mm, three flutes, a_p 6, f_z 0.08. A pose in air
+/// counts as zero force.
+#[test]
+fn move_mean_force_is_the_slot_closed_form() {
+    use millplan_models::force::mean::MeanForce;
+    let tdn = Coeffs {
+        kc: [57.5, -76.5, -672.0],
+        ke: [4.63, -11.8, -11.0],
+    };
+    let rta = Coeffs::rta(672.0, 76.5, 57.5, 11.0, 11.8, 4.63);
+    let want = flat::mean_forces(&rta, 3, 6.0, 0.08, 0.0, PI);
+    // The slot form of T1a with these coefficients: (−95.15, 304.95, 68.00) N.
+    close(want[0], -95.15, 1e-3, "slot Fx closed");
+    close(want[1], 304.95, 1e-3, "slot Fy closed");
+    close(want[2], 68.00, 1e-3, "slot Fz closed");
+    let tool = flat_tool(12.0, 3, 0.0);
+    let grid = Grid {
+        dz: 0.05,
+        dphi: deg(0.05),
+    };
+    let model = ForceModel::new(tool, Law::FluteSegment(tdn), grid).expect("model");
+    let slot = FnEngagement {
+        z_lo: 0.0,
+        z_hi: 6.0,
+        f: |p: [f64; 3]| p[2] <= 6.0,
+    };
+    let s = model.evaluate(&cut(0.08, 0.0, 0.0), &slot).summary();
+    let mut m = MeanForce::default();
+    assert_eq!(m.mean(), [0.0; 3], "no poses, no force");
+    m.add(&s);
+    m.add(&s);
+    for (got, w) in m.mean().iter().zip(want) {
+        close(*got, w, 2e-3, "slot mean numeric");
+    }
+    m.add_air();
+    assert_eq!(m.poses(), 3);
+    for (got, w) in m.mean().iter().zip(want) {
+        let what = "two poses in the slot, one in air";
+        close(*got, w * 2.0 / 3.0, 2e-3, what);
+    }
+}

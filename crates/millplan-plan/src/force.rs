@@ -363,6 +363,10 @@ pub struct MoveForces {
     pub fx: [f64; 2],
     pub fy: [f64; 2],
     pub fz_force: [f64; 2],
+    /// The mean force over the move's loaded poses (each a mean over a
+    /// revolution, a pose in air zero), tool frame: the static load.
+    #[serde(skip)]
+    pub mean: millplan_models::force::mean::MeanForce,
     /// N·mm.
     pub torque_max: f64,
     pub torque_mean: f64,
@@ -857,6 +861,7 @@ fn stroke_forces(
             .converge_from(&Cut { fz: top, ..cut }, &eng, (0, 0), below);
         evals += 1 + (conv.halvings.0 + conv.halvings.1) as usize;
         if conv.cells.is_empty() {
+            m.mean.add_air();
             continue;
         }
         let sum = if top == fz {
@@ -865,6 +870,7 @@ fn stroke_forces(
             evals += 1;
             conv.evaluate_at(&cut).summary()
         };
+        m.mean.add(&sum);
         m.merge(
             &sum,
             &Loads::new(&sum, &tf.holding),

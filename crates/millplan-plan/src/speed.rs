@@ -274,6 +274,10 @@ pub struct Summary {
     pub vc_deviation_points: usize,
     /// Their share of the points.
     pub vc_deviation_share: f64,
+    /// Share of the points whose cutting speed at the program's constant
+    /// spindle speed misses the target by more than [`VC_DEVIATION`]: what
+    /// the control is measured against.
+    pub vc_constant_deviation_share: f64,
 }
 
 /// Relative difference between the written and the target spindle speed
@@ -943,7 +947,8 @@ struct SummaryAcc {
     vc_controlled: StatsAcc,
     ind: IndicatorsAcc,
     ind_target: IndicatorsAcc,
-    deviating: usize,
+    /// Points off the target with control, and at the constant speed.
+    deviating: [usize; 2],
 }
 
 impl SummaryAcc {
@@ -958,7 +963,7 @@ impl SummaryAcc {
             vc_controlled: StatsAcc::default(),
             ind: IndicatorsAcc::default(),
             ind_target: IndicatorsAcc::default(),
-            deviating: 0,
+            deviating: [0; 2],
         }
     }
 
@@ -985,7 +990,17 @@ impl SummaryAcc {
         self.vc_controlled.push(pi * l.dw * n / 1000.0);
         self.ind.push(n, ds, dt);
         self.ind_target.push(n_target, ds, dt);
-        self.deviating += deviates(n, n_target) as usize;
+        self.deviating[0] += deviates(n, n_target) as usize;
+        self.deviating[1] += deviates(self.n0, n_target) as usize;
+    }
+
+    /// `n` as a share of the points (0 without points).
+    fn share(&self, n: usize) -> f64 {
+        if self.points > 0 {
+            n as f64 / self.points as f64
+        } else {
+            0.0
+        }
     }
 
     fn finish(
@@ -1016,12 +1031,9 @@ impl SummaryAcc {
             vc_controlled: self.vc_controlled.finish(),
             indicators: self.ind.finish(),
             indicators_target: self.ind_target.finish(),
-            vc_deviation_points: self.deviating,
-            vc_deviation_share: if self.points > 0 {
-                self.deviating as f64 / self.points as f64
-            } else {
-                0.0
-            },
+            vc_deviation_points: self.deviating[0],
+            vc_deviation_share: self.share(self.deviating[0]),
+            vc_constant_deviation_share: self.share(self.deviating[1]),
         }
     }
 }

@@ -141,3 +141,28 @@ pub fn located(e: &str) -> Located {
     }
     Located::new(Place::default(), e)
 }
+
+/// A library's message about the file `file`: located as `file:line:col:`
+/// when it says so, else at `file` (its own `file: ` prefix taken off).
+pub fn located_in(file: &str, e: &str) -> Located {
+    let l = located(e);
+    if l.place.file.is_some() {
+        return l;
+    }
+    let rest = e
+        .strip_prefix(file)
+        .and_then(|r| r.strip_prefix(": "))
+        .unwrap_or(e);
+    Located::new(Place::file(file), rest)
+}
+
+/// The driver's error choosing the output's dialect (worded for `--to` and
+/// the output file `out`, which may be none) as the `dialect` keyword's.
+pub fn dialect_error(out: &str, e: &str) -> Located {
+    let e = e.replace("--to", "dialect");
+    match e.strip_prefix(": ") {
+        Some(rest) => Located::new(Place::file("dialect"), rest),
+        None if out.is_empty() => Located::new(Place::file("dialect"), e),
+        None => located_in(out, &e),
+    }
+}

@@ -45,7 +45,7 @@ fn col<T: Copy>(rows: &[MoveForces], f: impl Fn(&MoveForces) -> T) -> Array1<T> 
 }
 
 /// The moves' loads as NumPy columns, named as `force --table` names them.
-fn columns<'py>(py: Python<'py>, rows: &[MoveForces]) -> PyResult<Bound<'py, PyDict>> {
+pub(crate) fn columns<'py>(py: Python<'py>, rows: &[MoveForces]) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("index", col(rows, |m| m.index).into_pyarray(py))?;
     d.set_item("line", col(rows, |m| m.line).into_pyarray(py))?;

@@ -7,13 +7,16 @@
 
 mod cut;
 mod error;
+mod feed;
 mod force;
 mod gouge;
 mod job;
 mod mesh;
+mod post;
 mod program;
 mod raster;
 mod reorder;
+mod setup;
 mod simulate;
 mod speed;
 mod tools;
@@ -202,5 +205,8 @@ fn _millplan(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cut::cut, m)?)?;
     m.add_function(wrap_pyfunction!(raster::raster, m)?)?;
     m.add_function(wrap_pyfunction!(reorder::reorder, m)?)?;
+    m.add_function(wrap_pyfunction!(feed::feed, m)?)?;
+    m.add_function(wrap_pyfunction!(setup::setup, m)?)?;
+    m.add_function(wrap_pyfunction!(post::post, m)?)?;
     Ok(())
 }

@@ -155,6 +155,7 @@ fn label(key: &str) -> Option<(&'static str, &'static str)> {
         "within_tolerance" => ("moves within the limit's tolerance", ""),
         "limit_tolerance" => ("tolerance on a limit", "share"),
         "stock" => ("stock", ""),
+        "stock_contact" => ("a cutting move meets the stock", ""),
         "steps" => ("force integration steps", ""),
         "binding" => ("what limits the feed, blocks", ""),
         "blocks" => ("blocks", ""),

@@ -44,23 +44,9 @@ pub struct SpeedInputs {
     /// Findings about the inputs (off-surface points, mesh defects), shown
     /// in the warning box at the top.
     pub warnings: Vec<String>,
-}
-
-/// Share of points (0–1) whose cutting speed at the program's constant
-/// spindle speed misses `vc` by more than the deviation the control allows.
-fn share_off_vc_constant(s: &Summary, rows: &[PointRow], vc: f64) -> f64 {
-    if rows.is_empty() {
-        return 0.0;
-    }
-    let pi = std::f64::consts::PI;
-    let off = rows
-        .iter()
-        .filter(|r| {
-            let v = pi * r.r.dw * s.constant_spindle / 1000.0;
-            (v - vc).abs() > millplan_plan::speed::VC_DEVIATION * vc
-        })
-        .count();
-    off as f64 / rows.len() as f64
+    /// The checks of the written program that failed (it is written only
+    /// under `--force`), each in words ([`failed_checks`]).
+    pub failed: Vec<String>,
 }
 
 /// A time that grew by more than this share counts as worse in a verdict
@@ -81,12 +67,13 @@ pub fn worse_words(name: &str, before: f64, after: f64, decimals: usize, unit: &
 /// input when it found no ball-end point to act on; worse when more points
 /// miss the cutting speed than at the program's constant speed, or the time
 /// grew.
-pub fn speed_evidence(i: &SpeedInputs, s: &Summary, rows: &[PointRow]) -> Evidence {
+pub fn speed_evidence(s: &Summary, failed: &[String], times: [Option<f64>; 2]) -> Evidence {
     let mut e = Evidence {
+        failed: failed.to_vec(),
         kept: s.points == 0,
         ..Evidence::default()
     };
-    let before = 100.0 * share_off_vc_constant(s, rows, i.vc);
+    let before = 100.0 * s.vc_constant_deviation_share;
     let after = 100.0 * s.vc_deviation_share;
     if after > before {
         e.worse.push(worse_words(
@@ -97,7 +84,7 @@ pub fn speed_evidence(i: &SpeedInputs, s: &Summary, rows: &[PointRow]) -> Eviden
             "%",
         ));
     }
-    if let (Some(b), Some(a)) = (i.time_before_s, i.time_after_s) {
+    if let [Some(b), Some(a)] = times {
         if a > b * (1.0 + TIME_WORSE) {
             e.worse.push(worse_words("cycle time", b, a, 1, "s"));
         }
@@ -106,7 +93,7 @@ pub fn speed_evidence(i: &SpeedInputs, s: &Summary, rows: &[PointRow]) -> Eviden
 }
 
 /// The verdict in words: what changed, what it buys, what to look at.
-pub fn speed_verdict(i: &SpeedInputs, s: &Summary, rows: &[PointRow]) -> Vec<String> {
+pub fn speed_verdict(i: &SpeedInputs, s: &Summary) -> Vec<String> {
     let pct = |n: usize| {
         if s.points == 0 {
             0.0
@@ -115,7 +102,7 @@ pub fn speed_verdict(i: &SpeedInputs, s: &Summary, rows: &[PointRow]) -> Vec<Str
         }
     };
     let mut v = Vec::new();
-    let before = 100.0 * share_off_vc_constant(s, rows, i.vc);
+    let before = 100.0 * s.vc_constant_deviation_share;
     let after = 100.0 * s.vc_deviation_share;
     v.push(format!(
         "Spindle control keeps the cutting speed within 5 % of {} m/min at {:.1} % of the {} points, against {:.1} % at the program's constant {:.0} 1/min (cutting speed {:.1}–{:.1} m/min there).",
@@ -218,8 +205,8 @@ pub fn speed_report(title: &str, i: &SpeedInputs, s: &Summary, rows: &[PointRow]
         &Notes::judged(
             speed_inputs_rows(i),
             i.warnings.clone(),
-            &speed_evidence(i, s, rows),
-            speed_verdict(i, s, rows),
+            &speed_evidence(s, &i.failed, [i.time_before_s, i.time_after_s]),
+            speed_verdict(i, s),
         ),
     );
     let row = |h: &mut String, name: &str, v: String| {
@@ -259,6 +246,15 @@ pub fn speed_report(title: &str, i: &SpeedInputs, s: &Summary, rows: &[PointRow]
         format!(
             "{:.1} … {:.1} (σ {:.2})",
             s.vc_controlled.min, s.vc_controlled.max, s.vc_controlled.std
+        ),
+    );
+    row(
+        &mut h,
+        "points off the cutting speed by more than 5 % (%)",
+        format!(
+            "{:.1} with control, {:.1} at the constant speed",
+            100.0 * s.vc_deviation_share,
+            100.0 * s.vc_constant_deviation_share
         ),
     );
     row(
@@ -424,11 +420,7 @@ pub fn speed_report(title: &str, i: &SpeedInputs, s: &Summary, rows: &[PointRow]
         ),
         "Contact points seen from above, coloured by working diameter.",
     );
-    let _ = write!(
-        h,
-        "<h2>Run data</h2><pre>{}</pre></body></html>",
-        esc(&serde_json::to_string_pretty(s).unwrap_or_default())
-    );
+    h.push_str("</body></html>");
     h
 }
 
@@ -530,6 +522,65 @@ pub fn headline(e: &Evidence, warnings: usize) -> String {
     format!("{cap}: {}.", why.join("; "))
 }
 
+/// A verdict as the terminal and `--json` print it, by the same rule and in
+/// the same words as a report's verdict box: the level, the headline
+/// ([`headline`]), what failed, what got worse and the warnings.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Verdict {
+    pub level: Level,
+    /// The headline: level and why (`Amber: worse: cycle time …`).
+    pub summary: String,
+    pub failed: Vec<String>,
+    pub worse: Vec<String>,
+    /// The input was kept, or there was nothing to act on.
+    pub kept: bool,
+    pub warnings: Vec<String>,
+}
+
+impl Verdict {
+    /// The verdict of `e` with `warnings`, by [`Level::of`].
+    pub fn of(e: &Evidence, warnings: Vec<String>) -> Verdict {
+        Verdict {
+            level: Level::of(e, warnings.len()),
+            summary: headline(e, warnings.len()),
+            failed: e.failed.clone(),
+            worse: e.worse.clone(),
+            kept: e.kept,
+            warnings,
+        }
+    }
+
+    /// The verdict's lines in a text summary: each warning, then
+    /// `verdict: LEVEL: why.`
+    pub fn text(&self) -> String {
+        let mut o = String::new();
+        for w in &self.warnings {
+            let _ = writeln!(o, "warning: {w}");
+        }
+        let _ = writeln!(o, "verdict: {}", self.summary);
+        o
+    }
+}
+
+/// The failed checks of a written program in words, for a verdict: the
+/// check's name and its first finding that is not the input's own, at its
+/// line.
+pub fn failed_checks(checks: &[millplan_plan::safety::Check]) -> Vec<String> {
+    checks
+        .iter()
+        .filter(|c| !c.ok)
+        .map(|c| match c.findings.iter().find(|f| !f.in_input) {
+            Some(f) => format!(
+                "check {} at line {}: {}",
+                c.name,
+                f.line.unwrap_or(0),
+                f.message
+            ),
+            None => format!("check {}", c.name),
+        })
+        .collect()
+}
+
 /// What a report says before its tables: the inputs it was made from (a
 /// header table), warnings (shown in a red box: what to look at before using
 /// the result) and a verdict: its level by the one rule, then in words (what
@@ -553,13 +604,18 @@ impl Notes {
         evidence: &Evidence,
         verdict: Vec<String>,
     ) -> Notes {
-        let level = Level::of(evidence, warnings.len());
-        let mut lines = vec![headline(evidence, warnings.len())];
+        Notes::of_verdict(inputs, &Verdict::of(evidence, warnings), verdict)
+    }
+
+    /// Notes showing `v` (its warnings, level and headline), then the words
+    /// of `verdict`.
+    pub fn of_verdict(inputs: Vec<(String, String)>, v: &Verdict, verdict: Vec<String>) -> Notes {
+        let mut lines = vec![v.summary.clone()];
         lines.extend(verdict);
         Notes {
             inputs,
-            warnings,
-            level,
+            warnings: v.warnings.clone(),
+            level: v.level,
             verdict: lines,
         }
     }

@@ -2,7 +2,7 @@
 //! sphere map of tool directions with the machine's rotary limits and the part
 //! coloured by the tilt its facets need.
 
-use crate::html::{report_page, Evidence, Notes};
+use crate::html::{report_page, Evidence, Notes, Verdict};
 use crate::svg::{map, sphere_map, DirClass};
 use millplan_geom::{DVec3, TriMesh};
 use millplan_models::kinematics::{Kinematics, RotaryAxis};
@@ -95,17 +95,12 @@ pub fn limit_curves(machine: &Kinematics) -> Vec<Vec<[f64; 3]>> {
     out
 }
 
-/// The warnings and the verdict in words: feasible or not, the ranges the
-/// part needs, the setup chosen, the share out of reach, what to look at.
-pub fn setup_notes(
-    i: &SetupInputs,
-    mesh: &TriMesh,
-    plan: &SetupPlan,
-    machine: &Kinematics,
-) -> Notes {
+/// The verdict of a setup search by the one rule: red when no setup
+/// reaches every facet that needs cutting; amber on a warning (the mesh's
+/// defects, facets out of reach or reached by no direction); green
+/// otherwise. Text, JSON and report print it alike.
+pub fn setup_verdict(i: &SetupInputs, mesh: &TriMesh, plan: &SetupPlan) -> Verdict {
     let best = &plan.best;
-    let s = plan.summary(mesh, machine);
-    let [n0, n1] = s.axes.map(str::to_uppercase);
     let total = mesh.area().max(1e-300);
     let mut warnings = i.warnings.clone();
     if !best.unreachable.is_empty() {
@@ -122,6 +117,33 @@ pub fn setup_notes(
             plan.inaccessible.len()
         ));
     }
+    let evidence = Evidence {
+        failed: if plan.feasible {
+            Vec::new()
+        } else {
+            vec![format!(
+                "one setup reaches every facet ({} facets out of reach)",
+                best.unreachable.len()
+            )]
+        },
+        ..Evidence::default()
+    };
+    Verdict::of(&evidence, warnings)
+}
+
+/// The warnings and the verdict in words: feasible or not, the ranges the
+/// part needs, the setup chosen, the share out of reach, what to look at.
+pub fn setup_notes(
+    i: &SetupInputs,
+    mesh: &TriMesh,
+    plan: &SetupPlan,
+    machine: &Kinematics,
+) -> Notes {
+    let best = &plan.best;
+    let s = plan.summary(mesh, machine);
+    let [n0, n1] = s.axes.map(str::to_uppercase);
+    let total = mesh.area().max(1e-300);
+    let v = setup_verdict(i, mesh, plan);
     let e = s.euler_zyx_deg.map(deg);
     let chosen = format!(
         "the part turned by Euler Z-Y-X {}°, {}°, {}°",
@@ -166,21 +188,10 @@ pub fn setup_notes(
     }
     if !plan.feasible {
         verdict.push("Look at the red directions on the map (needed, out of reach) and the facets of largest tilt: they need a second setup, or a machine with larger ranges.".to_string());
-    } else if !warnings.is_empty() {
+    } else if !v.warnings.is_empty() {
         verdict.push("Look at the warnings above before clamping the part.".to_string());
     }
-    let evidence = Evidence {
-        failed: if plan.feasible {
-            Vec::new()
-        } else {
-            vec![format!(
-                "one setup reaches every facet ({} facets out of reach)",
-                best.unreachable.len()
-            )]
-        },
-        ..Evidence::default()
-    };
-    Notes::judged(
+    Notes::of_verdict(
         vec![
             ("part".into(), format!("{} ({} facets)", i.part, mesh.len())),
             (
@@ -203,8 +214,7 @@ pub fn setup_notes(
                 ),
             ),
         ],
-        warnings,
-        &evidence,
+        &v,
         verdict,
     )
 }

@@ -78,6 +78,7 @@ fn top_view(stock: &Stock, n: usize) -> Vec<(f64, f64, f64)> {
 /// by height) and the removal rate along the program.
 pub fn report(
     title: &str,
+    inputs: Vec<(String, String)>,
     stock_spec: &str,
     stock: &Stock,
     rep: &SimReport,
@@ -260,7 +261,7 @@ pub fn report(
     report_page(
         title,
         &intro,
-        &Notes::judged(Vec::new(), warnings, &sim_evidence(rep, part), verdict),
+        &Notes::judged(inputs, warnings, &sim_evidence(rep, part), verdict),
         &rows,
         &figures,
     )

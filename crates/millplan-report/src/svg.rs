@@ -651,6 +651,86 @@ mod tests {
         assert!(svg.starts_with("<svg") && svg.ends_with("</svg>"));
     }
 
+    /// The number after `key="` in `svg` at each of its places.
+    fn attrs(svg: &str, key: &str) -> Vec<f64> {
+        svg.split(&format!(" {key}=\""))
+            .skip(1)
+            .filter_map(|r| r.split('"').next()?.parse().ok())
+            .collect()
+    }
+
+    /// Every legend entry of a line plot and a histogram lies above the
+    /// plot's area, never over its data; the histogram's count is of what
+    /// its legend names (it read "points" over a legend of "facets").
+    #[test]
+    fn legends_stay_outside_the_data_and_labels_agree() {
+        let pts: Vec<(f64, f64)> = (0..50).map(|i| (i as f64, i as f64)).collect();
+        let series = |name, color| Series {
+            name,
+            color,
+            points: pts.clone(),
+        };
+        let plot = line_plot(
+            "p",
+            "time [s]",
+            "F [N]",
+            &[series("input", "#1f77b4"), series("limit", "#000000")],
+        );
+        let hist = histogram(
+            "Material left",
+            "mm",
+            30,
+            &[("facets", "#1f77b4", vec![0.1, 0.2, 0.5])],
+        );
+        for svg in [&plot, &hist] {
+            let area_top = svg
+                .split(r#"class="plot-area" x=""#)
+                .nth(1)
+                .and_then(|r| attrs(r, "y").first().copied())
+                .expect("plot area");
+            let legend = svg.split(r#"<g class="legend">"#).nth(1).expect("legend");
+            let legend = legend.split("</g>").next().expect("legend end");
+            let ys = attrs(legend, "y");
+            assert!(!ys.is_empty(), "{svg}");
+            assert!(ys.iter().all(|y| *y <= area_top), "{ys:?} over {area_top}");
+        }
+        assert!(hist.contains(">count of facets<"), "{hist}");
+        assert!(
+            hist.contains(">facets<") && !hist.contains("points"),
+            "{hist}"
+        );
+        assert!(hist.contains(">mm<"), "{hist}");
+    }
+
+    /// A top-view map names both axes in mm, puts ticks on them and colours
+    /// by the 2nd–98th percentile: a thin border of large values does not
+    /// set the scale, and the bar shows the clipped end (`≥`) and every
+    /// value's range.
+    #[test]
+    fn maps_have_axes_in_mm_and_a_robust_clipped_scale() {
+        let mut pts: Vec<(f64, f64, f64)> = (0..1000)
+            .map(|i| ((i % 40) as f64, (i / 40) as f64, 0.1 + 0.0001 * i as f64))
+            .collect();
+        pts.extend((0..10).map(|i| (i as f64, -1.0, 5.0)));
+        let svg = map("Material left", "left mm", &pts);
+        assert!(
+            svg.contains(">X (mm)<") && svg.contains(">Y (mm)<"),
+            "{svg}"
+        );
+        assert_eq!(svg.matches(r#"class="axis-label""#).count(), 2);
+        assert!(svg.contains(">colours: 2nd–98th percentile<"), "{svg}");
+        assert!(svg.contains(">all values 0.100 … 5.000<"), "{svg}");
+        let hi = svg
+            .split(">≥ ")
+            .nth(1)
+            .and_then(|r| r.split('<').next())
+            .and_then(|t| t.parse::<f64>().ok())
+            .expect("the clipped top");
+        assert!(hi < 0.25, "the border sets the scale: {hi}");
+        let ticks = svg.matches(r#"text-anchor="middle">"#).count();
+        assert!(ticks >= 4, "{svg}");
+    }
+
     #[test]
     fn plots_are_well_formed_svg() {
         let pts: Vec<(f64, f64)> = (0..10000)

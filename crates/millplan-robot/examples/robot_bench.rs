@@ -27,12 +27,16 @@ fn raster(rows: usize, len: f64, step: f64, gap: f64) -> Vec<PathPoint> {
             axis: DVec3::Z,
             feed: 5310.0 * 3.0 * 0.08,
             line: r as u32 + 1,
+            mv: r as u32,
+            tilt: DVec3::ZERO,
         });
         v.push(PathPoint {
             p: DVec3::new(b, y, 0.0),
             axis: DVec3::Z,
             feed: 5310.0 * 3.0 * 0.08,
             line: r as u32 + 1,
+            mv: r as u32,
+            tilt: DVec3::ZERO,
         });
     }
     resample(&v, step)
@@ -142,8 +146,14 @@ fn main() {
         },
     };
     let t = Instant::now();
-    let placed =
-        machining::place(&robot, Variant::ThreeAxis, &samples, &load, &search).expect("feasible");
+    let placed = machining::place(
+        &robot,
+        Variant::ThreeAxis,
+        &samples,
+        &machining::PathLoad::Fixed(load),
+        &search,
+    )
+    .expect("feasible");
     println!(
         "placement: {} evaluations on a {}-point path ({} samples at 10 mm) in {:.2} s: {:?} mean {:.4} max {:.4}",
         placed.evaluations, path.len(), samples.len(), t.elapsed().as_secs_f64(), placed.place, placed.mean, placed.max

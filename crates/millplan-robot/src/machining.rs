@@ -10,7 +10,7 @@
 
 use crate::anneal::{self, Settings};
 use crate::kin::Joints;
-use crate::pose::Pose;
+use crate::pose::{matrix_to_abc, rotation_vector, Pose};
 use crate::robot::Robot;
 use crate::stiffness::Variant;
 use millplan_geom::{DMat3, DVec3};
@@ -31,6 +31,42 @@ pub struct PathPoint {
     pub feed: f64,
     /// Source line.
     pub line: u32,
+    /// Index of the move over the whole program (operations in order), the
+    /// key of a per-move load.
+    pub mv: u32,
+    /// A rotation of the tool's orientation on top of the one its axis
+    /// gives (rotation vector, rad, workpiece frame, applied on the left):
+    /// zero on a nominal path, −Δθ where the compensation corrects the
+    /// orientation.
+    pub tilt: DVec3,
+}
+
+impl PathPoint {
+    /// The tool's orientation in the workpiece frame (KUKA: the tool along
+    /// the frame's x): that of the axis, turned by the tilt.
+    pub fn orientation(&self) -> DMat3 {
+        let r = abc_matrix(abc_for_axis(self.axis));
+        if self.tilt == DVec3::ZERO {
+            r
+        } else {
+            rotation(self.tilt) * r
+        }
+    }
+
+    /// KUKA's A, B, C (degrees) of the orientation: exactly those of the
+    /// axis when there is no tilt.
+    pub fn abc(&self) -> [f64; 3] {
+        if self.tilt == DVec3::ZERO {
+            abc_for_axis(self.axis)
+        } else {
+            matrix_to_abc(&self.orientation())
+        }
+    }
+}
+
+/// The rotation of a rotation vector (axis times angle, rad).
+pub fn rotation(v: DVec3) -> DMat3 {
+    DMat3::from_quat(glam::DQuat::from_scaled_axis(v))
 }
 
 /// The workpiece frame in the robot base: a translation (mm) and a turn
@@ -63,6 +99,41 @@ pub struct Load {
     pub axial: f64,
 }
 
+impl Load {
+    /// The force in the workpiece frame at a point with tool axis `axis`
+    /// (unit) feeding along `feed` (unit, normal to the axis).
+    pub fn force(&self, axis: DVec3, feed: DVec3) -> DVec3 {
+        feed * self.feed + axis.cross(feed) * self.cross + axis * self.axial
+    }
+}
+
+/// The process load along a path, in the feed frame of each point: the same
+/// everywhere, or one per move of the program (what the force model with
+/// the stock gives: the mean over a revolution, averaged along the move;
+/// zero in air), indexed by [`PathPoint::mv`]; a move past the end has
+/// none.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PathLoad {
+    Fixed(Load),
+    PerMove(Vec<Load>),
+}
+
+const NO_LOAD: Load = Load {
+    feed: 0.0,
+    cross: 0.0,
+    axial: 0.0,
+};
+
+impl PathLoad {
+    /// The load at `pt`.
+    pub fn at(&self, pt: &PathPoint) -> Load {
+        match self {
+            PathLoad::Fixed(l) => *l,
+            PathLoad::PerMove(v) => v.get(pt.mv as usize).copied().unwrap_or(NO_LOAD),
+        }
+    }
+}
+
 /// Why a point cannot be machined.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum MachiningError {
@@ -78,16 +149,21 @@ pub enum MachiningError {
 /// arcs as chords within 0.01 mm).
 pub fn cutting_runs(prog: &Program) -> Result<Vec<Vec<PathPoint>>, MachiningError> {
     let mut runs = Vec::new();
+    let mut index = 0u32;
     for op in &prog.operations {
         let mut run: Vec<PathPoint> = Vec::new();
         let mut last = op.start;
         for m in &op.moves {
             let axis = op.axis(m).unwrap_or(DVec3::Z);
+            let mv = index;
+            index += 1;
             let point = |p: DVec3| PathPoint {
                 p,
                 axis,
                 feed: m.feed,
                 line: m.line,
+                mv,
+                tilt: DVec3::ZERO,
             };
             match m.kind {
                 MoveKind::Rapid => {
@@ -214,33 +290,37 @@ pub fn tcp_pose(place: &Pose, p: DVec3, axis: DVec3) -> Pose {
 }
 
 /// What a thread keeps between the points of a path: the chain's frames
-/// and the last tool axis with its rotation (a path's axis seldom changes,
-/// and turning it into KUKA's A, B, C and back costs a dozen sines).
+/// and the last tool axis and tilt with their rotation (a path's axis
+/// seldom changes, and turning it into KUKA's A, B, C and back costs a
+/// dozen sines).
 #[derive(Default)]
 struct Scratch {
     frames: Vec<Pose>,
-    axis: Option<(DVec3, DMat3)>,
+    axis: Option<(DVec3, DVec3, DMat3)>,
 }
 
 impl Scratch {
-    /// [`tcp_pose`], the rotation of the last axis reused.
-    fn tcp_pose(&mut self, place: &Pose, p: DVec3, axis: DVec3) -> Pose {
+    /// The TCP's pose in the base at `pt` ([`tcp_pose`] with the tilt), the
+    /// rotation of the last axis and tilt reused.
+    fn tcp_pose(&mut self, place: &Pose, pt: &PathPoint) -> Pose {
         let r = match self.axis {
-            Some((a, r)) if a == axis => r,
+            Some((a, t, r)) if a == pt.axis && t == pt.tilt => r,
             _ => {
-                let r = place.r * abc_matrix(abc_for_axis(axis));
-                self.axis = Some((axis, r));
+                let r = place.r * pt.orientation();
+                self.axis = Some((pt.axis, pt.tilt, r));
                 r
             }
         };
-        Pose::new(r, place.apply(p))
+        Pose::new(r, place.apply(pt.p))
     }
 }
 
-/// The deflection along a run: Δp (workpiece frame, mm) per point.
+/// The deflection along a run: Δp (workpiece frame, mm) and Δθ (the
+/// rotation vector of the tool, workpiece frame, rad) per point.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Deflections {
     pub dp: Vec<DVec3>,
+    pub dtheta: Vec<DVec3>,
     pub mean: f64,
     pub max: f64,
     /// KUKA Status of the configuration used throughout.
@@ -295,9 +375,32 @@ impl Robot {
             });
         }
         self.deflections_by(variant, place, run, status, |i, pt| {
-            let f = dirs[i];
-            let c = pt.axis.cross(f);
-            f * load.feed + c * load.cross + pt.axis * load.axial
+            load.force(pt.axis, dirs[i])
+        })
+    }
+
+    /// As [`Robot::deflections_along`] under a [`PathLoad`]: each point's
+    /// load in its feed frame (`dirs`, the nominal path's).
+    pub fn deflections_loaded(
+        &self,
+        variant: Variant,
+        place: &Placement,
+        run: &[PathPoint],
+        dirs: &[DVec3],
+        load: &PathLoad,
+        status: Option<u8>,
+    ) -> Result<Deflections, MachiningError> {
+        if let PathLoad::Fixed(l) = load {
+            return self.deflections_along(variant, place, run, dirs, l, status);
+        }
+        if dirs.len() != run.len() {
+            return Err(MachiningError::Program {
+                line: run.first().map_or(0, |p| p.line),
+                message: format!("{} feed directions for {} points", dirs.len(), run.len()),
+            });
+        }
+        self.deflections_by(variant, place, run, status, |i, pt| {
+            load.at(pt).force(pt.axis, dirs[i])
         })
     }
 
@@ -340,17 +443,20 @@ impl Robot {
         let status = match status {
             Some(s) => s,
             None => self
-                .choose_status(&tcp_pose(&pose, first.p, first.axis))
+                .choose_status(&Pose::new(
+                    pose.r * first.orientation(),
+                    pose.apply(first.p),
+                ))
                 .ok_or(MachiningError::Unreachable {
                     line: first.line,
                     index: 0,
                 })?,
         };
-        let dp: Vec<DVec3> = run
+        let d: Vec<(DVec3, DVec3)> = run
             .par_iter()
             .enumerate()
             .map_init(Scratch::default, |s, (i, pt)| {
-                let tcp = s.tcp_pose(&pose, pt.p, pt.axis);
+                let tcp = s.tcp_pose(&pose, pt);
                 let q = self
                     .ik_status(&tcp, status)
                     .ok_or(MachiningError::Unreachable {
@@ -359,14 +465,17 @@ impl Robot {
                     })?;
                 let base = pose.r * force(i, pt);
                 let (_, d) = self.deflect_with(&q, variant, base, DVec3::ZERO, &mut s.frames);
-                Ok(pose.r.transpose() * d.dp)
+                let back = pose.r.transpose();
+                Ok((back * d.dp, back * d.dtheta))
             })
             .collect::<Result<_, MachiningError>>()?;
+        let (dp, dtheta): (Vec<DVec3>, Vec<DVec3>) = d.into_iter().unzip();
         let lens = dp.iter().map(|d| d.length());
         let max = lens.clone().fold(0.0, f64::max);
         let mean = lens.sum::<f64>() / dp.len() as f64;
         Ok(Deflections {
             dp,
+            dtheta,
             mean,
             max,
             status,
@@ -380,6 +489,40 @@ pub fn compensate(run: &[PathPoint], dp: &[DVec3]) -> Vec<PathPoint> {
         .zip(dp)
         .map(|(p, d)| PathPoint { p: p.p - *d, ..*p })
         .collect()
+}
+
+/// p_cmd = p_ideal − Δp and the orientation turned by −Δθ (the small-angle
+/// rotation vector taken as a rotation, composed on the left: in the
+/// workpiece frame, which is the base's turned about the vertical, so the
+/// same as in the base), in one step as the position.
+pub fn compensate_pose(run: &[PathPoint], d: &Deflections) -> Vec<PathPoint> {
+    run.iter()
+        .zip(d.dp.iter().zip(&d.dtheta))
+        .map(|(p, (dp, dth))| {
+            let tilt = if p.tilt == DVec3::ZERO {
+                -*dth
+            } else {
+                rotation_vector(&(rotation(-*dth) * rotation(p.tilt)))
+            };
+            PathPoint {
+                p: p.p - *dp,
+                tilt,
+                ..*p
+            }
+        })
+        .collect()
+}
+
+/// The angle (rad) between the deflected tool, commanded with tilt `cmd`
+/// and turned by `dtheta`, and the nominal tool with tilt `ideal` (the same
+/// axis): |dtheta| itself when neither is tilted.
+fn orientation_residual(dtheta: DVec3, cmd: DVec3, ideal: DVec3) -> f64 {
+    if cmd == DVec3::ZERO && ideal == DVec3::ZERO {
+        return dtheta.length();
+    }
+    let q = |v: DVec3| glam::DQuat::from_scaled_axis(v);
+    let r = q(dtheta) * q(cmd) * q(ideal).inverse();
+    2.0 * r.xyz().length().atan2(r.w.abs())
 }
 
 /// A KRL program of compensated runs: the workpiece frame as `BASE_DATA`
@@ -414,7 +557,7 @@ pub fn krl_program(
         for (i, p) in run.iter().enumerate() {
             let pos = KrlPos {
                 xyz: p.p,
-                abc: abc_for_axis(p.axis),
+                abc: p.abc(),
                 e: [None; 6],
                 s: None,
                 t: None,
@@ -474,9 +617,10 @@ pub fn place(
     robot: &Robot,
     variant: Variant,
     samples: &[PathPoint],
-    load: &Load,
+    load: &PathLoad,
     search: &PlaceSearch,
 ) -> Option<Placed> {
+    let dirs = feed_dirs(samples);
     let placement = |x: &[f64]| Placement {
         x: x[0],
         y: x[1],
@@ -485,7 +629,7 @@ pub fn place(
     };
     let f = |x: &[f64]| {
         robot
-            .deflections(variant, &placement(x), samples, load, None)
+            .deflections_loaded(variant, &placement(x), samples, &dirs, load, None)
             .ok()
             .map(|d| d.mean)
     };
@@ -498,7 +642,9 @@ pub fn place(
         &search.settings,
     )?;
     let p = placement(&best.x);
-    let d = robot.deflections(variant, &p, samples, load, None).ok()?;
+    let d = robot
+        .deflections_loaded(variant, &p, samples, &dirs, load, None)
+        .ok()?;
     Some(Placed {
         place: p,
         mean: d.mean,
@@ -512,39 +658,135 @@ pub fn place(
 pub struct Compensated {
     /// The commanded runs, p_cmd = p_ideal − Δp, every `spacing` mm.
     pub runs: Vec<Vec<PathPoint>>,
+    /// The nominal runs they were computed from, point for point.
+    pub ideal: Vec<Vec<PathPoint>>,
     /// Mean and largest |Δp| over all points before compensation, mm.
     pub mean: f64,
     pub max: f64,
+    /// Mean and largest distance of the tip from the nominal path after
+    /// compensation, mm: the robot commanded to p_cmd and pushed by the
+    /// same loads (the model against itself, T14).
+    pub residual_mean: f64,
+    pub residual_max: f64,
+    /// Mean and largest |Δθ|, the tool's turn under the load, before
+    /// compensation, degrees.
+    pub rot_mean_deg: f64,
+    pub rot_max_deg: f64,
+    /// Mean and largest angle between the deflected tool at the commanded
+    /// points and the nominal tool, degrees: |Δθ| there when the
+    /// orientation is not corrected.
+    pub residual_rot_mean_deg: f64,
+    pub residual_rot_max_deg: f64,
+    /// Whether the orientation was corrected too.
+    pub orientation: bool,
     pub points: usize,
+}
+
+/// Sums and maxima of the distances and angles over the points.
+#[derive(Default)]
+struct Tally {
+    sum: f64,
+    max: f64,
+    rot_sum: f64,
+    rot_max: f64,
+}
+
+impl Tally {
+    fn add(&mut self, dist: f64, angle: f64) {
+        self.sum += dist;
+        self.max = self.max.max(dist);
+        self.rot_sum += angle;
+        self.rot_max = self.rot_max.max(angle);
+    }
 }
 
 /// Compensates every cutting run of `prog` (in the workpiece frame, placed
 /// at `place`): resampled every `spacing` mm (0.3 in the paper), Δp from
-/// the nominal path, p_cmd = p − Δp, one Status throughout each run.
+/// the nominal path, p_cmd = p − Δp, one Status throughout each run; then
+/// the deflection again at the commanded points under the nominal path's
+/// loads, for the residual.
 pub fn compensate_program(
     robot: &Robot,
     variant: Variant,
     prog: &Program,
     place: &Placement,
-    load: &Load,
+    load: &PathLoad,
     spacing: f64,
 ) -> Result<Compensated, MachiningError> {
-    let mut runs = Vec::new();
-    let (mut sum, mut max, mut points) = (0.0, 0.0f64, 0);
+    compensate_program_with(robot, variant, prog, place, load, spacing, false)
+}
+
+/// [`compensate_program`], with `orientation` the tool's orientation
+/// corrected as well ([`compensate_pose`]).
+pub fn compensate_program_with(
+    robot: &Robot,
+    variant: Variant,
+    prog: &Program,
+    place: &Placement,
+    load: &PathLoad,
+    spacing: f64,
+    orientation: bool,
+) -> Result<Compensated, MachiningError> {
+    let (mut runs, mut ideals) = (Vec::new(), Vec::new());
+    let (mut before, mut after, mut points) = (Tally::default(), Tally::default(), 0);
     for run in cutting_runs(prog)? {
         let ideal = resample(&run, spacing);
-        let d = robot.deflections(variant, place, &ideal, load, None)?;
-        sum += d.mean * ideal.len() as f64;
-        max = max.max(d.max);
+        let dirs = feed_dirs(&ideal);
+        let d = robot.deflections_loaded(variant, place, &ideal, &dirs, load, None)?;
+        for (dp, dth) in d.dp.iter().zip(&d.dtheta) {
+            before.add(dp.length(), dth.length());
+        }
         points += ideal.len();
-        runs.push(compensate(&ideal, &d.dp));
+        let cmd = match orientation {
+            true => compensate_pose(&ideal, &d),
+            false => compensate(&ideal, &d.dp),
+        };
+        let at = robot.deflections_loaded(variant, place, &cmd, &dirs, load, Some(d.status))?;
+        for (((c, a), th), i) in cmd.iter().zip(&at.dp).zip(&at.dtheta).zip(&ideal) {
+            after.add(
+                (c.p + *a - i.p).length(),
+                orientation_residual(*th, c.tilt, i.tilt),
+            );
+        }
+        runs.push(cmd);
+        ideals.push(ideal);
     }
+    let n = points as f64;
     Ok(Compensated {
         runs,
-        mean: sum / points as f64,
-        max,
+        ideal: ideals,
+        mean: before.sum / n,
+        max: before.max,
+        residual_mean: after.sum / n,
+        residual_max: after.max,
+        rot_mean_deg: (before.rot_sum / n).to_degrees(),
+        rot_max_deg: before.rot_max.to_degrees(),
+        residual_rot_mean_deg: (after.rot_sum / n).to_degrees(),
+        residual_rot_max_deg: after.rot_max.to_degrees(),
+        orientation,
         points,
     })
+}
+
+/// The largest distance of the deflected tip from the nominal path when the
+/// robot is commanded to `cmd` (runs point for point with `c.ideal`, e.g.
+/// the commanded points read back from the KRL written) under `load`, mm.
+pub fn residual_max(
+    robot: &Robot,
+    variant: Variant,
+    place: &Placement,
+    c: &Compensated,
+    cmd: &[Vec<PathPoint>],
+    load: &PathLoad,
+) -> Result<f64, MachiningError> {
+    let mut max = 0.0f64;
+    for (ideal, run) in c.ideal.iter().zip(cmd) {
+        let d = robot.deflections_loaded(variant, place, run, &feed_dirs(ideal), load, None)?;
+        for ((p, dp), i) in run.iter().zip(&d.dp).zip(ideal) {
+            max = max.max((p.p + *dp - i.p).length());
+        }
+    }
+    Ok(max)
 }
 
 /// The cutting runs of `prog` resampled every 10 mm (the paper's placement

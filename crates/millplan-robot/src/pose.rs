@@ -76,16 +76,18 @@ pub fn matrix_to_abc(r: &DMat3) -> [f64; 3] {
     [a.to_degrees(), b.to_degrees(), c.to_degrees()]
 }
 
-/// The rotation vector (axis times angle, radians) of a rotation matrix.
+/// The rotation vector (axis times angle, radians, the angle in [0, π]) of
+/// a rotation matrix; the angle from the quaternion's vector part, so that
+/// small rotations keep their digits.
 pub fn rotation_vector(r: &DMat3) -> DVec3 {
     let q = glam::DQuat::from_mat3(r);
-    let (axis, angle) = q.to_axis_angle();
-    let angle = if angle > std::f64::consts::PI {
-        angle - 2.0 * std::f64::consts::PI
-    } else {
-        angle
-    };
-    axis * angle
+    let q = if q.w < 0.0 { -q } else { q };
+    let v = q.xyz();
+    let s = v.length();
+    if s == 0.0 {
+        return DVec3::ZERO;
+    }
+    v * (2.0 * s.atan2(q.w) / s)
 }
 
 #[cfg(test)]
@@ -97,6 +99,20 @@ mod tests {
     }
 
     /// T16 (process-models §6): KUKA A, B, C with R = Rz(A)·Ry(B)·Rx(C).
+    /// The rotation vector of a rotation about a known axis, large and tiny.
+    #[test]
+    fn rotation_vector_keeps_small_angles() {
+        let axis = DVec3::new(1.0, -2.0, 0.5).normalize();
+        for angle in [1e-9, 1e-6, 0.3, 3.0] {
+            let r = DMat3::from_axis_angle(axis, angle);
+            let v = rotation_vector(&r);
+            assert!(
+                (v - axis * angle).length() < 1e-12 * angle.max(1.0),
+                "{angle}: {v}"
+            );
+        }
+    }
+
     #[test]
     fn t16_kuka_abc() {
         assert!(near(abc_to_matrix([90.0, 0.0, 0.0]) * DVec3::X, DVec3::Y));

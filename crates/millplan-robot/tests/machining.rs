@@ -4,7 +4,7 @@
 use millplan_geom::DVec3;
 use millplan_robot::anneal::Settings;
 use millplan_robot::machining::{
-    self, compensate, resample, Load, PathPoint, PlaceSearch, Placement,
+    self, compensate, resample, Load, PathLoad, PathPoint, PlaceSearch, Placement,
 };
 use millplan_robot::{Robot, Variant};
 
@@ -25,6 +25,8 @@ fn zigzag(step: f64) -> Vec<PathPoint> {
                 axis: DVec3::Z,
                 feed: 1200.0,
                 line: row + 1,
+                mv: row,
+                tilt: DVec3::ZERO,
             });
         }
     }
@@ -144,8 +146,22 @@ fn placement_search_is_seeded_and_improves() {
             ..Settings::default()
         },
     };
-    let a = machining::place(&robot, Variant::ThreeAxis, &path, &LOAD, &search).expect("placed");
-    let b = machining::place(&robot, Variant::ThreeAxis, &path, &LOAD, &search).expect("placed");
+    let a = machining::place(
+        &robot,
+        Variant::ThreeAxis,
+        &path,
+        &machining::PathLoad::Fixed(LOAD),
+        &search,
+    )
+    .expect("placed");
+    let b = machining::place(
+        &robot,
+        Variant::ThreeAxis,
+        &path,
+        &machining::PathLoad::Fixed(LOAD),
+        &search,
+    )
+    .expect("placed");
     assert_eq!(a.place, b.place);
     let hand = robot
         .deflections(Variant::ThreeAxis, &place(), &path, &LOAD, None)
@@ -287,4 +303,152 @@ fn deflection_under_a_force_per_point() {
         .deflections_under(Variant::ThreeAxis, &place, &run, &forces[1..], None)
         .expect_err("one short");
     assert!(e.to_string().contains("one force a point"), "{e}");
+}
+
+/// A load per move (`PathLoad::PerMove`, what the force model with the
+/// stock gives): the same load for every move deflects exactly as the
+/// fixed load; a move with no load (in air) does not deflect, the others
+/// as before; a move past the list has none.
+#[test]
+fn deflection_under_a_load_per_move() {
+    let run = zigzag(0.3);
+    let (robot, place) = (Robot::kr240(), place());
+    let dirs = machining::feed_dirs(&run);
+    let moves = run.iter().map(|p| p.mv).max().expect("points") as usize + 1;
+    let fixed = robot
+        .deflections_loaded(
+            Variant::ThreeAxis,
+            &place,
+            &run,
+            &dirs,
+            &PathLoad::Fixed(LOAD),
+            None,
+        )
+        .expect("reachable");
+    let same = PathLoad::PerMove(vec![LOAD; moves]);
+    let each = robot
+        .deflections_loaded(Variant::ThreeAxis, &place, &run, &dirs, &same, None)
+        .expect("reachable");
+    assert_eq!(each.dp, fixed.dp);
+    let mut air = vec![LOAD; moves];
+    air[2] = Load {
+        feed: 0.0,
+        cross: 0.0,
+        axial: 0.0,
+    };
+    let d = robot
+        .deflections_loaded(
+            Variant::ThreeAxis,
+            &place,
+            &run,
+            &dirs,
+            &PathLoad::PerMove(air),
+            None,
+        )
+        .expect("reachable");
+    for (i, p) in run.iter().enumerate() {
+        if p.mv == 2 {
+            assert_eq!(d.dp[i], DVec3::ZERO, "point {i}");
+        } else {
+            assert_eq!(d.dp[i], fixed.dp[i], "point {i}");
+        }
+    }
+    let none = PathLoad::PerMove(Vec::new());
+    let d = robot
+        .deflections_loaded(Variant::ThreeAxis, &place, &run, &dirs, &none, None)
+        .expect("reachable");
+    assert_eq!((d.mean, d.max), (0.0, 0.0));
+}
+
+/// The angle of a rotation (rad), precise for small ones (from the
+/// quaternion's vector part, not its scalar).
+fn angle(r: &millplan_geom::DMat3) -> f64 {
+    let q = glam::DQuat::from_mat3(r);
+    2.0 * q.xyz().length().atan2(q.w.abs())
+}
+
+/// Offline compensation with the orientation corrected too (process-models
+/// §4.4, "optionally the orientation"): the tool commanded to p − Δp and
+/// turned by −Δθ, then pushed by the same load, lands within 1e-3 of |Δp|
+/// of the nominal point and within 1e-3 of |Δθ| of the nominal orientation
+/// (here under 0.1 µm and 1e-7 rad, against |Δp| up to 0.2 mm and |Δθ| up
+/// to 2.4e-4 rad); without the correction the orientation is off by
+/// the |Δθ| at the commanded point, within 1 % of that at the nominal one.
+/// The position is the same with and without: the tilt moves no point.
+#[test]
+fn orientation_compensation_leaves_position_and_orientation_on_the_path() {
+    let robot = Robot::kr240();
+    let ideal = zigzag(5.0);
+    let v = Variant::ThreeAxis;
+    let d = robot
+        .deflections(v, &place(), &ideal, &LOAD, None)
+        .expect("reachable");
+    let dirs = machining::feed_dirs(&ideal);
+    let plain = compensate(&ideal, &d.dp);
+    let posed = machining::compensate_pose(&ideal, &d);
+    let at = |cmd: &[PathPoint]| {
+        robot
+            .deflections_along(v, &place(), cmd, &dirs, &LOAD, Some(d.status))
+            .expect("reachable")
+    };
+    let (at_plain, at_posed) = (at(&plain), at(&posed));
+    let mut worst = (0.0f64, 0.0f64);
+    for i in 0..ideal.len() {
+        assert_eq!(plain[i].p, posed[i].p);
+        assert_eq!(posed[i].tilt, -d.dtheta[i]);
+        let (dp, dth) = (d.dp[i].length(), d.dtheta[i].length());
+        assert!(dth > 1e-5, "point {i}: the load turns the tool ({dth} rad)");
+        // Landed position and orientation of the corrected command.
+        let landed = posed[i].p + at_posed.dp[i];
+        let r = machining::rotation(at_posed.dtheta[i]) * posed[i].orientation();
+        let off = angle(&(r * ideal[i].orientation().transpose()));
+        assert!((landed - ideal[i].p).length() < 1e-3 * dp, "point {i}");
+        assert!(off < 1e-3 * dth, "point {i}: {off} vs {dth}");
+        worst = (
+            worst.0.max((landed - ideal[i].p).length()),
+            worst.1.max(off),
+        );
+        // Without: the orientation is off by the whole turn.
+        let r = machining::rotation(at_plain.dtheta[i]) * plain[i].orientation();
+        let off = angle(&(r * ideal[i].orientation().transpose()));
+        assert!((off - at_plain.dtheta[i].length()).abs() < 1e-12);
+        assert!((off - dth).abs() < 0.01 * dth, "point {i}");
+    }
+    assert!(worst.0 < 1e-4 && worst.1 < 1e-7, "{worst:?}");
+}
+
+/// The corrected orientation in KRL: A, B, C are KUKA's Z-Y-X angles of
+/// the turned tool (they read back to the same rotation); a point without
+/// tilt is written with the A, B, C of its axis, unchanged.
+#[test]
+fn orientation_compensation_is_written_as_abc() {
+    let robot = Robot::kr240();
+    let ideal = zigzag(5.0);
+    let d = robot
+        .deflections(Variant::ThreeAxis, &place(), &ideal, &LOAD, None)
+        .expect("reachable");
+    let posed = machining::compensate_pose(&ideal, &d);
+    let k = machining::krl_program("slot", std::slice::from_ref(&posed), &place(), 0.15);
+    let abc: Vec<[f64; 3]> = k
+        .statements
+        .iter()
+        .filter_map(|l| match &l.statement {
+            millplan_nc::krl::Statement::Move {
+                motion: millplan_nc::krl::Motion::Lin(p) | millplan_nc::krl::Motion::Ptp(p),
+                ..
+            } => Some(p.abc),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(abc.len(), posed.len());
+    let axis_abc = millplan_nc::krl::abc_for_axis(DVec3::Z);
+    for (a, p) in abc.iter().zip(&posed) {
+        let r = millplan_robot::pose::abc_to_matrix(*a);
+        assert!((r - p.orientation())
+            .to_cols_array()
+            .iter()
+            .all(|e| e.abs() < 1e-12));
+        assert!(a.iter().zip(axis_abc).any(|(x, y)| (x - y).abs() > 1e-6));
+    }
+    assert_eq!(ideal[0].abc(), axis_abc);
 }

@@ -142,11 +142,13 @@ pub fn escape_controls(s: &str) -> String {
 }
 
 /// The stable name of an exit code in a JSON error: `usage` (arguments
-/// clap refused), `bad-input`, `internal`.
+/// clap refused), `bad-input`, `findings` (a check failed, or nothing to
+/// act on), `internal`.
 pub fn code_name(exit: i32, usage: bool) -> &'static str {
     match (exit, usage) {
         (_, true) => "usage",
         (EXIT_BAD_INPUT, _) => "bad-input",
+        (EXIT_FINDINGS, _) => "findings",
         _ => "internal",
     }
 }

@@ -24,7 +24,6 @@ mod error;
 mod io;
 mod limits;
 mod progress;
-mod round;
 mod timings;
 mod verdict;
 

@@ -456,7 +456,8 @@ fn help_explains_every_command() {
 /// library crate depends only on the crates below it
 /// (geom ← nc; geom ← models; nc + models ← sim ← plan ← report ← driver;
 /// tooldb alone, below driver; geom + nc ← robot), and no library on the command-line, terminal or temporary-file
-/// crates that only the binary uses.
+/// crates that only the binary uses (but the driver's `io`, which stages a
+/// run's outputs in temporary files).
 #[test]
 fn crate_dependencies_point_one_way() {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
@@ -516,6 +517,7 @@ fn crate_dependencies_point_one_way() {
                 "millplan-plan",
                 "millplan-report",
                 "millplan-tooldb",
+                "millplan-robot",
             ],
         ),
     ];
@@ -544,8 +546,9 @@ fn crate_dependencies_point_one_way() {
             if dep.starts_with("millplan") {
                 assert!(ok.contains(&dep), "{name} must not depend on {dep}");
             }
+            let staging = name == "millplan-driver" && dep == "tempfile";
             assert!(
-                !binary_only.contains(&dep),
+                staging || !binary_only.contains(&dep),
                 "{name} must not depend on {dep}: only the binary does I/O and argument parsing"
             );
         }
@@ -656,9 +659,12 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// The bound of [`the_binary_stays_small`]: 7,610 lines after `feed`,
 /// `force`, `post` and `tool` moved into `millplan-driver`, 7,766 once the
 /// KRL reading of `convert`, `--spindle`, `simulate --timings` and the
-/// progress bar of `optimise` came in beside that move; lowered as `robot`,
-/// `speed` and the argument groups shared by the commands move.
-const MAX_BINARY_LINES: usize = 7800;
+/// progress bar of `optimise` came in beside that move; 6,409 after file
+/// access (`io`), the tool library's decisions, the run's limits, the
+/// rounding of JSON numbers, the timing clock, the demo's files and the
+/// thread checks' outcomes moved into the driver; lowered as `robot`, `speed` and the argument groups
+/// shared by the commands move.
+const MAX_BINARY_LINES: usize = 6550;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into

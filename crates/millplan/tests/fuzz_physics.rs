@@ -22,7 +22,10 @@ const HOSTILE: &[&str] = &[
     "0.3", "1", "2", "10", "63", "2000",
 ];
 
-const PROGRAM: &str = "UNITS/MM\nCUTTER/10,5\nFEDRAT/500\nSPINDL/6000,CLW\nGOTO/0,0,50\nGOTO/0,0,19\nGOTO/60,0,19\nGOTO/60,20,19\nGOTO/0,20,19\nGOTO/0,20,50\nFINI\n";
+/// A pass 1 mm deep in the auto stocks (their top is the highest cutting
+/// tip): the approach and the retract are rapids, so `box:auto` is not a
+/// slot 31 mm deep, whose force integrals alone took a minute per debug run.
+const PROGRAM: &str = "UNITS/MM\nCUTTER/10,5\nFEDRAT/500\nSPINDL/6000,CLW\nRAPID\nGOTO/0,0,50\nRAPID\nGOTO/0,0,20\nGOTO/0,0,19\nGOTO/60,0,19\nGOTO/60,20,19\nGOTO/0,20,19\nRAPID\nGOTO/0,20,50\nFINI\n";
 const FIVE: &str = "UNITS/MM\nCUTTER/10,5\nFEDRAT/500\nSPINDL/6000,CLW\nGOTO/0,0,50,0,0,1\nGOTO/10,0,19,0,0.5,0.866\nGOTO/20,0,19,0,0,1\nGOTO/20,0,50,0,0,1\nFINI\n";
 const MATERIAL: &str = "[c45]\nmodel = \"linear\"\nkc = [2100, 800, 500]\nke = [30, 40, 0]\n[ob]\nmodel = \"oblique\"\ntau_s = 300.0\nbeta_a = [20.0, 0.3]\nrc_c0 = [1.7, 0.0]\nrc_a = [0.2, 0.0]\nke = [24.0, 43.0, 0.0]\n";
 const MACHINE: &str = "[spindle]\nmin = 500\nmax = 18000\naccel = 6000\n[feed]\nmin = 1\nmax = 20000\nrapid = 15000\n[kinematics]\nkind = \"table-ac\"\nrot_point = [0, 0, 0]\n[axes.x]\nvelocity = 30000\naccel = 3000\njerk = 30000\n[axes.a]\nvelocity = 9000\naccel = 1800\n";

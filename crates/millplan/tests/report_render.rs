@@ -319,8 +319,10 @@ fn simulate_report_draws_the_stock_in_3d_or_says_it_cannot() {
 /// What a page measures of itself once laid out (run inside Chromium):
 /// the viewport's width and the page's, the elements whose box leaves the
 /// viewport, the legend entries whose boxes meet a plot's area, per plot
-/// its axis labels and tick labels, and the verdict's level, colour, first
-/// line and whether a warnings box is shown.
+/// its axis labels and tick labels, the cells that read as raw data (JSON
+/// braces or keys, numbers to seven or more decimals), the names of the
+/// inputs box's rows, and the verdict's level, colour, first line and
+/// whether a warnings box is shown.
 const PROBE: &str = r#"<script>
 (() => {
   const W = window.innerWidth;
@@ -343,6 +345,10 @@ const PROBE: &str = r#"<script>
     r.plots.push({ title: (svg.querySelector('text') || {}).textContent, map: !!svg.querySelector('.map-area'),
       labels: svg.querySelectorAll('.axis-label').length, ticks });
   }
+  r.raw = [...document.querySelectorAll('td,pre')]
+    .filter(e => /[{}]|"\w+"\s*:|\d\.\d{7,}/.test(e.textContent))
+    .map(e => e.tagName + ': ' + e.textContent.slice(0, 80));
+  r.inputs = [...document.querySelectorAll('#inputs th')].map(e => e.textContent);
   const v = document.getElementById('verdict');
   if (v) r.verdict = { level: v.dataset.level, colour: getComputedStyle(v).borderLeftColor,
     first: (v.querySelector('p') || {}).textContent || '', warnings: !!document.getElementById('warnings') };
@@ -398,7 +404,8 @@ fn level_colour(level: &str) -> &'static str {
 }
 
 /// A report read at 1,400 px: nothing off-screen, no legend over a plot's
-/// data, axes (two labels, ticks) on every map and plot, and a verdict whose
+/// data, no raw data dump (JSON, full double precision), an inputs box,
+/// axes (two labels, ticks) on every map and plot, and a verdict whose
 /// colour is its level's and whose level follows from what the page says:
 /// red with a failed check, amber with a warning, a kept input or a worse
 /// measure, green otherwise. Returns the level.
@@ -408,6 +415,15 @@ fn readable(profile: &Path, page: &Path) -> String {
     assert!(v["page"].as_f64() <= v["width"].as_f64(), "{name}: {v}");
     assert_eq!(v["off"], serde_json::json!([]), "{name}: off-screen");
     assert_eq!(v["over"], serde_json::json!([]), "{name}: legend over data");
+    assert_eq!(
+        v["raw"],
+        serde_json::json!([]),
+        "{name}: raw data in a table"
+    );
+    assert!(
+        v["inputs"].as_array().is_some_and(|i| !i.is_empty()),
+        "{name}: no inputs box"
+    );
     let plots = v["plots"].as_array().expect("plots");
     assert!(!plots.is_empty(), "{name}: no plot");
     for p in plots {
@@ -613,6 +629,21 @@ fn force_and_feed_reports_are_readable() {
         &[0, 3],
     );
     readable(&profile("feed"), &feed);
+    // The header of the other reports: what was run on what.
+    let want = [
+        "program",
+        "part",
+        "stock",
+        "tools",
+        "material",
+        "machine",
+        "options",
+        "load limits",
+    ];
+    for (name, page) in [("force", &force), ("feed", &feed)] {
+        let v = measure(&profile(&format!("{name}-inputs")), page);
+        assert_eq!(v["inputs"], serde_json::json!(want), "{name}");
+    }
 }
 
 #[test]

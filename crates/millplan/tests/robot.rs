@@ -192,6 +192,81 @@ fn compensate_writes_krl_and_reports() {
     );
 }
 
+/// The commanded poses of a KRL file: X, Y, Z and A, B, C.
+fn krl_poses(path: &std::path::Path) -> Vec<([f64; 3], [f64; 3])> {
+    let text = std::fs::read_to_string(path).expect("written");
+    let k = millplan_nc::krl::read(&text, &mut |_| None).expect("KRL reads back");
+    k.statements
+        .iter()
+        .filter_map(|l| match &l.statement {
+            millplan_nc::krl::Statement::Move {
+                motion: millplan_nc::krl::Motion::Lin(p) | millplan_nc::krl::Motion::Ptp(p),
+                ..
+            } => Some((p.xyz.to_array(), p.abc)),
+            _ => None,
+        })
+        .collect()
+}
+
+/// `robot compensate --orientation`: the same positions, the tool turned
+/// back; the deflected tool then stays within a thousandth of the load's
+/// turn of the nominal orientation (without: off by the whole turn, a
+/// hundredth of a degree here), and the tip within a thousandth of the
+/// largest deflection of the path.
+#[test]
+fn compensate_corrects_the_orientation_on_request() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let apt = zigzag_apt(dir.path());
+    let go = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "robot",
+            "compensate",
+            apt.to_str().expect("utf8"),
+            "--pose",
+            "1300,-100,300,0",
+            "--load",
+            "-60,150,40",
+            "--max-points",
+            "0",
+            "-o",
+            out.to_str().expect("utf8"),
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        (json(&args), krl_poses(&out))
+    };
+    let (plain, plain_krl) = go("plain.src", &[]);
+    let (posed, posed_krl) = go("posed.src", &["--orientation"]);
+    let f = |j: &serde_json::Value, k: &str| j[k].as_f64().expect(k);
+    let turn = f(&plain, "max_rotation_deg");
+    assert!(turn > 1e-3 && turn < 1.0, "{plain}");
+    assert_eq!(turn, f(&posed, "max_rotation_deg"));
+    assert_eq!(plain["orientation"], false);
+    assert_eq!(posed["orientation"], true);
+    let plain_off = f(&plain, "residual_rotation_max_deg");
+    assert!((plain_off - turn).abs() < 0.01 * turn, "{plain}");
+    assert!(
+        f(&posed, "residual_rotation_max_deg") < 1e-3 * turn,
+        "{posed}"
+    );
+    let max = f(&plain, "max_deflection_mm");
+    for j in [&plain, &posed] {
+        assert!(f(j, "residual_max_mm") < 1e-3 * max, "{j}");
+    }
+    assert_eq!(plain_krl.len(), posed_krl.len());
+    let mut turned = 0;
+    for ((p, a), (q, b)) in plain_krl.iter().zip(&posed_krl) {
+        assert_eq!(p, q, "the positions do not change");
+        turned += usize::from(a.iter().zip(b).any(|(x, y)| (x - y).abs() > 1e-4));
+    }
+    assert!(
+        turned > plain_krl.len() / 2,
+        "{turned} of {}",
+        plain_krl.len()
+    );
+}
+
 /// `robot place`: the JSON keys of the issue, feasible, reproducible for a seed.
 #[test]
 fn place_is_seeded() {
@@ -220,4 +295,288 @@ fn place_is_seeded() {
             <= a["max_deflection_mm"].as_f64().expect("max")
     );
     assert_eq!(json(&args), a);
+}
+
+/// A slot in G-code (the paper's cut: 12 mm, three flutes, a_p 6 at
+/// f_z 0.08 and 5310 1/min), entered and left through air, at `z` under
+/// the stock's top at z 0.
+fn slot_nc(dir: &std::path::Path, z: f64) -> std::path::PathBuf {
+    let s = format!(
+        "G21 G90 G17\nT1 M6\nS5310 M3\nG0 X-20 Y0 Z5\nG1 Z{z} F1274.4\nG1 X10\nG1 X90\nG1 X130\nG0 Z5\nM30\n"
+    );
+    let p = dir.join("slot.nc");
+    std::fs::write(&p, s).expect("write");
+    p
+}
+
+fn coupled(path: &std::path::Path, out: &std::path::Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec![
+        "robot",
+        "compensate",
+        path.to_str().expect("utf8"),
+        "--pose",
+        "1300,-100,300,0",
+        "--stock",
+        "box:0,-20,-20,120,20,0",
+        "--material",
+        "en-aw-2007",
+        "--tool",
+        "flat:12",
+        "--flutes",
+        "3",
+        "--helix",
+        "0",
+        "--resolution",
+        "0.25",
+        "-o",
+        out.to_str().expect("utf8"),
+        "--json",
+    ];
+    args.extend_from_slice(extra);
+    json(&args)
+}
+
+/// The load from the force model with the stock: a path through air above
+/// the stock gets no load and no deflection; a slot's largest move load is
+/// the closed-form mean force of the paper's slot (|(−95.15, 304.95, 68.0)|
+/// = 326.6 N, process-models §6 T1a with §1.5e's coefficients), and its
+/// deflection is that of the fixed --load of the same force where the slot
+/// is cut in full, less where the tool enters and leaves; compensation
+/// leaves a residual far below the deflection.
+#[test]
+fn compensate_takes_the_load_from_the_force_model() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("c.src");
+    let air = coupled(&slot_nc(dir.path(), 2.0), &out, &[]);
+    assert_eq!(air["loads"]["loaded_moves"], 0, "{air}");
+    assert_eq!(air["mean_deflection_mm"].as_f64(), Some(0.0), "{air}");
+    assert_eq!(air["max_deflection_mm"].as_f64(), Some(0.0), "{air}");
+    let slot = coupled(&slot_nc(dir.path(), -6.0), &out, &[]);
+    assert_eq!(slot["loads"]["loaded_moves"], 3, "{slot}");
+    let f = slot["loads"]["max_mean_force_n"].as_f64().expect("force");
+    assert!((f - 326.6).abs() < 0.02 * 326.6, "{slot}");
+    let fixed = json(&[
+        "robot",
+        "compensate",
+        slot_nc(dir.path(), -6.0).to_str().expect("utf8"),
+        "--pose",
+        "1300,-100,300,0",
+        "--load",
+        "-95.15,304.95,68.0",
+        "-o",
+        out.to_str().expect("utf8"),
+        "--json",
+    ]);
+    let (cm, cx) = (
+        slot["mean_deflection_mm"].as_f64().expect("mean"),
+        slot["max_deflection_mm"].as_f64().expect("max"),
+    );
+    let (fm, fx) = (
+        fixed["mean_deflection_mm"].as_f64().expect("mean"),
+        fixed["max_deflection_mm"].as_f64().expect("max"),
+    );
+    assert!(cm > 0.3 * fm && cm < fm, "coupled {slot}, fixed {fixed}");
+    // The fixed load also loads the plunge and the entry and exit: the
+    // largest deflection is at most theirs, close to it.
+    assert!(
+        cx > 0.9 * fx && cx < 1.01 * fx,
+        "coupled {slot}, fixed {fixed}"
+    );
+    let r = slot["residual_max_mm"].as_f64().expect("residual");
+    assert!(r < 0.01 * cx, "{slot}");
+    // --load and --stock exclude each other; one of them is needed.
+    let o = run(&[
+        "robot",
+        "place",
+        "x.nc",
+        "--load",
+        "0,0,0",
+        "--stock",
+        "box:auto",
+        "--material",
+        "en-aw-2007",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = run(&["robot", "place", "x.nc"]);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+/// `robot place` with the coupled load runs, feasible and seeded.
+#[test]
+fn place_takes_the_load_from_the_force_model() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let nc = slot_nc(dir.path(), -6.0);
+    let args = [
+        "robot",
+        "place",
+        nc.to_str().expect("utf8"),
+        "--stock",
+        "box:0,-20,-20,120,20,0",
+        "--material",
+        "en-aw-2007",
+        "--tool",
+        "flat:12",
+        "--flutes",
+        "3",
+        "--resolution",
+        "0.25",
+        "--seed",
+        "2",
+        "--restarts",
+        "1",
+        "--json",
+    ];
+    let a = json(&args);
+    assert_eq!(a["feasible"], true, "{a}");
+    let mean = a["mean_deflection_mm"].as_f64().expect("mean");
+    assert!(mean > 0.0 && mean <= a["max_deflection_mm"].as_f64().expect("max"));
+    assert_eq!(json(&args), a);
+}
+
+/// `optimise --robot`: the optimised slot ends compensated and written as
+/// KRL, a main program calling sub-programs of --max-points motions beside
+/// it, which read back (the pass re-runs the deflection on what it read
+/// and holds the tip within --tol); without the stock the load is
+/// missing and the run says so (exit 2).
+#[test]
+fn optimise_ends_with_the_compensation_pass() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let nc = slot_nc(dir.path(), -6.0);
+    let out = dir.path().join("opt.src");
+    let mut args = vec![
+        "optimise",
+        nc.to_str().expect("utf8"),
+        "--material",
+        "en-aw-2007",
+        "--tool",
+        "flat:12",
+        "--flutes",
+        "3",
+        "--resolution",
+        "0.25",
+        "--robot",
+        "kr240",
+        "--pose",
+        "1300,-100,300,0",
+        "--max-points",
+        "200",
+        "-o",
+        out.to_str().expect("utf8"),
+    ];
+    let o = run(&args);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("--stock"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    args.extend_from_slice(&["--stock", "box:0,-20,-20,120,20,0"]);
+    let o = run(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("robot: deflection mean"), "{err}");
+    let main = std::fs::read_to_string(&out).expect("main");
+    assert!(main.contains("opt_001()"), "{main}");
+    let k = millplan_nc::krl::read(&main, &mut |n| {
+        std::fs::read_to_string(dir.path().join(format!("{n}.src"))).ok()
+    })
+    .expect("reads with its sub-programs");
+    assert!(k.missing.is_empty(), "{:?}", k.missing);
+    let motions = k
+        .statements
+        .iter()
+        .filter(|l| matches!(l.statement, millplan_nc::krl::Statement::Move { .. }))
+        .count();
+    // 140 mm of cutting and the plunge at 0.3 mm, in files of 200.
+    assert!(motions > 480, "{motions}");
+    assert!(dir.path().join("opt_003.src").is_file());
+}
+
+/// `convert --to krl --max-points N`: a main program calling sub-programs
+/// of N motions beside it (the writer of `robot compensate`), which read
+/// back to the poses of the one-file conversion; refused for another
+/// dialect or standard output.
+#[test]
+fn convert_splits_krl_into_sub_programs() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let apt = zigzag_apt(dir.path());
+    let one = dir.path().join("one.src");
+    let split = dir.path().join("zz.src");
+    let conv = |out: &std::path::Path, extra: &[&str]| {
+        let mut args = vec![
+            "convert",
+            apt.to_str().expect("utf8"),
+            "-o",
+            out.to_str().expect("utf8"),
+            "--to",
+            "krl",
+        ];
+        args.extend_from_slice(extra);
+        run(&args)
+    };
+    // The approach GOTO is a feed move the KRL writes as PTP: --lossy.
+    let o = conv(&one, &["--lossy"]);
+    assert!(o.status.code().is_some_and(|c| c == 0 || c == 3), "{o:?}");
+    let o = conv(&split, &["--max-points", "2", "--lossy"]);
+    assert!(o.status.code().is_some_and(|c| c == 0 || c == 3), "{o:?}");
+    let read = |p: &std::path::Path| {
+        let text = std::fs::read_to_string(p).expect("written");
+        millplan_nc::krl::read(&text, &mut |n| {
+            std::fs::read_to_string(dir.path().join(format!("{n}.src"))).ok()
+        })
+        .expect("reads")
+    };
+    let poses = |k: &millplan_nc::krl::KrlProgram| -> Vec<millplan_nc::krl::Statement> {
+        k.statements
+            .iter()
+            .filter(|l| matches!(l.statement, millplan_nc::krl::Statement::Move { .. }))
+            .map(|l| l.statement.clone())
+            .collect()
+    };
+    let (a, b) = (read(&one), read(&split));
+    assert!(b.missing.is_empty(), "{:?}", b.missing);
+    assert_eq!(poses(&a), poses(&b));
+    let n = poses(&a).len();
+    assert!(n > 4, "{n}");
+    let subs = n.div_ceil(2);
+    assert_eq!(b.files.len(), 1 + subs, "{:?}", b.files);
+    assert!(dir.path().join(format!("zz_{subs:03}.src")).is_file());
+    let main = std::fs::read_to_string(&split).expect("main");
+    assert!(
+        main.contains("zz_001()") && !main.contains("LIN "),
+        "{main}"
+    );
+    let x = dir.path().join("x.apt");
+    let o = run(&[
+        "convert",
+        apt.to_str().expect("utf8"),
+        "-o",
+        x.to_str().expect("utf8"),
+        "--max-points",
+        "2",
+        "--lossy",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("--max-points"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let o = run(&[
+        "convert",
+        apt.to_str().expect("utf8"),
+        "-o",
+        "-",
+        "--to",
+        "krl",
+        "--max-points",
+        "2",
+        "--lossy",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
 }

@@ -51,7 +51,10 @@ fn assert_phases_cover(args: &[&str], ok_codes: &[i32]) {
         let total = total.unwrap_or_else(|| panic!("{args:?}: no total in\n{stderr}"));
         assert!(phases.len() >= 3, "{args:?}: too few phases in\n{stderr}");
         let sum: f64 = phases.iter().map(|p| p.1).sum();
-        if (sum - total).abs() <= 0.05 * total && (wall - total).abs() <= 0.05 * wall {
+        // The wall time measured here also holds the process's start and
+        // exit (loading, the allocator, freeing at exit), outside any clock
+        // the program can read: 20 ms of it are allowed beside the 5 %.
+        if (sum - total).abs() <= 0.05 * total && (wall - total).abs() <= 0.05 * wall + 0.02 {
             return;
         }
         last = format!("phases {sum:.3} s, total {total:.3} s, wall {wall:.3} s\n{stderr}");

@@ -28,6 +28,7 @@
 //! - [`deflect`]: bending stress and deflection of the tool (§2.2).
 //! - [`feed`]: the feed-per-tooth iteration of §2.3.
 //! - [`materials`]: named coefficient sets from a small TOML file.
+//! - [`mean`]: the mean force over the poses of a move (the static load).
 
 pub mod case;
 pub mod coeffs;
@@ -38,6 +39,7 @@ pub mod engage;
 pub mod feed;
 pub mod flat;
 pub mod materials;
+pub mod mean;
 pub mod quadrature;
 
 use coeffs::{ChipRule, Law};

@@ -119,6 +119,71 @@ pub fn write(p: &KrlProgram, o: &KrlOptions) -> KrlFiles {
     out
 }
 
+/// The program name a KRL output at `output` takes: its file stem.
+pub fn stem(output: &std::path::Path) -> String {
+    let s = output.file_stem().and_then(|s| s.to_str());
+    s.unwrap_or("millplan").into()
+}
+
+/// The paths of written files: the main program at `output`, each
+/// sub-program beside it as `NAME.src`.
+pub fn file_paths(output: &std::path::Path, files: &KrlFiles) -> Vec<std::path::PathBuf> {
+    files
+        .iter()
+        .enumerate()
+        .map(|(i, (name, _))| {
+            if i == 0 {
+                output.to_path_buf()
+            } else {
+                output.with_file_name(format!("{name}.src"))
+            }
+        })
+        .collect()
+}
+
+/// The motions of a program, in order.
+fn motions(p: &KrlProgram) -> Vec<&Statement> {
+    p.statements
+        .iter()
+        .map(|l| &l.statement)
+        .filter(|s| matches!(s, Statement::Move { .. }))
+        .collect()
+}
+
+/// A one-file KRL text split by [`write()`] with `o` (a main program calling
+/// sub-programs of `o.max_points` motions), checked: the files read back,
+/// the main finding its sub-programs among them, command the motions of
+/// `text` (poses, approximation, `$VEL.CP`) in the same order.
+pub fn split(text: &str, o: &KrlOptions) -> Result<KrlFiles, String> {
+    let k = crate::krl::read(text, &mut |_| None)
+        .map_err(|e| format!("the program written does not read back: {e:?}"))?;
+    let files = write(&k, o);
+    let back = crate::krl::read(&files[0].1, &mut |n| {
+        files
+            .iter()
+            .find(|(f, _)| f.eq_ignore_ascii_case(n))
+            .map(|(_, t)| t.clone())
+    })
+    .map_err(|e| format!("the sub-programs written do not read back: {e:?}"))?;
+    let (a, b) = (motions(&k), motions(&back));
+    if a.len() != b.len() {
+        return Err(format!(
+            "the sub-programs read back hold {} motions, the program {}",
+            b.len(),
+            a.len()
+        ));
+    }
+    if let Some(i) = a.iter().zip(&b).position(|(x, y)| x != y) {
+        return Err(format!(
+            "motion {} reads back as {:?}, written {:?}",
+            i + 1,
+            b[i],
+            a[i]
+        ));
+    }
+    Ok(files)
+}
+
 /// One file: `ext` the sub-programs its statements call that were not read
 /// (declared again, so that the calls kept stay calls), `calls` those it
 /// calls at its end.

@@ -45,6 +45,9 @@ __all__ = [
     "cut",
     "raster",
     "reorder",
+    "feed",
+    "setup",
+    "post",
 ]
 
 StrPath = Union[str, "PathLike[str]"]
@@ -578,3 +581,155 @@ def reorder(
     )
     summary.pop("output", None)
     return prog, summary
+
+
+def feed(
+    program: Union[Program, StrPath],
+    stock: str,
+    material: str,
+    part: Union[Mesh, StrPath, None] = None,
+    machine: Optional[StrPath] = None,
+    tools: Optional[str] = None,
+    *,
+    flutes: Optional[int] = None,
+    helix: Optional[float] = None,
+    stickout: Optional[float] = None,
+    flute_length: Optional[float] = None,
+    modulus: Optional[float] = None,
+    resolution: Optional[float] = None,
+    dz: Optional[float] = None,
+    dphi: Optional[float] = None,
+    fixed_grid: bool = False,
+    spindle: Optional[float] = None,
+    fz_min: Optional[float] = None,
+    fz_max: Optional[float] = None,
+    fos: Optional[float] = None,
+    feed_accel: Optional[float] = None,
+    limits: Optional[Dict[str, float]] = None,
+    dialect: Optional[str] = None,
+    output: Optional[StrPath] = None,
+    pandas: Optional[bool] = None,
+) -> "Tuple[Program, str, Dict[str, Any], Any]":
+    """A feed per block from the cutting forces: ``millplan feed``.
+
+    The program runs stroke by stroke through ``stock`` (as in
+    :func:`force`; 'offset:MM' needs ``part``) on a dexel grid of
+    ``resolution`` mm (default 0.1) with the coefficients of ``material``;
+    each cutting block gets the feed per tooth at which the tightest limit
+    is met: ``limits`` (dict of fxy N, torque N·mm, power W, stress MPa,
+    deflection mm, and fz_min/fz_max mm) and the machine file's spindle
+    chart, power, torque and stress divided by ``fos`` (default 1). Blocks
+    in air run at the machine's air feed, else at the tool's largest feed
+    per tooth. Feeds stay within ``fz_min`` (default 0.01 mm) ..
+    ``fz_max`` (default per tool: the material's chip load at its
+    diameter) and the machine's feed range; changes between blocks stay
+    within ``feed_accel`` (mm/s², default the machine's smallest
+    linear-axis acceleration) by lowering feeds only. Positions, spindle
+    speeds and feed modes are kept.
+
+    The model: flutes (default 2), helix (degrees, default 30), stickout
+    (mm, default 3·D), flute_length (mm), modulus (N/mm², default carbide),
+    dz (mm) and dphi (degrees) the force model's coarsest steps, refined per
+    load sample until F_xy,max and T_max converge unless ``fixed_grid``;
+    spindle (1/min) for moves without an S word.
+    tools: the cutter of operations that name none ('ball:10', 'flat:8',
+    'bull:10:2').
+
+    Returns ``(program, text, summary, moves)``: the program with the new
+    feeds, its text in ``dialect`` (default the machine's, else the file
+    name's, else the input's; written to ``output`` when given), what
+    ``millplan feed --json`` prints (times before and after, the largest
+    loads before and after, the binding limits, moves still over a limit),
+    and per move of the input its loads with the feed allowed
+    (``fz_allowed``; the columns of :func:`force`): a DataFrame when pandas
+    is installed. Runs with the GIL released.
+    """
+    prog, text, summary, moves = _millplan.feed(
+        program, stock, material, part, machine, tools, flutes, helix,
+        stickout, flute_length, modulus, resolution, dz, dphi, fixed_grid,
+        spindle, fz_min, fz_max, fos, feed_accel, limits, dialect, output,
+    )
+    return prog, text, summary, _table(moves, pandas)
+
+
+def setup(
+    part: Union[Mesh, StrPath],
+    machine: Optional[StrPath] = None,
+    kind: Optional[str] = None,
+    range1: Optional[str] = None,
+    range2: Optional[str] = None,
+    *,
+    grid: Optional[str] = None,
+    cells: Optional[int] = None,
+    tool: Optional[str] = None,
+    clearance: Optional[float] = None,
+    ignore_bottom: bool = False,
+    exact: bool = False,
+) -> "Tuple[Dict[str, Any], Mesh]":
+    """Can a five-axis machine reach the whole part in one setup, and how
+    should it be clamped: ``millplan setup``.
+
+    The machine: a machine file with a ``[kinematics]`` table, or ``kind``
+    'ca' (a tilting A table carrying a C table; range1 the A axis, range2
+    the C table) or 'ab' (an A table on a B cradle), each range 'MIN,MAX'
+    in degrees or 'free' (the default). Every facet of ``part`` (a Mesh or
+    an STL file) gets the grid directions that leave it by more than
+    ``clearance`` degrees (default 0) and see no other part of the part
+    (with ``tool`` 'D,REACH[,HOLDER_D,HOLDER_LENGTH]' in mm: along which a
+    ball-end mill, its shank and holder touch nothing but the facet); the
+    search finds the setup needing the least of the rotary ranges. grid:
+    'latlon' (default), 'icosphere' or 'healpix', about ``cells`` cells
+    (default 1200). ignore_bottom: the part stands on its bottom face.
+    exact: the exact window algorithm for a C axis (slow on fine grids).
+
+    Returns ``(report, rotated)``: what ``millplan setup --json`` prints
+    (feasible, the setup rotation, the ranges required, the facets out of
+    reach) and the part turned into the setup found (what ``-o`` writes).
+    Runs with the GIL released.
+    """
+    return _millplan.setup(
+        part, machine, kind, range1, range2, grid, cells, tool, clearance,
+        ignore_bottom, exact,
+    )
+
+
+def post(
+    program: Union[Program, StrPath],
+    machine: StrPath,
+    output: Optional[StrPath] = None,
+    dialect: Optional[str] = None,
+    *,
+    tcp: bool = False,
+    g93: bool = False,
+    tol: Optional[float] = None,
+    pole_cone: Optional[float] = None,
+    pole_tol: Optional[float] = None,
+    clearance: Optional[float] = None,
+    force: bool = False,
+) -> "Tuple[Program, str, Dict[str, Any]]":
+    """Post a five-axis CL program for a machine: ``millplan post``.
+
+    The rotary angles come from ``machine``'s kinematics (a machine file
+    with a ``[kinematics]`` table), chosen over the whole path: the path of
+    least rotary travel that never changes branch inside a cut (a change
+    across a rapid gets a retract of ``clearance`` mm along the tool axis).
+    Within ``pole_cone`` degrees of the pole the turning axis is held, and
+    blocks deviating more than ``pole_tol`` degrees are flagged (defaults:
+    the machine file's ``[post]``, else 1, 1 and 50). Without ``tcp`` the
+    program is in machine coordinates and points are inserted wherever the
+    tip would leave the CL segment by more than ``tol`` mm (default 0.01);
+    with ``tcp`` tool tips under the control's TCP mode. ``g93``: inverse
+    time feed. dialect: default the machine's control, else ``output``'s
+    extension; G-code only.
+
+    The written program is read back and checked (the IR, S and F within
+    the machine, every posted tip on the CL path within ``tol``); a check
+    that fails raises MillplanError at the CL line unless ``force``.
+    Returns ``(program, text, summary)``: the posted program, its text
+    (written to ``output`` when given) and what ``millplan post --json``
+    prints. Runs with the GIL released.
+    """
+    return _millplan.post(
+        program, machine, output, dialect, tcp, g93, tol, pole_cone, pole_tol,
+        clearance, force,
+    )

@@ -255,3 +255,58 @@ def reorder(
     machine: Optional[StrPath] = None,
 ) -> Tuple[Program, Dict[str, Any]]:
     """The reordered program and the summary of ``millplan reorder --json``."""
+def feed(
+    program: Union[Program, StrPath],
+    stock: str,
+    material: str,
+    part: Union[Mesh, StrPath, None] = None,
+    machine: Optional[StrPath] = None,
+    tools: Optional[str] = None,
+    flutes: Optional[int] = None,
+    helix: Optional[float] = None,
+    stickout: Optional[float] = None,
+    flute_length: Optional[float] = None,
+    modulus: Optional[float] = None,
+    resolution: Optional[float] = None,
+    dz: Optional[float] = None,
+    dphi: Optional[float] = None,
+    fixed_grid: bool = False,
+    spindle: Optional[float] = None,
+    fz_min: Optional[float] = None,
+    fz_max: Optional[float] = None,
+    fos: Optional[float] = None,
+    feed_accel: Optional[float] = None,
+    limits: Optional[Dict[str, float]] = None,
+    dialect: Optional[str] = None,
+    output: Optional[StrPath] = None,
+) -> Tuple[Program, str, Dict[str, Any], Dict[str, npt.NDArray[Any]]]:
+    """The feed pass: the new program, its text, the summary of ``millplan
+    feed --json`` and the input's per-move loads with the feeds allowed."""
+def setup(
+    part: Union[Mesh, StrPath],
+    machine: Optional[StrPath] = None,
+    kind: Optional[str] = None,
+    range1: Optional[str] = None,
+    range2: Optional[str] = None,
+    grid: Optional[str] = None,
+    cells: Optional[int] = None,
+    tool: Optional[str] = None,
+    clearance: Optional[float] = None,
+    ignore_bottom: bool = False,
+    exact: bool = False,
+) -> Tuple[Dict[str, Any], Mesh]:
+    """The report of ``millplan setup --json`` and the part rotated into the setup."""
+def post(
+    program: Union[Program, StrPath],
+    machine: StrPath,
+    output: Optional[StrPath] = None,
+    dialect: Optional[str] = None,
+    tcp: bool = False,
+    g93: bool = False,
+    tol: Optional[float] = None,
+    pole_cone: Optional[float] = None,
+    pole_tol: Optional[float] = None,
+    clearance: Optional[float] = None,
+    force: bool = False,
+) -> Tuple[Program, str, Dict[str, Any]]:
+    """The posted program, its text and the summary of ``millplan post --json``."""

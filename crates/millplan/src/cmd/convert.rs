@@ -5,6 +5,7 @@ use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::Outputs;
 use millplan_nc::equiv::Tolerance;
 use millplan_nc::readback::read_back;
+use millplan_nc::write::krl::KrlFiles;
 use millplan_nc::write::{self, Target};
 use millplan_nc::LengthUnit;
 use millplan_plan::orient::ResolveOrientation;
@@ -63,6 +64,13 @@ pub struct Args {
     /// written as APT).
     #[arg(long)]
     pub machine: Option<PathBuf>,
+    /// With a KRL output: at most this many motions a file. A longer
+    /// program becomes a main program (at -o) calling sub-programs of N
+    /// motions each, written beside it as NAME_001.src, NAME_002.src, …
+    /// (NAME from the output's file name), as a controller loads them. 0:
+    /// one file, as without the option.
+    #[arg(long, value_name = "N")]
+    pub max_points: Option<usize>,
     /// Do not print reader diagnostics.
     #[arg(long, short)]
     pub quiet: bool,
@@ -101,6 +109,55 @@ fn check_output(p: &millplan_nc::Program, out: &[u8], target: Target, a: &Args) 
     }
 }
 
+/// The KRL output `out` split into a main program and sub-programs of
+/// `--max-points` motions (checked: they read back to its motions), when
+/// asked for and longer; `None` to write `out` as it is.
+fn krl_files(a: &Args, target: Target, out: &[u8]) -> CliResult<Option<KrlFiles>> {
+    let n = match a.max_points {
+        None | Some(0) => return Ok(None),
+        Some(n) => n,
+    };
+    if target != Target::Krl {
+        return Err(CliError::input(format!(
+            "--max-points {n}: sub-programs are KRL's; give --to krl or an output named .src"
+        )));
+    }
+    if a.output.as_os_str() == "-" {
+        return Err(CliError::input(format!(
+            "--max-points {n}: sub-programs are files beside the main program; name the output file"
+        )));
+    }
+    let o = write::krl::KrlOptions {
+        name: write::krl::stem(&a.output),
+        max_points: n,
+        ..Default::default()
+    };
+    let text = String::from_utf8_lossy(out);
+    write::krl::split(&text, &o)
+        .map(Some)
+        .map_err(|e| CliError::internal(format!("{}: {e}; not written", a.output.display())))
+}
+
+/// Writes `out` at -o, or with --max-points its KRL split (a main program
+/// and sub-programs beside it).
+fn write_out(
+    a: &Args,
+    inputs: &[&std::path::Path],
+    mut outputs: Outputs,
+    target: Target,
+    out: &[u8],
+) -> CliResult<()> {
+    match krl_files(a, target, out)? {
+        Some(files) => crate::cmd::robot::stage_krl(inputs, &a.output, &files, 0)?
+            .0
+            .commit(),
+        None => {
+            outputs.write(&a.output, out)?;
+            outputs.commit()
+        }
+    }
+}
+
 /// The reader's warnings (an `S0` before a cut, words not understood), each
 /// at its place, for `--json`.
 fn json_warnings(input: &std::path::Path, d: &[millplan_nc::Diagnostic]) -> Vec<String> {
@@ -121,7 +178,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         .into_iter()
         .flatten()
         .collect();
-    let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
+    let outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
     let (parsed, krl) = crate::io::read_source(&a.input, read_options(a.units, a.feed)?)?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet);
     let warnings = json_warnings(&a.input, &parsed.diagnostics);
@@ -151,8 +208,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         _ => write_program(&p, o, &a.input, a.quiet)?,
     };
     let equivalent = check_output(&p, &out, target, &a)?;
-    outputs.write(&a.output, &out)?;
-    outputs.commit()?;
+    write_out(&a, &inputs, outputs, target, &out)?;
     if a.json {
         outln!(
             "{}",

@@ -117,6 +117,18 @@ impl ModelArgs {
         }
     }
 
+    /// The header rows of a report on the program at `path` against
+    /// `limits`: the files by their names, the run's options.
+    pub fn report_inputs(
+        &self,
+        path: &Path,
+        p: &Prepared,
+        limits: &millplan_driver::feed::FeedLimits,
+    ) -> Vec<(String, String)> {
+        let names = lib::InputNames::of(path, self.stl.as_deref());
+        lib::model_inputs(&names, &self.request(), p, limits)
+    }
+
     /// The files the run reads, besides the program.
     pub fn inputs(&self) -> Vec<PathBuf> {
         let mut v: Vec<PathBuf> = Vec::new();
@@ -221,7 +233,15 @@ pub fn run(a: Args) -> CliResult<i32> {
         outputs.write(t, lib::loads_csv(&s.before).as_bytes())?;
     }
     if let Some(r) = &m.report {
-        let html = lib::feed_report(&summary, &s.before, &after, &s.params.limits, &p.machine);
+        let inputs = m.report_inputs(&a.path, &p, &s.params.limits);
+        let html = lib::feed_report(
+            inputs,
+            &summary,
+            &s.before,
+            &after,
+            &s.params.limits,
+            &p.machine,
+        );
         outputs.write(r, html.as_bytes())?;
     }
     outputs.commit()?;
@@ -230,10 +250,10 @@ pub fn run(a: Args) -> CliResult<i32> {
     } else {
         out!("{}", summary.render_text());
     }
-    Ok(if summary.over_limit_after == 0 {
-        EXIT_OK
-    } else {
+    Ok(if summary.findings() {
         EXIT_FINDINGS
+    } else {
+        EXIT_OK
     })
 }
 

@@ -115,7 +115,8 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
         outputs.write(t, millplan_driver::feed::loads_csv(&run).as_bytes())?;
     }
     if let Some(r) = &m.report {
-        let html = lib::report(&name, &summary, &run, &limits, &p);
+        let inputs = m.report_inputs(path, &p, &limits);
+        let html = lib::report(&name, inputs, &summary, &run, &limits, &p);
         outputs.write(r, html.as_bytes())?;
     }
     outputs.commit()?;
@@ -124,10 +125,10 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
     } else {
         out!("{}", summary.render_text(&name, &over));
     }
-    Ok(if over.is_empty() {
-        EXIT_OK
-    } else {
+    Ok(if summary.findings() {
         crate::error::EXIT_FINDINGS
+    } else {
+        EXIT_OK
     })
 }
 

@@ -3,6 +3,7 @@
 use crate::cmd::{print_diagnostics, read_options, UnitArg};
 use crate::error::{CliResult, EXIT_OK};
 use crate::io::{read_any, Input};
+use crate::timings::Table as _;
 use millplan_driver::inspect as lib;
 use std::path::PathBuf;
 

@@ -94,7 +94,7 @@ impl CuttingData {
 /// Prints a JSON summary on standard output, every number rounded to what
 /// it means (`round::json`).
 pub fn print_json(v: serde_json::Value) {
-    let v = crate::round::json(v);
+    let v = millplan_driver::round::json(v);
     outln!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
 }
 
@@ -124,29 +124,15 @@ impl From<TargetArg> for Target {
 }
 
 /// The dialect an output is written in: `--to`, else the output file's
-/// extension, else the source's own dialect. Never a silent default: a
-/// program whose target none of these names is refused.
+/// extension, else the source's own dialect (the driver's one rule, without
+/// a machine file).
 pub fn target_for(
     to: Option<TargetArg>,
     output: &std::path::Path,
     source: millplan_nc::Dialect,
 ) -> crate::error::CliResult<Target> {
-    if let Some(t) = to {
-        return Ok(t.into());
-    }
-    if let Some(t) = output
-        .extension()
-        .and_then(|e| e.to_str())
-        .and_then(Target::from_extension)
-    {
-        return Ok(t);
-    }
-    Target::of(source).ok_or_else(|| {
-        crate::error::CliError::input(format!(
-            "{}: say which dialect to write with --to (the file name's extension names none)",
-            output.display()
-        ))
-    })
+    millplan_driver::target::output_target(to.map(Into::into), output, None, source)
+        .map_err(crate::error::CliError::input)
 }
 
 /// The dialect to write for a command that reads a machine file: `--to`;
@@ -162,10 +148,9 @@ pub fn target_with_machine(
         .map_err(crate::error::CliError::input)
 }
 
-/// Writes a program for `o.target` as the output `path` of `outputs`, a few
-/// megabytes at a time: a large program is never held whole as text. Words
-/// written as comments under `--lossy` are printed as warnings located in
-/// `source`.
+/// Writes a program for `o.target` as the output `path` of `outputs`
+/// (streamed, within this run's limits). Words written as comments under
+/// `--lossy` are printed as warnings located in `source`.
 pub fn write_program_file(
     p: &millplan_nc::Program,
     o: WriteOptions,
@@ -174,55 +159,13 @@ pub fn write_program_file(
     source: &std::path::Path,
     quiet: bool,
 ) -> crate::error::CliResult<()> {
-    use millplan_nc::write::WriteError;
     let o = WriteOptions {
         limits: crate::limits::get(),
         ..o
     };
-    let mut failed: Option<WriteError> = None;
-    let mut warnings = Vec::new();
-    let written = outputs.write_with(path, |f| {
-        let mut buf = Vec::new();
-        let mut io_error = None;
-        let r = {
-            let mut sink = |b: &[u8]| {
-                f.write_all(b).map_err(|e| {
-                    let message = e.to_string();
-                    io_error = Some(e);
-                    WriteError::new(0, message)
-                })
-            };
-            millplan_nc::write::write_program_to(p, o, &mut buf, Some(&mut sink))
-        };
-        match (r, io_error) {
-            (Ok(w), _) => {
-                warnings = w;
-                f.write_all(&buf)
-            }
-            (Err(_), Some(e)) => Err(e),
-            (Err(e), None) => {
-                failed = Some(e);
-                Err(std::io::Error::other("the program cannot be written"))
-            }
-        }
-    });
-    match failed {
-        // Something the target cannot express: the user's input, not the disk.
-        Some(e) => Err(crate::error::CliError::input(located(source, &e))),
-        None => {
-            print_diagnostics(source, &warnings, quiet);
-            written
-        }
-    }
-}
-
-/// `file:line:col: message` for a writer's error at a source line.
-fn located(source: &std::path::Path, e: &millplan_nc::write::WriteError) -> String {
-    if e.line > 0 {
-        format!("{}:{}:1: {}", source.display(), e.line, e.message)
-    } else {
-        format!("{}: {}", source.display(), e.message)
-    }
+    let warnings = outputs.write_program(path, p, o, source)?;
+    print_diagnostics(source, &warnings, quiet);
+    Ok(())
 }
 
 /// Writes a program for `o.target` into memory; words written as comments
@@ -238,7 +181,7 @@ pub fn write_program(
         ..o
     };
     let (out, warnings) = millplan_nc::write::write_program(p, o)
-        .map_err(|e| crate::error::CliError::input(located(source, &e)))?;
+        .map_err(|e| millplan_driver::io::outputs::write_error(source, &e))?;
     print_diagnostics(source, &warnings, quiet);
     Ok(out)
 }

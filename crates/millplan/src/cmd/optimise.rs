@@ -132,6 +132,8 @@ pub struct Args {
     /// No warnings or notes on standard error.
     #[arg(long, short)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub robot: crate::cmd::robot::OptimiseRobotArgs,
 }
 
 fn options(a: &Args) -> CliResult<Options> {
@@ -166,41 +168,11 @@ fn options(a: &Args) -> CliResult<Options> {
     })
 }
 
-/// The tool library of `--tools`, read whole (it must exist).
-fn library(p: &Path) -> CliResult<Library> {
-    use millplan_tooldb::db::ToolDb;
-    if !p.is_file() {
-        return Err(CliError::input(format!(
-            "--tools {}: no such tool library",
-            p.display()
-        )));
-    }
-    let err = |e: millplan_tooldb::db::DbError| {
-        let m = format!("--tools {}: {e}", p.display());
-        if e.is_bad_input() {
-            CliError::input(m)
-        } else {
-            CliError::internal(m)
-        }
-    };
-    let db = ToolDb::open(p).map_err(err)?;
-    let mut lib = Library::default();
-    for t in db.tools().map_err(err)? {
-        lib.tools.insert(t.number, t);
-    }
-    for e in db.events(None).map_err(err)? {
-        if let Some(n) = e.tool {
-            lib.last_decision.insert(n, e.decision);
-        }
-    }
-    Ok(lib)
-}
-
 fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
     let mut parsed = read_program(path, read_options(a.units, None)?)?;
     print_diagnostics(path, &parsed.diagnostics, a.quiet || a.json);
     let from_library = match &a.tools {
-        Some(db) => tools::apply(&mut parsed.program, &library(db)?).map_err(|e| {
+        Some(db) => tools::apply(&mut parsed.program, &Library::open(db)?).map_err(|e| {
             CliError::input(format!("{}:{}:1: {}", path.display(), e.line, e.message))
         })?,
         None => Vec::new(),
@@ -293,7 +265,15 @@ pub fn run(a: Args) -> CliResult<i32> {
         limits: crate::limits::get(),
         ..job.inputs.machine.write_options(target)
     };
-    let (outcome, w) = passes_and_checks(&a, &job, &order, wo, &path)?;
+    let (outcome, mut w) = passes_and_checks(&a, &job, &order, wo, &path)?;
+    let quiet = a.quiet || a.json;
+    crate::cmd::robot::after_optimise(
+        &a.robot,
+        (&job, &outcome),
+        &mut w,
+        (&inputs, &output),
+        (a.force, quiet),
+    )?;
     print_diagnostics(&path, &w.warnings, a.quiet || a.json);
     let refused = w.summary.verdict == Verdict::Refused;
     if !refused || a.force {

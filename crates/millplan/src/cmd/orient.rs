@@ -245,7 +245,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     }
     let checks = lib::check(&parsed.program, &o.program, initial.as_ref(), &machine);
     let checked = crate::verdict::enforce(&checks, &a.path, a.force)?;
-    summary.checks = Some(checks);
+    summary = summary.with_checks(checks);
     crate::cmd::write_program_file(
         &o.program,
         machine.write_options(target),

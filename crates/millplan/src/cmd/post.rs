@@ -3,6 +3,7 @@
 use crate::cmd::{print_diagnostics, print_json, read_options, TargetArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, Outputs};
+use crate::timings::Table as _;
 use millplan_driver::post::{self as lib, PostRequest, PostSummary};
 use millplan_plan::post::{for_target, post, PostError, Posted};
 use std::path::{Path, PathBuf};

@@ -5,9 +5,9 @@ use crate::cmd::{arg, Range};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use clap::{Subcommand, ValueEnum};
 use millplan_geom::DVec3;
-use millplan_robot::machining::{self, Load, Placement};
+use millplan_nc::Program;
+use millplan_robot::machining::{self, PathLoad, Placement};
 use millplan_robot::{Robot, Variant};
-use serde::Serialize;
 use std::path::Path;
 
 /// Robot machining: how far the tool centre point of a compliant robot gives
@@ -50,11 +50,20 @@ pub struct ProcessArgs {
     /// The robot: `kr240` for the bundled KUKA KR 240 R2500, or a robot file.
     #[arg(long, default_value = "kr240")]
     pub robot: String,
-    /// The process force on the tool in newtons, in each point's feed frame:
-    /// along the feed, across it (to the left seen from the spindle), along
-    /// the tool axis (toward the spindle).
-    #[arg(long, allow_hyphen_values = true, value_name = "FEED,CROSS,AXIAL")]
-    pub load: String,
+    /// A fixed process force on the tool in newtons, the same at every
+    /// point, in each point's feed frame: along the feed, across it (to the
+    /// left seen from the spindle), along the tool axis (toward the
+    /// spindle). The alternative to --stock and --material.
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        value_name = "FEED,CROSS,AXIAL",
+        required_unless_present = "stock",
+        conflicts_with = "stock"
+    )]
+    pub load: Option<String>,
+    #[command(flatten)]
+    pub model: CouplingArgs,
     /// Compliant axes per frame: three (x, y, z) or one (the joint's).
     #[arg(long, value_enum, default_value = "three")]
     pub axes: VariantArg,
@@ -80,6 +89,12 @@ pub struct CompensateArgs {
     /// one file.
     #[arg(long, default_value_t = millplan_driver::command_defaults::robot::MAX_POINTS)]
     pub max_points: usize,
+    /// Correct the tool's orientation too: each point is commanded turned
+    /// back by the angle the load turns the tool there (A, B, C written from
+    /// the turned frame). Without it only the position is corrected and the
+    /// tool stays tilted by that angle, a few hundredths of a degree.
+    #[arg(long)]
+    pub orientation: bool,
     /// The KRL program to write (.src); sub-programs go beside it.
     #[arg(short = 'o', long)]
     pub output: std::path::PathBuf,
@@ -106,6 +121,76 @@ pub struct PlaceArgs {
     /// Independent runs of the search from random starts; the best is kept.
     #[arg(long, default_value_t = millplan_driver::command_defaults::robot::RESTARTS)]
     pub restarts: usize,
+}
+
+/// The force model along the path, as `millplan force` runs it: the
+/// program cut through its stock, each move's mean force over a revolution
+/// (averaged along the move, zero in air) the load of its points.
+#[derive(clap::Args)]
+pub struct CouplingArgs {
+    /// Initial stock as `millplan force` takes it (box:auto, box:X0,Y0,Z0,X1,Y1,Z1,
+    /// cylinder:…, stl:FILE, offset:MM): the load from the force model cutting it.
+    #[arg(long, requires = "material")]
+    pub stock: Option<String>,
+    /// Part surface (STL), for --stock offset:MM.
+    #[arg(long)]
+    pub stl: Option<std::path::PathBuf>,
+    /// Unit of the STL file's numbers (an STL does not say): mm (default) or
+    /// inch, converted to mm on reading.
+    #[arg(long, value_enum)]
+    pub stl_units: Option<crate::cmd::UnitArg>,
+    /// Named material (`millplan force materials`; en-aw-2007: the paper's).
+    #[arg(long, requires = "stock")]
+    pub material: Option<String>,
+    /// A TOML file of further materials.
+    #[arg(long)]
+    pub materials: Option<std::path::PathBuf>,
+    /// Cutter where the program gives none, or to override it: ball:D, flat:D, bull:D:R.
+    #[arg(long)]
+    pub tool: Option<String>,
+    /// Flutes of every tool.
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::FLUTES)]
+    pub flutes: usize,
+    /// Helix angle, degrees.
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::HELIX_DEG, allow_hyphen_values = true)]
+    pub helix: f64,
+    /// Spindle speed, 1/min, for the moves of a program that gives none.
+    #[arg(long, value_name = "RPM")]
+    pub spindle: Option<f64>,
+    /// Dexel size of the stock, mm (and the spacing of the loaded poses).
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::RESOLUTION)]
+    pub resolution: f64,
+}
+
+impl CouplingArgs {
+    /// The options as `force` takes them (the others at their defaults).
+    fn model(&self, json: bool) -> crate::cmd::feed::ModelArgs {
+        use millplan_driver::command_defaults::feed as d;
+        crate::cmd::feed::ModelArgs {
+            stock: self.stock.clone(),
+            stl: self.stl.clone(),
+            stl_units: self.stl_units,
+            material: self.material.clone(),
+            materials: self.materials.clone(),
+            machine: None,
+            tool: self.tool.clone(),
+            flutes: self.flutes,
+            helix: self.helix,
+            stickout: None,
+            flute_length: None,
+            modulus: d::MODULUS,
+            resolution: self.resolution,
+            dz: d::DZ,
+            dphi: d::DPHI_DEG,
+            fixed_grid: true,
+            spindle: self.spindle,
+            units: None,
+            table: None,
+            report: None,
+            json,
+            quiet: json,
+        }
+    }
 }
 
 /// Which compliant axes each frame of the chain has.
@@ -162,42 +247,14 @@ pub fn load_robot(name: &str) -> CliResult<Robot> {
     })
 }
 
-/// `n` comma-separated numbers, each checked against `range`; `names`
-/// label them in errors (`--joints A6`).
+/// `n` comma-separated numbers, each checked against `range`.
 pub fn numbers(flag: &str, text: &str, names: &[&str], range: Range) -> CliResult<Vec<f64>> {
-    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
-    if parts.len() != names.len() {
-        return Err(CliError::input(format!(
-            "{flag} {text}: {} numbers separated by commas were expected ({})",
-            names.len(),
-            names.join(",")
-        )));
-    }
-    parts
-        .iter()
-        .zip(names)
-        .map(|(p, n)| {
-            let v: f64 = p
-                .parse()
-                .map_err(|_| CliError::input(format!("{flag} {n} {p}: not a number")))?;
-            arg(&format!("{flag} {n}"), v, range)
-        })
-        .collect()
+    millplan_driver::robot::numbers(flag, text, names, range).map_err(CliError::input)
 }
 
 fn vec3(flag: &str, text: &str, names: [&str; 3], range: Range) -> CliResult<DVec3> {
     let v = numbers(flag, text, &names, range)?;
     Ok(DVec3::new(v[0], v[1], v[2]))
-}
-
-#[derive(Serialize)]
-struct DeflectJson {
-    robot: String,
-    joints_deg: [f64; 6],
-    tcp_mm: [f64; 3],
-    dp_mm: [f64; 3],
-    dtheta_deg: [f64; 3],
-    dp_norm_mm: f64,
 }
 
 fn deflect(a: DeflectArgs) -> CliResult<i32> {
@@ -208,10 +265,6 @@ fn deflect(a: DeflectArgs) -> CliResult<i32> {
         &["A1", "A2", "A3", "A4", "A5", "A6"],
         Range::from(-360.0, 360.0, "degrees"),
     )?;
-    let mut q = [0.0; 6];
-    for (qi, d) in q.iter_mut().zip(&deg) {
-        *qi = d.to_radians();
-    }
     let force = vec3(
         "--force",
         &a.force,
@@ -229,46 +282,19 @@ fn deflect(a: DeflectArgs) -> CliResult<i32> {
         }
         None => DVec3::ZERO,
     };
-    let variant = match a.axes {
-        VariantArg::Three => Variant::ThreeAxis,
-        VariantArg::One => Variant::OneAxis,
-    };
-    let d = robot.deflect(&q, variant, force, moment);
-    let tcp = robot.fk(&q).t;
-    let out = DeflectJson {
-        robot: robot.name.clone(),
-        joints_deg: [deg[0], deg[1], deg[2], deg[3], deg[4], deg[5]],
-        tcp_mm: tcp.to_array().map(|x| sig(x, 9)),
-        dp_mm: d.dp.to_array().map(|x| sig(x, 6)),
-        dtheta_deg: d.dtheta.to_array().map(|x| sig(x.to_degrees(), 6)),
-        dp_norm_mm: sig(d.dp.length(), 6),
-    };
+    let joints = [deg[0], deg[1], deg[2], deg[3], deg[4], deg[5]];
+    let out = millplan_driver::robot::DeflectSummary::new(
+        &robot,
+        joints,
+        variant(a.axes),
+        (force, moment),
+    );
     if a.json {
         outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
     } else {
-        outln!("robot  {}", out.robot);
-        outln!(
-            "TCP    {:.3} {:.3} {:.3} mm (base frame)",
-            tcp.x,
-            tcp.y,
-            tcp.z
-        );
-        let [x, y, z] = out.dp_mm;
-        outln!("dp     {x} {y} {z} mm  (|dp| {} mm)", out.dp_norm_mm);
-        let [x, y, z] = out.dtheta_deg;
-        outln!("dtheta {x} {y} {z} degrees");
+        out!("{}", out.render_text());
     }
     Ok(EXIT_OK)
-}
-
-/// `x` to `digits` significant digits (deflections are small: a fixed
-/// number of decimals would lose them).
-fn sig(x: f64, digits: i32) -> f64 {
-    if x == 0.0 || !x.is_finite() {
-        return x;
-    }
-    let scale = 10f64.powi(digits - 1 - x.abs().log10().floor() as i32);
-    (x * scale).round() / scale
 }
 
 fn variant(v: VariantArg) -> Variant {
@@ -278,48 +304,63 @@ fn variant(v: VariantArg) -> Variant {
     }
 }
 
-fn process(p: &ProcessArgs) -> CliResult<(Robot, Load, Variant)> {
+/// The robot, the program at `path` and its load: `--load` at every
+/// point, or the force model's per move with the stock.
+fn process(path: &Path, p: &ProcessArgs) -> CliResult<(Robot, Program, PathLoad, Variant)> {
     let robot = load_robot(&p.robot)?;
-    let l = numbers(
-        "--load",
-        &p.load,
-        &["FEED", "CROSS", "AXIAL"],
-        Range::from(-1e5, 1e5, "N"),
-    )?;
-    Ok((
-        robot,
-        Load {
-            feed: l[0],
-            cross: l[1],
-            axial: l[2],
-        },
-        variant(p.axes),
-    ))
+    let (prog, load) = match &p.load {
+        Some(text) => (
+            read_path(path)?,
+            millplan_driver::robot::fixed_load(text).map_err(CliError::input)?,
+        ),
+        None => {
+            let m = p.model.model(p.json);
+            let prepared = crate::cmd::feed::prepare(path, &m)?;
+            let run = crate::cmd::feed::run_forces(
+                &prepared,
+                &prepared.program,
+                &prepared.strokes,
+                p.json,
+            )?;
+            let name = path.display().to_string();
+            millplan_driver::feed::stopped_spindle(&name, &run).map_err(CliError::input)?;
+            let load = millplan_driver::robot::move_loads(&prepared.program, &run);
+            (prepared.program, load)
+        }
+    };
+    Ok((robot, prog, load, variant(p.axes)))
 }
 
-fn read_path(path: &Path) -> CliResult<millplan_nc::Program> {
+fn read_path(path: &Path) -> CliResult<Program> {
     let parsed = crate::io::read_program(path, millplan_nc::ReadOptions::default())?;
     Ok(parsed.program)
 }
 
 fn machining_error(path: &Path, e: machining::MachiningError) -> CliError {
-    match e {
-        machining::MachiningError::Unreachable { line, .. }
-        | machining::MachiningError::Program { line, .. } => {
-            let msg = e.to_string();
-            let rest = msg.split_once(": ").map_or(msg.as_str(), |(_, r)| r);
-            CliError::input(format!("{}:{line}:1: {rest}", path.display()))
-        }
-        machining::MachiningError::Empty => CliError::input(format!("{}: {e}", path.display())),
-    }
+    CliError::input(millplan_driver::robot::located(
+        &path.display().to_string(),
+        &e,
+    ))
 }
 
-#[derive(Serialize)]
-struct CompensateJson {
-    mean_deflection_mm: f64,
-    max_deflection_mm: f64,
-    points: usize,
-    files: Vec<String>,
+/// KRL files from the `first` (0: the main program, at `output`; its
+/// sub-programs beside it) staged against `inputs`: the outputs, the paths.
+pub fn stage_krl(
+    inputs: &[&Path],
+    output: &Path,
+    files: &millplan_nc::write::krl::KrlFiles,
+    first: usize,
+) -> CliResult<(crate::io::Outputs, Vec<std::path::PathBuf>)> {
+    let paths = millplan_nc::write::krl::file_paths(output, files);
+    let planned: Vec<(&str, Option<&Path>)> = paths[first..]
+        .iter()
+        .map(|p| ("-o", Some(p.as_path())))
+        .collect();
+    let mut outputs = crate::io::Outputs::plan(inputs, &planned, false)?;
+    for (p, (_, text)) in paths.iter().zip(files).skip(first) {
+        outputs.write(p, text.as_bytes())?;
+    }
+    Ok((outputs, paths))
 }
 
 /// The compensated path written as KRL: the main program at `-o`, its
@@ -329,142 +370,53 @@ fn write_krl(
     c: &machining::Compensated,
     place: &Placement,
 ) -> CliResult<Vec<std::path::PathBuf>> {
-    let stem = a
-        .output
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .unwrap_or("millplan");
-    let k = machining::krl_program(stem, &c.runs, place, a.spacing / 2.0);
+    let stem = millplan_nc::write::krl::stem(&a.output);
+    let k = machining::krl_program(&stem, &c.runs, place, a.spacing / 2.0);
     let o = millplan_nc::write::krl::KrlOptions {
-        name: stem.into(),
+        name: stem,
         max_points: a.max_points,
         ..Default::default()
     };
     let files = millplan_nc::write::krl::write(&k, &o);
-    let paths: Vec<std::path::PathBuf> = files
-        .iter()
-        .enumerate()
-        .map(|(i, (name, _))| {
-            if i == 0 {
-                a.output.clone()
-            } else {
-                a.output.with_file_name(format!("{name}.src"))
-            }
-        })
-        .collect();
-    let planned: Vec<(&str, Option<&Path>)> =
-        paths.iter().map(|p| ("-o", Some(p.as_path()))).collect();
-    let mut outputs = crate::io::Outputs::plan(&[a.path.as_path()], &planned, false)?;
-    for (p, (_, text)) in paths.iter().zip(&files) {
-        outputs.write(p, text.as_bytes())?;
-    }
+    let (outputs, paths) = stage_krl(&[a.path.as_path()], &a.output, &files, 0)?;
     outputs.commit()?;
     Ok(paths)
 }
 
 fn compensate(a: CompensateArgs) -> CliResult<i32> {
-    let (robot, load, variant) = process(&a.process)?;
-    let pose = numbers(
-        "--pose",
-        &a.pose,
-        &["X", "Y", "Z", "RZ"],
-        Range::from(-1e5, 1e5, "mm or degrees"),
-    )?;
+    let place = millplan_driver::robot::pose(&a.pose).map_err(CliError::input)?;
     arg("--spacing", a.spacing, Range::from(0.01, 100.0, "mm"))?;
-    let place = Placement {
-        x: pose[0],
-        y: pose[1],
-        z: pose[2],
-        rz: pose[3].to_radians(),
-    };
     crate::io::Outputs::plan(&[a.path.as_path()], &[("-o", Some(&a.output))], false)?;
-    let prog = read_path(&a.path)?;
-    let c = machining::compensate_program(&robot, variant, &prog, &place, &load, a.spacing)
-        .map_err(|e| machining_error(&a.path, e))?;
+    let (robot, prog, load, variant) = process(&a.path, &a.process)?;
+    let c = machining::compensate_program_with(
+        &robot,
+        variant,
+        &prog,
+        &place,
+        &load,
+        a.spacing,
+        a.orientation,
+    )
+    .map_err(|e| machining_error(&a.path, e))?;
     let paths = write_krl(&a, &c, &place)?;
-    let out = CompensateJson {
-        mean_deflection_mm: sig(c.mean, 6),
-        max_deflection_mm: sig(c.max, 6),
-        points: c.points,
-        files: paths.iter().map(|p| p.display().to_string()).collect(),
-    };
+    let files = paths.iter().map(|p| p.display().to_string()).collect();
+    let out = millplan_driver::robot::CompensateSummary::new(&c, &load, files);
     if a.process.json {
         outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
     } else {
-        outln!(
-            "deflection before compensation: mean {} mm, max {} mm over {} points",
-            out.mean_deflection_mm,
-            out.max_deflection_mm,
-            out.points
-        );
-        outln!("wrote {}", out.files.join(", "));
+        out!("{}", out.render_text());
     }
     Ok(EXIT_OK)
 }
 
-#[derive(Serialize)]
-struct PoseJson {
-    x: f64,
-    y: f64,
-    z: f64,
-    rz: f64,
-}
-
-#[derive(Serialize)]
-struct PlaceJson {
-    pose: PoseJson,
-    mean_deflection_mm: f64,
-    max_deflection_mm: f64,
-    feasible: bool,
-    evaluations: usize,
-}
-
-/// The placement found, as JSON or text.
-fn print_place(out: &PlaceJson, json: bool) {
-    if json {
-        outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
-    } else if out.feasible {
-        let p = &out.pose;
-        outln!(
-            "placement: X {} Y {} Z {} mm, RZ {} degrees",
-            p.x,
-            p.y,
-            p.z,
-            p.rz
-        );
-        outln!(
-            "deflection: mean {} mm, max {} mm ({} evaluations)",
-            out.mean_deflection_mm,
-            out.max_deflection_mm,
-            out.evaluations
-        );
-    } else {
-        outln!(
-            "no feasible placement in the box: the robot cannot machine the path anywhere in it"
-        );
-    }
-}
-
 fn place(a: PlaceArgs) -> CliResult<i32> {
-    let (robot, load, variant) = process(&a.process)?;
-    let b = numbers(
-        "--box",
-        &a.bounds,
-        &["X0", "Y0", "Z0", "X1", "Y1", "Z1"],
-        Range::from(-1e5, 1e5, "mm"),
-    )?;
-    if !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]) {
-        return Err(CliError::input(format!(
-            "--box {}: each lower corner coordinate must be below the upper",
-            a.bounds
-        )));
-    }
+    let (lo, hi) = millplan_driver::robot::place_box(&a.bounds).map_err(CliError::input)?;
     arg("--restarts", a.restarts as f64, Range::from(1.0, 100.0, ""))?;
-    let prog = read_path(&a.path)?;
+    let (robot, prog, load, variant) = process(&a.path, &a.process)?;
     let samples = machining::placement_samples(&prog).map_err(|e| machining_error(&a.path, e))?;
     let search = machining::PlaceSearch {
-        lo: DVec3::new(b[0], b[1], b[2]),
-        hi: DVec3::new(b[3], b[4], b[5]),
+        lo,
+        hi,
         settings: millplan_robot::anneal::Settings {
             seed: a.seed,
             restarts: a.restarts,
@@ -472,32 +424,86 @@ fn place(a: PlaceArgs) -> CliResult<i32> {
         },
     };
     let found = machining::place(&robot, variant, &samples, &load, &search);
-    let out = match &found {
-        Some(p) => PlaceJson {
-            pose: PoseJson {
-                x: sig(p.place.x, 7),
-                y: sig(p.place.y, 7),
-                z: sig(p.place.z, 7),
-                rz: sig(p.place.rz.to_degrees(), 6),
-            },
-            mean_deflection_mm: sig(p.mean, 6),
-            max_deflection_mm: sig(p.max, 6),
-            feasible: true,
-            evaluations: p.evaluations,
-        },
-        None => PlaceJson {
-            pose: PoseJson {
-                x: 0.0,
-                y: 0.0,
-                z: 0.0,
-                rz: 0.0,
-            },
-            mean_deflection_mm: 0.0,
-            max_deflection_mm: 0.0,
-            feasible: false,
-            evaluations: 0,
-        },
-    };
-    print_place(&out, a.process.json);
+    let out = millplan_driver::robot::PlaceSummary::new(found.as_ref());
+    if a.process.json {
+        outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
+    } else {
+        out!("{}", out.render_text());
+    }
     Ok(if out.feasible { EXIT_OK } else { 3 })
+}
+
+/// `optimise --robot ROBOT --pose X,Y,Z,RZ`: the optimised program ends
+/// with offline compensation for a robot and is written as KRL.
+#[derive(clap::Args)]
+pub struct OptimiseRobotArgs {
+    /// End with offline compensation for a robot (`kr240`, or a robot
+    /// file), as `robot compensate` does under the force model's loads on
+    /// the stock (--stock, --material): written to -o as KUKA KRL, read back
+    /// and run on the robot model again, the tip within --tol of the path.
+    #[arg(long, requires = "pose")]
+    pub robot: Option<String>,
+    /// With --robot: the workpiece frame in the robot base, origin X,Y,Z in
+    /// mm and the turn RZ about the vertical in degrees.
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        value_name = "X,Y,Z,RZ",
+        requires = "robot"
+    )]
+    pub pose: Option<String>,
+    /// With --robot: motions per KRL sub-program (a main program at -o calls
+    /// them, written beside it); 0 writes one file.
+    #[arg(long, default_value_t = millplan_driver::command_defaults::robot::MAX_POINTS)]
+    pub max_points: usize,
+}
+
+/// The robot pass at the end of `optimise` (nothing without --robot): the
+/// KRL main program to write, its sub-programs written beside `output`.
+pub fn after_optimise(
+    r: &OptimiseRobotArgs,
+    (job, outcome): (&millplan_driver::Job, &millplan_driver::Outcome),
+    w: &mut millplan_driver::Written,
+    (inputs, output): (&[&Path], &Path),
+    (force, quiet): (bool, bool),
+) -> CliResult<()> {
+    let (Some(name), Some(pose)) = (&r.robot, &r.pose) else {
+        return Ok(());
+    };
+    let setup = millplan_driver::robot_pass::RobotSetup::new(
+        load_robot(name)?,
+        pose,
+        r.max_points,
+        job.tol,
+    )
+    .map_err(CliError::input)?;
+    let krl = millplan_nc::write::Target::Krl.name();
+    if w.summary.dialect == krl {
+        let t = millplan_driver::robot_pass::check_target(job.inputs.program.source);
+        let wo = millplan_nc::write::WriteOptions {
+            limits: crate::limits::get(),
+            ..job.inputs.machine.write_options(t)
+        };
+        *w = job
+            .finish(outcome, wo)
+            .map_err(|e| CliError::input(e.to_string()))?;
+        w.summary.dialect = krl.into();
+    }
+    let stem = millplan_nc::write::krl::stem(output);
+    let posted = outcome.posted.is_some();
+    let done = millplan_driver::robot_pass::run(
+        &setup,
+        (&w.program, posted),
+        w.forces_after.as_ref(),
+        &stem,
+    )
+    .map_err(|e| CliError::input(format!("--robot: {e}")))?;
+    if !quiet {
+        eprintln!("{}", done.summary.render_text());
+    }
+    w.bytes = done.files[0].1.clone().into_bytes();
+    if w.summary.verdict != millplan_driver::Verdict::Refused || force {
+        stage_krl(inputs, output, &done.files, 1)?.0.commit()?;
+    }
+    Ok(())
 }

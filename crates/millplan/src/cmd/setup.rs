@@ -210,13 +210,14 @@ pub fn run(a: Args) -> CliResult<i32> {
     }
     outputs.commit()?;
     let s = plan.summary(&mesh, &machine);
+    let v = lib::verdict(&req, &mesh, &plan);
     if a.json {
-        let j = lib::Report::new(&req, &s, &machine, secs);
+        let j = lib::Report::new(&req, &s, &machine, (secs, v));
         crate::cmd::print_json(serde_json::to_value(j).unwrap_or_default());
     } else {
         out!(
             "{}",
-            lib::render_text(&req, &a.stl.display().to_string(), &s, &plan)
+            lib::render_text(&req, &a.stl.display().to_string(), (&s, &v), &plan)
         );
     }
     Ok(if plan.feasible {

@@ -3,6 +3,7 @@
 use crate::cmd::{print_diagnostics, read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_mesh, read_program, read_surface, Outputs};
+use crate::timings::Table as _;
 use millplan_driver::simulate::{self as lib, SimRequest};
 use millplan_driver::{SimReport, Stock, StockSpec, Strokes};
 use millplan_geom::TriMesh;
@@ -240,7 +241,10 @@ fn write_outputs(
     }
     if let Some(p) = &a.report {
         let title = format!("Stock simulation of {}", a.path.display());
-        let html = millplan_report::sim::report(&title, &a.stock, stock, rep, rem.zip(part));
+        let files = (a.path.as_path(), a.stl.as_deref());
+        let inputs = lib::report_inputs(files, &a.stock, &request(a));
+        let html =
+            millplan_report::sim::report(&title, inputs, &a.stock, stock, rep, rem.zip(part));
         outputs.write(p, html.as_bytes())?;
     }
     Ok(())

@@ -65,8 +65,9 @@ pub struct Args {
     /// Stock thickness along the surface normal (finishing allowance), mm.
     #[arg(long)]
     pub ap: f64,
-    /// Machine description (TOML: spindle_min, spindle_max, spindle_accel,
-    /// feed_min, feed_max, rapid, dialect); a typical HSC machine by default.
+    /// Machine file (examples/machine.toml): the spindle range and
+    /// acceleration, the feed range and rapid rate, the control's dialect
+    /// and its axes for the time estimate; a typical HSC machine by default.
     #[arg(long)]
     pub machine: Option<PathBuf>,
     /// Output program.
@@ -237,6 +238,21 @@ fn record_reading(
     cx.record("read STL, surface and toolpath", t_inputs);
 }
 
+/// The program, unless spindle control finds nothing to act on in it: then
+/// that, named, exit 3 and nothing written.
+fn something_to_control(
+    path: &std::path::Path,
+    parsed: millplan_nc::Parsed,
+) -> CliResult<millplan_nc::Parsed> {
+    match lib::nothing_to_control(&parsed.program) {
+        Some(why) => Err(CliError {
+            code: EXIT_FINDINGS,
+            message: format!("{}: {why}", path.display()),
+        }),
+        None => Ok(parsed),
+    }
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     let t0 = std::time::Instant::now();
     let req = request(&a);
@@ -250,7 +266,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let t_surface = t.elapsed().as_secs_f64();
     let read = join(reader);
     let t_inputs = t0.elapsed().as_secs_f64() - t_setup;
-    let parsed = read.parsed?;
+    let parsed = something_to_control(&a.path, read.parsed?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
     let bar = crate::progress::Phases::new(!a.quiet && parsed.program.move_count() >= 100_000);
@@ -381,14 +397,16 @@ fn report_run(
     target: millplan_nc::write::Target,
 ) -> CliResult<()> {
     let inputs = || {
-        report_inputs(
+        let mut i = report_inputs(
             (&a.path, r.program),
             &a.stl,
             &cx.machine,
             req.cut,
             r.findings,
             r.times,
-        )
+        );
+        i.failed = lib::failed_checks(r.checks);
+        i
     };
     cx.time("table and report", || {
         write_table_and_report(a, &mut outputs, r.summary, r.rows, inputs)

@@ -3,8 +3,7 @@
 use crate::cmd::tool::print;
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use clap::Subcommand;
-use millplan_tooldb::thread::{check, class_limits, parse_designation, pitch_diameter};
-use serde_json::json;
+use millplan_driver::thread as lib;
 
 /// ISO metric threads: limits of size of a tolerance class and whether a
 /// measured pitch diameter is within it (ISO 965-1 tables).
@@ -77,85 +76,19 @@ pub fn run(a: Args) -> CliResult<i32> {
 
 /// `thread check`: OK (exit 0) or REJECT (exit 3).
 fn run_check(thread: &str, class: &str, d2: f64, json: bool) -> CliResult<i32> {
-    let c = check(thread, class, d2).map_err(|e| CliError::input(e.to_string()))?;
-    let (d, p) = parse_designation(thread).map_err(|e| CliError::input(e.to_string()))?;
-    let verdict = if c.ok {
-        "OK".to_string()
-    } else if d2 < c.min {
-        format!("REJECT: {:.3} mm under the minimum", c.min - d2)
-    } else {
-        format!("REJECT: {:.3} mm over the maximum", d2 - c.max)
-    };
-    print(
-        json,
-        json!({ "ok": c.ok, "min": c.min, "max": c.max, "d2": d2, "basic_d2": pitch_diameter(d, p) }),
-        format!(
-            "{thread}-{class}: D2 {d2:.3} mm, limits {:.3} … {:.3} mm (basic {:.3}): {verdict}",
-            c.min,
-            c.max,
-            pitch_diameter(d, p)
-        ),
-    )?;
+    let c = lib::check_d2(thread, class, d2).map_err(CliError::input)?;
+    let j = serde_json::to_value(&c).unwrap_or_default();
+    print(json, j, c.render_text(thread, class))?;
     Ok(if c.ok { EXIT_OK } else { EXIT_FINDINGS })
 }
 
 /// `thread limits`: the limits of size of a class.
 fn run_limits(thread: &str, class: &str, json: bool) -> CliResult<i32> {
-    let l = class_limits(thread, class).map_err(|e| CliError::input(e.to_string()))?;
-    let (d, p) = parse_designation(thread).map_err(|e| CliError::input(e.to_string()))?;
-    let (pitch_name, crest_name, t2, tc) = if l.internal {
-        ("D2", "D1", "T_D2", "T_D1")
-    } else {
-        ("d2", "d", "T_d2", "T_d")
-    };
-    let range = |r: Option<(f64, f64)>| r.map(|(min, max)| json!({ "min": min, "max": max }));
-    let mut text = vec![
-        format!(
-            "{thread}-{class} ({}), ISO 965-1: {} {} µm",
-            if l.internal { "internal" } else { "external" },
-            if l.internal { "EI" } else { "es" },
-            match l.fundamental_deviation_um {
-                0 => "0".to_string(),
-                v => format!("{v:+}"),
-            }
-        ),
-        format!(
-            "  pitch diameter {pitch_name} {:.3} … {:.3} mm ({t2} {} µm, basic {:.3})",
-            l.pitch.0,
-            l.pitch.1,
-            l.pitch_tolerance_um,
-            pitch_diameter(d, p)
-        ),
-    ];
-    let crest_label = if l.internal { "minor" } else { "major" };
-    text.push(match (l.crest, l.crest_tolerance_um) {
-        (Some((lo, hi)), Some(t)) => {
-            format!("  {crest_label} diameter {crest_name} {lo:.3} … {hi:.3} mm ({tc} {t} µm)")
-        }
-        _ => format!(
-            "  {crest_label} diameter {crest_name}: not given ({})",
-            l.crest_missing.clone().unwrap_or_default()
-        ),
-    });
-    if let Some(m) = l.major_min {
-        text.push(format!("  major diameter D ≥ {m:.3} mm"));
-    }
+    let l = lib::limits(thread, class).map_err(CliError::input)?;
     print(
         json,
-        json!({
-            "thread": thread,
-            "class": class,
-            "internal": l.internal,
-            "fundamental_deviation_um": l.fundamental_deviation_um,
-            "pitch_tolerance_um": l.pitch_tolerance_um,
-            "pitch_diameter_mm": range(Some(l.pitch)),
-            "basic_d2": pitch_diameter(d, p),
-            "crest_diameter_mm": range(l.crest),
-            "crest_tolerance_um": l.crest_tolerance_um,
-            "crest_missing": l.crest_missing,
-            "major_diameter_min_mm": l.major_min,
-        }),
-        text.join("\n"),
+        serde_json::to_value(&l).unwrap_or_default(),
+        l.render_text(),
     )?;
     Ok(EXIT_OK)
 }

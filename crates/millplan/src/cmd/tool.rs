@@ -3,10 +3,10 @@
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::Outputs;
 use clap::{Subcommand, ValueEnum};
-use millplan_driver::tool::{self as t, describe, ImportedJson, InsertJson, PzJson, WrittenJson};
-use millplan_tooldb::control::{record, Settings};
-use millplan_tooldb::cycles;
-use millplan_tooldb::db::{DbError, ToolDb, ToolEdit, ToolRecord};
+use millplan_driver::tool::{
+    self as t, describe, ImportedJson, InsertJson, Library, PzJson, ToolError, WrittenJson,
+};
+use millplan_tooldb::db::ToolEdit;
 use millplan_tooldb::thread::pz;
 use std::path::{Path, PathBuf};
 
@@ -238,36 +238,12 @@ pub struct CycleArgs {
     pub output: PathBuf,
 }
 
-/// The library's default location: $MILLPLAN_DB, else under $XDG_DATA_HOME or
-/// ~/.local/share. An empty $MILLPLAN_DB is an error, not a temporary library.
-pub fn default_db() -> CliResult<PathBuf> {
-    use std::env::var_os;
-    t::default_db(
-        var_os("MILLPLAN_DB"),
-        var_os("XDG_DATA_HOME"),
-        var_os("HOME"),
-    )
-    .map_err(CliError::input)
-}
-
-/// [`default_db`] with its folder created (a `--db` folder never is).
-fn default_db_created() -> CliResult<PathBuf> {
-    let p = default_db()?;
-    if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| CliError::input(format!("{}: cannot create: {e}", dir.display())))?;
-    }
-    Ok(p)
-}
-
-/// A library error with the library's path: exit 2 when the arguments or the
-/// file are at fault, 1 when the system refused.
-fn db_err(path: &Path, e: DbError) -> CliError {
-    let message = format!("{}: {e}", path.display());
-    if e.is_bad_input() {
-        CliError::input(message)
-    } else {
-        CliError::internal(message)
+impl From<ToolError> for CliError {
+    fn from(e: ToolError) -> Self {
+        match e.bad_input {
+            true => CliError::input(e.message),
+            false => CliError::internal(e.message),
+        }
     }
 }
 
@@ -279,7 +255,7 @@ fn to_json<T: serde::Serialize>(v: &T) -> CliResult<serde_json::Value> {
 /// (a closed pipe, a full disk) is reported when the run ends, never a panic.
 pub(crate) fn print(json_out: bool, j: serde_json::Value, text: String) -> CliResult<()> {
     let s = if json_out {
-        serde_json::to_string_pretty(&crate::round::json(j))
+        serde_json::to_string_pretty(&millplan_driver::round::json(j))
             .map_err(|e| CliError::internal(format!("JSON output: {e}")))?
     } else {
         text
@@ -288,16 +264,33 @@ pub(crate) fn print(json_out: bool, j: serde_json::Value, text: String) -> CliRe
     Ok(())
 }
 
+/// Prints `j` (with --json) or `text`; exit 0.
+fn done(json_out: bool, j: serde_json::Value, text: String) -> CliResult<i32> {
+    print(json_out, j, text)?;
+    Ok(EXIT_OK)
+}
+
 /// Writes `text` as the output `path` (`-`: standard output), never over
 /// the library; says what it wrote unless that was standard output.
-fn write_output(lib: &Lib, path: &Path, text: &str, j: serde_json::Value) -> CliResult<i32> {
-    let mut o = Outputs::plan(&[lib.path], &[("-o", Some(path))], true)?;
+fn write_output(
+    lib: &Library,
+    json: bool,
+    path: &Path,
+    text: &str,
+    pz: Option<Option<f64>>,
+) -> CliResult<i32> {
+    let mut o = Outputs::plan(&[lib.path.as_path()], &[("-o", Some(path))], true)?;
     o.write(path, text.as_bytes())?;
     o.commit()?;
     if path.as_os_str() == "-" {
         return Ok(EXIT_OK);
     }
-    lib.print(j, format!("wrote {}", path.display()))
+    let output = path.display().to_string();
+    done(
+        json,
+        to_json(&WrittenJson { output, pz })?,
+        format!("wrote {}", path.display()),
+    )
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -305,131 +298,112 @@ pub fn run(a: Args) -> CliResult<i32> {
     if let ToolCommand::Pz { insl, tp } = a.command {
         return print_pz(a.json, insl, tp);
     }
-    let path = match a.db.clone() {
-        Some(p) => p,
-        None => default_db_created()?,
-    };
-    let mut db = ToolDb::open(&path).map_err(|e| db_err(&path, e))?;
-    let lib = Lib {
-        path: &path,
-        json: a.json,
-    };
+    use std::env::var_os;
+    let (db, xdg, home) = (
+        var_os("MILLPLAN_DB"),
+        var_os("XDG_DATA_HOME"),
+        var_os("HOME"),
+    );
+    let path = t::library_path(a.db, db, xdg, home)?;
+    let mut lib = Library::open(path)?;
+    let json = a.json;
     match a.command {
         ToolCommand::Pz { .. } => unreachable!("handled above"),
-        ToolCommand::Add(x) => add(&mut db, &lib, x),
+        ToolCommand::Add(x) => add(&mut lib, json, x),
         ToolCommand::Insert {
             number,
             designation,
             insl,
             tp,
-        } => {
-            let pz = db
-                .add_insert(number, &designation, insl, tp)
-                .map_err(|e| lib.err(e))?;
-            let j = InsertJson {
-                tool: number,
-                designation: &designation,
-                insl,
-                tp,
-                pz,
-            };
-            lib.print(
-                to_json(&j)?,
-                format!("T{number}: insert {designation}, PZ {pz:.3} mm"),
-            )
-        }
+        } => insert(&mut lib, json, number, &designation, (insl, tp)),
         ToolCommand::Preset { number, l, r } => {
-            db.record_presetter(number, l, r).map_err(|e| lib.err(e))?;
-            let t = db.tool(number).map_err(|e| lib.err(e))?;
-            lib.print(
-                to_json(&t)?,
-                format!("presetter values recorded: {}", describe(&t)),
-            )
+            let t = lib.preset(number, l, r)?;
+            let text = format!("presetter values recorded: {}", describe(&t));
+            done(json, to_json(&t)?, text)
         }
-        ToolCommand::Measure(x) => measure(&mut db, &lib, x),
-        ToolCommand::Show { number } => show(&db, &lib, number),
-        ToolCommand::Log { number } => log(&db, &lib, number),
-        ToolCommand::Import { file } => import(&mut db, &lib, &file),
-        ToolCommand::Export { format, output } => export(&db, &lib, format, &output),
-        ToolCommand::Cycle(x) => cycle(&db, &lib, x),
+        ToolCommand::Measure(x) => measure(&mut lib, json, x),
+        ToolCommand::Show { number } => {
+            let tools = lib.show(number)?;
+            let text = t::tools_text(&tools, &lib.path.display().to_string());
+            done(json, to_json(&tools)?, text)
+        }
+        ToolCommand::Log { number } => {
+            let ev = lib.log(number)?;
+            done(json, to_json(&ev)?, t::events_text(&ev))
+        }
+        ToolCommand::Import { file } => {
+            let n = lib.import(&file)?;
+            let text = format!("imported {n} tools into {}", lib.path.display());
+            done(json, to_json(&ImportedJson { imported: n })?, text)
+        }
+        ToolCommand::Export { format, output } => {
+            let text = lib.export(format.into())?;
+            write_output(&lib, json, &output, &text, None)
+        }
+        ToolCommand::Cycle(x) => cycle(&lib, json, x),
     }
+}
+
+/// Records the insert of a thread mill; says its PZ.
+fn insert(
+    lib: &mut Library,
+    json: bool,
+    tool: u32,
+    designation: &str,
+    (insl, tp): (f64, f64),
+) -> CliResult<i32> {
+    let pz = lib.insert(tool, designation, insl, tp)?;
+    let j = InsertJson {
+        tool,
+        designation,
+        insl,
+        tp,
+        pz,
+    };
+    let text = format!("T{tool}: insert {designation}, PZ {pz:.3} mm");
+    done(json, to_json(&j)?, text)
 }
 
 /// The PZ of an insert (no library needed).
 fn print_pz(json_out: bool, insl: f64, tp: f64) -> CliResult<i32> {
     let v = pz(insl, tp).map_err(|e| CliError::input(e.to_string()))?;
-    print(
-        json_out,
-        to_json(&PzJson { pz: v, insl, tp })?,
-        format!("PZ = {v:.3} mm (INSL {insl}, TP {tp})"),
+    let text = format!("PZ = {v:.3} mm (INSL {insl}, TP {tp})");
+    done(json_out, to_json(&PzJson { pz: v, insl, tp })?, text)
+}
+
+impl From<ExportFormat> for t::ExportFormat {
+    fn from(f: ExportFormat) -> Self {
+        match f {
+            ExportFormat::Csv => t::ExportFormat::Csv,
+            ExportFormat::Json => t::ExportFormat::Json,
+            ExportFormat::ToolT => t::ExportFormat::ToolT,
+        }
+    }
+}
+
+fn add(lib: &mut Library, json: bool, x: AddArgs) -> CliResult<i32> {
+    let t = lib.add(
+        x.number,
+        ToolEdit {
+            name: x.name,
+            kind: x.kind,
+            l: x.l,
+            r: x.r,
+            ltol: x.ltol,
+            rtol: x.rtol,
+            lbreak: x.lbreak,
+            rbreak: x.rbreak,
+            sister: x.sister,
+            life_min: x.life,
+            insl: x.insl,
+            tp: x.tp,
+            iso: x.iso,
+        },
     )?;
-    Ok(EXIT_OK)
+    done(json, to_json(&t)?, format!("saved {}", describe(&t)))
 }
 
-/// The library written as CSV, JSON or a TOOL.T table.
-fn export(db: &ToolDb, lib: &Lib, format: ExportFormat, output: &Path) -> CliResult<i32> {
-    let text = match format {
-        ExportFormat::Csv => db.export_csv(),
-        ExportFormat::Json => db.export_json(),
-        ExportFormat::ToolT => db.export_tool_t(),
-    }
-    .map_err(|e| lib.err(e))?;
-    write_output(
-        lib,
-        output,
-        &text,
-        to_json(&WrittenJson {
-            output: output.display().to_string(),
-            pz: None,
-        })?,
-    )
-}
-
-/// The library a subcommand works on, and how it prints.
-struct Lib<'a> {
-    path: &'a Path,
-    json: bool,
-}
-
-impl Lib<'_> {
-    fn err(&self, e: DbError) -> CliError {
-        db_err(self.path, e)
-    }
-
-    fn print(&self, j: serde_json::Value, text: String) -> CliResult<i32> {
-        print(self.json, j, text)?;
-        Ok(EXIT_OK)
-    }
-}
-
-fn add(db: &mut ToolDb, lib: &Lib, x: AddArgs) -> CliResult<i32> {
-    // Only a tool the library does not have is new; a row that cannot be
-    // read is an error, never overwritten by a fresh record.
-    let mut t = db
-        .find_tool(x.number)
-        .map_err(|e| lib.err(e))?
-        .unwrap_or_else(|| ToolRecord::new(x.number, ""));
-    t.apply(ToolEdit {
-        name: x.name,
-        kind: x.kind,
-        l: x.l,
-        r: x.r,
-        ltol: x.ltol,
-        rtol: x.rtol,
-        lbreak: x.lbreak,
-        rbreak: x.rbreak,
-        sister: x.sister,
-        life_min: x.life,
-        insl: x.insl,
-        tp: x.tp,
-        iso: x.iso,
-    })
-    .map_err(|e| CliError::input(format!("insert data: {e}")))?;
-    db.put_tool(&t).map_err(|e| lib.err(e))?;
-    lib.print(to_json(&t)?, format!("saved {}", describe(&t)))
-}
-
-fn measure(db: &mut ToolDb, lib: &Lib, x: MeasureArgs) -> CliResult<i32> {
+fn measure(lib: &mut Library, json: bool, x: MeasureArgs) -> CliResult<i32> {
     let req = t::MeasureRequest {
         number: x.number,
         first: x.first,
@@ -439,15 +413,8 @@ fn measure(db: &mut ToolDb, lib: &Lib, x: MeasureArgs) -> CliResult<i32> {
         pz: x.pz,
         dset: x.dset,
     };
-    t::check_measure(&req).map_err(CliError::input)?;
-    let tool = db.tool(x.number).map_err(|e| lib.err(e))?;
-    let m = t::measurement(req, &tool);
-    let settings = Settings {
-        dset: x.dset,
-        pallet: x.pallet,
-    };
-    let o = record(db, &m, &settings).map_err(|e| lib.err(e))?;
-    lib.print(to_json(&o)?, t::outcome_text(&o))?;
+    let o = lib.measure(req, x.pallet)?;
+    print(json, to_json(&o)?, t::outcome_text(&o))?;
     Ok(if o.decision.is_problem() {
         EXIT_FINDINGS
     } else {
@@ -455,56 +422,21 @@ fn measure(db: &mut ToolDb, lib: &Lib, x: MeasureArgs) -> CliResult<i32> {
     })
 }
 
-fn show(db: &ToolDb, lib: &Lib, number: Option<u32>) -> CliResult<i32> {
-    let tools = match number {
-        Some(n) => vec![db.tool(n).map_err(|e| lib.err(e))?],
-        None => db.tools().map_err(|e| lib.err(e))?,
-    };
-    let text = t::tools_text(&tools, &lib.path.display().to_string());
-    lib.print(to_json(&tools)?, text)
-}
-
-fn log(db: &ToolDb, lib: &Lib, number: Option<u32>) -> CliResult<i32> {
-    let ev = db.events(number).map_err(|e| lib.err(e))?;
-    let text = t::events_text(&ev);
-    lib.print(to_json(&ev)?, text)
-}
-
-fn import(db: &mut ToolDb, lib: &Lib, file: &Path) -> CliResult<i32> {
-    let text = std::fs::read_to_string(file)
-        .map_err(|e| CliError::input(format!("{}: {e}", file.display())))?;
-    let n = if text.trim_start().starts_with('[') {
-        db.import_json(&text)
-    } else {
-        db.import_csv(&text)
-    }
-    .map_err(|e| match e {
-        // Located in the imported file (line:column).
-        DbError::Invalid(_) => CliError::input(format!("{}:{e}", file.display())),
-        e => lib.err(e),
+fn cycle(lib: &Library, json: bool, x: CycleArgs) -> CliResult<i32> {
+    let (text, pz) = lib.cycle(t::CycleRequest {
+        number: x.number,
+        control: match x.control {
+            Control::Heidenhain => t::CycleControl::Heidenhain,
+            Control::Fanuc => t::CycleControl::Fanuc,
+        },
+        first: x.first,
+        measured: match x.measure {
+            MeasureArg::Length => t::Measured::Length,
+            MeasureArg::Radius => t::Measured::Radius,
+            MeasureArg::Both => t::Measured::Both,
+        },
+        clearance: x.clearance,
+        per_tooth: x.per_tooth,
     })?;
-    lib.print(
-        to_json(&ImportedJson { imported: n })?,
-        format!("imported {n} tools into {}", lib.path.display()),
-    )
-}
-
-fn cycle(db: &ToolDb, lib: &Lib, x: CycleArgs) -> CliResult<i32> {
-    t::check_clearance(x.clearance).map_err(CliError::input)?;
-    let tool = db.tool(x.number).map_err(|e| lib.err(e))?;
-    let measured = match x.measure {
-        MeasureArg::Length => t::Measured::Length,
-        MeasureArg::Radius => t::Measured::Radius,
-        MeasureArg::Both => t::Measured::Both,
-    };
-    let o = t::cycle_options(&tool, x.first, measured, x.clearance, x.per_tooth);
-    let text = match x.control {
-        Control::Heidenhain => cycles::heidenhain(&tool, &o),
-        Control::Fanuc => cycles::fanuc(&tool, &o),
-    };
-    let j = WrittenJson {
-        output: x.output.display().to_string(),
-        pz: Some(o.pz),
-    };
-    write_output(lib, &x.output, &text, to_json(&j)?)
+    write_output(lib, json, &x.output, &text, Some(pz))
 }

@@ -1,4 +1,5 @@
-//! Numbers rounded to what they mean before they are printed: positions and
+//! Numbers rounded to what they mean before they are printed (every
+//! command's `--json`): positions and
 //! lengths to the micrometre (3 decimals of mm), angles to 0.001°, spindle
 //! speeds to 0.1 1/min; anything else to 6 significant digits, so that no
 //! output carries the noise of binary floating point (`-57.533539999999995`).

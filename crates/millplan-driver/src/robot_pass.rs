@@ -1,0 +1,179 @@
+//! `optimise --robot ROBOT --pose X,Y,Z,RZ`: the last pass, offline
+//! compensation of the optimised program for a compliant robot (paper 001,
+//! process-models §4.4), written as KUKA KRL. It moves the tool tip on
+//! purpose (p_cmd = p − Δp), so it runs after the checks of the optimised
+//! program, on the program as written and re-read, with the loads the force
+//! model found on it ([`crate::robot::move_loads`]). Its own check re-reads
+//! the KRL it wrote and runs the deflection again at the commanded points
+//! read: the deflected tip must land on the nominal path within the
+//! tolerance.
+
+use crate::robot::{move_loads, LoadSummary};
+use millplan_nc::krl::{Motion, Statement};
+use millplan_nc::write::krl::{self, KrlFiles, KrlOptions};
+use millplan_nc::Program;
+use millplan_plan::force::ForceRun;
+use millplan_robot::machining::{self, Compensated, PathLoad, PathPoint, Placement};
+use millplan_robot::{Robot, Variant};
+use serde::Serialize;
+
+/// The robot, where the workpiece sits and how the KRL is written.
+pub struct RobotSetup {
+    pub robot: Robot,
+    pub variant: Variant,
+    pub place: Placement,
+    /// Distance between commanded points, mm.
+    pub spacing: f64,
+    /// Motions per sub-program (0: one file).
+    pub max_points: usize,
+    /// How far the deflected tip may land from the nominal path, mm.
+    pub tol: f64,
+}
+
+impl RobotSetup {
+    /// The setup of `--robot` (the robot read) and `--pose X,Y,Z,RZ`: three
+    /// compliant axes per frame, the paper's spacing.
+    pub fn new(
+        robot: Robot,
+        pose: &str,
+        max_points: usize,
+        tol: f64,
+    ) -> Result<RobotSetup, String> {
+        Ok(RobotSetup {
+            robot,
+            variant: Variant::ThreeAxis,
+            place: crate::robot::pose(pose)?,
+            spacing: crate::command_defaults::robot::SPACING_MM,
+            max_points,
+            tol,
+        })
+    }
+}
+
+/// The dialect the optimised program is written, re-read and checked in
+/// before the pass when the output is KRL: KRL has no spindle speed and
+/// no tool for the force model and the checks to work with, so the
+/// source's own dialect (APT for a KRL source).
+pub fn check_target(source: millplan_nc::ir::Dialect) -> millplan_nc::write::Target {
+    use millplan_nc::write::Target;
+    Target::of(source)
+        .filter(|t| *t != Target::Krl)
+        .unwrap_or(Target::Apt)
+}
+
+/// What the pass did, in the units of `robot compensate`.
+#[derive(Clone, Debug, Serialize)]
+pub struct RobotSummary {
+    pub mean_deflection_mm: f64,
+    pub max_deflection_mm: f64,
+    /// The largest distance of the deflected tip from the path, commanded
+    /// to the points read back from the KRL written, mm.
+    pub residual_max_mm: f64,
+    pub tolerance_mm: f64,
+    pub points: usize,
+    pub loads: Option<LoadSummary>,
+}
+
+impl RobotSummary {
+    pub fn render_text(&self) -> String {
+        use crate::robot::sig;
+        format!(
+            "robot: deflection mean {} mm, max {} mm over {} points; compensated, the KRL read back leaves at most {} mm (tolerance {} mm)",
+            sig(self.mean_deflection_mm, 4),
+            sig(self.max_deflection_mm, 4),
+            self.points,
+            sig(self.residual_max_mm, 3),
+            self.tolerance_mm
+        )
+    }
+}
+
+/// The KRL files (main first) and the summary.
+pub struct RobotWritten {
+    pub files: KrlFiles,
+    pub summary: RobotSummary,
+}
+
+/// Compensates `program` (written and re-read) under the loads of its force
+/// run, writes KRL named `name`, and checks it.
+/// `posted`: the program was posted to a machine's joints (refused).
+pub fn run(
+    s: &RobotSetup,
+    (program, posted): (&Program, bool),
+    forces: Option<&ForceRun>,
+    name: &str,
+) -> Result<RobotWritten, String> {
+    if posted {
+        return Err("the program was posted to a machine's joints; leave out the post pass (--passes) for a robot".into());
+    }
+    let forces = forces.ok_or(
+        "the robot pass needs the process load along the path: give --stock and --material",
+    )?;
+    let load = move_loads(program, forces);
+    let err = |e: machining::MachiningError| e.to_string();
+    let c = machining::compensate_program(&s.robot, s.variant, program, &s.place, &load, s.spacing)
+        .map_err(err)?;
+    let k = machining::krl_program(name, &c.runs, &s.place, s.spacing / 2.0);
+    let o = KrlOptions {
+        name: name.into(),
+        max_points: s.max_points,
+        ..KrlOptions::default()
+    };
+    let files = krl::write(&k, &o);
+    let residual = verify(s, &c, &files, &load)?;
+    if !(residual <= s.tol) {
+        return Err(format!(
+            "the KRL written, run on the robot model, leaves the tip {residual:.4} mm from the path: over the tolerance of {} mm",
+            s.tol
+        ));
+    }
+    let summary = RobotSummary {
+        mean_deflection_mm: c.mean,
+        max_deflection_mm: c.max,
+        residual_max_mm: residual,
+        tolerance_mm: s.tol,
+        points: c.points,
+        loads: LoadSummary::of(&load),
+    };
+    Ok(RobotWritten { files, summary })
+}
+
+/// Reads the files back (the main finding its sub-programs among them),
+/// puts every commanded point read in place of the one computed, and runs
+/// the deflection again: the largest distance of the tip from the path.
+fn verify(
+    s: &RobotSetup,
+    c: &Compensated,
+    files: &KrlFiles,
+    load: &PathLoad,
+) -> Result<f64, String> {
+    let back = millplan_nc::krl::read(&files[0].1, &mut |n| {
+        files
+            .iter()
+            .find(|(f, _)| f.eq_ignore_ascii_case(n))
+            .map(|(_, t)| t.clone())
+    })
+    .map_err(|e| format!("the KRL written does not read back: {e:?}"))?;
+    let mut read = back.statements.iter().filter_map(|l| match &l.statement {
+        Statement::Move {
+            motion: Motion::Lin(p) | Motion::Ptp(p),
+            ..
+        } => Some(p.xyz),
+        _ => None,
+    });
+    let mut cmd: Vec<Vec<PathPoint>> = Vec::with_capacity(c.runs.len());
+    for run in &c.runs {
+        let mut r = Vec::with_capacity(run.len());
+        for pt in run {
+            let p = read
+                .next()
+                .ok_or("the KRL written holds fewer motions than the compensated path")?;
+            r.push(PathPoint { p, ..*pt });
+        }
+        cmd.push(r);
+    }
+    if read.next().is_some() {
+        return Err("the KRL written holds more motions than the compensated path".into());
+    }
+    machining::residual_max(&s.robot, s.variant, &s.place, c, &cmd, load).map_err(|e| e.to_string())
+}
