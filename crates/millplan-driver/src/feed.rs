@@ -12,7 +12,7 @@ pub use millplan_plan::feed::FeedParams;
 use millplan_plan::feed::{machine_accel, BodyFn, FeedChanges, FeedPass};
 /// The load limits of a run.
 pub use millplan_plan::force::FeedLimits;
-use millplan_plan::force::{simulate, ForceSetup, FzRange, MoveForces};
+use millplan_plan::force::{simulate, ForceSetup, FzRange, LimitUse, MoveForces};
 use millplan_plan::force::{Maxima, Steps};
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context, PassError, Progress};
@@ -339,15 +339,28 @@ pub fn stopped_spindle(path: &str, run: &ForceRun) -> Result<(), String> {
     }
 }
 
-/// The forces of `program` cut into `s` over the prepared stock; `done`
-/// hears the strokes done.
+/// The forces of `program` cut into `s` over the prepared stock, every
+/// load converged; `done` hears the strokes done.
 pub fn forces(
     p: &Prepared,
     program: &Program,
     s: &Strokes,
     done: &(dyn Fn(usize) + Sync),
 ) -> Result<ForceRun, String> {
-    simulate(program, s, p.stock.clone(), &p.setup, None, done)
+    simulate(program, s, p.stock.clone(), &p.setup, LimitUse::None, done)
+}
+
+/// The forces of the program a feed run wrote (`s`), as its limits are
+/// checked: a load sample below every limit by more than its error is not
+/// refined further ([`LimitUse::Check`]); `done` hears the strokes done.
+pub fn forces_after(
+    p: &Prepared,
+    s: &Scheduled,
+    strokes: &Strokes,
+    done: &(dyn Fn(usize) + Sync),
+) -> Result<ForceRun, String> {
+    let check = LimitUse::Check(&s.params.limits, &p.machine);
+    simulate(&s.program, strokes, p.stock.clone(), &p.setup, check, done)
 }
 
 /// The load limits of `--limit NAME=VALUE` (`loads`) with the feed-per-tooth

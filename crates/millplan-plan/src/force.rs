@@ -147,6 +147,10 @@ impl Engagement for StockEngagement<'_> {
         let level = (self.tip.z + z) + self.lift;
         self.rings[a..=b].iter().any(|t| *t as f64 > level)
     }
+
+    fn resolution(&self) -> Option<f64> {
+        Some(self.stock.grid.res)
+    }
 }
 
 /// How the forces are modelled: the law (material), the flutes and helix of
@@ -566,10 +570,33 @@ pub fn moves_by_index(p: &Program) -> Vec<&Move> {
     p.operations.iter().flat_map(|op| op.moves.iter()).collect()
 }
 
+/// What a force run does with load limits.
+#[derive(Clone, Copy, Debug)]
+pub enum LimitUse<'a> {
+    /// No limits: every load sample is converged unless it lies below its
+    /// move's largest by more than its error.
+    None,
+    /// A run that checks the limits: a sample whose loads, with their
+    /// estimated error, stay below every limit is not refined further (it
+    /// cannot be over a limit), so such loads carry the coarser grid's error.
+    Check(&'a FeedLimits, &'a crate::machine::Machine),
+    /// Checks, and finds the feed per tooth each stroke's limits allow
+    /// (§2.3, the iteration reusing the stroke's engaged cells).
+    Schedule(&'a FeedLimits, &'a crate::machine::Machine),
+}
+
+impl<'a> LimitUse<'a> {
+    fn limits(&self) -> Option<(&'a FeedLimits, &'a crate::machine::Machine)> {
+        match *self {
+            LimitUse::None => None,
+            LimitUse::Check(l, m) | LimitUse::Schedule(l, m) => Some((l, m)),
+        }
+    }
+}
+
 /// Runs `strokes` (of `program`) through `stock`, evaluating the forces of
-/// every cutting stroke; with `schedule`, also the feed per tooth each
-/// stroke's limits allow (§2.3, the iteration reusing the stroke's engaged
-/// cells). `progress(done)` is called now and then.
+/// every cutting stroke, using the limits as `limits` says.
+/// `progress(done)` is called now and then.
 ///
 /// The strokes run in order through one stock, yet in parallel: one thread
 /// removes material only (a small share of the work) and hands a copy of the
@@ -582,7 +609,7 @@ pub fn simulate(
     strokes: &Strokes,
     stock: Stock,
     setup: &ForceSetup,
-    schedule: Option<(&FeedLimits, &crate::machine::Machine)>,
+    schedule: LimitUse<'_>,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<ForceRun, String> {
     simulate_in_parts(program, strokes, stock, setup, schedule, progress, MIN_PART)
@@ -599,7 +626,7 @@ pub fn simulate_in_parts(
     strokes: &Strokes,
     stock: Stock,
     setup: &ForceSetup,
-    schedule: Option<(&FeedLimits, &crate::machine::Machine)>,
+    schedule: LimitUse<'_>,
     progress: &(dyn Fn(usize) + Sync),
     min_part: usize,
 ) -> Result<ForceRun, String> {
@@ -682,7 +709,7 @@ struct PartContext<'a> {
     ir: &'a [&'a Move],
     tools: &'a [ToolForces],
     strokes: &'a Strokes,
-    schedule: Option<(&'a FeedLimits, &'a crate::machine::Machine)>,
+    schedule: LimitUse<'a>,
     done: &'a std::sync::atomic::AtomicUsize,
     progress: &'a (dyn Fn(usize) + Sync),
 }
@@ -812,7 +839,7 @@ fn stroke_forces(
     s: &Stroke,
     from_cut: bool,
     m: &mut MoveForces,
-    schedule: Option<(&FeedLimits, &crate::machine::Machine)>,
+    schedule: LimitUse<'_>,
 ) -> Option<usize> {
     let d = s.p1 - s.p0;
     let len = d.length();
@@ -827,7 +854,10 @@ fn stroke_forces(
     }
     let fz = v / (m.rpm * flutes);
     m.fz = m.fz.max(fz);
-    let limits = schedule.map(|(lim, machine)| lim.at(m.rpm, 2.0 * tf.radius, machine));
+    let limits = schedule
+        .limits()
+        .map(|(lim, machine)| lim.at(m.rpm, 2.0 * tf.radius, machine));
+    let scheduling = matches!(schedule, LimitUse::Schedule(..));
     let mut evals = 0;
     for dist in sample_distances(len, stock.grid.res, from_cut) {
         let t = dist / len;
@@ -849,7 +879,10 @@ fn stroke_forces(
         // estimated error, stay below the move's largest so far cannot
         // decide the move's loads or its feed, nor one whose loads stay
         // below every limit: it is not refined further.
-        let top = limits.as_ref().map_or(fz, |l| l.fz_max.max(fz));
+        let top = match &limits {
+            Some(l) if scheduling => l.fz_max.max(fz),
+            _ => fz,
+        };
         let most = (m.fxy_max, m.torque_max, m.power_w);
         let below =
             |e: &millplan_models::force::Evaluation| settled(e, most, limits.as_ref(), &tf.holding);
@@ -877,7 +910,7 @@ fn stroke_forces(
             conv.cells.len(),
             conv.model,
         );
-        if let Some(lim) = &limits {
+        if let Some(lim) = limits.as_ref().filter(|_| scheduling) {
             evals += tighten(&cut, &conv, &tf.holding, lim, m);
         }
     }

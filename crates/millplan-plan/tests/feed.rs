@@ -7,7 +7,9 @@ use millplan_models::force::materials::Materials;
 use millplan_nc::generate::{raster, Raster};
 use millplan_nc::Program;
 use millplan_plan::feed::{FeedParams, FeedPass};
-use millplan_plan::force::{simulate, simulate_in_parts, FeedLimits, ForceRun, ForceSetup};
+use millplan_plan::force::{
+    simulate, simulate_in_parts, FeedLimits, ForceRun, ForceSetup, LimitUse,
+};
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context};
 use millplan_sim::stock::path::{strokes, PathOptions};
@@ -62,7 +64,7 @@ fn forces(p: &Program, stock: Stock, m: &Machine) -> ForceRun {
             rapid_rate: m.rapid,
         },
     );
-    simulate(p, &s, stock, &setup(), None, &|_| {}).expect("simulates")
+    simulate(p, &s, stock, &setup(), LimitUse::None, &|_| {}).expect("simulates")
 }
 
 fn time_s(p: &Program, m: &Machine) -> f64 {
@@ -95,7 +97,7 @@ fn forces_do_not_depend_on_how_the_run_is_split_over_threads() {
                     &s,
                     stock.clone(),
                     &setup(),
-                    Some((&limits, &m)),
+                    LimitUse::Schedule(&limits, &m),
                     &|_| {},
                     min_part,
                 )
@@ -142,7 +144,7 @@ fn forces_follow_the_engagement_along_the_program() {
         },
     );
     let _ = millplan_sim::stock::run::run(&mut stock2, &s, 0.01, &|_| {});
-    let again = simulate(&p2, &s, stock2, &setup(), None, &|_| {}).expect("simulates");
+    let again = simulate(&p2, &s, stock2, &setup(), LimitUse::None, &|_| {}).expect("simulates");
     let median = |r: &ForceRun| {
         let mut v: Vec<f64> = r
             .moves
@@ -357,7 +359,7 @@ fn slot_forces(p: &Program, stock: Stock) -> ForceRun {
             rapid_rate: 15000.0,
         },
     );
-    simulate(p, &s, stock, &setup(), None, &|_| {}).expect("simulates")
+    simulate(p, &s, stock, &setup(), LimitUse::None, &|_| {}).expect("simulates")
 }
 
 /// F_xy,max of the analytic full slot at feed `f` (mm/min).
@@ -482,7 +484,7 @@ fn a_schedule_rechecked_on_a_four_times_finer_grid_stays_within_two_percent() {
             rapid_rate: m.rapid,
         },
     );
-    let after = simulate(&p, &s, stock, &fine, None, &|_| {}).expect("simulates");
+    let after = simulate(&p, &s, stock, &fine, LimitUse::None, &|_| {}).expect("simulates");
     let worst = after
         .moves
         .iter()

@@ -88,7 +88,7 @@ fn run(m: &ModelRequest, f: &FeedRequest, g: &Given) -> Res<Ran> {
         lib::stopped_spindle(&g.name, &s.before).map_err(|e| crate::error::located(&e))?;
         let s2 =
             lib::program_strokes(m, &s.program, p.machine.rapid).map_err(|e| option_error(&e))?;
-        let after = lib::forces(&p, &s.program, &s2, &|_| {})
+        let after = lib::forces_after(&p, &s, &s2, &|_| {})
             .map_err(|e| crate::error::located_in(&g.name, &e))?;
         let wo = millplan_nc::write::WriteOptions {
             limits: millplan_geom::limits::Limits::default(),

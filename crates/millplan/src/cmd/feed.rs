@@ -169,8 +169,17 @@ pub fn run_forces(
     s: &millplan_driver::Strokes,
     quiet: bool,
 ) -> CliResult<millplan_driver::feed::ForceRun> {
+    with_bar(s, quiet, |done| lib::forces(p, program, s, done))
+}
+
+/// A force run over the strokes `s` with a progress bar.
+fn with_bar<T>(
+    s: &millplan_driver::Strokes,
+    quiet: bool,
+    run: impl FnOnce(&(dyn Fn(usize) + Sync)) -> Result<T, String>,
+) -> CliResult<T> {
     let bar = crate::progress::count(s.strokes.len() as u64, "forces", "strokes", !quiet);
-    let r = lib::forces(p, program, s, &|d| bar.set_position(d as u64));
+    let r = run(&|d| bar.set_position(d as u64));
     bar.finish_and_clear();
     r.map_err(CliError::input)
 }
@@ -224,7 +233,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     let path = a.path.display().to_string();
     lib::stopped_spindle(&path, &s.before).map_err(CliError::input)?;
     let s2 = lib::program_strokes(&req, &s.program, p.machine.rapid).map_err(CliError::input)?;
-    let after = run_forces(&p, &s.program, &s2, m.quiet || m.json)?;
+    let after = with_bar(&s2, m.quiet || m.json, |d| {
+        lib::forces_after(&p, &s, &s2, d)
+    })?;
     let wo = p.machine.write_options(target);
     write_program_file(&s.program, wo, &mut outputs, &a.output, &a.path, m.quiet)?;
     let output = a.output.display().to_string();
