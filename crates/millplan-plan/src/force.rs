@@ -147,10 +147,6 @@ impl Engagement for StockEngagement<'_> {
         let level = (self.tip.z + z) + self.lift;
         self.rings[a..=b].iter().any(|t| *t as f64 > level)
     }
-
-    fn resolution(&self) -> Option<f64> {
-        Some(self.stock.grid.res)
-    }
 }
 
 /// How the forces are modelled: the law (material), the flutes and helix of

@@ -64,16 +64,6 @@ pub const DZ_FLOOR: f64 = 0.001;
 /// per revolution).
 pub const DPHI_FLOOR: f64 = 0.02 * std::f64::consts::PI / 180.0;
 
-/// The share of an engagement's resolution ([`Engagement::resolution`])
-/// below which no step is refined: the slice length, and the distance the
-/// tool's largest radius turns in one rotation step. Finer steps would
-/// resolve the stairs of a dexel stock's columns, which are not the part's
-/// edge: the even and the odd slices (and angles) see different stairs
-/// however fine the grid, so the error estimates would not fall, while the
-/// loads stay within the stock's own error (a wall half a cell either way,
-/// `leadtilt::stock_tests` in millplan-plan).
-pub const RESOLUTION_SHARE: f64 = 0.25;
-
 /// A tool and law with the grids from the user's (`grid`, the coarsest) to
 /// its steps halved `refine.halvings` times, each built when first needed.
 #[derive(Debug)]
@@ -380,10 +370,7 @@ impl ConvergedModel {
     ) -> Vec<[f64; COLUMNS]> {
         let (mut a, b) = c.halvings;
         let mut refined = vec![false; rows.len()];
-        let floor = eng
-            .resolution()
-            .map_or(DZ_FLOOR, |r| DZ_FLOOR.max(RESOLUTION_SHARE * r));
-        while c.evaluation.error_dz > self.refine.tol && self.may_halve(a, self.grid.dz, floor) {
+        while c.evaluation.error_dz > self.refine.tol && self.may_halve(a, self.grid.dz, DZ_FLOOR) {
             let Some(fine) = self.level(a + 1, b) else {
                 break;
             };
@@ -440,11 +427,8 @@ impl ConvergedModel {
     ) {
         let (a, mut b) = c.halvings;
         let mut exact = vec![true; rows.len()];
-        let radius = self.tool.shape.radius();
-        let floor = eng.resolution().map_or(DPHI_FLOOR, |r| {
-            DPHI_FLOOR.max(RESOLUTION_SHARE * r / radius)
-        });
-        while c.evaluation.error_dphi > self.refine.tol && self.may_halve(b, self.grid.dphi, floor)
+        while c.evaluation.error_dphi > self.refine.tol
+            && self.may_halve(b, self.grid.dphi, DPHI_FLOOR)
         {
             let Some(fine) = self.level(a, b + 1) else {
                 break;

@@ -22,13 +22,6 @@ pub trait Engagement {
     fn ring_may_touch(&self, _z: f64, _r: f64) -> bool {
         true
     }
-    /// The size below which the engagement's boundary says nothing (a
-    /// dexel stock's cell: its columns place an edge only to within a
-    /// cell), mm; `None` for an exact boundary. The converged grid refines
-    /// no step below a quarter of it ([`super::converge::RESOLUTION_SHARE`]).
-    fn resolution(&self) -> Option<f64> {
-        None
-    }
 }
 
 /// An engagement given by a closure, with the band of heights to slice.
