@@ -907,7 +907,17 @@ fn stroke_forces(
             conv.model,
         );
         if let Some(lim) = limits.as_ref().filter(|_| scheduling) {
+            let prev = m.fz_allowed;
             evals += tighten(&cut, &conv, &tf.holding, lim, m);
+            // The finer grids were chosen around the peaks at `top`; at the
+            // lower feed this sample allows, a peak may lie where they did
+            // not look. Converged again there, it is checked once more.
+            if let Some(a) = m.fz_allowed.filter(|a| prev != Some(*a) && *a < top) {
+                let at = Cut { fz: a, ..cut };
+                let again = tf.model.converge_from(&at, &eng, (0, 0), below);
+                evals += 1 + (again.halvings.0 + again.halvings.1) as usize;
+                evals += tighten(&cut, &again, &tf.holding, lim, m);
+            }
         }
     }
     Some(evals)

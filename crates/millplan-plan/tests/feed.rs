@@ -8,7 +8,7 @@ use millplan_nc::generate::{raster, Raster};
 use millplan_nc::Program;
 use millplan_plan::feed::{FeedParams, FeedPass};
 use millplan_plan::force::{
-    simulate, simulate_in_parts, FeedLimits, ForceRun, ForceSetup, LimitUse,
+    simulate, simulate_in_parts, FeedLimits, ForceRun, ForceSetup, LimitUse, LIMIT_TOLERANCE,
 };
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context};
@@ -177,6 +177,7 @@ fn scheduled_feeds_meet_the_limits_within_the_machine_and_save_time() {
     let cx = Context::new(m.clone()).verifying();
     pipeline::run(&mut [&mut pass], &mut p, &cx).expect("the pass runs");
     let ch = pass.changes.expect("changes");
+    let held = held_at_fz_min(pass.before.as_ref().expect("loads"), &limits());
     assert!(ch.blocks > 500, "{ch:?}");
     // Every feed block within the machine's range, spindle speeds kept.
     for (a, b) in input.moves().zip(p.moves()) {
@@ -189,18 +190,25 @@ fn scheduled_feeds_meet_the_limits_within_the_machine_and_save_time() {
             );
         }
     }
-    // The output's own prediction stays within every limit.
+    // The output's own prediction stays within every limit (within the
+    // tolerance the exit codes state), but at moves the pass had to hold
+    // at the smallest feed per tooth, which it reports as still over.
     let after = forces(&p, stock, &m);
     let l = limits();
-    for x in after.moves.iter().filter(|x| !x.unmodelled) {
+    let within = 1.0 + LIMIT_TOLERANCE;
+    for x in after
+        .moves
+        .iter()
+        .filter(|x| !x.unmodelled && !held.contains(&x.index))
+    {
         assert!(
-            x.fxy_max <= l.fxy.unwrap_or(f64::INFINITY) * (1.0 + 1e-9),
-            "line {} fxy {}",
-            x.line,
+            x.fxy_max <= l.fxy.unwrap_or(f64::INFINITY) * within,
+            "move {} fxy {}",
+            x.index,
             x.fxy_max
         );
-        assert!(x.power_w <= l.power.unwrap_or(f64::INFINITY) * (1.0 + 1e-9));
-        assert!(x.deflection_mm <= l.deflection.unwrap_or(f64::INFINITY) * (1.0 + 1e-9));
+        assert!(x.power_w <= l.power.unwrap_or(f64::INFINITY) * within);
+        assert!(x.deflection_mm <= l.deflection.unwrap_or(f64::INFINITY) * within);
         if x.fz > 0.0 && x.fxy_max > 0.0 {
             assert!(x.fz <= 0.25 * (1.0 + 1e-9), "fz {}", x.fz);
         }
@@ -467,6 +475,7 @@ fn a_schedule_rechecked_on_a_four_times_finer_grid_stays_within_two_percent() {
     let cx = Context::new(m.clone());
     pipeline::run(&mut [&mut pass], &mut p, &cx).expect("the pass runs");
     let ch = pass.changes.expect("changes");
+    let held = held_at_fz_min(pass.before.as_ref().expect("loads"), &pass.params.limits);
     assert!(
         ch.binding.get("fxy").copied().unwrap_or(0) > 100,
         "the limit must bind: {:?}",
@@ -488,9 +497,30 @@ fn a_schedule_rechecked_on_a_four_times_finer_grid_stays_within_two_percent() {
     let worst = after
         .moves
         .iter()
-        .filter(|x| !x.unmodelled)
+        .filter(|x| !x.unmodelled && !held.contains(&x.index))
         .map(|x| x.fxy_max)
         .fold(0.0, f64::max);
     assert!(worst > 90.0, "the limit is reached: {worst} N");
     assert!(worst <= 102.0, "F_xy,max {worst} N at the finer grid");
+    // The moves held at the smallest feed per tooth are at or over the
+    // limit on the finer grid too (within the same 2 %): the default grid
+    // did not invent them.
+    for x in after.moves.iter().filter(|x| held.contains(&x.index)) {
+        assert!(x.fxy_max > 98.0, "move {} at {} N", x.index, x.fxy_max);
+    }
+}
+
+/// The moves a schedule (`run`, the pass's loads of its input) held at the
+/// smallest feed per tooth because a limit could not be met even there:
+/// `feed` reports them as still over the limit and exits 3.
+fn held_at_fz_min(run: &ForceRun, limits: &FeedLimits) -> std::collections::HashSet<u32> {
+    run.moves
+        .iter()
+        .filter(|x| x.binding == Some("feed-range"))
+        .filter(|x| {
+            x.fz_allowed
+                .is_some_and(|a| a <= limits.fz_min * (1.0 + 1e-9))
+        })
+        .map(|x| x.index)
+        .collect()
 }
