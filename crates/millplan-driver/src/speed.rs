@@ -117,6 +117,115 @@ pub fn checks(cx: &Context, input: &Program, output: &Program) -> Vec<Check> {
     })
 }
 
+/// The estimated cycle time of `p` on `machine`, with acceleration, s.
+pub fn cycle_time(p: &Program, machine: &Machine) -> f64 {
+    millplan_plan::timing::estimate_program(p, machine).total_s
+}
+
+/// What `millplan speed` makes of a program: the new program, the pass's
+/// summary and per-point rows, the checks of the output and the part's
+/// own findings (open edges, points off the part).
+pub struct Outcome {
+    pub program: Program,
+    pub summary: Summary,
+    pub rows: Vec<millplan_plan::speed::PointRow>,
+    pub checks: Vec<Check>,
+    pub findings: Vec<Diagnostic>,
+}
+
+/// Why a run of `millplan speed` stopped.
+#[derive(Debug)]
+pub enum SpeedError {
+    /// The pass's own error (the input's, or a bug).
+    Pass(PassError),
+    /// A bug: the pass ran and left no summary.
+    NoSummary,
+}
+
+/// `millplan speed` on `input` over `mesh` (its surface in `cx`): the pass
+/// on a copy of the input, the checks of its output against the input,
+/// the part's findings; each phase timed in `cx`.
+pub fn command(
+    a: &SpeedRequest,
+    cx: &Context,
+    mesh: &millplan_geom::TriMesh,
+    input: Program,
+) -> Result<Outcome, SpeedError> {
+    let (program, mut pass) = run(a, cx, &input).map_err(SpeedError::Pass)?;
+    let checks = checks(cx, &input, &program);
+    cx.time("input freed", || drop(input));
+    let summary = pass.summary.take().ok_or(SpeedError::NoSummary)?;
+    // A part that does not match its path makes every speed meaningless.
+    let findings = cx.time("part checks (open edges, points off the part)", || {
+        [
+            millplan_plan::checks::mesh(mesh),
+            millplan_plan::checks::off_surface(&summary),
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
+    });
+    Ok(Outcome {
+        program,
+        summary,
+        rows: std::mem::take(&mut pass.rows),
+        checks,
+        findings,
+    })
+}
+
+impl Outcome {
+    /// Too many points off the part for the speeds to mean anything.
+    pub fn untrusted(&self) -> bool {
+        millplan_plan::checks::untrusted(&self.summary)
+    }
+
+    /// The report's header, warnings, cycle times and failed checks; the
+    /// program and the part by their file names.
+    pub fn report_inputs(
+        &self,
+        (program, part): (String, String),
+        machine: &Machine,
+        cut: Cutting,
+        times: [f64; 2],
+    ) -> millplan_report::html::SpeedInputs {
+        let on = (program, &self.program);
+        let mut i = report_inputs(on, part, machine, cut, &self.findings, times);
+        i.failed = failed_checks(&self.checks);
+        i
+    }
+
+    /// The HTML report (`--report`) of the run on the program `names.0`
+    /// over the part `names.1`.
+    pub fn report_html(
+        &self,
+        names: (String, String),
+        machine: &Machine,
+        cut: Cutting,
+        times: [f64; 2],
+    ) -> String {
+        let title = format!("millplan speed: {}", names.0);
+        let inputs = self.report_inputs(names, machine, cut, times);
+        millplan_report::html::speed_report(&title, &inputs, &self.summary, &self.rows)
+    }
+
+    /// The per-point table (`--table`), CSV.
+    pub fn table_csv(&self) -> String {
+        millplan_report::table::points_csv(&self.rows)
+    }
+
+    /// What `speed --json` prints for the program written to `output`.
+    pub fn report<'a>(
+        &'a self,
+        written: (String, Target),
+        machine: &'a Machine,
+        times: [f64; 2],
+    ) -> Report<'a> {
+        let on = (&self.summary, self.checks.as_slice());
+        Report::new(on, written, machine, &self.findings, times)
+    }
+}
+
 /// Why spindle control has nothing to act on in `p`, when so: no cutting
 /// move, or every cutting operation's cutter is known and none is a ball.
 /// A tool the program gives no shape is no such finding: `--ball-d` names
@@ -340,5 +449,77 @@ impl<'a> Report<'a> {
         );
         o.push_str(&self.verdict.text());
         o
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use millplan_geom::analytic::{tessellate, DemoSurface};
+    use millplan_nc::generate::{raster, Raster};
+
+    fn request() -> SpeedRequest {
+        SpeedRequest {
+            cut: Cutting {
+                vc: 63.0,
+                fz: 0.125,
+                flutes: 2,
+                ap: 0.3,
+            },
+            ball_d: None,
+            s_threshold: crate::command_defaults::speed::S_THRESHOLD,
+            keep_feed: false,
+            convention: None,
+            normals: NormalMode::Smooth,
+            nearest_incentre: false,
+            keep_rows: true,
+        }
+    }
+
+    /// The command's run is the spindle-control model applied on its own
+    /// (`speed::apply`, no pipeline): the same program and summary; its
+    /// checks pass (only S and F changed); on a part moved away every point
+    /// is off the part and the run is not to be trusted.
+    #[test]
+    fn the_command_is_the_model_and_says_when_the_part_is_elsewhere() {
+        let s = DemoSurface::default();
+        let mesh = tessellate(&s, 1.0);
+        let stepped = Raster {
+            stepover: 3.0,
+            step: 1.0,
+            ..Raster::default()
+        };
+        let (prog, _) = raster(&s, &stepped);
+        let req = request();
+        let machine = Machine::default();
+        let want =
+            millplan_plan::speed::apply(&prog, &mesh, &machine, &params(&req)).expect("applies");
+        let cx = Context::new(machine.clone()).with_surface(Surface::new(&mesh));
+        let Ok(out) = command(&req, &cx, &mesh, prog.clone()) else {
+            panic!("the command runs")
+        };
+        assert_eq!(out.program, want.program);
+        assert_eq!(out.summary, want.summary);
+        assert_eq!(out.rows.len(), out.summary.points);
+        assert!(safety::passed(&out.checks), "{:?}", out.checks);
+        assert!(!out.untrusted());
+        let times = [
+            cycle_time(&prog, &machine),
+            cycle_time(&out.program, &machine),
+        ];
+        let json =
+            serde_json::to_value(out.report(("o.nc".into(), Target::Fanuc), &machine, times))
+                .expect("json");
+        assert_eq!(json["points"], out.summary.points);
+        assert_eq!(json["trusted"], true);
+        assert!(out.table_csv().lines().count() == out.rows.len() + 1);
+        let mut far = mesh.clone();
+        far.map_vertices(|v| v + millplan_geom::DVec3::new(0.0, 0.0, -50.0));
+        let cx = Context::new(machine).with_surface(Surface::new(&far));
+        let Ok(off) = command(&req, &cx, &far, prog) else {
+            panic!("the command runs off the part")
+        };
+        assert!(off.untrusted());
+        assert!(!off.findings.is_empty());
     }
 }

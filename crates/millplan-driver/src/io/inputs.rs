@@ -338,6 +338,21 @@ fn sibling_src(dir: &Path, name: &str) -> Option<PathBuf> {
     })
 }
 
+/// The robot of `--robot NAME`: `kr240`, the bundled KUKA KR 240 R2500, or
+/// a robot file in its TOML form (a TOML error at `file:line:col`).
+pub fn read_robot(name: &str) -> IoResult<millplan_robot::Robot> {
+    if name == "kr240" {
+        return Ok(millplan_robot::Robot::kr240());
+    }
+    let p = Path::new(name);
+    let text = std::fs::read_to_string(p)
+        .map_err(|e| IoError::input(format!("{}: cannot read: {e}", p.display())))?;
+    millplan_robot::Robot::from_toml(&text).map_err(|e| match e {
+        millplan_robot::RobotError::Toml { .. } => IoError::input(format!("{}:{e}", p.display())),
+        _ => IoError::input(format!("{}: {e}", p.display())),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -408,3 +423,4 @@ mod tests {
         std::fs::remove_dir_all(&dir).expect("clean");
     }
 }
+

@@ -218,9 +218,10 @@ fn report(
     mesh: &millplan_geom::TriMesh,
 ) -> String {
     let findings: Vec<_> = millplan_plan::checks::mesh(mesh).into_iter().collect();
-    let run = crate::cmd::speed::report_inputs(
-        (&a.path, original),
-        &a.stl,
+    let name = millplan_driver::feed::file_name;
+    let run = millplan_driver::speed::report_inputs(
+        (name(&a.path), original),
+        name(&a.stl),
         machine,
         a.cut.cutting(),
         &findings,
