@@ -423,4 +423,3 @@ mod tests {
         std::fs::remove_dir_all(&dir).expect("clean");
     }
 }
-

@@ -1,5 +1,6 @@
 //! One file per subcommand.
 
+pub mod args;
 pub mod completions;
 pub mod convert;
 pub mod cut;

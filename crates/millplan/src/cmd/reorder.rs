@@ -3,7 +3,7 @@
 
 use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_program, read_surface, Outputs};
+use crate::io::{read_program, Outputs};
 use clap::ValueEnum;
 use millplan_driver::reorder::Summary;
 use millplan_nc::Program;
@@ -66,10 +66,8 @@ pub struct Args {
     /// Part surface (STL) in the same coordinates as the program.
     #[arg(long)]
     pub stl: PathBuf,
-    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
-    /// converted to mm on reading.
-    #[arg(long, value_enum)]
-    pub stl_units: Option<UnitArg>,
+    #[command(flatten)]
+    pub part_units: crate::cmd::args::PartUnits,
     /// How the order is searched: as-run (default) measures candidate orders as the
     /// machine will run them; paper is the published greedy search over single
     /// points; optimised keeps
@@ -121,13 +119,10 @@ pub struct Args {
     /// inch.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
-    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
-    /// on standard error.
-    #[arg(long)]
-    pub json: bool,
-    /// Print no warnings or notes about the inputs (errors still print).
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
     /// Write the program even when a check before writing refuses it (a
     /// cutting point of the input not cut, a gouge the input did not have,
     /// an S or F outside the machine); the run then ends with exit 3.
@@ -163,12 +158,16 @@ pub fn run(a: Args) -> CliResult<i32> {
     let mut outputs = plan(&a)?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
-    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    print_diagnostics(
+        &a.path,
+        &parsed.diagnostics,
+        a.notes.quiet || a.summary.json,
+    );
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
-    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
+    let mesh = a.part_units.read(&a.stl)?;
     let mut program = parsed.program.clone();
     // Some 100,000 points a second at the least: from there it takes a while.
-    let bar = crate::progress::Phases::new(!a.quiet && program.move_count() >= 100_000);
+    let bar = crate::progress::Phases::new(!a.notes.quiet && program.move_count() >= 100_000);
     let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
     let cx = Context::new(machine).with_part(&mesh).with_progress(&hook);
     let mut reorder = ReorderPass::new(params(&a));
@@ -183,7 +182,12 @@ pub fn run(a: Args) -> CliResult<i32> {
     let Some(o) = reorder.outcome else {
         return Err(CliError::internal("the reorder pass left no outcome"));
     };
-    let out = write_program(&program, cx.machine.write_options(target), &a.path, a.quiet)?;
+    let out = write_program(
+        &program,
+        cx.machine.write_options(target),
+        &a.path,
+        a.notes.quiet,
+    )?;
     crate::verdict::read_back(&out, target, &program, &a.output)?;
     let checks = cx.time("checks", || {
         millplan_driver::reorder::check(&parsed.program, &program, &cx)
@@ -200,11 +204,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         .to_possible_value()
         .map(|v| v.get_name().to_string());
     let summary = Summary::new(method, &o, a.output.display().to_string(), &checks);
-    if a.json {
-        crate::cmd::print_json(serde_json::to_value(&summary).unwrap_or_default());
-    } else {
-        out!("{}", summary.render_text());
-    }
+    a.summary.print(&summary, |s| s.render_text());
     Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
 }
 

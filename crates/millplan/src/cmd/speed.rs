@@ -50,10 +50,8 @@ pub struct Args {
     /// Part surface (STL) in the same coordinates as the toolpath.
     #[arg(long)]
     pub stl: PathBuf,
-    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
-    /// converted to mm on reading.
-    #[arg(long, value_enum)]
-    pub stl_units: Option<UnitArg>,
+    #[command(flatten)]
+    pub part_units: crate::cmd::args::PartUnits,
     /// Cutting speed, m/min.
     #[arg(long)]
     pub vc: f64,
@@ -111,9 +109,8 @@ pub struct Args {
     /// Print the wall time of each phase on standard error.
     #[arg(long)]
     pub timings: bool,
-    /// Print no warnings or notes about the inputs (errors still print).
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
     /// Write the program even when a check before writing refuses it (an S
     /// or F outside the machine, a position changed); the findings are
     /// printed and the run ends with exit 3.
@@ -215,7 +212,7 @@ fn read_part(
 ) -> CliResult<(millplan_geom::TriMesh, Reader, f64)> {
     let t = std::time::Instant::now();
     let reader = spawn_reader(a, machine)?;
-    match read_surface(&a.stl, a.stl_units) {
+    match read_surface(&a.stl, a.part_units.stl_units) {
         Ok((m, _)) => Ok((m, reader, t.elapsed().as_secs_f64())),
         Err(e) => Err(join(reader).parsed.err().unwrap_or(e)),
     }
@@ -267,9 +264,10 @@ pub fn run(a: Args) -> CliResult<i32> {
     let read = join(reader);
     let t_inputs = t0.elapsed().as_secs_f64() - t_setup;
     let parsed = something_to_control(&a.path, read.parsed?)?;
-    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    print_diagnostics(&a.path, &parsed.diagnostics, a.notes.quiet || a.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
-    let bar = crate::progress::Phases::new(!a.quiet && parsed.program.move_count() >= 100_000);
+    let bar =
+        crate::progress::Phases::new(!a.notes.quiet && parsed.program.move_count() >= 100_000);
     let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
     let cx = Context::new(machine)
         .with_surface(surface)
@@ -283,7 +281,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         SpeedError::NoSummary => CliError::internal("the speed pass left no summary"),
     })?;
     let checked = crate::verdict::enforce(&out.checks, &a.path, a.force)?;
-    print_diagnostics(&a.stl, &out.findings, a.quiet || a.json);
+    print_diagnostics(&a.stl, &out.findings, a.notes.quiet || a.json);
     let time_after = write_and_estimate(&a, &cx, &out.program, target, &mut outputs)?;
     let times = [read.time_before, time_after];
     report_run(&a, &req, &cx, (&out, times), outputs, target)?;
@@ -319,7 +317,7 @@ fn write_and_estimate(
             outputs,
             &a.output,
             &a.path,
-            a.quiet,
+            a.notes.quiet,
         );
         let w = t.elapsed().as_secs_f64();
         (
