@@ -211,7 +211,7 @@ pub fn initial_stock(
 }
 
 /// The blank of an `stl:` stock, read and scaled to mm.
-fn blank(spec: &StockSpec, stl_units: Option<UnitArg>) -> CliResult<Option<TriMesh>> {
+pub fn blank(spec: &StockSpec, stl_units: Option<UnitArg>) -> CliResult<Option<TriMesh>> {
     let StockSpec::Stl(p) = spec else {
         return Ok(None);
     };
