@@ -27,6 +27,25 @@ pub struct Cutting {
     pub ap: f64,
 }
 
+impl Cutting {
+    /// Every value in its physical range, naming the option.
+    pub fn check(&self) -> Result<(), String> {
+        arg("--vc", self.vc, Range::positive(MAX_VC, "m/min"))?;
+        arg("--fz", self.fz, Range::positive(10.0, "mm"))?;
+        arg("--flutes", self.flutes as f64, Range::from(1.0, 1000.0, ""))?;
+        arg("--ap", self.ap, Range::positive(MAX_TOOL_D / 2.0, "mm"))?;
+        Ok(())
+    }
+
+    /// Spindle-control settings for the commands that read only the
+    /// summary and the program (no per-point rows).
+    pub fn params(&self) -> SpeedParams {
+        let mut p = SpeedParams::new(self.vc, self.fz, self.flutes, self.ap);
+        p.keep_rows = false;
+        p
+    }
+}
+
 /// The options of `millplan speed` as given.
 #[derive(Clone, Copy, Debug)]
 pub struct SpeedRequest {

@@ -31,7 +31,7 @@ use clap::ValueEnum;
 use millplan_nc::write::{Target, WriteOptions};
 use millplan_nc::{LengthUnit, ReadOptions};
 
-pub use millplan_driver::check::{Range, MAX_FEED, MAX_SPINDLE, MAX_TOOL_D, MAX_VC};
+pub use millplan_driver::check::{Range, MAX_FEED, MAX_SPINDLE, MAX_VC};
 
 /// Checks a numeric argument: finite and in its range, else an error naming
 /// the option, the value and the range (exit 2).
@@ -39,7 +39,7 @@ pub fn arg(flag: &str, v: f64, r: Range) -> CliResult<f64> {
     millplan_driver::check::arg(flag, v, r).map_err(CliError::input)
 }
 
-/// Checks a cutter from `--tool`: its diameter at most [`MAX_TOOL_D`].
+/// Checks a cutter from `--tool`: its diameter at most the largest tool.
 pub fn tool_shape(flag: &str, s: &str) -> CliResult<millplan_driver::Shape> {
     millplan_driver::check::tool_shape(flag, s).map_err(CliError::input)
 }
@@ -66,11 +66,7 @@ pub struct CuttingData {
 impl CuttingData {
     /// Checks every value against its physical range.
     pub fn check(&self) -> CliResult<()> {
-        arg("--vc", self.vc, Range::positive(MAX_VC, "m/min"))?;
-        arg("--fz", self.fz, Range::positive(10.0, "mm"))?;
-        arg("--flutes", self.flutes as f64, Range::from(1.0, 1000.0, ""))?;
-        arg("--ap", self.ap, Range::positive(MAX_TOOL_D / 2.0, "mm"))?;
-        Ok(())
+        self.cutting().check().map_err(CliError::input)
     }
 
     /// The values, as the library takes them.
@@ -86,9 +82,7 @@ impl CuttingData {
     /// Spindle-control settings for commands that read only the summary and
     /// the program (no per-point rows).
     pub fn params(&self) -> millplan_plan::speed::SpeedParams {
-        let mut p = millplan_plan::speed::SpeedParams::new(self.vc, self.fz, self.flutes, self.ap);
-        p.keep_rows = false;
-        p
+        self.cutting().params()
     }
 }
 
