@@ -141,6 +141,76 @@ pub fn cycle_time(p: &Program, machine: &Machine) -> f64 {
     millplan_plan::timing::estimate_program(p, machine).total_s
 }
 
+/// The program as read on a thread of its own, with the cycle time
+/// estimated there after the read, and the wall time of each.
+pub struct ReadBeside {
+    pub parsed: millplan_nc::Parsed,
+    pub read_s: f64,
+    pub time_before: f64,
+    pub estimate_s: f64,
+}
+
+/// The program read on a thread of its own, its cycle time estimated
+/// there after the read, while the caller reads the part and builds its
+/// search trees.
+pub struct Reader<E>(std::thread::JoinHandle<(Result<millplan_nc::Parsed, E>, [f64; 3])>);
+
+impl<E: Send + 'static> Reader<E> {
+    /// Starts `read` and then the estimate on `machine`.
+    pub fn spawn(
+        machine: Machine,
+        read: impl FnOnce() -> Result<millplan_nc::Parsed, E> + Send + 'static,
+    ) -> Reader<E> {
+        Reader(std::thread::spawn(move || {
+            let t = std::time::Instant::now();
+            let parsed = read();
+            let read_s = t.elapsed().as_secs_f64();
+            let t = std::time::Instant::now();
+            let time_before = parsed
+                .as_ref()
+                .map_or(0.0, |p| cycle_time(&p.program, &machine));
+            (parsed, [read_s, time_before, t.elapsed().as_secs_f64()])
+        }))
+    }
+
+    /// The program read and its estimate, once both are done.
+    pub fn join(self) -> Result<ReadBeside, E> {
+        let (parsed, [read_s, time_before, estimate_s]) = self
+            .0
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e));
+        Ok(ReadBeside {
+            parsed: parsed?,
+            read_s,
+            time_before,
+            estimate_s,
+        })
+    }
+}
+
+/// Runs `write` while the cycle time of `program` on `machine` is
+/// estimated on another thread: what `write` gave, the estimate, and the
+/// wall times of the writing and of the estimate.
+pub fn write_beside<T>(
+    program: &Program,
+    machine: &Machine,
+    write: impl FnOnce() -> T,
+) -> (T, f64, [f64; 2]) {
+    std::thread::scope(|s| {
+        let estimate = s.spawn(|| {
+            let t = std::time::Instant::now();
+            (cycle_time(program, machine), t.elapsed().as_secs_f64())
+        });
+        let t = std::time::Instant::now();
+        let written = write();
+        let write_s = t.elapsed().as_secs_f64();
+        let (total, estimate_s) = estimate
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e));
+        (written, total, [write_s, estimate_s])
+    })
+}
+
 /// What `millplan speed` makes of a program: the new program, the pass's
 /// summary and per-point rows, the checks of the output and the part's
 /// own findings (open edges, points off the part).
@@ -540,5 +610,31 @@ mod tests {
         };
         assert!(off.untrusted());
         assert!(!off.findings.is_empty());
+    }
+
+    /// The reader on its own thread gives the program and the estimate of
+    /// its cycle time that `cycle_time` gives; a reader's error is passed
+    /// on. Writing beside the estimate gives what the writer gave and the
+    /// same estimate.
+    #[test]
+    fn reading_and_writing_beside_the_estimate() {
+        let (prog, _) = raster(&DemoSurface::default(), &Raster::default());
+        let machine = Machine::default();
+        let parsed = millplan_nc::Parsed {
+            program: prog.clone(),
+            diagnostics: Vec::new(),
+        };
+        let want = cycle_time(&prog, &machine);
+        assert!(want > 0.0);
+        let read = Reader::<String>::spawn(machine.clone(), move || Ok(parsed))
+            .join()
+            .expect("reads");
+        assert_eq!(read.time_before, want);
+        assert_eq!(read.parsed.program, prog);
+        let failed = Reader::<String>::spawn(machine.clone(), || Err("bad.nc:1:1: no".into()));
+        assert_eq!(failed.join().err().as_deref(), Some("bad.nc:1:1: no"));
+        let (written, after, [w, e]) = write_beside(&prog, &machine, || 7);
+        assert_eq!((written, after), (7, want));
+        assert!(w >= 0.0 && e >= 0.0);
     }
 }

@@ -665,9 +665,9 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// thread checks' outcomes moved into the driver; 6,324 once `robot`'s
 /// and `speed`'s runs moved (one driver function per command); 6,345 with
 /// the argument groups several commands share declared once (`cmd/args.rs`:
-/// no fewer lines, one definition); lowered as `orient`, `reorder`,
-/// `simulate` and `tool` move.
-const MAX_BINARY_LINES: usize = 6375;
+/// no fewer lines, one definition); 6,060 once `simulate`, `orient`,
+/// `reorder`, `tool`, `optimise`'s text and `speed`'s threads moved.
+const MAX_BINARY_LINES: usize = 6090;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into

@@ -210,19 +210,10 @@ fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
 }
 
 fn list_passes(json: bool) {
-    let t = passes::table();
     if json {
-        crate::cmd::print_json(serde_json::to_value(&t).unwrap_or_default());
-        return;
-    }
-    for r in t {
-        outln!(
-            "{:<8} needs: {}\n         changes: {:?}; {}",
-            r.name,
-            r.needs,
-            r.changes,
-            r.does
-        );
+        crate::cmd::print_json(serde_json::to_value(passes::table()).unwrap_or_default());
+    } else {
+        outln!("{}", passes::table_text());
     }
 }
 
@@ -348,36 +339,7 @@ fn print_summary(a: &Args, w: &Written, path: &Path, output: &Path, withheld: bo
     }
     if a.json {
         crate::cmd::print_json(serde_json::to_value(s).unwrap_or_default());
-        return;
-    }
-    for x in &s.settings {
-        outln!("  {:<13} {}  ({})", x.name, x.value, x.from);
-    }
-    for p in &s.passes {
-        let state = if p.ran {
-            format!("{:>7.2} s", p.seconds)
-        } else {
-            "skipped".into()
-        };
-        outln!("  {:<8} {state}  {}", p.name, p.reason);
-    }
-    outln!("{}", report::verdict_text(s));
-    for c in &s.checks {
-        let skipped = c
-            .skipped
-            .as_deref()
-            .map_or(String::new(), |w| format!(" (skipped: {w})"));
-        outln!(
-            "  check {:<10} {:<6} {} {}{skipped}",
-            c.name,
-            if c.ok { "ok" } else { "FAILED" },
-            c.checked,
-            c.unit
-        );
-    }
-    if withheld {
-        outln!("nothing written (give --force to write it anyway)");
     } else {
-        outln!("wrote {} ({})", output.display(), s.dialect);
+        outln!("{}", report::summary_text(s, output, withheld));
     }
 }

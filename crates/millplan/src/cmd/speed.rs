@@ -2,12 +2,13 @@
 
 use crate::cmd::{print_diagnostics, read_options, write_program_file, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_program, read_surface, Outputs};
+use crate::io::{read_program, Outputs};
 use clap::ValueEnum;
 use millplan_driver::feed::file_name;
 use millplan_driver::speed::{
     self as lib, Convention, Cutting, NormalMode, SpeedError, SpeedRequest, Surface,
 };
+use millplan_geom::TriMesh;
 use millplan_plan::pipeline::Context;
 use std::path::PathBuf;
 
@@ -144,44 +145,6 @@ fn request(a: &Args) -> SpeedRequest {
     }
 }
 
-/// What the reader thread hands back: the program and the cycle time
-/// estimated on it, each with its own wall time.
-struct ReadBeside {
-    parsed: CliResult<millplan_nc::Parsed>,
-    read_s: f64,
-    time_before: f64,
-    estimate_s: f64,
-}
-
-type Reader = std::thread::JoinHandle<ReadBeside>;
-
-/// Reads the program on its own thread, and estimates its cycle time there,
-/// while the STL is read and its search trees are built.
-fn spawn_reader(a: &Args, machine: &millplan_plan::machine::Machine) -> CliResult<Reader> {
-    let (path, opts) = (a.path.clone(), read_options(a.units, None)?);
-    let machine = machine.clone();
-    Ok(std::thread::spawn(move || {
-        let t = std::time::Instant::now();
-        let parsed = read_program(&path, opts);
-        let read_s = t.elapsed().as_secs_f64();
-        let t = std::time::Instant::now();
-        let time_before = match &parsed {
-            Ok(p) => lib::cycle_time(&p.program, &machine),
-            Err(_) => 0.0,
-        };
-        ReadBeside {
-            parsed,
-            read_s,
-            time_before,
-            estimate_s: t.elapsed().as_secs_f64(),
-        }
-    }))
-}
-
-fn join(r: Reader) -> ReadBeside {
-    r.join().unwrap_or_else(|e| std::panic::resume_unwind(e))
-}
-
 /// The program, table and report, checked against each other and the inputs
 /// before any work.
 fn plan_outputs(a: &Args) -> CliResult<Outputs> {
@@ -204,17 +167,19 @@ fn plan_outputs(a: &Args) -> CliResult<Outputs> {
     )
 }
 
-/// The part, read while the program is read on its own thread; the STL's
-/// wall time. A program error is still reported first.
+/// The part, read while the program is read (and its cycle time estimated)
+/// on a thread of its own; the STL's wall time. A program that does not
+/// read is still the error reported first.
 fn read_part(
     a: &Args,
     machine: &millplan_plan::machine::Machine,
-) -> CliResult<(millplan_geom::TriMesh, Reader, f64)> {
+) -> CliResult<(TriMesh, lib::Reader<CliError>, f64)> {
+    let (path, opts) = (a.path.clone(), read_options(a.units, None)?);
     let t = std::time::Instant::now();
-    let reader = spawn_reader(a, machine)?;
-    match read_surface(&a.stl, a.part_units.stl_units) {
-        Ok((m, _)) => Ok((m, reader, t.elapsed().as_secs_f64())),
-        Err(e) => Err(join(reader).parsed.err().unwrap_or(e)),
+    let reader = lib::Reader::spawn(machine.clone(), move || read_program(&path, opts));
+    match a.part_units.read(&a.stl) {
+        Ok(m) => Ok((m, reader, t.elapsed().as_secs_f64())),
+        Err(e) => Err(reader.join().err().unwrap_or(e)),
     }
 }
 
@@ -261,13 +226,13 @@ pub fn run(a: Args) -> CliResult<i32> {
     let t = std::time::Instant::now();
     let surface = Surface::new(&mesh);
     let t_surface = t.elapsed().as_secs_f64();
-    let read = join(reader);
+    let read = reader.join()?;
     let t_inputs = t0.elapsed().as_secs_f64() - t_setup;
-    let parsed = something_to_control(&a.path, read.parsed?)?;
-    print_diagnostics(&a.path, &parsed.diagnostics, a.notes.quiet || a.json);
+    let parsed = something_to_control(&a.path, read.parsed)?;
+    let quiet = a.notes.quiet;
+    print_diagnostics(&a.path, &parsed.diagnostics, quiet || a.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
-    let bar =
-        crate::progress::Phases::new(!a.notes.quiet && parsed.program.move_count() >= 100_000);
+    let bar = crate::progress::Phases::new(!quiet && parsed.program.move_count() >= 100_000);
     let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
     let cx = Context::new(machine)
         .with_surface(surface)
@@ -281,8 +246,18 @@ pub fn run(a: Args) -> CliResult<i32> {
         SpeedError::NoSummary => CliError::internal("the speed pass left no summary"),
     })?;
     let checked = crate::verdict::enforce(&out.checks, &a.path, a.force)?;
-    print_diagnostics(&a.stl, &out.findings, a.notes.quiet || a.json);
-    let time_after = write_and_estimate(&a, &cx, &out.program, target, &mut outputs)?;
+    print_diagnostics(&a.stl, &out.findings, quiet || a.json);
+    let t = std::time::Instant::now();
+    let wo = cx.machine.write_options(target);
+    let (written, time_after, [write_s, estimate_s]) =
+        lib::write_beside(&out.program, &cx.machine, || {
+            write_program_file(&out.program, wo, &mut outputs, &a.output, &a.path, quiet)
+        });
+    written?;
+    cx.record("  program written and synced", write_s);
+    cx.record("  time estimate of the output (beside it)", estimate_s);
+    let t_write = t.elapsed().as_secs_f64();
+    cx.record("program written, its time estimated", t_write);
     let times = [read.time_before, time_after];
     report_run(&a, &req, &cx, (&out, times), outputs, target)?;
     if a.timings {
@@ -293,48 +268,6 @@ pub fn run(a: Args) -> CliResult<i32> {
     } else {
         EXIT_OK
     })
-}
-
-/// Writes the program (staged, synced) while its cycle time is estimated on
-/// another thread; returns the estimate.
-fn write_and_estimate(
-    a: &Args,
-    cx: &Context,
-    program: &millplan_nc::Program,
-    target: millplan_nc::write::Target,
-    outputs: &mut Outputs,
-) -> CliResult<f64> {
-    let t = std::time::Instant::now();
-    let (written, (time_after, estimate_s)) = std::thread::scope(|s| {
-        let estimate = s.spawn(|| {
-            let t = std::time::Instant::now();
-            let total = lib::cycle_time(program, &cx.machine);
-            (total, t.elapsed().as_secs_f64())
-        });
-        let written = write_program_file(
-            program,
-            cx.machine.write_options(target),
-            outputs,
-            &a.output,
-            &a.path,
-            a.notes.quiet,
-        );
-        let w = t.elapsed().as_secs_f64();
-        (
-            written.map(|x| (x, w)),
-            estimate
-                .join()
-                .unwrap_or_else(|e| std::panic::resume_unwind(e)),
-        )
-    });
-    let (_, write_s) = written?;
-    cx.record("  program written and synced", write_s);
-    cx.record("  time estimate of the output (beside it)", estimate_s);
-    cx.record(
-        "program written, its time estimated",
-        t.elapsed().as_secs_f64(),
-    );
-    Ok(time_after)
 }
 
 /// The table and report written, the outputs committed, the summary printed.
