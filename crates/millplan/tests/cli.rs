@@ -666,8 +666,9 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// and `speed`'s runs moved (one driver function per command); 6,345 with
 /// the argument groups several commands share declared once (`cmd/args.rs`:
 /// no fewer lines, one definition); 6,060 once `simulate`, `orient`,
-/// `reorder`, `tool`, `optimise`'s text and `speed`'s threads moved.
-const MAX_BINARY_LINES: usize = 6090;
+/// `reorder`, `tool`, `optimise`'s text and `speed`'s threads moved;
+/// 6,048 with the machine file read by the driver's `io`.
+const MAX_BINARY_LINES: usize = 6080;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into

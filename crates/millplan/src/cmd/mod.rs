@@ -250,17 +250,5 @@ pub fn print_diagnostics(path: &std::path::Path, diags: &[millplan_nc::Diagnosti
 pub fn load_machine(
     path: Option<&std::path::Path>,
 ) -> crate::error::CliResult<millplan_plan::machine::Machine> {
-    use crate::error::CliError;
-    match path {
-        Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .map_err(|e| CliError::input(format!("{}: cannot read: {e}", p.display())))?;
-            millplan_plan::machine::Machine::from_toml(&text).map_err(|e| {
-                // `file:line:col: field: message` when the error has a place.
-                let sep = if e.at.is_some() { ":" } else { ": " };
-                CliError::input(format!("{}{sep}{e}", p.display()))
-            })
-        }
-        None => Ok(millplan_plan::machine::Machine::default()),
-    }
+    Ok(millplan_driver::io::inputs::read_machine(path)?)
 }
