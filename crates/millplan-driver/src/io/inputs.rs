@@ -448,14 +448,18 @@ mod tests {
         let bad = dir.path().join("m.toml");
         let text = "[spindle]\nmin = 500\nmax = nan\naccel = 6000\n[feed]\nmax = 20000\n";
         std::fs::write(&bad, text).expect("write");
-        let e = read_machine(Some(&bad)).err().expect("refused");
+        let Err(e) = read_machine(Some(&bad)) else {
+            panic!("a NaN spindle maximum is refused")
+        };
         let want = format!(
             "{}:3:7: spindle.max: must be from 1 to 1000000 1/min, got NaN",
             bad.display()
         );
         assert_eq!(e.message, want);
         let gone = dir.path().join("gone.toml");
-        let e = read_machine(Some(&gone)).err().expect("missing");
+        let Err(e) = read_machine(Some(&gone)) else {
+            panic!("a missing file is refused")
+        };
         assert!(e
             .message
             .starts_with(&format!("{}: cannot read", gone.display())));
