@@ -31,17 +31,12 @@ use clap::ValueEnum;
 use millplan_nc::write::{Target, WriteOptions};
 use millplan_nc::{LengthUnit, ReadOptions};
 
-pub use millplan_driver::check::{Range, MAX_FEED, MAX_SPINDLE, MAX_VC};
+pub use millplan_driver::check::{Range, MAX_FEED};
 
 /// Checks a numeric argument: finite and in its range, else an error naming
 /// the option, the value and the range (exit 2).
 pub fn arg(flag: &str, v: f64, r: Range) -> CliResult<f64> {
     millplan_driver::check::arg(flag, v, r).map_err(CliError::input)
-}
-
-/// Checks a cutter from `--tool`: its diameter at most the largest tool.
-pub fn tool_shape(flag: &str, s: &str) -> CliResult<millplan_driver::Shape> {
-    millplan_driver::check::tool_shape(flag, s).map_err(CliError::input)
 }
 
 /// Cutting data for the commands that evaluate spindle control along the way;
