@@ -1066,8 +1066,19 @@ fn same_mode(a: PathMode, b: PathMode) -> bool {
 /// (`stream::ChainStream`, the same numbers to the bit): neither the
 /// machine blocks nor the planner's arrays are held for a whole chain.
 pub fn estimate_program(p: &Program, machine: &Machine) -> TimeEstimate {
+    estimate_program_with(p, machine, true)
+}
+
+/// [`estimate_program`] without `per_move_s` (left empty): the figures of
+/// a program in memory that does not grow with it.
+pub fn estimate_program_totals(p: &Program, machine: &Machine) -> TimeEstimate {
+    estimate_program_with(p, machine, false)
+}
+
+fn estimate_program_with(p: &Program, machine: &Machine, per_move: bool) -> TimeEstimate {
     let lim = Limits::of(machine);
     let mut s = Streamed {
+        per_move,
         lim: &lim,
         chain: None,
         total: TimeEstimate {
@@ -1098,6 +1109,8 @@ pub fn estimate_program(p: &Program, machine: &Machine) -> TimeEstimate {
 
 /// [`estimate_program`]'s sink: each chain timed as its blocks come.
 struct Streamed<'a> {
+    /// Whether `per_move_s` is kept.
+    per_move: bool,
     lim: &'a Limits,
     chain: Option<stream::ChainStream<'a>>,
     total: TimeEstimate,
@@ -1114,24 +1127,31 @@ impl ChainSink for Streamed<'_> {
         let chain = self
             .chain
             .get_or_insert_with(|| stream::ChainStream::new(start, lim));
-        let (total, last) = (&mut self.total, &mut self.last);
-        chain.push(m, ctl, &mut |d| timed(total, last, d));
+        let (total, last, keep) = (&mut self.total, &mut self.last, self.per_move);
+        chain.push(m, ctl, &mut |d| timed(total, last, d, keep));
     }
 
     fn end(&mut self) {
         let Some(chain) = self.chain.take() else {
             return;
         };
-        let (total, last) = (&mut self.total, &mut self.last);
-        let e = chain.finish(&mut |d| timed(total, last, d));
+        let (total, last, keep) = (&mut self.total, &mut self.last, self.per_move);
+        let e = chain.finish(&mut |d| timed(total, last, d, keep));
         self.chains.push(e);
     }
 }
 
 /// One block's final time into the program's: its entry of `per_move_s`
 /// and, unless a dwell, the time of its path-control mode.
-fn timed(total: &mut TimeEstimate, last: &mut Option<(PathMode, usize)>, d: stream::Timed) {
-    total.per_move_s.push(d.t);
+fn timed(
+    total: &mut TimeEstimate,
+    last: &mut Option<(PathMode, usize)>,
+    d: stream::Timed,
+    per_move: bool,
+) {
+    if per_move {
+        total.per_move_s.push(d.t);
+    }
     if d.dwell {
         return;
     }
@@ -1181,9 +1201,7 @@ pub(crate) fn estimate_program_whole(p: &Program, machine: &Machine) -> TimeEsti
                 dwell: matches!(m.kind, MoveKind::Dwell { .. }),
                 ctl: *c,
             };
-            let keep = total.per_move_s.len();
-            timed(&mut total, &mut last, d);
-            total.per_move_s.truncate(keep);
+            timed(&mut total, &mut last, d, false);
         }
         total.total_s += e.total_s;
         total.nominal_s += e.nominal_s;
@@ -1739,6 +1757,10 @@ mod tests {
                 let mut m = Machine::default();
                 m.control.planner = Planner::of(kind);
                 let (a, b) = (estimate_program(&p, &m), estimate_program_whole(&p, &m));
+                let mut c = estimate_program_totals(&p, &m);
+                assert!(c.per_move_s.is_empty());
+                c.per_move_s.clone_from(&a.per_move_s);
+                assert_eq!(c, a, "case {case}, {kind:?}");
                 let key = |e: &TimeEstimate| {
                     (
                         [e.total_s, e.nominal_s, e.rapid_s, e.feed_s, e.dwell_s].map(f64::to_bits),
