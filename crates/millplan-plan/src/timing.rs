@@ -741,6 +741,9 @@ impl ChainSink for Collect {
     }
 }
 
+/// How many blocks of a chain [`walk_program`] holds before it hands them on.
+const DRAIN_BATCH: usize = 64;
+
 /// Hands the blocks of the open chain whose mode can no longer change (all
 /// but the last `keep`) to `sink`, oldest first.
 fn drain_final(
@@ -858,8 +861,9 @@ pub(crate) fn walk_program(p: &Program, machine: &Machine, sink: &mut dyn ChainS
             let o = op.orient(m);
             let start = op.known_start(i);
             sync_ctl(&cur, &mut ctl_cur, st, std::mem::take(&mut stop_once));
-            // Only the last block's mode may still change (a G09's stop).
-            if cur.as_ref().is_some_and(|c| c.1.len() > 1) {
+            // Only the last block's mode may still change (a G09's stop);
+            // the others go on in batches.
+            if cur.as_ref().is_some_and(|c| c.1.len() > DRAIN_BATCH) {
                 drain_final(&mut cur, &mut ctl_cur, 1, sink);
                 open = true;
             }

@@ -81,6 +81,8 @@ pub(crate) struct ChainTotals {
 pub(crate) struct ChainStream<'a> {
     lim: &'a Limits,
     lcnc: bool,
+    /// Whether the planner plans a depth of blocks ahead.
+    deep: bool,
     /// Where the input stands, and whether the next block starts at rest.
     here: [f64; 6],
     stop: bool,
@@ -103,6 +105,8 @@ pub(crate) struct ChainStream<'a> {
     win: VecDeque<Run>,
     v_in: f64,
     back: Vec<f64>,
+    /// A window was settled since the input blocks were last let go.
+    settled: bool,
     sums: ChainTotals,
 }
 
@@ -111,6 +115,7 @@ impl<'a> ChainStream<'a> {
         ChainStream {
             lim,
             lcnc: lim.planner.kind == PlannerKind::LinuxCnc29,
+            deep: lim.planner.lookahead > 0 || lim.planner.plain_lookahead > 0,
             here: start,
             stop: true,
             moves: VecDeque::new(),
@@ -125,6 +130,7 @@ impl<'a> ChainStream<'a> {
             win: VecDeque::new(),
             v_in: 0.0,
             back: Vec::new(),
+            settled: false,
             sums: ChainTotals::default(),
         }
     }
@@ -161,7 +167,10 @@ impl<'a> ChainStream<'a> {
                 self.shape(b, ctl, stop);
             }
         }
-        self.release(done);
+        // Only a settled window times blocks (and lets input blocks go).
+        if std::mem::take(&mut self.settled) {
+            self.release(done);
+        }
     }
 
     /// The chain ends at rest: everything still held is timed; its figures.
@@ -216,23 +225,32 @@ impl<'a> ChainStream<'a> {
     /// of an arc's chords blend alike).
     fn resolve(&mut self, end: bool) {
         loop {
-            let known = self.own.iter().rposition(|o| o.out.is_some());
             let upto = if !self.lcnc {
-                known
+                // Every block but the last knows its junction out.
+                match self.own.back() {
+                    Some(o) if o.out.is_some() => self.own.len(),
+                    _ => self.own.len().saturating_sub(1),
+                }
             } else {
                 // The first arc's chords up to its last, or all at the end.
                 let ends = self
                     .own
                     .iter()
                     .position(|o| o.out.is_some() && !o.ctl.same_move);
-                ends.or(if end { known } else { None })
+                let known = self.own.iter().rposition(|o| o.out.is_some());
+                match ends.or(if end { known } else { None }) {
+                    Some(i) => i + 1,
+                    None => 0,
+                }
             };
-            let Some(upto) = upto else { return };
+            if upto == 0 {
+                return;
+            }
             let half = self.lcnc
-                && self.own.iter().take(upto + 1).any(|o| {
+                && self.own.iter().take(upto).any(|o| {
                     planner::own_half(&o.ctl, &o.into, &o.out.map_or(Joint::Stop, |x| x.0))
                 });
-            for _ in 0..=upto {
+            for _ in 0..upto {
                 let Some(mut o) = self.own.pop_front() else {
                     return;
                 };
@@ -240,21 +258,8 @@ impl<'a> ChainStream<'a> {
                     planner::share_accel(&mut o.b, half, o.kinked, &self.lim.planner);
                 }
                 let (out, next_cap) = o.out.unwrap_or((Joint::Stop, 0.0));
-                let (la, vj, runs, length) = (
-                    &mut self.la,
-                    &mut self.vj_next,
-                    &mut self.runs,
-                    &mut self.length,
-                );
                 planner::emit_one(o.b, o.trimmed, out, next_cap, &mut |b, after| {
-                    la.push_back(Run {
-                        b,
-                        vj: *vj,
-                        at: *length,
-                    });
-                    *length += b.len;
-                    *vj = after;
-                    *runs += 1;
+                    self.enter(b, after)
                 });
             }
             if !self.lcnc {
@@ -263,14 +268,42 @@ impl<'a> ChainStream<'a> {
         }
     }
 
+    /// The next block the control runs, `after` the limit leaving it.
+    fn enter(&mut self, b: Block, after: f64) {
+        let run = Run {
+            b,
+            vj: self.vj_next,
+            at: self.length,
+        };
+        self.length += b.len;
+        self.vj_next = after;
+        self.runs += 1;
+        if self.deep {
+            self.la.push_back(run);
+        } else {
+            // No look-ahead depth: the limit is final as it stands.
+            self.la_first += 1;
+            self.to_window(run);
+        }
+    }
+
+    /// A block with its final limit into the window, settling the window
+    /// first when the block's start is an anchor.
+    fn to_window(&mut self, run: Run) {
+        if !self.win.is_empty() && anchor(run.vj, &run.b) {
+            self.settle(run.vj);
+        }
+        self.win.push_back(run);
+    }
+
     /// Applies the look-ahead depth to the blocks that have their depth of
     /// blocks after them (all at the chain's end).
     fn look(&mut self, end: bool) {
-        let pl = self.lim.planner;
+        let lim = self.lim;
         while let Some(first) = self.la.front() {
             let k = self.la_first;
             let on = self.ctl_of(first.b.index).lookahead_on;
-            let d = planner::depth(on, &pl);
+            let d = planner::depth(on, &lim.planner);
             let mut run = *first;
             if k > 0 && d > 0 {
                 if !end && self.runs < k + d {
@@ -288,10 +321,7 @@ impl<'a> ChainStream<'a> {
             }
             self.la.pop_front();
             self.la_first += 1;
-            if !self.win.is_empty() && anchor(run.vj, &run.b) {
-                self.settle(run.vj);
-            }
-            self.win.push_back(run);
+            self.to_window(run);
         }
     }
 
@@ -326,20 +356,22 @@ impl<'a> ChainStream<'a> {
             v = next;
         }
         self.v_in = v;
+        self.settled = true;
     }
 
     /// Hands on the input blocks no held block belongs to, with their
     /// final times and their share of the chain's figures.
     fn release(&mut self, done: &mut dyn FnMut(Timed)) {
-        let held = [
-            self.win.front().map(|r| r.b.index),
-            self.la.front().map(|r| r.b.index),
-            self.own.front().map(|o| o.b.index),
-        ]
-        .into_iter()
-        .flatten()
-        .min()
-        .unwrap_or(self.next);
+        // Blocks go from `own` to `la` to `win` in order: the first held
+        // is the oldest.
+        let held = match (self.win.front(), self.la.front(), self.own.front()) {
+            (Some(r), _, _) | (None, Some(r), _) => r.b.index,
+            (None, None, Some(o)) => o.b.index,
+            (None, None, None) => self.next,
+        };
+        if self.base >= held {
+            return;
+        }
         let rapid = self.lim.rapid;
         while self.base < held {
             let Some(m) = self.moves.pop_front() else {
