@@ -1723,7 +1723,7 @@ mod tests {
                     "G1 X{:.4} Y{:.4} Z{:.4} F{:.0}",
                     x + dx,
                     y + dy,
-                    -1.0 * rng.next(),
+                    -rng.next(),
                     200.0 + 3000.0 * rng.next()
                 )
             };

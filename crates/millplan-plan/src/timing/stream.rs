@@ -283,13 +283,13 @@ impl<'a> ChainStream<'a> {
         } else {
             // No look-ahead depth: the limit is final as it stands.
             self.la_first += 1;
-            self.to_window(run);
+            self.windowed(run);
         }
     }
 
     /// A block with its final limit into the window, settling the window
     /// first when the block's start is an anchor.
-    fn to_window(&mut self, run: Run) {
+    fn windowed(&mut self, run: Run) {
         if !self.win.is_empty() && anchor(run.vj, &run.b) {
             self.settle(run.vj);
         }
@@ -321,7 +321,7 @@ impl<'a> ChainStream<'a> {
             }
             self.la.pop_front();
             self.la_first += 1;
-            self.to_window(run);
+            self.windowed(run);
         }
     }
 
@@ -538,8 +538,8 @@ mod tests {
                 } else {
                     1.0 + 30.0 * rng.next()
                 };
-                for i in 0..3 {
-                    to[i] += len * dir[i];
+                for (t, d) in to.iter_mut().zip(dir) {
+                    *t += len * d;
                 }
                 if rng.pick(0.1) {
                     to[3] += 5.0 * rng.next();
@@ -601,8 +601,7 @@ mod tests {
                 let lim = limits(&mut rng, kind);
                 let (moves, ctl) = chain(&mut rng, n);
                 let start = [0.0; 6];
-                let whole = estimate_controlled(start, &moves, &ctl, &lim);
-                let mut whole = whole;
+                let mut whole = estimate_controlled(start, &moves, &ctl, &lim);
                 whole.planner = "";
                 whole.by_mode.clear();
                 let s = streamed(start, &moves, &ctl, &lim);
