@@ -10,7 +10,7 @@ use millplan_nc::ir::{CutterKind, LengthUnit, UnitsOrigin};
 use millplan_nc::stats::{summarize, RotaryUse};
 use millplan_nc::Program;
 use millplan_plan::machine::Machine;
-use millplan_plan::timing::{estimate_program, TimeEstimate};
+use millplan_plan::timing::{estimate_program_totals, TimeEstimate};
 use serde::Serialize;
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -136,7 +136,7 @@ pub struct ProgramSummary {
 /// Summarises program `p` (read with `diagnostics` diagnostics) timed on `machine`.
 pub fn program(p: &Program, diagnostics: usize, machine: &Machine) -> ProgramSummary {
     let s = summarize(p, machine.rapid);
-    let est = estimate_program(p, machine);
+    let est = estimate_program_totals(p, machine);
     let tools = p
         .operations
         .iter()

@@ -76,6 +76,58 @@ pub struct Options {
     pub g93: bool,
 }
 
+/// The options of `optimise` as given, before their checks.
+#[derive(Clone, Debug, Default)]
+pub struct OptionsRequest {
+    pub vc: Option<f64>,
+    pub spindle: Option<f64>,
+    /// `ball:D`, `flat:D`, `bull:D:R`.
+    pub tool: Option<String>,
+    pub flutes: Option<usize>,
+    pub resolution: Option<f64>,
+    /// `--limit NAME=VALUE` pairs.
+    pub loads: Vec<(String, String)>,
+    pub tol: Option<f64>,
+    pub memory: Option<u64>,
+    pub g93: bool,
+}
+
+impl Options {
+    /// Every option given in its range (the error names the option), the
+    /// tool parsed and the load limits read.
+    pub fn checked(r: &OptionsRequest) -> Result<Options, String> {
+        use crate::check::{arg, tool_shape, Range, MAX_SPINDLE, MAX_VC};
+        let within =
+            |flag: &str, v: Option<f64>, range: Range| v.map(|v| arg(flag, v, range)).transpose();
+        let tool = r
+            .tool
+            .as_deref()
+            .map(|s| tool_shape("--tool", s))
+            .transpose()?;
+        let flutes = r.flutes.map(|f| f as f64);
+        within("--flutes", flutes, Range::from(1.0, 64.0, ""))?;
+        Ok(Options {
+            vc: within("--vc", r.vc, Range::positive(MAX_VC, "m/min"))?,
+            spindle: within(
+                "--spindle",
+                r.spindle,
+                Range::positive(MAX_SPINDLE, "1/min"),
+            )?,
+            tool,
+            flutes: r.flutes,
+            resolution: within(
+                "--resolution",
+                r.resolution,
+                Range::from(0.005, 100.0, "mm"),
+            )?,
+            limits: UserLimits::parse(&r.loads)?,
+            tol: within("--tol", r.tol, Range::from(0.0, 100.0, "mm"))?,
+            memory: r.memory,
+            g93: r.g93,
+        })
+    }
+}
+
 /// The inputs as read (the caller does all file access).
 pub struct Inputs {
     pub program: Program,
@@ -542,4 +594,67 @@ fn limits(u: &UserLimits, chip: Option<ChipLoads>, d: f64, s: &mut Vec<Setting>)
         }
     }
     l
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `optimise`'s options: none given is no choice made; each given is
+    /// checked against its range, naming the option; the tool parsed; a
+    /// load limit read.
+    #[test]
+    fn options_are_checked_naming_the_option() {
+        let none = Options::checked(&OptionsRequest::default()).expect("none given");
+        assert!(none.vc.is_none() && none.tool.is_none() && none.resolution.is_none());
+        let given = OptionsRequest {
+            tool: Some("ball:10".into()),
+            flutes: Some(2),
+            resolution: Some(0.1),
+            loads: vec![("fxy".into(), "300".into())],
+            ..OptionsRequest::default()
+        };
+        let o = Options::checked(&given).expect("in range");
+        assert_eq!(o.tool.map(|t| t.radius()), Some(5.0));
+        assert_eq!(o.resolution, Some(0.1));
+        let bad = |r: OptionsRequest, flag: &str| {
+            let e = Options::checked(&r).err().unwrap_or_default();
+            assert!(e.starts_with(flag), "{flag}: {e}");
+        };
+        bad(
+            OptionsRequest {
+                flutes: Some(0),
+                ..given.clone()
+            },
+            "--flutes",
+        );
+        bad(
+            OptionsRequest {
+                resolution: Some(0.001),
+                ..given.clone()
+            },
+            "--resolution",
+        );
+        bad(
+            OptionsRequest {
+                vc: Some(-1.0),
+                ..given.clone()
+            },
+            "--vc",
+        );
+        bad(
+            OptionsRequest {
+                tol: Some(f64::NAN),
+                ..given.clone()
+            },
+            "--tol",
+        );
+        bad(
+            OptionsRequest {
+                tool: Some("ball:1e9".into()),
+                ..given
+            },
+            "--tool",
+        );
+    }
 }

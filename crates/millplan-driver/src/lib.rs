@@ -46,7 +46,7 @@ pub mod tools;
 pub mod wd;
 
 pub use finish::{Summary, Verdict, Written};
-pub use job::{Inputs, Job, JobError, Options, UserLimits};
+pub use job::{Inputs, Job, JobError, Options, OptionsRequest, UserLimits};
 pub use passes::PassName;
 pub use run::Outcome;
 

@@ -6,7 +6,9 @@ use crate::check::{arg, Range, MAX_SPINDLE};
 use millplan_models::force::materials::Materials;
 use millplan_models::leadtilt::{SearchOptions, Variant};
 use millplan_nc::{Operation, Program};
-use millplan_plan::leadtilt::{Objective, OpChoice, OpSkipped, Oriented, Params, StockInput};
+use millplan_plan::leadtilt::{
+    choose_with, Objective, OpChoice, OpSkipped, Oriented, Params, Stage, StockInput,
+};
 use millplan_plan::machine::Machine;
 use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
 use millplan_report::html::{failed_checks, worse_words, Evidence, Verdict};
@@ -205,6 +207,79 @@ pub fn check(
     })
 }
 
+/// What `millplan orient` works on besides its request: the program (its
+/// file's name for errors), the part, the machine, an `stl:` stock's blank
+/// (read), the memory the stock may take and the output's name.
+pub struct OrientInputs<'a> {
+    pub name: &'a str,
+    pub output: &'a str,
+    pub program: &'a Program,
+    pub mesh: &'a millplan_geom::TriMesh,
+    pub machine: &'a Machine,
+    pub blank: Option<&'a millplan_geom::TriMesh>,
+    pub memory: u64,
+}
+
+/// What a run of `millplan orient` made: the summary (without the checks),
+/// the re-oriented program and its checks against the input (none when no
+/// operation was re-oriented), and the moves the stock did not see.
+pub struct Outcome {
+    pub summary: Summary,
+    pub program: Program,
+    pub checks: Vec<Check>,
+    /// Whether any operation was re-oriented (else nothing is to be written).
+    pub chosen: bool,
+    pub unsimulated: usize,
+}
+
+/// `millplan orient`: the spindle speed from the program where `--n` gave
+/// none, with `--stock` the stock and the strokes that cut it, the choice
+/// per operation (`progress` hears its stages), the summary and the checks
+/// of the re-oriented program.
+pub fn command(
+    a: &OrientRequest,
+    mut p: Params,
+    g: &OrientInputs,
+    progress: &(dyn Fn(Stage, usize, usize) + Sync),
+) -> Result<Outcome, String> {
+    let spec = stock_spec(a)?;
+    if p.rpm <= 0.0 {
+        p.rpm = first_spindle(g.program)
+            .ok_or_else(|| format!("{}: the program sets no spindle speed; give --n", g.name))?;
+    }
+    let st = spec
+        .as_ref()
+        .map(|_| program_strokes(g.program, a.resolution, g.machine.rapid));
+    let unsimulated = st.as_ref().map_or(0, |s| s.skipped.total());
+    let input = match (&spec, &st) {
+        (Some(spec), Some(st)) => {
+            simulable(st, g.name)?;
+            let parts = (Some(g.mesh), g.blank);
+            let stock =
+                crate::simulate::build_stock(g.name, a.resolution, spec, st, parts, g.memory)?;
+            Some(stock_input(stock, st, a.samples))
+        }
+        _ => None,
+    };
+    let initial = input.as_ref().map(|i| i.stock.clone());
+    let o = choose_with(g.program, g.mesh, g.machine, &p, input, progress)
+        .map_err(|e| format!("{}: {e}", g.name))?;
+    let summary = Summary::new(a, &o, g.output, unsimulated);
+    let chosen = !o.chosen.is_empty();
+    let checks = if chosen {
+        check(g.program, &o.program, initial.as_ref(), g.machine)
+    } else {
+        Vec::new()
+    };
+    Ok(Outcome {
+        summary,
+        program: o.program,
+        checks,
+        chosen,
+        unsimulated,
+    })
+}
+
 /// An operation's objective that grew by more than this share counts as
 /// worse in the verdict (below it: the search's resolution).
 pub const OBJECTIVE_WORSE: f64 = 0.005;
@@ -378,5 +453,103 @@ impl Summary {
         }
         o.push_str(&self.verdict.text());
         o
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::command_defaults::orient as d;
+    use millplan_geom::{DVec3, TriMesh};
+    use millplan_nc::{Cutter, Dialect, Move};
+
+    fn request(n: Option<f64>) -> OrientRequest {
+        OrientRequest {
+            lead_range: d::LEAD_RANGE.into(),
+            tilt_range: d::TILT_RANGE.into(),
+            variant: Variant::LeadThenTilt,
+            objective: Objective::Fxy,
+            fz: d::FZ,
+            n,
+            flutes: d::FLUTES,
+            helix: d::HELIX_DEG,
+            ap: d::AP,
+            ae: d::AE,
+            reach: d::REACH,
+            holder: None,
+            material: "al7075".into(),
+            stock: None,
+            resolution: d::RESOLUTION,
+            samples: d::SAMPLES,
+        }
+    }
+
+    /// A flat 100 × 100 mm plate, top at z = 0.
+    fn plate() -> TriMesh {
+        let v = [
+            DVec3::new(-50.0, -50.0, 0.0),
+            DVec3::new(50.0, -50.0, 0.0),
+            DVec3::new(50.0, 50.0, 0.0),
+            DVec3::new(-50.0, 50.0, 0.0),
+        ];
+        TriMesh::from_soup(&[[v[0], v[1], v[2]], [v[0], v[2], v[3]]]).0
+    }
+
+    /// A D10 ball along +X on the plate, vertical, with no spindle speed.
+    fn program() -> Program {
+        let mut op = Operation {
+            start: DVec3::new(-30.0, 0.0, 5.0),
+            tool: Some(millplan_nc::Tool {
+                number: Some(1),
+                name: None,
+                cutter: Some(Cutter::ball(10.0)),
+                line: 1,
+            }),
+            ..Operation::default()
+        };
+        for k in 0..=30 {
+            let at = DVec3::new(-30.0 + 2.0 * k as f64, 0.0, 0.0);
+            op.moves.push(Move::linear(at, 1000.0));
+        }
+        let mut p = Program::new(Dialect::Fanuc);
+        p.operations.push(op);
+        p
+    }
+
+    /// On a flat plate the vertical ball cuts with its centre, where the
+    /// tip rule (process-models §1.4c) refuses lead 0 and the force model
+    /// prefers a forward lean: the command re-orients the operation with a
+    /// positive lead, every ball centre kept (its checks pass) and the
+    /// output named. Without --n a program with no S is the program's
+    /// error.
+    #[test]
+    fn the_command_leans_the_ball_forward_and_asks_for_a_speed() {
+        let materials = Materials::builtin();
+        let (mesh, machine, p) = (plate(), Machine::default(), program());
+        let g = OrientInputs {
+            name: "plate.nc",
+            output: "out.nc",
+            program: &p,
+            mesh: &mesh,
+            machine: &machine,
+            blank: None,
+            memory: 1 << 30,
+        };
+        let req = request(None);
+        let params = super::params(&req, &materials).expect("params");
+        let e = command(&req, params, &g, &|_, _, _| {})
+            .err()
+            .expect("no S");
+        assert!(e.starts_with("plate.nc: ") && e.contains("--n"), "{e}");
+        let req = request(Some(8000.0));
+        let params = super::params(&req, &materials).expect("params");
+        let Ok(o) = command(&req, params, &g, &|_, _, _| {}) else {
+            panic!("orients")
+        };
+        assert!(o.chosen);
+        assert!(o.summary.operations[0].lead > 1.0);
+        assert!(safety::passed(&o.checks), "{:?}", o.checks);
+        assert_eq!(o.summary.output.as_deref(), Some("out.nc"));
+        assert_eq!(o.unsimulated, 0);
     }
 }

@@ -94,6 +94,21 @@ pub fn table() -> Vec<PassRow> {
     ORDER.iter().map(|p| p.row()).collect()
 }
 
+/// The table of `optimise --list-passes` in words: each pass, what it
+/// needs and what it changes.
+pub fn table_text() -> String {
+    table()
+        .iter()
+        .map(|r| {
+            format!(
+                "{:<8} needs: {}\n         changes: {:?}; {}",
+                r.name, r.needs, r.changes, r.does
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 /// Parses `--passes a,b,c`: known names, each once, in the order given.
 pub fn parse_list(s: &str) -> Result<Vec<PassName>, String> {
     let mut v: Vec<PassName> = Vec::new();

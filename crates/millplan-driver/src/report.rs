@@ -160,6 +160,41 @@ pub fn verdict_text(s: &Summary) -> String {
     )
 }
 
+/// The text summary of `optimise`: the settings and where each came from,
+/// the passes (time or skipped, why), the verdict, the checks, and what
+/// was written to `output` (or, `withheld`, that nothing was).
+pub fn summary_text(s: &Summary, output: &std::path::Path, withheld: bool) -> String {
+    use std::fmt::Write as _;
+    let mut o = String::new();
+    for x in &s.settings {
+        let _ = writeln!(o, "  {:<13} {}  ({})", x.name, x.value, x.from);
+    }
+    for p in &s.passes {
+        let state = if p.ran {
+            format!("{:>7.2} s", p.seconds)
+        } else {
+            "skipped".into()
+        };
+        let _ = writeln!(o, "  {:<8} {state}  {}", p.name, p.reason);
+    }
+    let _ = writeln!(o, "{}", verdict_text(s));
+    for c in &s.checks {
+        let skipped = c
+            .skipped
+            .as_deref()
+            .map_or(String::new(), |w| format!(" (skipped: {w})"));
+        let ok = if c.ok { "ok" } else { "FAILED" };
+        let (name, checked, unit) = (c.name, c.checked, c.unit);
+        let _ = writeln!(o, "  check {name:<10} {ok:<6} {checked} {unit}{skipped}");
+    }
+    if withheld {
+        o.push_str("nothing written (give --force to write it anyway)");
+    } else {
+        let _ = write!(o, "wrote {} ({})", output.display(), s.dialect);
+    }
+    o
+}
+
 /// The level of a run's verdict, by the one rule of every report.
 pub fn level(s: &Summary) -> millplan_report::html::Level {
     millplan_report::html::Level::of(&evidence(s), warnings(s).len())

@@ -11,9 +11,12 @@
 
 use crate::check::{arg, Range};
 use millplan_geom::DVec3;
+use millplan_nc::write::krl::{self, KrlFiles};
 use millplan_nc::Program;
 use millplan_plan::force::ForceRun;
-use millplan_robot::machining::{Compensated, Load, MachiningError, PathLoad, Placed, Placement};
+use millplan_robot::machining::{
+    self, Compensated, Load, MachiningError, PathLoad, Placed, Placement,
+};
 use millplan_robot::{Robot, Variant};
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -321,6 +324,172 @@ impl PlaceSummary {
     }
 }
 
+fn vec3(flag: &str, text: &str, names: [&str; 3], range: Range) -> Result<DVec3, String> {
+    let v = numbers(flag, text, &names, range)?;
+    Ok(DVec3::new(v[0], v[1], v[2]))
+}
+
+/// The options of `robot deflect` as given.
+#[derive(Clone, Debug)]
+pub struct DeflectRequest {
+    /// `A1,A2,A3,A4,A5,A6`, degrees.
+    pub joints: String,
+    /// `FX,FY,FZ`, N, in the base frame.
+    pub force: String,
+    /// `MX,MY,MZ`, N·m, in the base frame.
+    pub moment: Option<String>,
+    pub variant: Variant,
+}
+
+/// `robot deflect`: every number checked, the deflection at the pose.
+pub fn deflect(robot: &Robot, r: &DeflectRequest) -> Result<DeflectSummary, String> {
+    let deg = numbers(
+        "--joints",
+        &r.joints,
+        &["A1", "A2", "A3", "A4", "A5", "A6"],
+        Range::from(-360.0, 360.0, "degrees"),
+    )?;
+    let force = vec3(
+        "--force",
+        &r.force,
+        ["FX", "FY", "FZ"],
+        Range::from(-1e6, 1e6, "N"),
+    )?;
+    let moment = match &r.moment {
+        Some(m) => {
+            vec3(
+                "--moment",
+                m,
+                ["MX", "MY", "MZ"],
+                Range::from(-1e5, 1e5, "N·m"),
+            )? * 1e3
+        }
+        None => DVec3::ZERO,
+    };
+    let joints = [deg[0], deg[1], deg[2], deg[3], deg[4], deg[5]];
+    Ok(DeflectSummary::new(
+        robot,
+        joints,
+        r.variant,
+        (force, moment),
+    ))
+}
+
+/// A path on a robot under its load: what `compensate` and `place` work on.
+pub struct Process<'a> {
+    pub robot: &'a Robot,
+    pub variant: Variant,
+    pub program: &'a Program,
+    pub load: &'a PathLoad,
+    /// The program's file, for located errors.
+    pub path: &'a str,
+}
+
+/// The options of `robot compensate` as given.
+#[derive(Clone, Debug)]
+pub struct CompensateRequest {
+    /// `X,Y,Z,RZ`: the workpiece frame in the robot base (mm, degrees).
+    pub pose: String,
+    /// Distance between the commanded points, mm.
+    pub spacing: f64,
+    /// Motions per KRL sub-program; 0: one file.
+    pub max_points: usize,
+    /// Correct the tool's orientation too.
+    pub orientation: bool,
+}
+
+impl CompensateRequest {
+    /// The workpiece frame, the spacing checked: before any work.
+    pub fn check(&self) -> Result<Placement, String> {
+        let place = pose(&self.pose)?;
+        arg("--spacing", self.spacing, Range::from(0.01, 100.0, "mm"))?;
+        Ok(place)
+    }
+}
+
+/// What `robot compensate` writes and prints: the KRL files (the main
+/// program first), where each goes (the main at the output, its
+/// sub-programs beside it) and the summary.
+pub struct Compensation {
+    pub files: KrlFiles,
+    pub paths: Vec<std::path::PathBuf>,
+    pub summary: CompensateSummary,
+}
+
+/// `robot compensate`: the path resampled and compensated at `place`,
+/// written as KRL named after `output`.
+pub fn compensate(
+    p: &Process,
+    r: &CompensateRequest,
+    place: &Placement,
+    output: &std::path::Path,
+) -> Result<Compensation, String> {
+    let c = machining::compensate_program_with(
+        p.robot,
+        p.variant,
+        p.program,
+        place,
+        p.load,
+        r.spacing,
+        r.orientation,
+    )
+    .map_err(|e| located(p.path, &e))?;
+    let stem = krl::stem(output);
+    let k = machining::krl_program(&stem, &c.runs, place, r.spacing / 2.0);
+    let o = krl::KrlOptions {
+        name: stem,
+        max_points: r.max_points,
+        ..Default::default()
+    };
+    let files = krl::write(&k, &o);
+    let paths = krl::file_paths(output, &files);
+    let names = paths.iter().map(|p| p.display().to_string()).collect();
+    let summary = CompensateSummary::new(&c, p.load, names);
+    Ok(Compensation {
+        files,
+        paths,
+        summary,
+    })
+}
+
+/// The options of `robot place` as given.
+#[derive(Clone, Debug)]
+pub struct PlaceRequest {
+    /// `X0,Y0,Z0,X1,Y1,Z1`: the box the workpiece origin may be placed in.
+    pub bounds: String,
+    pub seed: u64,
+    pub restarts: usize,
+}
+
+impl PlaceRequest {
+    /// The search, its box and restarts checked: before any work.
+    pub fn check(&self) -> Result<machining::PlaceSearch, String> {
+        let (lo, hi) = place_box(&self.bounds)?;
+        arg(
+            "--restarts",
+            self.restarts as f64,
+            Range::from(1.0, 100.0, ""),
+        )?;
+        Ok(machining::PlaceSearch {
+            lo,
+            hi,
+            settings: millplan_robot::anneal::Settings {
+                seed: self.seed,
+                restarts: self.restarts,
+                ..Default::default()
+            },
+        })
+    }
+}
+
+/// `robot place`: the placement in the box with the smallest mean
+/// deflection along the path (not feasible: none in the box).
+pub fn place(p: &Process, search: &machining::PlaceSearch) -> Result<PlaceSummary, String> {
+    let samples = machining::placement_samples(p.program).map_err(|e| located(p.path, &e))?;
+    let found = machining::place(p.robot, p.variant, &samples, p.load, search);
+    Ok(PlaceSummary::new(found.as_ref()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -414,5 +583,150 @@ mod tests {
         assert_eq!(s.loaded_moves, 3);
         assert!((s.max_mean_force_n - 326.6).abs() < 0.02 * 326.6, "{s:?}");
         assert_eq!(LoadSummary::of(&PathLoad::Fixed(slot)), None);
+    }
+
+    /// A 100 mm × 50 mm zig-zag at z 0, tool vertical, as APT.
+    fn zigzag() -> Program {
+        let mut s = String::from("CUTTER/12\nGOTO/0,0,10,0,0,1\nFEDRAT/1200\n");
+        for row in 0..3 {
+            let y = row as f64 * 25.0;
+            let (a, b) = if row % 2 == 0 { (0, 100) } else { (100, 0) };
+            s.push_str(&format!("GOTO/{a},{y},0,0,0,1\nGOTO/{b},{y},0,0,0,1\n"));
+        }
+        millplan_nc::parse_program(&s, millplan_nc::ReadOptions::default())
+            .expect("reads")
+            .program
+    }
+
+    /// `robot deflect` is the model's deflection (Schnoes & Zaeh, Eq. 2)
+    /// with the moment in N·m turned into N·mm; a wrong count of numbers
+    /// names the option and what it wants.
+    #[test]
+    fn deflect_checks_its_numbers_and_is_the_model() {
+        let robot = Robot::kr240();
+        let req = DeflectRequest {
+            joints: "0,-90,90,0,30,0".into(),
+            force: "0,1000,0".into(),
+            moment: Some("0,0,50".into()),
+            variant: Variant::ThreeAxis,
+        };
+        let got = deflect(&robot, &req).expect("deflects");
+        let q = [0.0, -90.0, 90.0, 0.0, 30.0, 0.0].map(f64::to_radians);
+        let want = robot.deflect(
+            &q,
+            Variant::ThreeAxis,
+            DVec3::new(0.0, 1000.0, 0.0),
+            DVec3::new(0.0, 0.0, 50e3),
+        );
+        for i in 0..3 {
+            assert!((got.dp_mm[i] - want.dp[i]).abs() <= 1e-5 * want.dp.length());
+        }
+        let bad = DeflectRequest {
+            joints: "0,-90,90,0,30".into(),
+            ..req.clone()
+        };
+        let e = deflect(&robot, &bad).expect_err("five joints");
+        assert!(e.starts_with("--joints") && e.contains("6 numbers"), "{e}");
+        let bad = DeflectRequest {
+            force: "0,1e7,0".into(),
+            ..req
+        };
+        let e = deflect(&robot, &bad).expect_err("out of range");
+        assert!(e.starts_with("--force FY"), "{e}");
+    }
+
+    /// `robot compensate`: the main program goes to the output, its
+    /// sub-programs beside it, one commanded point per --spacing; the
+    /// summary names the files; out of reach is located in the program.
+    #[test]
+    fn compensate_names_its_files_and_locates_the_unreachable() {
+        let (robot, program) = (Robot::kr240(), zigzag());
+        let load = fixed_load("-60,150,40").expect("load");
+        let p = Process {
+            robot: &robot,
+            variant: Variant::ThreeAxis,
+            program: &program,
+            load: &load,
+            path: "zz.apt",
+        };
+        let req = CompensateRequest {
+            pose: "1300,-100,300,0".into(),
+            spacing: 0.3,
+            max_points: 300,
+            orientation: false,
+        };
+        let place = req.check().expect("pose");
+        let out = std::path::Path::new("/tmp/zz.src");
+        let c = compensate(&p, &req, &place, out).expect("compensates");
+        assert_eq!(c.paths[0], out);
+        assert!(c.files.len() > 2, "{} files", c.files.len());
+        assert_eq!(c.paths.len(), c.files.len());
+        let named: Vec<String> = c.paths.iter().map(|p| p.display().to_string()).collect();
+        assert_eq!(c.summary.files, named);
+        let back = millplan_nc::krl::read(&c.files[0].1, &mut |n| {
+            c.files
+                .iter()
+                .find(|(f, _)| f.eq_ignore_ascii_case(n))
+                .map(|(_, t)| t.clone())
+        })
+        .expect("reads back");
+        let motions = back
+            .statements
+            .iter()
+            .filter(|l| matches!(l.statement, millplan_nc::krl::Statement::Move { .. }))
+            .count();
+        assert_eq!(motions, c.summary.points);
+        assert!(c.summary.points > (250.0_f64 / 0.3) as usize);
+        assert!(c.summary.residual_max_mm < c.summary.max_deflection_mm);
+        let far = CompensateRequest {
+            pose: "5000,0,0,0".into(),
+            ..req
+        };
+        let Err(e) = compensate(&p, &far, &far.check().expect("pose"), out) else {
+            panic!("out of reach at X 5000")
+        };
+        assert!(e.starts_with("zz.apt:"), "{e}");
+        let bad = CompensateRequest {
+            spacing: 0.0,
+            ..far
+        };
+        assert!(bad.check().expect_err("spacing").starts_with("--spacing"));
+    }
+
+    /// `robot place`: seeded, so the same search finds the same
+    /// placement; an empty box and no restarts are refused before any work.
+    #[test]
+    fn place_is_seeded_and_checks_its_box() {
+        let (robot, program) = (Robot::kr240(), zigzag());
+        let load = fixed_load("-60,150,40").expect("load");
+        let p = Process {
+            robot: &robot,
+            variant: Variant::ThreeAxis,
+            program: &program,
+            load: &load,
+            path: "zz.apt",
+        };
+        let req = PlaceRequest {
+            bounds: crate::command_defaults::robot::PLACE_BOX.into(),
+            seed: 7,
+            restarts: 1,
+        };
+        let a = place(&p, &req.check().expect("box")).expect("places");
+        let b = place(&p, &req.check().expect("box")).expect("places");
+        assert!(a.feasible && a.evaluations > 0);
+        assert_eq!(
+            (a.pose.x, a.pose.y, a.pose.z),
+            (b.pose.x, b.pose.y, b.pose.z)
+        );
+        let empty = PlaceRequest {
+            bounds: "900,0,0,800,1,1".into(),
+            ..req.clone()
+        };
+        assert!(empty.check().expect_err("box").starts_with("--box"));
+        let none = PlaceRequest { restarts: 0, ..req };
+        assert!(none
+            .check()
+            .expect_err("restarts")
+            .starts_with("--restarts"));
     }
 }

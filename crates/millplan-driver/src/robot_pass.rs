@@ -138,6 +138,37 @@ pub fn run(
     Ok(RobotWritten { files, summary })
 }
 
+/// The robot pass at the end of `optimise`, on what `Job::finish` wrote as
+/// `w`: when the output is KRL the program is first written, re-read and
+/// checked again in the dialect of [`check_target`] (within `limits`); then
+/// compensated and written as KRL named after `output`. `w` is left with
+/// the main KRL program as its bytes; the files (main first) are returned,
+/// the sub-programs to be written beside `output`.
+pub fn after_optimise(
+    s: &RobotSetup,
+    (job, outcome): (&crate::Job, &crate::Outcome),
+    w: &mut crate::Written,
+    output: &std::path::Path,
+    limits: millplan_geom::limits::Limits,
+) -> Result<RobotWritten, String> {
+    let krl_name = millplan_nc::write::Target::Krl.name();
+    if w.summary.dialect == krl_name {
+        let t = check_target(job.inputs.program.source);
+        let wo = millplan_nc::write::WriteOptions {
+            limits,
+            ..job.inputs.machine.write_options(t)
+        };
+        *w = job.finish(outcome, wo).map_err(|e| e.to_string())?;
+        w.summary.dialect = krl_name.into();
+    }
+    let stem = krl::stem(output);
+    let posted = outcome.posted.is_some();
+    let done = run(s, (&w.program, posted), w.forces_after.as_ref(), &stem)
+        .map_err(|e| format!("--robot: {e}"))?;
+    w.bytes = done.files[0].1.clone().into_bytes();
+    Ok(done)
+}
+
 /// Reads the files back (the main finding its sub-programs among them),
 /// puts every commanded point read in place of the one computed, and runs
 /// the deflection again: the largest distance of the tip from the path.

@@ -192,6 +192,110 @@ pub fn remaining_on(stock: &Stock, part: &millplan_geom::TriMesh, tol: f64) -> R
     remaining(stock, part, REMAINING_REACH, tol)
 }
 
+/// What `millplan simulate` runs besides its request: the program (its
+/// file's name for errors), the stock as given and parsed, the part and an
+/// `stl:` stock's blank (read), the machine's rapid rate and the memory the
+/// stock may take.
+pub struct SimInputs<'a> {
+    pub name: &'a str,
+    pub program: &'a Program,
+    pub stock: &'a str,
+    pub spec: &'a StockSpec,
+    pub part: Option<&'a TriMesh>,
+    pub blank: Option<&'a TriMesh>,
+    pub rapid: f64,
+    pub memory: u64,
+}
+
+/// What a run of `millplan simulate` made: the stock after the program,
+/// the run's report, the material left on the part (with a part) and the
+/// note on the flute length assumed (when neither option nor program gave
+/// one).
+pub struct Simulated {
+    pub stock: Stock,
+    pub run: SimReport,
+    pub remaining: Option<Remaining>,
+    pub flute_note: Option<String>,
+}
+
+impl Simulated {
+    /// Whether a rapid crossed material or the holder or shank met it.
+    pub fn collided(&self) -> bool {
+        !(self.run.rapid_collisions.is_empty() && self.run.holder_collisions.is_empty())
+    }
+
+    /// What `simulate --json` prints.
+    pub fn report<'a>(&'a self, stock: &'a str) -> Report<'a> {
+        Report::new(&self.run, stock, self.remaining.as_ref())
+    }
+
+    /// The per-move table (`--table`), CSV.
+    pub fn table_csv(&self) -> String {
+        millplan_report::sim::moves_csv(&self.run.per_move)
+    }
+
+    /// The HTML report (`--report`) of the run of the program at `files.0`
+    /// (over the part at `files.1`, `part` its mesh) on the stock as given.
+    pub fn report_html(
+        &self,
+        a: &SimRequest,
+        files: (&std::path::Path, Option<&std::path::Path>),
+        stock: &str,
+        part: Option<&TriMesh>,
+    ) -> String {
+        let title = format!("Stock simulation of {}", files.0.display());
+        let inputs = report_inputs(files, stock, a);
+        let rem = self.remaining.as_ref().zip(part);
+        millplan_report::sim::report(&title, inputs, stock, &self.stock, &self.run, rem)
+    }
+}
+
+/// Why a run of `millplan simulate` stopped: the program's moves (none
+/// simulable, no tool shape) or the stock (it cannot be built from them or
+/// the part, or the memory does not hold it); the message says which file.
+#[derive(Debug)]
+pub enum SimError {
+    Program(String),
+    Stock(String),
+}
+
+impl std::fmt::Display for SimError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SimError::Program(m) | SimError::Stock(m) => f.write_str(m),
+        }
+    }
+}
+
+/// `millplan simulate`: the strokes, the stock built, the material removed
+/// stroke by stroke (`progress` hears the strokes done and their number),
+/// the material left on the part; `lap` hears each phase's end.
+pub fn command(
+    a: &SimRequest,
+    g: &SimInputs,
+    lap: &mut dyn FnMut(&str),
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Simulated, SimError> {
+    let strokes = program_strokes(a, g.name, g.program, g.rapid).map_err(SimError::Program)?;
+    let flute_note = default_flute_note(a, g.program).map_err(SimError::Program)?;
+    lap("strokes (tool bodies, moves in chords)");
+    let parts = (g.part, g.blank);
+    let mut stock = build_stock(g.name, a.resolution, g.spec, &strokes, parts, g.memory)
+        .map_err(SimError::Stock)?;
+    lap("stock built");
+    let total = strokes.strokes.len();
+    let run = crate::simulate_stock(&mut stock, &strokes, a.tol, &|d| progress(d, total));
+    lap("material removal");
+    let remaining = g.part.map(|p| remaining_on(&stock, p, a.tol));
+    lap("material left on the part");
+    Ok(Simulated {
+        stock,
+        run,
+        remaining,
+        flute_note,
+    })
+}
+
 /// The material left on the part.
 #[derive(Serialize)]
 pub struct RemainingJson<'a> {
@@ -275,5 +379,80 @@ impl<'a> Report<'a> {
             let _ = writeln!(o, "{hits} collisions");
         }
         o
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn request(tool: Option<&str>) -> SimRequest {
+        SimRequest {
+            tool: tool.map(Into::into),
+            holder: None,
+            flute_length: None,
+            shank: None,
+            resolution: 0.25,
+            tol: crate::command_defaults::simulate::TOL,
+            mesh_resolution: None,
+        }
+    }
+
+    fn program(src: &str) -> Program {
+        millplan_nc::parse_program(src, millplan_nc::ReadOptions::default())
+            .expect("reads")
+            .program
+    }
+
+    /// A 10 mm flat end mill slots 2 mm deep straight through a 50 mm box
+    /// (its round ends outside): 50 · 10 · 2 = 1000 mm³ removed, to the
+    /// dexels' resolution; every phase heard, no collision. A rapid through
+    /// the box is one; a tool without a shape is the program's error.
+    #[test]
+    fn a_slot_removes_its_volume_and_a_rapid_through_the_stock_collides() {
+        let slot = "G21 G90\nT1 M6\nS1000 M3\nG0 X-10 Y0 Z5\nG1 Z-2 F500\nG1 X60\nG0 Z5\nM30\n";
+        let p = program(slot);
+        let stock = "box:0,-20,-10,50,20,0";
+        let spec = StockSpec::parse(stock).expect("stock");
+        let g = SimInputs {
+            name: "slot.nc",
+            program: &p,
+            stock,
+            spec: &spec,
+            part: None,
+            blank: None,
+            rapid: 10_000.0,
+            memory: 1 << 30,
+        };
+        let mut laps = Vec::new();
+        let Ok(sim) = command(
+            &request(Some("flat:10")),
+            &g,
+            &mut |l| laps.push(l.to_string()),
+            &|_, _| {},
+        ) else {
+            panic!("simulates")
+        };
+        assert!(
+            (sim.run.removed_mm3 - 1000.0).abs() < 0.02 * 1000.0,
+            "{}",
+            sim.run.removed_mm3
+        );
+        assert!(!sim.collided());
+        assert_eq!(laps.len(), 4, "{laps:?}");
+        assert!(sim.table_csv().lines().count() > sim.run.per_move.len());
+        let rapid = program("G21 G90\nT1 M6\nS1000 M3\nG0 X-10 Y0 Z-2\nG0 X60\nM30\n");
+        let g = SimInputs {
+            program: &rapid,
+            ..g
+        };
+        let Ok(crash) = command(&request(Some("flat:10")), &g, &mut |_| {}, &|_, _| {}) else {
+            panic!("simulates")
+        };
+        assert!(crash.collided());
+        let Err(SimError::Program(e)) = command(&request(None), &g, &mut |_| {}, &|_, _| {}) else {
+            panic!("no tool shape")
+        };
+        assert!(e.starts_with("slot.nc: ") && e.contains("--tool"), "{e}");
     }
 }

@@ -27,6 +27,25 @@ pub struct Cutting {
     pub ap: f64,
 }
 
+impl Cutting {
+    /// Every value in its physical range, naming the option.
+    pub fn check(&self) -> Result<(), String> {
+        arg("--vc", self.vc, Range::positive(MAX_VC, "m/min"))?;
+        arg("--fz", self.fz, Range::positive(10.0, "mm"))?;
+        arg("--flutes", self.flutes as f64, Range::from(1.0, 1000.0, ""))?;
+        arg("--ap", self.ap, Range::positive(MAX_TOOL_D / 2.0, "mm"))?;
+        Ok(())
+    }
+
+    /// Spindle-control settings for the commands that read only the
+    /// summary and the program (no per-point rows).
+    pub fn params(&self) -> SpeedParams {
+        let mut p = SpeedParams::new(self.vc, self.fz, self.flutes, self.ap);
+        p.keep_rows = false;
+        p
+    }
+}
+
 /// The options of `millplan speed` as given.
 #[derive(Clone, Copy, Debug)]
 pub struct SpeedRequest {
@@ -115,6 +134,185 @@ pub fn checks(cx: &Context, input: &Program, output: &Program) -> Vec<Check> {
             loads: None,
         })
     })
+}
+
+/// The estimated cycle time of `p` on `machine`, with acceleration, s.
+pub fn cycle_time(p: &Program, machine: &Machine) -> f64 {
+    millplan_plan::timing::estimate_program(p, machine).total_s
+}
+
+/// The program as read on a thread of its own, with the cycle time
+/// estimated there after the read, and the wall time of each.
+pub struct ReadBeside {
+    pub parsed: millplan_nc::Parsed,
+    pub read_s: f64,
+    pub time_before: f64,
+    pub estimate_s: f64,
+}
+
+/// The program read on a thread of its own, its cycle time estimated
+/// there after the read, while the caller reads the part and builds its
+/// search trees.
+pub struct Reader<E>(std::thread::JoinHandle<(Result<millplan_nc::Parsed, E>, [f64; 3])>);
+
+impl<E: Send + 'static> Reader<E> {
+    /// Starts `read` and then the estimate on `machine`.
+    pub fn spawn(
+        machine: Machine,
+        read: impl FnOnce() -> Result<millplan_nc::Parsed, E> + Send + 'static,
+    ) -> Reader<E> {
+        Reader(std::thread::spawn(move || {
+            let t = std::time::Instant::now();
+            let parsed = read();
+            let read_s = t.elapsed().as_secs_f64();
+            let t = std::time::Instant::now();
+            let time_before = parsed
+                .as_ref()
+                .map_or(0.0, |p| cycle_time(&p.program, &machine));
+            (parsed, [read_s, time_before, t.elapsed().as_secs_f64()])
+        }))
+    }
+
+    /// The program read and its estimate, once both are done.
+    pub fn join(self) -> Result<ReadBeside, E> {
+        let (parsed, [read_s, time_before, estimate_s]) = self
+            .0
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e));
+        Ok(ReadBeside {
+            parsed: parsed?,
+            read_s,
+            time_before,
+            estimate_s,
+        })
+    }
+}
+
+/// Runs `write` while the cycle time of `program` on `machine` is
+/// estimated on another thread: what `write` gave, the estimate, and the
+/// wall times of the writing and of the estimate.
+pub fn write_beside<T>(
+    program: &Program,
+    machine: &Machine,
+    write: impl FnOnce() -> T,
+) -> (T, f64, [f64; 2]) {
+    std::thread::scope(|s| {
+        let estimate = s.spawn(|| {
+            let t = std::time::Instant::now();
+            (cycle_time(program, machine), t.elapsed().as_secs_f64())
+        });
+        let t = std::time::Instant::now();
+        let written = write();
+        let write_s = t.elapsed().as_secs_f64();
+        let (total, estimate_s) = estimate
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e));
+        (written, total, [write_s, estimate_s])
+    })
+}
+
+/// What `millplan speed` makes of a program: the new program, the pass's
+/// summary and per-point rows, the checks of the output and the part's
+/// own findings (open edges, points off the part).
+pub struct Outcome {
+    pub program: Program,
+    pub summary: Summary,
+    pub rows: Vec<millplan_plan::speed::PointRow>,
+    pub checks: Vec<Check>,
+    pub findings: Vec<Diagnostic>,
+}
+
+/// Why a run of `millplan speed` stopped.
+#[derive(Debug)]
+pub enum SpeedError {
+    /// The pass's own error (the input's, or a bug).
+    Pass(PassError),
+    /// A bug: the pass ran and left no summary.
+    NoSummary,
+}
+
+/// `millplan speed` on `input` over `mesh` (its surface in `cx`): the pass
+/// on a copy of the input, the checks of its output against the input,
+/// the part's findings; each phase timed in `cx`.
+pub fn command(
+    a: &SpeedRequest,
+    cx: &Context,
+    mesh: &millplan_geom::TriMesh,
+    input: Program,
+) -> Result<Outcome, SpeedError> {
+    let (program, mut pass) = run(a, cx, &input).map_err(SpeedError::Pass)?;
+    let checks = checks(cx, &input, &program);
+    cx.time("input freed", || drop(input));
+    let summary = pass.summary.take().ok_or(SpeedError::NoSummary)?;
+    // A part that does not match its path makes every speed meaningless.
+    let findings = cx.time("part checks (open edges, points off the part)", || {
+        [
+            millplan_plan::checks::mesh(mesh),
+            millplan_plan::checks::off_surface(&summary),
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
+    });
+    Ok(Outcome {
+        program,
+        summary,
+        rows: std::mem::take(&mut pass.rows),
+        checks,
+        findings,
+    })
+}
+
+impl Outcome {
+    /// Too many points off the part for the speeds to mean anything.
+    pub fn untrusted(&self) -> bool {
+        millplan_plan::checks::untrusted(&self.summary)
+    }
+
+    /// The report's header, warnings, cycle times and failed checks; the
+    /// program and the part by their file names.
+    pub fn report_inputs(
+        &self,
+        (program, part): (String, String),
+        machine: &Machine,
+        cut: Cutting,
+        times: [f64; 2],
+    ) -> millplan_report::html::SpeedInputs {
+        let on = (program, &self.program);
+        let mut i = report_inputs(on, part, machine, cut, &self.findings, times);
+        i.failed = failed_checks(&self.checks);
+        i
+    }
+
+    /// The HTML report (`--report`) of the run on the program `names.0`
+    /// over the part `names.1`.
+    pub fn report_html(
+        &self,
+        names: (String, String),
+        machine: &Machine,
+        cut: Cutting,
+        times: [f64; 2],
+    ) -> String {
+        let title = format!("millplan speed: {}", names.0);
+        let inputs = self.report_inputs(names, machine, cut, times);
+        millplan_report::html::speed_report(&title, &inputs, &self.summary, &self.rows)
+    }
+
+    /// The per-point table (`--table`), CSV.
+    pub fn table_csv(&self) -> String {
+        millplan_report::table::points_csv(&self.rows)
+    }
+
+    /// What `speed --json` prints for the program written to `output`.
+    pub fn report<'a>(
+        &'a self,
+        written: (String, Target),
+        machine: &'a Machine,
+        times: [f64; 2],
+    ) -> Report<'a> {
+        let on = (&self.summary, self.checks.as_slice());
+        Report::new(on, written, machine, &self.findings, times)
+    }
 }
 
 /// Why spindle control has nothing to act on in `p`, when so: no cutting
@@ -340,5 +538,103 @@ impl<'a> Report<'a> {
         );
         o.push_str(&self.verdict.text());
         o
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use millplan_geom::analytic::{tessellate, DemoSurface};
+    use millplan_nc::generate::{raster, Raster};
+
+    fn request() -> SpeedRequest {
+        SpeedRequest {
+            cut: Cutting {
+                vc: 63.0,
+                fz: 0.125,
+                flutes: 2,
+                ap: 0.3,
+            },
+            ball_d: None,
+            s_threshold: crate::command_defaults::speed::S_THRESHOLD,
+            keep_feed: false,
+            convention: None,
+            normals: NormalMode::Smooth,
+            nearest_incentre: false,
+            keep_rows: true,
+        }
+    }
+
+    /// The command's run is the spindle-control model applied on its own
+    /// (`speed::apply`, no pipeline): the same program and summary; its
+    /// checks pass (only S and F changed); on a part moved away every point
+    /// is off the part and the run is not to be trusted.
+    #[test]
+    fn the_command_is_the_model_and_says_when_the_part_is_elsewhere() {
+        let s = DemoSurface::default();
+        let mesh = tessellate(&s, 1.0);
+        let stepped = Raster {
+            stepover: 3.0,
+            step: 1.0,
+            ..Raster::default()
+        };
+        let (prog, _) = raster(&s, &stepped);
+        let req = request();
+        let machine = Machine::default();
+        let want =
+            millplan_plan::speed::apply(&prog, &mesh, &machine, &params(&req)).expect("applies");
+        let cx = Context::new(machine.clone()).with_surface(Surface::new(&mesh));
+        let Ok(out) = command(&req, &cx, &mesh, prog.clone()) else {
+            panic!("the command runs")
+        };
+        assert_eq!(out.program, want.program);
+        assert_eq!(out.summary, want.summary);
+        assert_eq!(out.rows.len(), out.summary.points);
+        assert!(safety::passed(&out.checks), "{:?}", out.checks);
+        assert!(!out.untrusted());
+        let times = [
+            cycle_time(&prog, &machine),
+            cycle_time(&out.program, &machine),
+        ];
+        let json =
+            serde_json::to_value(out.report(("o.nc".into(), Target::Fanuc), &machine, times))
+                .expect("json");
+        assert_eq!(json["points"], out.summary.points);
+        assert_eq!(json["trusted"], true);
+        assert!(out.table_csv().lines().count() == out.rows.len() + 1);
+        let mut far = mesh.clone();
+        far.map_vertices(|v| v + millplan_geom::DVec3::new(0.0, 0.0, -50.0));
+        let cx = Context::new(machine).with_surface(Surface::new(&far));
+        let Ok(off) = command(&req, &cx, &far, prog) else {
+            panic!("the command runs off the part")
+        };
+        assert!(off.untrusted());
+        assert!(!off.findings.is_empty());
+    }
+
+    /// The reader on its own thread gives the program and the estimate of
+    /// its cycle time that `cycle_time` gives; a reader's error is passed
+    /// on. Writing beside the estimate gives what the writer gave and the
+    /// same estimate.
+    #[test]
+    fn reading_and_writing_beside_the_estimate() {
+        let (prog, _) = raster(&DemoSurface::default(), &Raster::default());
+        let machine = Machine::default();
+        let parsed = millplan_nc::Parsed {
+            program: prog.clone(),
+            diagnostics: Vec::new(),
+        };
+        let want = cycle_time(&prog, &machine);
+        assert!(want > 0.0);
+        let read = Reader::<String>::spawn(machine.clone(), move || Ok(parsed))
+            .join()
+            .expect("reads");
+        assert_eq!(read.time_before, want);
+        assert_eq!(read.parsed.program, prog);
+        let failed = Reader::<String>::spawn(machine.clone(), || Err("bad.nc:1:1: no".into()));
+        assert_eq!(failed.join().err().as_deref(), Some("bad.nc:1:1: no"));
+        let (written, after, [w, e]) = write_beside(&prog, &machine, || 7);
+        assert_eq!((written, after), (7, want));
+        assert!(w >= 0.0 && e >= 0.0);
     }
 }

@@ -29,6 +29,14 @@ impl ToolError {
             message: message.into(),
         }
     }
+
+    /// The program's fault.
+    pub fn internal(message: impl Into<String>) -> ToolError {
+        ToolError {
+            bad_input: false,
+            message: message.into(),
+        }
+    }
 }
 
 impl std::fmt::Display for ToolError {
@@ -408,6 +416,123 @@ pub struct ImportedJson {
     pub imported: usize,
 }
 
+/// One subcommand of `millplan tool` on the library, as given.
+pub enum ToolRequest {
+    Add(u32, ToolEdit),
+    /// Tool, designation, INSL and TP (mm).
+    Insert(u32, String, (f64, f64)),
+    /// Tool, L and R (mm) from the presetter.
+    Preset(u32, (f64, f64)),
+    Measure(MeasureRequest, Option<String>),
+    Show(Option<u32>),
+    Log(Option<u32>),
+    Import(PathBuf),
+    Export(ExportFormat),
+    Cycle(CycleRequest),
+}
+
+/// What a subcommand made: its JSON and text (when it writes a file, what
+/// to write and the PZ it used: `tool export` none, `tool cycle` the
+/// insert's if it has one), and whether a measurement found a problem.
+#[derive(Debug)]
+pub struct ToolOutcome {
+    pub json: serde_json::Value,
+    pub text: String,
+    pub file: Option<(String, Option<Option<f64>>)>,
+    pub problem: bool,
+}
+
+impl ToolOutcome {
+    fn said<T: Serialize>(v: &T, text: String) -> Result<ToolOutcome, ToolError> {
+        let json = serde_json::to_value(v)
+            .map_err(|e| ToolError::internal(format!("JSON output: {e}")))?;
+        Ok(ToolOutcome {
+            json,
+            text,
+            file: None,
+            problem: false,
+        })
+    }
+
+    fn file(text: String, pz: Option<Option<f64>>) -> ToolOutcome {
+        ToolOutcome {
+            json: serde_json::Value::Null,
+            text: String::new(),
+            file: Some((text, pz)),
+            problem: false,
+        }
+    }
+
+    /// What a subcommand that wrote `output` says (its JSON, its text).
+    pub fn written(output: &Path, pz: Option<Option<f64>>) -> Result<ToolOutcome, ToolError> {
+        let text = format!("wrote {}", output.display());
+        let output = output.display().to_string();
+        ToolOutcome::said(&WrittenJson { output, pz }, text)
+    }
+}
+
+/// `millplan tool pz`: the PZ of an insert (no library needed).
+pub fn pz_command(insl: f64, tp: f64) -> Result<ToolOutcome, ToolError> {
+    let v = pz(insl, tp).map_err(|e| ToolError::input(e.to_string()))?;
+    let text = format!("PZ = {v:.3} mm (INSL {insl}, TP {tp})");
+    ToolOutcome::said(&PzJson { pz: v, insl, tp }, text)
+}
+
+/// `millplan tool SUBCOMMAND` on the library.
+pub fn command(lib: &mut Library, r: ToolRequest) -> Result<ToolOutcome, ToolError> {
+    match r {
+        ToolRequest::Add(number, edit) => {
+            let t = lib.add(number, edit)?;
+            ToolOutcome::said(&t, format!("saved {}", describe(&t)))
+        }
+        ToolRequest::Insert(tool, designation, (insl, tp)) => {
+            let pz = lib.insert(tool, &designation, insl, tp)?;
+            let text = format!("T{tool}: insert {designation}, PZ {pz:.3} mm");
+            let designation = designation.as_str();
+            ToolOutcome::said(
+                &InsertJson {
+                    tool,
+                    designation,
+                    insl,
+                    tp,
+                    pz,
+                },
+                text,
+            )
+        }
+        ToolRequest::Preset(number, (l, r)) => {
+            let t = lib.preset(number, l, r)?;
+            let text = format!("presetter values recorded: {}", describe(&t));
+            ToolOutcome::said(&t, text)
+        }
+        ToolRequest::Measure(req, pallet) => {
+            let o = lib.measure(req, pallet)?;
+            let problem = o.decision.is_problem();
+            let out = ToolOutcome::said(&o, outcome_text(&o))?;
+            Ok(ToolOutcome { problem, ..out })
+        }
+        ToolRequest::Show(number) => {
+            let tools = lib.show(number)?;
+            let text = tools_text(&tools, &lib.path.display().to_string());
+            ToolOutcome::said(&tools, text)
+        }
+        ToolRequest::Log(number) => {
+            let ev = lib.log(number)?;
+            ToolOutcome::said(&ev, events_text(&ev))
+        }
+        ToolRequest::Import(file) => {
+            let n = lib.import(&file)?;
+            let text = format!("imported {n} tools into {}", lib.path.display());
+            ToolOutcome::said(&ImportedJson { imported: n }, text)
+        }
+        ToolRequest::Export(format) => Ok(ToolOutcome::file(lib.export(format)?, None)),
+        ToolRequest::Cycle(c) => {
+            let (text, pz) = lib.cycle(c)?;
+            Ok(ToolOutcome::file(text, Some(pz)))
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -473,6 +598,47 @@ mod tests {
             library_path(None, Some("".into()), None, None)
                 .expect_err("empty")
                 .bad_input
+        );
+    }
+
+    /// The subcommands through the one function: a tool added and shown,
+    /// an insert's PZ by paper 002's formula 2 (INSL 12.1, TP 1.5:
+    /// (12.1 − 7·1.5)/2 = 0.8 mm; INSL 14, TP 1: 0.5 mm, an exact multiple),
+    /// the export as a file to write, a bad pitch the arguments' fault.
+    #[test]
+    fn the_commands_route_through_one_function() {
+        let dir = tempfile::tempdir().expect("tmp");
+        let mut lib = Library::open(dir.path().join("tools.db")).expect("opens");
+        let edit = ToolEdit {
+            name: Some("thread mill".into()),
+            l: Some(80.0),
+            r: Some(5.0),
+            ..ToolEdit::default()
+        };
+        let added = command(&mut lib, ToolRequest::Add(7, edit)).expect("adds");
+        assert!(added.text.starts_with("saved") && !added.problem);
+        let shown = command(&mut lib, ToolRequest::Show(Some(7))).expect("shows");
+        assert_eq!(shown.json[0]["number"], 7, "{}", shown.json);
+        let ins = ToolRequest::Insert(7, "12IR1.5ISO".into(), (12.1, 1.5));
+        let ins = command(&mut lib, ins).expect("insert");
+        assert!(
+            (ins.json["pz"].as_f64().expect("pz") - 0.8).abs() < 1e-9,
+            "{}",
+            ins.json
+        );
+        let pz = pz_command(14.0, 1.0).expect("pz");
+        assert!((pz.json["pz"].as_f64().expect("pz") - 0.5).abs() < 1e-9);
+        assert!(!pz_command(14.0, -1.0)
+            .expect_err("pitch")
+            .message
+            .is_empty());
+        let export = command(&mut lib, ToolRequest::Export(ExportFormat::Csv)).expect("export");
+        let (text, pz) = export.file.expect("a file to write");
+        assert!(text.lines().count() >= 2 && pz.is_none(), "{text}");
+        let w = ToolOutcome::written(Path::new("out.csv"), None).expect("said");
+        assert_eq!(
+            (w.json["output"].as_str(), w.text.as_str()),
+            (Some("out.csv"), "wrote out.csv")
         );
     }
 }

@@ -32,6 +32,7 @@
 //! the conservative defaults of [`DEFAULT_LINEAR_ACCEL`] and friends.
 
 mod planner;
+mod stream;
 
 pub use planner::{BlockCtl, PathMode, Planner, PlannerKind, Profile};
 
@@ -234,66 +235,88 @@ pub(crate) fn prepare(
     let mut stop = true;
     let mut here = start;
     for (index, m) in moves.iter().enumerate() {
-        let (rapid, nominal_min) = match m.kind {
-            MoveKind::Dwell { .. } => {
-                stop = true;
-                continue;
-            }
-            MoveKind::Rapid => (true, 0.0),
-            MoveKind::Feed { nominal_min } => (false, nominal_min),
-        };
-        let mut d = [0.0; 6];
-        for (i, di) in d.iter_mut().enumerate() {
-            *di = m.target[i] - here[i];
-        }
-        here = m.target;
-        let lin = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        let rot = (d[3] * d[3] + d[4] * d[4] + d[5] * d[5]).sqrt();
-        let (len, rotary_only) = if lin > EPS {
-            (lin, false)
-        } else if rot > EPS {
-            (rot, true)
-        } else {
-            // Nothing moves: the control skips the block.
-            continue;
-        };
-        let mut dir = [0.0; 6];
-        let (mut vaxes, mut accel, mut jerk) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
-        for i in 0..6 {
-            dir[i] = d[i] / len;
-            let e = dir[i].abs();
-            if e > 1e-12 {
-                vaxes = vaxes.min(lim.velocity[i] / e);
-                accel = accel.min(lim.accel[i] / e);
-                jerk = jerk.min(lim.jerk[i] / e);
+        match prepare_one(index, m, &mut here, lim) {
+            Prepared::Dwell => stop = true,
+            Prepared::Still => {}
+            Prepared::Moves(b) => {
+                blocks.push(b);
+                stops.push(stop);
+                stop = false;
             }
         }
-        let path_cap = if rotary_only {
-            f64::INFINITY
-        } else if rapid {
-            lim.rapid
-        } else {
-            lim.feed_max
-        };
-        let programmed = programmed_speed(rapid, len, nominal_min);
-        let vgeom = path_cap.min(vaxes);
-        let vcap = programmed.min(vgeom);
-        blocks.push(Block {
-            index,
-            len,
-            dir,
-            rotary_only,
-            rapid,
-            vcap,
-            vgeom,
-            accel,
-            jerk,
-            velocity_limited: !rapid && vcap < programmed * (1.0 - 1e-12),
-        });
-        stops.push(stop);
-        stop = false;
     }
     (blocks, stops)
+}
+
+/// What one input block is to the motion.
+pub(crate) enum Prepared {
+    /// A dwell: the motion stops.
+    Dwell,
+    /// Nothing moves: the control skips the block.
+    Still,
+    Moves(Block),
+}
+
+/// Input block `index`, `m`, from `here` (moved on to its end unless a
+/// dwell), prepared.
+pub(crate) fn prepare_one(
+    index: usize,
+    m: &AxisMove,
+    here: &mut [f64; 6],
+    lim: &Limits,
+) -> Prepared {
+    let (rapid, nominal_min) = match m.kind {
+        MoveKind::Dwell { .. } => return Prepared::Dwell,
+        MoveKind::Rapid => (true, 0.0),
+        MoveKind::Feed { nominal_min } => (false, nominal_min),
+    };
+    let mut d = [0.0; 6];
+    for (i, di) in d.iter_mut().enumerate() {
+        *di = m.target[i] - here[i];
+    }
+    *here = m.target;
+    let lin = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    let rot = (d[3] * d[3] + d[4] * d[4] + d[5] * d[5]).sqrt();
+    let (len, rotary_only) = if lin > EPS {
+        (lin, false)
+    } else if rot > EPS {
+        (rot, true)
+    } else {
+        return Prepared::Still;
+    };
+    let mut dir = [0.0; 6];
+    let (mut vaxes, mut accel, mut jerk) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
+    for i in 0..6 {
+        dir[i] = d[i] / len;
+        let e = dir[i].abs();
+        if e > 1e-12 {
+            vaxes = vaxes.min(lim.velocity[i] / e);
+            accel = accel.min(lim.accel[i] / e);
+            jerk = jerk.min(lim.jerk[i] / e);
+        }
+    }
+    let path_cap = if rotary_only {
+        f64::INFINITY
+    } else if rapid {
+        lim.rapid
+    } else {
+        lim.feed_max
+    };
+    let programmed = programmed_speed(rapid, len, nominal_min);
+    let vgeom = path_cap.min(vaxes);
+    let vcap = programmed.min(vgeom);
+    Prepared::Moves(Block {
+        index,
+        len,
+        dir,
+        rotary_only,
+        rapid,
+        vcap,
+        vgeom,
+        accel,
+        jerk,
+        velocity_limited: !rapid && vcap < programmed * (1.0 - 1e-12),
+    })
 }
 
 /// The speed a block's F asks for along its path (per second; unbounded on
@@ -674,9 +697,75 @@ pub struct ProgramBlocks {
 /// through the machine's inverse kinematics (nearest solution to the
 /// previous one); without kinematics the tool tip moves as X Y Z.
 pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
+    let mut all = Collect::default();
+    let loose_dwell_s = walk_program(p, machine, &mut all);
+    ProgramBlocks {
+        chains: all.chains,
+        ctl: all.ctl,
+        loose_dwell_s,
+    }
+}
+
+/// Where [`walk_program`] hands the blocks of a program's chains, in order,
+/// each once its path-control mode is final.
+pub(crate) trait ChainSink {
+    /// The next block of the chain that starts at `start` (a new chain when
+    /// none is open).
+    fn block(&mut self, start: [f64; 6], m: AxisMove, ctl: BlockCtl);
+    /// The open chain ends (called only after a block of it).
+    fn end(&mut self);
+}
+
+/// The sink that keeps every chain whole ([`ProgramBlocks`]).
+#[derive(Default)]
+struct Collect {
+    chains: Vec<([f64; 6], Vec<AxisMove>)>,
+    ctl: Vec<Vec<BlockCtl>>,
+    open: bool,
+}
+
+impl ChainSink for Collect {
+    fn block(&mut self, start: [f64; 6], m: AxisMove, ctl: BlockCtl) {
+        if !self.open {
+            self.chains.push((start, Vec::new()));
+            self.ctl.push(Vec::new());
+            self.open = true;
+        }
+        if let (Some(c), Some(k)) = (self.chains.last_mut(), self.ctl.last_mut()) {
+            c.1.push(m);
+            k.push(ctl);
+        }
+    }
+    fn end(&mut self) {
+        self.open = false;
+    }
+}
+
+/// How many blocks of a chain [`walk_program`] holds before it hands them on.
+const DRAIN_BATCH: usize = 64;
+
+/// Hands the blocks of the open chain whose mode can no longer change (all
+/// but the last `keep`) to `sink`, oldest first.
+fn drain_final(
+    cur: &mut Option<([f64; 6], Vec<AxisMove>)>,
+    ctl_cur: &mut Vec<BlockCtl>,
+    keep: usize,
+    sink: &mut dyn ChainSink,
+) {
+    if let Some(c) = cur.as_mut() {
+        let n = c.1.len().saturating_sub(keep).min(ctl_cur.len());
+        for (m, k) in c.1.drain(..n).zip(ctl_cur.drain(..n)) {
+            sink.block(c.0, m, k);
+        }
+    }
+}
+
+/// [`program_axis_moves`] block by block into `sink`, holding only the
+/// blocks of the move at hand; returns the seconds of dwells before any
+/// known position.
+pub(crate) fn walk_program(p: &Program, machine: &Machine, sink: &mut dyn ChainSink) -> f64 {
     let kin = machine.kinematics();
     let names = kin.map(|k| k.kind.rotary_names());
-    let mut chains: Vec<([f64; 6], Vec<AxisMove>)> = Vec::new();
     let mut rot = [0.0f64; 3];
     let mut cur: Option<([f64; 6], Vec<AxisMove>)> = None;
     let mut here: Option<[f64; 6]> = None;
@@ -746,26 +835,38 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
     // The path-control mode of every block, in step with the chains: the
     // blocks of a move take the mode in effect for it when the next move
     // (or the end) comes.
-    let mut ctls: Vec<Vec<BlockCtl>> = Vec::new();
     let mut ctl_cur: Vec<BlockCtl> = Vec::new();
     let mut st = BlockCtl::default();
     let mut stop_once = false;
-    let mut flush =
-        |cur: &mut Option<([f64; 6], Vec<AxisMove>)>, ctl_cur: &mut Vec<BlockCtl>, st: BlockCtl| {
-            sync_ctl(cur, ctl_cur, st, false);
-            if let Some(c) = cur.take() {
-                if !c.1.is_empty() {
-                    chains.push(c);
-                    ctls.push(std::mem::take(ctl_cur));
-                }
-            }
-            ctl_cur.clear();
-        };
+    // Whether the open chain has handed a block to the sink.
+    let mut open = false;
+    let flush = |cur: &mut Option<([f64; 6], Vec<AxisMove>)>,
+                 ctl_cur: &mut Vec<BlockCtl>,
+                 st: BlockCtl,
+                 open: &mut bool,
+                 sink: &mut dyn ChainSink| {
+        sync_ctl(cur, ctl_cur, st, false);
+        if cur.as_ref().is_some_and(|c| !c.1.is_empty()) {
+            drain_final(cur, ctl_cur, 0, sink);
+            *open = true;
+        }
+        if std::mem::take(open) {
+            sink.end();
+        }
+        *cur = None;
+        ctl_cur.clear();
+    };
     for op in &p.operations {
         for (i, m) in op.moves.iter().enumerate() {
             let o = op.orient(m);
             let start = op.known_start(i);
             sync_ctl(&cur, &mut ctl_cur, st, std::mem::take(&mut stop_once));
+            // Only the last block's mode may still change (a G09's stop);
+            // the others go on in batches.
+            if cur.as_ref().is_some_and(|c| c.1.len() > DRAIN_BATCH) {
+                drain_final(&mut cur, &mut ctl_cur, 1, sink);
+                open = true;
+            }
             for e in op.events_before(i) {
                 if let ir::EventKind::PathControl(pc) = &e.kind {
                     apply_path_control(&mut st, &mut stop_once, pc);
@@ -776,7 +877,7 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
             }
             if let Some(c) = op.cycle(m) {
                 let Some(at) = known(m.end) else {
-                    flush(&mut cur, &mut ctl_cur, st);
+                    flush(&mut cur, &mut ctl_cur, st, &mut open, sink);
                     here = None;
                     continue;
                 };
@@ -807,7 +908,7 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
                         across
                     }
                     None => {
-                        flush(&mut cur, &mut ctl_cur, st);
+                        flush(&mut cur, &mut ctl_cur, st, &mut open, sink);
                         let first = match steps.next() {
                             Some(CycleStep::Rapid(q) | CycleStep::Feed(q, _)) => q,
                             _ => at,
@@ -839,7 +940,7 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
                 continue;
             }
             let (Some(s), Some(e)) = (start, known(m.end)) else {
-                flush(&mut cur, &mut ctl_cur, st);
+                flush(&mut cur, &mut ctl_cur, st, &mut open, sink);
                 here = None;
                 continue;
             };
@@ -902,12 +1003,8 @@ pub fn program_axis_moves(p: &Program, machine: &Machine) -> ProgramBlocks {
         }
     }
     sync_ctl(&cur, &mut ctl_cur, st, stop_once);
-    flush(&mut cur, &mut ctl_cur, st);
-    ProgramBlocks {
-        chains,
-        ctl: ctls,
-        loose_dwell_s: loose.get(),
-    }
+    flush(&mut cur, &mut ctl_cur, st, &mut open, sink);
+    loose.get()
 }
 
 /// Gives the blocks of the open chain that have no mode yet `st`; with
@@ -968,7 +1065,128 @@ fn same_mode(a: PathMode, b: PathMode) -> bool {
 /// of known moves ([`program_axis_moves`]) timed by [`estimate_axes`], the
 /// figures summed. `per_move_s` is per machine block (arcs split into
 /// chords, cycles spelled out), in program order.
+///
+/// The chains are timed as they are made, block by block
+/// (`stream::ChainStream`, the same numbers to the bit): neither the
+/// machine blocks nor the planner's arrays are held for a whole chain.
 pub fn estimate_program(p: &Program, machine: &Machine) -> TimeEstimate {
+    estimate_program_with(p, machine, true)
+}
+
+/// [`estimate_program`] without `per_move_s` (left empty): the figures of
+/// a program in memory that does not grow with it.
+pub fn estimate_program_totals(p: &Program, machine: &Machine) -> TimeEstimate {
+    estimate_program_with(p, machine, false)
+}
+
+fn estimate_program_with(p: &Program, machine: &Machine, per_move: bool) -> TimeEstimate {
+    let lim = Limits::of(machine);
+    let mut s = Streamed {
+        per_move,
+        lim: &lim,
+        chain: None,
+        total: TimeEstimate {
+            planner: lim.planner.kind.name(),
+            ..TimeEstimate::default()
+        },
+        last: None,
+        chains: Vec::new(),
+    };
+    let loose = walk_program(p, machine, &mut s);
+    let mut total = s.total;
+    // The dwells before any known position first, then each chain's
+    // figures in order (as they have always been summed).
+    total.total_s = loose;
+    total.nominal_s = loose;
+    total.dwell_s = loose;
+    for e in s.chains {
+        total.total_s += e.total_s;
+        total.nominal_s += e.nominal_s;
+        total.rapid_s += e.rapid_s;
+        total.feed_s += e.feed_s;
+        total.dwell_s += e.dwell_s;
+        total.velocity_limited_blocks += e.velocity_limited_blocks;
+        total.accel_limited_blocks += e.accel_limited_blocks;
+    }
+    total
+}
+
+/// [`estimate_program`]'s sink: each chain timed as its blocks come.
+struct Streamed<'a> {
+    /// Whether `per_move_s` is kept.
+    per_move: bool,
+    lim: &'a Limits,
+    chain: Option<stream::ChainStream<'a>>,
+    total: TimeEstimate,
+    /// The entry of `by_mode` the last block went to, by its mode's bits: a
+    /// run of blocks under one mode is summed without naming it again.
+    last: Option<(PathMode, usize)>,
+    /// Each chain's figures, summed once the dwells outside them are known.
+    chains: Vec<stream::ChainTotals>,
+}
+
+impl ChainSink for Streamed<'_> {
+    fn block(&mut self, start: [f64; 6], m: AxisMove, ctl: BlockCtl) {
+        let lim = self.lim;
+        let chain = self
+            .chain
+            .get_or_insert_with(|| stream::ChainStream::new(start, lim));
+        let (total, last, keep) = (&mut self.total, &mut self.last, self.per_move);
+        chain.push(m, ctl, &mut |d| timed(total, last, d, keep));
+    }
+
+    fn end(&mut self) {
+        let Some(chain) = self.chain.take() else {
+            return;
+        };
+        let (total, last, keep) = (&mut self.total, &mut self.last, self.per_move);
+        let e = chain.finish(&mut |d| timed(total, last, d, keep));
+        self.chains.push(e);
+    }
+}
+
+/// One block's final time into the program's: its entry of `per_move_s`
+/// and, unless a dwell, the time of its path-control mode.
+fn timed(
+    total: &mut TimeEstimate,
+    last: &mut Option<(PathMode, usize)>,
+    d: stream::Timed,
+    per_move: bool,
+) {
+    if per_move {
+        total.per_move_s.push(d.t);
+    }
+    if d.dwell {
+        return;
+    }
+    let at = match *last {
+        Some((mode, i)) if same_mode(mode, d.ctl.mode) => i,
+        _ => {
+            let label = d.ctl.mode.label();
+            let i = match total.by_mode.iter().position(|b| b.mode == label) {
+                Some(i) => i,
+                None => {
+                    total.by_mode.push(ModeTime {
+                        mode: label,
+                        time_s: 0.0,
+                        blocks: 0,
+                    });
+                    total.by_mode.len() - 1
+                }
+            };
+            *last = Some((d.ctl.mode, i));
+            i
+        }
+    };
+    let b = &mut total.by_mode[at];
+    b.time_s += d.t;
+    b.blocks += 1;
+}
+
+/// The whole-chain estimate of a program ([`estimate_program`] as it was
+/// before it streamed): the reference the streamed one is tested against.
+#[cfg(test)]
+pub(crate) fn estimate_program_whole(p: &Program, machine: &Machine) -> TimeEstimate {
     let lim = Limits::of(machine);
     let blocks = program_axis_moves(p, machine);
     let mut total = TimeEstimate {
@@ -978,37 +1196,16 @@ pub fn estimate_program(p: &Program, machine: &Machine) -> TimeEstimate {
         ..TimeEstimate::default()
     };
     total.planner = lim.planner.kind.name();
-    // The entry of `by_mode` the last block went to, by its mode's bits: a
-    // run of blocks under one mode is summed without naming it again.
     let mut last: Option<(PathMode, usize)> = None;
     for ((start, moves), ctl) in blocks.chains.into_iter().zip(&blocks.ctl) {
         let e = estimate_controlled(start, &moves, ctl, &lim);
         for ((m, c), t) in moves.iter().zip(ctl).zip(&e.per_move_s) {
-            if matches!(m.kind, MoveKind::Dwell { .. }) {
-                continue;
-            }
-            let at = match last {
-                Some((mode, i)) if same_mode(mode, c.mode) => i,
-                _ => {
-                    let label = c.mode.label();
-                    let i = match total.by_mode.iter().position(|b| b.mode == label) {
-                        Some(i) => i,
-                        None => {
-                            total.by_mode.push(ModeTime {
-                                mode: label,
-                                time_s: 0.0,
-                                blocks: 0,
-                            });
-                            total.by_mode.len() - 1
-                        }
-                    };
-                    last = Some((c.mode, i));
-                    i
-                }
+            let d = stream::Timed {
+                t: *t,
+                dwell: matches!(m.kind, MoveKind::Dwell { .. }),
+                ctl: *c,
             };
-            let b = &mut total.by_mode[at];
-            b.time_s += t;
-            b.blocks += 1;
+            timed(&mut total, &mut last, d, false);
         }
         total.total_s += e.total_s;
         total.nominal_s += e.nominal_s;
@@ -1482,5 +1679,106 @@ mod tests {
         close(e5.nominal_s, e3.nominal_s, 1e-12);
         assert!(e5.total_s >= 4.0, "{e5:?}");
         assert!(e3.total_s < 2.0, "{e3:?}");
+    }
+
+    /// A G-code program of `n` lines: feed and rapid moves, arcs, dwells,
+    /// the path-control words (G61, G64, G64 P, G09), feeds changing, a
+    /// reference return that leaves the position unknown.
+    fn random_gcode(rng: &mut Rng, n: usize) -> String {
+        let mut s = String::from("G21 G90 G17\nT1 M6\nS8000 M3\nG0 X0 Y0 Z5\n");
+        let (mut x, mut y) = (0.0f64, 0.0f64);
+        for _ in 0..n {
+            let r = rng.next();
+            let (dx, dy) = if rng.next() < 0.6 {
+                (0.3 * (rng.next() - 0.5), 0.3 * (rng.next() - 0.5))
+            } else {
+                (20.0 * (rng.next() - 0.5), 20.0 * (rng.next() - 0.5))
+            };
+            let line = if r < 0.04 {
+                "G61".to_string()
+            } else if r < 0.08 {
+                "G64".to_string()
+            } else if r < 0.12 {
+                format!("G64 P{:.3}", 0.001 + 0.1 * rng.next())
+            } else if r < 0.14 {
+                format!("G4 P{:.2}", rng.next())
+            } else if r < 0.16 {
+                format!("G9 G1 X{:.4} Y{:.4}", x + dx, y + dy)
+            } else if r < 0.18 {
+                "G28".to_string()
+            } else if r < 0.25 {
+                format!("G0 X{:.4} Y{:.4} Z{:.4}", x + dx, y + dy, 5.0 * rng.next())
+            } else if r < 0.35 {
+                // A half circle through the chord's midpoint.
+                let g = if rng.next() < 0.5 { "G2" } else { "G3" };
+                format!(
+                    "{g} X{:.4} Y{:.4} I{:.4} J{:.4}",
+                    x + dx,
+                    y + dy,
+                    dx / 2.0,
+                    dy / 2.0
+                )
+            } else {
+                format!(
+                    "G1 X{:.4} Y{:.4} Z{:.4} F{:.0}",
+                    x + dx,
+                    y + dy,
+                    -rng.next(),
+                    200.0 + 3000.0 * rng.next()
+                )
+            };
+            if line.starts_with("G0 ")
+                || line.starts_with("G1 ")
+                || line.starts_with("G2")
+                || line.starts_with("G3")
+                || line.starts_with("G9")
+            {
+                x += dx;
+                y += dy;
+            }
+            if line == "G28" {
+                x = 0.0;
+                y = 0.0;
+            }
+            s += &line;
+            s.push('\n');
+        }
+        s + "M30\n"
+    }
+
+    /// Issue 32: the program's estimate, timed chain by chain as its blocks
+    /// come, is the whole-chain estimate to the bit (every figure, every
+    /// block's time, the time per mode) under each planner model.
+    #[test]
+    fn streamed_program_estimate_is_the_whole_one_to_the_bit() {
+        let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+        for case in 0..60 {
+            let src = random_gcode(&mut rng, 40 + case * 7);
+            let p = millplan_nc::parse_program(&src, millplan_nc::ReadOptions::default())
+                .unwrap_or_else(|e| panic!("{e}\n{src}"))
+                .program;
+            for kind in PlannerKind::ALL {
+                let mut m = Machine::default();
+                m.control.planner = Planner::of(kind);
+                let (a, b) = (estimate_program(&p, &m), estimate_program_whole(&p, &m));
+                let mut c = estimate_program_totals(&p, &m);
+                assert!(c.per_move_s.is_empty());
+                c.per_move_s.clone_from(&a.per_move_s);
+                assert_eq!(c, a, "case {case}, {kind:?}");
+                let key = |e: &TimeEstimate| {
+                    (
+                        [e.total_s, e.nominal_s, e.rapid_s, e.feed_s, e.dwell_s].map(f64::to_bits),
+                        e.per_move_s.iter().map(|t| t.to_bits()).collect::<Vec<_>>(),
+                        e.by_mode
+                            .iter()
+                            .map(|m| (m.mode.clone(), m.time_s.to_bits(), m.blocks))
+                            .collect::<Vec<_>>(),
+                        [e.velocity_limited_blocks, e.accel_limited_blocks],
+                        e.planner,
+                    )
+                };
+                assert_eq!(key(&a), key(&b), "case {case}, {kind:?}\n{src}");
+            }
+        }
     }
 }

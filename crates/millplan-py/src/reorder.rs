@@ -4,12 +4,12 @@
 
 use crate::error::{guard, option_error, Located, Place, Res};
 use millplan_driver::command_defaults::{cutting, reorder as defaults};
+use millplan_driver::reorder::{self as lib, ReorderRequest};
 use millplan_geom::TriMesh;
 use millplan_nc::Program;
 use millplan_plan::machine::Machine;
-use millplan_plan::pipeline::{self, Context, Pass};
-use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Start};
-use millplan_plan::speed::{SpeedParams, SpeedPass};
+use millplan_plan::pipeline::Context;
+use millplan_plan::reorder::{Method, ReorderParams, Start};
 use pyo3::prelude::*;
 
 /// The options of `reorder` as Python gives them.
@@ -28,8 +28,9 @@ fn bad(what: &str, m: String) -> Located {
     Located::new(Place::file(what), m)
 }
 
-/// The pass's parameters, as the command builds them from its options.
-pub fn params(o: &Options) -> Res<ReorderParams> {
+/// The request of `millplan reorder` and the pass's parameters, checked as
+/// the command checks them.
+pub fn request(o: &Options, speed: bool) -> Res<(ReorderRequest, ReorderParams)> {
     let method = match o.method.unwrap_or("as-run") {
         "as-run" => Method::AsRun,
         "paper" => Method::Paper,
@@ -44,81 +45,43 @@ pub fn params(o: &Options) -> Res<ReorderParams> {
         (None, "random") => Start::Random(seed),
         (None, x) => return Err(bad("start", format!("{x:?}: lowest, highest or random"))),
     };
-    let req = millplan_driver::speed::SpeedRequest {
+    let req = ReorderRequest {
+        method,
+        start,
+        n_min: o.n_min.unwrap_or(defaults::N_MIN),
+        tie: o.tie.unwrap_or(defaults::TIE),
+        max_step: o.max_step.unwrap_or(defaults::MAX_STEP),
         cut: o.cut,
-        ball_d: None,
-        s_threshold: millplan_driver::command_defaults::speed::S_THRESHOLD,
-        keep_feed: false,
-        convention: None,
-        normals: millplan_driver::speed::NormalMode::Smooth,
-        nearest_incentre: false,
-        keep_rows: false,
+        speed,
     };
-    millplan_driver::speed::check(&req).map_err(|e| option_error(&e))?;
-    let max_step = o.max_step.unwrap_or(defaults::MAX_STEP);
-    let tie = o.tie.unwrap_or(defaults::TIE);
-    millplan_driver::check::arg(
-        "--max-step",
-        max_step,
-        millplan_driver::check::Range::from(0.0, 1000.0, "mm"),
-    )
-    .map_err(|e| option_error(&e))?;
-    millplan_driver::check::arg(
-        "--tie",
-        tie,
-        millplan_driver::check::Range::from(0.0, 100.0, "mm"),
-    )
-    .map_err(|e| option_error(&e))?;
-    let mut rp = ReorderParams::new(method);
-    rp.start = start;
-    rp.n_min = o.n_min.unwrap_or(defaults::N_MIN);
-    rp.tie = tie;
-    rp.max_step = (max_step > 0.0).then_some(max_step);
-    rp.ap = o.cut.ap;
-    rp.vc = o.cut.vc;
-    rp.speed = speed_params(o.cut);
-    Ok(rp)
+    let rp = req.params().map_err(|e| option_error(&e))?;
+    Ok((req, rp))
 }
 
-fn speed_params(c: millplan_driver::speed::Cutting) -> SpeedParams {
-    let mut p = SpeedParams::new(c.vc, c.fz, c.flutes, c.ap);
-    p.keep_rows = false;
-    p
-}
-
-/// The passes over a copy of `input`, the checks, the summary (JSON).
+/// The run of `millplan reorder` (the driver's `reorder::command`) on a
+/// copy of `input`; the summary (JSON).
 fn run(
     input: &Program,
     mesh: &TriMesh,
     machine: Machine,
-    rp: ReorderParams,
-    speed: bool,
+    (req, rp): (ReorderRequest, ReorderParams),
     method: &str,
 ) -> Res<(Program, String)> {
     guard("reorder", || {
         let err = |e: String| Located::new(Place::file("reorder"), e);
-        let mut program = input.clone();
         let cx = Context::new(machine).with_part(mesh);
-        let mut reorder = ReorderPass::new(rp);
-        let mut sp = SpeedPass::new(rp.speed);
-        let mut passes: Vec<&mut dyn Pass> = vec![&mut reorder];
-        if speed {
-            passes.push(&mut sp);
-        }
-        pipeline::run(&mut passes, &mut program, &cx).map_err(|e| err(e.to_string()))?;
-        let o = reorder
-            .outcome
-            .take()
-            .ok_or_else(|| err("the pass left no outcome".into()))?;
-        let checks = millplan_driver::reorder::check(input, &program, &cx);
-        let s = millplan_driver::reorder::Summary::new(
+        let r = lib::command(&req, rp, &cx, input).map_err(|e| match e {
+            lib::ReorderError::Pass(e) => err(e.to_string()),
+            lib::ReorderError::NoOutcome => err("the pass left no outcome".into()),
+        })?;
+        let s = lib::Summary::new(
             Some(method.to_string()),
-            &o,
+            &r.outcome,
             String::new(),
-            &checks,
+            &r.checks,
         );
         let json = serde_json::to_string(&s).map_err(|e| err(e.to_string()))?;
-        Ok((program, json))
+        Ok((r.program, json))
     })
 }
 
@@ -161,12 +124,12 @@ pub fn reorder(
             ap: ap.unwrap_or(cutting::AP),
         },
     };
-    let rp = params(&o)?;
+    let req = request(&o, speed)?;
     let (input, _) = crate::job::program_arg(program)?;
     let mesh = crate::job::mesh_arg(part)?;
     let m = crate::program::machine(machine.map(|m| m.display().to_string()).as_deref())?;
     let method = method.unwrap_or("as-run").to_string();
-    let (prog, json) = py.detach(|| run(&input, &mesh, m, rp, speed, &method))?;
+    let (prog, json) = py.detach(|| run(&input, &mesh, m, req, &method))?;
     Ok((
         crate::program::PyProgram::of(prog),
         crate::json_to_py(py, &json)?,

@@ -6,7 +6,7 @@
 use crate::error::{guard, option_error, read_bytes, write_bytes, Located, Place, Res};
 use millplan_driver::command_defaults::simulate as defaults;
 use millplan_driver::simulate::{self as lib, SimRequest};
-use millplan_driver::{StockError, StockSpec};
+use millplan_driver::StockSpec;
 use millplan_geom::TriMesh;
 use millplan_nc::Program;
 use millplan_sim::stock::sim::MoveCut;
@@ -40,37 +40,38 @@ fn blank(spec: &StockSpec) -> Res<Option<TriMesh>> {
     Ok(Some(crate::mesh::parse_stl(&p, &read_bytes(&p)?)?.0))
 }
 
-/// The run as `millplan simulate` does it: strokes, the stock built, the
-/// simulation, what is left on the part, the stock's STL written.
+/// The run of `millplan simulate` (the driver's `simulate::command`: the
+/// strokes, the stock built, the simulation, what is left on the part), the
+/// stock's STL written.
 fn run(req: &SimRequest, g: &Given) -> Res<Ran> {
     guard(g.name, || {
-        let err = |e: String| crate::error::located(&e);
         let spec = StockSpec::parse(g.stock)
             .map_err(|e| Located::new(Place::file("stock"), e.to_string()))?;
-        let strokes = lib::program_strokes(req, g.name, g.program, g.rapid).map_err(err)?;
-        let memory = millplan_geom::limits::Limits::default().memory;
-        let mut stock = spec
-            .build(
-                req.resolution,
-                &strokes,
-                g.part,
-                blank(&spec)?.as_ref(),
-                memory,
-            )
-            .map_err(|e| match e {
-                StockError::NoCut => Located::new(Place::file(g.name), e.to_string()),
-                e => Located::new(Place::file("stock"), e.to_string()),
-            })?;
-        let rep = millplan_driver::simulate_stock(&mut stock, &strokes, req.tol, &|_| {});
-        let rem = g.part.map(|p| lib::remaining_on(&stock, p, req.tol));
+        let blank = blank(&spec)?;
+        let inputs = lib::SimInputs {
+            name: g.name,
+            program: g.program,
+            stock: g.stock,
+            spec: &spec,
+            part: g.part,
+            blank: blank.as_ref(),
+            rapid: g.rapid,
+            memory: millplan_geom::limits::Limits::default().memory,
+        };
+        let sim = lib::command(req, &inputs, &mut |_| {}, &|_, _| {}).map_err(|e| match e {
+            lib::SimError::Program(e) => crate::error::located(&e),
+            lib::SimError::Stock(e) => match e.strip_prefix(&format!("{}: ", g.name)) {
+                Some(m) => Located::new(Place::file(g.name), m),
+                None => Located::new(Place::file("stock"), e),
+            },
+        })?;
         if let Some(o) = g.output {
-            write_bytes(o, &lib::stock_stl(&stock, req.mesh_resolution))?;
+            write_bytes(o, &lib::stock_stl(&sim.stock, req.mesh_resolution))?;
         }
-        let report = lib::Report::new(&rep, g.stock, rem.as_ref());
-        let report_json = serde_json::to_string(&report)
+        let report_json = serde_json::to_string(&sim.report(g.stock))
             .map_err(|e| Located::new(Place::file(g.name), e.to_string()))?;
         Ok(Ran {
-            moves: rep.per_move,
+            moves: sim.run.per_move,
             report_json,
         })
     })

@@ -68,27 +68,18 @@ pub struct Ran {
     pub report_json: String,
 }
 
-/// The pass on `input` over `mesh`, its checks, the part's findings and the
-/// times before and after, as `millplan speed` runs them.
+/// `millplan speed`'s run (the driver's `speed::command`: the pass, its
+/// checks, the part's findings) on `input` over `mesh`, with the times
+/// before and after.
 pub fn run(req: &SpeedRequest, input: &Program, mesh: &TriMesh, machine: Machine) -> Res<Ran> {
     guard("speed", || {
-        let time_before = millplan_plan::timing::estimate_program(input, &machine).total_s;
+        let time_before = lib::cycle_time(input, &machine);
         let cx = Context::new(machine).with_surface(Surface::new(mesh));
-        let (program, mut pass) =
-            lib::run(req, &cx, input).map_err(|e| place("speed", e.to_string()))?;
-        let checks = lib::checks(&cx, input, &program);
-        let summary = pass
-            .summary
-            .take()
-            .ok_or_else(|| place("speed", "the pass left no summary"))?;
-        let findings: Vec<_> = [
-            millplan_plan::checks::mesh(mesh),
-            millplan_plan::checks::off_surface(&summary),
-        ]
-        .into_iter()
-        .flatten()
-        .collect();
-        let time_after = millplan_plan::timing::estimate_program(&program, &cx.machine).total_s;
+        let out = lib::command(req, &cx, mesh, input.clone()).map_err(|e| match e {
+            lib::SpeedError::Pass(e) => place("speed", e.to_string()),
+            lib::SpeedError::NoSummary => place("speed", "the pass left no summary"),
+        })?;
+        let time_after = lib::cycle_time(&out.program, &cx.machine);
         let target = millplan_driver::target::output_target(
             None,
             std::path::Path::new(""),
@@ -96,18 +87,13 @@ pub fn run(req: &SpeedRequest, input: &Program, mesh: &TriMesh, machine: Machine
             input.source,
         )
         .map_err(|e| place("speed", e))?;
-        let report = lib::Report::new(
-            (&summary, &checks),
-            (String::new(), target),
-            &cx.machine,
-            &findings,
-            [time_before, time_after],
-        );
+        let times = [time_before, time_after];
+        let report = out.report((String::new(), target), &cx.machine, times);
         let report_json =
             serde_json::to_string(&report).map_err(|e| place("speed", e.to_string()))?;
         Ok(Ran {
-            program,
-            rows: std::mem::take(&mut pass.rows),
+            program: out.program,
+            rows: out.rows,
             report_json,
         })
     })

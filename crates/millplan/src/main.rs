@@ -97,7 +97,8 @@ enum Command {
 /// against 0.4–0.6 ms per MB for small pages; `speed` on a million points
 /// faulted about 480 MB of them for 0.6–1.1 s of kernel time), while on
 /// bare metal huge pages save page-table walks. Nothing is switched
-/// process-wide unless asked for.
+/// process-wide unless asked for, but by `inspect` (its own choice: it
+/// holds one flat array of moves, where huge pages only add slack).
 fn small_pages_if_asked() -> bool {
     let asked = std::env::var_os("MILLPLAN_SMALL_PAGES").is_some_and(|v| v == "1");
     if asked {

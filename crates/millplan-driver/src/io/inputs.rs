@@ -338,6 +338,37 @@ fn sibling_src(dir: &Path, name: &str) -> Option<PathBuf> {
     })
 }
 
+/// The machine of `--machine FILE` (the machine file, or either of the two
+/// older single-purpose files; a field's error at `file:line:col`), or the
+/// built-in default.
+pub fn read_machine(path: Option<&Path>) -> IoResult<millplan_plan::machine::Machine> {
+    let Some(p) = path else {
+        return Ok(millplan_plan::machine::Machine::default());
+    };
+    let text = std::fs::read_to_string(p)
+        .map_err(|e| IoError::input(format!("{}: cannot read: {e}", p.display())))?;
+    millplan_plan::machine::Machine::from_toml(&text).map_err(|e| {
+        // `file:line:col: field: message` when the error has a place.
+        let sep = if e.at.is_some() { ":" } else { ": " };
+        IoError::input(format!("{}{sep}{e}", p.display()))
+    })
+}
+
+/// The robot of `--robot NAME`: `kr240`, the bundled KUKA KR 240 R2500, or
+/// a robot file in its TOML form (a TOML error at `file:line:col`).
+pub fn read_robot(name: &str) -> IoResult<millplan_robot::Robot> {
+    if name == "kr240" {
+        return Ok(millplan_robot::Robot::kr240());
+    }
+    let p = Path::new(name);
+    let text = std::fs::read_to_string(p)
+        .map_err(|e| IoError::input(format!("{}: cannot read: {e}", p.display())))?;
+    millplan_robot::Robot::from_toml(&text).map_err(|e| match e {
+        millplan_robot::RobotError::Toml { .. } => IoError::input(format!("{}:{e}", p.display())),
+        _ => IoError::input(format!("{}: {e}", p.display())),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -406,5 +437,33 @@ mod tests {
             "{e}"
         );
         std::fs::remove_dir_all(&dir).expect("clean");
+    }
+
+    /// A machine file's field error is located at its line and column and
+    /// named; a file that cannot be read says so; none given is the
+    /// built-in machine.
+    #[test]
+    fn a_machine_file_is_read_or_located() {
+        let dir = tempfile::tempdir().expect("tmp");
+        let bad = dir.path().join("m.toml");
+        let text = "[spindle]\nmin = 500\nmax = nan\naccel = 6000\n[feed]\nmax = 20000\n";
+        std::fs::write(&bad, text).expect("write");
+        let Err(e) = read_machine(Some(&bad)) else {
+            panic!("a NaN spindle maximum is refused")
+        };
+        let want = format!(
+            "{}:3:7: spindle.max: must be from 1 to 1000000 1/min, got NaN",
+            bad.display()
+        );
+        assert_eq!(e.message, want);
+        let gone = dir.path().join("gone.toml");
+        let Err(e) = read_machine(Some(&gone)) else {
+            panic!("a missing file is refused")
+        };
+        assert!(e
+            .message
+            .starts_with(&format!("{}: cannot read", gone.display())));
+        let d = read_machine(None).expect("default");
+        assert_eq!(d.name, millplan_plan::machine::Machine::default().name);
     }
 }

@@ -215,7 +215,7 @@ pub(crate) struct Shaped {
 
 /// How a junction is passed.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Joint {
+pub(super) enum Joint {
     /// The motion stops.
     Stop,
     /// The motion stops and the first block ends at rest whatever the mode
@@ -244,13 +244,13 @@ const KINK_RATIO: f64 = 0.1;
 const MIN_SEGMENT_CYCLES: f64 = 1.02;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct BlendArc {
+pub(super) struct BlendArc {
     /// Acceleration along the arc.
-    accel: f64,
+    pub(super) accel: f64,
     /// Taken off the end of the first block and the start of the second.
-    trim: f64,
-    len: f64,
-    vcap: f64,
+    pub(super) trim: f64,
+    pub(super) len: f64,
+    pub(super) vcap: f64,
 }
 
 /// Shapes the prepared blocks of one chain for the planner (module doc).
@@ -318,16 +318,7 @@ fn linuxcnc_accels(
 ) {
     let n = bs.len();
     let mut half: Vec<bool> = (0..n)
-        .map(|k| {
-            let c = ctl_of(k);
-            let parabolic_end = c.mode != PathMode::ExactStop
-                && !c.stop_after
-                && !matches!(
-                    joints[k + 1],
-                    Joint::Tangent | Joint::Arc(_) | Joint::Kink(_) | Joint::HardStop
-                );
-            parabolic_end || matches!(joints[k], Joint::Parabolic(_))
-        })
+        .map(|k| own_half(&ctl_of(k), &joints[k], &joints[k + 1]))
         .collect();
     // The chords of one arc are one segment to LinuxCNC: all or none.
     for k in (0..n.saturating_sub(1)).rev() {
@@ -341,11 +332,30 @@ fn linuxcnc_accels(
         }
     }
     for ((b, h), r) in bs.iter_mut().zip(half).zip(kinked) {
-        if h {
-            b.accel *= pl.blend_accel_scale;
-        }
-        b.accel *= 1.0 - r;
+        share_accel(b, h, *r, pl);
     }
+}
+
+/// Whether LinuxCNC gives block `c` (entered by `into`, left by `out`) the
+/// blend share of its acceleration by itself: it blends at its end without
+/// an arc, or its start is a parabolic blend.
+pub(super) fn own_half(c: &BlockCtl, into: &Joint, out: &Joint) -> bool {
+    let parabolic_end = c.mode != PathMode::ExactStop
+        && !c.stop_after
+        && !matches!(
+            out,
+            Joint::Tangent | Joint::Arc(_) | Joint::Kink(_) | Joint::HardStop
+        );
+    parabolic_end || matches!(into, Joint::Parabolic(_))
+}
+
+/// A block's acceleration under LinuxCNC: the blend share when `half`, less
+/// the share `kinked` its kinks take.
+pub(super) fn share_accel(b: &mut Block, half: bool, kinked: f64, pl: &Planner) {
+    if half {
+        b.accel *= pl.blend_accel_scale;
+    }
+    b.accel *= 1.0 - kinked;
 }
 
 /// The blocks the control runs (blend arcs between their trimmed
@@ -358,31 +368,11 @@ fn emit(bs: &[Block], joints: &[Joint], trimmed: &[f64]) -> Shaped {
     };
     out.vj.push(0.0);
     for k in 0..n {
-        let mut b = bs[k];
-        let end_trim = match joints[k + 1] {
-            Joint::Arc(a) => a.trim,
-            _ => 0.0,
-        };
-        b.len = (b.len - trimmed[k] - end_trim).max(0.0);
-        out.blocks.push(b);
         let next_cap = bs.get(k + 1).map_or(0.0, |x| x.vcap);
-        match joints[k + 1] {
-            Joint::Arc(a) => {
-                out.vj.push(a.vcap.min(b.vcap));
-                let mut arc = b;
-                arc.len = a.len;
-                arc.vcap = a.vcap;
-                arc.vgeom = a.vcap;
-                arc.accel = a.accel;
-                out.blocks.push(arc);
-                out.vj.push(a.vcap.min(next_cap));
-            }
-            Joint::Stop | Joint::HardStop => out.vj.push(0.0),
-            Joint::Tangent => out.vj.push(b.vcap.min(next_cap)),
-            Joint::At(v) | Joint::Parabolic(v) | Joint::Kink(v) => {
-                out.vj.push(v.min(b.vcap).min(next_cap))
-            }
-        }
+        emit_one(bs[k], trimmed[k], joints[k + 1], next_cap, &mut |b, v| {
+            out.blocks.push(b);
+            out.vj.push(v);
+        });
     }
     if let Some(last) = out.vj.last_mut() {
         *last = 0.0;
@@ -390,10 +380,41 @@ fn emit(bs: &[Block], joints: &[Joint], trimmed: &[f64]) -> Shaped {
     out
 }
 
+/// The blocks the control runs for block `b` (its start trimmed by
+/// `trimmed`, left by `out`, the next block capped at `next_cap`), each
+/// with the speed limit at its end: `b` itself, and the blend arc after it.
+pub(super) fn emit_one(
+    mut b: Block,
+    trimmed: f64,
+    out: Joint,
+    next_cap: f64,
+    push: &mut dyn FnMut(Block, f64),
+) {
+    let end_trim = match out {
+        Joint::Arc(a) => a.trim,
+        _ => 0.0,
+    };
+    b.len = (b.len - trimmed - end_trim).max(0.0);
+    match out {
+        Joint::Arc(a) => {
+            push(b, a.vcap.min(b.vcap));
+            let mut arc = b;
+            arc.len = a.len;
+            arc.vcap = a.vcap;
+            arc.vgeom = a.vcap;
+            arc.accel = a.accel;
+            push(arc, a.vcap.min(next_cap));
+        }
+        Joint::Stop | Joint::HardStop => push(b, 0.0),
+        Joint::Tangent => push(b, b.vcap.min(next_cap)),
+        Joint::At(v) | Joint::Parabolic(v) | Joint::Kink(v) => push(b, v.min(b.vcap).min(next_cap)),
+    }
+}
+
 /// A block as the planner runs it alone: its cap within its block time and,
 /// on an arc, within the normal acceleration; its acceleration along an arc
 /// and its jerk by the profile in effect.
-fn own_block(b: &Block, cap: f64, c: &BlockCtl, pl: &Planner) -> Block {
+pub(super) fn own_block(b: &Block, cap: f64, c: &BlockCtl, pl: &Planner) -> Block {
     let mut b = *b;
     b.vcap = cap;
     if let (Some(a), false) = (pl.path_accel, b.rotary_only) {
@@ -419,7 +440,7 @@ fn own_block(b: &Block, cap: f64, c: &BlockCtl, pl: &Planner) -> Block {
 
 /// How the junction from `a` to `b` is passed, and the share of their
 /// acceleration it takes from both blocks (LinuxCNC's kinks).
-fn joint(
+pub(super) fn joint(
     a: &Block,
     b: &Block,
     ca: &BlockCtl,
@@ -646,14 +667,7 @@ fn parabolic_speed(a: &Block, b: &Block, ca: &BlockCtl, acc: f64, th: f64) -> f6
 /// stops within the next `depth` blocks.
 fn lookahead(s: &mut Shaped, ctl: Option<&[BlockCtl]>, pl: &Planner) {
     let n = s.blocks.len();
-    let depth_of = |b: &Block| {
-        let on = ctl.is_some_and(|c| c[b.index].lookahead_on);
-        if pl.plain_lookahead > 0 && !on {
-            pl.plain_lookahead
-        } else {
-            pl.lookahead
-        }
-    };
+    let depth_of = |b: &Block| depth(ctl.is_some_and(|c| c[b.index].lookahead_on), pl);
     if n == 0 || s.blocks.iter().all(|b| depth_of(b) == 0) {
         return;
     }
@@ -667,13 +681,27 @@ fn lookahead(s: &mut Shaped, ctl: Option<&[BlockCtl]>, pl: &Planner) {
             continue;
         }
         let end = (k + d).min(n);
-        let seen = prefix[end] - prefix[k];
         let a = s.blocks[k..end]
             .iter()
             .map(|b| b.accel)
             .fold(f64::INFINITY, f64::min);
-        s.vj[k] = s.vj[k].min((2.0 * a * seen).sqrt());
+        s.vj[k] = stop_within(s.vj[k], a, prefix[end] - prefix[k]);
     }
+}
+
+/// The blocks the control plans ahead of a block, its look-ahead function
+/// `on` or not (0: as many as needed).
+pub(super) fn depth(on: bool, pl: &Planner) -> usize {
+    if pl.plain_lookahead > 0 && !on {
+        pl.plain_lookahead
+    } else {
+        pl.lookahead
+    }
+}
+
+/// Junction speed `v` at most what stops within `seen` at acceleration `a`.
+pub(super) fn stop_within(v: f64, a: f64, seen: f64) -> f64 {
+    v.min((2.0 * a * seen).sqrt())
 }
 
 #[cfg(test)]

@@ -19,10 +19,8 @@ pub struct Args {
     /// Folder for the demo's outputs (created if missing).
     #[arg(short, long, default_value = "millplan-demo")]
     pub output: PathBuf,
-    /// Print a machine-readable summary (JSON) on standard output; errors too,
-    /// as JSON on standard error.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
     /// Print one line (the folder and the report to open) instead of the
     /// summary and every file written.
     #[arg(long, short)]
@@ -57,7 +55,7 @@ pub fn run(a: Args) -> CliResult<i32> {
 
 /// What the demo made and where, and what spindle control did on it.
 fn print_summary(a: &Args, written: &[(PathBuf, Vec<u8>)], d: &Demo) {
-    if a.json {
+    if a.summary.json {
         let paths: Vec<String> = written
             .iter()
             .map(|(p, _)| p.display().to_string())

@@ -3,7 +3,7 @@
 
 use crate::cmd::{read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::{read_program, read_surface};
+use crate::io::read_program;
 use clap::ValueEnum;
 use millplan_plan::directions::{rank, raster_candidates, Candidate, RankBy as By};
 use millplan_plan::pipeline::Context;
@@ -48,10 +48,8 @@ pub struct Args {
     /// Part surface (STL) in the same coordinates as the paths.
     #[arg(long)]
     pub stl: PathBuf,
-    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
-    /// converted to mm on reading.
-    #[arg(long, value_enum)]
-    pub stl_units: Option<UnitArg>,
+    #[command(flatten)]
+    pub part_units: crate::cmd::args::PartUnits,
     #[command(flatten)]
     pub cut: super::CuttingData,
     /// Machine file (examples/machine.toml): the spindle range and acceleration the
@@ -65,10 +63,8 @@ pub struct Args {
     /// inch.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
-    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
-    /// on standard error.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
 }
 
 /// The generated rasters' arguments in range, and their points (counted
@@ -97,7 +93,7 @@ fn check_rasters(a: &Args, bounds: &millplan_geom::Aabb) -> CliResult<millplan_d
 pub fn run(a: Args) -> CliResult<i32> {
     a.cut.check()?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
+    let mesh = a.part_units.read(&a.stl)?;
     let cx = Context::new(machine).with_part(&mesh);
     let mut candidates = Vec::new();
     if !a.angles.is_empty() {
@@ -120,7 +116,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     let ranked = rank(candidates, &cx, &a.cut.params(), by)
         .map_err(|e| crate::cmd::pass_error(&a.stl, e))?;
-    if a.json {
+    if a.summary.json {
         let j = millplan_driver::directions::Report::new(format!("{:?}", a.by), &ranked);
         crate::cmd::print_json(serde_json::to_value(j).unwrap_or_default());
     } else {

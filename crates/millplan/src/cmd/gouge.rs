@@ -2,7 +2,7 @@
 
 use crate::cmd::{print_diagnostics, read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_program, read_surface};
+use crate::io::read_program;
 use millplan_driver::gouge::{self as lib, GougeRequest, BYTES_PER_SAMPLE};
 use millplan_plan::checks;
 use std::path::PathBuf;
@@ -23,10 +23,8 @@ pub struct Args {
     /// Part surface (STL).
     #[arg(long)]
     pub stl: PathBuf,
-    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
-    /// converted to mm on reading.
-    #[arg(long, value_enum)]
-    pub stl_units: Option<UnitArg>,
+    #[command(flatten)]
+    pub part_units: crate::cmd::args::PartUnits,
     /// Depth that counts as a gouge, mm.
     #[arg(long, default_value_t = millplan_driver::command_defaults::gouge::TOL)]
     pub tol: f64,
@@ -43,13 +41,10 @@ pub struct Args {
     /// inch.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
-    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
-    /// on standard error.
-    #[arg(long)]
-    pub json: bool,
-    /// Print no warnings or notes about the inputs (errors still print).
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -61,16 +56,20 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     let (g, fallback) = lib::params(&req).map_err(CliError::input)?;
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
-    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    print_diagnostics(
+        &a.path,
+        &parsed.diagnostics,
+        a.notes.quiet || a.summary.json,
+    );
     let path = a.path.display().to_string();
     if fallback.is_none() {
         lib::shape_is_known(&path, &parsed.program).map_err(CliError::input)?;
     }
-    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
+    let mesh = a.part_units.read(&a.stl)?;
     print_diagnostics(
         &a.stl,
         &checks::mesh(&mesh).into_iter().collect::<Vec<_>>(),
-        a.quiet || a.json,
+        a.notes.quiet || a.summary.json,
     );
     // Counted first: a step of 1e-9 on a long program is refused, not run.
     let n = lib::sample_count(&parsed.program, fallback, &g);
@@ -83,17 +82,18 @@ pub fn run(a: Args) -> CliResult<i32> {
         n * BYTES_PER_SAMPLE,
     )?;
     // Some 300,000 points a second: a bar from a second's worth on.
-    let bar = crate::progress::count(n as u64, "gouge check", "points", !a.quiet && n >= 3e5);
+    let bar = crate::progress::count(
+        n as u64,
+        "gouge check",
+        "points",
+        !a.notes.quiet && n >= 3e5,
+    );
     let rep = lib::check(&parsed.program, &mesh, fallback, &g, &|done, _| {
         bar.set_position(done as u64)
     });
     bar.finish_and_clear();
     let report = lib::Report::new(&rep, a.tol);
-    if a.json {
-        crate::cmd::print_json(serde_json::to_value(&report).unwrap_or_default());
-    } else {
-        out!("{}", report.render_text(&path));
-    }
+    a.summary.print(&report, |r| r.render_text(&path));
     if rep.moves_checked == 0 {
         return Err(CliError::input(format!(
             "{path}: no move could be checked ({})",

@@ -1,5 +1,6 @@
 //! One file per subcommand.
 
+pub mod args;
 pub mod completions;
 pub mod convert;
 pub mod cut;
@@ -30,17 +31,12 @@ use clap::ValueEnum;
 use millplan_nc::write::{Target, WriteOptions};
 use millplan_nc::{LengthUnit, ReadOptions};
 
-pub use millplan_driver::check::{Range, MAX_FEED, MAX_SPINDLE, MAX_TOOL_D, MAX_VC};
+pub use millplan_driver::check::{Range, MAX_FEED};
 
 /// Checks a numeric argument: finite and in its range, else an error naming
 /// the option, the value and the range (exit 2).
 pub fn arg(flag: &str, v: f64, r: Range) -> CliResult<f64> {
     millplan_driver::check::arg(flag, v, r).map_err(CliError::input)
-}
-
-/// Checks a cutter from `--tool`: its diameter at most [`MAX_TOOL_D`].
-pub fn tool_shape(flag: &str, s: &str) -> CliResult<millplan_driver::Shape> {
-    millplan_driver::check::tool_shape(flag, s).map_err(CliError::input)
 }
 
 /// Cutting data for the commands that evaluate spindle control along the way;
@@ -65,11 +61,7 @@ pub struct CuttingData {
 impl CuttingData {
     /// Checks every value against its physical range.
     pub fn check(&self) -> CliResult<()> {
-        arg("--vc", self.vc, Range::positive(MAX_VC, "m/min"))?;
-        arg("--fz", self.fz, Range::positive(10.0, "mm"))?;
-        arg("--flutes", self.flutes as f64, Range::from(1.0, 1000.0, ""))?;
-        arg("--ap", self.ap, Range::positive(MAX_TOOL_D / 2.0, "mm"))?;
-        Ok(())
+        self.cutting().check().map_err(CliError::input)
     }
 
     /// The values, as the library takes them.
@@ -85,9 +77,7 @@ impl CuttingData {
     /// Spindle-control settings for commands that read only the summary and
     /// the program (no per-point rows).
     pub fn params(&self) -> millplan_plan::speed::SpeedParams {
-        let mut p = millplan_plan::speed::SpeedParams::new(self.vc, self.fz, self.flutes, self.ap);
-        p.keep_rows = false;
-        p
+        self.cutting().params()
     }
 }
 
@@ -255,17 +245,5 @@ pub fn print_diagnostics(path: &std::path::Path, diags: &[millplan_nc::Diagnosti
 pub fn load_machine(
     path: Option<&std::path::Path>,
 ) -> crate::error::CliResult<millplan_plan::machine::Machine> {
-    use crate::error::CliError;
-    match path {
-        Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .map_err(|e| CliError::input(format!("{}: cannot read: {e}", p.display())))?;
-            millplan_plan::machine::Machine::from_toml(&text).map_err(|e| {
-                // `file:line:col: field: message` when the error has a place.
-                let sep = if e.at.is_some() { ":" } else { ": " };
-                CliError::input(format!("{}{sep}{e}", p.display()))
-            })
-        }
-        None => Ok(millplan_plan::machine::Machine::default()),
-    }
+    Ok(millplan_driver::io::inputs::read_machine(path)?)
 }

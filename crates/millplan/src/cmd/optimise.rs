@@ -1,14 +1,14 @@
 //! `millplan optimise`: the compiler driver — parses, reads the files,
 //! builds a `millplan_driver::Job`, runs it and prints.
 
-use crate::cmd::{arg, print_diagnostics, read_options, tool_shape, Range, TargetArg, UnitArg};
+use crate::cmd::{print_diagnostics, read_options, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_mesh, read_program, read_surface, Outputs};
 use millplan_driver::passes::{self, ORDER};
 use millplan_driver::report::{self, InputNames, Plotted};
 use millplan_driver::tools::{self, Library};
 use millplan_driver::StockSpec;
-use millplan_driver::{Inputs, Job, Options, Outcome, UserLimits, Verdict, Written};
+use millplan_driver::{Inputs, Job, Options, OptionsRequest, Outcome, Verdict, Written};
 use std::path::{Path, PathBuf};
 
 /// Take a CAM program to a verified, better program for one machine, stock,
@@ -137,35 +137,18 @@ pub struct Args {
 }
 
 fn options(a: &Args) -> CliResult<Options> {
-    let pos = |flag: &str, v: Option<f64>, hi: f64, unit: &'static str| {
-        v.map(|v| arg(flag, v, Range::positive(hi, unit)))
-            .transpose()
-    };
-    let tool = a
-        .tool
-        .as_deref()
-        .map(|s| tool_shape("--tool", s))
-        .transpose()?;
-    if let Some(f) = a.flutes {
-        arg("--flutes", f as f64, Range::from(1.0, 64.0, ""))?;
-    }
-    Ok(Options {
-        vc: pos("--vc", a.vc, crate::cmd::MAX_VC, "m/min")?,
-        spindle: pos("--spindle", a.spindle, crate::cmd::MAX_SPINDLE, "1/min")?,
-        tool,
+    Options::checked(&OptionsRequest {
+        vc: a.vc,
+        spindle: a.spindle,
+        tool: a.tool.clone(),
         flutes: a.flutes,
-        resolution: a
-            .resolution
-            .map(|v| arg("--resolution", v, Range::from(0.005, 100.0, "mm")))
-            .transpose()?,
-        limits: UserLimits::parse(&crate::limits::loads()).map_err(CliError::input)?,
-        tol: a
-            .tol
-            .map(|v| arg("--tol", v, Range::from(0.0, 100.0, "mm")))
-            .transpose()?,
+        resolution: a.resolution,
+        loads: crate::limits::loads(),
+        tol: a.tol,
         memory: Some(crate::limits::get().memory),
         g93: a.g93,
     })
+    .map_err(CliError::input)
 }
 
 fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
@@ -210,19 +193,10 @@ fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
 }
 
 fn list_passes(json: bool) {
-    let t = passes::table();
     if json {
-        crate::cmd::print_json(serde_json::to_value(&t).unwrap_or_default());
-        return;
-    }
-    for r in t {
-        outln!(
-            "{:<8} needs: {}\n         changes: {:?}; {}",
-            r.name,
-            r.needs,
-            r.changes,
-            r.does
-        );
+        crate::cmd::print_json(serde_json::to_value(passes::table()).unwrap_or_default());
+    } else {
+        outln!("{}", passes::table_text());
     }
 }
 
@@ -348,36 +322,7 @@ fn print_summary(a: &Args, w: &Written, path: &Path, output: &Path, withheld: bo
     }
     if a.json {
         crate::cmd::print_json(serde_json::to_value(s).unwrap_or_default());
-        return;
-    }
-    for x in &s.settings {
-        outln!("  {:<13} {}  ({})", x.name, x.value, x.from);
-    }
-    for p in &s.passes {
-        let state = if p.ran {
-            format!("{:>7.2} s", p.seconds)
-        } else {
-            "skipped".into()
-        };
-        outln!("  {:<8} {state}  {}", p.name, p.reason);
-    }
-    outln!("{}", report::verdict_text(s));
-    for c in &s.checks {
-        let skipped = c
-            .skipped
-            .as_deref()
-            .map_or(String::new(), |w| format!(" (skipped: {w})"));
-        outln!(
-            "  check {:<10} {:<6} {} {}{skipped}",
-            c.name,
-            if c.ok { "ok" } else { "FAILED" },
-            c.checked,
-            c.unit
-        );
-    }
-    if withheld {
-        outln!("nothing written (give --force to write it anyway)");
     } else {
-        outln!("wrote {} ({})", output.display(), s.dialect);
+        outln!("{}", report::summary_text(s, output, withheld));
     }
 }

@@ -7,7 +7,7 @@ use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
 use millplan_driver::orient::{self as lib, OrientRequest, Summary};
 use millplan_driver::StockSpec;
-use millplan_plan::leadtilt::{choose_with, Objective, Stage, StockInput};
+use millplan_plan::leadtilt::{Objective, Stage};
 use std::path::{Path, PathBuf};
 
 /// Choose lead and tilt per ball-end operation (docs/leadtilt.md):
@@ -175,37 +175,10 @@ fn request(a: &Args) -> OrientRequest {
     }
 }
 
-/// The initial stock and the strokes that cut it, for the choice; a note
-/// on the moves the stock does not see.
-fn stock_input<'a>(
-    a: &Args,
-    spec: &StockSpec,
-    st: &'a millplan_driver::Strokes,
-    mesh: &millplan_geom::TriMesh,
-) -> CliResult<StockInput<'a>> {
-    lib::simulable(st, &a.path.display().to_string()).map_err(CliError::input)?;
-    let unsimulated = st.skipped.total();
-    if unsimulated > 0 && !(a.quiet || a.json) {
-        eprintln!(
-            "{}: note: {unsimulated} moves are not simulated (their tool has no shape, or their position or axis is unknown): the stock does not see them",
-            a.path.display()
-        );
-    }
-    let stock = crate::cmd::simulate::initial_stock(
-        &a.path,
-        a.resolution,
-        spec,
-        st,
-        Some(mesh),
-        a.stl_units,
-    )?;
-    Ok(lib::stock_input(stock, st, a.samples))
-}
-
 pub fn run(a: Args) -> CliResult<i32> {
     let req = request(&a);
     let materials = load_materials(a.materials.as_deref())?;
-    let mut p = lib::params(&req, &materials).map_err(CliError::input)?;
+    let p = lib::params(&req, &materials).map_err(CliError::input)?;
     let spec = lib::stock_spec(&req).map_err(CliError::input)?;
     let mut inputs: Vec<&Path> = vec![&a.path, &a.stl];
     inputs.extend(a.machine.as_deref());
@@ -218,83 +191,64 @@ pub fn run(a: Args) -> CliResult<i32> {
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
-    if p.rpm <= 0.0 {
-        p.rpm = lib::first_spindle(&parsed.program).ok_or_else(|| {
-            CliError::input(format!(
-                "{}: the program sets no spindle speed; give --n",
-                a.path.display()
-            ))
-        })?;
-    }
     let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
-    let st = spec
-        .as_ref()
-        .map(|_| lib::program_strokes(&parsed.program, a.resolution, machine.rapid));
-    let unsimulated = st.as_ref().map_or(0, |s| s.skipped.total());
-    let input = match (&spec, &st) {
-        (Some(spec), Some(st)) => Some(stock_input(&a, spec, st, &mesh)?),
-        _ => None,
+    let blank = match &spec {
+        Some(s) => crate::cmd::simulate::blank(s, a.stl_units)?,
+        None => None,
     };
-    let initial = input.as_ref().map(|i| i.stock.clone());
-    let o = choose(&a, &parsed.program, &mesh, &machine, &p, input, st.as_ref())?;
-    let mut summary = Summary::new(&req, &o, &a.output.display().to_string(), unsimulated);
-    if o.chosen.is_empty() {
+    let (name, output) = (a.path.display().to_string(), a.output.display().to_string());
+    let g = lib::OrientInputs {
+        name: &name,
+        output: &output,
+        program: &parsed.program,
+        mesh: &mesh,
+        machine: &machine,
+        blank: blank.as_ref(),
+        memory: crate::limits::get().memory,
+    };
+    let o = choose(&a, &req, p, &g)?;
+    if !o.chosen {
         outputs.commit()?;
-        report(&a, &summary);
+        report(&a, &o.summary);
         return Ok(EXIT_FINDINGS);
     }
-    let checks = lib::check(&parsed.program, &o.program, initial.as_ref(), &machine);
-    let checked = crate::verdict::enforce(&checks, &a.path, a.force)?;
-    summary = summary.with_checks(checks);
-    crate::cmd::write_program_file(
-        &o.program,
-        machine.write_options(target),
-        &mut outputs,
-        &a.output,
-        &a.path,
-        a.quiet,
-    )?;
+    let checked = crate::verdict::enforce(&o.checks, &a.path, a.force)?;
+    let summary = o.summary.with_checks(o.checks);
+    let wo = machine.write_options(target);
+    crate::cmd::write_program_file(&o.program, wo, &mut outputs, &a.output, &a.path, a.quiet)?;
     outputs.commit()?;
     report(&a, &summary);
     Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
 }
 
-/// The choice, with its progress on two bars (the stock, the operations).
+/// The run, with its progress on two bars (the stock, the operations) and
+/// the note on the moves the stock does not see.
 fn choose(
     a: &Args,
-    program: &millplan_nc::Program,
-    mesh: &millplan_geom::TriMesh,
-    machine: &millplan_plan::machine::Machine,
-    p: &millplan_plan::leadtilt::Params,
-    input: Option<StockInput>,
-    st: Option<&millplan_driver::Strokes>,
-) -> CliResult<millplan_plan::leadtilt::Oriented> {
-    let total = program.operations.len() as u64;
-    let strokes_total = st.map_or(0, |s| 2 * s.strokes.len()) as u64;
-    let sim_bar = crate::progress::count(
-        strokes_total,
-        "stock",
-        "strokes",
-        !a.quiet && input.is_some(),
-    );
+    req: &OrientRequest,
+    p: millplan_plan::leadtilt::Params,
+    g: &lib::OrientInputs,
+) -> CliResult<lib::Outcome> {
+    let total = g.program.operations.len() as u64;
+    let sim_bar = crate::progress::Phases::new(!a.quiet && req.stock.is_some());
     let bar = crate::progress::count(total, "lead/tilt", "operations", !a.quiet);
-    let o = choose_with(
-        program,
-        mesh,
-        machine,
-        p,
-        input,
-        &|stage, done, _| match stage {
-            Stage::Stock => sim_bar.set_position(done as u64),
-            Stage::Operations => {
-                sim_bar.finish_and_clear();
-                bar.set_position(done as u64)
-            }
-        },
-    )
-    .map_err(|e| CliError::input(format!("{}: {e}", a.path.display())))?;
-    sim_bar.finish_and_clear();
+    let o = lib::command(req, p, g, &|stage, done, all| match stage {
+        Stage::Stock => sim_bar.report("stock", done, all),
+        Stage::Operations => {
+            sim_bar.finish();
+            bar.set_position(done as u64)
+        }
+    })
+    .map_err(CliError::input)?;
+    sim_bar.finish();
     bar.finish_and_clear();
+    if o.unsimulated > 0 && !(a.quiet || a.json) {
+        eprintln!(
+            "{}: note: {} moves are not simulated (their tool has no shape, or their position or axis is unknown): the stock does not see them",
+            a.path.display(),
+            o.unsimulated
+        );
+    }
     Ok(o)
 }
 

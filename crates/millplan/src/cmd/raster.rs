@@ -1,9 +1,8 @@
 //! `millplan raster`: a finishing raster over an STL part.
 
-use crate::cmd::UnitArg;
 use crate::cmd::{print_diagnostics, write_program, TargetArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_surface, Outputs};
+use crate::io::Outputs;
 use millplan_driver::raster::{self as lib, RasterRequest};
 use millplan_plan::checks;
 use std::path::PathBuf;
@@ -25,10 +24,8 @@ pub struct Args {
     /// Part surface (STL).
     #[arg(long)]
     pub stl: PathBuf,
-    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
-    /// converted to mm on reading.
-    #[arg(long, value_enum)]
-    pub stl_units: Option<UnitArg>,
+    #[command(flatten)]
+    pub part_units: crate::cmd::args::PartUnits,
     /// Cutter: ball:D, flat:D, bull:D:R (corner radius), cone:D:ANGLE (point angle).
     #[arg(long)]
     pub tool: String,
@@ -79,13 +76,10 @@ pub struct Args {
     /// then ends with exit 3.
     #[arg(long)]
     pub force: bool,
-    /// Print no warnings or notes about the inputs (errors still print).
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print a machine-readable summary (JSON) on standard output; errors too,
-    /// as JSON on standard error.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
 }
 
 fn request(a: &Args) -> RasterRequest {
@@ -111,7 +105,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         .collect();
     let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], false)?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
+    let mesh = a.part_units.read(&a.stl)?;
     let limits = crate::limits::get();
     let (points, bytes) =
         lib::check_grid(&p, &mesh.bounds(), limits.moves as f64).map_err(CliError::input)?;
@@ -123,7 +117,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     print_diagnostics(
         &a.stl,
         &checks::mesh(&mesh).into_iter().collect::<Vec<_>>(),
-        a.quiet,
+        a.notes.quiet,
     );
     let (prog, part) = lib::generate(&mesh, &p);
     if prog.move_count() == 0 {
@@ -134,7 +128,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     }
     let generated = millplan_nc::Dialect::Generated;
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, generated)?;
-    let out = write_program(&prog, machine.write_options(target), &a.stl, a.quiet)?;
+    let out = write_program(&prog, machine.write_options(target), &a.stl, a.notes.quiet)?;
     let (checks, rep) = lib::check((&prog, &out), target, &part, &machine, &p)
         .map_err(|e| CliError::internal(format!("{}: {e}", a.output.display())))?;
     crate::verdict::enforce(&checks, &a.output, a.force)?;
@@ -143,11 +137,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let est = millplan_plan::timing::estimate_program(&prog, &machine);
     let output = a.output.display().to_string();
     let report = lib::Report::new(output, (&prog, &machine, &p), (&rep, &checks), &est);
-    if a.json {
-        crate::cmd::print_json(serde_json::to_value(&report).unwrap_or_default());
-    } else {
-        out!("{}", report.render_text());
-    }
+    a.summary.print(&report, |r| r.render_text());
     Ok(if millplan_plan::safety::passed(&checks) {
         EXIT_OK
     } else {

@@ -3,16 +3,12 @@
 
 use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_program, read_surface, Outputs};
+use crate::io::{read_program, Outputs};
 use clap::ValueEnum;
-use millplan_driver::reorder::Summary;
-use millplan_nc::Program;
-use millplan_plan::machine::Machine;
-use millplan_plan::pipeline::{self, Context, Pass};
-use millplan_plan::reorder::Outcome;
-use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Start};
-use millplan_plan::speed::SpeedPass;
-use millplan_report::reorder::{reorder_report, ReorderInputs};
+use millplan_driver::feed::file_name;
+use millplan_driver::reorder as lib;
+use millplan_plan::pipeline::Context;
+use millplan_plan::reorder::{Method, ReorderParams, Start};
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -66,10 +62,8 @@ pub struct Args {
     /// Part surface (STL) in the same coordinates as the program.
     #[arg(long)]
     pub stl: PathBuf,
-    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
-    /// converted to mm on reading.
-    #[arg(long, value_enum)]
-    pub stl_units: Option<UnitArg>,
+    #[command(flatten)]
+    pub part_units: crate::cmd::args::PartUnits,
     /// How the order is searched: as-run (default) measures candidate orders as the
     /// machine will run them; paper is the published greedy search over single
     /// points; optimised keeps
@@ -121,13 +115,10 @@ pub struct Args {
     /// inch.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
-    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
-    /// on standard error.
-    #[arg(long)]
-    pub json: bool,
-    /// Print no warnings or notes about the inputs (errors still print).
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
     /// Write the program even when a check before writing refuses it (a
     /// cutting point of the input not cut, a gouge the input did not have,
     /// an S or F outside the machine); the run then ends with exit 3.
@@ -136,14 +127,9 @@ pub struct Args {
 }
 
 /// The arguments checked and the outputs planned, before any work.
-fn plan(a: &Args) -> CliResult<Outputs> {
-    crate::cmd::arg(
-        "--max-step",
-        a.max_step,
-        crate::cmd::Range::from(0.0, 1000.0, "mm"),
-    )?;
-    crate::cmd::arg("--tie", a.tie, crate::cmd::Range::from(0.0, 100.0, "mm"))?;
-    a.cut.check()?;
+fn plan(a: &Args) -> CliResult<(lib::ReorderRequest, ReorderParams, Outputs)> {
+    let req = request(a);
+    let rp = req.params().map_err(CliError::input)?;
     let inputs: Vec<&std::path::Path> = [
         Some(a.path.as_path()),
         Some(a.stl.as_path()),
@@ -152,105 +138,75 @@ fn plan(a: &Args) -> CliResult<Outputs> {
     .into_iter()
     .flatten()
     .collect();
-    Outputs::plan(
+    let outputs = Outputs::plan(
         &inputs,
         &[("-o", Some(&a.output)), ("--report", a.report.as_deref())],
         false,
-    )
+    )?;
+    Ok((req, rp, outputs))
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let mut outputs = plan(&a)?;
+    let (req, rp, mut outputs) = plan(&a)?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    let quiet = a.notes.quiet;
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
-    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    print_diagnostics(&a.path, &parsed.diagnostics, quiet || a.summary.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
-    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
-    let mut program = parsed.program.clone();
+    let mesh = a.part_units.read(&a.stl)?;
     // Some 100,000 points a second at the least: from there it takes a while.
-    let bar = crate::progress::Phases::new(!a.quiet && program.move_count() >= 100_000);
+    let bar = crate::progress::Phases::new(!quiet && parsed.program.move_count() >= 100_000);
     let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
     let cx = Context::new(machine).with_part(&mesh).with_progress(&hook);
-    let mut reorder = ReorderPass::new(params(&a));
-    let mut speed = SpeedPass::new(a.cut.params());
-    let mut passes: Vec<&mut dyn Pass> = vec![&mut reorder];
-    if !a.no_speed {
-        passes.push(&mut speed);
-    }
-    let ran = pipeline::run(&mut passes, &mut program, &cx);
+    let ran = lib::command(&req, rp, &cx, &parsed.program);
     bar.finish();
-    ran.map_err(|e| crate::cmd::pass_error(&a.path, e))?;
-    let Some(o) = reorder.outcome else {
-        return Err(CliError::internal("the reorder pass left no outcome"));
-    };
-    let out = write_program(&program, cx.machine.write_options(target), &a.path, a.quiet)?;
-    crate::verdict::read_back(&out, target, &program, &a.output)?;
-    let checks = cx.time("checks", || {
-        millplan_driver::reorder::check(&parsed.program, &program, &cx)
-    });
-    let checked = crate::verdict::enforce(&checks, &a.path, a.force)?;
+    let r = ran.map_err(|e| match e {
+        lib::ReorderError::Pass(e) => crate::cmd::pass_error(&a.path, e),
+        lib::ReorderError::NoOutcome => CliError::internal("the reorder pass left no outcome"),
+    })?;
+    let wo = cx.machine.write_options(target);
+    let out = write_program(&r.program, wo, &a.path, quiet)?;
+    crate::verdict::read_back(&out, target, &r.program, &a.output)?;
+    let checked = crate::verdict::enforce(&r.checks, &a.path, a.force)?;
     outputs.write(&a.output, &out)?;
     if let Some(path) = &a.report {
-        let html = report(&a, (&parsed.program, &program), &o, &cx.machine, &mesh);
+        let names = (file_name(&a.path), file_name(&a.stl));
+        let on = (&cx.machine, req.cut);
+        let html = r.report_html((&parsed.program, &mesh), names, on, method(&a));
         outputs.write(path, html.as_bytes())?;
     }
     outputs.commit()?;
-    let method = a
-        .method
-        .to_possible_value()
-        .map(|v| v.get_name().to_string());
-    let summary = Summary::new(method, &o, a.output.display().to_string(), &checks);
-    if a.json {
-        crate::cmd::print_json(serde_json::to_value(&summary).unwrap_or_default());
-    } else {
-        out!("{}", summary.render_text());
-    }
+    let output = a.output.display().to_string();
+    let summary = lib::Summary::new(Some(method(&a)), &r.outcome, output, &r.checks);
+    a.summary.print(&summary, |s| s.render_text());
     Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
 }
 
-/// The HTML report: the inputs, warnings (the part's mesh defects, points
-/// off the part, a spindle that cannot follow), the verdict and both orders.
-fn report(
-    a: &Args,
-    (original, reordered): (&Program, &Program),
-    o: &Outcome,
-    machine: &Machine,
-    mesh: &millplan_geom::TriMesh,
-) -> String {
-    let findings: Vec<_> = millplan_plan::checks::mesh(mesh).into_iter().collect();
-    let run = crate::cmd::speed::report_inputs(
-        (&a.path, original),
-        &a.stl,
-        machine,
-        a.cut.cutting(),
-        &findings,
-        [o.before.as_run.time_s, o.after.as_run.time_s],
-    );
-    let method = a
-        .method
+/// The method's name as the option gives it.
+fn method(a: &Args) -> String {
+    a.method
         .to_possible_value()
         .map(|v| v.get_name().to_string())
-        .unwrap_or_default();
-    reorder_report(original, reordered, o, &ReorderInputs { run, method })
+        .unwrap_or_default()
 }
 
-fn params(a: &Args) -> ReorderParams {
-    let mut rp = ReorderParams::new(match a.method {
-        MethodArg::AsRun => Method::AsRun,
-        MethodArg::Paper => Method::Paper,
-        MethodArg::Optimised => Method::Optimised,
-    });
-    rp.start = match (a.start_index, a.start) {
-        (Some(i), _) => Start::Index(i),
-        (None, StartArg::Lowest) => Start::Lowest,
-        (None, StartArg::Highest) => Start::Highest,
-        (None, StartArg::Random) => Start::Random(a.seed),
-    };
-    rp.n_min = a.n_min;
-    rp.tie = a.tie;
-    rp.max_step = (a.max_step > 0.0).then_some(a.max_step);
-    rp.ap = a.cut.ap;
-    rp.vc = a.cut.vc;
-    rp.speed = a.cut.params();
-    rp
+fn request(a: &Args) -> lib::ReorderRequest {
+    lib::ReorderRequest {
+        method: match a.method {
+            MethodArg::AsRun => Method::AsRun,
+            MethodArg::Paper => Method::Paper,
+            MethodArg::Optimised => Method::Optimised,
+        },
+        start: match (a.start_index, a.start) {
+            (Some(i), _) => Start::Index(i),
+            (None, StartArg::Lowest) => Start::Lowest,
+            (None, StartArg::Highest) => Start::Highest,
+            (None, StartArg::Random) => Start::Random(a.seed),
+        },
+        n_min: a.n_min,
+        tie: a.tie,
+        max_step: a.max_step,
+        cut: a.cut.cutting(),
+        speed: !a.no_speed,
+    }
 }

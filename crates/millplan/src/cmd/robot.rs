@@ -1,12 +1,12 @@
 //! `millplan robot`: the compliant-joint robot model of Schnoes & Zaeh
 //! (deflection at a pose).
 
-use crate::cmd::{arg, Range};
-use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use clap::{Subcommand, ValueEnum};
-use millplan_geom::DVec3;
+use millplan_driver::robot as lib;
+use millplan_driver::robot_pass::RobotSetup;
 use millplan_nc::Program;
-use millplan_robot::machining::{self, PathLoad, Placement};
+use millplan_robot::machining::PathLoad;
 use millplan_robot::{Robot, Variant};
 use std::path::Path;
 
@@ -234,66 +234,29 @@ pub fn run(a: Args) -> CliResult<i32> {
 }
 
 /// `kr240`, or a robot file.
-pub fn load_robot(name: &str) -> CliResult<Robot> {
-    if name == "kr240" {
-        return Ok(Robot::kr240());
+fn load_robot(name: &str) -> CliResult<Robot> {
+    Ok(millplan_driver::io::inputs::read_robot(name)?)
+}
+
+/// Prints a command's summary, as JSON or as text.
+fn print<T: serde::Serialize>(json: bool, out: &T, text: impl FnOnce(&T) -> String) {
+    if json {
+        outln!("{}", serde_json::to_string_pretty(out).unwrap_or_default());
+    } else {
+        out!("{}", text(out));
     }
-    let p = Path::new(name);
-    let text = std::fs::read_to_string(p)
-        .map_err(|e| CliError::input(format!("{}: cannot read: {e}", p.display())))?;
-    Robot::from_toml(&text).map_err(|e| match e {
-        millplan_robot::RobotError::Toml { .. } => CliError::input(format!("{}:{e}", p.display())),
-        _ => CliError::input(format!("{}: {e}", p.display())),
-    })
-}
-
-/// `n` comma-separated numbers, each checked against `range`.
-pub fn numbers(flag: &str, text: &str, names: &[&str], range: Range) -> CliResult<Vec<f64>> {
-    millplan_driver::robot::numbers(flag, text, names, range).map_err(CliError::input)
-}
-
-fn vec3(flag: &str, text: &str, names: [&str; 3], range: Range) -> CliResult<DVec3> {
-    let v = numbers(flag, text, &names, range)?;
-    Ok(DVec3::new(v[0], v[1], v[2]))
 }
 
 fn deflect(a: DeflectArgs) -> CliResult<i32> {
     let robot = load_robot(&a.robot)?;
-    let deg = numbers(
-        "--joints",
-        &a.joints,
-        &["A1", "A2", "A3", "A4", "A5", "A6"],
-        Range::from(-360.0, 360.0, "degrees"),
-    )?;
-    let force = vec3(
-        "--force",
-        &a.force,
-        ["FX", "FY", "FZ"],
-        Range::from(-1e6, 1e6, "N"),
-    )?;
-    let moment = match &a.moment {
-        Some(m) => {
-            vec3(
-                "--moment",
-                m,
-                ["MX", "MY", "MZ"],
-                Range::from(-1e5, 1e5, "N·m"),
-            )? * 1e3
-        }
-        None => DVec3::ZERO,
+    let req = lib::DeflectRequest {
+        joints: a.joints,
+        force: a.force,
+        moment: a.moment,
+        variant: variant(a.axes),
     };
-    let joints = [deg[0], deg[1], deg[2], deg[3], deg[4], deg[5]];
-    let out = millplan_driver::robot::DeflectSummary::new(
-        &robot,
-        joints,
-        variant(a.axes),
-        (force, moment),
-    );
-    if a.json {
-        outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
-    } else {
-        out!("{}", out.render_text());
-    }
+    let out = lib::deflect(&robot, &req).map_err(CliError::input)?;
+    print(a.json, &out, lib::DeflectSummary::render_text);
     Ok(EXIT_OK)
 }
 
@@ -306,41 +269,21 @@ fn variant(v: VariantArg) -> Variant {
 
 /// The robot, the program at `path` and its load: `--load` at every
 /// point, or the force model's per move with the stock.
-fn process(path: &Path, p: &ProcessArgs) -> CliResult<(Robot, Program, PathLoad, Variant)> {
+fn process(path: &Path, p: &ProcessArgs) -> CliResult<(Robot, Program, PathLoad)> {
     let robot = load_robot(&p.robot)?;
-    let (prog, load) = match &p.load {
-        Some(text) => (
-            read_path(path)?,
-            millplan_driver::robot::fixed_load(text).map_err(CliError::input)?,
-        ),
-        None => {
-            let m = p.model.model(p.json);
-            let prepared = crate::cmd::feed::prepare(path, &m)?;
-            let run = crate::cmd::feed::run_forces(
-                &prepared,
-                &prepared.program,
-                &prepared.strokes,
-                p.json,
-            )?;
-            let name = path.display().to_string();
-            millplan_driver::feed::stopped_spindle(&name, &run).map_err(CliError::input)?;
-            let load = millplan_driver::robot::move_loads(&prepared.program, &run);
-            (prepared.program, load)
-        }
-    };
-    Ok((robot, prog, load, variant(p.axes)))
-}
-
-fn read_path(path: &Path) -> CliResult<Program> {
-    let parsed = crate::io::read_program(path, millplan_nc::ReadOptions::default())?;
-    Ok(parsed.program)
-}
-
-fn machining_error(path: &Path, e: machining::MachiningError) -> CliError {
-    CliError::input(millplan_driver::robot::located(
-        &path.display().to_string(),
-        &e,
-    ))
+    if let Some(text) = &p.load {
+        let load = lib::fixed_load(text).map_err(CliError::input)?;
+        let opts = millplan_nc::ReadOptions::default();
+        return Ok((robot, crate::io::read_program(path, opts)?.program, load));
+    }
+    let m = p.model.model(p.json);
+    let prepared = crate::cmd::feed::prepare(path, &m)?;
+    let (program, strokes) = (&prepared.program, &prepared.strokes);
+    let run = crate::cmd::feed::run_forces(&prepared, program, strokes, p.json)?;
+    let name = path.display().to_string();
+    millplan_driver::feed::stopped_spindle(&name, &run).map_err(CliError::input)?;
+    let load = lib::move_loads(&prepared.program, &run);
+    Ok((robot, prepared.program, load))
 }
 
 /// KRL files from the `first` (0: the main program, at `output`; its
@@ -363,74 +306,59 @@ pub fn stage_krl(
     Ok((outputs, paths))
 }
 
-/// The compensated path written as KRL: the main program at `-o`, its
-/// sub-programs beside it; the paths written.
-fn write_krl(
-    a: &CompensateArgs,
-    c: &machining::Compensated,
-    place: &Placement,
-) -> CliResult<Vec<std::path::PathBuf>> {
-    let stem = millplan_nc::write::krl::stem(&a.output);
-    let k = machining::krl_program(&stem, &c.runs, place, a.spacing / 2.0);
-    let o = millplan_nc::write::krl::KrlOptions {
-        name: stem,
-        max_points: a.max_points,
-        ..Default::default()
-    };
-    let files = millplan_nc::write::krl::write(&k, &o);
-    let (outputs, paths) = stage_krl(&[a.path.as_path()], &a.output, &files, 0)?;
-    outputs.commit()?;
-    Ok(paths)
-}
-
 fn compensate(a: CompensateArgs) -> CliResult<i32> {
-    let place = millplan_driver::robot::pose(&a.pose).map_err(CliError::input)?;
-    arg("--spacing", a.spacing, Range::from(0.01, 100.0, "mm"))?;
+    let req = lib::CompensateRequest {
+        pose: a.pose,
+        spacing: a.spacing,
+        max_points: a.max_points,
+        orientation: a.orientation,
+    };
+    let place = req.check().map_err(CliError::input)?;
     crate::io::Outputs::plan(&[a.path.as_path()], &[("-o", Some(&a.output))], false)?;
-    let (robot, prog, load, variant) = process(&a.path, &a.process)?;
-    let c = machining::compensate_program_with(
-        &robot,
-        variant,
-        &prog,
-        &place,
-        &load,
-        a.spacing,
-        a.orientation,
-    )
-    .map_err(|e| machining_error(&a.path, e))?;
-    let paths = write_krl(&a, &c, &place)?;
-    let files = paths.iter().map(|p| p.display().to_string()).collect();
-    let out = millplan_driver::robot::CompensateSummary::new(&c, &load, files);
-    if a.process.json {
-        outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
-    } else {
-        out!("{}", out.render_text());
-    }
+    let (robot, program, load) = process(&a.path, &a.process)?;
+    let name = a.path.display().to_string();
+    let p = process_of(&robot, &a.process, (&program, &load), &name);
+    let done = lib::compensate(&p, &req, &place, &a.output).map_err(CliError::input)?;
+    stage_krl(&[a.path.as_path()], &a.output, &done.files, 0)?
+        .0
+        .commit()?;
+    print(
+        a.process.json,
+        &done.summary,
+        lib::CompensateSummary::render_text,
+    );
     Ok(EXIT_OK)
 }
 
-fn place(a: PlaceArgs) -> CliResult<i32> {
-    let (lo, hi) = millplan_driver::robot::place_box(&a.bounds).map_err(CliError::input)?;
-    arg("--restarts", a.restarts as f64, Range::from(1.0, 100.0, ""))?;
-    let (robot, prog, load, variant) = process(&a.path, &a.process)?;
-    let samples = machining::placement_samples(&prog).map_err(|e| machining_error(&a.path, e))?;
-    let search = machining::PlaceSearch {
-        lo,
-        hi,
-        settings: millplan_robot::anneal::Settings {
-            seed: a.seed,
-            restarts: a.restarts,
-            ..Default::default()
-        },
-    };
-    let found = machining::place(&robot, variant, &samples, &load, &search);
-    let out = millplan_driver::robot::PlaceSummary::new(found.as_ref());
-    if a.process.json {
-        outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
-    } else {
-        out!("{}", out.render_text());
+/// The path on the robot under its load, as the driver takes it.
+fn process_of<'a>(
+    robot: &'a Robot,
+    a: &ProcessArgs,
+    (program, load): (&'a Program, &'a PathLoad),
+    path: &'a str,
+) -> lib::Process<'a> {
+    lib::Process {
+        robot,
+        variant: variant(a.axes),
+        program,
+        load,
+        path,
     }
-    Ok(if out.feasible { EXIT_OK } else { 3 })
+}
+
+fn place(a: PlaceArgs) -> CliResult<i32> {
+    let req = lib::PlaceRequest {
+        bounds: a.bounds,
+        seed: a.seed,
+        restarts: a.restarts,
+    };
+    let search = req.check().map_err(CliError::input)?;
+    let (robot, program, load) = process(&a.path, &a.process)?;
+    let name = a.path.display().to_string();
+    let p = process_of(&robot, &a.process, (&program, &load), &name);
+    let out = lib::place(&p, &search).map_err(CliError::input)?;
+    print(a.process.json, &out, lib::PlaceSummary::render_text);
+    Ok(if out.feasible { EXIT_OK } else { EXIT_FINDINGS })
 }
 
 /// `optimise --robot ROBOT --pose X,Y,Z,RZ`: the optimised program ends
@@ -462,7 +390,7 @@ pub struct OptimiseRobotArgs {
 /// KRL main program to write, its sub-programs written beside `output`.
 pub fn after_optimise(
     r: &OptimiseRobotArgs,
-    (job, outcome): (&millplan_driver::Job, &millplan_driver::Outcome),
+    run: (&millplan_driver::Job, &millplan_driver::Outcome),
     w: &mut millplan_driver::Written,
     (inputs, output): (&[&Path], &Path),
     (force, quiet): (bool, bool),
@@ -470,38 +398,15 @@ pub fn after_optimise(
     let (Some(name), Some(pose)) = (&r.robot, &r.pose) else {
         return Ok(());
     };
-    let setup = millplan_driver::robot_pass::RobotSetup::new(
-        load_robot(name)?,
-        pose,
-        r.max_points,
-        job.tol,
-    )
-    .map_err(CliError::input)?;
-    let krl = millplan_nc::write::Target::Krl.name();
-    if w.summary.dialect == krl {
-        let t = millplan_driver::robot_pass::check_target(job.inputs.program.source);
-        let wo = millplan_nc::write::WriteOptions {
-            limits: crate::limits::get(),
-            ..job.inputs.machine.write_options(t)
-        };
-        *w = job
-            .finish(outcome, wo)
-            .map_err(|e| CliError::input(e.to_string()))?;
-        w.summary.dialect = krl.into();
-    }
-    let stem = millplan_nc::write::krl::stem(output);
-    let posted = outcome.posted.is_some();
-    let done = millplan_driver::robot_pass::run(
-        &setup,
-        (&w.program, posted),
-        w.forces_after.as_ref(),
-        &stem,
-    )
-    .map_err(|e| CliError::input(format!("--robot: {e}")))?;
+    let tol = run.0.tol;
+    let setup =
+        RobotSetup::new(load_robot(name)?, pose, r.max_points, tol).map_err(CliError::input)?;
+    let done =
+        millplan_driver::robot_pass::after_optimise(&setup, run, w, output, crate::limits::get())
+            .map_err(CliError::input)?;
     if !quiet {
         eprintln!("{}", done.summary.render_text());
     }
-    w.bytes = done.files[0].1.clone().into_bytes();
     if w.summary.verdict != millplan_driver::Verdict::Refused || force {
         stage_krl(inputs, output, &done.files, 1)?.0.commit()?;
     }

@@ -1,9 +1,8 @@
 //! `millplan setup`: can a five-axis machine reach the whole part in one setup,
 //! and how should the part be clamped?
 
-use crate::cmd::UnitArg;
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_surface, Outputs};
+use crate::io::Outputs;
 use millplan_driver::setup::{self as lib, Kinematics, MachineType, SetupRequest};
 use millplan_plan::setup::{self, GridKind};
 use std::path::PathBuf;
@@ -32,10 +31,8 @@ pub struct Args {
     /// Part surface (STL).
     #[arg(long)]
     pub stl: PathBuf,
-    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
-    /// converted to mm on reading.
-    #[arg(long, value_enum)]
-    pub stl_units: Option<UnitArg>,
+    #[command(flatten)]
+    pub part_units: crate::cmd::args::PartUnits,
     /// Machine file (see examples/machine.toml) with a `[kinematics]` table:
     /// kind = "table-ac" | "table-bc" | "table-ab" | "head-bc" |
     /// "head-b-table-c", [kinematics.first] and [kinematics.second] with min,
@@ -81,10 +78,8 @@ pub struct Args {
     /// Write the part rotated into the chosen setup (binary STL).
     #[arg(long, short)]
     pub output: Option<PathBuf>,
-    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
-    /// on standard error.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
     /// Print no warnings or notes about the inputs (errors still print). No progress
     /// either.
     #[arg(long, short)]
@@ -186,11 +181,11 @@ pub fn run(a: Args) -> CliResult<i32> {
     lib::check(&req).map_err(CliError::input)?;
     let machine = machine(&a)?;
     let p = lib::params(&req).map_err(CliError::input)?;
-    let (mut mesh, _) = read_surface(&a.stl, a.stl_units)?;
+    let mut mesh = a.part_units.read(&a.stl)?;
     let t0 = std::time::Instant::now();
     let plan = plan_shown(&a, &mut mesh, &machine, &p)?;
     let secs = t0.elapsed().as_secs_f64();
-    if plan.flipped && !a.quiet && !a.json {
+    if plan.flipped && !a.quiet && !a.summary.json {
         eprintln!(
             "{}: the facets are wound inward (negative volume); turned outward",
             a.stl.display()
@@ -211,7 +206,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     outputs.commit()?;
     let s = plan.summary(&mesh, &machine);
     let v = lib::verdict(&req, &mesh, &plan);
-    if a.json {
+    if a.summary.json {
         let j = lib::Report::new(&req, &s, &machine, (secs, v));
         crate::cmd::print_json(serde_json::to_value(j).unwrap_or_default());
     } else {

@@ -5,7 +5,7 @@ use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_mesh, read_program, read_surface, Outputs};
 use crate::timings::Table as _;
 use millplan_driver::simulate::{self as lib, SimRequest};
-use millplan_driver::{SimReport, Stock, StockSpec, Strokes};
+use millplan_driver::{Stock, StockSpec, Strokes};
 use millplan_geom::TriMesh;
 use std::path::{Path, PathBuf};
 
@@ -129,44 +129,50 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     clock.lap("program read");
-    let path = a.path.display().to_string();
-    let strokes = lib::program_strokes(&req, &path, &parsed.program, machine.rapid)
-        .map_err(CliError::input)?;
-    note_default_flute(a, &req, &parsed.program)?;
-    clock.lap("strokes (tool bodies, moves in chords)");
     let part = match &a.stl {
         Some(p) => Some(read_surface(p, a.stl_units)?.0),
         None => None,
     };
-    let mut stock = initial_stock(
-        &a.path,
-        a.resolution,
-        &spec,
-        &strokes,
-        part.as_ref(),
-        a.stl_units,
-    )?;
-    clock.lap("part read and stock built");
-    let rep = simulate(a, &mut stock, &strokes);
-    clock.lap("material removal");
-    let rem = part.as_ref().map(|p| lib::remaining_on(&stock, p, a.tol));
-    clock.lap("material left on the part");
-    write_outputs(a, &mut outputs, &stock, &rep, rem.as_ref(), part.as_ref())?;
+    let blank = blank(&spec, a.stl_units)?;
+    clock.lap("part read");
+    let path = a.path.display().to_string();
+    let g = lib::SimInputs {
+        name: &path,
+        program: &parsed.program,
+        stock: &a.stock,
+        spec: &spec,
+        part: part.as_ref(),
+        blank: blank.as_ref(),
+        rapid: machine.rapid,
+        memory: crate::limits::get().memory,
+    };
+    // A bar on a long program only.
+    let bar = crate::progress::Phases::new(!a.quiet && !a.json);
+    let progress = |done: usize, total: usize| {
+        if total > 50_000 {
+            bar.report("simulating", done, total)
+        }
+    };
+    let run = lib::command(&req, &g, &mut |l| clock.lap(l), &progress);
+    bar.finish();
+    let sim = run.map_err(|e| CliError::input(e.to_string()))?;
+    if let (Some(note), false) = (&sim.flute_note, a.quiet || a.json) {
+        eprintln!("note: {note}");
+    }
+    write_outputs(a, &mut outputs, &sim, part.as_ref())?;
     outputs.commit()?;
     clock.lap("outputs written, synced and renamed into place");
-    let report = lib::Report::new(&rep, &a.stock, rem.as_ref());
+    let report = sim.report(&a.stock);
     if a.json {
         crate::cmd::print_json(serde_json::to_value(&report).unwrap_or_default());
     } else {
         out!("{}", report.render_text(&path, a.tol));
     }
-    Ok(
-        if rep.rapid_collisions.is_empty() && rep.holder_collisions.is_empty() {
-            EXIT_OK
-        } else {
-            EXIT_FINDINGS
-        },
-    )
+    Ok(if sim.collided() {
+        EXIT_FINDINGS
+    } else {
+        EXIT_OK
+    })
 }
 
 /// The outputs of the run, checked against every file it reads.
@@ -188,20 +194,6 @@ fn plan_outputs(a: &Args, spec: &StockSpec) -> CliResult<Outputs> {
     )
 }
 
-/// The run over the stock, with a bar on a long program.
-fn simulate(a: &Args, stock: &mut Stock, strokes: &Strokes) -> SimReport {
-    let bar = crate::progress::count(
-        strokes.strokes.len() as u64,
-        "simulating",
-        "strokes",
-        !a.quiet && !a.json && strokes.strokes.len() > 50_000,
-    );
-    let rep =
-        millplan_driver::simulate_stock(stock, strokes, a.tol, &|d| bar.set_position(d as u64));
-    bar.finish_and_clear();
-    rep
-}
-
 /// The stock before the program at `program` runs, as `spec` names it, at
 /// cell size `res` (`StockSpec::build` in the driver; an `stl:` blank read here).
 pub fn initial_stock(
@@ -212,51 +204,38 @@ pub fn initial_stock(
     part: Option<&TriMesh>,
     stl_units: Option<UnitArg>,
 ) -> CliResult<Stock> {
-    let blank = match spec {
-        StockSpec::Stl(p) => {
-            let (mut mesh, _) = read_mesh(p)?;
-            crate::cmd::stl_to_mm(&mut mesh, stl_units);
-            Some(mesh)
-        }
-        _ => None,
-    };
+    let blank = blank(spec, stl_units)?;
     let memory = crate::limits::get().memory;
     let name = program.display().to_string();
     lib::build_stock(&name, res, spec, s, (part, blank.as_ref()), memory).map_err(CliError::input)
 }
 
+/// The blank of an `stl:` stock, read and scaled to mm.
+pub fn blank(spec: &StockSpec, stl_units: Option<UnitArg>) -> CliResult<Option<TriMesh>> {
+    let StockSpec::Stl(p) = spec else {
+        return Ok(None);
+    };
+    let (mut mesh, _) = read_mesh(p)?;
+    crate::cmd::stl_to_mm(&mut mesh, stl_units);
+    Ok(Some(mesh))
+}
+
 fn write_outputs(
     a: &Args,
     outputs: &mut Outputs,
-    stock: &Stock,
-    rep: &SimReport,
-    rem: Option<&millplan_driver::Remaining>,
+    sim: &lib::Simulated,
     part: Option<&TriMesh>,
 ) -> CliResult<()> {
     if let Some(p) = &a.output {
-        outputs.write(p, &lib::stock_stl(stock, a.mesh_resolution))?;
+        outputs.write(p, &lib::stock_stl(&sim.stock, a.mesh_resolution))?;
     }
     if let Some(p) = &a.table {
-        outputs.write(p, millplan_report::sim::moves_csv(&rep.per_move).as_bytes())?;
+        outputs.write(p, sim.table_csv().as_bytes())?;
     }
     if let Some(p) = &a.report {
-        let title = format!("Stock simulation of {}", a.path.display());
         let files = (a.path.as_path(), a.stl.as_deref());
-        let inputs = lib::report_inputs(files, &a.stock, &request(a));
-        let html =
-            millplan_report::sim::report(&title, inputs, &a.stock, stock, rep, rem.zip(part));
+        let html = sim.report_html(&request(a), files, &a.stock, part);
         outputs.write(p, html.as_bytes())?;
-    }
-    Ok(())
-}
-
-/// Says which flute length the shank and holder were simulated above, when
-/// neither `--flute-length` nor the program's cutter gave one.
-fn note_default_flute(a: &Args, req: &SimRequest, p: &millplan_nc::Program) -> CliResult<()> {
-    if !(a.quiet || a.json) {
-        if let Some(note) = lib::default_flute_note(req, p).map_err(CliError::input)? {
-            eprintln!("note: {note}");
-        }
     }
     Ok(())
 }

@@ -2,12 +2,14 @@
 
 use crate::cmd::{print_diagnostics, read_options, write_program_file, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_program, read_surface, Outputs};
+use crate::io::{read_program, Outputs};
 use clap::ValueEnum;
-use millplan_driver::speed::{self as lib, Convention, Cutting, NormalMode, SpeedRequest, Surface};
-use millplan_plan::checks;
+use millplan_driver::feed::file_name;
+use millplan_driver::speed::{
+    self as lib, Convention, Cutting, NormalMode, SpeedError, SpeedRequest, Surface,
+};
+use millplan_geom::TriMesh;
 use millplan_plan::pipeline::Context;
-use millplan_plan::speed::Summary;
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -49,10 +51,8 @@ pub struct Args {
     /// Part surface (STL) in the same coordinates as the toolpath.
     #[arg(long)]
     pub stl: PathBuf,
-    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
-    /// converted to mm on reading.
-    #[arg(long, value_enum)]
-    pub stl_units: Option<UnitArg>,
+    #[command(flatten)]
+    pub part_units: crate::cmd::args::PartUnits,
     /// Cutting speed, m/min.
     #[arg(long)]
     pub vc: f64,
@@ -110,9 +110,8 @@ pub struct Args {
     /// Print the wall time of each phase on standard error.
     #[arg(long)]
     pub timings: bool,
-    /// Print no warnings or notes about the inputs (errors still print).
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
     /// Write the program even when a check before writing refuses it (an S
     /// or F outside the machine, a position changed); the findings are
     /// printed and the run ends with exit 3.
@@ -146,44 +145,6 @@ fn request(a: &Args) -> SpeedRequest {
     }
 }
 
-/// What the reader thread hands back: the program and the cycle time
-/// estimated on it, each with its own wall time.
-struct ReadBeside {
-    parsed: CliResult<millplan_nc::Parsed>,
-    read_s: f64,
-    time_before: f64,
-    estimate_s: f64,
-}
-
-type Reader = std::thread::JoinHandle<ReadBeside>;
-
-/// Reads the program on its own thread, and estimates its cycle time there,
-/// while the STL is read and its search trees are built.
-fn spawn_reader(a: &Args, machine: &millplan_plan::machine::Machine) -> CliResult<Reader> {
-    let (path, opts) = (a.path.clone(), read_options(a.units, None)?);
-    let machine = machine.clone();
-    Ok(std::thread::spawn(move || {
-        let t = std::time::Instant::now();
-        let parsed = read_program(&path, opts);
-        let read_s = t.elapsed().as_secs_f64();
-        let t = std::time::Instant::now();
-        let time_before = match &parsed {
-            Ok(p) => millplan_plan::timing::estimate_program(&p.program, &machine).total_s,
-            Err(_) => 0.0,
-        };
-        ReadBeside {
-            parsed,
-            read_s,
-            time_before,
-            estimate_s: t.elapsed().as_secs_f64(),
-        }
-    }))
-}
-
-fn join(r: Reader) -> ReadBeside {
-    r.join().unwrap_or_else(|e| std::panic::resume_unwind(e))
-}
-
 /// The program, table and report, checked against each other and the inputs
 /// before any work.
 fn plan_outputs(a: &Args) -> CliResult<Outputs> {
@@ -206,25 +167,26 @@ fn plan_outputs(a: &Args) -> CliResult<Outputs> {
     )
 }
 
-/// The part, read while the program is read on its own thread; the STL's
-/// wall time. A program error is still reported first.
+/// The part, read while the program is read (and its cycle time estimated)
+/// on a thread of its own; the STL's wall time. A program that does not
+/// read is still the error reported first.
 fn read_part(
     a: &Args,
     machine: &millplan_plan::machine::Machine,
-) -> CliResult<(millplan_geom::TriMesh, Reader, f64)> {
+) -> CliResult<(TriMesh, lib::Reader<CliError>, f64)> {
+    let (path, opts) = (a.path.clone(), read_options(a.units, None)?);
     let t = std::time::Instant::now();
-    let reader = spawn_reader(a, machine)?;
-    match read_surface(&a.stl, a.stl_units) {
-        Ok((m, _)) => Ok((m, reader, t.elapsed().as_secs_f64())),
-        Err(e) => Err(join(reader).parsed.err().unwrap_or(e)),
+    let reader = lib::Reader::spawn(machine.clone(), move || read_program(&path, opts));
+    match a.part_units.read(&a.stl) {
+        Ok(m) => Ok((m, reader, t.elapsed().as_secs_f64())),
+        Err(e) => Err(reader.join().err().unwrap_or(e)),
     }
 }
 
 /// The reading phases' times in the context's timings.
 fn record_reading(
     cx: &Context,
-    t_setup: f64,
-    [t_mesh, t_surface, t_inputs]: [f64; 3],
+    [t_setup, t_mesh, t_surface, t_inputs]: [f64; 4],
     [read_s, estimate_s]: [f64; 2],
 ) {
     cx.record("arguments, machine file and outputs checked", t_setup);
@@ -264,127 +226,48 @@ pub fn run(a: Args) -> CliResult<i32> {
     let t = std::time::Instant::now();
     let surface = Surface::new(&mesh);
     let t_surface = t.elapsed().as_secs_f64();
-    let read = join(reader);
+    let read = reader.join()?;
     let t_inputs = t0.elapsed().as_secs_f64() - t_setup;
-    let parsed = something_to_control(&a.path, read.parsed?)?;
-    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    let parsed = something_to_control(&a.path, read.parsed)?;
+    let quiet = a.notes.quiet;
+    print_diagnostics(&a.path, &parsed.diagnostics, quiet || a.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
-    let bar = crate::progress::Phases::new(!a.quiet && parsed.program.move_count() >= 100_000);
+    let bar = crate::progress::Phases::new(!quiet && parsed.program.move_count() >= 100_000);
     let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
     let cx = Context::new(machine)
         .with_surface(surface)
         .with_progress(&hook);
-    record_reading(
-        &cx,
-        t_setup,
-        [t_mesh, t_surface, t_inputs],
-        [read.read_s, read.estimate_s],
-    );
-    let input = parsed.program;
-    let ran = lib::run(&req, &cx, &input).map_err(|e| crate::cmd::pass_error(&a.path, e));
+    let times = [t_setup, t_mesh, t_surface, t_inputs];
+    record_reading(&cx, times, [read.read_s, read.estimate_s]);
+    let ran = lib::command(&req, &cx, &mesh, parsed.program);
     bar.finish();
-    let (program, mut pass) = ran?;
-    let checks = cx.time("checks of the output", || {
-        lib::checks(&cx, &input, &program)
-    });
-    let checked = crate::verdict::enforce(&checks, &a.path, a.force)?;
-    cx.time("input freed", || drop(input));
-    let Some(summary) = pass.summary.take() else {
-        return Err(CliError::internal("the speed pass left no summary"));
-    };
-    // A part that does not match its path makes every speed meaningless.
-    let findings = part_findings(&cx, &mesh, &summary);
-    print_diagnostics(&a.stl, &findings, a.quiet || a.json);
-    let time_after = write_and_estimate(&a, &cx, &program, target, &mut outputs)?;
-    let run = Ran {
-        program: &program,
-        summary: &summary,
-        rows: &pass.rows,
-        checks: &checks,
-        findings: &findings,
-        times: [read.time_before, time_after],
-    };
-    report_run(&a, &req, &cx, &run, outputs, target)?;
-    print_timings(&a, &cx, t0);
-    Ok(if checks::untrusted(&summary) || !checked {
+    let out = ran.map_err(|e| match e {
+        SpeedError::Pass(e) => crate::cmd::pass_error(&a.path, e),
+        SpeedError::NoSummary => CliError::internal("the speed pass left no summary"),
+    })?;
+    let checked = crate::verdict::enforce(&out.checks, &a.path, a.force)?;
+    print_diagnostics(&a.stl, &out.findings, quiet || a.json);
+    let t = std::time::Instant::now();
+    let wo = cx.machine.write_options(target);
+    let (written, time_after, [write_s, estimate_s]) =
+        lib::write_beside(&out.program, &cx.machine, || {
+            write_program_file(&out.program, wo, &mut outputs, &a.output, &a.path, quiet)
+        });
+    written?;
+    cx.record("  program written and synced", write_s);
+    cx.record("  time estimate of the output (beside it)", estimate_s);
+    let t_write = t.elapsed().as_secs_f64();
+    cx.record("program written, its time estimated", t_write);
+    let times = [read.time_before, time_after];
+    report_run(&a, &req, &cx, (&out, times), outputs, target)?;
+    if a.timings {
+        crate::timings::print(&cx.timings(), t0);
+    }
+    Ok(if out.untrusted() || !checked {
         EXIT_FINDINGS
     } else {
         EXIT_OK
     })
-}
-
-/// The part's own findings: open edges, points off the part.
-fn part_findings(
-    cx: &Context,
-    mesh: &millplan_geom::TriMesh,
-    summary: &Summary,
-) -> Vec<millplan_nc::Diagnostic> {
-    cx.time("part checks (open edges, points off the part)", || {
-        [checks::mesh(mesh), checks::off_surface(summary)]
-            .into_iter()
-            .flatten()
-            .collect()
-    })
-}
-
-/// The phases' timings on standard error (with --timings).
-fn print_timings(a: &Args, cx: &Context, t0: std::time::Instant) {
-    if a.timings {
-        crate::timings::print(&cx.timings(), t0);
-    }
-}
-
-/// Writes the program (staged, synced) while its cycle time is estimated on
-/// another thread; returns the estimate.
-fn write_and_estimate(
-    a: &Args,
-    cx: &Context,
-    program: &millplan_nc::Program,
-    target: millplan_nc::write::Target,
-    outputs: &mut Outputs,
-) -> CliResult<f64> {
-    let t = std::time::Instant::now();
-    let (written, (time_after, estimate_s)) = std::thread::scope(|s| {
-        let estimate = s.spawn(|| {
-            let t = std::time::Instant::now();
-            let total = millplan_plan::timing::estimate_program(program, &cx.machine).total_s;
-            (total, t.elapsed().as_secs_f64())
-        });
-        let written = write_program_file(
-            program,
-            cx.machine.write_options(target),
-            outputs,
-            &a.output,
-            &a.path,
-            a.quiet,
-        );
-        let w = t.elapsed().as_secs_f64();
-        (
-            written.map(|x| (x, w)),
-            estimate
-                .join()
-                .unwrap_or_else(|e| std::panic::resume_unwind(e)),
-        )
-    });
-    let (_, write_s) = written?;
-    cx.record("  program written and synced", write_s);
-    cx.record("  time estimate of the output (beside it)", estimate_s);
-    cx.record(
-        "program written, its time estimated",
-        t.elapsed().as_secs_f64(),
-    );
-    Ok(time_after)
-}
-
-/// What a run made: the program, the pass's summary and rows, the checks,
-/// the part's findings and the times before and after.
-struct Ran<'a> {
-    program: &'a millplan_nc::Program,
-    summary: &'a Summary,
-    rows: &'a [millplan_plan::speed::PointRow],
-    checks: &'a [millplan_driver::Check],
-    findings: &'a [millplan_nc::Diagnostic],
-    times: [f64; 2],
 }
 
 /// The table and report written, the outputs committed, the summary printed.
@@ -392,88 +275,28 @@ fn report_run(
     a: &Args,
     req: &SpeedRequest,
     cx: &Context,
-    r: &Ran,
+    (out, times): (&lib::Outcome, [f64; 2]),
     mut outputs: Outputs,
     target: millplan_nc::write::Target,
 ) -> CliResult<()> {
-    let inputs = || {
-        let mut i = report_inputs(
-            (&a.path, r.program),
-            &a.stl,
-            &cx.machine,
-            req.cut,
-            r.findings,
-            r.times,
-        );
-        i.failed = lib::failed_checks(r.checks);
-        i
-    };
-    cx.time("table and report", || {
-        write_table_and_report(a, &mut outputs, r.summary, r.rows, inputs)
+    cx.time("table and report", || -> CliResult<()> {
+        if let Some(t) = &a.table {
+            outputs.write(t, out.table_csv().as_bytes())?;
+        }
+        if let Some(r) = &a.report {
+            let names = (file_name(&a.path), file_name(&a.stl));
+            let html = out.report_html(names, &cx.machine, req.cut, times);
+            outputs.write(r, html.as_bytes())?;
+        }
+        Ok(())
     })?;
     cx.time("outputs renamed into place", || outputs.commit())?;
-    let out = lib::Report::new(
-        (r.summary, r.checks),
-        (a.output.display().to_string(), target),
-        &cx.machine,
-        r.findings,
-        r.times,
-    );
+    let written = (a.output.display().to_string(), target);
+    let report = out.report(written, &cx.machine, times);
     if a.json {
-        crate::cmd::print_json(serde_json::to_value(&out).unwrap_or_default());
+        crate::cmd::print_json(serde_json::to_value(&report).unwrap_or_default());
     } else {
-        out!("{}", out.render_text());
-    }
-    Ok(())
-}
-
-/// The header, warnings and cycle times of a spindle-control report, the
-/// program and the part named by their file names.
-pub fn report_inputs(
-    program: (&std::path::Path, &millplan_nc::Program),
-    part: &std::path::Path,
-    machine: &millplan_plan::machine::Machine,
-    cut: Cutting,
-    findings: &[millplan_nc::Diagnostic],
-    times: [f64; 2],
-) -> millplan_report::html::SpeedInputs {
-    let name = |p: &std::path::Path| {
-        p.file_name()
-            .map(|f| f.to_string_lossy().into_owned())
-            .unwrap_or_default()
-    };
-    lib::report_inputs(
-        (name(program.0), program.1),
-        name(part),
-        machine,
-        cut,
-        findings,
-        times,
-    )
-}
-
-/// The per-point table (--table) and the report (--report), when asked for.
-fn write_table_and_report(
-    a: &Args,
-    outputs: &mut Outputs,
-    summary: &Summary,
-    rows: &[millplan_plan::speed::PointRow],
-    inputs: impl FnOnce() -> millplan_report::html::SpeedInputs,
-) -> CliResult<()> {
-    if let Some(t) = &a.table {
-        let csv = millplan_report::table::points_csv(rows);
-        outputs.write(t, csv.as_bytes())?;
-    }
-    if let Some(r) = &a.report {
-        let title = format!(
-            "millplan speed: {}",
-            a.path
-                .file_name()
-                .map(|f| f.to_string_lossy())
-                .unwrap_or_default()
-        );
-        let html = millplan_report::html::speed_report(&title, &inputs(), summary, rows);
-        outputs.write(r, html.as_bytes())?;
+        out!("{}", report.render_text());
     }
     Ok(())
 }

@@ -36,10 +36,8 @@ pub struct Args {
     /// Also fit the regression surrogate and print R², RMSE and MAPE.
     #[arg(long)]
     pub fit: bool,
-    /// Print a machine-readable summary (JSON) on standard output; errors too,
-    /// as JSON on standard error.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -55,7 +53,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         .map_err(|e| CliError::input(format!("{}: {e}", a.output.display())))?;
     let (csv, figures) = sweep(&design);
     let fit = a.fit.then(millplan_driver::sweep::fit);
-    if let (Some(f), false) = (&fit, a.json) {
+    if let (Some(f), false) = (&fit, a.summary.json) {
         outln!(
             "regression surrogate: {} samples, R² {:.4}, RMSE {:.4} mm, MAPE {:.2} %",
             f.samples,
@@ -73,7 +71,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     outputs.write(&c, csv.as_bytes())?;
     outputs.write(&h, html.as_bytes())?;
     outputs.commit()?;
-    if a.json {
+    if a.summary.json {
         let fit = fit.as_ref().map(|f| {
             serde_json::json!({"samples": f.samples, "r2": f.r2, "rmse_mm": f.rmse, "mape_percent": f.mape})
         });

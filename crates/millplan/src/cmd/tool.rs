@@ -3,11 +3,8 @@
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::Outputs;
 use clap::{Subcommand, ValueEnum};
-use millplan_driver::tool::{
-    self as t, describe, ImportedJson, InsertJson, Library, PzJson, ToolError, WrittenJson,
-};
+use millplan_driver::tool::{self as t, Library, ToolError, ToolRequest};
 use millplan_tooldb::db::ToolEdit;
-use millplan_tooldb::thread::pz;
 use std::path::{Path, PathBuf};
 
 /// The tool library and thread-mill control, for the tool room.
@@ -247,10 +244,6 @@ impl From<ToolError> for CliError {
     }
 }
 
-fn to_json<T: serde::Serialize>(v: &T) -> CliResult<serde_json::Value> {
-    serde_json::to_value(v).map_err(|e| CliError::internal(format!("JSON output: {e}")))
-}
-
 /// Prints `j` (with --json) or `text` on standard output. A write that fails
 /// (a closed pipe, a full disk) is reported when the run ends, never a panic.
 pub(crate) fn print(json_out: bool, j: serde_json::Value, text: String) -> CliResult<()> {
@@ -264,39 +257,31 @@ pub(crate) fn print(json_out: bool, j: serde_json::Value, text: String) -> CliRe
     Ok(())
 }
 
-/// Prints `j` (with --json) or `text`; exit 0.
-fn done(json_out: bool, j: serde_json::Value, text: String) -> CliResult<i32> {
-    print(json_out, j, text)?;
-    Ok(EXIT_OK)
-}
-
-/// Writes `text` as the output `path` (`-`: standard output), never over
-/// the library; says what it wrote unless that was standard output.
-fn write_output(
-    lib: &Library,
-    json: bool,
-    path: &Path,
-    text: &str,
-    pz: Option<Option<f64>>,
-) -> CliResult<i32> {
-    let mut o = Outputs::plan(&[lib.path.as_path()], &[("-o", Some(path))], true)?;
-    o.write(path, text.as_bytes())?;
-    o.commit()?;
-    if path.as_os_str() == "-" {
-        return Ok(EXIT_OK);
-    }
-    let output = path.display().to_string();
-    done(
-        json,
-        to_json(&WrittenJson { output, pz })?,
-        format!("wrote {}", path.display()),
-    )
+/// Writes what a subcommand made to `output` (`-`: standard output), never
+/// over the library, and says so; else prints its JSON or text.
+fn finish(lib: &Library, json: bool, o: t::ToolOutcome, output: Option<&Path>) -> CliResult<i32> {
+    let o = match (&o.file, output) {
+        (Some((text, pz)), Some(path)) => {
+            let mut w = Outputs::plan(&[lib.path.as_path()], &[("-o", Some(path))], true)?;
+            w.write(path, text.as_bytes())?;
+            w.commit()?;
+            if path.as_os_str() == "-" {
+                return Ok(EXIT_OK);
+            }
+            t::ToolOutcome::written(path, *pz)?
+        }
+        _ => o,
+    };
+    print(json, o.json, o.text)?;
+    Ok(if o.problem { EXIT_FINDINGS } else { EXIT_OK })
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
     // PZ needs no library.
     if let ToolCommand::Pz { insl, tp } = a.command {
-        return print_pz(a.json, insl, tp);
+        let o = t::pz_command(insl, tp)?;
+        print(a.json, o.json, o.text)?;
+        return Ok(EXIT_OK);
     }
     use std::env::var_os;
     let (db, xdg, home) = (
@@ -306,69 +291,32 @@ pub fn run(a: Args) -> CliResult<i32> {
     );
     let path = t::library_path(a.db, db, xdg, home)?;
     let mut lib = Library::open(path)?;
-    let json = a.json;
-    match a.command {
-        ToolCommand::Pz { .. } => unreachable!("handled above"),
-        ToolCommand::Add(x) => add(&mut lib, json, x),
+    let (req, output) = request(a.command);
+    let o = t::command(&mut lib, req)?;
+    finish(&lib, a.json, o, output.as_deref())
+}
+
+/// The subcommand as the driver takes it, and the file it writes.
+fn request(c: ToolCommand) -> (ToolRequest, Option<PathBuf>) {
+    match c {
+        ToolCommand::Add(x) => (ToolRequest::Add(x.number, edit(x)), None),
         ToolCommand::Insert {
             number,
             designation,
             insl,
             tp,
-        } => insert(&mut lib, json, number, &designation, (insl, tp)),
-        ToolCommand::Preset { number, l, r } => {
-            let t = lib.preset(number, l, r)?;
-            let text = format!("presetter values recorded: {}", describe(&t));
-            done(json, to_json(&t)?, text)
-        }
-        ToolCommand::Measure(x) => measure(&mut lib, json, x),
-        ToolCommand::Show { number } => {
-            let tools = lib.show(number)?;
-            let text = t::tools_text(&tools, &lib.path.display().to_string());
-            done(json, to_json(&tools)?, text)
-        }
-        ToolCommand::Log { number } => {
-            let ev = lib.log(number)?;
-            done(json, to_json(&ev)?, t::events_text(&ev))
-        }
-        ToolCommand::Import { file } => {
-            let n = lib.import(&file)?;
-            let text = format!("imported {n} tools into {}", lib.path.display());
-            done(json, to_json(&ImportedJson { imported: n })?, text)
-        }
+        } => (ToolRequest::Insert(number, designation, (insl, tp)), None),
+        ToolCommand::Preset { number, l, r } => (ToolRequest::Preset(number, (l, r)), None),
+        ToolCommand::Measure(x) => (measure(x), None),
+        ToolCommand::Show { number } => (ToolRequest::Show(number), None),
+        ToolCommand::Log { number } => (ToolRequest::Log(number), None),
+        ToolCommand::Import { file } => (ToolRequest::Import(file), None),
         ToolCommand::Export { format, output } => {
-            let text = lib.export(format.into())?;
-            write_output(&lib, json, &output, &text, None)
+            (ToolRequest::Export(format.into()), Some(output))
         }
-        ToolCommand::Cycle(x) => cycle(&lib, json, x),
+        ToolCommand::Cycle(x) => cycle(x),
+        ToolCommand::Pz { insl, tp } => unreachable!("PZ {insl} {tp} needs no library"),
     }
-}
-
-/// Records the insert of a thread mill; says its PZ.
-fn insert(
-    lib: &mut Library,
-    json: bool,
-    tool: u32,
-    designation: &str,
-    (insl, tp): (f64, f64),
-) -> CliResult<i32> {
-    let pz = lib.insert(tool, designation, insl, tp)?;
-    let j = InsertJson {
-        tool,
-        designation,
-        insl,
-        tp,
-        pz,
-    };
-    let text = format!("T{tool}: insert {designation}, PZ {pz:.3} mm");
-    done(json, to_json(&j)?, text)
-}
-
-/// The PZ of an insert (no library needed).
-fn print_pz(json_out: bool, insl: f64, tp: f64) -> CliResult<i32> {
-    let v = pz(insl, tp).map_err(|e| CliError::input(e.to_string()))?;
-    let text = format!("PZ = {v:.3} mm (INSL {insl}, TP {tp})");
-    done(json_out, to_json(&PzJson { pz: v, insl, tp })?, text)
 }
 
 impl From<ExportFormat> for t::ExportFormat {
@@ -381,29 +329,25 @@ impl From<ExportFormat> for t::ExportFormat {
     }
 }
 
-fn add(lib: &mut Library, json: bool, x: AddArgs) -> CliResult<i32> {
-    let t = lib.add(
-        x.number,
-        ToolEdit {
-            name: x.name,
-            kind: x.kind,
-            l: x.l,
-            r: x.r,
-            ltol: x.ltol,
-            rtol: x.rtol,
-            lbreak: x.lbreak,
-            rbreak: x.rbreak,
-            sister: x.sister,
-            life_min: x.life,
-            insl: x.insl,
-            tp: x.tp,
-            iso: x.iso,
-        },
-    )?;
-    done(json, to_json(&t)?, format!("saved {}", describe(&t)))
+fn edit(x: AddArgs) -> ToolEdit {
+    ToolEdit {
+        name: x.name,
+        kind: x.kind,
+        l: x.l,
+        r: x.r,
+        ltol: x.ltol,
+        rtol: x.rtol,
+        lbreak: x.lbreak,
+        rbreak: x.rbreak,
+        sister: x.sister,
+        life_min: x.life,
+        insl: x.insl,
+        tp: x.tp,
+        iso: x.iso,
+    }
 }
 
-fn measure(lib: &mut Library, json: bool, x: MeasureArgs) -> CliResult<i32> {
+fn measure(x: MeasureArgs) -> ToolRequest {
     let req = t::MeasureRequest {
         number: x.number,
         first: x.first,
@@ -413,17 +357,11 @@ fn measure(lib: &mut Library, json: bool, x: MeasureArgs) -> CliResult<i32> {
         pz: x.pz,
         dset: x.dset,
     };
-    let o = lib.measure(req, x.pallet)?;
-    print(json, to_json(&o)?, t::outcome_text(&o))?;
-    Ok(if o.decision.is_problem() {
-        EXIT_FINDINGS
-    } else {
-        EXIT_OK
-    })
+    ToolRequest::Measure(req, x.pallet)
 }
 
-fn cycle(lib: &Library, json: bool, x: CycleArgs) -> CliResult<i32> {
-    let (text, pz) = lib.cycle(t::CycleRequest {
+fn cycle(x: CycleArgs) -> (ToolRequest, Option<PathBuf>) {
+    let c = t::CycleRequest {
         number: x.number,
         control: match x.control {
             Control::Heidenhain => t::CycleControl::Heidenhain,
@@ -437,6 +375,6 @@ fn cycle(lib: &Library, json: bool, x: CycleArgs) -> CliResult<i32> {
         },
         clearance: x.clearance,
         per_tooth: x.per_tooth,
-    })?;
-    write_output(lib, json, &x.output, &text, Some(pz))
+    };
+    (ToolRequest::Cycle(c), Some(x.output))
 }

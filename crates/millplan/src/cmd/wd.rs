@@ -57,10 +57,8 @@ pub struct Args {
     /// surrogate).
     #[arg(long, value_enum, default_value = "geometric")]
     pub model: ModelArg,
-    /// Print a machine-readable summary (JSON) on standard output; errors too, as JSON
-    /// on standard error.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -79,10 +77,6 @@ pub fn run(a: Args) -> CliResult<i32> {
         regression: matches!(a.model, ModelArg::Regression),
     };
     let o = millplan_driver::wd::run(&req).map_err(CliError::input)?;
-    if a.json {
-        crate::cmd::print_json(serde_json::to_value(&o).unwrap_or_default());
-    } else {
-        out!("{}", o.render_text());
-    }
+    a.summary.print(&o, |o| o.render_text());
     Ok(EXIT_OK)
 }
