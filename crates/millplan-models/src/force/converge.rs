@@ -223,7 +223,7 @@ fn window_margin(error_dphi: f64) -> f64 {
     (4.0 * error_dphi).clamp(WINDOW_FLOOR, 1.0)
 }
 
-/// The least margin of [`window_margin`].
+/// The least margin of `window_margin`.
 pub const WINDOW_FLOOR: f64 = 0.01;
 
 /// The angle indices of a grid with twice the angles of `rows` to
@@ -500,7 +500,7 @@ pub const HALVES_SHARE: f64 = 0.25;
 /// 2^-[`BISECTIONS`] of a slice, so half of that is the largest error.
 pub const BOUNDARY_SHARE: f64 = 0.5 / (1u32 << BISECTIONS) as f64;
 
-/// The share of [`tent_excess`] taken as the error of the rotation step.
+/// The share of `tent_excess` taken as the error of the rotation step.
 pub const TENT_SHARE: f64 = 0.5;
 
 /// How far the peak of quantity `c` (0: F_xy, 1: |T|) over the tooth period
