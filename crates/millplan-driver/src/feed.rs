@@ -12,7 +12,7 @@ pub use millplan_plan::feed::FeedParams;
 use millplan_plan::feed::{machine_accel, BodyFn, FeedChanges, FeedPass};
 /// The load limits of a run.
 pub use millplan_plan::force::FeedLimits;
-use millplan_plan::force::{simulate, ForceSetup, FzRange, MoveForces};
+use millplan_plan::force::{simulate, ForceSetup, FzRange, LimitUse, MoveForces};
 use millplan_plan::force::{Maxima, Steps};
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context, PassError, Progress};
@@ -48,7 +48,8 @@ pub struct ModelRequest {
     pub dz: f64,
     /// Rotation step, degrees.
     pub dphi: f64,
-    pub converge: bool,
+    /// Use the grid as given instead of refining it per load sample.
+    pub fixed_grid: bool,
     /// `--spindle`, 1/min: the speed of the moves that have none.
     pub spindle: Option<f64>,
 }
@@ -107,8 +108,8 @@ pub fn force_setup(m: &ModelRequest, materials: &Materials) -> Result<ForceSetup
         dz: m.dz,
         dphi: m.dphi.to_radians(),
     };
-    if m.converge {
-        s.refine = Some(millplan_models::force::converge::Refine::default());
+    if m.fixed_grid {
+        s.refine = None;
     }
     s.stickout = m.stickout;
     s.flute_length = m.flute_length;
@@ -338,15 +339,28 @@ pub fn stopped_spindle(path: &str, run: &ForceRun) -> Result<(), String> {
     }
 }
 
-/// The forces of `program` cut into `s` over the prepared stock; `done`
-/// hears the strokes done.
+/// The forces of `program` cut into `s` over the prepared stock, every
+/// load converged; `done` hears the strokes done.
 pub fn forces(
     p: &Prepared,
     program: &Program,
     s: &Strokes,
     done: &(dyn Fn(usize) + Sync),
 ) -> Result<ForceRun, String> {
-    simulate(program, s, p.stock.clone(), &p.setup, None, done)
+    simulate(program, s, p.stock.clone(), &p.setup, LimitUse::None, done)
+}
+
+/// The forces of the program a feed run wrote (`s`), as its limits are
+/// checked: a load sample below every limit by more than its error is not
+/// refined further ([`LimitUse::Check`]); `done` hears the strokes done.
+pub fn forces_after(
+    p: &Prepared,
+    s: &Scheduled,
+    strokes: &Strokes,
+    done: &(dyn Fn(usize) + Sync),
+) -> Result<ForceRun, String> {
+    let check = LimitUse::Check(&s.params.limits, &p.machine);
+    simulate(&s.program, strokes, p.stock.clone(), &p.setup, check, done)
 }
 
 /// The load limits of `--limit NAME=VALUE` (`loads`) with the feed-per-tooth

@@ -89,7 +89,7 @@ impl Job {
         // and the part are checked on the CL program it was posted from,
         // its tips through the kinematics against the input.
         let cl = o.posted.as_ref().map_or(&read, |(cl, _)| cl);
-        let forces_after = self.forces(cl)?;
+        let forces_after = self.forces_checked(cl)?;
         list.extend(self.checks(o, cl, forces_after.as_ref()));
         if o.posted.is_some() {
             self.posted_checks(&read, &mut list);

@@ -520,9 +520,8 @@ fn force_setup(
         .law;
     let mut s = ForceSetup::new(law, flutes);
     s.helix = helix_deg.to_radians();
-    // The given grid, unrefined (`ForceSetup::new`; `feed --converge`
-    // refines it): converging every load sample costs tens of times the
-    // evaluations.
+    // The default grid as the coarsest, refined per load sample until the
+    // peaks converge (`ForceSetup::new`).
     s.grid = Grid::default();
     Ok(Some(s))
 }

@@ -514,7 +514,7 @@ mod tests {
             resolution: 0.25,
             dz: crate::command_defaults::feed::DZ,
             dphi: crate::command_defaults::feed::DPHI_DEG,
-            converge: false,
+            fixed_grid: true,
             spindle: None,
         };
         let materials = Materials::builtin();

@@ -104,11 +104,25 @@ impl Job {
     /// The largest loads of `p` on the job's stock, `None` without a stock
     /// or a material.
     pub fn forces(&self, p: &Program) -> Result<Option<ForceRun>, JobError> {
+        self.forces_using(p, force::LimitUse::None)
+    }
+
+    /// The loads of a program the job wrote, as its limits are checked: a
+    /// load sample below every limit by more than its error is not refined
+    /// further ([`force::LimitUse::Check`]).
+    pub fn forces_checked(&self, p: &Program) -> Result<Option<ForceRun>, JobError> {
+        self.forces_using(
+            p,
+            force::LimitUse::Check(&self.limits, &self.inputs.machine),
+        )
+    }
+
+    fn forces_using(&self, p: &Program, u: force::LimitUse) -> Result<Option<ForceRun>, JobError> {
         let (Some(stock), Some(setup)) = (&self.stock, &self.setup) else {
             return Ok(None);
         };
         let s = self.strokes(p, true);
-        force::simulate(p, &s, stock.clone(), setup, None, &|_| {})
+        force::simulate(p, &s, stock.clone(), setup, u, &|_| {})
             .map(Some)
             .map_err(JobError)
     }

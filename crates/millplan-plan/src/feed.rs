@@ -127,7 +127,7 @@ impl Pass for FeedPass {
                     &s,
                     stock,
                     &self.params.setup,
-                    Some((&self.params.limits, m)),
+                    force::LimitUse::Schedule(&self.params.limits, m),
                     &|done| cx.progress("feed: forces", done, total),
                 )
             })

@@ -24,13 +24,13 @@
 
 use millplan_geom::{DVec2, DVec3};
 use millplan_models::force::coeffs::Law;
-use millplan_models::force::converge::{ConvergedModel, Refine};
+use millplan_models::force::converge::{Converged, ConvergedModel, Refine};
 use millplan_models::force::deflect::{Cantilever, DE_RATIO, E_CARBIDE};
 use millplan_models::force::edge::Tool;
 use millplan_models::force::engage::Engagement;
 use millplan_models::force::feed::{Limits, Loads};
 use millplan_models::force::materials::{fz_max_for, ChipLoads, FzSource};
-use millplan_models::force::{Cut, Engaged, ForceModel, Grid, Summary};
+use millplan_models::force::{Cut, ForceModel, Grid, Summary};
 use millplan_nc::{Move, Program};
 use millplan_sim::stock::engage::tool_frame;
 use millplan_sim::stock::path::{Stroke, Strokes};
@@ -160,8 +160,8 @@ pub struct ForceSetup {
     /// The steps of the force integrals: the coarsest with `refine`, else
     /// exactly these.
     pub grid: Grid,
-    /// Refine the steps per stroke until the peaks converge
-    /// ([`ConvergedModel`]; on by default).
+    /// Refine the steps per load sample until the peaks converge
+    /// ([`ConvergedModel`]; on by default, `None` uses `grid` as it is).
     pub refine: Option<Refine>,
     /// Gauge length from the holder face to the tip, mm (default 3·D).
     pub stickout: Option<f64>,
@@ -179,9 +179,10 @@ impl ForceSetup {
             flutes,
             helix: 30f64.to_radians(),
             grid: Grid::default(),
-            // The given grid: converging every load sample costs tens of
-            // times the evaluations (`feed --converge` asks for it).
-            refine: None,
+            // Converged per load sample: with the weighted ends of
+            // `force::quadrature` the slice height rarely needs halving,
+            // and the rotation step is refined around the peaks only.
+            refine: Some(Refine::default()),
             stickout: None,
             flute_length: None,
             modulus: E_CARBIDE,
@@ -565,10 +566,33 @@ pub fn moves_by_index(p: &Program) -> Vec<&Move> {
     p.operations.iter().flat_map(|op| op.moves.iter()).collect()
 }
 
+/// What a force run does with load limits.
+#[derive(Clone, Copy, Debug)]
+pub enum LimitUse<'a> {
+    /// No limits: every load sample is converged unless it lies below its
+    /// move's largest by more than its error.
+    None,
+    /// A run that checks the limits: a sample whose loads, with their
+    /// estimated error, stay below every limit is not refined further (it
+    /// cannot be over a limit), so such loads carry the coarser grid's error.
+    Check(&'a FeedLimits, &'a crate::machine::Machine),
+    /// Checks, and finds the feed per tooth each stroke's limits allow
+    /// (§2.3, the iteration reusing the stroke's engaged cells).
+    Schedule(&'a FeedLimits, &'a crate::machine::Machine),
+}
+
+impl<'a> LimitUse<'a> {
+    fn limits(&self) -> Option<(&'a FeedLimits, &'a crate::machine::Machine)> {
+        match *self {
+            LimitUse::None => None,
+            LimitUse::Check(l, m) | LimitUse::Schedule(l, m) => Some((l, m)),
+        }
+    }
+}
+
 /// Runs `strokes` (of `program`) through `stock`, evaluating the forces of
-/// every cutting stroke; with `schedule`, also the feed per tooth each
-/// stroke's limits allow (§2.3, the iteration reusing the stroke's engaged
-/// cells). `progress(done)` is called now and then.
+/// every cutting stroke, using the limits as `limits` says.
+/// `progress(done)` is called now and then.
 ///
 /// The strokes run in order through one stock, yet in parallel: one thread
 /// removes material only (a small share of the work) and hands a copy of the
@@ -581,7 +605,7 @@ pub fn simulate(
     strokes: &Strokes,
     stock: Stock,
     setup: &ForceSetup,
-    schedule: Option<(&FeedLimits, &crate::machine::Machine)>,
+    schedule: LimitUse<'_>,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<ForceRun, String> {
     simulate_in_parts(program, strokes, stock, setup, schedule, progress, MIN_PART)
@@ -598,7 +622,7 @@ pub fn simulate_in_parts(
     strokes: &Strokes,
     stock: Stock,
     setup: &ForceSetup,
-    schedule: Option<(&FeedLimits, &crate::machine::Machine)>,
+    schedule: LimitUse<'_>,
     progress: &(dyn Fn(usize) + Sync),
     min_part: usize,
 ) -> Result<ForceRun, String> {
@@ -681,7 +705,7 @@ struct PartContext<'a> {
     ir: &'a [&'a Move],
     tools: &'a [ToolForces],
     strokes: &'a Strokes,
-    schedule: Option<(&'a FeedLimits, &'a crate::machine::Machine)>,
+    schedule: LimitUse<'a>,
     done: &'a std::sync::atomic::AtomicUsize,
     progress: &'a (dyn Fn(usize) + Sync),
 }
@@ -811,7 +835,7 @@ fn stroke_forces(
     s: &Stroke,
     from_cut: bool,
     m: &mut MoveForces,
-    schedule: Option<(&FeedLimits, &crate::machine::Machine)>,
+    schedule: LimitUse<'_>,
 ) -> Option<usize> {
     let d = s.p1 - s.p0;
     let len = d.length();
@@ -826,7 +850,10 @@ fn stroke_forces(
     }
     let fz = v / (m.rpm * flutes);
     m.fz = m.fz.max(fz);
-    let limits = schedule.map(|(lim, machine)| lim.at(m.rpm, 2.0 * tf.radius, machine));
+    let limits = schedule
+        .limits()
+        .map(|(lim, machine)| lim.at(m.rpm, 2.0 * tf.radius, machine));
+    let scheduling = matches!(schedule, LimitUse::Schedule(..));
     let mut evals = 0;
     for dist in sample_distances(len, stock.grid.res, from_cut) {
         let t = dist / len;
@@ -840,23 +867,81 @@ fn stroke_forces(
             lead,
             tilt: 0.0,
         };
-        // The grid refined until this sample's peaks converge; the
-        // converged evaluation is at the stroke's own feed per tooth.
-        let conv = tf.model.converge(&cut, &eng);
+        // The grid refined until this sample's peaks converge. When
+        // scheduling, it is converged at the highest feed per tooth the
+        // schedule may give the move (the loads there are the largest the
+        // schedule can meet) and evaluated again at the move's own; else
+        // at the move's own. A sample whose loads there, with their
+        // estimated error, stay below the move's largest so far cannot
+        // decide the move's loads or its feed, nor one whose loads stay
+        // below every limit: it is not refined further.
+        let top = match &limits {
+            Some(l) if scheduling => l.fz_max.max(fz),
+            _ => fz,
+        };
+        let most = (m.fxy_max, m.torque_max, m.power_w);
+        let below =
+            |e: &millplan_models::force::Evaluation| settled(e, most, limits.as_ref(), &tf.holding);
+        // Every sample from the coarsest grid, so that its loads do not
+        // depend on the samples before it (nor on where the program was
+        // split over the threads).
+        let conv = tf
+            .model
+            .converge_from(&Cut { fz: top, ..cut }, &eng, (0, 0), below);
         evals += 1 + (conv.halvings.0 + conv.halvings.1) as usize;
-        let (model, cells) = (conv.model, &conv.cells);
-        if cells.is_empty() {
+        if conv.cells.is_empty() {
             m.mean.add_air();
             continue;
         }
-        let sum = conv.evaluation.summary();
+        let sum = if top == fz {
+            conv.evaluation.summary()
+        } else {
+            evals += 1;
+            conv.evaluate_at(&cut).summary()
+        };
         m.mean.add(&sum);
-        m.merge(&sum, &Loads::new(&sum, &tf.holding), cells.len(), model);
-        if let Some(lim) = &limits {
-            evals += tighten(&cut, cells, model, &tf.holding, lim, m);
+        m.merge(
+            &sum,
+            &Loads::new(&sum, &tf.holding),
+            conv.cells.len(),
+            conv.model,
+        );
+        if let Some(lim) = limits.as_ref().filter(|_| scheduling) {
+            let prev = m.fz_allowed;
+            evals += tighten(&cut, &conv, &tf.holding, lim, m);
+            // The finer grids were chosen around the peaks at `top`; at the
+            // lower feed this sample allows, a peak may lie where they did
+            // not look. Converged again there, it is checked once more.
+            if let Some(a) = m.fz_allowed.filter(|a| prev != Some(*a) && *a < top) {
+                let at = Cut { fz: a, ..cut };
+                let again = tf.model.converge_from(&at, &eng, (0, 0), below);
+                evals += 1 + (again.halvings.0 + again.halvings.1) as usize;
+                evals += tighten(&cut, &again, &tf.holding, lim, m);
+            }
         }
     }
     Some(evals)
+}
+
+/// How many times its estimated error a sample's loads must stay below the
+/// move's largest so far for its grid not to be refined further.
+pub const EARLY_MARGIN: f64 = 3.0;
+
+/// Whether a load sample's evaluation `e` settles what its move needs
+/// without refining further: its loads with their estimated error (times
+/// [`EARLY_MARGIN`]) stay below the move's largest so far (`fxy`, `torque`,
+/// `power`), or, when scheduling (`limits`), below every limit.
+fn settled(
+    e: &millplan_models::force::Evaluation,
+    (fxy, torque, power): (f64, f64, f64),
+    limits: Option<&Limits>,
+    holding: &Cantilever,
+) -> bool {
+    let s = e.summary();
+    let k = 1.0 + EARLY_MARGIN * (e.error_dz + e.error_dphi);
+    let under_move = s.fxy_max * k < fxy && s.torque_max * k < torque && s.power_w * k < power;
+    under_move
+        || limits.is_some_and(|l| l.ratio(&Loads::new(&s, holding)).is_none_or(|(r, _)| r > k))
 }
 
 /// Lowers the move's allowed feed per tooth until this sample's limits are
@@ -864,8 +949,7 @@ fn stroke_forces(
 /// within its limits). Returns the evaluations used.
 fn tighten(
     cut: &Cut,
-    cells: &Engaged,
-    model: &ForceModel,
+    conv: &Converged,
     holding: &Cantilever,
     lim: &Limits,
     m: &mut MoveForces,
@@ -873,9 +957,7 @@ fn tighten(
     let mut evals = 0;
     let start = match m.fz_allowed {
         Some(a) => {
-            let s = model
-                .evaluate_engaged(&Cut { fz: a, ..*cut }, cells)
-                .summary();
+            let s = conv.evaluate_at(&Cut { fz: a, ..*cut }).summary();
             evals += 1;
             let loads = Loads::new(&s, holding);
             match lim.ratio(&loads) {
@@ -889,7 +971,7 @@ fn tighten(
         }
         None => cut.fz,
     };
-    let (f, c, n, loads) = allowed_fz(&Cut { fz: start, ..*cut }, cells, model, holding, lim);
+    let (f, c, n, loads) = allowed_fz(&Cut { fz: start, ..*cut }, conv, holding, lim);
     if m.fz_allowed.is_none_or(|a| f < a) {
         m.fz_allowed = Some(f);
         m.binding = Some(c);
@@ -925,14 +1007,13 @@ fn slow_for_power(lim: &Limits, loads: &Loads, m: &mut MoveForces) {
 /// the evaluations used and the loads at the feed returned.
 fn allowed_fz(
     cut: &Cut,
-    cells: &Engaged,
-    model: &ForceModel,
+    conv: &Converged,
     holding: &Cantilever,
     lim: &Limits,
 ) -> (f64, &'static str, usize, Option<Loads>) {
     use millplan_models::force::feed::iterate_feed;
     let eval = |fz: f64| {
-        let s = model.evaluate_engaged(&Cut { fz, ..*cut }, cells).summary();
+        let s = conv.evaluate_at(&Cut { fz, ..*cut }).summary();
         Loads::new(&s, holding)
     };
     let sched = iterate_feed(cut.fz, lim, 0.01, 20, eval);

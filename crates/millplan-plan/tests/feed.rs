@@ -7,7 +7,9 @@ use millplan_models::force::materials::Materials;
 use millplan_nc::generate::{raster, Raster};
 use millplan_nc::Program;
 use millplan_plan::feed::{FeedParams, FeedPass};
-use millplan_plan::force::{simulate, simulate_in_parts, FeedLimits, ForceRun, ForceSetup};
+use millplan_plan::force::{
+    simulate, simulate_in_parts, FeedLimits, ForceRun, ForceSetup, LimitUse, LIMIT_TOLERANCE,
+};
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context};
 use millplan_sim::stock::path::{strokes, PathOptions};
@@ -62,7 +64,7 @@ fn forces(p: &Program, stock: Stock, m: &Machine) -> ForceRun {
             rapid_rate: m.rapid,
         },
     );
-    simulate(p, &s, stock, &setup(), None, &|_| {}).expect("simulates")
+    simulate(p, &s, stock, &setup(), LimitUse::None, &|_| {}).expect("simulates")
 }
 
 fn time_s(p: &Program, m: &Machine) -> f64 {
@@ -95,7 +97,7 @@ fn forces_do_not_depend_on_how_the_run_is_split_over_threads() {
                     &s,
                     stock.clone(),
                     &setup(),
-                    Some((&limits, &m)),
+                    LimitUse::Schedule(&limits, &m),
                     &|_| {},
                     min_part,
                 )
@@ -142,7 +144,7 @@ fn forces_follow_the_engagement_along_the_program() {
         },
     );
     let _ = millplan_sim::stock::run::run(&mut stock2, &s, 0.01, &|_| {});
-    let again = simulate(&p2, &s, stock2, &setup(), None, &|_| {}).expect("simulates");
+    let again = simulate(&p2, &s, stock2, &setup(), LimitUse::None, &|_| {}).expect("simulates");
     let median = |r: &ForceRun| {
         let mut v: Vec<f64> = r
             .moves
@@ -175,6 +177,7 @@ fn scheduled_feeds_meet_the_limits_within_the_machine_and_save_time() {
     let cx = Context::new(m.clone()).verifying();
     pipeline::run(&mut [&mut pass], &mut p, &cx).expect("the pass runs");
     let ch = pass.changes.expect("changes");
+    let held = held_at_fz_min(pass.before.as_ref().expect("loads"), &limits());
     assert!(ch.blocks > 500, "{ch:?}");
     // Every feed block within the machine's range, spindle speeds kept.
     for (a, b) in input.moves().zip(p.moves()) {
@@ -187,18 +190,25 @@ fn scheduled_feeds_meet_the_limits_within_the_machine_and_save_time() {
             );
         }
     }
-    // The output's own prediction stays within every limit.
+    // The output's own prediction stays within every limit (within the
+    // tolerance the exit codes state), but at moves the pass had to hold
+    // at the smallest feed per tooth, which it reports as still over.
     let after = forces(&p, stock, &m);
     let l = limits();
-    for x in after.moves.iter().filter(|x| !x.unmodelled) {
+    let within = 1.0 + LIMIT_TOLERANCE;
+    for x in after
+        .moves
+        .iter()
+        .filter(|x| !x.unmodelled && !held.contains(&x.index))
+    {
         assert!(
-            x.fxy_max <= l.fxy.unwrap_or(f64::INFINITY) * (1.0 + 1e-9),
-            "line {} fxy {}",
-            x.line,
+            x.fxy_max <= l.fxy.unwrap_or(f64::INFINITY) * within,
+            "move {} fxy {}",
+            x.index,
             x.fxy_max
         );
-        assert!(x.power_w <= l.power.unwrap_or(f64::INFINITY) * (1.0 + 1e-9));
-        assert!(x.deflection_mm <= l.deflection.unwrap_or(f64::INFINITY) * (1.0 + 1e-9));
+        assert!(x.power_w <= l.power.unwrap_or(f64::INFINITY) * within);
+        assert!(x.deflection_mm <= l.deflection.unwrap_or(f64::INFINITY) * within);
         if x.fz > 0.0 && x.fxy_max > 0.0 {
             assert!(x.fz <= 0.25 * (1.0 + 1e-9), "fz {}", x.fz);
         }
@@ -357,7 +367,7 @@ fn slot_forces(p: &Program, stock: Stock) -> ForceRun {
             rapid_rate: 15000.0,
         },
     );
-    simulate(p, &s, stock, &setup(), None, &|_| {}).expect("simulates")
+    simulate(p, &s, stock, &setup(), LimitUse::None, &|_| {}).expect("simulates")
 }
 
 /// F_xy,max of the analytic full slot at feed `f` (mm/min).
@@ -435,4 +445,82 @@ fn a_slot_that_ends_in_air_is_scheduled_under_the_limit() {
         "F_xy,max {:.1} N against a limit of {limit:.1} N",
         slot.fxy_max
     );
+}
+
+/// Issue 30, "done when": a program scheduled under `fxy=100` (the demo's
+/// ball D10 finishing raster over the demo surface, al7075) and re-checked
+/// with the force grid's slice length and rotation step each four times
+/// finer than the default, fixed, stays within 2 % of its limit. The
+/// default grid used to under-predict F_xy,max by up to 22 %, and such a
+/// schedule had 2,446 of 6,384 blocks over its limit at the finer grid.
+#[test]
+fn a_schedule_rechecked_on_a_four_times_finer_grid_stays_within_two_percent() {
+    let (mut p, stock) = case();
+    let m = Machine::default();
+    let limits = FeedLimits {
+        fxy: Some(100.0),
+        torque: None,
+        power: None,
+        stress: None,
+        deflection: None,
+        ..limits()
+    };
+    let params = FeedParams {
+        setup: setup(),
+        limits,
+        accel: 2000.0,
+        chord: 0.025,
+    };
+    let mut pass = FeedPass::new(params, stock.clone(), Box::new(body));
+    let cx = Context::new(m.clone());
+    pipeline::run(&mut [&mut pass], &mut p, &cx).expect("the pass runs");
+    let ch = pass.changes.expect("changes");
+    let held = held_at_fz_min(pass.before.as_ref().expect("loads"), &pass.params.limits);
+    assert!(
+        ch.binding.get("fxy").copied().unwrap_or(0) > 100,
+        "the limit must bind: {:?}",
+        ch.binding
+    );
+    let mut fine = setup();
+    fine.grid.dz /= 4.0;
+    fine.grid.dphi /= 4.0;
+    fine.refine = None;
+    let s = strokes(
+        &p,
+        body,
+        &PathOptions {
+            chord: 0.025,
+            rapid_rate: m.rapid,
+        },
+    );
+    let after = simulate(&p, &s, stock, &fine, LimitUse::None, &|_| {}).expect("simulates");
+    let worst = after
+        .moves
+        .iter()
+        .filter(|x| !x.unmodelled && !held.contains(&x.index))
+        .map(|x| x.fxy_max)
+        .fold(0.0, f64::max);
+    assert!(worst > 90.0, "the limit is reached: {worst} N");
+    assert!(worst <= 102.0, "F_xy,max {worst} N at the finer grid");
+    // The moves held at the smallest feed per tooth are at or over the
+    // limit on the finer grid too (within the same 2 %): the default grid
+    // did not invent them.
+    for x in after.moves.iter().filter(|x| held.contains(&x.index)) {
+        assert!(x.fxy_max > 98.0, "move {} at {} N", x.index, x.fxy_max);
+    }
+}
+
+/// The moves a schedule (`run`, the pass's loads of its input) held at the
+/// smallest feed per tooth because a limit could not be met even there:
+/// `feed` reports them as still over the limit and exits 3.
+fn held_at_fz_min(run: &ForceRun, limits: &FeedLimits) -> std::collections::HashSet<u32> {
+    run.moves
+        .iter()
+        .filter(|x| x.binding == Some("feed-range"))
+        .filter(|x| {
+            x.fz_allowed
+                .is_some_and(|a| a <= limits.fz_min * (1.0 + 1e-9))
+        })
+        .map(|x| x.index)
+        .collect()
 }

@@ -88,7 +88,7 @@ fn run(m: &ModelRequest, f: &FeedRequest, g: &Given) -> Res<Ran> {
         lib::stopped_spindle(&g.name, &s.before).map_err(|e| crate::error::located(&e))?;
         let s2 =
             lib::program_strokes(m, &s.program, p.machine.rapid).map_err(|e| option_error(&e))?;
-        let after = lib::forces(&p, &s.program, &s2, &|_| {})
+        let after = lib::forces_after(&p, &s, &s2, &|_| {})
             .map_err(|e| crate::error::located_in(&g.name, &e))?;
         let wo = millplan_nc::write::WriteOptions {
             limits: millplan_geom::limits::Limits::default(),
@@ -122,13 +122,14 @@ fn loads(d: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, String)>> {
 
 /// The model's options, the defaults of `millplan feed` where none is given:
 /// (stock, material, tool), flutes, [helix, modulus, resolution, dz, dphi],
-/// (stickout, flute length, spindle), converge.
+/// (stickout, flute length, spindle), fixed grid (the steps as given, not
+/// refined until the peaks converge).
 fn model(
     (stock, material, tool): (String, String, Option<String>),
     flutes: Option<usize>,
     [helix, modulus, resolution, dz, dphi]: [Option<f64>; 5],
     (stickout, flute_length, spindle): (Option<f64>, Option<f64>, Option<f64>),
-    converge: bool,
+    fixed_grid: bool,
 ) -> ModelRequest {
     ModelRequest {
         stock: Some(stock),
@@ -142,7 +143,7 @@ fn model(
         resolution: resolution.unwrap_or(defaults::RESOLUTION),
         dz: dz.unwrap_or(defaults::DZ),
         dphi: dphi.unwrap_or(defaults::DPHI_DEG),
-        converge,
+        fixed_grid,
         spindle,
     }
 }
@@ -152,7 +153,7 @@ fn model(
 #[pyfunction]
 #[pyo3(signature = (program, stock, material, part=None, machine=None, tools=None, flutes=None,
                     helix=None, stickout=None, flute_length=None, modulus=None, resolution=None,
-                    dz=None, dphi=None, converge=false, spindle=None, fz_min=None, fz_max=None,
+                    dz=None, dphi=None, fixed_grid=false, spindle=None, fz_min=None, fz_max=None,
                     fos=None, feed_accel=None, limits=None, dialect=None, output=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn feed<'py>(
@@ -171,7 +172,7 @@ pub fn feed<'py>(
     resolution: Option<f64>,
     dz: Option<f64>,
     dphi: Option<f64>,
-    converge: bool,
+    fixed_grid: bool,
     spindle: Option<f64>,
     fz_min: Option<f64>,
     fz_max: Option<f64>,
@@ -191,7 +192,7 @@ pub fn feed<'py>(
         flutes,
         [helix, modulus, resolution, dz, dphi],
         (stickout, flute_length, spindle),
-        converge,
+        fixed_grid,
     );
     let f = FeedRequest {
         fz_min: fz_min.unwrap_or(defaults::FZ_MIN),

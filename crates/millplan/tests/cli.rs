@@ -70,8 +70,13 @@ fn feed_on_a_real_program_meets_its_limits_and_speeds_up_the_conservative_operat
     ]);
     let f = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
     assert_eq!(j["over_limit_after"], 0, "{j}");
-    assert!(f(&j["max_after"]["fxy"]) <= 1500.0, "{j}");
-    assert!(f(&j["max_after"]["deflection"]) <= 0.1, "{j}");
+    // Within the tolerance the command states for its exit code (a load
+    // that far over its limit is within the model's resolution, and
+    // counted as `within_tolerance_after`).
+    let within = 1.0 + f(&j["limit_tolerance"]);
+    assert!(within > 1.0 && within <= 1.01, "{j}");
+    assert!(f(&j["max_after"]["fxy"]) <= 1500.0 * within, "{j}");
+    assert!(f(&j["max_after"]["deflection"]) <= 0.1 * within, "{j}");
     assert!(
         f(&j["max_before"]["fxy"]) > 1500.0,
         "the input exceeds the limit somewhere: {j}"

@@ -283,7 +283,10 @@ fn cut_refines_its_grid_until_the_peaks_converge() {
     ];
     let j = json(&case);
     let (dz, dphi) = (f(&j["dz_mm"]), f(&j["dphi_deg"]));
-    assert!(dz < 0.05 && dphi <= 1.0, "steps {dz} mm, {dphi}°");
+    assert!(
+        dz <= 0.05 && dphi <= 1.0 && (dz < 0.05 || dphi < 1.0),
+        "steps {dz} mm, {dphi}°"
+    );
     // Four times finer, within the finest --dz the command takes (0.001 mm;
     // the JSON rounds the chosen 0.003125 mm).
     let (dz4, dphi4) = ((dz / 4.0).max(0.001).to_string(), (dphi / 4.0).to_string());
@@ -298,7 +301,14 @@ fn cut_refines_its_grid_until_the_peaks_converge() {
     coarse.push("--fixed-grid");
     let c = json(&coarse);
     assert_eq!((f(&c["dz_mm"]), f(&c["dphi_deg"])), (0.05, 1.0));
-    assert!(f(&c["fxy_max"]) < 0.95 * f(&r["fxy_max"]));
+    // The fixed default grid, whose run ends now count by their share in
+    // material (it was 10 % low), is within 2 % of the finer grid; the
+    // rotation step still misses a little of the peak.
+    let (coarse, fine) = (f(&c["fxy_max"]), f(&r["fxy_max"]));
+    assert!(
+        (coarse - fine).abs() <= 0.02 * fine,
+        "{coarse} against {fine}"
+    );
 }
 
 #[test]

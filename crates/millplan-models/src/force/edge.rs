@@ -90,17 +90,23 @@ impl Tool {
     }
 }
 
-/// One axial slice of the edge, cell-centred at `z` with thickness `dz`.
+/// One slice of the edge, cell-centred at meridian length `u` (height `z`)
+/// with length `dz` along the meridian (the height on the cylinder).
 #[derive(Clone, Copy, Debug)]
 pub struct Slice {
     pub z: f64,
+    /// Meridian length from the tip to the centre, mm ([`meridian`]).
+    pub u: f64,
+    /// Length along the meridian, mm.
     pub dz: f64,
     pub edge: EdgePoint,
     pub sin_k: f64,
     pub cos_k: f64,
-    /// Chip width db = dz / sin κ.
+    /// Chip width db: the meridian's arc over the slice (dz / sin κ in
+    /// heights).
     pub db: f64,
-    /// Edge arc length dS = dz·sqrt(1 + (dR/dz)² + (R tan i0/R0)²).
+    /// Edge arc length dS = dh·sqrt(1 + (dR/dz)² + (R tan i0/R0)²) over the
+    /// slice's height dh.
     pub ds: f64,
     /// Unit vectors at θ = 0 in the tool frame: outward surface normal n,
     /// edge tangent t (toward the shank), cutting velocity v.
@@ -108,20 +114,25 @@ pub struct Slice {
     pub tangent: [f64; 3],
 }
 
-/// Cell-centred slices covering [z_lo, z_hi] with cells of about `dz`; never
-/// evaluates at the tip itself.
+/// Cell-centred slices covering heights [z_lo, z_hi] with cells of about
+/// `dz` along the meridian: equal lengths of the profile, so a ball's tip is
+/// sliced as finely in κ as its side (equal heights would give the slice at
+/// the tip an arc of sqrt(2·R·dz), where the chip's direction turns fastest).
+/// Never evaluates at the tip itself.
 pub fn slices(tool: &Tool, z_lo: f64, z_hi: f64, dz: f64) -> Vec<Slice> {
     let z_lo = z_lo.max(0.0);
     let z_hi = z_hi.min(tool.flute_length);
     if !(z_hi > z_lo) || !(dz > 0.0) {
         return Vec::new();
     }
-    let n = ((z_hi - z_lo) / dz).ceil().max(1.0) as usize;
-    let h = (z_hi - z_lo) / n as f64;
+    let (u_lo, u_hi) = (meridian(&tool.shape, z_lo), meridian(&tool.shape, z_hi));
+    let n = ((u_hi - u_lo) / dz).ceil().max(1.0) as usize;
+    let h = (u_hi - u_lo) / n as f64;
     let ti = tool.helix.tan() / tool.shape.radius();
     (0..n)
         .map(|i| {
-            let z = z_lo + (i as f64 + 0.5) * h;
+            let u = u_lo + (i as f64 + 0.5) * h;
+            let z = height(&tool.shape, u);
             let e = tool.edge(z);
             let (sin_k, cos_k) = e.kappa.sin_cos();
             let sin_k = sin_k.max(1e-9);
@@ -131,15 +142,49 @@ pub fn slices(tool: &Tool, z_lo: f64, z_hi: f64, dz: f64) -> Vec<Slice> {
             let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             Slice {
                 z,
+                u,
                 dz: h,
                 edge: e,
                 sin_k,
                 cos_k,
-                db: h / sin_k,
-                ds: h * len,
+                db: h,
+                ds: h * sin_k * len,
                 normal: [0.0, sin_k, -cos_k],
                 tangent: [d[0] / len, d[1] / len, d[2] / len],
             }
         })
         .collect()
+}
+
+/// Length of the edge's meridian (the profile in the plane through the
+/// axis) from the tip up to height z, mm: ρ·κ(z) on a round part of radius
+/// ρ, then the straight side.
+pub fn meridian(shape: &Shape, z: f64) -> f64 {
+    let z = z.max(0.0);
+    match *shape {
+        Shape::Ball { radius: rho } | Shape::Bull { corner: rho, .. } if rho > 0.0 => {
+            if z < rho {
+                rho * ((rho - z) / rho).clamp(-1.0, 1.0).acos()
+            } else {
+                rho * std::f64::consts::FRAC_PI_2 + (z - rho)
+            }
+        }
+        _ => z,
+    }
+}
+
+/// The height above the tip at meridian length `u` ([`meridian`]'s inverse).
+pub fn height(shape: &Shape, u: f64) -> f64 {
+    let u = u.max(0.0);
+    match *shape {
+        Shape::Ball { radius: rho } | Shape::Bull { corner: rho, .. } if rho > 0.0 => {
+            let quarter = rho * std::f64::consts::FRAC_PI_2;
+            if u < quarter {
+                rho * (1.0 - (u / rho).cos())
+            } else {
+                rho + (u - quarter)
+            }
+        }
+        _ => u,
+    }
 }

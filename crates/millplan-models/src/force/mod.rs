@@ -40,11 +40,13 @@ pub mod feed;
 pub mod flat;
 pub mod materials;
 pub mod mean;
+pub mod quadrature;
 
 use coeffs::{ChipRule, Law};
 use converge::error_estimates;
 use edge::{Slice, Tool};
 use engage::Engagement;
+use quadrature::{accumulate, Cell, COLUMNS};
 use std::f64::consts::PI;
 
 /// 3×3 matrix, row-major.
@@ -127,6 +129,9 @@ impl Default for Grid {
 #[derive(Clone, Copy, Debug)]
 struct SliceK {
     z: f64,
+    /// Meridian length of the centre, and the height of the slice's top.
+    u: f64,
+    z_top: f64,
     r: f64,
     kappa: f64,
     psi: f64,
@@ -265,7 +270,7 @@ impl ForceModel {
         let (sin_t, cos_t) = (0..m).map(|k| (k as f64 * step).sin_cos()).unzip();
         let raw = edge::slices(&tool, 0.0, tool.flute_length, grid.dz);
         let dz = raw.first().map_or(grid.dz, |s| s.dz);
-        let slices = raw.iter().map(|s| slice_k(s, &law)).collect();
+        let slices = raw.iter().map(|s| slice_k(s, &law, &tool.shape)).collect();
         Ok(ForceModel {
             tool,
             law,
@@ -310,34 +315,55 @@ impl ForceModel {
         eng: &E,
         band: (f64, f64),
     ) -> Engaged {
+        self.engaged_where(cut, eng, band, None)
+    }
+
+    /// [`ForceModel::engaged_in`], at the angle indices `angles` only where
+    /// given (each a whole column of the edge at one spindle angle; a few,
+    /// so each slice looks at those instead of its whole chip window).
+    pub(crate) fn engaged_where<E: Engagement + ?Sized>(
+        &self,
+        cut: &Cut,
+        eng: &E,
+        band: (f64, f64),
+        angles: Option<&[usize]>,
+    ) -> Engaged {
         let m = self.m;
         let dir = Cut { fz: 1.0, ..*cut };
         let f = dir.feed_vector();
         let (z_lo, z_hi) = eng.z_range(&self.tool);
         let (z_lo, z_hi) = (z_lo.max(band.0), z_hi.min(band.1));
-        let first = ((z_lo.max(0.0) / self.dz).floor() as usize).min(self.slices.len());
-        let last = ((z_hi.max(0.0) / self.dz).ceil() as usize).min(self.slices.len());
-        let mut cells = Vec::new();
+        let u = |z: f64| edge::meridian(&self.tool.shape, z.max(0.0)) / self.dz;
+        let first = (u(z_lo).floor() as usize).min(self.slices.len());
+        let last = (u(z_hi).ceil() as usize).min(self.slices.len());
+        let mut raw = Vec::new();
         for (si, s) in self.slices[first..last.max(first)].iter().enumerate() {
             if !eng.ring_may_touch(s.z, s.r) {
                 continue;
             }
             let (lo, count) = self.chip_window(s, f);
-            for i in 0..count {
-                let k = if lo + i >= m { lo + i - m } else { lo + i };
+            let mut test = |k: usize| {
                 let (st, ct) = self.rotated(s, k);
                 // h = f·n(θ), n(θ) = (ny sθ, ny cθ, nz)
                 let h = f[0] * s.ny * st + f[1] * s.ny * ct + f[2] * s.nz;
                 if h > 0.0 && eng.contains([s.r * st, s.r * ct, s.z]) {
-                    cells.push(((first + si) as u32, k as u32));
+                    raw.push(((first + si) as u32, k as u32));
                 }
+            };
+            match angles {
+                None => {
+                    (0..count).for_each(|i| test(if lo + i >= m { lo + i - m } else { lo + i }))
+                }
+                Some(ks) => ks
+                    .iter()
+                    .filter(|&&k| (k + m - lo) % m < count)
+                    .for_each(|&k| test(k)),
             }
         }
-        mark_boundaries(&mut cells, m, self.slices.len());
         Engaged {
             lead: cut.lead,
             tilt: cut.tilt,
-            cells,
+            cells: self.weigh(&raw, eng, f),
         }
     }
 
@@ -345,13 +371,18 @@ impl ForceModel {
     /// and spindle speed of `cut` (its lead and tilt must be those the cells
     /// were found with).
     pub fn evaluate_engaged(&self, cut: &Cut, e: &Engaged) -> Evaluation {
+        let (rows, stats) = self.rows(cut, e);
+        self.finish(cut, &rows, stats, e.cells.len())
+    }
+
+    /// The per-angle table of an engagement over one tooth period
+    /// ([`quadrature::COLUMNS`]), and the smallest κ and the highest slice
+    /// top of its cells.
+    pub(crate) fn rows(&self, cut: &Cut, e: &Engaged) -> (Vec<[f64; COLUMNS]>, (f64, f64)) {
         debug_assert!(e.lead == cut.lead && e.tilt == cut.tilt);
         let m = self.m;
         let f = cut.feed_vector();
-        // Columns: Fx, Fy, Fz, T of every cell, then Fx, Fy, T of the odd
-        // slices' cells and of the boundary cells (for the error estimates
-        // of the slice height).
-        let mut table = vec![[0.0f64; 10]; m];
+        let mut table = vec![[0.0f64; COLUMNS]; m];
         let mut kappa_min = f64::INFINITY;
         let mut z_max = f64::NEG_INFINITY;
         let oblique = match self.law {
@@ -361,16 +392,11 @@ impl ForceModel {
             },
             _ => None,
         };
-        let mut last_slice = u32::MAX;
-        for &(si, k) in &e.cells {
-            let s = &self.slices[si as usize];
-            let boundary = k & BOUNDARY != 0;
-            let k = (k & !BOUNDARY) as usize;
-            if si != last_slice {
-                last_slice = si;
-                kappa_min = kappa_min.min(s.kappa);
-                z_max = z_max.max(s.z + 0.5 * self.dz);
-            }
+        for c in &e.cells {
+            let s = &self.slices[c.slice as usize];
+            let k = c.k as usize;
+            kappa_min = kappa_min.min(s.kappa);
+            z_max = z_max.max(s.z_top);
             let (st, ct) = self.rotated(s, k);
             let h = (f[0] * s.ny * st + f[1] * s.ny * ct + f[2] * s.nz).max(0.0);
             let kc = match oblique {
@@ -386,55 +412,60 @@ impl ForceModel {
                 f0[2] += mag * d[2];
             }
             // Rotate from θ = 0 to θ: (a, b, c) → (a cθ + b sθ, −a sθ + b cθ, c).
-            let row = &mut table[k];
-            let (fx, fy, t) = (
+            let q = [
                 f0[0] * ct + f0[1] * st,
                 -f0[0] * st + f0[1] * ct,
+                f0[2],
                 -s.r * f0[0],
-            );
-            row[0] += fx;
-            row[1] += fy;
-            row[2] += f0[2];
-            row[3] += t;
-            if si & 1 == 1 {
-                row[4] += fx;
-                row[5] += fy;
-                row[6] += t;
-            }
-            if boundary {
-                row[7] += fx;
-                row[8] += fy;
-                row[9] += t;
-            }
+            ];
+            accumulate(&mut table[k], c, q);
         }
         let n = self.tool.flutes;
         let p = m / n;
-        let sums: Vec<[f64; 10]> = (0..p)
+        let sums: Vec<[f64; COLUMNS]> = (0..p)
             .map(|i| {
-                let mut acc = [0.0; 10];
+                let mut acc = [0.0; COLUMNS];
                 for j in 0..n {
                     let t = &table[(i + j * p) % m];
-                    for c in 0..10 {
+                    for c in 0..COLUMNS {
                         acc[c] += t[c];
                     }
                 }
                 acc
             })
             .collect();
-        let (error_dz, error_dphi) = error_estimates(&sums);
+        (sums, (kappa_min, z_max))
+    }
+
+    /// The evaluation from the per-angle table `rows` of one tooth period
+    /// ([`ForceModel::rows`]), with the smallest κ and highest slice top of
+    /// its `cells` cells.
+    pub(crate) fn finish(
+        &self,
+        cut: &Cut,
+        rows: &[[f64; COLUMNS]],
+        (kappa_min, z_max): (f64, f64),
+        cells: usize,
+    ) -> Evaluation {
+        let (error_dz, error_dphi) = error_estimates(rows);
         Evaluation {
             dphi: self.dphi(),
             dz: self.dz,
             error_dz,
             error_dphi,
-            flutes: n,
+            flutes: self.tool.flutes,
             rpm: cut.rpm,
             r_wt: r_wt(cut.lead, cut.tilt),
-            period: sums.iter().map(|r| [r[0], r[1], r[2], r[3]]).collect(),
-            cells: e.cells.len(),
+            period: rows.iter().map(|r| [r[0], r[1], r[2], r[3]]).collect(),
+            cells,
             kappa_min: kappa_min.is_finite().then_some(kappa_min),
             z_max: z_max.is_finite().then_some(z_max),
         }
+    }
+
+    /// Angles per tooth period.
+    pub(crate) fn per_tooth(&self) -> usize {
+        self.m / self.tool.flutes
     }
 
     /// sin θ and cos θ of slice `s` at angle index `k`: θ = kδ − ψ.
@@ -448,59 +479,14 @@ impl ForceModel {
     }
 }
 
-/// The flag of a boundary cell, in the angle index of [`Engaged::cells`].
-const BOUNDARY: u32 = 1 << 31;
-
-/// Flags ([`BOUNDARY`]) the cells where a run of engaged slices at one angle
-/// index ends: at one spindle angle a flute's edge is the column of cells of
-/// one angle index, and it enters or leaves material somewhere between such
-/// a cell and its unengaged neighbour. Runs ending with the edge itself (the
-/// first and the last slice of the flute) have no boundary there. `cells`
-/// are ordered by slice.
-fn mark_boundaries(cells: &mut [(u32, u32)], m: usize, slices: usize) {
-    let words = m.div_ceil(64);
-    let (mut prev, mut cur) = (vec![0u64; words], vec![0u64; words]);
-    let bit = |v: &[u64], k: u32| v[(k >> 6) as usize] >> (k & 63) & 1 == 1;
-    let last = slices as u32 - 1;
-    let (mut prev_s, mut prev_range) = (u32::MAX, 0..0);
-    let mut i = 0;
-    while i < cells.len() {
-        let s = cells[i].0;
-        let j = i + cells[i..].iter().take_while(|c| c.0 == s).count();
-        for c in &cells[i..j] {
-            cur[(c.1 >> 6) as usize] |= 1 << (c.1 & 63);
-        }
-        let adjacent = prev_s.wrapping_add(1) == s;
-        for c in &mut cells[i..j] {
-            if s > 0 && !(adjacent && bit(&prev, c.1)) {
-                c.1 |= BOUNDARY;
-            }
-        }
-        for c in &mut cells[prev_range.clone()] {
-            let k = c.1 & !BOUNDARY;
-            if prev_s < last && !(adjacent && bit(&cur, k)) {
-                c.1 |= BOUNDARY;
-            }
-            prev[(k >> 6) as usize] = 0;
-        }
-        std::mem::swap(&mut prev, &mut cur);
-        (prev_s, prev_range) = (s, i..j);
-        i = j;
-    }
-    for c in &mut cells[prev_range] {
-        if prev_s < last {
-            c.1 |= BOUNDARY;
-        }
-    }
-}
-
 /// The engaged cells of one engagement ([`ForceModel::engaged`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Engaged {
     lead: f64,
     tilt: f64,
-    /// (slice, angle index), slices ascending.
-    cells: Vec<(u32, u32)>,
+    /// Column by column (angle index ascending), each column's slices
+    /// ascending ([`quadrature`]).
+    cells: Vec<Cell>,
 }
 
 impl Engaged {
@@ -538,7 +524,7 @@ impl ForceModel {
     }
 }
 
-fn slice_k(s: &Slice, law: &Law) -> SliceK {
+fn slice_k(s: &Slice, law: &Law, shape: &crate::cutter::Shape) -> SliceK {
     let (sk, ck) = (s.sin_k, s.cos_k);
     let nrm = s.normal;
     let t = s.tangent;
@@ -581,6 +567,8 @@ fn slice_k(s: &Slice, law: &Law) -> SliceK {
     };
     SliceK {
         z: s.z,
+        u: s.u,
+        z_top: edge::height(shape, s.u + 0.5 * s.dz),
         r: s.edge.r,
         kappa: s.edge.kappa,
         psi: s.edge.psi,

@@ -132,9 +132,11 @@ fn model(pr: &Params) -> (ForceModel, Tool) {
 /// (`LIFT_SHARE`, so that the tool does not find its own cut's slope), and
 /// at ae = 0.5 mm the scallop is only 0.006 mm tall, so that lift takes
 /// the sliver of material over the finished plane away. Against the planar
-/// raster seen with the same lift the sampled maximum agrees within 1 %
-/// at 0.025 mm dexels (the remainder is the columns' sampling of the
-/// scallop's edge); against the raster itself it is never higher, and
+/// raster seen with the same lift the sampled maximum agrees within 1 % of
+/// the range the planar model spans when the wall of the pass before moves
+/// half a 0.025 mm dexel either way (the columns put it no closer; the
+/// force integrals find each flute's run ends on the edge they are given,
+/// so that half dexel shows); against the raster itself it is never higher, and
 /// within 10 %.
 ///
 /// One convention (process-models §0): the force model's R_wt = Rx(T)·
@@ -171,19 +173,20 @@ fn the_stocks_objective_on_a_planar_raster_is_the_planar_ones() {
         (25.0, 20.0),
     ] {
         let s = stock::judge(&m, &samples[1], &pts[1], R, 30.0, &pr, l, t);
-        let (planar, lifted) = {
-            let (lr, tr) = (l.to_radians(), t.to_radians());
-            let e = PlanarRaster::new(&tool, ap, Some(ae), lr, tr).expect("raster");
-            let cut = Cut {
-                fz: pr.fz,
-                rpm: pr.rpm,
-                lead: lr,
-                tilt: tr,
-            };
-            // The work frame's up in the tool frame: row 3 of R_wt.
-            let up = [-tr.cos() * lr.sin(), tr.sin(), tr.cos() * lr.cos()];
+        let (lr, tr) = (l.to_radians(), t.to_radians());
+        let cut = Cut {
+            fz: pr.fz,
+            rpm: pr.rpm,
+            lead: lr,
+            tilt: tr,
+        };
+        // The work frame's up in the tool frame: row 3 of R_wt.
+        let up = [-tr.cos() * lr.sin(), tr.sin(), tr.cos() * lr.cos()];
+        let lift = LIFT_SHARE * res;
+        // The planar raster at a stepover `w`, as is and seen with the lift.
+        let planar_at = |w: f64| {
+            let e = PlanarRaster::new(&tool, ap, Some(w), lr, tr).expect("raster");
             let (z_lo, z_hi) = e.z_range(&tool);
-            let lift = LIFT_SHARE * res;
             let seen = FnEngagement {
                 z_lo,
                 z_hi,
@@ -194,10 +197,18 @@ fn the_stocks_objective_on_a_planar_raster_is_the_planar_ones() {
                 m.evaluate(&cut, &seen).summary().fxy_max,
             )
         };
+        let (planar, lifted) = planar_at(ae);
+        // The stock's wall stands where its columns put it, up to half a
+        // dexel either way of the pass before: the stock's answer lies
+        // between the lifted planar ones of those two walls, within 1 %.
+        let (_, near) = planar_at(ae - res / 2.0);
+        let (_, far) = planar_at(ae + res / 2.0);
+        let (lo, hi) = (near.min(far).min(lifted), near.max(far).max(lifted));
         assert_eq!(s.tip, 0, "lead {l}: the tip never cuts (§1.4c)");
         assert!(
-            (s.fxy - lifted).abs() <= 0.01 * lifted,
-            "lead {l}, tilt {t}: stock {:.2} N, planar with the lift {lifted:.2} N",
+            s.fxy >= 0.99 * lo && s.fxy <= 1.01 * hi,
+            "lead {l}, tilt {t}: stock {:.2} N, planar with the lift {lifted:.2} N \
+             ({lo:.2}..{hi:.2} N with the wall half a dexel either way)",
             s.fxy
         );
         assert!(

@@ -599,7 +599,7 @@ def feed(
     resolution: Optional[float] = None,
     dz: Optional[float] = None,
     dphi: Optional[float] = None,
-    converge: bool = False,
+    fixed_grid: bool = False,
     spindle: Optional[float] = None,
     fz_min: Optional[float] = None,
     fz_max: Optional[float] = None,
@@ -629,8 +629,9 @@ def feed(
 
     The model: flutes (default 2), helix (degrees, default 30), stickout
     (mm, default 3·D), flute_length (mm), modulus (N/mm², default carbide),
-    dz (mm) and dphi (degrees) the force model's steps, refined per load
-    sample with ``converge``; spindle (1/min) for moves without an S word.
+    dz (mm) and dphi (degrees) the force model's coarsest steps, refined per
+    load sample until F_xy,max and T_max converge unless ``fixed_grid``;
+    spindle (1/min) for moves without an S word.
     tools: the cutter of operations that name none ('ball:10', 'flat:8',
     'bull:10:2').
 
@@ -645,7 +646,7 @@ def feed(
     """
     prog, text, summary, moves = _millplan.feed(
         program, stock, material, part, machine, tools, flutes, helix,
-        stickout, flute_length, modulus, resolution, dz, dphi, converge,
+        stickout, flute_length, modulus, resolution, dz, dphi, fixed_grid,
         spindle, fz_min, fz_max, fos, feed_accel, limits, dialect, output,
     )
     return prog, text, summary, _table(moves, pandas)

@@ -270,7 +270,7 @@ def feed(
     resolution: Optional[float] = None,
     dz: Optional[float] = None,
     dphi: Optional[float] = None,
-    converge: bool = False,
+    fixed_grid: bool = False,
     spindle: Optional[float] = None,
     fz_min: Optional[float] = None,
     fz_max: Optional[float] = None,

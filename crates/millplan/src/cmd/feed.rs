@@ -59,22 +59,22 @@ pub struct ModelArgs {
     /// is loaded at along its length.
     #[arg(long, default_value_t = millplan_driver::command_defaults::feed::RESOLUTION)]
     pub resolution: f64,
-    /// Axial slice height of the force model, mm (with --converge the
-    /// largest used: per load sample the model halves it, up to four
-    /// times, until F_xy,max and T_max are estimated within 0.4 %).
+    /// Slice length of the force model along the tool's profile, mm: the
+    /// largest used (per load sample the model halves it, up to four times,
+    /// until F_xy,max and T_max are estimated within 0.4 %), unless
+    /// --fixed-grid.
     #[arg(long, default_value_t = millplan_driver::command_defaults::feed::DZ)]
     pub dz: f64,
     /// Rotation step of the force model, degrees: the largest used, halved
     /// like --dz.
     #[arg(long, default_value_t = millplan_driver::command_defaults::feed::DPHI_DEG)]
     pub dphi: f64,
-    /// Refine --dz and --dphi per load sample until F_xy,max and T_max
-    /// converge (within 0.4 %). The default grid can under-predict F_xy,max
-    /// of a ball-end cut by 10-20 %; converging costs tens of times the
-    /// force evaluations, so it is off by default. Use it to check a
-    /// schedule whose loads sit close to their limits.
+    /// Use --dz and --dphi as given instead of refining them per load
+    /// sample until F_xy,max and T_max converge. Faster on engagements
+    /// with sharp force peaks, where the given steps can miss a peak by a
+    /// few per cent.
     #[arg(long)]
-    pub converge: bool,
+    pub fixed_grid: bool,
     /// Spindle speed, 1/min, for the moves of a program that gives none (no
     /// S word, as some CAM systems write finishing programs): the forces
     /// need one. Moves with an S word keep theirs.
@@ -112,7 +112,7 @@ impl ModelArgs {
             resolution: self.resolution,
             dz: self.dz,
             dphi: self.dphi,
-            converge: self.converge,
+            fixed_grid: self.fixed_grid,
             spindle: self.spindle,
         }
     }
@@ -169,8 +169,17 @@ pub fn run_forces(
     s: &millplan_driver::Strokes,
     quiet: bool,
 ) -> CliResult<millplan_driver::feed::ForceRun> {
+    with_bar(s, quiet, |done| lib::forces(p, program, s, done))
+}
+
+/// A force run over the strokes `s` with a progress bar.
+fn with_bar<T>(
+    s: &millplan_driver::Strokes,
+    quiet: bool,
+    run: impl FnOnce(&(dyn Fn(usize) + Sync)) -> Result<T, String>,
+) -> CliResult<T> {
     let bar = crate::progress::count(s.strokes.len() as u64, "forces", "strokes", !quiet);
-    let r = lib::forces(p, program, s, &|d| bar.set_position(d as u64));
+    let r = run(&|d| bar.set_position(d as u64));
     bar.finish_and_clear();
     r.map_err(CliError::input)
 }
@@ -224,7 +233,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     let path = a.path.display().to_string();
     lib::stopped_spindle(&path, &s.before).map_err(CliError::input)?;
     let s2 = lib::program_strokes(&req, &s.program, p.machine.rapid).map_err(CliError::input)?;
-    let after = run_forces(&p, &s.program, &s2, m.quiet || m.json)?;
+    let after = with_bar(&s2, m.quiet || m.json, |d| {
+        lib::forces_after(&p, &s, &s2, d)
+    })?;
     let wo = p.machine.write_options(target);
     write_program_file(&s.program, wo, &mut outputs, &a.output, &a.path, m.quiet)?;
     let output = a.output.display().to_string();

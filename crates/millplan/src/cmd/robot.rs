@@ -182,7 +182,7 @@ impl CouplingArgs {
             resolution: self.resolution,
             dz: d::DZ,
             dphi: d::DPHI_DEG,
-            converge: false,
+            fixed_grid: true,
             spindle: self.spindle,
             units: None,
             table: None,
