@@ -71,6 +71,12 @@ pub struct Args {
     /// one file, as without the option.
     #[arg(long, value_name = "N")]
     pub max_points: Option<usize>,
+    /// With a KRL output: each point one LIN approximated with C_DIS (as
+    /// read, for a KRL source), or each run of approximated LIN moves as one
+    /// SPLINE block of SPL segments through the same points (CIRC as SCIRC);
+    /// checked by reading the output back.
+    #[arg(long, value_enum, default_value_t)]
+    pub krl_motion: crate::cmd::KrlMotionArg,
     /// Do not print reader diagnostics.
     #[arg(long, short)]
     pub quiet: bool,
@@ -110,19 +116,21 @@ fn check_output(p: &millplan_nc::Program, out: &[u8], target: Target, a: &Args) 
 }
 
 /// The KRL output `out` split into a main program and sub-programs of
-/// `--max-points` motions (checked: they read back to its motions), when
-/// asked for and longer; `None` to write `out` as it is.
+/// `--max-points` motions and its runs written as `--krl-motion` asks
+/// (checked: they read back to its motions), when asked for; `None` to
+/// write `out` as it is.
 fn krl_files(a: &Args, target: Target, out: &[u8]) -> CliResult<Option<KrlFiles>> {
-    let n = match a.max_points {
-        None | Some(0) => return Ok(None),
-        Some(n) => n,
-    };
-    if target != Target::Krl {
-        return Err(CliError::input(format!(
-            "--max-points {n}: sub-programs are KRL's; give --to krl or an output named .src"
-        )));
+    let spline = a.krl_motion == crate::cmd::KrlMotionArg::Spline;
+    let n = a.max_points.unwrap_or(0);
+    if n == 0 && !spline {
+        return Ok(None);
     }
-    if a.output.as_os_str() == "-" {
+    if target != Target::Krl {
+        return Err(CliError::input(
+            "--max-points, --krl-motion: sub-programs and SPLINE blocks are KRL's; give --to krl or an output named .src",
+        ));
+    }
+    if n > 0 && a.output.as_os_str() == "-" {
         return Err(CliError::input(format!(
             "--max-points {n}: sub-programs are files beside the main program; name the output file"
         )));
@@ -130,6 +138,7 @@ fn krl_files(a: &Args, target: Target, out: &[u8]) -> CliResult<Option<KrlFiles>
     let o = write::krl::KrlOptions {
         name: write::krl::stem(&a.output),
         max_points: n,
+        motion: a.krl_motion.into(),
         ..Default::default()
     };
     let text = String::from_utf8_lossy(out);
@@ -148,6 +157,10 @@ fn write_out(
     out: &[u8],
 ) -> CliResult<()> {
     match krl_files(a, target, out)? {
+        Some(files) if files.len() == 1 => {
+            outputs.write(&a.output, files[0].1.as_bytes())?;
+            outputs.commit()
+        }
         Some(files) => crate::cmd::robot::stage_krl(inputs, &a.output, &files, 0)?
             .0
             .commit(),
