@@ -463,7 +463,11 @@ fn assignment_or_call(
 
 fn motion(word: &str, code: &str, raw: &str, line: u32) -> Result<Statement, ParseError> {
     let rest = code[word.len()..].trim();
-    let (targets, tail) = match rest.rfind('}') {
+    // The target's closing brace (a circle's second): a `WITH` clause after
+    // it may hold aggregates of its own.
+    let skip = usize::from(word.ends_with("CIRC"));
+    let close = rest.match_indices('}').nth(skip).map(|(i, _)| i);
+    let (targets, tail) = match close {
         Some(end) if rest.starts_with('{') => (&rest[..=end], rest[end + 1..].trim()),
         _ => ("", rest),
     };
