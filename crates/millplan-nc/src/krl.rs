@@ -177,11 +177,26 @@ pub fn read(
     Ok(p)
 }
 
-/// What a file's reading knows beyond its statements: the sub-programs it
-/// declares with `EXT` and the SPLINE block open (its line, its `WITH` speed).
+/// What a file's reading knows beyond its statements: which file it is,
+/// how deep in calls, the sub-programs it declares with `EXT` and the
+/// SPLINE block open (its line, its `WITH` speed).
 struct FileState {
+    file: usize,
+    depth: usize,
     ext: Vec<String>,
     block: Option<(u32, Option<f64>)>,
+}
+
+/// An error in file `file` of `p`.
+fn fail(p: &KrlProgram, file: usize, e: ParseError) -> KrlError {
+    KrlError {
+        file: if file == 0 {
+            None
+        } else {
+            p.files.get(file).cloned()
+        },
+        error: e,
+    }
 }
 
 fn read_file(
@@ -192,97 +207,113 @@ fn read_file(
     p: &mut KrlProgram,
     vel: &mut Option<f64>,
 ) -> Result<(), KrlError> {
-    let fail = |p: &KrlProgram, e: ParseError| KrlError {
-        file: if file == 0 {
-            None
-        } else {
-            p.files.get(file).cloned()
-        },
-        error: e,
-    };
     if p.files.len() <= file {
         p.files.push(String::new());
     }
     let mut fs = FileState {
+        file,
+        depth,
         ext: Vec::new(),
         block: None,
     };
     for (k, raw) in crate::lines::split(src).enumerate() {
         let line = u32::try_from(k + 1).unwrap_or(u32::MAX);
-        let st = parse_line(raw, line).map_err(|e| fail(p, e))?;
+        let st = parse_line(raw, line).map_err(|e| fail(p, file, e))?;
         let Some(st) = st else { continue };
-        in_block(fs.block, &st, raw, line).map_err(|e| fail(p, e))?;
-        let push = |p: &mut KrlProgram, statement| {
-            p.statements.push(Located {
-                file,
-                line,
-                statement,
-            })
-        };
-        match st {
-            Parsed1::Def(name) => {
-                if p.files[file].is_empty() {
-                    p.files[file] = name;
-                }
-            }
-            Parsed1::Ext(name) => fs.ext.push(name.to_ascii_uppercase()),
-            Parsed1::Call(name, text) if fs.ext.contains(&name.to_ascii_uppercase()) => {
-                if depth >= MAX_DEPTH {
-                    let m = "sub-programs call each other deeper than 8 levels";
-                    return Err(fail(p, ParseError::new(line, 1, m)));
-                }
-                match resolve(&name) {
-                    Some(sub) => {
-                        let idx = p.files.len();
-                        p.files.push(name.clone());
-                        read_file(&sub, idx, depth + 1, resolve, p, vel)?;
-                    }
-                    None => {
-                        p.missing.push((name, file, line));
-                        push(p, Statement::Verbatim(text));
-                    }
-                }
-            }
-            Parsed1::Call(_, text) => push(p, Statement::Verbatim(text)),
-            Parsed1::Begin(with, speed) => {
-                fs.block = Some((line, speed));
-                warn_with(p, file, line, &with);
-                push(p, Statement::SplineBegin(with));
-            }
-            Parsed1::End(approx) => {
-                fs.block = None;
-                push(p, Statement::SplineEnd(approx));
-            }
-            Parsed1::St(mut s) => {
-                match &mut s {
-                    Statement::VelCp(v) => *vel = Some(*v),
-                    Statement::Move { vel_cp, with, .. } => {
-                        *vel_cp = vel_cp.or(fs.block.and_then(|b| b.1)).or(*vel);
-                        warn_with(p, file, line, with);
-                    }
-                    Statement::Verbatim(t) if first_word(t) == "SPTP" => p.warnings.push((
-                        file,
-                        line,
-                        format!(
-                            "{t}: a spline PTP motion, kept as written; where it ends is not read"
-                        ),
-                    )),
-                    _ => {}
-                }
-                push(p, s);
-            }
-        }
+        in_block(fs.block, &st, raw, line).map_err(|e| fail(p, file, e))?;
+        take(&mut fs, st, line, resolve, p, vel)?;
     }
     match fs.block {
-        Some((open, _)) => Err(fail(
-            p,
-            ParseError::new(
-                open,
-                1,
-                "SPLINE block not closed: no ENDSPLINE before the end of the file",
-            ),
-        )),
+        Some((open, _)) => {
+            let m = "SPLINE block not closed: no ENDSPLINE before the end of the file";
+            Err(fail(p, file, ParseError::new(open, 1, m)))
+        }
         None => Ok(()),
+    }
+}
+
+/// One statement read at `line` of the file `fs` reads: into `p`, a
+/// sub-program called read in its place.
+fn take(
+    fs: &mut FileState,
+    st: Parsed1,
+    line: u32,
+    resolve: &mut dyn FnMut(&str) -> Option<String>,
+    p: &mut KrlProgram,
+    vel: &mut Option<f64>,
+) -> Result<(), KrlError> {
+    let file = fs.file;
+    let push = |p: &mut KrlProgram, statement| {
+        p.statements.push(Located {
+            file,
+            line,
+            statement,
+        })
+    };
+    match st {
+        Parsed1::Def(name) => {
+            if p.files[file].is_empty() {
+                p.files[file] = name;
+            }
+        }
+        Parsed1::Ext(name) => fs.ext.push(name.to_ascii_uppercase()),
+        Parsed1::Call(name, text) if fs.ext.contains(&name.to_ascii_uppercase()) => {
+            if fs.depth >= MAX_DEPTH {
+                let m = "sub-programs call each other deeper than 8 levels";
+                return Err(fail(p, file, ParseError::new(line, 1, m)));
+            }
+            match resolve(&name) {
+                Some(sub) => {
+                    let idx = p.files.len();
+                    p.files.push(name.clone());
+                    read_file(&sub, idx, fs.depth + 1, resolve, p, vel)?;
+                }
+                None => {
+                    p.missing.push((name, file, line));
+                    push(p, Statement::Verbatim(text));
+                }
+            }
+        }
+        Parsed1::Call(_, text) => push(p, Statement::Verbatim(text)),
+        Parsed1::Begin(with, speed) => {
+            fs.block = Some((line, speed));
+            warn_with(p, file, line, &with);
+            push(p, Statement::SplineBegin(with));
+        }
+        Parsed1::End(approx) => {
+            fs.block = None;
+            push(p, Statement::SplineEnd(approx));
+        }
+        Parsed1::St(mut s) => {
+            in_force(&mut s, fs, line, p, vel);
+            push(p, s);
+        }
+    }
+    Ok(())
+}
+
+/// A statement's part in what is in force: a `$VEL.CP` sets the speed, a
+/// motion takes its own, its block's or the one in force; what is not
+/// modelled is named.
+fn in_force(
+    s: &mut Statement,
+    fs: &FileState,
+    line: u32,
+    p: &mut KrlProgram,
+    vel: &mut Option<f64>,
+) {
+    match s {
+        Statement::VelCp(v) => *vel = Some(*v),
+        Statement::Move { vel_cp, with, .. } => {
+            *vel_cp = vel_cp.or(fs.block.and_then(|b| b.1)).or(*vel);
+            warn_with(p, fs.file, line, with);
+        }
+        Statement::Verbatim(t) if first_word(t) == "SPTP" => p.warnings.push((
+            fs.file,
+            line,
+            format!("{t}: a spline PTP motion, kept as written; where it ends is not read"),
+        )),
+        _ => {}
     }
 }
 
@@ -827,6 +858,17 @@ impl KrlProgram {
             }
             self.push_move(l, motion, feed, &mut op);
         }
+        self.findings(&mut diags);
+        prog.operations.push(op);
+        Ok(Parsed {
+            program: prog,
+            diagnostics: diags,
+        })
+    }
+
+    /// What was read but not modelled, and the sub-programs not read, as
+    /// findings at their lines.
+    fn findings(&self, diags: &mut Vec<Diagnostic>) {
         for (file, line, what) in &self.warnings {
             let name = self.files.get(*file).map_or("?", String::as_str);
             let message = format!("{name}:{line}: {what}");
@@ -841,11 +883,6 @@ impl KrlProgram {
                 self.files.get(*file).map_or("?", String::as_str)),
             ));
         }
-        prog.operations.push(op);
-        Ok(Parsed {
-            program: prog,
-            diagnostics: diags,
-        })
     }
 
     /// The tool of the first `$TOOL = TOOL_DATA[n]`, else an unnamed one.

@@ -433,19 +433,17 @@ impl<'a> Render<'a> {
         else {
             return;
         };
-        let (word, aux, end) = match motion {
-            Motion::Lin(p) | Motion::Spl(p) => ("SPL", None, p),
-            Motion::Slin(p) => ("SLIN", None, p),
-            Motion::Circ { aux, end } | Motion::Scirc { aux, end } => ("SCIRC", Some(aux), end),
-            _ => return statement(s, st),
-        };
-        s.push_str(word);
-        s.push(' ');
-        if let Some(a) = aux {
-            pos(s, a);
-            s.push_str(", ");
+        match motion {
+            Motion::Lin(p) if ours => motion_text(s, &Motion::Spl(*p)),
+            Motion::Circ { aux, end } if ours => motion_text(
+                s,
+                &Motion::Scirc {
+                    aux: *aux,
+                    end: *end,
+                },
+            ),
+            _ => motion_text(s, motion),
         }
-        pos(s, end);
         let own_vel = with
             .iter()
             .any(|w| w.to_ascii_uppercase().starts_with("$VEL"));
@@ -497,52 +495,15 @@ fn pos(s: &mut String, p: &KrlPos) {
 fn statement(s: &mut String, st: &Statement) {
     match st {
         Statement::Move { motion, approx, .. } => {
-            match motion {
-                Motion::Lin(p) => {
-                    s.push_str("LIN ");
-                    pos(s, p);
-                }
-                Motion::Ptp(p) => {
-                    s.push_str("PTP ");
-                    pos(s, p);
-                }
-                Motion::Circ { aux, end } => {
-                    s.push_str("CIRC ");
-                    pos(s, aux);
-                    s.push_str(", ");
-                    pos(s, end);
-                }
-                Motion::PtpOther(t) => {
-                    let _ = write!(s, "PTP {t}");
-                }
-                Motion::Spl(p) | Motion::Slin(p) => {
-                    s.push_str(if matches!(motion, Motion::Spl(_)) {
-                        "SPL "
-                    } else {
-                        "SLIN "
-                    });
-                    pos(s, p);
-                }
-                Motion::Scirc { aux, end } => {
-                    s.push_str("SCIRC ");
-                    pos(s, aux);
-                    s.push_str(", ");
-                    pos(s, end);
-                }
-            }
+            motion_text(s, motion);
             s.push_str(approx_tag(*approx));
         }
         Statement::SplineBegin(with) if with.is_empty() => s.push_str("SPLINE\n"),
         Statement::SplineBegin(with) => {
             let _ = writeln!(s, "SPLINE WITH {}", with.join(", "));
         }
-        Statement::SplineEnd(approx) => {
-            s.push_str(if *approx {
-                "ENDSPLINE C_SPL\n"
-            } else {
-                "ENDSPLINE\n"
-            });
-        }
+        Statement::SplineEnd(true) => s.push_str("ENDSPLINE C_SPL\n"),
+        Statement::SplineEnd(false) => s.push_str("ENDSPLINE\n"),
         Statement::VelCp(v) => {
             let _ = writeln!(s, "$VEL.CP = {v:.6}");
         }
@@ -559,6 +520,29 @@ fn statement(s: &mut String, st: &Statement) {
             let _ = writeln!(s, "{t}");
         }
     }
+}
+
+/// A motion's keyword and targets, as read.
+fn motion_text(s: &mut String, motion: &Motion) {
+    let (word, aux, end) = match motion {
+        Motion::PtpOther(t) => {
+            let _ = write!(s, "PTP {t}");
+            return;
+        }
+        Motion::Lin(p) => ("LIN", None, p),
+        Motion::Ptp(p) => ("PTP", None, p),
+        Motion::Spl(p) => ("SPL", None, p),
+        Motion::Slin(p) => ("SLIN", None, p),
+        Motion::Circ { aux, end } => ("CIRC", Some(aux), end),
+        Motion::Scirc { aux, end } => ("SCIRC", Some(aux), end),
+    };
+    s.push_str(word);
+    s.push(' ');
+    if let Some(a) = aux {
+        pos(s, a);
+        s.push_str(", ");
+    }
+    pos(s, end);
 }
 
 /// `$VEL.CP` for a feed in mm/min: m/s (T17: 1120 mm/min → 0.018667).
