@@ -31,6 +31,21 @@ pub enum KrlMotion {
     Spline,
 }
 
+impl std::str::FromStr for KrlMotion {
+    type Err = String;
+
+    /// `lin` or `spline`, as the command line names them.
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "lin" => Ok(KrlMotion::Lin),
+            "spline" => Ok(KrlMotion::Spline),
+            _ => Err(format!(
+                "{s}: lin (one LIN per point) or spline (SPLINE blocks)"
+            )),
+        }
+    }
+}
+
 /// How a KRL program is written.
 #[derive(Clone, Debug)]
 pub struct KrlOptions {

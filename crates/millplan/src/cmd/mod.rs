@@ -88,27 +88,6 @@ pub fn print_json(v: serde_json::Value) {
     outln!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
 }
 
-/// How a KRL program's cutting moves are written, shared by the commands
-/// that write KRL.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ValueEnum)]
-pub enum KrlMotionArg {
-    /// One LIN per point, approximated with C_DIS (as the paper's programs).
-    #[default]
-    Lin,
-    /// Each run of approximated moves as one SPLINE block of SPL segments
-    /// through the same points.
-    Spline,
-}
-
-impl From<KrlMotionArg> for millplan_nc::write::krl::KrlMotion {
-    fn from(m: KrlMotionArg) -> Self {
-        match m {
-            KrlMotionArg::Lin => Self::Lin,
-            KrlMotionArg::Spline => Self::Spline,
-        }
-    }
-}
-
 /// Output dialect, shared by the writing commands.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum TargetArg {

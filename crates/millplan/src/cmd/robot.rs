@@ -89,11 +89,9 @@ pub struct CompensateArgs {
     /// one file.
     #[arg(long, default_value_t = millplan_driver::command_defaults::robot::MAX_POINTS)]
     pub max_points: usize,
-    /// How the points are written: one LIN each (approximated with C_DIS),
-    /// or SPLINE blocks of SPL segments through the same points, which a
-    /// controller follows at the programmed speed better on short segments.
-    #[arg(long, value_enum, default_value_t)]
-    pub krl_motion: crate::cmd::KrlMotionArg,
+    /// Each point one LIN (approximated with C_DIS), or each run a SPLINE block of SPL points.
+    #[arg(long, default_value = "lin", value_name = "lin|spline")]
+    pub krl_motion: millplan_nc::write::krl::KrlMotion,
     /// Correct the tool's orientation too: each point is commanded turned
     /// back by the angle the load turns the tool there (A, B, C written from
     /// the turned frame). Without it only the position is corrected and the
@@ -316,7 +314,7 @@ fn compensate(a: CompensateArgs) -> CliResult<i32> {
         pose: a.pose,
         spacing: a.spacing,
         max_points: a.max_points,
-        motion: a.krl_motion.into(),
+        motion: a.krl_motion,
         orientation: a.orientation,
     };
     let place = req.check().map_err(CliError::input)?;
@@ -390,10 +388,9 @@ pub struct OptimiseRobotArgs {
     /// them, written beside it); 0 writes one file.
     #[arg(long, default_value_t = millplan_driver::command_defaults::robot::MAX_POINTS)]
     pub max_points: usize,
-    /// With --robot: the points as one LIN each (approximated with C_DIS),
-    /// or as SPLINE blocks of SPL segments through the same points.
-    #[arg(long, value_enum, default_value_t)]
-    pub krl_motion: crate::cmd::KrlMotionArg,
+    /// With --robot: each point one LIN (with C_DIS), or each run a SPLINE block of SPL points.
+    #[arg(long, default_value = "lin", value_name = "lin|spline")]
+    pub krl_motion: millplan_nc::write::krl::KrlMotion,
 }
 
 /// The robot pass at the end of `optimise` (nothing without --robot): the
@@ -411,7 +408,7 @@ pub fn after_optimise(
     let tol = run.0.tol;
     let mut setup =
         RobotSetup::new(load_robot(name)?, pose, r.max_points, tol).map_err(CliError::input)?;
-    setup.motion = r.krl_motion.into();
+    setup.motion = r.krl_motion;
     let done =
         millplan_driver::robot_pass::after_optimise(&setup, run, w, output, crate::limits::get())
             .map_err(CliError::input)?;
