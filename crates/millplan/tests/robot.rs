@@ -495,6 +495,31 @@ fn optimise_ends_with_the_compensation_pass() {
     // 140 mm of cutting and the plunge at 0.3 mm, in files of 200.
     assert!(motions > 480, "{motions}");
     assert!(dir.path().join("opt_003.src").is_file());
+    // The same points as SPLINE blocks: checked by the pass as LIN is.
+    let spl = dir.path().join("spl.src");
+    let n = args.len();
+    args[n - 3] = spl.to_str().expect("utf8");
+    args.extend_from_slice(&["--krl-motion", "spline"]);
+    let o = run(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let k = millplan_nc::krl::read(&std::fs::read_to_string(&spl).expect("main"), &mut |n| {
+        std::fs::read_to_string(dir.path().join(format!("{n}.src"))).ok()
+    })
+    .expect("reads with its sub-programs");
+    let segments = k
+        .statements
+        .iter()
+        .filter(|l| matches!(&l.statement, millplan_nc::krl::Statement::Move { motion, .. } if motion.is_spline()))
+        .count();
+    assert!(
+        segments > 480 && segments < motions,
+        "{segments} of {motions}"
+    );
+    let sub = std::fs::read_to_string(dir.path().join("spl_002.src")).expect("sub");
+    assert!(
+        sub.starts_with("&ACCESS RVP\n&REL 1\nDEF spl_002()\nSPLINE\n"),
+        "{sub}"
+    );
 }
 
 /// `convert --to krl --max-points N`: a main program calling sub-programs
