@@ -406,3 +406,76 @@ fn powermill_sub_program_as_spline() {
     }
     assert!(spl > 5900, "{spl} SPL segments");
 }
+
+/// Programs of random motions (approximated or exact LINs and CIRCs, PTPs,
+/// named PTPs), speed changes, comments and calls, written as SPLINE in
+/// one file and in sub-programs of random sizes: every file reads back
+/// (the reader refuses a block holding anything but segments, `TRIGGER`
+/// and comments, a nested, unclosed or empty-ended one), the motions are
+/// those written, the files hold the motions LIN output holds, and each
+/// file's blocks open and close in it.
+#[test]
+fn random_programs_split_into_valid_spline_files() {
+    let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
+    let mut next = |n: u64| {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        seed % n
+    };
+    let (mut cut_blocks, mut scirc) = (0, 0);
+    for case in 0..300 {
+        let mut src = String::from("DEF r()\nPTP {X 0, Y 0, Z 5, A 0, B 90, C 0}\n");
+        let len = 1 + next(40);
+        for i in 0..len {
+            let x = i as f64 + 1.0;
+            let tag = if next(3) == 0 { "" } else { " C_DIS" };
+            let line = match next(12) {
+                0 => format!("$VEL.CP = 0.0{}\n", 1 + next(9)),
+                1 => "; a comment\n".to_string(),
+                2 => "SetRPM(8000)\n".to_string(),
+                3 => format!("PTP {{X {x}, Y 9, Z 5, A 0, B 90, C 0}}\n"),
+                4 => "PTP XHOME\n".to_string(),
+                5 => format!(
+                    "CIRC {{X {x}, Y 1, Z 0, A 0, B 90, C 0}}, {{X {}, Y 0, Z 0, A 0, B 90, C 0}}{tag}\n",
+                    x + 0.5
+                ),
+                _ => format!("LIN {{X {x}, Y 0, Z 0, A 0, B 90, C 0, E1 {}}}{tag}\n", next(360)),
+            };
+            src.push_str(&line);
+        }
+        src.push_str("END\n");
+        let k = krl::read(&src, &mut no_subs).expect("the source reads");
+        let max_points = [0, 1, 2, 3, 5, 8][next(6) as usize];
+        let o = KrlOptions {
+            name: "r".into(),
+            ..spline(max_points)
+        };
+        let files = write(&k, &o);
+        check(&k, &files).unwrap_or_else(|e| panic!("case {case}: {e}\n{src}\n{files:#?}"));
+        let lin = write(&k, &o.clone().with_lin());
+        assert_eq!(lin.len(), files.len(), "case {case}");
+        let count = |t: &str| {
+            let words = ["LIN ", "PTP ", "CIRC ", "SPL ", "SCIRC "];
+            t.lines()
+                .filter(|l| words.iter().any(|w| l.starts_with(w)))
+                .count()
+        };
+        for ((_, a), (name, b)) in lin.iter().zip(&files) {
+            assert_eq!(count(a), count(b), "case {case}, {name}");
+            krl::read(b, &mut no_subs)
+                .unwrap_or_else(|e| panic!("case {case}, {name}: {e:?}\n{b}"));
+            assert!(
+                !b.contains("SPLINE\nENDSPLINE"),
+                "case {case}, {name}: an empty block\n{b}"
+            );
+            cut_blocks += usize::from(b.ends_with("ENDSPLINE C_SPL\nEND\n"));
+            scirc += b.matches("\nSCIRC ").count();
+        }
+    }
+    // The cases reached what they are for: blocks cut at a file's end, arcs.
+    assert!(
+        cut_blocks > 50 && scirc > 50,
+        "{cut_blocks} blocks cut, {scirc} SCIRC"
+    );
+}
