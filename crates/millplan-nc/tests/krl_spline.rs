@@ -405,6 +405,21 @@ fn powermill_sub_program_as_spline() {
         spl += usize::from(matches!(y.0, Motion::Spl(_)));
     }
     assert!(spl > 5900, "{spl} SPL segments");
+    // Blocks of at most SPLINE_SEGMENTS_MAX segments, a long run going on
+    // in the next (approximated).
+    let mut longest = 0;
+    for (_, t) in &files {
+        let mut n = 0;
+        for l in t.lines() {
+            n = if l == "SPLINE" {
+                0
+            } else {
+                n + usize::from(l.starts_with("SPL "))
+            };
+            longest = longest.max(n);
+        }
+    }
+    assert_eq!(longest, millplan_nc::write::krl::SPLINE_SEGMENTS_MAX);
 }
 
 /// Programs of random motions (approximated or exact LINs and CIRCs, PTPs,

@@ -46,6 +46,11 @@ impl std::str::FromStr for KrlMotion {
     }
 }
 
+/// The most segments the writer puts in one SPLINE block of its own: the
+/// controller plans a block whole before it runs and bounds its size, so a
+/// longer run goes on in the next block (`ENDSPLINE C_SPL`, approximated).
+pub const SPLINE_SEGMENTS_MAX: usize = 1000;
+
 /// How a KRL program is written.
 #[derive(Clone, Debug)]
 pub struct KrlOptions {
@@ -316,8 +321,9 @@ struct Render<'a> {
     /// `$VEL.CP` as the files written so far set it, and as the program has it.
     written_vel: Option<f64>,
     vel: Option<f64>,
-    /// A block of the writer's own is open.
+    /// A block of the writer's own is open, with this many segments.
     ours: bool,
+    segments: usize,
     /// A block read with the program: its `SPLINE` line, and whether that
     /// line is written yet (it waits for the block's first statement, so
     /// that no file holds an empty block).
@@ -352,6 +358,7 @@ impl<'a> Render<'a> {
             written_vel: None,
             vel: None,
             ours: false,
+            segments: 0,
             theirs: None,
         }
     }
@@ -360,11 +367,15 @@ impl<'a> Render<'a> {
     fn put(&mut self, s: &mut String, i: usize) {
         let l = &self.st[i];
         if self.seg[i] {
+            if self.ours && self.segments == SPLINE_SEGMENTS_MAX {
+                self.close(s, true);
+            }
             if !self.ours {
                 s.push_str("SPLINE\n");
-                self.ours = true;
+                (self.ours, self.segments) = (true, 0);
             }
             self.segment(s, &l.statement, true);
+            self.segments += 1;
             if !self.cont[i] {
                 self.close(s, false);
             }
