@@ -806,7 +806,7 @@ fn krl_programs_are_read_as_krl() {
     .expect("write");
     fails_with_2(
         &["inspect", src.to_str().expect("utf8")],
-        "ROBOT.SRC:4:1: a KRL position needs X, Y and Z",
+        "ROBOT.SRC:4:5: a KRL position needs X, Y and Z",
     );
 }
 

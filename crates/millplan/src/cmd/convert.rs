@@ -5,7 +5,7 @@ use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::Outputs;
 use millplan_nc::equiv::Tolerance;
 use millplan_nc::readback::read_back;
-use millplan_nc::write::krl::KrlFiles;
+use millplan_nc::write::krl::{KrlFiles, KrlMotion};
 use millplan_nc::write::{self, Target};
 use millplan_nc::LengthUnit;
 use millplan_plan::orient::ResolveOrientation;
@@ -71,6 +71,9 @@ pub struct Args {
     /// one file, as without the option.
     #[arg(long, value_name = "N")]
     pub max_points: Option<usize>,
+    /// With a KRL output: each point one LIN as read or written, or each run of approximated LINs one SPLINE block of SPL points.
+    #[arg(long, default_value = "lin", value_name = "lin|spline")]
+    pub krl_motion: KrlMotion,
     /// Do not print reader diagnostics.
     #[arg(long, short)]
     pub quiet: bool,
@@ -110,26 +113,28 @@ fn check_output(p: &millplan_nc::Program, out: &[u8], target: Target, a: &Args) 
 }
 
 /// The KRL output `out` split into a main program and sub-programs of
-/// `--max-points` motions (checked: they read back to its motions), when
-/// asked for and longer; `None` to write `out` as it is.
+/// `--max-points` motions, SPLINE blocks with `--krl-motion spline`
+/// (checked: they read back to its motions), when asked for; `None` to
+/// write `out` as it is.
 fn krl_files(a: &Args, target: Target, out: &[u8]) -> CliResult<Option<KrlFiles>> {
-    let n = match a.max_points {
-        None | Some(0) => return Ok(None),
-        Some(n) => n,
-    };
+    let n = a.max_points.unwrap_or_default();
+    if n == 0 && a.krl_motion == KrlMotion::Lin {
+        return Ok(None);
+    }
     if target != Target::Krl {
-        return Err(CliError::input(format!(
-            "--max-points {n}: sub-programs are KRL's; give --to krl or an output named .src"
-        )));
+        return Err(CliError::input(
+            "--max-points, --krl-motion: sub-programs and SPLINE blocks are KRL's; give --to krl or an output named .src",
+        ));
     }
     if a.output.as_os_str() == "-" {
-        return Err(CliError::input(format!(
-            "--max-points {n}: sub-programs are files beside the main program; name the output file"
-        )));
+        return Err(CliError::input(
+            "--max-points, --krl-motion: KRL files are staged beside the main program; name the output file",
+        ));
     }
     let o = write::krl::KrlOptions {
         name: write::krl::stem(&a.output),
         max_points: n,
+        motion: a.krl_motion,
         ..Default::default()
     };
     let text = String::from_utf8_lossy(out);
