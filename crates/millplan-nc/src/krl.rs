@@ -72,23 +72,37 @@ pub enum Motion {
         aux: KrlPos,
         end: KrlPos,
     },
+    /// A spline point-to-point motion `SPTP` (in a block or alone) to a
+    /// Cartesian target: a positioning move, as `PTP`.
+    Sptp(KrlPos),
+    /// `SPTP` to joint angles or a named position: where it ends is not
+    /// known to the reader, as [`Motion::PtpOther`].
+    SptpOther(String),
 }
 
 impl Motion {
     /// Where the motion ends, when the reader knows it.
     pub fn end(&self) -> Option<&KrlPos> {
         match self {
-            Motion::Lin(p) | Motion::Ptp(p) | Motion::Spl(p) | Motion::Slin(p) => Some(p),
+            Motion::Lin(p)
+            | Motion::Ptp(p)
+            | Motion::Spl(p)
+            | Motion::Slin(p)
+            | Motion::Sptp(p) => Some(p),
             Motion::Circ { end, .. } | Motion::Scirc { end, .. } => Some(end),
-            Motion::PtpOther(_) => None,
+            Motion::PtpOther(_) | Motion::SptpOther(_) => None,
         }
     }
 
-    /// Whether it is a spline motion (`SPL`, `SLIN`, `SCIRC`).
+    /// Whether it is a spline motion (`SPL`, `SLIN`, `SCIRC`, `SPTP`).
     pub fn is_spline(&self) -> bool {
         matches!(
             self,
-            Motion::Spl(_) | Motion::Slin(_) | Motion::Scirc { .. }
+            Motion::Spl(_)
+                | Motion::Slin(_)
+                | Motion::Scirc { .. }
+                | Motion::Sptp(_)
+                | Motion::SptpOther(_)
         )
     }
 }
@@ -308,11 +322,6 @@ fn in_force(
             *vel_cp = vel_cp.or(fs.block.and_then(|b| b.1)).or(*vel);
             warn_with(p, fs.file, line, with);
         }
-        Statement::Verbatim(t) if first_word(t) == "SPTP" => p.warnings.push((
-            fs.file,
-            line,
-            format!("{t}: a spline PTP motion, kept as written; where it ends is not read"),
-        )),
         _ => {}
     }
 }
@@ -321,7 +330,7 @@ fn in_force(
 /// modelled (a speed `$VEL = …` is read, so not named).
 fn warn_with(p: &mut KrlProgram, file: usize, line: u32, with: &[String]) {
     for o in with {
-        if !o.to_ascii_uppercase().starts_with("$VEL") {
+        if !sets_path_speed(o) {
             p.warnings.push((
                 file,
                 line,
@@ -329,6 +338,16 @@ fn warn_with(p: &mut KrlProgram, file: usize, line: u32, with: &[String]) {
             ));
         }
     }
+}
+
+/// Whether a `WITH` option sets the path speed (`$VEL = {CP …}`, read as
+/// the motion's speed), and not another variable whose name starts alike
+/// (`$VEL_EXTAX`, `$VEL_AXIS`).
+pub(crate) fn sets_path_speed(option: &str) -> bool {
+    option
+        .split('=')
+        .next()
+        .is_some_and(|l| l.trim().eq_ignore_ascii_case("$VEL"))
 }
 
 /// The line's first word, upper case.
@@ -367,9 +386,7 @@ fn in_block(
     let fits = match st {
         Parsed1::End(_) => true,
         Parsed1::St(Statement::Move { motion, .. }) => motion.is_spline(),
-        Parsed1::St(Statement::Verbatim(t)) => {
-            t.starts_with(';') || matches!(first_word(t).as_str(), "SPTP" | "TRIGGER")
-        }
+        Parsed1::St(Statement::Verbatim(t)) => t.starts_with(';') || first_word(t) == "TRIGGER",
         _ => false,
     };
     if fits {
@@ -427,7 +444,7 @@ fn parse_line(raw: &str, line: u32) -> Result<Option<Parsed1>, ParseError> {
         }
         "END" => Ok(None),
         "EXT" => Ok(Some(Parsed1::Ext(name_before_paren(&code[3..])))),
-        "LIN" | "PTP" | "CIRC" | "SPL" | "SLIN" | "SCIRC" => {
+        "LIN" | "PTP" | "CIRC" | "SPL" | "SLIN" | "SCIRC" | "SPTP" => {
             motion(word, code, raw, line).map(|s| Some(Parsed1::St(s)))
         }
         "SPLINE" => {
@@ -503,7 +520,7 @@ fn motion(word: &str, code: &str, raw: &str, line: u32) -> Result<Statement, Par
         _ => ("", rest),
     };
     let (tail, approx) = approx_tag(tail);
-    let spline = matches!(word, "SPL" | "SLIN" | "SCIRC");
+    let spline = matches!(word, "SPL" | "SLIN" | "SCIRC" | "SPTP");
     let (vel_cp, with) = if spline {
         with_clause(tail, raw, line)?
     } else {
@@ -521,6 +538,10 @@ fn motion(word: &str, code: &str, raw: &str, line: u32) -> Result<Statement, Par
             Motion::PtpOther(rest.to_string())
         }
         "PTP" => Motion::Ptp(aggregate(targets, raw, line)?),
+        "SPTP" if targets.is_empty() || targets.to_ascii_uppercase().contains("A1 ") => {
+            Motion::SptpOther(rest.to_string())
+        }
+        "SPTP" => Motion::Sptp(aggregate(targets, raw, line)?),
         "LIN" | "SPL" | "SLIN" if targets.is_empty() => return Err(named()),
         "LIN" => Motion::Lin(aggregate(targets, raw, line)?),
         "SPL" => Motion::Spl(aggregate(targets, raw, line)?),
@@ -587,7 +608,8 @@ fn with_clause(text: &str, raw: &str, line: u32) -> Result<(Option<f64>, Vec<Str
         return Ok((None, Vec::new()));
     }
     let err = |at: &str, m: String| ParseError::new(line, col_of(raw, at), m);
-    let body = (t.len() > 4 && t[..4].eq_ignore_ascii_case("WITH"))
+    // `get`: a character that is not ASCII may straddle the fourth byte.
+    let body = (t.len() > 4 && t.get(..4).is_some_and(|w| w.eq_ignore_ascii_case("WITH")))
         .then(|| &t[4..])
         .filter(|b| b.starts_with(char::is_whitespace))
         .ok_or_else(|| {
@@ -957,7 +979,7 @@ impl KrlProgram {
     fn push_move(&self, l: &Located, motion: &Motion, feed: f64, op: &mut Operation) {
         let (end, kind, rapid) = match motion {
             Motion::Lin(p) | Motion::Spl(p) | Motion::Slin(p) => (p, MoveKind::Linear, false),
-            Motion::Ptp(p) => (p, MoveKind::Rapid, true),
+            Motion::Ptp(p) | Motion::Sptp(p) => (p, MoveKind::Rapid, true),
             Motion::Circ { aux, end } | Motion::Scirc { aux, end } => {
                 let start = op.moves.last().map_or(DVec3::NAN, |m| m.end);
                 match circle(start, aux.xyz, end.xyz) {
@@ -968,12 +990,17 @@ impl KrlProgram {
                     None => (end, MoveKind::Linear, false),
                 }
             }
-            Motion::PtpOther(text) => {
+            Motion::PtpOther(text) | Motion::SptpOther(text) => {
+                let word = if matches!(motion, Motion::PtpOther(_)) {
+                    "PTP"
+                } else {
+                    "SPTP"
+                };
                 op.push_event(
                     l.line,
                     EventKind::Passthrough(Passthrough {
-                        word: "PTP".into(),
-                        text: format!("PTP {text}"),
+                        word: word.into(),
+                        text: format!("{word} {text}"),
                         class: PassClass::Machine,
                         modal: false,
                         moves: true,

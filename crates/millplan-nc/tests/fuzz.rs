@@ -144,7 +144,10 @@ fn write_every_target(p: &millplan_nc::Program, src: &str) {
             if verbatim.iter().any(|v| b.contains(v.as_str())) {
                 continue;
             }
-            // Comments carry the source's words.
+            // Comments carry the source's words (APT's as PPRINT text).
+            if line.trim_start().starts_with("PPRINT") {
+                continue;
+            }
             let code = line.split([';', '(']).next().unwrap_or("");
             let code = code.split("$$").next().unwrap_or("");
             for w in code.split(|c: char| !c.is_ascii_alphanumeric() && c != '.' && c != '-') {

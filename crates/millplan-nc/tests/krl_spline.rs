@@ -89,8 +89,10 @@ fn lin_and_spline_round_trips_keep_poses_and_speeds() {
     assert_eq!(files.len(), 1);
     let text = &files[0].1;
     check(&k, &files).expect("read back within the digits written");
-    assert_eq!(text.matches("\nSPLINE\n").count(), 3, "{text}");
-    assert_eq!(text.matches("\nENDSPLINE\n").count(), 3, "{text}");
+    // Two blocks a row: the plunge ends exactly where the row turns off
+    // it (a spline would swing below the row there), then the row.
+    assert_eq!(text.matches("\nSPLINE\n").count(), 6, "{text}");
+    assert_eq!(text.matches("\nENDSPLINE\n").count(), 6, "{text}");
     // Each row's plunge and its 20 points.
     assert_eq!(text.lines().filter(|l| l.starts_with("SPL ")).count(), 63);
     assert!(!text.contains("C_DIS"), "{text}");
@@ -132,7 +134,7 @@ fn lin_and_spline_round_trips_keep_poses_and_speeds() {
 /// program's `$VEL.CP` after the block is the one it had set.
 #[test]
 fn a_feed_change_inside_a_run_is_a_segment_speed() {
-    let src = "DEF f()\nPTP {X 0, Y 0, Z 5, A 0, B 90, C 0}\n$VEL.CP = 0.02\n\
+    let src = "DEF f()\nPTP {X 0, Y 0, Z 0, A 0, B 90, C 0}\n$VEL.CP = 0.02\n\
 LIN {X 1, Y 0, Z 0, A 0, B 90, C 0} C_DIS\n$VEL.CP = 0.01\n\
 LIN {X 2, Y 0, Z 0, A 0, B 90, C 0} C_DIS\nLIN {X 3, Y 0, Z 0, A 0, B 90, C 0}\n\
 LIN {X 3, Y 0, Z 5, A 0, B 90, C 0}\nEND\n";
@@ -419,7 +421,42 @@ fn powermill_sub_program_as_spline() {
             longest = longest.max(n);
         }
     }
-    assert_eq!(longest, millplan_nc::write::krl::SPLINE_SEGMENTS_MAX);
+    // PowerMILL's passes end in turns a spline would swing through: each
+    // ends its block exactly, well before the cap.
+    assert!(longest > 20 && longest <= millplan_nc::write::krl::SPLINE_SEGMENTS_MAX);
+}
+
+/// A run longer than [`SPLINE_SEGMENTS_MAX`] segments goes on, approximated,
+/// in the next block.
+#[test]
+fn a_long_run_is_cut_into_blocks_of_the_cap() {
+    let k = from_ir(&zigzag(1, 2500), &KrlOptions::default()).expect("krl");
+    let files = write(&k, &spline(0));
+    check(&k, &files).expect("the same motions");
+    let t = &files[0].1;
+    let mut sizes = Vec::new();
+    let mut n = 0;
+    for l in t.lines() {
+        if l == "SPLINE" {
+            n = 0;
+        } else if l.starts_with("SPL ") {
+            n += 1;
+        } else if l.starts_with("ENDSPLINE") {
+            sizes.push((n, l.to_string()));
+        }
+    }
+    let cap = millplan_nc::write::krl::SPLINE_SEGMENTS_MAX;
+    // The plunge, then the row of 2,500 points in blocks of the cap.
+    assert_eq!(
+        sizes,
+        [
+            (1, "ENDSPLINE".to_string()),
+            (cap, "ENDSPLINE C_SPL".to_string()),
+            (cap, "ENDSPLINE C_SPL".to_string()),
+            (2500 - 2 * cap, "ENDSPLINE".to_string())
+        ],
+        "{t}"
+    );
 }
 
 /// Programs of random motions (approximated or exact LINs and CIRCs, PTPs,
@@ -493,4 +530,90 @@ fn random_programs_split_into_valid_spline_files() {
         cut_blocks > 50 && scirc > 50,
         "{cut_blocks} blocks cut, {scirc} SCIRC"
     );
+}
+
+/// `SPTP` is a motion: to a Cartesian target a positioning move of the
+/// toolpath (not a line kept aside, after which the next move would start
+/// from the wrong place); to joint angles a motion whose end is not known.
+/// KRL → KRL writes both back as `SPTP`.
+#[test]
+fn sptp_is_a_positioning_move() {
+    let src = "DEF s()\nSPTP {X 10, Y 20, Z 50, A 0, B 90, C 0} C_SPL\n$VEL.CP = 0.1\nLIN {X 10, Y 20, Z 5, A 0, B 90, C 0}\nSPTP {A1 0, A2 -90, A3 90, A4 0, A5 0, A6 0}\nEND\n";
+    let p = krl::read(src, &mut no_subs).expect("reads");
+    let m = moves(&p);
+    assert!(matches!(&m[0].0, Motion::Sptp(x) if x.xyz == DVec3::new(10.0, 20.0, 50.0)));
+    assert_eq!(m[0].1, Approx::Spl);
+    assert!(matches!(&m[2].0, Motion::SptpOther(t) if t.contains("A2 -90")));
+    assert!(p.warnings.is_empty(), "{:?}", p.warnings);
+    let ir = p.to_ir(1000.0, true).expect("ir").program;
+    let mv: Vec<&Move> = ir.moves().collect();
+    assert_eq!(mv.len(), 2, "{mv:?}");
+    assert!(mv[0].is_rapid() && mv[0].end == DVec3::new(10.0, 20.0, 50.0));
+    assert!(mv[1].is_cutting() && mv[1].end == DVec3::new(10.0, 20.0, 5.0));
+    let files = write(&p, &KrlOptions::default());
+    assert!(files[0].1.contains("SPTP {X 10"), "{}", files[0].1);
+    assert!(files[0].1.contains("SPTP {A1 0, A2 -90"), "{}", files[0].1);
+    check(&p, &files).expect("the same motions");
+}
+
+/// A character that is not ASCII where `WITH` is looked for is a located
+/// error, not a panic (a Latin-1 file read with replacement characters).
+#[test]
+fn a_wide_character_after_a_target_is_located() {
+    let src = "DEF s()\nSPLINE\nSPL {X 1, Y 2, Z 3, A 0, B 90, C 0} ab\u{fc}c\nENDSPLINE\nEND\n";
+    let e = krl::read(src, &mut no_subs).expect_err("refused");
+    assert_eq!(e.error.line, 3, "{e:?}");
+}
+
+/// Written as SPLINE, a path that turns sharply (a raster's end, here a
+/// right angle) ends its block exactly on the corner point, where a spline
+/// through it would swing outside; gentle turns stay in one block.
+#[test]
+fn a_sharp_corner_ends_the_spline_block_exactly() {
+    let mut apt = String::from("CUTTER/10\nGOTO/0,0,5,0,0,1\nGOTO/0,0,-1,0,0,1\nFEDRAT/1000\n");
+    for i in 1..=10 {
+        apt.push_str(&format!("GOTO/{:.1},0,-1,0,0,1\n", i as f64));
+    }
+    for i in 1..=10 {
+        // a 5° bend halfway up the second leg
+        let x = 10.0
+            + if i > 5 {
+                (i - 5) as f64 * 5f64.to_radians().tan()
+            } else {
+                0.0
+            };
+        apt.push_str(&format!("GOTO/{x:.4},{i}.0,-1,0,0,1\n"));
+    }
+    let p = parse_program(&apt, ReadOptions::default())
+        .expect("apt")
+        .program;
+    let k = from_ir(&p, &KrlOptions::default()).expect("krl");
+    let files = write(&k, &spline(0));
+    check(&k, &files).expect("the same motions");
+    let text = &files[0].1;
+    let lines: Vec<&str> = text.lines().collect();
+    let corner = lines
+        .iter()
+        .position(|l| l.starts_with("SPL {X 10") && l.contains("Y 0"))
+        .unwrap_or_else(|| panic!("{text}"));
+    assert_eq!(lines[corner + 1], "ENDSPLINE", "{text}");
+    // The plunge, then one block for each leg: the 5° bend ends none.
+    assert_eq!(text.matches("ENDSPLINE").count(), 3, "{text}");
+}
+
+/// `$VEL_EXTAX` is not the path speed: named as not modelled, and a
+/// segment's own `$VEL.CP` beside it is kept when written again.
+#[test]
+fn vel_extax_is_not_the_path_speed() {
+    let src = "DEF s()\n$VEL.CP = 0.1\nSPLINE\nSPL {X 1, Y 2, Z 3, A 0, B 90, C 0} WITH $VEL.CP = 0.3, $VEL_EXTAX[1] = 50\nSPL {X 2, Y 2, Z 3, A 0, B 90, C 0}\nENDSPLINE\nEND\n";
+    let p = krl::read(src, &mut no_subs).expect("reads");
+    assert!(
+        p.warnings.iter().any(|w| w.2.contains("$VEL_EXTAX")),
+        "{:?}",
+        p.warnings
+    );
+    let files = write(&p, &KrlOptions::default());
+    let back = krl::read(&files[0].1, &mut no_subs).expect("reads back");
+    assert_eq!(moves(&back)[0].2, Some(0.3), "{}", files[0].1);
+    check(&p, &files).expect("the same motions");
 }

@@ -51,6 +51,18 @@ impl std::str::FromStr for KrlMotion {
 /// longer run goes on in the next block (`ENDSPLINE C_SPL`, approximated).
 pub const SPLINE_SEGMENTS_MAX: usize = 1000;
 
+/// The largest turn, degrees, a SPLINE block of the writer's own is
+/// smoothed through when the spline would swing more than
+/// [`SPLINE_SWING_MM`] there. A spline passes through its points and swings
+/// outside a sharp corner between long segments (under the surface at a
+/// plunge or a raster's turn), where `LIN … C_DIS` cuts inside it; there the
+/// block ends exactly on the corner point and the next starts at it.
+pub const SPLINE_CORNER_DEG: f64 = 20.0;
+
+/// The largest swing, mm, of a spline off the straight lines between its
+/// points that a corner may cause (estimated at the segment's middle).
+pub const SPLINE_SWING_MM: f64 = 0.01;
+
 /// How a KRL program is written.
 #[derive(Clone, Debug)]
 pub struct KrlOptions {
@@ -205,14 +217,16 @@ fn same_motion(a: &Statement, b: &Statement) -> bool {
     let same = aa == ab;
     let splined = *ab == Approx::Exact;
     let targets = match (ma, mb) {
-        (Lin(x), Lin(y)) | (Ptp(x), Ptp(y)) | (Spl(x), Spl(y)) | (Slin(x), Slin(y)) => {
-            same && near(x, y)
-        }
+        (Lin(x), Lin(y))
+        | (Ptp(x), Ptp(y))
+        | (Spl(x), Spl(y))
+        | (Slin(x), Slin(y))
+        | (Sptp(x), Sptp(y)) => same && near(x, y),
         (Lin(x), Spl(y)) => splined && near(x, y),
         (Circ { aux, end }, Circ { aux: x, end: y })
         | (Scirc { aux, end }, Scirc { aux: x, end: y }) => same && near(aux, x) && near(end, y),
         (Circ { aux, end }, Scirc { aux: x, end: y }) => splined && near(aux, x) && near(end, y),
-        (PtpOther(x), PtpOther(y)) => same && x == y,
+        (PtpOther(x), PtpOther(y)) | (SptpOther(x), SptpOther(y)) => same && x == y,
         _ => false,
     };
     let vel = match (va, vb) {
@@ -306,6 +320,47 @@ fn file(
     s
 }
 
+/// Per statement: a motion where the path turns by more than
+/// [`SPLINE_CORNER_DEG`] and a spline through it (tangents from the
+/// neighbouring points, as a Catmull-Rom spline takes them) would swing
+/// more than [`SPLINE_SWING_MM`] off the straight line to the point before
+/// or after it. Finely sampled curves turn by much at short segments and
+/// swing little: they stay in one block.
+fn sharp_corners(st: &[Located]) -> Vec<bool> {
+    let at: Vec<(usize, DVec3)> = st
+        .iter()
+        .enumerate()
+        .filter_map(|(i, l)| match &l.statement {
+            Statement::Move { motion, .. } => motion.end().map(|p| (i, p.xyz)),
+            _ => None,
+        })
+        .collect();
+    let p = |k: isize| at[k.clamp(0, at.len() as isize - 1) as usize].1;
+    let tangent = |k: isize| (p(k + 1) - p(k - 1)) * 0.5;
+    // The midpoint of the Hermite cubic from k to k + 1 lies (T_k − T_k+1)/8
+    // from the chord's; its part across the chord is the swing.
+    let swing = |k: isize| {
+        let chord = p(k + 1) - p(k);
+        let d = (tangent(k) - tangent(k + 1)) / 8.0;
+        let l2 = chord.length_squared();
+        if l2 > 0.0 {
+            (d - chord * (d.dot(chord) / l2)).length()
+        } else {
+            0.0
+        }
+    };
+    let cos_max = SPLINE_CORNER_DEG.to_radians().cos();
+    let mut out = vec![false; st.len()];
+    for k in 1..at.len().saturating_sub(1) {
+        let k = k as isize;
+        let (u, v) = (p(k) - p(k - 1), p(k + 1) - p(k));
+        let (lu, lv) = (u.length(), v.length());
+        let turns = lu > 0.0 && lv > 0.0 && u.dot(v) < cos_max * lu * lv;
+        out[at[k as usize].0] = turns && swing(k - 1).max(swing(k)) > SPLINE_SWING_MM;
+    }
+    out
+}
+
 /// The statements of a program written in the order the controller runs
 /// them, file after file: the path speed written so far and the one in
 /// force, the SPLINE blocks open.
@@ -343,10 +398,11 @@ impl<'a> Render<'a> {
                     prev_dis = seg[i] && *approx == Approx::Dis;
                 }
             }
+            let corner = sharp_corners(st);
             let mut next_seg = false;
             for (i, l) in st.iter().enumerate().rev() {
                 if let Statement::Move { approx, .. } = &l.statement {
-                    cont[i] = seg[i] && *approx == Approx::Dis && next_seg;
+                    cont[i] = seg[i] && *approx == Approx::Dis && next_seg && !corner[i];
                     next_seg = seg[i];
                 }
             }
@@ -470,9 +526,7 @@ impl<'a> Render<'a> {
             ),
             _ => motion_text(s, motion),
         }
-        let own_vel = with
-            .iter()
-            .any(|w| w.to_ascii_uppercase().starts_with("$VEL"));
+        let own_vel = with.iter().any(|w| crate::krl::sets_path_speed(w));
         let mut opts: Vec<String> = Vec::new();
         if let (Some(v), false) = (vel_cp, own_vel) {
             if Some(*v) != self.written_vel {
@@ -555,6 +609,11 @@ fn motion_text(s: &mut String, motion: &Motion) {
             let _ = write!(s, "PTP {t}");
             return;
         }
+        Motion::SptpOther(t) => {
+            let _ = write!(s, "SPTP {t}");
+            return;
+        }
+        Motion::Sptp(p) => ("SPTP", None, p),
         Motion::Lin(p) => ("LIN", None, p),
         Motion::Ptp(p) => ("PTP", None, p),
         Motion::Spl(p) => ("SPL", None, p),
