@@ -85,11 +85,6 @@ pub fn read_any(path: &Path, opts: ReadOptions) -> CliResult<Input> {
     Ok(with_bar(|p| inputs::read_any(path, opts, p))?)
 }
 
-/// Reads an STL mesh within the limits of this run.
-pub fn read_mesh(path: &Path) -> CliResult<(TriMesh, StlReport)> {
-    Ok(inputs::read_mesh(path, &crate::limits::get())?)
-}
-
 /// Reads the part for a command that works on its surface (refused without
 /// a triangle), scaled by `--stl-units`.
 pub fn read_surface(
@@ -98,6 +93,21 @@ pub fn read_surface(
 ) -> CliResult<(TriMesh, StlReport)> {
     let units = units.map(Into::into);
     Ok(inputs::read_surface(path, &crate::limits::get(), units)?)
+}
+
+/// The built-in materials plus those of `--materials`.
+pub fn read_materials(path: Option<&Path>) -> CliResult<millplan_driver::Materials> {
+    Ok(inputs::read_materials(path)?)
+}
+
+/// The blank of an `stl:` stock, read within this run's limits and scaled
+/// by `--stl-units`.
+pub fn read_blank(
+    spec: &millplan_driver::StockSpec,
+    units: Option<crate::cmd::UnitArg>,
+) -> CliResult<Option<TriMesh>> {
+    let units = units.map(Into::into);
+    Ok(inputs::read_blank(spec, &crate::limits::get(), units)?)
 }
 
 /// Reads an APT/CL, G-code or KUKA KRL program.

@@ -185,7 +185,7 @@ fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
         blank,
         machine: crate::cmd::load_machine(a.machine.as_deref())?,
         machine_given: a.machine.is_some(),
-        materials: crate::cmd::cut::load_materials(a.materials.as_deref())?,
+        materials: crate::io::read_materials(a.materials.as_deref())?,
         material: a.material.clone(),
         options: options(a)?,
         library: from_library,

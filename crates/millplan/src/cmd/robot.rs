@@ -163,32 +163,16 @@ pub struct CouplingArgs {
 }
 
 impl CouplingArgs {
-    /// The options as `force` takes them (the others at their defaults).
-    fn model(&self, json: bool) -> crate::cmd::feed::ModelArgs {
-        use millplan_driver::command_defaults::feed as d;
-        crate::cmd::feed::ModelArgs {
+    /// The force model's options as the driver takes them.
+    fn request(&self) -> lib::CouplingRequest {
+        lib::CouplingRequest {
             stock: self.stock.clone(),
-            stl: self.stl.clone(),
-            stl_units: self.stl_units,
             material: self.material.clone(),
-            materials: self.materials.clone(),
-            machine: None,
             tool: self.tool.clone(),
             flutes: self.flutes,
             helix: self.helix,
-            stickout: None,
-            flute_length: None,
-            modulus: d::MODULUS,
-            resolution: self.resolution,
-            dz: d::DZ,
-            dphi: d::DPHI_DEG,
-            fixed_grid: true,
             spindle: self.spindle,
-            units: None,
-            table: None,
-            report: None,
-            json,
-            quiet: json,
+            resolution: self.resolution,
         }
     }
 }
@@ -276,14 +260,17 @@ fn process(path: &Path, p: &ProcessArgs) -> CliResult<(Robot, Program, PathLoad)
         let opts = millplan_nc::ReadOptions::default();
         return Ok((robot, crate::io::read_program(path, opts)?.program, load));
     }
-    let m = p.model.model(p.json);
-    let prepared = crate::cmd::feed::prepare(path, &m)?;
-    let (program, strokes) = (&prepared.program, &prepared.strokes);
-    let run = crate::cmd::feed::run_forces(&prepared, program, strokes, p.json)?;
-    let name = path.display().to_string();
-    millplan_driver::feed::stopped_spindle(&name, &run).map_err(CliError::input)?;
-    let load = lib::move_loads(&prepared.program, &run);
-    Ok((robot, prepared.program, load))
+    let files = millplan_driver::feed::ModelFiles {
+        program: path,
+        stl: p.model.stl.as_deref(),
+        stl_units: p.model.stl_units.map(Into::into),
+        materials: p.model.materials.as_deref(),
+        machine: None,
+        read: crate::cmd::read_options(None, None)?,
+    };
+    let watch = crate::progress::Watch::new(path, p.json);
+    let (program, load) = lib::model_load(&files, &p.model.request(), &watch)?;
+    Ok((robot, program, load))
 }
 
 /// KRL files from the `first` (0: the main program, at `output`; its
