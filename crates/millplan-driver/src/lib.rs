@@ -17,6 +17,7 @@ pub mod demo;
 pub mod directions;
 pub mod feed;
 pub mod finish;
+pub mod given;
 pub mod force;
 pub mod gouge;
 pub mod inspect;
