@@ -250,7 +250,7 @@ pub fn prepare(
     let spec = stock_spec(req).map_err(IoError::input)?;
     let machine = inputs::read_machine(f.machine)?;
     let mut reading = |done, total| w.reading(done, total);
-    let (mut parsed, _) = inputs::read_source(f.program, f.read.clone(), &mut reading)?;
+    let (mut parsed, _) = inputs::read_source(f.program, f.read, &mut reading)?;
     w.diagnostics(&parsed.diagnostics);
     supply_spindle(req, &mut parsed.program).map_err(IoError::input)?;
     let name = f.program.display().to_string();

@@ -26,46 +26,10 @@ impl From<IoError> for CliError {
     }
 }
 
-/// The outputs of one run (`millplan_driver::io::outputs`): checked together
-/// before any work, written one by one, renamed into place together.
-pub struct Outputs(millplan_driver::io::outputs::Outputs);
-
-impl Outputs {
-    /// Checks the outputs (`(flag, path)`, `None` for one not asked for)
-    /// against each other and the inputs; `stdout`: whether `-` may stand
-    /// for standard output.
-    pub fn plan(
-        inputs: &[&Path],
-        outputs: &[(&str, Option<&Path>)],
-        stdout: bool,
-    ) -> CliResult<Outputs> {
-        Ok(Outputs(millplan_driver::io::outputs::Outputs::plan(
-            inputs, outputs, stdout,
-        )?))
-    }
-
-    /// Writes `bytes` as the output `path` (one of those planned).
-    pub fn write(&mut self, path: &Path, bytes: &[u8]) -> CliResult<()> {
-        Ok(self.0.write(path, bytes)?)
-    }
-
-    /// Writes program `p` as the output `path`, streamed; the warnings of
-    /// `--lossy`.
-    pub fn write_program(
-        &mut self,
-        path: &Path,
-        p: &millplan_nc::Program,
-        o: millplan_nc::write::WriteOptions,
-        source: &Path,
-    ) -> CliResult<Vec<millplan_nc::Diagnostic>> {
-        Ok(self.0.write_program(path, p, o, source)?)
-    }
-
-    /// Renames every staged output into place.
-    pub fn commit(self) -> CliResult<()> {
-        Ok(self.0.commit()?)
-    }
-}
+/// The outputs of one run: checked together before any work, written one
+/// by one, renamed into place together (their errors exit codes by
+/// `From<IoError>`).
+pub use millplan_driver::io::outputs::Outputs;
 
 /// Reads with a byte-count bar on standard error (shown for large inputs).
 fn with_bar<T>(read: impl FnOnce(&mut dyn FnMut(u64, u64)) -> T) -> T {

@@ -274,24 +274,18 @@ fn say_skipped(a: &Args, o: &Outcome) {
     if a.quiet || a.json {
         return;
     }
-    for p in o.passes.iter().filter(|p| !p.ran) {
-        eprintln!("note: pass {} skipped: {}", p.name, p.reason);
+    for n in report::skipped_notes(o) {
+        eprintln!("{n}");
     }
 }
 
 fn page(a: &Args, job: &Job, o: &Outcome, w: &Written, path: &Path, output: &Path) -> String {
-    let name = |p: &Path| p.display().to_string();
-    let names = InputNames {
-        program: name(path),
-        part: a.stl.as_deref().map(name),
-        stock: a.stock.clone(),
-        machine: a
-            .machine
-            .as_deref()
-            .map_or_else(|| format!("{} (built-in)", job.inputs.machine.name), name),
-        material: a.material.clone(),
-        output: name(output),
-    };
+    let names = InputNames::of(
+        (path, output),
+        a.stl.as_deref(),
+        (a.stock.as_deref(), a.material.as_deref()),
+        (a.machine.as_deref(), &job.inputs.machine.name),
+    );
     let plotted = Plotted {
         before: &job.inputs.program,
         after: &w.program,
@@ -304,8 +298,8 @@ fn page(a: &Args, job: &Job, o: &Outcome, w: &Written, path: &Path, output: &Pat
 
 fn print_summary(a: &Args, w: &Written, path: &Path, output: &Path, withheld: bool) {
     let s = &w.summary;
-    if let Some((check, line, m)) = s.refusal() {
-        eprintln!("{}:{line}: check {check} failed: {m}", path.display());
+    if let Some(line) = report::refusal_line(s, path) {
+        eprintln!("{line}");
     }
     if a.json {
         crate::cmd::print_json(serde_json::to_value(s).unwrap_or_default());

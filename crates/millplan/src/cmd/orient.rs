@@ -243,12 +243,9 @@ fn choose(
     .map_err(CliError::input)?;
     sim_bar.finish();
     bar.finish_and_clear();
-    if o.unsimulated > 0 && !(a.quiet || a.json) {
-        eprintln!(
-            "{}: note: {} moves are not simulated (their tool has no shape, or their position or axis is unknown): the stock does not see them",
-            a.path.display(),
-            o.unsimulated
-        );
+    match o.unsimulated_note(&a.path.display().to_string()) {
+        Some(n) if !(a.quiet || a.json) => eprintln!("{n}"),
+        _ => {}
     }
     Ok(o)
 }

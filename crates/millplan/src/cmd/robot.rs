@@ -2,6 +2,7 @@
 //! (deflection at a pose).
 
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::io::Outputs;
 use clap::{Subcommand, ValueEnum};
 use millplan_driver::robot as lib;
 use millplan_driver::robot_pass::RobotSetup;
@@ -273,26 +274,6 @@ fn process(path: &Path, p: &ProcessArgs) -> CliResult<(Robot, Program, PathLoad)
     Ok((robot, program, load))
 }
 
-/// KRL files from the `first` (0: the main program, at `output`; its
-/// sub-programs beside it) staged against `inputs`: the outputs, the paths.
-pub fn stage_krl(
-    inputs: &[&Path],
-    output: &Path,
-    files: &millplan_nc::write::krl::KrlFiles,
-    first: usize,
-) -> CliResult<(crate::io::Outputs, Vec<std::path::PathBuf>)> {
-    let paths = millplan_nc::write::krl::file_paths(output, files);
-    let planned: Vec<(&str, Option<&Path>)> = paths[first..]
-        .iter()
-        .map(|p| ("-o", Some(p.as_path())))
-        .collect();
-    let mut outputs = crate::io::Outputs::plan(inputs, &planned, false)?;
-    for (p, (_, text)) in paths.iter().zip(files).skip(first) {
-        outputs.write(p, text.as_bytes())?;
-    }
-    Ok((outputs, paths))
-}
-
 fn compensate(a: CompensateArgs) -> CliResult<i32> {
     let req = lib::CompensateRequest {
         pose: a.pose,
@@ -306,9 +287,7 @@ fn compensate(a: CompensateArgs) -> CliResult<i32> {
     let name = a.path.display().to_string();
     let p = process_of(&robot, &a.process, (&program, &load), &name);
     let done = lib::compensate(&p, &req, &place, &a.output).map_err(CliError::input)?;
-    stage_krl(&[a.path.as_path()], &a.output, &done.files, 0)?
-        .0
-        .commit()?;
+    Outputs::stage_krl(&[a.path.as_path()], &a.output, &done.files, 0)?.commit()?;
     print(
         a.process.json,
         &done.summary,
@@ -395,7 +374,7 @@ pub fn after_optimise(
         eprintln!("{}", done.summary.render_text());
     }
     if w.summary.verdict != millplan_driver::Verdict::Refused || force {
-        stage_krl(inputs, output, &done.files, 1)?.0.commit()?;
+        Outputs::stage_krl(inputs, output, &done.files, 1)?.commit()?;
     }
     Ok(())
 }

@@ -149,7 +149,7 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
     // A bar on a long program only.
     let bar = crate::progress::Phases::new(!a.quiet && !a.json);
     let progress = |done: usize, total: usize| {
-        if total > 50_000 {
+        if total > millplan_driver::command_defaults::progress::LONG_SIMULATION_STROKES {
             bar.report("simulating", done, total)
         }
     };
@@ -183,7 +183,7 @@ fn plan_outputs(a: &Args, spec: &StockSpec) -> CliResult<Outputs> {
     if let StockSpec::Stl(p) = spec {
         inputs.push(p);
     }
-    Outputs::plan(
+    Ok(Outputs::plan(
         &inputs,
         &[
             ("-o", a.output.as_deref()),
@@ -191,7 +191,7 @@ fn plan_outputs(a: &Args, spec: &StockSpec) -> CliResult<Outputs> {
             ("--report", a.report.as_deref()),
         ],
         false,
-    )
+    )?)
 }
 
 fn write_outputs(
