@@ -4,8 +4,8 @@
 use crate::error::{guard, Located, Place, Res};
 use crate::mesh::PyMesh;
 use crate::program::PyProgram;
-use millplan_driver::passes::{self, ORDER};
 use millplan_driver::given::{Given, GivenError};
+use millplan_driver::passes::{self, ORDER};
 use millplan_driver::{Inputs, Job, OptionsRequest, UserLimits, Verdict};
 use millplan_geom::TriMesh;
 use millplan_models::force::materials::Materials;
