@@ -162,3 +162,12 @@ impl millplan_driver::feed::Watch for Watch<'_> {
         }
     }
 }
+
+impl Drop for Watch<'_> {
+    /// A read that failed leaves no bar behind.
+    fn drop(&mut self) {
+        if let Some(b) = self.read.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            b.finish_and_clear();
+        }
+    }
+}
