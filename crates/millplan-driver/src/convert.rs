@@ -13,7 +13,7 @@ use serde::Serialize;
 use std::path::Path;
 
 /// The options of `convert` that shape what is written.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 pub struct ConvertRequest {
     /// `--to`.
     pub to: Option<Target>,
@@ -23,6 +23,8 @@ pub struct ConvertRequest {
     pub lossy: bool,
     /// `--max-points`: motions per KRL sub-program (0 or none: one file).
     pub max_points: Option<usize>,
+    /// `--krl-motion`: each point one LIN, or runs as SPLINE blocks.
+    pub motion: krl::KrlMotion,
 }
 
 /// The dialect to write: `--to`, else the machine file's control, else the
@@ -97,31 +99,34 @@ pub enum SplitError {
     Split(String),
 }
 
-/// The KRL main program and sub-programs of `--max-points` (none without
-/// it, or with 0), split from the bytes written for `output`.
+/// The KRL output `out` (written for `output`) split into a main program
+/// and sub-programs of `--max-points` motions, SPLINE blocks with
+/// `--krl-motion spline` (checked: they read back to its motions), when
+/// asked for; `None` to write `out` as it is.
 pub fn krl_files(
     r: &ConvertRequest,
     target: Target,
     output: &Path,
     out: &[u8],
 ) -> Result<Option<KrlFiles>, SplitError> {
-    let n = match r.max_points {
-        None | Some(0) => return Ok(None),
-        Some(n) => n,
-    };
+    let n = r.max_points.unwrap_or_default();
+    if n == 0 && r.motion == krl::KrlMotion::Lin {
+        return Ok(None);
+    }
     if target != Target::Krl {
-        return Err(SplitError::Option(format!(
-            "--max-points {n}: sub-programs are KRL's; give --to krl or an output named .src"
-        )));
+        return Err(SplitError::Option(
+            "--max-points, --krl-motion: sub-programs and SPLINE blocks are KRL's; give --to krl or an output named .src".into(),
+        ));
     }
     if output.as_os_str() == "-" {
-        return Err(SplitError::Option(format!(
-            "--max-points {n}: sub-programs are files beside the main program; name the output file"
-        )));
+        return Err(SplitError::Option(
+            "--max-points, --krl-motion: KRL files are staged beside the main program; name the output file".into(),
+        ));
     }
     let o = krl::KrlOptions {
         name: krl::stem(output),
         max_points: n,
+        motion: r.motion,
         ..Default::default()
     };
     krl::split(&String::from_utf8_lossy(out), &o)

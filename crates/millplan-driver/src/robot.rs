@@ -444,6 +444,8 @@ pub struct CompensateRequest {
     pub spacing: f64,
     /// Motions per KRL sub-program; 0: one file.
     pub max_points: usize,
+    /// `LIN` per point or SPLINE blocks.
+    pub motion: krl::KrlMotion,
     /// Correct the tool's orientation too.
     pub orientation: bool,
 }
@@ -489,9 +491,11 @@ pub fn compensate(
     let o = krl::KrlOptions {
         name: stem,
         max_points: r.max_points,
+        motion: r.motion,
         ..Default::default()
     };
     let files = krl::write(&k, &o);
+    krl::check(&k, &files).map_err(|e| format!("{}: {e}; not written", output.display()))?;
     let paths = krl::file_paths(output, &files);
     let names = paths.iter().map(|p| p.display().to_string()).collect();
     let summary = CompensateSummary::new(&c, p.load, names);
@@ -703,6 +707,7 @@ mod tests {
             pose: "1300,-100,300,0".into(),
             spacing: 0.3,
             max_points: 300,
+            motion: krl::KrlMotion::Lin,
             orientation: false,
         };
         let place = req.check().expect("pose");

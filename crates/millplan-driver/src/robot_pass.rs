@@ -9,8 +9,8 @@
 //! tolerance.
 
 use crate::robot::{move_loads, LoadSummary};
-use millplan_nc::krl::{Motion, Statement};
-use millplan_nc::write::krl::{self, KrlFiles, KrlOptions};
+use millplan_nc::krl::Statement;
+use millplan_nc::write::krl::{self, KrlFiles, KrlMotion, KrlOptions};
 use millplan_nc::Program;
 use millplan_plan::force::ForceRun;
 use millplan_robot::machining::{self, Compensated, PathLoad, PathPoint, Placement};
@@ -26,6 +26,8 @@ pub struct RobotSetup {
     pub spacing: f64,
     /// Motions per sub-program (0: one file).
     pub max_points: usize,
+    /// `LIN` per point or SPLINE blocks.
+    pub motion: KrlMotion,
     /// How far the deflected tip may land from the nominal path, mm.
     pub tol: f64,
 }
@@ -45,6 +47,7 @@ impl RobotSetup {
             place: crate::robot::pose(pose)?,
             spacing: crate::command_defaults::robot::SPACING_MM,
             max_points,
+            motion: KrlMotion::Lin,
             tol,
         })
     }
@@ -117,9 +120,11 @@ pub fn run(
     let o = KrlOptions {
         name: name.into(),
         max_points: s.max_points,
+        motion: s.motion,
         ..KrlOptions::default()
     };
     let files = krl::write(&k, &o);
+    krl::check(&k, &files)?;
     let residual = verify(s, &c, &files, &load)?;
     if !(residual <= s.tol) {
         return Err(format!(
@@ -186,10 +191,7 @@ fn verify(
     })
     .map_err(|e| format!("the KRL written does not read back: {e:?}"))?;
     let mut read = back.statements.iter().filter_map(|l| match &l.statement {
-        Statement::Move {
-            motion: Motion::Lin(p) | Motion::Ptp(p),
-            ..
-        } => Some(p.xyz),
+        Statement::Move { motion, .. } => motion.end().map(|p| p.xyz),
         _ => None,
     });
     let mut cmd: Vec<Vec<PathPoint>> = Vec::with_capacity(c.runs.len());

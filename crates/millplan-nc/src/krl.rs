@@ -12,6 +12,15 @@
 //! other dialects: the orientation A, B, C (R = Rz(A)·Ry(B)·Rx(C), the
 //! tool along the tool frame's x) becomes a tool axis, external axes are
 //! refused at their line unless lossy. `write::krl` writes it back.
+//!
+//! Spline motions (KSS 8.x) read too: a `SPLINE [WITH …]` … `ENDSPLINE
+//! [C_SPL]` block of `SPL`, `SLIN` and `SCIRC` segments, and `SLIN`/`SCIRC`
+//! alone, with the same aggregates as `LIN`. A segment's path speed is its
+//! own `WITH $VEL.CP = v` (or `$VEL = {CP v, …}`, `$VEL = SVEL_CP(v, …)`),
+//! else its block's, else the `$VEL.CP` in force; every other option of a
+//! `WITH` clause is kept as written (and written back) and named in a
+//! warning, the IR not modelling it. Into the IR an `SPL` or `SLIN` segment
+//! is a straight move to its point, an `SCIRC` an arc.
 
 use crate::diag::{Code, Diagnostic, ParseError, Parsed, Severity};
 use crate::ir::{Dialect, EventKind, FeedMode, Move, MoveKind, Operation, Orient, Program};
@@ -36,6 +45,8 @@ pub enum Approx {
     Dis,
     Vel,
     Ori,
+    /// `C_SPL`: a spline motion approximated by `$APO.CDIS`.
+    Spl,
 }
 
 /// A motion's target.
@@ -52,6 +63,34 @@ pub enum Motion {
     /// Point to point to joint angles or a named position (`XHOME`,
     /// `$POS_ACT`): where it ends is not known to the reader.
     PtpOther(String),
+    /// A spline segment `SPL` (only inside a SPLINE block).
+    Spl(KrlPos),
+    /// A straight spline segment `SLIN` (in a block or alone).
+    Slin(KrlPos),
+    /// A circular spline segment `SCIRC` through `aux` to `end`.
+    Scirc {
+        aux: KrlPos,
+        end: KrlPos,
+    },
+}
+
+impl Motion {
+    /// Where the motion ends, when the reader knows it.
+    pub fn end(&self) -> Option<&KrlPos> {
+        match self {
+            Motion::Lin(p) | Motion::Ptp(p) | Motion::Spl(p) | Motion::Slin(p) => Some(p),
+            Motion::Circ { end, .. } | Motion::Scirc { end, .. } => Some(end),
+            Motion::PtpOther(_) => None,
+        }
+    }
+
+    /// Whether it is a spline motion (`SPL`, `SLIN`, `SCIRC`).
+    pub fn is_spline(&self) -> bool {
+        matches!(
+            self,
+            Motion::Spl(_) | Motion::Slin(_) | Motion::Scirc { .. }
+        )
+    }
 }
 
 /// One statement of a program.
@@ -63,9 +102,18 @@ pub enum Statement {
     Move {
         motion: Motion,
         approx: Approx,
-        /// `$VEL.CP` in force, m/s (`None`: never set in the program).
+        /// `$VEL.CP` in force, m/s (`None`: never set in the program); a
+        /// spline motion's own or its block's `WITH` speed where it has one.
         vel_cp: Option<f64>,
+        /// The options of a spline motion's `WITH` clause other than
+        /// `$VEL.CP = v`, as written (`$ACC = {…}`, `$VEL = SVEL_CP(…)`).
+        with: Vec<String>,
     },
+    /// `SPLINE [WITH …]`: a spline block begins; the options of its `WITH`
+    /// clause other than `$VEL.CP = v` (which its segments hold), as written.
+    SplineBegin(Vec<String>),
+    /// `ENDSPLINE [C_SPL]`: the block ends, approximated or not.
+    SplineEnd(bool),
     VelCp(f64),
     ApoCdis(f64),
     /// `$TOOL = …` / `$BASE = …`: the right-hand side as written.
@@ -94,6 +142,9 @@ pub struct KrlProgram {
     pub statements: Vec<Located>,
     /// Sub-programs called but not found: (name, file index, calling line).
     pub missing: Vec<(String, usize, u32)>,
+    /// What was read but is not modelled (a `WITH` option, an `SPTP`):
+    /// (file index, line, what), kept as written.
+    pub warnings: Vec<(usize, u32, String)>,
 }
 
 /// An error in one of the files of a program.
@@ -126,6 +177,28 @@ pub fn read(
     Ok(p)
 }
 
+/// What a file's reading knows beyond its statements: which file it is,
+/// how deep in calls, the sub-programs it declares with `EXT` and the
+/// SPLINE block open (its line, its `WITH` speed).
+struct FileState {
+    file: usize,
+    depth: usize,
+    ext: Vec<String>,
+    block: Option<(u32, Option<f64>)>,
+}
+
+/// An error in file `file` of `p`.
+fn fail(p: &KrlProgram, file: usize, e: ParseError) -> KrlError {
+    KrlError {
+        file: if file == 0 {
+            None
+        } else {
+            p.files.get(file).cloned()
+        },
+        error: e,
+    }
+}
+
 fn read_file(
     src: &str,
     file: usize,
@@ -134,76 +207,182 @@ fn read_file(
     p: &mut KrlProgram,
     vel: &mut Option<f64>,
 ) -> Result<(), KrlError> {
-    let fail = |p: &KrlProgram, e: ParseError| KrlError {
-        file: if file == 0 {
-            None
-        } else {
-            p.files.get(file).cloned()
-        },
-        error: e,
-    };
     if p.files.len() <= file {
         p.files.push(String::new());
     }
-    let mut ext: Vec<String> = Vec::new();
+    let mut fs = FileState {
+        file,
+        depth,
+        ext: Vec::new(),
+        block: None,
+    };
     for (k, raw) in crate::lines::split(src).enumerate() {
         let line = u32::try_from(k + 1).unwrap_or(u32::MAX);
-        let st = parse_line(raw, line).map_err(|e| fail(p, e))?;
+        let st = parse_line(raw, line).map_err(|e| fail(p, file, e))?;
         let Some(st) = st else { continue };
-        match st {
-            Parsed1::Def(name) => {
-                if p.files[file].is_empty() {
-                    p.files[file] = name;
+        in_block(fs.block, &st, raw, line).map_err(|e| fail(p, file, e))?;
+        take(&mut fs, st, line, resolve, p, vel)?;
+    }
+    match fs.block {
+        Some((open, _)) => {
+            let m = "SPLINE block not closed: no ENDSPLINE before the end of the file";
+            Err(fail(p, file, ParseError::new(open, 1, m)))
+        }
+        None => Ok(()),
+    }
+}
+
+/// One statement read at `line` of the file `fs` reads: into `p`, a
+/// sub-program called read in its place.
+fn take(
+    fs: &mut FileState,
+    st: Parsed1,
+    line: u32,
+    resolve: &mut dyn FnMut(&str) -> Option<String>,
+    p: &mut KrlProgram,
+    vel: &mut Option<f64>,
+) -> Result<(), KrlError> {
+    let file = fs.file;
+    let push = |p: &mut KrlProgram, statement| {
+        p.statements.push(Located {
+            file,
+            line,
+            statement,
+        })
+    };
+    match st {
+        Parsed1::Def(name) => {
+            if p.files[file].is_empty() {
+                p.files[file] = name;
+            }
+        }
+        Parsed1::Ext(name) => fs.ext.push(name.to_ascii_uppercase()),
+        Parsed1::Call(name, text) if fs.ext.contains(&name.to_ascii_uppercase()) => {
+            if fs.depth >= MAX_DEPTH {
+                let m = "sub-programs call each other deeper than 8 levels";
+                return Err(fail(p, file, ParseError::new(line, 1, m)));
+            }
+            match resolve(&name) {
+                Some(sub) => {
+                    let idx = p.files.len();
+                    p.files.push(name.clone());
+                    read_file(&sub, idx, fs.depth + 1, resolve, p, vel)?;
+                }
+                None => {
+                    p.missing.push((name, file, line));
+                    push(p, Statement::Verbatim(text));
                 }
             }
-            Parsed1::Ext(name) => ext.push(name.to_ascii_uppercase()),
-            Parsed1::Call(name, text) if ext.contains(&name.to_ascii_uppercase()) => {
-                if depth >= MAX_DEPTH {
-                    return Err(fail(
-                        p,
-                        ParseError::new(
-                            line,
-                            1,
-                            "sub-programs call each other deeper than 8 levels",
-                        ),
-                    ));
-                }
-                match resolve(&name) {
-                    Some(sub) => {
-                        let idx = p.files.len();
-                        p.files.push(name.clone());
-                        read_file(&sub, idx, depth + 1, resolve, p, vel)?;
-                    }
-                    None => {
-                        p.missing.push((name, file, line));
-                        p.statements.push(Located {
-                            file,
-                            line,
-                            statement: Statement::Verbatim(text),
-                        });
-                    }
-                }
-            }
-            Parsed1::Call(_, text) => p.statements.push(Located {
-                file,
-                line,
-                statement: Statement::Verbatim(text),
-            }),
-            Parsed1::St(mut s) => {
-                match &mut s {
-                    Statement::VelCp(v) => *vel = Some(*v),
-                    Statement::Move { vel_cp, .. } => *vel_cp = *vel,
-                    _ => {}
-                }
-                p.statements.push(Located {
-                    file,
-                    line,
-                    statement: s,
-                });
-            }
+        }
+        Parsed1::Call(_, text) => push(p, Statement::Verbatim(text)),
+        Parsed1::Begin(with, speed) => {
+            fs.block = Some((line, speed));
+            warn_with(p, file, line, &with);
+            push(p, Statement::SplineBegin(with));
+        }
+        Parsed1::End(approx) => {
+            fs.block = None;
+            push(p, Statement::SplineEnd(approx));
+        }
+        Parsed1::St(mut s) => {
+            in_force(&mut s, fs, line, p, vel);
+            push(p, s);
         }
     }
     Ok(())
+}
+
+/// A statement's part in what is in force: a `$VEL.CP` sets the speed, a
+/// motion takes its own, its block's or the one in force; what is not
+/// modelled is named.
+fn in_force(
+    s: &mut Statement,
+    fs: &FileState,
+    line: u32,
+    p: &mut KrlProgram,
+    vel: &mut Option<f64>,
+) {
+    match s {
+        Statement::VelCp(v) => *vel = Some(*v),
+        Statement::Move { vel_cp, with, .. } => {
+            *vel_cp = vel_cp.or(fs.block.and_then(|b| b.1)).or(*vel);
+            warn_with(p, fs.file, line, with);
+        }
+        Statement::Verbatim(t) if first_word(t) == "SPTP" => p.warnings.push((
+            fs.file,
+            line,
+            format!("{t}: a spline PTP motion, kept as written; where it ends is not read"),
+        )),
+        _ => {}
+    }
+}
+
+/// A finding for each option of a `WITH` clause kept as written but not
+/// modelled (a speed `$VEL = …` is read, so not named).
+fn warn_with(p: &mut KrlProgram, file: usize, line: u32, with: &[String]) {
+    for o in with {
+        if !o.to_ascii_uppercase().starts_with("$VEL") {
+            p.warnings.push((
+                file,
+                line,
+                format!("WITH {o}: kept as written; the toolpath read does not model it"),
+            ));
+        }
+    }
+}
+
+/// The line's first word, upper case.
+fn first_word(t: &str) -> String {
+    let w = t.split(|c: char| c.is_whitespace() || c == '(' || c == '{');
+    w.map(str::trim)
+        .find(|w| !w.is_empty())
+        .unwrap_or("")
+        .to_ascii_uppercase()
+}
+
+/// Whether `st` may stand where it is: a SPLINE block (open at `block`)
+/// holds only spline segments, `SPTP`, `TRIGGER` and comments; `SPL` only
+/// stands inside one; blocks do not nest.
+fn in_block(
+    block: Option<(u32, Option<f64>)>,
+    st: &Parsed1,
+    raw: &str,
+    line: u32,
+) -> Result<(), ParseError> {
+    let col = col_of(raw, raw.trim_start());
+    let err = |m: String| Err(ParseError::new(line, col, m));
+    let Some((open, _)) = block else {
+        return match st {
+            Parsed1::End(_) => err("ENDSPLINE without a SPLINE block open".into()),
+            Parsed1::St(Statement::Move {
+                motion: Motion::Spl(_),
+                ..
+            }) => err(
+                "SPL outside a SPLINE block: SPL segments stand between SPLINE and ENDSPLINE"
+                    .into(),
+            ),
+            _ => Ok(()),
+        };
+    };
+    let fits = match st {
+        Parsed1::End(_) => true,
+        Parsed1::St(Statement::Move { motion, .. }) => motion.is_spline(),
+        Parsed1::St(Statement::Verbatim(t)) => {
+            t.starts_with(';') || matches!(first_word(t).as_str(), "SPTP" | "TRIGGER")
+        }
+        _ => false,
+    };
+    if fits {
+        return Ok(());
+    }
+    let what = if matches!(st, Parsed1::Begin(..)) {
+        "SPLINE inside a SPLINE block".to_string()
+    } else {
+        format!("{}: not a spline segment", first_word(raw.trim()))
+    };
+    err(format!(
+        "{what}: the block opened at line {open} holds only SPL, SLIN, SCIRC and SPTP segments, TRIGGER and comments until its ENDSPLINE"
+    ))
 }
 
 #[allow(clippy::large_enum_variant)]
@@ -212,7 +391,17 @@ enum Parsed1 {
     Ext(String),
     /// A call `name(…)`: the name and the statement as written.
     Call(String, String),
+    /// `SPLINE [WITH …]`: the options kept and the block's speed.
+    Begin(Vec<String>, Option<f64>),
+    /// `ENDSPLINE [C_SPL]`.
+    End(bool),
     St(Statement),
+}
+
+/// The 1-based column of `sub`, a slice of `raw`, in `raw`.
+fn col_of(raw: &str, sub: &str) -> u32 {
+    let off = (sub.as_ptr() as usize).saturating_sub(raw.as_ptr() as usize);
+    u32::try_from(off.min(raw.len()) + 1).unwrap_or(u32::MAX)
 }
 
 /// One line: `None` for blank lines, headers and `END`.
@@ -230,7 +419,7 @@ fn parse_line(raw: &str, line: u32) -> Result<Option<Parsed1>, ParseError> {
         .split(|c: char| c.is_whitespace() || c == '(' || c == '{')
         .next()
         .unwrap_or("");
-    let col = |needle: &str| raw.find(needle).map_or(1, |i| i + 1) as u32;
+    let col = col_of(raw, code);
     match word {
         "DEF" | "GLOBAL" if up.contains("DEF ") => {
             let name = name_before_paren(&code[up.find("DEF ").unwrap_or(0) + 4..]);
@@ -238,8 +427,24 @@ fn parse_line(raw: &str, line: u32) -> Result<Option<Parsed1>, ParseError> {
         }
         "END" => Ok(None),
         "EXT" => Ok(Some(Parsed1::Ext(name_before_paren(&code[3..])))),
-        "LIN" | "PTP" | "CIRC" => motion(word, code, line, col(code)).map(|s| Some(Parsed1::St(s))),
-        _ => Ok(Some(assignment_or_call(code, text, &up, line, col(code))?)),
+        "LIN" | "PTP" | "CIRC" | "SPL" | "SLIN" | "SCIRC" => {
+            motion(word, code, raw, line).map(|s| Some(Parsed1::St(s)))
+        }
+        "SPLINE" => {
+            let rest = code[word.len()..].trim();
+            let (speed, with) = with_clause(rest, raw, line)?;
+            Ok(Some(Parsed1::Begin(with, speed)))
+        }
+        "ENDSPLINE" => match up[word.len()..].trim() {
+            "" => Ok(Some(Parsed1::End(false))),
+            "C_SPL" => Ok(Some(Parsed1::End(true))),
+            other => Err(ParseError::new(
+                line,
+                col_of(raw, code[word.len()..].trim()),
+                format!("ENDSPLINE {other}: only C_SPL may follow ENDSPLINE"),
+            )),
+        },
+        _ => Ok(Some(assignment_or_call(code, text, &up, line, col)?)),
     }
 }
 
@@ -287,56 +492,187 @@ fn assignment_or_call(
     Ok(Parsed1::St(Statement::Verbatim(text.to_string())))
 }
 
-fn motion(word: &str, code: &str, line: u32, col: u32) -> Result<Statement, ParseError> {
+fn motion(word: &str, code: &str, raw: &str, line: u32) -> Result<Statement, ParseError> {
     let rest = code[word.len()..].trim();
-    let (targets, tail) = match rest.rfind('}') {
+    // The target's closing brace (a circle's second): a `WITH` clause after
+    // it may hold aggregates of its own.
+    let skip = usize::from(word.ends_with("CIRC"));
+    let close = rest.match_indices('}').nth(skip).map(|(i, _)| i);
+    let (targets, tail) = match close {
         Some(end) if rest.starts_with('{') => (&rest[..=end], rest[end + 1..].trim()),
         _ => ("", rest),
     };
-    let approx = match tail.to_ascii_uppercase().split_whitespace().last() {
-        Some("C_DIS") => Approx::Dis,
-        Some("C_VEL") => Approx::Vel,
-        Some("C_ORI") => Approx::Ori,
-        _ => Approx::Exact,
+    let (tail, approx) = approx_tag(tail);
+    let spline = matches!(word, "SPL" | "SLIN" | "SCIRC");
+    let (vel_cp, with) = if spline {
+        with_clause(tail, raw, line)?
+    } else {
+        (None, Vec::new())
+    };
+    let named = || {
+        ParseError::new(
+            line,
+            col_of(raw, rest),
+            format!("{word} to a named position: only aggregates {{X …}} are read"),
+        )
     };
     let motion = match word {
         "PTP" if targets.is_empty() || targets.to_ascii_uppercase().contains("A1 ") => {
             Motion::PtpOther(rest.to_string())
         }
-        "PTP" => Motion::Ptp(aggregate(targets, line, col)?),
-        "LIN" => {
-            if targets.is_empty() {
-                return Err(ParseError::new(
-                    line,
-                    col,
-                    "LIN to a named position: only aggregates {X …} are read",
-                ));
-            }
-            Motion::Lin(aggregate(targets, line, col)?)
-        }
+        "PTP" => Motion::Ptp(aggregate(targets, raw, line)?),
+        "LIN" | "SPL" | "SLIN" if targets.is_empty() => return Err(named()),
+        "LIN" => Motion::Lin(aggregate(targets, raw, line)?),
+        "SPL" => Motion::Spl(aggregate(targets, raw, line)?),
+        "SLIN" => Motion::Slin(aggregate(targets, raw, line)?),
         _ => {
-            let (a, b) = targets.split_once("},").ok_or_else(|| {
-                ParseError::new(
-                    line,
-                    col,
-                    "CIRC needs an auxiliary point and a target: {…},{…}",
-                )
-            })?;
-            Motion::Circ {
-                aux: aggregate(&format!("{a}}}"), line, col)?,
-                end: aggregate(b.trim(), line, col)?,
+            let (aux, end) = circle_targets(word, targets, raw, line)?;
+            if word == "CIRC" {
+                Motion::Circ { aux, end }
+            } else {
+                Motion::Scirc { aux, end }
             }
         }
     };
     Ok(Statement::Move {
         motion,
         approx,
-        vel_cp: None,
+        vel_cp,
+        with,
     })
 }
 
-/// `{X 1, Y 2, Z 3, A 0, B 90, C 0, E1 10, S 6, T 27}` (E6POS; X, Y, Z needed).
-fn aggregate(s: &str, line: u32, col: u32) -> Result<KrlPos, ParseError> {
+/// The approximation tag ending a motion's tail, and what is before it.
+fn approx_tag(tail: &str) -> (&str, Approx) {
+    let (before, last) = match tail.rfind(char::is_whitespace) {
+        Some(i) => (tail[..i].trim_end(), tail[i..].trim()),
+        None => ("", tail),
+    };
+    let approx = match last.to_ascii_uppercase().as_str() {
+        "C_DIS" => Approx::Dis,
+        "C_VEL" => Approx::Vel,
+        "C_ORI" => Approx::Ori,
+        "C_SPL" => Approx::Spl,
+        _ => return (tail, Approx::Exact),
+    };
+    (before, approx)
+}
+
+/// `{…}, {…}` of a `CIRC` or `SCIRC`: the auxiliary point and the target.
+fn circle_targets(
+    word: &str,
+    targets: &str,
+    raw: &str,
+    line: u32,
+) -> Result<(KrlPos, KrlPos), ParseError> {
+    let split = targets.find('}').and_then(|i| {
+        let end = targets[i + 1..].trim_start().strip_prefix(',')?.trim();
+        Some((&targets[..=i], end))
+    });
+    let Some((aux, end)) = split.filter(|(_, e)| e.starts_with('{')) else {
+        return Err(ParseError::new(
+            line,
+            col_of(raw, targets),
+            format!("{word} needs an auxiliary point and a target: {{…}}, {{…}}"),
+        ));
+    };
+    Ok((aggregate(aux, raw, line)?, aggregate(end, raw, line)?))
+}
+
+/// A spline motion's or block's `WITH a = x, b = y` (or nothing): the path
+/// speed it sets, m/s, and the options other than `$VEL.CP = v` as written.
+fn with_clause(text: &str, raw: &str, line: u32) -> Result<(Option<f64>, Vec<String>), ParseError> {
+    let t = text.trim();
+    if t.is_empty() {
+        return Ok((None, Vec::new()));
+    }
+    let err = |at: &str, m: String| ParseError::new(line, col_of(raw, at), m);
+    let body = (t.len() > 4 && t[..4].eq_ignore_ascii_case("WITH"))
+        .then(|| &t[4..])
+        .filter(|b| b.starts_with(char::is_whitespace))
+        .ok_or_else(|| {
+            err(
+                t,
+                format!(
+                    "{t}: only a WITH clause and an approximation (C_SPL, C_DIS) are read here"
+                ),
+            )
+        })?;
+    let (mut speed, mut kept) = (None, Vec::new());
+    for part in split_top(body) {
+        let part = part.trim();
+        let Some((lhs, rhs)) = part.split_once('=') else {
+            return Err(err(
+                part,
+                format!("{part:?}: an assignment `$NAME = value` was expected in WITH"),
+            ));
+        };
+        let (l, r) = (lhs.trim().to_ascii_uppercase(), rhs.trim());
+        let bad = || {
+            err(
+                r,
+                format!("{part}: the path speed (m/s, a number from 0 up) is not read from it"),
+            )
+        };
+        match l.as_str() {
+            "$VEL.CP" => speed = Some(speed_number(r).ok_or_else(bad)?),
+            "$VEL" => {
+                speed = Some(vel_aggregate_cp(r).ok_or_else(bad)?);
+                kept.push(part.to_string());
+            }
+            _ => kept.push(part.to_string()),
+        }
+    }
+    Ok((speed, kept))
+}
+
+/// A speed: a finite number from 0 up.
+fn speed_number(s: &str) -> Option<f64> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && *v >= 0.0)
+}
+
+/// The CP component of `{CP 0.2, ORI1 …}` or the first argument of
+/// `SVEL_CP(0.2, …)`.
+fn vel_aggregate_cp(r: &str) -> Option<f64> {
+    if let Some(inner) = r.strip_prefix('{').and_then(|r| r.strip_suffix('}')) {
+        let inner = inner.split_once(':').map_or(inner, |(_, r)| r);
+        return inner.split(',').find_map(|c| {
+            let mut it = c.split_whitespace();
+            let key = it.next()?;
+            key.eq_ignore_ascii_case("CP")
+                .then(|| speed_number(it.next()?))?
+        });
+    }
+    let up = r.to_ascii_uppercase();
+    let args = up.strip_prefix("SVEL_CP")?.trim_start().strip_prefix('(')?;
+    speed_number(args.split([',', ')']).next()?)
+}
+
+/// `s` split at the commas outside braces and parentheses.
+fn split_top(s: &str) -> Vec<&str> {
+    let (mut parts, mut depth, mut start) = (Vec::new(), 0i32, 0);
+    for (i, c) in s.char_indices() {
+        match c {
+            '{' | '(' => depth += 1,
+            '}' | ')' => depth -= 1,
+            ',' if depth == 0 => {
+                parts.push(&s[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    parts.push(&s[start..]);
+    parts
+}
+
+/// `{X 1, Y 2, Z 3, A 0, B 90, C 0, E1 10, S 6, T 27}` (E6POS, POS or
+/// FRAME; X, Y, Z needed), a slice of the line `raw`: errors at the
+/// component's column.
+fn aggregate(s: &str, raw: &str, line: u32) -> Result<KrlPos, ParseError> {
     let inner = s
         .trim()
         .strip_prefix('{')
@@ -344,7 +680,7 @@ fn aggregate(s: &str, line: u32, col: u32) -> Result<KrlPos, ParseError> {
         .ok_or_else(|| {
             ParseError::new(
                 line,
-                col,
+                col_of(raw, s),
                 format!("{s}: an aggregate {{X …, Y …, Z …}} was expected"),
             )
         })?;
@@ -358,59 +694,72 @@ fn aggregate(s: &str, line: u32, col: u32) -> Result<KrlPos, ParseError> {
         t: None,
     };
     for part in inner.split(',') {
-        let mut it = part.split_whitespace();
-        let (Some(key), Some(val)) = (it.next(), it.next()) else {
-            return Err(ParseError::new(
-                line,
-                col,
-                format!("{part:?}: a component `NAME value` was expected"),
-            ));
-        };
-        let key = key.to_ascii_uppercase();
-        let num = || -> Result<f64, ParseError> {
-            let v = if let Some(b) = val
-                .strip_prefix('\'')
-                .and_then(|v| v.strip_prefix('B').or(v.strip_prefix('b')))
-            {
-                u32::from_str_radix(b.trim_end_matches('\''), 2)
-                    .map(f64::from)
-                    .ok()
-            } else {
-                val.parse::<f64>().ok()
-            };
-            v.filter(|v| v.is_finite())
-                .ok_or_else(|| ParseError::new(line, col, format!("{key} {val}: not a number")))
-        };
-        match key.as_str() {
-            "X" => xyz[0] = num()?,
-            "Y" => xyz[1] = num()?,
-            "Z" => xyz[2] = num()?,
-            "A" => p.abc[0] = num()?,
-            "B" => p.abc[1] = num()?,
-            "C" => p.abc[2] = num()?,
-            "S" => p.s = Some(num()? as u32),
-            "T" => p.t = Some(num()? as u32),
-            k if k.len() == 2 && k.starts_with('E') && (b'1'..=b'6').contains(&k.as_bytes()[1]) => {
-                p.e[(k.as_bytes()[1] - b'1') as usize] = Some(num()?)
-            }
-            _ => {
-                return Err(ParseError::new(
-                    line,
-                    col,
-                    format!("{key}: not a component of a Cartesian KRL position"),
-                ))
-            }
-        }
+        component(part, raw, line, &mut xyz, &mut p)?;
     }
     if xyz.iter().any(|v| v.is_nan()) {
         return Err(ParseError::new(
             line,
-            col,
+            col_of(raw, s),
             "a KRL position needs X, Y and Z",
         ));
     }
     p.xyz = DVec3::from_array(xyz);
     Ok(p)
+}
+
+/// One `NAME value` of an aggregate into `xyz` or `p`.
+fn component(
+    part: &str,
+    raw: &str,
+    line: u32,
+    xyz: &mut [f64; 3],
+    p: &mut KrlPos,
+) -> Result<(), ParseError> {
+    let col = col_of(raw, part.trim_start());
+    let mut it = part.split_whitespace();
+    let (Some(key), Some(val), None) = (it.next(), it.next(), it.next()) else {
+        return Err(ParseError::new(
+            line,
+            col,
+            format!("{:?}: a component `NAME value` was expected", part.trim()),
+        ));
+    };
+    let key = key.to_ascii_uppercase();
+    let num = || -> Result<f64, ParseError> {
+        let v = if let Some(b) = val
+            .strip_prefix('\'')
+            .and_then(|v| v.strip_prefix('B').or(v.strip_prefix('b')))
+        {
+            u32::from_str_radix(b.trim_end_matches('\''), 2)
+                .map(f64::from)
+                .ok()
+        } else {
+            val.parse::<f64>().ok()
+        };
+        v.filter(|v| v.is_finite())
+            .ok_or_else(|| ParseError::new(line, col, format!("{key} {val}: not a number")))
+    };
+    match key.as_str() {
+        "X" => xyz[0] = num()?,
+        "Y" => xyz[1] = num()?,
+        "Z" => xyz[2] = num()?,
+        "A" => p.abc[0] = num()?,
+        "B" => p.abc[1] = num()?,
+        "C" => p.abc[2] = num()?,
+        "S" => p.s = Some(num()? as u32),
+        "T" => p.t = Some(num()? as u32),
+        k if k.len() == 2 && k.starts_with('E') && (b'1'..=b'6').contains(&k.as_bytes()[1]) => {
+            p.e[(k.as_bytes()[1] - b'1') as usize] = Some(num()?)
+        }
+        _ => {
+            return Err(ParseError::new(
+                line,
+                col,
+                format!("{key}: not a component of a Cartesian KRL position"),
+            ))
+        }
+    }
+    Ok(())
 }
 
 /// The statement a line of KRL is (a `$VEL.CP`, `$TOOL`, … kept by the IR
@@ -491,12 +840,7 @@ impl KrlProgram {
                     default_feed
                 }
             };
-            let target = match motion {
-                Motion::Lin(p) | Motion::Ptp(p) => Some(p),
-                Motion::Circ { end, .. } => Some(end),
-                Motion::PtpOther(_) => None,
-            };
-            if let Some(p) = target {
+            if let Some(p) = motion.end() {
                 if p.e.iter().any(Option::is_some) {
                     if !lossy {
                         return Err(KrlError { file: self.file_name(l), error: ParseError::new(l.line, 1,
@@ -514,6 +858,22 @@ impl KrlProgram {
             }
             self.push_move(l, motion, feed, &mut op);
         }
+        self.findings(&mut diags);
+        prog.operations.push(op);
+        Ok(Parsed {
+            program: prog,
+            diagnostics: diags,
+        })
+    }
+
+    /// What was read but not modelled, and the sub-programs not read, as
+    /// findings at their lines.
+    fn findings(&self, diags: &mut Vec<Diagnostic>) {
+        for (file, line, what) in &self.warnings {
+            let name = self.files.get(*file).map_or("?", String::as_str);
+            let message = format!("{name}:{line}: {what}");
+            diags.push(diag(Code::UnknownWord, *line, message));
+        }
         for (name, file, line) in &self.missing {
             diags.push(diag(
                 Code::UnknownPosition,
@@ -523,11 +883,6 @@ impl KrlProgram {
                 self.files.get(*file).map_or("?", String::as_str)),
             ));
         }
-        prog.operations.push(op);
-        Ok(Parsed {
-            program: prog,
-            diagnostics: diags,
-        })
     }
 
     /// The tool of the first `$TOOL = TOOL_DATA[n]`, else an unnamed one.
@@ -566,6 +921,10 @@ impl KrlProgram {
             Statement::ApoCdis(v) => format!("$APO.CDIS = {v}"),
             Statement::Tool(t) => format!("$TOOL = {t}"),
             Statement::Base(b) => format!("$BASE = {b}"),
+            Statement::SplineBegin(with) if with.is_empty() => "SPLINE".into(),
+            Statement::SplineBegin(with) => format!("SPLINE WITH {}", with.join(", ")),
+            Statement::SplineEnd(false) => "ENDSPLINE".into(),
+            Statement::SplineEnd(true) => "ENDSPLINE C_SPL".into(),
             Statement::Verbatim(t) if t.starts_with(';') => {
                 op.push_event(
                     l.line,
@@ -597,9 +956,9 @@ impl KrlProgram {
 
     fn push_move(&self, l: &Located, motion: &Motion, feed: f64, op: &mut Operation) {
         let (end, kind, rapid) = match motion {
-            Motion::Lin(p) => (p, MoveKind::Linear, false),
+            Motion::Lin(p) | Motion::Spl(p) | Motion::Slin(p) => (p, MoveKind::Linear, false),
             Motion::Ptp(p) => (p, MoveKind::Rapid, true),
-            Motion::Circ { aux, end } => {
+            Motion::Circ { aux, end } | Motion::Scirc { aux, end } => {
                 let start = op.moves.last().map_or(DVec3::NAN, |m| m.end);
                 match circle(start, aux.xyz, end.xyz) {
                     Some(arc) => {

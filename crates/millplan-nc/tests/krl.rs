@@ -40,6 +40,7 @@ fn moves(p: &krl::KrlProgram) -> Vec<(Motion, Approx, Option<f64>)> {
                 motion,
                 approx,
                 vel_cp,
+                ..
             } => Some((motion.clone(), *approx, *vel_cp)),
             _ => None,
         })

@@ -578,6 +578,7 @@ pub fn krl_program(
                     motion,
                     approx,
                     vel_cp: vel,
+                    with: Vec::new(),
                 },
             );
         }
@@ -587,7 +588,7 @@ pub fn krl_program(
         name: name.clone(),
         files: vec![name],
         statements: st,
-        missing: Vec::new(),
+        ..KrlProgram::default()
     }
 }
 

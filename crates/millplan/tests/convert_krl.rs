@@ -199,3 +199,135 @@ fn powermill_main_with_missing_sub_programs() {
         "{err}"
     );
 }
+
+/// The end poses of every motion a KRL program commands, its sub-programs
+/// read from `dir` (those missing left out): (X, Y, Z, A, B, C, E1,
+/// `$VEL.CP`), spline segments too.
+fn all_motions(text: &str, dir: &Path) -> Vec<[f64; 8]> {
+    let p = krl::read(text, &mut |n| {
+        std::fs::read_to_string(dir.join(format!("{n}.src"))).ok()
+    })
+    .expect("reads");
+    p.statements
+        .iter()
+        .filter_map(|l| match &l.statement {
+            Statement::Move { motion, vel_cp, .. } => motion.end().map(|x| {
+                [
+                    x.xyz.x,
+                    x.xyz.y,
+                    x.xyz.z,
+                    x.abc[0],
+                    x.abc[1],
+                    x.abc[2],
+                    x.e[0].unwrap_or(f64::NAN),
+                    vel_cp.unwrap_or(f64::NAN),
+                ]
+            }),
+            _ => None,
+        })
+        .collect()
+}
+
+/// `convert --krl-motion spline`: the approximated LIN runs become SPLINE
+/// blocks of SPL segments through the same poses, E1 and speeds, in one
+/// file or, with --max-points, in sub-programs of as many motions as LIN
+/// output has, no block straddling two; refused for another dialect.
+#[test]
+fn krl_motion_spline_writes_blocks_that_read_back() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let src = dir.path().join("small.src");
+    std::fs::write(&src, SMALL).expect("write");
+    let out = dir.path().join("spl.src");
+    let o = run(&["convert", s(&src), "-o", s(&out), "--krl-motion", "spline"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let written = std::fs::read_to_string(&out).expect("out");
+    assert!(written.contains("\nSPLINE\nSPL {X 10.000, Y 0.000, Z 5.000, A 0.0000, B 90.0000, C 0.0000, E1 12.500}\nENDSPLINE C_SPL\nSetRPM(8000)\nSPLINE\n"), "{written}");
+    assert!(!written.contains("LIN "), "{written}");
+    same(&all_motions(&written, dir.path()), &motions(SMALL), 5e-4);
+
+    let main = dir.path().join("parts.src");
+    let o = run(&[
+        "convert",
+        s(&src),
+        "-o",
+        s(&main),
+        "--krl-motion",
+        "spline",
+        "--max-points",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&main).expect("main");
+    same(&all_motions(&text, dir.path()), &motions(SMALL), 5e-4);
+    for sub in ["parts_001.src", "parts_002.src"] {
+        let t = std::fs::read_to_string(dir.path().join(sub)).expect("sub");
+        let open = t.lines().filter(|l| *l == "SPLINE").count();
+        let close = t.lines().filter(|l| l.starts_with("ENDSPLINE")).count();
+        assert_eq!(open, close, "{sub}: {t}");
+    }
+
+    let apt = dir.path().join("x.apt");
+    let o = run(&[
+        "convert",
+        s(&src),
+        "-o",
+        s(&apt),
+        "--lossy",
+        "--krl-motion",
+        "spline",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--krl-motion"));
+    assert!(!apt.exists());
+}
+
+/// A SPLINE program with a malformed segment: exit 2 at its file, line and
+/// column, nothing written.
+#[test]
+fn a_malformed_spline_segment_is_located() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let src = dir.path().join("bad.src");
+    std::fs::write(
+        &src,
+        "DEF bad()\nSPLINE\n  SPL {X 1, Y 2, Z 3}\n  SPL {X 1, Y 2, Z 3} WITH $VEL.CP = fast\nENDSPLINE\nEND\n",
+    )
+    .expect("write");
+    let out = dir.path().join("out.src");
+    let o = run(&["convert", s(&src), "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("bad.src:4:38:"), "{err}");
+    assert!(!out.exists());
+}
+
+/// The PowerMILL main and its two sub-programs converted with
+/// `--krl-motion spline`: every pose and E1 of the sample back.
+#[test]
+fn powermill_as_spline() {
+    let Some(main) = shared_data::file("kuka-krl-powermill-ballnose/f1_Kuka_APT2_Main.SRC") else {
+        return;
+    };
+    let dir = tempfile::tempdir().expect("tmp");
+    let out = dir.path().join("f1.src");
+    let o = run(&[
+        "convert",
+        s(&main),
+        "-o",
+        s(&out),
+        "--krl-motion",
+        "spline",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let written = std::fs::read_to_string(&out).expect("out");
+    let mut from_sample = Vec::new();
+    for sub in ["f1_Kuka_APT201T02S01.SRC", "f1_Kuka_APT202T02S02.SRC"] {
+        let text = std::fs::read_to_string(main.with_file_name(sub)).expect("sub");
+        from_sample.extend(motions(&text));
+    }
+    same(&all_motions(&written, dir.path()), &from_sample, 5e-4);
+    // Every LIN of the sample is approximated or ends a run of them.
+    let spl = written.lines().filter(|l| l.starts_with("SPL {")).count();
+    assert_eq!(spl, from_sample.len());
+    assert!(!written.contains("\nLIN "));
+}

@@ -312,7 +312,9 @@ fn passes_one_by_one_give_the_same_program() {
     let (stl, apt, machine) = demo(dir.path());
     let opt = dir.path().join("opt.nc");
     // The same limits for both runs: without them optimise would learn its
-    // own from the input's loads, which feed alone does not.
+    // own from the input's loads, which feed alone does not. The stock at
+    // 0.25 mm: the test is about the two routes agreeing, not the loads,
+    // and fewer samples along the moves and a sixth of the stock's columns.
     let common = [
         "--stl",
         s(&stl),
@@ -327,6 +329,8 @@ fn passes_one_by_one_give_the_same_program() {
             s(&apt),
             "--stock",
             "offset:0.3",
+            "--resolution",
+            "0.25",
             "--material",
             "al7075",
             "--passes",
@@ -382,6 +386,8 @@ fn passes_one_by_one_give_the_same_program() {
             s(&sp),
             "--stock",
             "offset:0.3",
+            "--resolution",
+            "0.25",
             "--material",
             "al7075",
             "--fz-min",

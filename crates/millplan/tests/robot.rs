@@ -495,6 +495,31 @@ fn optimise_ends_with_the_compensation_pass() {
     // 140 mm of cutting and the plunge at 0.3 mm, in files of 200.
     assert!(motions > 480, "{motions}");
     assert!(dir.path().join("opt_003.src").is_file());
+    // The same points as SPLINE blocks: checked by the pass as LIN is.
+    let spl = dir.path().join("spl.src");
+    let n = args.len();
+    args[n - 3] = spl.to_str().expect("utf8");
+    args.extend_from_slice(&["--krl-motion", "spline"]);
+    let o = run(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let k = millplan_nc::krl::read(&std::fs::read_to_string(&spl).expect("main"), &mut |n| {
+        std::fs::read_to_string(dir.path().join(format!("{n}.src"))).ok()
+    })
+    .expect("reads with its sub-programs");
+    let segments = k
+        .statements
+        .iter()
+        .filter(|l| matches!(&l.statement, millplan_nc::krl::Statement::Move { motion, .. } if motion.is_spline()))
+        .count();
+    assert!(
+        segments > 480 && segments < motions,
+        "{segments} of {motions}"
+    );
+    let sub = std::fs::read_to_string(dir.path().join("spl_002.src")).expect("sub");
+    assert!(
+        sub.starts_with("&ACCESS RVP\n&REL 1\nDEF spl_002()\nSPLINE\n"),
+        "{sub}"
+    );
 }
 
 /// `convert --to krl --max-points N`: a main program calling sub-programs
@@ -579,4 +604,62 @@ fn convert_splits_krl_into_sub_programs() {
         "--lossy",
     ]);
     assert_eq!(o.status.code(), Some(2));
+}
+
+/// `robot compensate --krl-motion spline`: the same commanded points as
+/// with LIN, each run a SPLINE block of SPL segments, in sub-programs of as
+/// many motions as LIN's, no block straddling two files.
+#[test]
+fn compensate_writes_spline_blocks_on_request() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let apt = zigzag_apt(dir.path());
+    let write = |name: &str, motion: &str| {
+        let out = dir.path().join(name);
+        let o = run(&[
+            "robot",
+            "compensate",
+            apt.to_str().expect("utf8"),
+            "--pose",
+            "1300,-100,300,0",
+            "--load",
+            "-60,150,40",
+            "--max-points",
+            "300",
+            "--krl-motion",
+            motion,
+            "-o",
+            out.to_str().expect("utf8"),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let text = std::fs::read_to_string(&out).expect("written");
+        let k = millplan_nc::krl::read(&text, &mut |n| {
+            std::fs::read_to_string(dir.path().join(format!("{n}.src"))).ok()
+        })
+        .expect("reads back");
+        assert!(k.missing.is_empty(), "{:?}", k.missing);
+        let ends: Vec<[f64; 6]> = k
+            .statements
+            .iter()
+            .filter_map(|l| match &l.statement {
+                millplan_nc::krl::Statement::Move { motion, .. } => motion.end().map(|p| {
+                    let [x, y, z] = p.xyz.to_array();
+                    [x, y, z, p.abc[0], p.abc[1], p.abc[2]]
+                }),
+                _ => None,
+            })
+            .collect();
+        (k.files.len(), ends)
+    };
+    let (lin_files, lin) = write("lin.src", "lin");
+    let (spl_files, spl) = write("spl.src", "spline");
+    assert_eq!(lin_files, spl_files);
+    assert!(spl_files > 2, "{spl_files} files");
+    assert_eq!(lin, spl);
+    for i in 1..spl_files {
+        let t = std::fs::read_to_string(dir.path().join(format!("spl_{i:03}.src"))).expect("sub");
+        let open = t.lines().filter(|l| *l == "SPLINE").count();
+        let close = t.lines().filter(|l| l.starts_with("ENDSPLINE")).count();
+        assert!(open >= 1 && open == close, "spl_{i:03}: {t}");
+        assert!(!t.contains("\nLIN "), "spl_{i:03}: {t}");
+    }
 }

@@ -3,8 +3,11 @@
 //!
 //! Units: mm and degrees in positions (3 decimals for mm, 4 for degrees),
 //! `$VEL.CP` in m/s with 6 decimals, `$APO.CDIS` in mm. Every cutting point
-//! is one `LIN` (the faithful default; `SPLINE` blocks are not written),
-//! approximated with `C_DIS` except the last one before a rapid or the end.
+//! is one `LIN` (the faithful default), approximated with `C_DIS` except
+//! the last one before a rapid or the end; with [`KrlMotion::Spline`] each
+//! such run is one `SPLINE` block of `SPL` segments through the same points
+//! instead (a feed change inside it a segment's `WITH $VEL.CP`). Every
+//! point is written inline, so no `.dat` is needed (docs/robot.md).
 //! From the IR the tool axis becomes an orientation A, B, C (the tool along
 //! the tool frame's x; turned about the axis as little as possible from the
 //! tool pointing down, A = C = 0, B = 90°).
@@ -14,6 +17,39 @@ use crate::ir::{Dialect, EventKind, MoveKind, PassClass, Program};
 use crate::krl::{abc_for_axis, Approx, KrlPos, KrlProgram, Located, Motion, Statement};
 use millplan_geom::DVec3;
 use std::fmt::Write;
+
+/// How the cutting moves of a KRL program are written.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum KrlMotion {
+    /// One `LIN` per point (a `CIRC` per arc), approximated with `C_DIS`:
+    /// the paper's choice, and the default.
+    #[default]
+    Lin,
+    /// Each run of approximated moves as one `SPLINE` … `ENDSPLINE` block
+    /// of `SPL` segments (`SCIRC` for arcs) through the same points; a
+    /// controller keeps the programmed speed on short segments better.
+    Spline,
+}
+
+impl std::str::FromStr for KrlMotion {
+    type Err = String;
+
+    /// `lin` or `spline`, as the command line names them.
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "lin" => Ok(KrlMotion::Lin),
+            "spline" => Ok(KrlMotion::Spline),
+            _ => Err(format!(
+                "{s}: lin (one LIN per point) or spline (SPLINE blocks)"
+            )),
+        }
+    }
+}
+
+/// The most segments the writer puts in one SPLINE block of its own: the
+/// controller plans a block whole before it runs and bounds its size, so a
+/// longer run goes on in the next block (`ENDSPLINE C_SPL`, approximated).
+pub const SPLINE_SEGMENTS_MAX: usize = 1000;
 
 /// How a KRL program is written.
 #[derive(Clone, Debug)]
@@ -30,6 +66,8 @@ pub struct KrlOptions {
     /// Words another dialect kept that KRL cannot express become comments
     /// (else an error at their line).
     pub lossy: bool,
+    /// `LIN` per point, or SPLINE blocks.
+    pub motion: KrlMotion,
 }
 
 impl Default for KrlOptions {
@@ -40,6 +78,7 @@ impl Default for KrlOptions {
             apo_cdis: None,
             rapid_m_s: 0.5,
             lossy: false,
+            motion: KrlMotion::Lin,
         }
     }
 }
@@ -67,54 +106,44 @@ pub fn krl_name(s: &str) -> String {
 }
 
 /// Writes `p`: one file, or a main calling sub-programs of `max_points`
-/// motions each.
+/// motions each. A SPLINE block never straddles two files: one open at a
+/// file's end is closed there with `C_SPL` (the path goes on, approximated)
+/// and opened again in the next file.
 pub fn write(p: &KrlProgram, o: &KrlOptions) -> KrlFiles {
     let name = krl_name(&o.name);
-    let motions = p
-        .statements
-        .iter()
-        .filter(|l| matches!(l.statement, Statement::Move { .. }))
-        .count();
+    let is_move = |l: &Located| matches!(l.statement, Statement::Move { .. });
+    let motions = p.statements.iter().filter(|l| is_move(l)).count();
     let mut missing: Vec<String> = Vec::new();
     for (m, _, _) in &p.missing {
         if !missing.contains(m) {
             missing.push(m.clone());
         }
     }
+    let mut r = Render::new(&p.statements, o.motion);
+    let n = p.statements.len();
     if o.max_points == 0 || motions <= o.max_points {
-        return vec![(
-            name.clone(),
-            file(&name, &missing, &[], p.statements.iter()),
-        )];
+        return vec![(name.clone(), file(&name, &missing, &[], &mut r, 0..n))];
     }
     // Everything before the first motion stays in the main; the rest is cut
     // into chunks of `max_points` motions.
-    let first = p
-        .statements
-        .iter()
-        .position(|l| matches!(l.statement, Statement::Move { .. }))
-        .unwrap_or(0);
-    let mut chunks: Vec<Vec<&Located>> = vec![Vec::new()];
+    let first = p.statements.iter().position(is_move).unwrap_or(0);
+    let mut cuts = vec![first];
     let mut count = 0;
-    for l in &p.statements[first..] {
-        if matches!(l.statement, Statement::Move { .. }) {
+    for (i, l) in p.statements.iter().enumerate().skip(first) {
+        if is_move(l) {
             if count == o.max_points {
-                chunks.push(Vec::new());
+                cuts.push(i);
                 count = 0;
             }
             count += 1;
         }
-        chunks.last_mut().expect("one chunk").push(l);
     }
-    let subs: Vec<String> = (1..=chunks.len())
-        .map(|i| format!("{name}_{i:03}"))
-        .collect();
-    let mut out = vec![(
-        name.clone(),
-        file(&name, &missing, &subs, p.statements[..first].iter()),
-    )];
-    for (s, chunk) in subs.iter().zip(chunks) {
-        out.push((s.clone(), file(s, &missing, &[], chunk.into_iter())));
+    cuts.push(n);
+    let subs: Vec<String> = (1..cuts.len()).map(|i| format!("{name}_{i:03}")).collect();
+    let main = file(&name, &missing, &subs, &mut r, 0..first);
+    let mut out = vec![(name.clone(), main)];
+    for (s, w) in subs.iter().zip(cuts.windows(2)) {
+        out.push((s.clone(), file(s, &missing, &[], &mut r, w[0]..w[1])));
     }
     out
 }
@@ -150,30 +179,97 @@ fn motions(p: &KrlProgram) -> Vec<&Statement> {
         .collect()
 }
 
+/// Whether `b`, read back, commands what `a` does within the precision
+/// written (mm to 3 decimals, degrees to 4, m/s to 6): the same targets,
+/// speed and options; a `LIN` may have become an `SPL`, a `CIRC` an `SCIRC`
+/// (their approximation then the spline's own).
+fn same_motion(a: &Statement, b: &Statement) -> bool {
+    use Motion::*;
+    let (
+        Statement::Move {
+            motion: ma,
+            approx: aa,
+            vel_cp: va,
+            with: wa,
+        },
+        Statement::Move {
+            motion: mb,
+            approx: ab,
+            vel_cp: vb,
+            with: wb,
+        },
+    ) = (a, b)
+    else {
+        return a == b;
+    };
+    let same = aa == ab;
+    let splined = *ab == Approx::Exact;
+    let targets = match (ma, mb) {
+        (Lin(x), Lin(y)) | (Ptp(x), Ptp(y)) | (Spl(x), Spl(y)) | (Slin(x), Slin(y)) => {
+            same && near(x, y)
+        }
+        (Lin(x), Spl(y)) => splined && near(x, y),
+        (Circ { aux, end }, Circ { aux: x, end: y })
+        | (Scirc { aux, end }, Scirc { aux: x, end: y }) => same && near(aux, x) && near(end, y),
+        (Circ { aux, end }, Scirc { aux: x, end: y }) => splined && near(aux, x) && near(end, y),
+        (PtpOther(x), PtpOther(y)) => same && x == y,
+        _ => false,
+    };
+    let vel = match (va, vb) {
+        (Some(x), Some(y)) => (x - y).abs() <= 5e-7 * (1.0 + 1e-9),
+        (x, y) => x == y,
+    };
+    targets && vel && wa == wb
+}
+
+/// Two targets the same within the digits written.
+fn near(a: &KrlPos, b: &KrlPos) -> bool {
+    let mm = 5e-4 * (1.0 + 1e-9) + 1e-12 * a.xyz.abs().max_element();
+    let deg = 5e-5 * (1.0 + 1e-9);
+    let e_same = a.e.iter().zip(&b.e).all(|(x, y)| match (x, y) {
+        (Some(x), Some(y)) => (x - y).abs() <= mm,
+        (x, y) => x == y,
+    });
+    (a.xyz - b.xyz).abs().max_element() <= mm
+        && a.abc.iter().zip(&b.abc).all(|(x, y)| (x - y).abs() <= deg)
+        && e_same
+        && a.s == b.s
+        && a.t == b.t
+}
+
 /// A one-file KRL text split by [`write()`] with `o` (a main program calling
-/// sub-programs of `o.max_points` motions), checked: the files read back,
-/// the main finding its sub-programs among them, command the motions of
-/// `text` (poses, approximation, `$VEL.CP`) in the same order.
+/// sub-programs of `o.max_points` motions, its cutting moves as SPLINE
+/// blocks under [`KrlMotion::Spline`]), checked: the files read back, the
+/// main finding its sub-programs among them, command the motions of `text`
+/// (poses, external axes, approximation, `$VEL.CP`) in the same order.
 pub fn split(text: &str, o: &KrlOptions) -> Result<KrlFiles, String> {
     let k = crate::krl::read(text, &mut |_| None)
         .map_err(|e| format!("the program written does not read back: {e:?}"))?;
     let files = write(&k, o);
+    check(&k, &files)?;
+    Ok(files)
+}
+
+/// Reads `files` back (the main finding its sub-programs among them) and
+/// compares their motions with those of `k`, the program they were
+/// written from.
+pub fn check(k: &KrlProgram, files: &KrlFiles) -> Result<(), String> {
     let back = crate::krl::read(&files[0].1, &mut |n| {
         files
             .iter()
             .find(|(f, _)| f.eq_ignore_ascii_case(n))
             .map(|(_, t)| t.clone())
     })
-    .map_err(|e| format!("the sub-programs written do not read back: {e:?}"))?;
-    let (a, b) = (motions(&k), motions(&back));
+    .map_err(|e| format!("the files written do not read back: {e:?}"))?;
+    let (a, b) = (motions(k), motions(&back));
     if a.len() != b.len() {
         return Err(format!(
-            "the sub-programs read back hold {} motions, the program {}",
+            "the files read back hold {} motions, the program {}",
             b.len(),
             a.len()
         ));
     }
-    if let Some(i) = a.iter().zip(&b).position(|(x, y)| x != y) {
+    if let Some(i) = a.iter().zip(&b).position(|(x, y)| !same_motion(x, y)) {
         return Err(format!(
             "motion {} reads back as {:?}, written {:?}",
             i + 1,
@@ -181,31 +277,224 @@ pub fn split(text: &str, o: &KrlOptions) -> Result<KrlFiles, String> {
             a[i]
         ));
     }
-    Ok(files)
+    Ok(())
 }
 
 /// One file: `ext` the sub-programs its statements call that were not read
 /// (declared again, so that the calls kept stay calls), `calls` those it
-/// calls at its end.
-fn file<'a>(
+/// calls at its end, `range` its statements.
+fn file(
     name: &str,
     ext: &[String],
     calls: &[String],
-    body: impl Iterator<Item = &'a Located>,
+    r: &mut Render,
+    range: std::ops::Range<usize>,
 ) -> String {
     let mut s = String::with_capacity(1 << 16);
     let _ = writeln!(s, "&ACCESS RVP\n&REL 1\nDEF {name}()");
     for c in ext.iter().chain(calls) {
         let _ = writeln!(s, "EXT {c}()");
     }
-    for l in body {
-        statement(&mut s, &l.statement);
+    for i in range {
+        r.put(&mut s, i);
     }
+    r.finish(&mut s);
     for c in calls {
         let _ = writeln!(s, "{c}()");
     }
     s.push_str("END\n");
     s
+}
+
+/// The statements of a program written in the order the controller runs
+/// them, file after file: the path speed written so far and the one in
+/// force, the SPLINE blocks open.
+struct Render<'a> {
+    st: &'a [Located],
+    /// Per statement: a `LIN` or `CIRC` written as a segment of a SPLINE
+    /// block of the writer's own ([`KrlMotion::Spline`]): an approximated
+    /// one, or the one ending a run of them.
+    seg: Vec<bool>,
+    /// Per segment: approximated, and the next motion a segment too (the
+    /// path goes on without a stop).
+    cont: Vec<bool>,
+    /// `$VEL.CP` as the files written so far set it, and as the program has it.
+    written_vel: Option<f64>,
+    vel: Option<f64>,
+    /// A block of the writer's own is open, with this many segments.
+    ours: bool,
+    segments: usize,
+    /// A block read with the program: its `SPLINE` line, and whether that
+    /// line is written yet (it waits for the block's first statement, so
+    /// that no file holds an empty block).
+    theirs: Option<(&'a Statement, bool)>,
+}
+
+impl<'a> Render<'a> {
+    fn new(st: &'a [Located], motion: KrlMotion) -> Render<'a> {
+        let n = st.len();
+        let (mut seg, mut cont) = (vec![false; n], vec![false; n]);
+        if motion == KrlMotion::Spline {
+            let mut prev_dis = false;
+            for (i, l) in st.iter().enumerate() {
+                if let Statement::Move { motion, approx, .. } = &l.statement {
+                    let lin = matches!(motion, Motion::Lin(_) | Motion::Circ { .. });
+                    seg[i] = lin && (*approx == Approx::Dis || prev_dis);
+                    prev_dis = seg[i] && *approx == Approx::Dis;
+                }
+            }
+            let mut next_seg = false;
+            for (i, l) in st.iter().enumerate().rev() {
+                if let Statement::Move { approx, .. } = &l.statement {
+                    cont[i] = seg[i] && *approx == Approx::Dis && next_seg;
+                    next_seg = seg[i];
+                }
+            }
+        }
+        Render {
+            st,
+            seg,
+            cont,
+            written_vel: None,
+            vel: None,
+            ours: false,
+            segments: 0,
+            theirs: None,
+        }
+    }
+
+    /// Writes statement `i`.
+    fn put(&mut self, s: &mut String, i: usize) {
+        let l = &self.st[i];
+        if self.seg[i] {
+            if self.ours && self.segments == SPLINE_SEGMENTS_MAX {
+                self.close(s, true);
+            }
+            if !self.ours {
+                s.push_str("SPLINE\n");
+                (self.ours, self.segments) = (true, 0);
+            }
+            self.segment(s, &l.statement, true);
+            self.segments += 1;
+            if !self.cont[i] {
+                self.close(s, false);
+            }
+            return;
+        }
+        let comment = matches!(&l.statement, Statement::Verbatim(t) if t.starts_with(';'));
+        if self.ours {
+            match &l.statement {
+                Statement::VelCp(v) => return self.vel = Some(*v),
+                _ if comment => return statement(s, &l.statement),
+                _ => self.close(s, true),
+            }
+        }
+        match &l.statement {
+            Statement::SplineBegin(_) => return self.theirs = Some((&l.statement, false)),
+            Statement::SplineEnd(_) => self.open_theirs(s),
+            _ if comment => {}
+            _ => self.open_theirs(s),
+        }
+        match &l.statement {
+            Statement::SplineEnd(_) => self.theirs = None,
+            Statement::VelCp(v) => {
+                self.vel = Some(*v);
+                self.written_vel = Some(*v);
+            }
+            Statement::Move { motion, .. } if motion.is_spline() => {
+                return self.segment(s, &l.statement, false)
+            }
+            _ => {}
+        }
+        statement(s, &l.statement);
+    }
+
+    /// Writes the `SPLINE` line of a block read, if it waits.
+    fn open_theirs(&mut self, s: &mut String) {
+        if let Some((b, false)) = self.theirs {
+            statement(s, b);
+            self.theirs = Some((b, true));
+        }
+    }
+
+    /// Closes the writer's block, approximated or not; then the path speed
+    /// the program has, where the block's segments carried it alone.
+    fn close(&mut self, s: &mut String, approx: bool) {
+        s.push_str(if approx {
+            "ENDSPLINE C_SPL\n"
+        } else {
+            "ENDSPLINE\n"
+        });
+        self.ours = false;
+        if self.vel != self.written_vel {
+            if let Some(v) = self.vel {
+                let _ = writeln!(s, "$VEL.CP = {v:.6}");
+            }
+            self.written_vel = self.vel;
+        }
+    }
+
+    /// The end of a file: a block open is closed, approximated, to be
+    /// opened again by the next file's first statement in it.
+    fn finish(&mut self, s: &mut String) {
+        if self.ours {
+            self.close(s, true);
+        }
+        if let Some((b, true)) = self.theirs {
+            s.push_str("ENDSPLINE C_SPL\n");
+            self.theirs = Some((b, false));
+        }
+    }
+
+    /// A spline segment: `SPL`/`SCIRC` for a `LIN`/`CIRC` of the writer's
+    /// block (`ours`), else as read; its own `WITH $VEL.CP` where its speed
+    /// is not the one written, and the options read.
+    fn segment(&self, s: &mut String, st: &Statement, ours: bool) {
+        let Statement::Move {
+            motion,
+            approx,
+            vel_cp,
+            with,
+        } = st
+        else {
+            return;
+        };
+        match motion {
+            Motion::Lin(p) if ours => motion_text(s, &Motion::Spl(*p)),
+            Motion::Circ { aux, end } if ours => motion_text(
+                s,
+                &Motion::Scirc {
+                    aux: *aux,
+                    end: *end,
+                },
+            ),
+            _ => motion_text(s, motion),
+        }
+        let own_vel = with
+            .iter()
+            .any(|w| w.to_ascii_uppercase().starts_with("$VEL"));
+        let mut opts: Vec<String> = Vec::new();
+        if let (Some(v), false) = (vel_cp, own_vel) {
+            if Some(*v) != self.written_vel {
+                opts.push(format!("$VEL.CP = {v:.6}"));
+            }
+        }
+        opts.extend(with.iter().cloned());
+        if !opts.is_empty() {
+            let _ = write!(s, " WITH {}", opts.join(", "));
+        }
+        s.push_str(if ours { "\n" } else { approx_tag(*approx) });
+    }
+}
+
+fn approx_tag(a: Approx) -> &'static str {
+    match a {
+        Approx::Exact => "\n",
+        Approx::Dis => " C_DIS\n",
+        Approx::Vel => " C_VEL\n",
+        Approx::Ori => " C_ORI\n",
+        Approx::Spl => " C_SPL\n",
+    }
 }
 
 fn pos(s: &mut String, p: &KrlPos) {
@@ -232,32 +521,15 @@ fn pos(s: &mut String, p: &KrlPos) {
 fn statement(s: &mut String, st: &Statement) {
     match st {
         Statement::Move { motion, approx, .. } => {
-            match motion {
-                Motion::Lin(p) => {
-                    s.push_str("LIN ");
-                    pos(s, p);
-                }
-                Motion::Ptp(p) => {
-                    s.push_str("PTP ");
-                    pos(s, p);
-                }
-                Motion::Circ { aux, end } => {
-                    s.push_str("CIRC ");
-                    pos(s, aux);
-                    s.push_str(", ");
-                    pos(s, end);
-                }
-                Motion::PtpOther(t) => {
-                    let _ = write!(s, "PTP {t}");
-                }
-            }
-            s.push_str(match approx {
-                Approx::Exact => "\n",
-                Approx::Dis => " C_DIS\n",
-                Approx::Vel => " C_VEL\n",
-                Approx::Ori => " C_ORI\n",
-            });
+            motion_text(s, motion);
+            s.push_str(approx_tag(*approx));
         }
+        Statement::SplineBegin(with) if with.is_empty() => s.push_str("SPLINE\n"),
+        Statement::SplineBegin(with) => {
+            let _ = writeln!(s, "SPLINE WITH {}", with.join(", "));
+        }
+        Statement::SplineEnd(true) => s.push_str("ENDSPLINE C_SPL\n"),
+        Statement::SplineEnd(false) => s.push_str("ENDSPLINE\n"),
         Statement::VelCp(v) => {
             let _ = writeln!(s, "$VEL.CP = {v:.6}");
         }
@@ -274,6 +546,29 @@ fn statement(s: &mut String, st: &Statement) {
             let _ = writeln!(s, "{t}");
         }
     }
+}
+
+/// A motion's keyword and targets, as read.
+fn motion_text(s: &mut String, motion: &Motion) {
+    let (word, aux, end) = match motion {
+        Motion::PtpOther(t) => {
+            let _ = write!(s, "PTP {t}");
+            return;
+        }
+        Motion::Lin(p) => ("LIN", None, p),
+        Motion::Ptp(p) => ("PTP", None, p),
+        Motion::Spl(p) => ("SPL", None, p),
+        Motion::Slin(p) => ("SLIN", None, p),
+        Motion::Circ { aux, end } => ("CIRC", Some(aux), end),
+        Motion::Scirc { aux, end } => ("SCIRC", Some(aux), end),
+    };
+    s.push_str(word);
+    s.push(' ');
+    if let Some(a) = aux {
+        pos(s, a);
+        s.push_str(", ");
+    }
+    pos(s, end);
 }
 
 /// `$VEL.CP` for a feed in mm/min: m/s (T17: 1120 mm/min → 0.018667).
@@ -385,6 +680,7 @@ fn push_move(p: &mut KrlProgram, line: u32, motion: Motion, approx: Approx, vel:
             motion,
             approx,
             vel_cp: vel,
+            with: Vec::new(),
         },
     );
 }
@@ -419,6 +715,10 @@ fn event(
         EventKind::Comment(c) => Statement::Verbatim(format!("; {c}")),
         EventKind::Passthrough(t) if source == Dialect::Krl => {
             match crate::krl::statement_of(&t.text) {
+                // The blocks of a source read: its moves come back as
+                // `LIN`s, which a SPLINE block cannot hold; the writer's
+                // `motion` makes blocks of its own.
+                Some(Statement::SplineBegin(_) | Statement::SplineEnd(_)) => return Ok(()),
                 Some(s) => s,
                 None => Statement::Verbatim(t.text.clone()),
             }

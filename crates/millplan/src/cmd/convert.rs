@@ -4,6 +4,7 @@ use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, Unit
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::Outputs;
 use millplan_driver::convert::{self as lib, ConvertRequest};
+use millplan_nc::write::krl::KrlMotion;
 use millplan_nc::write::{self, Target};
 use millplan_nc::LengthUnit;
 use std::path::PathBuf;
@@ -67,6 +68,9 @@ pub struct Args {
     /// one file, as without the option.
     #[arg(long, value_name = "N")]
     pub max_points: Option<usize>,
+    /// With a KRL output: each point one LIN as read or written, or each run of approximated LINs one SPLINE block of SPL points.
+    #[arg(long, default_value = "lin", value_name = "lin|spline")]
+    pub krl_motion: KrlMotion,
     /// Do not print reader diagnostics.
     #[arg(long, short)]
     pub quiet: bool,
@@ -83,9 +87,12 @@ fn request(a: &Args) -> ConvertRequest {
         line_numbers: a.line_numbers,
         lossy: a.lossy,
         max_points: a.max_points,
+        motion: a.krl_motion,
     }
 }
 
+/// Writes `out` at -o, or with --max-points or --krl-motion its KRL split
+/// (a main program and sub-programs beside it).
 fn write_out(
     a: &Args,
     inputs: &[&std::path::Path],

@@ -90,6 +90,9 @@ pub struct CompensateArgs {
     /// one file.
     #[arg(long, default_value_t = millplan_driver::command_defaults::robot::MAX_POINTS)]
     pub max_points: usize,
+    /// Each point one LIN (approximated with C_DIS), or each run a SPLINE block of SPL points.
+    #[arg(long, default_value = "lin", value_name = "lin|spline")]
+    pub krl_motion: millplan_nc::write::krl::KrlMotion,
     /// Correct the tool's orientation too: each point is commanded turned
     /// back by the angle the load turns the tool there (A, B, C written from
     /// the turned frame). Without it only the position is corrected and the
@@ -279,6 +282,7 @@ fn compensate(a: CompensateArgs) -> CliResult<i32> {
         pose: a.pose,
         spacing: a.spacing,
         max_points: a.max_points,
+        motion: a.krl_motion,
         orientation: a.orientation,
     };
     let place = req.check().map_err(CliError::input)?;
@@ -350,6 +354,9 @@ pub struct OptimiseRobotArgs {
     /// them, written beside it); 0 writes one file.
     #[arg(long, default_value_t = millplan_driver::command_defaults::robot::MAX_POINTS)]
     pub max_points: usize,
+    /// With --robot: each point one LIN (with C_DIS), or each run a SPLINE block of SPL points.
+    #[arg(long, default_value = "lin", value_name = "lin|spline")]
+    pub krl_motion: millplan_nc::write::krl::KrlMotion,
 }
 
 /// The robot pass at the end of `optimise` (nothing without --robot): the
@@ -365,8 +372,9 @@ pub fn after_optimise(
         return Ok(());
     };
     let tol = run.0.tol;
-    let setup =
+    let mut setup =
         RobotSetup::new(load_robot(name)?, pose, r.max_points, tol).map_err(CliError::input)?;
+    setup.motion = r.krl_motion;
     let done =
         millplan_driver::robot_pass::after_optimise(&setup, run, w, output, crate::limits::get())
             .map_err(CliError::input)?;
