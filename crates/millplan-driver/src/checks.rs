@@ -72,6 +72,80 @@ pub fn loads_of(p: &Program, run: &ForceRun, l: &FeedLimits, m: &Machine) -> Vec
     v
 }
 
+/// Refusing findings a command prints before "and N more".
+pub const SHOWN: usize = 20;
+
+/// A refusing finding as a command prints it: `PATH:LINE: check NAME:
+/// message`, marked when the input already had it.
+pub fn located(
+    path: &str,
+    c: &millplan_plan::safety::Check,
+    f: &millplan_plan::safety::Finding,
+) -> String {
+    let at = match f.line {
+        Some(l) => format!("{path}:{l}"),
+        None => path.to_string(),
+    };
+    let own = if f.in_input {
+        " (the input's own fault)"
+    } else {
+        ""
+    };
+    format!("{at}: check {}: {}{own}", c.name, f.message)
+}
+
+/// What failed checks of a program at `path` say: the lines to print (the
+/// first [`SHOWN`] refusing findings, then how many more) and the first
+/// refusal, the run's error; `None` when every check passed.
+pub fn refusal(
+    checks: &[millplan_plan::safety::Check],
+    path: &str,
+) -> Option<(Vec<String>, String)> {
+    use millplan_plan::safety::{first_refusal, passed};
+    if passed(checks) {
+        return None;
+    }
+    let refusing: Vec<_> = checks
+        .iter()
+        .flat_map(|c| c.refusing().map(move |f| (c, f)))
+        .collect();
+    let mut lines: Vec<String> = refusing
+        .iter()
+        .take(SHOWN)
+        .map(|(c, f)| located(path, c, f))
+        .collect();
+    if refusing.len() > SHOWN {
+        lines.push(format!("… and {} more", refusing.len() - SHOWN));
+    }
+    let first = match first_refusal(checks) {
+        Some((c, f)) => located(path, c, f),
+        None => format!("{path}: a check failed"),
+    };
+    Some((lines, first))
+}
+
+/// Reads `out` (the bytes written for `target` from `p`) back: bytes that
+/// do not read, or do not command what `p` does, are a writer's bug and
+/// are not written; the error names `output`'s line.
+pub fn read_back(
+    out: &[u8],
+    target: millplan_nc::write::Target,
+    p: &Program,
+    output: &str,
+) -> Result<millplan_nc::readback::ReadBack, String> {
+    let tol = millplan_nc::equiv::Tolerance::default();
+    let back = millplan_nc::readback::read_back(out, target, p, &tol).map_err(|e| {
+        format!("{output}: the program written does not read back ({e}); not written")
+    })?;
+    if let Err(m) = &back.equiv {
+        return Err(format!(
+            "{output}:{}: the program written would not command what was made ({m}); not written",
+            m.line_b
+        ));
+    }
+    Ok(back)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

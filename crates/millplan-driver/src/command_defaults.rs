@@ -185,3 +185,18 @@ pub mod robot {
     /// Independent runs of the placement search.
     pub const RESTARTS: usize = 4;
 }
+
+/// When a command's work is long enough to show its progress.
+pub mod progress {
+    /// Moves of a program from which `speed` and `reorder` show their
+    /// phases (some 100,000 points a second at the least).
+    pub const LONG_PROGRAM_MOVES: usize = 100_000;
+    /// Strokes from which `simulate` shows its progress.
+    pub const LONG_SIMULATION_STROKES: usize = 50_000;
+
+    /// Whether `program` is long enough for `speed` and `reorder` to show
+    /// their phases.
+    pub fn long_program(program: &millplan_nc::Program) -> bool {
+        program.move_count() >= LONG_PROGRAM_MOVES
+    }
+}

@@ -13,6 +13,7 @@ use millplan_nc::Program;
 use millplan_plan::machine::Machine;
 use millplan_plan::speed::{apply, SpeedParams, SpeedResult, Summary};
 use serde::Serialize;
+use std::fmt::Write as _;
 
 /// The demo's machine: a three-axis high-speed machining centre with a Fanuc
 /// control, the machine file every `--machine` of README's tour reads.
@@ -186,6 +187,46 @@ pub struct DemoJson {
 }
 
 impl Demo {
+    /// What `millplan demo` prints without `--json`: the files `written`
+    /// (path and size) into `folder` and what ran, or with `quiet` one line.
+    pub fn text(
+        &self,
+        folder: &std::path::Path,
+        written: &[(String, usize)],
+        quiet: bool,
+    ) -> String {
+        let report = folder.join("report.html").display().to_string();
+        if quiet {
+            return format!(
+                "millplan demo: {} files in {}; open {report} for the plots\n",
+                written.len(),
+                folder.display(),
+            );
+        }
+        let mut t = format!(
+            "millplan demo: free-form part {} triangles, ball D10 raster {} points\n",
+            self.triangles,
+            self.program.move_count()
+        );
+        let _ = writeln!(
+                t,
+                "  cutting length {:.0} mm, time {:.0} s estimated with acceleration ({:.0} s at programmed feeds)",
+                self.cutting_mm, self.time_s, self.time_nominal_s
+            );
+        for (path, bytes) in written {
+            let _ = writeln!(t, "  wrote {path} ({bytes} bytes)");
+        }
+        t.push_str("  part.stl is an open surface by design (the part's top, no sides or bottom): the other commands note its open border as note[open-mesh]; expected here\n");
+        let r = &self.summary;
+        let _ = writeln!(
+                t,
+                "spindle control: D_w {:.2}…{:.2} mm, n {:.0}…{:.0} 1/min; vc {:.1}…{:.1} m/min with control vs {:.1}…{:.1} at a constant {:.0} 1/min",
+                r.d_w.min, r.d_w.max, r.spindle.min, r.spindle.max, r.vc_controlled.min, r.vc_controlled.max, r.vc_constant.min, r.vc_constant.max, r.constant_spindle
+            );
+        let _ = writeln!(t, "open {report} in a browser for the plots");
+        t
+    }
+
     /// The summary for `--json`, the files as written into `folder`
     /// (`paths`, in the order of [`Demo::files`]).
     pub fn json(&self, folder: String, paths: &[String]) -> DemoJson {

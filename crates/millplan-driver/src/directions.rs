@@ -34,6 +34,27 @@ pub fn rasters(
     Ok((shape, e.points * n, e.bytes * n))
 }
 
+/// The rasters of [`rasters`] within `max_moves` points: the cutter and
+/// the bytes they take; too many points is an error saying what made them.
+pub fn rasters_within(
+    tool: &str,
+    angles: &[f64],
+    (stepover, step): (f64, f64),
+    bounds: &millplan_geom::Aabb,
+    max_moves: f64,
+) -> Result<(Shape, f64), String> {
+    let (shape, n, bytes) = rasters(tool, angles, (stepover, step), bounds)?;
+    if !(n <= max_moves) {
+        let needs = format!(
+            "{} rasters at --stepover {stepover} and --step {step} make {} points",
+            angles.len(),
+            millplan_geom::limits::amount(n.ceil())
+        );
+        return Err(millplan_geom::limits::Exceeded::new("moves", needs, max_moves).to_string());
+    }
+    Ok((shape, bytes))
+}
+
 /// One ranked candidate.
 #[derive(Serialize)]
 pub struct Row<'a> {

@@ -208,6 +208,86 @@ impl Prepared {
     }
 }
 
+/// The files of a `force PATH`, `feed` or `robot --stock` run besides the
+/// options, and how they are read.
+pub struct ModelFiles<'a> {
+    pub program: &'a std::path::Path,
+    /// The part (`--stl`), for an `offset:` stock.
+    pub stl: Option<&'a std::path::Path>,
+    /// The unit of the STL files' numbers (the part and an `stl:` blank).
+    pub stl_units: Option<millplan_nc::LengthUnit>,
+    /// Further materials (`--materials`).
+    pub materials: Option<&'a std::path::Path>,
+    pub machine: Option<&'a std::path::Path>,
+    /// How the program is read; its limits bound the meshes read and the
+    /// stock's memory too.
+    pub read: millplan_nc::ReadOptions,
+}
+
+/// What a force run tells its caller while it works (a command draws it
+/// as bars and prints the findings).
+pub trait Watch: Sync {
+    /// `done` bytes of the program read of `total`.
+    fn reading(&self, done: u64, total: u64);
+    /// The reader's findings on the program, once it is read.
+    fn diagnostics(&self, found: &[millplan_nc::Diagnostic]);
+    /// `done` strokes of the force run of `total` (first with 0).
+    fn strokes(&self, done: usize, total: usize);
+    /// The force run has ended.
+    fn forces_done(&self);
+}
+
+/// Reads the program and the files `f` names and builds its strokes and
+/// stock as `req` asks: the run every force command starts from.
+pub fn prepare(
+    f: &ModelFiles,
+    req: &ModelRequest,
+    w: &dyn Watch,
+) -> Result<Prepared, crate::io::IoError> {
+    use crate::io::{inputs, IoError};
+    let materials = inputs::read_materials(f.materials)?;
+    let setup = force_setup(req, &materials).map_err(IoError::input)?;
+    let spec = stock_spec(req).map_err(IoError::input)?;
+    let machine = inputs::read_machine(f.machine)?;
+    let mut reading = |done, total| w.reading(done, total);
+    let (mut parsed, _) = inputs::read_source(f.program, f.read, &mut reading)?;
+    w.diagnostics(&parsed.diagnostics);
+    supply_spindle(req, &mut parsed.program).map_err(IoError::input)?;
+    let name = f.program.display().to_string();
+    let s = input_strokes(req, &name, &parsed.program, machine.rapid).map_err(IoError::input)?;
+    let limits = &f.read.limits;
+    let part = match f.stl {
+        Some(p) => Some(inputs::read_surface(p, limits, f.stl_units)?.0),
+        None => None,
+    };
+    let blank = inputs::read_blank(&spec, limits, f.stl_units)?;
+    let meshes = (part.as_ref(), blank.as_ref());
+    let stock =
+        crate::simulate::build_stock(&name, req.resolution, &spec, &s, meshes, limits.memory)
+            .map_err(IoError::input)?;
+    Prepared::new(req, &materials, (parsed.program, s, stock), setup, machine)
+        .map_err(IoError::input)
+}
+
+/// The program as [`prepare`]d from `f` and the forces of every move
+/// along it (`w` hears the strokes done); a cutting move without a spindle
+/// speed is an error at its line.
+pub fn program_forces(
+    f: &ModelFiles,
+    req: &ModelRequest,
+    w: &dyn Watch,
+) -> Result<(Prepared, ForceRun), crate::io::IoError> {
+    use crate::io::IoError;
+    let p = prepare(f, req, w)?;
+    let total = p.strokes.strokes.len();
+    w.strokes(0, total);
+    let run = forces(&p, &p.program, &p.strokes, &|d| w.strokes(d, total));
+    w.forces_done();
+    let run = run.map_err(IoError::input)?;
+    stopped_spindle(&f.program.display().to_string(), &run).map_err(IoError::input)?;
+    Ok((p, run))
+}
+
 /// The files a `force` or `feed` run read, by the names a report shows
 /// (file names, not folders).
 pub struct InputNames {

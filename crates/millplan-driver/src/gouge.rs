@@ -59,6 +59,18 @@ fn shape(fallback: Option<Shape>) -> impl Fn(&Operation) -> Option<Shape> {
     }
 }
 
+/// Points from which the check shows its progress (some 300,000 points a
+/// second: a second's worth).
+pub const SHOWN_SAMPLES: f64 = 3e5;
+
+/// What `n` samples at `step` are, for the memory limit's message.
+pub fn samples_needed(step: f64, n: f64) -> String {
+    format!(
+        "--step {step} over this program samples {} points, which",
+        millplan_geom::limits::amount(n)
+    )
+}
+
 /// The points the check will sample (counted before it runs).
 pub fn sample_count(p: &Program, fallback: Option<Shape>, g: &GougeParams) -> f64 {
     samples(p, shape(fallback), g)

@@ -491,6 +491,18 @@ pub fn render_program(path: &str, p: &Program, j: &Value) -> String {
     o
 }
 
+/// Fastest rapid rate `--rapid-rate` takes, mm/min.
+pub const MAX_RAPID: f64 = 1e7;
+
+/// The machine's rapid rate, or `--rapid-rate` in its range.
+pub fn rapid_rate(machine: &Machine, given: Option<f64>) -> Result<f64, String> {
+    crate::check::arg(
+        "--rapid-rate",
+        given.unwrap_or(machine.rapid),
+        crate::check::Range::positive(MAX_RAPID, "mm/min"),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

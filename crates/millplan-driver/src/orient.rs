@@ -232,6 +232,17 @@ pub struct Outcome {
     pub unsimulated: usize,
 }
 
+impl Outcome {
+    /// The note on moves the stock did not see, for the program `path`
+    /// (`None` when every move was simulated).
+    pub fn unsimulated_note(&self, path: &str) -> Option<String> {
+        (self.unsimulated > 0).then(|| format!(
+            "{path}: note: {} moves are not simulated (their tool has no shape, or their position or axis is unknown): the stock does not see them",
+            self.unsimulated
+        ))
+    }
+}
+
 /// `millplan orient`: the spindle speed from the program where `--n` gave
 /// none, with `--stock` the stock and the strokes that cut it, the choice
 /// per operation (`progress` hears its stages), the summary and the checks

@@ -296,3 +296,16 @@ impl<'a> PostSummary<'a> {
         o
     }
 }
+
+/// The writer's options for a posted program: the machine's for `target`,
+/// TCP switched only by the post's own events (it states TCP itself, per
+/// operation, when asked for it).
+pub fn write_options(
+    machine: &millplan_plan::machine::Machine,
+    target: millplan_nc::write::Target,
+) -> millplan_nc::write::WriteOptions {
+    millplan_nc::write::WriteOptions {
+        auto_tcp: false,
+        ..machine.write_options(target)
+    }
+}

@@ -21,6 +21,42 @@ pub struct InputNames {
     pub output: String,
 }
 
+impl InputNames {
+    /// The names of a job's files: `machine` the machine file (`None`: the
+    /// built-in machine, named `machine_name`).
+    pub fn of(
+        (program, output): (&std::path::Path, &std::path::Path),
+        part: Option<&std::path::Path>,
+        (stock, material): (Option<&str>, Option<&str>),
+        (machine, machine_name): (Option<&std::path::Path>, &str),
+    ) -> InputNames {
+        let name = |p: &std::path::Path| p.display().to_string();
+        InputNames {
+            program: name(program),
+            part: part.map(name),
+            stock: stock.map(str::to_string),
+            machine: machine.map_or_else(|| format!("{machine_name} (built-in)"), name),
+            material: material.map(str::to_string),
+            output: name(output),
+        }
+    }
+}
+
+/// The notes on the passes of `o` that did not run, and why.
+pub fn skipped_notes(o: &crate::Outcome) -> Vec<String> {
+    o.passes
+        .iter()
+        .filter(|p| !p.ran)
+        .map(|p| format!("note: pass {} skipped: {}", p.name, p.reason))
+        .collect()
+}
+
+/// The line naming the check that refused the written program of `path`.
+pub fn refusal_line(s: &Summary, path: &std::path::Path) -> Option<String> {
+    s.refusal()
+        .map(|(check, line, m)| format!("{}:{line}: check {check} failed: {m}", path.display()))
+}
+
 /// What the report draws: both programs and their forces.
 pub struct Plotted<'a> {
     pub before: &'a Program,

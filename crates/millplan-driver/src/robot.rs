@@ -43,6 +43,56 @@ pub fn move_loads(program: &Program, run: &ForceRun) -> PathLoad {
     PathLoad::PerMove(loads)
 }
 
+/// The force model's options of `robot compensate|place --stock` (the
+/// others at `force`'s defaults; the grid fixed, as the paper's loads are
+/// means over a revolution).
+#[derive(Clone, Debug)]
+pub struct CouplingRequest {
+    pub stock: Option<String>,
+    pub material: Option<String>,
+    pub tool: Option<String>,
+    pub flutes: usize,
+    /// Helix angle, degrees.
+    pub helix: f64,
+    pub spindle: Option<f64>,
+    pub resolution: f64,
+}
+
+impl CouplingRequest {
+    /// The request of the force run.
+    pub fn model(&self) -> crate::feed::ModelRequest {
+        use crate::command_defaults::feed as d;
+        crate::feed::ModelRequest {
+            stock: self.stock.clone(),
+            material: self.material.clone(),
+            tool: self.tool.clone(),
+            flutes: self.flutes,
+            helix: self.helix,
+            stickout: None,
+            flute_length: None,
+            modulus: d::MODULUS,
+            resolution: self.resolution,
+            dz: d::DZ,
+            dphi: d::DPHI_DEG,
+            fixed_grid: true,
+            spindle: self.spindle,
+        }
+    }
+}
+
+/// The program of `f` and its load per move from the force model cutting
+/// the stock `req` names, as `millplan force` runs it: each move's mean
+/// force over a revolution, averaged along the move, zero in air.
+pub fn model_load(
+    f: &crate::feed::ModelFiles,
+    req: &CouplingRequest,
+    w: &dyn crate::feed::Watch,
+) -> Result<(Program, PathLoad), crate::io::IoError> {
+    let (p, run) = crate::feed::program_forces(f, &req.model(), w)?;
+    let load = move_loads(&p.program, &run);
+    Ok((p.program, load))
+}
+
 /// What a run's loads amount to: the moves with a load and the largest
 /// mean force of a move, N.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]

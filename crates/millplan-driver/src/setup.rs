@@ -326,3 +326,39 @@ pub fn render_text(
     o.push_str(&v.text());
     o
 }
+
+/// The kinematics of a machine file (`path` names it in the error), which
+/// `setup` needs: the rotary axes.
+pub fn file_kinematics(
+    machine: &millplan_plan::machine::Machine,
+    path: &str,
+) -> Result<Kinematics, String> {
+    machine.kinematics().cloned().ok_or_else(|| {
+        format!("{path}: the machine file has no [kinematics] table: setup needs the rotary axes")
+    })
+}
+
+/// Facets times directions above which the search shows its progress.
+pub const SHOWN_WORK: usize = 20_000_000;
+
+/// Whether the search over `mesh` with `p` takes long enough to show its
+/// progress.
+pub fn shows_progress(mesh: &TriMesh, p: &SetupParams) -> bool {
+    mesh.len() * p.cells > SHOWN_WORK
+}
+
+/// The part turned into the setup found, as binary STL.
+pub fn rotated_stl(mesh: &TriMesh, plan: &SetupPlan) -> Vec<u8> {
+    let s = plan.best.setup;
+    let mut rotated = mesh.clone();
+    rotated.map_vertices(|v| s * v);
+    let mut bytes = Vec::new();
+    millplan_geom::stl::write_binary_stl(&rotated, "millplan setup", &mut bytes);
+    bytes
+}
+
+/// The warning when the part's facets were wound inward (`None` when not).
+pub fn flipped_note(plan: &SetupPlan, stl: &str) -> Option<String> {
+    plan.flipped
+        .then(|| format!("{stl}: the facets are wound inward (negative volume); turned outward"))
+}

@@ -541,6 +541,25 @@ impl<'a> Report<'a> {
     }
 }
 
+/// The reading phases' times of `millplan speed` in the context's timings:
+/// arguments checked, the STL and its surface, the toolpath read on its own
+/// thread and its time estimate, all reading together.
+pub fn record_reading(
+    cx: &Context,
+    [t_setup, t_mesh, t_surface, t_inputs]: [f64; 4],
+    [read_s, estimate_s]: [f64; 2],
+) {
+    cx.record("arguments, machine file and outputs checked", t_setup);
+    cx.record("  read STL", t_mesh);
+    cx.record("  surface (BVH, vertex normals)", t_surface);
+    cx.record("  read toolpath (its own thread)", read_s);
+    cx.record(
+        "  time estimate of the input (after it, same thread)",
+        estimate_s,
+    );
+    cx.record("read STL, surface and toolpath", t_inputs);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

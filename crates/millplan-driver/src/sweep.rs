@@ -28,3 +28,56 @@ pub fn check(d: &Design) -> Result<(), String> {
 pub fn fit() -> Fit {
     Surrogate::fit(&samples()).fit
 }
+
+/// The sweep's tables and plots as files: the CSV and the HTML page of
+/// `fit` (when asked for).
+pub fn files(d: &Design, fit: Option<&Fit>) -> (String, String) {
+    let (csv, figures) = millplan_report::sweep::sweep(d);
+    let html = millplan_report::sweep::page(&figures, fit);
+    (csv, html)
+}
+
+/// The surrogate's fit as `--json` prints it.
+#[derive(Debug, serde::Serialize)]
+pub struct FitJson {
+    pub samples: usize,
+    pub r2: f64,
+    pub rmse_mm: f64,
+    pub mape_percent: f64,
+}
+
+/// What `millplan wd-sweep` prints: the files written and the fit.
+#[derive(Debug, serde::Serialize)]
+pub struct SweepSummary {
+    pub csv: String,
+    pub html: String,
+    pub fit: Option<FitJson>,
+}
+
+impl SweepSummary {
+    pub fn new(csv: String, html: String, fit: Option<&Fit>) -> SweepSummary {
+        SweepSummary {
+            csv,
+            html,
+            fit: fit.map(|f| FitJson {
+                samples: f.samples,
+                r2: f.r2,
+                rmse_mm: f.rmse,
+                mape_percent: f.mape,
+            }),
+        }
+    }
+
+    /// The line on the fit, printed before the files are written.
+    pub fn fit_text(f: &Fit) -> String {
+        format!(
+            "regression surrogate: {} samples, R² {:.4}, RMSE {:.4} mm, MAPE {:.2} %",
+            f.samples, f.r2, f.rmse, f.mape
+        )
+    }
+
+    /// The files written, as text.
+    pub fn text(&self) -> String {
+        format!("wrote {} and {}\n", self.csv, self.html)
+    }
+}

@@ -4,13 +4,12 @@
 use crate::error::{guard, Located, Place, Res};
 use crate::mesh::PyMesh;
 use crate::program::PyProgram;
+use millplan_driver::given::{Given, GivenError};
 use millplan_driver::passes::{self, ORDER};
-use millplan_driver::{Inputs, Job, Options, UserLimits, Verdict};
+use millplan_driver::{Inputs, Job, OptionsRequest, UserLimits, Verdict};
 use millplan_geom::TriMesh;
-use millplan_models::cutter::Shape;
 use millplan_models::force::materials::Materials;
 use millplan_nc::Program;
-use millplan_sim::stock::spec::StockSpec;
 use std::path::Path;
 
 /// What `optimise` was given, before any file is read.
@@ -68,62 +67,42 @@ fn err(place: &str, e: impl std::fmt::Display) -> Located {
     Located::new(Place::file(place), e.to_string())
 }
 
-/// A number given must be finite and within `lo..=hi`.
-fn within(name: &str, v: Option<f64>, lo: f64, hi: f64) -> Res<()> {
-    match v {
-        Some(x) if !(x >= lo && x <= hi) => {
-            Err(err(name, format!("{x}: must be from {lo} to {hi}")))
-        }
-        _ => Ok(()),
-    }
-}
-
+/// The inputs of the job, checked as `millplan optimise` checks its
+/// options (`Inputs::given`: the same ranges and messages).
 pub fn inputs(r: &Request) -> Res<Inputs> {
-    within("vc", r.vc, 1e-3, 1e4)?;
-    within("resolution", r.resolution, 0.005, 100.0)?;
-    within("flutes", r.flutes.map(|f| f as f64), 1.0, 64.0)?;
-    let stock = r
-        .stock
-        .as_deref()
-        .map(|s| StockSpec::parse(s).map_err(|e| err("stock", e)))
-        .transpose()?;
-    let blank = match &stock {
-        Some(StockSpec::Stl(p)) => {
-            let p = p.display().to_string();
-            Some((*crate::mesh::read(&p, false)?.mesh).clone())
-        }
-        _ => None,
-    };
-    let tool = r
-        .tool
-        .as_deref()
-        .map(|s| Shape::parse(s).map_err(|e| err("tools", e)))
-        .transpose()?;
-    let mut program = r.program.clone();
-    let library = match &r.library {
-        Some(l) => millplan_driver::tools::apply(&mut program, l)
-            .map_err(|e| Located::new(Place::at(&r.name, e.line, 1), e.message))?,
-        None => Vec::new(),
-    };
-    Ok(Inputs {
-        program,
+    let given = Given {
+        program: r.program.clone(),
         part: r.part.clone(),
-        stock,
-        blank,
-        machine: crate::program::machine(r.machine.as_deref())?,
-        machine_given: r.machine.is_some(),
+        stock: r.stock.as_deref(),
+        stl_units: None,
+        limits: millplan_geom::limits::Limits::default(),
+        machine: r
+            .machine
+            .as_deref()
+            .map(|m| crate::program::machine(Some(m)))
+            .transpose()?,
         materials: Materials::load(None).map_err(|e| err("material", e))?,
         material: r.material.clone(),
-        options: Options {
+        library: r.library.as_ref(),
+        options: OptionsRequest {
             vc: r.vc,
-            resolution: r.resolution,
-            tool,
+            spindle: None,
+            tool: r.tool.clone(),
             flutes: r.flutes,
-            limits: r.limits,
-            ..Options::default()
+            resolution: r.resolution,
+            loads: Vec::new(),
+            tol: None,
+            memory: None,
+            g93: false,
         },
-        library,
-    })
+    };
+    let mut inputs = Inputs::given(given).map_err(|e| match e {
+        GivenError::Option(m) => Located::new(Place::default(), m),
+        GivenError::Tool(e) => Located::new(Place::at(&r.name, e.line, 1), e.message),
+        GivenError::Io(e) => Located::new(Place::default(), e.message),
+    })?;
+    inputs.options.limits = r.limits;
+    Ok(inputs)
 }
 
 /// Runs the job as `millplan optimise` does: the passes, the written

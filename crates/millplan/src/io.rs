@@ -26,46 +26,10 @@ impl From<IoError> for CliError {
     }
 }
 
-/// The outputs of one run (`millplan_driver::io::outputs`): checked together
-/// before any work, written one by one, renamed into place together.
-pub struct Outputs(millplan_driver::io::outputs::Outputs);
-
-impl Outputs {
-    /// Checks the outputs (`(flag, path)`, `None` for one not asked for)
-    /// against each other and the inputs; `stdout`: whether `-` may stand
-    /// for standard output.
-    pub fn plan(
-        inputs: &[&Path],
-        outputs: &[(&str, Option<&Path>)],
-        stdout: bool,
-    ) -> CliResult<Outputs> {
-        Ok(Outputs(millplan_driver::io::outputs::Outputs::plan(
-            inputs, outputs, stdout,
-        )?))
-    }
-
-    /// Writes `bytes` as the output `path` (one of those planned).
-    pub fn write(&mut self, path: &Path, bytes: &[u8]) -> CliResult<()> {
-        Ok(self.0.write(path, bytes)?)
-    }
-
-    /// Writes program `p` as the output `path`, streamed; the warnings of
-    /// `--lossy`.
-    pub fn write_program(
-        &mut self,
-        path: &Path,
-        p: &millplan_nc::Program,
-        o: millplan_nc::write::WriteOptions,
-        source: &Path,
-    ) -> CliResult<Vec<millplan_nc::Diagnostic>> {
-        Ok(self.0.write_program(path, p, o, source)?)
-    }
-
-    /// Renames every staged output into place.
-    pub fn commit(self) -> CliResult<()> {
-        Ok(self.0.commit()?)
-    }
-}
+/// The outputs of one run: checked together before any work, written one
+/// by one, renamed into place together (their errors exit codes by
+/// `From<IoError>`).
+pub use millplan_driver::io::outputs::Outputs;
 
 /// Reads with a byte-count bar on standard error (shown for large inputs).
 fn with_bar<T>(read: impl FnOnce(&mut dyn FnMut(u64, u64)) -> T) -> T {
@@ -85,11 +49,6 @@ pub fn read_any(path: &Path, opts: ReadOptions) -> CliResult<Input> {
     Ok(with_bar(|p| inputs::read_any(path, opts, p))?)
 }
 
-/// Reads an STL mesh within the limits of this run.
-pub fn read_mesh(path: &Path) -> CliResult<(TriMesh, StlReport)> {
-    Ok(inputs::read_mesh(path, &crate::limits::get())?)
-}
-
 /// Reads the part for a command that works on its surface (refused without
 /// a triangle), scaled by `--stl-units`.
 pub fn read_surface(
@@ -98,6 +57,21 @@ pub fn read_surface(
 ) -> CliResult<(TriMesh, StlReport)> {
     let units = units.map(Into::into);
     Ok(inputs::read_surface(path, &crate::limits::get(), units)?)
+}
+
+/// The built-in materials plus those of `--materials`.
+pub fn read_materials(path: Option<&Path>) -> CliResult<millplan_driver::Materials> {
+    Ok(inputs::read_materials(path)?)
+}
+
+/// The blank of an `stl:` stock, read within this run's limits and scaled
+/// by `--stl-units`.
+pub fn read_blank(
+    spec: &millplan_driver::StockSpec,
+    units: Option<crate::cmd::UnitArg>,
+) -> CliResult<Option<TriMesh>> {
+    let units = units.map(Into::into);
+    Ok(inputs::read_blank(spec, &crate::limits::get(), units)?)
 }
 
 /// Reads an APT/CL, G-code or KUKA KRL program.

@@ -176,21 +176,8 @@ fn main() {
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) if e.use_stderr() && json => {
-            // clap's message without its usage lines, on one line.
-            let text = e.to_string();
-            let what = text.split("\n\nUsage:").next().unwrap_or("");
-            let what: Vec<&str> = what
-                .lines()
-                .map(str::trim)
-                .filter(|l| !l.is_empty())
-                .collect();
-            let what = what.join(" ");
-            print_error(
-                what.trim_start_matches("error: "),
-                EXIT_BAD_INPUT,
-                true,
-                true,
-            );
+            let what = millplan_driver::message::usage_line(&e.to_string());
+            print_error(&what, EXIT_BAD_INPUT, true, true);
             std::process::exit(EXIT_BAD_INPUT);
         }
         Err(e) => {

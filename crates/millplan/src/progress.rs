@@ -114,3 +114,60 @@ impl Phases {
         self.bar.finish_and_clear();
     }
 }
+
+/// What a force run of the driver reports, drawn and printed
+/// (`millplan_driver::feed::Watch`): the bytes of the program read, its
+/// findings (none with `quiet`), the strokes done (no bar with `quiet`).
+pub struct Watch<'a> {
+    path: &'a std::path::Path,
+    quiet: bool,
+    read: std::sync::Mutex<Option<ProgressBar>>,
+    strokes: std::sync::OnceLock<ProgressBar>,
+}
+
+impl<'a> Watch<'a> {
+    pub fn new(path: &'a std::path::Path, quiet: bool) -> Watch<'a> {
+        Watch {
+            path,
+            quiet,
+            read: std::sync::Mutex::new(None),
+            strokes: std::sync::OnceLock::new(),
+        }
+    }
+}
+
+impl millplan_driver::feed::Watch for Watch<'_> {
+    fn reading(&self, done: u64, total: u64) {
+        let mut bar = self.read.lock().unwrap_or_else(|e| e.into_inner());
+        bar.get_or_insert_with(|| bytes(total, "reading"))
+            .set_position(done);
+    }
+
+    fn diagnostics(&self, found: &[millplan_nc::Diagnostic]) {
+        if let Some(b) = self.read.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            b.finish_and_clear();
+        }
+        crate::cmd::print_diagnostics(self.path, found, self.quiet);
+    }
+
+    fn strokes(&self, done: usize, total: usize) {
+        self.strokes
+            .get_or_init(|| count(total as u64, "forces", "strokes", !self.quiet))
+            .set_position(done as u64);
+    }
+
+    fn forces_done(&self) {
+        if let Some(b) = self.strokes.get() {
+            b.finish_and_clear();
+        }
+    }
+}
+
+impl Drop for Watch<'_> {
+    /// A read that failed leaves no bar behind.
+    fn drop(&mut self) {
+        if let Some(b) = self.read.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            b.finish_and_clear();
+        }
+    }
+}

@@ -674,7 +674,7 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// `reorder`, `tool`, `optimise`'s text and `speed`'s threads moved;
 /// 6,048 with the machine file read by the driver's `io`; 6,026 with
 /// `optimise`'s option checks in the driver (`Options::checked`).
-const MAX_BINARY_LINES: usize = 6056;
+const MAX_BINARY_LINES: usize = 5477;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into

@@ -369,6 +369,39 @@ pub fn read_robot(name: &str) -> IoResult<millplan_robot::Robot> {
     })
 }
 
+/// The built-in materials plus those of the TOML file `path`
+/// (`--materials`; an error of the file at its place).
+pub fn read_materials(
+    path: Option<&Path>,
+) -> IoResult<millplan_models::force::materials::Materials> {
+    let text = match path {
+        Some(p) => Some(
+            std::fs::read_to_string(p)
+                .map_err(|e| IoError::input(format!("{}: cannot read: {e}", p.display())))?,
+        ),
+        None => None,
+    };
+    let origin = path.map(|p| p.display().to_string()).unwrap_or_default();
+    crate::cut::materials(text.as_deref().map(|t| (t, origin.as_str()))).map_err(IoError::input)
+}
+
+/// The blank of an `stl:` stock (`--stock stl:FILE`) within `limits`, in
+/// mm (an inch STL scaled by 25.4); `None` for a stock of another kind.
+pub fn read_blank(
+    spec: &millplan_sim::stock::spec::StockSpec,
+    limits: &Limits,
+    units: Option<LengthUnit>,
+) -> IoResult<Option<TriMesh>> {
+    let millplan_sim::stock::spec::StockSpec::Stl(p) = spec else {
+        return Ok(None);
+    };
+    let (mut mesh, _) = read_mesh(p, limits)?;
+    if units == Some(LengthUnit::Inch) {
+        mesh.map_vertices(|v| v * 25.4);
+    }
+    Ok(Some(mesh))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

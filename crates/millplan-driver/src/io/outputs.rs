@@ -360,6 +360,28 @@ impl Outputs {
     }
 }
 
+impl Outputs {
+    /// The KRL files from the `first` (0: the main program, at `output`;
+    /// its sub-programs beside it) planned against `inputs` and staged.
+    pub fn stage_krl(
+        inputs: &[&Path],
+        output: &Path,
+        files: &millplan_nc::write::krl::KrlFiles,
+        first: usize,
+    ) -> IoResult<Outputs> {
+        let paths = millplan_nc::write::krl::file_paths(output, files);
+        let planned: Vec<(&str, Option<&Path>)> = paths[first..]
+            .iter()
+            .map(|p| ("-o", Some(p.as_path())))
+            .collect();
+        let mut outputs = Outputs::plan(inputs, &planned, false)?;
+        for (p, (_, text)) in paths.iter().zip(files).skip(first) {
+            outputs.write(p, text.as_bytes())?;
+        }
+        Ok(outputs)
+    }
+}
+
 /// A writer's error at its source line (`file:line:1: message`), or in the
 /// source as a whole: bad input.
 pub fn write_error(source: &Path, e: &millplan_nc::write::WriteError) -> IoError {

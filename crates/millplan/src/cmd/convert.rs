@@ -1,15 +1,12 @@
 //! `millplan convert`: read a program in any supported format, write it in another.
 
-use crate::cmd::{print_diagnostics, read_options, target_for, write_program, TargetArg, UnitArg};
+use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::Outputs;
-use millplan_nc::equiv::Tolerance;
-use millplan_nc::readback::read_back;
-use millplan_nc::write::krl::{KrlFiles, KrlMotion};
+use millplan_driver::convert::{self as lib, ConvertRequest};
+use millplan_nc::write::krl::KrlMotion;
 use millplan_nc::write::{self, Target};
 use millplan_nc::LengthUnit;
-use millplan_plan::orient::ResolveOrientation;
-use millplan_plan::pipeline::{self, Context};
 use std::path::PathBuf;
 
 /// Convert an NC program (APT/CL, G-code or KUKA KRL) to another dialect.
@@ -83,68 +80,19 @@ pub struct Args {
     pub json: bool,
 }
 
-/// Reads the output back and runs it and its source through the same
-/// interpreter: a program that would command something else is not written
-/// (with --lossy, where words were dropped on purpose, it is, with a warning,
-/// and the run ends with exit 3). Returns whether the output is equivalent.
-fn check_output(p: &millplan_nc::Program, out: &[u8], target: Target, a: &Args) -> CliResult<bool> {
-    let back = read_back(out, target, p, &Tolerance::default()).map_err(|e| {
-        CliError::internal(format!(
-            "{}: the program written does not read back ({e}); not written",
-            a.output.display()
-        ))
-    })?;
-    match back.equiv {
-        Ok(_) => Ok(true),
-        Err(m) if a.lossy => {
-            // Said even with --quiet: the exit code alone does not say why.
-            eprintln!(
-                "{}: warning: written with --lossy, the output does not command what the source does ({m})",
-                a.output.display()
-            );
-            Ok(false)
-        }
-        Err(m) => Err(CliError::internal(format!(
-            "{}:{}: the output would not command what the source does ({m}); not written",
-            a.input.display(),
-            m.line_a
-        ))),
-    }
-}
-
-/// The KRL output `out` split into a main program and sub-programs of
-/// `--max-points` motions, SPLINE blocks with `--krl-motion spline`
-/// (checked: they read back to its motions), when asked for; `None` to
-/// write `out` as it is.
-fn krl_files(a: &Args, target: Target, out: &[u8]) -> CliResult<Option<KrlFiles>> {
-    let n = a.max_points.unwrap_or_default();
-    if n == 0 && a.krl_motion == KrlMotion::Lin {
-        return Ok(None);
-    }
-    if target != Target::Krl {
-        return Err(CliError::input(
-            "--max-points, --krl-motion: sub-programs and SPLINE blocks are KRL's; give --to krl or an output named .src",
-        ));
-    }
-    if a.output.as_os_str() == "-" {
-        return Err(CliError::input(
-            "--max-points, --krl-motion: KRL files are staged beside the main program; name the output file",
-        ));
-    }
-    let o = write::krl::KrlOptions {
-        name: write::krl::stem(&a.output),
-        max_points: n,
+fn request(a: &Args) -> ConvertRequest {
+    ConvertRequest {
+        to: a.to.map(Into::into),
+        unit: a.out_units.map(LengthUnit::from),
+        line_numbers: a.line_numbers,
+        lossy: a.lossy,
+        max_points: a.max_points,
         motion: a.krl_motion,
-        ..Default::default()
-    };
-    let text = String::from_utf8_lossy(out);
-    write::krl::split(&text, &o)
-        .map(Some)
-        .map_err(|e| CliError::internal(format!("{}: {e}; not written", a.output.display())))
+    }
 }
 
-/// Writes `out` at -o, or with --max-points its KRL split (a main program
-/// and sub-programs beside it).
+/// Writes `out` at -o, or with --max-points or --krl-motion its KRL split
+/// (a main program and sub-programs beside it).
 fn write_out(
     a: &Args,
     inputs: &[&std::path::Path],
@@ -152,25 +100,17 @@ fn write_out(
     target: Target,
     out: &[u8],
 ) -> CliResult<()> {
-    match krl_files(a, target, out)? {
-        Some(files) => crate::cmd::robot::stage_krl(inputs, &a.output, &files, 0)?
-            .0
-            .commit(),
+    let files = lib::krl_files(&request(a), target, &a.output, out).map_err(|e| match e {
+        lib::SplitError::Option(m) => CliError::input(m),
+        lib::SplitError::Split(m) => CliError::internal(m),
+    })?;
+    match files {
+        Some(files) => Ok(Outputs::stage_krl(inputs, &a.output, &files, 0)?.commit()?),
         None => {
             outputs.write(&a.output, out)?;
-            outputs.commit()
+            Ok(outputs.commit()?)
         }
     }
-}
-
-/// The reader's warnings (an `S0` before a cut, words not understood), each
-/// at its place, for `--json`.
-fn json_warnings(input: &std::path::Path, d: &[millplan_nc::Diagnostic]) -> Vec<String> {
-    let file = input.display().to_string();
-    d.iter()
-        .filter(|d| d.severity == millplan_nc::diag::Severity::Warning)
-        .map(|d| d.located(&file))
-        .collect()
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -186,24 +126,12 @@ pub fn run(a: Args) -> CliResult<i32> {
     let outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
     let (parsed, krl) = crate::io::read_source(&a.input, read_options(a.units, a.feed)?)?;
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet);
-    let warnings = json_warnings(&a.input, &parsed.diagnostics);
     let mut p = parsed.program;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let to = a.to.map(Into::into).or(machine.target());
-    let target = match to {
-        Some(t) => t,
-        None => target_for(None, &a.output, p.source)?,
-    };
-    if let Some(k) = machine.kinematics() {
-        let cx = Context::new(machine.clone());
-        let mut pass = ResolveOrientation::new(k.clone());
-        pipeline::run(&mut [&mut pass], &mut p, &cx)
-            .map_err(|e| crate::cmd::pass_error(&a.input, e))?;
-    }
-    let mut o = machine.write_options(target);
-    o.unit = a.out_units.map(LengthUnit::from);
-    o.line_numbers = a.line_numbers;
-    o.lossy = a.lossy;
+    let req = request(&a);
+    let target = lib::target(&req, &machine, &a.output, p.source).map_err(CliError::input)?;
+    lib::resolve(&mut p, &machine).map_err(|e| crate::cmd::pass_error(&a.input, e))?;
+    let o = lib::write_options(&req, &machine, target);
     let out = match krl
         .as_ref()
         .map(|k| write::krl::from_krl(k, target, a.lossy))
@@ -212,23 +140,27 @@ pub fn run(a: Args) -> CliResult<i32> {
         Some(Err(e)) => return Err(crate::io::krl_error(&a.input, e)),
         _ => write_program(&p, o, &a.input, a.quiet)?,
     };
-    let equivalent = check_output(&p, &out, target, &a)?;
-    write_out(&a, &inputs, outputs, target, &out)?;
-    if a.json {
-        outln!(
-            "{}",
-            serde_json::json!({
-                "input": a.input.display().to_string(),
-                "output": a.output.display().to_string(),
-                "target": target.name(),
-                "moves": p.move_count(),
-                "equivalent": equivalent,
-                "warnings": warnings,
-            })
-        );
-    } else {
-        let (path, moves) = (a.output.display(), p.move_count());
-        eprintln!("wrote {path} ({moves} moves, {})", target.name());
+    let (input, output) = (
+        a.input.display().to_string(),
+        a.output.display().to_string(),
+    );
+    let lossy = lib::check_output(&p, &out, target, a.lossy, (&input, &output))
+        .map_err(CliError::internal)?;
+    if let Some(w) = &lossy {
+        // Said even with --quiet: the exit code alone does not say why.
+        eprintln!("{w}");
     }
-    Ok(if equivalent { EXIT_OK } else { EXIT_FINDINGS })
+    write_out(&a, &inputs, outputs, target, &out)?;
+    let found = (input.as_str(), parsed.diagnostics.as_slice());
+    let summary = lib::ConvertSummary::new(found, &p, (&output, target), lossy.is_none());
+    if a.json {
+        outln!("{}", serde_json::to_string(&summary).unwrap_or_default());
+    } else {
+        eprintln!("{}", summary.text());
+    }
+    Ok(if lossy.is_none() {
+        EXIT_OK
+    } else {
+        EXIT_FINDINGS
+    })
 }

@@ -3,8 +3,7 @@
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::Outputs;
 use millplan_driver::cut::{CutRequest, Variant};
-use millplan_driver::Materials;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Cutting forces of one engagement (the mechanistic edge-force model, see
 /// docs/forces.md): a ball,
@@ -107,7 +106,7 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let materials = load_materials(a.materials.as_deref())?;
+    let materials = crate::io::read_materials(a.materials.as_deref())?;
     let r = millplan_driver::cut::run(&request(&a), &materials).map_err(CliError::input)?;
     let mut outputs = Outputs::plan(
         &a.materials.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
@@ -151,20 +150,6 @@ fn request(a: &Args) -> CutRequest {
         dphi: a.dphi,
         fixed_grid: a.fixed_grid,
     }
-}
-
-/// The built-in materials plus those of `--materials`.
-pub fn load_materials(path: Option<&Path>) -> CliResult<Materials> {
-    let text = match path {
-        Some(p) => Some(
-            std::fs::read_to_string(p)
-                .map_err(|e| CliError::input(format!("{}: cannot read: {e}", p.display())))?,
-        ),
-        None => None,
-    };
-    let origin = path.map(|p| p.display().to_string()).unwrap_or_default();
-    millplan_driver::cut::materials(text.as_deref().map(|t| (t, origin.as_str())))
-        .map_err(CliError::input)
 }
 
 /// The order of the lead and tilt turns (`--variant` of `cut` and `orient`).

@@ -37,7 +37,7 @@ fn write_all(written: &[(PathBuf, Vec<u8>)]) -> CliResult<()> {
     for (path, bytes) in written {
         outputs.write(path, bytes)?;
     }
-    outputs.commit()
+    Ok(outputs.commit()?)
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -55,48 +55,15 @@ pub fn run(a: Args) -> CliResult<i32> {
 
 /// What the demo made and where, and what spindle control did on it.
 fn print_summary(a: &Args, written: &[(PathBuf, Vec<u8>)], d: &Demo) {
+    let paths: Vec<(String, usize)> = written
+        .iter()
+        .map(|(p, b)| (p.display().to_string(), b.len()))
+        .collect();
     if a.summary.json {
-        let paths: Vec<String> = written
-            .iter()
-            .map(|(p, _)| p.display().to_string())
-            .collect();
-        let j = d.json(a.output.display().to_string(), &paths);
+        let names: Vec<String> = paths.iter().map(|(p, _)| p.clone()).collect();
+        let j = d.json(a.output.display().to_string(), &names);
         crate::cmd::print_json(serde_json::to_value(&j).unwrap_or_default());
-        return;
+    } else {
+        out!("{}", d.text(&a.output, &paths, a.quiet));
     }
-    if a.quiet {
-        outln!(
-            "millplan demo: {} files in {}; open {} for the plots",
-            written.len(),
-            a.output.display(),
-            a.output.join("report.html").display()
-        );
-        return;
-    }
-    outln!(
-        "millplan demo: free-form part {} triangles, ball D10 raster {} points",
-        d.triangles,
-        d.program.move_count()
-    );
-    outln!(
-        "  cutting length {:.0} mm, time {:.0} s estimated with acceleration ({:.0} s at programmed feeds)",
-        d.cutting_mm,
-        d.time_s,
-        d.time_nominal_s
-    );
-    for (path, bytes) in written {
-        outln!("  wrote {} ({} bytes)", path.display(), bytes.len());
-    }
-    outln!(
-        "  part.stl is an open surface by design (the part's top, no sides or bottom): the other commands note its open border as note[open-mesh]; expected here"
-    );
-    let r = &d.summary;
-    outln!(
-        "spindle control: D_w {:.2}…{:.2} mm, n {:.0}…{:.0} 1/min; vc {:.1}…{:.1} m/min with control vs {:.1}…{:.1} at a constant {:.0} 1/min",
-        r.d_w.min, r.d_w.max, r.spindle.min, r.spindle.max, r.vc_controlled.min, r.vc_controlled.max, r.vc_constant.min, r.vc_constant.max, r.constant_spindle
-    );
-    outln!(
-        "open {} in a browser for the plots",
-        a.output.join("report.html").display()
-    );
 }

@@ -70,22 +70,11 @@ pub struct Args {
 /// The generated rasters' arguments in range, and their points (counted
 /// from the grid) within the limits.
 fn check_rasters(a: &Args, bounds: &millplan_geom::Aabb) -> CliResult<millplan_driver::Shape> {
-    let (shape, n, bytes) =
-        millplan_driver::directions::rasters(&a.tool, &a.angles, (a.stepover, a.step), bounds)
-            .map_err(CliError::input)?;
     let limit = crate::limits::get().moves as f64;
-    if !(n <= limit) {
-        let needs = format!(
-            "{} rasters at --stepover {} and --step {} make {} points",
-            a.angles.len(),
-            a.stepover,
-            a.step,
-            millplan_geom::limits::amount(n.ceil())
-        );
-        return Err(CliError::input(
-            millplan_geom::limits::Exceeded::new("moves", needs, limit).to_string(),
-        ));
-    }
+    let spacing = (a.stepover, a.step);
+    let (shape, bytes) =
+        millplan_driver::directions::rasters_within(&a.tool, &a.angles, spacing, bounds, limit)
+            .map_err(CliError::input)?;
     crate::limits::check_memory("the candidate rasters", bytes)?;
     Ok(shape)
 }

@@ -1,11 +1,9 @@
 //! `millplan feed`: a feed per block from the cutting forces; and what
 //! `millplan force PATH` shares with it (the program, its stock, the model).
 
-use crate::cmd::cut::load_materials;
-use crate::cmd::simulate::initial_stock;
-use crate::cmd::{print_diagnostics, read_options, write_program_file, TargetArg, UnitArg};
+use crate::cmd::{read_options, write_program_file, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_program, read_surface, Outputs};
+use crate::io::Outputs;
 use millplan_driver::feed::{self as lib, FeedRequest, ModelRequest, Prepared, ScheduleError};
 use millplan_driver::StockSpec;
 use std::path::{Path, PathBuf};
@@ -129,6 +127,19 @@ impl ModelArgs {
         lib::model_inputs(&names, &self.request(), p, limits)
     }
 
+    /// The program at `path` and the files of the options, as the driver
+    /// reads them.
+    pub fn files<'a>(&'a self, path: &'a Path) -> CliResult<lib::ModelFiles<'a>> {
+        Ok(lib::ModelFiles {
+            program: path,
+            stl: self.stl.as_deref(),
+            stl_units: self.stl_units.map(Into::into),
+            materials: self.materials.as_deref(),
+            machine: self.machine.as_deref(),
+            read: read_options(self.units, None)?,
+        })
+    }
+
     /// The files the run reads, besides the program.
     pub fn inputs(&self) -> Vec<PathBuf> {
         let mut v: Vec<PathBuf> = Vec::new();
@@ -142,34 +153,8 @@ impl ModelArgs {
 
 /// Reads the program and builds its strokes and stock.
 pub fn prepare(path: &Path, m: &ModelArgs) -> CliResult<Prepared> {
-    let req = m.request();
-    let materials = load_materials(m.materials.as_deref())?;
-    let setup = lib::force_setup(&req, &materials).map_err(CliError::input)?;
-    let spec = lib::stock_spec(&req).map_err(CliError::input)?;
-    let machine = crate::cmd::load_machine(m.machine.as_deref())?;
-    let mut parsed = read_program(path, read_options(m.units, None)?)?;
-    print_diagnostics(path, &parsed.diagnostics, m.quiet || m.json);
-    lib::supply_spindle(&req, &mut parsed.program).map_err(CliError::input)?;
-    let name = path.display().to_string();
-    let s =
-        lib::input_strokes(&req, &name, &parsed.program, machine.rapid).map_err(CliError::input)?;
-    let part = match &m.stl {
-        Some(p) => Some(read_surface(p, m.stl_units)?.0),
-        None => None,
-    };
-    let stock = initial_stock(path, m.resolution, &spec, &s, part.as_ref(), m.stl_units)?;
-    lib::Prepared::new(&req, &materials, (parsed.program, s, stock), setup, machine)
-        .map_err(CliError::input)
-}
-
-/// Forces of the prepared program, with a progress bar.
-pub fn run_forces(
-    p: &Prepared,
-    program: &millplan_nc::Program,
-    s: &millplan_driver::Strokes,
-    quiet: bool,
-) -> CliResult<millplan_driver::feed::ForceRun> {
-    with_bar(s, quiet, |done| lib::forces(p, program, s, done))
+    let watch = crate::progress::Watch::new(path, m.quiet || m.json);
+    Ok(lib::prepare(&m.files(path)?, &m.request(), &watch)?)
 }
 
 /// A force run over the strokes `s` with a progress bar.

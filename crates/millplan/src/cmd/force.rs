@@ -1,8 +1,8 @@
 //! `millplan force …`: the force model's data: calibration of coefficients
 //! from measured slot forces, and the named materials.
 
-use crate::cmd::cut::load_materials;
 use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::io::read_materials as load_materials;
 use millplan_driver::force as lib;
 use std::path::{Path, PathBuf};
 
@@ -105,10 +105,9 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
     )?;
     let limits =
         millplan_driver::feed::force_limits(&crate::limits::loads()).map_err(CliError::input)?;
-    let p = crate::cmd::feed::prepare(path, m)?;
-    let run = crate::cmd::feed::run_forces(&p, &p.program, &p.strokes, m.quiet || m.json)?;
+    let watch = crate::progress::Watch::new(path, m.quiet || m.json);
+    let (p, run) = millplan_driver::feed::program_forces(&m.files(path)?, &m.request(), &watch)?;
     let name = path.display().to_string();
-    millplan_driver::feed::stopped_spindle(&name, &run).map_err(CliError::input)?;
     let over = run.over_limits(&limits, &p.machine);
     let summary = lib::ForceSummary::new(&p, &run, &limits);
     if let Some(t) = &m.table {

@@ -73,21 +73,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     );
     // Counted first: a step of 1e-9 on a long program is refused, not run.
     let n = lib::sample_count(&parsed.program, fallback, &g);
-    crate::limits::check_memory(
-        &format!(
-            "--step {} over this program samples {} points, which",
-            a.step,
-            millplan_geom::limits::amount(n)
-        ),
-        n * BYTES_PER_SAMPLE,
-    )?;
-    // Some 300,000 points a second: a bar from a second's worth on.
-    let bar = crate::progress::count(
-        n as u64,
-        "gouge check",
-        "points",
-        !a.notes.quiet && n >= 3e5,
-    );
+    crate::limits::check_memory(&lib::samples_needed(a.step, n), n * BYTES_PER_SAMPLE)?;
+    let show = !a.notes.quiet && n >= lib::SHOWN_SAMPLES;
+    let bar = crate::progress::count(n as u64, "gouge check", "points", show);
     let rep = lib::check(&parsed.program, &mesh, fallback, &g, &|done, _| {
         bar.set_position(done as u64)
     });

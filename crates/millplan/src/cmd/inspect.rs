@@ -1,7 +1,7 @@
 //! `millplan inspect`: what a file holds.
 
 use crate::cmd::{print_diagnostics, read_options, UnitArg};
-use crate::error::{CliResult, EXIT_OK};
+use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_any, Input};
 use crate::timings::Table as _;
 use millplan_driver::inspect as lib;
@@ -60,11 +60,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     crate::small_pages_only();
     let mut clock = crate::timings::Clock::start();
     let mut machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    machine.rapid = crate::cmd::arg(
-        "--rapid-rate",
-        a.rapid_rate.unwrap_or(machine.rapid),
-        crate::cmd::Range::positive(1e7, "mm/min"),
-    )?;
+    machine.rapid = lib::rapid_rate(&machine, a.rapid_rate).map_err(CliError::input)?;
     clock.lap("arguments and machine file");
     let input = read_any(&a.file, read_options(a.units, None)?)?;
     clock.lap("file read");

@@ -113,21 +113,9 @@ impl From<TargetArg> for Target {
     }
 }
 
-/// The dialect an output is written in: `--to`, else the output file's
-/// extension, else the source's own dialect (the driver's one rule, without
-/// a machine file).
-pub fn target_for(
-    to: Option<TargetArg>,
-    output: &std::path::Path,
-    source: millplan_nc::Dialect,
-) -> crate::error::CliResult<Target> {
-    millplan_driver::target::output_target(to.map(Into::into), output, None, source)
-        .map_err(crate::error::CliError::input)
-}
-
 /// The dialect to write for a command that reads a machine file: `--to`;
 /// else the machine's control, which the output's extension must not
-/// contradict; else as [`target_for`].
+/// contradict; else the output's name, else the source's dialect.
 pub fn target_with_machine(
     to: Option<TargetArg>,
     output: &std::path::Path,

@@ -1,14 +1,16 @@
 //! `millplan optimise`: the compiler driver — parses, reads the files,
 //! builds a `millplan_driver::Job`, runs it and prints.
 
+use crate::cmd::load_machine;
 use crate::cmd::{print_diagnostics, read_options, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_mesh, read_program, read_surface, Outputs};
+use crate::io::{read_program, read_surface, Outputs};
+use millplan_driver::given::{Given, GivenError};
 use millplan_driver::passes::{self, ORDER};
 use millplan_driver::report::{self, InputNames, Plotted};
-use millplan_driver::tools::{self, Library};
+use millplan_driver::tools::Library;
 use millplan_driver::StockSpec;
-use millplan_driver::{Inputs, Job, Options, OptionsRequest, Outcome, Verdict, Written};
+use millplan_driver::{Inputs, Job, OptionsRequest, Outcome, Verdict, Written};
 use std::path::{Path, PathBuf};
 
 /// Take a CAM program to a verified, better program for one machine, stock,
@@ -136,8 +138,8 @@ pub struct Args {
     pub robot: crate::cmd::robot::OptimiseRobotArgs,
 }
 
-fn options(a: &Args) -> CliResult<Options> {
-    Options::checked(&OptionsRequest {
+fn options(a: &Args) -> OptionsRequest {
+    OptionsRequest {
         vc: a.vc,
         spindle: a.spindle,
         tool: a.tool.clone(),
@@ -147,48 +149,33 @@ fn options(a: &Args) -> CliResult<Options> {
         tol: a.tol,
         memory: Some(crate::limits::get().memory),
         g93: a.g93,
-    })
-    .map_err(CliError::input)
+    }
 }
 
 fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
-    let mut parsed = read_program(path, read_options(a.units, None)?)?;
+    let parsed = read_program(path, read_options(a.units, None)?)?;
     print_diagnostics(path, &parsed.diagnostics, a.quiet || a.json);
-    let from_library = match &a.tools {
-        Some(db) => tools::apply(&mut parsed.program, &Library::open(db)?).map_err(|e| {
-            CliError::input(format!("{}:{}:1: {}", path.display(), e.line, e.message))
-        })?,
-        None => Vec::new(),
-    };
-    let part = a
-        .stl
-        .as_deref()
-        .map(|p| read_surface(p, a.stl_units).map(|r| r.0))
-        .transpose()?;
-    let stock = a
-        .stock
-        .as_deref()
-        .map(|s| StockSpec::parse(s).map_err(|e| CliError::input(format!("--stock {e}"))))
-        .transpose()?;
-    let blank = match &stock {
-        Some(StockSpec::Stl(p)) => {
-            let (mut m, _) = read_mesh(p)?;
-            crate::cmd::stl_to_mm(&mut m, a.stl_units);
-            Some(m)
-        }
-        _ => None,
-    };
-    Ok(Inputs {
+    let library = a.tools.as_deref().map(Library::open).transpose()?;
+    let part = a.stl.as_deref().map(|p| read_surface(p, a.stl_units));
+    let machine = a.machine.as_deref().map(|m| load_machine(Some(m)));
+    let given = Given {
         program: parsed.program,
-        part,
-        stock,
-        blank,
-        machine: crate::cmd::load_machine(a.machine.as_deref())?,
-        machine_given: a.machine.is_some(),
-        materials: crate::cmd::cut::load_materials(a.materials.as_deref())?,
+        part: part.transpose()?.map(|r| r.0),
+        stock: a.stock.as_deref(),
+        stl_units: a.stl_units.map(Into::into),
+        limits: crate::limits::get(),
+        machine: machine.transpose()?,
+        materials: crate::io::read_materials(a.materials.as_deref())?,
         material: a.material.clone(),
-        options: options(a)?,
-        library: from_library,
+        library: library.as_ref(),
+        options: options(a),
+    };
+    Inputs::given(given).map_err(|e| match e {
+        GivenError::Option(m) => CliError::input(m),
+        GivenError::Tool(e) => {
+            CliError::input(format!("{}:{}:1: {}", path.display(), e.line, e.message))
+        }
+        GivenError::Io(e) => e.into(),
     })
 }
 
@@ -287,24 +274,18 @@ fn say_skipped(a: &Args, o: &Outcome) {
     if a.quiet || a.json {
         return;
     }
-    for p in o.passes.iter().filter(|p| !p.ran) {
-        eprintln!("note: pass {} skipped: {}", p.name, p.reason);
+    for n in report::skipped_notes(o) {
+        eprintln!("{n}");
     }
 }
 
 fn page(a: &Args, job: &Job, o: &Outcome, w: &Written, path: &Path, output: &Path) -> String {
-    let name = |p: &Path| p.display().to_string();
-    let names = InputNames {
-        program: name(path),
-        part: a.stl.as_deref().map(name),
-        stock: a.stock.clone(),
-        machine: a
-            .machine
-            .as_deref()
-            .map_or_else(|| format!("{} (built-in)", job.inputs.machine.name), name),
-        material: a.material.clone(),
-        output: name(output),
-    };
+    let names = InputNames::of(
+        (path, output),
+        a.stl.as_deref(),
+        (a.stock.as_deref(), a.material.as_deref()),
+        (a.machine.as_deref(), &job.inputs.machine.name),
+    );
     let plotted = Plotted {
         before: &job.inputs.program,
         after: &w.program,
@@ -317,8 +298,8 @@ fn page(a: &Args, job: &Job, o: &Outcome, w: &Written, path: &Path, output: &Pat
 
 fn print_summary(a: &Args, w: &Written, path: &Path, output: &Path, withheld: bool) {
     let s = &w.summary;
-    if let Some((check, line, m)) = s.refusal() {
-        eprintln!("{}:{line}: check {check} failed: {m}", path.display());
+    if let Some(line) = report::refusal_line(s, path) {
+        eprintln!("{line}");
     }
     if a.json {
         crate::cmd::print_json(serde_json::to_value(s).unwrap_or_default());

@@ -1,9 +1,10 @@
 //! `millplan orient`: lead and tilt per operation by the force model or the
 //! machining time (spec process-models §2.4).
 
-use crate::cmd::cut::{load_materials, VariantArg};
+use crate::cmd::cut::VariantArg;
 use crate::cmd::{print_diagnostics, read_options, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::io::read_materials as load_materials;
 use crate::io::{read_program, read_surface, Outputs};
 use millplan_driver::orient::{self as lib, OrientRequest, Summary};
 use millplan_driver::StockSpec;
@@ -193,7 +194,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
     let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
     let blank = match &spec {
-        Some(s) => crate::cmd::simulate::blank(s, a.stl_units)?,
+        Some(s) => crate::io::read_blank(s, a.stl_units)?,
         None => None,
     };
     let (name, output) = (a.path.display().to_string(), a.output.display().to_string());
@@ -242,12 +243,9 @@ fn choose(
     .map_err(CliError::input)?;
     sim_bar.finish();
     bar.finish_and_clear();
-    if o.unsimulated > 0 && !(a.quiet || a.json) {
-        eprintln!(
-            "{}: note: {} moves are not simulated (their tool has no shape, or their position or axis is unknown): the stock does not see them",
-            a.path.display(),
-            o.unsimulated
-        );
+    match o.unsimulated_note(&a.path.display().to_string()) {
+        Some(n) if !(a.quiet || a.json) => eprintln!("{n}"),
+        _ => {}
     }
     Ok(o)
 }

@@ -136,9 +136,7 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet || a.json);
     clock.lap("read CL file");
     let (program, report) = post_program(a, &parsed.program, &machine, &o, target, clock)?;
-    let mut wo = machine.write_options(target);
-    // The post states TCP itself, per operation, when asked for it.
-    wo.auto_tcp = false;
+    let wo = lib::write_options(&machine, target);
     let out = crate::cmd::write_program(&program, wo, &a.input, a.quiet)?;
     clock.lap("G-code written (in memory)");
     let names = (

@@ -154,8 +154,8 @@ pub fn run(a: Args) -> CliResult<i32> {
     print_diagnostics(&a.path, &parsed.diagnostics, quiet || a.summary.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
     let mesh = a.part_units.read(&a.stl)?;
-    // Some 100,000 points a second at the least: from there it takes a while.
-    let bar = crate::progress::Phases::new(!quiet && parsed.program.move_count() >= 100_000);
+    let long = millplan_driver::command_defaults::progress::long_program(&parsed.program);
+    let bar = crate::progress::Phases::new(!quiet && long);
     let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
     let cx = Context::new(machine).with_part(&mesh).with_progress(&hook);
     let ran = lib::command(&req, rp, &cx, &parsed.program);

@@ -2,6 +2,7 @@
 //! (deflection at a pose).
 
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::io::Outputs;
 use clap::{Subcommand, ValueEnum};
 use millplan_driver::robot as lib;
 use millplan_driver::robot_pass::RobotSetup;
@@ -166,32 +167,16 @@ pub struct CouplingArgs {
 }
 
 impl CouplingArgs {
-    /// The options as `force` takes them (the others at their defaults).
-    fn model(&self, json: bool) -> crate::cmd::feed::ModelArgs {
-        use millplan_driver::command_defaults::feed as d;
-        crate::cmd::feed::ModelArgs {
+    /// The force model's options as the driver takes them.
+    fn request(&self) -> lib::CouplingRequest {
+        lib::CouplingRequest {
             stock: self.stock.clone(),
-            stl: self.stl.clone(),
-            stl_units: self.stl_units,
             material: self.material.clone(),
-            materials: self.materials.clone(),
-            machine: None,
             tool: self.tool.clone(),
             flutes: self.flutes,
             helix: self.helix,
-            stickout: None,
-            flute_length: None,
-            modulus: d::MODULUS,
-            resolution: self.resolution,
-            dz: d::DZ,
-            dphi: d::DPHI_DEG,
-            fixed_grid: true,
             spindle: self.spindle,
-            units: None,
-            table: None,
-            report: None,
-            json,
-            quiet: json,
+            resolution: self.resolution,
         }
     }
 }
@@ -279,34 +264,17 @@ fn process(path: &Path, p: &ProcessArgs) -> CliResult<(Robot, Program, PathLoad)
         let opts = millplan_nc::ReadOptions::default();
         return Ok((robot, crate::io::read_program(path, opts)?.program, load));
     }
-    let m = p.model.model(p.json);
-    let prepared = crate::cmd::feed::prepare(path, &m)?;
-    let (program, strokes) = (&prepared.program, &prepared.strokes);
-    let run = crate::cmd::feed::run_forces(&prepared, program, strokes, p.json)?;
-    let name = path.display().to_string();
-    millplan_driver::feed::stopped_spindle(&name, &run).map_err(CliError::input)?;
-    let load = lib::move_loads(&prepared.program, &run);
-    Ok((robot, prepared.program, load))
-}
-
-/// KRL files from the `first` (0: the main program, at `output`; its
-/// sub-programs beside it) staged against `inputs`: the outputs, the paths.
-pub fn stage_krl(
-    inputs: &[&Path],
-    output: &Path,
-    files: &millplan_nc::write::krl::KrlFiles,
-    first: usize,
-) -> CliResult<(crate::io::Outputs, Vec<std::path::PathBuf>)> {
-    let paths = millplan_nc::write::krl::file_paths(output, files);
-    let planned: Vec<(&str, Option<&Path>)> = paths[first..]
-        .iter()
-        .map(|p| ("-o", Some(p.as_path())))
-        .collect();
-    let mut outputs = crate::io::Outputs::plan(inputs, &planned, false)?;
-    for (p, (_, text)) in paths.iter().zip(files).skip(first) {
-        outputs.write(p, text.as_bytes())?;
-    }
-    Ok((outputs, paths))
+    let files = millplan_driver::feed::ModelFiles {
+        program: path,
+        stl: p.model.stl.as_deref(),
+        stl_units: p.model.stl_units.map(Into::into),
+        materials: p.model.materials.as_deref(),
+        machine: None,
+        read: crate::cmd::read_options(None, None)?,
+    };
+    let watch = crate::progress::Watch::new(path, p.json);
+    let (program, load) = lib::model_load(&files, &p.model.request(), &watch)?;
+    Ok((robot, program, load))
 }
 
 fn compensate(a: CompensateArgs) -> CliResult<i32> {
@@ -323,9 +291,7 @@ fn compensate(a: CompensateArgs) -> CliResult<i32> {
     let name = a.path.display().to_string();
     let p = process_of(&robot, &a.process, (&program, &load), &name);
     let done = lib::compensate(&p, &req, &place, &a.output).map_err(CliError::input)?;
-    stage_krl(&[a.path.as_path()], &a.output, &done.files, 0)?
-        .0
-        .commit()?;
+    Outputs::stage_krl(&[a.path.as_path()], &a.output, &done.files, 0)?.commit()?;
     print(
         a.process.json,
         &done.summary,
@@ -416,7 +382,7 @@ pub fn after_optimise(
         eprintln!("{}", done.summary.render_text());
     }
     if w.summary.verdict != millplan_driver::Verdict::Refused || force {
-        stage_krl(inputs, output, &done.files, 1)?.0.commit()?;
+        Outputs::stage_krl(inputs, output, &done.files, 1)?.commit()?;
     }
     Ok(())
 }

@@ -107,15 +107,11 @@ pub enum GridArg {
 /// The machine from --machine, or --type with --range1/--range2.
 fn machine(a: &Args) -> CliResult<Kinematics> {
     match (&a.machine, a.kind) {
-        (Some(p), _) => crate::cmd::load_machine(Some(p))?
-            .kinematics()
-            .cloned()
-            .ok_or_else(|| {
-                CliError::input(format!(
-                    "{}: the machine file has no [kinematics] table: setup needs the rotary axes",
-                    p.display()
-                ))
-            }),
+        (Some(p), _) => lib::file_kinematics(
+            &crate::cmd::load_machine(Some(p))?,
+            &p.display().to_string(),
+        )
+        .map_err(CliError::input),
         (None, Some(t)) => {
             let t = match t {
                 TypeArg::Ca => MachineType::Ca,
@@ -150,7 +146,7 @@ fn plan_shown(
     machine: &Kinematics,
     p: &setup::SetupParams,
 ) -> CliResult<setup::SetupPlan> {
-    let show = mesh.len() * p.cells > 20_000_000 && !a.quiet;
+    let show = lib::shows_progress(mesh, p) && !a.quiet;
     let bar = crate::progress::fraction("cones of access", show);
     let progress = |done: usize, total: usize| {
         bar.set_length(total as u64);
@@ -185,19 +181,13 @@ pub fn run(a: Args) -> CliResult<i32> {
     let t0 = std::time::Instant::now();
     let plan = plan_shown(&a, &mut mesh, &machine, &p)?;
     let secs = t0.elapsed().as_secs_f64();
-    if plan.flipped && !a.quiet && !a.summary.json {
-        eprintln!(
-            "{}: the facets are wound inward (negative volume); turned outward",
-            a.stl.display()
-        );
+    let stl = a.stl.display().to_string();
+    match lib::flipped_note(&plan, &stl) {
+        Some(n) if !a.quiet && !a.summary.json => eprintln!("{n}"),
+        _ => {}
     }
     if let Some(out) = &a.output {
-        let s = plan.best.setup;
-        let mut rotated = mesh.clone();
-        rotated.map_vertices(|v| s * v);
-        let mut bytes = Vec::new();
-        millplan_geom::stl::write_binary_stl(&rotated, "millplan setup", &mut bytes);
-        outputs.write(out, &bytes)?;
+        outputs.write(out, &lib::rotated_stl(&mesh, &plan))?;
     }
     if let Some(path) = &a.report {
         let html = lib::report(&req, a.stl.display().to_string(), &mesh, &plan, &machine);

@@ -2,10 +2,10 @@
 
 use crate::cmd::{print_diagnostics, read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_mesh, read_program, read_surface, Outputs};
+use crate::io::{read_program, read_surface, Outputs};
 use crate::timings::Table as _;
 use millplan_driver::simulate::{self as lib, SimRequest};
-use millplan_driver::{Stock, StockSpec, Strokes};
+use millplan_driver::StockSpec;
 use millplan_geom::TriMesh;
 use std::path::{Path, PathBuf};
 
@@ -133,7 +133,7 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
         Some(p) => Some(read_surface(p, a.stl_units)?.0),
         None => None,
     };
-    let blank = blank(&spec, a.stl_units)?;
+    let blank = crate::io::read_blank(&spec, a.stl_units)?;
     clock.lap("part read");
     let path = a.path.display().to_string();
     let g = lib::SimInputs {
@@ -149,7 +149,7 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
     // A bar on a long program only.
     let bar = crate::progress::Phases::new(!a.quiet && !a.json);
     let progress = |done: usize, total: usize| {
-        if total > 50_000 {
+        if total > millplan_driver::command_defaults::progress::LONG_SIMULATION_STROKES {
             bar.report("simulating", done, total)
         }
     };
@@ -183,7 +183,7 @@ fn plan_outputs(a: &Args, spec: &StockSpec) -> CliResult<Outputs> {
     if let StockSpec::Stl(p) = spec {
         inputs.push(p);
     }
-    Outputs::plan(
+    Ok(Outputs::plan(
         &inputs,
         &[
             ("-o", a.output.as_deref()),
@@ -191,33 +191,7 @@ fn plan_outputs(a: &Args, spec: &StockSpec) -> CliResult<Outputs> {
             ("--report", a.report.as_deref()),
         ],
         false,
-    )
-}
-
-/// The stock before the program at `program` runs, as `spec` names it, at
-/// cell size `res` (`StockSpec::build` in the driver; an `stl:` blank read here).
-pub fn initial_stock(
-    program: &Path,
-    res: f64,
-    spec: &StockSpec,
-    s: &Strokes,
-    part: Option<&TriMesh>,
-    stl_units: Option<UnitArg>,
-) -> CliResult<Stock> {
-    let blank = blank(spec, stl_units)?;
-    let memory = crate::limits::get().memory;
-    let name = program.display().to_string();
-    lib::build_stock(&name, res, spec, s, (part, blank.as_ref()), memory).map_err(CliError::input)
-}
-
-/// The blank of an `stl:` stock, read and scaled to mm.
-pub fn blank(spec: &StockSpec, stl_units: Option<UnitArg>) -> CliResult<Option<TriMesh>> {
-    let StockSpec::Stl(p) = spec else {
-        return Ok(None);
-    };
-    let (mut mesh, _) = read_mesh(p)?;
-    crate::cmd::stl_to_mm(&mut mesh, stl_units);
-    Ok(Some(mesh))
+    )?)
 }
 
 fn write_outputs(

@@ -156,7 +156,7 @@ fn plan_outputs(a: &Args) -> CliResult<Outputs> {
     .into_iter()
     .flatten()
     .collect();
-    Outputs::plan(
+    Ok(Outputs::plan(
         &inputs,
         &[
             ("-o", Some(&a.output)),
@@ -164,7 +164,7 @@ fn plan_outputs(a: &Args) -> CliResult<Outputs> {
             ("--report", a.report.as_deref()),
         ],
         false,
-    )
+    )?)
 }
 
 /// The part, read while the program is read (and its cycle time estimated)
@@ -181,23 +181,6 @@ fn read_part(
         Ok(m) => Ok((m, reader, t.elapsed().as_secs_f64())),
         Err(e) => Err(reader.join().err().unwrap_or(e)),
     }
-}
-
-/// The reading phases' times in the context's timings.
-fn record_reading(
-    cx: &Context,
-    [t_setup, t_mesh, t_surface, t_inputs]: [f64; 4],
-    [read_s, estimate_s]: [f64; 2],
-) {
-    cx.record("arguments, machine file and outputs checked", t_setup);
-    cx.record("  read STL", t_mesh);
-    cx.record("  surface (BVH, vertex normals)", t_surface);
-    cx.record("  read toolpath (its own thread)", read_s);
-    cx.record(
-        "  time estimate of the input (after it, same thread)",
-        estimate_s,
-    );
-    cx.record("read STL, surface and toolpath", t_inputs);
 }
 
 /// The program, unless spindle control finds nothing to act on in it: then
@@ -232,13 +215,14 @@ pub fn run(a: Args) -> CliResult<i32> {
     let quiet = a.notes.quiet;
     print_diagnostics(&a.path, &parsed.diagnostics, quiet || a.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
-    let bar = crate::progress::Phases::new(!quiet && parsed.program.move_count() >= 100_000);
+    let long = millplan_driver::command_defaults::progress::long_program(&parsed.program);
+    let bar = crate::progress::Phases::new(!quiet && long);
     let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
     let cx = Context::new(machine)
         .with_surface(surface)
         .with_progress(&hook);
     let times = [t_setup, t_mesh, t_surface, t_inputs];
-    record_reading(&cx, times, [read.read_s, read.estimate_s]);
+    lib::record_reading(&cx, times, [read.read_s, read.estimate_s]);
     let ran = lib::command(&req, &cx, &mesh, parsed.program);
     bar.finish();
     let out = ran.map_err(|e| match e {

@@ -2,8 +2,7 @@
 
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::Outputs;
-use millplan_driver::sweep::Design;
-use millplan_report::sweep::{page, sweep};
+use millplan_driver::sweep::{self as lib, Design};
 use std::path::PathBuf;
 
 /// Tabulate and plot the working diameter over tool diameter, depth of cut,
@@ -48,21 +47,14 @@ pub fn run(a: Args) -> CliResult<i32> {
         alpha: a.alpha,
         af_step: a.af_step,
     };
-    millplan_driver::sweep::check(&design).map_err(CliError::input)?;
+    lib::check(&design).map_err(CliError::input)?;
     std::fs::create_dir_all(&a.output)
         .map_err(|e| CliError::input(format!("{}: {e}", a.output.display())))?;
-    let (csv, figures) = sweep(&design);
-    let fit = a.fit.then(millplan_driver::sweep::fit);
+    let fit = a.fit.then(lib::fit);
     if let (Some(f), false) = (&fit, a.summary.json) {
-        outln!(
-            "regression surrogate: {} samples, R² {:.4}, RMSE {:.4} mm, MAPE {:.2} %",
-            f.samples,
-            f.r2,
-            f.rmse,
-            f.mape
-        );
+        outln!("{}", lib::SweepSummary::fit_text(f));
     }
-    let html = page(&figures, fit.as_ref());
+    let (csv, html) = lib::files(&design, fit.as_ref());
     let (c, h) = (
         a.output.join("wd_sweep.csv"),
         a.output.join("wd_sweep.html"),
@@ -71,18 +63,8 @@ pub fn run(a: Args) -> CliResult<i32> {
     outputs.write(&c, csv.as_bytes())?;
     outputs.write(&h, html.as_bytes())?;
     outputs.commit()?;
-    if a.summary.json {
-        let fit = fit.as_ref().map(|f| {
-            serde_json::json!({"samples": f.samples, "r2": f.r2, "rmse_mm": f.rmse, "mape_percent": f.mape})
-        });
-        let json = serde_json::json!({
-            "csv": c.display().to_string(),
-            "html": h.display().to_string(),
-            "fit": fit,
-        });
-        crate::cmd::print_json(json);
-    } else {
-        outln!("wrote {} and {}", c.display(), h.display());
-    }
+    let names = (c.display().to_string(), h.display().to_string());
+    let summary = lib::SweepSummary::new(names.0, names.1, fit.as_ref());
+    a.summary.print(&summary, |s| s.text());
     Ok(EXIT_OK)
 }
