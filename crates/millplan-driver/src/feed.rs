@@ -494,13 +494,56 @@ pub fn feed_params(
         .or_else(|| machine_accel(&p.machine))
         .unwrap_or(crate::defaults::Defaults::FEED_ACCEL);
     arg("--feed-accel", accel, Range::positive(1e6, "mm/s²"))?;
-    let limits = load_limits(r.fos, r.fz_min, r.fz_max, p.chip_loads, loads)?;
+    let mut limits = load_limits(r.fos, r.fz_min, r.fz_max, p.chip_loads, loads)?;
+    let chart = p.machine.spindle_curve.is_some();
+    let learned = if limits.fxy.is_none()
+        && limits.torque.is_none()
+        && limits.power.is_none()
+        && limits.stress.is_none()
+        && limits.deflection.is_none()
+    {
+        let run = forces(p, &p.program, &p.strokes, &|_| {})?;
+        learn(&mut limits, &run.maxima(), chart)
+            .into_iter()
+            .map(|(name, _)| name)
+            .collect()
+    } else {
+        Vec::new()
+    };
     Ok(FeedParams {
         setup: p.setup,
         limits,
         accel,
         chord: m.resolution / 4.0,
+        learned,
     })
+}
+
+/// Load limits nothing gives take the input's own largest loads: F_xy
+/// always, torque and power unless the machine's spindle chart gives them
+/// at each block's speed. The program as its CAM system wrote it is the one
+/// the shop has proven, so the feeds may rise where it cuts lightly but no
+/// cut may load the tool more than its hardest one did (VERICUT's "learn
+/// mode" takes its limits from the program in the same way). Without any
+/// load limit the feed per tooth alone would bound a cut, and the material
+/// table's chip load is meant for a moderate engagement: a deep full slot
+/// raised to it loads the tool several times over. Returns each limit
+/// learned with its value.
+pub fn learn(l: &mut FeedLimits, max: &Maxima, chart: bool) -> Vec<(&'static str, f64)> {
+    let mut learned = Vec::new();
+    if l.fxy.is_none() && max.fxy > 0.0 {
+        l.fxy = Some(max.fxy);
+        learned.push(("fxy", max.fxy));
+    }
+    if !chart && l.torque.is_none() && max.torque > 0.0 {
+        l.torque = Some(max.torque);
+        learned.push(("torque", max.torque));
+    }
+    if !chart && l.power.is_none() && max.power > 0.0 {
+        l.power = Some(max.power);
+        learned.push(("power", max.power));
+    }
+    learned
 }
 
 /// What the feed pass made of the program.
@@ -552,6 +595,9 @@ pub struct LimitsJson {
     pub stress: Option<f64>,
     pub deflection: Option<f64>,
     pub fos: f64,
+    /// The limits taken from the input's own largest loads, no load limit
+    /// being given ([`learn`]).
+    pub learned: Vec<&'static str>,
 }
 
 /// One operation with simulated moves: its time at the programmed feeds
@@ -685,6 +731,7 @@ impl FeedSummary {
                 stress: limits.stress,
                 deflection: limits.deflection,
                 fos: limits.fos,
+                learned: s.params.learned.clone(),
             },
             over_limit_after: over.len(),
             over_limit_lines: over_lines,
@@ -729,6 +776,13 @@ impl FeedSummary {
         ];
         for (k, b, a) in pairs {
             let _ = writeln!(o, "  {k:<11} max {b:>10.3} → {a:>10.3}");
+        }
+        if !self.limits.learned.is_empty() {
+            let _ = writeln!(
+                o,
+                "  no load limit given: {} held to the input's largest (give --limit to raise them)",
+                self.limits.learned.join(", ")
+            );
         }
         if self.operations.len() > 1 {
             for op in &self.operations {

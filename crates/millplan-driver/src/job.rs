@@ -375,21 +375,13 @@ impl Job {
         let max = run.maxima();
         let chart = self.inputs.machine.spindle_curve.is_some();
         let from = "the input's largest (no --limit, no spindle chart)";
-        let l = &mut self.limits;
-        let mut learned = Vec::new();
-        if l.fxy.is_none() && max.fxy > 0.0 {
-            l.fxy = Some(max.fxy);
-            learned.push(("fxy", format!("{:.1} N", max.fxy)));
-        }
-        if !chart && l.torque.is_none() && max.torque > 0.0 {
-            l.torque = Some(max.torque);
-            learned.push(("torque", format!("{:.1} N·mm", max.torque)));
-        }
-        if !chart && l.power.is_none() && max.power > 0.0 {
-            l.power = Some(max.power);
-            learned.push(("power", format!("{:.1} W", max.power)));
-        }
-        for (name, value) in learned {
+        let learned = crate::feed::learn(&mut self.limits, &max, chart);
+        for (name, v) in learned {
+            let value = match name {
+                "fxy" => format!("{v:.1} N"),
+                "torque" => format!("{v:.1} N·mm"),
+                _ => format!("{v:.1} W"),
+            };
             let from = if name == "fxy" {
                 "the input's largest (no --limit fxy)"
             } else {

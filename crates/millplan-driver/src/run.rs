@@ -337,6 +337,7 @@ impl Job {
             limits: self.limits,
             accel: self.feed_accel,
             chord: self.resolution / 4.0,
+            learned: Vec::new(),
         })
     }
 

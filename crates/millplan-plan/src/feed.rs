@@ -48,6 +48,9 @@ pub struct FeedParams {
     pub accel: f64,
     /// Chord tolerance of arcs in the simulation, mm.
     pub chord: f64,
+    /// The limits among `limits` taken from the input's own largest loads
+    /// (none was given), by name.
+    pub learned: Vec<&'static str>,
 }
 
 /// How the feeds were set.

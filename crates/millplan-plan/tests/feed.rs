@@ -172,6 +172,7 @@ fn scheduled_feeds_meet_the_limits_within_the_machine_and_save_time() {
         limits: limits(),
         accel: 2000.0,
         chord: 0.025,
+        learned: Vec::new(),
     };
     let mut pass = FeedPass::new(params, stock.clone(), Box::new(body));
     let cx = Context::new(m.clone()).verifying();
@@ -428,6 +429,7 @@ fn a_slot_that_ends_in_air_is_scheduled_under_the_limit() {
         },
         accel: 2000.0,
         chord: 0.025,
+        learned: Vec::new(),
     };
     let mut pass = FeedPass::new(params, stock.clone(), Box::new(flat));
     let cx = Context::new(m.clone()).verifying();
@@ -470,6 +472,7 @@ fn a_schedule_rechecked_on_a_four_times_finer_grid_stays_within_two_percent() {
         limits,
         accel: 2000.0,
         chord: 0.025,
+        learned: Vec::new(),
     };
     let mut pass = FeedPass::new(params, stock.clone(), Box::new(body));
     let cx = Context::new(m.clone());

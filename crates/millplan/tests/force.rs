@@ -529,6 +529,59 @@ fn lobes_refuse_absurd_inputs() {
 const SLOT: &str = "%\nO0030\nG21 G90 G17 G94\nT1 M6\nS8000 M3\nG0 X-20. Y0. Z5.\n\
 G1 Z-3. F500.\nG1 X60. F1120.\nG0 Z5.\nM30\n%\n";
 
+/// `feed` without any load limit holds each cut to the input's own largest
+/// loads (F_xy, torque, power: the spindle chart is absent), as `optimise`
+/// does, and says so: the feed per tooth alone would have raised this
+/// 3 mm full slot to the material's chip load (0.08 mm for a D10 tool).
+/// Here the slot at F500 (fz 0.031 mm) is the hardest cut: its feed stays.
+#[test]
+fn feed_without_a_limit_holds_the_inputs_largest_loads() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let d = dir.path();
+    let s = |p: &str| d.join(p).display().to_string();
+    std::fs::write(d.join("slot.nc"), SLOT.replace("F1120.", "F500.")).expect("written");
+    let model = [
+        "--stock",
+        "box:-10,-20,-10,50,20,0",
+        "--tool",
+        "flat:10",
+        "--material",
+        "al7075",
+        "--json",
+        "-q",
+    ];
+    let j = json(&[&["feed", &s("slot.nc")][..], &model, &["-o", &s("out.nc")]].concat());
+    assert_eq!(
+        j["limits"]["learned"],
+        serde_json::json!(["fxy", "torque", "power"]),
+        "{j}"
+    );
+    let (b, a) = (&j["max_before"], &j["max_after"]);
+    assert!((f(&j["limits"]["fxy"]) - f(&b["fxy"])).abs() < 1e-9, "{j}");
+    for k in ["fxy", "torque", "power"] {
+        assert!(
+            f(&a[k]) <= f(&b[k]) * (1.0 + f(&j["limit_tolerance"])),
+            "{k}: {j}"
+        );
+    }
+    assert_eq!(j["over_limit_after"], 0, "{j}");
+    // Given one limit, nothing is learned: the others stay open.
+    let j = json(
+        &[
+            &["feed", &s("slot.nc")][..],
+            &model,
+            &["--limit", "deflection=1", "-o", &s("out2.nc")],
+        ]
+        .concat(),
+    );
+    assert_eq!(j["limits"]["learned"], serde_json::json!([]), "{j}");
+    assert!(j["limits"]["fxy"].is_null(), "{j}");
+    assert!(
+        f(&j["max_after"]["fxy"]) > 1.5 * f(&j["max_before"]["fxy"]),
+        "the chip load alone raises the slot's load: {j}"
+    );
+}
+
 /// Issue 30, fault 1: a full slot `G1 X60 F1120` that enters the stock at
 /// X −10 and leaves it at X 50 ends in air. `force` loads it along the move,
 /// `feed` lowers its feed to the F_xy limit (it was `kept` at 1120 when only
