@@ -10,7 +10,7 @@ use serde::Serialize;
 const LONGEST_WORD: usize = 80;
 
 /// `message` with every word (a run without whitespace) longer than
-/// [`LONGEST_WORD`] bytes shortened: a path to the middle of its folder, any
+/// `LONGEST_WORD` bytes shortened: a path to the middle of its folder, any
 /// other word to its first 40 characters, `…` and its length in bytes.
 pub fn shorten(message: &str) -> std::borrow::Cow<'_, str> {
     let long = |w: &str| w.len() > LONGEST_WORD;

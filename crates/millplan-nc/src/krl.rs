@@ -350,6 +350,16 @@ pub(crate) fn sets_path_speed(option: &str) -> bool {
         .is_some_and(|l| l.trim().eq_ignore_ascii_case("$VEL"))
 }
 
+/// Whether a `WITH` option moves the motion's frame (`$BASE`, `$TOOL`, the
+/// interpolation mode `$IPO_MODE` that swaps them): its point is then not
+/// in the frame the program's other points are read in.
+fn moves_frame(option: &str) -> bool {
+    let name = option.split('=').next().unwrap_or("").trim();
+    ["$BASE", "$TOOL", "$IPO_MODE"]
+        .iter()
+        .any(|f| name.eq_ignore_ascii_case(f))
+}
+
 /// The line's first word, upper case.
 fn first_word(t: &str) -> String {
     let w = t.split(|c: char| c.is_whitespace() || c == '(' || c == '{');
@@ -847,10 +857,32 @@ impl KrlProgram {
         let mut warned_feed = false;
         let mut warned_e = false;
         for l in &self.statements {
-            let Statement::Move { motion, vel_cp, .. } = &l.statement else {
+            let Statement::Move {
+                motion,
+                vel_cp,
+                with,
+                ..
+            } = &l.statement
+            else {
                 self.event(l, &mut op);
                 continue;
             };
+            if let Some(o) = with.iter().find(|o| moves_frame(o)) {
+                let message = format!(
+                    "WITH {o}: this motion's point is in a frame of its own, which the target dialect has no place for: --lossy reads it in the program's frame"
+                );
+                if !lossy {
+                    return Err(KrlError {
+                        file: self.file_name(l),
+                        error: ParseError::new(l.line, 1, message),
+                    });
+                }
+                diags.push(diag(
+                    Code::LossyWord,
+                    l.line,
+                    format!("{}: {message}", self.place(l)),
+                ));
+            }
             let feed = match vel_cp {
                 Some(v) => v * 60_000.0,
                 None => {

@@ -617,3 +617,31 @@ fn vel_extax_is_not_the_path_speed() {
     assert_eq!(moves(&back)[0].2, Some(0.3), "{}", files[0].1);
     check(&p, &files).expect("the same motions");
 }
+
+/// A segment whose `WITH` moves its frame (`$BASE`, `$TOOL`, `$IPO_MODE`)
+/// is refused at its line into another dialect (its point is not in the
+/// program's frame); `--lossy` reads it with a finding; KRL → KRL keeps it.
+#[test]
+fn a_segment_in_a_frame_of_its_own_is_refused_into_the_ir() {
+    let src = "DEF s()\n$VEL.CP = 0.1\nSPLINE\nSPL {X 1, Y 2, Z 3, A 0, B 90, C 0}\nSPL {X 2, Y 2, Z 3, A 0, B 90, C 0} WITH $BASE = BASE_DATA[4]\nENDSPLINE\nEND\n";
+    let p = krl::read(src, &mut no_subs).expect("reads");
+    let e = p.to_ir(1000.0, false).expect_err("refused");
+    assert_eq!(e.error.line, 5, "{e:?}");
+    assert!(e.error.message.contains("$BASE"), "{e:?}");
+    let lossy = p.to_ir(1000.0, true).expect("lossy reads");
+    assert!(
+        lossy
+            .diagnostics
+            .iter()
+            .any(|d| d.message.contains("$BASE")),
+        "{:?}",
+        lossy.diagnostics
+    );
+    let files = write(&p, &KrlOptions::default());
+    assert!(
+        files[0].1.contains("WITH $BASE = BASE_DATA[4]"),
+        "{}",
+        files[0].1
+    );
+    check(&p, &files).expect("the same motions");
+}
