@@ -533,8 +533,28 @@ fn motion(word: &str, code: &str, raw: &str, line: u32) -> Result<Statement, Par
     let spline = matches!(word, "SPL" | "SLIN" | "SCIRC" | "SPTP");
     let (vel_cp, with) = if spline {
         with_clause(tail, raw, line)?
-    } else {
+    } else if tail.trim().is_empty() || targets.is_empty() {
+        // No aggregate: a named position or joint angles, kept as written.
         (None, Vec::new())
+    } else {
+        // Read past, `CIRC …, CA 90` would end the arc at its target
+        // whatever angle it asks for.
+        let t = tail.trim();
+        let what = if t
+            .trim_start_matches(',')
+            .trim_start()
+            .to_ascii_uppercase()
+            .starts_with("CA")
+        {
+            "a circle's angle (CA) is not read: the arc would be taken to end at its target"
+        } else {
+            "only an approximation (C_DIS, C_VEL, C_ORI) is read after the target"
+        };
+        return Err(ParseError::new(
+            line,
+            col_of(raw, t),
+            format!("{t}: {what}"),
+        ));
     };
     let named = || {
         ParseError::new(

@@ -645,3 +645,18 @@ fn a_segment_in_a_frame_of_its_own_is_refused_into_the_ir() {
     );
     check(&p, &files).expect("the same motions");
 }
+
+/// What stands after a LIN, PTP or CIRC target besides its approximation is
+/// located, not read past: `CA 90` would have the arc end at its target
+/// whatever angle it asks for.
+#[test]
+fn words_after_a_target_are_located() {
+    for (src, col, needle) in [
+        ("DEF s()\nLIN {X 0, Y 0, Z 0, A 0, B 90, C 0}\nCIRC {X 1, Y 1, Z 0, A 0, B 90, C 0}, {X 2, Y 0, Z 0, A 0, B 90, C 0}, CA 90 C_DIS\nEND\n", 70, "CA"),
+        ("DEF s()\nLIN {X 0, Y 0, Z 0, A 0, B 90, C 0} C_DIS junk\nEND\n", 37, "approximation"),
+    ] {
+        let e = krl::read(src, &mut no_subs).expect_err("refused");
+        assert!(e.error.message.contains(needle), "{e:?}");
+        assert_eq!(e.error.col, col, "{e:?}");
+    }
+}
