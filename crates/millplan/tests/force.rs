@@ -529,6 +529,18 @@ fn lobes_refuse_absurd_inputs() {
 const SLOT: &str = "%\nO0030\nG21 G90 G17 G94\nT1 M6\nS8000 M3\nG0 X-20. Y0. Z5.\n\
 G1 Z-3. F500.\nG1 X60. F1120.\nG0 Z5.\nM30\n%\n";
 
+/// The slot's stock, tool and material, with JSON output.
+const SLOT_MODEL: [&str; 8] = [
+    "--stock",
+    "box:-10,-20,-10,50,20,0",
+    "--tool",
+    "flat:10",
+    "--material",
+    "al7075",
+    "--json",
+    "-q",
+];
+
 /// `feed` without any load limit holds each cut to the input's own largest
 /// loads (F_xy, torque, power: the spindle chart is absent), as `optimise`
 /// does, and says so: the feed per tooth alone would have raised this
@@ -540,16 +552,7 @@ fn feed_without_a_limit_holds_the_inputs_largest_loads() {
     let d = dir.path();
     let s = |p: &str| d.join(p).display().to_string();
     std::fs::write(d.join("slot.nc"), SLOT.replace("F1120.", "F500.")).expect("written");
-    let model = [
-        "--stock",
-        "box:-10,-20,-10,50,20,0",
-        "--tool",
-        "flat:10",
-        "--material",
-        "al7075",
-        "--json",
-        "-q",
-    ];
+    let model = SLOT_MODEL;
     let j = json(&[&["feed", &s("slot.nc")][..], &model, &["-o", &s("out.nc")]].concat());
     assert_eq!(
         j["limits"]["learned"],
@@ -594,16 +597,7 @@ fn feed_loads_a_slot_along_its_move_and_what_it_wrote_stays_under_the_limit() {
     let d = dir.path();
     let s = |p: &str| d.join(p).display().to_string();
     std::fs::write(d.join("slot.nc"), SLOT).expect("written");
-    let model = [
-        "--stock",
-        "box:-10,-20,-10,50,20,0",
-        "--tool",
-        "flat:10",
-        "--material",
-        "al7075",
-        "--json",
-        "-q",
-    ];
+    let model = SLOT_MODEL;
     let before = json(&[&["force", &s("slot.nc")][..], &model].concat());
     let f0 = f(&before["max"]["fxy"]);
     assert!(f0 > 100.0, "the slot is loaded: {before}");
