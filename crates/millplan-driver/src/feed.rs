@@ -235,6 +235,9 @@ pub trait Watch: Sync {
     fn strokes(&self, done: usize, total: usize);
     /// The force run has ended.
     fn forces_done(&self);
+    /// The phase `name` has ended (for a `--timings` table; each phase is
+    /// the work since the previous one).
+    fn lap(&self, _name: &str) {}
 }
 
 /// Reads the program and the files `f` names and builds its strokes and
@@ -249,24 +252,30 @@ pub fn prepare(
     let setup = force_setup(req, &materials).map_err(IoError::input)?;
     let spec = stock_spec(req).map_err(IoError::input)?;
     let machine = inputs::read_machine(f.machine)?;
+    w.lap("materials and machine file read");
     let mut reading = |done, total| w.reading(done, total);
     let (mut parsed, _) = inputs::read_source(f.program, f.read, &mut reading)?;
     w.diagnostics(&parsed.diagnostics);
     supply_spindle(req, &mut parsed.program).map_err(IoError::input)?;
+    w.lap("program read");
     let name = f.program.display().to_string();
     let s = input_strokes(req, &name, &parsed.program, machine.rapid).map_err(IoError::input)?;
+    w.lap("strokes (tool bodies, moves in chords)");
     let limits = &f.read.limits;
     let part = match f.stl {
         Some(p) => Some(inputs::read_surface(p, limits, f.stl_units)?.0),
         None => None,
     };
     let blank = inputs::read_blank(&spec, limits, f.stl_units)?;
+    w.lap("part and stock files read");
     let meshes = (part.as_ref(), blank.as_ref());
     let stock =
         crate::simulate::build_stock(&name, req.resolution, &spec, &s, meshes, limits.memory)
             .map_err(IoError::input)?;
-    Prepared::new(req, &materials, (parsed.program, s, stock), setup, machine)
-        .map_err(IoError::input)
+    let p = Prepared::new(req, &materials, (parsed.program, s, stock), setup, machine)
+        .map_err(IoError::input);
+    w.lap("stock built");
+    p
 }
 
 /// The program as [`prepare`]d from `f` and the forces of every move
@@ -283,6 +292,7 @@ pub fn program_forces(
     w.strokes(0, total);
     let run = forces(&p, &p.program, &p.strokes, &|d| w.strokes(d, total));
     w.forces_done();
+    w.lap("forces along every move");
     let run = run.map_err(IoError::input)?;
     stopped_spindle(&f.program.display().to_string(), &run).map_err(IoError::input)?;
     Ok((p, run))

@@ -123,16 +123,28 @@ pub struct Watch<'a> {
     quiet: bool,
     read: std::sync::Mutex<Option<ProgressBar>>,
     strokes: std::sync::OnceLock<ProgressBar>,
+    clock: std::sync::Mutex<crate::timings::Clock>,
 }
 
 impl<'a> Watch<'a> {
+    /// A watch whose `--timings` clock starts now.
     pub fn new(path: &'a std::path::Path, quiet: bool) -> Watch<'a> {
         Watch {
             path,
             quiet,
             read: std::sync::Mutex::new(None),
             strokes: std::sync::OnceLock::new(),
+            clock: std::sync::Mutex::new(crate::timings::Clock::start()),
         }
+    }
+
+    /// Prints the `--timings` table of the phases so far when `on`.
+    pub fn print_timings(&self, on: bool) {
+        use crate::timings::Table as _;
+        self.clock
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .print(on);
     }
 }
 
@@ -160,6 +172,13 @@ impl millplan_driver::feed::Watch for Watch<'_> {
         if let Some(b) = self.strokes.get() {
             b.finish_and_clear();
         }
+    }
+
+    fn lap(&self, name: &str) {
+        self.clock
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .lap(name);
     }
 }
 

@@ -156,6 +156,32 @@ fn post_phases_add_up_to_the_wall_time() {
     assert_phases_cover(&args, &[0]);
 }
 
+/// A pass 1 mm deep along a 30 mm line, in and out by rapids.
+const PASS: &str = "UNITS/MM\nCUTTER/10,5\nFEDRAT/500\nSPINDL/6000,CLW\nRAPID\nGOTO/0,0,50\nRAPID\nGOTO/0,0,20\nGOTO/0,0,19\nGOTO/30,0,19\nRAPID\nGOTO/30,0,50\nFINI\n";
+
+/// `feed` and `force` (one clock through the driver's reading, stock and
+/// force phases and the binary's writing).
+#[test]
+fn feed_and_force_phases_add_up_to_the_wall_time() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (p, out) = (dir.path().join("pass.apt"), dir.path().join("out.apt"));
+    std::fs::write(&p, PASS).expect("write");
+    let p = p.to_str().expect("utf8");
+    let model = [
+        "--stock",
+        "box:auto",
+        "--material",
+        "al7075",
+        "--resolution",
+        "0.5",
+        "-q",
+    ];
+    let feed = [&["feed", p, "-o", out.to_str().expect("utf8")][..], &model].concat();
+    assert_phases_cover(&feed, &[0, 3]);
+    let force = [&["force", p][..], &model].concat();
+    assert_phases_cover(&force, &[0, 3]);
+}
+
 #[test]
 fn the_table_parses_phases_parts_and_total() {
     let (phases, total) = parse(

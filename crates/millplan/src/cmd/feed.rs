@@ -4,7 +4,9 @@
 use crate::cmd::{read_options, write_program_file, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::Outputs;
-use millplan_driver::feed::{self as lib, FeedRequest, ModelRequest, Prepared, ScheduleError};
+use millplan_driver::feed::{
+    self as lib, FeedRequest, ModelRequest, Prepared, ScheduleError, Watch as _,
+};
 use millplan_driver::StockSpec;
 use std::path::{Path, PathBuf};
 
@@ -93,6 +95,10 @@ pub struct ModelArgs {
     /// No progress bar or warnings.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Print the wall time of each phase on standard error (they add up to
+    /// the whole run).
+    #[arg(long)]
+    pub timings: bool,
 }
 
 impl ModelArgs {
@@ -151,12 +157,6 @@ impl ModelArgs {
     }
 }
 
-/// Reads the program and builds its strokes and stock.
-pub fn prepare(path: &Path, m: &ModelArgs) -> CliResult<Prepared> {
-    let watch = crate::progress::Watch::new(path, m.quiet || m.json);
-    Ok(lib::prepare(&m.files(path)?, &m.request(), &watch)?)
-}
-
 /// A force run over the strokes `s` with a progress bar.
 fn with_bar<T>(
     s: &millplan_driver::Strokes,
@@ -197,10 +197,11 @@ fn schedule(
 
 pub fn run(a: Args) -> CliResult<i32> {
     let m = &a.model;
+    let watch = crate::progress::Watch::new(&a.path, m.quiet || m.json);
     let others = m.inputs();
     let mut inputs: Vec<&Path> = vec![&a.path];
     inputs.extend(others.iter().map(PathBuf::as_path));
-    let mut outputs = Outputs::plan(
+    let outputs = Outputs::plan(
         &inputs,
         &[
             ("-o", Some(&a.output)),
@@ -209,43 +210,66 @@ pub fn run(a: Args) -> CliResult<i32> {
         ],
         false,
     )?;
-    let p = prepare(&a.path, m)?;
+    watch.lap("arguments and outputs checked");
+    let p = lib::prepare(&m.files(&a.path)?, &m.request(), &watch)?;
     let req = m.request();
     let params = lib::feed_params(&request(&a), &req, &p, &crate::limits::loads())
         .map_err(CliError::input)?;
     let target = crate::cmd::target_with_machine(a.to, &a.output, &p.machine, p.program.source)?;
+    watch.lap("limits (learned from the input's forces when none is given), output dialect");
     let s = schedule(&a, &p, &req, params)?;
     let path = a.path.display().to_string();
     lib::stopped_spindle(&path, &s.before).map_err(CliError::input)?;
+    watch.lap("feeds scheduled (the input's forces, the feed iteration)");
     let s2 = lib::program_strokes(&req, &s.program, p.machine.rapid).map_err(CliError::input)?;
     let after = with_bar(&s2, m.quiet || m.json, |d| {
         lib::forces_after(&p, &s, &s2, d)
     })?;
+    watch.lap("written program simulated again");
+    let code = write_outputs(&a, &p, &s, &after, target, outputs, &watch)?;
+    watch.print_timings(m.timings);
+    Ok(code)
+}
+
+/// Writes the program, the table and the report, commits them and prints
+/// the summary; the exit code.
+fn write_outputs(
+    a: &Args,
+    p: &Prepared,
+    s: &lib::Scheduled,
+    after: &lib::ForceRun,
+    target: millplan_nc::write::Target,
+    mut outputs: Outputs,
+    watch: &crate::progress::Watch,
+) -> CliResult<i32> {
+    let m = &a.model;
     let wo = p.machine.write_options(target);
     write_program_file(&s.program, wo, &mut outputs, &a.output, &a.path, m.quiet)?;
     let output = a.output.display().to_string();
-    let summary = lib::FeedSummary::new(&p, &s, &after, &output, target.name());
+    let summary = lib::FeedSummary::new(p, s, after, &output, target.name());
     if let Some(t) = &m.table {
         outputs.write(t, lib::loads_csv(&s.before).as_bytes())?;
     }
     if let Some(r) = &m.report {
-        let inputs = m.report_inputs(&a.path, &p, &s.params.limits);
+        let inputs = m.report_inputs(&a.path, p, &s.params.limits);
         let html = lib::feed_report(
             inputs,
             &summary,
             &s.before,
-            &after,
+            after,
             &s.params.limits,
             &p.machine,
         );
         outputs.write(r, html.as_bytes())?;
     }
     outputs.commit()?;
+    watch.lap("outputs written, checked and renamed into place");
     if m.json {
         crate::cmd::print_json(serde_json::to_value(&summary).unwrap_or_default());
     } else {
         out!("{}", summary.render_text());
     }
+    watch.lap("summary printed");
     Ok(if summary.findings() {
         EXIT_FINDINGS
     } else {

@@ -92,6 +92,8 @@ pub fn run(a: Args) -> CliResult<i32> {
 
 /// `millplan force PATH`: the loads of every move.
 fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32> {
+    use millplan_driver::feed::Watch as _;
+    let watch = crate::progress::Watch::new(path, m.quiet || m.json);
     let others = m.inputs();
     let mut inputs: Vec<&Path> = vec![path];
     inputs.extend(others.iter().map(PathBuf::as_path));
@@ -105,7 +107,7 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
     )?;
     let limits =
         millplan_driver::feed::force_limits(&crate::limits::loads()).map_err(CliError::input)?;
-    let watch = crate::progress::Watch::new(path, m.quiet || m.json);
+    watch.lap("arguments, limits and outputs checked");
     let (p, run) = millplan_driver::feed::program_forces(&m.files(path)?, &m.request(), &watch)?;
     let name = path.display().to_string();
     let over = run.over_limits(&limits, &p.machine);
@@ -119,11 +121,14 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
         outputs.write(r, html.as_bytes())?;
     }
     outputs.commit()?;
+    watch.lap("outputs written and renamed into place");
     if m.json {
         crate::cmd::print_json(serde_json::to_value(&summary).unwrap_or_default());
     } else {
         out!("{}", summary.render_text(&name, &over));
     }
+    watch.lap("summary printed");
+    watch.print_timings(m.timings);
     Ok(if summary.findings() {
         crate::error::EXIT_FINDINGS
     } else {
