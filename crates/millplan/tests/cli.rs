@@ -674,10 +674,10 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// `reorder`, `tool`, `optimise`'s text and `speed`'s threads moved;
 /// 6,048 with the machine file read by the driver's `io`; 6,026 with
 /// `optimise`'s option checks in the driver (`Options::checked`); 5,447
-/// once `robot --stock` went through the driver; 5,495 with `--timings` on
-/// `feed` and `force` (the phases are the driver's, the clock and the
-/// table the binary's).
-const MAX_BINARY_LINES: usize = 5495;
+/// once `robot --stock` went through the driver; 5,563 with `--timings` on
+/// `feed`, `force`, `orient`, `reorder`, `gouge`, `raster` and `setup` (the
+/// laps where the binary's own steps end, one `Timings` group for all).
+const MAX_BINARY_LINES: usize = 5563;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into

@@ -182,6 +182,53 @@ fn feed_and_force_phases_add_up_to_the_wall_time() {
     assert_phases_cover(&force, &[0, 3]);
 }
 
+/// The commands over a part: `raster` writes a coarse finishing pass on
+/// the demo part, then `gouge`, `reorder`, `orient` and `setup` run on it.
+#[test]
+fn part_commands_phases_add_up_to_the_wall_time() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (stl, apt) = demo_raster(dir.path(), &["--stepover", "2", "--step", "1"]);
+    let f = |p: &std::path::Path| p.to_str().expect("utf8").to_string();
+    let (stl, apt) = (f(&stl), f(&apt));
+    let out = |n: &str| f(&dir.path().join(n));
+    let (r, o, ra) = (out("r.apt"), out("o.apt"), out("ra.apt"));
+    let raster = [
+        "raster",
+        "--stl",
+        &stl,
+        "--tool",
+        "ball:10",
+        "--stepover",
+        "2",
+        "--step",
+        "1",
+        "-o",
+        &ra,
+    ];
+    assert_phases_cover(&raster, &[0]);
+    assert_phases_cover(&["gouge", &apt, "--stl", &stl, "-q"], &[0, 3]);
+    let reorder = ["reorder", &apt, "--stl", &stl, "-o", &r, "-q"];
+    assert_phases_cover(&reorder, &[0, 3]);
+    let orient = [
+        "orient",
+        &apt,
+        "--stl",
+        &stl,
+        "--material",
+        "al7075",
+        "--samples",
+        "4",
+        "-o",
+        &o,
+        "-q",
+    ];
+    assert_phases_cover(&orient, &[0, 3]);
+    let setup = [
+        "setup", "--type", "ca", "--stl", &stl, "--cells", "200", "-q",
+    ];
+    assert_phases_cover(&setup, &[0, 3]);
+}
+
 #[test]
 fn the_table_parses_phases_parts_and_total() {
     let (phases, total) = parse(

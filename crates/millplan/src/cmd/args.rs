@@ -49,3 +49,12 @@ pub struct Quiet {
     #[arg(long, short)]
     pub quiet: bool,
 }
+
+/// `--timings` of the commands that name their phases.
+#[derive(clap::Args, Clone, Copy)]
+pub struct Timings {
+    /// Print the wall time of each phase on standard error (they add up to
+    /// the whole run).
+    #[arg(long = "timings")]
+    pub on: bool,
+}

@@ -95,10 +95,8 @@ pub struct ModelArgs {
     /// No progress bar or warnings.
     #[arg(long, short)]
     pub quiet: bool,
-    /// Print the wall time of each phase on standard error (they add up to
-    /// the whole run).
-    #[arg(long)]
-    pub timings: bool,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 impl ModelArgs {
@@ -227,7 +225,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     })?;
     watch.lap("written program simulated again");
     let code = write_outputs(&a, &p, &s, &after, target, outputs, &watch)?;
-    watch.print_timings(m.timings);
+    watch.print_timings(m.timings.on);
     Ok(code)
 }
 

@@ -128,7 +128,7 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
         out!("{}", summary.render_text(&name, &over));
     }
     watch.lap("summary printed");
-    watch.print_timings(m.timings);
+    watch.print_timings(m.timings.on);
     Ok(if summary.findings() {
         crate::error::EXIT_FINDINGS
     } else {

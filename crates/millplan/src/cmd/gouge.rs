@@ -3,6 +3,7 @@
 use crate::cmd::{print_diagnostics, read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::read_program;
+use crate::timings::Table as _;
 use millplan_driver::gouge::{self as lib, GougeRequest, BYTES_PER_SAMPLE};
 use millplan_plan::checks;
 use std::path::PathBuf;
@@ -45,9 +46,12 @@ pub struct Args {
     pub summary: crate::cmd::args::SummaryJson,
     #[command(flatten)]
     pub notes: crate::cmd::args::Quiet,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    let mut clock = crate::timings::Clock::start();
     let req = GougeRequest {
         tol: a.tol,
         step: a.step,
@@ -65,6 +69,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     if fallback.is_none() {
         lib::shape_is_known(&path, &parsed.program).map_err(CliError::input)?;
     }
+    clock.lap("arguments checked, program read");
     let mesh = a.part_units.read(&a.stl)?;
     print_diagnostics(
         &a.stl,
@@ -72,6 +77,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         a.notes.quiet || a.summary.json,
     );
     // Counted first: a step of 1e-9 on a long program is refused, not run.
+    clock.lap("part read");
     let n = lib::sample_count(&parsed.program, fallback, &g);
     crate::limits::check_memory(&lib::samples_needed(a.step, n), n * BYTES_PER_SAMPLE)?;
     let show = !a.notes.quiet && n >= lib::SHOWN_SAMPLES;
@@ -80,8 +86,11 @@ pub fn run(a: Args) -> CliResult<i32> {
         bar.set_position(done as u64)
     });
     bar.finish_and_clear();
+    clock.lap("points checked against the part");
     let report = lib::Report::new(&rep, a.tol);
     a.summary.print(&report, |r| r.render_text(&path));
+    clock.lap("summary printed");
+    clock.print(a.timings.on);
     if rep.moves_checked == 0 {
         return Err(CliError::input(format!(
             "{path}: no move could be checked ({})",

@@ -47,10 +47,8 @@ pub struct Args {
     /// to mm; without it the unit is guessed from the part's size.
     #[arg(long, value_enum)]
     pub stl_units: Option<UnitArg>,
-    /// Print the wall time of each phase on standard error (they add up to
-    /// the whole run).
-    #[arg(long)]
-    pub timings: bool,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -71,7 +69,7 @@ pub fn run(a: Args) -> CliResult<i32> {
             if a.ir {
                 out!("{}", millplan_nc::text::print(p));
                 clock.lap("IR printed");
-                clock.print(a.timings);
+                clock.print(a.timings.on);
                 return Ok(EXIT_OK);
             }
             let j = lib::program_json(p, parsed.diagnostics.len(), &machine);
@@ -98,6 +96,6 @@ pub fn run(a: Args) -> CliResult<i32> {
         }
     }
     clock.lap("printed");
-    clock.print(a.timings);
+    clock.print(a.timings.on);
     Ok(EXIT_OK)
 }

@@ -6,6 +6,7 @@ use crate::cmd::{print_diagnostics, read_options, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::read_materials as load_materials;
 use crate::io::{read_program, read_surface, Outputs};
+use crate::timings::{Clock, Table as _};
 use millplan_driver::orient::{self as lib, OrientRequest, Summary};
 use millplan_driver::StockSpec;
 use millplan_plan::leadtilt::{Objective, Stage};
@@ -144,6 +145,8 @@ pub struct Args {
     /// or F outside the machine); the run then ends with exit 3.
     #[arg(long)]
     pub force: bool,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -177,6 +180,7 @@ fn request(a: &Args) -> OrientRequest {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    let mut clock = Clock::start();
     let req = request(&a);
     let materials = load_materials(a.materials.as_deref())?;
     let p = lib::params(&req, &materials).map_err(CliError::input)?;
@@ -187,16 +191,19 @@ pub fn run(a: Args) -> CliResult<i32> {
     if let Some(StockSpec::Stl(b)) = &spec {
         inputs.push(b);
     }
-    let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], false)?;
+    let outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], false)?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    clock.lap("arguments, materials, machine file and outputs checked");
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
+    clock.lap("program read");
     let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
     let blank = match &spec {
         Some(s) => crate::io::read_blank(s, a.stl_units)?,
         None => None,
     };
+    clock.lap("part and stock files read");
     let (name, output) = (a.path.display().to_string(), a.output.display().to_string());
     let g = lib::OrientInputs {
         name: &name,
@@ -208,17 +215,34 @@ pub fn run(a: Args) -> CliResult<i32> {
         memory: crate::limits::get().memory,
     };
     let o = choose(&a, &req, p, &g)?;
+    clock.lap("lead and tilt chosen, the result checked");
+    let code = finish(&a, o, machine.write_options(target), outputs, &mut clock)?;
+    clock.print(a.timings.on);
+    Ok(code)
+}
+
+/// Writes the chosen program (none when no choice was made), commits and
+/// prints the summary; the exit code.
+fn finish(
+    a: &Args,
+    o: lib::Outcome,
+    wo: millplan_nc::write::WriteOptions,
+    mut outputs: Outputs,
+    clock: &mut Clock,
+) -> CliResult<i32> {
     if !o.chosen {
         outputs.commit()?;
-        report(&a, &o.summary);
+        report(a, &o.summary);
+        clock.lap("summary printed");
         return Ok(EXIT_FINDINGS);
     }
     let checked = crate::verdict::enforce(&o.checks, &a.path, a.force)?;
     let summary = o.summary.with_checks(o.checks);
-    let wo = machine.write_options(target);
     crate::cmd::write_program_file(&o.program, wo, &mut outputs, &a.output, &a.path, a.quiet)?;
     outputs.commit()?;
-    report(&a, &summary);
+    clock.lap("output written, read back and renamed into place");
+    report(a, &summary);
+    clock.lap("summary printed");
     Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
 }
 

@@ -3,6 +3,7 @@
 use crate::cmd::{print_diagnostics, write_program, TargetArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::Outputs;
+use crate::timings::Table as _;
 use millplan_driver::raster::{self as lib, RasterRequest};
 use millplan_plan::checks;
 use std::path::PathBuf;
@@ -80,6 +81,8 @@ pub struct Args {
     pub notes: crate::cmd::args::Quiet,
     #[command(flatten)]
     pub summary: crate::cmd::args::SummaryJson,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 fn request(a: &Args) -> RasterRequest {
@@ -98,6 +101,7 @@ fn request(a: &Args) -> RasterRequest {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    let mut clock = crate::timings::Clock::start();
     let p = lib::params(&request(&a)).map_err(CliError::input)?;
     let inputs: Vec<&std::path::Path> = [Some(a.stl.as_path()), a.machine.as_deref()]
         .into_iter()
@@ -105,7 +109,9 @@ pub fn run(a: Args) -> CliResult<i32> {
         .collect();
     let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], false)?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    clock.lap("arguments, machine file and outputs checked");
     let mesh = a.part_units.read(&a.stl)?;
+    clock.lap("part read");
     let limits = crate::limits::get();
     let (points, bytes) =
         lib::check_grid(&p, &mesh.bounds(), limits.moves as f64).map_err(CliError::input)?;
@@ -120,6 +126,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         a.notes.quiet,
     );
     let (prog, part) = lib::generate(&mesh, &p);
+    clock.lap("raster generated (drop-cutter)");
     if prog.move_count() == 0 {
         return Err(CliError::input(format!(
             "{}: the raster does not cross the part (check --boundary)",
@@ -129,15 +136,20 @@ pub fn run(a: Args) -> CliResult<i32> {
     let generated = millplan_nc::Dialect::Generated;
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, generated)?;
     let out = write_program(&prog, machine.write_options(target), &a.stl, a.notes.quiet)?;
+    clock.lap("program written");
     let (checks, rep) = lib::check((&prog, &out), target, &part, &machine, &p)
         .map_err(|e| CliError::internal(format!("{}: {e}", a.output.display())))?;
     crate::verdict::enforce(&checks, &a.output, a.force)?;
+    clock.lap("written program read back and checked");
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
+    clock.lap("output synced and renamed into place");
     let est = millplan_plan::timing::estimate_program(&prog, &machine);
     let output = a.output.display().to_string();
     let report = lib::Report::new(output, (&prog, &machine, &p), (&rep, &checks), &est);
     a.summary.print(&report, |r| r.render_text());
+    clock.lap("time estimate, summary printed");
+    clock.print(a.timings.on);
     Ok(if millplan_plan::safety::passed(&checks) {
         EXIT_OK
     } else {

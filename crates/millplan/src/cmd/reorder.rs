@@ -4,6 +4,7 @@
 use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, Outputs};
+use crate::timings::Table as _;
 use clap::ValueEnum;
 use millplan_driver::feed::file_name;
 use millplan_driver::reorder as lib;
@@ -124,6 +125,8 @@ pub struct Args {
     /// an S or F outside the machine); the run then ends with exit 3.
     #[arg(long)]
     pub force: bool,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 /// The arguments checked and the outputs planned, before any work.
@@ -147,13 +150,17 @@ fn plan(a: &Args) -> CliResult<(lib::ReorderRequest, ReorderParams, Outputs)> {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    let mut clock = crate::timings::Clock::start();
     let (req, rp, mut outputs) = plan(&a)?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    clock.lap("arguments, machine file and outputs checked");
     let quiet = a.notes.quiet;
     let parsed = read_program(&a.path, read_options(a.units, None)?)?;
     print_diagnostics(&a.path, &parsed.diagnostics, quiet || a.summary.json);
     let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
+    clock.lap("program read");
     let mesh = a.part_units.read(&a.stl)?;
+    clock.lap("part read");
     let long = millplan_driver::command_defaults::progress::long_program(&parsed.program);
     let bar = crate::progress::Phases::new(!quiet && long);
     let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
@@ -164,6 +171,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         lib::ReorderError::Pass(e) => crate::cmd::pass_error(&a.path, e),
         lib::ReorderError::NoOutcome => CliError::internal("the reorder pass left no outcome"),
     })?;
+    clock.lap("reordered and checked");
     let wo = cx.machine.write_options(target);
     let out = write_program(&r.program, wo, &a.path, quiet)?;
     crate::verdict::read_back(&out, target, &r.program, &a.output)?;
@@ -176,9 +184,12 @@ pub fn run(a: Args) -> CliResult<i32> {
         outputs.write(path, html.as_bytes())?;
     }
     outputs.commit()?;
+    clock.lap("outputs written, read back and renamed into place");
     let output = a.output.display().to_string();
     let summary = lib::Summary::new(Some(method(&a)), &r.outcome, output, &r.checks);
     a.summary.print(&summary, |s| s.render_text());
+    clock.lap("summary printed");
+    clock.print(a.timings.on);
     Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
 }
 

@@ -3,6 +3,7 @@
 
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::Outputs;
+use crate::timings::Table as _;
 use millplan_driver::setup::{self as lib, Kinematics, MachineType, SetupRequest};
 use millplan_plan::setup::{self, GridKind};
 use std::path::PathBuf;
@@ -84,6 +85,8 @@ pub struct Args {
     /// either.
     #[arg(long, short)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -161,6 +164,7 @@ fn plan_shown(
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    let mut clock = crate::timings::Clock::start();
     let inputs: Vec<&std::path::Path> = [Some(a.stl.as_path()), a.machine.as_deref()]
         .into_iter()
         .flatten()
@@ -177,10 +181,13 @@ pub fn run(a: Args) -> CliResult<i32> {
     lib::check(&req).map_err(CliError::input)?;
     let machine = machine(&a)?;
     let p = lib::params(&req).map_err(CliError::input)?;
+    clock.lap("arguments, machine file and outputs checked");
     let mut mesh = a.part_units.read(&a.stl)?;
+    clock.lap("part read");
     let t0 = std::time::Instant::now();
     let plan = plan_shown(&a, &mut mesh, &machine, &p)?;
     let secs = t0.elapsed().as_secs_f64();
+    clock.lap("cones of access and setups searched");
     let stl = a.stl.display().to_string();
     match lib::flipped_note(&plan, &stl) {
         Some(n) if !a.quiet && !a.summary.json => eprintln!("{n}"),
@@ -194,6 +201,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         outputs.write(path, html.as_bytes())?;
     }
     outputs.commit()?;
+    clock.lap("outputs written and renamed into place");
     let s = plan.summary(&mesh, &machine);
     let v = lib::verdict(&req, &mesh, &plan);
     if a.summary.json {
@@ -205,6 +213,8 @@ pub fn run(a: Args) -> CliResult<i32> {
             lib::render_text(&req, &a.stl.display().to_string(), (&s, &v), &plan)
         );
     }
+    clock.lap("summary printed");
+    clock.print(a.timings.on);
     Ok(if plan.feasible {
         EXIT_OK
     } else {

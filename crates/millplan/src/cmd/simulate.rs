@@ -92,10 +92,8 @@ pub struct Args {
     /// No progress bar or warnings.
     #[arg(long, short)]
     pub quiet: bool,
-    /// Print the wall time of each phase on standard error (they add up to
-    /// the whole run).
-    #[arg(long)]
-    pub timings: bool,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 fn request(a: &Args) -> SimRequest {
@@ -114,7 +112,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let mut clock = crate::timings::Clock::start();
     let code = run_timed(&a, &mut clock)?;
     clock.lap("summary printed");
-    clock.print(a.timings);
+    clock.print(a.timings.on);
     Ok(code)
 }
 

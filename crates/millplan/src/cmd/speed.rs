@@ -107,9 +107,8 @@ pub struct Args {
     /// Unit of the toolpath when the file does not say.
     #[arg(long, value_enum)]
     pub units: Option<UnitArg>,
-    /// Print the wall time of each phase on standard error.
-    #[arg(long)]
-    pub timings: bool,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
     #[command(flatten)]
     pub notes: crate::cmd::args::Quiet,
     /// Write the program even when a check before writing refuses it (an S
@@ -244,7 +243,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     cx.record("program written, its time estimated", t_write);
     let times = [read.time_before, time_after];
     report_run(&a, &req, &cx, (&out, times), outputs, target)?;
-    if a.timings {
+    if a.timings.on {
         crate::timings::print(&cx.timings(), t0);
     }
     Ok(if out.untrusted() || !checked {
