@@ -16,6 +16,7 @@ use millplan_plan::force::{simulate, ForceSetup, FzRange, LimitUse, MoveForces};
 use millplan_plan::force::{Maxima, Steps};
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context, PassError, Progress};
+use millplan_plan::safety::{self, Check, TipRule, Tolerances};
 use millplan_report::html::Verdict;
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
 use millplan_sim::stock::spec::StockSpec;
@@ -453,6 +454,46 @@ pub fn forces_after(
     simulate(&s.program, strokes, p.stock.clone(), &p.setup, check, done)
 }
 
+/// The checks of `output`, the program a feed run made of the prepared
+/// input ([`millplan_plan::safety::check`] with the request's tool bodies):
+/// the IR, S and F within the machine, every tip where the input put it,
+/// and no rapid, shank or holder in the initial stock. The loads are the
+/// feed summary's own (a move still over a limit is written and reported).
+pub fn checks(p: &Prepared, output: &Program, m: &ModelRequest) -> Result<Vec<Check>, String> {
+    let body = body_fn(m)?;
+    Ok(safety::check(&safety::Inputs {
+        input: &p.program,
+        output,
+        part: None,
+        stock: Some(&p.stock),
+        tool_body: &*body,
+        machine: Some(&p.machine),
+        tip: TipRule::Kept,
+        tol: Tolerances::default(),
+        loads: None,
+    }))
+}
+
+/// The stock check of the input itself, before any force is computed: a
+/// feed run keeps every position, so a rapid, shank or holder the input
+/// drives through the stock is in its output too, and is refused as it
+/// would be there (all its findings are the input's own).
+pub fn input_collisions(p: &Prepared, m: &ModelRequest) -> Result<Check, String> {
+    let body = body_fn(m)?;
+    let i = safety::Inputs {
+        input: &p.program,
+        output: &p.program,
+        part: None,
+        stock: Some(&p.stock),
+        tool_body: &*body,
+        machine: None,
+        tip: TipRule::Kept,
+        tol: Tolerances::default(),
+        loads: None,
+    };
+    Ok(safety::stock(&i, &p.stock))
+}
+
 /// The load limits of `--limit NAME=VALUE` (`loads`) with the feed-per-tooth
 /// range (`fz_max` None: each tool's from the material's chip loads).
 pub fn load_limits(
@@ -677,9 +718,12 @@ pub struct FeedSummary {
     pub dialect: &'static str,
     pub operations: Vec<OperationJson>,
     pub steps: Steps,
-    /// The verdict by the one rule: red when a move is still over a limit,
-    /// amber when no block's feed changed, a warning applies or the cycle
-    /// time grew, green otherwise.
+    /// The checks of the written program ([`checks`]).
+    pub checks: Vec<Check>,
+    /// The verdict by the one rule: red when a move is still over a limit
+    /// or a check failed (written under `--force`), amber when no block's
+    /// feed changed, a warning applies or the cycle time grew, green
+    /// otherwise.
     pub verdict: Verdict,
 }
 
@@ -690,11 +734,12 @@ fn first_lines(over: &[&MoveForces]) -> Vec<u32> {
 
 impl FeedSummary {
     /// The summary of a feed run: `s` the pass's result, `after` the written
-    /// program's loads, `output` its name, `dialect` the target's.
+    /// program's loads and `checks` its checks, `output` its name, `dialect`
+    /// the target's.
     pub fn new(
         p: &Prepared,
         s: &Scheduled,
-        after: &ForceRun,
+        (after, checks): (&ForceRun, Vec<Check>),
         output: &str,
         dialect: &'static str,
     ) -> Self {
@@ -710,6 +755,8 @@ impl FeedSummary {
             (c.blocks + c.air_blocks) as u64,
             [t0.total_s, t1.total_s],
         );
+        e.failed
+            .extend(millplan_report::html::failed_checks(&checks));
         let mut warnings = load_warnings(over.len(), &over_lines, 0, 0);
         let stock_contact = meets_stock(&s.before);
         if !stock_contact {
@@ -752,14 +799,16 @@ impl FeedSummary {
             dialect,
             operations: per_operation(&s.program, &s.before, after),
             steps: s.before.steps(&p.setup.grid),
+            checks,
             verdict,
         }
     }
 
     /// Whether the run found problems (exit 3): moves still over a limit,
-    /// or no cutting move that meets the stock.
+    /// no cutting move that meets the stock, or a check that failed (the
+    /// program written under `--force`).
     pub fn findings(&self) -> bool {
-        self.over_limit_after > 0 || !self.stock_contact
+        self.over_limit_after > 0 || !self.stock_contact || !safety::passed(&self.checks)
     }
 
     /// The summary in words, as `feed` prints it.

@@ -199,3 +199,44 @@ fn orient_refuses_a_rapid_through_the_stock_that_the_input_had() {
     assert!(err.contains("rapid through material"), "{err}");
     assert!(err.contains("(the input's own fault)"), "{err}");
 }
+
+/// `feed` keeps every position, so a rapid the input drives into the stock
+/// is in its output too: refused at its line before any force is computed
+/// (exit 3, nothing written), and written with exit 3 under --force, the
+/// check failed in the JSON.
+#[test]
+fn feed_refuses_a_rapid_into_the_stock_at_its_line() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let apt = dir.path().join("in.apt");
+    // Line 8: a rapid from 50 down to 15, 5 mm into the 20 mm box.
+    let program = "UNITS/MM\nCUTTER/10,5\nFEDRAT/500\nSPINDL/6000,CLW\nRAPID\nGOTO/0,0,50\nRAPID\nGOTO/0,0,15\nGOTO/0,0,14\nGOTO/5,0,14\nRAPID\nGOTO/5,0,50\nFINI\n";
+    std::fs::write(&apt, program).expect("write");
+    let out = dir.path().join("out.apt");
+    let run = |extra: &[&str]| {
+        bin()
+            .args(["feed", s(&apt), "-o", s(&out), "--material", "al7075"])
+            .args(["--stock", "box:-10,-10,0,40,10,20", "--resolution", "1"])
+            .args(extra)
+            .output()
+            .expect("runs")
+    };
+    let o = run(&["-q"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(!out.exists(), "nothing written");
+    assert_eq!(named_line(&err, &apt, "stock"), 8, "{err}");
+    assert!(err.contains("rapid through material"), "{err}");
+    assert!(err.contains("(the input's own fault)"), "{err}");
+    let o = run(&["-q", "--force", "--json"]);
+    assert_eq!(o.status.code(), Some(3));
+    assert!(out.exists(), "written under --force");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    let stock = v["checks"]
+        .as_array()
+        .expect("checks")
+        .iter()
+        .find(|c| c["name"] == "stock")
+        .expect("the stock check");
+    assert_eq!(stock["ok"], false, "{stock}");
+    assert_eq!(v["verdict"]["level"], "red", "{}", v["verdict"]);
+}

@@ -676,8 +676,9 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// `optimise`'s option checks in the driver (`Options::checked`); 5,447
 /// once `robot --stock` went through the driver; 5,563 with `--timings` on
 /// `feed`, `force`, `orient`, `reorder`, `gouge`, `raster` and `setup` (the
-/// laps where the binary's own steps end, one `Timings` group for all).
-const MAX_BINARY_LINES: usize = 5563;
+/// laps where the binary's own steps end, one `Timings` group for all);
+/// 5,577 with `feed`'s checks before writing and its `--force`.
+const MAX_BINARY_LINES: usize = 5577;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into

@@ -211,6 +211,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     watch.lap("arguments and outputs checked");
     let p = lib::prepare(&m.files(&a.path)?, &m.request(), &watch)?;
     let req = m.request();
+    let own = lib::input_collisions(&p, &req).map_err(CliError::input)?;
+    crate::verdict::enforce(&[own], &a.path, a.force)?;
+    watch.lap("the input's rapids, shank and holder on the stock");
     let params = lib::feed_params(&request(&a), &req, &p, &crate::limits::loads())
         .map_err(CliError::input)?;
     let target = crate::cmd::target_with_machine(a.to, &a.output, &p.machine, p.program.source)?;
@@ -223,8 +226,10 @@ pub fn run(a: Args) -> CliResult<i32> {
     let after = with_bar(&s2, m.quiet || m.json, |d| {
         lib::forces_after(&p, &s, &s2, d)
     })?;
-    watch.lap("written program simulated again");
-    let code = write_outputs(&a, &p, &s, &after, target, outputs, &watch)?;
+    let checks = lib::checks(&p, &s.program, &req).map_err(CliError::input)?;
+    crate::verdict::enforce(&checks, &a.path, a.force)?;
+    watch.lap("written program simulated again and checked");
+    let code = write_outputs(&a, &p, &s, (&after, checks), target, outputs, &watch)?;
     watch.print_timings(m.timings.on);
     Ok(code)
 }
@@ -235,7 +240,7 @@ fn write_outputs(
     a: &Args,
     p: &Prepared,
     s: &lib::Scheduled,
-    after: &lib::ForceRun,
+    (after, checks): (&lib::ForceRun, Vec<millplan_plan::safety::Check>),
     target: millplan_nc::write::Target,
     mut outputs: Outputs,
     watch: &crate::progress::Watch,
@@ -244,7 +249,7 @@ fn write_outputs(
     let wo = p.machine.write_options(target);
     write_program_file(&s.program, wo, &mut outputs, &a.output, &a.path, m.quiet)?;
     let output = a.output.display().to_string();
-    let summary = lib::FeedSummary::new(p, s, after, &output, target.name());
+    let summary = lib::FeedSummary::new(p, s, (after, checks), &output, target.name());
     if let Some(t) = &m.table {
         outputs.write(t, lib::loads_csv(&s.before).as_bytes())?;
     }
@@ -290,12 +295,16 @@ fn write_outputs(
 /// changes between
 /// blocks are brought within the feed acceleration by lowering feeds only.
 /// Positions, spindle speeds and feed modes are kept; canned cycles keep
-/// their feeds. The written program is simulated again: its own prediction.
+/// their feeds. The written program is simulated again: its own prediction;
+/// and checked before it is written: S and F within the machine, every tip
+/// where the input put it, no rapid, shank or holder in the stock (the
+/// input's own are refused before any force is computed).
 ///
 /// Exit codes: 0 done (moves over a limit by at most 0.5 %, within the
 /// model's resolution, are reported as such); 2 bad input; 3 the written
 /// program still exceeds a limit by more than 0.5 % somewhere (even
-/// --fz-min is too much there; the program is written).
+/// --fz-min is too much there; the program is written), or a check refused
+/// it (nothing written unless --force).
 #[derive(clap::Args)]
 pub struct Args {
     /// Program (APT/CL or G-code).
@@ -323,4 +332,9 @@ pub struct Args {
     /// acceleration, else 1000).
     #[arg(long)]
     pub feed_accel: Option<f64>,
+    /// Write the program even when a check refuses it (a rapid, shank or
+    /// holder in the stock, the input's own included; an S or F outside the
+    /// machine); the run then ends with exit 3.
+    #[arg(long)]
+    pub force: bool,
 }
