@@ -53,6 +53,16 @@ impl RobotSetup {
     }
 }
 
+/// `optimise`'s KRL options without `--robot` (`robot`: whether it is
+/// given): refused with the reason, for only the robot pass writes KRL.
+/// `motion` is `--krl-motion` as given (`None`: not given).
+pub fn krl_options(robot: bool, motion: Option<KrlMotion>) -> Result<(), String> {
+    match (robot, motion) {
+        (false, Some(_)) => Err("--krl-motion: optimise writes a KRL program, whose motions are LIN or SPLINE, only with --robot (the program compensated for a robot); without it the output is a program for a machine tool".into()),
+        _ => Ok(()),
+    }
+}
+
 /// The dialect the optimised program is written, re-read and checked in
 /// before the pass when the output is KRL: KRL has no spindle speed and
 /// no tool for the force model and the checks to work with, so the

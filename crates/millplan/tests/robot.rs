@@ -663,3 +663,78 @@ fn compensate_writes_spline_blocks_on_request() {
         assert!(!t.contains("\nLIN "), "spl_{i:03}: {t}");
     }
 }
+
+/// `--krl-motion` where no KRL program is written is refused (exit 2,
+/// the reason named, nothing written), not ignored: `optimise` without
+/// `--robot` writes G-code, `convert --to fanuc` writes G-code; given with
+/// a KRL output it is taken.
+#[test]
+fn krl_motion_without_a_krl_output_is_refused() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let nc = slot_nc(dir.path(), -6.0);
+    let out = dir.path().join("opt.nc");
+    let o = run(&[
+        "optimise",
+        nc.to_str().expect("utf8"),
+        "--krl-motion",
+        "spline",
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--krl-motion") && err.contains("--robot"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let o = run(&[
+        "optimise",
+        nc.to_str().expect("utf8"),
+        "--max-points",
+        "10",
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--robot"), "{err}");
+    assert!(!out.exists());
+    for motion in ["lin", "spline"] {
+        let o = run(&[
+            "convert",
+            nc.to_str().expect("utf8"),
+            "--to",
+            "fanuc",
+            "-o",
+            out.to_str().expect("utf8"),
+            "--krl-motion",
+            motion,
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{motion}: {err}");
+        assert!(
+            err.contains("--krl-motion") && err.contains("only a KRL program"),
+            "{err}"
+        );
+        assert!(!out.exists());
+    }
+    let src = dir.path().join("slot.src");
+    let o = run(&[
+        "convert",
+        nc.to_str().expect("utf8"),
+        "-o",
+        src.to_str().expect("utf8"),
+        "--krl-motion",
+        "lin",
+        "--lossy",
+    ]);
+    // Taken: written (exit 3 only for what --lossy drops, the tool call).
+    assert_ne!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(std::fs::read_to_string(&src).expect("src").contains("LIN "));
+}

@@ -196,6 +196,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         list_passes(a.json);
         return Ok(EXIT_OK);
     }
+    a.robot.check()?;
     let order = match &a.passes {
         Some(s) => passes::parse_list(s).map_err(|e| CliError::input(format!("--passes: {e}")))?,
         None => ORDER.to_vec(),
