@@ -74,10 +74,14 @@ pub fn check_target(source: millplan_nc::ir::Dialect) -> millplan_nc::write::Tar
         .unwrap_or(Target::Apt)
 }
 
-/// What the pass did, in the units of `robot compensate`.
+/// What the pass did, in the units of `robot compensate`: the deflection
+/// |Δp| of the tool tip under the process load before compensation, and
+/// after it the largest distance of the deflected tip from the path.
 #[derive(Clone, Debug, Serialize)]
 pub struct RobotSummary {
+    /// Mean |Δp| over the points, mm (before compensation).
     pub mean_deflection_mm: f64,
+    /// Largest |Δp|, mm (before compensation).
     pub max_deflection_mm: f64,
     /// The largest distance of the deflected tip from the path, commanded
     /// to the points read back from the KRL written, mm.
@@ -88,6 +92,36 @@ pub struct RobotSummary {
 }
 
 impl RobotSummary {
+    /// The rows of the report's robot section: (what, value).
+    pub fn rows(&self) -> Vec<(&'static str, String)> {
+        use crate::robot::sig;
+        let mm = |v: f64, d: i32| format!("{} mm", sig(v, d));
+        let mut rows = vec![
+            ("commanded points", self.points.to_string()),
+            (
+                "deflection before compensation, mean |Δp|",
+                mm(self.mean_deflection_mm, 4),
+            ),
+            (
+                "deflection before compensation, max |Δp|",
+                mm(self.max_deflection_mm, 4),
+            ),
+            (
+                "after compensation (the KRL read back), max distance of the tip from the path",
+                mm(self.residual_max_mm, 3),
+            ),
+            ("tolerance", format!("{} mm", self.tolerance_mm)),
+        ];
+        if let Some(l) = &self.loads {
+            rows.push(("moves under load", l.loaded_moves.to_string()));
+            rows.push((
+                "largest mean force of a move",
+                format!("{} N", sig(l.max_mean_force_n, 4)),
+            ));
+        }
+        rows
+    }
+
     pub fn render_text(&self) -> String {
         use crate::robot::sig;
         format!(
@@ -181,6 +215,7 @@ pub fn after_optimise(
     let done = run(s, (&w.program, posted), w.forces_after.as_ref(), &stem)
         .map_err(|e| format!("--robot: {e}"))?;
     w.bytes = done.files[0].1.clone().into_bytes();
+    w.summary.robot = Some(done.summary.clone());
     Ok(done)
 }
 

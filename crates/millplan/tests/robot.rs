@@ -738,3 +738,93 @@ fn krl_motion_without_a_krl_output_is_refused() {
     );
     assert!(std::fs::read_to_string(&src).expect("src").contains("LIN "));
 }
+
+/// `optimise --robot --json --report`: the robot pass's figures (the
+/// deflection before compensation, mean and max |Δp|, and the largest
+/// distance of the tip from the path that the KRL read back leaves) are
+/// keys of the typed summary and one section of the report, the same
+/// numbers as standard error prints without --json.
+#[test]
+fn optimise_robot_figures_in_json_and_report() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let nc = slot_nc(dir.path(), -6.0);
+    let out = dir.path().join("opt.src");
+    let report = dir.path().join("opt.html");
+    let mut args = vec![
+        "optimise",
+        nc.to_str().expect("utf8"),
+        "--material",
+        "en-aw-2007",
+        "--tool",
+        "flat:12",
+        "--flutes",
+        "3",
+        "--resolution",
+        "0.25",
+        "--stock",
+        "box:0,-20,-20,120,20,0",
+        "--robot",
+        "kr240",
+        "--pose",
+        "1300,-100,300,0",
+        "--max-points",
+        "0",
+        "-o",
+        out.to_str().expect("utf8"),
+        "--report",
+        report.to_str().expect("utf8"),
+    ];
+    let text = run(&args);
+    let err = String::from_utf8_lossy(&text.stderr).to_string();
+    assert!(text.status.success(), "{err}");
+    args.push("--json");
+    let j = json(&args);
+    let r = &j["robot"];
+    let num = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k}: {j}"));
+    let (mean, max, residual) = (
+        num("mean_deflection_mm"),
+        num("max_deflection_mm"),
+        num("residual_max_mm"),
+    );
+    assert!(mean > 0.01 && mean <= max, "{r}");
+    assert!(
+        residual <= num("tolerance_mm") && residual < 0.1 * max,
+        "{r}"
+    );
+    assert!(r["points"].as_u64().expect("points") > 480, "{r}");
+    assert!(
+        r["loads"]["max_mean_force_n"].as_f64().expect("force") > 100.0,
+        "{r}"
+    );
+    // Standard error prints the same figures (--json rounds lengths to the
+    // micrometre): mean and max to 4 significant digits, the residual to 3.
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("robot: deflection mean "))
+        .unwrap_or_else(|| panic!("{err}"));
+    let word_after = |w: &str| -> String {
+        let rest = line
+            .split_once(w)
+            .unwrap_or_else(|| panic!("{w} in {line}"))
+            .1;
+        rest.split_whitespace().next().unwrap_or("").to_string()
+    };
+    let printed = [
+        (word_after("deflection mean "), mean),
+        (word_after(", max "), max),
+        (word_after("leaves at most "), residual),
+    ];
+    let html = std::fs::read_to_string(&report).expect("report");
+    let section = html
+        .split_once("<section id=\"robot\">")
+        .map(|(_, s)| s.split("</section>").next().unwrap_or(""))
+        .expect("a robot section");
+    for (text, json) in &printed {
+        let v: f64 = text.parse().unwrap_or_else(|_| panic!("{text} in {line}"));
+        assert!((v - json).abs() <= 5e-4, "{line}\n{r}");
+        let cell = format!("<td>{text} mm</td>");
+        assert!(section.contains(&cell), "{cell} in {section}");
+    }
+    assert_eq!(html.matches("<section id=\"robot\">").count(), 1);
+    assert!(html.ends_with("</body></html>"));
+}
