@@ -2,7 +2,8 @@
 //!
 //! A program is read into a [`KrlProgram`]: its motions (`PTP`, `LIN`,
 //! `CIRC` with `E6POS` aggregates `{X, Y, Z, A, B, C, E1..E6, S, T}`, the
-//! approximation `C_DIS`/`C_VEL`/`C_ORI`), the path speed `$VEL.CP` (m/s)
+//! approximation `C_DIS`/`C_VEL`/`C_ORI`/`C_PTP`, each tag checked against
+//! the motion it follows, see [`Approx`]), the path speed `$VEL.CP` (m/s)
 //! and approximation distance `$APO.CDIS` (mm) in force at each, `$TOOL` and
 //! `$BASE`, and every other statement kept verbatim (user calls such as
 //! `MMPM(30000.0)`, `BAS(...)`, FOLD lines). A main program that calls
@@ -38,7 +39,12 @@ pub struct KrlPos {
     pub t: Option<u32>,
 }
 
-/// The approximation tag of a motion.
+/// The approximation tag of a motion. Which tags a motion takes (KSS 8.x)
+/// is checked as it is read: `LIN`, `CIRC` one of `C_DIS`, `C_VEL`,
+/// `C_ORI`; `PTP` `C_PTP`, `C_PTP` and one of those three (for a `LIN` or
+/// `CIRC` after it), or `C_DIS`; `SPTP` `C_SPL` or `C_PTP`; `SLIN`,
+/// `SCIRC` alone `C_SPL`; a segment of a SPLINE block none (its
+/// `ENDSPLINE C_SPL` approximates the block).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Approx {
     Exact,
@@ -47,6 +53,13 @@ pub enum Approx {
     Ori,
     /// `C_SPL`: a spline motion approximated by `$APO.CDIS`.
     Spl,
+    /// `C_PTP`: a point-to-point motion approximated by `$APO.CPTP`.
+    Ptp,
+    /// `C_PTP C_DIS`, `C_PTP C_ORI`, `C_PTP C_VEL`: a `PTP` approximated
+    /// into the `LIN` or `CIRC` after it by that criterion.
+    PtpDis,
+    PtpOri,
+    PtpVel,
 }
 
 /// A motion's target.
@@ -232,7 +245,7 @@ fn read_file(
     };
     for (k, raw) in crate::lines::split(src).enumerate() {
         let line = u32::try_from(k + 1).unwrap_or(u32::MAX);
-        let st = parse_line(raw, line).map_err(|e| fail(p, file, e))?;
+        let st = parse_line(raw, line, fs.block.is_some()).map_err(|e| fail(p, file, e))?;
         let Some(st) = st else { continue };
         in_block(fs.block, &st, raw, line).map_err(|e| fail(p, file, e))?;
         take(&mut fs, st, line, resolve, p, vel)?;
@@ -431,8 +444,9 @@ fn col_of(raw: &str, sub: &str) -> u32 {
     u32::try_from(off.min(raw.len()) + 1).unwrap_or(u32::MAX)
 }
 
-/// One line: `None` for blank lines, headers and `END`.
-fn parse_line(raw: &str, line: u32) -> Result<Option<Parsed1>, ParseError> {
+/// One line (`in_block`: inside a SPLINE block): `None` for blank lines,
+/// headers and `END`.
+fn parse_line(raw: &str, line: u32, in_block: bool) -> Result<Option<Parsed1>, ParseError> {
     let text = raw.trim();
     let code = text.split(';').next().unwrap_or("").trim();
     if text.is_empty() || text.starts_with('&') {
@@ -455,7 +469,7 @@ fn parse_line(raw: &str, line: u32) -> Result<Option<Parsed1>, ParseError> {
         "END" => Ok(None),
         "EXT" => Ok(Some(Parsed1::Ext(name_before_paren(&code[3..])))),
         "LIN" | "PTP" | "CIRC" | "SPL" | "SLIN" | "SCIRC" | "SPTP" => {
-            motion(word, code, raw, line).map(|s| Some(Parsed1::St(s)))
+            motion(word, code, (raw, line, in_block)).map(|s| Some(Parsed1::St(s)))
         }
         "SPLINE" => {
             let rest = code[word.len()..].trim();
@@ -519,7 +533,11 @@ fn assignment_or_call(
     Ok(Parsed1::St(Statement::Verbatim(text.to_string())))
 }
 
-fn motion(word: &str, code: &str, raw: &str, line: u32) -> Result<Statement, ParseError> {
+fn motion(
+    word: &str,
+    code: &str,
+    (raw, line, in_block): (&str, u32, bool),
+) -> Result<Statement, ParseError> {
     let rest = code[word.len()..].trim();
     // The target's closing brace (a circle's second): a `WITH` clause after
     // it may hold aggregates of its own.
@@ -529,7 +547,7 @@ fn motion(word: &str, code: &str, raw: &str, line: u32) -> Result<Statement, Par
         Some(end) if rest.starts_with('{') => (&rest[..=end], rest[end + 1..].trim()),
         _ => ("", rest),
     };
-    let (tail, approx) = approx_tag(tail);
+    let (tail, approx) = approximation(word, tail, (raw, line, in_block))?;
     let spline = matches!(word, "SPL" | "SLIN" | "SCIRC" | "SPTP");
     let (vel_cp, with) = if spline {
         with_clause(tail, raw, line)?
@@ -548,7 +566,7 @@ fn motion(word: &str, code: &str, raw: &str, line: u32) -> Result<Statement, Par
         {
             "a circle's angle (CA) is not read: the arc would be taken to end at its target"
         } else {
-            "only an approximation (C_DIS, C_VEL, C_ORI) is read after the target"
+            "only an approximation is read after the target"
         };
         return Err(ParseError::new(
             line,
@@ -593,20 +611,97 @@ fn motion(word: &str, code: &str, raw: &str, line: u32) -> Result<Statement, Par
     })
 }
 
-/// The approximation tag ending a motion's tail, and what is before it.
-fn approx_tag(tail: &str) -> (&str, Approx) {
-    let (before, last) = match tail.rfind(char::is_whitespace) {
-        Some(i) => (tail[..i].trim_end(), tail[i..].trim()),
-        None => ("", tail),
+/// The approximation tags ending the tail of a motion `word` (inside a
+/// SPLINE block when `in_block`), checked against those the motion takes
+/// (see [`Approx`]), and what is before them; a tag the motion does not
+/// take is an error at its column.
+fn approximation<'a>(
+    word: &str,
+    tail: &'a str,
+    (raw, line, in_block): (&str, u32, bool),
+) -> Result<(&'a str, Approx), ParseError> {
+    let tags = trailing_tags(tail);
+    let Some(&(first, _)) = tags.first() else {
+        return Ok((tail, Approx::Exact));
     };
-    let approx = match last.to_ascii_uppercase().as_str() {
-        "C_DIS" => Approx::Dis,
-        "C_VEL" => Approx::Vel,
-        "C_ORI" => Approx::Ori,
-        "C_SPL" => Approx::Spl,
-        _ => return (tail, Approx::Exact),
+    let up: Vec<String> = tags.iter().map(|t| t.1.to_ascii_uppercase()).collect();
+    let up: Vec<&str> = up.iter().map(String::as_str).collect();
+    let segment = in_block && word.starts_with('S');
+    let taken = if segment { Err(0) } else { takes(word, &up) };
+    match taken {
+        Ok(a) => Ok((tail[..first].trim_end(), a)),
+        Err(k) => {
+            let what = if segment || word == "SPL" {
+                "a segment of a SPLINE block is not approximated alone: the block's ENDSPLINE C_SPL approximates it"
+            } else {
+                match word {
+                    "LIN" | "CIRC" => "LIN and CIRC take one of C_DIS, C_VEL, C_ORI",
+                    "PTP" => "PTP takes C_PTP, C_PTP and one of C_DIS, C_ORI, C_VEL (for a LIN or CIRC after it), or C_DIS",
+                    "SPTP" => "SPTP takes C_SPL or C_PTP",
+                    _ => "SLIN and SCIRC outside a SPLINE block take C_SPL",
+                }
+            };
+            let before = up[..k].iter().fold(word.to_string(), |w, t| w + " " + t);
+            Err(ParseError::new(
+                line,
+                col_of(raw, tags[k].1),
+                format!("{} after {before}: {what}", up[k]),
+            ))
+        }
+    }
+}
+
+/// The approximation of a motion `word` from its tags `t` (upper case), or
+/// the index of the first tag it does not take.
+fn takes(word: &str, t: &[&str]) -> Result<Approx, usize> {
+    let cp = |s: &str| match s {
+        "C_DIS" => Some(Approx::Dis),
+        "C_VEL" => Some(Approx::Vel),
+        "C_ORI" => Some(Approx::Ori),
+        _ => None,
     };
-    (before, approx)
+    let found = match (word, t) {
+        ("LIN" | "CIRC", [a]) => cp(a),
+        // KSS 8's inline forms write `LIN XP1 C_DIS C_DIS`.
+        ("LIN" | "CIRC", [a, b]) if a == b => cp(a),
+        ("PTP" | "SPTP", ["C_PTP"]) => Some(Approx::Ptp),
+        ("PTP", ["C_PTP", b]) => match *b {
+            "C_DIS" => Some(Approx::PtpDis),
+            "C_ORI" => Some(Approx::PtpOri),
+            "C_VEL" => Some(Approx::PtpVel),
+            _ => None,
+        },
+        // KSS 8 approximates a PTP by C_DIS (its inline forms write it).
+        ("PTP", ["C_DIS"]) => Some(Approx::Dis),
+        ("SPTP" | "SLIN" | "SCIRC", ["C_SPL"]) => Some(Approx::Spl),
+        _ => None,
+    };
+    match found {
+        Some(a) => Ok(a),
+        None if t.len() > 1 && takes(word, &t[..1]).is_ok() => Err(1),
+        None => Err(0),
+    }
+}
+
+/// The words `C_…` ending `tail` (a motion's approximation tags), with
+/// their offsets in it; a value of a `WITH` assignment (`$X = C_Y`) is not
+/// one.
+fn trailing_tags(tail: &str) -> Vec<(usize, &str)> {
+    let words: Vec<(usize, &str)> = tail
+        .split_whitespace()
+        .map(|w| (w.as_ptr() as usize - tail.as_ptr() as usize, w))
+        .collect();
+    let is_tag = |w: &str| {
+        w.len() > 2
+            && w.get(..2).is_some_and(|c| c.eq_ignore_ascii_case("C_"))
+            && w.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_')
+    };
+    let n = words.iter().rev().take_while(|(_, w)| is_tag(w)).count();
+    let mut start = words.len() - n;
+    if start > 0 && n > 0 && words[start - 1].1.ends_with('=') {
+        start += 1;
+    }
+    words[start..].to_vec()
 }
 
 /// `{…}, {…}` of a `CIRC` or `SCIRC`: the auxiliary point and the target.
@@ -645,9 +740,7 @@ fn with_clause(text: &str, raw: &str, line: u32) -> Result<(Option<f64>, Vec<Str
         .ok_or_else(|| {
             err(
                 t,
-                format!(
-                    "{t}: only a WITH clause and an approximation (C_SPL, C_DIS) are read here"
-                ),
+                format!("{t}: only a WITH clause and an approximation are read here"),
             )
         })?;
     let (mut speed, mut kept) = (None, Vec::new());
@@ -817,7 +910,7 @@ fn component(
 /// The statement a line of KRL is (a `$VEL.CP`, `$TOOL`, … kept by the IR
 /// as text), or `None` for a line that is not one statement.
 pub fn statement_of(text: &str) -> Option<Statement> {
-    match parse_line(text, 1).ok()?? {
+    match parse_line(text, 1, false).ok()?? {
         Parsed1::St(s) => Some(s),
         Parsed1::Call(_, t) => Some(Statement::Verbatim(t)),
         _ => None,

@@ -548,6 +548,10 @@ fn approx_tag(a: Approx) -> &'static str {
         Approx::Vel => " C_VEL\n",
         Approx::Ori => " C_ORI\n",
         Approx::Spl => " C_SPL\n",
+        Approx::Ptp => " C_PTP\n",
+        Approx::PtpDis => " C_PTP C_DIS\n",
+        Approx::PtpOri => " C_PTP C_ORI\n",
+        Approx::PtpVel => " C_PTP C_VEL\n",
     }
 }
 
