@@ -660,3 +660,70 @@ fn words_after_a_target_are_located() {
         assert_eq!(e.error.col, col, "{e:?}");
     }
 }
+
+/// KRL → KRL: the comments right after a block's `SPLINE` line (a FOLD
+/// line, as KSS writes it) are written after it again, in the order read,
+/// in one file and where sub-programs cut the block (the line then opens
+/// the file that holds the block's first segment, the comments after it).
+#[test]
+fn comments_after_the_spline_line_stay_after_it() {
+    let src = "DEF c()\nPTP {X 0, Y 0, Z 9, A 0, B 90, C 0}\nSPLINE\n; first\n;FOLD SPL P1\nSPL {X 1, Y 0, Z 9, A 0, B 90, C 0}\n;ENDFOLD\nSPL {X 2, Y 0, Z 9, A 0, B 90, C 0}\nENDSPLINE\nEND\n";
+    let p = krl::read(src, &mut no_subs).expect("reads");
+    let after_spline = |t: &str| -> Vec<String> {
+        let lines: Vec<&str> = t.lines().collect();
+        let i = lines.iter().position(|l| *l == "SPLINE").expect("SPLINE");
+        lines[i..].iter().take(4).map(|l| l.to_string()).collect()
+    };
+    let one = write(
+        &p,
+        &KrlOptions {
+            name: "c".into(),
+            ..KrlOptions::default()
+        },
+    );
+    check(&p, &one).expect("same motions");
+    assert_eq!(one.len(), 1);
+    assert_eq!(
+        after_spline(&one[0].1)[..3],
+        ["SPLINE", "; first", ";FOLD SPL P1"],
+        "{}",
+        one[0].1
+    );
+    assert!(!one[0].1.contains("; first\nSPLINE"), "{}", one[0].1);
+    let subs = write(
+        &p,
+        &KrlOptions {
+            name: "c".into(),
+            max_points: 1,
+            ..KrlOptions::default()
+        },
+    );
+    check(&p, &subs).expect("same motions");
+    assert_eq!(subs.len(), 4, "{subs:?}");
+    assert!(!subs[1].1.contains("SPLINE"), "{}", subs[1].1);
+    assert_eq!(
+        after_spline(&subs[2].1),
+        [
+            "SPLINE",
+            "; first",
+            ";FOLD SPL P1",
+            "SPL {X 1.000, Y 0.000, Z 9.000, A 0.0000, B 90.0000, C 0.0000}"
+        ],
+        "{}",
+        subs[2].1
+    );
+    assert!(
+        subs[2].1.contains(";ENDFOLD\nENDSPLINE C_SPL\n"),
+        "{}",
+        subs[2].1
+    );
+    assert_eq!(
+        after_spline(&subs[3].1)[..2],
+        [
+            "SPLINE",
+            "SPL {X 2.000, Y 0.000, Z 9.000, A 0.0000, B 90.0000, C 0.0000}"
+        ],
+        "{}",
+        subs[3].1
+    );
+}

@@ -383,6 +383,9 @@ struct Render<'a> {
     /// line is written yet (it waits for the block's first statement, so
     /// that no file holds an empty block).
     theirs: Option<(&'a Statement, bool)>,
+    /// Comments read after that `SPLINE` line while it waits: written
+    /// after it when it is, in the order read.
+    held: Vec<&'a Statement>,
 }
 
 impl<'a> Render<'a> {
@@ -416,6 +419,7 @@ impl<'a> Render<'a> {
             ours: false,
             segments: 0,
             theirs: None,
+            held: Vec::new(),
         }
     }
 
@@ -448,7 +452,11 @@ impl<'a> Render<'a> {
         match &l.statement {
             Statement::SplineBegin(_) => return self.theirs = Some((&l.statement, false)),
             Statement::SplineEnd(_) => self.open_theirs(s),
-            _ if comment => {}
+            _ if comment => {
+                if let Some((_, false)) = self.theirs {
+                    return self.held.push(&l.statement);
+                }
+            }
             _ => self.open_theirs(s),
         }
         match &l.statement {
@@ -465,11 +473,15 @@ impl<'a> Render<'a> {
         statement(s, &l.statement);
     }
 
-    /// Writes the `SPLINE` line of a block read, if it waits.
+    /// Writes the `SPLINE` line of a block read, if it waits, and the
+    /// comments held after it.
     fn open_theirs(&mut self, s: &mut String) {
         if let Some((b, false)) = self.theirs {
             statement(s, b);
             self.theirs = Some((b, true));
+            for c in self.held.drain(..) {
+                statement(s, c);
+            }
         }
     }
 
