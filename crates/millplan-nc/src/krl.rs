@@ -142,6 +142,14 @@ pub enum Statement {
     /// `ENDSPLINE [C_SPL]`: the block ends, approximated or not.
     SplineEnd(bool),
     VelCp(f64),
+    /// `$VEL = {…}`: the aggregate as written (the right-hand side) and
+    /// its CP component, m/s, which sets the path speed as `$VEL.CP` does;
+    /// without one (only ORI1, ORI2) the path speed stays the one in force,
+    /// for KRL assigns only the components an aggregate names.
+    Vel {
+        cp: Option<f64>,
+        text: String,
+    },
     ApoCdis(f64),
     /// `$TOOL = …` / `$BASE = …`: the right-hand side as written.
     Tool(String),
@@ -330,7 +338,7 @@ fn in_force(
     vel: &mut Option<f64>,
 ) {
     match s {
-        Statement::VelCp(v) => *vel = Some(*v),
+        Statement::VelCp(v) | Statement::Vel { cp: Some(v), .. } => *vel = Some(*v),
         Statement::Move { vel_cp, with, .. } => {
             *vel_cp = vel_cp.or(fs.block.and_then(|b| b.1)).or(*vel);
             warn_with(p, fs.file, line, with);
@@ -340,27 +348,37 @@ fn in_force(
 }
 
 /// A finding for each option of a `WITH` clause kept as written but not
-/// modelled (a speed `$VEL = …` is read, so not named).
+/// modelled (a speed `$VEL = {CP …}` is read, so not named).
 fn warn_with(p: &mut KrlProgram, file: usize, line: u32, with: &[String]) {
     for o in with {
-        if !sets_path_speed(o) {
-            p.warnings.push((
-                file,
-                line,
-                format!("WITH {o}: kept as written; the toolpath read does not model it"),
-            ));
-        }
+        let m = if sets_path_speed(o) {
+            continue;
+        } else if is_vel(o) {
+            format!("WITH {o}: no CP, so the path speed stays the one in force; the orientation speeds are kept as written, the toolpath read does not model them")
+        } else {
+            format!("WITH {o}: kept as written; the toolpath read does not model it")
+        };
+        p.warnings.push((file, line, m));
     }
 }
 
-/// Whether a `WITH` option sets the path speed (`$VEL = {CP …}`, read as
-/// the motion's speed), and not another variable whose name starts alike
-/// (`$VEL_EXTAX`, `$VEL_AXIS`).
-pub(crate) fn sets_path_speed(option: &str) -> bool {
+/// Whether an assignment is to `$VEL`, not to another variable whose name
+/// starts alike (`$VEL_EXTAX`, `$VEL_AXIS`) or to one component (`$VEL.CP`).
+fn is_vel(option: &str) -> bool {
     option
         .split('=')
         .next()
         .is_some_and(|l| l.trim().eq_ignore_ascii_case("$VEL"))
+}
+
+/// Whether a `WITH` option sets the path speed: `$VEL = {CP …}` or
+/// `$VEL = SVEL_CP(…)`, read as the motion's speed; a `$VEL = {ORI1 …}`
+/// without CP does not.
+pub(crate) fn sets_path_speed(option: &str) -> bool {
+    is_vel(option)
+        && option
+            .split_once('=')
+            .is_some_and(|(_, r)| matches!(vel_value(r.trim()), Ok(Some(_))))
 }
 
 /// Whether a `WITH` option moves the motion's frame (`$BASE`, `$TOOL`, the
@@ -516,6 +534,17 @@ fn assignment_or_call(
         };
         match l.as_str() {
             "$VEL.CP" => return Ok(Parsed1::St(Statement::VelCp(number("$VEL.CP")?))),
+            "$VEL" if r.starts_with('{') => {
+                let cp = vel_value(r).map_err(|()| {
+                    ParseError::new(
+                        line,
+                        col,
+                        format!("$VEL = {r}: its CP, the path speed (m/s, a number from 0 up), is not read from it"),
+                    )
+                })?;
+                let text = r.to_string();
+                return Ok(Parsed1::St(Statement::Vel { cp, text }));
+            }
             "$APO.CDIS" => return Ok(Parsed1::St(Statement::ApoCdis(number("$APO.CDIS")?))),
             "$TOOL" => return Ok(Parsed1::St(Statement::Tool(r.to_string()))),
             "$BASE" => return Ok(Parsed1::St(Statement::Base(r.to_string()))),
@@ -762,7 +791,10 @@ fn with_clause(text: &str, raw: &str, line: u32) -> Result<(Option<f64>, Vec<Str
         match l.as_str() {
             "$VEL.CP" => speed = Some(speed_number(r).ok_or_else(bad)?),
             "$VEL" => {
-                speed = Some(vel_aggregate_cp(r).ok_or_else(bad)?);
+                // Without CP the speed in force stays (the option is kept).
+                if let Some(v) = vel_value(r).map_err(|()| bad())? {
+                    speed = Some(v);
+                }
                 kept.push(part.to_string());
             }
             _ => kept.push(part.to_string()),
@@ -779,21 +811,29 @@ fn speed_number(s: &str) -> Option<f64> {
         .filter(|v| v.is_finite() && *v >= 0.0)
 }
 
-/// The CP component of `{CP 0.2, ORI1 …}` or the first argument of
-/// `SVEL_CP(0.2, …)`.
-fn vel_aggregate_cp(r: &str) -> Option<f64> {
+/// The path speed a `$VEL` value sets, m/s: the CP component of
+/// `{CP 0.2, ORI1 …}` (an aggregate without one, `{ORI1 …, ORI2 …}`, sets
+/// none: `Ok(None)`) or the first argument of `SVEL_CP(0.2, …)`; `Err`
+/// when a CP or that argument is not a speed, or the value is neither.
+fn vel_value(r: &str) -> Result<Option<f64>, ()> {
     if let Some(inner) = r.strip_prefix('{').and_then(|r| r.strip_suffix('}')) {
         let inner = inner.split_once(':').map_or(inner, |(_, r)| r);
-        return inner.split(',').find_map(|c| {
+        let mut cp = None;
+        for c in inner.split(',') {
             let mut it = c.split_whitespace();
-            let key = it.next()?;
-            key.eq_ignore_ascii_case("CP")
-                .then(|| speed_number(it.next()?))?
-        });
+            let (Some(key), value) = (it.next(), it.next()) else {
+                continue;
+            };
+            if key.eq_ignore_ascii_case("CP") {
+                cp = Some(value.and_then(speed_number).ok_or(())?);
+            }
+        }
+        return Ok(cp);
     }
     let up = r.to_ascii_uppercase();
-    let args = up.strip_prefix("SVEL_CP")?.trim_start().strip_prefix('(')?;
-    speed_number(args.split([',', ')']).next()?)
+    let args = up.strip_prefix("SVEL_CP").map(str::trim_start);
+    let first = args.and_then(|a| a.strip_prefix('(')?.split([',', ')']).next());
+    first.and_then(speed_number).map(Some).ok_or(())
 }
 
 /// `s` split at the commas outside braces and parentheses.
@@ -1085,6 +1125,7 @@ impl KrlProgram {
     fn event(&self, l: &Located, op: &mut Operation) {
         let text = match &l.statement {
             Statement::VelCp(v) => format!("$VEL.CP = {v}"),
+            Statement::Vel { text, .. } => format!("$VEL = {text}"),
             Statement::ApoCdis(v) => format!("$APO.CDIS = {v}"),
             Statement::Tool(t) => format!("$TOOL = {t}"),
             Statement::Base(b) => format!("$BASE = {b}"),

@@ -461,7 +461,7 @@ impl<'a> Render<'a> {
         }
         match &l.statement {
             Statement::SplineEnd(_) => self.theirs = None,
-            Statement::VelCp(v) => {
+            Statement::VelCp(v) | Statement::Vel { cp: Some(v), .. } => {
                 self.vel = Some(*v);
                 self.written_vel = Some(*v);
             }
@@ -602,6 +602,9 @@ fn statement(s: &mut String, st: &Statement) {
         Statement::SplineEnd(false) => s.push_str("ENDSPLINE\n"),
         Statement::VelCp(v) => {
             let _ = writeln!(s, "$VEL.CP = {v:.6}");
+        }
+        Statement::Vel { text, .. } => {
+            let _ = writeln!(s, "$VEL = {text}");
         }
         Statement::ApoCdis(v) => {
             let _ = writeln!(s, "$APO.CDIS = {v:.3}");
