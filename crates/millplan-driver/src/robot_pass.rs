@@ -30,6 +30,8 @@ pub struct RobotSetup {
     pub motion: KrlMotion,
     /// How far the deflected tip may land from the nominal path, mm.
     pub tol: f64,
+    /// Correct the tool's orientation too (`--orientation`).
+    pub orientation: bool,
 }
 
 impl RobotSetup {
@@ -49,6 +51,7 @@ impl RobotSetup {
             max_points,
             motion: KrlMotion::Lin,
             tol,
+            orientation: false,
         })
     }
 }
@@ -89,6 +92,15 @@ pub struct RobotSummary {
     pub tolerance_mm: f64,
     pub points: usize,
     pub loads: Option<LoadSummary>,
+    /// The tool's turn |Δθ| under the load before compensation, degrees:
+    /// the largest.
+    pub max_rotation_deg: f64,
+    /// The largest angle between the deflected tool at the commanded
+    /// points and the nominal tool, degrees: the turn itself unless
+    /// `orientation`.
+    pub residual_rotation_max_deg: f64,
+    /// Whether the orientation was corrected (`--orientation`).
+    pub orientation: bool,
 }
 
 impl RobotSummary {
@@ -112,6 +124,17 @@ impl RobotSummary {
             ),
             ("tolerance", format!("{} mm", self.tolerance_mm)),
         ];
+        let deg = |v: f64| format!("{}°", sig(v, 3));
+        rows.push((
+            "tool turned by the load, max |Δθ|",
+            deg(self.max_rotation_deg),
+        ));
+        let after = if self.orientation {
+            "after compensation, orientation corrected: max angle to the nominal tool"
+        } else {
+            "after compensation, orientation not corrected: max angle to the nominal tool"
+        };
+        rows.push((after, deg(self.residual_rotation_max_deg)));
         if let Some(l) = &self.loads {
             rows.push(("moves under load", l.loaded_moves.to_string()));
             rows.push((
@@ -158,8 +181,16 @@ pub fn run(
     )?;
     let load = move_loads(program, forces);
     let err = |e: machining::MachiningError| e.to_string();
-    let c = machining::compensate_program(&s.robot, s.variant, program, &s.place, &load, s.spacing)
-        .map_err(err)?;
+    let c = machining::compensate_program_with(
+        &s.robot,
+        s.variant,
+        program,
+        &s.place,
+        &load,
+        s.spacing,
+        s.orientation,
+    )
+    .map_err(err)?;
     let k = machining::krl_program(name, &c.runs, &s.place, s.spacing / 2.0);
     let o = KrlOptions {
         name: name.into(),
@@ -183,6 +214,11 @@ pub fn run(
         tolerance_mm: s.tol,
         points: c.points,
         loads: LoadSummary::of(&load),
+        // Six digits, as `robot compensate` prints them (the JSON's
+        // rounding keeps keys that name a rotation whole).
+        max_rotation_deg: crate::robot::sig(c.rot_max_deg, 6),
+        residual_rotation_max_deg: crate::robot::sig(c.residual_rot_max_deg, 6),
+        orientation: c.orientation,
     };
     Ok(RobotWritten { files, summary })
 }

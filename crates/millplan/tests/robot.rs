@@ -828,3 +828,85 @@ fn optimise_robot_figures_in_json_and_report() {
     assert_eq!(html.matches("<section id=\"robot\">").count(), 1);
     assert!(html.ends_with("</body></html>"));
 }
+
+/// `optimise --robot --orientation`: the orientation corrected as `robot
+/// compensate --orientation` does it (process-models §4.4, optional): the
+/// tool's turn under the load is left at the commanded points without it
+/// and (nearly) gone with it, the position held within --tol either way;
+/// the KRL differs in A, B, C only. Without --robot the option is refused.
+#[test]
+fn optimise_robot_corrects_the_orientation_on_request() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let nc = slot_nc(dir.path(), -6.0);
+    let run_with = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "optimise",
+            nc.to_str().expect("utf8"),
+            "--material",
+            "en-aw-2007",
+            "--tool",
+            "flat:12",
+            "--flutes",
+            "3",
+            "--resolution",
+            "0.25",
+            "--stock",
+            "box:0,-20,-20,120,20,0",
+            "--robot",
+            "kr240",
+            "--pose",
+            "1300,-100,300,0",
+            "--max-points",
+            "0",
+            "--json",
+            "-o",
+            out.to_str().expect("utf8"),
+        ];
+        args.extend_from_slice(extra);
+        let j = json(&args);
+        (j["robot"].clone(), krl_poses(&out))
+    };
+    let (plain, pos_plain) = run_with("plain.src", &[]);
+    let (turned, pos_turned) = run_with("turned.src", &["--orientation"]);
+    let f = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k}: {r}"));
+    assert_eq!(
+        (
+            plain["orientation"].as_bool(),
+            turned["orientation"].as_bool()
+        ),
+        (Some(false), Some(true))
+    );
+    let rot = f(&plain, "max_rotation_deg");
+    assert!(rot > 0.002, "{plain}");
+    assert!(
+        f(&plain, "residual_rotation_max_deg") >= 0.5 * rot,
+        "{plain}"
+    );
+    assert!(
+        f(&turned, "residual_rotation_max_deg") <= 0.05 * rot,
+        "{turned}"
+    );
+    assert!(
+        f(&turned, "residual_max_mm") <= f(&turned, "tolerance_mm"),
+        "{turned}"
+    );
+    assert_eq!(pos_plain.len(), pos_turned.len());
+    let (mut moved, mut turned_abc) = (0.0f64, 0.0f64);
+    for ((p0, a0), (p1, a1)) in pos_plain.iter().zip(&pos_turned) {
+        moved = moved.max((0..3).map(|i| (p0[i] - p1[i]).abs()).fold(0.0, f64::max));
+        turned_abc = turned_abc.max((0..3).map(|i| (a0[i] - a1[i]).abs()).fold(0.0, f64::max));
+    }
+    assert!(turned_abc > 1e-3, "{turned_abc}");
+    assert!(moved < 0.01, "{moved}");
+    let o = run(&[
+        "optimise",
+        nc.to_str().expect("utf8"),
+        "--orientation",
+        "-o",
+        dir.path().join("x.nc").to_str().expect("utf8"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--robot"), "{err}");
+}

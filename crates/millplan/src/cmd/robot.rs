@@ -363,6 +363,12 @@ pub struct OptimiseRobotArgs {
     /// robot's program is KRL.
     #[arg(long, value_name = "lin|spline")]
     pub krl_motion: Option<millplan_nc::write::krl::KrlMotion>,
+    /// With --robot: correct the tool's orientation too, as `robot
+    /// compensate --orientation` does (each point commanded turned back by
+    /// the angle the load turns the tool there); without it only the
+    /// position is corrected.
+    #[arg(long, requires = "robot")]
+    pub orientation: bool,
 }
 
 impl OptimiseRobotArgs {
@@ -389,6 +395,7 @@ pub fn after_optimise(
     let mut setup =
         RobotSetup::new(load_robot(name)?, pose, r.max_points, tol).map_err(CliError::input)?;
     setup.motion = r.krl_motion.unwrap_or_default();
+    setup.orientation = r.orientation;
     let done =
         millplan_driver::robot_pass::after_optimise(&setup, run, w, output, crate::limits::get())
             .map_err(CliError::input)?;
