@@ -23,8 +23,9 @@ pub struct ConvertRequest {
     pub lossy: bool,
     /// `--max-points`: motions per KRL sub-program (0 or none: one file).
     pub max_points: Option<usize>,
-    /// `--krl-motion`: each point one LIN, or runs as SPLINE blocks.
-    pub motion: krl::KrlMotion,
+    /// `--krl-motion`: each point one LIN, or runs as SPLINE blocks (none
+    /// given: LIN).
+    pub motion: Option<krl::KrlMotion>,
 }
 
 /// The dialect to write: `--to`, else the machine file's control, else the
@@ -109,14 +110,19 @@ pub fn krl_files(
     output: &Path,
     out: &[u8],
 ) -> Result<Option<KrlFiles>, SplitError> {
-    let n = r.max_points.unwrap_or_default();
-    if n == 0 && r.motion == krl::KrlMotion::Lin {
-        return Ok(None);
-    }
     if target != Target::Krl {
-        return Err(SplitError::Option(
-            "--max-points, --krl-motion: sub-programs and SPLINE blocks are KRL's; give --to krl or an output named .src".into(),
-        ));
+        return match krl_only_given(r) {
+            Some(opt) => Err(SplitError::Option(format!(
+                "{opt}: only a KRL program has sub-programs and LIN or SPLINE motions, and the output is {} (give --to krl or an output named .src, or leave {opt} out)",
+                target.name()
+            ))),
+            None => Ok(None),
+        };
+    }
+    let n = r.max_points.unwrap_or_default();
+    let motion = r.motion.unwrap_or_default();
+    if n == 0 && motion == krl::KrlMotion::Lin {
+        return Ok(None);
     }
     if output.as_os_str() == "-" {
         return Err(SplitError::Option(
@@ -126,12 +132,23 @@ pub fn krl_files(
     let o = krl::KrlOptions {
         name: krl::stem(output),
         max_points: n,
-        motion: r.motion,
+        motion,
         ..Default::default()
     };
     krl::split(&String::from_utf8_lossy(out), &o)
         .map(Some)
         .map_err(|e| SplitError::Split(format!("{}: {e}; not written", output.display())))
+}
+
+/// The KRL-only options given (`--max-points`, `--krl-motion`), named as
+/// the command line spells them; `None` when neither is.
+fn krl_only_given(r: &ConvertRequest) -> Option<&'static str> {
+    match (r.max_points.is_some(), r.motion.is_some()) {
+        (true, true) => Some("--max-points, --krl-motion"),
+        (true, false) => Some("--max-points"),
+        (false, true) => Some("--krl-motion"),
+        (false, false) => None,
+    }
 }
 
 /// What `convert --json` prints.

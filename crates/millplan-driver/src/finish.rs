@@ -46,6 +46,10 @@ pub struct Summary {
     pub settings: Vec<Setting>,
     pub dialect: String,
     pub moves: usize,
+    /// `optimise --robot`: what the compensation pass found and left
+    /// (absent without it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub robot: Option<crate::robot_pass::RobotSummary>,
 }
 
 /// The written program with its checks.
@@ -219,6 +223,7 @@ impl Job {
             settings: self.settings.clone(),
             dialect: wo.target.name().to_string(),
             moves: o.program.move_count(),
+            robot: None,
         };
         s.level = crate::report::level(&s);
         s

@@ -361,13 +361,32 @@ fn figures(p: &Plotted) -> Vec<(String, String)> {
     v
 }
 
-/// The report page.
+/// The report page; with `optimise --robot` it ends with the robot
+/// section.
 pub fn html(s: &Summary, names: &InputNames, p: &Plotted) -> String {
-    report_page(
+    let page = report_page(
         &format!("millplan optimise: {}", names.program),
         "The program through the passes its inputs allow, written, read back from its own bytes and checked before it was put in place.",
         &notes(s, names),
         &rows(s),
         &figures(p),
-    )
+    );
+    const END: &str = "</body></html>";
+    match (&s.robot, page.strip_suffix(END)) {
+        (Some(r), Some(body)) => format!("{body}{}{END}", robot_section(r)),
+        _ => page,
+    }
+}
+
+/// The section of the robot pass: the tip's deflection under the process
+/// load before compensation and what the compensated KRL leaves.
+fn robot_section(r: &crate::robot_pass::RobotSummary) -> String {
+    let mut h = String::from(
+        "<section id=\"robot\"><h2>Robot compensation</h2><p>The tool tip's deflection |Δp| under the process load on the compliant robot, at the commanded points, before compensation; after it, the KRL written is read back and run on the robot model again.</p><table>",
+    );
+    for (k, v) in r.rows() {
+        h.push_str(&format!("<tr><td>{k}</td><td>{v}</td></tr>"));
+    }
+    h.push_str("</table></section>");
+    h
 }

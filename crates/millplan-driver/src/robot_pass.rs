@@ -30,6 +30,8 @@ pub struct RobotSetup {
     pub motion: KrlMotion,
     /// How far the deflected tip may land from the nominal path, mm.
     pub tol: f64,
+    /// Correct the tool's orientation too (`--orientation`).
+    pub orientation: bool,
 }
 
 impl RobotSetup {
@@ -49,7 +51,18 @@ impl RobotSetup {
             max_points,
             motion: KrlMotion::Lin,
             tol,
+            orientation: false,
         })
+    }
+}
+
+/// `optimise`'s KRL options without `--robot` (`robot`: whether it is
+/// given): refused with the reason, for only the robot pass writes KRL.
+/// `motion` is `--krl-motion` as given (`None`: not given).
+pub fn krl_options(robot: bool, motion: Option<KrlMotion>) -> Result<(), String> {
+    match (robot, motion) {
+        (false, Some(_)) => Err("--krl-motion: optimise writes a KRL program, whose motions are LIN or SPLINE, only with --robot (the program compensated for a robot); without it the output is a program for a machine tool".into()),
+        _ => Ok(()),
     }
 }
 
@@ -64,10 +77,14 @@ pub fn check_target(source: millplan_nc::ir::Dialect) -> millplan_nc::write::Tar
         .unwrap_or(Target::Apt)
 }
 
-/// What the pass did, in the units of `robot compensate`.
+/// What the pass did, in the units of `robot compensate`: the deflection
+/// |Δp| of the tool tip under the process load before compensation, and
+/// after it the largest distance of the deflected tip from the path.
 #[derive(Clone, Debug, Serialize)]
 pub struct RobotSummary {
+    /// Mean |Δp| over the points, mm (before compensation).
     pub mean_deflection_mm: f64,
+    /// Largest |Δp|, mm (before compensation).
     pub max_deflection_mm: f64,
     /// The largest distance of the deflected tip from the path, commanded
     /// to the points read back from the KRL written, mm.
@@ -75,9 +92,59 @@ pub struct RobotSummary {
     pub tolerance_mm: f64,
     pub points: usize,
     pub loads: Option<LoadSummary>,
+    /// The tool's turn |Δθ| under the load before compensation, degrees:
+    /// the largest.
+    pub max_rotation_deg: f64,
+    /// The largest angle between the deflected tool at the commanded
+    /// points and the nominal tool, degrees: the turn itself unless
+    /// `orientation`.
+    pub residual_rotation_max_deg: f64,
+    /// Whether the orientation was corrected (`--orientation`).
+    pub orientation: bool,
 }
 
 impl RobotSummary {
+    /// The rows of the report's robot section: (what, value).
+    pub fn rows(&self) -> Vec<(&'static str, String)> {
+        use crate::robot::sig;
+        let mm = |v: f64, d: i32| format!("{} mm", sig(v, d));
+        let mut rows = vec![
+            ("commanded points", self.points.to_string()),
+            (
+                "deflection before compensation, mean |Δp|",
+                mm(self.mean_deflection_mm, 4),
+            ),
+            (
+                "deflection before compensation, max |Δp|",
+                mm(self.max_deflection_mm, 4),
+            ),
+            (
+                "after compensation (the KRL read back), max distance of the tip from the path",
+                mm(self.residual_max_mm, 3),
+            ),
+            ("tolerance", format!("{} mm", self.tolerance_mm)),
+        ];
+        let deg = |v: f64| format!("{}°", sig(v, 3));
+        rows.push((
+            "tool turned by the load, max |Δθ|",
+            deg(self.max_rotation_deg),
+        ));
+        let after = if self.orientation {
+            "after compensation, orientation corrected: max angle to the nominal tool"
+        } else {
+            "after compensation, orientation not corrected: max angle to the nominal tool"
+        };
+        rows.push((after, deg(self.residual_rotation_max_deg)));
+        if let Some(l) = &self.loads {
+            rows.push(("moves under load", l.loaded_moves.to_string()));
+            rows.push((
+                "largest mean force of a move",
+                format!("{} N", sig(l.max_mean_force_n, 4)),
+            ));
+        }
+        rows
+    }
+
     pub fn render_text(&self) -> String {
         use crate::robot::sig;
         format!(
@@ -114,8 +181,16 @@ pub fn run(
     )?;
     let load = move_loads(program, forces);
     let err = |e: machining::MachiningError| e.to_string();
-    let c = machining::compensate_program(&s.robot, s.variant, program, &s.place, &load, s.spacing)
-        .map_err(err)?;
+    let c = machining::compensate_program_with(
+        &s.robot,
+        s.variant,
+        program,
+        &s.place,
+        &load,
+        s.spacing,
+        s.orientation,
+    )
+    .map_err(err)?;
     let k = machining::krl_program(name, &c.runs, &s.place, s.spacing / 2.0);
     let o = KrlOptions {
         name: name.into(),
@@ -139,6 +214,11 @@ pub fn run(
         tolerance_mm: s.tol,
         points: c.points,
         loads: LoadSummary::of(&load),
+        // Six digits, as `robot compensate` prints them (the JSON's
+        // rounding keeps keys that name a rotation whole).
+        max_rotation_deg: crate::robot::sig(c.rot_max_deg, 6),
+        residual_rotation_max_deg: crate::robot::sig(c.residual_rot_max_deg, 6),
+        orientation: c.orientation,
     };
     Ok(RobotWritten { files, summary })
 }
@@ -171,6 +251,7 @@ pub fn after_optimise(
     let done = run(s, (&w.program, posted), w.forces_after.as_ref(), &stem)
         .map_err(|e| format!("--robot: {e}"))?;
     w.bytes = done.files[0].1.clone().into_bytes();
+    w.summary.robot = Some(done.summary.clone());
     Ok(done)
 }
 

@@ -2,7 +2,8 @@
 //!
 //! A program is read into a [`KrlProgram`]: its motions (`PTP`, `LIN`,
 //! `CIRC` with `E6POS` aggregates `{X, Y, Z, A, B, C, E1..E6, S, T}`, the
-//! approximation `C_DIS`/`C_VEL`/`C_ORI`), the path speed `$VEL.CP` (m/s)
+//! approximation `C_DIS`/`C_VEL`/`C_ORI`/`C_PTP`, each tag checked against
+//! the motion it follows, see [`Approx`]), the path speed `$VEL.CP` (m/s)
 //! and approximation distance `$APO.CDIS` (mm) in force at each, `$TOOL` and
 //! `$BASE`, and every other statement kept verbatim (user calls such as
 //! `MMPM(30000.0)`, `BAS(...)`, FOLD lines). A main program that calls
@@ -38,7 +39,12 @@ pub struct KrlPos {
     pub t: Option<u32>,
 }
 
-/// The approximation tag of a motion.
+/// The approximation tag of a motion. Which tags a motion takes (KSS 8.x)
+/// is checked as it is read: `LIN`, `CIRC` one of `C_DIS`, `C_VEL`,
+/// `C_ORI`; `PTP` `C_PTP`, `C_PTP` and one of those three (for a `LIN` or
+/// `CIRC` after it), or `C_DIS`; `SPTP` `C_SPL` or `C_PTP`; `SLIN`,
+/// `SCIRC` alone `C_SPL`; a segment of a SPLINE block none (its
+/// `ENDSPLINE C_SPL` approximates the block).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Approx {
     Exact,
@@ -47,6 +53,13 @@ pub enum Approx {
     Ori,
     /// `C_SPL`: a spline motion approximated by `$APO.CDIS`.
     Spl,
+    /// `C_PTP`: a point-to-point motion approximated by `$APO.CPTP`.
+    Ptp,
+    /// `C_PTP C_DIS`, `C_PTP C_ORI`, `C_PTP C_VEL`: a `PTP` approximated
+    /// into the `LIN` or `CIRC` after it by that criterion.
+    PtpDis,
+    PtpOri,
+    PtpVel,
 }
 
 /// A motion's target.
@@ -129,6 +142,14 @@ pub enum Statement {
     /// `ENDSPLINE [C_SPL]`: the block ends, approximated or not.
     SplineEnd(bool),
     VelCp(f64),
+    /// `$VEL = {…}`: the aggregate as written (the right-hand side) and
+    /// its CP component, m/s, which sets the path speed as `$VEL.CP` does;
+    /// without one (only ORI1, ORI2) the path speed stays the one in force,
+    /// for KRL assigns only the components an aggregate names.
+    Vel {
+        cp: Option<f64>,
+        text: String,
+    },
     ApoCdis(f64),
     /// `$TOOL = …` / `$BASE = …`: the right-hand side as written.
     Tool(String),
@@ -232,7 +253,7 @@ fn read_file(
     };
     for (k, raw) in crate::lines::split(src).enumerate() {
         let line = u32::try_from(k + 1).unwrap_or(u32::MAX);
-        let st = parse_line(raw, line).map_err(|e| fail(p, file, e))?;
+        let st = parse_line(raw, line, fs.block.is_some()).map_err(|e| fail(p, file, e))?;
         let Some(st) = st else { continue };
         in_block(fs.block, &st, raw, line).map_err(|e| fail(p, file, e))?;
         take(&mut fs, st, line, resolve, p, vel)?;
@@ -317,7 +338,7 @@ fn in_force(
     vel: &mut Option<f64>,
 ) {
     match s {
-        Statement::VelCp(v) => *vel = Some(*v),
+        Statement::VelCp(v) | Statement::Vel { cp: Some(v), .. } => *vel = Some(*v),
         Statement::Move { vel_cp, with, .. } => {
             *vel_cp = vel_cp.or(fs.block.and_then(|b| b.1)).or(*vel);
             warn_with(p, fs.file, line, with);
@@ -327,27 +348,37 @@ fn in_force(
 }
 
 /// A finding for each option of a `WITH` clause kept as written but not
-/// modelled (a speed `$VEL = …` is read, so not named).
+/// modelled (a speed `$VEL = {CP …}` is read, so not named).
 fn warn_with(p: &mut KrlProgram, file: usize, line: u32, with: &[String]) {
     for o in with {
-        if !sets_path_speed(o) {
-            p.warnings.push((
-                file,
-                line,
-                format!("WITH {o}: kept as written; the toolpath read does not model it"),
-            ));
-        }
+        let m = if sets_path_speed(o) {
+            continue;
+        } else if is_vel(o) {
+            format!("WITH {o}: no CP, so the path speed stays the one in force; the orientation speeds are kept as written, the toolpath read does not model them")
+        } else {
+            format!("WITH {o}: kept as written; the toolpath read does not model it")
+        };
+        p.warnings.push((file, line, m));
     }
 }
 
-/// Whether a `WITH` option sets the path speed (`$VEL = {CP …}`, read as
-/// the motion's speed), and not another variable whose name starts alike
-/// (`$VEL_EXTAX`, `$VEL_AXIS`).
-pub(crate) fn sets_path_speed(option: &str) -> bool {
+/// Whether an assignment is to `$VEL`, not to another variable whose name
+/// starts alike (`$VEL_EXTAX`, `$VEL_AXIS`) or to one component (`$VEL.CP`).
+fn is_vel(option: &str) -> bool {
     option
         .split('=')
         .next()
         .is_some_and(|l| l.trim().eq_ignore_ascii_case("$VEL"))
+}
+
+/// Whether a `WITH` option sets the path speed: `$VEL = {CP …}` or
+/// `$VEL = SVEL_CP(…)`, read as the motion's speed; a `$VEL = {ORI1 …}`
+/// without CP does not.
+pub(crate) fn sets_path_speed(option: &str) -> bool {
+    is_vel(option)
+        && option
+            .split_once('=')
+            .is_some_and(|(_, r)| matches!(vel_value(r.trim()), Ok(Some(_))))
 }
 
 /// Whether a `WITH` option moves the motion's frame (`$BASE`, `$TOOL`, the
@@ -431,8 +462,9 @@ fn col_of(raw: &str, sub: &str) -> u32 {
     u32::try_from(off.min(raw.len()) + 1).unwrap_or(u32::MAX)
 }
 
-/// One line: `None` for blank lines, headers and `END`.
-fn parse_line(raw: &str, line: u32) -> Result<Option<Parsed1>, ParseError> {
+/// One line (`in_block`: inside a SPLINE block): `None` for blank lines,
+/// headers and `END`.
+fn parse_line(raw: &str, line: u32, in_block: bool) -> Result<Option<Parsed1>, ParseError> {
     let text = raw.trim();
     let code = text.split(';').next().unwrap_or("").trim();
     if text.is_empty() || text.starts_with('&') {
@@ -455,7 +487,7 @@ fn parse_line(raw: &str, line: u32) -> Result<Option<Parsed1>, ParseError> {
         "END" => Ok(None),
         "EXT" => Ok(Some(Parsed1::Ext(name_before_paren(&code[3..])))),
         "LIN" | "PTP" | "CIRC" | "SPL" | "SLIN" | "SCIRC" | "SPTP" => {
-            motion(word, code, raw, line).map(|s| Some(Parsed1::St(s)))
+            motion(word, code, (raw, line, in_block)).map(|s| Some(Parsed1::St(s)))
         }
         "SPLINE" => {
             let rest = code[word.len()..].trim();
@@ -502,6 +534,17 @@ fn assignment_or_call(
         };
         match l.as_str() {
             "$VEL.CP" => return Ok(Parsed1::St(Statement::VelCp(number("$VEL.CP")?))),
+            "$VEL" if r.starts_with('{') => {
+                let cp = vel_value(r).map_err(|()| {
+                    ParseError::new(
+                        line,
+                        col,
+                        format!("$VEL = {r}: its CP, the path speed (m/s, a number from 0 up), is not read from it"),
+                    )
+                })?;
+                let text = r.to_string();
+                return Ok(Parsed1::St(Statement::Vel { cp, text }));
+            }
             "$APO.CDIS" => return Ok(Parsed1::St(Statement::ApoCdis(number("$APO.CDIS")?))),
             "$TOOL" => return Ok(Parsed1::St(Statement::Tool(r.to_string()))),
             "$BASE" => return Ok(Parsed1::St(Statement::Base(r.to_string()))),
@@ -519,7 +562,11 @@ fn assignment_or_call(
     Ok(Parsed1::St(Statement::Verbatim(text.to_string())))
 }
 
-fn motion(word: &str, code: &str, raw: &str, line: u32) -> Result<Statement, ParseError> {
+fn motion(
+    word: &str,
+    code: &str,
+    (raw, line, in_block): (&str, u32, bool),
+) -> Result<Statement, ParseError> {
     let rest = code[word.len()..].trim();
     // The target's closing brace (a circle's second): a `WITH` clause after
     // it may hold aggregates of its own.
@@ -529,7 +576,7 @@ fn motion(word: &str, code: &str, raw: &str, line: u32) -> Result<Statement, Par
         Some(end) if rest.starts_with('{') => (&rest[..=end], rest[end + 1..].trim()),
         _ => ("", rest),
     };
-    let (tail, approx) = approx_tag(tail);
+    let (tail, approx) = approximation(word, tail, (raw, line, in_block))?;
     let spline = matches!(word, "SPL" | "SLIN" | "SCIRC" | "SPTP");
     let (vel_cp, with) = if spline {
         with_clause(tail, raw, line)?
@@ -548,7 +595,7 @@ fn motion(word: &str, code: &str, raw: &str, line: u32) -> Result<Statement, Par
         {
             "a circle's angle (CA) is not read: the arc would be taken to end at its target"
         } else {
-            "only an approximation (C_DIS, C_VEL, C_ORI) is read after the target"
+            "only an approximation is read after the target"
         };
         return Err(ParseError::new(
             line,
@@ -593,20 +640,97 @@ fn motion(word: &str, code: &str, raw: &str, line: u32) -> Result<Statement, Par
     })
 }
 
-/// The approximation tag ending a motion's tail, and what is before it.
-fn approx_tag(tail: &str) -> (&str, Approx) {
-    let (before, last) = match tail.rfind(char::is_whitespace) {
-        Some(i) => (tail[..i].trim_end(), tail[i..].trim()),
-        None => ("", tail),
+/// The approximation tags ending the tail of a motion `word` (inside a
+/// SPLINE block when `in_block`), checked against those the motion takes
+/// (see [`Approx`]), and what is before them; a tag the motion does not
+/// take is an error at its column.
+fn approximation<'a>(
+    word: &str,
+    tail: &'a str,
+    (raw, line, in_block): (&str, u32, bool),
+) -> Result<(&'a str, Approx), ParseError> {
+    let tags = trailing_tags(tail);
+    let Some(&(first, _)) = tags.first() else {
+        return Ok((tail, Approx::Exact));
     };
-    let approx = match last.to_ascii_uppercase().as_str() {
-        "C_DIS" => Approx::Dis,
-        "C_VEL" => Approx::Vel,
-        "C_ORI" => Approx::Ori,
-        "C_SPL" => Approx::Spl,
-        _ => return (tail, Approx::Exact),
+    let up: Vec<String> = tags.iter().map(|t| t.1.to_ascii_uppercase()).collect();
+    let up: Vec<&str> = up.iter().map(String::as_str).collect();
+    let segment = in_block && word.starts_with('S');
+    let taken = if segment { Err(0) } else { takes(word, &up) };
+    match taken {
+        Ok(a) => Ok((tail[..first].trim_end(), a)),
+        Err(k) => {
+            let what = if segment || word == "SPL" {
+                "a segment of a SPLINE block is not approximated alone: the block's ENDSPLINE C_SPL approximates it"
+            } else {
+                match word {
+                    "LIN" | "CIRC" => "LIN and CIRC take one of C_DIS, C_VEL, C_ORI",
+                    "PTP" => "PTP takes C_PTP, C_PTP and one of C_DIS, C_ORI, C_VEL (for a LIN or CIRC after it), or C_DIS",
+                    "SPTP" => "SPTP takes C_SPL or C_PTP",
+                    _ => "SLIN and SCIRC outside a SPLINE block take C_SPL",
+                }
+            };
+            let before = up[..k].iter().fold(word.to_string(), |w, t| w + " " + t);
+            Err(ParseError::new(
+                line,
+                col_of(raw, tags[k].1),
+                format!("{} after {before}: {what}", up[k]),
+            ))
+        }
+    }
+}
+
+/// The approximation of a motion `word` from its tags `t` (upper case), or
+/// the index of the first tag it does not take.
+fn takes(word: &str, t: &[&str]) -> Result<Approx, usize> {
+    let cp = |s: &str| match s {
+        "C_DIS" => Some(Approx::Dis),
+        "C_VEL" => Some(Approx::Vel),
+        "C_ORI" => Some(Approx::Ori),
+        _ => None,
     };
-    (before, approx)
+    let found = match (word, t) {
+        ("LIN" | "CIRC", [a]) => cp(a),
+        // KSS 8's inline forms write `LIN XP1 C_DIS C_DIS`.
+        ("LIN" | "CIRC", [a, b]) if a == b => cp(a),
+        ("PTP" | "SPTP", ["C_PTP"]) => Some(Approx::Ptp),
+        ("PTP", ["C_PTP", b]) => match *b {
+            "C_DIS" => Some(Approx::PtpDis),
+            "C_ORI" => Some(Approx::PtpOri),
+            "C_VEL" => Some(Approx::PtpVel),
+            _ => None,
+        },
+        // KSS 8 approximates a PTP by C_DIS (its inline forms write it).
+        ("PTP", ["C_DIS"]) => Some(Approx::Dis),
+        ("SPTP" | "SLIN" | "SCIRC", ["C_SPL"]) => Some(Approx::Spl),
+        _ => None,
+    };
+    match found {
+        Some(a) => Ok(a),
+        None if t.len() > 1 && takes(word, &t[..1]).is_ok() => Err(1),
+        None => Err(0),
+    }
+}
+
+/// The words `C_…` ending `tail` (a motion's approximation tags), with
+/// their offsets in it; a value of a `WITH` assignment (`$X = C_Y`) is not
+/// one.
+fn trailing_tags(tail: &str) -> Vec<(usize, &str)> {
+    let words: Vec<(usize, &str)> = tail
+        .split_whitespace()
+        .map(|w| (w.as_ptr() as usize - tail.as_ptr() as usize, w))
+        .collect();
+    let is_tag = |w: &str| {
+        w.len() > 2
+            && w.get(..2).is_some_and(|c| c.eq_ignore_ascii_case("C_"))
+            && w.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_')
+    };
+    let n = words.iter().rev().take_while(|(_, w)| is_tag(w)).count();
+    let mut start = words.len() - n;
+    if start > 0 && n > 0 && words[start - 1].1.ends_with('=') {
+        start += 1;
+    }
+    words[start..].to_vec()
 }
 
 /// `{…}, {…}` of a `CIRC` or `SCIRC`: the auxiliary point and the target.
@@ -645,9 +769,7 @@ fn with_clause(text: &str, raw: &str, line: u32) -> Result<(Option<f64>, Vec<Str
         .ok_or_else(|| {
             err(
                 t,
-                format!(
-                    "{t}: only a WITH clause and an approximation (C_SPL, C_DIS) are read here"
-                ),
+                format!("{t}: only a WITH clause and an approximation are read here"),
             )
         })?;
     let (mut speed, mut kept) = (None, Vec::new());
@@ -669,7 +791,10 @@ fn with_clause(text: &str, raw: &str, line: u32) -> Result<(Option<f64>, Vec<Str
         match l.as_str() {
             "$VEL.CP" => speed = Some(speed_number(r).ok_or_else(bad)?),
             "$VEL" => {
-                speed = Some(vel_aggregate_cp(r).ok_or_else(bad)?);
+                // Without CP the speed in force stays (the option is kept).
+                if let Some(v) = vel_value(r).map_err(|()| bad())? {
+                    speed = Some(v);
+                }
                 kept.push(part.to_string());
             }
             _ => kept.push(part.to_string()),
@@ -686,21 +811,29 @@ fn speed_number(s: &str) -> Option<f64> {
         .filter(|v| v.is_finite() && *v >= 0.0)
 }
 
-/// The CP component of `{CP 0.2, ORI1 …}` or the first argument of
-/// `SVEL_CP(0.2, …)`.
-fn vel_aggregate_cp(r: &str) -> Option<f64> {
+/// The path speed a `$VEL` value sets, m/s: the CP component of
+/// `{CP 0.2, ORI1 …}` (an aggregate without one, `{ORI1 …, ORI2 …}`, sets
+/// none: `Ok(None)`) or the first argument of `SVEL_CP(0.2, …)`; `Err`
+/// when a CP or that argument is not a speed, or the value is neither.
+fn vel_value(r: &str) -> Result<Option<f64>, ()> {
     if let Some(inner) = r.strip_prefix('{').and_then(|r| r.strip_suffix('}')) {
         let inner = inner.split_once(':').map_or(inner, |(_, r)| r);
-        return inner.split(',').find_map(|c| {
+        let mut cp = None;
+        for c in inner.split(',') {
             let mut it = c.split_whitespace();
-            let key = it.next()?;
-            key.eq_ignore_ascii_case("CP")
-                .then(|| speed_number(it.next()?))?
-        });
+            let (Some(key), value) = (it.next(), it.next()) else {
+                continue;
+            };
+            if key.eq_ignore_ascii_case("CP") {
+                cp = Some(value.and_then(speed_number).ok_or(())?);
+            }
+        }
+        return Ok(cp);
     }
     let up = r.to_ascii_uppercase();
-    let args = up.strip_prefix("SVEL_CP")?.trim_start().strip_prefix('(')?;
-    speed_number(args.split([',', ')']).next()?)
+    let args = up.strip_prefix("SVEL_CP").map(str::trim_start);
+    let first = args.and_then(|a| a.strip_prefix('(')?.split([',', ')']).next());
+    first.and_then(speed_number).map(Some).ok_or(())
 }
 
 /// `s` split at the commas outside braces and parentheses.
@@ -817,7 +950,7 @@ fn component(
 /// The statement a line of KRL is (a `$VEL.CP`, `$TOOL`, … kept by the IR
 /// as text), or `None` for a line that is not one statement.
 pub fn statement_of(text: &str) -> Option<Statement> {
-    match parse_line(text, 1).ok()?? {
+    match parse_line(text, 1, false).ok()?? {
         Parsed1::St(s) => Some(s),
         Parsed1::Call(_, t) => Some(Statement::Verbatim(t)),
         _ => None,
@@ -992,6 +1125,7 @@ impl KrlProgram {
     fn event(&self, l: &Located, op: &mut Operation) {
         let text = match &l.statement {
             Statement::VelCp(v) => format!("$VEL.CP = {v}"),
+            Statement::Vel { text, .. } => format!("$VEL = {text}"),
             Statement::ApoCdis(v) => format!("$APO.CDIS = {v}"),
             Statement::Tool(t) => format!("$TOOL = {t}"),
             Statement::Base(b) => format!("$BASE = {b}"),

@@ -293,3 +293,92 @@ fn powermill_sample_reads_and_converts() {
         assert!((a.axis(m).expect("axis") - b.axis(n).expect("axis")).length() < 1e-5);
     }
 }
+
+/// The approximation tags each motion takes (KSS 8.x; KUKA's
+/// mxAutomation manual lists C_PTP alone or with C_DIS, C_ORI, C_VEL for
+/// PTP and C_DIS, C_ORI, C_VEL for LIN and CIRC; KSS 8's inline forms write
+/// `PTP … C_DIS` and `LIN … C_DIS C_DIS`; C_SPL is the spline motions'):
+/// each is read and written back as read.
+#[test]
+fn approximation_tags_read_per_motion() {
+    let p = "{X 1, Y 2, Z 3, A 0, B 90, C 0}";
+    let q = "{X 2, Y 2, Z 3, A 0, B 90, C 0}";
+    let cases: &[(&str, Approx)] = &[
+        (&format!("LIN {p} C_DIS"), Approx::Dis),
+        (&format!("LIN {p} c_vel"), Approx::Vel),
+        (&format!("LIN {p} C_ORI"), Approx::Ori),
+        (&format!("LIN {p} C_DIS C_DIS"), Approx::Dis),
+        (&format!("CIRC {p}, {q} C_VEL"), Approx::Vel),
+        (&format!("PTP {p} C_PTP"), Approx::Ptp),
+        (&format!("PTP {p} C_PTP C_DIS"), Approx::PtpDis),
+        (&format!("PTP {p} C_PTP C_ORI"), Approx::PtpOri),
+        (&format!("PTP {p} C_PTP C_VEL"), Approx::PtpVel),
+        (&format!("PTP {p} C_DIS"), Approx::Dis),
+        (&format!("SPTP {p} C_SPL"), Approx::Spl),
+        (&format!("SPTP {p} C_PTP"), Approx::Ptp),
+        (&format!("SLIN {p} C_SPL"), Approx::Spl),
+        (&format!("SLIN {p} WITH $VEL.CP = 0.1 C_SPL"), Approx::Spl),
+        (&format!("SCIRC {p}, {q} C_SPL"), Approx::Spl),
+        (&format!("LIN {p}"), Approx::Exact),
+    ];
+    for (line, want) in cases {
+        let src = format!("DEF t()\n{line}\nEND\n");
+        let k = krl::read(&src, &mut no_subs).unwrap_or_else(|e| panic!("{line}: {e:?}"));
+        let m = moves(&k);
+        assert_eq!(m.len(), 1, "{line}");
+        assert_eq!(m[0].1, *want, "{line}");
+        let files = write(&k, &KrlOptions::default());
+        let back = krl::read(&files[0].1, &mut no_subs).expect("re-reads");
+        assert_eq!(moves(&back), m, "{line}\n{}", files[0].1);
+    }
+}
+
+/// A tag a motion does not take is an error at its line and column, named
+/// with what the motion takes.
+#[test]
+fn approximation_tags_that_do_not_belong_are_located() {
+    let p = "{X 1, Y 2, Z 3, A 0, B 90, C 0}";
+    let at = |body: &str| {
+        let src = format!("DEF bad()\nPTP {p}\n{body}\nEND\n");
+        let e = krl::read(&src, &mut no_subs).expect_err(body);
+        (e.error.line, e.error.col, e.error.message)
+    };
+    // `LIN {…}` is 35 characters: the tag at 37.
+    let cases: &[(String, u32, &str)] = &[
+        (format!("LIN {p} C_PTP"), 37, "LIN and CIRC take"),
+        (format!("LIN {p} C_SPL"), 37, "LIN and CIRC take"),
+        (format!("LIN {p} C_DIS C_VEL"), 43, "after LIN C_DIS"),
+        (format!("LIN {p} C_FOO"), 37, "LIN and CIRC take"),
+        (format!("PTP {p} C_VEL"), 37, "PTP takes C_PTP"),
+        (format!("PTP {p} C_SPL"), 37, "PTP takes C_PTP"),
+        (format!("PTP {p} C_PTP C_SPL"), 43, "after PTP C_PTP"),
+        (format!("PTP {p} C_DIS C_PTP"), 43, "after PTP C_DIS"),
+        (format!("SPTP {p} C_DIS"), 38, "SPTP takes C_SPL or C_PTP"),
+        (
+            format!("SLIN {p} C_DIS"),
+            38,
+            "outside a SPLINE block take C_SPL",
+        ),
+        (
+            format!("SLIN {p} C_PTP"),
+            38,
+            "outside a SPLINE block take C_SPL",
+        ),
+        (
+            format!("SPLINE\nSPL {p} C_SPL\nENDSPLINE"),
+            37,
+            "ENDSPLINE C_SPL approximates",
+        ),
+        (
+            format!("SPLINE\nSLIN {p} C_SPL\nENDSPLINE"),
+            38,
+            "ENDSPLINE C_SPL approximates",
+        ),
+    ];
+    for (body, col, says) in cases {
+        let line = if body.starts_with("SPLINE") { 4 } else { 3 };
+        let (l, c, m) = at(body);
+        assert_eq!((l, c), (line, *col), "{body}: {m}");
+        assert!(m.contains(says), "{body}: {m}");
+    }
+}

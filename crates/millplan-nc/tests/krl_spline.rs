@@ -660,3 +660,141 @@ fn words_after_a_target_are_located() {
         assert_eq!(e.error.col, col, "{e:?}");
     }
 }
+
+/// KRL → KRL: the comments right after a block's `SPLINE` line (a FOLD
+/// line, as KSS writes it) are written after it again, in the order read,
+/// in one file and where sub-programs cut the block (the line then opens
+/// the file that holds the block's first segment, the comments after it).
+#[test]
+fn comments_after_the_spline_line_stay_after_it() {
+    let src = "DEF c()\nPTP {X 0, Y 0, Z 9, A 0, B 90, C 0}\nSPLINE\n; first\n;FOLD SPL P1\nSPL {X 1, Y 0, Z 9, A 0, B 90, C 0}\n;ENDFOLD\nSPL {X 2, Y 0, Z 9, A 0, B 90, C 0}\nENDSPLINE\nEND\n";
+    let p = krl::read(src, &mut no_subs).expect("reads");
+    let after_spline = |t: &str| -> Vec<String> {
+        let lines: Vec<&str> = t.lines().collect();
+        let i = lines.iter().position(|l| *l == "SPLINE").expect("SPLINE");
+        lines[i..].iter().take(4).map(|l| l.to_string()).collect()
+    };
+    let one = write(
+        &p,
+        &KrlOptions {
+            name: "c".into(),
+            ..KrlOptions::default()
+        },
+    );
+    check(&p, &one).expect("same motions");
+    assert_eq!(one.len(), 1);
+    assert_eq!(
+        after_spline(&one[0].1)[..3],
+        ["SPLINE", "; first", ";FOLD SPL P1"],
+        "{}",
+        one[0].1
+    );
+    assert!(!one[0].1.contains("; first\nSPLINE"), "{}", one[0].1);
+    let subs = write(
+        &p,
+        &KrlOptions {
+            name: "c".into(),
+            max_points: 1,
+            ..KrlOptions::default()
+        },
+    );
+    check(&p, &subs).expect("same motions");
+    assert_eq!(subs.len(), 4, "{subs:?}");
+    assert!(!subs[1].1.contains("SPLINE"), "{}", subs[1].1);
+    assert_eq!(
+        after_spline(&subs[2].1),
+        [
+            "SPLINE",
+            "; first",
+            ";FOLD SPL P1",
+            "SPL {X 1.000, Y 0.000, Z 9.000, A 0.0000, B 90.0000, C 0.0000}"
+        ],
+        "{}",
+        subs[2].1
+    );
+    assert!(
+        subs[2].1.contains(";ENDFOLD\nENDSPLINE C_SPL\n"),
+        "{}",
+        subs[2].1
+    );
+    assert_eq!(
+        after_spline(&subs[3].1)[..2],
+        [
+            "SPLINE",
+            "SPL {X 2.000, Y 0.000, Z 9.000, A 0.0000, B 90.0000, C 0.0000}"
+        ],
+        "{}",
+        subs[3].1
+    );
+}
+
+/// `$VEL = {…}` without CP (only the orientation speeds ORI1, ORI2), in a
+/// segment's `WITH` or as a statement before a block: KRL assigns only the
+/// components an aggregate names, so the path speed stays the one in force
+/// (the block's, else `$VEL.CP`), and the aggregate is kept as written
+/// (a `WITH` option named in a warning) and written back. A `$VEL = {CP v,
+/// …}` statement sets the path speed as `$VEL.CP = v` does; a CP that is
+/// not a speed is an error at its line.
+#[test]
+fn vel_without_cp_keeps_the_path_speed() {
+    let src = "DEF v()\n$VEL.CP = 0.05\nPTP {X 0, Y 0, Z 9, A 0, B 90, C 0}\n$VEL = {ORI1 100, ORI2 100}\nSPLINE WITH $VEL.CP = 0.2\nSPL {X 1, Y 0, Z 9, A 0, B 90, C 0} WITH $VEL = {ORI1 200, ORI2 200}\nSPL {X 2, Y 0, Z 9, A 0, B 90, C 0}\nENDSPLINE\nSPLINE\nSPL {X 3, Y 0, Z 9, A 0, B 90, C 0} WITH $VEL = {ORI1 50}\nENDSPLINE\n$VEL = {CP 0.1, ORI1 300, ORI2 300}\nSPLINE\nSPL {X 4, Y 0, Z 9, A 0, B 90, C 0}\nENDSPLINE\nEND\n";
+    let p = krl::read(src, &mut no_subs).expect("reads");
+    let m = moves(&p);
+    let speeds: Vec<Option<f64>> = m.iter().map(|x| x.2).collect();
+    assert_eq!(
+        speeds,
+        [Some(0.05), Some(0.2), Some(0.2), Some(0.05), Some(0.1)]
+    );
+    assert_eq!(m[1].3, ["$VEL = {ORI1 200, ORI2 200}"]);
+    assert_eq!(m[3].3, ["$VEL = {ORI1 50}"]);
+    let named: Vec<u32> = p
+        .warnings
+        .iter()
+        .filter(|w| w.2.contains("no CP") && w.2.contains("path speed stays"))
+        .map(|w| w.1)
+        .collect();
+    assert_eq!(named, [6, 10], "{:?}", p.warnings);
+    assert!(p.statements.iter().any(|l| l.statement
+        == Statement::Vel {
+            cp: Some(0.1),
+            text: "{CP 0.1, ORI1 300, ORI2 300}".into()
+        }));
+    // KRL → KRL: the speeds, the options and the statements as read.
+    let files = write(
+        &p,
+        &KrlOptions {
+            name: "v".into(),
+            ..KrlOptions::default()
+        },
+    );
+    check(&p, &files).expect("same motions");
+    let t = &files[0].1;
+    assert!(t.contains("\n$VEL = {ORI1 100, ORI2 100}\n"), "{t}");
+    assert!(t.contains("\n$VEL = {CP 0.1, ORI1 300, ORI2 300}\n"), "{t}");
+    assert!(
+        t.contains("WITH $VEL.CP = 0.200000, $VEL = {ORI1 200, ORI2 200}\n"),
+        "{t}"
+    );
+    assert_eq!(moves(&krl::read(t, &mut no_subs).expect("re-reads")), m);
+    // Into the IR: the speeds as feeds.
+    let ir = p.to_ir(1000.0, true).expect("ir");
+    let feeds: Vec<f64> = ir.program.moves().map(|x| x.feed).collect();
+    assert!((feeds[4] - 0.1 * 60_000.0).abs() < 1e-9, "{feeds:?}");
+    assert!((feeds[3] - 0.05 * 60_000.0).abs() < 1e-9, "{feeds:?}");
+    // A CP that is not a speed: at its line.
+    for (body, line) in [
+        ("$VEL = {CP fast, ORI1 100}", 2),
+        (
+            "SPLINE\nSPL {X 1, Y 0, Z 9} WITH $VEL = {CP fast}\nENDSPLINE",
+            3,
+        ),
+    ] {
+        let e = krl::read(&format!("DEF b()\n{body}\nEND\n"), &mut no_subs).expect_err(body);
+        assert_eq!(e.error.line, line, "{body}: {}", e.error.message);
+        assert!(
+            e.error.message.contains("path speed"),
+            "{}",
+            e.error.message
+        );
+    }
+}

@@ -333,3 +333,25 @@ fn powermill_as_spline() {
     assert_eq!(spl, from_sample.len());
     assert!(!written.contains("\nLIN "));
 }
+
+/// An approximation tag the motion does not take (C_PTP after a LIN):
+/// exit 2 at its file, line and column, nothing written.
+#[test]
+fn an_approximation_the_motion_does_not_take_is_located() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let src = dir.path().join("bad.src");
+    std::fs::write(
+        &src,
+        "DEF bad()\nPTP {X 0, Y 0, Z 9, A 0, B 90, C 0} C_PTP\nLIN {X 1, Y 0, Z 9, A 0, B 90, C 0} C_PTP\nEND\n",
+    )
+    .expect("write");
+    let out = dir.path().join("out.src");
+    let o = run(&["convert", s(&src), "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("bad.src:3:37:") && err.contains("C_PTP after LIN"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

@@ -663,3 +663,250 @@ fn compensate_writes_spline_blocks_on_request() {
         assert!(!t.contains("\nLIN "), "spl_{i:03}: {t}");
     }
 }
+
+/// `--krl-motion` where no KRL program is written is refused (exit 2,
+/// the reason named, nothing written), not ignored: `optimise` without
+/// `--robot` writes G-code, `convert --to fanuc` writes G-code; given with
+/// a KRL output it is taken.
+#[test]
+fn krl_motion_without_a_krl_output_is_refused() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let nc = slot_nc(dir.path(), -6.0);
+    let out = dir.path().join("opt.nc");
+    let o = run(&[
+        "optimise",
+        nc.to_str().expect("utf8"),
+        "--krl-motion",
+        "spline",
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--krl-motion") && err.contains("--robot"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let o = run(&[
+        "optimise",
+        nc.to_str().expect("utf8"),
+        "--max-points",
+        "10",
+        "-o",
+        out.to_str().expect("utf8"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--robot"), "{err}");
+    assert!(!out.exists());
+    for motion in ["lin", "spline"] {
+        let o = run(&[
+            "convert",
+            nc.to_str().expect("utf8"),
+            "--to",
+            "fanuc",
+            "-o",
+            out.to_str().expect("utf8"),
+            "--krl-motion",
+            motion,
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{motion}: {err}");
+        assert!(
+            err.contains("--krl-motion") && err.contains("only a KRL program"),
+            "{err}"
+        );
+        assert!(!out.exists());
+    }
+    let src = dir.path().join("slot.src");
+    let o = run(&[
+        "convert",
+        nc.to_str().expect("utf8"),
+        "-o",
+        src.to_str().expect("utf8"),
+        "--krl-motion",
+        "lin",
+        "--lossy",
+    ]);
+    // Taken: written (exit 3 only for what --lossy drops, the tool call).
+    assert_ne!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(std::fs::read_to_string(&src).expect("src").contains("LIN "));
+}
+
+/// `optimise --robot --json --report`: the robot pass's figures (the
+/// deflection before compensation, mean and max |Δp|, and the largest
+/// distance of the tip from the path that the KRL read back leaves) are
+/// keys of the typed summary and one section of the report, the same
+/// numbers as standard error prints without --json.
+#[test]
+fn optimise_robot_figures_in_json_and_report() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let nc = slot_nc(dir.path(), -6.0);
+    let out = dir.path().join("opt.src");
+    let report = dir.path().join("opt.html");
+    let mut args = vec![
+        "optimise",
+        nc.to_str().expect("utf8"),
+        "--material",
+        "en-aw-2007",
+        "--tool",
+        "flat:12",
+        "--flutes",
+        "3",
+        "--resolution",
+        "0.25",
+        "--stock",
+        "box:0,-20,-20,120,20,0",
+        "--robot",
+        "kr240",
+        "--pose",
+        "1300,-100,300,0",
+        "--max-points",
+        "0",
+        "-o",
+        out.to_str().expect("utf8"),
+        "--report",
+        report.to_str().expect("utf8"),
+    ];
+    let text = run(&args);
+    let err = String::from_utf8_lossy(&text.stderr).to_string();
+    assert!(text.status.success(), "{err}");
+    args.push("--json");
+    let j = json(&args);
+    let r = &j["robot"];
+    let num = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k}: {j}"));
+    let (mean, max, residual) = (
+        num("mean_deflection_mm"),
+        num("max_deflection_mm"),
+        num("residual_max_mm"),
+    );
+    assert!(mean > 0.01 && mean <= max, "{r}");
+    assert!(
+        residual <= num("tolerance_mm") && residual < 0.1 * max,
+        "{r}"
+    );
+    assert!(r["points"].as_u64().expect("points") > 480, "{r}");
+    assert!(
+        r["loads"]["max_mean_force_n"].as_f64().expect("force") > 100.0,
+        "{r}"
+    );
+    // Standard error prints the same figures (--json rounds lengths to the
+    // micrometre): mean and max to 4 significant digits, the residual to 3.
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("robot: deflection mean "))
+        .unwrap_or_else(|| panic!("{err}"));
+    let word_after = |w: &str| -> String {
+        let rest = line
+            .split_once(w)
+            .unwrap_or_else(|| panic!("{w} in {line}"))
+            .1;
+        rest.split_whitespace().next().unwrap_or("").to_string()
+    };
+    let printed = [
+        (word_after("deflection mean "), mean),
+        (word_after(", max "), max),
+        (word_after("leaves at most "), residual),
+    ];
+    let html = std::fs::read_to_string(&report).expect("report");
+    let section = html
+        .split_once("<section id=\"robot\">")
+        .map(|(_, s)| s.split("</section>").next().unwrap_or(""))
+        .expect("a robot section");
+    for (text, json) in &printed {
+        let v: f64 = text.parse().unwrap_or_else(|_| panic!("{text} in {line}"));
+        assert!((v - json).abs() <= 5e-4, "{line}\n{r}");
+        let cell = format!("<td>{text} mm</td>");
+        assert!(section.contains(&cell), "{cell} in {section}");
+    }
+    assert_eq!(html.matches("<section id=\"robot\">").count(), 1);
+    assert!(html.ends_with("</body></html>"));
+}
+
+/// `optimise --robot --orientation`: the orientation corrected as `robot
+/// compensate --orientation` does it (process-models §4.4, optional): the
+/// tool's turn under the load is left at the commanded points without it
+/// and (nearly) gone with it, the position held within --tol either way;
+/// the KRL differs in A, B, C only. Without --robot the option is refused.
+#[test]
+fn optimise_robot_corrects_the_orientation_on_request() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let nc = slot_nc(dir.path(), -6.0);
+    let run_with = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "optimise",
+            nc.to_str().expect("utf8"),
+            "--material",
+            "en-aw-2007",
+            "--tool",
+            "flat:12",
+            "--flutes",
+            "3",
+            "--resolution",
+            "0.25",
+            "--stock",
+            "box:0,-20,-20,120,20,0",
+            "--robot",
+            "kr240",
+            "--pose",
+            "1300,-100,300,0",
+            "--max-points",
+            "0",
+            "--json",
+            "-o",
+            out.to_str().expect("utf8"),
+        ];
+        args.extend_from_slice(extra);
+        let j = json(&args);
+        (j["robot"].clone(), krl_poses(&out))
+    };
+    let (plain, pos_plain) = run_with("plain.src", &[]);
+    let (turned, pos_turned) = run_with("turned.src", &["--orientation"]);
+    let f = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k}: {r}"));
+    assert_eq!(
+        (
+            plain["orientation"].as_bool(),
+            turned["orientation"].as_bool()
+        ),
+        (Some(false), Some(true))
+    );
+    let rot = f(&plain, "max_rotation_deg");
+    assert!(rot > 0.002, "{plain}");
+    assert!(
+        f(&plain, "residual_rotation_max_deg") >= 0.5 * rot,
+        "{plain}"
+    );
+    assert!(
+        f(&turned, "residual_rotation_max_deg") <= 0.05 * rot,
+        "{turned}"
+    );
+    assert!(
+        f(&turned, "residual_max_mm") <= f(&turned, "tolerance_mm"),
+        "{turned}"
+    );
+    assert_eq!(pos_plain.len(), pos_turned.len());
+    let (mut moved, mut turned_abc) = (0.0f64, 0.0f64);
+    for ((p0, a0), (p1, a1)) in pos_plain.iter().zip(&pos_turned) {
+        moved = moved.max((0..3).map(|i| (p0[i] - p1[i]).abs()).fold(0.0, f64::max));
+        turned_abc = turned_abc.max((0..3).map(|i| (a0[i] - a1[i]).abs()).fold(0.0, f64::max));
+    }
+    assert!(turned_abc > 1e-3, "{turned_abc}");
+    assert!(moved < 0.01, "{moved}");
+    let o = run(&[
+        "optimise",
+        nc.to_str().expect("utf8"),
+        "--orientation",
+        "-o",
+        dir.path().join("x.nc").to_str().expect("utf8"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--robot"), "{err}");
+}

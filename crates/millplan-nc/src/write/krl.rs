@@ -383,6 +383,9 @@ struct Render<'a> {
     /// line is written yet (it waits for the block's first statement, so
     /// that no file holds an empty block).
     theirs: Option<(&'a Statement, bool)>,
+    /// Comments read after that `SPLINE` line while it waits: written
+    /// after it when it is, in the order read.
+    held: Vec<&'a Statement>,
 }
 
 impl<'a> Render<'a> {
@@ -416,6 +419,7 @@ impl<'a> Render<'a> {
             ours: false,
             segments: 0,
             theirs: None,
+            held: Vec::new(),
         }
     }
 
@@ -448,12 +452,16 @@ impl<'a> Render<'a> {
         match &l.statement {
             Statement::SplineBegin(_) => return self.theirs = Some((&l.statement, false)),
             Statement::SplineEnd(_) => self.open_theirs(s),
-            _ if comment => {}
+            _ if comment => {
+                if let Some((_, false)) = self.theirs {
+                    return self.held.push(&l.statement);
+                }
+            }
             _ => self.open_theirs(s),
         }
         match &l.statement {
             Statement::SplineEnd(_) => self.theirs = None,
-            Statement::VelCp(v) => {
+            Statement::VelCp(v) | Statement::Vel { cp: Some(v), .. } => {
                 self.vel = Some(*v);
                 self.written_vel = Some(*v);
             }
@@ -465,11 +473,15 @@ impl<'a> Render<'a> {
         statement(s, &l.statement);
     }
 
-    /// Writes the `SPLINE` line of a block read, if it waits.
+    /// Writes the `SPLINE` line of a block read, if it waits, and the
+    /// comments held after it.
     fn open_theirs(&mut self, s: &mut String) {
         if let Some((b, false)) = self.theirs {
             statement(s, b);
             self.theirs = Some((b, true));
+            for c in self.held.drain(..) {
+                statement(s, c);
+            }
         }
     }
 
@@ -548,6 +560,10 @@ fn approx_tag(a: Approx) -> &'static str {
         Approx::Vel => " C_VEL\n",
         Approx::Ori => " C_ORI\n",
         Approx::Spl => " C_SPL\n",
+        Approx::Ptp => " C_PTP\n",
+        Approx::PtpDis => " C_PTP C_DIS\n",
+        Approx::PtpOri => " C_PTP C_ORI\n",
+        Approx::PtpVel => " C_PTP C_VEL\n",
     }
 }
 
@@ -586,6 +602,9 @@ fn statement(s: &mut String, st: &Statement) {
         Statement::SplineEnd(false) => s.push_str("ENDSPLINE\n"),
         Statement::VelCp(v) => {
             let _ = writeln!(s, "$VEL.CP = {v:.6}");
+        }
+        Statement::Vel { text, .. } => {
+            let _ = writeln!(s, "$VEL = {text}");
         }
         Statement::ApoCdis(v) => {
             let _ = writeln!(s, "$APO.CDIS = {v:.3}");

@@ -68,9 +68,11 @@ pub struct Args {
     /// one file, as without the option.
     #[arg(long, value_name = "N")]
     pub max_points: Option<usize>,
-    /// With a KRL output: each point one LIN as read or written, or each run of approximated LINs one SPLINE block of SPL points.
-    #[arg(long, default_value = "lin", value_name = "lin|spline")]
-    pub krl_motion: KrlMotion,
+    /// With a KRL output: each point one LIN as read or written (the
+    /// default), or each run of approximated LINs one SPLINE block of SPL
+    /// points. Refused with any other output, which has no such motions.
+    #[arg(long, value_name = "lin|spline")]
+    pub krl_motion: Option<KrlMotion>,
     /// Do not print reader diagnostics.
     #[arg(long, short)]
     pub quiet: bool,

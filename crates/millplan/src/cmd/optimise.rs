@@ -187,6 +187,16 @@ fn list_passes(json: bool) {
     }
 }
 
+/// The passes to run (--passes, else all), once the options refused
+/// before any work are checked.
+fn checked_order(a: &Args) -> CliResult<Vec<passes::PassName>> {
+    a.robot.check()?;
+    match &a.passes {
+        Some(s) => passes::parse_list(s).map_err(|e| CliError::input(format!("--passes: {e}"))),
+        None => Ok(ORDER.to_vec()),
+    }
+}
+
 pub fn run(a: Args) -> CliResult<i32> {
     let (Some(path), Some(output)) = (a.path.clone(), a.output.clone()) else {
         list_passes(a.json);
@@ -196,10 +206,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         list_passes(a.json);
         return Ok(EXIT_OK);
     }
-    let order = match &a.passes {
-        Some(s) => passes::parse_list(s).map_err(|e| CliError::input(format!("--passes: {e}")))?,
-        None => ORDER.to_vec(),
-    };
+    let order = checked_order(&a)?;
     let mut inputs: Vec<&Path> = vec![&path];
     inputs.extend(a.stl.as_deref());
     inputs.extend(a.machine.as_deref());

@@ -352,11 +352,31 @@ pub struct OptimiseRobotArgs {
     pub pose: Option<String>,
     /// With --robot: motions per KRL sub-program (a main program at -o calls
     /// them, written beside it); 0 writes one file.
-    #[arg(long, default_value_t = millplan_driver::command_defaults::robot::MAX_POINTS)]
+    #[arg(
+        long,
+        default_value_t = millplan_driver::command_defaults::robot::MAX_POINTS,
+        requires = "robot"
+    )]
     pub max_points: usize,
-    /// With --robot: each point one LIN (with C_DIS), or each run a SPLINE block of SPL points.
-    #[arg(long, default_value = "lin", value_name = "lin|spline")]
-    pub krl_motion: millplan_nc::write::krl::KrlMotion,
+    /// With --robot: each point one LIN with C_DIS (the default), or each
+    /// run a SPLINE block of SPL points. Refused without --robot: only the
+    /// robot's program is KRL.
+    #[arg(long, value_name = "lin|spline")]
+    pub krl_motion: Option<millplan_nc::write::krl::KrlMotion>,
+    /// With --robot: correct the tool's orientation too, as `robot
+    /// compensate --orientation` does (each point commanded turned back by
+    /// the angle the load turns the tool there); without it only the
+    /// position is corrected.
+    #[arg(long, requires = "robot")]
+    pub orientation: bool,
+}
+
+impl OptimiseRobotArgs {
+    /// The options refused before any work: a KRL motion without --robot.
+    pub fn check(&self) -> CliResult<()> {
+        millplan_driver::robot_pass::krl_options(self.robot.is_some(), self.krl_motion)
+            .map_err(CliError::input)
+    }
 }
 
 /// The robot pass at the end of `optimise` (nothing without --robot): the
@@ -374,7 +394,8 @@ pub fn after_optimise(
     let tol = run.0.tol;
     let mut setup =
         RobotSetup::new(load_robot(name)?, pose, r.max_points, tol).map_err(CliError::input)?;
-    setup.motion = r.krl_motion;
+    setup.motion = r.krl_motion.unwrap_or_default();
+    setup.orientation = r.orientation;
     let done =
         millplan_driver::robot_pass::after_optimise(&setup, run, w, output, crate::limits::get())
             .map_err(CliError::input)?;
