@@ -677,8 +677,10 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// once `robot --stock` went through the driver; 5,563 with `--timings` on
 /// `feed`, `force`, `orient`, `reorder`, `gouge`, `raster` and `setup` (the
 /// laps where the binary's own steps end, one `Timings` group for all);
-/// 5,577 with `feed`'s checks before writing and its `--force`.
-const MAX_BINARY_LINES: usize = 5577;
+/// 5,577 with `feed`'s checks before writing and its `--force`; 5,607 with
+/// `optimise --robot --orientation` and the KRL-only options refused
+/// without a KRL output.
+const MAX_BINARY_LINES: usize = 5607;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into
