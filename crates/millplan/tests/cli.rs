@@ -33,7 +33,9 @@ fn json(args: &[&str]) -> serde_json::Value {
 /// the machine's range, its own prediction stays within the limits, and
 /// the operations whose feed was conservative (the flat end mill's, loaded
 /// to about half the limit) run faster, while the ball's, which exceeds it,
-/// is slowed.
+/// is slowed. The program drives a rapid into the stock at line 36 (as
+/// `optimise` finds it too): refused without `--force`, written with it
+/// (exit 3), the stock check failing on the input's own faults only.
 #[test]
 fn feed_on_a_real_program_meets_its_limits_and_speeds_up_the_conservative_operations() {
     let Some(apt) = shared_data::file("swcam-apt-stl-pairs/Interface-glue.apt") else {
@@ -42,7 +44,7 @@ fn feed_on_a_real_program_meets_its_limits_and_speeds_up_the_conservative_operat
     let machine = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/machine.toml");
     let d = tempfile::tempdir().expect("tmp");
     let out = d.path().join("feed.apt");
-    let j = json(&[
+    let args = [
         "feed",
         apt.to_str().expect("utf-8"),
         "--stock",
@@ -67,7 +69,20 @@ fn feed_on_a_real_program_meets_its_limits_and_speeds_up_the_conservative_operat
         out.to_str().expect("utf-8"),
         "--json",
         "-q",
-    ]);
+    ];
+    let refused = bin().args(args).output().expect("runs");
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(3), "{err}");
+    assert!(err.contains("Interface-glue.apt:36: check stock"), "{err}");
+    assert!(!out.exists(), "nothing written without --force");
+    let o = bin().args(args).arg("--force").output().expect("runs");
+    assert_eq!(o.status.code(), Some(3));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    for c in j["checks"].as_array().expect("checks") {
+        let own = c["findings"].as_array().expect("findings").iter();
+        let own = own.clone().all(|f| f["in_input"] == true);
+        assert!(c["ok"] == true || (c["name"] == "stock" && own), "{c}");
+    }
     let f = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
     assert_eq!(j["over_limit_after"], 0, "{j}");
     // Within the tolerance the command states for its exit code (a load
