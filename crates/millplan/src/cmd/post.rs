@@ -180,13 +180,10 @@ fn post_program(
 ) -> CliResult<(millplan_nc::Program, millplan_plan::post::PostReport)> {
     let bar = crate::progress::spinner("posting", !a.quiet && !a.json);
     let posted = post(cl, machine, o).map_err(|e| post_error(&a.input, e))?;
-    // The posted blocks (timed inside the post) are not needed any more:
-    // their memory goes before the written program and its read-back take
-    // theirs. The CL program stays for the tip check.
+    // The CL program stays for the tip check.
     let Posted {
         mut program,
         report,
-        ..
     } = posted;
     clock.lap("post (IK, DP over the path, linearisation, feeds, time estimates)");
     for_target(&mut program, target).map_err(|e| post_error(&a.input, e))?;
