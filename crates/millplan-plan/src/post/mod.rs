@@ -968,6 +968,60 @@ fn target6(kin: &Kinematics, j: &Joints) -> [f64; 6] {
     t
 }
 
+/// Points whose [`Geometry`] is computed at once (in parallel), so that it
+/// is not held for the whole operation.
+const GEOMETRY_CHUNK: usize = 1 << 16;
+
+/// What `build` needs of a posted point beyond the point itself.
+#[derive(Clone, Copy)]
+struct Geometry {
+    /// The distance of its tip by forward kinematics from the CL tip, mm,
+    /// and the angle of its axis from the CL axis, degrees.
+    err: f64,
+    dev: f64,
+    /// The block to it: its path length, the least minutes the axes with a
+    /// known top speed allow, and the minutes of a plain G94 post (zeros
+    /// for the first point and rapids).
+    times: (f64, f64, f64),
+}
+
+/// The [`Geometry`] of the points `range` of `pts`, in parallel.
+fn geometry(
+    pts: &[Pt],
+    range: std::ops::Range<usize>,
+    kin: &Kinematics,
+    machine: &Machine,
+    o: &PostOptions,
+) -> Vec<Geometry> {
+    range
+        .into_par_iter()
+        .map(|i| {
+            let p = &pts[i];
+            let (tip, k) = kin.forward(&p.j);
+            let (err, dev) = ((tip - p.cl.tip).length(), ik::angle_deg(k, p.cl.k));
+            if i == 0 || p.cl.rapid {
+                let times = (0.0, 0.0, 0.0);
+                return Geometry { err, dev, times };
+            }
+            let a = &pts[i - 1];
+            let len = if o.tcp {
+                (p.cl.tip - a.cl.tip).length()
+            } else if p.len.is_nan() {
+                tip_path_length(kin, &a.j, &p.j)
+            } else {
+                p.len
+            };
+            let plain = if o.tcp {
+                len / p.cl.v
+            } else {
+                g94_minutes(&a.j, &p.j, p.cl.v)
+            };
+            let times = (len, known_axes_minutes(machine, &a.j, &p.j), plain);
+            Geometry { err, dev, times }
+        })
+        .collect()
+}
+
 /// The posted operation: moves, orientations, events re-anchored, feeds.
 fn build(
     op: &Operation,
@@ -992,42 +1046,17 @@ fn build(
     // The first posted move of each source move.
     let mut first_of = vec![u32::MAX; op.moves.len() + 1];
     let rapid_lin = machine.rapid;
-    // Per block: path length and times, computed in parallel.
-    // Forward kinematics of every posted point: the distance of its tip
-    // from the CL tip and the angle of its axis from the CL axis.
-    let fk: Vec<(f64, f64)> = pts
-        .par_iter()
-        .map(|p| {
-            let (tip, k) = kin.forward(&p.j);
-            ((tip - p.cl.tip).length(), ik::angle_deg(k, p.cl.k))
-        })
-        .collect();
-    let times: Vec<(f64, f64, f64)> = (0..pts.len())
-        .into_par_iter()
-        .map(|i| {
-            let p = &pts[i];
-            if i == 0 || p.cl.rapid {
-                return (0.0, 0.0, 0.0);
-            }
-            let a = &pts[i - 1];
-            let len = if o.tcp {
-                (p.cl.tip - a.cl.tip).length()
-            } else if p.len.is_nan() {
-                tip_path_length(kin, &a.j, &p.j)
-            } else {
-                p.len
-            };
-            let plain = if o.tcp {
-                len / p.cl.v
-            } else {
-                g94_minutes(&a.j, &p.j, p.cl.v)
-            };
-            (len, known_axes_minutes(machine, &a.j, &p.j), plain)
-        })
-        .collect();
     let (mut nominal, mut g93, mut g94) = (0.0, 0.0, 0.0);
+    let mut geo = Vec::new();
     for (i, p) in pts.iter().enumerate() {
-        let (err, dev) = fk[i];
+        if i % GEOMETRY_CHUNK == 0 {
+            geo = geometry(pts, i..(i + GEOMETRY_CHUNK).min(pts.len()), kin, machine, o);
+        }
+        let Geometry {
+            err,
+            dev,
+            times: (len, floor, plain),
+        } = geo[i % GEOMETRY_CHUNK];
         report.max_tip_error_mm = report.max_tip_error_mm.max(err);
         report.max_orientation_deviation_deg = report.max_orientation_deviation_deg.max(dev);
         if p.pole {
@@ -1066,7 +1095,6 @@ fn build(
             }
         } else {
             let a = &pts[i - 1];
-            let (len, floor, plain) = times[i];
             let mut t = if len > 1e-9 {
                 len / p.cl.v
             } else {
