@@ -46,7 +46,9 @@ pub fn tip_path_length_from(
     // fraction, so the same joints and tip to the bit (both quotients are
     // the one correctly rounded value).
     let tip_at = |i: usize| match samples {
-        Some(s) if DEVIATION_SAMPLES % m == 0 && i < m => s[i * (DEVIATION_SAMPLES / m) - 1],
+        Some(s) if DEVIATION_SAMPLES.is_multiple_of(m) && i < m => {
+            s[i * (DEVIATION_SAMPLES / m) - 1]
+        }
         _ => kin.tip(&lerp(a, b, i as f64 / m as f64)),
     };
     // The 2n steps; every other point gives the n steps.
