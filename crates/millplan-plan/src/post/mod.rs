@@ -766,18 +766,21 @@ fn post_operation(
     let (cands, off, pole) = all_candidates(&cls, kin, r, o.pole_cone)?;
     let chosen = choose(&cls, &cands, &off, kin, r)?;
     drop((cands, off));
-    let pts: Vec<Pt> = cls
-        .par_iter()
-        .zip(chosen.par_iter())
-        .zip(pole.par_iter())
-        .map(|((cl, c), &pole)| Pt {
-            cl: *cl,
-            c: *c,
-            j: joints(kin, cl.tip, c),
-            pole,
-            len: f64::NAN,
-        })
-        .collect();
+    // Room for the points linearisation inserts (memory not touched
+    // until then): they are merged into this array.
+    let mut pts: Vec<Pt> = Vec::with_capacity(cls.len() + cls.len() / 4 + 64);
+    pts.par_extend(
+        cls.par_iter()
+            .zip(chosen.par_iter())
+            .zip(pole.par_iter())
+            .map(|((cl, c), &pole)| Pt {
+                cl: *cl,
+                c: *c,
+                j: joints(kin, cl.tip, c),
+                pole,
+                len: f64::NAN,
+            }),
+    );
     drop((cls, chosen, pole));
     // Linearisation, each cutting block on its own, in chunks: the points
     // inserted before each point, flat, their number per point, and the
@@ -809,32 +812,81 @@ fn post_operation(
     };
     let extra: usize = inserted.iter().map(|c| c.0.len()).sum();
     report.inserted_points += extra;
-    let mut all = Vec::with_capacity(pts.len() + extra);
-    let mut before = inserted.iter().flat_map(|(flat, counts, lens)| {
-        counts.iter().zip(lens).scan(0usize, move |at, (&n, &len)| {
-            let v = &flat[*at..*at + n as usize];
-            *at += n as usize;
-            Some((v, len))
-        })
-    });
-    for (i, p) in pts.iter().enumerate() {
-        let mut p = *p;
-        let flip = i > 0 && is_flip(r, &pts[i - 1].c, &p.c);
-        if flip {
-            flip_moves(kin, &pts[i - 1], &p, o, &mut all, report);
-        }
-        if let Some((v, len)) = before.next() {
-            all.extend_from_slice(v);
-            // Measured from the point before it in the CL path: that is the
-            // point before it here only when nothing came between.
-            if v.is_empty() && !flip {
-                p.len = len;
-            }
-        }
-        all.push(p);
-    }
+    let all = merge(pts, &inserted, kin, r, o, report);
     check_travel(&all, kin, machine)?;
     Ok(all)
+}
+
+/// The points linearisation inserted before each point (`inserted`: per
+/// chunk of points, flat, their number per point and the length of each
+/// block that needed none) and the flips' moves merged into `pts` in
+/// order, from the end of its own array (which has room for a quarter
+/// more: no second array of the whole path).
+fn merge(
+    pts: Vec<Pt>,
+    inserted: &[(Vec<Pt>, Vec<u32>, Vec<f64>)],
+    kin: &Kinematics,
+    r: Roles,
+    o: &PostOptions,
+    report: &mut PostReport,
+) -> Vec<Pt> {
+    let n = pts.len();
+    // The flips' moves first, in order (the report's order).
+    let mut flips: Vec<(usize, Vec<Pt>)> = Vec::new();
+    for i in 1..n {
+        if is_flip(r, &pts[i - 1].c, &pts[i].c) {
+            let mut v = Vec::with_capacity(3);
+            flip_moves(kin, &pts[i - 1], &pts[i], o, &mut v, report);
+            flips.push((i, v));
+        }
+    }
+    let extra: usize = inserted.iter().map(|c| c.0.len()).sum::<usize>()
+        + flips.iter().map(|f| f.1.len()).sum::<usize>();
+    let Some(&filler) = pts.first() else {
+        return pts;
+    };
+    let mut all = pts;
+    all.resize(n + extra, filler);
+    // Point i's moves go to all[w - k..w]: the flip's, those inserted,
+    // the point. They start at or after i, so the points before i are
+    // still in place when read.
+    let mut w = all.len();
+    let mut place = |all: &mut Vec<Pt>, i: usize, v: &[Pt], len: f64| {
+        let mut p = all[i];
+        let flip = if flips.last().is_some_and(|f| f.0 == i) {
+            flips.pop()
+        } else {
+            None
+        };
+        // Measured from the point before it in the CL path: that is the
+        // point before it here only when nothing came between.
+        if v.is_empty() && flip.is_none() {
+            p.len = len;
+        }
+        w -= 1;
+        all[w] = p;
+        w -= v.len();
+        all[w..w + v.len()].copy_from_slice(v);
+        if let Some((_, f)) = flip {
+            w -= f.len();
+            all[w..w + f.len()].copy_from_slice(&f);
+        }
+    };
+    let mut i = n;
+    for (flat, counts, lens) in inserted.iter().rev() {
+        let mut at = flat.len();
+        for (&c, &len) in counts.iter().zip(lens).rev() {
+            i -= 1;
+            let v = &flat[at - c as usize..at];
+            at -= c as usize;
+            place(&mut all, i, v, len);
+        }
+    }
+    while i > 0 {
+        i -= 1;
+        place(&mut all, i, &[], f64::NAN);
+    }
+    all
 }
 
 /// Retract along the old axis, rotate there, approach above the new point:
