@@ -227,31 +227,40 @@ impl Kinematics {
     pub fn forward(&self, j: &Joints) -> (DVec3, DVec3) {
         let (a, c) = self.angles(j);
         let r = self.r();
-        let k = self.tool_axis(j.first, j.second);
-        let tip = match self.kind {
+        // The table kinds turn the tip and the axis by the same matrices
+        // (the expressions of `tip` and `tool_axis`, the sines taken once).
+        let table = |first: DMat3, d: DVec3| {
+            let (zt, ft) = (rz(c).transpose(), first.transpose());
+            (r + zt * (ft * (j.xyz - r - d) + d), zt * ft * DVec3::Z)
+        };
+        match self.kind {
             KinKind::TableAc => {
                 let d = DVec3::new(0.0, self.offset[1], self.offset[2] + self.tool_offset);
-                r + rz(c).transpose() * (rx(a).transpose() * (j.xyz - r - d) + d)
+                table(rx(a), d)
             }
             KinKind::TableBc => {
                 let d = DVec3::new(self.offset[0], 0.0, self.offset[2] + self.tool_offset);
-                r + rz(c).transpose() * (ry(a).transpose() * (j.xyz - r - d) + d)
+                table(ry(a), d)
             }
             KinKind::TableAb => {
                 let d = DVec3::new(self.offset[0], 0.0, self.offset[2]);
                 let t = DVec3::new(0.0, 0.0, self.tool_offset);
-                r + d + t + rx(a) * (ry(c) * (j.xyz - r - t) - d)
+                let tip = r + d + t + rx(a) * (ry(c) * (j.xyz - r - t) - d);
+                (tip, self.tool_axis(j.first, j.second))
             }
-            KinKind::HeadBc => j.xyz - k * self.pivot + DVec3::new(0.0, 0.0, self.pivot),
+            KinKind::HeadBc => {
+                let k = self.tool_axis(j.first, j.second);
+                (j.xyz - k * self.pivot + DVec3::new(0.0, 0.0, self.pivot), k)
+            }
             KinKind::HeadBTableC => {
                 // The head puts the tip at joints + L·e_z − L·K_m (machine frame);
                 // the table turns the part by C about the Z axis through R.
                 let km = ry(a) * DVec3::Z;
                 let tip_m = j.xyz + DVec3::new(0.0, 0.0, self.pivot) - km * self.pivot;
-                r + rz(c).transpose() * (tip_m - r)
+                let tip = r + rz(c).transpose() * (tip_m - r);
+                (tip, self.tool_axis(j.first, j.second))
             }
-        };
-        (tip, k)
+        }
     }
 
     /// The tool tip of [`Kinematics::forward`] alone (half the trigonometry:
@@ -655,6 +664,27 @@ mod tests {
             // One of the two branches is the joints we started from.
             let same = |s: &Joints| (s.xyz - j.xyz).length() < 1e-7 && (s.first - a).abs() < 1e-7 && (s.second - c).abs() < 1e-7;
             prop_assert!(sols.iter().any(same), "{:?} vs {:?}", sols, j);
+        }
+
+        /// `forward` takes its sines once for both results: the tip of
+        /// `tip` and the axis of `tool_axis`, to the bit.
+        #[test]
+        fn forward_is_tip_and_tool_axis_to_the_bit(
+            kind in 0usize..5, x in -300.0..300.0f64, y in -300.0..300.0f64, z in -300.0..300.0f64,
+            a in -120.0..120.0f64, c in -400.0..400.0f64, sign in any::<bool>(),
+        ) {
+            let kinds = [KinKind::TableAc, KinKind::TableBc, KinKind::TableAb, KinKind::HeadBc, KinKind::HeadBTableC];
+            let mut k = Kinematics::new(kinds[kind]);
+            k.rot_point = [10.0, -5.0, 2.0];
+            k.offset = [-4.0, 3.0, 20.0];
+            k.tool_offset = 100.0;
+            k.pivot = 250.0;
+            if sign { k.first.sign = -1.0; }
+            let j = Joints { xyz: DVec3::new(x, y, z), first: a, second: c };
+            let (tip, axis) = k.forward(&j);
+            let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+            prop_assert_eq!(bits(tip), bits(k.tip(&j)));
+            prop_assert_eq!(bits(axis), bits(k.tool_axis(a, c)));
         }
     }
 }

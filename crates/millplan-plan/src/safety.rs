@@ -656,22 +656,46 @@ fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
 }
 
 /// The input's cutting moves by source line: (start, end) in part
-/// coordinates, in order (a spline span read from one line makes several).
-type Segments = rustc_hash::FxHashMap<u32, Vec<(DVec3, DVec3)>>;
+/// coordinates, in order (a spline span read from one line makes several),
+/// flat and sorted by line (a map of a list per line took some 240 bytes a
+/// move: a million-point CL file's check held 235 MB).
+struct Segments {
+    lines: Vec<u32>,
+    segs: Vec<(DVec3, DVec3)>,
+}
+
+impl Segments {
+    /// The segments of source line `line`, in order (none: empty).
+    fn of_line(&self, line: u32) -> &[(DVec3, DVec3)] {
+        let a = self.lines.partition_point(|&l| l < line);
+        let n = self.lines[a..].partition_point(|&l| l == line);
+        &self.segs[a..a + n]
+    }
+}
 
 /// `tol`: arcs are cut into chords within a quarter of it.
 fn input_segments(input: &Program, tol: f64) -> Segments {
-    let mut map = Segments::default();
+    let (mut lines, mut segs) = (Vec::new(), Vec::new());
     for op in &input.operations {
         for (i, m) in op.moves.iter().enumerate() {
             if m.kind == MoveKind::Rapid || m.line == 0 {
                 continue;
             }
-            let v = map.entry(m.line).or_default();
-            move_segments(op, i, tol, &mut |a, b| v.push((a, b)));
+            move_segments(op, i, tol, &mut |a, b| {
+                lines.push(m.line);
+                segs.push((a, b));
+            });
         }
     }
-    map
+    if !lines.is_sorted() {
+        // Lines out of order (a program built in another order than its
+        // source's): sorted, each line's segments kept in their order.
+        let mut order: Vec<u32> = (0..lines.len() as u32).collect();
+        order.sort_by_key(|&k| lines[k as usize]);
+        segs = order.iter().map(|&k| segs[k as usize]).collect();
+        lines = order.iter().map(|&k| lines[k as usize]).collect();
+    }
+    Segments { lines, segs }
 }
 
 /// The straight pieces of move `i` of `op` in part coordinates (an arc as
@@ -785,7 +809,7 @@ fn tip_moved_by(input: &Program, output: &Program, k: &Kinematics, tol: f64) -> 
             }
             // A line whose input moves have no known ends (the first move
             // from an unknown position) has nothing to compare with.
-            let sg = segs.get(&m.line).filter(|s| !s.is_empty());
+            let sg = Some(segs.of_line(m.line)).filter(|s| !s.is_empty());
             let (Some(sg), Some(t)) = (sg, posted_tip(op, m, k, tcp)) else {
                 unmatched += 1;
                 continue;

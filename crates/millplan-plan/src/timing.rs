@@ -249,6 +249,7 @@ pub(crate) fn prepare(
 }
 
 /// What one input block is to the motion.
+#[derive(Clone, Copy)]
 pub(crate) enum Prepared {
     /// A dwell: the motion stops.
     Dwell,
@@ -302,21 +303,30 @@ pub(crate) fn prepare_one(
     } else {
         lim.feed_max
     };
-    let programmed = programmed_speed(rapid, len, nominal_min);
-    let vgeom = path_cap.min(vaxes);
-    let vcap = programmed.min(vgeom);
-    Prepared::Moves(Block {
+    let mut b = Block {
         index,
         len,
         dir,
         rotary_only,
         rapid,
-        vcap,
-        vgeom,
+        vcap: 0.0,
+        vgeom: path_cap.min(vaxes),
         accel,
         jerk,
-        velocity_limited: !rapid && vcap < programmed * (1.0 - 1e-12),
-    })
+        velocity_limited: false,
+    };
+    b.at_minutes(nominal_min);
+    Prepared::Moves(b)
+}
+
+impl Block {
+    /// The block's cap when it asks for `nominal_min` minutes (a feed
+    /// block; a rapid keeps none but its geometry's).
+    pub(crate) fn at_minutes(&mut self, nominal_min: f64) {
+        let programmed = programmed_speed(self.rapid, self.len, nominal_min);
+        self.vcap = programmed.min(self.vgeom);
+        self.velocity_limited = !self.rapid && self.vcap < programmed * (1.0 - 1e-12);
+    }
 }
 
 /// The speed a block's F asks for along its path (per second; unbounded on
@@ -551,22 +561,69 @@ pub fn estimate_axes_at(
     estimate_at(start, moves, Some(minutes), &Limits::of(machine))
 }
 
-/// [`estimate_axes`] of the same blocks for each set of minutes in
-/// `variants` (`None`: the blocks' own), in parallel, the blocks' geometry
-/// prepared once.
-pub fn estimate_axes_variants(
-    start: [f64; 6],
-    moves: &[AxisMove],
-    variants: &[Option<&[f64]>],
-    machine: &Machine,
-) -> Vec<TimeEstimate> {
-    use rayon::prelude::*;
-    let lim = Limits::of(machine);
-    let (blocks, stops) = prepare(start, moves, &lim);
-    variants
-        .par_iter()
-        .map(|m| finish(start, moves, *m, &blocks, &stops, None, &lim))
-        .collect()
+/// `N` estimates of one chain of machine-axis blocks that differ only in
+/// the minutes each feed block asks for, timed as the blocks come, each
+/// under the default path-control mode: for each, the figures of
+/// [`estimate_with`] over the whole chain, to the bit, without the chain's
+/// blocks or a time per block in memory (each holds only the blocks whose
+/// speeds the blocks after them may still lower: `stream::ChainStream`).
+/// The blocks' geometry is prepared once for all `N`.
+pub struct AxisChains<'a, const N: usize> {
+    lim: &'a Limits,
+    here: [f64; 6],
+    next: usize,
+    streams: [stream::ChainStream<'a>; N],
+}
+
+impl<'a, const N: usize> AxisChains<'a, N> {
+    /// The chains from `start`, at rest there, timed within `lim`.
+    pub fn new(start: [f64; 6], lim: &'a Limits) -> AxisChains<'a, N> {
+        AxisChains {
+            lim,
+            here: start,
+            next: 0,
+            streams: std::array::from_fn(|_| stream::ChainStream::new(start, lim)),
+        }
+    }
+
+    /// The chain's next block: `m` (its own minutes unused) asking for
+    /// `minutes[k]` in estimate k when a feed block.
+    pub fn push(&mut self, m: AxisMove, minutes: [f64; N]) {
+        let before = self.here;
+        let prepared = prepare_one(self.next, &m, &mut self.here, self.lim);
+        self.next += 1;
+        let rapid_mm = stream::rapid_mm(&m, &before);
+        for (s, t) in self.streams.iter_mut().zip(minutes) {
+            let (kind, p) = match (m.kind, &prepared) {
+                (MoveKind::Feed { .. }, Prepared::Moves(b)) => {
+                    let mut b = *b;
+                    b.at_minutes(t);
+                    (MoveKind::Feed { nominal_min: t }, Prepared::Moves(b))
+                }
+                (MoveKind::Feed { .. }, p) => (MoveKind::Feed { nominal_min: t }, *p),
+                (k, p) => (k, *p),
+            };
+            s.push_prepared(kind, rapid_mm, p, BlockCtl::default(), &mut |_| {});
+        }
+    }
+
+    /// The chains end at rest: the figures of each (`per_move_s` empty,
+    /// `planner` and `by_mode` as [`estimate_with`] leaves them).
+    pub fn finish(self) -> [TimeEstimate; N] {
+        self.streams.map(|s| {
+            let e = s.finish(&mut |_| {});
+            TimeEstimate {
+                total_s: e.total_s,
+                nominal_s: e.nominal_s,
+                rapid_s: e.rapid_s,
+                feed_s: e.feed_s,
+                dwell_s: e.dwell_s,
+                velocity_limited_blocks: e.velocity_limited_blocks,
+                accel_limited_blocks: e.accel_limited_blocks,
+                ..TimeEstimate::default()
+            }
+        })
+    }
 }
 
 /// [`estimate_with`] with the program's path-control mode at every block

@@ -24,19 +24,40 @@ pub fn lerp(a: &Joints, b: &Joints, s: f64) -> Joints {
 /// travel, one step per 2° and at least 2. Without rotary motion the path is
 /// the straight chord.
 pub fn tip_path_length(kin: &Kinematics, a: &Joints, b: &Joints) -> f64 {
+    tip_path_length_from(kin, a, b, None)
+}
+
+/// [`tip_path_length`], the tips inside the block taken from `samples`
+/// ([`tip_samples`] of the same block) where its steps fall on them (2 and
+/// 4 steps, or 4 and 8): the same bits, three or seven tips fewer.
+pub fn tip_path_length_from(
+    kin: &Kinematics,
+    a: &Joints,
+    b: &Joints,
+    samples: Option<&Samples>,
+) -> f64 {
     let turn = (b.first - a.first).abs().max((b.second - a.second).abs());
     if turn < 1e-12 {
         return (kin.tip(b) - kin.tip(a)).length();
     }
     let n = ((turn / 2.0).ceil() as usize).clamp(2, 512);
     let m = 2 * n;
+    // Step i of m is sample i·(S/m) of S when m divides S: the same
+    // fraction, so the same joints and tip to the bit (both quotients are
+    // the one correctly rounded value).
+    let tip_at = |i: usize| match samples {
+        Some(s) if DEVIATION_SAMPLES.is_multiple_of(m) && i < m => {
+            s[i * (DEVIATION_SAMPLES / m) - 1]
+        }
+        _ => kin.tip(&lerp(a, b, i as f64 / m as f64)),
+    };
     // The 2n steps; every other point gives the n steps.
     let mut l2n = 0.0;
     let mut ln = 0.0;
     let mut prev = kin.tip(a);
     let mut prev2 = prev;
     for i in 1..=m {
-        let p = kin.tip(&lerp(a, b, i as f64 / m as f64));
+        let p = tip_at(i);
         l2n += (p - prev).length();
         prev = p;
         if i % 2 == 0 {
@@ -63,22 +84,39 @@ pub fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
 /// Samples per block of the deviation estimate.
 pub const DEVIATION_SAMPLES: usize = 8;
 
+/// The tips at the inner sample points of a block (joints moving linearly
+/// from `a` to `b`), at fractions i / [`DEVIATION_SAMPLES`].
+pub type Samples = [DVec3; DEVIATION_SAMPLES - 1];
+
+/// [`Samples`] of the block from `a` to `b`; `None` when the rotaries do not
+/// turn (the joints move in a straight line with the table still: so does
+/// the tip).
+pub fn tip_samples(kin: &Kinematics, a: &Joints, b: &Joints) -> Option<Samples> {
+    let turn = (b.first - a.first).abs().max((b.second - a.second).abs());
+    if turn < 1e-12 {
+        return None;
+    }
+    Some(std::array::from_fn(|k| {
+        let s = (k + 1) as f64 / DEVIATION_SAMPLES as f64;
+        kin.tip(&lerp(a, b, s))
+    }))
+}
+
+/// The largest distance of the sampled tips from the straight CL segment
+/// `p0`–`p1` (0 without samples).
+pub fn sampled_deviation(samples: Option<&Samples>, p0: DVec3, p1: DVec3) -> f64 {
+    samples.map_or(0.0, |s| {
+        s.iter()
+            .map(|&p| segment_distance(p, p0, p1))
+            .fold(0.0, f64::max)
+    })
+}
+
 /// The largest distance of the tip path (joints moving linearly from `a` to
 /// `b`) from the straight CL segment `p0`–`p1`, sampled at
 /// [`DEVIATION_SAMPLES`] − 1 inner points.
 pub fn tip_deviation(kin: &Kinematics, a: &Joints, b: &Joints, p0: DVec3, p1: DVec3) -> f64 {
-    let turn = (b.first - a.first).abs().max((b.second - a.second).abs());
-    if turn < 1e-12 {
-        // The joints move in a straight line with the table still: so does
-        // the tip.
-        return 0.0;
-    }
-    (1..DEVIATION_SAMPLES)
-        .map(|i| {
-            let s = i as f64 / DEVIATION_SAMPLES as f64;
-            segment_distance(kin.tip(&lerp(a, b, s)), p0, p1)
-        })
-        .fold(0.0, f64::max)
+    sampled_deviation(tip_samples(kin, a, b).as_ref(), p0, p1)
 }
 
 /// The F word of G93 for a block of tip path length `len` (mm) at the tool

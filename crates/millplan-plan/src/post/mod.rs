@@ -35,8 +35,11 @@ pub mod ik;
 
 use crate::machine::{LinearAxis, Machine};
 use crate::orient::letters;
-use crate::timing::{estimate_axes_variants, AxisMove, MoveKind as AxisKind};
-use feed::{g94_machine_f, g94_minutes, tip_deviation, tip_path_length};
+use crate::timing::{AxisChains, AxisMove, Limits, MoveKind as AxisKind};
+use feed::{
+    g94_machine_f, g94_minutes, sampled_deviation, tip_deviation, tip_path_length,
+    tip_path_length_from, tip_samples,
+};
 use ik::{candidates, in_pole, is_flip, roles, wrap180, wrapped, Cand, Roles};
 use millplan_geom::DVec3;
 use millplan_models::kinematics::{Joints, Kinematics};
@@ -157,21 +160,10 @@ pub struct PostReport {
     pub rotary: Vec<AxisRange>,
 }
 
-/// A posted program, its blocks in machine coordinates (one per move, in
-/// order, as the controller-aware time estimate takes them) and the report.
+/// A posted program and the report.
 #[derive(Clone, Debug)]
 pub struct Posted {
     pub program: Program,
-    /// X Y Z (mm) and A B C (degrees) of the joints per move, with the
-    /// block time its F word asks for.
-    pub blocks: Vec<AxisMove>,
-    /// Per block, the minutes at the CL tip feed exactly (what G93 asks
-    /// for before any slowing) and those of a plain G94 post (the CL feed
-    /// applied to the joints' XYZ distance); 0 on rapids.
-    pub exact_min: Vec<f64>,
-    pub plain_g94_min: Vec<f64>,
-    /// Index of each operation's first block.
-    pub op_starts: Vec<usize>,
     pub report: PostReport,
 }
 
@@ -246,6 +238,9 @@ struct Pt {
     j: Joints,
     /// Inside the pole cone.
     pole: bool,
+    /// The tip path length from the point before it, when linearisation
+    /// measured it on the way (NaN: not measured).
+    len: f64,
 }
 
 /// Fits a program posted with TCP to its control. LinuxCNC has no TCP word:
@@ -295,8 +290,8 @@ pub fn post(p: &Program, machine: &Machine, o: &PostOptions) -> Result<Posted, P
         ..p.clone_header()
     };
     let mut report = PostReport::default();
-    let mut blocks = Vec::new();
-    let (mut exact_min, mut plain_g94_min, mut op_starts) = (Vec::new(), Vec::new(), Vec::new());
+    let lim = Limits::of(machine);
+    let mut times = Times::new(&lim);
     let mut ranges = [[f64::INFINITY, f64::NEG_INFINITY]; 2];
     for op in &p.operations {
         let pts = post_operation(op, kin, machine, o, &mut report)?;
@@ -306,13 +301,8 @@ pub fn post(p: &Program, machine: &Machine, o: &PostOptions) -> Result<Posted, P
                 r[1] = r[1].max(v);
             }
         }
-        op_starts.push(blocks.len());
-        let lists = BlockLists {
-            blocks: &mut blocks,
-            exact_min: &mut exact_min,
-            plain_g94_min: &mut plain_g94_min,
-        };
-        let new_op = build(op, &pts, kin, machine, o, lists, &mut report);
+        let new_op = build(op, &pts, kin, machine, o, &mut times, &mut report);
+        times.end_operation();
         drop(pts);
         out.operations.push(new_op);
     }
@@ -331,50 +321,63 @@ pub fn post(p: &Program, machine: &Machine, o: &PostOptions) -> Result<Posted, P
         })
         .collect();
     report.blocks = out.move_count();
-    let mut posted = Posted {
+    [report.time_s, report.time_g93_s, report.time_g94_s] = times.totals;
+    Ok(Posted {
         program: out,
-        blocks,
-        exact_min,
-        plain_g94_min,
-        op_starts,
         report,
-    };
-    estimate(&mut posted, machine);
-    Ok(posted)
+    })
 }
 
-/// The controller-aware estimates (`timing::estimate_axes`: axis
-/// velocities, accelerations, jerk, look-ahead) of the posted blocks as
-/// written, at the exact tip feed (G93) and as a plain G94 post would run.
-fn estimate(posted: &mut Posted, machine: &Machine) {
-    let mut ends = posted.op_starts.clone();
-    ends.push(posted.blocks.len());
-    let mut totals = [0.0; 3];
-    for w in ends.windows(2) {
-        let (a, b) = (w[0], w[1]);
-        if b <= a + 1 {
-            continue;
-        }
-        // Each operation from its first block's position (the move there
-        // comes from an unknown place).
-        let r = a + 1..b;
-        let e = estimate_axes_variants(
-            posted.blocks[a].target,
-            &posted.blocks[r.clone()],
-            &[
-                None,
-                Some(&posted.exact_min[r.clone()]),
-                Some(&posted.plain_g94_min[r]),
-            ],
-            machine,
-        );
-        for (t, e) in totals.iter_mut().zip(&e) {
-            *t += e.total_s;
+/// The controller-aware estimates (`timing::AxisChains`: axis velocities,
+/// accelerations, jerk, look-ahead) of the posted blocks as written, at
+/// the exact tip feed (G93) and as a plain G94 post would run, each
+/// operation a chain from its first block's position (the move there comes
+/// from an unknown place), timed as `build` makes its blocks.
+struct Times<'a> {
+    lim: &'a Limits,
+    /// The open operation's first block, then its three chains.
+    first: Option<[f64; 6]>,
+    chains: Option<AxisChains<'a, 3>>,
+    /// Seconds, summed over the operations in order.
+    totals: [f64; 3],
+}
+
+impl<'a> Times<'a> {
+    fn new(lim: &'a Limits) -> Times<'a> {
+        Times {
+            lim,
+            first: None,
+            chains: None,
+            totals: [0.0; 3],
         }
     }
-    posted.report.time_s = totals[0];
-    posted.report.time_g93_s = totals[1];
-    posted.report.time_g94_s = totals[2];
+
+    /// The next block of the open operation as written, and its minutes
+    /// at the exact tip feed and in a plain G94 post (ignored on rapids).
+    fn push(&mut self, m: AxisMove, exact_min: f64, plain_min: f64) {
+        let Some(start) = self.first else {
+            self.first = Some(m.target);
+            return;
+        };
+        let own = match m.kind {
+            AxisKind::Feed { nominal_min } => nominal_min,
+            _ => 0.0,
+        };
+        let lim = self.lim;
+        self.chains
+            .get_or_insert_with(|| AxisChains::new(start, lim))
+            .push(m, [own, exact_min, plain_min]);
+    }
+
+    /// The open operation's chains timed to their end.
+    fn end_operation(&mut self) {
+        self.first = None;
+        if let Some(chains) = self.chains.take() {
+            for (t, e) in self.totals.iter_mut().zip(chains.finish()) {
+                *t += e.total_s;
+            }
+        }
+    }
 }
 
 trait Header {
@@ -679,6 +682,25 @@ fn joints(kin: &Kinematics, tip: DVec3, c: &Cand) -> Joints {
     }
 }
 
+/// Linearises the cutting block `a`–`b`, pushing the points inserted in
+/// order: the block's tip path length when it needs none (measured from
+/// the tips its test sampled), else NaN.
+fn linearise(
+    kin: &Kinematics,
+    r: Roles,
+    a: &Pt,
+    b: &Pt,
+    o: &PostOptions,
+    out: &mut Vec<Pt>,
+) -> f64 {
+    let s = tip_samples(kin, &a.j, &b.j);
+    if sampled_deviation(s.as_ref(), a.cl.tip, b.cl.tip) <= SAMPLE_MARGIN * o.tol {
+        return tip_path_length_from(kin, &a.j, &b.j, s.as_ref());
+    }
+    halve(kin, r, a, b, o, 0, out);
+    f64::NAN
+}
+
 /// Halves the block `a`–`b` while the tip strays more than `tol` from the
 /// CL segment, pushing the points inserted in order.
 fn refine(
@@ -695,6 +717,19 @@ fn refine(
     {
         return;
     }
+    halve(kin, r, a, b, o, depth, out);
+}
+
+/// [`refine`] of the two halves of a block that strays.
+fn halve(
+    kin: &Kinematics,
+    r: Roles,
+    a: &Pt,
+    b: &Pt,
+    o: &PostOptions,
+    depth: u32,
+    out: &mut Vec<Pt>,
+) {
     let tip = (a.cl.tip + b.cl.tip) * 0.5;
     let k = axis_at(a.cl.k, b.cl.k, 0.5);
     let mid = Cand {
@@ -708,6 +743,7 @@ fn refine(
         c,
         j: joints(kin, tip, &c),
         pole: in_pole(r, k, o.pole_cone),
+        len: f64::NAN,
     };
     refine(kin, r, a, &m, o, depth + 1, out);
     out.push(m);
@@ -730,61 +766,127 @@ fn post_operation(
     let (cands, off, pole) = all_candidates(&cls, kin, r, o.pole_cone)?;
     let chosen = choose(&cls, &cands, &off, kin, r)?;
     drop((cands, off));
-    let pts: Vec<Pt> = cls
-        .par_iter()
-        .zip(chosen.par_iter())
-        .zip(pole.par_iter())
-        .map(|((cl, c), &pole)| Pt {
-            cl: *cl,
-            c: *c,
-            j: joints(kin, cl.tip, c),
-            pole,
-        })
-        .collect();
+    // Room for the points linearisation inserts (memory not touched
+    // until then): they are merged into this array.
+    let mut pts: Vec<Pt> = Vec::with_capacity(cls.len() + cls.len() / 4 + 64);
+    pts.par_extend(
+        cls.par_iter()
+            .zip(chosen.par_iter())
+            .zip(pole.par_iter())
+            .map(|((cl, c), &pole)| Pt {
+                cl: *cl,
+                c: *c,
+                j: joints(kin, cl.tip, c),
+                pole,
+                len: f64::NAN,
+            }),
+    );
     drop((cls, chosen, pole));
     // Linearisation, each cutting block on its own, in chunks: the points
-    // inserted before each point, flat, and their number per point.
+    // inserted before each point, flat, their number per point, and the
+    // tip path length of each block that needed none.
     const CHUNK: usize = 8192;
-    let inserted: Vec<(Vec<Pt>, Vec<u32>)> = if o.tcp {
+    type Part = (Vec<Pt>, Vec<u32>, Vec<f64>);
+    let inserted: Vec<Part> = if o.tcp {
         Vec::new()
     } else {
         (0..pts.len())
             .into_par_iter()
             .step_by(CHUNK)
             .map(|start| {
-                let (mut flat, mut counts) = (Vec::new(), Vec::with_capacity(CHUNK));
-                for i in start..(start + CHUNK).min(pts.len()) {
+                let end = (start + CHUNK).min(pts.len());
+                let mut flat = Vec::new();
+                let (mut counts, mut lens) = (Vec::with_capacity(CHUNK), Vec::with_capacity(CHUNK));
+                for i in start..end {
                     let before = flat.len();
+                    let mut len = f64::NAN;
                     if i > 0 && !pts[i].cl.rapid {
-                        refine(kin, r, &pts[i - 1], &pts[i], o, 0, &mut flat);
+                        len = linearise(kin, r, &pts[i - 1], &pts[i], o, &mut flat);
                     }
                     counts.push((flat.len() - before) as u32);
+                    lens.push(len);
                 }
-                (flat, counts)
+                (flat, counts, lens)
             })
             .collect()
     };
     let extra: usize = inserted.iter().map(|c| c.0.len()).sum();
     report.inserted_points += extra;
-    let mut all = Vec::with_capacity(pts.len() + extra);
-    let mut before = inserted.iter().flat_map(|(flat, counts)| {
-        counts.iter().scan(0usize, move |at, &n| {
-            let v = &flat[*at..*at + n as usize];
-            *at += n as usize;
-            Some(v)
-        })
-    });
-    for (i, p) in pts.iter().enumerate() {
-        if i > 0 && is_flip(r, &pts[i - 1].c, &p.c) {
-            flip_moves(kin, &pts[i - 1], p, o, &mut all, report);
-        }
-        if let Some(v) = before.next() {
-            all.extend_from_slice(v);
-        }
-        all.push(*p);
-    }
+    let all = merge(pts, &inserted, kin, r, o, report);
     check_travel(&all, kin, machine)?;
     Ok(all)
+}
+
+/// The points linearisation inserted before each point (`inserted`: per
+/// chunk of points, flat, their number per point and the length of each
+/// block that needed none) and the flips' moves merged into `pts` in
+/// order, from the end of its own array (which has room for a quarter
+/// more: no second array of the whole path).
+fn merge(
+    pts: Vec<Pt>,
+    inserted: &[(Vec<Pt>, Vec<u32>, Vec<f64>)],
+    kin: &Kinematics,
+    r: Roles,
+    o: &PostOptions,
+    report: &mut PostReport,
+) -> Vec<Pt> {
+    let n = pts.len();
+    // The flips' moves first, in order (the report's order).
+    let mut flips: Vec<(usize, Vec<Pt>)> = Vec::new();
+    for i in 1..n {
+        if is_flip(r, &pts[i - 1].c, &pts[i].c) {
+            let mut v = Vec::with_capacity(3);
+            flip_moves(kin, &pts[i - 1], &pts[i], o, &mut v, report);
+            flips.push((i, v));
+        }
+    }
+    let extra: usize = inserted.iter().map(|c| c.0.len()).sum::<usize>()
+        + flips.iter().map(|f| f.1.len()).sum::<usize>();
+    let Some(&filler) = pts.first() else {
+        return pts;
+    };
+    let mut all = pts;
+    all.resize(n + extra, filler);
+    // Point i's moves go to all[w - k..w]: the flip's, those inserted,
+    // the point. They start at or after i, so the points before i are
+    // still in place when read.
+    let mut w = all.len();
+    let mut place = |all: &mut Vec<Pt>, i: usize, v: &[Pt], len: f64| {
+        let mut p = all[i];
+        let flip = if flips.last().is_some_and(|f| f.0 == i) {
+            flips.pop()
+        } else {
+            None
+        };
+        // Measured from the point before it in the CL path: that is the
+        // point before it here only when nothing came between.
+        if v.is_empty() && flip.is_none() {
+            p.len = len;
+        }
+        w -= 1;
+        all[w] = p;
+        w -= v.len();
+        all[w..w + v.len()].copy_from_slice(v);
+        if let Some((_, f)) = flip {
+            w -= f.len();
+            all[w..w + f.len()].copy_from_slice(&f);
+        }
+    };
+    let mut i = n;
+    for (flat, counts, lens) in inserted.iter().rev() {
+        let mut at = flat.len();
+        for (&c, &len) in counts.iter().zip(lens).rev() {
+            i -= 1;
+            let v = &flat[at - c as usize..at];
+            at -= c as usize;
+            place(&mut all, i, v, len);
+        }
+    }
+    while i > 0 {
+        i -= 1;
+        place(&mut all, i, &[], f64::NAN);
+    }
+    all
 }
 
 /// Retract along the old axis, rotate there, approach above the new point:
@@ -812,6 +914,7 @@ fn flip_moves(
             c,
             j: joints(kin, tip, &c),
             pole: false,
+            len: f64::NAN,
         });
     }
     report.flip_moves += 3;
@@ -917,11 +1020,58 @@ fn target6(kin: &Kinematics, j: &Joints) -> [f64; 6] {
     t
 }
 
-/// Where `build` appends each posted block and its two reference times.
-struct BlockLists<'a> {
-    blocks: &'a mut Vec<AxisMove>,
-    exact_min: &'a mut Vec<f64>,
-    plain_g94_min: &'a mut Vec<f64>,
+/// Points whose [`Geometry`] is computed at once (in parallel), so that it
+/// is not held for the whole operation.
+const GEOMETRY_CHUNK: usize = 1 << 16;
+
+/// What `build` needs of a posted point beyond the point itself.
+#[derive(Clone, Copy)]
+struct Geometry {
+    /// The distance of its tip by forward kinematics from the CL tip, mm,
+    /// and the angle of its axis from the CL axis, degrees.
+    err: f64,
+    dev: f64,
+    /// The block to it: its path length, the least minutes the axes with a
+    /// known top speed allow, and the minutes of a plain G94 post (zeros
+    /// for the first point and rapids).
+    times: (f64, f64, f64),
+}
+
+/// The [`Geometry`] of the points `range` of `pts`, in parallel.
+fn geometry(
+    pts: &[Pt],
+    range: std::ops::Range<usize>,
+    kin: &Kinematics,
+    machine: &Machine,
+    o: &PostOptions,
+) -> Vec<Geometry> {
+    range
+        .into_par_iter()
+        .map(|i| {
+            let p = &pts[i];
+            let (tip, k) = kin.forward(&p.j);
+            let (err, dev) = ((tip - p.cl.tip).length(), ik::angle_deg(k, p.cl.k));
+            if i == 0 || p.cl.rapid {
+                let times = (0.0, 0.0, 0.0);
+                return Geometry { err, dev, times };
+            }
+            let a = &pts[i - 1];
+            let len = if o.tcp {
+                (p.cl.tip - a.cl.tip).length()
+            } else if p.len.is_nan() {
+                tip_path_length(kin, &a.j, &p.j)
+            } else {
+                p.len
+            };
+            let plain = if o.tcp {
+                len / p.cl.v
+            } else {
+                g94_minutes(&a.j, &p.j, p.cl.v)
+            };
+            let times = (len, known_axes_minutes(machine, &a.j, &p.j), plain);
+            Geometry { err, dev, times }
+        })
+        .collect()
 }
 
 /// The posted operation: moves, orientations, events re-anchored, feeds.
@@ -931,7 +1081,7 @@ fn build(
     kin: &Kinematics,
     machine: &Machine,
     o: &PostOptions,
-    out: BlockLists,
+    timer: &mut Times,
     report: &mut PostReport,
 ) -> Operation {
     let mut new = Operation {
@@ -945,46 +1095,20 @@ fn build(
         orients: Vec::with_capacity(pts.len()),
         events: Vec::new(),
     };
-    out.blocks.reserve(pts.len());
-    out.exact_min.reserve(pts.len());
-    out.plain_g94_min.reserve(pts.len());
     // The first posted move of each source move.
     let mut first_of = vec![u32::MAX; op.moves.len() + 1];
     let rapid_lin = machine.rapid;
-    // Per block: path length and times, computed in parallel.
-    // Forward kinematics of every posted point: the distance of its tip
-    // from the CL tip and the angle of its axis from the CL axis.
-    let fk: Vec<(f64, f64)> = pts
-        .par_iter()
-        .map(|p| {
-            let (tip, k) = kin.forward(&p.j);
-            ((tip - p.cl.tip).length(), ik::angle_deg(k, p.cl.k))
-        })
-        .collect();
-    let times: Vec<(f64, f64, f64)> = (0..pts.len())
-        .into_par_iter()
-        .map(|i| {
-            let p = &pts[i];
-            if i == 0 || p.cl.rapid {
-                return (0.0, 0.0, 0.0);
-            }
-            let a = &pts[i - 1];
-            let len = if o.tcp {
-                (p.cl.tip - a.cl.tip).length()
-            } else {
-                tip_path_length(kin, &a.j, &p.j)
-            };
-            let plain = if o.tcp {
-                len / p.cl.v
-            } else {
-                g94_minutes(&a.j, &p.j, p.cl.v)
-            };
-            (len, known_axes_minutes(machine, &a.j, &p.j), plain)
-        })
-        .collect();
     let (mut nominal, mut g93, mut g94) = (0.0, 0.0, 0.0);
+    let mut geo = Vec::new();
     for (i, p) in pts.iter().enumerate() {
-        let (err, dev) = fk[i];
+        if i % GEOMETRY_CHUNK == 0 {
+            geo = geometry(pts, i..(i + GEOMETRY_CHUNK).min(pts.len()), kin, machine, o);
+        }
+        let Geometry {
+            err,
+            dev,
+            times: (len, floor, plain),
+        } = geo[i % GEOMETRY_CHUNK];
         report.max_tip_error_mm = report.max_tip_error_mm.max(err);
         report.max_orientation_deviation_deg = report.max_orientation_deviation_deg.max(dev);
         if p.pole {
@@ -1023,7 +1147,6 @@ fn build(
             }
         } else {
             let a = &pts[i - 1];
-            let (len, floor, plain) = times[i];
             let mut t = if len > 1e-9 {
                 len / p.cl.v
             } else {
@@ -1068,12 +1191,11 @@ fn build(
         if first_of[src] == u32::MAX {
             first_of[src] = new.moves.len() as u32;
         }
-        out.blocks.push(AxisMove {
+        let block = AxisMove {
             target: target6(kin, &p.j),
             kind,
-        });
-        out.exact_min.push(exact_t);
-        out.plain_g94_min.push(plain_t);
+        };
+        timer.push(block, exact_t, plain_t);
         new.moves.push(m);
     }
     // Events before source move k go before the first posted move of k or

@@ -138,25 +138,30 @@ impl<'a> ChainStream<'a> {
     /// The next input block with its path-control mode; `done` hears every
     /// input block whose time is final, in order.
     pub(crate) fn push(&mut self, m: AxisMove, ctl: BlockCtl, done: &mut dyn FnMut(Timed)) {
-        let index = self.next;
-        self.next += 1;
         let before = self.here;
-        let rapid_mm = match m.kind {
-            MoveKind::Rapid => DVec3::new(
-                m.target[0] - before[0],
-                m.target[1] - before[1],
-                m.target[2] - before[2],
-            )
-            .length(),
-            _ => 0.0,
-        };
+        let p = prepare_one(self.next, &m, &mut self.here, self.lim);
+        self.push_prepared(m.kind, rapid_mm(&m, &before), p, ctl, done);
+    }
+
+    /// [`ChainStream::push`] of a block prepared from where this chain
+    /// stands (`prepare_one` at the next index; `rapid_mm` its XYZ length
+    /// on a rapid, else 0), moving the chain on to its end.
+    pub(crate) fn push_prepared(
+        &mut self,
+        kind: MoveKind,
+        rapid_mm: f64,
+        p: Prepared,
+        ctl: BlockCtl,
+        done: &mut dyn FnMut(Timed),
+    ) {
+        self.next += 1;
         self.moves.push_back(Pending {
-            kind: m.kind,
+            kind,
             rapid_mm,
             ctl,
             t: 0.0,
         });
-        match prepare_one(index, &m, &mut self.here, self.lim) {
+        match p {
             Prepared::Dwell => self.stop = true,
             Prepared::Still => {}
             Prepared::Moves(b) => {
@@ -407,6 +412,19 @@ impl<'a> ChainStream<'a> {
     }
 }
 
+/// The XYZ length of `m` from `before` on a rapid (its nominal time), else 0.
+pub(crate) fn rapid_mm(m: &AxisMove, before: &[f64; 6]) -> f64 {
+    match m.kind {
+        MoveKind::Rapid => DVec3::new(
+            m.target[0] - before[0],
+            m.target[1] - before[1],
+            m.target[2] - before[2],
+        )
+        .length(),
+        _ => 0.0,
+    }
+}
+
 /// Whether the backward pass gives `w` at the start of `b` whatever speed
 /// `b` must end at (module doc).
 fn anchor(w: f64, b: &Block) -> bool {
@@ -606,6 +624,46 @@ mod tests {
                 whole.by_mode.clear();
                 let s = streamed(start, &moves, &ctl, &lim);
                 prop_assert_eq!(bits(&s), bits(&whole), "{:?}", kind);
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+        /// `AxisChains` (the post's three estimates, no modes) agrees to
+        /// the bit with the whole chain timed at its own feeds and at other
+        /// minutes per block (`estimate_at`), under every planner model.
+        #[test]
+        fn axis_chains_are_the_whole_chain_at_any_minutes(seed in 1u64..u64::MAX, n in 1usize..160) {
+            use crate::timing::{estimate_at, AxisChains};
+            let mut rng = Rng(seed);
+            for kind in PlannerKind::ALL {
+                let lim = limits(&mut rng, kind);
+                let (moves, _) = chain(&mut rng, n);
+                let start = [1.0, -2.0, 0.5, 0.0, 0.0, 0.0];
+                let mut minutes = [Vec::new(), Vec::new()];
+                for m in &mut minutes {
+                    *m = moves
+                        .iter()
+                        .map(|_| if rng.pick(0.1) { 0.0 } else { 1e-4 * rng.next() })
+                        .collect();
+                }
+                let mut chains = AxisChains::<3>::new(start, &lim);
+                for (i, m) in moves.iter().enumerate() {
+                    // The first set of minutes is the blocks' own (and is
+                    // ignored on every block that is not a feed block).
+                    let own = match m.kind {
+                        MoveKind::Feed { nominal_min } => nominal_min,
+                        _ => 1.0,
+                    };
+                    chains.push(*m, [own, minutes[0][i], minutes[1][i]]);
+                }
+                let got = chains.finish();
+                for (k, at) in [None, Some(&minutes[0][..]), Some(&minutes[1][..])].into_iter().enumerate() {
+                    let mut whole = estimate_at(start, &moves, at, &lim);
+                    whole.per_move_s.clear();
+                    prop_assert_eq!(bits(&got[k]), bits(&whole), "{:?} estimate {}", kind, k);
+                }
             }
         }
     }

@@ -136,6 +136,11 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet || a.json);
     clock.lap("read CL file");
     let (program, report) = post_program(a, &parsed.program, &machine, &o, target, clock)?;
+    // The checks before the writing, so that the CL program is gone before
+    // the G-code text and the program read back from it are made.
+    let checks = lib::check_posted(&parsed.program, &program, &machine, o.tol);
+    drop(parsed);
+    clock.lap("checks (IR, machine, tips through the kinematics)");
     let wo = lib::write_options(&machine, target);
     let out = crate::cmd::write_program(&program, wo, &a.input, a.quiet)?;
     clock.lap("G-code written (in memory)");
@@ -144,11 +149,8 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
         &*a.input.display().to_string(),
     );
     lib::read_back_check(&program, &out, target, a.tol, names).map_err(CliError::internal)?;
-    clock.lap("written program read back and compared");
-    let checks = lib::check_posted(&parsed.program, &program, &machine, o.tol);
-    drop(parsed);
     let checked = crate::verdict::enforce(&checks, &a.input, a.force)?;
-    clock.lap("checks (IR, machine, tips through the kinematics)");
+    clock.lap("written program read back and compared");
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
     clock.lap("program staged, synced and renamed into place");
@@ -180,13 +182,10 @@ fn post_program(
 ) -> CliResult<(millplan_nc::Program, millplan_plan::post::PostReport)> {
     let bar = crate::progress::spinner("posting", !a.quiet && !a.json);
     let posted = post(cl, machine, o).map_err(|e| post_error(&a.input, e))?;
-    // The posted blocks (timed inside the post) are not needed any more:
-    // their memory goes before the written program and its read-back take
-    // theirs. The CL program stays for the tip check.
+    // The CL program stays for the tip check.
     let Posted {
         mut program,
         report,
-        ..
     } = posted;
     clock.lap("post (IK, DP over the path, linearisation, feeds, time estimates)");
     for_target(&mut program, target).map_err(|e| post_error(&a.input, e))?;
