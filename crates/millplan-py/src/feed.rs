@@ -73,7 +73,7 @@ fn target(g: &Given, p: &Prepared) -> Res<Target> {
 }
 
 /// The run of `millplan feed`: prepared, scheduled, the written program's
-/// loads, written to `output` when given.
+/// loads and checks, written to `output` when given and no check refuses it.
 fn run(m: &ModelRequest, f: &FeedRequest, g: &Given) -> Res<Ran> {
     guard(&g.name, || {
         let p = prepare(m, g)?;
@@ -96,11 +96,14 @@ fn run(m: &ModelRequest, f: &FeedRequest, g: &Given) -> Res<Ran> {
         };
         let (bytes, _) = millplan_nc::write::write_program(&s.program, wo)
             .map_err(|e| Located::new(Place::at(&g.name, e.line, 1), e.message))?;
-        if let Some(o) = &g.output {
+        // The command's checks; a refused program is not written (the
+        // summary's `checks` and red verdict say why).
+        let checks = lib::checks(&p, &s.program, m).map_err(|e| option_error(&e))?;
+        if let (Some(o), true) = (&g.output, millplan_plan::safety::passed(&checks)) {
             write_bytes(o, &bytes)?;
         }
         let output = g.output.clone().unwrap_or_default();
-        let summary = lib::FeedSummary::new(&p, &s, &after, &output, target.name());
+        let summary = lib::FeedSummary::new(&p, &s, (&after, checks), &output, target.name());
         let summary_json = serde_json::to_string(&summary)
             .map_err(|e| Located::new(Place::file(&g.name), e.to_string()))?;
         Ok(Ran {

@@ -739,6 +739,27 @@ fn krl_motion_without_a_krl_output_is_refused() {
     assert!(std::fs::read_to_string(&src).expect("src").contains("LIN "));
 }
 
+/// The options of `optimise --robot` on the slot of [`slot_nc`]: EN AW-2007,
+/// a 3-flute D12 flat end mill, the KR 240 at 1300,-100,300,0, one KRL file.
+const SLOT_ON_THE_ROBOT: [&str; 16] = [
+    "--material",
+    "en-aw-2007",
+    "--tool",
+    "flat:12",
+    "--flutes",
+    "3",
+    "--resolution",
+    "0.25",
+    "--stock",
+    "box:0,-20,-20,120,20,0",
+    "--robot",
+    "kr240",
+    "--pose",
+    "1300,-100,300,0",
+    "--max-points",
+    "0",
+];
+
 /// `optimise --robot --json --report`: the robot pass's figures (the
 /// deflection before compensation, mean and max |Δp|, and the largest
 /// distance of the tip from the path that the KRL read back leaves) are
@@ -750,30 +771,14 @@ fn optimise_robot_figures_in_json_and_report() {
     let nc = slot_nc(dir.path(), -6.0);
     let out = dir.path().join("opt.src");
     let report = dir.path().join("opt.html");
-    let mut args = vec![
-        "optimise",
-        nc.to_str().expect("utf8"),
-        "--material",
-        "en-aw-2007",
-        "--tool",
-        "flat:12",
-        "--flutes",
-        "3",
-        "--resolution",
-        "0.25",
-        "--stock",
-        "box:0,-20,-20,120,20,0",
-        "--robot",
-        "kr240",
-        "--pose",
-        "1300,-100,300,0",
-        "--max-points",
-        "0",
+    let mut args = vec!["optimise", nc.to_str().expect("utf8")];
+    args.extend(SLOT_ON_THE_ROBOT);
+    args.extend([
         "-o",
         out.to_str().expect("utf8"),
         "--report",
         report.to_str().expect("utf8"),
-    ];
+    ]);
     let text = run(&args);
     let err = String::from_utf8_lossy(&text.stderr).to_string();
     assert!(text.status.success(), "{err}");
@@ -840,29 +845,9 @@ fn optimise_robot_corrects_the_orientation_on_request() {
     let nc = slot_nc(dir.path(), -6.0);
     let run_with = |name: &str, extra: &[&str]| {
         let out = dir.path().join(name);
-        let mut args = vec![
-            "optimise",
-            nc.to_str().expect("utf8"),
-            "--material",
-            "en-aw-2007",
-            "--tool",
-            "flat:12",
-            "--flutes",
-            "3",
-            "--resolution",
-            "0.25",
-            "--stock",
-            "box:0,-20,-20,120,20,0",
-            "--robot",
-            "kr240",
-            "--pose",
-            "1300,-100,300,0",
-            "--max-points",
-            "0",
-            "--json",
-            "-o",
-            out.to_str().expect("utf8"),
-        ];
+        let mut args = vec!["optimise", nc.to_str().expect("utf8")];
+        args.extend(SLOT_ON_THE_ROBOT);
+        args.extend(["--json", "-o", out.to_str().expect("utf8")]);
         args.extend_from_slice(extra);
         let j = json(&args);
         (j["robot"].clone(), krl_poses(&out))
