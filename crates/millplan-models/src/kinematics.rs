@@ -635,6 +635,24 @@ mod tests {
         assert_eq!(KinKind::HeadBTableC.rotary_names(), ['B', 'C']);
     }
 
+    /// The machine of kind number `kind` (of five) with every offset set,
+    /// for the properties below.
+    fn offset_machine(kind: usize) -> Kinematics {
+        let kinds = [
+            KinKind::TableAc,
+            KinKind::TableBc,
+            KinKind::TableAb,
+            KinKind::HeadBc,
+            KinKind::HeadBTableC,
+        ];
+        let mut k = Kinematics::new(kinds[kind]);
+        k.rot_point = [10.0, -5.0, 2.0];
+        k.offset = [-4.0, 3.0, 20.0];
+        k.tool_offset = 100.0;
+        k.pivot = 250.0;
+        k
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(300))]
 
@@ -644,12 +662,7 @@ mod tests {
             a in -85.0..85.0f64, c in -179.0..179.0f64, sign in any::<bool>(),
         ) {
             prop_assume!(a.abs() > 0.5);
-            let kinds = [KinKind::TableAc, KinKind::TableBc, KinKind::TableAb, KinKind::HeadBc, KinKind::HeadBTableC];
-            let mut k = Kinematics::new(kinds[kind]);
-            k.rot_point = [10.0, -5.0, 2.0];
-            k.offset = [-4.0, 3.0, 20.0];
-            k.tool_offset = 100.0;
-            k.pivot = 250.0;
+            let mut k = offset_machine(kind);
             if sign { k.second.sign = -1.0; }
             let j = Joints { xyz: DVec3::new(x, y, z), first: a, second: c };
             let (tip, axis) = k.forward(&j);
@@ -673,12 +686,7 @@ mod tests {
             kind in 0usize..5, x in -300.0..300.0f64, y in -300.0..300.0f64, z in -300.0..300.0f64,
             a in -120.0..120.0f64, c in -400.0..400.0f64, sign in any::<bool>(),
         ) {
-            let kinds = [KinKind::TableAc, KinKind::TableBc, KinKind::TableAb, KinKind::HeadBc, KinKind::HeadBTableC];
-            let mut k = Kinematics::new(kinds[kind]);
-            k.rot_point = [10.0, -5.0, 2.0];
-            k.offset = [-4.0, 3.0, 20.0];
-            k.tool_offset = 100.0;
-            k.pivot = 250.0;
+            let mut k = offset_machine(kind);
             if sign { k.first.sign = -1.0; }
             let j = Joints { xyz: DVec3::new(x, y, z), first: a, second: c };
             let (tip, axis) = k.forward(&j);
