@@ -76,6 +76,17 @@ impl Job {
     /// Writes the outcome's program with `wo`, re-reads it from its bytes
     /// and runs every check that applies on what was read.
     pub fn finish(&self, o: &Outcome, wo: WriteOptions) -> Result<Written, JobError> {
+        self.finish_timed(o, wo, &mut |_| {})
+    }
+
+    /// [`Job::finish`] naming its phases to `lap` as each ends: writing
+    /// and reading back, the output's loads, the checks, the measures.
+    pub fn finish_timed(
+        &self,
+        o: &Outcome,
+        wo: WriteOptions,
+        lap: &mut dyn FnMut(&str),
+    ) -> Result<Written, JobError> {
         let (program, wo) = self.for_writing(o, wo)?;
         let program = program.as_ref().unwrap_or(&o.program);
         let (bytes, warnings) = write_program(program, wo)
@@ -89,18 +100,22 @@ impl Job {
         let mut list = vec![safety::read_back_check(&back)];
         let mut read = back.program;
         checks::same_tools(&mut read, program);
+        lap("program written in memory and read back");
         // A posted program is in machine coordinates: the loads, the stock
         // and the part are checked on the CL program it was posted from,
         // its tips through the kinematics against the input.
         let cl = o.posted.as_ref().map_or(&read, |(cl, _)| cl);
         let forces_after = self.forces_checked(cl)?;
+        lap("the output's loads on the stock");
         list.extend(self.checks(o, cl, forces_after.as_ref()));
         if o.posted.is_some() {
             self.posted_checks(&read, &mut list);
         }
+        lap("the output checked (IR, machine, tips, stock, part)");
         let cx = self.context();
         let after = self.measure(cl, forces_after.as_ref(), &cx);
         let summary = self.summary(o, &after, list, wo);
+        lap("the output measured (time, constant-vc share)");
         Ok(Written {
             bytes,
             warnings,

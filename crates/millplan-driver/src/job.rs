@@ -303,6 +303,12 @@ fn first_diameter(p: &Program, body: &BodyOptions) -> Option<f64> {
 impl Job {
     /// Resolves every default and builds the stock and the force model.
     pub fn new(inputs: Inputs) -> Result<Job, JobError> {
+        Job::new_timed(inputs, &mut |_| {})
+    }
+
+    /// [`Job::new`] naming its phases to `lap` as each ends (for a
+    /// `--timings` table): the defaults, the stock, the input's loads.
+    pub fn new_timed(inputs: Inputs, lap: &mut dyn FnMut(&str)) -> Result<Job, JobError> {
         let o = inputs.options.clone();
         let mut s = Vec::new();
         let lib = first_library_tool(&inputs);
@@ -355,9 +361,12 @@ impl Job {
             forces_before: None,
         };
         job.default_spindle(d);
+        lap("defaults resolved, materials and tools looked up");
         job.stock = job.build_stock()?;
+        lap("stock built");
         job.forces_before = job.forces(&job.inputs.program)?;
         job.learn_limits();
+        lap("the input's loads on the stock (limits learned)");
         Ok(job)
     }
 

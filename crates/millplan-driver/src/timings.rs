@@ -34,6 +34,15 @@ impl Clock {
         self.last = now;
     }
 
+    /// Records `seconds` of the next phase as its part `name` (printed
+    /// indented under it, not added to the total).
+    pub fn part(&mut self, name: &str, seconds: f64) {
+        self.entries.push(Timing {
+            name: format!("  {name}"),
+            seconds,
+        });
+    }
+
     /// The laps so far, in order.
     pub fn entries(&self) -> &[Timing] {
         &self.entries

@@ -227,6 +227,22 @@ fn part_commands_phases_add_up_to_the_wall_time() {
         "setup", "--type", "ca", "--stl", &stl, "--cells", "200", "-q",
     ];
     assert_phases_cover(&setup, &[0, 3]);
+    let optimise = [
+        "optimise",
+        &apt,
+        "--stl",
+        &stl,
+        "--stock",
+        "offset:0.3",
+        "--resolution",
+        "1",
+        "--material",
+        "al7075",
+        "-o",
+        &out("opt.apt"),
+        "-q",
+    ];
+    assert_phases_cover(&optimise, &[0, 3]);
 }
 
 #[test]

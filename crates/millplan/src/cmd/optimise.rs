@@ -5,6 +5,7 @@ use crate::cmd::load_machine;
 use crate::cmd::{print_diagnostics, read_options, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::{read_program, read_surface, Outputs};
+use crate::timings::{Clock, Table as _};
 use millplan_driver::given::{Given, GivenError};
 use millplan_driver::passes::{self, ORDER};
 use millplan_driver::report::{self, InputNames, Plotted};
@@ -136,6 +137,8 @@ pub struct Args {
     pub quiet: bool,
     #[command(flatten)]
     pub robot: crate::cmd::robot::OptimiseRobotArgs,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 fn options(a: &Args) -> OptionsRequest {
@@ -206,6 +209,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         list_passes(a.json);
         return Ok(EXIT_OK);
     }
+    let mut clock = Clock::start();
     let order = checked_order(&a)?;
     let mut inputs: Vec<&Path> = vec![&path];
     inputs.extend(a.stl.as_deref());
@@ -219,7 +223,10 @@ pub fn run(a: Args) -> CliResult<i32> {
         &[("-o", Some(&output)), ("--report", a.report.as_deref())],
         false,
     )?;
-    let job = Job::new(read_inputs(&a, &path)?)
+    clock.lap("arguments and outputs checked");
+    let given = read_inputs(&a, &path)?;
+    clock.lap("program, part, machine, materials and tools read");
+    let job = Job::new_timed(given, &mut |n| clock.lap(n))
         .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
     let machine = job.inputs.machine_given.then_some(&job.inputs.machine);
     let target = millplan_driver::target::output_target(
@@ -233,7 +240,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         limits: crate::limits::get(),
         ..job.inputs.machine.write_options(target)
     };
-    let (outcome, mut w) = passes_and_checks(&a, &job, &order, wo, &path)?;
+    let (outcome, mut w) = passes_and_checks(&a, &job, &order, wo, &path, &mut clock)?;
     let quiet = a.quiet || a.json;
     crate::cmd::robot::after_optimise(
         &a.robot,
@@ -242,6 +249,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         (&inputs, &output),
         (a.force, quiet),
     )?;
+    clock.lap("robot placement and compensation (--robot)");
     print_diagnostics(&path, &w.warnings, a.quiet || a.json);
     let refused = w.summary.verdict == Verdict::Refused;
     if !refused || a.force {
@@ -251,7 +259,10 @@ pub fn run(a: Args) -> CliResult<i32> {
         outputs.write(r, page(&a, &job, &outcome, &w, &path, &output).as_bytes())?;
     }
     outputs.commit()?;
+    clock.lap("outputs written and renamed into place");
     print_summary(&a, &w, &path, &output, refused && !a.force);
+    clock.lap("summary printed");
+    clock.print(a.timings.on);
     Ok(if refused { EXIT_FINDINGS } else { EXIT_OK })
 }
 
@@ -263,14 +274,19 @@ fn passes_and_checks(
     order: &[passes::PassName],
     wo: millplan_nc::write::WriteOptions,
     path: &Path,
+    clock: &mut Clock,
 ) -> CliResult<(Outcome, Written)> {
     let bar = crate::progress::Phases::new(!(a.quiet || a.json));
     let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
     let outcome = job.run_with(order, Some(&hook));
     let outcome = outcome.map_err(|e| CliError::input(format!("{}: {e}", path.display())));
     let outcome = outcome.inspect_err(|_| bar.finish())?;
+    for p in outcome.passes.iter().filter(|p| p.ran) {
+        clock.part(&format!("pass {}", p.name), p.seconds);
+    }
+    clock.lap("the input measured, the passes run");
     bar.report("optimise: checks of the written program", 0, 1);
-    let w = job.finish(&outcome, wo);
+    let w = job.finish_timed(&outcome, wo, &mut |n| clock.lap(n));
     bar.finish();
     say_skipped(a, &outcome);
     let w = w.map_err(|e| CliError::input(format!("{}:{e}", path.display())))?;
