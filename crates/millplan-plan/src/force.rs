@@ -28,6 +28,7 @@ use millplan_models::force::converge::{Converged, ConvergedModel, Refine};
 use millplan_models::force::deflect::{Cantilever, DE_RATIO, E_CARBIDE};
 use millplan_models::force::edge::Tool;
 use millplan_models::force::engage::Engagement;
+use millplan_models::force::engage::SECTORS;
 use millplan_models::force::feed::{Limits, Loads};
 use millplan_models::force::materials::{fz_max_for, ChipLoads, FzSource};
 use millplan_models::force::{Cut, ForceModel, Grid, Summary};
@@ -36,7 +37,7 @@ use millplan_sim::stock::engage::tool_frame;
 use millplan_sim::stock::path::{Stroke, Strokes};
 use millplan_sim::stock::sim::{continues, Simulator, CUT_EPS};
 use millplan_sim::stock::tool::ToolBody;
-use millplan_sim::stock::{Stock, RADIAL_SLACK};
+use millplan_sim::stock::{SectorTops, Stock};
 
 /// The stock seen from the tool at one pose: tool-frame points (origin at the
 /// tip, z along the axis, x the feed) turned into part coordinates and looked
@@ -52,8 +53,8 @@ pub struct StockEngagement<'a> {
     /// Material counts from this far below a column's top, mm.
     lift: f64,
     /// For a vertical tool, the highest material by distance from the axis
-    /// ([`Stock::radial_tops`]); empty otherwise.
-    rings: Vec<f32>,
+    /// and by angle about it ([`Stock::sector_tops`]); empty otherwise.
+    sectors: SectorTops<SECTORS>,
 }
 
 /// The share of a dexel's size an edge point must lie below a column's top
@@ -82,15 +83,14 @@ impl<'a> StockEngagement<'a> {
         let lift = LIFT_SHARE * stock.grid.res;
         let cos_g = z.z;
         let sin_g = (1.0 - cos_g * cos_g).max(0.0).sqrt();
-        let mut rings = Vec::new();
+        let mut sectors = SectorTops::default();
         // A vertical tool's slices are level circles: one pass over the
         // cells it can reach gives the highest material at every distance
-        // from the axis, which bounds every slice at once.
+        // from the axis and angle about it, which bounds every slice at once.
         let vertical = z == DVec3::Z && x.z == 0.0 && y.z == 0.0;
         let z_hi = if vertical {
-            let res = stock.grid.res;
-            let reach = radius + RADIAL_SLACK * res;
-            let top = stock.radial_tops(tip.truncate(), reach, &mut rings);
+            let frame = (x.truncate(), y.truncate());
+            let top = stock.sector_tops(tip.truncate(), radius, frame, &mut sectors);
             (top - tip.z).clamp(0.0, flute)
         } else if cos_g > 0.2 {
             // The tool up to the flute length covers this XY rectangle.
@@ -111,7 +111,7 @@ impl<'a> StockEngagement<'a> {
             z,
             z_hi,
             lift,
-            rings,
+            sectors,
         }
     }
 
@@ -133,19 +133,29 @@ impl Engagement for StockEngagement<'_> {
     }
 
     /// A point at distance r from the axis lies in a tile whose centre is
-    /// within [`RADIAL_SLACK`] cells of r; it is in material only where a top
-    /// rises above it (the comparison of `contains`, which rounds to f32 as
-    /// the tops are: rounding is monotone, so a top not above the level in
-    /// f64 is not above it in f32 either).
-    fn ring_may_touch(&self, z: f64, r: f64) -> bool {
-        let Some(last) = self.rings.len().checked_sub(1) else {
-            return true;
+    /// within the table's slack of r, and in the sectors that tile was
+    /// entered under; it is in material only where a top rises above it
+    /// (the comparison of `contains`, which rounds to f32 as the tops are:
+    /// rounding is monotone, so a top not above the level in f64 is not
+    /// above it in f32 either).
+    fn sectors(&self, z: f64, r: f64) -> u64 {
+        let Some(last) = self.sectors.bins.len().checked_sub(1) else {
+            return u64::MAX;
         };
-        let res = self.stock.grid.res;
-        let a = (((r / res - RADIAL_SLACK).max(0.0)) as usize).min(last);
-        let b = (((r / res + RADIAL_SLACK).max(0.0)) as usize).min(last);
+        let (res, slack) = (self.stock.grid.res, self.sectors.slack);
+        let a = (((r / res - slack).max(0.0)) as usize).min(last);
+        let b = (((r / res + slack).max(0.0)) as usize).min(last);
         let level = (self.tip.z + z) + self.lift;
-        self.rings[a..=b].iter().any(|t| *t as f64 > level)
+        let mut high = [f32::NEG_INFINITY; SECTORS];
+        for bin in &self.sectors.bins[a..=b] {
+            for (h, t) in high.iter_mut().zip(bin) {
+                *h = h.max(*t);
+            }
+        }
+        high.iter()
+            .enumerate()
+            .filter(|(_, t)| **t as f64 > level)
+            .fold(0, |m, (s, _)| m | 1 << s)
     }
 }
 
@@ -1243,8 +1253,8 @@ mod tests {
                 "tip {tip}, feed {feed}"
             );
             pruned += (0..200)
-                .filter(|k| !eng.ring_may_touch(*k as f64 * 0.05, 2.0))
-                .count();
+                .map(|k| eng.sectors(k as f64 * 0.05, 2.0).count_zeros())
+                .sum::<u32>();
         }
         assert!(
             pruned > 0,

@@ -15,12 +15,29 @@ pub trait Engagement {
     fn z_range(&self, tool: &Tool) -> (f64, f64);
     /// Whether the edge point `p` is in material.
     fn contains(&self, p: [f64; 3]) -> bool;
-    /// Whether any point of the circle of radius `r` around the axis at
-    /// height `z` (the edge of one slice over a revolution) can be in
-    /// material. A `false` must be certain: the model then skips the slice.
-    /// By default every slice is asked point by point.
-    fn ring_may_touch(&self, _z: f64, _r: f64) -> bool {
-        true
+    /// Where on the circle of radius `r` around the axis at height `z` (the
+    /// edge of one slice over a revolution) material can be, by sector
+    /// (none: the model skips the slice): bit s stands for
+    /// the tool-frame angles θ ∈ [s, s + 1)·2π/[`SECTORS`] of the points
+    /// (r sin θ, r cos θ, z). A clear bit must be certain: the model then
+    /// asks no point of that sector. By default every sector is asked.
+    fn sectors(&self, _z: f64, _r: f64) -> u64 {
+        u64::MAX
+    }
+}
+
+/// Sectors of the full turn in [`Engagement::sectors`] (one bit each).
+pub const SECTORS: usize = 64;
+
+/// ⌊v⌋ for |v| < 2⁶³ without the C library's `floor` (not inlined on
+/// x86-64 without SSE4.1): truncation, one down below zero.
+#[inline]
+pub fn floor_i64(v: f64) -> i64 {
+    let t = v as i64;
+    if (t as f64) > v {
+        t - 1
+    } else {
+        t
     }
 }
 

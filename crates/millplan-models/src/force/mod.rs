@@ -337,12 +337,22 @@ impl ForceModel {
         let first = (u(z_lo).floor() as usize).min(self.slices.len());
         let last = (u(z_hi).ceil() as usize).min(self.slices.len());
         let mut raw = Vec::new();
+        // Sector of angle index k: θ = kδ − ψ in units of 2π/SECTORS.
+        let per_k = engage::SECTORS as f64 / m as f64;
         for (si, s) in self.slices[first..last.max(first)].iter().enumerate() {
-            if !eng.ring_may_touch(s.z, s.r) {
+            let mask = eng.sectors(s.z, s.r);
+            if mask == 0 {
                 continue;
             }
+            let psi = s.psi * engage::SECTORS as f64 / (2.0 * PI);
             let (lo, count) = self.chip_window(s, f);
             let mut test = |k: usize| {
+                if mask != u64::MAX {
+                    let sec = engage::floor_i64(k as f64 * per_k - psi);
+                    if mask & (1u64 << sec.rem_euclid(engage::SECTORS as i64)) == 0 {
+                        return;
+                    }
+                }
                 let (st, ct) = self.rotated(s, k);
                 // h = f·n(θ), n(θ) = (ny sθ, ny cθ, nz)
                 let h = f[0] * s.ny * st + f[1] * s.ny * ct + f[2] * s.nz;

@@ -37,6 +37,7 @@ pub mod tool;
 pub use mesh::stock_mesh;
 
 use millplan_geom::{DVec2, DVec3, TriMesh};
+use millplan_models::force::engage::floor_i64;
 use rustc_hash::FxHashMap;
 
 /// The XY grid of a stock: cell (i, j) has its centre at
@@ -180,13 +181,54 @@ pub struct Stock {
 /// a tool passing above is skipped by).
 pub const BLOCK: usize = 32;
 
-/// Cells per side of the tiles of [`Stock::radial_tops`].
-pub const RADIAL_TILE: usize = 4;
+/// The side of the tiles of [`Stock::sector_tops`] for a tool of radius
+/// `radius`, cells: about 1/32 of the tool's width.
+pub fn sector_tile(radius: f64, res: f64) -> usize {
+    ((2.0 * radius / res / 32.0).ceil() as usize).max(1)
+}
 
-/// How far from a point's distance to the axis, in cells, the centre of the
-/// tile holding it can lie: half a tile's diagonal, and a little for a point
-/// on a cell's edge.
-pub const RADIAL_SLACK: f64 = RADIAL_TILE as f64 * std::f64::consts::FRAC_1_SQRT_2 + 0.05;
+/// The highest material by distance from an axis and by angle about it
+/// ([`Stock::sector_tops`]).
+#[derive(Clone, Debug, Default)]
+pub struct SectorTops<const N: usize> {
+    /// Per distance bin of one cell, per sector.
+    pub bins: Vec<[f32; N]>,
+    /// How far from a point's distance to the axis, in cells, the centre of
+    /// the tile holding it can lie: half a tile's diagonal, and a little for
+    /// a point on a cell's edge.
+    pub slack: f64,
+}
+
+/// The largest error of [`fast_atan2`], rad, with a margin.
+pub const ATAN_ERROR: f64 = 1e-4;
+
+/// atan2(y, x) within 2·10⁻⁵ rad (a degree-9 odd polynomial on [0, 1] and
+/// the octant symmetries): the angle bounds of [`Stock::sector_tops`] add
+/// [`ATAN_ERROR`], so they need no exact arctangent per cell.
+pub fn fast_atan2(y: f64, x: f64) -> f64 {
+    use std::f64::consts::{FRAC_PI_2, PI};
+    let (ax, ay) = (x.abs(), y.abs());
+    let (num, den) = if ay > ax { (ax, ay) } else { (ay, ax) };
+    if den == 0.0 {
+        return 0.0;
+    }
+    let t = num / den;
+    let t2 = t * t;
+    let mut a = t
+        * (0.999_866_0
+            + t2 * (-0.330_299_5 + t2 * (0.180_141_0 + t2 * (-0.085_133_0 + t2 * 0.020_835_1))));
+    if ay > ax {
+        a = FRAC_PI_2 - a;
+    }
+    if x < 0.0 {
+        a = PI - a;
+    }
+    if y < 0.0 {
+        -a
+    } else {
+        a
+    }
+}
 
 /// Memory per cell of a stock without gaps, bytes.
 pub const BYTES_PER_CELL: f64 = 8.0 + std::mem::size_of::<RowGaps>() as f64 / 64.0;
@@ -454,50 +496,99 @@ impl Stock {
     }
 
     /// An upper bound of the material by distance from a vertical axis
-    /// through `centre`, out to `reach`: the cells are taken in tiles of
-    /// [`RADIAL_TILE`]² (a tile's highest top, empty cells included, which
-    /// only loosens the bound), and entry b of `out` is the highest tile
-    /// whose centre lies between b·res and (b + 1)·res from the axis (−∞
-    /// where none). The highest of all is returned. A point at distance r
-    /// lies in a tile whose centre is within [`RADIAL_SLACK`]·res of r.
-    pub fn radial_tops(&self, centre: DVec2, reach: f64, out: &mut Vec<f32>) -> f64 {
-        const T: usize = RADIAL_TILE;
+    /// through `centre` and by angle about it, for every point out to
+    /// `radius`. The cells are taken in square tiles of [`sector_tile`]
+    /// cells a side (about 1/32 of the tool's width, so the work is bounded
+    /// whatever the resolution),
+    /// a tile standing for the highest top of its cells that hold material.
+    /// Entry b of `out.bins` holds, per sector s of the full turn, the
+    /// highest tile whose centre lies between b·res and (b + 1)·res from the
+    /// axis and whose cells can hold a point at an angle of sector s. The
+    /// angle of an offset d from the axis is θ = atan2(d·`ux`, d·`uy`) in
+    /// [0, 2π) (the tool frame's, with `ux` and `uy` the unit horizontal
+    /// directions of its x and y), sector s covering [s, s + 1)·2π/N. A point
+    /// at distance r lies in a tile whose centre is within `out.slack`·res
+    /// of r. Returns the highest top of all the cells looked at, empty ones
+    /// included.
+    pub fn sector_tops<const N: usize>(
+        &self,
+        centre: DVec2,
+        radius: f64,
+        (ux, uy): (DVec2, DVec2),
+        out: &mut SectorTops<N>,
+    ) -> f64 {
         let g = &self.grid;
-        out.clear();
-        out.resize((reach / g.res).ceil() as usize + 1, f32::NEG_INFINITY);
+        let t = sector_tile(radius, g.res);
+        out.slack = t as f64 * std::f64::consts::FRAC_1_SQRT_2 + 0.05;
+        let reach = radius + out.slack * g.res;
+        out.bins.clear();
+        let bins = (reach / g.res).ceil() as usize + 1;
+        out.bins.resize(bins, [f32::NEG_INFINITY; N]);
         let lo = centre - DVec2::splat(reach);
         let hi = centre + DVec2::splat(reach);
         let (Some((i0, i1)), Some((j0, j1))) = (g.span(lo.x, hi.x), g.rows(lo.y, hi.y)) else {
             return f64::NEG_INFINITY;
         };
-        let last = out.len() - 1;
+        let last = bins - 1;
+        let w = std::f64::consts::TAU / N as f64;
+        // A tile lies within slack·res of its centre, so seen from the axis
+        // at distance ≥ b·res its points are at most asin(slack/b) off the
+        // centre's angle (in sectors, with a margin for the approximate
+        // arctangent and rounding).
+        let half: Vec<f64> = (0..bins)
+            .map(|b| {
+                let q = out.slack / b as f64;
+                if q >= 1.0 {
+                    N as f64
+                } else {
+                    (q.asin() + ATAN_ERROR) / w
+                }
+            })
+            .collect();
         let mut cols = vec![f32::NEG_INFINITY; i1 - i0 + 1];
         let mut m = f32::NEG_INFINITY;
         let mut j = j0;
         while j <= j1 {
-            let je = (j + T - 1).min(j1);
+            let je = (j + t - 1).min(j1);
             cols.fill(f32::NEG_INFINITY);
             for jj in j..=je {
-                let row = &self.top[jj * g.nx + i0..=jj * g.nx + i1];
-                for (c, t) in cols.iter_mut().zip(row) {
-                    if *t > *c {
+                let k = jj * g.nx;
+                let (top, bot) = (&self.top[k + i0..=k + i1], &self.bot[k + i0..=k + i1]);
+                for ((c, t), b) in cols.iter_mut().zip(top).zip(bot) {
+                    m = m.max(*t);
+                    if *t > *b && *t > *c {
                         *c = *t;
                     }
                 }
             }
             let dy = 0.5 * (g.cy(j) + g.cy(je)) - centre.y;
-            for (k, tile) in cols.chunks(T).enumerate() {
-                let t = tile
+            for (k, tile) in cols.chunks(t).enumerate() {
+                let top = tile
                     .iter()
                     .fold(f32::NEG_INFINITY, |a, b| if *b > a { *b } else { a });
-                let (ia, ie) = (i0 + k * T, i0 + k * T + tile.len() - 1);
-                let dx = 0.5 * (g.cx(ia) + g.cx(ie)) - centre.x;
-                let bin = (((dx * dx + dy * dy).sqrt() / g.res) as usize).min(last);
-                if t > out[bin] {
-                    out[bin] = t;
+                if top == f32::NEG_INFINITY {
+                    continue;
                 }
-                if t > m {
-                    m = t;
+                let (ia, ie) = (i0 + k * t, i0 + k * t + tile.len() - 1);
+                let d = DVec2::new(0.5 * (g.cx(ia) + g.cx(ie)) - centre.x, dy);
+                let bin = ((d.length() / g.res) as usize).min(last);
+                let h = half[bin];
+                let slot = &mut out.bins[bin];
+                if h >= N as f64 / 2.0 {
+                    for v in slot.iter_mut() {
+                        *v = v.max(top);
+                    }
+                } else {
+                    let a = fast_atan2(d.dot(ux), d.dot(uy));
+                    let a = if a < 0.0 {
+                        a + std::f64::consts::TAU
+                    } else {
+                        a
+                    } / w;
+                    for s in floor_i64(a - h)..=floor_i64(a + h) {
+                        let v = &mut slot[s.rem_euclid(N as i64) as usize];
+                        *v = v.max(top);
+                    }
                 }
             }
             j = je + 1;
