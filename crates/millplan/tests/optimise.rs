@@ -474,7 +474,7 @@ fn swcam_interface_glue_is_faster_and_its_own_faults_are_named() {
 
 /// The NX ball-end NURBS program (no STL exists for it): its part is the
 /// surface the program itself leaves on a box (`simulate -o`), its stock that
-/// part grown by 0.3 mm.
+/// part grown by 0.3 mm. A 1 mm grid is 30 cells across its D30 ball.
 #[test]
 fn nx_nurbs_is_optimised_on_its_own_surface() {
     let Some(clsf) = shared_data::file("nx-clsf-ballend-nurbs/nurbs.clsf") else {
@@ -488,7 +488,7 @@ fn nx_nurbs_is_optimised_on_its_own_surface() {
         "--stock",
         "box:auto:2",
         "--resolution",
-        "0.5",
+        "1",
         "-o",
         s(&part),
         "-q",
@@ -503,7 +503,7 @@ fn nx_nurbs_is_optimised_on_its_own_surface() {
         "--stock",
         "offset:0.3",
         "--resolution",
-        "0.5",
+        "1",
         "--material",
         "al7075",
         "-o",
