@@ -134,10 +134,8 @@ impl Engagement for StockEngagement<'_> {
 
     /// A point at distance r from the axis lies in a tile whose centre is
     /// within the table's slack of r, and in the sectors that tile was
-    /// entered under; it is in material only where a top rises above it
-    /// (the comparison of `contains`, which rounds to f32 as the tops are:
-    /// rounding is monotone, so a top not above the level in f64 is not
-    /// above it in f32 either).
+    /// entered under; it is in material only where a top rises above the
+    /// level rounded to f32, exactly the comparison of `contains`.
     fn sectors(&self, z: f64, r: f64) -> u64 {
         let Some(last) = self.sectors.bins.len().checked_sub(1) else {
             return u64::MAX;
@@ -145,17 +143,22 @@ impl Engagement for StockEngagement<'_> {
         let (res, slack) = (self.stock.grid.res, self.sectors.slack);
         let a = (((r / res - slack).max(0.0)) as usize).min(last);
         let b = (((r / res + slack).max(0.0)) as usize).min(last);
-        let level = (self.tip.z + z) + self.lift;
+        // The level as `contains` compares it with the tops.
+        let level = ((self.tip.z + z) + self.lift) as f32;
+        if !self.sectors.rings[a..=b].iter().any(|t| *t > level) {
+            return 0;
+        }
         let mut high = [f32::NEG_INFINITY; SECTORS];
         for bin in &self.sectors.bins[a..=b] {
             for (h, t) in high.iter_mut().zip(bin) {
                 *h = h.max(*t);
             }
         }
-        high.iter()
-            .enumerate()
-            .filter(|(_, t)| **t as f64 > level)
-            .fold(0, |m, (s, _)| m | 1 << s)
+        let mut mask = 0u64;
+        for (s, t) in high.iter().enumerate() {
+            mask |= u64::from(*t > level) << s;
+        }
+        mask
     }
 }
 

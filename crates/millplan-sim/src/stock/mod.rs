@@ -193,6 +193,8 @@ pub fn sector_tile(radius: f64, res: f64) -> usize {
 pub struct SectorTops<const N: usize> {
     /// Per distance bin of one cell, per sector.
     pub bins: Vec<[f32; N]>,
+    /// Per distance bin, the highest of its sectors.
+    pub rings: Vec<f32>,
     /// How far from a point's distance to the axis, in cells, the centre of
     /// the tile holding it can lie: half a tile's diagonal, and a little for
     /// a point on a cell's edge.
@@ -522,8 +524,10 @@ impl Stock {
         out.slack = t as f64 * std::f64::consts::FRAC_1_SQRT_2 + 0.05;
         let reach = radius + out.slack * g.res;
         out.bins.clear();
+        out.rings.clear();
         let bins = (reach / g.res).ceil() as usize + 1;
         out.bins.resize(bins, [f32::NEG_INFINITY; N]);
+        out.rings.resize(bins, f32::NEG_INFINITY);
         let lo = centre - DVec2::splat(reach);
         let hi = centre + DVec2::splat(reach);
         let (Some((i0, i1)), Some((j0, j1))) = (g.span(lo.x, hi.x), g.rows(lo.y, hi.y)) else {
@@ -573,6 +577,7 @@ impl Stock {
                 let d = DVec2::new(0.5 * (g.cx(ia) + g.cx(ie)) - centre.x, dy);
                 let bin = ((d.length() / g.res) as usize).min(last);
                 let h = half[bin];
+                out.rings[bin] = out.rings[bin].max(top);
                 let slot = &mut out.bins[bin];
                 if h >= N as f64 / 2.0 {
                     for v in slot.iter_mut() {
