@@ -79,6 +79,25 @@ impl Job {
         self.finish_timed(o, wo, &mut |_| {})
     }
 
+    /// How the job's program is written to `output`: the dialect by the one
+    /// rule of [`crate::target::output_target`] (`to`, else the machine
+    /// file, else the file name, else the source), the machine's options,
+    /// and the run's resource `limits`.
+    pub fn write_options(
+        &self,
+        to: Option<millplan_nc::write::Target>,
+        output: &std::path::Path,
+        limits: millplan_nc::Limits,
+    ) -> Result<WriteOptions, String> {
+        let i = &self.inputs;
+        let machine = i.machine_given.then_some(&i.machine);
+        let target = crate::target::output_target(to, output, machine, i.program.source)?;
+        Ok(WriteOptions {
+            limits,
+            ..i.machine.write_options(target)
+        })
+    }
+
     /// [`Job::finish`] naming its phases to `lap` as each ends: writing
     /// and reading back, the output's loads, the checks, the measures.
     pub fn finish_timed(

@@ -201,14 +201,11 @@ fn checked_order(a: &Args) -> CliResult<Vec<passes::PassName>> {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let (Some(path), Some(output)) = (a.path.clone(), a.output.clone()) else {
+    let (Some(path), Some(output), false) = (a.path.clone(), a.output.clone(), a.list_passes)
+    else {
         list_passes(a.json);
         return Ok(EXIT_OK);
     };
-    if a.list_passes {
-        list_passes(a.json);
-        return Ok(EXIT_OK);
-    }
     let mut clock = Clock::start();
     let order = checked_order(&a)?;
     let mut inputs: Vec<&Path> = vec![&path];
@@ -228,26 +225,15 @@ pub fn run(a: Args) -> CliResult<i32> {
     clock.lap("program, part, machine, materials and tools read");
     let job = Job::new_timed(given, &mut |n| clock.lap(n))
         .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
-    let machine = job.inputs.machine_given.then_some(&job.inputs.machine);
-    let target = millplan_driver::target::output_target(
-        a.to.map(Into::into),
-        &output,
-        machine,
-        job.inputs.program.source,
-    )
-    .map_err(CliError::input)?;
-    let wo = millplan_nc::write::WriteOptions {
-        limits: crate::limits::get(),
-        ..job.inputs.machine.write_options(target)
-    };
+    let wo = job.write_options(a.to.map(Into::into), &output, crate::limits::get());
+    let wo = wo.map_err(CliError::input)?;
     let (outcome, mut w) = passes_and_checks(&a, &job, &order, wo, &path, &mut clock)?;
-    let quiet = a.quiet || a.json;
     crate::cmd::robot::after_optimise(
         &a.robot,
         (&job, &outcome),
         &mut w,
         (&inputs, &output),
-        (a.force, quiet),
+        (a.force, a.quiet || a.json),
     )?;
     clock.lap("robot placement and compensation (--robot)");
     print_diagnostics(&path, &w.warnings, a.quiet || a.json);
@@ -277,10 +263,9 @@ fn passes_and_checks(
     clock: &mut Clock,
 ) -> CliResult<(Outcome, Written)> {
     let bar = crate::progress::Phases::new(!(a.quiet || a.json));
-    let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
-    let outcome = job.run_with(order, Some(&hook));
-    let outcome = outcome.map_err(|e| CliError::input(format!("{}: {e}", path.display())));
-    let outcome = outcome.inspect_err(|_| bar.finish())?;
+    let h = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
+    let outcome = job.run_with(order, Some(&h)).inspect_err(|_| bar.finish());
+    let outcome = outcome.map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
     for p in outcome.passes.iter().filter(|p| p.ran) {
         clock.part(&format!("pass {}", p.name), p.seconds);
     }
