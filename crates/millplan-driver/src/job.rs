@@ -48,7 +48,11 @@ impl UserLimits {
                 "stress" => l.stress = v,
                 "fz_min" => l.fz_min = v,
                 "fz_max" => l.fz_max = v,
-                _ => l.deflection = v,
+                "deflection" => l.deflection = v,
+                _ => {
+                    let names = crate::limits::LOAD_NAMES.join(", ");
+                    return Err(format!("--limit {name}: not a load limit ({names})"));
+                }
             }
         }
         Ok(l)
@@ -600,6 +604,30 @@ fn limits(u: &UserLimits, chip: Option<ChipLoads>, d: f64, s: &mut Vec<Setting>)
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every load name is read into its own limit, and a name that is not
+    /// one is refused (never taken as another limit).
+    #[test]
+    fn load_limits_are_read_by_name_and_an_unknown_one_is_refused() {
+        let pairs: Vec<(String, String)> = crate::limits::LOAD_NAMES
+            .iter()
+            .enumerate()
+            .map(|(k, n)| (n.to_string(), format!("{}", k + 1)))
+            .collect();
+        let l = UserLimits::parse(&pairs).expect("every name");
+        let got = [
+            l.fxy,
+            l.torque,
+            l.power,
+            l.stress,
+            l.deflection,
+            l.fz_min,
+            l.fz_max,
+        ];
+        assert_eq!(got, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0].map(Some));
+        let e = UserLimits::parse(&[("flexion".into(), "0.01".into())]).expect_err("unknown");
+        assert!(e.starts_with("--limit flexion: not a load limit"), "{e}");
+    }
 
     /// `optimise`'s options: none given is no choice made; each given is
     /// checked against its range, naming the option; the tool parsed; a

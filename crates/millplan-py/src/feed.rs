@@ -115,13 +115,6 @@ fn run(m: &ModelRequest, f: &FeedRequest, g: &Given) -> Res<Ran> {
     })
 }
 
-/// The load limits dict as `--limit NAME=VALUE` pairs (checked by the driver).
-fn loads(d: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, String)>> {
-    let Some(d) = d else { return Ok(Vec::new()) };
-    d.iter()
-        .map(|(k, v)| Ok((k.extract::<String>()?, v.extract::<f64>()?.to_string())))
-        .collect()
-}
 
 /// The model's options, the defaults of `millplan feed` where none is given:
 /// (stock, material, tool), flutes, [helix, modulus, resolution, dz, dphi],
@@ -211,7 +204,7 @@ pub fn feed<'py>(
         machine: machine.map(|m| m.display().to_string()),
         dialect,
         output: output.map(|o| o.display().to_string()),
-        loads: loads(limits)?,
+        loads: crate::loads(limits)?,
     };
     let ran = py.detach(|| run(&m, &f, &g))?;
     let summary = crate::json_to_py(py, &ran.summary_json)?;

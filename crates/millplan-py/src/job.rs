@@ -6,7 +6,7 @@ use crate::mesh::PyMesh;
 use crate::program::PyProgram;
 use millplan_driver::given::{Given, GivenError};
 use millplan_driver::passes::{self, ORDER};
-use millplan_driver::{Inputs, Job, OptionsRequest, UserLimits, Verdict};
+use millplan_driver::{Inputs, Job, OptionsRequest, Verdict};
 use millplan_geom::TriMesh;
 use millplan_models::force::materials::Materials;
 use millplan_nc::Program;
@@ -25,7 +25,8 @@ pub struct Request {
     pub vc: Option<f64>,
     pub resolution: Option<f64>,
     pub passes: Option<String>,
-    pub limits: UserLimits,
+    /// The load limits as `--limit NAME=VALUE` pairs.
+    pub loads: Vec<(String, String)>,
     pub dialect: Option<String>,
     pub output: Option<String>,
     /// A tool library: each tool the program calls takes its geometry.
@@ -47,7 +48,7 @@ impl Request {
             vc: None,
             resolution: None,
             passes: None,
-            limits: UserLimits::default(),
+            loads: Vec::new(),
             dialect: None,
             output: None,
             library: None,
@@ -90,19 +91,17 @@ pub fn inputs(r: &Request) -> Res<Inputs> {
             tool: r.tool.clone(),
             flutes: r.flutes,
             resolution: r.resolution,
-            loads: Vec::new(),
+            loads: r.loads.clone(),
             tol: None,
             memory: None,
             g93: false,
         },
     };
-    let mut inputs = Inputs::given(given).map_err(|e| match e {
-        GivenError::Option(m) => Located::new(Place::default(), m),
+    Inputs::given(given).map_err(|e| match e {
+        GivenError::Option(m) => crate::error::option_error(&m),
         GivenError::Tool(e) => Located::new(Place::at(&r.name, e.line, 1), e.message),
         GivenError::Io(e) => Located::new(Place::default(), e.message),
-    })?;
-    inputs.options.limits = r.limits;
-    Ok(inputs)
+    })
 }
 
 /// Runs the job as `millplan optimise` does: the passes, the written

@@ -22,8 +22,6 @@ mod speed;
 mod tools;
 mod wd;
 
-use error::{Located, Place};
-use millplan_driver::UserLimits;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -100,35 +98,14 @@ fn read_stl(
     Ok(py.detach(|| error::guard(&path, || mesh::read(&path, inch)))?)
 }
 
-/// The load limits given as a dict (fxy N, torque N·mm, power W, stress
-/// MPa, deflection mm).
-fn limits(d: Option<&Bound<'_, PyDict>>) -> PyResult<UserLimits> {
-    let mut l = UserLimits::default();
-    let Some(d) = d else { return Ok(l) };
-    for (k, v) in d.iter() {
-        let name: String = k.extract()?;
-        let v: f64 = v.extract()?;
-        if !(v > 0.0 && v.is_finite()) {
-            return Err(Located::new(
-                Place::file("limits"),
-                format!("{name} {v}: must be positive"),
-            )
-            .into());
-        }
-        let slot = match name.as_str() {
-            "fxy" => &mut l.fxy,
-            "torque" => &mut l.torque,
-            "power" => &mut l.power,
-            "stress" => &mut l.stress,
-            "deflection" => &mut l.deflection,
-            _ => {
-                let m = format!("{name:?}: not a limit (fxy, torque, power, stress, deflection)");
-                return Err(Located::new(Place::file("limits"), m).into());
-            }
-        };
-        *slot = Some(v);
-    }
-    Ok(l)
+/// The load limits dict as `--limit NAME=VALUE` pairs (fxy N, torque N·mm,
+/// power W, stress MPa, deflection mm, fz_min and fz_max mm), checked by
+/// the driver as the command line's are.
+pub(crate) fn loads(d: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, String)>> {
+    let Some(d) = d else { return Ok(Vec::new()) };
+    d.iter()
+        .map(|(k, v)| Ok((k.extract::<String>()?, v.extract::<f64>()?.to_string())))
+        .collect()
 }
 
 /// The job of `millplan optimise`; returns (program, text, summary JSON, refused).
@@ -167,7 +144,7 @@ fn optimise(
         vc,
         resolution,
         passes,
-        limits: self::limits(limits)?,
+        loads: self::loads(limits)?,
         dialect,
         output: output.map(|o| o.display().to_string()),
         library: tools::library_arg(library)?,

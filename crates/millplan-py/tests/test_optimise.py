@@ -70,5 +70,16 @@ def test_optimise_errors_are_located(demo, tmp_path):
         millplan.optimise(demo / "finish.apt", resolution=-1)
     with pytest.raises(millplan.MillplanError, match="passes"):
         millplan.optimise(demo / "finish.apt", passes="speed,polish")
-    with pytest.raises(millplan.MillplanError, match="limits"):
+    with pytest.raises(millplan.MillplanError, match="fxy") as e:
         millplan.optimise(demo / "finish.apt", limits={"fxy": -3})
+    assert e.value.file == "limit"
+    # The names and ranges of --limit, one set for the command line, feed
+    # and optimise: an unknown name is refused, never taken as another.
+    for call in (lambda l: millplan.optimise(demo / "finish.apt", limits=l),
+                 lambda l: millplan.feed(demo / "finish.apt", "offset:0.5", "al7075",
+                                         part=demo / "part.stl", limits=l)):
+        with pytest.raises(millplan.MillplanError, match="flexion: not a load limit") as e:
+            call({"flexion": 0.01})
+        assert e.value.file == "limit"
+        with pytest.raises(millplan.MillplanError, match="fxy"):
+            call({"fxy": 2e9})
