@@ -35,6 +35,10 @@ impl UserLimits {
     pub fn parse(loads: &[(String, String)]) -> Result<UserLimits, String> {
         let mut l = UserLimits::default();
         for (name, value) in loads {
+            if !crate::limits::LOAD_NAMES.contains(&name.as_str()) {
+                let names = crate::limits::LOAD_NAMES.join(", ");
+                return Err(format!("--limit {name}: not a load limit ({names})"));
+            }
             let v: f64 = value
                 .parse()
                 .map_err(|_| format!("--limit {name}={value}: not a number"))?;
@@ -48,11 +52,7 @@ impl UserLimits {
                 "stress" => l.stress = v,
                 "fz_min" => l.fz_min = v,
                 "fz_max" => l.fz_max = v,
-                "deflection" => l.deflection = v,
-                _ => {
-                    let names = crate::limits::LOAD_NAMES.join(", ");
-                    return Err(format!("--limit {name}: not a load limit ({names})"));
-                }
+                _ => l.deflection = v,
             }
         }
         Ok(l)
@@ -625,8 +625,10 @@ mod tests {
             l.fz_max,
         ];
         assert_eq!(got, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0].map(Some));
-        let e = UserLimits::parse(&[("flexion".into(), "0.01".into())]).expect_err("unknown");
-        assert!(e.starts_with("--limit flexion: not a load limit"), "{e}");
+        for v in ["0.01", "-1"] {
+            let e = UserLimits::parse(&[("flexion".into(), v.into())]).expect_err("unknown");
+            assert!(e.starts_with("--limit flexion: not a load limit"), "{e}");
+        }
     }
 
     /// `optimise`'s options: none given is no choice made; each given is

@@ -115,7 +115,6 @@ fn run(m: &ModelRequest, f: &FeedRequest, g: &Given) -> Res<Ran> {
     })
 }
 
-
 /// The model's options, the defaults of `millplan feed` where none is given:
 /// (stock, material, tool), flutes, [helix, modulus, resolution, dz, dphi],
 /// (stickout, flute length, spindle), fixed grid (the steps as given, not
