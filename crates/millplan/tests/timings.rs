@@ -131,6 +131,15 @@ fn inspect_phases_add_up_to_the_wall_time() {
     assert_phases_cover(&["inspect", "--json", f.to_str().expect("utf8")], &[0]);
 }
 
+#[test]
+fn convert_phases_add_up_to_the_wall_time() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (f, out) = (dir.path().join("big.apt"), dir.path().join("big.nc"));
+    std::fs::write(&f, apt(200_000, false)).expect("write");
+    let (f, out) = (f.to_str().expect("utf8"), out.to_str().expect("utf8"));
+    assert_phases_cover(&["convert", f, "--to", "fanuc", "-o", out, "-q"], &[0]);
+}
+
 const TRUNNION: &str = "name = \"A/C trunnion\"\n[spindle]\nmin = 500.0\nmax = 18000.0\naccel = 6000.0\n[feed]\nmax = 20000.0\nrapid = 40000.0\n[kinematics]\nkind = \"table-ac\"\nrot_point = [0.0, 0.0, -100.0]\n[kinematics.first]\nmin = -120.0\nmax = 120.0\n[axes.a]\nvelocity = 9000.0\n[axes.c]\nvelocity = 18000.0\n";
 
 #[test]

@@ -3,6 +3,7 @@
 use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::Outputs;
+use crate::timings::{Clock, Table as _};
 use millplan_driver::convert::{self as lib, ConvertRequest};
 use millplan_nc::write::krl::KrlMotion;
 use millplan_nc::write::{self, Target};
@@ -80,6 +81,8 @@ pub struct Args {
     /// as JSON on standard error.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 fn request(a: &Args) -> ConvertRequest {
@@ -125,8 +128,11 @@ pub fn run(a: Args) -> CliResult<i32> {
         .into_iter()
         .flatten()
         .collect();
+    let mut clock = Clock::start();
     let outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
+    clock.lap("arguments and outputs checked");
     let (parsed, krl) = crate::io::read_source(&a.input, read_options(a.units, a.feed)?)?;
+    clock.lap("program read");
     print_diagnostics(&a.input, &parsed.diagnostics, a.quiet);
     let mut p = parsed.program;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
@@ -142,17 +148,20 @@ pub fn run(a: Args) -> CliResult<i32> {
         Some(Err(e)) => return Err(crate::io::krl_error(&a.input, e)),
         _ => write_program(&p, o, &a.input, a.quiet)?,
     };
+    clock.lap("machine file read, program resolved and written in memory");
     let (input, output) = (
         a.input.display().to_string(),
         a.output.display().to_string(),
     );
     let lossy = lib::check_output(&p, &out, target, a.lossy, (&input, &output))
         .map_err(CliError::internal)?;
+    clock.lap("output read back and compared with the program");
     if let Some(w) = &lossy {
         // Said even with --quiet: the exit code alone does not say why.
         eprintln!("{w}");
     }
     write_out(&a, &inputs, outputs, target, &out)?;
+    clock.lap("outputs written and renamed into place");
     let found = (input.as_str(), parsed.diagnostics.as_slice());
     let summary = lib::ConvertSummary::new(found, &p, (&output, target), lossy.is_none());
     if a.json {
@@ -160,9 +169,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     } else {
         eprintln!("{}", summary.text());
     }
-    Ok(if lossy.is_none() {
-        EXIT_OK
-    } else {
-        EXIT_FINDINGS
-    })
+    clock.lap("summary printed");
+    clock.print(a.timings.on);
+    Ok(lossy.map_or(EXIT_OK, |_| EXIT_FINDINGS))
 }

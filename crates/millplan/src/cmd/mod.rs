@@ -131,16 +131,13 @@ pub fn target_with_machine(
 /// `--lossy` are printed as warnings located in `source`.
 pub fn write_program_file(
     p: &millplan_nc::Program,
-    o: WriteOptions,
+    mut o: WriteOptions,
     outputs: &mut crate::io::Outputs,
     path: &std::path::Path,
     source: &std::path::Path,
     quiet: bool,
 ) -> crate::error::CliResult<()> {
-    let o = WriteOptions {
-        limits: crate::limits::get(),
-        ..o
-    };
+    o.limits = crate::limits::get();
     let warnings = outputs.write_program(path, p, o, source)?;
     print_diagnostics(source, &warnings, quiet);
     Ok(())
@@ -150,14 +147,11 @@ pub fn write_program_file(
 /// under `--lossy` are printed as warnings located in `source`.
 pub fn write_program(
     p: &millplan_nc::Program,
-    o: WriteOptions,
+    mut o: WriteOptions,
     source: &std::path::Path,
     quiet: bool,
 ) -> crate::error::CliResult<Vec<u8>> {
-    let o = WriteOptions {
-        limits: crate::limits::get(),
-        ..o
-    };
+    o.limits = crate::limits::get();
     let (out, warnings) = millplan_nc::write::write_program(p, o)
         .map_err(|e| millplan_driver::io::outputs::write_error(source, &e))?;
     print_diagnostics(source, &warnings, quiet);

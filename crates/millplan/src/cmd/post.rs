@@ -82,10 +82,8 @@ pub struct Args {
     /// ends with exit 3.
     #[arg(long)]
     pub force: bool,
-    /// Print the wall time of each phase on standard error (they add up to
-    /// the whole run).
-    #[arg(long)]
-    pub timings: bool,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 fn request(a: &Args) -> PostRequest {
@@ -115,7 +113,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let mut clock = crate::timings::Clock::start();
     let code = run_timed(&a, &mut clock)?;
     clock.lap("summary printed");
-    clock.print(a.timings);
+    clock.print(a.timings.on);
     Ok(code)
 }
 
