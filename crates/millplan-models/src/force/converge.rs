@@ -500,6 +500,10 @@ pub const HALVES_SHARE: f64 = 0.25;
 /// 2^-[`BISECTIONS`] of a slice, so half of that is the largest error.
 pub const BOUNDARY_SHARE: f64 = 0.5 / (1u32 << BISECTIONS) as f64;
 
+/// The share of the whole force's peak |F| below which F_xy,max is not
+/// taken as the scale of its own error ([`error_estimates`]).
+pub const FXY_FLOOR_SHARE: f64 = 0.1;
+
 /// The share of `tent_excess` taken as the error of the rotation step.
 pub const TENT_SHARE: f64 = 0.5;
 
@@ -541,7 +545,10 @@ pub(crate) fn error_estimates(rows: &[[f64; COLUMNS]]) -> (f64, f64) {
     // quadratures; the quadrature at the even and at the odd angles; the
     // boundary cells.
     let mut peak = [[0.0f64; 2]; 6];
+    // The whole force's peak |F|², without a square root per angle.
+    let mut whole2 = 0.0f64;
     for (i, r) in rows.iter().enumerate() {
+        whole2 = whole2.max(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         let q = [
             [r[0].hypot(r[1]), r[3].abs()],
             [r[4].hypot(r[5]), r[6].abs()],
@@ -560,13 +567,18 @@ pub(crate) fn error_estimates(rows: &[[f64; COLUMNS]]) -> (f64, f64) {
     let (mut dz, mut dphi) = (0.0f64, 0.0f64);
     // Per quantity (F_xy, T): [all, odd, even, even angles, odd angles, boundary].
     let [all, odd, even, at_even, at_odd, boundary] = peak;
+    // F_xy's error is relative to F_xy,max, but never to less than a share
+    // of the whole force: where the flutes' side forces cancel (a plunge),
+    // F_xy is a small difference of large terms and no step makes its
+    // relative error small.
+    let scale = [all[0].max(FXY_FLOOR_SHARE * whole2.sqrt()), all[1]];
     for c in 0..2 {
-        if all[c] > 0.0 {
+        if scale[c] > 0.0 {
             let halves = HALVES_SHARE * (even[c] - odd[c]).abs();
-            dz = dz.max((halves + BOUNDARY_SHARE * boundary[c]) / all[c]);
+            dz = dz.max((halves + BOUNDARY_SHARE * boundary[c]) / scale[c]);
             let sampled = (at_even[c] - at_odd[c]).abs();
             let kink = TENT_SHARE * tent_excess(rows, c);
-            dphi = dphi.max(sampled.max(kink) / all[c]);
+            dphi = dphi.max(sampled.max(kink) / scale[c]);
         }
     }
     (dz, dphi)
