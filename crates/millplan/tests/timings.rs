@@ -236,21 +236,9 @@ fn part_commands_phases_add_up_to_the_wall_time() {
         "setup", "--type", "ca", "--stl", &stl, "--cells", "200", "-q",
     ];
     assert_phases_cover(&setup, &[0, 3]);
-    let optimise = [
-        "optimise",
-        &apt,
-        "--stl",
-        &stl,
-        "--stock",
-        "offset:0.3",
-        "--resolution",
-        "1",
-        "--material",
-        "al7075",
-        "-o",
-        &out("opt.apt"),
-        "-q",
-    ];
+    let opt = out("opt.apt");
+    let mut optimise = vec!["optimise", &apt, "--stl", &stl, "-o", &opt, "-q"];
+    optimise.extend("--stock offset:0.3 --resolution 1 --material al7075".split(' '));
     assert_phases_cover(&optimise, &[0, 3]);
 }
 
