@@ -501,7 +501,7 @@ pub const HALVES_SHARE: f64 = 0.25;
 pub const BOUNDARY_SHARE: f64 = 0.5 / (1u32 << BISECTIONS) as f64;
 
 /// The share of the whole force's peak |F| below which F_xy,max is not
-/// taken as the scale of its own error ([`error_estimates`]).
+/// taken as the scale of its own error (in `error_estimates`).
 pub const FXY_FLOOR_SHARE: f64 = 0.1;
 
 /// The share of `tent_excess` taken as the error of the rotation step.
