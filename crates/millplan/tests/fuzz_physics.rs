@@ -340,11 +340,12 @@ proptest! {
             machine: pick(3, MACHINE),
         };
         setup(dir.path(), &c);
+        let t = Instant::now();
         let code = run_checked(dir.path(), &command(k, stock, n))?;
         if let Ok(p) = std::env::var("MILLPLAN_FUZZ_LOG") {
             use std::io::Write;
             let mut f = std::fs::OpenOptions::new().create(true).append(true).open(p).expect("log");
-            let _ = writeln!(f, "{} {code}", k % 7);
+            let _ = writeln!(f, "{} {code} {:.3}", k % 7, t.elapsed().as_secs_f64());
         }
     }
 }
