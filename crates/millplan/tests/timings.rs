@@ -242,6 +242,38 @@ fn part_commands_phases_add_up_to_the_wall_time() {
     assert_phases_cover(&optimise, &[0, 3]);
 }
 
+/// The model commands without a program of their own to write: `lobes`,
+/// `wd-sweep`, `directions` (rasters made on the demo part) and `robot
+/// place` and `robot compensate` under a fixed load.
+#[test]
+fn model_commands_phases_add_up_to_the_wall_time() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (stl, _) = demo_raster(dir.path(), &["--stepover", "2", "--step", "1"]);
+    let f = |p: &std::path::Path| p.to_str().expect("utf8").to_string();
+    let stl = f(&stl);
+    let out = |n: &str| f(&dir.path().join(n));
+    let mut lobes = vec!["lobes", "--slot", "-o"];
+    let svg = out("l.svg");
+    lobes.push(&svg);
+    lobes.extend("--fn 800 --k 2e7 --zeta 0.03 --flutes 2 --kt 700 --kr 0.3".split(' '));
+    assert_phases_cover(&lobes, &[0]);
+    let sweep = out("sweep");
+    let mut wd = vec!["wd-sweep", "-o", &sweep, "--fit"];
+    wd.extend("--d 6,10 --ap 0.1,0.5 --alpha 0,30 --af-step 30".split(' '));
+    assert_phases_cover(&wd, &[0]);
+    let directions = ["directions", "--angles", "0,90", "--stl", &stl];
+    assert_phases_cover(&directions, &[0]);
+    let path = dir.path().join("robot.apt");
+    std::fs::write(&path, apt(400, false)).expect("write");
+    let (path, src) = (f(&path), out("r.src"));
+    let load = ["--load", "100,50,-20"];
+    let place = [&["robot", "place", &path, "--restarts", "1"][..], &load].concat();
+    assert_phases_cover(&place, &[0, 3]);
+    let pose = ["--pose", "1500,0,500,0", "-o", &src];
+    let compensate = [&["robot", "compensate", &path][..], &load, &pose].concat();
+    assert_phases_cover(&compensate, &[0]);
+}
+
 #[test]
 fn the_table_parses_phases_parts_and_total() {
     let (phases, total) = parse(

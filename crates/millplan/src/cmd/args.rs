@@ -34,11 +34,7 @@ pub struct SummaryJson {
 impl SummaryJson {
     /// Prints `v` as JSON (numbers rounded to what they mean), else its text.
     pub fn print<T: serde::Serialize>(&self, v: &T, text: impl FnOnce(&T) -> String) {
-        if self.json {
-            crate::cmd::print_json(serde_json::to_value(v).unwrap_or_default());
-        } else {
-            out!("{}", text(v));
-        }
+        crate::cmd::print_summary(self.json, || v, || text(v));
     }
 }
 

@@ -120,11 +120,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         outputs.write(p, r.curves_svg().as_bytes())?;
     }
     outputs.commit()?;
-    if a.json {
-        crate::cmd::print_json(serde_json::to_value(r.json()).unwrap_or_default());
-    } else {
-        out!("{}", r.render_text());
-    }
+    crate::cmd::print_summary(a.json, || r.json(), || r.render_text());
     Ok(EXIT_OK)
 }
 

@@ -59,11 +59,7 @@ fn print_summary(a: &Args, written: &[(PathBuf, Vec<u8>)], d: &Demo) {
         .iter()
         .map(|(p, b)| (p.display().to_string(), b.len()))
         .collect();
-    if a.summary.json {
-        let names: Vec<String> = paths.iter().map(|(p, _)| p.clone()).collect();
-        let j = d.json(a.output.display().to_string(), &names);
-        crate::cmd::print_json(serde_json::to_value(&j).unwrap_or_default());
-    } else {
-        out!("{}", d.text(&a.output, &paths, a.quiet));
-    }
+    let names: Vec<String> = paths.iter().map(|(p, _)| p.clone()).collect();
+    let j = || d.json(a.output.display().to_string(), &names);
+    crate::cmd::print_summary(a.summary.json, j, || d.text(&a.output, &paths, a.quiet));
 }

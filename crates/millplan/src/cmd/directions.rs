@@ -4,6 +4,7 @@
 use crate::cmd::{read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::read_program;
+use crate::timings::{Clock, Table as _};
 use clap::ValueEnum;
 use millplan_plan::directions::{rank, raster_candidates, Candidate, RankBy as By};
 use millplan_plan::pipeline::Context;
@@ -65,6 +66,8 @@ pub struct Args {
     pub units: Option<UnitArg>,
     #[command(flatten)]
     pub summary: crate::cmd::args::SummaryJson,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 /// The generated rasters' arguments in range, and their points (counted
@@ -80,15 +83,18 @@ fn check_rasters(a: &Args, bounds: &millplan_geom::Aabb) -> CliResult<millplan_d
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    let mut clock = Clock::start();
     a.cut.check()?;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let mesh = a.part_units.read(&a.stl)?;
     let cx = Context::new(machine).with_part(&mesh);
+    clock.lap("machine file and part read");
     let mut candidates = Vec::new();
     if !a.angles.is_empty() {
         let shape = check_rasters(&a, &mesh.bounds())?;
         candidates = raster_candidates(&cx, shape, &a.angles, a.stepover, a.step)
             .map_err(|e| crate::cmd::pass_error(&a.stl, e))?;
+        clock.lap("candidate rasters made (drop-cutter)");
     }
     for p in &a.paths {
         let parsed = read_program(p, read_options(a.units, None)?)?;
@@ -103,13 +109,14 @@ pub fn run(a: Args) -> CliResult<i32> {
         RankBy::Accel => By::Accel,
         RankBy::Integral => By::Integral,
     };
+    clock.lap("candidate paths read");
     let ranked = rank(candidates, &cx, &a.cut.params(), by)
         .map_err(|e| crate::cmd::pass_error(&a.stl, e))?;
-    if a.summary.json {
-        let j = millplan_driver::directions::Report::new(format!("{:?}", a.by), &ranked);
-        crate::cmd::print_json(serde_json::to_value(j).unwrap_or_default());
-    } else {
-        out!("{}", millplan_driver::directions::render_text(&ranked));
-    }
+    clock.lap("candidates run under spindle control and ranked");
+    let j = || millplan_driver::directions::Report::new(format!("{:?}", a.by), &ranked);
+    let text = || millplan_driver::directions::render_text(&ranked);
+    crate::cmd::print_summary(a.summary.json, j, text);
+    clock.lap("summary printed");
+    clock.print(a.timings.on);
     Ok(EXIT_OK)
 }

@@ -267,11 +267,7 @@ fn write_outputs(
     }
     outputs.commit()?;
     watch.lap("outputs written, checked and renamed into place");
-    if m.json {
-        crate::cmd::print_json(serde_json::to_value(&summary).unwrap_or_default());
-    } else {
-        out!("{}", summary.render_text());
-    }
+    crate::cmd::print_summary(m.json, || &summary, || summary.render_text());
     watch.lap("summary printed");
     Ok(if summary.findings() {
         EXIT_FINDINGS

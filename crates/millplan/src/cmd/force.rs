@@ -122,11 +122,8 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
     }
     outputs.commit()?;
     watch.lap("outputs written and renamed into place");
-    if m.json {
-        crate::cmd::print_json(serde_json::to_value(&summary).unwrap_or_default());
-    } else {
-        out!("{}", summary.render_text(&name, &over));
-    }
+    let text = || summary.render_text(&name, &over);
+    crate::cmd::print_summary(m.json, || &summary, text);
     watch.lap("summary printed");
     watch.print_timings(m.timings.on);
     Ok(if summary.findings() {
@@ -143,20 +140,13 @@ fn calibrate(a: CalibrateArgs) -> CliResult<i32> {
         .map_err(|e| CliError::input(format!("{name}: cannot read: {e}")))?;
     let tests = lib::parse_tests(&text, &name).map_err(CliError::input)?;
     let cal = lib::calibrate(&tests, a.flutes, a.ap, &name).map_err(CliError::input)?;
-    if a.json {
-        let v = lib::CalibrationJson::new(&cal, tests.len());
-        crate::cmd::print_json(serde_json::to_value(v).unwrap_or_default());
-    } else {
-        out!("{}", lib::calibration_text(&cal, &a.name, tests.len()));
-    }
+    let j = || lib::CalibrationJson::new(&cal, tests.len());
+    let text = || lib::calibration_text(&cal, &a.name, tests.len());
+    crate::cmd::print_summary(a.json, j, text);
     Ok(EXIT_OK)
 }
 
 fn list(m: &millplan_driver::Materials, json: bool) -> CliResult<i32> {
-    if json {
-        crate::cmd::print_json(serde_json::to_value(lib::material_list(m)).unwrap_or_default());
-    } else {
-        out!("{}", lib::material_text(m));
-    }
+    crate::cmd::print_summary(json, || lib::material_list(m), || lib::material_text(m));
     Ok(EXIT_OK)
 }

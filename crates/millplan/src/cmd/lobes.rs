@@ -2,6 +2,7 @@
 
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::Outputs;
+use crate::timings::{Clock, Table as _};
 use millplan_driver::lobes::LobesRequest;
 use std::path::PathBuf;
 
@@ -82,6 +83,8 @@ pub struct Args {
     /// envelope as [speed, a_lim] pairs.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 fn request(a: &Args) -> LobesRequest {
@@ -106,18 +109,17 @@ fn request(a: &Args) -> LobesRequest {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    let mut clock = Clock::start();
     let o = millplan_driver::lobes::run(&request(&a)).map_err(CliError::input)?;
+    clock.lap("lobes and their envelope computed");
     if let Some(p) = &a.output {
         let mut out = Outputs::plan(&[], &[("-o", Some(p))], true)?;
         out.write(p, o.plot().as_bytes())?;
         out.commit()?;
+        clock.lap("plot drawn, written and renamed into place");
     }
-    if a.json {
-        let j = serde_json::to_value(o.json())
-            .map_err(|e| CliError::internal(format!("JSON output: {e}")))?;
-        crate::cmd::print_json(j);
-    } else {
-        out!("{}", o.render_text());
-    }
+    crate::cmd::print_summary(a.json, || o.json(), || o.render_text());
+    clock.lap("summary printed");
+    clock.print(a.timings.on);
     Ok(EXIT_OK)
 }

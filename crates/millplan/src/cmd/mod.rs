@@ -88,6 +88,20 @@ pub fn print_json(v: serde_json::Value) {
     outln!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
 }
 
+/// Prints a command's summary: `json()` as [`print_json`] does when `json`,
+/// else `text()`.
+pub fn print_summary<T: serde::Serialize>(
+    json: bool,
+    j: impl FnOnce() -> T,
+    text: impl FnOnce() -> String,
+) {
+    if json {
+        print_json(serde_json::to_value(j()).unwrap_or_default());
+    } else {
+        out!("{}", text());
+    }
+}
+
 /// Output dialect, shared by the writing commands.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum TargetArg {

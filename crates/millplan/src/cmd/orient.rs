@@ -7,7 +7,7 @@ use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::read_materials as load_materials;
 use crate::io::{read_program, read_surface, Outputs};
 use crate::timings::{Clock, Table as _};
-use millplan_driver::orient::{self as lib, OrientRequest, Summary};
+use millplan_driver::orient::{self as lib, OrientRequest};
 use millplan_driver::StockSpec;
 use millplan_plan::leadtilt::{Objective, Stage};
 use std::path::{Path, PathBuf};
@@ -232,7 +232,7 @@ fn finish(
 ) -> CliResult<i32> {
     if !o.chosen {
         outputs.commit()?;
-        report(a, &o.summary);
+        crate::cmd::print_summary(a.json, || &o.summary, || o.summary.render_text());
         clock.lap("summary printed");
         return Ok(EXIT_FINDINGS);
     }
@@ -241,7 +241,7 @@ fn finish(
     crate::cmd::write_program_file(&o.program, wo, &mut outputs, &a.output, &a.path, a.quiet)?;
     outputs.commit()?;
     clock.lap("output written, read back and renamed into place");
-    report(a, &summary);
+    crate::cmd::print_summary(a.json, || &summary, || summary.render_text());
     clock.lap("summary printed");
     Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
 }
@@ -272,12 +272,4 @@ fn choose(
         _ => {}
     }
     Ok(o)
-}
-
-fn report(a: &Args, s: &Summary) {
-    if a.json {
-        crate::cmd::print_json(serde_json::to_value(s).unwrap_or_default());
-    } else {
-        out!("{}", s.render_text());
-    }
 }

@@ -3,6 +3,7 @@
 
 use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
 use crate::io::Outputs;
+use crate::timings::{Clock, Table as _};
 use clap::{Subcommand, ValueEnum};
 use millplan_driver::robot as lib;
 use millplan_driver::robot_pass::RobotSetup;
@@ -71,6 +72,8 @@ pub struct ProcessArgs {
     /// Print JSON on standard output; errors too, as JSON on standard error.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 #[derive(clap::Args)]
@@ -285,18 +288,24 @@ fn compensate(a: CompensateArgs) -> CliResult<i32> {
         motion: a.krl_motion,
         orientation: a.orientation,
     };
+    let mut clock = Clock::start();
     let place = req.check().map_err(CliError::input)?;
     crate::io::Outputs::plan(&[a.path.as_path()], &[("-o", Some(&a.output))], false)?;
     let (robot, program, load) = process(&a.path, &a.process)?;
+    clock.lap("robot, program and load read (the force model on the stock with --stock)");
     let name = a.path.display().to_string();
     let p = process_of(&robot, &a.process, (&program, &load), &name);
     let done = lib::compensate(&p, &req, &place, &a.output).map_err(CliError::input)?;
+    clock.lap("path resampled, deflected, compensated and checked; KRL made");
     Outputs::stage_krl(&[a.path.as_path()], &a.output, &done.files, 0)?.commit()?;
+    clock.lap("KRL files written and renamed into place");
     print(
         a.process.json,
         &done.summary,
         lib::CompensateSummary::render_text,
     );
+    clock.lap("summary printed");
+    clock.print(a.process.timings.on);
     Ok(EXIT_OK)
 }
 
@@ -322,12 +331,17 @@ fn place(a: PlaceArgs) -> CliResult<i32> {
         seed: a.seed,
         restarts: a.restarts,
     };
+    let mut clock = Clock::start();
     let search = req.check().map_err(CliError::input)?;
     let (robot, program, load) = process(&a.path, &a.process)?;
+    clock.lap("robot, program and load read (the force model on the stock with --stock)");
     let name = a.path.display().to_string();
     let p = process_of(&robot, &a.process, (&program, &load), &name);
     let out = lib::place(&p, &search).map_err(CliError::input)?;
+    clock.lap("placement searched (simulated annealing)");
     print(a.process.json, &out, lib::PlaceSummary::render_text);
+    clock.lap("summary printed");
+    clock.print(a.process.timings.on);
     Ok(if out.feasible { EXIT_OK } else { EXIT_FINDINGS })
 }
 

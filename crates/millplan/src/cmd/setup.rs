@@ -204,15 +204,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     clock.lap("outputs written and renamed into place");
     let s = plan.summary(&mesh, &machine);
     let v = lib::verdict(&req, &mesh, &plan);
-    if a.summary.json {
-        let j = lib::Report::new(&req, &s, &machine, (secs, v));
-        crate::cmd::print_json(serde_json::to_value(j).unwrap_or_default());
-    } else {
-        out!(
-            "{}",
-            lib::render_text(&req, &a.stl.display().to_string(), (&s, &v), &plan)
-        );
-    }
+    let text = || lib::render_text(&req, &a.stl.display().to_string(), (&s, &v), &plan);
+    let j = || lib::Report::new(&req, &s, &machine, (secs, v.clone()));
+    crate::cmd::print_summary(a.summary.json, j, text);
     clock.lap("summary printed");
     clock.print(a.timings.on);
     Ok(if plan.feasible {

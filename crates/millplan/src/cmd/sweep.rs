@@ -2,6 +2,7 @@
 
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::Outputs;
+use crate::timings::{Clock, Table as _};
 use millplan_driver::sweep::{self as lib, Design};
 use std::path::PathBuf;
 
@@ -37,9 +38,12 @@ pub struct Args {
     pub fit: bool,
     #[command(flatten)]
     pub summary: crate::cmd::args::SummaryJson,
+    #[command(flatten)]
+    pub timings: crate::cmd::args::Timings,
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
+    let mut clock = Clock::start();
     let design = Design {
         d: a.d,
         ap: a.ap,
@@ -50,11 +54,16 @@ pub fn run(a: Args) -> CliResult<i32> {
     lib::check(&design).map_err(CliError::input)?;
     std::fs::create_dir_all(&a.output)
         .map_err(|e| CliError::input(format!("{}: {e}", a.output.display())))?;
+    clock.lap("design checked, output folder made");
     let fit = a.fit.then(lib::fit);
     if let (Some(f), false) = (&fit, a.summary.json) {
         outln!("{}", lib::SweepSummary::fit_text(f));
     }
+    if a.fit {
+        clock.lap("surrogate fitted and compared with the model");
+    }
     let (csv, html) = lib::files(&design, fit.as_ref());
+    clock.lap("working diameter over the design, table and plots");
     let (c, h) = (
         a.output.join("wd_sweep.csv"),
         a.output.join("wd_sweep.html"),
@@ -63,8 +72,11 @@ pub fn run(a: Args) -> CliResult<i32> {
     outputs.write(&c, csv.as_bytes())?;
     outputs.write(&h, html.as_bytes())?;
     outputs.commit()?;
+    clock.lap("files written and renamed into place");
     let names = (c.display().to_string(), h.display().to_string());
     let summary = lib::SweepSummary::new(names.0, names.1, fit.as_ref());
     a.summary.print(&summary, |s| s.text());
+    clock.lap("summary printed");
+    clock.print(a.timings.on);
     Ok(EXIT_OK)
 }
