@@ -18,6 +18,12 @@ use millplan_geom::limits::{NC_EXTENT, NC_RATE};
 pub const MIN_FEED: f64 = 1e-3;
 const MIN_INVERSE_TIME: f64 = 1e-6;
 
+/// The smallest spindle speed a move may be given, 1/min: a positive speed
+/// below one revolution a minute (`SPINDL/1e-300`) is absurd, and the force
+/// models would turn its feed per tooth into an infinite force. `S0` is a
+/// stopped spindle, not refused here (see [`warnings`]).
+pub const MIN_SPINDLE: f64 = 1.0;
+
 /// Positive and below the smallest plausible feed of its mode.
 fn too_slow(feed: f64, mode: crate::ir::FeedMode) -> bool {
     let min = match mode {
@@ -113,6 +119,16 @@ fn check_op(op: &Operation) -> Result<(), ParseError> {
                 1,
                 format!(
                     "the spindle speed of this move, {}, is negative: give the speed and the direction (M3/M4) apart",
+                    m.spindle
+                ),
+            ));
+        }
+        if m.spindle > 0.0 && m.spindle < MIN_SPINDLE {
+            return Err(ParseError::new(
+                m.line,
+                1,
+                format!(
+                    "the spindle speed of this move, {:e}, is below the smallest plausible speed ({MIN_SPINDLE} 1/min): no spindle cuts that slowly",
                     m.spindle
                 ),
             ));
@@ -215,6 +231,30 @@ mod tests {
         // A slow but real feed reads.
         let ok = "G21 G90\nG0 X0 Y0 Z5\nG1 Z0 F0.5\nM30\n";
         assert!(crate::parse_program(ok, crate::ReadOptions::default()).is_ok());
+    }
+
+    /// Issue 34's fuzz campaign: `force` on an APT with `SPINDL/1e-300`
+    /// printed a force of 5e299 N and an infinite power. The reader refuses
+    /// the speed at the first move it applies to.
+    #[test]
+    fn an_absurdly_slow_spindle_is_refused_at_its_line() {
+        let src = "UNITS/MM\nCUTTER/10,5\nFEDRAT/500\nSPINDL/1e-300,CLW\nGOTO/0,0,50\nFINI\n";
+        let e = crate::parse_program(src, crate::ReadOptions::default()).expect_err("refused");
+        assert_eq!(e.line, 5, "{e}");
+        assert!(e.to_string().contains("smallest plausible speed"), "{e}");
+        let g = "G21 G90\nS0.5 M3\nG0 X0 Y0 Z5\nM30\n";
+        let e = crate::parse_program(g, crate::ReadOptions::default()).expect_err("refused");
+        assert_eq!(e.line, 3, "{e}");
+        // A slow but real speed reads, and so does a stopped spindle.
+        for ok in [
+            "G21 G90\nS1 M3\nG0 X0 Y0 Z5\nM30\n",
+            "G21 G90\nS0 M3\nG0 X0 Y0 Z5\nM30\n",
+        ] {
+            assert!(
+                crate::parse_program(ok, crate::ReadOptions::default()).is_ok(),
+                "{ok}"
+            );
+        }
     }
 
     #[test]
