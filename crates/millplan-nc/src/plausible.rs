@@ -123,7 +123,7 @@ fn check_op(op: &Operation) -> Result<(), ParseError> {
                 ),
             ));
         }
-        if m.spindle > 0.0 && m.spindle < MIN_SPINDLE {
+        if !matches!(m.kind, MoveKind::Rapid) && m.spindle > 0.0 && m.spindle < MIN_SPINDLE {
             return Err(ParseError::new(
                 m.line,
                 1,
@@ -235,20 +235,22 @@ mod tests {
 
     /// Issue 34's fuzz campaign: `force` on an APT with `SPINDL/1e-300`
     /// printed a force of 5e299 N and an infinite power. The reader refuses
-    /// the speed at the first move it applies to.
+    /// the speed at the first feed move it applies to.
     #[test]
     fn an_absurdly_slow_spindle_is_refused_at_its_line() {
-        let src = "UNITS/MM\nCUTTER/10,5\nFEDRAT/500\nSPINDL/1e-300,CLW\nGOTO/0,0,50\nFINI\n";
+        let src = "UNITS/MM\nCUTTER/10,5\nFEDRAT/500\nSPINDL/1e-300,CLW\nRAPID\nGOTO/0,0,50\nGOTO/0,0,40\nFINI\n";
         let e = crate::parse_program(src, crate::ReadOptions::default()).expect_err("refused");
-        assert_eq!(e.line, 5, "{e}");
+        assert_eq!(e.line, 7, "{e}");
         assert!(e.to_string().contains("smallest plausible speed"), "{e}");
-        let g = "G21 G90\nS0.5 M3\nG0 X0 Y0 Z5\nM30\n";
+        let g = "G21 G90\nS0.5 M3\nG0 X0 Y0 Z5\nG1 Z0 F100\nM30\n";
         let e = crate::parse_program(g, crate::ReadOptions::default()).expect_err("refused");
-        assert_eq!(e.line, 3, "{e}");
-        // A slow but real speed reads, and so does a stopped spindle.
+        assert_eq!(e.line, 4, "{e}");
+        // A slow but real speed reads, and so does a stopped spindle; a
+        // speed no feed move runs at is never used.
         for ok in [
-            "G21 G90\nS1 M3\nG0 X0 Y0 Z5\nM30\n",
+            "G21 G90\nS1 M3\nG0 X0 Y0 Z5\nG1 Z0 F100\nM30\n",
             "G21 G90\nS0 M3\nG0 X0 Y0 Z5\nM30\n",
+            "G21 G90\nS0.5 M3\nG0 X0 Y0 Z5\nM30\n",
         ] {
             assert!(
                 crate::parse_program(ok, crate::ReadOptions::default()).is_ok(),

@@ -694,10 +694,11 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// laps where the binary's own steps end, one `Timings` group for all);
 /// 5,577 with `feed`'s checks before writing and its `--force`; 5,607 with
 /// `optimise --robot --orientation` and the KRL-only options refused
-/// without a KRL output; 5,571 with one helper printing every command's
-/// summary as JSON or text; 5,615 with `--timings` on `directions`, `lobes`,
-/// `wd-sweep` and `robot place` and `compensate`.
-const MAX_BINARY_LINES: usize = 5615;
+/// without a KRL output; 5,571 with one helper printing the commands'
+/// summaries as JSON or text; 5,615 with `--timings` on `directions`, `lobes`,
+/// `wd-sweep` and `robot place` and `compensate` (5,617 with a lap only
+/// for the phases that ran).
+const MAX_BINARY_LINES: usize = 5617;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into

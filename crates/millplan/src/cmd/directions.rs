@@ -109,7 +109,9 @@ pub fn run(a: Args) -> CliResult<i32> {
         RankBy::Accel => By::Accel,
         RankBy::Integral => By::Integral,
     };
-    clock.lap("candidate paths read");
+    if !a.paths.is_empty() {
+        clock.lap("candidate paths read");
+    }
     let ranked = rank(candidates, &cx, &a.cut.params(), by)
         .map_err(|e| crate::cmd::pass_error(&a.stl, e))?;
     clock.lap("candidates run under spindle control and ranked");
