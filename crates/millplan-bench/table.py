@@ -71,7 +71,7 @@ def workloads(d):
          [mp, "post", f"{d}/five_axis_1m.apt", "--machine", f"{d}/trunnion.toml", "--g93",
           "-o", f"{d}/out_post.nc", "-q"], "post", None),
         ("access", "`setup --tool 10,40,40,60`, 98,568 triangles × 1,280 icosphere cells", "≤ 15 s",
-         [mp, "setup", "--stl", f"{d}/access_98k.stl", "--tool", "10,40,40,60", "--grid",
+         [mp, "setup", "--type", "ca", "--stl", f"{d}/access_98k.stl", "--tool", "10,40,40,60", "--grid",
           "icosphere", "--cells", "1280", "--json", "-q"], "access", None),
     ]
 
