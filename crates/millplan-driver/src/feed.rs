@@ -270,9 +270,10 @@ pub fn prepare(
     let blank = inputs::read_blank(&spec, limits, f.stl_units)?;
     w.lap("part and stock files read");
     let meshes = (part.as_ref(), blank.as_ref());
-    let stock =
-        crate::simulate::build_stock(&name, req.resolution, &spec, &s, meshes, limits.memory)
-            .map_err(IoError::input)?;
+    // The prepared stock stays while each run cuts a copy of it.
+    let memory = (limits.memory, 2);
+    let stock = crate::simulate::build_stock(&name, req.resolution, &spec, &s, meshes, memory)
+        .map_err(IoError::input)?;
     let p = Prepared::new(req, &materials, (parsed.program, s, stock), setup, machine)
         .map_err(IoError::input);
     w.lap("stock built");

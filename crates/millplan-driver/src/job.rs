@@ -455,15 +455,11 @@ impl Job {
             .options
             .memory
             .unwrap_or(millplan_geom::limits::Limits::default().memory);
-        spec.build(
-            self.resolution,
-            &s,
-            self.inputs.part.as_ref(),
-            self.inputs.blank.as_ref(),
-            memory,
-        )
-        .map(Some)
-        .map_err(|e| JobError(format!("--stock: {e}")))
+        // The job keeps its stock while each run cuts a copy of it.
+        let meshes = (self.inputs.part.as_ref(), self.inputs.blank.as_ref());
+        spec.build(self.resolution, &s, meshes, (memory, 2))
+            .map(Some)
+            .map_err(|e| JobError(format!("--stock: {e}")))
     }
 
     /// Cutting moves without a spindle speed get `--spindle`, else the

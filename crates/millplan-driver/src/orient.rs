@@ -266,8 +266,10 @@ pub fn command(
         (Some(spec), Some(st)) => {
             simulable(st, g.name)?;
             let parts = (Some(g.mesh), g.blank);
+            // The stock before the program is kept beside the one cut.
+            let memory = (g.memory, 2);
             let stock =
-                crate::simulate::build_stock(g.name, a.resolution, spec, st, parts, g.memory)?;
+                crate::simulate::build_stock(g.name, a.resolution, spec, st, parts, memory)?;
             Some(stock_input(stock, st, a.samples))
         }
         _ => None,

@@ -578,8 +578,9 @@ mod tests {
             .expect("reads")
             .program;
         let s = feed::input_strokes(&req, "slot", &program, 10_000.0).expect("strokes");
-        let stock = crate::simulate::build_stock("slot", 0.25, &spec, &s, (None, None), 1 << 30)
-            .expect("stock");
+        let stock =
+            crate::simulate::build_stock("slot", 0.25, &spec, &s, (None, None), (1 << 30, 2))
+                .expect("stock");
         let machine = millplan_plan::machine::Machine::default();
         let p = feed::Prepared::new(&req, &materials, (program, s, stock), setup, machine)
             .expect("prepared");

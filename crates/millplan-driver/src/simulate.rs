@@ -155,20 +155,19 @@ pub fn program_strokes(
 
 /// The stock before the program at `program` (its name in errors) runs, as
 /// `spec` names it, at cell size `res` (`StockSpec::build`; `blank` the mesh
-/// of an `stl:` blank, `memory` the bytes it may take).
+/// of an `stl:` blank, `memory` the bytes its `copies` may take together).
 pub fn build_stock(
     program: &str,
     res: f64,
     spec: &StockSpec,
     s: &Strokes,
-    (part, blank): (Option<&TriMesh>, Option<&TriMesh>),
-    memory: u64,
+    meshes: (Option<&TriMesh>, Option<&TriMesh>),
+    memory: (u64, u32),
 ) -> Result<Stock, String> {
-    spec.build(res, s, part, blank, memory)
-        .map_err(|e| match e {
-            StockError::NoCut => format!("{program}: {e}"),
-            e => e.to_string(),
-        })
+    spec.build(res, s, meshes, memory).map_err(|e| match e {
+        StockError::NoCut => format!("{program}: {e}"),
+        e => e.to_string(),
+    })
 }
 
 /// The stock's surface as binary STL, at `mesh_resolution` (else coarse
@@ -280,7 +279,7 @@ pub fn command(
     let flute_note = default_flute_note(a, g.program).map_err(SimError::Program)?;
     lap("strokes (tool bodies, moves in chords)");
     let parts = (g.part, g.blank);
-    let mut stock = build_stock(g.name, a.resolution, g.spec, &strokes, parts, g.memory)
+    let mut stock = build_stock(g.name, a.resolution, g.spec, &strokes, parts, (g.memory, 1))
         .map_err(SimError::Stock)?;
     lap("stock built");
     let total = strokes.strokes.len();

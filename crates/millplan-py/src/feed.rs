@@ -52,9 +52,15 @@ fn prepare(m: &ModelRequest, g: &Given) -> Res<Prepared> {
     };
     let memory = millplan_geom::limits::Limits::default().memory;
     let parts = (g.part.as_ref(), blank.as_deref());
-    let stock =
-        millplan_driver::simulate::build_stock(&g.name, m.resolution, &spec, &s, parts, memory)
-            .map_err(|e| crate::error::located_in("stock", &e))?;
+    let stock = millplan_driver::simulate::build_stock(
+        &g.name,
+        m.resolution,
+        &spec,
+        &s,
+        parts,
+        (memory, 2),
+    )
+    .map_err(|e| crate::error::located_in("stock", &e))?;
     Prepared::new(m, &materials, (program, s, stock), setup, machine).map_err(|e| option_error(&e))
 }
 

@@ -87,6 +87,33 @@ fn a_stock_over_the_address_space_is_refused_not_aborted() {
     assert!(e.contains("over the memory limit of 2048"), "{e}");
 }
 
+/// Issue 34's fuzz campaign of 27 Nov 2026: `feed` with a 2 m cutter in an
+/// auto cylinder held 13.2 GB where its stock's estimate said 7.1 GB, since
+/// a force run keeps the stock before the program beside the copy it cuts.
+/// The estimate counts both, so the refusal comes before the allocation;
+/// `simulate`, which cuts its only copy, is not refused for them.
+#[test]
+fn a_stock_held_twice_is_estimated_twice() {
+    let b = Bench::new();
+    let res = ["--resolution", "0.1", "--limit", "memory=4"];
+    let sim = [&["simulate", "slot.apt", "--stock", BOX, "-q"][..], &res].concat();
+    let o = b.run(&sim);
+    assert!(matches!(o.status.code(), Some(0 | 3)), "{}", stderr(&o));
+    let model = ["--stock", BOX, "--material", "c45", "--materials", "m.toml"];
+    let feed = [
+        &["feed", "slot.apt", "-o", "out.apt", "-q"][..],
+        &model,
+        &res,
+    ]
+    .concat();
+    b.refused(
+        &feed,
+        "held twice (the stock before the program and the copy a run cuts)",
+    );
+    let force = [&["force", "slot.apt", "-q"][..], &model, &res].concat();
+    b.refused(&force, "held twice");
+}
+
 /// Issue 34: "`--materials FILE` is not treated as an input: `-o`, `--csv`,
 /// `--svg`, `--report`, `--table` of `cut`, `force`, `feed`, `orient`
 /// replace it" and "`simulate --machine M --report M` (also `--table M`,

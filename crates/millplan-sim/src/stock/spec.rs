@@ -143,23 +143,29 @@ impl StockSpec {
     /// The stock before the program whose cutting strokes are `s`, as this
     /// spec names it, at cell size `res`: `part` is the part for `offset:`,
     /// `blank` the mesh of `stl:FILE` (read by the caller). Refused before
-    /// any allocation when its dexels would take more than `memory` bytes.
+    /// any allocation when `copies` of its dexels (2 for a run that keeps
+    /// the stock before the program beside the copy it cuts) would take more
+    /// than `memory` bytes.
     pub fn build(
         &self,
         res: f64,
         s: &Strokes,
-        part: Option<&TriMesh>,
-        blank: Option<&TriMesh>,
-        memory: u64,
+        (part, blank): (Option<&TriMesh>, Option<&TriMesh>),
+        (memory, copies): (u64, u32),
     ) -> Result<Stock, StockError> {
         let check = |min: DVec2, max: DVec2| {
             let g = Grid::covering(min, max, res);
-            let bytes = g.cells() as f64 * super::BYTES_PER_CELL;
+            let bytes = g.cells() as f64 * super::BYTES_PER_CELL * f64::from(copies.max(1));
             if bytes <= memory as f64 {
                 return Ok(());
             }
+            let held = if copies > 1 {
+                ", held twice (the stock before the program and the copy a run cuts),"
+            } else {
+                ""
+            };
             let needs = format!(
-                "a stock of {} × {} dexels at --resolution {res} would take about {} MB",
+                "a stock of {} × {} dexels at --resolution {res}{held} would take about {} MB",
                 g.nx,
                 g.ny,
                 millplan_geom::limits::amount((bytes / 1e6).ceil())
