@@ -12,7 +12,7 @@ pub use millplan_plan::feed::FeedParams;
 use millplan_plan::feed::{machine_accel, BodyFn, FeedChanges, FeedPass};
 /// The load limits of a run.
 pub use millplan_plan::force::FeedLimits;
-use millplan_plan::force::{simulate, ForceSetup, FzRange, LimitUse, MoveForces};
+use millplan_plan::force::{simulate, simulate_largest, ForceSetup, FzRange, LimitUse, MoveForces};
 use millplan_plan::force::{Maxima, Steps};
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context, PassError, Progress};
@@ -554,7 +554,7 @@ pub fn feed_params(
         && limits.stress.is_none()
         && limits.deflection.is_none()
     {
-        let run = forces(p, &p.program, &p.strokes, &|_| {})?;
+        let run = simulate_largest(&p.program, &p.strokes, &p.stock, &p.setup, &|_| {})?;
         learn(&mut limits, &run.maxima(), chart)
             .into_iter()
             .map(|(name, _)| name)

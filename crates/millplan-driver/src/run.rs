@@ -102,8 +102,23 @@ impl Job {
     }
 
     /// The largest loads of `p` on the job's stock, `None` without a stock
-    /// or a material.
+    /// or a material: converged where they may be the program's largest
+    /// ([`force::simulate_largest`]), each move's own on the coarsest grid
+    /// elsewhere.
     pub fn forces(&self, p: &Program) -> Result<Option<ForceRun>, JobError> {
+        let (Some(stock), Some(setup)) = (&self.stock, &self.setup) else {
+            return Ok(None);
+        };
+        let s = self.strokes(p, true);
+        force::simulate_largest(p, &s, stock, setup, &|_| {})
+            .map(Some)
+            .map_err(JobError)
+    }
+
+    /// The loads of every move of `p` on the job's stock, each converged
+    /// as `millplan force` gives them; `None` without a stock or a
+    /// material.
+    pub fn forces_of_every_move(&self, p: &Program) -> Result<Option<ForceRun>, JobError> {
         self.forces_using(p, force::LimitUse::None)
     }
 

@@ -398,6 +398,13 @@ pub struct MoveForces {
     /// speed pass has raised the speed, the feed alone cannot always bring
     /// the power back down.
     pub speed_share: Option<f64>,
+    /// Its samples' loads less and plus [`EARLY_MARGIN`] times their
+    /// estimated error, on the grid each stopped at, the largest of each
+    /// ([`Bound`]).
+    #[serde(skip)]
+    pub low: Bound,
+    #[serde(skip)]
+    pub high: Bound,
 }
 
 impl MoveForces {
@@ -526,6 +533,16 @@ impl ForceRun {
     }
 
     /// The largest loads over every move.
+    /// The largest of the moves' [`MoveForces::floor`]: below it the
+    /// program's largest converged loads cannot lie.
+    pub fn floor(&self) -> Bound {
+        let mut f = Bound::default();
+        for m in &self.moves {
+            f.raise(m.low.fxy, m.low.torque, m.low.power);
+        }
+        f
+    }
+
     pub fn maxima(&self) -> Maxima {
         let mut x = Maxima::default();
         for m in &self.moves {
@@ -585,6 +602,23 @@ pub enum LimitUse<'a> {
     /// No limits: every load sample is converged unless it lies below its
     /// move's largest by more than its error.
     None,
+    /// The coarsest grid only, no sample refined: a first look at the
+    /// program that gives [`ForceRun::floor`] for a [`LimitUse::Largest`]
+    /// run.
+    Coarse,
+    /// Only the program's largest loads are wanted (limits learned from
+    /// the input, the figures before a pass): a sample is refined only
+    /// where it may reach `floor` ([`ForceRun::floor`] of a
+    /// [`LimitUse::Coarse`] run, below which the program's largest F_xy,
+    /// torque and power cannot lie) or its move's largest so far. The
+    /// program's largest loads come out as in a [`LimitUse::None`] run;
+    /// a move that cannot reach them carries the coarsest grid's error.
+    Largest {
+        floor: Bound,
+        /// By move index: the moves whose samples may reach `floor` (the
+        /// others are not evaluated).
+        moves: &'a [bool],
+    },
     /// A run that checks the limits: a sample whose loads, with their
     /// estimated error, stay below every limit is not refined further (it
     /// cannot be over a limit), so such loads carry the coarser grid's error.
@@ -595,9 +629,17 @@ pub enum LimitUse<'a> {
 }
 
 impl<'a> LimitUse<'a> {
+    /// Whether the move of index `mv` is evaluated at all.
+    fn evaluates(&self, mv: u32) -> bool {
+        match self {
+            LimitUse::Largest { moves, .. } => moves[mv as usize],
+            _ => true,
+        }
+    }
+
     fn limits(&self) -> Option<(&'a FeedLimits, &'a crate::machine::Machine)> {
         match *self {
-            LimitUse::None => None,
+            LimitUse::None | LimitUse::Coarse | LimitUse::Largest { .. } => None,
             LimitUse::Check(l, m) | LimitUse::Schedule(l, m) => Some((l, m)),
         }
     }
@@ -622,6 +664,83 @@ pub fn simulate(
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<ForceRun, String> {
     simulate_in_parts(program, strokes, stock, setup, schedule, progress, MIN_PART)
+}
+
+/// A bound on F_xy (N), torque (N·mm) and power (W): from below, loads the
+/// program's (or a move's) largest converged loads cannot lie under (its
+/// samples' loads less [`EARLY_MARGIN`] times their estimated error); from
+/// above, loads its samples' converged loads cannot exceed (plus that
+/// error), exactly as [`settled`] compares them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Bound {
+    pub fxy: f64,
+    pub torque: f64,
+    pub power: f64,
+}
+
+impl Bound {
+    fn raise(&mut self, fxy: f64, torque: f64, power: f64) {
+        self.fxy = self.fxy.max(fxy);
+        self.torque = self.torque.max(torque);
+        self.power = self.power.max(power);
+    }
+
+    /// Whether loads bounded above by `self` may reach `floor` in any of
+    /// the three (else [`settled`] stops every sample below it).
+    fn reaches(&self, floor: &Bound) -> bool {
+        !(self.fxy < floor.fxy && self.torque < floor.torque && self.power < floor.power)
+    }
+}
+
+/// The forces of a program where only its largest loads must be
+/// converged: a [`LimitUse::Coarse`] run gives every move's loads on the
+/// coarsest grid and the floor ([`ForceRun::floor`]); a [`LimitUse::Largest`]
+/// run then steps the stock through the program again and evaluates only
+/// the moves whose samples may reach the floor, refining as a
+/// [`LimitUse::None`] run does. A move that cannot reach it keeps the first
+/// run's loads, which are what the second would give it (every sample
+/// settled on the coarsest grid). The two runs cut copies of `stock` one
+/// after the other; `progress` hears each run's strokes as half of the
+/// total.
+pub fn simulate_largest(
+    program: &Program,
+    strokes: &Strokes,
+    stock: &Stock,
+    setup: &ForceSetup,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<ForceRun, String> {
+    let n = strokes.strokes.len();
+    let first = simulate(
+        program,
+        strokes,
+        stock.clone(),
+        setup,
+        LimitUse::Coarse,
+        &|d| progress(d / 2),
+    )?;
+    let floor = first.floor();
+    let mut moves = vec![false; moves_by_index(program).len()];
+    for m in &first.moves {
+        if m.high.reaches(&floor) {
+            moves[m.index as usize] = true;
+        }
+    }
+    let use_ = LimitUse::Largest {
+        floor,
+        moves: &moves,
+    };
+    let second = simulate(program, strokes, stock.clone(), setup, use_, &|d| {
+        progress(n / 2 + d / 2)
+    })?;
+    let mut run = first;
+    for (a, b) in run.moves.iter_mut().zip(second.moves) {
+        debug_assert_eq!(a.index, b.index);
+        if moves[a.index as usize] {
+            *a = b;
+        }
+    }
+    run.evaluated += second.evaluated;
+    Ok(run)
 }
 
 /// Strokes of the smallest part [`simulate`] hands to a thread: below that,
@@ -767,7 +886,7 @@ impl PartContext<'_> {
             t += s.minutes * 60.0;
             m.seconds += s.minutes * 60.0;
             let body = &self.strokes.tools[s.tool as usize];
-            if !s.rapid {
+            if !s.rapid && self.schedule.evaluates(s.mv) {
                 let g = range_start + k;
                 let from_cut = continues(all, g) && !all[g - 1].rapid;
                 if let Some(n) = stroke_forces(
@@ -897,8 +1016,14 @@ fn stroke_forces(
             _ => fz,
         };
         let most = (m.fxy_max, m.torque_max, m.power_w);
-        let below =
-            |e: &millplan_models::force::Evaluation| settled(e, most, limits.as_ref(), &tf.holding);
+        let below = |e: &millplan_models::force::Evaluation| match schedule {
+            LimitUse::Coarse => true,
+            LimitUse::Largest { floor: f, .. } => {
+                settled(e, most, None, &tf.holding)
+                    || settled(e, (f.fxy, f.torque, f.power), None, &tf.holding)
+            }
+            _ => settled(e, most, limits.as_ref(), &tf.holding),
+        };
         // Every sample from the coarsest grid, so that its loads do not
         // depend on the samples before it (nor on where the program was
         // split over the threads).
@@ -917,6 +1042,7 @@ fn stroke_forces(
             conv.evaluate_at(&cut).summary()
         };
         m.mean.add(&sum);
+        bound(m, &conv.evaluation);
         m.merge(
             &sum,
             &Loads::new(&sum, &tf.holding),
@@ -938,6 +1064,19 @@ fn stroke_forces(
         }
     }
     Some(evals)
+}
+
+/// Raises the move's [`Bound`]s to the sample evaluated as `e`: its loads
+/// less and plus [`EARLY_MARGIN`] times their estimated error (the
+/// factor [`settled`] compares with).
+fn bound(m: &mut MoveForces, e: &millplan_models::force::Evaluation) {
+    let s = e.summary();
+    let err = EARLY_MARGIN * (e.error_dz + e.error_dphi);
+    let (lo, hi) = ((1.0 - err).max(0.0), 1.0 + err);
+    m.low
+        .raise(s.fxy_max * lo, s.torque_max * lo, s.power_w * lo);
+    m.high
+        .raise(s.fxy_max * hi, s.torque_max * hi, s.power_w * hi);
 }
 
 /// How many times its estimated error a sample's loads must stay below the

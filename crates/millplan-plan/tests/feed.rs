@@ -8,7 +8,8 @@ use millplan_nc::generate::{raster, Raster};
 use millplan_nc::Program;
 use millplan_plan::feed::{FeedParams, FeedPass};
 use millplan_plan::force::{
-    simulate, simulate_in_parts, FeedLimits, ForceRun, ForceSetup, LimitUse, LIMIT_TOLERANCE,
+    simulate, simulate_in_parts, simulate_largest, FeedLimits, ForceRun, ForceSetup, LimitUse,
+    LIMIT_TOLERANCE,
 };
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context};
@@ -113,6 +114,58 @@ fn forces_do_not_depend_on_how_the_run_is_split_over_threads() {
             "{threads} threads, parts of {min_part}"
         );
     }
+}
+
+#[test]
+fn the_largest_loads_come_out_as_when_every_move_is_converged() {
+    // Learning limits needs only the program's largest loads: converging
+    // only the moves that may reach them must find the same maxima, and
+    // every move it evaluates again must carry the loads a run that
+    // converges every move gives it; the others their coarsest-grid loads,
+    // which cannot reach the maxima.
+    let (p, stock) = case();
+    let m = Machine::default();
+    let s = strokes(
+        &p,
+        body,
+        &PathOptions {
+            chord: 0.025,
+            rapid_rate: m.rapid,
+        },
+    );
+    let all = simulate(&p, &s, stock.clone(), &setup(), LimitUse::None, &|_| {}).expect("runs");
+    let largest = simulate_largest(&p, &s, &stock, &setup(), &|_| {}).expect("runs");
+    let coarse = simulate(&p, &s, stock, &setup(), LimitUse::Coarse, &|_| {}).expect("runs");
+    let (a, b) = (all.maxima(), largest.maxima());
+    assert_eq!((a.fxy, a.torque, a.power), (b.fxy, b.torque, b.power));
+    let floor = coarse.floor();
+    assert!(
+        floor.fxy > 0.5 * a.fxy && floor.fxy <= a.fxy,
+        "{floor:?} {a:?}"
+    );
+    assert!(floor.torque <= a.torque && floor.power <= a.power);
+    assert_eq!(all.moves.len(), largest.moves.len());
+    let (mut again, mut kept) = (0, 0);
+    for ((x, y), c) in all.moves.iter().zip(&largest.moves).zip(&coarse.moves) {
+        if y == c && x != y {
+            kept += 1;
+            assert!(
+                y.fxy_max < a.fxy && y.torque_max < a.torque,
+                "line {}",
+                y.line
+            );
+        } else {
+            again += usize::from(!x.rapid);
+            assert_eq!(
+                (x.fxy_max, x.torque_max, x.power_w),
+                (y.fxy_max, y.torque_max, y.power_w),
+                "line {}",
+                y.line
+            );
+        }
+    }
+    assert!(kept > again, "{kept} moves kept coarse, {again} converged");
+    assert!(largest.evaluated < coarse.evaluated + all.evaluated / 2);
 }
 
 #[test]
