@@ -127,8 +127,8 @@ impl Job {
         let forces_after = self.forces_checked(cl)?;
         lap("the output's loads on the stock");
         list.extend(self.checks(o, cl, forces_after.as_ref()));
-        if o.posted.is_some() {
-            self.posted_checks(&read, &mut list);
+        if let Some((cl, _)) = &o.posted {
+            self.posted_checks(cl, &read, o.oriented, &mut list);
         }
         lap("the output checked (IR, machine, tips, stock, part)");
         let cx = self.context();
@@ -166,17 +166,22 @@ impl Job {
         Ok((Some(p), wo))
     }
 
-    /// The posted program as read back against the input: the IR verifier,
-    /// S and F within the machine (G93 words included), and every posted tip
-    /// through the machine's forward kinematics on the input's path within
-    /// the tolerance; these replace the CL program's checks of the same
-    /// names.
-    fn posted_checks(&self, read: &Program, list: &mut Vec<Check>) {
+    /// The posted program as read back against the CL program it was
+    /// posted from (`cl`, the input unless a pass before the post turned
+    /// its axes): the IR verifier, S and F within the machine (G93 words
+    /// included), and every posted tip through the machine's forward
+    /// kinematics on the CL path within the tolerance; these replace the CL
+    /// program's checks of the same names. When the axes were turned
+    /// (`oriented`) the CL program's own tip check (ball centres where the
+    /// input put them) stands beside the posted one, the two as one `tip`
+    /// check.
+    fn posted_checks(&self, cl: &Program, read: &Program, oriented: bool, list: &mut Vec<Check>) {
         let Some(kin) = self.inputs.machine.kinematics() else {
             return;
         };
+        let input = if oriented { cl } else { &self.inputs.program };
         let posted = safety::check(&Inputs {
-            input: &self.inputs.program,
+            input,
             output: read,
             part: None,
             stock: None,
@@ -190,8 +195,18 @@ impl Job {
             loads: None,
         });
         let replaced = ["ir", "machine", "tip"];
+        let centres = list
+            .iter()
+            .position(|c| oriented && c.name == "tip")
+            .map(|k| list.remove(k));
         list.retain(|c| !replaced.contains(&c.name));
-        list.extend(posted.into_iter().filter(|c| replaced.contains(&c.name)));
+        for mut c in posted.into_iter().filter(|c| replaced.contains(&c.name)) {
+            if let Some(centres) = centres.as_ref().filter(|_| c.name == "tip") {
+                c.ok &= centres.ok;
+                c.findings.extend(centres.findings.iter().cloned());
+            }
+            list.push(c);
+        }
     }
 
     /// `safety::check` on the program read back, with the job's tools,
@@ -215,10 +230,13 @@ impl Job {
             stock: self.stock.as_ref(),
             tool_body: &body,
             machine: Some(&self.inputs.machine),
-            tip: if o.reordered {
-                TipRule::SamePoints
-            } else {
-                TipRule::Kept
+            // Orient turns only five-axis operations and reorder only
+            // three-axis ones; ball centres kept covers every operation
+            // whose order is kept.
+            tip: match (o.reordered, o.oriented) {
+                (true, _) => TipRule::SamePoints,
+                (false, true) => TipRule::CentreKept,
+                (false, false) => TipRule::Kept,
             },
             tol,
             loads: loads.as_ref().map(|l| l as &dyn LoadCheck),

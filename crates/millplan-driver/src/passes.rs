@@ -152,9 +152,10 @@ pub fn missing(job: &Job, pass: PassName) -> Option<String> {
         PassName::Reorder if !part => "no part (--stl)",
         PassName::Reorder if !has_ball(job, true) => "no three-axis ball-end operation",
         PassName::Orient if !five_axis(job) => "a three-axis program: no tool axes to lean",
-        PassName::Orient => {
-            "lead/tilt on the stock is not part of optimise yet: run `millplan orient` first"
-        }
+        PassName::Orient if !part => "no part (--stl): the contact points need the surface",
+        PassName::Orient if job.stock.is_none() => "no stock (--stock)",
+        PassName::Orient if job.setup.is_none() => "no material (--material)",
+        PassName::Orient if !has_ball(job, false) => "no ball-end operation",
         PassName::Feed if job.stock.is_none() => "no stock (--stock)",
         PassName::Feed if job.setup.is_none() => "no material (--material)",
         PassName::Post if !five_axis(job) => "a three-axis program: nothing to post",

@@ -2,10 +2,13 @@
 //! with the measures before and after.
 
 use crate::job::{Job, JobError};
+use crate::orient::{first_spindle, OrientRequest};
 use crate::passes::{missing, PassName};
+use millplan_models::leadtilt::Variant;
 use millplan_nc::Program;
 use millplan_plan::feed::{FeedChanges, FeedParams, FeedPass};
 use millplan_plan::force::{self, ForceRun};
+use millplan_plan::leadtilt::{choose_with, Objective};
 use millplan_plan::pipeline::{self, Context, Pass, Progress};
 use millplan_plan::post::{post, PostOptions, PostReport};
 use millplan_plan::reorder::{Method, ReorderParams, ReorderPass, Verdict};
@@ -56,6 +59,9 @@ pub struct Outcome {
     pub forces_before: Option<ForceRun>,
     /// Whether a pass changed the order of the cutting points.
     pub reordered: bool,
+    /// Whether the lead/tilt pass turned the tool axes (ball centres kept,
+    /// tips moved).
+    pub oriented: bool,
     /// After the post: the CL program it was made from and its report.
     pub posted: Option<(Program, PostReport)>,
 }
@@ -64,6 +70,7 @@ pub struct Outcome {
 #[derive(Default)]
 struct State {
     reordered: bool,
+    oriented: bool,
     posted: Option<(Program, PostReport)>,
 }
 
@@ -220,6 +227,7 @@ impl Job {
             before,
             forces_before,
             reordered: st.reordered,
+            oriented: st.oriented,
             posted: st.posted,
         })
     }
@@ -249,10 +257,11 @@ impl Job {
                 st.posted = Some((cl, report));
                 Ok(said)
             }
-            PassName::Orient => Err(JobError(format!(
-                "{}: not runnable here (a bug: `missing` lets it through)",
-                pass.name()
-            ))),
+            PassName::Orient => {
+                let (said, changed) = self.orient(p)?;
+                st.oriented |= changed;
+                Ok(said)
+            }
         }
     }
 
@@ -298,6 +307,81 @@ impl Job {
             ),
             _ => ("no order wins: the original order kept".into(), false),
         })
+    }
+
+    /// The lead/tilt pass's request: `millplan orient`'s defaults (lead
+    /// 0–30°, tilt ±30°, F_xy,max at fz 0.1 mm, ae 0.5 mm, reach 30 mm, 48
+    /// samples, no holder) with the job's material, flutes, helix,
+    /// allowance (ap), resolution and the program's first cutting speed, as
+    /// `millplan orient --stock` with those options runs it.
+    pub fn orient_request(&self, p: &Program) -> Result<OrientRequest, JobError> {
+        use crate::command_defaults::orient as d;
+        let helix = self.setup.map_or(d::HELIX_DEG, |s| s.helix.to_degrees());
+        Ok(OrientRequest {
+            lead_range: d::LEAD_RANGE.into(),
+            tilt_range: d::TILT_RANGE.into(),
+            variant: Variant::TiltThenLead,
+            objective: Objective::Fxy,
+            fz: d::FZ,
+            n: Some(first_spindle(p).ok_or_else(|| {
+                JobError("orient: the program sets no spindle speed for its cutting moves".into())
+            })?),
+            flutes: self.flutes,
+            helix,
+            ap: self.ap,
+            ae: d::AE,
+            reach: d::REACH,
+            holder: None,
+            material: self.inputs.material.clone().unwrap_or_default(),
+            stock: None,
+            resolution: self.resolution,
+            samples: d::SAMPLES,
+        })
+    }
+
+    /// Lead and tilt per ball-end operation from the forces on the job's
+    /// stock: `p` becomes the re-oriented program (ball centres kept).
+    /// Returns what it did and whether any operation was re-oriented.
+    fn orient(&self, p: &mut Program) -> Result<(String, bool), JobError> {
+        let (Some(mesh), Some(stock)) = (&self.inputs.part, &self.stock) else {
+            return Err(JobError("orient: no part or stock".into()));
+        };
+        let req = self.orient_request(p)?;
+        let params = crate::orient::params(&req, &self.inputs.materials).map_err(JobError)?;
+        let st = self.strokes(p, false);
+        let input = crate::orient::stock_input(stock.clone(), &st, req.samples);
+        let o = choose_with(
+            p,
+            mesh,
+            &self.inputs.machine,
+            &params,
+            Some(input),
+            &|_, _, _| {},
+        )
+        .map_err(|e| JobError(format!("orient: {e}")))?;
+        let said = if o.chosen.is_empty() {
+            "no operation re-oriented (none touches the part with a ball end)".to_string()
+        } else {
+            let ops: Vec<String> = o
+                .chosen
+                .iter()
+                .map(|c| {
+                    format!(
+                        "operation {}: lead {:.1}°, tilt {:.1}° (F_xy,max {} → {:.1} N)",
+                        c.operation + 1,
+                        c.lead,
+                        c.tilt,
+                        c.objective_before
+                            .map_or("refused".to_string(), |v| format!("{v:.1}")),
+                        c.objective_after
+                    )
+                })
+                .collect();
+            ops.join("; ")
+        };
+        let changed = !o.chosen.is_empty();
+        *p = o.program;
+        Ok((said, changed))
     }
 
     /// Whether the post writes inverse-time feed: `--g93`, else the machine

@@ -697,8 +697,9 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// without a KRL output; 5,571 with one helper printing the commands'
 /// summaries as JSON or text; 5,615 with `--timings` on `directions`, `lobes`,
 /// `wd-sweep` and `robot place` and `compensate` (5,617 with a lap only
-/// for the phases that ran).
-const MAX_BINARY_LINES: usize = 5617;
+/// for the phases that ran); 5,616 with `optimise`'s orient pass in the
+/// driver and its help reflowed.
+const MAX_BINARY_LINES: usize = 5616;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into

@@ -751,3 +751,179 @@ fn the_tool_library_serves_the_tools_and_a_missing_one_is_located() {
     );
     assert!(!out2.exists());
 }
+
+/// A 60 × 60 mm plate, top at z = 0, as an ASCII STL.
+fn plate(path: &Path) {
+    let tri = |n: [f64; 3], v: [[f64; 3]; 3]| {
+        let mut s = format!("facet normal {} {} {}\nouter loop\n", n[0], n[1], n[2]);
+        for p in v {
+            s += &format!("vertex {} {} {}\n", p[0], p[1], p[2]);
+        }
+        s + "endloop\nendfacet\n"
+    };
+    let (a, b, c, d) = ([0., 0., 0.], [60., 0., 0.], [60., 60., 0.], [0., 60., 0.]);
+    let (e, f, g, h) = (
+        [0., 0., -5.],
+        [60., 0., -5.],
+        [60., 60., -5.],
+        [0., 60., -5.],
+    );
+    let mut s = String::from("solid plate\n");
+    s += &tri([0., 0., 1.], [a, b, c]);
+    s += &tri([0., 0., 1.], [a, c, d]);
+    s += &tri([0., 0., -1.], [e, g, f]);
+    s += &tri([0., 0., -1.], [e, h, g]);
+    s += "endsolid plate\n";
+    std::fs::write(path, s).expect("write");
+}
+
+/// Issue 31, the default pass list: lead and tilt for five-axis CL on the
+/// stock. A D10 ball raster over a flat plate, written as five-axis CL with
+/// a vertical axis on every point, cuts with the ball's tip (refused by
+/// the lead/tilt pass's tip rule), so `optimise` leans it; the ball centres
+/// stay where the input put them (the tip check), the feeds follow on the
+/// re-oriented program, and the orient pass alone writes what `millplan
+/// orient --stock` with the job's allowance writes.
+#[test]
+fn a_five_axis_ball_program_is_leaned_on_the_stock_with_its_centres_kept() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let d = dir.path();
+    let (stl, raster, apt) = (d.join("plate.stl"), d.join("r.apt"), d.join("r5.apt"));
+    plate(&stl);
+    let o = run(&[
+        "raster",
+        "--stl",
+        s(&stl),
+        "--tool",
+        "ball:10",
+        "--stepover",
+        "10",
+        "--step",
+        "2",
+        "-o",
+        s(&raster),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Every point with its (vertical) tool axis: five-axis CL.
+    let text = std::fs::read_to_string(&raster).expect("written");
+    let five: String = text
+        .lines()
+        .map(|l| {
+            if l.starts_with("GOTO/") && l.matches(',').count() == 2 {
+                format!("{l},0,0,1\n")
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    std::fs::write(&apt, five).expect("write");
+    let stock = "box:-6,-6,-5,66,66,0.5";
+    let common = ["--stl", s(&stl), "--stock", stock, "--material", "al7075"];
+    let out = d.join("o.apt");
+    let mut args = vec!["optimise", s(&apt)];
+    args.extend(common);
+    args.extend(["--resolution", "0.2", "-o", s(&out), "--json", "-q"]);
+    let o = run(&args);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let j = json(&o);
+    let orient = pass(&j, "orient");
+    assert_eq!(orient["ran"], true, "{j}");
+    assert!(
+        orient["reason"].as_str().expect("said").contains("lead"),
+        "{orient}"
+    );
+    assert_eq!(pass(&j, "feed")["ran"], true, "{j}");
+    assert_eq!(j["verdict"], "improved", "{j}");
+    for c in j["checks"].as_array().expect("checks") {
+        assert_eq!(c["ok"], true, "{c}");
+    }
+    // Leaned: the written axes are no longer vertical, the centres kept.
+    let (input, output) = (read(&apt), read(&out));
+    let cutting = |p: &millplan_nc::Program| {
+        p.operations
+            .iter()
+            .flat_map(|op| {
+                op.moves
+                    .iter()
+                    .filter(|m| m.is_cutting())
+                    .map(|m| (m.end, op.orient(m).and_then(|o| o.axis)))
+            })
+            .collect::<Vec<_>>()
+    };
+    let (a, b) = (cutting(&input), cutting(&output));
+    assert_eq!(a.len(), b.len());
+    let leaned = b
+        .iter()
+        .filter(|(_, ax)| ax.is_some_and(|v| v.z < 0.999_999))
+        .count();
+    assert!(leaned > b.len() / 2, "{leaned} of {} leaned", b.len());
+    for ((p, u), (q, v)) in a.iter().zip(&b) {
+        let (u, v) = (u.expect("axis"), v.expect("axis"));
+        let (c0, c1) = (*p + u * 5.0, *q + v * 5.0);
+        assert!(c0.distance(c1) < 0.01, "centre {c0} → {c1}");
+    }
+    // The orient pass alone (written whatever its loads say) is `millplan
+    // orient --stock` with the job's allowance and resolution.
+    let (alone, cmd) = (d.join("alone.apt"), d.join("cmd.apt"));
+    let mut args = vec!["optimise", s(&apt)];
+    args.extend(common);
+    args.extend([
+        "--resolution",
+        "0.2",
+        "--passes",
+        "orient",
+        "--force",
+        "-q",
+        "-o",
+        s(&alone),
+    ]);
+    let o = run(&args);
+    assert!(
+        matches!(o.status.code(), Some(0 | 3)),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let mut args = vec!["orient", s(&apt)];
+    args.extend(common);
+    args.extend(["--resolution", "0.2", "--ap", "0.3", "-q", "-o", s(&cmd)]);
+    let o = run(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let gotos = |p: &Path| {
+        std::fs::read_to_string(p)
+            .expect("written")
+            .lines()
+            .filter(|l| l.starts_with("GOTO/"))
+            .map(str::to_string)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(gotos(&alone), gotos(&cmd));
+    // Leaned, then posted for a table A/C machine: the posted tips are
+    // checked through the kinematics against the re-oriented CL, the ball
+    // centres against the input, the two as one `tip` check.
+    let (m, posted) = (d.join("ac.toml"), d.join("posted.nc"));
+    std::fs::write(&m, TABLE_AC_G93).expect("write");
+    let mut args = vec!["optimise", s(&apt)];
+    args.extend(common);
+    args.extend(["--resolution", "0.2", "--machine", s(&m), "--json", "-q"]);
+    args.extend(["-o", s(&posted)]);
+    let o = run(&args);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let j = json(&o);
+    assert_eq!(pass(&j, "orient")["ran"], true, "{j}");
+    assert_eq!(pass(&j, "post")["ran"], true, "{j}");
+    let checks = j["checks"].as_array().expect("checks");
+    let tips: Vec<_> = checks.iter().filter(|c| c["name"] == "tip").collect();
+    assert_eq!(tips.len(), 1, "{j}");
+    assert_eq!(tips[0]["ok"], true, "{j}");
+}

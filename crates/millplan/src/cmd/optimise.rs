@@ -18,16 +18,16 @@ use std::path::{Path, PathBuf};
 /// material and part: every pass the inputs allow, the result written,
 /// re-read from its own bytes and checked before it is put in place.
 ///
-/// Passes, in order (`--list-passes` prints what each needs and changes):
-/// speed (constant cutting speed for ball-end operations; needs --stl),
-/// reorder (the order as it will run, kept unless it wins; needs --stl),
-/// orient (lead/tilt of five-axis CL), feed (a feed per block from the
-/// forces on the stock under the machine's spindle chart and --limit; needs
-/// --stock and --material), post (five-axis CL through the machine's
-/// kinematics to joint positions, feeds in inverse time when the machine
-/// file's `[post]` says `inverse_time = true` or --g93 is given; the posted tips
-/// are checked through the forward kinematics). A pass whose inputs are
-/// missing is skipped and says why.
+/// Passes, in order (`--list-passes` prints what each needs and changes): speed (constant
+/// cutting speed for ball-end operations; needs --stl), reorder (the order as it will run, kept
+/// unless it wins; needs --stl), orient (lead/tilt of five-axis ball-end CL from the forces on the
+/// stock, ball centres kept, as `millplan orient --stock` with its defaults and the job's ap,
+/// flutes, helix and resolution; needs --stl, --stock, --material), feed (a feed per block from
+/// the forces on the stock under the machine's spindle chart and --limit; needs --stock and
+/// --material), post (five-axis CL through the machine's kinematics to joint positions, feeds in
+/// inverse time when the machine file's `[post]` says `inverse_time = true` or --g93 is given;
+/// the posted tips are checked through the forward kinematics). A pass whose inputs are missing
+/// is skipped and says why.
 ///
 /// Defaults (each printed with where it came from): vc from the material's
 /// cutting data; the spindle speed of moves without S from vc on the tool's
@@ -40,11 +40,10 @@ use std::path::{Path, PathBuf};
 /// deflection=mm gives a limit instead.
 ///
 /// Checks of what is written, on the program re-read from its bytes:
-/// read-back (parses, commands what the optimised program does, IR
-/// verifier), machine (S and F within the machine), tip (the tool tip where
-/// the input put it), rapids-and-holder (on the stock: refused even when the
-/// input had it), loads (under every limit within 0.5 %), gouge (no gouge
-/// the input did not have).
+/// read-back (parses, commands what the optimised program does, IR verifier), machine (S and F
+/// within the machine), tip (the tool tip where the input put it; the ball centre after orient),
+/// rapids-and-holder (on the stock: refused even when the input had it), loads (under every limit
+/// within 0.5 %), gouge (no gouge the input did not have).
 ///
 /// Exit codes: 0 written; 2 bad input; 3 a check failed (the check and line
 /// are named; nothing written unless --force).
