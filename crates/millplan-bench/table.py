@@ -73,6 +73,11 @@ def workloads(d):
         ("access", "`setup --tool 10,40,40,60`, 98,568 triangles × 1,280 icosphere cells", "≤ 15 s",
          [mp, "setup", "--type", "ca", "--stl", f"{d}/access_98k.stl", "--tool", "10,40,40,60", "--grid",
           "icosphere", "--cells", "1280", "--json", "-q"], "access", None),
+        ("optimise", "`optimise --passes speed,feed`, 100,006 ball-end moves, offset stock at 0.1 mm, with its checks",
+         "≤ 15 s",
+         [mp, "optimise", f"{d}/r100k.apt", "--stl", f"{d}/demo/part.stl", "--stock", "offset:0.3",
+          "--machine", f"{d}/demo/machine.toml", "--material", "al7075", "--passes", "speed,feed",
+          "-o", f"{d}/out_optimise.nc", "-q"], None, None),
     ]
 
 
@@ -107,6 +112,12 @@ def prepare(d, build):
         subprocess.run([os.path.join(BIN, "gen-inputs"), d], check=True)
     if not os.path.exists(f"{d}/access_98k.stl"):
         subprocess.run([os.path.join(BIN, "gen-inputs"), "--access", f"{d}/access_98k.stl"], check=True)
+    mp = os.path.join(BIN, "millplan")
+    if not os.path.exists(f"{d}/demo/part.stl"):
+        subprocess.run([mp, "demo", "-o", f"{d}/demo", "-q"], check=True)
+    if not os.path.exists(f"{d}/r100k.apt"):
+        subprocess.run([mp, "raster", "--stl", f"{d}/demo/part.stl", "--tool", "ball:10", "--stepover", "0.19",
+                        "--step", "0.19", "--tol", "0", "-o", f"{d}/r100k.apt", "-q"], check=True)
     with open(f"{d}/trunnion.toml", "w") as f:
         f.write(TRUNNION)
 

@@ -616,7 +616,7 @@ pub enum LimitUse<'a> {
     Largest {
         floor: Bound,
         /// By move index: the moves whose samples may reach `floor` (the
-        /// others are not evaluated).
+        /// others are neither evaluated nor listed in the run).
         moves: &'a [bool],
     },
     /// A run that checks the limits: a sample whose loads, with their
@@ -732,10 +732,11 @@ pub fn simulate_largest(
     let second = simulate(program, strokes, stock.clone(), setup, use_, &|d| {
         progress(n / 2 + d / 2)
     })?;
+    // The second run holds the moves it evaluated only, in program order.
     let mut run = first;
-    for (a, b) in run.moves.iter_mut().zip(second.moves) {
-        debug_assert_eq!(a.index, b.index);
-        if moves[a.index as usize] {
+    let mut slots = run.moves.iter_mut();
+    for b in second.moves {
+        if let Some(a) = slots.by_ref().find(|a| a.index == b.index) {
             *a = b;
         }
     }
@@ -866,6 +867,12 @@ impl PartContext<'_> {
             if k % 4096 == 4095 {
                 (self.progress)(self.done.fetch_add(4096, Ordering::Relaxed) + 4096);
             }
+            if !self.schedule.evaluates(s.mv) {
+                // Only the stock and the clock go on.
+                t += s.minutes * 60.0;
+                sim.step(s, &self.strokes.tools[s.tool as usize]);
+                continue;
+            }
             let new_move = part.moves.last().is_none_or(|m| m.index != s.mv);
             if new_move {
                 let mv = self.ir.get(s.mv as usize).copied();
@@ -886,7 +893,7 @@ impl PartContext<'_> {
             t += s.minutes * 60.0;
             m.seconds += s.minutes * 60.0;
             let body = &self.strokes.tools[s.tool as usize];
-            if !s.rapid && self.schedule.evaluates(s.mv) {
+            if !s.rapid {
                 let g = range_start + k;
                 let from_cut = continues(all, g) && !all[g - 1].rapid;
                 if let Some(n) = stroke_forces(

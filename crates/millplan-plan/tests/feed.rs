@@ -135,6 +135,7 @@ fn the_largest_loads_come_out_as_when_every_move_is_converged() {
     );
     let all = simulate(&p, &s, stock.clone(), &setup(), LimitUse::None, &|_| {}).expect("runs");
     let largest = simulate_largest(&p, &s, &stock, &setup(), &|_| {}).expect("runs");
+    let stock2 = stock.clone();
     let coarse = simulate(&p, &s, stock, &setup(), LimitUse::Coarse, &|_| {}).expect("runs");
     let (a, b) = (all.maxima(), largest.maxima());
     assert_eq!((a.fxy, a.torque, a.power), (b.fxy, b.torque, b.power));
@@ -166,6 +167,14 @@ fn the_largest_loads_come_out_as_when_every_move_is_converged() {
     }
     assert!(kept > again, "{kept} moves kept coarse, {again} converged");
     assert!(largest.evaluated < coarse.evaluated + all.evaluated / 2);
+    // Nor does it depend on the threads the parts run on.
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a pool")
+        .install(|| simulate_largest(&p, &s, &stock2, &setup(), &|_| {}))
+        .expect("runs");
+    assert_eq!(one, largest);
 }
 
 #[test]
