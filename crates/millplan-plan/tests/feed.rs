@@ -56,15 +56,20 @@ fn limits() -> FeedLimits {
     }
 }
 
-fn forces(p: &Program, stock: Stock, m: &Machine) -> ForceRun {
-    let s = strokes(
+/// The case's strokes: the ball at a chord of 0.025 mm.
+fn strokes_of(p: &Program, m: &Machine) -> millplan_sim::stock::path::Strokes {
+    strokes(
         p,
         body,
         &PathOptions {
             chord: 0.025,
             rapid_rate: m.rapid,
         },
-    );
+    )
+}
+
+fn forces(p: &Program, stock: Stock, m: &Machine) -> ForceRun {
+    let s = strokes_of(p, m);
     simulate(p, &s, stock, &setup(), LimitUse::None, &|_| {}).expect("simulates")
 }
 
@@ -78,14 +83,7 @@ fn forces_do_not_depend_on_how_the_run_is_split_over_threads() {
     // must still meet the stock one sequential run gives it.
     let (p, stock) = case();
     let m = Machine::default();
-    let s = strokes(
-        &p,
-        body,
-        &PathOptions {
-            chord: 0.025,
-            rapid_rate: m.rapid,
-        },
-    );
+    let s = strokes_of(&p, &m);
     let limits = limits();
     let run = |threads: usize, min_part: usize| {
         rayon::ThreadPoolBuilder::new()
@@ -125,14 +123,7 @@ fn the_largest_loads_come_out_as_when_every_move_is_converged() {
     // which cannot reach the maxima.
     let (p, stock) = case();
     let m = Machine::default();
-    let s = strokes(
-        &p,
-        body,
-        &PathOptions {
-            chord: 0.025,
-            rapid_rate: m.rapid,
-        },
-    );
+    let s = strokes_of(&p, &m);
     let all = simulate(&p, &s, stock.clone(), &setup(), LimitUse::None, &|_| {}).expect("runs");
     let largest = simulate_largest(&p, &s, &stock, &setup(), &|_| {}).expect("runs");
     let stock2 = stock.clone();
@@ -550,14 +541,7 @@ fn a_schedule_rechecked_on_a_four_times_finer_grid_stays_within_two_percent() {
     fine.grid.dz /= 4.0;
     fine.grid.dphi /= 4.0;
     fine.refine = None;
-    let s = strokes(
-        &p,
-        body,
-        &PathOptions {
-            chord: 0.025,
-            rapid_rate: m.rapid,
-        },
-    );
+    let s = strokes_of(&p, &m);
     let after = simulate(&p, &s, stock, &fine, LimitUse::None, &|_| {}).expect("simulates");
     let worst = after
         .moves

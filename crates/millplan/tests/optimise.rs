@@ -5,6 +5,10 @@
 #[path = "../../millplan-nc/tests/shared_data/mod.rs"]
 mod shared_data;
 
+#[path = "support/plate.rs"]
+mod support;
+use support::plate;
+
 use millplan_nc::equiv::{compare, Tolerance};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -750,31 +754,6 @@ fn the_tool_library_serves_the_tools_and_a_missing_one_is_located() {
         "{e}"
     );
     assert!(!out2.exists());
-}
-
-/// A 60 × 60 mm plate, top at z = 0, as an ASCII STL.
-fn plate(path: &Path) {
-    let tri = |n: [f64; 3], v: [[f64; 3]; 3]| {
-        let mut s = format!("facet normal {} {} {}\nouter loop\n", n[0], n[1], n[2]);
-        for p in v {
-            s += &format!("vertex {} {} {}\n", p[0], p[1], p[2]);
-        }
-        s + "endloop\nendfacet\n"
-    };
-    let (a, b, c, d) = ([0., 0., 0.], [60., 0., 0.], [60., 60., 0.], [0., 60., 0.]);
-    let (e, f, g, h) = (
-        [0., 0., -5.],
-        [60., 0., -5.],
-        [60., 60., -5.],
-        [0., 60., -5.],
-    );
-    let mut s = String::from("solid plate\n");
-    s += &tri([0., 0., 1.], [a, b, c]);
-    s += &tri([0., 0., 1.], [a, c, d]);
-    s += &tri([0., 0., -1.], [e, g, f]);
-    s += &tri([0., 0., -1.], [e, h, g]);
-    s += "endsolid plate\n";
-    std::fs::write(path, s).expect("write");
 }
 
 /// Issue 31, the default pass list: lead and tilt for five-axis CL on the

@@ -4,37 +4,15 @@
 //! §1.4c, §2.4), so the chosen lead is positive, F_xy,max falls, and the
 //! written CL reads back with a tool axis on every cutting point.
 
+#[path = "support/plate.rs"]
+mod support;
+use support::plate;
+
 use std::path::Path;
 use std::process::Command;
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_millplan"))
-}
-
-/// A 60 × 60 mm plate, top at z = 0, as an ASCII STL (two triangles on top,
-/// two below).
-fn plate(path: &Path) {
-    let tri = |n: [f64; 3], v: [[f64; 3]; 3]| {
-        let mut s = format!("facet normal {} {} {}\nouter loop\n", n[0], n[1], n[2]);
-        for p in v {
-            s += &format!("vertex {} {} {}\n", p[0], p[1], p[2]);
-        }
-        s + "endloop\nendfacet\n"
-    };
-    let (a, b, c, d) = ([0., 0., 0.], [60., 0., 0.], [60., 60., 0.], [0., 60., 0.]);
-    let (e, f, g, h) = (
-        [0., 0., -5.],
-        [60., 0., -5.],
-        [60., 60., -5.],
-        [0., 60., -5.],
-    );
-    let mut s = String::from("solid plate\n");
-    s += &tri([0., 0., 1.], [a, b, c]);
-    s += &tri([0., 0., 1.], [a, c, d]);
-    s += &tri([0., 0., -1.], [e, g, f]);
-    s += &tri([0., 0., -1.], [e, h, g]);
-    s += "endsolid plate\n";
-    std::fs::write(path, s).expect("write");
 }
 
 #[test]
