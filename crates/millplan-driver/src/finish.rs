@@ -204,6 +204,10 @@ impl Job {
             if let Some(centres) = centres.as_ref().filter(|_| c.name == "tip") {
                 c.ok &= centres.ok;
                 c.findings.extend(centres.findings.iter().cloned());
+                if let Some(b) = &centres.skipped {
+                    let a = c.skipped.take().map_or(String::new(), |a| format!("{a}; "));
+                    c.skipped = Some(format!("{a}ball centres: {b}"));
+                }
             }
             list.push(c);
         }
@@ -230,9 +234,8 @@ impl Job {
             stock: self.stock.as_ref(),
             tool_body: &body,
             machine: Some(&self.inputs.machine),
-            // Orient turns only five-axis operations and reorder only
-            // three-axis ones; ball centres kept covers every operation
-            // whose order is kept.
+            // Orient does not run after a reorder that won (`after_others`),
+            // so at most one of the two applies.
             tip: match (o.reordered, o.oriented) {
                 (true, _) => TipRule::SamePoints,
                 (false, true) => TipRule::CentreKept,

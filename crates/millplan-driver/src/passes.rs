@@ -135,6 +135,13 @@ fn has_ball(job: &Job, three_axis: bool) -> bool {
     })
 }
 
+/// Whether `op` is five-axis CL: a cutting move, and a tool axis vector
+/// on every cutting move (not rotary angles alone).
+pub fn axis_vectors(op: &millplan_nc::Operation) -> bool {
+    let mut cutting = op.moves.iter().filter(|m| m.is_cutting()).peekable();
+    cutting.peek().is_some() && cutting.all(|m| op.orient(m).is_some_and(|o| o.axis.is_some()))
+}
+
 fn five_axis(job: &Job) -> bool {
     job.inputs
         .program
@@ -151,7 +158,9 @@ pub fn missing(job: &Job, pass: PassName) -> Option<String> {
         PassName::Speed if !has_ball(job, false) => "no ball-end operation",
         PassName::Reorder if !part => "no part (--stl)",
         PassName::Reorder if !has_ball(job, true) => "no three-axis ball-end operation",
-        PassName::Orient if !five_axis(job) => "a three-axis program: no tool axes to lean",
+        PassName::Orient if !job.inputs.program.operations.iter().any(axis_vectors) => {
+            "no five-axis CL operation (tool axes as vectors on every cutting move): nothing to lean"
+        }
         PassName::Orient if !part => "no part (--stl): the contact points need the surface",
         PassName::Orient if job.stock.is_none() => "no stock (--stock)",
         PassName::Orient if job.setup.is_none() => "no material (--material)",

@@ -3,7 +3,7 @@
 
 use crate::job::{Job, JobError};
 use crate::orient::{first_spindle, OrientRequest};
-use crate::passes::{missing, PassName};
+use crate::passes::{axis_vectors, missing, PassName};
 use millplan_models::leadtilt::Variant;
 use millplan_nc::Program;
 use millplan_plan::feed::{FeedChanges, FeedParams, FeedPass};
@@ -64,6 +64,16 @@ pub struct Outcome {
     pub oriented: bool,
     /// After the post: the CL program it was made from and its report.
     pub posted: Option<(Program, PostReport)>,
+}
+
+/// Why `pass` is skipped after the passes before it (`None`: it runs):
+/// lead and tilt after a new order would leave a program whose tips are
+/// checked neither as the same points (the order) nor move by move (the
+/// centres), so orient does not follow a reorder that won.
+fn after_others(pass: PassName, st: &State) -> Option<String> {
+    (pass == PassName::Orient && st.reordered).then(|| {
+        "reorder changed the order: lead and tilt are not chosen on a new order in the same run (run `millplan orient` on the result)".to_string()
+    })
 }
 
 /// What the passes leave for the checks besides the program.
@@ -209,7 +219,7 @@ impl Job {
         for (k, &pass) in passes.iter().enumerate() {
             cx.progress(PASSES_PHASE, k, passes.len());
             let t = Instant::now();
-            let (ran, reason) = match missing(self, pass) {
+            let (ran, reason) = match missing(self, pass).or_else(|| after_others(pass, &st)) {
                 Some(why) => (false, why),
                 None => (true, self.run_pass(pass, &mut p, &cx, passes, &mut st)?),
             };
@@ -260,6 +270,11 @@ impl Job {
             PassName::Orient => {
                 let (said, changed) = self.orient(p)?;
                 st.oriented |= changed;
+                // Turned axes change the working diameters: the speeds
+                // follow them (as after a new order).
+                if changed && all.contains(&PassName::Speed) {
+                    return Ok(format!("{said}; {}", self.speed(p, cx)?));
+                }
                 Ok(said)
             }
         }
@@ -339,9 +354,11 @@ impl Job {
         })
     }
 
-    /// Lead and tilt per ball-end operation from the forces on the job's
-    /// stock: `p` becomes the re-oriented program (ball centres kept).
-    /// Returns what it did and whether any operation was re-oriented.
+    /// Lead and tilt per five-axis ball-end operation (tool axis vectors
+    /// on every cutting move, [`axis_vectors`]) from the forces on the
+    /// job's stock: `p` becomes the re-oriented program (ball centres
+    /// kept; every other operation as it was). Returns what it did and
+    /// whether any operation was re-oriented.
     fn orient(&self, p: &mut Program) -> Result<(String, bool), JobError> {
         let (Some(mesh), Some(stock)) = (&self.inputs.part, &self.stock) else {
             return Err(JobError("orient: no part or stock".into()));
@@ -359,11 +376,22 @@ impl Job {
             &|_, _, _| {},
         )
         .map_err(|e| JobError(format!("orient: {e}")))?;
-        let said = if o.chosen.is_empty() {
-            "no operation re-oriented (none touches the part with a ball end)".to_string()
+        let five: Vec<bool> = p.operations.iter().map(axis_vectors).collect();
+        if o.program.operations.len() != five.len() {
+            return Err(JobError("orient: the operations changed in number".into()));
+        }
+        let mut out = o.program;
+        for ((new, old), five) in out.operations.iter_mut().zip(&p.operations).zip(&five) {
+            if !five {
+                *new = old.clone();
+            }
+        }
+        let chosen: Vec<_> = o.chosen.iter().filter(|c| five[c.operation]).collect();
+        let said = if chosen.is_empty() {
+            "no operation re-oriented (no five-axis ball-end operation touches the part)"
+                .to_string()
         } else {
-            let ops: Vec<String> = o
-                .chosen
+            let ops: Vec<String> = chosen
                 .iter()
                 .map(|c| {
                     format!(
@@ -379,8 +407,8 @@ impl Job {
                 .collect();
             ops.join("; ")
         };
-        let changed = !o.chosen.is_empty();
-        *p = o.program;
+        let changed = !chosen.is_empty();
+        *p = out;
         Ok((said, changed))
     }
 

@@ -398,9 +398,9 @@ pub struct MoveForces {
     /// speed pass has raised the speed, the feed alone cannot always bring
     /// the power back down.
     pub speed_share: Option<f64>,
-    /// Its samples' loads less and plus [`EARLY_MARGIN`] times their
-    /// estimated error, on the grid each stopped at, the largest of each
-    /// ([`Bound`]).
+    /// In a [`LimitUse::Coarse`] run (zero in any other): its samples'
+    /// loads less and plus [`EARLY_MARGIN`] times their estimated error,
+    /// the largest of each ([`Bound`]).
     #[serde(skip)]
     pub low: Bound,
     #[serde(skip)]
@@ -532,17 +532,17 @@ impl ForceRun {
         s
     }
 
-    /// The largest loads over every move.
-    /// The largest of the moves' [`MoveForces::floor`]: below it the
-    /// program's largest converged loads cannot lie.
+    /// The largest of the moves' [`MoveForces::low`]: the program's
+    /// largest converged loads do not lie below it by the error estimate.
     pub fn floor(&self) -> Bound {
         let mut f = Bound::default();
         for m in &self.moves {
-            f.raise(m.low.fxy, m.low.torque, m.low.power);
+            f.raise(&m.low);
         }
         f
     }
 
+    /// The largest loads over every move.
     pub fn maxima(&self) -> Maxima {
         let mut x = Maxima::default();
         for m in &self.moves {
@@ -609,10 +609,11 @@ pub enum LimitUse<'a> {
     /// Only the program's largest loads are wanted (limits learned from
     /// the input, the figures before a pass): a sample is refined only
     /// where it may reach `floor` ([`ForceRun::floor`] of a
-    /// [`LimitUse::Coarse`] run, below which the program's largest F_xy,
-    /// torque and power cannot lie) or its move's largest so far. The
-    /// program's largest loads come out as in a [`LimitUse::None`] run;
-    /// a move that cannot reach them carries the coarsest grid's error.
+    /// [`LimitUse::Coarse`] run, below which the program's largest loads do
+    /// not lie by the error estimate) or its move's largest so far. The
+    /// program's largest loads come out as in a [`LimitUse::None`] run
+    /// within that estimate; a move that cannot reach them carries the
+    /// coarsest grid's error.
     Largest {
         floor: Bound,
         /// By move index: the moves whose samples may reach `floor` (the
@@ -666,29 +667,50 @@ pub fn simulate(
     simulate_in_parts(program, strokes, stock, setup, schedule, progress, MIN_PART)
 }
 
-/// A bound on F_xy (N), torque (N·mm) and power (W): from below, loads the
-/// program's (or a move's) largest converged loads cannot lie under (its
-/// samples' loads less [`EARLY_MARGIN`] times their estimated error); from
-/// above, loads its samples' converged loads cannot exceed (plus that
-/// error), exactly as [`settled`] compares them.
+/// A bound on F_xy (N), torque (N·mm), power (W), stress (MPa) and
+/// deflection (mm), each tool's stress and deflection from its own
+/// cantilever: from below, loads the program's (or a move's) largest
+/// converged loads do not lie under by the error estimate (its samples'
+/// loads less [`EARLY_MARGIN`] times their estimated error); from above,
+/// loads its samples' converged loads do not exceed (plus that error), as
+/// [`settled`] compares them.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Bound {
     pub fxy: f64,
     pub torque: f64,
     pub power: f64,
+    pub stress: f64,
+    pub deflection: f64,
 }
 
 impl Bound {
-    fn raise(&mut self, fxy: f64, torque: f64, power: f64) {
-        self.fxy = self.fxy.max(fxy);
-        self.torque = self.torque.max(torque);
-        self.power = self.power.max(power);
+    /// The five of `l` times `k`.
+    fn of(l: &Loads, k: f64) -> Bound {
+        Bound {
+            fxy: l.fxy_max * k,
+            torque: l.torque_max * k,
+            power: l.power_w * k,
+            stress: l.stress_mpa * k,
+            deflection: l.deflection_mm * k,
+        }
     }
 
-    /// Whether loads bounded above by `self` may reach `floor` in any of
-    /// the three (else [`settled`] stops every sample below it).
+    fn raise(&mut self, b: &Bound) {
+        self.fxy = self.fxy.max(b.fxy);
+        self.torque = self.torque.max(b.torque);
+        self.power = self.power.max(b.power);
+        self.stress = self.stress.max(b.stress);
+        self.deflection = self.deflection.max(b.deflection);
+    }
+
+    /// Whether loads bounded above by `self` reach `floor` in any of the
+    /// five (else every sample below it is settled by [`under_floor`]).
     fn reaches(&self, floor: &Bound) -> bool {
-        !(self.fxy < floor.fxy && self.torque < floor.torque && self.power < floor.power)
+        !(self.fxy < floor.fxy
+            && self.torque < floor.torque
+            && self.power < floor.power
+            && self.stress < floor.stress
+            && self.deflection < floor.deflection)
     }
 }
 
@@ -1025,9 +1047,8 @@ fn stroke_forces(
         let most = (m.fxy_max, m.torque_max, m.power_w);
         let below = |e: &millplan_models::force::Evaluation| match schedule {
             LimitUse::Coarse => true,
-            LimitUse::Largest { floor: f, .. } => {
-                settled(e, most, None, &tf.holding)
-                    || settled(e, (f.fxy, f.torque, f.power), None, &tf.holding)
+            LimitUse::Largest { floor, .. } => {
+                settled(e, most, None, &tf.holding) || under_floor(e, &floor, &tf.holding)
             }
             _ => settled(e, most, limits.as_ref(), &tf.holding),
         };
@@ -1049,7 +1070,9 @@ fn stroke_forces(
             conv.evaluate_at(&cut).summary()
         };
         m.mean.add(&sum);
-        bound(m, &conv.evaluation);
+        if matches!(schedule, LimitUse::Coarse) {
+            bound(m, &conv.evaluation, &tf.holding);
+        }
         m.merge(
             &sum,
             &Loads::new(&sum, &tf.holding),
@@ -1076,14 +1099,24 @@ fn stroke_forces(
 /// Raises the move's [`Bound`]s to the sample evaluated as `e`: its loads
 /// less and plus [`EARLY_MARGIN`] times their estimated error (the
 /// factor [`settled`] compares with).
-fn bound(m: &mut MoveForces, e: &millplan_models::force::Evaluation) {
-    let s = e.summary();
+fn bound(m: &mut MoveForces, e: &millplan_models::force::Evaluation, holding: &Cantilever) {
+    let l = Loads::new(&e.summary(), holding);
     let err = EARLY_MARGIN * (e.error_dz + e.error_dphi);
-    let (lo, hi) = ((1.0 - err).max(0.0), 1.0 + err);
-    m.low
-        .raise(s.fxy_max * lo, s.torque_max * lo, s.power_w * lo);
-    m.high
-        .raise(s.fxy_max * hi, s.torque_max * hi, s.power_w * hi);
+    m.low.raise(&Bound::of(&l, (1.0 - err).max(0.0)));
+    m.high.raise(&Bound::of(&l, 1.0 + err));
+}
+
+/// Whether a sample evaluated as `e` stays below `floor` in all five loads
+/// with [`EARLY_MARGIN`] times its estimated error: it cannot decide any of
+/// the program's largest loads (the comparison [`Bound::reaches`] makes
+/// from the move's [`MoveForces::high`]).
+fn under_floor(
+    e: &millplan_models::force::Evaluation,
+    floor: &Bound,
+    holding: &Cantilever,
+) -> bool {
+    let l = Loads::new(&e.summary(), holding);
+    !Bound::of(&l, 1.0 + EARLY_MARGIN * (e.error_dz + e.error_dphi)).reaches(floor)
 }
 
 /// How many times its estimated error a sample's loads must stay below the

@@ -129,7 +129,10 @@ fn the_largest_loads_come_out_as_when_every_move_is_converged() {
     let stock2 = stock.clone();
     let coarse = simulate(&p, &s, stock, &setup(), LimitUse::Coarse, &|_| {}).expect("runs");
     let (a, b) = (all.maxima(), largest.maxima());
-    assert_eq!((a.fxy, a.torque, a.power), (b.fxy, b.torque, b.power));
+    assert_eq!(
+        (a.fxy, a.torque, a.power, a.stress, a.deflection),
+        (b.fxy, b.torque, b.power, b.stress, b.deflection)
+    );
     let floor = coarse.floor();
     assert!(
         floor.fxy > 0.5 * a.fxy && floor.fxy <= a.fxy,
@@ -147,12 +150,18 @@ fn the_largest_loads_come_out_as_when_every_move_is_converged() {
                 y.line
             );
         } else {
+            // Converged where a sample may decide the program's largest
+            // loads, else on the coarsest grid: within its error.
             again += usize::from(!x.rapid);
-            assert_eq!(
-                (x.fxy_max, x.torque_max, x.power_w),
-                (y.fxy_max, y.torque_max, y.power_w),
-                "line {}",
-                y.line
+            let near = |u: f64, v: f64| (u - v).abs() <= 0.05 * v + 1e-9;
+            assert!(
+                near(y.fxy_max, x.fxy_max) && near(y.torque_max, x.torque_max),
+                "line {}: {} {} against {} {}",
+                y.line,
+                y.fxy_max,
+                y.torque_max,
+                x.fxy_max,
+                x.torque_max
             );
         }
     }

@@ -813,8 +813,10 @@ fn a_five_axis_ball_program_is_leaned_on_the_stock_with_its_centres_kept() {
     let j = json(&o);
     let orient = pass(&j, "orient");
     assert_eq!(orient["ran"], true, "{j}");
+    let said = orient["reason"].as_str().expect("said");
+    // The speeds follow the turned axes.
     assert!(
-        orient["reason"].as_str().expect("said").contains("lead"),
+        said.contains("lead") && said.contains("spindle"),
         "{orient}"
     );
     assert_eq!(pass(&j, "feed")["ran"], true, "{j}");
@@ -905,4 +907,76 @@ fn a_five_axis_ball_program_is_leaned_on_the_stock_with_its_centres_kept() {
     let tips: Vec<_> = checks.iter().filter(|c| c["name"] == "tip").collect();
     assert_eq!(tips.len(), 1, "{j}");
     assert_eq!(tips[0]["ok"], true, "{j}");
+    // A program of a three-axis and a five-axis operation (the CL reader
+    // keeps a tool axis from one operation to the next, so the three-axis
+    // one comes first; the five-axis one runs between its passes, 5 mm
+    // over in y): only the five-axis one is leaned, the other written as
+    // it was.
+    let mixed = d.join("mixed.apt");
+    let body = |t: &str| {
+        t.lines()
+            .filter(|l| !l.starts_with("FINI"))
+            .map(|l| format!("{l}\n"))
+            .collect::<String>()
+    };
+    let five: String = std::fs::read_to_string(&apt)
+        .expect("written")
+        .lines()
+        .map(|l| match l.strip_prefix("GOTO/") {
+            Some(r) => {
+                let mut v: Vec<String> = r.split(',').map(str::to_string).collect();
+                let y: f64 = v[1].parse().expect("y");
+                v[1] = format!("{}", y + 5.0);
+                format!("GOTO/{}\n", v.join(","))
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    std::fs::write(&mixed, body(&text) + &body(&five) + "FINI\n").expect("write");
+    let out = d.join("mixed_out.apt");
+    let mut args = vec!["optimise", s(&mixed)];
+    args.extend(common);
+    args.extend([
+        "--resolution",
+        "0.2",
+        "--passes",
+        "orient",
+        "--force",
+        "-q",
+        "-o",
+        s(&out),
+    ]);
+    let o = run(&args);
+    assert!(
+        matches!(o.status.code(), Some(0 | 3)),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let (input, output) = (read(&mixed), read(&out));
+    assert_eq!(input.operations.len(), 2, "two operations");
+    let axes = |op: &millplan_nc::Operation| {
+        op.moves
+            .iter()
+            .filter(|m| m.is_cutting())
+            .map(|m| op.orient(m).and_then(|o| o.axis))
+            .collect::<Vec<_>>()
+    };
+    assert!(axes(&input.operations[0]).iter().all(Option::is_none));
+    assert!(axes(&output.operations[0]).iter().all(Option::is_none));
+    assert_eq!(
+        gotos_of(&input.operations[0]),
+        gotos_of(&output.operations[0])
+    );
+    assert!(axes(&output.operations[1])
+        .iter()
+        .any(|a| a.is_some_and(|v| v.z < 0.999_999)));
+}
+
+/// The cutting positions of an operation.
+fn gotos_of(op: &millplan_nc::Operation) -> Vec<millplan_geom::DVec3> {
+    op.moves
+        .iter()
+        .filter(|m| m.is_cutting())
+        .map(|m| m.end)
+        .collect()
 }
