@@ -673,7 +673,7 @@ pub fn simulate(
 /// converged loads do not lie under by the error estimate (its samples'
 /// loads less [`EARLY_MARGIN`] times their estimated error); from above,
 /// loads its samples' converged loads do not exceed (plus that error), as
-/// [`settled`] compares them.
+/// the refinement compares them.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Bound {
     pub fxy: f64,
