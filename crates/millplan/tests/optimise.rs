@@ -852,24 +852,7 @@ fn a_five_axis_ball_program_is_leaned_on_the_stock_with_its_centres_kept() {
     // The orient pass alone (written whatever its loads say) is `millplan
     // orient --stock` with the job's allowance and resolution.
     let (alone, cmd) = (d.join("alone.apt"), d.join("cmd.apt"));
-    let mut args = vec!["optimise", s(&apt)];
-    args.extend(common);
-    args.extend([
-        "--resolution",
-        "0.2",
-        "--passes",
-        "orient",
-        "--force",
-        "-q",
-        "-o",
-        s(&alone),
-    ]);
-    let o = run(&args);
-    assert!(
-        matches!(o.status.code(), Some(0 | 3)),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    orient_alone(&apt, &common, &alone);
     let mut args = vec!["orient", s(&apt)];
     args.extend(common);
     args.extend(["--resolution", "0.2", "--ap", "0.3", "-q", "-o", s(&cmd)]);
@@ -934,24 +917,7 @@ fn a_five_axis_ball_program_is_leaned_on_the_stock_with_its_centres_kept() {
         .collect();
     std::fs::write(&mixed, body(&text) + &body(&five) + "FINI\n").expect("write");
     let out = d.join("mixed_out.apt");
-    let mut args = vec!["optimise", s(&mixed)];
-    args.extend(common);
-    args.extend([
-        "--resolution",
-        "0.2",
-        "--passes",
-        "orient",
-        "--force",
-        "-q",
-        "-o",
-        s(&out),
-    ]);
-    let o = run(&args);
-    assert!(
-        matches!(o.status.code(), Some(0 | 3)),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    orient_alone(&mixed, &common, &out);
     let (input, output) = (read(&mixed), read(&out));
     assert_eq!(input.operations.len(), 2, "two operations");
     let axes = |op: &millplan_nc::Operation| {
@@ -970,6 +936,21 @@ fn a_five_axis_ball_program_is_leaned_on_the_stock_with_its_centres_kept() {
     assert!(axes(&output.operations[1])
         .iter()
         .any(|a| a.is_some_and(|v| v.z < 0.999_999)));
+}
+
+/// `optimise --passes orient` of `apt` into `out`, written whatever its
+/// checks say (`--force`), with the options `common` at 0.2 mm.
+fn orient_alone(apt: &Path, common: &[&str], out: &Path) {
+    let mut args = vec!["optimise", s(apt)];
+    args.extend(common);
+    args.extend(["--resolution", "0.2", "--passes", "orient", "--force"]);
+    args.extend(["-q", "-o", s(out)]);
+    let o = run(&args);
+    assert!(
+        matches!(o.status.code(), Some(0 | 3)),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 }
 
 /// The cutting positions of an operation.
