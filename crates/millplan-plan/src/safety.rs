@@ -633,14 +633,40 @@ fn posted_tip(op: &Operation, m: &millplan_nc::Move, k: &Kinematics, tcp: bool) 
     if tcp {
         return Some(part_point(op, end));
     }
+    Some(k.tip(&posted_joints(op, m, k)?))
+}
+
+/// The machine position a posted move ends at (no TCP).
+fn posted_joints(op: &Operation, m: &millplan_nc::Move, k: &Kinematics) -> Option<Joints> {
+    let end = known(m.end)?;
     let [f, s] = k.kind.rotary_names().map(letter_index);
     let angles = op.orient(m).map_or([None; 3], |o| o.angles);
-    let j = Joints {
+    Some(Joints {
         xyz: end,
         first: angles[f].unwrap_or(0.0).to_degrees(),
         second: angles[s].unwrap_or(0.0).to_degrees(),
+    })
+}
+
+/// How far the tip strays, inside the block from the machine position `a`
+/// to that of `m`, from the input's moves `sg` of its line: the axes move
+/// in straight lines, the tip is sampled where the post samples it
+/// ([`crate::post::feed::tip_samples`]); 0 when the rotaries do not turn.
+fn inner_deviation(
+    op: &Operation,
+    a: &Joints,
+    m: &millplan_nc::Move,
+    k: &Kinematics,
+    sg: &[(DVec3, DVec3)],
+) -> f64 {
+    let Some(b) = posted_joints(op, m, k) else {
+        return 0.0;
     };
-    Some(k.tip(&j))
+    crate::post::feed::tip_samples(k, a, &b).map_or(0.0, |v| {
+        v.iter()
+            .map(|&t| line_distance(t, sg, false))
+            .fold(0.0, f64::max)
+    })
 }
 
 /// Distance from `p` to the segment `a`–`b`.
@@ -803,6 +829,31 @@ fn tip_moved_by(input: &Program, output: &Program, k: &Kinematics, tol: f64) -> 
     let mut unmatched = 0usize;
     for op in &output.operations {
         let tcp = op.events.iter().any(|e| e.kind == EventKind::Tcp(true));
+        // Without TCP the control moves the axes in straight lines: the tip
+        // between a block's ends must stay on the input's move too (a
+        // branch change inside a cut keeps both ends on it). Seven
+        // kinematics a block, so the blocks are shared over the threads.
+        let inner: Vec<f64> = if tcp {
+            Vec::new()
+        } else {
+            use rayon::prelude::*;
+            (0..op.moves.len())
+                .into_par_iter()
+                .map(|i| {
+                    let m = &op.moves[i];
+                    let sg = segs.of_line(m.line);
+                    let from = i
+                        .checked_sub(1)
+                        .and_then(|p| posted_joints(op, &op.moves[p], k));
+                    match from {
+                        Some(a) if m.kind != MoveKind::Rapid && !sg.is_empty() => {
+                            inner_deviation(op, &a, m, k, sg)
+                        }
+                        _ => 0.0,
+                    }
+                })
+                .collect()
+        };
         for (i, m) in op.moves.iter().enumerate() {
             if m.kind == MoveKind::Rapid {
                 continue;
@@ -815,6 +866,17 @@ fn tip_moved_by(input: &Program, output: &Program, k: &Kinematics, tol: f64) -> 
                 continue;
             };
             c.checked += 1;
+            let inner = inner.get(i).copied().unwrap_or(0.0);
+            if inner > tol {
+                c.findings.push(Finding {
+                    line: line_of(m.line),
+                    message: format!(
+                        "the tip inside the block, by forward kinematics with the axes moving in straight lines, is {inner:.4} mm from the input's move (tolerance {tol} mm)"
+                    ),
+                    in_input: false,
+                });
+                continue;
+            }
             let last = op.moves.get(i + 1).is_none_or(|n| n.line != m.line);
             let d = line_distance(t, sg, last);
             if d > tol {

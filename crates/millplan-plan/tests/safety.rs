@@ -497,6 +497,46 @@ fn posted_tips_are_checked_through_forward_kinematics() {
     let t = tip(&moved);
     assert!(!t.ok);
     assert_eq!(t.findings[0].line, Some(line));
+    // A block that changes branch inside the cut: the same tip at its end
+    // (A and C of the other solution, X, Y and Z solved for the tip), the
+    // rotaries swinging the tip far off the path in between. Both ends
+    // pass; the tip inside the block does not.
+    let mut flipped = posted.program.clone();
+    let op = &mut flipped.operations[0];
+    let i = op.moves.len() - 5;
+    let (m, angles) = (op.moves[i], op.orient(&op.moves[i]).expect("angles").angles);
+    let (a, c) = (angles[0].expect("A"), angles[2].expect("C"));
+    let joints = |xyz: DVec3, a: f64, c: f64| millplan_models::kinematics::Joints {
+        xyz,
+        first: a.to_degrees(),
+        second: c.to_degrees(),
+    };
+    let want = kin.tip(&joints(m.end, a, c));
+    let (a2, c2) = (-a, c + std::f64::consts::PI);
+    // The tip is affine in X, Y and Z at fixed angles: one linear solve.
+    let at = |xyz: DVec3| kin.tip(&joints(xyz, a2, c2));
+    let base = at(m.end);
+    let jac = millplan_geom::DMat3::from_cols(
+        at(m.end + DVec3::X) - base,
+        at(m.end + DVec3::Y) - base,
+        at(m.end + DVec3::Z) - base,
+    );
+    let end = m.end + jac.inverse() * (want - base);
+    assert!((at(end) - want).length() < 1e-9);
+    let id = op.intern_orient(Orient {
+        axis: None,
+        angles: [Some(a2), None, Some(c2)],
+    });
+    op.moves[i].end = end;
+    op.moves[i].orient = Some(id);
+    let t = tip(&flipped);
+    assert!(!t.ok, "{t:#?}");
+    assert_eq!(t.findings[0].line, Some(op_line(&flipped, i)), "{t:#?}");
+    assert!(
+        t.findings[0].message.contains("inside the block"),
+        "{}",
+        t.findings[0].message
+    );
     // Under TCP the tips are written as they are.
     let tcp = post(
         &input,
@@ -508,6 +548,11 @@ fn posted_tips_are_checked_through_forward_kinematics() {
     )
     .expect("posts under TCP");
     assert!(tip(&tcp.program).ok);
+}
+
+/// The source line of move `i` of the first operation.
+fn op_line(p: &Program, i: usize) -> u32 {
+    p.operations[0].moves[i].line
 }
 
 #[test]
