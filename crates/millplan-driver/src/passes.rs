@@ -168,10 +168,10 @@ pub fn missing(job: &Job, pass: PassName) -> Option<String> {
         PassName::Feed if job.stock.is_none() => "no stock (--stock)",
         PassName::Feed if job.setup.is_none() => "no material (--material)",
         PassName::Post if !five_axis(job) => "a three-axis program: nothing to post",
+        PassName::Post if !i.machine_given => "no machine file (--machine)",
         PassName::Post if i.machine.kinematics().is_none() => {
             "the machine file has no [kinematics]"
         }
-        PassName::Post if !i.machine_given => "no machine file (--machine)",
         _ => return None,
     };
     Some(why.to_string())
