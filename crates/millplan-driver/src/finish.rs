@@ -46,6 +46,9 @@ pub struct Summary {
     pub settings: Vec<Setting>,
     pub dialect: String,
     pub moves: usize,
+    /// Whether the program written is the input as it was (no pass
+    /// changed it).
+    pub input_unchanged: bool,
     /// `optimise --robot`: what the compensation pass found and left
     /// (absent without it).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -278,6 +281,7 @@ impl Job {
             settings: self.settings.clone(),
             dialect: wo.target.name().to_string(),
             moves: o.program.move_count(),
+            input_unchanged: o.program == self.inputs.program,
             robot: None,
         };
         s.level = crate::report::level(&s);

@@ -82,8 +82,28 @@ pub fn verdict_line(s: &Summary) -> String {
         (Verdict::Refused, Some((check, line, m))) => {
             format!("Refused: check `{check}` failed at line {line}: {m}; {t}")
         }
-        (Verdict::Improved, _) => format!("Improved: {t}, every check passed"),
-        _ => format!("Kept: nothing measured better ({t}); every check passed"),
+        (Verdict::Improved, _) => {
+            let faster = s.time_after_s < s.time_before_s * (1.0 - 1e-3);
+            let vc = match (s.vc_off_before, s.vc_off_after) {
+                (Some(b), Some(a)) if a < b - 1e-3 => Some(format!(
+                    "points off the cutting speed {:.1} % → {:.1} %",
+                    100.0 * b,
+                    100.0 * a
+                )),
+                _ => None,
+            };
+            match (faster, vc) {
+                (true, Some(v)) => format!("Improved: {t}, {v}, every check passed"),
+                (false, Some(v)) => format!("Improved: {v} ({t}), every check passed"),
+                _ => format!("Improved: {t}, every check passed"),
+            }
+        }
+        _ if s.input_unchanged => {
+            format!("Kept: nothing measured better ({t}); every check passed")
+        }
+        _ => format!(
+            "Kept: nothing measured better ({t}); the passes' program is written, every check passed"
+        ),
     }
 }
 
@@ -277,9 +297,18 @@ pub fn evidence(s: &Summary) -> Evidence {
             ));
         }
     }
+    // Not better, yet changed: the program written is the passes', so the
+    // input is not what is kept; say what did not get better instead.
+    let kept = s.verdict == Verdict::Kept;
+    if kept && !s.input_unchanged && worse.is_empty() {
+        worse.push(format!(
+            "nothing measured better than the input (cycle time {:.1} → {:.1} s)",
+            s.time_before_s, s.time_after_s
+        ));
+    }
     Evidence {
         failed,
-        kept: s.verdict == Verdict::Kept,
+        kept: kept && s.input_unchanged,
         worse,
     }
 }
@@ -389,4 +418,62 @@ fn robot_section(r: &crate::robot_pass::RobotSummary) -> String {
     }
     h.push_str("</table></section>");
     h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn summary(verdict: Verdict, times: (f64, f64), vc: (f64, f64), unchanged: bool) -> Summary {
+        Summary {
+            verdict,
+            level: millplan_report::html::Level::Green,
+            passes: Vec::new(),
+            time_before_s: times.0,
+            time_after_s: times.1,
+            max_before: None,
+            max_after: None,
+            vc_off_before: Some(vc.0),
+            vc_off_after: Some(vc.1),
+            checks: Vec::new(),
+            settings: Vec::new(),
+            dialect: "fanuc".into(),
+            moves: 10,
+            input_unchanged: unchanged,
+            robot: None,
+        }
+    }
+
+    /// "Kept" says the input is kept only when the program written is the
+    /// input; a changed program that measures no better says so instead.
+    #[test]
+    fn kept_means_the_input_only_when_it_is_written_unchanged() {
+        let same = summary(Verdict::Kept, (10.0, 10.0), (0.5, 0.5), true);
+        assert!(evidence(&same).kept);
+        assert!(!verdict_line(&same).contains("passes' program"));
+        let changed = summary(Verdict::Kept, (10.0, 10.0), (0.5, 0.5), false);
+        let e = evidence(&changed);
+        assert!(!e.kept);
+        assert!(
+            e.worse[0].contains("nothing measured better"),
+            "{:?}",
+            e.worse
+        );
+        assert!(verdict_line(&changed).contains("the passes' program is written"));
+        assert_eq!(level(&changed), millplan_report::html::Level::Amber);
+    }
+
+    /// An improvement names the measure that improved, not a cycle time
+    /// that grew.
+    #[test]
+    fn improved_names_what_improved() {
+        let vc_only = summary(Verdict::Improved, (34.9, 68.0), (0.9, 0.1), false);
+        let line = verdict_line(&vc_only);
+        assert!(
+            line.starts_with("Improved: points off the cutting speed 90.0 % → 10.0 %"),
+            "{line}"
+        );
+        let both = summary(Verdict::Improved, (20.0, 10.0), (0.9, 0.1), false);
+        assert!(verdict_line(&both).starts_with("Improved: cycle time 20.0 s → 10.0 s"));
+    }
 }
