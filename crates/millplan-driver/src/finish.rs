@@ -117,8 +117,33 @@ impl Job {
             position: self.tol.max(Tolerance::default().position),
             ..Tolerance::default()
         };
-        let back = read_back(&bytes, wo.target, program, &tol)
-            .map_err(|e| JobError(format!("the program written does not read back: {e}")))?;
+        let back = match read_back(&bytes, wo.target, program, &tol) {
+            Ok(b) => b,
+            // A failed check like any other: refused, written with --force.
+            Err(e) => {
+                let check = Check {
+                    name: "read-back",
+                    ok: false,
+                    checked: 0,
+                    unit: "steps",
+                    skipped: None,
+                    findings: vec![safety::Finding {
+                        line: None,
+                        message: format!("the program written does not read back at its line {e}"),
+                        in_input: false,
+                    }],
+                };
+                let after = self.measure(program, None, &self.context());
+                let summary = self.summary(o, &after, vec![check], wo);
+                return Ok(Written {
+                    bytes,
+                    warnings,
+                    summary,
+                    forces_after: None,
+                    program: program.clone(),
+                });
+            }
+        };
         let mut list = vec![safety::read_back_check(&back)];
         let mut read = back.program;
         checks::same_tools(&mut read, program);

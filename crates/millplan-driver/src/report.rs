@@ -79,6 +79,9 @@ pub fn verdict_line(s: &Summary) -> String {
         pct(s.time_before_s, s.time_after_s)
     );
     match (s.verdict, s.refusal()) {
+        (Verdict::Refused, Some((check, 0, m))) => {
+            format!("Refused: check `{check}` failed: {m}; {t}")
+        }
         (Verdict::Refused, Some((check, line, m))) => {
             format!("Refused: check `{check}` failed at line {line}: {m}; {t}")
         }

@@ -570,12 +570,10 @@ pub fn failed_checks(checks: &[millplan_plan::safety::Check]) -> Vec<String> {
         .iter()
         .filter(|c| !c.ok)
         .map(|c| match c.findings.iter().find(|f| !f.in_input) {
-            Some(f) => format!(
-                "check {} at line {}: {}",
-                c.name,
-                f.line.unwrap_or(0),
-                f.message
-            ),
+            Some(f) => match f.line {
+                Some(line) => format!("check {} at line {line}: {}", c.name, f.message),
+                None => format!("check {}: {}", c.name, f.message),
+            },
             None => format!("check {}", c.name),
         })
         .collect()
