@@ -455,13 +455,17 @@ impl Stock {
             return false;
         }
         let row = &self.gaps[j];
-        if row.is_empty() {
-            return true;
-        }
-        match row.get(&(i as u32)) {
-            Some(g) => !g.iter().any(|[a, b]| z >= *a && z <= *b),
-            None => true,
-        }
+        row.is_empty() || !Self::in_gap(row, i, z)
+    }
+
+    /// Whether height `z` lies in a gap of column `i` of a row with gaps
+    /// (kept out of line: most stocks have none, and the force model asks
+    /// [`Stock::contains`] at every point of the edge).
+    #[cold]
+    #[inline(never)]
+    fn in_gap(row: &RowGaps, i: usize, z: f32) -> bool {
+        row.get(&(i as u32))
+            .is_some_and(|g| g.iter().any(|[a, b]| z >= *a && z <= *b))
     }
 
     /// Highest material, mm (−∞ for an empty stock).
@@ -550,7 +554,9 @@ impl Stock {
             })
             .collect();
         let mut cols = vec![f32::NEG_INFINITY; i1 - i0 + 1];
-        let mut m = f32::NEG_INFINITY;
+        // The highest top per column, material or not (reduced at the end:
+        // element-wise selects vectorise, a running maximum does not).
+        let mut highest = vec![f32::NEG_INFINITY; i1 - i0 + 1];
         let mut j = j0;
         while j <= j1 {
             let je = (j + t - 1).min(j1);
@@ -558,11 +564,11 @@ impl Stock {
             for jj in j..=je {
                 let k = jj * g.nx;
                 let (top, bot) = (&self.top[k + i0..=k + i1], &self.bot[k + i0..=k + i1]);
-                for ((c, t), b) in cols.iter_mut().zip(top).zip(bot) {
-                    m = m.max(*t);
-                    if *t > *b && *t > *c {
-                        *c = *t;
-                    }
+                for (((c, h), t), b) in cols.iter_mut().zip(&mut highest).zip(top).zip(bot) {
+                    let (t, b) = (*t, *b);
+                    *h = if t > *h { t } else { *h };
+                    let v = if t > b { t } else { f32::NEG_INFINITY };
+                    *c = if v > *c { v } else { *c };
                 }
             }
             let dy = 0.5 * (g.cy(j) + g.cy(je)) - centre.y;
@@ -598,7 +604,7 @@ impl Stock {
             }
             j = je + 1;
         }
-        m as f64
+        highest.iter().fold(f32::NEG_INFINITY, |a, b| a.max(*b)) as f64
     }
 
     /// Whether any cell has gaps.
