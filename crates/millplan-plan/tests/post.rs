@@ -12,7 +12,7 @@ use millplan_plan::post::feed::{
     inverse_time_f, sampled_deviation, segment_distance, tip_deviation, tip_path_length,
     tip_path_length_from, tip_samples,
 };
-use millplan_plan::post::ik::{is_flip, roles, Cand};
+use millplan_plan::post::ik::{changes_side, closest_to_pole, is_flip, roles, Cand};
 use millplan_plan::post::{post, PostError, PostOptions, Posted};
 
 /// One CL record: rapid or not, tip, tool axis (normalised when written).
@@ -733,4 +733,83 @@ fn sampled_tip_length_is_the_tip_length_to_the_bit() {
             "{turn}"
         );
     }
+}
+
+/// A leaned ball-end raster (`millplan orient` on the demo part) turns its
+/// near-vertical tool axis by 110° about the pole from one row to the next,
+/// 2.2° from it at the closest, outside the 0.5° pole cone. Taking the tilt
+/// to its other side there (A from +7° to −3°, C by 70° instead of 110°) is
+/// the other IK branch: the axis would pass through the pole, which the CL
+/// never does, and the linearisation halving toward it left blocks a few µm
+/// long whose tip swept tens of mm off the path. The cut keeps its side,
+/// and every block's tip stays on the CL line.
+#[test]
+fn a_cut_passing_near_the_pole_keeps_its_branch() {
+    let recs: Vec<Rec> = vec![
+        (
+            false,
+            [0.673849, 7.23676, 0.149427],
+            [-0.134769718, 0.152648082, 0.979048357],
+        ),
+        (
+            false,
+            [0.639085, 8.235919, 0.1414],
+            [-0.127816923, 0.152816228, 0.979954098],
+        ),
+        (
+            false,
+            [-0.190404, 9.940641, 0.041731],
+            [0.03808071, 0.011871814, 0.999204143],
+        ),
+        (
+            false,
+            [0.805991, 9.901635, 0.155743],
+            [0.038801793, 0.019673088, 0.999053247],
+        ),
+    ];
+    let p = program(&recs, 2000.0);
+    let kin = Kinematics {
+        rot_point: [0.0, 0.0, -120.0],
+        first: RotaryAxis {
+            min: Some(-120.0),
+            max: Some(30.0),
+            sign: 1.0,
+        },
+        ..Kinematics::new(KinKind::TableAc)
+    };
+    let ro = roles(KinKind::TableAc);
+    let near = closest_to_pole(
+        ro,
+        DVec3::from_array(recs[1].2).normalize(),
+        DVec3::from_array(recs[2].2).normalize(),
+    );
+    assert!(
+        near > 1.0 && near < 3.0,
+        "the CL passes {near}° from the pole"
+    );
+    let o = PostOptions {
+        pole_cone: 0.5,
+        pole_tol: 0.5,
+        ..PostOptions::default()
+    };
+    let posted = post(&p, &machine(kin.clone()), &o).expect("posts");
+    let op = &posted.program.operations[0];
+    let cand = |j: &Joints| Cand {
+        first: j.first,
+        second: j.second,
+        dev: 0.0,
+    };
+    for i in 1..op.moves.len() {
+        let (a, b) = (joints_of(&kin, op, i - 1), joints_of(&kin, op, i));
+        assert!(
+            !changes_side(ro, &cand(&a), &cand(&b)),
+            "block {i}: A {} -> {} changes side in the cut",
+            a.first,
+            b.first
+        );
+        let (ta, tb) = (kin.forward(&a).0, kin.forward(&b).0);
+        let dev = tip_deviation(&kin, &a, &b, ta, tb);
+        assert!(dev <= o.tol, "block {i}: the tip strays {dev} mm inside it");
+    }
+    assert_round_trip(&kin, &cl_of(&p), &posted.program, 1e-6, 1e-6);
 }

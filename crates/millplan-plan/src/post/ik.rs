@@ -228,28 +228,67 @@ pub fn candidates(
     })
 }
 
+/// Which side of the pole the tilt of `c` puts the tool: sin t for a tilt
+/// from the pole at t = 0 (A/C, B/C, heads), cos t for the A/B table, whose
+/// pole is at B = ±90°; near 0 at the pole.
+#[inline]
+fn side(r: Roles, c: &Cand) -> f64 {
+    let (t, _) = split(r, c.first, c.second);
+    let t = t.to_radians();
+    if r.held_is_second {
+        t.sin()
+    } else {
+        t.cos()
+    }
+}
+
+/// Whether the tilt of `a` and of `b` put the tool on opposite sides of the
+/// pole (neither at it).
+#[inline]
+pub fn changes_side(r: Roles, a: &Cand, b: &Cand) -> bool {
+    let (sa, sb) = (side(r, a), side(r, b));
+    !(sa.abs() < 1e-6 || sb.abs() < 1e-6 || (sa > 0.0) == (sb > 0.0))
+}
+
 /// Whether the motion from `a` to `b` changes the IK branch: the two sides
 /// of the tilt differ (neither at the pole, where the tilt passes through
 /// zero continuously) while the held axis turns by 90° or more. Crossing the
 /// pole with the held axis still is no flip: the tilt passes through zero.
+/// (A change of side with a smaller turn is a change of branch too unless
+/// the tool axis passes the pole between the two points: the post asks
+/// [`closest_to_pole`] for that.)
 #[inline]
 pub fn is_flip(r: Roles, a: &Cand, b: &Cand) -> bool {
-    let (ta, ha) = split(r, a.first, a.second);
-    let (tb, hb) = split(r, b.first, b.second);
-    // Which side of the pole the tilt puts the tool: sin t for a tilt from
-    // the pole at t = 0 (A/C, B/C, heads), cos t for the A/B table, whose
-    // pole is at B = ±90°.
-    let side = |t: f64| {
-        let t = t.to_radians();
-        if r.held_is_second {
-            t.sin()
-        } else {
-            t.cos()
-        }
-    };
-    let (sa, sb) = (side(ta), side(tb));
-    if sa.abs() < 1e-6 || sb.abs() < 1e-6 || (sa > 0.0) == (sb > 0.0) {
+    if !changes_side(r, a, b) {
         return false;
     }
+    let (_, ha) = split(r, a.first, a.second);
+    let (_, hb) = split(r, b.first, b.second);
     wrap180(hb - ha).abs() >= 90.0
+}
+
+/// The smallest angle, degrees, between the pole (either end) and the tool
+/// axis as it turns on the great circle from unit `a` to unit `b` (the
+/// path [`crate::post`]'s `axis_at` interpolates): whether a move passes
+/// the pole, where the tilt may change side without a change of branch.
+pub fn closest_to_pole(r: Roles, a: DVec3, b: DVec3) -> f64 {
+    let p = DVec3::from_array(r.pole);
+    // The cosine of the angle to the nearer end of the pole, largest over
+    // the arc: at an end, or where the circle comes closest, if that lies
+    // between the ends.
+    let mut cos = a.dot(p).abs().max(b.dot(p).abs());
+    let n = a.cross(b);
+    if n.length() > 1e-12 {
+        let n = n.normalize();
+        for q in [p, -p] {
+            let v = q - n * q.dot(n);
+            if v.length() > 1e-12 {
+                let v = v.normalize();
+                if a.cross(v).dot(n) >= 0.0 && v.cross(b).dot(n) >= 0.0 {
+                    cos = cos.max(v.dot(q));
+                }
+            }
+        }
+    }
+    cos.clamp(-1.0, 1.0).acos().to_degrees()
 }

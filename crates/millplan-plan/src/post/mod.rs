@@ -13,7 +13,10 @@
 //!    rotary travel in degrees (wrapped for an endless axis), a branch flip
 //!    ([`ik::is_flip`]) costs a penalty and is forbidden outright on a
 //!    cutting move; a flip on a rapid gets a retract → rotate → approach
-//!    inserted at the clearance and is reported.
+//!    inserted at the clearance and is reported. A cut may take the tilt to
+//!    its other side only where its tool axis passes the pole (within the
+//!    pole cone, [`ik::closest_to_pole`]); elsewhere that is the other
+//!    branch too, and forbidden as a flip is.
 //! 4. **Linearisation** (§1.7.5, not under TCP, where the control keeps the
 //!    tip on the line): between two cutting points the joints move linearly
 //!    and the tip bows away from the CL segment; while its sampled distance
@@ -581,6 +584,7 @@ fn choose(
     off: &[u32],
     kin: &Kinematics,
     r: Roles,
+    cone: f64,
 ) -> Result<Vec<Cand>, PostError> {
     let n = cls.len();
     let mut back = vec![0u8; cands.len()];
@@ -595,6 +599,10 @@ fn choose(
         let (prev, cur) = (&cands[span(i - 1)], &cands[span(i)]);
         next.clear();
         let base = off[i] as usize;
+        // A cut whose tool axis does not pass the pole cannot take the
+        // tilt to its other side: that is the other branch, as a flip is.
+        let off_pole = !cls[i].rapid
+            && ik::closest_to_pole(r, cls[i - 1].k, cls[i].k) > cone.max(POLE_PASS_DEG);
         for (bi, b) in cur.iter().enumerate() {
             let mut best = f64::INFINITY;
             let mut arg = 0u8;
@@ -606,6 +614,8 @@ fn choose(
                     } else {
                         f64::INFINITY
                     };
+                } else if off_pole && ik::changes_side(r, a, b) {
+                    c = f64::INFINITY;
                 }
                 if c < best {
                     best = c;
@@ -644,9 +654,22 @@ fn choose(
     Ok(chosen)
 }
 
+/// The pole cone below which a cut is taken to pass the pole whatever the
+/// post's own cone (degrees): an axis through the pole, as computed.
+const POLE_PASS_DEG: f64 = 1e-4;
+
 /// The solution of `k` nearest the angles `near` (same windings as near as
-/// the travel allows), for a point inserted between two posted ones.
-fn nearest(kin: &Kinematics, r: Roles, k: DVec3, near: Cand, cone: f64) -> Cand {
+/// the travel allows), for a point inserted between the two posted ones
+/// `ends`: on their side of the pole when they share one (the branch the
+/// block runs on), whichever is nearer.
+fn nearest(
+    kin: &Kinematics,
+    r: Roles,
+    k: DVec3,
+    near: Cand,
+    cone: f64,
+    ends: (&Cand, &Cand),
+) -> Cand {
     let sols: Vec<Cand> = if in_pole(r, k, cone) {
         let (_, h) = ik::split(r, near.first, near.second);
         vec![ik::solve_tilt(kin, r, k, h)]
@@ -667,9 +690,13 @@ fn nearest(kin: &Kinematics, r: Roles, k: DVec3, near: Cand, cone: f64) -> Cand 
             dev: c.dev,
         })
         .min_by(|a, b| {
-            let da = (a.first - near.first).abs() + (a.second - near.second).abs();
-            let db = (b.first - near.first).abs() + (b.second - near.second).abs();
-            da.total_cmp(&db)
+            // Off the block's side last, then by distance.
+            let away =
+                |c: &Cand| !ik::changes_side(r, ends.0, ends.1) && ik::changes_side(r, ends.0, c);
+            let d = |c: &Cand| (c.first - near.first).abs() + (c.second - near.second).abs();
+            (away(a), d(a))
+                .partial_cmp(&(away(b), d(b)))
+                .unwrap_or(std::cmp::Ordering::Equal)
         })
         .unwrap_or(near)
 }
@@ -737,7 +764,7 @@ fn halve(
         second: 0.5 * (a.c.second + b.c.second),
         dev: 0.0,
     };
-    let c = nearest(kin, r, k, mid, o.pole_cone);
+    let c = nearest(kin, r, k, mid, o.pole_cone, (&a.c, &b.c));
     let m = Pt {
         cl: Cl { tip, k, ..b.cl },
         c,
@@ -764,7 +791,7 @@ fn post_operation(
     }
     let r = roles(kin.kind);
     let (cands, off, pole) = all_candidates(&cls, kin, r, o.pole_cone)?;
-    let chosen = choose(&cls, &cands, &off, kin, r)?;
+    let chosen = choose(&cls, &cands, &off, kin, r, o.pole_cone)?;
     drop((cands, off));
     // Room for the points linearisation inserts (memory not touched
     // until then): they are merged into this array.
