@@ -14,6 +14,7 @@ use millplan_plan::post::feed::{
 };
 use millplan_plan::post::ik::{changes_side, closest_to_pole, is_flip, roles, Cand};
 use millplan_plan::post::{post, PostError, PostOptions, Posted};
+use millplan_plan::timing::Planner;
 
 /// One CL record: rapid or not, tip, tool axis (normalised when written).
 type Rec = (bool, [f64; 3], [f64; 3]);
@@ -812,4 +813,40 @@ fn a_cut_passing_near_the_pole_keeps_its_branch() {
         assert!(dev <= o.tol, "block {i}: the tip strays {dev} mm inside it");
     }
     assert_round_trip(&kin, &cl_of(&p), &posted.program, 1e-6, 1e-6);
+}
+
+/// A block can take no less than the control's block cycle: a cut of a few
+/// µm (as the linearisation leaves where it halves toward the pole cone's
+/// edge) at 2000 mm/min would ask G93 for F 4·10⁵ (a 0.15 ms block) where
+/// the control needs 1 ms; the post writes what the control will do,
+/// F = 1/(1 ms) = 60 000 1/min, and counts the block as slowed.
+#[test]
+fn no_block_is_posted_shorter_than_the_block_cycle() {
+    let recs: Vec<Rec> = vec![
+        (false, [0.0, 0.0, 0.0], [0.1, 0.0, 1.0]),
+        (false, [10.0, 0.0, 0.0], [0.1, 0.0, 1.0]),
+        (false, [10.005, 0.0, 0.0], [0.1, 0.0, 1.0]),
+        (false, [20.0, 0.0, 0.0], [0.1, 0.0, 1.0]),
+    ];
+    let p = program(&recs, 2000.0);
+    let o = PostOptions {
+        g93: true,
+        ..PostOptions::default()
+    };
+    let f_of = |block_time_s: f64| {
+        let mut m = machine(Kinematics::new(KinKind::TableAc));
+        m.control.planner = Planner {
+            block_time_s,
+            ..Planner::default()
+        };
+        let posted = post(&p, &m, &o).expect("posts");
+        let op = &posted.program.operations[0];
+        let short = op.moves.iter().map(|m| m.feed).fold(0.0f64, f64::max);
+        (short, posted.report.slowed_blocks)
+    };
+    let (free, slowed_free) = f_of(0.0);
+    assert!((free - 2000.0 / 0.005).abs() < 1e-6 * free, "{free}");
+    let (capped, slowed) = f_of(0.001);
+    assert!((capped - 60_000.0).abs() < 1e-6, "{capped}");
+    assert_eq!(slowed, slowed_free + 1);
 }

@@ -25,7 +25,8 @@
 //! 5. **Feeds** (§1.9, §1.10): the block time is the tip path relative to
 //!    the part over the programmed tip feed (zero-length and rotary-only
 //!    blocks: the slowest axis at its top speed, else the feed read as
-//!    degrees/min); an axis faster than its top speed slows the block. G93
+//!    degrees/min); an axis faster than its top speed slows the block, and
+//!    so does the control's block cycle (`[control] block_time`). G93
 //!    writes F = 1/time; G94 writes what the control applies to the joint
 //!    XYZ distance (TCP: the tip feed itself).
 //!
@@ -1186,7 +1187,12 @@ fn build(
                 continue;
             }
             let exact = t;
-            let floor = floor.max(len / machine.feed_max);
+            // No block is faster than the machine's feed, nor shorter than
+            // the control's block cycle: asking for it (a G93 F of 2·10⁶ on
+            // a block of a few µm) would not make it so.
+            let floor = floor
+                .max(len / machine.feed_max)
+                .max(machine.control.planner.block_time_s / 60.0);
             if t < floor * (1.0 - 1e-12) {
                 t = floor;
                 report.slowed_blocks += 1;
