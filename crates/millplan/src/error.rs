@@ -32,6 +32,14 @@ impl CliError {
         }
     }
 
+    /// What a check or the input's own content found (exit 3).
+    pub fn findings(message: impl Into<String>) -> CliError {
+        CliError {
+            code: EXIT_FINDINGS,
+            message: message.into(),
+        }
+    }
+
     pub fn internal(message: impl Into<String>) -> CliError {
         CliError {
             code: EXIT_INTERNAL,
@@ -53,6 +61,16 @@ impl From<anyhow::Error> for CliError {
 }
 
 pub type CliResult<T> = Result<T, CliError>;
+
+/// The exit code of a run that went to its end: 3 when it `found` problems,
+/// else 0.
+pub fn exit(found: bool) -> i32 {
+    if found {
+        EXIT_FINDINGS
+    } else {
+        EXIT_OK
+    }
+}
 
 pub use millplan_driver::message::{escape_controls, text};
 

@@ -31,6 +31,18 @@ impl From<IoError> for CliError {
 /// `From<IoError>`).
 pub use millplan_driver::io::outputs::Outputs;
 
+/// The outputs `(flag, path)` of a run, checked before any work against each
+/// other and the files it reads (`None`: an optional file not given);
+/// `stdout` when `-` may name standard output.
+pub fn plan(
+    inputs: &[Option<&Path>],
+    outputs: &[(&str, Option<&Path>)],
+    stdout: bool,
+) -> CliResult<Outputs> {
+    let inputs: Vec<&Path> = inputs.iter().flatten().copied().collect();
+    Ok(Outputs::plan(&inputs, outputs, stdout)?)
+}
+
 /// Reads with a byte-count bar on standard error (shown for large inputs).
 fn with_bar<T>(read: impl FnOnce(&mut dyn FnMut(u64, u64)) -> T) -> T {
     let mut bar = None;

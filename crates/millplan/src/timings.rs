@@ -23,6 +23,9 @@ pub use millplan_driver::timings::Clock;
 pub trait Table {
     /// Prints the table when `on`.
     fn print(&self, on: bool);
+
+    /// The last lap, the summary printed; then the table when `on`.
+    fn end(&mut self, on: bool);
 }
 
 impl Table for Clock {
@@ -30,5 +33,10 @@ impl Table for Clock {
         if on {
             print(self.entries(), self.started());
         }
+    }
+
+    fn end(&mut self, on: bool) {
+        self.lap("summary printed");
+        self.print(on);
     }
 }

@@ -2,15 +2,16 @@
 //! flattened into each (`#[command(flatten)]`): the same option in the same
 //! words everywhere, and what the binary does with it in one place.
 
-use crate::cmd::UnitArg;
+use crate::cmd::{TargetArg, UnitArg};
 use crate::error::CliResult;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-/// The unit of the part's STL.
+/// The unit of the STL files a command reads.
 #[derive(clap::Args, Clone, Copy)]
 pub struct PartUnits {
-    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch,
-    /// converted to mm on reading.
+    /// Unit of the numbers of the STL files read (the part, and the blank of
+    /// an stl: stock; an STL does not say): mm (default) or inch, converted
+    /// to mm on reading.
     #[arg(long, value_enum)]
     pub stl_units: Option<UnitArg>,
 }
@@ -19,6 +20,136 @@ impl PartUnits {
     /// Reads the part at `stl` (refused without a triangle), in mm.
     pub fn read(&self, stl: &Path) -> CliResult<millplan_geom::TriMesh> {
         Ok(crate::io::read_surface(stl, self.stl_units)?.0)
+    }
+
+    /// The blank of an `stl:` stock, in mm (`None` for any other stock).
+    pub fn blank(
+        &self,
+        spec: &millplan_driver::StockSpec,
+    ) -> CliResult<Option<millplan_geom::TriMesh>> {
+        crate::io::read_blank(spec, self.stl_units)
+    }
+}
+
+/// The part of the commands that need one: `--stl` and its unit.
+#[derive(clap::Args, Clone)]
+pub struct Part {
+    /// Part surface (STL), in the coordinates of the programs read with it.
+    #[arg(long)]
+    pub stl: PathBuf,
+    #[command(flatten)]
+    pub units: PartUnits,
+}
+
+impl Part {
+    /// The part, in mm.
+    pub fn read(&self) -> CliResult<millplan_geom::TriMesh> {
+        self.units.read(&self.stl)
+    }
+}
+
+/// The part of the commands that can do without one.
+#[derive(clap::Args, Clone)]
+pub struct OptionalPart {
+    /// Part surface (STL), in the program's coordinates: the part --stock
+    /// offset:MM grows, and what the command measures or checks against
+    /// where its description says so.
+    #[arg(long)]
+    pub stl: Option<PathBuf>,
+    #[command(flatten)]
+    pub units: PartUnits,
+}
+
+impl OptionalPart {
+    /// The part, in mm, when `--stl` is given.
+    pub fn read(&self) -> CliResult<Option<millplan_geom::TriMesh>> {
+        self.stl.as_deref().map(|p| self.units.read(p)).transpose()
+    }
+}
+
+/// `--units` of the commands that read a program.
+#[derive(clap::Args, Clone, Copy)]
+pub struct ProgramUnits {
+    /// Unit of the program's numbers, mm or inch, taken instead of what the
+    /// file says or implies: for a program that does not say (NX's Haas
+    /// posts, bare GOTO files) or says wrongly.
+    #[arg(long, value_enum)]
+    pub units: Option<UnitArg>,
+}
+
+impl ProgramUnits {
+    /// The reader's options with this unit and the run's limits.
+    pub fn options(&self) -> CliResult<millplan_nc::ReadOptions> {
+        crate::cmd::read_options(self.units, None)
+    }
+
+    /// Reads the program at `path` and prints its diagnostics (none when
+    /// `quiet`).
+    pub fn read(&self, path: &Path, quiet: bool) -> CliResult<millplan_nc::Parsed> {
+        let parsed = crate::io::read_program(path, self.options()?)?;
+        crate::cmd::print_diagnostics(path, &parsed.diagnostics, quiet);
+        Ok(parsed)
+    }
+}
+
+/// `--machine` of the commands for which a machine file is optional.
+#[derive(clap::Args, Clone)]
+pub struct MachineFile {
+    /// Machine file (TOML; examples/machine.toml documents it): spindle and
+    /// feed ranges, spindle chart, rapid rate, the axes' limits for the time
+    /// estimate, rotary limits and kinematics, the control's dialect, each
+    /// used where the command needs it. Default: a built-in typical HSC
+    /// machine (three axes, no spindle chart).
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
+}
+
+impl MachineFile {
+    /// The machine of the file, or the built-in default.
+    pub fn load(&self) -> CliResult<millplan_plan::machine::Machine> {
+        crate::cmd::load_machine(self.machine.as_deref())
+    }
+}
+
+/// The program a command writes, and its dialect.
+#[derive(clap::Args, Clone)]
+pub struct ProgramOutput {
+    /// Output program.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Output dialect (default: the machine file's control; else the
+    /// output's extension: .nc Fanuc, .mpf Sinumerik, .h Heidenhain, .ngc
+    /// LinuxCNC, .apt/.cls APT, .src KRL; else the input's).
+    #[arg(long, value_enum)]
+    pub to: Option<TargetArg>,
+}
+
+impl ProgramOutput {
+    /// The dialect to write (`millplan_driver::target`'s rule).
+    pub fn target(
+        &self,
+        machine: &millplan_plan::machine::Machine,
+        source: millplan_nc::Dialect,
+    ) -> CliResult<millplan_nc::write::Target> {
+        crate::cmd::target_with_machine(self.to, &self.output, machine, source)
+    }
+}
+
+/// `--force` of the commands that check what they write.
+#[derive(clap::Args, Clone, Copy)]
+pub struct Force {
+    /// Write the output even when a check before writing refuses it (the
+    /// checks are those the command's description names); the findings are
+    /// printed and the run ends with exit 3.
+    #[arg(long)]
+    pub force: bool,
+}
+
+impl Force {
+    /// Whether `checks` passed: a refusal is printed, and ends the run
+    /// (exit 3, nothing written) unless `--force` (`verdict::enforce`).
+    pub fn enforce(&self, checks: &[millplan_plan::safety::Check], path: &Path) -> CliResult<bool> {
+        crate::verdict::enforce(checks, path, self.force)
     }
 }
 
@@ -41,7 +172,8 @@ impl SummaryJson {
 /// `-q` of the commands that warn about their inputs.
 #[derive(clap::Args, Clone, Copy)]
 pub struct Quiet {
-    /// Print no warnings or notes about the inputs (errors still print).
+    /// Print no warnings, notes or progress bars (errors still print, and so
+    /// does the bar of reading a large file).
     #[arg(long, short)]
     pub quiet: bool,
 }

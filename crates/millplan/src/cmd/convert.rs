@@ -1,7 +1,7 @@
 //! `millplan convert`: read a program in any supported format, write it in another.
 
 use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::error::{CliError, CliResult};
 use crate::io::Outputs;
 use crate::timings::{Clock, Table as _};
 use millplan_driver::convert::{self as lib, ConvertRequest};
@@ -38,9 +38,8 @@ pub struct Args {
     /// else the input's own.
     #[arg(long, value_enum)]
     pub to: Option<TargetArg>,
-    /// Unit of the source when the file does not say.
-    #[arg(long, value_enum)]
-    pub units: Option<UnitArg>,
+    #[command(flatten)]
+    pub units: crate::cmd::args::ProgramUnits,
     /// Unit of the output program (default: the unit of the source, so that
     /// words copied as written keep their meaning).
     #[arg(long, value_enum)]
@@ -74,9 +73,8 @@ pub struct Args {
     /// points. Refused with any other output, which has no such motions.
     #[arg(long, value_name = "lin|spline")]
     pub krl_motion: Option<KrlMotion>,
-    /// Do not print reader diagnostics.
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
     /// Print a machine-readable summary (JSON) on standard output (not with -o -); errors too,
     /// as JSON on standard error.
     #[arg(long)]
@@ -119,21 +117,17 @@ fn write_out(
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    if a.json && a.output.as_os_str() == "-" {
-        return Err(CliError::input(
-            "--json: not with -o - (the program itself goes to standard output)",
-        ));
-    }
-    let inputs: Vec<&std::path::Path> = [Some(a.input.as_path()), a.machine.as_deref()]
+    crate::cmd::json_not_on_stdout(a.json, &a.output)?;
+    let inputs: Vec<&std::path::Path> = [Some(&*a.input), a.machine.as_deref()]
         .into_iter()
         .flatten()
         .collect();
     let mut clock = Clock::start();
     let outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
     clock.lap("arguments and outputs checked");
-    let (parsed, krl) = crate::io::read_source(&a.input, read_options(a.units, a.feed)?)?;
+    let (parsed, krl) = crate::io::read_source(&a.input, read_options(a.units.units, a.feed)?)?;
     clock.lap("program read");
-    print_diagnostics(&a.input, &parsed.diagnostics, a.quiet);
+    print_diagnostics(&a.input, &parsed.diagnostics, a.notes.quiet);
     let mut p = parsed.program;
     let machine = crate::cmd::load_machine(a.machine.as_deref())?;
     let req = request(&a);
@@ -146,7 +140,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     {
         Some(Ok(Some(text))) => text.into_bytes(),
         Some(Err(e)) => return Err(crate::io::krl_error(&a.input, e)),
-        _ => write_program(&p, o, &a.input, a.quiet)?,
+        _ => write_program(&p, o, &a.input, a.notes.quiet)?,
     };
     clock.lap("machine file read, program resolved and written in memory");
     let (input, output) = (
@@ -169,7 +163,6 @@ pub fn run(a: Args) -> CliResult<i32> {
     } else {
         eprintln!("{}", summary.text());
     }
-    clock.lap("summary printed");
-    clock.print(a.timings.on);
-    Ok(lossy.map_or(EXIT_OK, |_| EXIT_FINDINGS))
+    clock.end(a.timings.on);
+    Ok(crate::error::exit(lossy.is_some()))
 }

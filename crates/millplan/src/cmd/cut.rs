@@ -100,9 +100,8 @@ pub struct Args {
     /// Write the force curves over one revolution as an SVG plot.
     #[arg(long)]
     pub svg: Option<PathBuf>,
-    /// Print JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -120,7 +119,7 @@ pub fn run(a: Args) -> CliResult<i32> {
         outputs.write(p, r.curves_svg().as_bytes())?;
     }
     outputs.commit()?;
-    crate::cmd::print_summary(a.json, || r.json(), || r.render_text());
+    crate::cmd::print_summary(a.summary.json, || r.json(), || r.render_text());
     Ok(EXIT_OK)
 }
 

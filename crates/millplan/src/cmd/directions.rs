@@ -1,7 +1,6 @@
 //! `millplan directions`: rank candidate paths of one surface by the spindle's
 //! dynamic load under constant-cutting-speed control (paper 000, thesis 3).
 
-use crate::cmd::{read_options, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::read_program;
 use crate::timings::{Clock, Table as _};
@@ -46,24 +45,17 @@ pub struct Args {
     /// Point spacing of generated rasters, mm.
     #[arg(long, default_value_t = millplan_driver::command_defaults::directions::STEP)]
     pub step: f64,
-    /// Part surface (STL) in the same coordinates as the paths.
-    #[arg(long)]
-    pub stl: PathBuf,
     #[command(flatten)]
-    pub part_units: crate::cmd::args::PartUnits,
+    pub part: crate::cmd::args::Part,
     #[command(flatten)]
     pub cut: super::CuttingData,
-    /// Machine file (examples/machine.toml): the spindle range and acceleration the
-    /// load is judged by; a typical HSC machine by default.
-    #[arg(long)]
-    pub machine: Option<PathBuf>,
+    #[command(flatten)]
+    pub machine: crate::cmd::args::MachineFile,
     /// Indicator to rank by (smaller is better).
     #[arg(long, value_enum, default_value = "tv")]
     pub by: RankBy,
-    /// Unit of a program that does not say (NX's Haas posts, bare GOTO files): mm or
-    /// inch.
-    #[arg(long, value_enum)]
-    pub units: Option<UnitArg>,
+    #[command(flatten)]
+    pub units: crate::cmd::args::ProgramUnits,
     #[command(flatten)]
     pub summary: crate::cmd::args::SummaryJson,
     #[command(flatten)]
@@ -85,19 +77,19 @@ fn check_rasters(a: &Args, bounds: &millplan_geom::Aabb) -> CliResult<millplan_d
 pub fn run(a: Args) -> CliResult<i32> {
     let mut clock = Clock::start();
     a.cut.check()?;
-    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let mesh = a.part_units.read(&a.stl)?;
+    let machine = a.machine.load()?;
+    let mesh = a.part.read()?;
     let cx = Context::new(machine).with_part(&mesh);
     clock.lap("machine file and part read");
     let mut candidates = Vec::new();
     if !a.angles.is_empty() {
         let shape = check_rasters(&a, &mesh.bounds())?;
         candidates = raster_candidates(&cx, shape, &a.angles, a.stepover, a.step)
-            .map_err(|e| crate::cmd::pass_error(&a.stl, e))?;
+            .map_err(|e| crate::cmd::pass_error(&a.part.stl, e))?;
         clock.lap("candidate rasters made (drop-cutter)");
     }
     for p in &a.paths {
-        let parsed = read_program(p, read_options(a.units, None)?)?;
+        let parsed = read_program(p, a.units.options()?)?;
         candidates.push(Candidate {
             name: p.display().to_string(),
             program: parsed.program,
@@ -113,12 +105,11 @@ pub fn run(a: Args) -> CliResult<i32> {
         clock.lap("candidate paths read");
     }
     let ranked = rank(candidates, &cx, &a.cut.params(), by)
-        .map_err(|e| crate::cmd::pass_error(&a.stl, e))?;
+        .map_err(|e| crate::cmd::pass_error(&a.part.stl, e))?;
     clock.lap("candidates run under spindle control and ranked");
     let j = || millplan_driver::directions::Report::new(format!("{:?}", a.by), &ranked);
     let text = || millplan_driver::directions::render_text(&ranked);
     crate::cmd::print_summary(a.summary.json, j, text);
-    clock.lap("summary printed");
-    clock.print(a.timings.on);
+    clock.end(a.timings.on);
     Ok(EXIT_OK)
 }

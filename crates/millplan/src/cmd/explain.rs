@@ -9,18 +9,12 @@ use millplan_driver::explain as lib;
 pub struct Args {
     /// A code as printed: `unknown-word`, or the whole `warning[unknown-word]`.
     pub code: Option<String>,
-    /// Print the codes and their explanations as JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
     let codes = lib::codes(a.code.as_deref()).map_err(CliError::input)?;
-    if a.json {
-        let v = lib::json(&codes);
-        outln!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
-    } else {
-        out!("{}", lib::text(&codes));
-    }
+    crate::cmd::print_summary(a.summary.json, || lib::json(&codes), || lib::text(&codes));
     Ok(EXIT_OK)
 }

@@ -1,8 +1,7 @@
 //! `millplan gouge`: does the program cut into the part?
 
-use crate::cmd::{print_diagnostics, read_options, UnitArg};
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::read_program;
+use crate::cmd::print_diagnostics;
+use crate::error::{exit, CliError, CliResult};
 use crate::timings::Table as _;
 use millplan_driver::gouge::{self as lib, GougeRequest, BYTES_PER_SAMPLE};
 use millplan_plan::checks;
@@ -21,11 +20,8 @@ use std::path::PathBuf;
 pub struct Args {
     /// Program (APT/CL or G-code).
     pub path: PathBuf,
-    /// Part surface (STL).
-    #[arg(long)]
-    pub stl: PathBuf,
     #[command(flatten)]
-    pub part_units: crate::cmd::args::PartUnits,
+    pub part: crate::cmd::args::Part,
     /// Depth that counts as a gouge, mm.
     #[arg(long, default_value_t = millplan_driver::command_defaults::gouge::TOL)]
     pub tol: f64,
@@ -38,10 +34,8 @@ pub struct Args {
     /// Cutter for operations whose tool has no geometry: ball:D, flat:D, bull:D:R, cone:D:ANGLE.
     #[arg(long)]
     pub tool: Option<String>,
-    /// Unit of a program that does not say (NX's Haas posts, bare GOTO files): mm or
-    /// inch.
-    #[arg(long, value_enum)]
-    pub units: Option<UnitArg>,
+    #[command(flatten)]
+    pub units: crate::cmd::args::ProgramUnits,
     #[command(flatten)]
     pub summary: crate::cmd::args::SummaryJson,
     #[command(flatten)]
@@ -59,23 +53,16 @@ pub fn run(a: Args) -> CliResult<i32> {
         tool: a.tool.clone(),
     };
     let (g, fallback) = lib::params(&req).map_err(CliError::input)?;
-    let parsed = read_program(&a.path, read_options(a.units, None)?)?;
-    print_diagnostics(
-        &a.path,
-        &parsed.diagnostics,
-        a.notes.quiet || a.summary.json,
-    );
+    let quiet = a.notes.quiet || a.summary.json;
+    let parsed = a.units.read(&a.path, quiet)?;
     let path = a.path.display().to_string();
     if fallback.is_none() {
         lib::shape_is_known(&path, &parsed.program).map_err(CliError::input)?;
     }
     clock.lap("arguments checked, program read");
-    let mesh = a.part_units.read(&a.stl)?;
-    print_diagnostics(
-        &a.stl,
-        &checks::mesh(&mesh).into_iter().collect::<Vec<_>>(),
-        a.notes.quiet || a.summary.json,
-    );
+    let mesh = a.part.read()?;
+    let found: Vec<_> = checks::mesh(&mesh).into_iter().collect();
+    print_diagnostics(&a.part.stl, &found, quiet);
     // Counted first: a step of 1e-9 on a long program is refused, not run.
     clock.lap("part read");
     let n = lib::sample_count(&parsed.program, fallback, &g);
@@ -89,17 +76,12 @@ pub fn run(a: Args) -> CliResult<i32> {
     clock.lap("points checked against the part");
     let report = lib::Report::new(&rep, a.tol);
     a.summary.print(&report, |r| r.render_text(&path));
-    clock.lap("summary printed");
-    clock.print(a.timings.on);
+    clock.end(a.timings.on);
     if rep.moves_checked == 0 {
         return Err(CliError::input(format!(
             "{path}: no move could be checked ({})",
             lib::skipped(&rep.skipped)
         )));
     }
-    Ok(if rep.gouges.is_empty() {
-        EXIT_OK
-    } else {
-        EXIT_FINDINGS
-    })
+    Ok(exit(!rep.gouges.is_empty()))
 }

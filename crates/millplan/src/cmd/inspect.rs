@@ -1,6 +1,6 @@
 //! `millplan inspect`: what a file holds.
 
-use crate::cmd::{print_diagnostics, read_options, UnitArg};
+use crate::cmd::{print_diagnostics, UnitArg};
 use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::{read_any, Input};
 use crate::timings::Table as _;
@@ -23,26 +23,21 @@ use std::path::PathBuf;
 pub struct Args {
     /// APT/CL, G-code (Fanuc, Sinumerik, LinuxCNC, Heidenhain) or STL file.
     pub file: PathBuf,
-    /// Print a machine-readable JSON summary on standard output.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
     /// Print the program's IR, one line per move and event.
     #[arg(long)]
     pub ir: bool,
-    /// Unit of the source when the file does not say (or says wrongly).
-    #[arg(long, value_enum)]
-    pub units: Option<UnitArg>,
+    #[command(flatten)]
+    pub units: crate::cmd::args::ProgramUnits,
     /// Rapid traverse rate for the time estimate, mm/min (default: the
     /// machine file's, else 15000).
     #[arg(long)]
     pub rapid_rate: Option<f64>,
-    /// Machine file (examples/machine.toml): its rapid rate, axis limits and
-    /// kinematics time the program (default: a built-in three-axis machine).
-    #[arg(long)]
-    pub machine: Option<PathBuf>,
-    /// Do not print reader diagnostics.
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub machine: crate::cmd::args::MachineFile,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
     /// Unit of an STL's numbers (an STL does not say): mm or inch, converted
     /// to mm; without it the unit is guessed from the part's size.
     #[arg(long, value_enum)]
@@ -57,15 +52,20 @@ pub fn run(a: Args) -> CliResult<i32> {
     // against 76 MB on 1,000,000 GOTOs, docs/benchmarks.md), at no gain.
     crate::small_pages_only();
     let mut clock = crate::timings::Clock::start();
-    let mut machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    let mut machine = a.machine.load()?;
     machine.rapid = lib::rapid_rate(&machine, a.rapid_rate).map_err(CliError::input)?;
     clock.lap("arguments and machine file");
-    let input = read_any(&a.file, read_options(a.units, None)?)?;
+    let input = read_any(&a.file, a.units.options()?)?;
     clock.lap("file read");
+    let name = a.file.display().to_string();
     match input {
         Input::Program(parsed) => {
-            print_diagnostics(&a.file, &parsed.diagnostics, a.quiet || a.json);
             let p = &parsed.program;
+            print_diagnostics(
+                &a.file,
+                &parsed.diagnostics,
+                a.notes.quiet || a.summary.json,
+            );
             if a.ir {
                 out!("{}", millplan_nc::text::print(p));
                 clock.lap("IR printed");
@@ -74,25 +74,13 @@ pub fn run(a: Args) -> CliResult<i32> {
             }
             let j = lib::program_json(p, parsed.diagnostics.len(), &machine);
             clock.lap("summary and time estimate");
-            if a.json {
-                crate::cmd::print_json(j);
-            } else {
-                out!(
-                    "{}",
-                    lib::render_program(&a.file.display().to_string(), p, &j)
-                );
-            }
-            drop(parsed);
+            a.summary.print(&j, |j| lib::render_program(&name, p, j));
         }
         Input::Mesh(mut mesh, r) => {
             crate::cmd::stl_to_mm(&mut mesh, a.stl_units);
             let j = lib::mesh_json(&mesh, &r, a.stl_units.map(Into::into));
             clock.lap("summary (edges, bounds)");
-            if a.json {
-                crate::cmd::print_json(j);
-            } else {
-                out!("{}", lib::render_mesh(&a.file.display().to_string(), &j));
-            }
+            a.summary.print(&j, |j| lib::render_mesh(&name, j));
         }
     }
     clock.lap("printed");

@@ -102,6 +102,16 @@ pub fn print_summary<T: serde::Serialize>(
     }
 }
 
+/// Refuses `--json` with `-o -`: the program itself goes to standard output.
+pub fn json_not_on_stdout(json: bool, output: &std::path::Path) -> CliResult<()> {
+    if json && output.as_os_str() == "-" {
+        return Err(CliError::input(
+            "--json: not with -o - (the program itself goes to standard output)",
+        ));
+    }
+    Ok(())
+}
+
 /// Output dialect, shared by the writing commands.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum TargetArg {

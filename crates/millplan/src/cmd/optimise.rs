@@ -1,10 +1,9 @@
 //! `millplan optimise`: the compiler driver — parses, reads the files,
 //! builds a `millplan_driver::Job`, runs it and prints.
 
-use crate::cmd::load_machine;
-use crate::cmd::{print_diagnostics, read_options, TargetArg, UnitArg};
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_program, read_surface, Outputs};
+use crate::cmd::{load_machine, print_diagnostics, TargetArg};
+use crate::error::{CliError, CliResult, EXIT_OK};
+use crate::io::Outputs;
 use crate::timings::{Clock, Table as _};
 use millplan_driver::given::{Given, GivenError};
 use millplan_driver::passes::{self, ORDER};
@@ -52,21 +51,15 @@ pub struct Args {
     /// Program (APT/CL or G-code).
     #[arg(required_unless_present = "list_passes")]
     pub path: Option<PathBuf>,
-    /// Part surface (STL) in the program's coordinates.
-    #[arg(long)]
-    pub stl: Option<PathBuf>,
-    /// Unit of the STL files' numbers: mm (default) or inch.
-    #[arg(long, value_enum)]
-    pub stl_units: Option<UnitArg>,
+    #[command(flatten)]
+    pub part: crate::cmd::args::OptionalPart,
     /// Initial stock: box:auto or box:auto:MARGIN, box:X0,Y0,Z0,X1,Y1,Z1,
     /// cylinder:auto or cylinder:auto:MARGIN, cylinder:CX,CY,Z0,Z1,D, stl:FILE or offset:MM
     /// (the --stl part grown by MM), as in `millplan simulate`.
     #[arg(long)]
     pub stock: Option<String>,
-    /// Machine file (TOML; examples/machine.toml documents it): spindle and
-    /// feed ranges, spindle chart, axes, control dialect, kinematics.
-    #[arg(long)]
-    pub machine: Option<PathBuf>,
+    #[command(flatten)]
+    pub machine: crate::cmd::args::MachineFile,
     /// Named material (`millplan force materials` lists them).
     #[arg(long)]
     pub material: Option<String>,
@@ -122,18 +115,14 @@ pub struct Args {
     /// HTML report: verdict, inputs, passes, before → after, checks, plots.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
-    /// Write the program even when a check fails (the exit code stays 3).
-    #[arg(long)]
-    pub force: bool,
-    /// Units of a program that does not say.
-    #[arg(long, value_enum)]
-    pub units: Option<UnitArg>,
-    /// Print the summary as JSON.
-    #[arg(long)]
-    pub json: bool,
-    /// No warnings or notes on standard error.
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub force: crate::cmd::args::Force,
+    #[command(flatten)]
+    pub units: crate::cmd::args::ProgramUnits,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
     #[command(flatten)]
     pub robot: crate::cmd::robot::OptimiseRobotArgs,
     #[command(flatten)]
@@ -155,16 +144,14 @@ fn options(a: &Args) -> OptionsRequest {
 }
 
 fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
-    let parsed = read_program(path, read_options(a.units, None)?)?;
-    print_diagnostics(path, &parsed.diagnostics, a.quiet || a.json);
+    let parsed = a.units.read(path, quiet(a))?;
     let library = a.tools.as_deref().map(Library::open).transpose()?;
-    let part = a.stl.as_deref().map(|p| read_surface(p, a.stl_units));
-    let machine = a.machine.as_deref().map(|m| load_machine(Some(m)));
+    let machine = a.machine.machine.as_deref().map(|m| load_machine(Some(m)));
     let given = Given {
         program: parsed.program,
-        part: part.transpose()?.map(|r| r.0),
+        part: a.part.read()?,
         stock: a.stock.as_deref(),
-        stl_units: a.stl_units.map(Into::into),
+        stl_units: a.part.units.stl_units.map(Into::into),
         limits: crate::limits::get(),
         machine: machine.transpose()?,
         materials: crate::io::read_materials(a.materials.as_deref())?,
@@ -181,12 +168,14 @@ fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
     })
 }
 
+/// Whether warnings, notes and the bar are left out (`-q`, `--json`).
+fn quiet(a: &Args) -> bool {
+    a.notes.quiet || a.summary.json
+}
+
 fn list_passes(json: bool) {
-    if json {
-        crate::cmd::print_json(serde_json::to_value(passes::table()).unwrap_or_default());
-    } else {
-        outln!("{}", passes::table_text());
-    }
+    let text = || format!("{}\n", passes::table_text());
+    crate::cmd::print_summary(json, passes::table, text);
 }
 
 /// The passes to run (--passes, else all), once the options refused
@@ -202,23 +191,25 @@ fn checked_order(a: &Args) -> CliResult<Vec<passes::PassName>> {
 pub fn run(a: Args) -> CliResult<i32> {
     let (Some(path), Some(output), false) = (a.path.clone(), a.output.clone(), a.list_passes)
     else {
-        list_passes(a.json);
+        list_passes(a.summary.json);
         return Ok(EXIT_OK);
     };
     let mut clock = Clock::start();
     let order = checked_order(&a)?;
-    let mut inputs: Vec<&Path> = vec![&path];
-    inputs.extend(a.stl.as_deref());
-    inputs.extend(a.machine.as_deref());
-    inputs.extend(a.materials.as_deref());
     let blank = a.stock.as_deref().and_then(StockSpec::file_of);
-    inputs.extend(blank.as_deref());
-    inputs.extend(a.tools.as_deref());
-    let mut outputs = Outputs::plan(
-        &inputs,
-        &[("-o", Some(&output)), ("--report", a.report.as_deref())],
-        false,
-    )?;
+    let (stl, machine) = (a.part.stl.as_deref(), a.machine.machine.as_deref());
+    let (materials, tools) = (a.materials.as_deref(), a.tools.as_deref());
+    let inputs = [
+        Some(&*path),
+        stl,
+        machine,
+        materials,
+        blank.as_deref(),
+        tools,
+    ];
+    let inputs: Vec<&Path> = inputs.into_iter().flatten().collect();
+    let outs = [("-o", Some(&*output)), ("--report", a.report.as_deref())];
+    let mut outputs = Outputs::plan(&inputs, &outs, false)?;
     clock.lap("arguments and outputs checked");
     let given = read_inputs(&a, &path)?;
     clock.lap("program, part, machine, materials and tools read");
@@ -227,17 +218,13 @@ pub fn run(a: Args) -> CliResult<i32> {
     let wo = job.write_options(a.to.map(Into::into), &output, crate::limits::get());
     let wo = wo.map_err(CliError::input)?;
     let (outcome, mut w) = passes_and_checks(&a, &job, &order, wo, &path, &mut clock)?;
-    crate::cmd::robot::after_optimise(
-        &a.robot,
-        (&job, &outcome),
-        &mut w,
-        (&inputs, &output),
-        (a.force, a.quiet || a.json),
-    )?;
+    let (force, quiet) = (a.force.force, quiet(&a));
+    let files = (&inputs[..], &*output);
+    crate::cmd::robot::after_optimise(&a.robot, (&job, &outcome), &mut w, files, (force, quiet))?;
     clock.lap("robot placement and compensation (--robot)");
-    print_diagnostics(&path, &w.warnings, a.quiet || a.json);
+    print_diagnostics(&path, &w.warnings, quiet);
     let refused = w.summary.verdict == Verdict::Refused;
-    if !refused || a.force {
+    if !refused || force {
         outputs.write(&output, &w.bytes)?;
     }
     if let Some(r) = &a.report {
@@ -245,10 +232,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     }
     outputs.commit()?;
     clock.lap("outputs written and renamed into place");
-    print_summary(&a, &w, &path, &output, refused && !a.force);
-    clock.lap("summary printed");
-    clock.print(a.timings.on);
-    Ok(if refused { EXIT_FINDINGS } else { EXIT_OK })
+    print_summary(&a, &w, &path, &output, refused && !force);
+    clock.end(a.timings.on);
+    Ok(crate::error::exit(refused))
 }
 
 /// The passes, then the written program's checks, under one bar on a
@@ -261,7 +247,7 @@ fn passes_and_checks(
     path: &Path,
     clock: &mut Clock,
 ) -> CliResult<(Outcome, Written)> {
-    let bar = crate::progress::Phases::new(!(a.quiet || a.json));
+    let bar = crate::progress::Phases::new(!quiet(a));
     let h = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
     let outcome = job.run_with(order, Some(&h)).inspect_err(|_| bar.finish());
     let outcome = outcome.map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
@@ -278,7 +264,7 @@ fn passes_and_checks(
 }
 
 fn say_skipped(a: &Args, o: &Outcome) {
-    if a.quiet || a.json {
+    if quiet(a) {
         return;
     }
     for n in report::skipped_notes(o) {
@@ -289,9 +275,9 @@ fn say_skipped(a: &Args, o: &Outcome) {
 fn page(a: &Args, job: &Job, o: &Outcome, w: &Written, path: &Path, output: &Path) -> String {
     let names = InputNames::of(
         (path, output),
-        a.stl.as_deref(),
+        a.part.stl.as_deref(),
         (a.stock.as_deref(), a.material.as_deref()),
-        (a.machine.as_deref(), &job.inputs.machine.name),
+        (a.machine.machine.as_deref(), &job.inputs.machine.name),
     );
     let plotted = Plotted {
         before: &job.inputs.program,
@@ -308,9 +294,6 @@ fn print_summary(a: &Args, w: &Written, path: &Path, output: &Path, withheld: bo
     if let Some(line) = report::refusal_line(s, path) {
         eprintln!("{line}");
     }
-    if a.json {
-        crate::cmd::print_json(serde_json::to_value(s).unwrap_or_default());
-    } else {
-        outln!("{}", report::summary_text(s, output, withheld));
-    }
+    let text = || format!("{}\n", report::summary_text(s, output, withheld));
+    crate::cmd::print_summary(a.summary.json, || s, text);
 }

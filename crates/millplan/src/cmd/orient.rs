@@ -2,15 +2,14 @@
 //! machining time (spec process-models §2.4).
 
 use crate::cmd::cut::VariantArg;
-use crate::cmd::{print_diagnostics, read_options, TargetArg, UnitArg};
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::error::{exit, CliError, CliResult, EXIT_FINDINGS};
 use crate::io::read_materials as load_materials;
-use crate::io::{read_program, read_surface, Outputs};
+use crate::io::Outputs;
 use crate::timings::{Clock, Table as _};
 use millplan_driver::orient::{self as lib, OrientRequest};
 use millplan_driver::StockSpec;
 use millplan_plan::leadtilt::{Objective, Stage};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Choose lead and tilt per ball-end operation (docs/leadtilt.md):
 /// a 5° grid over the ranges, then steepest descent from its best node, on
@@ -52,18 +51,10 @@ use std::path::{Path, PathBuf};
 pub struct Args {
     /// Program with ball-end operations (APT/CL or G-code).
     pub path: PathBuf,
-    /// Part surface (STL): the normals at the contacts and the collision
-    /// tests.
-    #[arg(long)]
-    pub stl: PathBuf,
-    /// Unit of the STL's numbers (an STL does not say): mm (default) or inch.
-    #[arg(long, value_enum)]
-    pub stl_units: Option<UnitArg>,
-    /// Machine file (examples/machine.toml): rotary limits, and the axis
-    /// limits of the time estimate (default: a built-in three-axis machine,
-    /// no rotary limits).
-    #[arg(long)]
-    pub machine: Option<PathBuf>,
+    #[command(flatten)]
+    pub part: crate::cmd::args::Part,
+    #[command(flatten)]
+    pub machine: crate::cmd::args::MachineFile,
     /// Named material (`millplan force materials` lists them).
     #[arg(long)]
     pub material: String,
@@ -124,27 +115,16 @@ pub struct Args {
     /// Holder as DIAMETER:LENGTH, mm (default: no holder, the shank alone).
     #[arg(long)]
     pub holder: Option<String>,
-    /// Output program (the extension or --to names the dialect).
-    #[arg(short, long)]
-    pub output: PathBuf,
-    /// Output dialect (default: the machine's, else the file name's, else the input's).
-    #[arg(long, value_enum)]
-    pub to: Option<TargetArg>,
-    /// Unit of a program that does not say: mm or inch.
-    #[arg(long, value_enum)]
-    pub units: Option<UnitArg>,
-    /// Print a machine-readable summary (JSON) on standard output; errors
-    /// too, as JSON on standard error.
-    #[arg(long)]
-    pub json: bool,
-    /// Print no warnings, notes or progress (errors still print).
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Write the program even when a check before writing refuses it (a
-    /// ball centre moved, a rapid or shank in the stock, a new gouge, an S
-    /// or F outside the machine); the run then ends with exit 3.
-    #[arg(long)]
-    pub force: bool,
+    #[command(flatten)]
+    pub out: crate::cmd::args::ProgramOutput,
+    #[command(flatten)]
+    pub units: crate::cmd::args::ProgramUnits,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
+    #[command(flatten)]
+    pub force: crate::cmd::args::Force,
     #[command(flatten)]
     pub timings: crate::cmd::args::Timings,
 }
@@ -185,26 +165,31 @@ pub fn run(a: Args) -> CliResult<i32> {
     let materials = load_materials(a.materials.as_deref())?;
     let p = lib::params(&req, &materials).map_err(CliError::input)?;
     let spec = lib::stock_spec(&req).map_err(CliError::input)?;
-    let mut inputs: Vec<&Path> = vec![&a.path, &a.stl];
-    inputs.extend(a.machine.as_deref());
-    inputs.extend(a.materials.as_deref());
-    if let Some(StockSpec::Stl(b)) = &spec {
-        inputs.push(b);
-    }
-    let outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], false)?;
-    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    let blank = a.stock.as_deref().and_then(StockSpec::file_of);
+    let (machine_file, materials_file) = (a.machine.machine.as_deref(), a.materials.as_deref());
+    let inputs = [
+        Some(&*a.path),
+        Some(&*a.part.stl),
+        machine_file,
+        materials_file,
+        blank.as_deref(),
+    ];
+    let outputs = crate::io::plan(&inputs, &[("-o", Some(&a.out.output))], false)?;
+    let machine = a.machine.load()?;
     clock.lap("arguments, materials, machine file and outputs checked");
-    let parsed = read_program(&a.path, read_options(a.units, None)?)?;
-    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
-    let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
+    let parsed = a.units.read(&a.path, a.notes.quiet || a.summary.json)?;
+    let target = a.out.target(&machine, parsed.program.source)?;
     clock.lap("program read");
-    let (mesh, _) = read_surface(&a.stl, a.stl_units)?;
+    let mesh = a.part.read()?;
     let blank = match &spec {
-        Some(s) => crate::io::read_blank(s, a.stl_units)?,
+        Some(s) => a.part.units.blank(s)?,
         None => None,
     };
     clock.lap("part and stock files read");
-    let (name, output) = (a.path.display().to_string(), a.output.display().to_string());
+    let (name, output) = (
+        a.path.display().to_string(),
+        a.out.output.display().to_string(),
+    );
     let g = lib::OrientInputs {
         name: &name,
         output: &output,
@@ -232,18 +217,19 @@ fn finish(
 ) -> CliResult<i32> {
     if !o.chosen {
         outputs.commit()?;
-        crate::cmd::print_summary(a.json, || &o.summary, || o.summary.render_text());
+        a.summary.print(&o.summary, |s| s.render_text());
         clock.lap("summary printed");
         return Ok(EXIT_FINDINGS);
     }
-    let checked = crate::verdict::enforce(&o.checks, &a.path, a.force)?;
+    let checked = a.force.enforce(&o.checks, &a.path)?;
     let summary = o.summary.with_checks(o.checks);
-    crate::cmd::write_program_file(&o.program, wo, &mut outputs, &a.output, &a.path, a.quiet)?;
+    let output = &a.out.output;
+    crate::cmd::write_program_file(&o.program, wo, &mut outputs, output, &a.path, a.notes.quiet)?;
     outputs.commit()?;
     clock.lap("output written, read back and renamed into place");
-    crate::cmd::print_summary(a.json, || &summary, || summary.render_text());
+    a.summary.print(&summary, |s| s.render_text());
     clock.lap("summary printed");
-    Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
+    Ok(exit(!checked))
 }
 
 /// The run, with its progress on two bars (the stock, the operations) and
@@ -255,8 +241,8 @@ fn choose(
     g: &lib::OrientInputs,
 ) -> CliResult<lib::Outcome> {
     let total = g.program.operations.len() as u64;
-    let sim_bar = crate::progress::Phases::new(!a.quiet && req.stock.is_some());
-    let bar = crate::progress::count(total, "lead/tilt", "operations", !a.quiet);
+    let sim_bar = crate::progress::Phases::new(!a.notes.quiet && req.stock.is_some());
+    let bar = crate::progress::count(total, "lead/tilt", "operations", !a.notes.quiet);
     let o = lib::command(req, p, g, &|stage, done, all| match stage {
         Stage::Stock => sim_bar.report("stock", done, all),
         Stage::Operations => {
@@ -268,7 +254,7 @@ fn choose(
     sim_bar.finish();
     bar.finish_and_clear();
     match o.unsimulated_note(&a.path.display().to_string()) {
-        Some(n) if !(a.quiet || a.json) => eprintln!("{n}"),
+        Some(n) if !(a.notes.quiet || a.summary.json) => eprintln!("{n}"),
         _ => {}
     }
     Ok(o)

@@ -1,8 +1,8 @@
 //! `millplan post`: a five-axis CL file posted through a machine's kinematics.
 
-use crate::cmd::{print_diagnostics, print_json, read_options, TargetArg};
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_program, Outputs};
+use crate::cmd::{print_json, TargetArg};
+use crate::error::{CliError, CliResult};
+use crate::io::Outputs;
 use crate::timings::Table as _;
 use millplan_driver::post::{self as lib, PostRequest, PostSummary};
 use millplan_plan::post::{for_target, post, PostError, Posted};
@@ -67,21 +67,16 @@ pub struct Args {
     /// Output file (`-`: standard output).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Unit of the source when the file does not say.
-    #[arg(long, value_enum)]
-    pub units: Option<crate::cmd::UnitArg>,
-    /// Do not print reader diagnostics or progress.
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub units: crate::cmd::args::ProgramUnits,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
     /// Print a machine-readable summary (JSON) on standard output (not with -o -); errors too,
     /// as JSON on standard error.
     #[arg(long)]
     pub json: bool,
-    /// Write the program even when a check before writing refuses it (a
-    /// tip off the CL path, an S or F outside the machine); the run then
-    /// ends with exit 3.
-    #[arg(long)]
-    pub force: bool,
+    #[command(flatten)]
+    pub force: crate::cmd::args::Force,
     #[command(flatten)]
     pub timings: crate::cmd::args::Timings,
 }
@@ -101,10 +96,7 @@ fn request(a: &Args) -> PostRequest {
 /// the input's fault (exit 2), located in the CL file.
 fn post_error(path: &Path, e: PostError) -> CliError {
     match lib::error(&path.display().to_string(), &e) {
-        (true, message) => CliError {
-            code: EXIT_FINDINGS,
-            message,
-        },
+        (true, message) => CliError::findings(message),
         (false, message) => CliError::input(message),
     }
 }
@@ -112,17 +104,12 @@ fn post_error(path: &Path, e: PostError) -> CliError {
 pub fn run(a: Args) -> CliResult<i32> {
     let mut clock = crate::timings::Clock::start();
     let code = run_timed(&a, &mut clock)?;
-    clock.lap("summary printed");
-    clock.print(a.timings.on);
+    clock.end(a.timings.on);
     Ok(code)
 }
 
 fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
-    if a.json && a.output.as_os_str() == "-" {
-        return Err(CliError::input(
-            "--json: not with -o - (the program itself goes to standard output)",
-        ));
-    }
+    crate::cmd::json_not_on_stdout(a.json, &a.output)?;
     let inputs = [a.input.as_path(), a.machine.as_path()];
     let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
     let machine = crate::cmd::load_machine(Some(&a.machine))?;
@@ -130,8 +117,7 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
     let target = lib::target(a.to.map(Into::into), &a.output, &machine, &a.machine)
         .map_err(CliError::input)?;
     clock.lap("arguments, machine file and outputs checked");
-    let parsed = read_program(&a.input, read_options(a.units, None)?)?;
-    print_diagnostics(&a.input, &parsed.diagnostics, a.quiet || a.json);
+    let parsed = a.units.read(&a.input, a.notes.quiet || a.json)?;
     clock.lap("read CL file");
     let (program, report) = post_program(a, &parsed.program, &machine, &o, target, clock)?;
     // The checks before the writing, so that the CL program is gone before
@@ -140,14 +126,14 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
     drop(parsed);
     clock.lap("checks (IR, machine, tips through the kinematics)");
     let wo = lib::write_options(&machine, target);
-    let out = crate::cmd::write_program(&program, wo, &a.input, a.quiet)?;
+    let out = crate::cmd::write_program(&program, wo, &a.input, a.notes.quiet)?;
     clock.lap("G-code written (in memory)");
     let names = (
         &*a.output.display().to_string(),
         &*a.input.display().to_string(),
     );
     lib::read_back_check(&program, &out, target, a.tol, names).map_err(CliError::internal)?;
-    let checked = crate::verdict::enforce(&checks, &a.input, a.force)?;
+    let checked = a.force.enforce(&checks, &a.input)?;
     clock.lap("written program read back and compared");
     outputs.write(&a.output, &out)?;
     outputs.commit()?;
@@ -166,7 +152,7 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
         eprintln!("{}", s.wrote());
         out!("{}", s.render_text());
     }
-    Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
+    Ok(crate::error::exit(!checked))
 }
 
 /// The CL program posted for `target`, with a spinner.
@@ -178,7 +164,7 @@ fn post_program(
     target: millplan_nc::write::Target,
     clock: &mut crate::timings::Clock,
 ) -> CliResult<(millplan_nc::Program, millplan_plan::post::PostReport)> {
-    let bar = crate::progress::spinner("posting", !a.quiet && !a.json);
+    let bar = crate::progress::spinner("posting", !a.notes.quiet && !a.json);
     let posted = post(cl, machine, o).map_err(|e| post_error(&a.input, e))?;
     // The CL program stays for the tip check.
     let Posted {

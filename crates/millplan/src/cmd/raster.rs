@@ -1,12 +1,10 @@
 //! `millplan raster`: a finishing raster over an STL part.
 
-use crate::cmd::{print_diagnostics, write_program, TargetArg};
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::Outputs;
+use crate::cmd::{print_diagnostics, write_program};
+use crate::error::{exit, CliError, CliResult};
 use crate::timings::Table as _;
 use millplan_driver::raster::{self as lib, RasterRequest};
 use millplan_plan::checks;
-use std::path::PathBuf;
 
 /// Generate a finishing raster over a part: parallel passes at --angle, every
 /// point a drop-cutter position (the cutter just touching the part), refined
@@ -22,11 +20,8 @@ use std::path::PathBuf;
 /// --force.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Part surface (STL).
-    #[arg(long)]
-    pub stl: PathBuf,
     #[command(flatten)]
-    pub part_units: crate::cmd::args::PartUnits,
+    pub part: crate::cmd::args::Part,
     /// Cutter: ball:D, flat:D, bull:D:R (corner radius), cone:D:ANGLE (point angle).
     #[arg(long)]
     pub tool: String,
@@ -60,17 +55,10 @@ pub struct Args {
     /// Spindle speed written with the tool, 1/min.
     #[arg(long, default_value_t = millplan_driver::command_defaults::raster::SPINDLE)]
     pub spindle: f64,
-    /// Output dialect; default: from the output's extension (.apt/.cls APT,
-    /// .nc Fanuc, .mpf Sinumerik, .h Heidenhain, .ngc LinuxCNC).
-    #[arg(long, value_enum)]
-    pub to: Option<TargetArg>,
-    /// Raster program to write (APT/CL, or the dialect of --to or the extension).
-    #[arg(short, long)]
-    pub output: PathBuf,
-    /// Machine file (examples/machine.toml): its control's dialect is the
-    /// default target and its S-word decimals are used.
-    #[arg(long)]
-    pub machine: Option<PathBuf>,
+    #[command(flatten)]
+    pub out: crate::cmd::args::ProgramOutput,
+    #[command(flatten)]
+    pub machine: crate::cmd::args::MachineFile,
     /// Write the raster even when a check refuses it (its own gouge check
     /// finds it cutting into the part: a mesh with holes or seams can make
     /// drop-cutter miss material; an S or F outside the machine); the run
@@ -103,14 +91,12 @@ fn request(a: &Args) -> RasterRequest {
 pub fn run(a: Args) -> CliResult<i32> {
     let mut clock = crate::timings::Clock::start();
     let p = lib::params(&request(&a)).map_err(CliError::input)?;
-    let inputs: Vec<&std::path::Path> = [Some(a.stl.as_path()), a.machine.as_deref()]
-        .into_iter()
-        .flatten()
-        .collect();
-    let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], false)?;
-    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    let (stl, output) = (&a.part.stl, &a.out.output);
+    let inputs = [Some(stl.as_path()), a.machine.machine.as_deref()];
+    let mut outputs = crate::io::plan(&inputs, &[("-o", Some(output))], false)?;
+    let machine = a.machine.load()?;
     clock.lap("arguments, machine file and outputs checked");
-    let mesh = a.part_units.read(&a.stl)?;
+    let mesh = a.part.read()?;
     clock.lap("part read");
     let limits = crate::limits::get();
     let (points, bytes) =
@@ -120,39 +106,31 @@ pub fn run(a: Args) -> CliResult<i32> {
         millplan_geom::limits::amount(points.ceil())
     );
     crate::limits::check_memory(&what, bytes)?;
-    print_diagnostics(
-        &a.stl,
-        &checks::mesh(&mesh).into_iter().collect::<Vec<_>>(),
-        a.notes.quiet,
-    );
+    let found: Vec<_> = checks::mesh(&mesh).into_iter().collect();
+    print_diagnostics(stl, &found, a.notes.quiet);
     let (prog, part) = lib::generate(&mesh, &p);
     clock.lap("raster generated (drop-cutter)");
     if prog.move_count() == 0 {
         return Err(CliError::input(format!(
             "{}: the raster does not cross the part (check --boundary)",
-            a.stl.display()
+            stl.display()
         )));
     }
-    let generated = millplan_nc::Dialect::Generated;
-    let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, generated)?;
-    let out = write_program(&prog, machine.write_options(target), &a.stl, a.notes.quiet)?;
+    let target = a.out.target(&machine, millplan_nc::Dialect::Generated)?;
+    let out = write_program(&prog, machine.write_options(target), stl, a.notes.quiet)?;
     clock.lap("program written");
     let (checks, rep) = lib::check((&prog, &out), target, &part, &machine, &p)
-        .map_err(|e| CliError::internal(format!("{}: {e}", a.output.display())))?;
-    crate::verdict::enforce(&checks, &a.output, a.force)?;
+        .map_err(|e| CliError::internal(format!("{}: {e}", output.display())))?;
+    crate::verdict::enforce(&checks, output, a.force)?;
     clock.lap("written program read back and checked");
-    outputs.write(&a.output, &out)?;
+    outputs.write(output, &out)?;
     outputs.commit()?;
     clock.lap("output synced and renamed into place");
     let est = millplan_plan::timing::estimate_program(&prog, &machine);
-    let output = a.output.display().to_string();
+    let output = output.display().to_string();
     let report = lib::Report::new(output, (&prog, &machine, &p), (&rep, &checks), &est);
     a.summary.print(&report, |r| r.render_text());
     clock.lap("time estimate, summary printed");
     clock.print(a.timings.on);
-    Ok(if millplan_plan::safety::passed(&checks) {
-        EXIT_OK
-    } else {
-        EXIT_FINDINGS
-    })
+    Ok(exit(!millplan_plan::safety::passed(&checks)))
 }

@@ -1,15 +1,14 @@
 //! `millplan reorder`: reorder finishing points so the working diameter changes
 //! least between successive points (paper 000, thesis 5), with safe links.
 
-use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_program, Outputs};
+use crate::cmd::write_program;
+use crate::error::{exit, CliError, CliResult};
 use crate::timings::Table as _;
 use clap::ValueEnum;
 use millplan_driver::feed::file_name;
 use millplan_driver::reorder as lib;
 use millplan_plan::pipeline::Context;
-use millplan_plan::reorder::{Method, ReorderParams, Start};
+use millplan_plan::reorder::{Method, Start};
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -60,11 +59,8 @@ pub enum StartArg {
 pub struct Args {
     /// Program to reorder (APT/CL or G-code).
     pub path: PathBuf,
-    /// Part surface (STL) in the same coordinates as the program.
-    #[arg(long)]
-    pub stl: PathBuf,
     #[command(flatten)]
-    pub part_units: crate::cmd::args::PartUnits,
+    pub part: crate::cmd::args::Part,
     /// How the order is searched: as-run (default) measures candidate orders as the
     /// machine will run them; paper is the published greedy search over single
     /// points; optimised keeps
@@ -97,69 +93,47 @@ pub struct Args {
     /// Write the reordered points without spindle control.
     #[arg(long)]
     pub no_speed: bool,
-    /// Machine file (examples/machine.toml): spindle range and acceleration, feed
-    /// limits, control dialect; a typical HSC machine by default.
-    #[arg(long)]
-    pub machine: Option<PathBuf>,
-    /// Output dialect; default: the machine file's control, else the output's
-    /// extension, else the source's dialect.
-    #[arg(long, value_enum)]
-    pub to: Option<TargetArg>,
-    /// Reordered program to write.
-    #[arg(short, long)]
-    pub output: PathBuf,
+    #[command(flatten)]
+    pub machine: crate::cmd::args::MachineFile,
+    #[command(flatten)]
+    pub out: crate::cmd::args::ProgramOutput,
     /// HTML report: both orders side by side (D_w and spindle speed along the
     /// path, the distribution of successive changes, the tour from above).
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// Unit of a program that does not say (NX's Haas posts, bare GOTO files): mm or
-    /// inch.
-    #[arg(long, value_enum)]
-    pub units: Option<UnitArg>,
+    #[command(flatten)]
+    pub units: crate::cmd::args::ProgramUnits,
     #[command(flatten)]
     pub summary: crate::cmd::args::SummaryJson,
     #[command(flatten)]
     pub notes: crate::cmd::args::Quiet,
-    /// Write the program even when a check before writing refuses it (a
-    /// cutting point of the input not cut, a gouge the input did not have,
-    /// an S or F outside the machine); the run then ends with exit 3.
-    #[arg(long)]
-    pub force: bool,
+    #[command(flatten)]
+    pub force: crate::cmd::args::Force,
     #[command(flatten)]
     pub timings: crate::cmd::args::Timings,
 }
 
-/// The arguments checked and the outputs planned, before any work.
-fn plan(a: &Args) -> CliResult<(lib::ReorderRequest, ReorderParams, Outputs)> {
-    let req = request(a);
-    let rp = req.params().map_err(CliError::input)?;
-    let inputs: Vec<&std::path::Path> = [
-        Some(a.path.as_path()),
-        Some(a.stl.as_path()),
-        a.machine.as_deref(),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
-    let outputs = Outputs::plan(
-        &inputs,
-        &[("-o", Some(&a.output)), ("--report", a.report.as_deref())],
-        false,
-    )?;
-    Ok((req, rp, outputs))
-}
-
 pub fn run(a: Args) -> CliResult<i32> {
     let mut clock = crate::timings::Clock::start();
-    let (req, rp, mut outputs) = plan(&a)?;
-    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    let req = request(&a);
+    let rp = req.params().map_err(CliError::input)?;
+    let outs = [
+        ("-o", Some(&*a.out.output)),
+        ("--report", a.report.as_deref()),
+    ];
+    let inputs = [
+        Some(&*a.path),
+        Some(&*a.part.stl),
+        a.machine.machine.as_deref(),
+    ];
+    let mut outputs = crate::io::plan(&inputs, &outs, false)?;
+    let machine = a.machine.load()?;
     clock.lap("arguments, machine file and outputs checked");
     let quiet = a.notes.quiet;
-    let parsed = read_program(&a.path, read_options(a.units, None)?)?;
-    print_diagnostics(&a.path, &parsed.diagnostics, quiet || a.summary.json);
-    let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
+    let parsed = a.units.read(&a.path, quiet || a.summary.json)?;
+    let target = a.out.target(&machine, parsed.program.source)?;
     clock.lap("program read");
-    let mesh = a.part_units.read(&a.stl)?;
+    let mesh = a.part.read()?;
     clock.lap("part read");
     let long = millplan_driver::command_defaults::progress::long_program(&parsed.program);
     let bar = crate::progress::Phases::new(!quiet && long);
@@ -174,23 +148,22 @@ pub fn run(a: Args) -> CliResult<i32> {
     clock.lap("reordered and checked");
     let wo = cx.machine.write_options(target);
     let out = write_program(&r.program, wo, &a.path, quiet)?;
-    crate::verdict::read_back(&out, target, &r.program, &a.output)?;
-    let checked = crate::verdict::enforce(&r.checks, &a.path, a.force)?;
-    outputs.write(&a.output, &out)?;
+    crate::verdict::read_back(&out, target, &r.program, &a.out.output)?;
+    let checked = a.force.enforce(&r.checks, &a.path)?;
+    outputs.write(&a.out.output, &out)?;
     if let Some(path) = &a.report {
-        let names = (file_name(&a.path), file_name(&a.stl));
+        let names = (file_name(&a.path), file_name(&a.part.stl));
         let on = (&cx.machine, req.cut);
         let html = r.report_html((&parsed.program, &mesh), names, on, method(&a));
         outputs.write(path, html.as_bytes())?;
     }
     outputs.commit()?;
     clock.lap("outputs written, read back and renamed into place");
-    let output = a.output.display().to_string();
+    let output = a.out.output.display().to_string();
     let summary = lib::Summary::new(Some(method(&a)), &r.outcome, output, &r.checks);
     a.summary.print(&summary, |s| s.render_text());
-    clock.lap("summary printed");
-    clock.print(a.timings.on);
-    Ok(if checked { EXIT_OK } else { EXIT_FINDINGS })
+    clock.end(a.timings.on);
+    Ok(exit(!checked))
 }
 
 /// The method's name as the option gives it.

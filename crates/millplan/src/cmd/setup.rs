@@ -1,8 +1,7 @@
 //! `millplan setup`: can a five-axis machine reach the whole part in one setup,
 //! and how should the part be clamped?
 
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::Outputs;
+use crate::error::{exit, CliError, CliResult};
 use crate::timings::Table as _;
 use millplan_driver::setup::{self as lib, Kinematics, MachineType, SetupRequest};
 use millplan_plan::setup::{self, GridKind};
@@ -29,11 +28,8 @@ use std::path::PathBuf;
 /// Exit code 0 when feasible, 3 when not.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Part surface (STL).
-    #[arg(long)]
-    pub stl: PathBuf,
     #[command(flatten)]
-    pub part_units: crate::cmd::args::PartUnits,
+    pub part: crate::cmd::args::Part,
     /// Machine file (see examples/machine.toml) with a `[kinematics]` table:
     /// kind = "table-ac" | "table-bc" | "table-ab" | "head-bc" |
     /// "head-b-table-c", [kinematics.first] and [kinematics.second] with min,
@@ -81,10 +77,8 @@ pub struct Args {
     pub output: Option<PathBuf>,
     #[command(flatten)]
     pub summary: crate::cmd::args::SummaryJson,
-    /// Print no warnings or notes about the inputs (errors still print). No progress
-    /// either.
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
     #[command(flatten)]
     pub timings: crate::cmd::args::Timings,
 }
@@ -149,14 +143,14 @@ fn plan_shown(
     machine: &Kinematics,
     p: &setup::SetupParams,
 ) -> CliResult<setup::SetupPlan> {
-    let show = lib::shows_progress(mesh, p) && !a.quiet;
+    let show = lib::shows_progress(mesh, p) && !a.notes.quiet;
     let bar = crate::progress::fraction("cones of access", show);
     let progress = |done: usize, total: usize| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
     };
     let plan = setup::plan_with_progress(mesh, machine, p, &progress).map_err(|e| match e {
-        setup::SetupError::NoTriangles => CliError::input(format!("{}: {e}", a.stl.display())),
+        setup::SetupError::NoTriangles => CliError::input(format!("{}: {e}", a.part.stl.display())),
         e => CliError::input(e.to_string()),
     });
     bar.finish_and_clear();
@@ -165,53 +159,42 @@ fn plan_shown(
 
 pub fn run(a: Args) -> CliResult<i32> {
     let mut clock = crate::timings::Clock::start();
-    let inputs: Vec<&std::path::Path> = [Some(a.stl.as_path()), a.machine.as_deref()]
-        .into_iter()
-        .flatten()
-        .collect();
-    let mut outputs = Outputs::plan(
-        &inputs,
-        &[
-            ("-o", a.output.as_deref()),
-            ("--report", a.report.as_deref()),
-        ],
-        false,
-    )?;
+    let inputs = [Some(&*a.part.stl), a.machine.as_deref()];
+    let outs = [
+        ("-o", a.output.as_deref()),
+        ("--report", a.report.as_deref()),
+    ];
+    let mut outputs = crate::io::plan(&inputs, &outs, false)?;
     let req = request(&a);
     lib::check(&req).map_err(CliError::input)?;
     let machine = machine(&a)?;
     let p = lib::params(&req).map_err(CliError::input)?;
     clock.lap("arguments, machine file and outputs checked");
-    let mut mesh = a.part_units.read(&a.stl)?;
+    let mut mesh = a.part.read()?;
     clock.lap("part read");
     let t0 = std::time::Instant::now();
     let plan = plan_shown(&a, &mut mesh, &machine, &p)?;
     let secs = t0.elapsed().as_secs_f64();
     clock.lap("cones of access and setups searched");
-    let stl = a.stl.display().to_string();
+    let stl = a.part.stl.display().to_string();
     match lib::flipped_note(&plan, &stl) {
-        Some(n) if !a.quiet && !a.summary.json => eprintln!("{n}"),
+        Some(n) if !a.notes.quiet && !a.summary.json => eprintln!("{n}"),
         _ => {}
     }
     if let Some(out) = &a.output {
         outputs.write(out, &lib::rotated_stl(&mesh, &plan))?;
     }
     if let Some(path) = &a.report {
-        let html = lib::report(&req, a.stl.display().to_string(), &mesh, &plan, &machine);
+        let html = lib::report(&req, stl.clone(), &mesh, &plan, &machine);
         outputs.write(path, html.as_bytes())?;
     }
     outputs.commit()?;
     clock.lap("outputs written and renamed into place");
     let s = plan.summary(&mesh, &machine);
     let v = lib::verdict(&req, &mesh, &plan);
-    let text = || lib::render_text(&req, &a.stl.display().to_string(), (&s, &v), &plan);
+    let text = || lib::render_text(&req, &stl, (&s, &v), &plan);
     let j = || lib::Report::new(&req, &s, &machine, (secs, v.clone()));
     crate::cmd::print_summary(a.summary.json, j, text);
-    clock.lap("summary printed");
-    clock.print(a.timings.on);
-    Ok(if plan.feasible {
-        EXIT_OK
-    } else {
-        EXIT_FINDINGS
-    })
+    clock.end(a.timings.on);
+    Ok(exit(!plan.feasible))
 }

@@ -1,13 +1,12 @@
 //! `millplan simulate`: the program run over its stock.
 
-use crate::cmd::{print_diagnostics, read_options, UnitArg};
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
-use crate::io::{read_program, read_surface, Outputs};
+use crate::error::{exit, CliError, CliResult};
+use crate::io::Outputs;
 use crate::timings::Table as _;
 use millplan_driver::simulate::{self as lib, SimRequest};
 use millplan_driver::StockSpec;
 use millplan_geom::TriMesh;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Run the program over its stock: material removal, engagement per move,
 /// collisions, and the result against the part.
@@ -52,13 +51,8 @@ pub struct Args {
     /// holder's face). Default: no holder.
     #[arg(long, value_name = "D:L")]
     pub holder: Option<String>,
-    /// Part surface (STL): report the material left on it.
-    #[arg(long)]
-    pub stl: Option<PathBuf>,
-    /// Unit of the STL files' numbers (the part and an stl: blank; an STL
-    /// does not say): mm (default) or inch, converted to mm on reading.
-    #[arg(long, value_enum)]
-    pub stl_units: Option<UnitArg>,
+    #[command(flatten)]
+    pub part: crate::cmd::args::OptionalPart,
     /// Dexel size, mm.
     #[arg(long, default_value_t = millplan_driver::command_defaults::simulate::RESOLUTION, value_name = "MM")]
     pub resolution: f64,
@@ -66,9 +60,8 @@ pub struct Args {
     /// collision; on the part, cut deeper than this is a gouge.
     #[arg(long, default_value_t = millplan_driver::command_defaults::simulate::TOL, value_name = "MM")]
     pub tol: f64,
-    /// Machine file (TOML) for the rapid rate.
-    #[arg(long)]
-    pub machine: Option<PathBuf>,
+    #[command(flatten)]
+    pub machine: crate::cmd::args::MachineFile,
     /// Write the final stock as binary STL.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
@@ -83,15 +76,12 @@ pub struct Args {
     /// left on the part, the removal rate along the program.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
-    /// Units of a program that does not say (G20/G21, UNITS/).
-    #[arg(long, value_enum)]
-    pub units: Option<UnitArg>,
-    /// Print the summary as JSON.
-    #[arg(long)]
-    pub json: bool,
-    /// No progress bar or warnings.
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub units: crate::cmd::args::ProgramUnits,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
     #[command(flatten)]
     pub timings: crate::cmd::args::Timings,
 }
@@ -111,8 +101,7 @@ fn request(a: &Args) -> SimRequest {
 pub fn run(a: Args) -> CliResult<i32> {
     let mut clock = crate::timings::Clock::start();
     let code = run_timed(&a, &mut clock)?;
-    clock.lap("summary printed");
-    clock.print(a.timings.on);
+    clock.end(a.timings.on);
     Ok(code)
 }
 
@@ -121,17 +110,14 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
     // Checked before any work, not after the simulation.
     lib::check(&req).map_err(CliError::input)?;
     let spec = StockSpec::parse(&a.stock).map_err(|e| CliError::input(format!("--stock {e}")))?;
-    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    let machine = a.machine.load()?;
     let mut outputs = plan_outputs(a, &spec)?;
     clock.lap("arguments, machine file and outputs checked");
-    let parsed = read_program(&a.path, read_options(a.units, None)?)?;
-    print_diagnostics(&a.path, &parsed.diagnostics, a.quiet || a.json);
+    let quiet = a.notes.quiet || a.summary.json;
+    let parsed = a.units.read(&a.path, quiet)?;
     clock.lap("program read");
-    let part = match &a.stl {
-        Some(p) => Some(read_surface(p, a.stl_units)?.0),
-        None => None,
-    };
-    let blank = crate::io::read_blank(&spec, a.stl_units)?;
+    let part = a.part.read()?;
+    let blank = a.part.units.blank(&spec)?;
     clock.lap("part read");
     let path = a.path.display().to_string();
     let g = lib::SimInputs {
@@ -145,7 +131,7 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
         memory: crate::limits::get().memory,
     };
     // A bar on a long program only.
-    let bar = crate::progress::Phases::new(!a.quiet && !a.json);
+    let bar = crate::progress::Phases::new(!quiet);
     let progress = |done: usize, total: usize| {
         if total > millplan_driver::command_defaults::progress::LONG_SIMULATION_STROKES {
             bar.report("simulating", done, total)
@@ -154,42 +140,36 @@ fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
     let run = lib::command(&req, &g, &mut |l| clock.lap(l), &progress);
     bar.finish();
     let sim = run.map_err(|e| CliError::input(e.to_string()))?;
-    if let (Some(note), false) = (&sim.flute_note, a.quiet || a.json) {
+    if let (Some(note), false) = (&sim.flute_note, quiet) {
         eprintln!("note: {note}");
     }
     write_outputs(a, &mut outputs, &sim, part.as_ref())?;
     outputs.commit()?;
     clock.lap("outputs written, synced and renamed into place");
     let report = sim.report(&a.stock);
-    if a.json {
-        crate::cmd::print_json(serde_json::to_value(&report).unwrap_or_default());
-    } else {
-        out!("{}", report.render_text(&path, a.tol));
-    }
-    Ok(if sim.collided() {
-        EXIT_FINDINGS
-    } else {
-        EXIT_OK
-    })
+    a.summary.print(&report, |r| r.render_text(&path, a.tol));
+    Ok(exit(sim.collided()))
 }
 
 /// The outputs of the run, checked against every file it reads.
 fn plan_outputs(a: &Args, spec: &StockSpec) -> CliResult<Outputs> {
-    let mut inputs: Vec<&Path> = vec![&a.path];
-    inputs.extend(a.stl.as_deref());
-    inputs.extend(a.machine.as_deref());
-    if let StockSpec::Stl(p) = spec {
-        inputs.push(p);
-    }
-    Ok(Outputs::plan(
-        &inputs,
-        &[
-            ("-o", a.output.as_deref()),
-            ("--table", a.table.as_deref()),
-            ("--report", a.report.as_deref()),
-        ],
-        false,
-    )?)
+    let blank = match spec {
+        StockSpec::Stl(p) => Some(p.as_path()),
+        _ => None,
+    };
+    let inputs = [
+        Some(&*a.path),
+        a.part.stl.as_deref(),
+        a.machine.machine.as_deref(),
+        blank,
+    ];
+    let (table, report) = (a.table.as_deref(), a.report.as_deref());
+    let outs = [
+        ("-o", a.output.as_deref()),
+        ("--table", table),
+        ("--report", report),
+    ];
+    crate::io::plan(&inputs, &outs, false)
 }
 
 fn write_outputs(
@@ -205,7 +185,7 @@ fn write_outputs(
         outputs.write(p, sim.table_csv().as_bytes())?;
     }
     if let Some(p) = &a.report {
-        let files = (a.path.as_path(), a.stl.as_deref());
+        let files = (a.path.as_path(), a.part.stl.as_deref());
         let html = sim.report_html(&request(a), files, &a.stock, part);
         outputs.write(p, html.as_bytes())?;
     }

@@ -1,7 +1,7 @@
 //! `millplan speed`: constant-cutting-speed spindle control for ball-end finishing.
 
-use crate::cmd::{print_diagnostics, read_options, write_program_file, TargetArg, UnitArg};
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::cmd::{print_diagnostics, write_program_file};
+use crate::error::{exit, CliError, CliResult};
 use crate::io::{read_program, Outputs};
 use clap::ValueEnum;
 use millplan_driver::feed::file_name;
@@ -48,11 +48,8 @@ pub enum NormalArg {
 pub struct Args {
     /// Toolpath: APT/CL or G-code with a ball-end tool.
     pub path: PathBuf,
-    /// Part surface (STL) in the same coordinates as the toolpath.
-    #[arg(long)]
-    pub stl: PathBuf,
     #[command(flatten)]
-    pub part_units: crate::cmd::args::PartUnits,
+    pub part: crate::cmd::args::Part,
     /// Cutting speed, m/min.
     #[arg(long)]
     pub vc: f64,
@@ -65,17 +62,10 @@ pub struct Args {
     /// Stock thickness along the surface normal (finishing allowance), mm.
     #[arg(long)]
     pub ap: f64,
-    /// Machine file (examples/machine.toml): the spindle range and
-    /// acceleration, the feed range and rapid rate, the control's dialect
-    /// and its axes for the time estimate; a typical HSC machine by default.
-    #[arg(long)]
-    pub machine: Option<PathBuf>,
-    /// Output program.
-    #[arg(short, long)]
-    pub output: PathBuf,
-    /// Output dialect (default: the machine's, else the input's).
-    #[arg(long, value_enum)]
-    pub to: Option<TargetArg>,
+    #[command(flatten)]
+    pub machine: crate::cmd::args::MachineFile,
+    #[command(flatten)]
+    pub out: crate::cmd::args::ProgramOutput,
     /// Ball diameter (mm) for operations whose tool has no geometry, as in
     /// G-code programs that call tools by number only.
     #[arg(long)]
@@ -101,21 +91,16 @@ pub struct Args {
     /// Report (self-contained HTML with SVG plots).
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// Print a JSON summary on standard output.
-    #[arg(long)]
-    pub json: bool,
-    /// Unit of the toolpath when the file does not say.
-    #[arg(long, value_enum)]
-    pub units: Option<UnitArg>,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
+    #[command(flatten)]
+    pub units: crate::cmd::args::ProgramUnits,
     #[command(flatten)]
     pub timings: crate::cmd::args::Timings,
     #[command(flatten)]
     pub notes: crate::cmd::args::Quiet,
-    /// Write the program even when a check before writing refuses it (an S
-    /// or F outside the machine, a position changed); the findings are
-    /// printed and the run ends with exit 3.
-    #[arg(long)]
-    pub force: bool,
+    #[command(flatten)]
+    pub force: crate::cmd::args::Force,
 }
 
 fn request(a: &Args) -> SpeedRequest {
@@ -144,28 +129,6 @@ fn request(a: &Args) -> SpeedRequest {
     }
 }
 
-/// The program, table and report, checked against each other and the inputs
-/// before any work.
-fn plan_outputs(a: &Args) -> CliResult<Outputs> {
-    let inputs: Vec<&std::path::Path> = [
-        Some(a.path.as_path()),
-        Some(a.stl.as_path()),
-        a.machine.as_deref(),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
-    Ok(Outputs::plan(
-        &inputs,
-        &[
-            ("-o", Some(&a.output)),
-            ("--table", a.table.as_deref()),
-            ("--report", a.report.as_deref()),
-        ],
-        false,
-    )?)
-}
-
 /// The part, read while the program is read (and its cycle time estimated)
 /// on a thread of its own; the STL's wall time. A program that does not
 /// read is still the error reported first.
@@ -173,27 +136,12 @@ fn read_part(
     a: &Args,
     machine: &millplan_plan::machine::Machine,
 ) -> CliResult<(TriMesh, lib::Reader<CliError>, f64)> {
-    let (path, opts) = (a.path.clone(), read_options(a.units, None)?);
+    let (path, opts) = (a.path.clone(), a.units.options()?);
     let t = std::time::Instant::now();
     let reader = lib::Reader::spawn(machine.clone(), move || read_program(&path, opts));
-    match a.part_units.read(&a.stl) {
+    match a.part.read() {
         Ok(m) => Ok((m, reader, t.elapsed().as_secs_f64())),
         Err(e) => Err(reader.join().err().unwrap_or(e)),
-    }
-}
-
-/// The program, unless spindle control finds nothing to act on in it: then
-/// that, named, exit 3 and nothing written.
-fn something_to_control(
-    path: &std::path::Path,
-    parsed: millplan_nc::Parsed,
-) -> CliResult<millplan_nc::Parsed> {
-    match lib::nothing_to_control(&parsed.program) {
-        Some(why) => Err(CliError {
-            code: EXIT_FINDINGS,
-            message: format!("{}: {why}", path.display()),
-        }),
-        None => Ok(parsed),
     }
 }
 
@@ -201,8 +149,19 @@ pub fn run(a: Args) -> CliResult<i32> {
     let t0 = std::time::Instant::now();
     let req = request(&a);
     lib::check(&req).map_err(CliError::input)?;
-    let mut outputs = plan_outputs(&a)?;
-    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
+    let (table, report) = (a.table.as_deref(), a.report.as_deref());
+    let outs = [
+        ("-o", Some(&*a.out.output)),
+        ("--table", table),
+        ("--report", report),
+    ];
+    let inputs = [
+        Some(&*a.path),
+        Some(&*a.part.stl),
+        a.machine.machine.as_deref(),
+    ];
+    let mut outputs = crate::io::plan(&inputs, &outs, false)?;
+    let machine = a.machine.load()?;
     let t_setup = t0.elapsed().as_secs_f64();
     let (mesh, reader, t_mesh) = read_part(&a, &machine)?;
     let t = std::time::Instant::now();
@@ -210,10 +169,13 @@ pub fn run(a: Args) -> CliResult<i32> {
     let t_surface = t.elapsed().as_secs_f64();
     let read = reader.join()?;
     let t_inputs = t0.elapsed().as_secs_f64() - t_setup;
-    let parsed = something_to_control(&a.path, read.parsed)?;
+    let parsed = read.parsed;
+    if let Some(why) = lib::nothing_to_control(&parsed.program) {
+        return Err(CliError::findings(format!("{}: {why}", a.path.display())));
+    }
     let quiet = a.notes.quiet;
-    print_diagnostics(&a.path, &parsed.diagnostics, quiet || a.json);
-    let target = crate::cmd::target_with_machine(a.to, &a.output, &machine, parsed.program.source)?;
+    print_diagnostics(&a.path, &parsed.diagnostics, quiet || a.summary.json);
+    let target = a.out.target(&machine, parsed.program.source)?;
     let long = millplan_driver::command_defaults::progress::long_program(&parsed.program);
     let bar = crate::progress::Phases::new(!quiet && long);
     let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
@@ -228,29 +190,34 @@ pub fn run(a: Args) -> CliResult<i32> {
         SpeedError::Pass(e) => crate::cmd::pass_error(&a.path, e),
         SpeedError::NoSummary => CliError::internal("the speed pass left no summary"),
     })?;
-    let checked = crate::verdict::enforce(&out.checks, &a.path, a.force)?;
-    print_diagnostics(&a.stl, &out.findings, quiet || a.json);
+    let checked = a.force.enforce(&out.checks, &a.path)?;
+    print_diagnostics(&a.part.stl, &out.findings, quiet || a.summary.json);
     let t = std::time::Instant::now();
     let wo = cx.machine.write_options(target);
     let (written, time_after, [write_s, estimate_s]) =
         lib::write_beside(&out.program, &cx.machine, || {
-            write_program_file(&out.program, wo, &mut outputs, &a.output, &a.path, quiet)
+            write_program_file(
+                &out.program,
+                wo,
+                &mut outputs,
+                &a.out.output,
+                &a.path,
+                quiet,
+            )
         });
     written?;
     cx.record("  program written and synced", write_s);
     cx.record("  time estimate of the output (beside it)", estimate_s);
-    let t_write = t.elapsed().as_secs_f64();
-    cx.record("program written, its time estimated", t_write);
+    cx.record(
+        "program written, its time estimated",
+        t.elapsed().as_secs_f64(),
+    );
     let times = [read.time_before, time_after];
     report_run(&a, &req, &cx, (&out, times), outputs, target)?;
     if a.timings.on {
         crate::timings::print(&cx.timings(), t0);
     }
-    Ok(if out.untrusted() || !checked {
-        EXIT_FINDINGS
-    } else {
-        EXIT_OK
-    })
+    Ok(exit(out.untrusted() || !checked))
 }
 
 /// The table and report written, the outputs committed, the summary printed.
@@ -267,19 +234,15 @@ fn report_run(
             outputs.write(t, out.table_csv().as_bytes())?;
         }
         if let Some(r) = &a.report {
-            let names = (file_name(&a.path), file_name(&a.stl));
+            let names = (file_name(&a.path), file_name(&a.part.stl));
             let html = out.report_html(names, &cx.machine, req.cut, times);
             outputs.write(r, html.as_bytes())?;
         }
         Ok(())
     })?;
     cx.time("outputs renamed into place", || outputs.commit())?;
-    let written = (a.output.display().to_string(), target);
+    let written = (a.out.output.display().to_string(), target);
     let report = out.report(written, &cx.machine, times);
-    if a.json {
-        crate::cmd::print_json(serde_json::to_value(&report).unwrap_or_default());
-    } else {
-        out!("{}", report.render_text());
-    }
+    a.summary.print(&report, |r| r.render_text());
     Ok(())
 }
