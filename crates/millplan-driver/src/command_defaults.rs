@@ -31,17 +31,19 @@ pub mod cut {
     /// Lead and tilt, degrees.
     pub const LEAD_DEG: f64 = 0.0;
     pub const TILT_DEG: f64 = 0.0;
-    /// Largest axial slice height, mm.
-    pub const DZ: f64 = 0.05;
-    /// Largest rotation step, degrees.
-    pub const DPHI_DEG: f64 = 1.0;
     /// Gauge length without `--stickout`, in tool diameters.
     pub const STICKOUT_PER_D: f64 = 3.0;
-    /// Young's modulus of the tool (carbide), N/mm².
-    pub const MODULUS: f64 = millplan_models::force::deflect::E_CARBIDE;
+    /// The force model's largest slice height, mm, rotation step, degrees,
+    /// and the tool's Young's modulus, N/mm²: `feed`'s (the binary's
+    /// `ForceModel` group declares them once for both; the Python binding
+    /// names them here).
+    pub const DZ: f64 = super::feed::DZ;
+    pub const DPHI_DEG: f64 = super::feed::DPHI_DEG;
+    pub const MODULUS: f64 = super::feed::MODULUS;
 }
 
-/// `millplan feed` and `millplan force`.
+/// `millplan feed` and `millplan force` (and the force model's tool and
+/// steps of `millplan cut`: `MODULUS`, `DZ`, `DPHI_DEG`).
 pub mod feed {
     /// Flutes.
     pub const FLUTES: usize = 2;

@@ -153,6 +153,37 @@ impl Force {
     }
 }
 
+/// The force model's tool body and steps (`cut`, `feed`, `force PATH`).
+#[derive(clap::Args, Clone, Copy)]
+pub struct ForceModel {
+    /// Gauge length from the holder face to the tip, mm (default 3·D).
+    #[arg(long)]
+    pub stickout: Option<f64>,
+    /// Fluted length, mm (default: the program's tool height where a program
+    /// gives one, else the stick-out); shorter than the stick-out it makes
+    /// the tool a stepped cantilever (shank D, flutes 0.8·D).
+    #[arg(long)]
+    pub flute_length: Option<f64>,
+    /// Young's modulus of the tool, N/mm².
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::MODULUS)]
+    pub modulus: f64,
+    /// Slice length of the force model along the tool's profile, mm: the
+    /// largest used (per engagement the model halves it, up to four times,
+    /// until F_xy,max and T_max are estimated within 0.4 %), unless
+    /// --fixed-grid.
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::DZ)]
+    pub dz: f64,
+    /// Rotation step of the force model, degrees: the largest used, halved
+    /// like --dz.
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::DPHI_DEG)]
+    pub dphi: f64,
+    /// Use --dz and --dphi as given instead of refining them per engagement
+    /// until F_xy,max and T_max converge. Faster on engagements with sharp
+    /// force peaks, where the given steps can miss a peak by a few per cent.
+    #[arg(long)]
+    pub fixed_grid: bool,
+}
+
 /// `--json` of the commands with a machine-readable summary.
 #[derive(clap::Args, Clone, Copy)]
 pub struct SummaryJson {

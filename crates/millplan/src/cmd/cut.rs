@@ -62,16 +62,8 @@ pub struct Args {
     /// (sin L·cos T, −sin T, cos L·cos T)); same signs either way.
     #[arg(long, value_enum, default_value = "tilt-then-lead")]
     pub variant: VariantArg,
-    /// Gauge length from the holder face to the tip, mm (default 3·D).
-    #[arg(long)]
-    pub stickout: Option<f64>,
-    /// Fluted length, mm: makes the tool a stepped cantilever (shank D,
-    /// flutes 0.8·D); without it the whole stick-out counts as fluted.
-    #[arg(long)]
-    pub flute_length: Option<f64>,
-    /// Young's modulus of the tool, N/mm².
-    #[arg(long, default_value_t = millplan_driver::command_defaults::cut::MODULUS)]
-    pub modulus: f64,
+    #[command(flatten)]
+    pub model: crate::cmd::args::ForceModel,
     /// Named material (`millplan force materials` lists them).
     #[arg(long, conflicts_with = "coeffs", required_unless_present = "coeffs")]
     pub material: Option<String>,
@@ -84,16 +76,6 @@ pub struct Args {
     /// Spindle speed, 1/min.
     #[arg(long)]
     pub n: f64,
-    /// Axial slice height, mm: the largest used. The model halves it (up to
-    /// four times) until F_xy,max and T_max are estimated within 0.4 %.
-    #[arg(long, default_value_t = millplan_driver::command_defaults::cut::DZ)]
-    pub dz: f64,
-    /// Rotation step, degrees: the largest used, halved like --dz.
-    #[arg(long, default_value_t = millplan_driver::command_defaults::cut::DPHI_DEG)]
-    pub dphi: f64,
-    /// Use exactly --dz and --dphi, without refining them.
-    #[arg(long)]
-    pub fixed_grid: bool,
     /// Write the force curves over one revolution as CSV.
     #[arg(long)]
     pub csv: Option<PathBuf>,
@@ -135,15 +117,15 @@ fn request(a: &Args) -> CutRequest {
         lead: a.lead,
         tilt: a.tilt,
         variant: a.variant.into(),
-        stickout: a.stickout,
-        flute_length: a.flute_length,
-        modulus: a.modulus,
+        stickout: a.model.stickout,
+        flute_length: a.model.flute_length,
+        modulus: a.model.modulus,
         material: a.material.clone(),
         coeffs: a.coeffs.clone(),
         n: a.n,
-        dz: a.dz,
-        dphi: a.dphi,
-        fixed_grid: a.fixed_grid,
+        dz: a.model.dz,
+        dphi: a.model.dphi,
+        fixed_grid: a.model.fixed_grid,
     }
 }
 
