@@ -1,8 +1,8 @@
 //! `millplan feed`: a feed per block from the cutting forces; and what
 //! `millplan force PATH` shares with it (the program, its stock, the model).
 
-use crate::cmd::{read_options, write_program_file, TargetArg, UnitArg};
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::cmd::write_program_file;
+use crate::error::{exit, CliError, CliResult};
 use crate::io::Outputs;
 use millplan_driver::feed::{
     self as lib, FeedRequest, ModelRequest, Prepared, ScheduleError, Watch as _,
@@ -10,31 +10,24 @@ use millplan_driver::feed::{
 use millplan_driver::StockSpec;
 use std::path::{Path, PathBuf};
 
-/// The program's stock, material and tools (shared by `force PATH` and `feed`).
+/// What the force model cuts with besides the program: the stock, the part,
+/// the material and the tools (shared by `force PATH`, `feed` and `robot`).
 #[derive(clap::Args, Clone)]
-pub struct ModelArgs {
+pub struct ForceInputs {
     /// Initial stock: box:auto or box:auto:MARGIN, box:X0,Y0,Z0,X1,Y1,Z1,
     /// cylinder:auto or cylinder:auto:MARGIN, cylinder:CX,CY,Z0,Z1,D, stl:FILE or
     /// offset:MM (the --stl part grown by MM), as in `millplan simulate`.
     #[arg(long)]
     pub stock: Option<String>,
-    /// Part surface (STL), for --stock offset:MM.
-    #[arg(long)]
-    pub stl: Option<PathBuf>,
-    /// Unit of the STL files' numbers (an STL does not say): mm (default) or
-    /// inch, converted to mm on reading.
-    #[arg(long, value_enum)]
-    pub stl_units: Option<crate::cmd::UnitArg>,
-    /// Named material (`millplan force materials` lists them).
+    #[command(flatten)]
+    pub part: crate::cmd::args::OptionalPart,
+    /// Named material (`millplan force materials` lists them; en-aw-2007
+    /// is the paper's).
     #[arg(long)]
     pub material: Option<String>,
-    /// A TOML file of further materials.
+    /// A TOML file of further materials (same form as the built-in table).
     #[arg(long)]
     pub materials: Option<PathBuf>,
-    /// Machine file (TOML): feed range, rapid rate, axis accelerations, the
-    /// spindle's power/torque chart (its limits at each block's speed).
-    #[arg(long)]
-    pub machine: Option<PathBuf>,
     /// Cutter for operations whose tool has no geometry, or to override it:
     /// ball:D, flat:D or bull:D:R.
     #[arg(long)]
@@ -45,56 +38,64 @@ pub struct ModelArgs {
     /// Helix angle, degrees.
     #[arg(long, default_value_t = millplan_driver::command_defaults::feed::HELIX_DEG, allow_hyphen_values = true)]
     pub helix: f64,
-    /// Gauge length from the holder face to the tip, mm (default 3·D).
-    #[arg(long)]
-    pub stickout: Option<f64>,
-    /// Fluted length, mm (default: the program's tool height, else the
-    /// stick-out); a stepped cantilever when shorter than the stick-out.
-    #[arg(long)]
-    pub flute_length: Option<f64>,
-    /// Young's modulus of the tool, N/mm².
-    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::MODULUS)]
-    pub modulus: f64,
-    /// Dexel size of the stock, mm; also the spacing of the poses each move
-    /// is loaded at along its length.
-    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::RESOLUTION)]
-    pub resolution: f64,
-    /// Slice length of the force model along the tool's profile, mm: the
-    /// largest used (per load sample the model halves it, up to four times,
-    /// until F_xy,max and T_max are estimated within 0.4 %), unless
-    /// --fixed-grid.
-    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::DZ)]
-    pub dz: f64,
-    /// Rotation step of the force model, degrees: the largest used, halved
-    /// like --dz.
-    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::DPHI_DEG)]
-    pub dphi: f64,
-    /// Use --dz and --dphi as given instead of refining them per load
-    /// sample until F_xy,max and T_max converge. Faster on engagements
-    /// with sharp force peaks, where the given steps can miss a peak by a
-    /// few per cent.
-    #[arg(long)]
-    pub fixed_grid: bool,
     /// Spindle speed, 1/min, for the moves of a program that gives none (no
     /// S word, as some CAM systems write finishing programs): the forces
     /// need one. Moves with an S word keep theirs.
     #[arg(long, value_name = "RPM")]
     pub spindle: Option<f64>,
-    /// Units of a program that does not say.
-    #[arg(long, value_enum)]
-    pub units: Option<UnitArg>,
+    /// Dexel size of the stock, mm; also the spacing of the poses each move
+    /// is loaded at along its length.
+    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::RESOLUTION)]
+    pub resolution: f64,
+}
+
+impl ForceInputs {
+    /// The program at `path` and the files of the options, as the driver
+    /// reads them.
+    pub fn files<'a>(
+        &'a self,
+        path: &'a Path,
+        machine: Option<&'a Path>,
+        units: &crate::cmd::args::ProgramUnits,
+    ) -> CliResult<lib::ModelFiles<'a>> {
+        Ok(lib::ModelFiles {
+            program: path,
+            stl: self.part.stl.as_deref(),
+            stl_units: self.part.units.stl_units.map(Into::into),
+            materials: self.materials.as_deref(),
+            machine,
+            read: units.options()?,
+        })
+    }
+
+    /// The files the run reads besides the program and a machine file.
+    pub fn inputs(&self) -> [Option<PathBuf>; 3] {
+        let blank = self.stock.as_deref().and_then(StockSpec::file_of);
+        [self.part.stl.clone(), self.materials.clone(), blank]
+    }
+}
+
+/// The program's stock, material and tools (shared by `force PATH` and `feed`).
+#[derive(clap::Args, Clone)]
+pub struct ModelArgs {
+    #[command(flatten)]
+    pub inputs: ForceInputs,
+    #[command(flatten)]
+    pub machine: crate::cmd::args::MachineFile,
+    #[command(flatten)]
+    pub tool: crate::cmd::args::ForceModel,
+    #[command(flatten)]
+    pub units: crate::cmd::args::ProgramUnits,
     /// One CSV row per move: loads, feed per tooth, allowed feed, binding limit.
     #[arg(long, value_name = "FILE")]
     pub table: Option<PathBuf>,
     /// HTML report: loads against time with the limits drawn.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
-    /// Print the summary as JSON.
-    #[arg(long)]
-    pub json: bool,
-    /// No progress bar or warnings.
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
+    #[command(flatten)]
+    pub notes: crate::cmd::args::Quiet,
     #[command(flatten)]
     pub timings: crate::cmd::args::Timings,
 }
@@ -102,20 +103,21 @@ pub struct ModelArgs {
 impl ModelArgs {
     /// The options as the driver takes them.
     pub fn request(&self) -> ModelRequest {
+        let i = &self.inputs;
         ModelRequest {
-            stock: self.stock.clone(),
-            material: self.material.clone(),
-            tool: self.tool.clone(),
-            flutes: self.flutes,
-            helix: self.helix,
-            stickout: self.stickout,
-            flute_length: self.flute_length,
-            modulus: self.modulus,
-            resolution: self.resolution,
-            dz: self.dz,
-            dphi: self.dphi,
-            fixed_grid: self.fixed_grid,
-            spindle: self.spindle,
+            stock: i.stock.clone(),
+            material: i.material.clone(),
+            tool: i.tool.clone(),
+            flutes: i.flutes,
+            helix: i.helix,
+            stickout: self.tool.stickout,
+            flute_length: self.tool.flute_length,
+            modulus: self.tool.modulus,
+            resolution: i.resolution,
+            dz: self.tool.dz,
+            dphi: self.tool.dphi,
+            fixed_grid: self.tool.fixed_grid,
+            spindle: i.spindle,
         }
     }
 
@@ -127,31 +129,37 @@ impl ModelArgs {
         p: &Prepared,
         limits: &millplan_driver::feed::FeedLimits,
     ) -> Vec<(String, String)> {
-        let names = lib::InputNames::of(path, self.stl.as_deref());
+        let names = lib::InputNames::of(path, self.inputs.part.stl.as_deref());
         lib::model_inputs(&names, &self.request(), p, limits)
     }
 
     /// The program at `path` and the files of the options, as the driver
     /// reads them.
     pub fn files<'a>(&'a self, path: &'a Path) -> CliResult<lib::ModelFiles<'a>> {
-        Ok(lib::ModelFiles {
-            program: path,
-            stl: self.stl.as_deref(),
-            stl_units: self.stl_units.map(Into::into),
-            materials: self.materials.as_deref(),
-            machine: self.machine.as_deref(),
-            read: read_options(self.units, None)?,
-        })
+        let machine = self.machine.machine.as_deref();
+        self.inputs.files(path, machine, &self.units)
     }
 
-    /// The files the run reads, besides the program.
-    pub fn inputs(&self) -> Vec<PathBuf> {
-        let mut v: Vec<PathBuf> = Vec::new();
-        v.extend(self.stl.clone());
-        v.extend(self.machine.clone());
-        v.extend(self.materials.clone());
-        v.extend(self.stock.as_deref().and_then(StockSpec::file_of));
-        v
+    /// Whether warnings, notes and bars are left out (`-q`, `--json`).
+    pub fn quiet(&self) -> bool {
+        self.notes.quiet || self.summary.json
+    }
+
+    /// The outputs `outs` of a run on the program at `path`, checked against
+    /// them and every file the run reads.
+    pub fn plan(&self, path: &Path, outs: &[(&str, Option<&Path>)]) -> CliResult<Outputs> {
+        let [a, b, c] = self.inputs.inputs();
+        let machine = self.machine.machine.as_deref();
+        let inputs = [
+            Some(path),
+            machine,
+            a.as_deref(),
+            b.as_deref(),
+            c.as_deref(),
+        ];
+        let (table, report) = (self.table.as_deref(), self.report.as_deref());
+        let outs = [outs, &[("--table", table), ("--report", report)]].concat();
+        crate::io::plan(&inputs, &outs, false)
     }
 }
 
@@ -183,7 +191,7 @@ fn schedule(
     req: &ModelRequest,
     params: millplan_driver::feed::FeedParams,
 ) -> CliResult<lib::Scheduled> {
-    let bar = crate::progress::Phases::new(!(a.model.quiet || a.model.json));
+    let bar = crate::progress::Phases::new(!a.model.quiet());
     let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
     let ran = lib::schedule(p, params, req, &hook);
     bar.finish();
@@ -195,39 +203,26 @@ fn schedule(
 
 pub fn run(a: Args) -> CliResult<i32> {
     let m = &a.model;
-    let watch = crate::progress::Watch::new(&a.path, m.quiet || m.json);
-    let others = m.inputs();
-    let mut inputs: Vec<&Path> = vec![&a.path];
-    inputs.extend(others.iter().map(PathBuf::as_path));
-    let outputs = Outputs::plan(
-        &inputs,
-        &[
-            ("-o", Some(&a.output)),
-            ("--table", m.table.as_deref()),
-            ("--report", m.report.as_deref()),
-        ],
-        false,
-    )?;
+    let watch = crate::progress::Watch::new(&a.path, m.quiet());
+    let outputs = m.plan(&a.path, &[("-o", Some(&a.out.output))])?;
     watch.lap("arguments and outputs checked");
     let p = lib::prepare(&m.files(&a.path)?, &m.request(), &watch)?;
     let req = m.request();
     let own = lib::input_collisions(&p, &req).map_err(CliError::input)?;
-    crate::verdict::enforce(&[own], &a.path, a.force)?;
+    a.force.enforce(&[own], &a.path)?;
     watch.lap("the input's rapids, shank and holder on the stock");
     let params = lib::feed_params(&request(&a), &req, &p, &crate::limits::loads())
         .map_err(CliError::input)?;
-    let target = crate::cmd::target_with_machine(a.to, &a.output, &p.machine, p.program.source)?;
+    let target = a.out.target(&p.machine, p.program.source)?;
     watch.lap("limits (learned from the input's forces when none is given), output dialect");
     let s = schedule(&a, &p, &req, params)?;
     let path = a.path.display().to_string();
     lib::stopped_spindle(&path, &s.before).map_err(CliError::input)?;
     watch.lap("feeds scheduled (the input's forces, the feed iteration)");
     let s2 = lib::program_strokes(&req, &s.program, p.machine.rapid).map_err(CliError::input)?;
-    let after = with_bar(&s2, m.quiet || m.json, |d| {
-        lib::forces_after(&p, &s, &s2, d)
-    })?;
+    let after = with_bar(&s2, m.quiet(), |d| lib::forces_after(&p, &s, &s2, d))?;
     let checks = lib::checks(&p, &s.program, &req).map_err(CliError::input)?;
-    crate::verdict::enforce(&checks, &a.path, a.force)?;
+    a.force.enforce(&checks, &a.path)?;
     watch.lap("written program simulated again and checked");
     let code = write_outputs(&a, &p, &s, (&after, checks), target, outputs, &watch)?;
     watch.print_timings(m.timings.on);
@@ -247,8 +242,9 @@ fn write_outputs(
 ) -> CliResult<i32> {
     let m = &a.model;
     let wo = p.machine.write_options(target);
-    write_program_file(&s.program, wo, &mut outputs, &a.output, &a.path, m.quiet)?;
-    let output = a.output.display().to_string();
+    let output = &a.out.output;
+    write_program_file(&s.program, wo, &mut outputs, output, &a.path, m.notes.quiet)?;
+    let output = output.display().to_string();
     let summary = lib::FeedSummary::new(p, s, (after, checks), &output, target.name());
     if let Some(t) = &m.table {
         outputs.write(t, lib::loads_csv(&s.before).as_bytes())?;
@@ -267,13 +263,9 @@ fn write_outputs(
     }
     outputs.commit()?;
     watch.lap("outputs written, checked and renamed into place");
-    crate::cmd::print_summary(m.json, || &summary, || summary.render_text());
+    m.summary.print(&summary, |s| s.render_text());
     watch.lap("summary printed");
-    Ok(if summary.findings() {
-        EXIT_FINDINGS
-    } else {
-        EXIT_OK
-    })
+    Ok(exit(summary.findings()))
 }
 
 /// A feed per block from the cutting forces (the feed iteration of
@@ -307,12 +299,8 @@ pub struct Args {
     pub path: PathBuf,
     #[command(flatten)]
     pub model: ModelArgs,
-    /// Output program.
-    #[arg(short, long)]
-    pub output: PathBuf,
-    /// Output dialect (default: the machine's, else the file name's, else the input's).
-    #[arg(long, value_enum)]
-    pub to: Option<TargetArg>,
+    #[command(flatten)]
+    pub out: crate::cmd::args::ProgramOutput,
     /// Smallest feed per tooth, mm (at most a tool's largest).
     #[arg(long, default_value_t = millplan_driver::command_defaults::feed::FZ_MIN)]
     pub fz_min: f64,
@@ -328,9 +316,6 @@ pub struct Args {
     /// acceleration, else 1000).
     #[arg(long)]
     pub feed_accel: Option<f64>,
-    /// Write the program even when a check refuses it (a rapid, shank or
-    /// holder in the stock, the input's own included; an S or F outside the
-    /// machine); the run then ends with exit 3.
-    #[arg(long)]
-    pub force: bool,
+    #[command(flatten)]
+    pub force: crate::cmd::args::Force,
 }

@@ -63,26 +63,24 @@ pub struct CalibrateArgs {
     /// Name for the materials-file entry printed at the end.
     #[arg(long, default_value = "calibrated")]
     pub name: String,
-    /// Print JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
 }
 
 /// Lists the named materials (built in, plus those of --materials).
 #[derive(clap::Args)]
 pub struct MaterialsArgs {
-    /// A TOML file of further materials.
+    /// A TOML file of further materials (same form as the built-in table).
     #[arg(long)]
     pub materials: Option<PathBuf>,
-    /// Print JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
     match (a.command, a.path) {
         (Some(Sub::Calibrate(c)), _) => calibrate(c),
-        (Some(Sub::Materials(m)), _) => list(&load_materials(m.materials.as_deref())?, m.json),
+        (Some(Sub::Materials(m)), _) => list(&load_materials(m.materials.as_deref())?, m.summary.json),
         (None, Some(path)) => program_forces(&path, &a.model),
         (None, None) => Err(CliError::input(
             "give a program (millplan force PATH --stock SPEC --material M) or a subcommand (calibrate, materials)",
@@ -93,18 +91,8 @@ pub fn run(a: Args) -> CliResult<i32> {
 /// `millplan force PATH`: the loads of every move.
 fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32> {
     use millplan_driver::feed::Watch as _;
-    let watch = crate::progress::Watch::new(path, m.quiet || m.json);
-    let others = m.inputs();
-    let mut inputs: Vec<&Path> = vec![path];
-    inputs.extend(others.iter().map(PathBuf::as_path));
-    let mut outputs = crate::io::Outputs::plan(
-        &inputs,
-        &[
-            ("--table", m.table.as_deref()),
-            ("--report", m.report.as_deref()),
-        ],
-        false,
-    )?;
+    let watch = crate::progress::Watch::new(path, m.quiet());
+    let mut outputs = m.plan(path, &[])?;
     let limits =
         millplan_driver::feed::force_limits(&crate::limits::loads()).map_err(CliError::input)?;
     watch.lap("arguments, limits and outputs checked");
@@ -122,15 +110,10 @@ fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32
     }
     outputs.commit()?;
     watch.lap("outputs written and renamed into place");
-    let text = || summary.render_text(&name, &over);
-    crate::cmd::print_summary(m.json, || &summary, text);
+    m.summary.print(&summary, |s| s.render_text(&name, &over));
     watch.lap("summary printed");
     watch.print_timings(m.timings.on);
-    Ok(if summary.findings() {
-        crate::error::EXIT_FINDINGS
-    } else {
-        EXIT_OK
-    })
+    Ok(crate::error::exit(summary.findings()))
 }
 
 fn calibrate(a: CalibrateArgs) -> CliResult<i32> {
@@ -142,7 +125,7 @@ fn calibrate(a: CalibrateArgs) -> CliResult<i32> {
     let cal = lib::calibrate(&tests, a.flutes, a.ap, &name).map_err(CliError::input)?;
     let j = || lib::CalibrationJson::new(&cal, tests.len());
     let text = || lib::calibration_text(&cal, &a.name, tests.len());
-    crate::cmd::print_summary(a.json, j, text);
+    crate::cmd::print_summary(a.summary.json, j, text);
     Ok(EXIT_OK)
 }
 

@@ -1,7 +1,7 @@
 //! `millplan robot`: the compliant-joint robot model of Schnoes & Zaeh
 //! (deflection at a pose).
 
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::Outputs;
 use crate::timings::{Clock, Table as _};
 use clap::{Subcommand, ValueEnum};
@@ -46,12 +46,32 @@ pub enum RobotCommand {
     Place(PlaceArgs),
 }
 
-/// The robot and the process load, shared by `compensate` and `place`.
+/// The robot, shared by `deflect`, `compensate` and `place`.
 #[derive(clap::Args)]
-pub struct ProcessArgs {
+pub struct RobotArgs {
     /// The robot: `kr240` for the bundled KUKA KR 240 R2500, or a robot file.
     #[arg(long, default_value = "kr240")]
     pub robot: String,
+    /// Compliant axes per frame: three (x, y, z) or one (the joint's).
+    #[arg(long, value_enum, default_value = "three")]
+    pub axes: VariantArg,
+    #[command(flatten)]
+    pub summary: crate::cmd::args::SummaryJson,
+}
+
+/// The robot and the process load, shared by `compensate` and `place`: a
+/// fixed load, or the force model along the path as `millplan force` runs
+/// it (the program cut through its stock, each move's mean force over a
+/// revolution, averaged along the move and zero in air, the load of its
+/// points).
+#[derive(clap::Args)]
+#[command(
+    mut_arg("stock", |a| a.requires("material")),
+    mut_arg("material", |a| a.requires("stock"))
+)]
+pub struct ProcessArgs {
+    #[command(flatten)]
+    pub robot: RobotArgs,
     /// A fixed process force on the tool in newtons, the same at every
     /// point, in each point's feed frame: along the feed, across it (to the
     /// left seen from the spindle), along the tool axis (toward the
@@ -65,13 +85,7 @@ pub struct ProcessArgs {
     )]
     pub load: Option<String>,
     #[command(flatten)]
-    pub model: CouplingArgs,
-    /// Compliant axes per frame: three (x, y, z) or one (the joint's).
-    #[arg(long, value_enum, default_value = "three")]
-    pub axes: VariantArg,
-    /// Print JSON on standard output; errors too, as JSON on standard error.
-    #[arg(long)]
-    pub json: bool,
+    pub model: crate::cmd::feed::ForceInputs,
     #[command(flatten)]
     pub timings: crate::cmd::args::Timings,
 }
@@ -130,60 +144,6 @@ pub struct PlaceArgs {
     pub restarts: usize,
 }
 
-/// The force model along the path, as `millplan force` runs it: the
-/// program cut through its stock, each move's mean force over a revolution
-/// (averaged along the move, zero in air) the load of its points.
-#[derive(clap::Args)]
-pub struct CouplingArgs {
-    /// Initial stock as `millplan force` takes it (box:auto, box:X0,Y0,Z0,X1,Y1,Z1,
-    /// cylinder:…, stl:FILE, offset:MM): the load from the force model cutting it.
-    #[arg(long, requires = "material")]
-    pub stock: Option<String>,
-    /// Part surface (STL), for --stock offset:MM.
-    #[arg(long)]
-    pub stl: Option<std::path::PathBuf>,
-    /// Unit of the STL file's numbers (an STL does not say): mm (default) or
-    /// inch, converted to mm on reading.
-    #[arg(long, value_enum)]
-    pub stl_units: Option<crate::cmd::UnitArg>,
-    /// Named material (`millplan force materials`; en-aw-2007: the paper's).
-    #[arg(long, requires = "stock")]
-    pub material: Option<String>,
-    /// A TOML file of further materials.
-    #[arg(long)]
-    pub materials: Option<std::path::PathBuf>,
-    /// Cutter where the program gives none, or to override it: ball:D, flat:D, bull:D:R.
-    #[arg(long)]
-    pub tool: Option<String>,
-    /// Flutes of every tool.
-    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::FLUTES)]
-    pub flutes: usize,
-    /// Helix angle, degrees.
-    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::HELIX_DEG, allow_hyphen_values = true)]
-    pub helix: f64,
-    /// Spindle speed, 1/min, for the moves of a program that gives none.
-    #[arg(long, value_name = "RPM")]
-    pub spindle: Option<f64>,
-    /// Dexel size of the stock, mm (and the spacing of the loaded poses).
-    #[arg(long, default_value_t = millplan_driver::command_defaults::feed::RESOLUTION)]
-    pub resolution: f64,
-}
-
-impl CouplingArgs {
-    /// The force model's options as the driver takes them.
-    fn request(&self) -> lib::CouplingRequest {
-        lib::CouplingRequest {
-            stock: self.stock.clone(),
-            material: self.material.clone(),
-            tool: self.tool.clone(),
-            flutes: self.flutes,
-            helix: self.helix,
-            spindle: self.spindle,
-            resolution: self.resolution,
-        }
-    }
-}
-
 /// Which compliant axes each frame of the chain has.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum VariantArg {
@@ -195,9 +155,6 @@ pub enum VariantArg {
 
 #[derive(clap::Args)]
 pub struct DeflectArgs {
-    /// The robot: `kr240` for the bundled KUKA KR 240 R2500, or a robot file.
-    #[arg(long, default_value = "kr240")]
-    pub robot: String,
     /// The six axis angles A1,A2,A3,A4,A5,A6 in degrees, as the controller
     /// shows them.
     #[arg(long, allow_hyphen_values = true, value_name = "A1,A2,A3,A4,A5,A6")]
@@ -208,12 +165,8 @@ pub struct DeflectArgs {
     /// A moment MX,MY,MZ in newton metres, in the base frame.
     #[arg(long, allow_hyphen_values = true, value_name = "MX,MY,MZ")]
     pub moment: Option<String>,
-    /// Compliant axes per frame: three (x, y, z) or one (the joint's).
-    #[arg(long, value_enum, default_value = "three")]
-    pub axes: VariantArg,
-    /// Print JSON on standard output; errors too, as JSON on standard error.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub robot: RobotArgs,
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
@@ -239,15 +192,15 @@ fn print<T: serde::Serialize>(json: bool, out: &T, text: impl FnOnce(&T) -> Stri
 }
 
 fn deflect(a: DeflectArgs) -> CliResult<i32> {
-    let robot = load_robot(&a.robot)?;
+    let robot = load_robot(&a.robot.robot)?;
     let req = lib::DeflectRequest {
         joints: a.joints,
         force: a.force,
         moment: a.moment,
-        variant: variant(a.axes),
+        variant: variant(a.robot.axes),
     };
     let out = lib::deflect(&robot, &req).map_err(CliError::input)?;
-    print(a.json, &out, lib::DeflectSummary::render_text);
+    print(a.robot.summary.json, &out, lib::DeflectSummary::render_text);
     Ok(EXIT_OK)
 }
 
@@ -261,22 +214,25 @@ fn variant(v: VariantArg) -> Variant {
 /// The robot, the program at `path` and its load: `--load` at every
 /// point, or the force model's per move with the stock.
 fn process(path: &Path, p: &ProcessArgs) -> CliResult<(Robot, Program, PathLoad)> {
-    let robot = load_robot(&p.robot)?;
+    let robot = load_robot(&p.robot.robot)?;
     if let Some(text) = &p.load {
         let load = lib::fixed_load(text).map_err(CliError::input)?;
         let opts = millplan_nc::ReadOptions::default();
         return Ok((robot, crate::io::read_program(path, opts)?.program, load));
     }
-    let files = millplan_driver::feed::ModelFiles {
-        program: path,
-        stl: p.model.stl.as_deref(),
-        stl_units: p.model.stl_units.map(Into::into),
-        materials: p.model.materials.as_deref(),
-        machine: None,
-        read: crate::cmd::read_options(None, None)?,
+    let m = &p.model;
+    let files = m.files(path, None, &crate::cmd::args::ProgramUnits { units: None })?;
+    let watch = crate::progress::Watch::new(path, p.robot.summary.json);
+    let req = lib::CouplingRequest {
+        stock: m.stock.clone(),
+        material: m.material.clone(),
+        tool: m.tool.clone(),
+        flutes: m.flutes,
+        helix: m.helix,
+        spindle: m.spindle,
+        resolution: m.resolution,
     };
-    let watch = crate::progress::Watch::new(path, p.json);
-    let (program, load) = lib::model_load(&files, &p.model.request(), &watch)?;
+    let (program, load) = lib::model_load(&files, &req, &watch)?;
     Ok((robot, program, load))
 }
 
@@ -299,13 +255,9 @@ fn compensate(a: CompensateArgs) -> CliResult<i32> {
     clock.lap("path resampled, deflected, compensated and checked; KRL made");
     Outputs::stage_krl(&[a.path.as_path()], &a.output, &done.files, 0)?.commit()?;
     clock.lap("KRL files written and renamed into place");
-    print(
-        a.process.json,
-        &done.summary,
-        lib::CompensateSummary::render_text,
-    );
-    clock.lap("summary printed");
-    clock.print(a.process.timings.on);
+    let json = a.process.robot.summary.json;
+    print(json, &done.summary, lib::CompensateSummary::render_text);
+    clock.end(a.process.timings.on);
     Ok(EXIT_OK)
 }
 
@@ -318,7 +270,7 @@ fn process_of<'a>(
 ) -> lib::Process<'a> {
     lib::Process {
         robot,
-        variant: variant(a.axes),
+        variant: variant(a.robot.axes),
         program,
         load,
         path,
@@ -339,10 +291,13 @@ fn place(a: PlaceArgs) -> CliResult<i32> {
     let p = process_of(&robot, &a.process, (&program, &load), &name);
     let out = lib::place(&p, &search).map_err(CliError::input)?;
     clock.lap("placement searched (simulated annealing)");
-    print(a.process.json, &out, lib::PlaceSummary::render_text);
-    clock.lap("summary printed");
-    clock.print(a.process.timings.on);
-    Ok(if out.feasible { EXIT_OK } else { EXIT_FINDINGS })
+    print(
+        a.process.robot.summary.json,
+        &out,
+        lib::PlaceSummary::render_text,
+    );
+    clock.end(a.process.timings.on);
+    Ok(crate::error::exit(!out.feasible))
 }
 
 /// `optimise --robot ROBOT --pose X,Y,Z,RZ`: the optimised program ends
