@@ -3,61 +3,47 @@
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-/// A byte-count bar, shown only for inputs large enough to take a while.
-pub fn bytes(total: u64, what: &str) -> ProgressBar {
-    if total < 32 << 20 {
+/// A bar of `len` drawn with `template`, its message `what`; hidden unless
+/// `show`.
+fn styled(len: Option<u64>, template: &str, what: &str, show: bool) -> ProgressBar {
+    if !show {
         return ProgressBar::hidden();
     }
-    let bar = ProgressBar::new(total);
-    if let Ok(style) = ProgressStyle::with_template("{msg} [{bar:30}] {bytes}/{total_bytes} {eta}")
-    {
+    let bar = len.map_or_else(ProgressBar::new_spinner, ProgressBar::new);
+    if let Ok(style) = ProgressStyle::with_template(template) {
         bar.set_style(style);
     }
     bar.set_message(what.to_string());
     bar
 }
 
+/// A byte-count bar, shown only for inputs large enough to take a while.
+pub fn bytes(total: u64, what: &str) -> ProgressBar {
+    let template = "{msg} [{bar:30}] {bytes}/{total_bytes} {eta}";
+    styled(Some(total), template, what, total >= 32 << 20)
+}
+
 /// A spinner with a message and the elapsed time, for work without a count.
 pub fn spinner(what: &str, show: bool) -> ProgressBar {
-    if !show {
-        return ProgressBar::hidden();
+    let bar = styled(None, "{spinner} {msg} {elapsed}", what, show);
+    if show {
+        bar.enable_steady_tick(std::time::Duration::from_millis(120));
     }
-    let bar = ProgressBar::new_spinner();
-    if let Ok(style) = ProgressStyle::with_template("{spinner} {msg} {elapsed}") {
-        bar.set_style(style);
-    }
-    bar.set_message(what.to_string());
-    bar.enable_steady_tick(std::time::Duration::from_millis(120));
     bar
 }
 
 /// A counting bar with an estimate of the time left, for a phase of `total`
 /// steps: shown when `show` (not `-q`) and standard error is a terminal.
 pub fn count(total: u64, what: &str, unit: &str, show: bool) -> ProgressBar {
-    if !show {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(total);
     let template = format!("{{msg}} [{{bar:30}}] {{human_pos}}/{{human_len}} {unit}, {{eta}} left");
-    if let Ok(style) = ProgressStyle::with_template(&template) {
-        bar.set_style(style);
-    }
-    bar.set_message(what.to_string());
-    bar
+    styled(Some(total), &template, what, show)
 }
 
 /// A bar of the share done and the time left, for work whose steps have no
 /// name of their own (its length is set by the first report).
 pub fn fraction(what: &str, show: bool) -> ProgressBar {
-    if !show {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::new(1);
-    if let Ok(style) = ProgressStyle::with_template("{msg} [{bar:30}] {percent:>3} %, {eta} left") {
-        bar.set_style(style);
-    }
-    bar.set_message(what.to_string());
-    bar
+    let template = "{msg} [{bar:30}] {percent:>3} %, {eta} left";
+    styled(Some(1), template, what, show)
 }
 
 /// One bar for the phases a pipeline's passes report (`Context::progress`):
