@@ -43,6 +43,16 @@ pub fn plan(
     Ok(Outputs::plan(&inputs, outputs, stdout)?)
 }
 
+/// Writes `files` (each checked as an output of `-o`), all of them or none.
+pub fn write_all<B: AsRef<[u8]>>(files: &[(std::path::PathBuf, B)]) -> CliResult<()> {
+    let named: Vec<(&str, Option<&Path>)> = files.iter().map(|(p, _)| ("-o", Some(&**p))).collect();
+    let mut outputs = Outputs::plan(&[], &named, false)?;
+    for (path, bytes) in files {
+        outputs.write(path, bytes.as_ref())?;
+    }
+    Ok(outputs.commit()?)
+}
+
 /// Reads with a byte-count bar on standard error (shown for large inputs).
 fn with_bar<T>(read: impl FnOnce(&mut dyn FnMut(u64, u64)) -> T) -> T {
     let mut bar = None;

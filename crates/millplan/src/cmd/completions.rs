@@ -2,7 +2,6 @@
 //! manual pages, generated from the same command tree as `--help`.
 
 use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::Outputs;
 use clap::CommandFactory;
 use std::path::{Path, PathBuf};
 
@@ -95,15 +94,9 @@ pub fn pages() -> CliResult<Vec<(String, Vec<u8>)>> {
 fn write_pages(dir: &Path, pages: &[(String, Vec<u8>)]) -> CliResult<Vec<PathBuf>> {
     std::fs::create_dir_all(dir)
         .map_err(|e| CliError::input(format!("{}: cannot create folder: {e}", dir.display())))?;
-    let paths: Vec<PathBuf> = pages.iter().map(|(n, _)| dir.join(n)).collect();
-    let named: Vec<(&str, Option<&Path>)> =
-        paths.iter().map(|p| ("-o", Some(p.as_path()))).collect();
-    let mut outputs = Outputs::plan(&[], &named, false)?;
-    for (p, (_, roff)) in paths.iter().zip(pages) {
-        outputs.write(p, roff)?;
-    }
-    outputs.commit()?;
-    Ok(paths)
+    let files: Vec<(PathBuf, &[u8])> = pages.iter().map(|(n, r)| (dir.join(n), &r[..])).collect();
+    crate::io::write_all(&files)?;
+    Ok(files.into_iter().map(|(p, _)| p).collect())
 }
 
 pub fn man(a: ManArgs) -> CliResult<i32> {

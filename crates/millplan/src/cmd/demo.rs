@@ -1,7 +1,6 @@
 //! `millplan demo`: the whole flow on a bundled, generated example.
 
 use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::Outputs;
 use millplan_driver::demo::{make, Demo};
 use std::path::PathBuf;
 
@@ -27,19 +26,6 @@ pub struct Args {
     pub quiet: bool,
 }
 
-/// Writes every file, all of them or none.
-fn write_all(written: &[(PathBuf, Vec<u8>)]) -> CliResult<()> {
-    let named: Vec<(&str, Option<&std::path::Path>)> = written
-        .iter()
-        .map(|(p, _)| ("-o", Some(p.as_path())))
-        .collect();
-    let mut outputs = Outputs::plan(&[], &named, false)?;
-    for (path, bytes) in written {
-        outputs.write(path, bytes)?;
-    }
-    Ok(outputs.commit()?)
-}
-
 pub fn run(a: Args) -> CliResult<i32> {
     std::fs::create_dir_all(&a.output).map_err(|e| {
         CliError::input(format!("{}: cannot create folder: {e}", a.output.display()))
@@ -48,7 +34,7 @@ pub fn run(a: Args) -> CliResult<i32> {
     let written: Vec<(PathBuf, Vec<u8>)> = (demo.files.iter())
         .map(|(name, bytes)| (a.output.join(name), bytes.clone()))
         .collect();
-    write_all(&written)?;
+    crate::io::write_all(&written)?;
     print_summary(&a, &written, &demo);
     Ok(EXIT_OK)
 }

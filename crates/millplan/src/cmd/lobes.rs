@@ -119,7 +119,6 @@ pub fn run(a: Args) -> CliResult<i32> {
         clock.lap("plot drawn, written and renamed into place");
     }
     crate::cmd::print_summary(a.json, || o.json(), || o.render_text());
-    clock.lap("summary printed");
-    clock.print(a.timings.on);
+    clock.end(a.timings.on);
     Ok(EXIT_OK)
 }

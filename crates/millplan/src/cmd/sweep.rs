@@ -1,7 +1,6 @@
 //! `millplan wd-sweep`: the working diameter over a grid of cases (thesis 1).
 
 use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::Outputs;
 use crate::timings::{Clock, Table as _};
 use millplan_driver::sweep::{self as lib, Design};
 use std::path::PathBuf;
@@ -68,15 +67,11 @@ pub fn run(a: Args) -> CliResult<i32> {
         a.output.join("wd_sweep.csv"),
         a.output.join("wd_sweep.html"),
     );
-    let mut outputs = Outputs::plan(&[], &[("-o", Some(&c)), ("-o", Some(&h))], false)?;
-    outputs.write(&c, csv.as_bytes())?;
-    outputs.write(&h, html.as_bytes())?;
-    outputs.commit()?;
+    crate::io::write_all(&[(c.clone(), csv), (h.clone(), html)])?;
     clock.lap("files written and renamed into place");
     let names = (c.display().to_string(), h.display().to_string());
     let summary = lib::SweepSummary::new(names.0, names.1, fit.as_ref());
     a.summary.print(&summary, |s| s.text());
-    clock.lap("summary printed");
-    clock.print(a.timings.on);
+    clock.end(a.timings.on);
     Ok(EXIT_OK)
 }
