@@ -1,7 +1,6 @@
 //! `millplan thread`: ISO metric thread checks.
 
-use crate::cmd::tool::print;
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::error::{exit, CliError, CliResult, EXIT_OK};
 use clap::Subcommand;
 use millplan_driver::thread as lib;
 
@@ -65,30 +64,20 @@ pub fn run(a: Args) -> CliResult<i32> {
             class,
             d2,
             json,
-        } => run_check(&thread, &class, d2, json),
+        } => {
+            let c = lib::check_d2(&thread, &class, d2).map_err(CliError::input)?;
+            let text = || format!("{}\n", c.render_text(&thread, &class));
+            crate::cmd::print_summary(json, || &c, text);
+            Ok(exit(!c.ok))
+        }
         ThreadCommand::Limits {
             thread,
             class,
             json,
-        } => run_limits(&thread, &class, json),
+        } => {
+            let l = lib::limits(&thread, &class).map_err(CliError::input)?;
+            crate::cmd::print_summary(json, || &l, || format!("{}\n", l.render_text()));
+            Ok(EXIT_OK)
+        }
     }
-}
-
-/// `thread check`: OK (exit 0) or REJECT (exit 3).
-fn run_check(thread: &str, class: &str, d2: f64, json: bool) -> CliResult<i32> {
-    let c = lib::check_d2(thread, class, d2).map_err(CliError::input)?;
-    let j = serde_json::to_value(&c).unwrap_or_default();
-    print(json, j, c.render_text(thread, class))?;
-    Ok(if c.ok { EXIT_OK } else { EXIT_FINDINGS })
-}
-
-/// `thread limits`: the limits of size of a class.
-fn run_limits(thread: &str, class: &str, json: bool) -> CliResult<i32> {
-    let l = lib::limits(thread, class).map_err(CliError::input)?;
-    print(
-        json,
-        serde_json::to_value(&l).unwrap_or_default(),
-        l.render_text(),
-    )?;
-    Ok(EXIT_OK)
 }

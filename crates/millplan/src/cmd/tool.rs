@@ -1,6 +1,6 @@
 //! `millplan tool`: the tool library and thread-mill active control.
 
-use crate::error::{CliError, CliResult, EXIT_FINDINGS, EXIT_OK};
+use crate::error::{CliError, CliResult, EXIT_OK};
 use crate::io::Outputs;
 use clap::{Subcommand, ValueEnum};
 use millplan_driver::tool::{self as t, Library, ToolError, ToolRequest};
@@ -48,12 +48,8 @@ pub enum ToolCommand {
         number: u32,
         /// Catalogue designation, e.g. "MT LNHU 1403 I1.00 ISO IC908".
         designation: String,
-        /// Insert length INSL, mm (ISO 13399).
-        #[arg(long)]
-        insl: f64,
-        /// Thread pitch TP of the insert, mm (at least 0.2, the finest ISO metric pitch).
-        #[arg(long)]
-        tp: f64,
+        #[command(flatten)]
+        insert: InsertData,
     },
     /// Enter the presetter's length and radius for a tool.
     Preset {
@@ -99,16 +95,20 @@ pub enum ToolCommand {
     },
     /// PZ: the laser's axial measuring point on a thread-mill insert, from
     /// the insert length INSL and the pitch TP (ISO 13399).
-    Pz {
-        /// Insert length INSL, mm (ISO 13399).
-        #[arg(long)]
-        insl: f64,
-        /// Thread pitch TP of the insert, mm (at least 0.2, the finest ISO metric pitch).
-        #[arg(long)]
-        tp: f64,
-    },
+    Pz(InsertData),
     /// Write the NC program that measures a tool on the machine's laser.
     Cycle(CycleArgs),
+}
+
+/// A thread-mill insert's length and pitch (ISO 13399).
+#[derive(clap::Args, Clone, Copy)]
+pub struct InsertData {
+    /// Insert length INSL, mm (ISO 13399).
+    #[arg(long)]
+    pub insl: f64,
+    /// Thread pitch TP of the insert, mm (at least 0.2, the finest ISO metric pitch).
+    #[arg(long)]
+    pub tp: f64,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -244,19 +244,6 @@ impl From<ToolError> for CliError {
     }
 }
 
-/// Prints `j` (with --json) or `text` on standard output. A write that fails
-/// (a closed pipe, a full disk) is reported when the run ends, never a panic.
-pub(crate) fn print(json_out: bool, j: serde_json::Value, text: String) -> CliResult<()> {
-    let s = if json_out {
-        serde_json::to_string_pretty(&millplan_driver::round::json(j))
-            .map_err(|e| CliError::internal(format!("JSON output: {e}")))?
-    } else {
-        text
-    };
-    outln!("{s}");
-    Ok(())
-}
-
 /// Writes what a subcommand made to `output` (`-`: standard output), never
 /// over the library, and says so; else prints its JSON or text.
 fn finish(lib: &Library, json: bool, o: t::ToolOutcome, output: Option<&Path>) -> CliResult<i32> {
@@ -272,15 +259,15 @@ fn finish(lib: &Library, json: bool, o: t::ToolOutcome, output: Option<&Path>) -
         }
         _ => o,
     };
-    print(json, o.json, o.text)?;
-    Ok(if o.problem { EXIT_FINDINGS } else { EXIT_OK })
+    crate::cmd::print_summary(json, || o.json, || format!("{}\n", o.text));
+    Ok(crate::error::exit(o.problem))
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
     // PZ needs no library.
-    if let ToolCommand::Pz { insl, tp } = a.command {
+    if let ToolCommand::Pz(InsertData { insl, tp }) = a.command {
         let o = t::pz_command(insl, tp)?;
-        print(a.json, o.json, o.text)?;
+        crate::cmd::print_summary(a.json, || o.json, || format!("{}\n", o.text));
         return Ok(EXIT_OK);
     }
     use std::env::var_os;
@@ -303,9 +290,11 @@ fn request(c: ToolCommand) -> (ToolRequest, Option<PathBuf>) {
         ToolCommand::Insert {
             number,
             designation,
-            insl,
-            tp,
-        } => (ToolRequest::Insert(number, designation, (insl, tp)), None),
+            insert: i,
+        } => (
+            ToolRequest::Insert(number, designation, (i.insl, i.tp)),
+            None,
+        ),
         ToolCommand::Preset { number, l, r } => (ToolRequest::Preset(number, (l, r)), None),
         ToolCommand::Measure(x) => (measure(x), None),
         ToolCommand::Show { number } => (ToolRequest::Show(number), None),
@@ -315,7 +304,7 @@ fn request(c: ToolCommand) -> (ToolRequest, Option<PathBuf>) {
             (ToolRequest::Export(format.into()), Some(output))
         }
         ToolCommand::Cycle(x) => cycle(x),
-        ToolCommand::Pz { insl, tp } => unreachable!("PZ {insl} {tp} needs no library"),
+        ToolCommand::Pz(i) => unreachable!("PZ {} {} needs no library", i.insl, i.tp),
     }
 }
 
