@@ -125,13 +125,17 @@ pub struct ProgramOutput {
 }
 
 impl ProgramOutput {
-    /// The dialect to write (`millplan_driver::target`'s rule).
+    /// The dialect to write: `--to`; else the machine's control, which the
+    /// output's extension must not contradict; else the output's name, else
+    /// the source's dialect (`millplan_driver::target`).
     pub fn target(
         &self,
         machine: &millplan_plan::machine::Machine,
         source: millplan_nc::Dialect,
     ) -> CliResult<millplan_nc::write::Target> {
-        crate::cmd::target_with_machine(self.to, &self.output, machine, source)
+        let to = self.to.map(Into::into);
+        millplan_driver::target::output_target(to, &self.output, Some(machine), source)
+            .map_err(crate::error::CliError::input)
     }
 }
 

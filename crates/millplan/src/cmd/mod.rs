@@ -137,19 +137,6 @@ impl From<TargetArg> for Target {
     }
 }
 
-/// The dialect to write for a command that reads a machine file: `--to`;
-/// else the machine's control, which the output's extension must not
-/// contradict; else the output's name, else the source's dialect.
-pub fn target_with_machine(
-    to: Option<TargetArg>,
-    output: &std::path::Path,
-    machine: &millplan_plan::machine::Machine,
-    source: millplan_nc::Dialect,
-) -> crate::error::CliResult<Target> {
-    millplan_driver::target::output_target(to.map(Into::into), output, Some(machine), source)
-        .map_err(crate::error::CliError::input)
-}
-
 /// Writes a program for `o.target` as the output `path` of `outputs`
 /// (streamed, within this run's limits). Words written as comments under
 /// `--lossy` are printed as warnings located in `source`.
@@ -208,14 +195,6 @@ impl From<UnitArg> for LengthUnit {
             UnitArg::Mm => LengthUnit::Mm,
             UnitArg::Inch => LengthUnit::Inch,
         }
-    }
-}
-
-/// Scales a mesh read from an STL to mm: `--stl-units inch` multiplies every
-/// coordinate by 25.4; mm (the default: an STL does not say) leaves it.
-pub fn stl_to_mm(mesh: &mut millplan_geom::TriMesh, units: Option<UnitArg>) {
-    if let Some(UnitArg::Inch) = units {
-        mesh.map_vertices(|v| v * 25.4);
     }
 }
 
