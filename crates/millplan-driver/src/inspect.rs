@@ -298,6 +298,14 @@ pub fn mesh_json(m: &TriMesh, r: &StlReport, given: Option<LengthUnit>) -> serde
     serde_json::to_value(mesh(m, r, given)).unwrap_or_default()
 }
 
+/// Scales a mesh read from an STL to mm: `--stl-units inch` multiplies every
+/// coordinate by 25.4; mm (the default: an STL does not say) leaves it.
+pub fn to_mm(m: &mut TriMesh, given: Option<LengthUnit>) {
+    if given == Some(LengthUnit::Inch) {
+        m.map_vertices(|v| v * 25.4);
+    }
+}
+
 pub fn render_mesh(path: &str, j: &Value) -> String {
     let mut o = String::new();
     w!(

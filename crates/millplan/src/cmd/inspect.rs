@@ -77,8 +77,9 @@ pub fn run(a: Args) -> CliResult<i32> {
             a.summary.print(&j, |j| lib::render_program(&name, p, j));
         }
         Input::Mesh(mut mesh, r) => {
-            crate::cmd::stl_to_mm(&mut mesh, a.stl_units);
-            let j = lib::mesh_json(&mesh, &r, a.stl_units.map(Into::into));
+            let given = a.stl_units.map(Into::into);
+            lib::to_mm(&mut mesh, given);
+            let j = lib::mesh_json(&mesh, &r, given);
             clock.lap("summary (edges, bounds)");
             a.summary.print(&j, |j| lib::render_mesh(&name, j));
         }
