@@ -329,6 +329,20 @@ pub fn render_text(
 
 /// The kinematics of a machine file (`path` names it in the error), which
 /// `setup` needs: the rotary axes.
+/// The machine of `setup`: the kinematics of the machine `file` (read, with
+/// its path), else a machine of `kind` with the rotary ranges `ranges`.
+pub fn kinematics(
+    file: Option<(&millplan_plan::machine::Machine, &str)>,
+    kind: Option<MachineType>,
+    (range1, range2): (&str, &str),
+) -> Result<Kinematics, String> {
+    match (file, kind) {
+        (Some((m, path)), _) => file_kinematics(m, path),
+        (None, Some(t)) => machine_of_type(t, range1, range2),
+        (None, None) => Err("give --machine FILE or --type ca|ab".into()),
+    }
+}
+
 pub fn file_kinematics(
     machine: &millplan_plan::machine::Machine,
     path: &str,

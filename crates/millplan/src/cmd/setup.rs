@@ -103,21 +103,18 @@ pub enum GridArg {
 
 /// The machine from --machine, or --type with --range1/--range2.
 fn machine(a: &Args) -> CliResult<Kinematics> {
-    match (&a.machine, a.kind) {
-        (Some(p), _) => lib::file_kinematics(
-            &crate::cmd::load_machine(Some(p))?,
-            &p.display().to_string(),
-        )
-        .map_err(CliError::input),
-        (None, Some(t)) => {
-            let t = match t {
-                TypeArg::Ca => MachineType::Ca,
-                TypeArg::Ab => MachineType::Ab,
-            };
-            lib::machine_of_type(t, &a.range1, &a.range2).map_err(CliError::input)
-        }
-        (None, None) => Err(CliError::input("give --machine FILE or --type ca|ab")),
-    }
+    let file = a
+        .machine
+        .as_deref()
+        .map(|p| crate::cmd::load_machine(Some(p)));
+    let file = file.transpose()?;
+    let path = a.machine.as_deref().map(|p| p.display().to_string());
+    let file = file.as_ref().zip(path.as_deref());
+    let kind = a.kind.map(|t| match t {
+        TypeArg::Ca => MachineType::Ca,
+        TypeArg::Ab => MachineType::Ab,
+    });
+    lib::kinematics(file, kind, (&a.range1, &a.range2)).map_err(CliError::input)
 }
 
 fn request(a: &Args) -> SetupRequest {
