@@ -242,23 +242,10 @@ fn run(command: Command) -> error::CliResult<i32> {
 
 #[cfg(test)]
 mod help_tests {
-    use clap::CommandFactory;
-
     /// Every command of the tree with its path (`millplan tool add`).
     fn commands() -> Vec<(String, clap::Command)> {
-        let mut root = super::Cli::command();
-        root.build();
-        let mut out = Vec::new();
-        let mut todo = vec![("millplan".to_string(), root)];
-        while let Some((path, c)) = todo.pop() {
-            for s in c.get_subcommands() {
-                if s.get_name() != "help" {
-                    todo.push((format!("{path} {}", s.get_name()), s.clone()));
-                }
-            }
-            out.push((path, c));
-        }
-        out
+        let tree = crate::cmd::completions::tree().into_iter();
+        tree.map(|(path, c)| (path.join(" "), c)).collect()
     }
 
     /// Every command says what it does, and every option and argument of every

@@ -70,19 +70,30 @@ pub struct ManArgs {
     pub json: bool,
 }
 
-/// Every page of the tree: its file name and its roff text.
-pub fn pages() -> CliResult<Vec<(String, Vec<u8>)>> {
+/// Every command of the tree but `help`, with the names on its path
+/// (`["millplan", "tool", "add"]`).
+pub fn tree() -> Vec<(Vec<String>, clap::Command)> {
     let mut root = crate::Cli::command();
     root.build();
-    let mut pages = Vec::new();
-    let mut todo = vec![("millplan".to_string(), root)];
-    while let Some((name, c)) = todo.pop() {
+    let mut all = Vec::new();
+    let mut todo = vec![(vec!["millplan".to_string()], root)];
+    while let Some((path, c)) = todo.pop() {
         for s in c.get_subcommands().filter(|s| s.get_name() != "help") {
-            let sub = format!("{name}-{}", s.get_name());
-            todo.push((sub.clone(), s.clone().name(sub)));
+            let sub = [&path[..], &[s.get_name().to_string()]].concat();
+            todo.push((sub, s.clone()));
         }
+        all.push((path, c));
+    }
+    all
+}
+
+/// Every page of the tree: its file name and its roff text.
+pub fn pages() -> CliResult<Vec<(String, Vec<u8>)>> {
+    let mut pages = Vec::new();
+    for (path, c) in tree() {
+        let name = path.join("-");
         let mut roff = Vec::new();
-        clap_mangen::Man::new(c)
+        clap_mangen::Man::new(c.name(name.clone()))
             .render(&mut roff)
             .map_err(|e| CliError::internal(format!("man page {name}: {e}")))?;
         pages.push((format!("{name}.1"), roff));
