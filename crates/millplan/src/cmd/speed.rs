@@ -150,17 +150,10 @@ pub fn run(a: Args) -> CliResult<i32> {
     let req = request(&a);
     lib::check(&req).map_err(CliError::input)?;
     let (table, report) = (a.table.as_deref(), a.report.as_deref());
-    let outs = [
-        ("-o", Some(&*a.out.output)),
-        ("--table", table),
-        ("--report", report),
-    ];
-    let inputs = [
-        Some(&*a.path),
-        Some(&*a.part.stl),
-        a.machine.machine.as_deref(),
-    ];
-    let mut outputs = crate::io::plan(&inputs, &outs, false)?;
+    let outs = [("-o", Some(&*a.out.output)), ("--table", table)];
+    let outs = [&outs[..], &[("--report", report)]].concat();
+    let (stl, machine) = (Some(&*a.part.stl), a.machine.machine.as_deref());
+    let mut outputs = crate::io::plan(&[Some(&*a.path), stl, machine], &outs, false)?;
     let machine = a.machine.load()?;
     let t_setup = t0.elapsed().as_secs_f64();
     let (mesh, reader, t_mesh) = read_part(&a, &machine)?;
@@ -192,32 +185,35 @@ pub fn run(a: Args) -> CliResult<i32> {
     })?;
     let checked = a.force.enforce(&out.checks, &a.path)?;
     print_diagnostics(&a.part.stl, &out.findings, quiet || a.summary.json);
-    let t = std::time::Instant::now();
-    let wo = cx.machine.write_options(target);
-    let (written, time_after, [write_s, estimate_s]) =
-        lib::write_beside(&out.program, &cx.machine, || {
-            write_program_file(
-                &out.program,
-                wo,
-                &mut outputs,
-                &a.out.output,
-                &a.path,
-                quiet,
-            )
-        });
-    written?;
-    cx.record("  program written and synced", write_s);
-    cx.record("  time estimate of the output (beside it)", estimate_s);
-    cx.record(
-        "program written, its time estimated",
-        t.elapsed().as_secs_f64(),
-    );
+    let time_after = write(&a, &cx, &out.program, &mut outputs, target)?;
     let times = [read.time_before, time_after];
     report_run(&a, &req, &cx, (&out, times), outputs, target)?;
     if a.timings.on {
         crate::timings::print(&cx.timings(), t0);
     }
     Ok(exit(out.untrusted() || !checked))
+}
+
+/// Writes the program while its time is estimated beside it; that time.
+fn write(
+    a: &Args,
+    cx: &Context,
+    p: &millplan_nc::Program,
+    outputs: &mut Outputs,
+    target: millplan_nc::write::Target,
+) -> CliResult<f64> {
+    let t = std::time::Instant::now();
+    let wo = cx.machine.write_options(target);
+    let (o, q) = (&a.out.output, a.notes.quiet);
+    let (written, time_after, [write_s, estimate_s]) = lib::write_beside(p, &cx.machine, || {
+        write_program_file(p, wo, outputs, o, &a.path, q)
+    });
+    written?;
+    cx.record("  program written and synced", write_s);
+    cx.record("  time estimate of the output (beside it)", estimate_s);
+    let t_write = t.elapsed().as_secs_f64();
+    cx.record("program written, its time estimated", t_write);
+    Ok(time_after)
 }
 
 /// The table and report written, the outputs committed, the summary printed.
