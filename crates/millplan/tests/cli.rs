@@ -698,8 +698,14 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// summaries as JSON or text; 5,615 with `--timings` on `directions`, `lobes`,
 /// `wd-sweep` and `robot place` and `compensate` (5,617 with a lap only
 /// for the phases that ran); 5,616 with `optimise`'s orient pass in the
-/// driver and its help reflowed.
-const MAX_BINARY_LINES: usize = 5616;
+/// driver and its help reflowed; 5,433 with the options several commands
+/// repeated declared once as groups in `cmd/args.rs` (the part, the
+/// program's units, the machine file, the output and its dialect,
+/// `--force`, the force model's tool and steps; the force model's inputs
+/// shared by `feed`, `force` and `robot`), the repeated planning of outputs,
+/// bars and sets of files as one helper each, and setup's choice of
+/// kinematics and inspect's inch STL in the driver.
+const MAX_BINARY_LINES: usize = 5433;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into
