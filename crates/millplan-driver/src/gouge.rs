@@ -7,6 +7,7 @@ use millplan_nc::{Operation, Program};
 use millplan_sim::dropcutter::DropMesh;
 use millplan_sim::gouge::{check_with_progress, samples, Skipped};
 pub use millplan_sim::gouge::{GougeParams, GougeReport, BYTES_PER_SAMPLE};
+use millplan_sim::stock::tool::{ToolBody, UNKNOWN_FLUTE};
 use serde::Serialize;
 use std::fmt::Write as _;
 
@@ -51,11 +52,22 @@ pub fn shape_is_known(path: &str, program: &Program) -> Result<(), String> {
     Ok(())
 }
 
-/// The cutter of an operation: its own, else the fallback.
-fn shape(fallback: Option<Shape>) -> impl Fn(&Operation) -> Option<Shape> {
-    move |op: &Operation| match op.tool.as_ref().and_then(|t| t.cutter) {
-        Some(c) => millplan_sim::shape_of(&c),
-        None => fallback,
+/// The tool of an operation: its own cutter, else the fallback; fluted up
+/// to the CUTTER record's height where it gives one, else all along (as
+/// the drop-cutter takes a vertical tool).
+fn body(fallback: Option<Shape>) -> impl Fn(&Operation) -> Option<ToolBody> {
+    move |op: &Operation| {
+        let cutter = op.tool.as_ref().and_then(|t| t.cutter);
+        let shape = match cutter {
+            Some(c) => millplan_sim::shape_of(&c),
+            None => fallback,
+        }?;
+        let mut b = ToolBody::new(shape);
+        b.flute = cutter
+            .map(|c| c.h)
+            .filter(|h| *h > 0.0)
+            .unwrap_or(UNKNOWN_FLUTE);
+        Some(b)
     }
 }
 
@@ -73,7 +85,7 @@ pub fn samples_needed(step: f64, n: f64) -> String {
 
 /// The points the check will sample (counted before it runs).
 pub fn sample_count(p: &Program, fallback: Option<Shape>, g: &GougeParams) -> f64 {
-    samples(p, shape(fallback), g)
+    samples(p, body(fallback), g)
 }
 
 /// The check of `p` against `part`, reporting the points done.
@@ -85,7 +97,7 @@ pub fn check(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> GougeReport {
     let part = DropMesh::new(part);
-    check_with_progress(p, &part, shape(fallback), g, progress)
+    check_with_progress(p, &part, body(fallback), g, progress)
 }
 
 /// The moves skipped, by reason.

@@ -769,6 +769,35 @@ impl PathIndex {
                 move_segments(op, i, tol, &mut |a, b| segs.push((a, b)));
             }
         }
+        Self::of(segs, tol)
+    }
+
+    /// The path of the ball centres of a program's ball-end moves (each
+    /// move from the previous move's centre to its own, arcs as their
+    /// chords), under the tool bodies of `i`.
+    fn centres(p: &Program, i: &Inputs, tol: f64) -> PathIndex {
+        let mut segs = Vec::new();
+        for op in &p.operations {
+            let Some(r) = (i.tool_body)(op).and_then(|b| match b.shape {
+                Shape::Ball { radius } => Some(radius),
+                _ => None,
+            }) else {
+                continue;
+            };
+            let mut last = None;
+            for m in &op.moves {
+                let c = known(m.end).and_then(|_| centre(op, m, r));
+                if let (Some(a), Some(b)) = (last, c) {
+                    segs.push((a, b));
+                }
+                last = c;
+            }
+        }
+        Self::of(segs, tol)
+    }
+
+    /// The index of the segments `segs`.
+    fn of(segs: Vec<(DVec3, DVec3)>, tol: f64) -> PathIndex {
         let total: f64 = segs.iter().map(|(a, b)| (*b - *a).length()).sum();
         let cell = (total / 2e6).max(4.0 * tol).max(0.5);
         let mut grid: rustc_hash::FxHashMap<[i64; 3], Vec<u32>> = Default::default();
@@ -1019,7 +1048,7 @@ fn gouge_report(i: &Inputs, p: &Program, part: &DropMesh) -> GougeReport {
         tol: i.tol.gouge,
         rapids: true,
     };
-    gouge::check(p, part, |op| (i.tool_body)(op).map(|b| b.shape), &g)
+    gouge::check(p, part, |op| (i.tool_body)(op), &g)
 }
 
 /// Gouges of the output into the part (rapids included). A gouge whose
@@ -1047,10 +1076,19 @@ fn gouges_with_report(i: &Inputs, part: &DropMesh) -> (Check, GougeReport) {
         return (c, out);
     }
     // The deepest point of a gouge lies where the input's tool also went:
-    // the same tool at the same place cuts the part as deep.
+    // the same tool at the same place cuts the part as deep. A tilted
+    // ball's own gouge is the input's where the input's ball had its
+    // centre there (the lead/tilt pass keeps the centres, not the tips).
     let old = PathIndex::new(i.input, i.tol.tip);
+    let old_centres = std::cell::OnceCell::new();
     for g in &out.gouges {
-        let in_input = old.near(DVec3::from_array(g.at), i.tol.tip);
+        let by_centre = |c: [f64; 3]| {
+            old_centres
+                .get_or_init(|| PathIndex::centres(i.input, i, i.tol.tip))
+                .near(DVec3::from_array(c), i.tol.tip)
+        };
+        let in_input =
+            old.near(DVec3::from_array(g.at), i.tol.tip) || g.ball_centre.is_some_and(by_centre);
         c.ok &= in_input;
         c.findings.push(Finding {
             line: line_of(g.line),

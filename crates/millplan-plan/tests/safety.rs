@@ -584,3 +584,52 @@ fn bytes_that_do_not_mean_what_was_written_fail_the_read_back() {
     .expect_err("does not read");
     assert_eq!(e.line, 2);
 }
+
+/// After the lead/tilt pass a ball end is leaned with its centre kept: its
+/// gouges are found by its distance to the part (not skipped as a tilted
+/// tool), and a gouge of the ball where the input's vertical ball had its
+/// centre is the input's; the leaned ball lowered further is new.
+#[test]
+fn a_leaned_ball_is_gouge_checked_and_its_own_gouge_matched_by_its_centre() {
+    let w = world();
+    // The input gouges 0.5 mm along its slot at Z−2.
+    let input = planted(6, "G1 X60 Z-2");
+    let a = 10f64.to_radians();
+    let k = DVec3::new(a.sin(), 0.0, a.cos());
+    let leaned = |lower: f64| {
+        let mut p = planted(6, "G1 X60 Z-2");
+        let op = &mut p.operations[0];
+        let id = op.intern_orient(Orient::vector(k));
+        for i in 1..=2 {
+            let m = &mut op.moves[i];
+            m.orient = Some(id);
+            m.end = m.end + DVec3::Z * 5.0 - k * 5.0 - DVec3::Z * lower;
+        }
+        p
+    };
+    let gouge = |out: &Program| named(&run(&w, &input, out), "gouge").clone();
+    let same = gouge(&leaned(0.0));
+    let skipped = same.skipped.as_deref().unwrap_or("");
+    assert!(skipped.contains("0 with a tilted tool"), "{same:#?}");
+    assert!(same.ok, "{same:#?}");
+    let slot = same
+        .findings
+        .iter()
+        .find(|f| f.line == Some(6))
+        .expect("the slot's gouge");
+    assert!(
+        slot.in_input && slot.message.contains("0.5000 mm deep"),
+        "{slot:#?}"
+    );
+    let deeper = gouge(&leaned(0.3));
+    assert!(!deeper.ok, "{deeper:#?}");
+    let slot = deeper
+        .findings
+        .iter()
+        .find(|f| f.line == Some(6))
+        .expect("the slot's gouge");
+    assert!(
+        !slot.in_input && slot.message.contains("0.8000 mm deep"),
+        "{slot:#?}"
+    );
+}

@@ -10,6 +10,7 @@
 //! A 2-D BVH with each node's highest z prunes every triangle that cannot raise the
 //! current best.
 
+use millplan_geom::bvh::Bvh;
 use millplan_geom::{DVec2, DVec3, TriMesh};
 use millplan_models::cutter::Shape;
 use rayon::prelude::*;
@@ -298,6 +299,9 @@ pub struct DropMesh {
     pos: Vec<u32>,
     /// The plane of each triangle of `tris`.
     planes: Vec<Plane>,
+    /// The same triangles in a 3-D tree, for a tool that is not vertical
+    /// ([`DropMesh::solid`]): built when first asked for.
+    solid: std::sync::OnceLock<Bvh>,
 }
 
 const LEAF: usize = 4;
@@ -367,7 +371,23 @@ impl DropMesh {
             tris,
             pos,
             planes,
+            solid: std::sync::OnceLock::new(),
         }
+    }
+
+    /// The part's triangles in a 3-D tree, for the distance of a tilted tool
+    /// (capsule tests); built on the first call, from the same triangles the
+    /// drop-cutter uses.
+    pub fn solid(&self) -> &Bvh {
+        self.solid.get_or_init(|| {
+            let mesh = TriMesh {
+                vertices: self.tris.iter().flatten().copied().collect(),
+                triangles: (0..self.tris.len() as u32)
+                    .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+                    .collect(),
+            };
+            Bvh::build(&mesh)
+        })
     }
 
     fn leaf_bounds(mesh: &TriMesh, order: &[u32], first: usize) -> Node {

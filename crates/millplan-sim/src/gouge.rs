@@ -1,11 +1,21 @@
 //! Gouge check: sample every cutting move (and optionally the rapids) at a chord
 //! step and compare the tool tip with the drop-cutter height there; a tip lower
 //! than the drop height by more than a tolerance cuts into the part.
+//!
+//! A ball-end tool whose axis is not vertical is checked by its distance to
+//! the part's surface instead: the ball and its flutes, a capsule from the
+//! ball centre up the axis (the axis turned along the move as the IR turns
+//! it), must stay clear of every triangle by its radius less the tolerance.
+//! A distance to a surface cannot tell a tool buried deeper than its radius
+//! from one in the air: such a tool is found where it went in, at the
+//! samples of the move that entered the part. Other tilted tools are
+//! skipped and counted.
 
 use crate::dropcutter::DropMesh;
+use crate::stock::tool::ToolBody;
 use millplan_geom::{DVec2, DVec3};
 use millplan_models::cutter::Shape;
-use millplan_nc::{known, MoveKind, Operation, Program};
+use millplan_nc::{axis_at, known, MoveKind, Operation, Program};
 use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug)]
@@ -39,8 +49,14 @@ pub struct Gouge {
     pub line: u32,
     /// Tool tip where it is deepest, part coordinates.
     pub at: [f64; 3],
-    /// How far the tip is below the drop height, mm.
+    /// How far the tip is below the drop height, mm (a tilted ball end: how
+    /// far its surface reaches into the part's).
     pub depth: f64,
+    /// A tilted ball end whose ball alone reaches that deep: the ball's
+    /// centre there (a gouge of the ball, which a vertical tool with its
+    /// centre at the same place would make too; not of its flutes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ball_centre: Option<[f64; 3]>,
 }
 
 /// Why moves were left out of a check.
@@ -48,8 +64,8 @@ pub struct Gouge {
 pub struct Skipped {
     /// The operation's tool has no geometry and none was given.
     pub no_tool: usize,
-    /// The tool is not along +Z (five-axis), or its axis is known only as
-    /// machine angles.
+    /// The tool is not along +Z (five-axis) and not a ball end, or its axis
+    /// is known only as machine angles.
     pub tilted: usize,
     /// Canned-cycle holes.
     pub cycles: usize,
@@ -74,17 +90,21 @@ pub struct GougeReport {
     pub max_depth: f64,
 }
 
+/// One sample of a check: operation, move, tool tip (part coordinates) and,
+/// for a tilted ball end, its axis there.
+type Sample = (u32, u32, DVec3, Option<DVec3>);
+
 /// Memory per sample point of a check: the sample and its depth.
 pub const BYTES_PER_SAMPLE: f64 =
-    (std::mem::size_of::<(u32, u32, DVec3, Shape)>() + std::mem::size_of::<f64>()) as f64;
+    (std::mem::size_of::<Sample>() + std::mem::size_of::<(f64, bool)>()) as f64;
 
 /// How many points [`check`] would sample (an upper bound: moves it would
 /// skip for a tilted tool are counted), in one pass over the moves without
 /// allocating: a step of 1e-9 is refused from this, never attempted.
-pub fn samples(p: &Program, shape: impl Fn(&Operation) -> Option<Shape>, g: &GougeParams) -> f64 {
+pub fn samples(p: &Program, body: impl Fn(&Operation) -> Option<ToolBody>, g: &GougeParams) -> f64 {
     let mut n = 0.0;
     for op in &p.operations {
-        if shape(op).is_none() {
+        if body(op).is_none() {
             continue;
         }
         for (i, m) in op.moves.iter().enumerate() {
@@ -108,15 +128,16 @@ pub fn samples(p: &Program, shape: impl Fn(&Operation) -> Option<Shape>, g: &Gou
     n
 }
 
-/// Checks a program against the part. `shape` gives the cutter of an operation
-/// (`None` skips the operation).
+/// Checks a program against the part. `body` gives the tool of an operation
+/// (`None` skips the operation): its cutter, and for a tilted ball end the
+/// flutes' length.
 pub fn check(
     p: &Program,
     part: &DropMesh,
-    shape: impl Fn(&Operation) -> Option<Shape>,
+    body: impl Fn(&Operation) -> Option<ToolBody>,
     g: &GougeParams,
 ) -> GougeReport {
-    check_with_progress(p, part, shape, g, &|_, _| {})
+    check_with_progress(p, part, body, g, &|_, _| {})
 }
 
 /// Sample points checked between two calls of a progress callback.
@@ -127,128 +148,211 @@ pub const PROGRESS_EVERY: usize = 16_384;
 pub fn check_with_progress(
     p: &Program,
     part: &DropMesh,
-    shape: impl Fn(&Operation) -> Option<Shape>,
+    body: impl Fn(&Operation) -> Option<ToolBody>,
     g: &GougeParams,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> GougeReport {
     let mut rep = GougeReport::default();
-    // (operation, move, sample point, shape index)
-    let mut samples: Vec<(u32, u32, DVec3, Shape)> = Vec::new();
+    let bodies: Vec<Option<ToolBody>> = p.operations.iter().map(&body).collect();
+    let mut samples: Vec<Sample> = Vec::new();
     for (oi, op) in p.operations.iter().enumerate() {
-        let wanted = |k: MoveKind| match k {
-            MoveKind::Linear | MoveKind::Arc(_) => true,
-            MoveKind::Rapid => g.rapids,
-            MoveKind::Cycle(_) => false,
-        };
-        let Some(sh) = shape(op) else {
-            rep.skipped.no_tool += op.moves.iter().filter(|m| wanted(m.kind)).count();
+        let Some(b) = bodies[oi] else {
+            rep.skipped.no_tool += op.moves.iter().filter(|m| wanted(m.kind, g)).count();
             continue;
         };
-        let to_part = |v: DVec3| op.frame.map(|f| f.to_parent(v)).unwrap_or(v);
-        // The tool axis in part coordinates; `None` when only machine angles
-        // say where it points.
-        let axis_part = |m: &millplan_nc::Move| -> Option<DVec3> {
-            let a = match op.orient(m) {
-                Some(o) => match o.axis {
-                    Some(v) => v,
-                    None if o.is_tilted() => return None,
-                    None => DVec3::Z,
-                },
-                None => DVec3::Z,
-            };
-            Some(op.frame.map(|f| f.dir_to_parent(a)).unwrap_or(a))
-        };
-        for (i, m) in op.moves.iter().enumerate() {
-            if !wanted(m.kind) {
-                if m.cycle().is_some() {
-                    rep.skipped.cycles += 1;
-                }
-                continue;
-            }
-            let (Some(start), Some(end)) = (op.known_start(i), known(m.end)) else {
-                rep.skipped.unknown_position += 1;
-                continue;
-            };
-            if axis_part(m).is_none_or(|a| (a - DVec3::Z).length() > 1e-6) {
-                rep.skipped.tilted += 1;
-                continue;
-            }
-            rep.moves_checked += 1;
-            let pts: Vec<DVec3> = match op.arc(m) {
-                Some(a) => {
-                    let len = a.length(start, end);
-                    let n = ((len / g.step).ceil() as usize).max(1);
-                    (0..=n)
-                        .map(|k| a.point_at(start, end, k as f64 / n as f64))
-                        .collect()
-                }
-                None => {
-                    let len = (end - start).length();
-                    let n = ((len / g.step).ceil() as usize).max(1);
-                    (0..=n)
-                        .map(|k| start.lerp(end, k as f64 / n as f64))
-                        .collect()
-                }
-            };
-            samples.extend(
-                pts.into_iter()
-                    .map(|q| (oi as u32, i as u32, to_part(q), sh)),
-            );
-        }
+        sample_operation(op, oi, &b, g, &mut rep, &mut samples);
     }
     rep.moves_skipped = rep.skipped.total();
     rep.points_checked = samples.len();
     let total = samples.len();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let depths: Vec<f64> = samples
+    // The depth of each sample, and whether a tilted ball alone reaches it.
+    let depths: Vec<(f64, bool)> = samples
         .par_iter()
-        .map(|(_, _, q, sh)| {
+        .map(|(oi, _, q, axis)| {
             let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             if k.is_multiple_of(PROGRESS_EVERY) || k == total {
                 progress(k, total);
             }
-            let c = DVec2::new(q.x, q.y);
-            let depth = part
-                .drop(sh, c)
-                .map(|d| d.z - q.z)
-                .unwrap_or(f64::NEG_INFINITY);
-            if depth <= g.tol {
-                return depth;
-            }
-            // Deeper than the tolerance below where the tool would rest, but
-            // is it into the part by more than the tolerance in any direction?
-            // A tool standing exactly at a vertical wall is not: the tool
-            // shrunk by the tolerance must still meet the part.
-            let (inner, rise) = sh.inset(g.tol);
-            let into = part.drop(&inner, c).is_some_and(|d| d.z > q.z + rise);
-            if into {
-                depth
-            } else {
-                f64::NEG_INFINITY
+            let b = bodies[*oi as usize].expect("sampled with a body");
+            match axis {
+                None => (vertical_depth(part, &b.shape, *q, g.tol), false),
+                Some(a) => tilted_depth(part, &b, *q, *a, g.tol),
             }
         })
         .collect();
-    for ((oi, mi, q, _), d) in samples.iter().zip(&depths) {
-        if *d > g.tol {
+    for ((oi, mi, q, axis), &(d, ball)) in samples.iter().zip(&depths) {
+        if d > g.tol {
             let (oi, mi) = (*oi as usize, *mi as usize);
             let line = p.operations[oi].moves[mi].line;
+            let r = bodies[oi].map_or(0.0, |b| b.radius());
+            let ball_centre = axis.filter(|_| ball).map(|a| (*q + a * r).to_array());
+            let here = Gouge {
+                operation: oi,
+                mv: mi,
+                line,
+                at: q.to_array(),
+                depth: d,
+                ball_centre,
+            };
             match rep.gouges.last_mut() {
                 Some(last) if last.operation == oi && last.mv == mi => {
-                    if *d > last.depth {
-                        last.depth = *d;
-                        last.at = q.to_array();
+                    if d > last.depth {
+                        *last = here;
                     }
                 }
-                _ => rep.gouges.push(Gouge {
-                    operation: oi,
-                    mv: mi,
-                    line,
-                    at: q.to_array(),
-                    depth: *d,
-                }),
+                _ => rep.gouges.push(here),
             }
-            rep.max_depth = rep.max_depth.max(*d);
+            rep.max_depth = rep.max_depth.max(d);
         }
     }
     rep
+}
+
+/// Whether a move of kind `k` is checked.
+fn wanted(k: MoveKind, g: &GougeParams) -> bool {
+    match k {
+        MoveKind::Linear | MoveKind::Arc(_) => true,
+        MoveKind::Rapid => g.rapids,
+        MoveKind::Cycle(_) => false,
+    }
+}
+
+/// The sample points of one operation's moves, every `g.step` along each
+/// (the skipped counted in `rep`).
+fn sample_operation(
+    op: &Operation,
+    oi: usize,
+    b: &ToolBody,
+    g: &GougeParams,
+    rep: &mut GougeReport,
+    samples: &mut Vec<Sample>,
+) {
+    let to_part = |v: DVec3| op.frame.map(|f| f.to_parent(v)).unwrap_or(v);
+    // The tool axis in part coordinates; `None` when only machine angles
+    // say where it points.
+    let axis_part = |m: &millplan_nc::Move| -> Option<DVec3> {
+        let a = match op.orient(m) {
+            Some(o) => match o.axis {
+                Some(v) => v,
+                None if o.is_tilted() => return None,
+                None => DVec3::Z,
+            },
+            None => DVec3::Z,
+        };
+        Some(op.frame.map(|f| f.dir_to_parent(a)).unwrap_or(a))
+    };
+    let vertical = |a: DVec3| (a - DVec3::Z).length() <= 1e-6;
+    let ball = matches!(b.shape, Shape::Ball { .. });
+    for (i, m) in op.moves.iter().enumerate() {
+        if !wanted(m.kind, g) {
+            if m.cycle().is_some() {
+                rep.skipped.cycles += 1;
+            }
+            continue;
+        }
+        let (Some(start), Some(end)) = (op.known_start(i), known(m.end)) else {
+            rep.skipped.unknown_position += 1;
+            continue;
+        };
+        let Some(a1) = axis_part(m) else {
+            rep.skipped.tilted += 1;
+            continue;
+        };
+        // The axis the move starts with: the previous move's (the first
+        // move of an operation turns from nowhere: its own).
+        let a0 = match i.checked_sub(1).map(|k| axis_part(&op.moves[k])) {
+            Some(None) => {
+                rep.skipped.tilted += 1;
+                continue;
+            }
+            Some(Some(a)) => a,
+            None => a1,
+        };
+        let upright = vertical(a1) && (vertical(a0) || !ball);
+        if !upright && !ball {
+            rep.skipped.tilted += 1;
+            continue;
+        }
+        rep.moves_checked += 1;
+        let (len, at): (f64, Box<dyn Fn(f64) -> DVec3>) = match op.arc(m) {
+            Some(a) => (
+                a.length(start, end),
+                Box::new(move |t| a.point_at(start, end, t)),
+            ),
+            None => (
+                (end - start).length(),
+                Box::new(move |t| start.lerp(end, t)),
+            ),
+        };
+        let n = ((len / g.step).ceil() as usize).max(1);
+        samples.extend((0..=n).map(|k| {
+            let t = k as f64 / n as f64;
+            let axis = (!upright).then(|| axis_at(a0, a1, t));
+            (oi as u32, i as u32, to_part(at(t)), axis)
+        }));
+    }
+}
+
+/// How far below the drop-cutter height of the vertical cutter `sh` the tip
+/// `q` is (−∞ where the cutter meets no part, or meets it only by the
+/// tolerance at a wall).
+fn vertical_depth(part: &DropMesh, sh: &Shape, q: DVec3, tol: f64) -> f64 {
+    let c = DVec2::new(q.x, q.y);
+    let depth = part
+        .drop(sh, c)
+        .map(|d| d.z - q.z)
+        .unwrap_or(f64::NEG_INFINITY);
+    if depth <= tol {
+        return depth;
+    }
+    // Deeper than the tolerance below where the tool would rest, but is it
+    // into the part by more than the tolerance in any direction? A tool
+    // standing exactly at a vertical wall is not: the tool shrunk by the
+    // tolerance must still meet the part.
+    let (inner, rise) = sh.inset(tol);
+    let into = part.drop(&inner, c).is_some_and(|d| d.z > q.z + rise);
+    if into {
+        depth
+    } else {
+        f64::NEG_INFINITY
+    }
+}
+
+/// Flutes longer than this are checked to here, mm (an unknown flute length
+/// stands for a tool that cuts all along: a kilometre is all of it).
+const FLUTE_REACH: f64 = 1e6;
+
+/// How far the ball end `b` at tip `q` with unit axis `a` reaches into the
+/// part: its radius less the distance from the part's surface to the
+/// capsule of its ball and flutes (−∞ when that distance is more than the
+/// radius less `tol`); and whether the ball alone reaches that deep.
+fn tilted_depth(part: &DropMesh, b: &ToolBody, q: DVec3, a: DVec3, tol: f64) -> (f64, bool) {
+    let r = b.radius();
+    let centre = q + a * r;
+    let top = q + a * b.flute.clamp(r, FLUTE_REACH);
+    let solid = part.solid();
+    let capsule = |radius: f64| solid.capsule_hits(centre, top, radius, None);
+    if !capsule(r - tol) {
+        return (f64::NEG_INFINITY, false);
+    }
+    let ball = |radius: f64| solid.capsule_hits(centre, centre, radius, None);
+    // The distance of a test that hits at r − tol lies between a radius
+    // that misses and one that hits.
+    let depth = |hits: &dyn Fn(f64) -> bool| {
+        let (mut lo, mut hi) = (0.0, r - tol);
+        for _ in 0..24 {
+            let mid = 0.5 * (lo + hi);
+            if hits(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        r - lo
+    };
+    let whole = depth(&capsule);
+    // The ball alone as deep as the whole tool: a gouge of the ball.
+    let alone = ball(r - tol) && depth(&ball) >= whole - 1e-6 * r;
+    (whole, alone)
 }

@@ -7,6 +7,7 @@ use millplan_models::cutter::Shape;
 use millplan_nc::{parse_program, Program, ReadOptions};
 use millplan_sim::dropcutter::DropMesh;
 use millplan_sim::gouge::{check, GougeParams};
+use millplan_sim::stock::tool::ToolBody;
 
 /// The box [10,110] × [10,110] × [-30,-1], closed.
 fn box_mesh() -> DropMesh {
@@ -71,7 +72,7 @@ fn a_tool_at_a_wall_gouges_only_when_inside_it() {
             (0.5, true),
         ] {
             let p = pass(10.0 - 7.0 + inside);
-            let rep = check(&p, &part, |_| Some(sh), &g);
+            let rep = check(&p, &part, |_| Some(ToolBody::new(sh)), &g);
             assert!(rep.points_checked > 0);
             assert_eq!(
                 !rep.gouges.is_empty(),
@@ -94,7 +95,7 @@ fn a_tool_below_the_top_gouges_by_its_depth() {
     let rep = check(
         &p,
         &part,
-        |_| Some(Shape::Ball { radius: 3.0 }),
+        |_| Some(ToolBody::new(Shape::Ball { radius: 3.0 })),
         &GougeParams::default(),
     );
     let deepest = rep.gouges.iter().map(|g| g.depth).fold(0.0, f64::max);
@@ -113,9 +114,15 @@ fn progress_counts_every_sample_point() {
     let p = pass(0.0);
     let sh = Shape::Ball { radius: 3.0 };
     let seen = std::sync::Mutex::new(Vec::new());
-    let rep = millplan_sim::gouge::check_with_progress(&p, &part, |_| Some(sh), &g, &|d, t| {
-        seen.lock().expect("lock").push((d, t));
-    });
+    let rep = millplan_sim::gouge::check_with_progress(
+        &p,
+        &part,
+        |_| Some(ToolBody::new(sh)),
+        &g,
+        &|d, t| {
+            seen.lock().expect("lock").push((d, t));
+        },
+    );
     let mut seen = seen.into_inner().expect("lock");
     seen.sort();
     let total = rep.points_checked;
@@ -123,7 +130,7 @@ fn progress_counts_every_sample_point() {
     assert!(seen.iter().all(|&(d, t)| t == total && d <= total));
     assert_eq!(seen.last(), Some(&(total, total)));
     assert_eq!(seen.len(), total / millplan_sim::gouge::PROGRESS_EVERY + 1);
-    let plain = check(&p, &part, |_| Some(sh), &g);
+    let plain = check(&p, &part, |_| Some(ToolBody::new(sh)), &g);
     assert_eq!(plain.points_checked, total);
     assert_eq!(plain.gouges.len(), rep.gouges.len());
 }
@@ -161,7 +168,12 @@ fn rasters_over_a_vertical_wall_climb_it_without_cutting_the_corner() {
                 climbs > 0,
                 "{sh:?} at {angle}°: the raster never meets the wall"
             );
-            let rep = check(&prog, &part, |_| Some(sh), &GougeParams::default());
+            let rep = check(
+                &prog,
+                &part,
+                |_| Some(ToolBody::new(sh)),
+                &GougeParams::default(),
+            );
             assert!(rep.points_checked > 10_000, "{}", rep.points_checked);
             assert!(
                 rep.gouges.is_empty(),
@@ -263,5 +275,69 @@ fn flat_raster_over_profile(
         ..RasterParams::new(sh)
     };
     let prog = raster(&part, &mesh.bounds(), &p);
-    check(&prog, &part, |_| Some(sh), g)
+    check(&prog, &part, |_| Some(ToolBody::new(sh)), g)
+}
+
+/// A program of one feed move from `a` to `b` with the tool axis `k`.
+fn tilted(a: [f64; 3], b: [f64; 3], k: [f64; 3]) -> Program {
+    let g = |p: [f64; 3]| {
+        format!(
+            "GOTO/{},{},{},{},{},{}\n",
+            p[0], p[1], p[2], k[0], k[1], k[2]
+        )
+    };
+    let src = format!(
+        "PARTNO TILT\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\n{}{}FINI\n",
+        g(a),
+        g(b)
+    );
+    parse_program(&src, ReadOptions::default())
+        .expect("reads")
+        .program
+}
+
+/// A ball end leaned 30° riding the box's top (z = −1) is checked by its
+/// distance to the part, not skipped: resting on the face it does not
+/// gouge, 0.2 mm lower it gouges 0.2 mm (the face's normal distance), and
+/// a tool whose ball is clear of the outside wall but whose flutes lean
+/// into it gouges, which the drop-cutter of a vertical tool at its tip
+/// would not see. A leaned flat end is still skipped, and counted.
+#[test]
+fn a_tilted_ball_end_is_checked_by_its_distance_to_the_part() {
+    let part = box_mesh();
+    let g = GougeParams::default();
+    let r = 3.0;
+    let ball = ToolBody::new(Shape::Ball { radius: r });
+    let (s, c) = (30f64.to_radians().sin(), 30f64.to_radians().cos());
+    let k = [s, 0.0, c];
+    // The ball's centre r above the face: the tip r below it along the axis.
+    let tip_z = |drop: f64| -1.0 + r - r * c - drop;
+    for (drop, gouges) in [(0.0, false), (0.2, true)] {
+        let z = tip_z(drop);
+        let p = tilted([40.0, 50.0, z], [80.0, 50.0, z], k);
+        let rep = check(&p, &part, |_| Some(ball), &g);
+        // The first move comes from an unknown place.
+        assert_eq!(rep.skipped.tilted, 0);
+        assert_eq!(rep.moves_checked, 1);
+        assert_eq!(!rep.gouges.is_empty(), gouges, "{drop}: {rep:?}");
+        if gouges {
+            assert!((rep.max_depth - drop).abs() < 1e-3, "{}", rep.max_depth);
+        }
+    }
+    // Beside the outside wall x = 10, below the top, leaning toward it by
+    // 45°: the ball's centre is 4.9 mm from the wall, its flutes reach it.
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let p = tilted([3.0, 40.0, -12.0], [3.0, 60.0, -12.0], [h, 0.0, h]);
+    let rep = check(&p, &part, |_| Some(ball), &g);
+    assert!(!rep.gouges.is_empty(), "{rep:?}");
+    let vertical = tilted([3.0, 40.0, -12.0], [3.0, 60.0, -12.0], [0.0, 0.0, 1.0]);
+    assert!(check(&vertical, &part, |_| Some(ball), &g)
+        .gouges
+        .is_empty());
+    // A ball without flutes above it clears the wall.
+    let short = ToolBody { flute: r, ..ball };
+    assert!(check(&p, &part, |_| Some(short), &g).gouges.is_empty());
+    let flat = ToolBody::new(Shape::Flat { radius: r });
+    let rep = check(&p, &part, |_| Some(flat), &g);
+    assert_eq!((rep.skipped.tilted, rep.moves_checked), (1, 0));
 }

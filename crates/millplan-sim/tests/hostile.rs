@@ -7,6 +7,7 @@ use millplan_models::cutter::Shape;
 use millplan_sim::dropcutter::DropMesh;
 use millplan_sim::gouge::{check, samples, GougeParams};
 use millplan_sim::raster::{estimate, raster, RasterParams};
+use millplan_sim::stock::tool::ToolBody;
 
 fn ball() -> Shape {
     Shape::Ball { radius: 5.0 }
@@ -54,7 +55,12 @@ fn repeated_facets_are_one_facet() {
     p.tol = None;
     let prog = raster(&b, &many.bounds(), &p);
     assert!(prog.move_count() > 1000);
-    let rep = check(&prog, &b, |_| Some(ball()), &GougeParams::default());
+    let rep = check(
+        &prog,
+        &b,
+        |_| Some(ToolBody::new(ball())),
+        &GougeParams::default(),
+    );
     assert!(rep.points_checked > 1000);
     assert!(
         t.elapsed().as_secs() < 20,
@@ -107,9 +113,9 @@ fn a_gouge_check_is_counted_before_it_is_made() {
             step,
             ..GougeParams::default()
         };
-        let rep = check(&prog, &part, |_| Some(ball()), &g);
+        let rep = check(&prog, &part, |_| Some(ToolBody::new(ball())), &g);
         assert_eq!(
-            samples(&prog, |_| Some(ball()), &g),
+            samples(&prog, |_| Some(ToolBody::new(ball())), &g),
             rep.points_checked as f64
         );
     }
@@ -117,7 +123,7 @@ fn a_gouge_check_is_counted_before_it_is_made() {
         step: 1e-9,
         ..GougeParams::default()
     };
-    assert!(samples(&prog, |_| Some(ball()), &g) > 1e11);
+    assert!(samples(&prog, |_| Some(ToolBody::new(ball())), &g) > 1e11);
 }
 
 /// Issue 34: "`--stock box:0,0,0,429496729.6,429496729.6,1`: the memory
