@@ -225,21 +225,10 @@ pub struct ModelFiles<'a> {
     pub read: millplan_nc::ReadOptions,
 }
 
-/// What a force run tells its caller while it works (a command draws it
-/// as bars and prints the findings).
-pub trait Watch: Sync {
-    /// `done` bytes of the program read of `total`.
-    fn reading(&self, done: u64, total: u64);
-    /// The reader's findings on the program, once it is read.
-    fn diagnostics(&self, found: &[millplan_nc::Diagnostic]);
-    /// `done` strokes of the force run of `total` (first with 0).
-    fn strokes(&self, done: usize, total: usize);
-    /// The force run has ended.
-    fn forces_done(&self);
-    /// The phase `name` has ended (for a `--timings` table; each phase is
-    /// the work since the previous one).
-    fn lap(&self, _name: &str) {}
-}
+pub use crate::watch::Watch;
+
+mod command;
+pub use command::{command, FeedCommand};
 
 /// Reads the program and the files `f` names and builds its strokes and
 /// stock as `req` asks: the run every force command starts from.

@@ -47,6 +47,7 @@ pub mod thread;
 pub mod timings;
 pub mod tool;
 pub mod tools;
+pub mod watch;
 pub mod wd;
 
 pub use finish::{Summary, Verdict, Written};

@@ -60,6 +60,17 @@ impl From<anyhow::Error> for CliError {
     }
 }
 
+impl From<millplan_driver::watch::Stop> for CliError {
+    fn from(e: millplan_driver::watch::Stop) -> Self {
+        use millplan_driver::watch::Stop;
+        match e {
+            Stop::Io(e) => e.into(),
+            Stop::Internal(m) => CliError::internal(m),
+            Stop::Refused(m) => CliError::findings(m),
+        }
+    }
+}
+
 pub type CliResult<T> = Result<T, CliError>;
 
 /// The exit code of a run that went to its end: 3 when it `found` problems,

@@ -101,25 +101,32 @@ impl Phases {
     }
 }
 
-/// What a force run of the driver reports, drawn and printed
-/// (`millplan_driver::feed::Watch`): the bytes of the program read, its
-/// findings (none with `quiet`), the strokes done (no bar with `quiet`).
+/// What a run of the driver reports, drawn and printed
+/// (`millplan_driver::watch::Watch`): the bytes of the program read, its
+/// findings (none with `quiet`), the written program's (none with `-q`),
+/// the strokes and the passes' phases done (no bar with `quiet`), the
+/// checks' refusal.
 pub struct Watch<'a> {
     path: &'a std::path::Path,
     quiet: bool,
+    notes: bool,
     read: std::sync::Mutex<Option<ProgressBar>>,
-    strokes: std::sync::OnceLock<ProgressBar>,
+    strokes: std::sync::Mutex<Option<ProgressBar>>,
+    phases: std::sync::OnceLock<Phases>,
     clock: std::sync::Mutex<crate::timings::Clock>,
 }
 
 impl<'a> Watch<'a> {
-    /// A watch whose `--timings` clock starts now.
-    pub fn new(path: &'a std::path::Path, quiet: bool) -> Watch<'a> {
+    /// A watch whose `--timings` clock starts now: `notes` unless `-q`,
+    /// bars and the reader's findings unless `-q` or `--json`.
+    pub fn new(path: &'a std::path::Path, quiet: bool, json: bool) -> Watch<'a> {
         Watch {
             path,
-            quiet,
+            quiet: quiet || json,
+            notes: !quiet,
             read: std::sync::Mutex::new(None),
-            strokes: std::sync::OnceLock::new(),
+            strokes: std::sync::Mutex::new(None),
+            phases: std::sync::OnceLock::new(),
             clock: std::sync::Mutex::new(crate::timings::Clock::start()),
         }
     }
@@ -134,7 +141,14 @@ impl<'a> Watch<'a> {
     }
 }
 
-impl millplan_driver::feed::Watch for Watch<'_> {
+/// The bar in `slot`, taken and cleared.
+fn clear(slot: &std::sync::Mutex<Option<ProgressBar>>) {
+    if let Some(b) = slot.lock().unwrap_or_else(|e| e.into_inner()).take() {
+        b.finish_and_clear();
+    }
+}
+
+impl millplan_driver::watch::Watch for Watch<'_> {
     fn reading(&self, done: u64, total: u64) {
         let mut bar = self.read.lock().unwrap_or_else(|e| e.into_inner());
         bar.get_or_insert_with(|| bytes(total, "reading"))
@@ -142,22 +156,22 @@ impl millplan_driver::feed::Watch for Watch<'_> {
     }
 
     fn diagnostics(&self, found: &[millplan_nc::Diagnostic]) {
-        if let Some(b) = self.read.lock().unwrap_or_else(|e| e.into_inner()).take() {
-            b.finish_and_clear();
-        }
+        clear(&self.read);
         crate::cmd::print_diagnostics(self.path, found, self.quiet);
     }
 
+    fn diagnostics_written(&self, found: &[millplan_nc::Diagnostic]) {
+        crate::cmd::print_diagnostics(self.path, found, !self.notes);
+    }
+
     fn strokes(&self, done: usize, total: usize) {
-        self.strokes
-            .get_or_init(|| count(total as u64, "forces", "strokes", !self.quiet))
+        let mut bar = self.strokes.lock().unwrap_or_else(|e| e.into_inner());
+        bar.get_or_insert_with(|| count(total as u64, "forces", "strokes", !self.quiet))
             .set_position(done as u64);
     }
 
     fn forces_done(&self) {
-        if let Some(b) = self.strokes.get() {
-            b.finish_and_clear();
-        }
+        clear(&self.strokes);
     }
 
     fn lap(&self, name: &str) {
@@ -166,13 +180,35 @@ impl millplan_driver::feed::Watch for Watch<'_> {
             .unwrap_or_else(|e| e.into_inner())
             .lap(name);
     }
+
+    fn phase(&self, phase: &str, done: usize, total: usize) {
+        let bar = self.phases.get_or_init(|| Phases::new(!self.quiet));
+        bar.report(phase, done, total);
+    }
+
+    fn phases_done(&self) {
+        if let Some(b) = self.phases.get() {
+            b.finish();
+        }
+    }
+
+    fn refused(&self, lines: &[String], forced: bool) {
+        for l in lines {
+            eprintln!("{l}");
+        }
+        if forced {
+            eprintln!("written anyway (--force)");
+        }
+    }
 }
 
 impl Drop for Watch<'_> {
-    /// A read that failed leaves no bar behind.
+    /// A run that failed leaves no bar behind.
     fn drop(&mut self) {
-        if let Some(b) = self.read.lock().unwrap_or_else(|e| e.into_inner()).take() {
-            b.finish_and_clear();
+        clear(&self.read);
+        clear(&self.strokes);
+        if let Some(b) = self.phases.get() {
+            b.finish();
         }
     }
 }

@@ -1,12 +1,9 @@
 //! `millplan feed`: a feed per block from the cutting forces; and what
 //! `millplan force PATH` shares with it (the program, its stock, the model).
 
-use crate::cmd::write_program_file;
-use crate::error::{exit, CliError, CliResult};
+use crate::error::{exit, CliResult};
 use crate::io::Outputs;
-use millplan_driver::feed::{
-    self as lib, FeedRequest, ModelRequest, Prepared, ScheduleError, Watch as _,
-};
+use millplan_driver::feed::{self as lib, FeedRequest, ModelRequest, Prepared, Watch as _};
 use millplan_driver::StockSpec;
 use std::path::{Path, PathBuf};
 
@@ -140,11 +137,6 @@ impl ModelArgs {
         self.inputs.files(path, machine, &self.units)
     }
 
-    /// Whether warnings, notes and bars are left out (`-q`, `--json`).
-    pub fn quiet(&self) -> bool {
-        self.notes.quiet || self.summary.json
-    }
-
     /// The outputs `outs` of a run on the program at `path`, checked against
     /// them and every file the run reads.
     pub fn plan(&self, path: &Path, outs: &[(&str, Option<&Path>)]) -> CliResult<Outputs> {
@@ -163,108 +155,31 @@ impl ModelArgs {
     }
 }
 
-/// A force run over the strokes `s` with a progress bar.
-fn with_bar<T>(
-    s: &millplan_driver::Strokes,
-    quiet: bool,
-    run: impl FnOnce(&(dyn Fn(usize) + Sync)) -> Result<T, String>,
-) -> CliResult<T> {
-    let bar = crate::progress::count(s.strokes.len() as u64, "forces", "strokes", !quiet);
-    let r = run(&|d| bar.set_position(d as u64));
-    bar.finish_and_clear();
-    r.map_err(CliError::input)
-}
-
-fn request(a: &Args) -> FeedRequest {
-    FeedRequest {
-        fz_min: a.fz_min,
-        fz_max: a.fz_max,
-        fos: a.fos,
-        feed_accel: a.feed_accel,
-    }
-}
-
-/// The feed pass over the prepared program, with the bar of its phases.
-fn schedule(
-    a: &Args,
-    p: &Prepared,
-    req: &ModelRequest,
-    params: millplan_driver::feed::FeedParams,
-) -> CliResult<lib::Scheduled> {
-    let bar = crate::progress::Phases::new(!a.model.quiet());
-    let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
-    let ran = lib::schedule(p, params, req, &hook);
-    bar.finish();
-    ran.map_err(|e| match e {
-        ScheduleError::Pass(e) => crate::cmd::pass_error(&a.path, e),
-        ScheduleError::Missing => CliError::internal("the feed pass left no result"),
-    })
-}
-
 pub fn run(a: Args) -> CliResult<i32> {
     let m = &a.model;
-    let watch = crate::progress::Watch::new(&a.path, m.quiet());
+    let watch = crate::progress::Watch::new(&a.path, m.notes.quiet, m.summary.json);
     let outputs = m.plan(&a.path, &[("-o", Some(&a.out.output))])?;
-    watch.lap("arguments and outputs checked");
-    let p = lib::prepare(&m.files(&a.path)?, &m.request(), &watch)?;
-    let req = m.request();
-    let own = lib::input_collisions(&p, &req).map_err(CliError::input)?;
-    a.force.enforce(&[own], &a.path)?;
-    watch.lap("the input's rapids, shank and holder on the stock");
-    let params = lib::feed_params(&request(&a), &req, &p, &crate::limits::loads())
-        .map_err(CliError::input)?;
-    let target = a.out.target(&p.machine, p.program.source)?;
-    watch.lap("limits (learned from the input's forces when none is given), output dialect");
-    let s = schedule(&a, &p, &req, params)?;
-    let path = a.path.display().to_string();
-    lib::stopped_spindle(&path, &s.before).map_err(CliError::input)?;
-    watch.lap("feeds scheduled (the input's forces, the feed iteration)");
-    let s2 = lib::program_strokes(&req, &s.program, p.machine.rapid).map_err(CliError::input)?;
-    let after = with_bar(&s2, m.quiet(), |d| lib::forces_after(&p, &s, &s2, d))?;
-    let checks = lib::checks(&p, &s.program, &req).map_err(CliError::input)?;
-    a.force.enforce(&checks, &a.path)?;
-    watch.lap("written program simulated again and checked");
-    let code = write_outputs(&a, &p, &s, (&after, checks), target, outputs, &watch)?;
-    watch.print_timings(m.timings.on);
-    Ok(code)
-}
-
-/// Writes the program, the table and the report, commits them and prints
-/// the summary; the exit code.
-fn write_outputs(
-    a: &Args,
-    p: &Prepared,
-    s: &lib::Scheduled,
-    (after, checks): (&lib::ForceRun, Vec<millplan_plan::safety::Check>),
-    target: millplan_nc::write::Target,
-    mut outputs: Outputs,
-    watch: &crate::progress::Watch,
-) -> CliResult<i32> {
-    let m = &a.model;
-    let wo = p.machine.write_options(target);
-    let output = &a.out.output;
-    write_program_file(&s.program, wo, &mut outputs, output, &a.path, m.notes.quiet)?;
-    let output = output.display().to_string();
-    let summary = lib::FeedSummary::new(p, s, (after, checks), &output, target.name());
-    if let Some(t) = &m.table {
-        outputs.write(t, lib::loads_csv(&s.before).as_bytes())?;
-    }
-    if let Some(r) = &m.report {
-        let inputs = m.report_inputs(&a.path, p, &s.params.limits);
-        let html = lib::feed_report(
-            inputs,
-            &summary,
-            &s.before,
-            after,
-            &s.params.limits,
-            &p.machine,
-        );
-        outputs.write(r, html.as_bytes())?;
-    }
-    outputs.commit()?;
-    watch.lap("outputs written, checked and renamed into place");
+    let loads = crate::limits::loads();
+    let c = lib::FeedCommand {
+        files: m.files(&a.path)?,
+        model: m.request(),
+        feed: FeedRequest {
+            fz_min: a.fz_min,
+            fz_max: a.fz_max,
+            fos: a.fos,
+            feed_accel: a.feed_accel,
+        },
+        loads: &loads,
+        to: a.out.to.map(Into::into),
+        output: &a.out.output,
+        table: m.table.clone(),
+        report: m.report.clone(),
+        force: a.force.force,
+    };
+    let summary = lib::command(&c, outputs, &watch)?;
     m.summary.print(&summary, |s| s.render_text());
     watch.lap("summary printed");
+    watch.print_timings(m.timings.on);
     Ok(exit(summary.findings()))
 }
 

@@ -91,7 +91,7 @@ pub fn run(a: Args) -> CliResult<i32> {
 /// `millplan force PATH`: the loads of every move.
 fn program_forces(path: &Path, m: &crate::cmd::feed::ModelArgs) -> CliResult<i32> {
     use millplan_driver::feed::Watch as _;
-    let watch = crate::progress::Watch::new(path, m.quiet());
+    let watch = crate::progress::Watch::new(path, m.notes.quiet, m.summary.json);
     let mut outputs = m.plan(path, &[])?;
     let limits =
         millplan_driver::feed::force_limits(&crate::limits::loads()).map_err(CliError::input)?;

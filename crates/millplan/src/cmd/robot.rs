@@ -222,7 +222,7 @@ fn process(path: &Path, p: &ProcessArgs) -> CliResult<(Robot, Program, PathLoad)
     }
     let m = &p.model;
     let files = m.files(path, None, &crate::cmd::args::ProgramUnits { units: None })?;
-    let watch = crate::progress::Watch::new(path, p.robot.summary.json);
+    let watch = crate::progress::Watch::new(path, false, p.robot.summary.json);
     let req = lib::CouplingRequest {
         stock: m.stock.clone(),
         material: m.material.clone(),
