@@ -15,6 +15,9 @@ use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
 
+mod command;
+pub use command::{command, PostCommand, PostRun};
+
 /// The options of `millplan post` that shape the post.
 #[derive(Clone, Copy, Debug)]
 pub struct PostRequest {

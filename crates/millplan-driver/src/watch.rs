@@ -32,6 +32,8 @@ pub trait Watch: Sync {
     fn phase(&self, _phase: &str, _done: usize, _total: usize) {}
     /// The passes that reported phases have ended.
     fn phases_done(&self) {}
+    /// Work without a count has started (`Some`, what it is) or ended.
+    fn busy(&self, _what: Option<&str>) {}
     /// The checks refused the output: the `lines` of its findings (and
     /// whether it is written anyway, `--force`).
     fn refused(&self, _lines: &[String], _forced: bool) {}
@@ -87,4 +89,17 @@ pub fn enforce(checks: &[Check], path: &Path, force: bool, w: &dyn Watch) -> Res
     Err(Stop::Refused(format!(
         "{first}; nothing written (--force writes it)"
     )))
+}
+
+/// Reads the program at `path` (APT/CL, G-code or KUKA KRL) as `opts`
+/// say, `w` hearing the bytes read and then the reader's findings.
+pub fn read_program(
+    path: &Path,
+    opts: millplan_nc::ReadOptions,
+    w: &dyn Watch,
+) -> Result<millplan_nc::Parsed, IoError> {
+    let mut reading = |done, total| w.reading(done, total);
+    let (parsed, _) = crate::io::inputs::read_source(path, opts, &mut reading)?;
+    w.diagnostics(&parsed.diagnostics);
+    Ok(parsed)
 }

@@ -113,6 +113,7 @@ pub struct Watch<'a> {
     read: std::sync::Mutex<Option<ProgressBar>>,
     strokes: std::sync::Mutex<Option<ProgressBar>>,
     phases: std::sync::OnceLock<Phases>,
+    spinner: std::sync::Mutex<Option<ProgressBar>>,
     clock: std::sync::Mutex<crate::timings::Clock>,
 }
 
@@ -127,6 +128,7 @@ impl<'a> Watch<'a> {
             read: std::sync::Mutex::new(None),
             strokes: std::sync::Mutex::new(None),
             phases: std::sync::OnceLock::new(),
+            spinner: std::sync::Mutex::new(None),
             clock: std::sync::Mutex::new(crate::timings::Clock::start()),
         }
     }
@@ -192,6 +194,13 @@ impl millplan_driver::watch::Watch for Watch<'_> {
         }
     }
 
+    fn busy(&self, what: Option<&str>) {
+        clear(&self.spinner);
+        if let Some(what) = what {
+            *self.spinner.lock().unwrap_or_else(|e| e.into_inner()) = Some(spinner(what, !self.quiet));
+        }
+    }
+
     fn refused(&self, lines: &[String], forced: bool) {
         for l in lines {
             eprintln!("{l}");
@@ -207,6 +216,7 @@ impl Drop for Watch<'_> {
     fn drop(&mut self) {
         clear(&self.read);
         clear(&self.strokes);
+        clear(&self.spinner);
         if let Some(b) = self.phases.get() {
             b.finish();
         }

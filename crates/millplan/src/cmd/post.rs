@@ -1,12 +1,11 @@
 //! `millplan post`: a five-axis CL file posted through a machine's kinematics.
 
 use crate::cmd::{print_json, TargetArg};
-use crate::error::{CliError, CliResult};
+use crate::error::CliResult;
 use crate::io::Outputs;
-use crate::timings::Table as _;
-use millplan_driver::post::{self as lib, PostRequest, PostSummary};
-use millplan_plan::post::{for_target, post, PostError, Posted};
-use std::path::{Path, PathBuf};
+use millplan_driver::post::{self as lib, PostRequest};
+use millplan_driver::watch::Watch as _;
+use std::path::PathBuf;
 
 /// Post a five-axis CL file (tool-axis vectors) for a machine: rotary angles
 /// through its kinematics, chosen over the whole path.
@@ -81,98 +80,36 @@ pub struct Args {
     pub timings: crate::cmd::args::Timings,
 }
 
-fn request(a: &Args) -> PostRequest {
-    PostRequest {
-        tol: a.tol,
-        tcp: a.tcp,
-        g93: a.g93,
-        pole_cone: a.pole_cone,
-        pole_tol: a.pole_tol,
-        clearance: a.clearance,
-    }
-}
-
-/// A post error as the command reports it: a check's finding (exit 3) or
-/// the input's fault (exit 2), located in the CL file.
-fn post_error(path: &Path, e: PostError) -> CliError {
-    match lib::error(&path.display().to_string(), &e) {
-        (true, message) => CliError::findings(message),
-        (false, message) => CliError::input(message),
-    }
-}
-
 pub fn run(a: Args) -> CliResult<i32> {
-    let mut clock = crate::timings::Clock::start();
-    let code = run_timed(&a, &mut clock)?;
-    clock.end(a.timings.on);
-    Ok(code)
-}
-
-fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
+    let watch = crate::progress::Watch::new(&a.input, a.notes.quiet, a.json);
     crate::cmd::json_not_on_stdout(a.json, &a.output)?;
     let inputs = [a.input.as_path(), a.machine.as_path()];
-    let mut outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
-    let machine = crate::cmd::load_machine(Some(&a.machine))?;
-    let o = lib::options(&request(a), &machine).map_err(CliError::input)?;
-    let target = lib::target(a.to.map(Into::into), &a.output, &machine, &a.machine)
-        .map_err(CliError::input)?;
-    clock.lap("arguments, machine file and outputs checked");
-    let parsed = a.units.read(&a.input, a.notes.quiet || a.json)?;
-    clock.lap("read CL file");
-    let (program, report) = post_program(a, &parsed.program, &machine, &o, target, clock)?;
-    // The checks before the writing, so that the CL program is gone before
-    // the G-code text and the program read back from it are made.
-    let checks = lib::check_posted(&parsed.program, &program, &machine, o.tol);
-    drop(parsed);
-    clock.lap("checks (IR, machine, tips through the kinematics)");
-    let wo = lib::write_options(&machine, target);
-    let out = crate::cmd::write_program(&program, wo, &a.input, a.notes.quiet)?;
-    clock.lap("G-code written (in memory)");
-    let names = (
-        &*a.output.display().to_string(),
-        &*a.input.display().to_string(),
-    );
-    lib::read_back_check(&program, &out, target, a.tol, names).map_err(CliError::internal)?;
-    let checked = a.force.enforce(&checks, &a.input)?;
-    clock.lap("written program read back and compared");
-    outputs.write(&a.output, &out)?;
-    outputs.commit()?;
-    clock.lap("program staged, synced and renamed into place");
-    let s = PostSummary::new(
-        (&a.input, &a.output),
-        &o,
-        &machine,
-        target,
-        &report,
-        &checks,
-    );
+    let outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
+    let c = lib::PostCommand {
+        input: &a.input,
+        machine: &a.machine,
+        output: &a.output,
+        to: a.to.map(Into::into),
+        post: PostRequest {
+            tol: a.tol,
+            tcp: a.tcp,
+            g93: a.g93,
+            pole_cone: a.pole_cone,
+            pole_tol: a.pole_tol,
+            clearance: a.clearance,
+        },
+        read: a.units.options()?,
+        force: a.force.force,
+    };
+    let r = lib::command(&c, outputs, &watch)?;
+    let s = r.summary(&c);
     if a.json {
         print_json(serde_json::to_value(&s).unwrap_or_default());
     } else {
         eprintln!("{}", s.wrote());
         out!("{}", s.render_text());
     }
-    Ok(crate::error::exit(!checked))
-}
-
-/// The CL program posted for `target`, with a spinner.
-fn post_program(
-    a: &Args,
-    cl: &millplan_nc::Program,
-    machine: &millplan_plan::machine::Machine,
-    o: &millplan_plan::post::PostOptions,
-    target: millplan_nc::write::Target,
-    clock: &mut crate::timings::Clock,
-) -> CliResult<(millplan_nc::Program, millplan_plan::post::PostReport)> {
-    let bar = crate::progress::spinner("posting", !a.notes.quiet && !a.json);
-    let posted = post(cl, machine, o).map_err(|e| post_error(&a.input, e))?;
-    // The CL program stays for the tip check.
-    let Posted {
-        mut program,
-        report,
-    } = posted;
-    clock.lap("post (IK, DP over the path, linearisation, feeds, time estimates)");
-    for_target(&mut program, target).map_err(|e| post_error(&a.input, e))?;
-    bar.finish_and_clear();
-    Ok((program, report))
+    watch.lap("summary printed");
+    watch.print_timings(a.timings.on);
+    Ok(crate::error::exit(!r.checked))
 }
