@@ -12,6 +12,9 @@ use millplan_plan::pipeline::{self, Context, PassError};
 use serde::Serialize;
 use std::path::Path;
 
+mod command;
+pub use command::{command, ConvertCommand, Converted};
+
 /// The options of `convert` that shape what is written.
 #[derive(Clone, Copy, Debug)]
 pub struct ConvertRequest {

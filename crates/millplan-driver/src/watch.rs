@@ -34,6 +34,9 @@ pub trait Watch: Sync {
     fn phases_done(&self) {}
     /// Work without a count has started (`Some`, what it is) or ended.
     fn busy(&self, _what: Option<&str>) {}
+    /// A warning said whatever `-q` says (the exit code alone does not
+    /// say why).
+    fn warning(&self, _text: &str) {}
     /// The checks refused the output: the `lines` of its findings (and
     /// whether it is written anyway, `--force`).
     fn refused(&self, _lines: &[String], _forced: bool) {}

@@ -98,20 +98,7 @@ pub fn read_blank(
 
 /// Reads an APT/CL, G-code or KUKA KRL program.
 pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
-    read_source(path, opts).map(|(p, _)| p)
-}
-
-/// Reads a program, and a KUKA KRL program also as KRL.
-pub fn read_source(
-    path: &Path,
-    opts: ReadOptions,
-) -> CliResult<(Parsed, Option<millplan_nc::krl::KrlProgram>)> {
-    Ok(with_bar(|p| inputs::read_source(path, opts, p))?)
-}
-
-/// An error of the KRL program whose main is `main`, at its place.
-pub fn krl_error(main: &Path, e: millplan_nc::krl::KrlError) -> CliError {
-    inputs::krl_error(main, e).into()
+    Ok(with_bar(|p| inputs::read_source(path, opts, p))?.0)
 }
 
 /// On SIGINT, SIGTERM or SIGHUP: removes the outputs staged so far, says

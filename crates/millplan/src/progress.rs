@@ -201,6 +201,10 @@ impl millplan_driver::watch::Watch for Watch<'_> {
         }
     }
 
+    fn warning(&self, text: &str) {
+        eprintln!("{text}");
+    }
+
     fn refused(&self, lines: &[String], forced: bool) {
         for l in lines {
             eprintln!("{l}");

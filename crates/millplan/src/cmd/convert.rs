@@ -1,12 +1,11 @@
 //! `millplan convert`: read a program in any supported format, write it in another.
 
-use crate::cmd::{print_diagnostics, read_options, write_program, TargetArg, UnitArg};
-use crate::error::{CliError, CliResult};
+use crate::cmd::{read_options, TargetArg, UnitArg};
+use crate::error::CliResult;
 use crate::io::Outputs;
-use crate::timings::{Clock, Table as _};
 use millplan_driver::convert::{self as lib, ConvertRequest};
+use millplan_driver::watch::Watch as _;
 use millplan_nc::write::krl::KrlMotion;
-use millplan_nc::write::{self, Target};
 use millplan_nc::LengthUnit;
 use std::path::PathBuf;
 
@@ -94,75 +93,29 @@ fn request(a: &Args) -> ConvertRequest {
     }
 }
 
-/// Writes `out` at -o, or with --max-points or --krl-motion its KRL split
-/// (a main program and sub-programs beside it).
-fn write_out(
-    a: &Args,
-    inputs: &[&std::path::Path],
-    mut outputs: Outputs,
-    target: Target,
-    out: &[u8],
-) -> CliResult<()> {
-    let files = lib::krl_files(&request(a), target, &a.output, out).map_err(|e| match e {
-        lib::SplitError::Option(m) => CliError::input(m),
-        lib::SplitError::Split(m) => CliError::internal(m),
-    })?;
-    match files {
-        Some(files) => Ok(Outputs::stage_krl(inputs, &a.output, &files, 0)?.commit()?),
-        None => {
-            outputs.write(&a.output, out)?;
-            Ok(outputs.commit()?)
-        }
-    }
-}
-
 pub fn run(a: Args) -> CliResult<i32> {
+    // The reader's findings are said under --json too (the summary lists them).
+    let watch = crate::progress::Watch::new(&a.input, a.notes.quiet, false);
     crate::cmd::json_not_on_stdout(a.json, &a.output)?;
     let inputs: Vec<&std::path::Path> = [Some(&*a.input), a.machine.as_deref()]
         .into_iter()
         .flatten()
         .collect();
-    let mut clock = Clock::start();
     let outputs = Outputs::plan(&inputs, &[("-o", Some(&a.output))], true)?;
-    clock.lap("arguments and outputs checked");
-    let (parsed, krl) = crate::io::read_source(&a.input, read_options(a.units.units, a.feed)?)?;
-    clock.lap("program read");
-    print_diagnostics(&a.input, &parsed.diagnostics, a.notes.quiet);
-    let mut p = parsed.program;
-    let machine = crate::cmd::load_machine(a.machine.as_deref())?;
-    let req = request(&a);
-    let target = lib::target(&req, &machine, &a.output, p.source).map_err(CliError::input)?;
-    lib::resolve(&mut p, &machine).map_err(|e| crate::cmd::pass_error(&a.input, e))?;
-    let o = lib::write_options(&req, &machine, target);
-    let out = match krl
-        .as_ref()
-        .map(|k| write::krl::from_krl(k, target, a.lossy))
-    {
-        Some(Ok(Some(text))) => text.into_bytes(),
-        Some(Err(e)) => return Err(crate::io::krl_error(&a.input, e)),
-        _ => write_program(&p, o, &a.input, a.notes.quiet)?,
+    let c = lib::ConvertCommand {
+        input: &a.input,
+        machine: a.machine.as_deref(),
+        output: &a.output,
+        convert: request(&a),
+        read: read_options(a.units.units, a.feed)?,
     };
-    clock.lap("machine file read, program resolved and written in memory");
-    let (input, output) = (
-        a.input.display().to_string(),
-        a.output.display().to_string(),
-    );
-    let lossy = lib::check_output(&p, &out, target, a.lossy, (&input, &output))
-        .map_err(CliError::internal)?;
-    clock.lap("output read back and compared with the program");
-    if let Some(w) = &lossy {
-        // Said even with --quiet: the exit code alone does not say why.
-        eprintln!("{w}");
-    }
-    write_out(&a, &inputs, outputs, target, &out)?;
-    clock.lap("outputs written and renamed into place");
-    let found = (input.as_str(), parsed.diagnostics.as_slice());
-    let summary = lib::ConvertSummary::new(found, &p, (&output, target), lossy.is_none());
+    let r = lib::command(&c, &inputs, outputs, &watch)?;
     if a.json {
-        outln!("{}", serde_json::to_string(&summary).unwrap_or_default());
+        outln!("{}", serde_json::to_string(&r.summary).unwrap_or_default());
     } else {
-        eprintln!("{}", summary.text());
+        eprintln!("{}", r.summary.text());
     }
-    clock.end(a.timings.on);
-    Ok(crate::error::exit(lossy.is_some()))
+    watch.lap("summary printed");
+    watch.print_timings(a.timings.on);
+    Ok(crate::error::exit(!r.equivalent))
 }
