@@ -197,7 +197,8 @@ impl millplan_driver::watch::Watch for Watch<'_> {
     fn busy(&self, what: Option<&str>) {
         clear(&self.spinner);
         if let Some(what) = what {
-            *self.spinner.lock().unwrap_or_else(|e| e.into_inner()) = Some(spinner(what, !self.quiet));
+            *self.spinner.lock().unwrap_or_else(|e| e.into_inner()) =
+                Some(spinner(what, !self.quiet));
         }
     }
 

@@ -704,8 +704,11 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// `--force`, the force model's tool and steps; the force model's inputs
 /// shared by `feed`, `force` and `robot`), the repeated planning of outputs,
 /// bars and sets of files as one helper each, and setup's choice of
-/// kinematics and inspect's inch STL in the driver.
-const MAX_BINARY_LINES: usize = 5433;
+/// kinematics and inspect's inch STL in the driver; 5,287 once the runs of
+/// `feed`, `post` and `convert` moved into the driver (`feed::command`,
+/// `post::command`, `convert::command`, telling the binary through
+/// `watch::Watch`).
+const MAX_BINARY_LINES: usize = 5287;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into

@@ -55,8 +55,12 @@ pub fn command(
         }
     };
     w.lap("machine file read, program resolved and written in memory");
-    let (input, output) = (c.input.display().to_string(), c.output.display().to_string());
-    let lossy = check_output(&p, &out, target, req.lossy, (&input, &output)).map_err(Stop::Internal)?;
+    let (input, output) = (
+        c.input.display().to_string(),
+        c.output.display().to_string(),
+    );
+    let lossy =
+        check_output(&p, &out, target, req.lossy, (&input, &output)).map_err(Stop::Internal)?;
     w.lap("output read back and compared with the program");
     if let Some(l) = &lossy {
         w.warning(l);

@@ -40,7 +40,9 @@ pub fn command(c: &FeedCommand, mut outputs: Outputs, w: &dyn Watch) -> Result<F
     let target = crate::target::output_target(c.to, c.output, Some(&p.machine), p.program.source)
         .map_err(Stop::input)?;
     w.lap("limits (learned from the input's forces when none is given), output dialect");
-    let ran = schedule(&p, params, req, &|phase, done, total| w.phase(phase, done, total));
+    let ran = schedule(&p, params, req, &|phase, done, total| {
+        w.phase(phase, done, total)
+    });
     w.phases_done();
     let s = ran.map_err(|e| match e {
         ScheduleError::Pass(e) => Stop::pass(path, e),

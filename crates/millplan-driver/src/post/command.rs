@@ -79,7 +79,10 @@ pub fn command(c: &PostCommand, mut outputs: Outputs, w: &dyn Watch) -> Result<P
         .map_err(|e| crate::io::outputs::write_error(c.input, &e))?;
     w.diagnostics_written(&warnings);
     w.lap("G-code written (in memory)");
-    let names = (&*c.output.display().to_string(), &*c.input.display().to_string());
+    let names = (
+        &*c.output.display().to_string(),
+        &*c.input.display().to_string(),
+    );
     read_back_check(&program, &out, target, c.post.tol, names).map_err(Stop::Internal)?;
     let checked = enforce(&checks, c.input, c.force, w)?;
     w.lap("written program read back and compared");
