@@ -275,15 +275,14 @@ fn sample_operation(
             continue;
         }
         rep.moves_checked += 1;
-        let (len, at): (f64, Box<dyn Fn(f64) -> DVec3>) = match op.arc(m) {
-            Some(a) => (
-                a.length(start, end),
-                Box::new(move |t| a.point_at(start, end, t)),
-            ),
-            None => (
-                (end - start).length(),
-                Box::new(move |t| start.lerp(end, t)),
-            ),
+        let arc = op.arc(m);
+        let len = match &arc {
+            Some(a) => a.length(start, end),
+            None => (end - start).length(),
+        };
+        let at = |t: f64| match &arc {
+            Some(a) => a.point_at(start, end, t),
+            None => start.lerp(end, t),
         };
         let n = ((len / g.step).ceil() as usize).max(1);
         samples.extend((0..=n).map(|k| {
