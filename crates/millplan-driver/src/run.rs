@@ -394,13 +394,15 @@ impl Job {
             let ops: Vec<String> = chosen
                 .iter()
                 .map(|c| {
+                    let before = c.objective_before.map_or(
+                        "the orientation read is refused by the constraints".to_string(),
+                        |v| format!("{v:.1} N as read"),
+                    );
                     format!(
-                        "operation {}: lead {:.1}°, tilt {:.1}° (F_xy,max {} → {:.1} N)",
+                        "operation {}: lead {:.1}°, tilt {:.1}° (F_xy,max {:.1} N; {before})",
                         c.operation + 1,
                         c.lead,
                         c.tilt,
-                        c.objective_before
-                            .map_or("refused".to_string(), |v| format!("{v:.1}")),
                         c.objective_after
                     )
                 })

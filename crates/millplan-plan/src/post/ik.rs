@@ -232,7 +232,7 @@ pub fn candidates(
 /// from the pole at t = 0 (A/C, B/C, heads), cos t for the A/B table, whose
 /// pole is at B = ±90°; near 0 at the pole.
 #[inline]
-fn side(r: Roles, c: &Cand) -> f64 {
+pub fn side(r: Roles, c: &Cand) -> f64 {
     let (t, _) = split(r, c.first, c.second);
     let t = t.to_radians();
     if r.held_is_second {
@@ -242,12 +242,25 @@ fn side(r: Roles, c: &Cand) -> f64 {
     }
 }
 
+/// Whether two [`side`]s are opposite (neither at the pole).
+#[inline]
+pub fn sides_differ(sa: f64, sb: f64) -> bool {
+    !(sa.abs() < 1e-6 || sb.abs() < 1e-6 || (sa > 0.0) == (sb > 0.0))
+}
+
 /// Whether the tilt of `a` and of `b` put the tool on opposite sides of the
 /// pole (neither at it).
 #[inline]
 pub fn changes_side(r: Roles, a: &Cand, b: &Cand) -> bool {
-    let (sa, sb) = (side(r, a), side(r, b));
-    !(sa.abs() < 1e-6 || sb.abs() < 1e-6 || (sa > 0.0) == (sb > 0.0))
+    sides_differ(side(r, a), side(r, b))
+}
+
+/// Whether the held (turning) axis turns by 90° or more from `a` to `b`.
+#[inline]
+pub fn held_turns(r: Roles, a: &Cand, b: &Cand) -> bool {
+    let (_, ha) = split(r, a.first, a.second);
+    let (_, hb) = split(r, b.first, b.second);
+    wrap180(hb - ha).abs() >= 90.0
 }
 
 /// Whether the motion from `a` to `b` changes the IK branch: the two sides
@@ -259,12 +272,7 @@ pub fn changes_side(r: Roles, a: &Cand, b: &Cand) -> bool {
 /// [`closest_to_pole`] for that.)
 #[inline]
 pub fn is_flip(r: Roles, a: &Cand, b: &Cand) -> bool {
-    if !changes_side(r, a, b) {
-        return false;
-    }
-    let (_, ha) = split(r, a.first, a.second);
-    let (_, hb) = split(r, b.first, b.second);
-    wrap180(hb - ha).abs() >= 90.0
+    changes_side(r, a, b) && held_turns(r, a, b)
 }
 
 /// The smallest angle, degrees, between the pole (either end) and the tool

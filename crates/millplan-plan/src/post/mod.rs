@@ -596,10 +596,18 @@ fn choose(
         .map(|c| 1e-3 * (c.first.abs() + c.second.abs()) + 10.0 * c.dev)
         .collect();
     let mut next = Vec::with_capacity(16);
+    // Each candidate's side of the pole, the previous point's and this one's.
+    let sides = |c: &[Cand], out: &mut Vec<f64>| {
+        out.clear();
+        out.extend(c.iter().map(|c| ik::side(r, c)));
+    };
+    let (mut side_a, mut side_b) = (Vec::with_capacity(16), Vec::with_capacity(16));
+    sides(&cands[span(0)], &mut side_a);
     for i in 1..n {
         let (prev, cur) = (&cands[span(i - 1)], &cands[span(i)]);
         next.clear();
         let base = off[i] as usize;
+        sides(cur, &mut side_b);
         // A cut whose tool axis does not pass the pole cannot take the
         // tilt to its other side: that is the other branch, as a flip is.
         let off_pole = !cls[i].rapid
@@ -609,14 +617,16 @@ fn choose(
             let mut arg = 0u8;
             for (ai, a) in prev.iter().enumerate() {
                 let mut c = cost[ai] + rot_dist(kin, a, b);
-                if is_flip(r, a, b) {
-                    c += if cls[i].rapid {
-                        FLIP_PENALTY
-                    } else {
-                        f64::INFINITY
-                    };
-                } else if off_pole && ik::changes_side(r, a, b) {
-                    c = f64::INFINITY;
+                if ik::sides_differ(side_a[ai], side_b[bi]) {
+                    if ik::held_turns(r, a, b) {
+                        c += if cls[i].rapid {
+                            FLIP_PENALTY
+                        } else {
+                            f64::INFINITY
+                        };
+                    } else if off_pole {
+                        c = f64::INFINITY;
+                    }
                 }
                 if c < best {
                     best = c;
@@ -630,6 +640,7 @@ fn choose(
             return Err(PostError::FlipInCut { line: cls[i].line });
         }
         std::mem::swap(&mut cost, &mut next);
+        std::mem::swap(&mut side_a, &mut side_b);
     }
     let mut idx = cost
         .iter()
@@ -671,6 +682,8 @@ fn nearest(
     cone: f64,
     ends: (&Cand, &Cand),
 ) -> Cand {
+    // The side the block's ends share, if they do.
+    let shared = Some(ik::side(r, ends.0)).filter(|_| !ik::changes_side(r, ends.0, ends.1));
     let sols: Vec<Cand> = if in_pole(r, k, cone) {
         let (_, h) = ik::split(r, near.first, near.second);
         vec![ik::solve_tilt(kin, r, k, h)]
@@ -692,8 +705,7 @@ fn nearest(
         })
         .min_by(|a, b| {
             // Off the block's side last, then by distance.
-            let away =
-                |c: &Cand| !ik::changes_side(r, ends.0, ends.1) && ik::changes_side(r, ends.0, c);
+            let away = |c: &Cand| shared.is_some_and(|s| ik::sides_differ(s, ik::side(r, c)));
             let d = |c: &Cand| (c.first - near.first).abs() + (c.second - near.second).abs();
             (away(a), d(a))
                 .partial_cmp(&(away(b), d(b)))
