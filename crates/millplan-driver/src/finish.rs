@@ -5,7 +5,7 @@ use crate::checks;
 use crate::job::{Job, JobError, Setting};
 use crate::run::{Loads, Measures, Outcome, PassOutcome};
 use millplan_nc::equiv::Tolerance;
-use millplan_nc::readback::read_back;
+use millplan_nc::readback::read_back_with;
 use millplan_nc::write::{write_program, WriteOptions};
 use millplan_nc::{Diagnostic, Program};
 use millplan_plan::force::ForceRun;
@@ -117,7 +117,7 @@ impl Job {
             position: self.tol.max(Tolerance::default().position),
             ..Tolerance::default()
         };
-        let back = match read_back(&bytes, wo.target, program, &tol) {
+        let back = match read_back_with(&bytes, wo.target, program, &tol, wo.g93_seconds) {
             Ok(b) => b,
             // A failed check like any other: refused, written with --force.
             Err(e) => {

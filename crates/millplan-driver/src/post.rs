@@ -4,7 +4,7 @@
 
 use crate::check::{arg, Range};
 use millplan_nc::equiv::Tolerance;
-use millplan_nc::readback::read_back;
+use millplan_nc::readback::read_back_with;
 use millplan_nc::write::Target;
 use millplan_nc::Program;
 use millplan_plan::machine::Machine;
@@ -97,13 +97,15 @@ pub fn error(path: &str, e: &PostError) -> (bool, String) {
     }
 }
 
-/// Reads the written program `out` back: it must command what the posted
-/// IR does (`tol` the post's tolerance; `output` and `input` the files'
-/// names in the message). An error here is a bug, not the user's.
+/// Reads the written program `out` back as it was written (`wo`: its
+/// dialect, and G93 F as seconds where the machine's control reads them so):
+/// it must command what the posted IR does (`tol` the post's tolerance;
+/// `output` and `input` the files' names in the message). An error here is
+/// a bug, not the user's.
 pub fn read_back_check(
     posted: &Program,
     out: &[u8],
-    target: Target,
+    wo: &millplan_nc::write::WriteOptions,
     tol: f64,
     (output, input): (&str, &str),
 ) -> Result<(), String> {
@@ -111,7 +113,7 @@ pub fn read_back_check(
         position: tol.max(Tolerance::default().position),
         ..Tolerance::default()
     };
-    let back = read_back(out, target, posted, &tol).map_err(|e| {
+    let back = read_back_with(out, wo.target, posted, &tol, wo.g93_seconds).map_err(|e| {
         format!("{output}: the posted program does not read back ({e}); not written")
     })?;
     back.equiv.map_err(|m| {

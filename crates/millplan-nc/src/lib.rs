@@ -42,6 +42,10 @@ pub struct ReadOptions {
     /// length of a line (`line_bytes`), the nesting of an expression
     /// (`expression_depth`).
     pub limits: Limits,
+    /// An F word under G93 is the block's time in seconds (Beckhoff/ISG
+    /// TwinCAT CNC) rather than its inverse in minutes (RS274/NGC): a machine
+    /// file's `g93_f = "seconds"`, as the writers' `g93_seconds`.
+    pub g93_seconds: bool,
 }
 
 impl Default for ReadOptions {
@@ -52,6 +56,7 @@ impl Default for ReadOptions {
             chord_tol: 0.002,
             expect_moves: 0,
             limits: Limits::default(),
+            g93_seconds: false,
         }
     }
 }

@@ -89,9 +89,22 @@ pub fn read_back(
     original: &Program,
     tol: &Tolerance,
 ) -> Result<ReadBack, ParseError> {
+    read_back_with(written, target, original, tol, false)
+}
+
+/// [`read_back`] of bytes whose G93 F words are block times in seconds
+/// where `g93_seconds` (as the writers' [`crate::write::WriteOptions`] say).
+pub fn read_back_with(
+    written: &[u8],
+    target: Target,
+    original: &Program,
+    tol: &Tolerance,
+    g93_seconds: bool,
+) -> Result<ReadBack, ParseError> {
     let text = String::from_utf8_lossy(written);
     let opts = ReadOptions {
         expect_moves: original.move_count(),
+        g93_seconds,
         ..ReadOptions::default()
     };
     let mut r = detect::Reader::new(reader_dialect(target, &text), opts);

@@ -1115,3 +1115,37 @@ fn linuxcnc_output_reads_back_as_linuxcnc_with_its_dwells() {
         );
     }
 }
+
+/// A machine whose control reads a G93 F as the block's time in seconds
+/// (`g93_f = "seconds"`, Beckhoff/ISG): what the writer writes so, the
+/// reader told so reads back as the same inverse time (per minute in the
+/// IR); read as RS274/NGC's inverse minutes it would not be. `post --g93`
+/// on such a machine failed its own read-back on every run.
+#[test]
+fn g93_feeds_in_seconds_read_back_as_written() {
+    let src = "%\nO0001\nG21 G17 G90 G94\nT1 M6\nS2000 M3\nG0 X0. Y0. Z5.\nG1 Z0. F300.\n\
+               G93 G1 X10. Y5. F50.\nX20. F25.\nG94 G1 X40. F400.\nM30\n%\n";
+    let p = parse(src, "G93");
+    let wo = millplan_nc::write::WriteOptions {
+        g93_seconds: true,
+        ..millplan_nc::write::WriteOptions::new(Target::Fanuc)
+    };
+    let (bytes, _) = millplan_nc::write::write_program(&p, wo).expect("writes");
+    let text = String::from_utf8_lossy(&bytes);
+    // 50 blocks a minute: 1.2 s each.
+    assert!(text.contains("F1.2"), "{text}");
+    let tol = Tolerance::default();
+    let back = millplan_nc::readback::read_back_with(&bytes, Target::Fanuc, &p, &tol, true)
+        .expect("reads");
+    assert!(back.equiv.is_ok(), "{:?}", back.equiv);
+    let inverse = back
+        .program
+        .moves()
+        .filter(|m| m.feed_mode == FeedMode::InverseTime)
+        .map(|m| m.feed)
+        .collect::<Vec<_>>();
+    assert_eq!(inverse.len(), 2);
+    assert!((inverse[0] - 50.0).abs() < 1e-9 && (inverse[1] - 25.0).abs() < 1e-9);
+    let plain = millplan_nc::readback::read_back(&bytes, Target::Fanuc, &p, &tol).expect("reads");
+    assert!(plain.equiv.is_err());
+}

@@ -78,7 +78,7 @@ fn run(r: &PostRequest, g: &Given) -> Res<(Program, String, String)> {
         wo.auto_tcp = false;
         let (bytes, _) = millplan_nc::write::write_program(&program, wo)
             .map_err(|e| Located::new(Place::at(g.name, e.line, 1), e.message))?;
-        lib::read_back_check(&program, &bytes, target, r.tol, (out, g.name))
+        lib::read_back_check(&program, &bytes, &wo, r.tol, (out, g.name))
             .map_err(|e| crate::error::located(&e))?;
         let checks = lib::check_posted(g.cl, &program, g.machine, o.tol);
         enforce(g.name, &checks, g.force)?;

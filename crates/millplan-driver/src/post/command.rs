@@ -83,7 +83,7 @@ pub fn command(c: &PostCommand, mut outputs: Outputs, w: &dyn Watch) -> Result<P
         &*c.output.display().to_string(),
         &*c.input.display().to_string(),
     );
-    read_back_check(&program, &out, target, c.post.tol, names).map_err(Stop::Internal)?;
+    read_back_check(&program, &out, &wo, c.post.tol, names).map_err(Stop::Internal)?;
     let checked = enforce(&checks, c.input, c.force, w)?;
     w.lap("written program read back and compared");
     outputs.write(c.output, &out)?;

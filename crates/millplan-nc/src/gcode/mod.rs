@@ -1029,6 +1029,9 @@ impl GcodeReader {
             ));
         }
         self.feed = match self.feed_mode {
+            // The IR's inverse time is per minute; a block time in seconds
+            // is 60 / F of it.
+            FeedMode::InverseTime if self.opts.g93_seconds => 60.0 / v,
             FeedMode::InverseTime => v,
             _ => v * self.scale,
         };
