@@ -850,3 +850,44 @@ fn no_block_is_posted_shorter_than_the_block_cycle() {
     assert!((capped - 60_000.0).abs() < 1e-6, "{capped}");
     assert_eq!(slowed, slowed_free + 1);
 }
+
+/// A G94 F is the feed of the joints, which the control holds to its
+/// maximum cutting feed: where the table turns, the joints move much
+/// further than the tip (17 mm for a 1 mm cut turning A by 10° about a
+/// pivot 100 mm below), and a block at the CL's 1000 mm/min would need
+/// F17000 on a machine whose top feed is 5000. It is written at most 5000
+/// and counted as slowed.
+#[test]
+fn no_g94_block_asks_more_than_the_machines_top_feed() {
+    let tilt = |deg: f64| {
+        let a = deg.to_radians();
+        [0.0, a.sin(), a.cos()]
+    };
+    let recs: Vec<Rec> = vec![
+        (false, [0.0, 0.0, 0.0], tilt(0.0)),
+        (false, [1.0, 0.0, 0.0], tilt(10.0)),
+        (false, [2.0, 0.0, 0.0], tilt(10.0)),
+    ];
+    let p = program(&recs, 1000.0);
+    let kin = Kinematics {
+        rot_point: [0.0, 0.0, -100.0],
+        ..Kinematics::new(KinKind::TableAc)
+    };
+    let top = |feed_max: f64| {
+        let mut m = machine(kin.clone());
+        m.feed_max = feed_max;
+        let posted = post(&p, &m, &PostOptions::default()).expect("posts");
+        let f = posted.program.operations[0]
+            .moves
+            .iter()
+            .filter(|m| m.feed_mode == FeedMode::PerMinute && m.is_cutting())
+            .map(|m| m.feed)
+            .fold(0.0f64, f64::max);
+        (f, posted.report.slowed_blocks)
+    };
+    let (free, slowed_free) = top(1e6);
+    assert!(free > 10_000.0, "{free}");
+    let (capped, slowed) = top(5000.0);
+    assert!((capped - 5000.0).abs() < 1e-6, "{capped}");
+    assert!(slowed > slowed_free);
+}

@@ -1202,9 +1202,14 @@ fn build(
             // No block is faster than the machine's feed, nor shorter than
             // the control's block cycle: asking for it (a G93 F of 2·10⁶ on
             // a block of a few µm) would not make it so.
-            let floor = floor
+            let mut floor = floor
                 .max(len / machine.feed_max)
                 .max(machine.control.planner.block_time_s / 60.0);
+            if !o.g93 && !o.tcp {
+                // A G94 F is the joints' feed, which the control holds to
+                // its maximum cutting feed: a block needing more is slower.
+                floor = floor.max(g94_minutes(&a.j, &p.j, machine.feed_max));
+            }
             if t < floor * (1.0 - 1e-12) {
                 t = floor;
                 report.slowed_blocks += 1;
