@@ -246,6 +246,10 @@ pub fn summary_text(s: &Summary, output: &std::path::Path, withheld: bool) -> St
         let (name, checked, unit) = (c.name, c.checked, c.unit);
         let _ = writeln!(o, "  check {name:<10} {ok:<6} {checked} {unit}{skipped}");
     }
+    // What the verdict's warnings are: the input's own faults.
+    for w in warnings(s) {
+        let _ = writeln!(o, "  warning: {w}");
+    }
     if withheld {
         o.push_str("nothing written (give --force to write it anyway)");
     } else {
