@@ -87,8 +87,12 @@ impl Default for PostOptions {
 
 /// Cost (degrees of rotary travel) of a branch flip on a rapid.
 const FLIP_PENALTY: f64 = 720.0;
-/// Deepest halving of one block by linearisation (4096 pieces).
-const MAX_DEPTH: u32 = 12;
+/// Deepest halving of one block by linearisation (65,536 pieces; the
+/// halving stops where the tip is within the tolerance, so this many only
+/// where the turning axis sweeps half a turn while the tip stands nearly
+/// still: a cut passing the pole on a table, whose part turns under the
+/// tool there).
+const MAX_DEPTH: u32 = 16;
 /// Margin under the tolerance that the sampled deviation must keep (the
 /// samples can miss the true peak by about 2 % of it).
 const SAMPLE_MARGIN: f64 = 0.97;
@@ -777,12 +781,24 @@ fn halve(
         second: 0.5 * (a.c.second + b.c.second),
         dev: 0.0,
     };
-    let c = nearest(kin, r, k, mid, o.pole_cone, (&a.c, &b.c));
+    // Inside the pole cone the turning axis is held. A point inserted
+    // where the block enters (or leaves) the cone holds the angle of its
+    // end outside, the exact one there: the mean of the two ends would
+    // leave a jump in the turning axis at the cone's edge that no halving
+    // removes (on a table, the part turns under the tool there), and the
+    // tip between them would stray by the chord of that turn.
+    let pole = in_pole(r, k, o.pole_cone);
+    let near = match (pole, a.pole, b.pole) {
+        (true, false, true) => a.c,
+        (true, true, false) => b.c,
+        _ => mid,
+    };
+    let c = nearest(kin, r, k, near, o.pole_cone, (&a.c, &b.c));
     let m = Pt {
         cl: Cl { tip, k, ..b.cl },
         c,
         j: joints(kin, tip, &c),
-        pole: in_pole(r, k, o.pole_cone),
+        pole,
         len: f64::NAN,
     };
     refine(kin, r, a, &m, o, depth + 1, out);
