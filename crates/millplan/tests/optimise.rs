@@ -599,6 +599,15 @@ fn nx_variable_contour_is_posted_in_g93_and_its_tips_are_the_cl_path() {
     );
     let j = json(&o);
     assert_eq!(pass(&j, "post")["ran"], true, "{j}");
+    // Only the post ran: before and after are the same blocks as the
+    // machine runs them (not the CL program's tip path before), so the
+    // cycle time is unchanged and nothing is claimed better.
+    let (t0, t1) = (
+        j["time_before_s"].as_f64().expect("t0"),
+        j["time_after_s"].as_f64().expect("t1"),
+    );
+    assert!((t0 - t1).abs() <= 1e-9 * t0, "{t0} -> {t1}");
+    assert_eq!(j["verdict"], "kept", "{j}");
     let tip = j["checks"]
         .as_array()
         .expect("checks")
