@@ -1,5 +1,5 @@
-//! `millplan reorder`: the checks of the reordered program and the summary
-//! the command prints.
+//! `millplan reorder`: the checks of the reordered program, the run
+//! (`run_command`) and the summary the command prints.
 
 use crate::check::{arg, Range};
 use millplan_nc::{Operation, Program};
@@ -12,6 +12,9 @@ use millplan_plan::speed::SpeedPass;
 use millplan_sim::stock::tool::ToolBody;
 use serde::Serialize;
 use std::fmt::Write as _;
+
+mod command;
+pub use command::{run_command, ReorderCommand, ReorderRun};
 
 /// The reordered program against the input: the IR verifier, every
 /// cutting point of the input still cut, S and F within the machine, no

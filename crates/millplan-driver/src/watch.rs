@@ -40,6 +40,16 @@ pub trait Watch: Sync {
     /// The checks refused the output: the `lines` of its findings (and
     /// whether it is written anyway, `--force`).
     fn refused(&self, _lines: &[String], _forced: bool) {}
+    /// Findings on a file other than the program, located in `path` (the
+    /// part's mesh defects, its points off the path).
+    fn findings(&self, _path: &Path, _found: &[millplan_nc::Diagnostic]) {}
+    /// A note on the run: said unless `-q` or `--json`.
+    fn note(&self, _text: &str) {}
+    /// `done` of the `total` steps of `what`, counted in `unit` (`None`:
+    /// shown as a share).
+    fn count(&self, _what: &str, _unit: Option<&str>, _done: usize, _total: usize) {}
+    /// The work [`Watch::count`] counted has ended.
+    fn counted(&self) {}
 }
 
 /// Why a command's run stopped before its end.
@@ -105,4 +115,18 @@ pub fn read_program(
     let (parsed, _) = crate::io::inputs::read_source(path, opts, &mut reading)?;
     w.diagnostics(&parsed.diagnostics);
     Ok(parsed)
+}
+
+/// Writes `p` into memory as `o` says, the words a writer kept as comments
+/// told to `w` (located in `source`).
+pub fn write_program(
+    p: &millplan_nc::Program,
+    o: millplan_nc::write::WriteOptions,
+    source: &Path,
+    w: &dyn Watch,
+) -> Result<Vec<u8>, IoError> {
+    let (out, warnings) = millplan_nc::write::write_program(p, o)
+        .map_err(|e| crate::io::outputs::write_error(source, &e))?;
+    w.diagnostics_written(&warnings);
+    Ok(out)
 }

@@ -110,8 +110,10 @@ pub struct Watch<'a> {
     path: &'a std::path::Path,
     quiet: bool,
     notes: bool,
+    bars: bool,
     read: std::sync::Mutex<Option<ProgressBar>>,
     strokes: std::sync::Mutex<Option<ProgressBar>>,
+    counted: std::sync::Mutex<Option<ProgressBar>>,
     phases: std::sync::OnceLock<Phases>,
     spinner: std::sync::Mutex<Option<ProgressBar>>,
     clock: std::sync::Mutex<crate::timings::Clock>,
@@ -125,12 +127,21 @@ impl<'a> Watch<'a> {
             path,
             quiet: quiet || json,
             notes: !quiet,
+            bars: !(quiet || json),
             read: std::sync::Mutex::new(None),
             strokes: std::sync::Mutex::new(None),
+            counted: std::sync::Mutex::new(None),
             phases: std::sync::OnceLock::new(),
             spinner: std::sync::Mutex::new(None),
             clock: std::sync::Mutex::new(crate::timings::Clock::start()),
         }
+    }
+
+    /// The bars shown under `--json` too (unless `-q`), as the commands
+    /// that drew them before `--json` hid them do.
+    pub fn bars_under_json(mut self) -> Watch<'a> {
+        self.bars = self.notes;
+        self
     }
 
     /// Prints the `--timings` table of the phases so far when `on`.
@@ -168,7 +179,7 @@ impl millplan_driver::watch::Watch for Watch<'_> {
 
     fn strokes(&self, done: usize, total: usize) {
         let mut bar = self.strokes.lock().unwrap_or_else(|e| e.into_inner());
-        bar.get_or_insert_with(|| count(total as u64, "forces", "strokes", !self.quiet))
+        bar.get_or_insert_with(|| count(total as u64, "forces", "strokes", self.bars))
             .set_position(done as u64);
     }
 
@@ -184,7 +195,7 @@ impl millplan_driver::watch::Watch for Watch<'_> {
     }
 
     fn phase(&self, phase: &str, done: usize, total: usize) {
-        let bar = self.phases.get_or_init(|| Phases::new(!self.quiet));
+        let bar = self.phases.get_or_init(|| Phases::new(self.bars));
         bar.report(phase, done, total);
     }
 
@@ -198,7 +209,7 @@ impl millplan_driver::watch::Watch for Watch<'_> {
         clear(&self.spinner);
         if let Some(what) = what {
             *self.spinner.lock().unwrap_or_else(|e| e.into_inner()) =
-                Some(spinner(what, !self.quiet));
+                Some(spinner(what, self.bars));
         }
     }
 
@@ -214,6 +225,30 @@ impl millplan_driver::watch::Watch for Watch<'_> {
             eprintln!("written anyway (--force)");
         }
     }
+
+    fn findings(&self, path: &std::path::Path, found: &[millplan_nc::Diagnostic]) {
+        crate::cmd::print_diagnostics(path, found, self.quiet);
+    }
+
+    fn note(&self, text: &str) {
+        if !self.quiet {
+            eprintln!("{text}");
+        }
+    }
+
+    fn count(&self, what: &str, unit: Option<&str>, done: usize, total: usize) {
+        let mut bar = self.counted.lock().unwrap_or_else(|e| e.into_inner());
+        let bar = bar.get_or_insert_with(|| match unit {
+            Some(unit) => count(total as u64, what, unit, self.bars),
+            None => fraction(what, self.bars),
+        });
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    }
+
+    fn counted(&self) {
+        clear(&self.counted);
+    }
 }
 
 impl Drop for Watch<'_> {
@@ -221,6 +256,7 @@ impl Drop for Watch<'_> {
     fn drop(&mut self) {
         clear(&self.read);
         clear(&self.strokes);
+        clear(&self.counted);
         clear(&self.spinner);
         if let Some(b) = self.phases.get() {
             b.finish();

@@ -5,9 +5,6 @@
 
 use crate::error::{CliError, CliResult, EXIT_FINDINGS};
 use millplan_driver::checks;
-use millplan_nc::readback::ReadBack;
-use millplan_nc::write::Target;
-use millplan_nc::Program;
 use millplan_plan::safety::Check;
 use std::path::Path;
 
@@ -30,10 +27,4 @@ pub fn enforce(checks: &[Check], path: &Path, force: bool) -> CliResult<bool> {
         code: EXIT_FINDINGS,
         message: format!("{first}; nothing written (--force writes it)"),
     })
-}
-
-/// Reads `out` (the bytes written for `target` from `p`) back
-/// (`millplan_driver::checks::read_back`; its failure a bug, exit 1).
-pub fn read_back(out: &[u8], target: Target, p: &Program, output: &Path) -> CliResult<ReadBack> {
-    checks::read_back(out, target, p, &output.display().to_string()).map_err(CliError::internal)
 }

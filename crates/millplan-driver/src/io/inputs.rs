@@ -154,6 +154,20 @@ pub fn read_surface(
     Ok((mesh, report))
 }
 
+/// A part's STL file and the unit of its numbers (`--stl-units`).
+#[derive(Clone, Copy)]
+pub struct PartFile<'a> {
+    pub path: &'a Path,
+    pub units: Option<LengthUnit>,
+}
+
+impl PartFile<'_> {
+    /// The part (refused without a triangle), in mm ([`read_surface`]).
+    pub fn read(&self, limits: &Limits) -> IoResult<TriMesh> {
+        Ok(read_surface(self.path, limits, self.units)?.0)
+    }
+}
+
 /// Reads one line into `buf` without its terminator (LF, CRLF or a lone CR,
 /// also when the CR and LF arrive in different reads); `None` at the end.
 /// Stops as soon as the line is longer than `max` bytes: `buf` then holds

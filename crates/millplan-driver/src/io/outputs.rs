@@ -382,6 +382,18 @@ impl Outputs {
     }
 }
 
+/// The outputs `(flag, path)` of a run, checked before any work against each
+/// other and the files it reads (`None`: an optional file not given);
+/// `stdout` when `-` may name standard output ([`Outputs::plan`]).
+pub fn plan(
+    inputs: &[Option<&Path>],
+    outputs: &[(&str, Option<&Path>)],
+    stdout: bool,
+) -> IoResult<Outputs> {
+    let inputs: Vec<&Path> = inputs.iter().flatten().copied().collect();
+    Outputs::plan(&inputs, outputs, stdout)
+}
+
 /// A writer's error at its source line (`file:line:1: message`), or in the
 /// source as a whole: bad input.
 pub fn write_error(source: &Path, e: &millplan_nc::write::WriteError) -> IoError {

@@ -46,6 +46,15 @@ impl Part {
     pub fn read(&self) -> CliResult<millplan_geom::TriMesh> {
         self.units.read(&self.stl)
     }
+
+    /// The part's file and unit, as the driver's runs read it.
+    pub fn file(&self) -> millplan_driver::io::inputs::PartFile<'_> {
+        let units = self.units.stl_units.map(Into::into);
+        millplan_driver::io::inputs::PartFile {
+            path: &self.stl,
+            units,
+        }
+    }
 }
 
 /// The part of the commands that can do without one.

@@ -1,13 +1,10 @@
 //! `millplan reorder`: reorder finishing points so the working diameter changes
 //! least between successive points (paper 000, thesis 5), with safe links.
 
-use crate::cmd::write_program;
-use crate::error::{exit, CliError, CliResult};
-use crate::timings::Table as _;
+use crate::error::{exit, CliResult};
 use clap::ValueEnum;
-use millplan_driver::feed::file_name;
 use millplan_driver::reorder as lib;
-use millplan_plan::pipeline::Context;
+use millplan_driver::watch::Watch as _;
 use millplan_plan::reorder::{Method, Start};
 use std::path::PathBuf;
 
@@ -114,56 +111,25 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let mut clock = crate::timings::Clock::start();
-    let req = request(&a);
-    let rp = req.params().map_err(CliError::input)?;
-    let outs = [
-        ("-o", Some(&*a.out.output)),
-        ("--report", a.report.as_deref()),
-    ];
-    let inputs = [
-        Some(&*a.path),
-        Some(&*a.part.stl),
-        a.machine.machine.as_deref(),
-    ];
-    let mut outputs = crate::io::plan(&inputs, &outs, false)?;
-    let machine = a.machine.load()?;
-    clock.lap("arguments, machine file and outputs checked");
-    let quiet = a.notes.quiet;
-    let parsed = a.units.read(&a.path, quiet || a.summary.json)?;
-    let target = a.out.target(&machine, parsed.program.source)?;
-    clock.lap("program read");
-    let mesh = a.part.read()?;
-    clock.lap("part read");
-    let long = millplan_driver::command_defaults::progress::long_program(&parsed.program);
-    let bar = crate::progress::Phases::new(!quiet && long);
-    let hook = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
-    let cx = Context::new(machine).with_part(&mesh).with_progress(&hook);
-    let ran = lib::command(&req, rp, &cx, &parsed.program);
-    bar.finish();
-    let r = ran.map_err(|e| match e {
-        lib::ReorderError::Pass(e) => crate::cmd::pass_error(&a.path, e),
-        lib::ReorderError::NoOutcome => CliError::internal("the reorder pass left no outcome"),
-    })?;
-    clock.lap("reordered and checked");
-    let wo = cx.machine.write_options(target);
-    let out = write_program(&r.program, wo, &a.path, quiet)?;
-    crate::verdict::read_back(&out, target, &r.program, &a.out.output)?;
-    let checked = a.force.enforce(&r.checks, &a.path)?;
-    outputs.write(&a.out.output, &out)?;
-    if let Some(path) = &a.report {
-        let names = (file_name(&a.path), file_name(&a.part.stl));
-        let on = (&cx.machine, req.cut);
-        let html = r.report_html((&parsed.program, &mesh), names, on, method(&a));
-        outputs.write(path, html.as_bytes())?;
-    }
-    outputs.commit()?;
-    clock.lap("outputs written, read back and renamed into place");
-    let output = a.out.output.display().to_string();
-    let summary = lib::Summary::new(Some(method(&a)), &r.outcome, output, &r.checks);
-    a.summary.print(&summary, |s| s.render_text());
-    clock.end(a.timings.on);
-    Ok(exit(!checked))
+    let watch = crate::progress::Watch::new(&a.path, a.notes.quiet, a.summary.json);
+    let watch = watch.bars_under_json();
+    let c = lib::ReorderCommand {
+        input: &a.path,
+        part: a.part.file(),
+        machine: a.machine.machine.as_deref(),
+        output: &a.out.output,
+        to: a.out.to.map(Into::into),
+        report: a.report.as_deref(),
+        request: request(&a),
+        method: method(&a),
+        read: a.units.options()?,
+        force: a.force.force,
+    };
+    let r = lib::run_command(&c, &watch)?;
+    a.summary.print(&r.summary(&c), |s| s.render_text());
+    watch.lap("summary printed");
+    watch.print_timings(a.timings.on);
+    Ok(exit(!r.checked))
 }
 
 /// The method's name as the option gives it.
