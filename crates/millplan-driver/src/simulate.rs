@@ -1,5 +1,6 @@
 //! `millplan simulate`: the tool bodies from the options, the strokes the
-//! stock is cut by, the stock mesh written, and the summary printed.
+//! stock is cut by, the run (`run_command`), the stock mesh written, and
+//! the summary printed.
 
 use crate::check::{arg, tool_shape, Range};
 use millplan_geom::TriMesh;
@@ -12,6 +13,9 @@ use millplan_sim::stock::tool::{BodyOptions, ToolBody};
 use millplan_sim::stock::Stock;
 use serde::Serialize;
 use std::fmt::Write as _;
+
+mod command;
+pub use command::{run_command, SimCommand};
 
 /// The options of `millplan simulate` that shape the tool and the run.
 #[derive(Clone, Debug)]

@@ -1,11 +1,8 @@
 //! `millplan simulate`: the program run over its stock.
 
-use crate::error::{exit, CliError, CliResult};
-use crate::io::Outputs;
-use crate::timings::Table as _;
+use crate::error::{exit, CliResult};
 use millplan_driver::simulate::{self as lib, SimRequest};
-use millplan_driver::StockSpec;
-use millplan_geom::TriMesh;
+use millplan_driver::watch::Watch as _;
 use std::path::PathBuf;
 
 /// Run the program over its stock: material removal, engagement per move,
@@ -99,95 +96,24 @@ fn request(a: &Args) -> SimRequest {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let mut clock = crate::timings::Clock::start();
-    let code = run_timed(&a, &mut clock)?;
-    clock.end(a.timings.on);
-    Ok(code)
-}
-
-fn run_timed(a: &Args, clock: &mut crate::timings::Clock) -> CliResult<i32> {
-    let req = request(a);
-    // Checked before any work, not after the simulation.
-    lib::check(&req).map_err(CliError::input)?;
-    let spec = StockSpec::parse(&a.stock).map_err(|e| CliError::input(format!("--stock {e}")))?;
-    let machine = a.machine.load()?;
-    let mut outputs = plan_outputs(a, &spec)?;
-    clock.lap("arguments, machine file and outputs checked");
-    let quiet = a.notes.quiet || a.summary.json;
-    let parsed = a.units.read(&a.path, quiet)?;
-    clock.lap("program read");
-    let part = a.part.read()?;
-    let blank = a.part.units.blank(&spec)?;
-    clock.lap("part read");
-    let path = a.path.display().to_string();
-    let g = lib::SimInputs {
-        name: &path,
-        program: &parsed.program,
+    let watch = crate::progress::Watch::new(&a.path, a.notes.quiet, a.summary.json);
+    let c = lib::SimCommand {
+        input: &a.path,
+        request: request(&a),
         stock: &a.stock,
-        spec: &spec,
-        part: part.as_ref(),
-        blank: blank.as_ref(),
-        rapid: machine.rapid,
-        memory: crate::limits::get().memory,
+        part: a.part.stl.as_deref(),
+        stl_units: a.part.units.stl_units.map(Into::into),
+        machine: a.machine.machine.as_deref(),
+        output: a.output.as_deref(),
+        table: a.table.as_deref(),
+        report: a.report.as_deref(),
+        read: a.units.options()?,
     };
-    // A bar on a long program only.
-    let bar = crate::progress::Phases::new(!quiet);
-    let progress = |done: usize, total: usize| {
-        if total > millplan_driver::command_defaults::progress::LONG_SIMULATION_STROKES {
-            bar.report("simulating", done, total)
-        }
-    };
-    let run = lib::command(&req, &g, &mut |l| clock.lap(l), &progress);
-    bar.finish();
-    let sim = run.map_err(|e| CliError::input(e.to_string()))?;
-    if let (Some(note), false) = (&sim.flute_note, quiet) {
-        eprintln!("note: {note}");
-    }
-    write_outputs(a, &mut outputs, &sim, part.as_ref())?;
-    outputs.commit()?;
-    clock.lap("outputs written, synced and renamed into place");
-    let report = sim.report(&a.stock);
-    a.summary.print(&report, |r| r.render_text(&path, a.tol));
+    let sim = lib::run_command(&c, &watch)?;
+    let path = a.path.display().to_string();
+    a.summary
+        .print(&sim.report(&a.stock), |r| r.render_text(&path, a.tol));
+    watch.lap("summary printed");
+    watch.print_timings(a.timings.on);
     Ok(exit(sim.collided()))
-}
-
-/// The outputs of the run, checked against every file it reads.
-fn plan_outputs(a: &Args, spec: &StockSpec) -> CliResult<Outputs> {
-    let blank = match spec {
-        StockSpec::Stl(p) => Some(p.as_path()),
-        _ => None,
-    };
-    let inputs = [
-        Some(&*a.path),
-        a.part.stl.as_deref(),
-        a.machine.machine.as_deref(),
-        blank,
-    ];
-    let (table, report) = (a.table.as_deref(), a.report.as_deref());
-    let outs = [
-        ("-o", a.output.as_deref()),
-        ("--table", table),
-        ("--report", report),
-    ];
-    crate::io::plan(&inputs, &outs, false)
-}
-
-fn write_outputs(
-    a: &Args,
-    outputs: &mut Outputs,
-    sim: &lib::Simulated,
-    part: Option<&TriMesh>,
-) -> CliResult<()> {
-    if let Some(p) = &a.output {
-        outputs.write(p, &lib::stock_stl(&sim.stock, a.mesh_resolution))?;
-    }
-    if let Some(p) = &a.table {
-        outputs.write(p, sim.table_csv().as_bytes())?;
-    }
-    if let Some(p) = &a.report {
-        let files = (a.path.as_path(), a.part.stl.as_deref());
-        let html = sim.report_html(&request(a), files, &a.stock, part);
-        outputs.write(p, html.as_bytes())?;
-    }
-    Ok(())
 }
