@@ -1,6 +1,7 @@
 //! `millplan speed` (and the spindle-control reports of `reorder`): the
 //! request checked into the pass's parameters, the pass on a copy of the
-//! input, the checks of its output, the report's header and the summary.
+//! input, the checks of its output, the run (`run_command`), the report's
+//! header and the summary.
 
 use crate::check::{arg, Range, MAX_TOOL_D, MAX_VC};
 pub use millplan_models::contact::{Convention, NormalMode, Surface};
@@ -14,6 +15,9 @@ pub use millplan_report::html::failed_checks;
 use millplan_report::html::Verdict;
 use serde::Serialize;
 use std::fmt::Write as _;
+
+mod command;
+pub use command::{run_command, SpeedCommand, SpeedRun};
 
 /// The cutting data of a spindle-control run, as given.
 #[derive(Clone, Copy, Debug)]
@@ -148,44 +152,6 @@ pub struct ReadBeside {
     pub read_s: f64,
     pub time_before: f64,
     pub estimate_s: f64,
-}
-
-/// The program read on a thread of its own, its cycle time estimated
-/// there after the read, while the caller reads the part and builds its
-/// search trees.
-pub struct Reader<E>(std::thread::JoinHandle<(Result<millplan_nc::Parsed, E>, [f64; 3])>);
-
-impl<E: Send + 'static> Reader<E> {
-    /// Starts `read` and then the estimate on `machine`.
-    pub fn spawn(
-        machine: Machine,
-        read: impl FnOnce() -> Result<millplan_nc::Parsed, E> + Send + 'static,
-    ) -> Reader<E> {
-        Reader(std::thread::spawn(move || {
-            let t = std::time::Instant::now();
-            let parsed = read();
-            let read_s = t.elapsed().as_secs_f64();
-            let t = std::time::Instant::now();
-            let time_before = parsed
-                .as_ref()
-                .map_or(0.0, |p| cycle_time(&p.program, &machine));
-            (parsed, [read_s, time_before, t.elapsed().as_secs_f64()])
-        }))
-    }
-
-    /// The program read and its estimate, once both are done.
-    pub fn join(self) -> Result<ReadBeside, E> {
-        let (parsed, [read_s, time_before, estimate_s]) = self
-            .0
-            .join()
-            .unwrap_or_else(|e| std::panic::resume_unwind(e));
-        Ok(ReadBeside {
-            parsed: parsed?,
-            read_s,
-            time_before,
-            estimate_s,
-        })
-    }
 }
 
 /// Runs `write` while the cycle time of `program` on `machine` is
@@ -566,7 +532,7 @@ mod tests {
     use millplan_geom::analytic::{tessellate, DemoSurface};
     use millplan_nc::generate::{raster, Raster};
 
-    fn request() -> SpeedRequest {
+    pub(super) fn request() -> SpeedRequest {
         SpeedRequest {
             cut: Cutting {
                 vc: 63.0,
@@ -631,27 +597,14 @@ mod tests {
         assert!(!off.findings.is_empty());
     }
 
-    /// The reader on its own thread gives the program and the estimate of
-    /// its cycle time that `cycle_time` gives; a reader's error is passed
-    /// on. Writing beside the estimate gives what the writer gave and the
-    /// same estimate.
+    /// Writing beside the estimate gives what the writer gave and the
+    /// estimate `cycle_time` gives.
     #[test]
-    fn reading_and_writing_beside_the_estimate() {
+    fn writing_beside_the_estimate() {
         let (prog, _) = raster(&DemoSurface::default(), &Raster::default());
         let machine = Machine::default();
-        let parsed = millplan_nc::Parsed {
-            program: prog.clone(),
-            diagnostics: Vec::new(),
-        };
         let want = cycle_time(&prog, &machine);
         assert!(want > 0.0);
-        let read = Reader::<String>::spawn(machine.clone(), move || Ok(parsed))
-            .join()
-            .expect("reads");
-        assert_eq!(read.time_before, want);
-        assert_eq!(read.parsed.program, prog);
-        let failed = Reader::<String>::spawn(machine.clone(), || Err("bad.nc:1:1: no".into()));
-        assert_eq!(failed.join().err().as_deref(), Some("bad.nc:1:1: no"));
         let (written, after, [w, e]) = write_beside(&prog, &machine, || 7);
         assert_eq!((written, after), (7, want));
         assert!(w >= 0.0 && e >= 0.0);
