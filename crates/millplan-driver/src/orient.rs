@@ -1,6 +1,6 @@
 //! `millplan orient`: the request checked into the lead/tilt pass's
 //! parameters, the stock the choice runs on, the checks of the re-oriented
-//! program and the summary it prints.
+//! program, the run (`run_command`) and the summary it prints.
 
 use crate::check::{arg, Range, MAX_SPINDLE};
 use millplan_models::force::materials::Materials;
@@ -18,6 +18,9 @@ use millplan_sim::stock::tool::{BodyOptions, ToolBody};
 use millplan_sim::stock::Stock;
 use serde::Serialize;
 use std::fmt::Write as _;
+
+mod command;
+pub use command::{run_command, OrientCommand, OrientRun};
 
 /// The options of `millplan orient` as given.
 #[derive(Clone, Debug)]

@@ -86,16 +86,6 @@ pub fn read_materials(path: Option<&Path>) -> CliResult<millplan_driver::Materia
     Ok(inputs::read_materials(path)?)
 }
 
-/// The blank of an `stl:` stock, read within this run's limits and scaled
-/// by `--stl-units`.
-pub fn read_blank(
-    spec: &millplan_driver::StockSpec,
-    units: Option<crate::cmd::UnitArg>,
-) -> CliResult<Option<TriMesh>> {
-    let units = units.map(Into::into);
-    Ok(inputs::read_blank(spec, &crate::limits::get(), units)?)
-}
-
 /// Reads an APT/CL, G-code or KUKA KRL program.
 pub fn read_program(path: &Path, opts: ReadOptions) -> CliResult<Parsed> {
     Ok(with_bar(|p| inputs::read_source(path, opts, p))?.0)

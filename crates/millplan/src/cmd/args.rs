@@ -21,14 +21,6 @@ impl PartUnits {
     pub fn read(&self, stl: &Path) -> CliResult<millplan_geom::TriMesh> {
         Ok(crate::io::read_surface(stl, self.stl_units)?.0)
     }
-
-    /// The blank of an `stl:` stock, in mm (`None` for any other stock).
-    pub fn blank(
-        &self,
-        spec: &millplan_driver::StockSpec,
-    ) -> CliResult<Option<millplan_geom::TriMesh>> {
-        crate::io::read_blank(spec, self.stl_units)
-    }
 }
 
 /// The part of the commands that need one: `--stl` and its unit.
@@ -156,14 +148,6 @@ pub struct Force {
     /// printed and the run ends with exit 3.
     #[arg(long)]
     pub force: bool,
-}
-
-impl Force {
-    /// Whether `checks` passed: a refusal is printed, and ends the run
-    /// (exit 3, nothing written) unless `--force` (`verdict::enforce`).
-    pub fn enforce(&self, checks: &[millplan_plan::safety::Check], path: &Path) -> CliResult<bool> {
-        crate::verdict::enforce(checks, path, self.force)
-    }
 }
 
 /// The force model's tool body and steps (`cut`, `feed`, `force PATH`).

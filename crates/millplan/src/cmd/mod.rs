@@ -137,23 +137,6 @@ impl From<TargetArg> for Target {
     }
 }
 
-/// Writes a program for `o.target` as the output `path` of `outputs`
-/// (streamed, within this run's limits). Words written as comments under
-/// `--lossy` are printed as warnings located in `source`.
-pub fn write_program_file(
-    p: &millplan_nc::Program,
-    mut o: WriteOptions,
-    outputs: &mut crate::io::Outputs,
-    path: &std::path::Path,
-    source: &std::path::Path,
-    quiet: bool,
-) -> crate::error::CliResult<()> {
-    o.limits = crate::limits::get();
-    let warnings = outputs.write_program(path, p, o, source)?;
-    print_diagnostics(source, &warnings, quiet);
-    Ok(())
-}
-
 /// Writes a program for `o.target` into memory; words written as comments
 /// under `--lossy` are printed as warnings located in `source`.
 pub fn write_program(

@@ -2,13 +2,10 @@
 //! machining time (spec process-models §2.4).
 
 use crate::cmd::cut::VariantArg;
-use crate::error::{exit, CliError, CliResult, EXIT_FINDINGS};
-use crate::io::read_materials as load_materials;
-use crate::io::Outputs;
-use crate::timings::{Clock, Table as _};
+use crate::error::{exit, CliResult};
 use millplan_driver::orient::{self as lib, OrientRequest};
-use millplan_driver::StockSpec;
-use millplan_plan::leadtilt::{Objective, Stage};
+use millplan_driver::watch::Watch as _;
+use millplan_plan::leadtilt::Objective;
 use std::path::PathBuf;
 
 /// Choose lead and tilt per ball-end operation (docs/leadtilt.md):
@@ -160,102 +157,22 @@ fn request(a: &Args) -> OrientRequest {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let mut clock = Clock::start();
-    let req = request(&a);
-    let materials = load_materials(a.materials.as_deref())?;
-    let p = lib::params(&req, &materials).map_err(CliError::input)?;
-    let spec = lib::stock_spec(&req).map_err(CliError::input)?;
-    let blank = a.stock.as_deref().and_then(StockSpec::file_of);
-    let (machine_file, materials_file) = (a.machine.machine.as_deref(), a.materials.as_deref());
-    let inputs = [
-        Some(&*a.path),
-        Some(&*a.part.stl),
-        machine_file,
-        materials_file,
-        blank.as_deref(),
-    ];
-    let outputs = crate::io::plan(&inputs, &[("-o", Some(&a.out.output))], false)?;
-    let machine = a.machine.load()?;
-    clock.lap("arguments, materials, machine file and outputs checked");
-    let parsed = a.units.read(&a.path, a.notes.quiet || a.summary.json)?;
-    let target = a.out.target(&machine, parsed.program.source)?;
-    clock.lap("program read");
-    let mesh = a.part.read()?;
-    let blank = match &spec {
-        Some(s) => a.part.units.blank(s)?,
-        None => None,
+    let watch = crate::progress::Watch::new(&a.path, a.notes.quiet, a.summary.json);
+    let watch = watch.bars_under_json();
+    let c = lib::OrientCommand {
+        input: &a.path,
+        part: a.part.file(),
+        machine: a.machine.machine.as_deref(),
+        materials: a.materials.as_deref(),
+        output: &a.out.output,
+        to: a.out.to.map(Into::into),
+        request: request(&a),
+        read: a.units.options()?,
+        force: a.force.force,
     };
-    clock.lap("part and stock files read");
-    let (name, output) = (
-        a.path.display().to_string(),
-        a.out.output.display().to_string(),
-    );
-    let g = lib::OrientInputs {
-        name: &name,
-        output: &output,
-        program: &parsed.program,
-        mesh: &mesh,
-        machine: &machine,
-        blank: blank.as_ref(),
-        memory: crate::limits::get().memory,
-    };
-    let o = choose(&a, &req, p, &g)?;
-    clock.lap("lead and tilt chosen, the result checked");
-    let code = finish(&a, o, machine.write_options(target), outputs, &mut clock)?;
-    clock.print(a.timings.on);
-    Ok(code)
-}
-
-/// Writes the chosen program (none when no choice was made), commits and
-/// prints the summary; the exit code.
-fn finish(
-    a: &Args,
-    o: lib::Outcome,
-    wo: millplan_nc::write::WriteOptions,
-    mut outputs: Outputs,
-    clock: &mut Clock,
-) -> CliResult<i32> {
-    if !o.chosen {
-        outputs.commit()?;
-        a.summary.print(&o.summary, |s| s.render_text());
-        clock.lap("summary printed");
-        return Ok(EXIT_FINDINGS);
-    }
-    let checked = a.force.enforce(&o.checks, &a.path)?;
-    let summary = o.summary.with_checks(o.checks);
-    let output = &a.out.output;
-    crate::cmd::write_program_file(&o.program, wo, &mut outputs, output, &a.path, a.notes.quiet)?;
-    outputs.commit()?;
-    clock.lap("output written, read back and renamed into place");
-    a.summary.print(&summary, |s| s.render_text());
-    clock.lap("summary printed");
-    Ok(exit(!checked))
-}
-
-/// The run, with its progress on two bars (the stock, the operations) and
-/// the note on the moves the stock does not see.
-fn choose(
-    a: &Args,
-    req: &OrientRequest,
-    p: millplan_plan::leadtilt::Params,
-    g: &lib::OrientInputs,
-) -> CliResult<lib::Outcome> {
-    let total = g.program.operations.len() as u64;
-    let sim_bar = crate::progress::Phases::new(!a.notes.quiet && req.stock.is_some());
-    let bar = crate::progress::count(total, "lead/tilt", "operations", !a.notes.quiet);
-    let o = lib::command(req, p, g, &|stage, done, all| match stage {
-        Stage::Stock => sim_bar.report("stock", done, all),
-        Stage::Operations => {
-            sim_bar.finish();
-            bar.set_position(done as u64)
-        }
-    })
-    .map_err(CliError::input)?;
-    sim_bar.finish();
-    bar.finish_and_clear();
-    match o.unsimulated_note(&a.path.display().to_string()) {
-        Some(n) if !(a.notes.quiet || a.summary.json) => eprintln!("{n}"),
-        _ => {}
-    }
-    Ok(o)
+    let r = lib::run_command(&c, &watch)?;
+    a.summary.print(&r.summary, |s| s.render_text());
+    watch.lap("summary printed");
+    watch.print_timings(a.timings.on);
+    Ok(exit(r.findings))
 }
