@@ -1,6 +1,6 @@
 //! `millplan raster`: the request checked into the raster's parameters, its
-//! size against the limits, the checks of the written raster and the typed
-//! summary.
+//! size against the limits, the checks of the written raster, the run
+//! (`run_command`) and the typed summary.
 
 use crate::check::{arg, raster_spacing, tool_shape, Range, MAX_FEED, MAX_SPINDLE};
 use millplan_geom::limits::{amount, Exceeded};
@@ -18,6 +18,9 @@ pub use millplan_sim::raster::RasterParams;
 use millplan_sim::raster::{estimate, raster};
 use millplan_sim::stock::tool::ToolBody;
 use serde::Serialize;
+
+mod command;
+pub use command::{run_command, RasterCommand, RasterRun};
 
 /// The options of `millplan raster`.
 #[derive(Clone, Debug)]

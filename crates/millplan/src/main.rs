@@ -25,7 +25,6 @@ mod io;
 mod limits;
 mod progress;
 mod timings;
-mod verdict;
 
 use clap::{Parser, Subcommand};
 use error::{EXIT_BAD_INPUT, EXIT_FINDINGS, EXIT_INTERNAL, EXIT_OK};

@@ -125,21 +125,6 @@ pub struct ProgramOutput {
     pub to: Option<TargetArg>,
 }
 
-impl ProgramOutput {
-    /// The dialect to write: `--to`; else the machine's control, which the
-    /// output's extension must not contradict; else the output's name, else
-    /// the source's dialect (`millplan_driver::target`).
-    pub fn target(
-        &self,
-        machine: &millplan_plan::machine::Machine,
-        source: millplan_nc::Dialect,
-    ) -> CliResult<millplan_nc::write::Target> {
-        let to = self.to.map(Into::into);
-        millplan_driver::target::output_target(to, &self.output, Some(machine), source)
-            .map_err(crate::error::CliError::input)
-    }
-}
-
 /// `--force` of the commands that check what they write.
 #[derive(clap::Args, Clone, Copy)]
 pub struct Force {

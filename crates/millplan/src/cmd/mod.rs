@@ -28,7 +28,7 @@ pub mod wd;
 
 use crate::error::{CliError, CliResult};
 use clap::ValueEnum;
-use millplan_nc::write::{Target, WriteOptions};
+use millplan_nc::write::Target;
 use millplan_nc::{LengthUnit, ReadOptions};
 
 pub use millplan_driver::check::{Range, MAX_FEED};
@@ -135,21 +135,6 @@ impl From<TargetArg> for Target {
             TargetArg::Krl => Target::Krl,
         }
     }
-}
-
-/// Writes a program for `o.target` into memory; words written as comments
-/// under `--lossy` are printed as warnings located in `source`.
-pub fn write_program(
-    p: &millplan_nc::Program,
-    mut o: WriteOptions,
-    source: &std::path::Path,
-    quiet: bool,
-) -> crate::error::CliResult<Vec<u8>> {
-    o.limits = crate::limits::get();
-    let (out, warnings) = millplan_nc::write::write_program(p, o)
-        .map_err(|e| millplan_driver::io::outputs::write_error(source, &e))?;
-    print_diagnostics(source, &warnings, quiet);
-    Ok(out)
 }
 
 /// A pass's failure as the command reports it: the input's fault (exit 2,

@@ -1,10 +1,8 @@
 //! `millplan raster`: a finishing raster over an STL part.
 
-use crate::cmd::{print_diagnostics, write_program};
-use crate::error::{exit, CliError, CliResult};
-use crate::timings::Table as _;
+use crate::error::{exit, CliResult};
 use millplan_driver::raster::{self as lib, RasterRequest};
-use millplan_plan::checks;
+use millplan_driver::watch::Watch as _;
 
 /// Generate a finishing raster over a part: parallel passes at --angle, every
 /// point a drop-cutter position (the cutter just touching the part), refined
@@ -89,48 +87,19 @@ fn request(a: &Args) -> RasterRequest {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let mut clock = crate::timings::Clock::start();
-    let p = lib::params(&request(&a)).map_err(CliError::input)?;
-    let (stl, output) = (&a.part.stl, &a.out.output);
-    let inputs = [Some(stl.as_path()), a.machine.machine.as_deref()];
-    let mut outputs = crate::io::plan(&inputs, &[("-o", Some(output))], false)?;
-    let machine = a.machine.load()?;
-    clock.lap("arguments, machine file and outputs checked");
-    let mesh = a.part.read()?;
-    clock.lap("part read");
-    let limits = crate::limits::get();
-    let (points, bytes) =
-        lib::check_grid(&p, &mesh.bounds(), limits.moves as f64).map_err(CliError::input)?;
-    let what = format!(
-        "a raster of {} points",
-        millplan_geom::limits::amount(points.ceil())
-    );
-    crate::limits::check_memory(&what, bytes)?;
-    let found: Vec<_> = checks::mesh(&mesh).into_iter().collect();
-    print_diagnostics(stl, &found, a.notes.quiet);
-    let (prog, part) = lib::generate(&mesh, &p);
-    clock.lap("raster generated (drop-cutter)");
-    if prog.move_count() == 0 {
-        return Err(CliError::input(format!(
-            "{}: the raster does not cross the part (check --boundary)",
-            stl.display()
-        )));
-    }
-    let target = a.out.target(&machine, millplan_nc::Dialect::Generated)?;
-    let out = write_program(&prog, machine.write_options(target), stl, a.notes.quiet)?;
-    clock.lap("program written");
-    let (checks, rep) = lib::check((&prog, &out), target, &part, &machine, &p)
-        .map_err(|e| CliError::internal(format!("{}: {e}", output.display())))?;
-    crate::verdict::enforce(&checks, output, a.force)?;
-    clock.lap("written program read back and checked");
-    outputs.write(output, &out)?;
-    outputs.commit()?;
-    clock.lap("output synced and renamed into place");
-    let est = millplan_plan::timing::estimate_program(&prog, &machine);
-    let output = output.display().to_string();
-    let report = lib::Report::new(output, (&prog, &machine, &p), (&rep, &checks), &est);
-    a.summary.print(&report, |r| r.render_text());
-    clock.lap("time estimate, summary printed");
-    clock.print(a.timings.on);
-    Ok(exit(!millplan_plan::safety::passed(&checks)))
+    let watch = crate::progress::Watch::new(&a.part.stl, a.notes.quiet, false);
+    let c = lib::RasterCommand {
+        part: a.part.file(),
+        machine: a.machine.machine.as_deref(),
+        output: &a.out.output,
+        to: a.out.to.map(Into::into),
+        request: request(&a),
+        limits: crate::limits::get(),
+        force: a.force,
+    };
+    let r = lib::run_command(&c, &watch)?;
+    a.summary.print(&r.report(&c), |r| r.render_text());
+    watch.lap("time estimate, summary printed");
+    watch.print_timings(a.timings.on);
+    Ok(exit(r.findings()))
 }
