@@ -1,5 +1,6 @@
 //! `millplan gouge`: the checked options, the cutter per operation, the
-//! sample count before any work, the check and the typed summary.
+//! sample count before any work, the check, the run (`run_command`) and
+//! the typed summary.
 
 use crate::check::{arg, tool_shape, Range};
 use millplan_models::cutter::Shape;
@@ -10,6 +11,9 @@ pub use millplan_sim::gouge::{GougeParams, GougeReport, BYTES_PER_SAMPLE};
 use millplan_sim::stock::tool::{ToolBody, UNKNOWN_FLUTE};
 use serde::Serialize;
 use std::fmt::Write as _;
+
+mod command;
+pub use command::{nothing_checked, run_command, GougeCommand};
 
 /// The options of `millplan gouge`.
 #[derive(Clone, Debug)]

@@ -1,10 +1,8 @@
 //! `millplan gouge`: does the program cut into the part?
 
-use crate::cmd::print_diagnostics;
 use crate::error::{exit, CliError, CliResult};
-use crate::timings::Table as _;
-use millplan_driver::gouge::{self as lib, GougeRequest, BYTES_PER_SAMPLE};
-use millplan_plan::checks;
+use millplan_driver::gouge::{self as lib, GougeRequest};
+use millplan_driver::watch::Watch as _;
 use std::path::PathBuf;
 
 /// Check a program for gouges: every cutting move (and with --rapids every
@@ -45,43 +43,27 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> CliResult<i32> {
-    let mut clock = crate::timings::Clock::start();
-    let req = GougeRequest {
-        tol: a.tol,
-        step: a.step,
-        rapids: a.rapids,
-        tool: a.tool.clone(),
+    let watch = crate::progress::Watch::new(&a.path, a.notes.quiet, a.summary.json);
+    let watch = watch.bars_under_json();
+    let c = lib::GougeCommand {
+        input: &a.path,
+        part: a.part.file(),
+        request: GougeRequest {
+            tol: a.tol,
+            step: a.step,
+            rapids: a.rapids,
+            tool: a.tool.clone(),
+        },
+        read: a.units.options()?,
     };
-    let (g, fallback) = lib::params(&req).map_err(CliError::input)?;
-    let quiet = a.notes.quiet || a.summary.json;
-    let parsed = a.units.read(&a.path, quiet)?;
+    let rep = lib::run_command(&c, &watch)?;
     let path = a.path.display().to_string();
-    if fallback.is_none() {
-        lib::shape_is_known(&path, &parsed.program).map_err(CliError::input)?;
-    }
-    clock.lap("arguments checked, program read");
-    let mesh = a.part.read()?;
-    let found: Vec<_> = checks::mesh(&mesh).into_iter().collect();
-    print_diagnostics(&a.part.stl, &found, quiet);
-    // Counted first: a step of 1e-9 on a long program is refused, not run.
-    clock.lap("part read");
-    let n = lib::sample_count(&parsed.program, fallback, &g);
-    crate::limits::check_memory(&lib::samples_needed(a.step, n), n * BYTES_PER_SAMPLE)?;
-    let show = !a.notes.quiet && n >= lib::SHOWN_SAMPLES;
-    let bar = crate::progress::count(n as u64, "gouge check", "points", show);
-    let rep = lib::check(&parsed.program, &mesh, fallback, &g, &|done, _| {
-        bar.set_position(done as u64)
-    });
-    bar.finish_and_clear();
-    clock.lap("points checked against the part");
-    let report = lib::Report::new(&rep, a.tol);
-    a.summary.print(&report, |r| r.render_text(&path));
-    clock.end(a.timings.on);
-    if rep.moves_checked == 0 {
-        return Err(CliError::input(format!(
-            "{path}: no move could be checked ({})",
-            lib::skipped(&rep.skipped)
-        )));
+    a.summary
+        .print(&lib::Report::new(&rep, a.tol), |r| r.render_text(&path));
+    watch.lap("summary printed");
+    watch.print_timings(a.timings.on);
+    if let Some(m) = lib::nothing_checked(&path, &rep) {
+        return Err(CliError::input(m));
     }
     Ok(exit(!rep.gouges.is_empty()))
 }
