@@ -1,16 +1,20 @@
 //! `millplan setup`: the machine and the search's parameters from the
-//! request, the report's inputs and the typed summary the command prints.
+//! request, the run (`run_command`), the report's inputs and the typed
+//! summary the command prints.
 
 use crate::check::{arg, Range};
 use millplan_geom::TriMesh;
 pub use millplan_models::kinematics::Kinematics;
 use millplan_models::kinematics::{KinKind, RotaryAxis};
-use millplan_plan::setup::{GridKind, SetupParams, SetupPlan, Summary};
+use millplan_plan::setup::{GridKind, SetupError, SetupParams, SetupPlan, Summary};
 use millplan_report::html::Verdict;
 use millplan_sim::access::ToolModel;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+
+mod command;
+pub use command::{run_command, SetupCommand, SetupRun};
 
 /// The machine types `--type` names: A tilting table on C, or A table in a
 /// B cradle.

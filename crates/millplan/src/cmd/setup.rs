@@ -1,10 +1,10 @@
 //! `millplan setup`: can a five-axis machine reach the whole part in one setup,
 //! and how should the part be clamped?
 
-use crate::error::{exit, CliError, CliResult};
-use crate::timings::Table as _;
-use millplan_driver::setup::{self as lib, Kinematics, MachineType, SetupRequest};
-use millplan_plan::setup::{self, GridKind};
+use crate::error::{exit, CliResult};
+use millplan_driver::setup::{self as lib, MachineType, SetupRequest};
+use millplan_driver::watch::Watch as _;
+use millplan_plan::setup::GridKind;
 use std::path::PathBuf;
 
 /// Machinability and setup orientation of a part on a five-axis machine
@@ -102,21 +102,6 @@ pub enum GridArg {
 }
 
 /// The machine from --machine, or --type with --range1/--range2.
-fn machine(a: &Args) -> CliResult<Kinematics> {
-    let file = a
-        .machine
-        .as_deref()
-        .map(|p| crate::cmd::load_machine(Some(p)));
-    let file = file.transpose()?;
-    let path = a.machine.as_deref().map(|p| p.display().to_string());
-    let file = file.as_ref().zip(path.as_deref());
-    let kind = a.kind.map(|t| match t {
-        TypeArg::Ca => MachineType::Ca,
-        TypeArg::Ab => MachineType::Ab,
-    });
-    lib::kinematics(file, kind, (&a.range1, &a.range2)).map_err(CliError::input)
-}
-
 fn request(a: &Args) -> SetupRequest {
     SetupRequest {
         grid: match a.grid {
@@ -134,64 +119,31 @@ fn request(a: &Args) -> SetupRequest {
 
 /// The setup search, with a bar of the share done and the time left where
 /// it takes a while (hidden with -q and when standard error is no terminal).
-fn plan_shown(
-    a: &Args,
-    mesh: &mut millplan_geom::TriMesh,
-    machine: &Kinematics,
-    p: &setup::SetupParams,
-) -> CliResult<setup::SetupPlan> {
-    let show = lib::shows_progress(mesh, p) && !a.notes.quiet;
-    let bar = crate::progress::fraction("cones of access", show);
-    let progress = |done: usize, total: usize| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    };
-    let plan = setup::plan_with_progress(mesh, machine, p, &progress).map_err(|e| match e {
-        setup::SetupError::NoTriangles => CliError::input(format!("{}: {e}", a.part.stl.display())),
-        e => CliError::input(e.to_string()),
-    });
-    bar.finish_and_clear();
-    plan
-}
-
 pub fn run(a: Args) -> CliResult<i32> {
-    let mut clock = crate::timings::Clock::start();
-    let inputs = [Some(&*a.part.stl), a.machine.as_deref()];
-    let outs = [
-        ("-o", a.output.as_deref()),
-        ("--report", a.report.as_deref()),
-    ];
-    let mut outputs = crate::io::plan(&inputs, &outs, false)?;
-    let req = request(&a);
-    lib::check(&req).map_err(CliError::input)?;
-    let machine = machine(&a)?;
-    let p = lib::params(&req).map_err(CliError::input)?;
-    clock.lap("arguments, machine file and outputs checked");
-    let mut mesh = a.part.read()?;
-    clock.lap("part read");
-    let t0 = std::time::Instant::now();
-    let plan = plan_shown(&a, &mut mesh, &machine, &p)?;
-    let secs = t0.elapsed().as_secs_f64();
-    clock.lap("cones of access and setups searched");
+    let watch = crate::progress::Watch::new(&a.part.stl, a.notes.quiet, a.summary.json);
+    let watch = watch.bars_under_json();
+    let c = lib::SetupCommand {
+        part: a.part.file(),
+        machine: a.machine.as_deref(),
+        kind: a.kind.map(|t| match t {
+            TypeArg::Ca => MachineType::Ca,
+            TypeArg::Ab => MachineType::Ab,
+        }),
+        ranges: (&a.range1, &a.range2),
+        output: a.output.as_deref(),
+        report: a.report.as_deref(),
+        request: request(&a),
+        limits: crate::limits::get(),
+    };
+    let r = lib::run_command(&c, &watch)?;
+    let (req, plan, machine) = (&c.request, &r.plan, &r.machine);
+    let s = plan.summary(&r.mesh, machine);
+    let v = lib::verdict(req, &r.mesh, plan);
     let stl = a.part.stl.display().to_string();
-    match lib::flipped_note(&plan, &stl) {
-        Some(n) if !a.notes.quiet && !a.summary.json => eprintln!("{n}"),
-        _ => {}
-    }
-    if let Some(out) = &a.output {
-        outputs.write(out, &lib::rotated_stl(&mesh, &plan))?;
-    }
-    if let Some(path) = &a.report {
-        let html = lib::report(&req, stl.clone(), &mesh, &plan, &machine);
-        outputs.write(path, html.as_bytes())?;
-    }
-    outputs.commit()?;
-    clock.lap("outputs written and renamed into place");
-    let s = plan.summary(&mesh, &machine);
-    let v = lib::verdict(&req, &mesh, &plan);
-    let text = || lib::render_text(&req, &stl, (&s, &v), &plan);
-    let j = || lib::Report::new(&req, &s, &machine, (secs, v.clone()));
+    let text = || lib::render_text(req, &stl, (&s, &v), plan);
+    let j = || lib::Report::new(req, &s, machine, (r.seconds, v.clone()));
     crate::cmd::print_summary(a.summary.json, j, text);
-    clock.end(a.timings.on);
+    watch.lap("summary printed");
+    watch.print_timings(a.timings.on);
     Ok(exit(!plan.feasible))
 }
