@@ -1,5 +1,5 @@
-//! `millplan directions`: the generated rasters' arguments and size, and
-//! the ranking as JSON and text.
+//! `millplan directions`: the generated rasters' arguments and size, the
+//! run (`run_command`), and the ranking as JSON and text.
 
 use crate::check::{arg, raster_spacing, tool_shape, Range};
 use millplan_models::cutter::Shape;
@@ -7,6 +7,9 @@ use millplan_plan::directions::Ranked;
 use millplan_sim::raster::{estimate, RasterParams};
 use serde::Serialize;
 use std::fmt::Write as _;
+
+mod command;
+pub use command::{run_command, DirectionsCommand};
 
 /// The share of the bounds' width the size estimate of a raster allows
 /// for (the estimate's margin).

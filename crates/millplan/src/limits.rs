@@ -26,9 +26,3 @@ pub fn init(args: &[String]) -> CliResult<()> {
     let _ = RUN.set(run);
     Ok(())
 }
-
-/// Refuses estimated work whose memory exceeds the `memory` limit; `what`
-/// says what would take it (`a raster of 3.2e9 points`).
-pub fn check_memory(what: &str, bytes: f64) -> CliResult<()> {
-    lib::check_memory(&get(), what, bytes).map_err(CliError::input)
-}

@@ -34,11 +34,6 @@ pub struct Part {
 }
 
 impl Part {
-    /// The part, in mm.
-    pub fn read(&self) -> CliResult<millplan_geom::TriMesh> {
-        self.units.read(&self.stl)
-    }
-
     /// The part's file and unit, as the driver's runs read it.
     pub fn file(&self) -> millplan_driver::io::inputs::PartFile<'_> {
         let units = self.units.stl_units.map(Into::into);

@@ -1,12 +1,10 @@
 //! `millplan directions`: rank candidate paths of one surface by the spindle's
 //! dynamic load under constant-cutting-speed control (paper 000, thesis 3).
 
-use crate::error::{CliError, CliResult, EXIT_OK};
-use crate::io::read_program;
-use crate::timings::{Clock, Table as _};
+use crate::error::{CliResult, EXIT_OK};
 use clap::ValueEnum;
-use millplan_plan::directions::{rank, raster_candidates, Candidate, RankBy as By};
-use millplan_plan::pipeline::Context;
+use millplan_driver::watch::Watch as _;
+use millplan_plan::directions::RankBy as By;
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq)]
@@ -64,52 +62,30 @@ pub struct Args {
 
 /// The generated rasters' arguments in range, and their points (counted
 /// from the grid) within the limits.
-fn check_rasters(a: &Args, bounds: &millplan_geom::Aabb) -> CliResult<millplan_driver::Shape> {
-    let limit = crate::limits::get().moves as f64;
-    let spacing = (a.stepover, a.step);
-    let (shape, bytes) =
-        millplan_driver::directions::rasters_within(&a.tool, &a.angles, spacing, bounds, limit)
-            .map_err(CliError::input)?;
-    crate::limits::check_memory("the candidate rasters", bytes)?;
-    Ok(shape)
-}
-
 pub fn run(a: Args) -> CliResult<i32> {
-    let mut clock = Clock::start();
-    a.cut.check()?;
-    let machine = a.machine.load()?;
-    let mesh = a.part.read()?;
-    let cx = Context::new(machine).with_part(&mesh);
-    clock.lap("machine file and part read");
-    let mut candidates = Vec::new();
-    if !a.angles.is_empty() {
-        let shape = check_rasters(&a, &mesh.bounds())?;
-        candidates = raster_candidates(&cx, shape, &a.angles, a.stepover, a.step)
-            .map_err(|e| crate::cmd::pass_error(&a.part.stl, e))?;
-        clock.lap("candidate rasters made (drop-cutter)");
-    }
-    for p in &a.paths {
-        let parsed = read_program(p, a.units.options()?)?;
-        candidates.push(Candidate {
-            name: p.display().to_string(),
-            program: parsed.program,
-        });
-    }
-    let by = match a.by {
-        RankBy::Tv => By::TotalVariation,
-        RankBy::MaxStep => By::MaxStep,
-        RankBy::Accel => By::Accel,
-        RankBy::Integral => By::Integral,
+    let watch = crate::progress::Watch::new(&a.part.stl, false, a.summary.json);
+    let c = millplan_driver::directions::DirectionsCommand {
+        part: a.part.file(),
+        machine: a.machine.machine.as_deref(),
+        cut: a.cut.cutting(),
+        angles: &a.angles,
+        tool: &a.tool,
+        stepover: a.stepover,
+        step: a.step,
+        paths: &a.paths,
+        read: a.units.options()?,
+        by: match a.by {
+            RankBy::Tv => By::TotalVariation,
+            RankBy::MaxStep => By::MaxStep,
+            RankBy::Accel => By::Accel,
+            RankBy::Integral => By::Integral,
+        },
     };
-    if !a.paths.is_empty() {
-        clock.lap("candidate paths read");
-    }
-    let ranked = rank(candidates, &cx, &a.cut.params(), by)
-        .map_err(|e| crate::cmd::pass_error(&a.part.stl, e))?;
-    clock.lap("candidates run under spindle control and ranked");
+    let ranked = millplan_driver::directions::run_command(&c, &watch)?;
     let j = || millplan_driver::directions::Report::new(format!("{:?}", a.by), &ranked);
     let text = || millplan_driver::directions::render_text(&ranked);
     crate::cmd::print_summary(a.summary.json, j, text);
-    clock.end(a.timings.on);
+    watch.lap("summary printed");
+    watch.print_timings(a.timings.on);
     Ok(EXIT_OK)
 }

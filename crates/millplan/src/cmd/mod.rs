@@ -59,11 +59,6 @@ pub struct CuttingData {
 }
 
 impl CuttingData {
-    /// Checks every value against its physical range.
-    pub fn check(&self) -> CliResult<()> {
-        self.cutting().check().map_err(CliError::input)
-    }
-
     /// The values, as the library takes them.
     pub fn cutting(&self) -> millplan_driver::speed::Cutting {
         millplan_driver::speed::Cutting {
@@ -72,12 +67,6 @@ impl CuttingData {
             flutes: self.flutes,
             ap: self.ap,
         }
-    }
-
-    /// Spindle-control settings for commands that read only the summary and
-    /// the program (no per-point rows).
-    pub fn params(&self) -> millplan_plan::speed::SpeedParams {
-        self.cutting().params()
     }
 }
 
@@ -134,19 +123,6 @@ impl From<TargetArg> for Target {
             TargetArg::Apt => Target::Apt,
             TargetArg::Krl => Target::Krl,
         }
-    }
-}
-
-/// A pass's failure as the command reports it: the input's fault (exit 2,
-/// naming the program) or a bug (exit 1).
-pub fn pass_error(
-    path: &std::path::Path,
-    e: millplan_plan::pipeline::PassError,
-) -> crate::error::CliError {
-    if e.is_input() {
-        crate::error::CliError::input(format!("{}: {e}", path.display()))
-    } else {
-        crate::error::CliError::internal(format!("{}: {e}", path.display()))
     }
 }
 
