@@ -31,18 +31,6 @@ impl From<IoError> for CliError {
 /// `From<IoError>`).
 pub use millplan_driver::io::outputs::Outputs;
 
-/// The outputs `(flag, path)` of a run, checked before any work against each
-/// other and the files it reads (`None`: an optional file not given);
-/// `stdout` when `-` may name standard output.
-pub fn plan(
-    inputs: &[Option<&Path>],
-    outputs: &[(&str, Option<&Path>)],
-    stdout: bool,
-) -> CliResult<Outputs> {
-    let inputs: Vec<&Path> = inputs.iter().flatten().copied().collect();
-    Ok(Outputs::plan(&inputs, outputs, stdout)?)
-}
-
 /// Writes `files` (each checked as an output of `-o`), all of them or none.
 pub fn write_all<B: AsRef<[u8]>>(files: &[(std::path::PathBuf, B)]) -> CliResult<()> {
     let named: Vec<(&str, Option<&Path>)> = files.iter().map(|(p, _)| ("-o", Some(&**p))).collect();

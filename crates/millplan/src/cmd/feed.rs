@@ -151,7 +151,7 @@ impl ModelArgs {
         ];
         let (table, report) = (self.table.as_deref(), self.report.as_deref());
         let outs = [outs, &[("--table", table), ("--report", report)]].concat();
-        crate::io::plan(&inputs, &outs, false)
+        Ok(millplan_driver::io::outputs::plan(&inputs, &outs, false)?)
     }
 }
 
