@@ -707,8 +707,12 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// kinematics and inspect's inch STL in the driver; 5,287 once the runs of
 /// `feed`, `post` and `convert` moved into the driver (`feed::command`,
 /// `post::command`, `convert::command`, telling the binary through
-/// `watch::Watch`).
-const MAX_BINARY_LINES: usize = 5288;
+/// `watch::Watch`); 5,288 with a line of `post --help`; 4,767 once the
+/// runs of `reorder`, `simulate`, `speed`, `orient`, `raster`, `gouge`,
+/// `setup` and `directions` moved there too (`run_command` in each
+/// module), with the helpers only they used (`verdict.rs`, the in-memory
+/// and file writers, `pass_error`, the output plan).
+const MAX_BINARY_LINES: usize = 4767;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into
