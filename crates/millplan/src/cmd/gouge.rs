@@ -8,12 +8,15 @@ use std::path::PathBuf;
 /// Check a program for gouges: every cutting move (and with --rapids every
 /// rapid) is sampled at --step and the tool tip compared with the height at which
 /// the cutter would touch the part there (drop-cutter, exact for flat, ball,
-/// bull and cone cutters). Deeper than --tol is a gouge.
+/// bull and cone cutters). Deeper than --tol is a gouge. A ball end whose
+/// axis leans (five-axis CL) is checked by the distance of its ball and
+/// flutes (the CUTTER record's height, else the whole tool) to the part.
 ///
 /// Exit code 0 when clean, 3 when gouges were found, 2 when the program does
 /// not say its tool's shape (give --tool) or no move could be checked. Moves
-/// whose tool axis is not +Z (5-axis), canned cycles and moves from a position
-/// the program has not set are counted as not checked, each kind apart.
+/// of other leaning tools or whose axis is known only as machine angles,
+/// canned cycles and moves from a position the program has not set are
+/// counted as not checked, each kind apart.
 #[derive(clap::Args)]
 pub struct Args {
     /// Program (APT/CL or G-code).

@@ -20,8 +20,9 @@ use std::path::PathBuf;
 /// wherever the rotaries' motion would take the tip further than --tol from
 /// the CL segment. Feeds: G94 converted to what the control applies to the
 /// joints' motion, or with --g93 inverse time. A block that would move an
-/// axis faster than the machine file's top speed, or take less than its
-/// control's block cycle (`block_time`), is slowed. An orientation
+/// axis faster than the machine file's top speed, take less than its
+/// control's block cycle (`block_time`) or, in G94, ask the joints for more
+/// than the machine's top feed, is slowed. An orientation
 /// or position out of an axis's travel stops the run (exit 3, nothing
 /// written), naming the CL line and the axis. The output is read back and
 /// checked before it is written: the IR verifier, S and F within the
