@@ -484,15 +484,7 @@ fn tip_kept(
 /// The tool axis of a move in part coordinates: +Z without an orientation,
 /// `None` when only machine angles say where it points.
 fn axis_part(op: &Operation, m: &millplan_nc::Move) -> Option<DVec3> {
-    let a = match op.orient(m) {
-        Some(o) => match o.axis {
-            Some(v) => v,
-            None if o.is_tilted() => return None,
-            None => DVec3::Z,
-        },
-        None => DVec3::Z,
-    };
-    Some(op.frame.map_or(a, |f| f.dir_to_parent(a)))
+    op.axis_in_part(m)
 }
 
 /// The ball centre of a move of a ball of radius `r`, part coordinates.

@@ -229,19 +229,7 @@ fn sample_operation(
     samples: &mut Vec<Sample>,
 ) {
     let to_part = |v: DVec3| op.frame.map(|f| f.to_parent(v)).unwrap_or(v);
-    // The tool axis in part coordinates; `None` when only machine angles
-    // say where it points.
-    let axis_part = |m: &millplan_nc::Move| -> Option<DVec3> {
-        let a = match op.orient(m) {
-            Some(o) => match o.axis {
-                Some(v) => v,
-                None if o.is_tilted() => return None,
-                None => DVec3::Z,
-            },
-            None => DVec3::Z,
-        };
-        Some(op.frame.map(|f| f.dir_to_parent(a)).unwrap_or(a))
-    };
+    let axis_part = |m: &millplan_nc::Move| op.axis_in_part(m);
     let vertical = |a: DVec3| (a - DVec3::Z).length() <= 1e-6;
     let ball = matches!(b.shape, Shape::Ball { .. });
     for (i, m) in op.moves.iter().enumerate() {

@@ -816,6 +816,21 @@ impl Operation {
         self.orient(m).and_then(|o| o.axis)
     }
 
+    /// The tool axis of a move in part coordinates (the operation's frame
+    /// applied): +Z without an orientation, `None` when only machine angles
+    /// say where it points.
+    pub fn axis_in_part(&self, m: &Move) -> Option<DVec3> {
+        let a = match self.orient(m) {
+            Some(o) => match o.axis {
+                Some(v) => v,
+                None if o.is_tilted() => return None,
+                None => DVec3::Z,
+            },
+            None => DVec3::Z,
+        };
+        Some(self.frame.map_or(a, |f| f.dir_to_parent(a)))
+    }
+
     pub fn orient(&self, m: &Move) -> Option<&Orient> {
         m.orient.and_then(|id| self.orients.get(id.index()))
     }
