@@ -736,6 +736,20 @@ fn sampled_tip_length_is_the_tip_length_to_the_bit() {
     }
 }
 
+/// The A/C trunnion of examples/machine.toml: pivot 120 mm below the
+/// table, A from −120° to 30°.
+fn example_trunnion() -> Kinematics {
+    Kinematics {
+        rot_point: [0.0, 0.0, -120.0],
+        first: RotaryAxis {
+            min: Some(-120.0),
+            max: Some(30.0),
+            sign: 1.0,
+        },
+        ..Kinematics::new(KinKind::TableAc)
+    }
+}
+
 /// A leaned ball-end raster (`millplan orient` on the demo part) turns its
 /// near-vertical tool axis by 110° about the pole from one row to the next,
 /// 2.2° from it at the closest, outside the 0.5° pole cone. Taking the tilt
@@ -769,15 +783,7 @@ fn a_cut_passing_near_the_pole_keeps_its_branch() {
         ),
     ];
     let p = program(&recs, 2000.0);
-    let kin = Kinematics {
-        rot_point: [0.0, 0.0, -120.0],
-        first: RotaryAxis {
-            min: Some(-120.0),
-            max: Some(30.0),
-            sign: 1.0,
-        },
-        ..Kinematics::new(KinKind::TableAc)
-    };
+    let kin = example_trunnion();
     let ro = roles(KinKind::TableAc);
     let near = closest_to_pole(
         ro,
@@ -930,15 +936,7 @@ fn a_cut_through_the_pole_cone_keeps_its_tip_on_the_path() {
         ),
     ];
     let p = program(&recs, 1500.0);
-    let kin = Kinematics {
-        rot_point: [0.0, 0.0, -120.0],
-        first: RotaryAxis {
-            min: Some(-120.0),
-            max: Some(30.0),
-            sign: 1.0,
-        },
-        ..Kinematics::new(KinKind::TableAc)
-    };
+    let kin = example_trunnion();
     let ro = roles(KinKind::TableAc);
     let k = |i: usize| DVec3::from_array(recs[i].2).normalize();
     let near = closest_to_pole(ro, k(2), k(3));
