@@ -747,7 +747,7 @@ impl FeedSummary {
         );
         e.failed
             .extend(millplan_report::html::failed_checks(&checks));
-        let mut warnings = load_warnings(over.len(), &over_lines, 0, 0);
+        let mut warnings = load_warnings(over.len(), &over_lines, 0, (0, None));
         let stock_contact = meets_stock(&s.before);
         if !stock_contact {
             e.kept = true;
@@ -960,7 +960,12 @@ pub fn no_contact(stock: &str) -> String {
 /// Warnings shared by `force` and `feed`: moves over a limit (`over` of
 /// them, the first at `lines`), moves whose loads are missing, moves not
 /// simulated.
-pub fn load_warnings(over: usize, lines: &[u32], unmodelled: usize, skipped: usize) -> Vec<String> {
+pub fn load_warnings(
+    over: usize,
+    lines: &[u32],
+    unmodelled: usize,
+    (skipped, first): (usize, Option<u32>),
+) -> Vec<String> {
     let mut w = Vec::new();
     if over > 0 {
         w.push(format!(
@@ -980,7 +985,8 @@ pub fn load_warnings(over: usize, lines: &[u32], unmodelled: usize, skipped: usi
     }
     if skipped > 0 {
         w.push(format!(
-            "{skipped} moves not simulated (unknown position or axis, no tool): their loads are missing"
+            "{skipped} moves not simulated (unknown position or axis, no tool{}): their loads are missing",
+            millplan_sim::stock::path::first_line_note(first)
         ));
     }
     w

@@ -58,7 +58,8 @@ impl ForceSummary {
         let unmodelled = run.moves.iter().filter(|x| x.unmodelled).count();
         let over_lines: Vec<u32> = over.iter().take(20).map(|x| x.line).collect();
         let mut e = millplan_report::forces::force_evidence(over.len() as u64);
-        let mut warnings = load_warnings(over.len(), &over_lines, unmodelled, run.skipped);
+        let skipped = (run.skipped, run.skipped_line);
+        let mut warnings = load_warnings(over.len(), &over_lines, unmodelled, skipped);
         let stock_contact = meets_stock(run);
         if !stock_contact {
             e.kept = true;

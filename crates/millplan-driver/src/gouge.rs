@@ -107,8 +107,8 @@ pub fn check(
 /// The moves skipped, by reason.
 pub fn skipped(s: &Skipped) -> String {
     format!(
-        "{} without a tool shape, {} with a tilted or unknown tool axis, {} canned-cycle holes, {} from or to an unknown position",
-        s.no_tool, s.tilted, s.cycles, s.unknown_position
+        "{} without a tool shape, {} with a tilted or unknown tool axis, {} canned-cycle holes, {} from or to an unknown position{}",
+        s.no_tool, s.tilted, s.cycles, s.unknown_position, s.first()
     )
 }
 

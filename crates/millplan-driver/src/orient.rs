@@ -12,7 +12,7 @@ use millplan_plan::leadtilt::{
 use millplan_plan::machine::Machine;
 use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
 use millplan_report::html::{failed_checks, worse_words, Evidence, Verdict};
-use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
+use millplan_sim::stock::path::{strokes, PathOptions, Strokes, Unsimulated};
 use millplan_sim::stock::spec::StockSpec;
 use millplan_sim::stock::tool::{BodyOptions, ToolBody};
 use millplan_sim::stock::Stock;
@@ -232,16 +232,19 @@ pub struct Outcome {
     pub checks: Vec<Check>,
     /// Whether any operation was re-oriented (else nothing is to be written).
     pub chosen: bool,
-    pub unsimulated: usize,
+    /// The moves the stock did not see, by reason.
+    pub unsimulated: Unsimulated,
 }
 
 impl Outcome {
     /// The note on moves the stock did not see, for the program `path`
     /// (`None` when every move was simulated).
     pub fn unsimulated_note(&self, path: &str) -> Option<String> {
-        (self.unsimulated > 0).then(|| format!(
-            "{path}: note: {} moves are not simulated (their tool has no shape, or their position or axis is unknown): the stock does not see them",
-            self.unsimulated
+        let u = &self.unsimulated;
+        (u.total() > 0).then(|| format!(
+            "{path}: note: {} moves are not simulated (their tool has no shape, or their position or axis is unknown{}): the stock does not see them",
+            u.total(),
+            u.first()
         ))
     }
 }
@@ -264,7 +267,7 @@ pub fn command(
     let st = spec
         .as_ref()
         .map(|_| program_strokes(g.program, a.resolution, g.machine.rapid));
-    let unsimulated = st.as_ref().map_or(0, |s| s.skipped.total());
+    let unsimulated = st.as_ref().map_or_else(Unsimulated::default, |s| s.skipped);
     let input = match (&spec, &st) {
         (Some(spec), Some(st)) => {
             simulable(st, g.name)?;
@@ -280,7 +283,7 @@ pub fn command(
     let initial = input.as_ref().map(|i| i.stock.clone());
     let o = choose_with(g.program, g.mesh, g.machine, &p, input, progress)
         .map_err(|e| format!("{}: {e}", g.name))?;
-    let summary = Summary::new(a, &o, g.output, unsimulated);
+    let summary = Summary::new(a, &o, g.output, &unsimulated);
     let chosen = !o.chosen.is_empty();
     let checks = if chosen {
         check(g.program, &o.program, initial.as_ref(), g.machine)
@@ -326,7 +329,7 @@ pub struct Summary {
 /// The warnings of a choice: ball-end operations left as they were (the
 /// pass applies to them; other tools are not its business) and moves the
 /// stock does not see.
-fn warnings(o: &Oriented, unsimulated: usize) -> Vec<String> {
+fn warnings(o: &Oriented, unsimulated: &Unsimulated) -> Vec<String> {
     let is_ball = |k: usize| {
         o.program
             .operations
@@ -347,9 +350,11 @@ fn warnings(o: &Oriented, unsimulated: usize) -> Vec<String> {
             )
         })
         .collect();
-    if unsimulated > 0 {
+    if unsimulated.total() > 0 {
         w.push(format!(
-            "{unsimulated} moves are not simulated (their tool has no shape, or their position or axis is unknown): the stock does not see them"
+            "{} moves are not simulated (their tool has no shape, or their position or axis is unknown{}): the stock does not see them",
+            unsimulated.total(),
+            unsimulated.first()
         ));
     }
     w
@@ -358,7 +363,12 @@ fn warnings(o: &Oriented, unsimulated: usize) -> Vec<String> {
 impl Summary {
     /// The summary of an outcome written to `output`; `unsimulated`: the
     /// moves the stock does not see (with a stock).
-    pub fn new(a: &OrientRequest, o: &Oriented, output: &str, unsimulated: usize) -> Summary {
+    pub fn new(
+        a: &OrientRequest,
+        o: &Oriented,
+        output: &str,
+        unsimulated: &Unsimulated,
+    ) -> Summary {
         let stock = a.stock.is_some();
         let mut s = Summary {
             objective: a.objective,
@@ -368,7 +378,7 @@ impl Summary {
             engagement: if stock { "stock" } else { "planar" },
             stock: a.stock.clone(),
             resolution_mm: stock.then_some(a.resolution),
-            unsimulated_moves: unsimulated,
+            unsimulated_moves: unsimulated.total(),
             checks: None,
             verdict: Verdict {
                 warnings: warnings(o, unsimulated),
@@ -566,6 +576,6 @@ mod tests {
         assert!(o.summary.operations[0].lead > 1.0);
         assert!(safety::passed(&o.checks), "{:?}", o.checks);
         assert_eq!(o.summary.output.as_deref(), Some("out.nc"));
-        assert_eq!(o.unsimulated, 0);
+        assert_eq!(o.unsimulated.total(), 0);
     }
 }

@@ -364,8 +364,8 @@ impl<'a> Report<'a> {
         if rep.skipped.total() > 0 {
             let _ = writeln!(
                 o,
-                "not simulated: {} moves from or to an unknown position, {} with the axis known only as machine angles",
-                rep.skipped.unknown_position, rep.skipped.unknown_axis
+                "not simulated: {} moves from or to an unknown position, {} with the axis known only as machine angles{}",
+                rep.skipped.unknown_position, rep.skipped.unknown_axis, rep.skipped.first()
             );
         }
         if let Some(r) = &self.remaining {

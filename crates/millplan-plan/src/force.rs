@@ -449,6 +449,8 @@ pub struct ForceRun {
     pub evaluated: usize,
     /// Moves not simulated (unknown position or axis, no tool).
     pub skipped: usize,
+    /// Source line of the first of them.
+    pub skipped_line: Option<u32>,
 }
 
 /// The largest loads of a run.
@@ -864,6 +866,7 @@ pub fn simulate_in_parts(
     }
     let mut run = ForceRun {
         skipped: strokes.skipped.total(),
+        skipped_line: strokes.skipped.first_line,
         ..ForceRun::default()
     };
     for p in parts {

@@ -963,11 +963,12 @@ fn collisions(i: &Inputs, p: &Program, stock: &Stock) -> Simulated {
     let sk = s.skipped;
     let skipped = if sk.total() > 0 {
         format!(
-            "{} moves not simulated: {} with no tool body, {} from or to an unknown position, {} with the axis known only as machine angles",
+            "{} moves not simulated: {} with no tool body, {} from or to an unknown position, {} with the axis known only as machine angles{}",
             sk.total(),
             sk.no_tool,
             sk.unknown_position,
-            sk.unknown_axis
+            sk.unknown_axis,
+            sk.first()
         )
     } else {
         String::new()
@@ -1060,8 +1061,8 @@ fn gouges_with_report(i: &Inputs, part: &DropMesh) -> (Check, GougeReport) {
     let s = out.skipped;
     if s.total() > 0 {
         c.skipped = Some(format!(
-            "{} moves not checked: {} with no tool body, {} with a tilted tool, {} canned cycles, {} from or to an unknown position",
-            s.total(), s.no_tool, s.tilted, s.cycles, s.unknown_position
+            "{} moves not checked: {} with no tool body, {} with a tilted tool, {} canned cycles, {} from or to an unknown position{}",
+            s.total(), s.no_tool, s.tilted, s.cycles, s.unknown_position, s.first()
         ));
     }
     if out.gouges.is_empty() {

@@ -112,8 +112,8 @@ pub fn report(
     let skipped = rep.skipped.total();
     if skipped > 0 {
         warnings.push(format!(
-            "{skipped} moves not simulated ({} from or to an unknown position, {} with the axis known only as machine angles, {} without a tool): the stock does not show them",
-            rep.skipped.unknown_position, rep.skipped.unknown_axis, rep.skipped.no_tool
+            "{skipped} moves not simulated ({} from or to an unknown position, {} with the axis known only as machine angles, {} without a tool{}): the stock does not show them",
+            rep.skipped.unknown_position, rep.skipped.unknown_axis, rep.skipped.no_tool, rep.skipped.first()
         ));
     }
     if let Some((r, _)) = part {

@@ -71,11 +71,24 @@ pub struct Skipped {
     pub cycles: usize,
     /// From or to a position the program has not set.
     pub unknown_position: usize,
+    /// Source line of the first move left out.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub first_line: Option<u32>,
 }
 
 impl Skipped {
     pub fn total(&self) -> usize {
         self.no_tool + self.tilted + self.cycles + self.unknown_position
+    }
+
+    /// Notes the source line of a move left out (the first one is kept).
+    pub fn at(&mut self, line: u32) {
+        self.first_line.get_or_insert(line);
+    }
+
+    /// `"; the first at line N"`, or nothing.
+    pub fn first(&self) -> String {
+        crate::stock::path::first_line_note(self.first_line)
     }
 }
 
@@ -157,7 +170,11 @@ pub fn check_with_progress(
     let mut samples: Vec<Sample> = Vec::new();
     for (oi, op) in p.operations.iter().enumerate() {
         let Some(b) = bodies[oi] else {
-            rep.skipped.no_tool += op.moves.iter().filter(|m| wanted(m.kind, g)).count();
+            let mut left = op.moves.iter().filter(|m| wanted(m.kind, g));
+            if let Some(m) = left.next() {
+                rep.skipped.at(m.line);
+                rep.skipped.no_tool += 1 + left.count();
+            }
             continue;
         };
         sample_operation(op, oi, &b, g, &mut rep, &mut samples);
@@ -236,15 +253,18 @@ fn sample_operation(
         if !wanted(m.kind, g) {
             if m.cycle().is_some() {
                 rep.skipped.cycles += 1;
+                rep.skipped.at(m.line);
             }
             continue;
         }
         let (Some(start), Some(end)) = (op.known_start(i), known(m.end)) else {
             rep.skipped.unknown_position += 1;
+            rep.skipped.at(m.line);
             continue;
         };
         let Some(a1) = axis_part(m) else {
             rep.skipped.tilted += 1;
+            rep.skipped.at(m.line);
             continue;
         };
         // The axis the move starts with: the previous move's (the first
@@ -252,6 +272,7 @@ fn sample_operation(
         let a0 = match i.checked_sub(1).map(|k| axis_part(&op.moves[k])) {
             Some(None) => {
                 rep.skipped.tilted += 1;
+                rep.skipped.at(m.line);
                 continue;
             }
             Some(Some(a)) => a,
@@ -260,6 +281,7 @@ fn sample_operation(
         let upright = vertical(a1) && (vertical(a0) || !ball);
         if !upright && !ball {
             rep.skipped.tilted += 1;
+            rep.skipped.at(m.line);
             continue;
         }
         rep.moves_checked += 1;

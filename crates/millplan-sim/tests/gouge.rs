@@ -341,3 +341,40 @@ fn a_tilted_ball_end_is_checked_by_its_distance_to_the_part() {
     let rep = check(&p, &part, |_| Some(flat), &g);
     assert_eq!((rep.skipped.tilted, rep.moves_checked), (1, 0));
 }
+
+/// The moves a check or a simulation leaves out are counted with the source
+/// line of the first, so a warning can say where to look: here the first
+/// move (line 5), a feed move from wherever the machine stood.
+#[test]
+fn moves_left_out_name_the_line_of_the_first() {
+    use millplan_sim::stock::path::{strokes, PathOptions};
+    let src = "PARTNO WALL\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nGOTO/0,50,20\nGOTO/0,50,-20\nGOTO/120,50,-20\nFINI\n";
+    let p = parse_program(src, ReadOptions::default())
+        .expect("reads")
+        .program;
+    let ball = |_: &millplan_nc::Operation| Some(ToolBody::new(Shape::Ball { radius: 5.0 }));
+    let rep = check(&p, &box_mesh(), ball, &GougeParams::default());
+    assert_eq!(rep.skipped.unknown_position, 1);
+    assert_eq!(rep.skipped.first_line, Some(5));
+    assert_eq!(rep.skipped.first(), "; the first at line 5");
+    let o = PathOptions {
+        chord: 0.01,
+        rapid_rate: 10_000.0,
+    };
+    let s = strokes(&p, ball, &o);
+    assert_eq!(
+        (s.skipped.unknown_position, s.skipped.first_line),
+        (1, Some(5))
+    );
+    // Without a tool every move is left out, from the operation's first.
+    let none = strokes(&p, |_| None, &o);
+    assert_eq!(
+        (none.skipped.no_tool, none.skipped.first_line),
+        (3, Some(5))
+    );
+    // Nothing left out: no line, no words.
+    assert_eq!(
+        millplan_sim::stock::path::Unsimulated::default().first(),
+        ""
+    );
+}

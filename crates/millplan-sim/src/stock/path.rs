@@ -50,12 +50,32 @@ pub struct Unsimulated {
     pub unknown_position: usize,
     /// Tool axis known only as machine angles.
     pub unknown_axis: usize,
+    /// Source line of the first move left out (the first move of a program
+    /// usually is: it starts where the machine stood before it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub first_line: Option<u32>,
 }
 
 impl Unsimulated {
     pub fn total(&self) -> usize {
         self.no_tool + self.unknown_position + self.unknown_axis
     }
+
+    /// Notes the source line of a move left out (the first one is kept).
+    pub fn at(&mut self, line: u32) {
+        self.first_line.get_or_insert(line);
+    }
+
+    /// `"; the first at line N"`, or nothing when no move was left out or
+    /// its line is unknown: the end of the messages that count them.
+    pub fn first(&self) -> String {
+        first_line_note(self.first_line)
+    }
+}
+
+/// `"; the first at line N"` for `Some(N)`, else nothing.
+pub fn first_line_note(line: Option<u32>) -> String {
+    line.map_or(String::new(), |l| format!("; the first at line {l}"))
 }
 
 /// The strokes of a program.
@@ -98,6 +118,9 @@ pub fn strokes(
         out.moves += op.moves.len();
         let Some(body) = tool(op) else {
             out.skipped.no_tool += op.moves.len();
+            if let Some(m) = op.moves.first() {
+                out.skipped.at(m.line);
+            }
             continue;
         };
         let ti = match out.tools.iter().position(|t| *t == body) {
@@ -149,6 +172,7 @@ fn op_strokes(
         let returned = after_cycle.take();
         let Some(a1) = axis(m) else {
             out.skipped.unknown_axis += 1;
+            out.skipped.at(m.line);
             continue;
         };
         let a0 = prev_axis;
@@ -158,6 +182,7 @@ fn op_strokes(
         let start = op.known_start(i).map(|s| returned.unwrap_or(s));
         let (Some(start), Some(end)) = (start, known(m.end)) else {
             out.skipped.unknown_position += 1;
+            out.skipped.at(m.line);
             continue;
         };
         let mut push = |p0: DVec3, p1: DVec3, b0: DVec3, b1: DVec3, rapid: bool, minutes: f64| {
