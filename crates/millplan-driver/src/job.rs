@@ -313,6 +313,18 @@ impl Job {
     /// [`Job::new`] naming its phases to `lap` as each ends (for a
     /// `--timings` table): the defaults, the stock, the input's loads.
     pub fn new_timed(inputs: Inputs, lap: &mut dyn FnMut(&str)) -> Result<Job, JobError> {
+        Job::for_passes(inputs, None, lap)
+    }
+
+    /// [`Job::new_timed`] for the passes the user named (`--passes`): one
+    /// that a missing input keeps from running is refused
+    /// ([`crate::passes::check_named`]) before the stock is built and the
+    /// input's loads are measured.
+    pub fn for_passes(
+        inputs: Inputs,
+        named: Option<&[crate::passes::PassName]>,
+        lap: &mut dyn FnMut(&str),
+    ) -> Result<Job, JobError> {
         let o = inputs.options.clone();
         let mut s = Vec::new();
         let lib = first_library_tool(&inputs);
@@ -366,6 +378,9 @@ impl Job {
         };
         job.default_spindle(d);
         lap("defaults resolved, materials and tools looked up");
+        if let Some(order) = named {
+            crate::passes::check_named(&job, order).map_err(JobError)?;
+        }
         job.stock = job.build_stock()?;
         lap("stock built");
         job.forces_before = job.forces(&job.inputs.program)?;

@@ -151,28 +151,65 @@ fn five_axis(job: &Job) -> bool {
 
 /// Why `pass` cannot run on this job, `None` when it can.
 pub fn missing(job: &Job, pass: PassName) -> Option<String> {
+    why_not(job, pass).map(|w| w.why.to_string())
+}
+
+/// Why a pass cannot run: the program has nothing for it, or an input the
+/// user can give is missing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WhyNot {
+    pub why: &'static str,
+    /// An option would let it run (no `--stl`, `--stock`, `--material`,
+    /// `--machine` or kinematics); `false`: the program has nothing for it.
+    pub option: bool,
+}
+
+/// Why `pass` cannot run on this job: what the program lacks is said
+/// first (no option would make the pass run then), then the missing input.
+pub fn why_not(job: &Job, pass: PassName) -> Option<WhyNot> {
     let i = &job.inputs;
     let part = i.part.is_some();
-    let why = match pass {
-        PassName::Speed if !part => "no part (--stl): the working diameter needs the surface",
-        PassName::Speed if !has_ball(job, false) => "no ball-end operation",
-        PassName::Reorder if !part => "no part (--stl)",
-        PassName::Reorder if !has_ball(job, true) => "no three-axis ball-end operation",
-        PassName::Orient if !job.inputs.program.operations.iter().any(axis_vectors) => {
-            "no five-axis CL operation (tool axes as vectors on every cutting move): nothing to lean"
+    let program = |why| Some(WhyNot { why, option: false });
+    let option = |why| Some(WhyNot { why, option: true });
+    match pass {
+        PassName::Speed if !has_ball(job, false) => program("no ball-end operation"),
+        PassName::Speed if !part => {
+            option("no part (--stl): the working diameter needs the surface")
         }
-        PassName::Orient if !part => "no part (--stl): the contact points need the surface",
-        PassName::Orient if job.stock.is_none() => "no stock (--stock)",
-        PassName::Orient if job.setup.is_none() => "no material (--material)",
-        PassName::Orient if !has_ball(job, false) => "no ball-end operation",
-        PassName::Feed if job.stock.is_none() => "no stock (--stock)",
-        PassName::Feed if job.setup.is_none() => "no material (--material)",
-        PassName::Post if !five_axis(job) => "a three-axis program: nothing to post",
-        PassName::Post if !i.machine_given => "no machine file (--machine)",
+        PassName::Reorder if !has_ball(job, true) => program("no three-axis ball-end operation"),
+        PassName::Reorder if !part => option("no part (--stl)"),
+        PassName::Orient if !job.inputs.program.operations.iter().any(axis_vectors) => program(
+            "no five-axis CL operation (tool axes as vectors on every cutting move): nothing to lean",
+        ),
+        PassName::Orient if !has_ball(job, false) => program("no ball-end operation"),
+        PassName::Orient if !part => {
+            option("no part (--stl): the contact points need the surface")
+        }
+        PassName::Orient if i.stock.is_none() => option("no stock (--stock)"),
+        PassName::Orient if job.setup.is_none() => option("no material (--material)"),
+        PassName::Feed if i.stock.is_none() => option("no stock (--stock)"),
+        PassName::Feed if job.setup.is_none() => option("no material (--material)"),
+        PassName::Post if !five_axis(job) => program("a three-axis program: nothing to post"),
+        PassName::Post if !i.machine_given => option("no machine file (--machine)"),
         PassName::Post if i.machine.kinematics().is_none() => {
-            "the machine file has no [kinematics]"
+            option("the machine file has no [kinematics]")
         }
-        _ => return None,
-    };
-    Some(why.to_string())
+        _ => None,
+    }
+}
+
+/// The passes the user named (`--passes`) checked before any work: one
+/// that a missing input keeps from running is refused, naming the input
+/// (a pass the program has nothing for is skipped as in the default list).
+pub fn check_named(job: &Job, order: &[PassName]) -> Result<(), String> {
+    for &p in order {
+        if let Some(w) = why_not(job, p).filter(|w| w.option) {
+            let n = p.name();
+            return Err(format!(
+                "--passes names {n}, which cannot run: {}; give it, or leave {n} out of --passes",
+                w.why
+            ));
+        }
+    }
+    Ok(())
 }

@@ -112,7 +112,9 @@ pub fn run(r: Request) -> Res<Done> {
             Some(s) => passes::parse_list(s).map_err(|e| err("passes", e))?,
             None => ORDER.to_vec(),
         };
-        let job = Job::new(inputs(&r)?).map_err(|e| err(&r.name, e))?;
+        // Passes named by the caller are refused when an input is missing.
+        let named = r.passes.is_some().then_some(&order[..]);
+        let job = Job::for_passes(inputs(&r)?, named, &mut |_| {}).map_err(|e| err(&r.name, e))?;
         let machine = job.inputs.machine_given.then_some(&job.inputs.machine);
         let to = r
             .dialect

@@ -47,15 +47,19 @@ def test_optimise_writes_what_the_command_line_writes(cli, demo, tmp_path):
 
 
 def test_optimise_takes_file_names_and_reports_skipped_passes(demo):
+    # Passes the three-axis program has nothing for are skipped, saying why.
     prog, o = millplan.optimise(
-        str(demo / "finish_fanuc.nc"), tools="ball:10", passes="speed,orient"
+        str(demo / "finish_fanuc.nc"), tools="ball:10", passes="orient,post"
     )
     assert o.verdict in ("improved", "kept")
     ran = {p["name"]: p["ran"] for p in o.passes}
-    assert ran == {"speed": False, "orient": False}, o.passes
+    assert ran == {"orient": False, "post": False}, o.passes
     assert o.max_before is None and o.written is None
     assert o.dialect == "fanuc" and o.text.startswith("%")
     assert len(prog) > 0
+    # A named pass whose input is missing is refused, as --passes is.
+    with pytest.raises(millplan.MillplanError, match="names speed, which cannot run: no part"):
+        millplan.optimise(str(demo / "finish_fanuc.nc"), tools="ball:10", passes="speed,orient")
 
 
 def test_optimise_errors_are_located(demo, tmp_path):

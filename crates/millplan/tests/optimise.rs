@@ -238,26 +238,49 @@ fn demo_constant_vc_program_meets_the_power_learned_from_the_input() {
 }
 
 /// A pass whose input is missing says why and the run goes on.
+/// The default list skips a pass whose input is missing and says why; a
+/// pass the user named in --passes is refused instead (exit 2, before any
+/// work, nothing written), unless the program has nothing for it.
 #[test]
 fn a_pass_without_its_input_prints_the_reason() {
     let dir = tempfile::tempdir().expect("tmp");
     let (_, apt, machine) = demo(dir.path());
     let out = dir.path().join("o.nc");
-    let o = run(&[
-        "optimise",
-        s(&apt),
-        "--machine",
-        s(&machine),
-        "--passes",
-        "speed,feed",
-        "-o",
-        s(&out),
-    ]);
+    let o = run(&["optimise", s(&apt), "--machine", s(&machine), "-o", s(&out)]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(0), "{err}");
     assert!(err.contains("pass speed skipped: no part (--stl)"), "{err}");
     assert!(
         err.contains("pass feed skipped: no stock (--stock)"),
+        "{err}"
+    );
+    assert!(out.exists());
+    std::fs::remove_file(&out).expect("rm");
+    let named = |list: &str| {
+        let args = [
+            "optimise",
+            s(&apt),
+            "--machine",
+            s(&machine),
+            "--passes",
+            list,
+        ];
+        run(&[&args[..], &["-o", s(&out)]].concat())
+    };
+    let o = named("post,feed");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--passes names feed, which cannot run: no stock (--stock)"),
+        "{err}"
+    );
+    assert!(!out.exists(), "nothing is written");
+    // Post has nothing to do on a three-axis program: skipped, not refused.
+    let o = named("post");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("pass post skipped: a three-axis program"),
         "{err}"
     );
     let o = run(&["optimise", s(&apt), "--passes", "speed,warp", "-o", s(&out)]);

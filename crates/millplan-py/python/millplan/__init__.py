@@ -232,7 +232,8 @@ def optimise(
     of operations without one, or overriding it ('ball:10', 'flat:8',
     'bull:10:2'). flutes, vc (m/min), resolution (the stock's dexel size, mm; default
     0.1), passes ('speed,reorder,orient,feed,
-    post'), limits (dict of fxy, torque, power, stress, deflection) as in
+    post'; a pass named here whose input is missing raises, as the
+    command's --passes exits 2), limits (dict of fxy, torque, power, stress, deflection) as in
     the command. dialect: of the output (default as ``write_program``).
     output: a file to write the program to unless a check refuses it.
     library: a tool library (:class:`ToolLibrary` or its file, as the

@@ -25,8 +25,9 @@ use std::path::{Path, PathBuf};
 /// the forces on the stock under the machine's spindle chart and --limit; needs --stock and
 /// --material), post (five-axis CL through the machine's kinematics to joint positions, feeds in
 /// inverse time when the machine file's `[post]` says `inverse_time = true` or --g93 is given;
-/// the posted tips are checked through the forward kinematics). A pass whose inputs are missing
-/// is skipped and says why.
+/// the posted tips are checked through the forward kinematics). In the default list a pass whose
+/// inputs are missing is skipped and says why; one named in --passes is refused instead (exit 2,
+/// before any work). A pass the program has nothing for (post on three-axis) is always skipped.
 ///
 /// Defaults (each printed with where it came from): vc from the material's
 /// cutting data; the spindle speed of moves without S from vc on the tool's
@@ -99,7 +100,9 @@ pub struct Args {
     #[arg(long)]
     pub g93: bool,
     /// Passes to run, in this order, comma-separated (default: all the
-    /// inputs allow, in the order above).
+    /// inputs allow, in the order above). A pass named here that a missing
+    /// --stl, --stock, --material or --machine keeps from running stops the
+    /// run (exit 2); one the program has nothing for is skipped.
     #[arg(long, value_name = "LIST")]
     pub passes: Option<String>,
     /// Print the pass table (what each pass needs and changes) and stop.
@@ -213,7 +216,8 @@ pub fn run(a: Args) -> CliResult<i32> {
     clock.lap("arguments and outputs checked");
     let given = read_inputs(&a, &path)?;
     clock.lap("program, part, machine, materials and tools read");
-    let job = Job::new_timed(given, &mut |n| clock.lap(n))
+    let named = a.passes.is_some().then_some(&order[..]);
+    let job = Job::for_passes(given, named, &mut |n| clock.lap(n))
         .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
     let wo = job.write_options(a.to.map(Into::into), &output, crate::limits::get());
     let wo = wo.map_err(CliError::input)?;
