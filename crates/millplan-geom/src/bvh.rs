@@ -17,6 +17,9 @@ struct Node {
     right: u32,
     /// Leaf: number of triangles (> 0); inner: 0.
     count: u32,
+    /// The positions in `order` of the triangles below (the collapse asks
+    /// for them at every node).
+    span: [u32; 2],
 }
 
 impl Node {
@@ -25,6 +28,7 @@ impl Node {
         first: 0,
         right: 0,
         count: 0,
+        span: [0; 2],
     };
 }
 
@@ -278,25 +282,27 @@ impl WideNode {
 impl Bvh {
     pub fn build(mesh: &TriMesh) -> Bvh {
         let n = mesh.len();
-        let cen: Vec<DVec3> = (0..n)
+        let mut items: Vec<Item> = (0..n)
             .into_par_iter()
             .map(|t| {
                 let [a, b, c] = mesh.corners(t);
-                (a + b + c) / 3.0
+                Item {
+                    cen: (a + b + c) / 3.0,
+                    tri: t as u32,
+                }
             })
             .collect();
-        let mut order: Vec<u32> = (0..n as u32).collect();
         let sizes = subtree_sizes(n);
         let mut nodes = vec![Node::EMPTY; sizes[&n]];
         if n > 0 {
             let ctx = Ctx {
-                cen: &cen,
                 mesh,
                 sizes: &sizes,
             };
-            ctx.split(&mut nodes, 0, &mut order, 0, 0);
+            ctx.split(&mut nodes, 0, &mut items, 0, 0);
         }
-        drop(cen);
+        let order: Vec<u32> = items.par_iter().map(|i| i.tri).collect();
+        drop(items);
         let tris = Tris::new(mesh, &order);
         let near = if n > 0 {
             NearBuild {
@@ -888,9 +894,16 @@ pub fn ray_triangle(o: DVec3, d: DVec3, a: DVec3, b: DVec3, c: DVec3) -> Option<
     Some(e2.dot(q) / det)
 }
 
+/// A triangle as the build splits it: its centroid beside its index, so the
+/// splits read and move one contiguous array (not an index into the centroids).
+#[derive(Clone, Copy)]
+struct Item {
+    cen: DVec3,
+    tri: u32,
+}
+
 /// Per-triangle data the build reads.
 struct Ctx<'a> {
-    cen: &'a [DVec3],
     mesh: &'a TriMesh,
     /// Subtree sizes by triangle count.
     sizes: &'a rustc_hash::FxHashMap<usize, usize>,
@@ -921,11 +934,11 @@ fn subtree_sizes(m: usize) -> rustc_hash::FxHashMap<usize, usize> {
 }
 
 impl Ctx<'_> {
-    /// The axis along which the centroids of `order` spread most.
-    fn longest_axis(&self, order: &[u32]) -> usize {
+    /// The axis along which the centroids of `items` spread most.
+    fn longest_axis(&self, items: &[Item]) -> usize {
         let mut cb = Aabb::EMPTY;
-        for &t in order.iter() {
-            cb.extend(self.cen[t as usize]);
+        for i in items {
+            cb.extend(i.cen);
         }
         let size = cb.size();
         if size.x >= size.y && size.x >= size.z {
@@ -937,17 +950,24 @@ impl Ctx<'_> {
         }
     }
 
-    /// Fills `nodes` (exactly the subtree over `order`, its root first, at
+    /// Fills `nodes` (exactly the subtree over `items`, its root first, at
     /// global index `base`; the triangles at positions `base`.. of the final
     /// order) depth first: the left subtree follows its parent. Boxes are
     /// merged from the leaves up; large halves are built in parallel into
     /// their own parts of the one vector.
-    fn split(&self, nodes: &mut [Node], base: usize, order: &mut [u32], offset: usize, depth: u32) {
-        if order.len() <= LEAF {
+    fn split(
+        &self,
+        nodes: &mut [Node],
+        base: usize,
+        items: &mut [Item],
+        offset: usize,
+        depth: u32,
+    ) {
+        if items.len() <= LEAF {
             let mut bbox = Aabb::EMPTY;
-            for &t in order.iter() {
+            for t in items.iter() {
                 self.mesh
-                    .corners(t as usize)
+                    .corners(t.tri as usize)
                     .iter()
                     .for_each(|c| bbox.extend(*c));
             }
@@ -955,17 +975,18 @@ impl Ctx<'_> {
                 bbox,
                 first: offset as u32,
                 right: 0,
-                count: order.len() as u32,
+                count: items.len() as u32,
+                span: [offset as u32, (offset + items.len()) as u32],
             };
             return;
         }
-        let axis = self.longest_axis(order);
-        let mid = order.len() / 2;
-        let cen = self.cen;
-        order.select_nth_unstable_by(mid, |a, b| {
-            cen[*a as usize][axis].total_cmp(&cen[*b as usize][axis])
-        });
-        let (l, r) = order.split_at_mut(mid);
+        let axis = self.longest_axis(items);
+        let mid = items.len() / 2;
+        // The same comparisons as on indices into the centroids: the
+        // selection's moves, and so the order, are those it made there.
+        items.select_nth_unstable_by(mid, |a, b| a.cen[axis].total_cmp(&b.cen[axis]));
+        let end = offset + items.len();
+        let (l, r) = items.split_at_mut(mid);
         let (me, rest) = nodes.split_at_mut(1);
         let (ln, rn) = rest.split_at_mut(self.sizes[&mid]);
         let (left, right) = (base + 1, base + 1 + ln.len());
@@ -983,6 +1004,7 @@ impl Ctx<'_> {
             first: left as u32,
             right: right as u32,
             count: 0,
+            span: [offset as u32, end as u32],
         };
     }
 }
@@ -1098,32 +1120,57 @@ impl NearNode {
 
 impl NearBuild<'_> {
     fn tree(&self) -> Vec<NearNode> {
-        let mut out = vec![NearNode::EMPTY; self.count(0)];
-        self.fill(0, &mut out, 0);
+        let mut big = Vec::new();
+        let mut out = vec![NearNode::EMPTY; self.count(0, &mut big)];
+        let counts: rustc_hash::FxHashMap<usize, usize> = big.into_iter().collect();
+        self.fill(0, &mut out, 0, &counts);
         out
     }
 
     /// Nodes of the closest-point tree over binary node `at` (large subtrees
-    /// counted in parallel).
-    fn count(&self, at: usize) -> usize {
+    /// counted in parallel). The counts of subtrees of at least `PAR_MIN` / 8
+    /// triangles are noted in `big`: `fill` splits its vector by them, and
+    /// counting them again would walk the tree once per parallel level.
+    fn count(&self, at: usize, big: &mut Vec<(usize, usize)>) -> usize {
         let (kids, n) = self.kids(at);
         let inner = kids[..n].iter().filter(|&&k| self.nodes[k].count == 0);
-        if self.range(at).len() >= PAR_MIN {
-            1 + inner
+        let len = self.range(at).len();
+        let c = if len >= PAR_MIN {
+            let parts: Vec<(usize, Vec<(usize, usize)>)> = inner
                 .collect::<Vec<_>>()
                 .into_par_iter()
-                .map(|&k| self.count(k))
+                .map(|&k| {
+                    let mut b = Vec::new();
+                    (self.count(k, &mut b), b)
+                })
+                .collect();
+            1 + parts
+                .into_iter()
+                .map(|(c, b)| {
+                    big.extend(b);
+                    c
+                })
                 .sum::<usize>()
         } else {
-            1 + inner.map(|&k| self.count(k)).sum::<usize>()
+            1 + inner.map(|&k| self.count(k, big)).sum::<usize>()
+        };
+        if len >= PAR_MIN / 8 {
+            big.push((at, c));
         }
+        c
     }
 
     /// Fills `out` (exactly the tree over binary node `at`, its root first, at
     /// global index `base`) depth first; large subtrees in parallel, each into
     /// its own part of the one vector. Returns the sum of the triangles'
     /// area-weighted normals below `at`.
-    fn fill(&self, at: usize, out: &mut [NearNode], base: usize) -> DVec3 {
+    fn fill(
+        &self,
+        at: usize,
+        out: &mut [NearNode],
+        base: usize,
+        counts: &rustc_hash::FxHashMap<usize, usize>,
+    ) -> DVec3 {
         if self.range(at).len() < PAR_MIN {
             return self.collapse(at, out, base, &mut 0).1;
         }
@@ -1138,7 +1185,11 @@ impl NearBuild<'_> {
             if nodes[k].count > 0 {
                 sums[lane] = self.leaf_sum(k);
             } else {
-                let (part, tail) = std::mem::take(&mut rest).split_at_mut(self.count(k));
+                let count = match counts.get(&k) {
+                    Some(&c) => c,
+                    None => self.count(k, &mut Vec::new()),
+                };
+                let (part, tail) = std::mem::take(&mut rest).split_at_mut(count);
                 rest = tail;
                 next += part.len();
                 jobs.push((lane, k, next - part.len(), part));
@@ -1146,7 +1197,7 @@ impl NearBuild<'_> {
         }
         let inner: Vec<(usize, u32, DVec3)> = jobs
             .into_par_iter()
-            .map(|(lane, k, b, part)| (lane, b as u32, self.fill(k, part, b)))
+            .map(|(lane, k, b, part)| (lane, b as u32, self.fill(k, part, b, counts)))
             .collect();
         for (lane, child, sum) in inner {
             sums[lane] = sum;
@@ -1223,14 +1274,8 @@ impl NearBuild<'_> {
 
     /// Positions in `order` of the triangles below binary node `k`.
     fn range(&self, k: usize) -> std::ops::Range<usize> {
-        let (mut a, mut b) = (k, k);
-        while self.nodes[a].count == 0 {
-            a = self.nodes[a].first as usize;
-        }
-        while self.nodes[b].count == 0 {
-            b = self.nodes[b].right as usize;
-        }
-        self.nodes[a].first as usize..(self.nodes[b].first + self.nodes[b].count) as usize
+        let [a, b] = self.nodes[k].span;
+        a as usize..b as usize
     }
 
     /// Puts binary node `k` in `lane` of `w` (whose centre and scale are set):
