@@ -43,15 +43,20 @@ const FIRST: u32 = 1 << 31;
 /// One block's corners (f32 bit patterns), by shard.
 type ShardLists = Vec<Vec<[u32; 3]>>;
 
+/// A corner's shard: middle bits of its hash. The shard's map takes its
+/// control bytes from the top bits, which would be all alike in a shard
+/// chosen by them.
 #[inline]
 fn shard_of(k: &[u32; 3]) -> usize {
     use std::hash::BuildHasher;
-    (rustc_hash::FxBuildHasher.hash_one(k) >> (64 - SHARD_BITS)) as usize
+    (rustc_hash::FxBuildHasher.hash_one(k) >> 32) as usize & (SHARDS - 1)
 }
 
 /// The corners of the weld with each shard's ids (in order of appearance).
 struct Walk<'a> {
     corners: &'a [[u32; 3]],
+    /// Each corner's shard.
+    shards: &'a [u8],
     /// Where each block's run starts in its shard's ids.
     offset: &'a [[usize; SHARDS]],
     ids: &'a [Vec<u32>],
@@ -63,8 +68,9 @@ impl Walk<'_> {
     fn block(&self, b: usize, mut each: impl FnMut(usize, &[u32; 3], usize, u32)) {
         let mut cursor = self.offset[b];
         let end = ((b + 1) * BLOCK).min(self.corners.len());
-        for (j, k) in self.corners[b * BLOCK..end].iter().enumerate() {
-            let s = shard_of(k);
+        let corners = self.corners[b * BLOCK..end].iter();
+        for (j, (k, &s)) in corners.zip(&self.shards[b * BLOCK..end]).enumerate() {
+            let s = s as usize;
             each(j, k, s, self.ids[s][cursor[s]]);
             cursor[s] += 1;
         }
@@ -149,15 +155,20 @@ impl TriMesh {
     /// (its blocks in file order), and the blocks then number the vertices they
     /// see first from a running count.
     pub fn from_f32_corners(corners: Vec<[u32; 3]>) -> (TriMesh, WeldReport) {
-        // Each block's corners by shard, in order.
+        // Each block's corners by shard, in order, and each corner's shard
+        // (the walks below read it rather than hash again).
+        let mut shards = vec![0u8; corners.len()];
         let lists: Vec<ShardLists> = corners
             .par_chunks(BLOCK)
-            .map(|block| {
+            .zip(shards.par_chunks_mut(BLOCK))
+            .map(|(block, shards)| {
                 let mut l: ShardLists = (0..SHARDS)
                     .map(|_| Vec::with_capacity(block.len() / SHARDS * 5 / 4 + 16))
                     .collect();
-                for k in block {
-                    l[shard_of(k)].push(*k);
+                for (k, out) in block.iter().zip(shards) {
+                    let s = shard_of(k);
+                    *out = s as u8;
+                    l[s].push(*k);
                 }
                 l
             })
@@ -171,7 +182,7 @@ impl TriMesh {
             }
         }
         // Weld each shard: local ids in order of appearance, marked FIRST where new.
-        let (ids, uniques): (Vec<Vec<u32>>, Vec<usize>) = (0..SHARDS)
+        let (mut ids, uniques): (Vec<Vec<u32>>, Vec<usize>) = (0..SHARDS)
             .into_par_iter()
             .map(|s| {
                 let n = offset[blocks][s];
@@ -219,6 +230,7 @@ impl TriMesh {
         }
         let walk = Walk {
             corners: &corners,
+            shards: &shards,
             offset: &offset,
             ids: &ids,
         };
@@ -249,17 +261,31 @@ impl TriMesh {
             }
         }
         drop(news);
+        // Each shard's ids turned into vertex numbers (a shard's numbers
+        // stay in cache, where the walk would look them up across all).
+        ids.par_iter_mut().zip(&global).for_each(|(ids, global)| {
+            for v in ids {
+                *v = global[(*v & !FIRST) as usize];
+            }
+        });
+        drop(global);
+        let walk = Walk {
+            corners: &corners,
+            shards: &shards,
+            offset: &offset,
+            ids: &ids,
+        };
         // Every corner's vertex number, block by block.
         let mut corner_tris = vec![[0u32; 3]; corners.len() / 3];
         corner_tris
             .par_chunks_mut(BLOCK / 3)
             .enumerate()
             .for_each(|(b, tris)| {
-                walk.block(b, |j, _, s, v| {
-                    tris[j / 3][j % 3] = global[s][(v & !FIRST) as usize]
-                });
+                let tris = tris.as_flattened_mut();
+                walk.block(b, |j, _, _, v| tris[j] = v);
             });
         drop(ids);
+        drop(shards);
         drop(corners);
         Self::assemble(vertices, corner_tris)
     }
