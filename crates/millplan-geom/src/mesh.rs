@@ -331,32 +331,69 @@ impl TriMesh {
             .reduce(|| Aabb::EMPTY, |a, b| a.union(&b))
     }
 
-    /// Counts open and non-manifold edges (by sorting packed edge keys: no hashing).
+    /// Counts open and non-manifold edges: each edge is listed under its
+    /// lower vertex (a counting sort by vertex), then each vertex's short list
+    /// is sorted and its runs counted. No hashing, and no sort of all edges.
     pub fn edge_report(&self) -> EdgeReport {
-        let mut keys: Vec<u64> = Vec::with_capacity(self.triangles.len() * 3);
+        let edges = |t: &[u32; 3]| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])];
+        let n = self
+            .triangles
+            .par_iter()
+            .map(|t| t[0].max(t[1]).max(t[2]) as usize + 1)
+            .max()
+            .unwrap_or(0);
+        // Where each vertex's list starts: the edges it is the lower end of.
+        let mut start = vec![0usize; n + 1];
         for t in &self.triangles {
-            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-                let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-                keys.push(((lo as u64) << 32) | hi as u64);
+            for (a, b) in edges(t) {
+                start[a.min(b) as usize + 1] += 1;
             }
         }
-        keys.par_sort_unstable();
-        let mut r = EdgeReport::default();
-        let mut i = 0;
-        while i < keys.len() {
-            let mut j = i + 1;
-            while j < keys.len() && keys[j] == keys[i] {
-                j += 1;
-            }
-            r.edges += 1;
-            match j - i {
-                1 => r.open += 1,
-                2 => {}
-                _ => r.non_manifold += 1,
-            }
-            i = j;
+        for v in 0..n {
+            start[v + 1] += start[v];
         }
-        r
+        let mut next = start.clone();
+        let mut upper = vec![0u32; self.triangles.len() * 3];
+        for t in &self.triangles {
+            for (a, b) in edges(t) {
+                let slot = &mut next[a.min(b) as usize];
+                upper[*slot] = a.max(b);
+                *slot += 1;
+            }
+        }
+        drop(next);
+        (0..n)
+            .into_par_iter()
+            .with_min_len(1 << 12)
+            .fold(
+                || (EdgeReport::default(), Vec::new()),
+                |(mut r, mut list): (EdgeReport, Vec<u32>), v| {
+                    list.clear();
+                    list.extend_from_slice(&upper[start[v]..start[v + 1]]);
+                    list.sort_unstable();
+                    let mut i = 0;
+                    while i < list.len() {
+                        let mut j = i + 1;
+                        while j < list.len() && list[j] == list[i] {
+                            j += 1;
+                        }
+                        r.edges += 1;
+                        match j - i {
+                            1 => r.open += 1,
+                            2 => {}
+                            _ => r.non_manifold += 1,
+                        }
+                        i = j;
+                    }
+                    (r, list)
+                },
+            )
+            .map(|(r, _)| r)
+            .reduce(EdgeReport::default, |a, b| EdgeReport {
+                edges: a.edges + b.edges,
+                open: a.open + b.open,
+                non_manifold: a.non_manifold + b.non_manifold,
+            })
     }
 
     /// Applies `f` to every vertex (unit conversion, re-orientation).
@@ -459,6 +496,34 @@ mod tests {
         assert_eq!(ra, rb);
         assert!(a.triangles == b.triangles);
         assert!(a.vertices == b.vertices);
+    }
+
+    /// The edge counts against a sort of all packed edge keys, on a fan
+    /// with a triangle repeated (non-manifold edges), open borders and an
+    /// edge used three times.
+    #[test]
+    fn edge_report_matches_a_sort_of_all_edges() {
+        let mut triangles: Vec<[u32; 3]> = (1..40u32).map(|i| [0, i, i + 1]).collect();
+        triangles.extend([[0, 5, 6], [7, 8, 50], [8, 7, 51], [7, 8, 52], [60, 61, 62]]);
+        let mesh = TriMesh {
+            vertices: vec![DVec3::ZERO; 63],
+            triangles,
+        };
+        let mut keys: Vec<u64> = mesh
+            .triangles
+            .iter()
+            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+            .map(|(a, b)| ((a.min(b) as u64) << 32) | a.max(b) as u64)
+            .collect();
+        keys.sort_unstable();
+        let mut want = EdgeReport::default();
+        for run in keys.chunk_by(|a, b| a == b) {
+            want.edges += 1;
+            want.open += (run.len() == 1) as usize;
+            want.non_manifold += (run.len() > 2) as usize;
+        }
+        assert!(want.open > 0 && want.non_manifold > 1);
+        assert_eq!(mesh.edge_report(), want);
     }
 
     #[test]
