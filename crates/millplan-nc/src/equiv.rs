@@ -34,6 +34,20 @@ pub struct Tolerance {
     pub spindle: f64,
 }
 
+impl Tolerance {
+    /// Where the tool goes only: feeds and spindle speeds may differ (a pass
+    /// that sets them), positions, paths, rapid or feed, angles and tools
+    /// may not. Positions within `position` mm.
+    pub fn paths_only(position: f64) -> Tolerance {
+        Tolerance {
+            position,
+            feed: f64::INFINITY,
+            spindle: f64::INFINITY,
+            ..Tolerance::default()
+        }
+    }
+}
+
 impl Default for Tolerance {
     fn default() -> Self {
         Tolerance {
@@ -96,7 +110,7 @@ struct Step {
 /// million-move program would otherwise hold hundreds of megabytes of steps
 /// twice over).
 struct Steps<'a> {
-    program: &'a Program,
+    ops: &'a [Operation],
     op: usize,
     mv: usize,
     cur: DVec3,
@@ -105,12 +119,12 @@ struct Steps<'a> {
     next: usize,
 }
 
-fn steps(p: &Program) -> Steps<'_> {
+fn steps(ops: &[Operation]) -> Steps<'_> {
     Steps {
-        program: p,
+        ops,
         op: 0,
         mv: 0,
-        cur: p.operations.first().map_or(DVec3::NAN, |op| op.start),
+        cur: ops.first().map_or(DVec3::NAN, |op| op.start),
         buf: Vec::new(),
         next: 0,
     }
@@ -127,11 +141,11 @@ impl Iterator for Steps<'_> {
             }
             self.buf.clear();
             self.next = 0;
-            let op = self.program.operations.get(self.op)?;
+            let op = self.ops.get(self.op)?;
             let Some(m) = op.moves.get(self.mv) else {
                 self.op += 1;
                 self.mv = 0;
-                if let Some(op) = self.program.operations.get(self.op) {
+                if let Some(op) = self.ops.get(self.op) {
                     self.cur = op.start;
                 }
                 continue;
@@ -248,7 +262,16 @@ fn same_attrs(a: &Step, b: &Step, tol: &Tolerance) -> Result<(), String> {
     }
     if !a.rapid {
         if a.mode != b.mode {
-            return Err(format!("feed mode {:?} against {:?}", a.mode, b.mode));
+            let mode = |m: FeedMode| match m {
+                FeedMode::PerMinute => "per minute (G94)",
+                FeedMode::PerRev => "per revolution (G95)",
+                FeedMode::InverseTime => "inverse time (G93)",
+            };
+            return Err(format!(
+                "feed mode {} against {}",
+                mode(a.mode),
+                mode(b.mode)
+            ));
         }
         if (a.feed - b.feed).abs() > tol.feed * a.feed.abs().max(1.0) {
             return Err(format!("feed {} against {}", a.feed, b.feed));
@@ -278,17 +301,26 @@ fn same_attrs(a: &Step, b: &Step, tol: &Tolerance) -> Result<(), String> {
     };
     if !same {
         return Err(match angle_miss {
-            Some(k) => format!(
-                "{} axis {:?} against {:?} (degrees)",
-                ["A", "B", "C"][k],
-                a.angles[k].map(f64::to_degrees),
-                b.angles[k].map(f64::to_degrees)
-            ),
-            None => format!("tool axis {:?} against {:?}", a.axis, b.axis),
+            Some(k) => {
+                let deg = |v: Option<f64>| {
+                    v.map_or("unset".to_string(), |r| format!("{:.4}°", r.to_degrees()))
+                };
+                format!(
+                    "{} axis {} against {}",
+                    ["A", "B", "C"][k],
+                    deg(a.angles[k]),
+                    deg(b.angles[k])
+                )
+            }
+            None => {
+                let axis = |v: Option<DVec3>| v.map_or("unset".to_string(), fmt);
+                format!("tool axis {} against {}", axis(a.axis), axis(b.axis))
+            }
         });
     }
     if a.tool != b.tool {
-        return Err(format!("tool {:?} against {:?}", a.tool, b.tool));
+        let tool = |t: Option<u32>| t.map_or("no tool number".to_string(), |t| format!("T{t}"));
+        return Err(format!("tool {} against {}", tool(a.tool), tool(b.tool)));
     }
     if let (Path::Arc(x), Path::Arc(y)) = (a.path, b.path) {
         // Rounded end points turn a small arc's sweep by up to their error
@@ -306,6 +338,16 @@ fn same_attrs(a: &Step, b: &Step, tol: &Tolerance) -> Result<(), String> {
 
 /// Compares what `a` and `b` command, step by step.
 pub fn compare(a: &Program, b: &Program, tol: &Tolerance) -> Result<Walked, Mismatch> {
+    compare_operations(&a.operations, &b.operations, tol)
+}
+
+/// [`compare`] over two lists of operations (one operation and what it was
+/// written as, say).
+pub fn compare_operations(
+    a: &[Operation],
+    b: &[Operation],
+    tol: &Tolerance,
+) -> Result<Walked, Mismatch> {
     let mut sb = steps(b).peekable();
     let mut w = Walked::default();
     let miss = |x: Option<&Step>, y: Option<&Step>, message: String| Mismatch {

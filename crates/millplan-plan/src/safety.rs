@@ -441,6 +441,23 @@ fn tip_kept(
     }
     let mut unknown_axis = 0;
     for (oi, (a, b)) in input.operations.iter().zip(&output.operations).enumerate() {
+        let r = ball(b);
+        if a.moves.len() != b.moves.len() && r.is_none() {
+            // Written in other moves (a repeated point left out, a canned
+            // cycle spelled out as lines, an arc as chords): the tips step
+            // through the same path, whatever the feeds and speeds.
+            let paths = millplan_nc::equiv::Tolerance::paths_only(tol);
+            let (a, b) = (std::slice::from_ref(a), std::slice::from_ref(b));
+            match millplan_nc::equiv::compare_operations(a, b, &paths) {
+                Ok(w) => c.checked += w.steps,
+                Err(m) => {
+                    let line = if m.line_a > 0 { m.line_a } else { m.line_b };
+                    let msg = format!("operation {}: {}", oi + 1, m.message);
+                    c.findings.push(finding(line, msg));
+                }
+            }
+            continue;
+        }
         if a.moves.len() != b.moves.len() {
             let line = b.moves.first().map_or(0, |m| m.line);
             c.findings.push(finding(
@@ -454,7 +471,6 @@ fn tip_kept(
             ));
             continue;
         }
-        let r = ball(b);
         for (ma, mb) in a.moves.iter().zip(&b.moves) {
             let differs = match r {
                 None => tip_differs(a, ma, b, mb, tol),

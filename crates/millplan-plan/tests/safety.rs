@@ -311,7 +311,7 @@ fn a_moved_tip_is_refused_at_its_line() {
     let out = planted(6, "G1 X60.01");
     let checks = run(&w, &read(CLEAN), &out);
     assert!(refuses_at(&checks, "tip", 6), "{checks:#?}");
-    // A move more or less is named too.
+    // A move more is named too.
     let extra = read(&CLEAN.replace("G0 Z5\nM30", "G0 Z5\nG0 Z6\nM30"));
     let checks = run(&w, &read(CLEAN), &extra);
     let t = named(&checks, "tip");
@@ -319,8 +319,27 @@ fn a_moved_tip_is_refused_at_its_line() {
         !t.ok
             && t.findings[0]
                 .message
-                .contains("5 moves written where the input has 4")
+                .contains("goes on to (60.0000, 25.0000, 6.0000)"),
+        "{t:#?}"
     );
+}
+
+/// Other moves along the same path are the same tips: a repeated point the
+/// writer leaves out, a line written in two pieces, with other feeds; a
+/// step off the path is not.
+#[test]
+fn the_same_path_in_other_moves_keeps_the_tips() {
+    let w = world();
+    let repeated = read(&CLEAN.replace("G1 X60\n", "G1 X60\nG1 X60\n"));
+    let checks = run(&w, &repeated, &read(CLEAN));
+    assert!(named(&checks, "tip").ok, "{checks:#?}");
+    let halves = read(&CLEAN.replace("G1 X60\n", "G1 X25 F1500\nG1 X60\n"));
+    let checks = run(&w, &read(CLEAN), &halves);
+    let t = named(&checks, "tip");
+    assert!(t.ok && t.checked == 4, "{t:#?}");
+    let bent = read(&CLEAN.replace("G1 X60\n", "G1 X25 Y25.01\nG1 X60\n"));
+    let checks = run(&w, &read(CLEAN), &bent);
+    assert!(refuses_at(&checks, "tip", 6), "{checks:#?}");
 }
 
 #[test]
