@@ -1149,3 +1149,30 @@ fn g93_feeds_in_seconds_read_back_as_written() {
     let plain = millplan_nc::readback::read_back(&bytes, Target::Fanuc, &p, &tol).expect("reads");
     assert!(plain.equiv.is_err());
 }
+
+/// The classic APT form `CYCLE/DRILL, depth, MMPM, feed, clearance` gives
+/// its depth and clearance by position: they were dropped, and the holes
+/// written to Z0 at the feed (found by trying `convert` on it). A number
+/// that neither a word nor the form names is refused at its column.
+#[test]
+fn positional_cycle_numbers_are_the_depth_and_the_clearance() {
+    let src =
+        "PARTNO D\nUNITS/MM\nCUTTER/10\nLOADTL/1\nSPINDL/3000,RPM,CLW\nRAPID\nGOTO/20,20,20\n\
+               CYCLE/DRILL,5,MMPM,150,3\nGOTO/20,20,0\nCYCLE/OFF\nFINI\n";
+    let p = parse(src, "positional cycle");
+    let op = &p.operations[0];
+    let hole = op
+        .moves
+        .iter()
+        .find(|m| op.cycle(m).is_some())
+        .expect("a hole");
+    let c = op.cycle(hole).expect("its cycle");
+    assert_eq!((c.bottom, c.clearance, c.feed), (-5.0, 3.0, 150.0));
+    let bad = src.replace("CYCLE/DRILL,5,MMPM,150,3", "CYCLE/DRILL,5,7,MMPM,150,3");
+    let e = millplan_nc::parse_program(&bad, ReadOptions::default()).expect_err("refused");
+    assert_eq!((e.line, e.col), (8, 15), "{e}");
+    assert!(
+        e.message.contains("the number 7 has no word before it"),
+        "{e}"
+    );
+}

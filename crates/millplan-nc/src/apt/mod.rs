@@ -1135,6 +1135,9 @@ impl AptReader {
             dwell: None,
             line: ln,
         };
+        // The classic positional form `CYCLE/DRILL, d, MMPM, f, c`: the
+        // depth before the feed's unit, the clearance after its feed.
+        let (mut depth_seen, mut feed_seen, mut clear_seen) = (false, false, false);
         let mut i = 1;
         while i < args.len() {
             let (a, c) = args[i];
@@ -1156,6 +1159,7 @@ impl AptReader {
                         "RTRCTO" => cy.retract = take(&mut i)?,
                         "MMPM" | "IPM" => {
                             cy.feed = take(&mut i)?;
+                            feed_seen = true;
                             if w == "IPM" && self.units.is_none() {
                                 self.set_units(LengthUnit::Inch, UnitsOrigin::InferredFromFeed, ln);
                             }
@@ -1176,7 +1180,25 @@ impl AptReader {
                         }
                     }
                 }
-                Arg::Num(_) => {}
+                Arg::Num(x) if !feed_seen && !depth_seen => {
+                    cy.bottom = -x.abs();
+                    depth_seen = true;
+                }
+                Arg::Num(x) if feed_seen && !clear_seen => {
+                    cy.clearance = x;
+                    clear_seen = true;
+                }
+                Arg::Num(x) => {
+                    // A number no word names and no position gives a
+                    // meaning: dropping it could lose a depth.
+                    return Err(ParseError::new(
+                        ln,
+                        c,
+                        format!(
+                            "CYCLE: the number {x} has no word before it (FEDTO, RAPTO, RTRCTO, STEP, DWELL, MMPM ...) and is not the depth or the clearance of the form CYCLE/{name}, depth, MMPM, feed, clearance"
+                        ),
+                    ));
+                }
             }
             i += 1;
         }
