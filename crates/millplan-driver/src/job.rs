@@ -194,6 +194,11 @@ pub struct Job {
     pub diameter: f64,
     /// The forces of the input on the stock (with a stock and a material).
     pub forces_before: Option<ForceRun>,
+    /// The input with the default spindle speed on the cutting moves that
+    /// have none (`None`: every one has its own), for the analyses and the
+    /// passes that need a speed; the program written keeps the input's own
+    /// words unless such a pass ran.
+    spindled: Option<Program>,
 }
 
 fn set(v: &mut Vec<Setting>, name: &'static str, value: String, from: &str) {
@@ -375,6 +380,7 @@ impl Job {
             feed_accel,
             diameter: d,
             forces_before: None,
+            spindled: None,
         };
         job.default_spindle(d);
         lap("defaults resolved, materials and tools looked up");
@@ -383,7 +389,7 @@ impl Job {
         }
         job.stock = job.build_stock()?;
         lap("stock built");
-        job.forces_before = job.forces(&job.inputs.program)?;
+        job.forces_before = job.forces(job.analysed())?;
         job.learn_limits();
         lap("the input's loads on the stock (limits learned)");
         Ok(job)
@@ -477,8 +483,15 @@ impl Job {
             .map_err(|e| JobError(format!("--stock: {e}")))
     }
 
+    /// The input as the analyses see it: with the default spindle speed on
+    /// the cutting moves that have none ([`Job::default_spindle`]).
+    pub fn analysed(&self) -> &Program {
+        self.spindled.as_ref().unwrap_or(&self.inputs.program)
+    }
+
     /// Cutting moves without a spindle speed get `--spindle`, else the
-    /// speed of the cutting speed on their tool's diameter.
+    /// speed of the cutting speed on their tool's diameter, in the copy of
+    /// the input the analyses take ([`Job::analysed`]).
     fn default_spindle(&mut self, d: f64) {
         let missing = self
             .inputs
@@ -495,7 +508,8 @@ impl Job {
             return;
         }
         let (o, vc, body) = (self.inputs.options.spindle, self.vc, self.body);
-        for op in &mut self.inputs.program.operations {
+        let mut spindled = self.inputs.program.clone();
+        for op in &mut spindled.operations {
             let dia = ToolBody::for_operation(op, &body).map_or(d, |b| 2.0 * b.radius());
             let n = o.unwrap_or_else(|| defaults::spindle_for(vc, dia));
             for m in op
@@ -509,6 +523,7 @@ impl Job {
                 );
             }
         }
+        self.spindled = Some(spindled);
         let (value, from) = match o {
             Some(n) => (format!("{n} 1/min where the program has no S"), "option"),
             None => (

@@ -210,10 +210,16 @@ impl Job {
             Some(f) => self.context().with_progress(f),
             None => self.context(),
         };
-        let input = &self.inputs.program;
+        let input = self.analysed();
         let forces_before = self.forces_before.clone();
         let before = self.measure(input, forces_before.as_ref(), &cx);
-        let mut p = input.clone();
+        // The default spindle speed is written only where a pass that needs
+        // a speed runs (the speeds, the feeds, lead and tilt on the forces).
+        let speeds = passes.iter().any(|&p| {
+            matches!(p, PassName::Speed | PassName::Feed | PassName::Orient)
+                && missing(self, p).is_none()
+        });
+        let mut p = if speeds { input } else { &self.inputs.program }.clone();
         let mut out = Vec::new();
         let mut st = State::default();
         for (k, &pass) in passes.iter().enumerate() {

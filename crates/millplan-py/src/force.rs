@@ -18,7 +18,7 @@ fn run(r: &Request) -> Res<(ForceRun, String)> {
         let err = |e: &dyn std::fmt::Display| Located::new(Place::file(&r.name), e.to_string());
         let job = Job::new(crate::job::inputs(r)?).map_err(|e| err(&e))?;
         let run = job
-            .forces_of_every_move(&job.inputs.program)
+            .forces_of_every_move(job.analysed())
             .map_err(|e| err(&e))?
             .ok_or_else(|| err(&"give a stock and a material"))?;
         if let Some(line) = run.stopped_spindle() {

@@ -993,3 +993,49 @@ fn gotos_of(op: &millplan_nc::Operation) -> Vec<millplan_geom::DVec3> {
         .map(|m| m.end)
         .collect()
 }
+
+/// A program without S is analysed at the default spindle speed, but that
+/// speed is written only where a pass that needs one ran (here the feeds):
+/// a run whose passes change nothing writes the input's words, no S added.
+#[test]
+fn a_default_spindle_speed_is_written_only_where_a_pass_needs_it() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let (_, _, machine) = demo(dir.path());
+    let apt = dir.path().join("nos.apt");
+    std::fs::write(
+        &apt,
+        "PARTNO NOS\nUNITS/MM\nCUTTER/10,5\nLOADTL/1\nRAPID\nGOTO/0,0,20\nFEDRAT/800,MMPM\n\
+         GOTO/0,0,-1\nGOTO/50,0,-1\nGOTO/50,30,-1\nRAPID\nGOTO/50,30,20\nFINI\n",
+    )
+    .expect("write");
+    let spindles = |out: &Path| read(out).moves().filter(|m| m.spindle > 0.0).count();
+    let common = ["--machine", s(&machine), "--resolution", "0.5"];
+    let kept = dir.path().join("kept.nc");
+    let o = run(&[&["optimise", s(&apt)], &common[..], &["-o", s(&kept)]].concat());
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(spindles(&kept), 0, "no pass ran: no S is invented");
+    let fed = dir.path().join("fed.nc");
+    let stock = ["--stock", "box:-10,-10,-5,60,40,0", "--material", "al7075"];
+    let o = run(&[
+        &["optimise", s(&apt)],
+        &common[..],
+        &stock[..],
+        &["-o", s(&fed)],
+    ]
+    .concat());
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        spindles(&fed) > 0,
+        "the feeds are written for the speed they assume"
+    );
+}
