@@ -227,6 +227,15 @@ fn a_fanuc_program_keeps_its_number() {
     let p = parse("%\nO1000\nG21 G90\nT1 M6\nG0 X1. Y1. Z5.\nM30\n%\n");
     let text = out(&p, Target::Fanuc);
     assert!(text.lines().any(|l| l == "O1000"), "{text}");
+    // With its title beside it (it was written as `O0001 (1000CYCLETEST)`,
+    // which stores the program under another number on the control).
+    let p = parse("%\nO1000 (CYCLE TEST)\nG21 G90\nT1 M6\nG0 X1. Y1. Z5.\nM30\n%\n");
+    let text = out(&p, Target::Fanuc);
+    assert!(text.lines().any(|l| l == "O1000 (CYCLE TEST)"), "{text}");
+    // A name that only starts with a digit is no program number.
+    let p = parse("PARTNO 3D PART\nUNITS/MM\nLOADTL/1\nRAPID\nGOTO/1,1,5\nFINI\n");
+    let text = out(&p, Target::Fanuc);
+    assert!(text.lines().any(|l| l == "O0001 (3DPART)"), "{text}");
 }
 
 #[test]

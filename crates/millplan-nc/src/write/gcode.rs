@@ -240,13 +240,11 @@ impl W<'_> {
             }
             _ => {
                 self.out.extend_from_slice(b"%\n");
-                // The source's own program number where it has one.
-                let number = name
-                    .parse::<u32>()
-                    .ok()
-                    .filter(|n| (1..=9999).contains(n) && name.len() <= 4);
-                let o = match number {
-                    Some(n) => format!("O{n:04}\n"),
+                // The source's own program number where it has one (the
+                // control stores the program under it), with its title.
+                let o = match fanuc_number(p.name.as_deref().unwrap_or("")) {
+                    Some((n, title)) if title.is_empty() => format!("O{n:04}\n"),
+                    Some((n, title)) => format!("O{n:04} ({title})\n"),
                     None => format!("O0001 ({name})\n"),
                 };
                 self.out.extend_from_slice(o.as_bytes());
@@ -1459,6 +1457,27 @@ impl W<'_> {
             warnings: Vec::new(),
         }
     }
+}
+
+/// A program name that is a Fanuc program number (1 to 9999, up to four
+/// digits), alone or before a space or a comment (`1000 (CYCLE TEST)` as
+/// read from `O1000 (CYCLE TEST)`; not `3D PART`): the number and the rest
+/// as a comment's text (no parentheses).
+fn fanuc_number(name: &str) -> Option<(u32, String)> {
+    let name = name.trim();
+    let end = name
+        .find(|c: char| !c.is_ascii_digit())
+        .unwrap_or(name.len());
+    let n = name[..end].parse::<u32>().ok()?;
+    let apart = name[end..].starts_with([' ', '\t', '(']) || end == name.len();
+    if !(1..=9999).contains(&n) || end > 4 || !apart {
+        return None;
+    }
+    let rest: String = name[end..]
+        .chars()
+        .filter(|c| !matches!(c, '(' | ')'))
+        .collect();
+    Some((n, rest.trim().to_string()))
 }
 
 fn program_name(p: &Program) -> String {
