@@ -113,7 +113,7 @@ impl Job {
         let (program, wo) = self.for_writing(o, wo)?;
         let program = program.as_ref().unwrap_or(&o.program);
         let (bytes, warnings) = write_program(program, wo)
-            .map_err(|e| JobError(format!("{}: {}", e.line, e.message)))?;
+            .map_err(|e| JobError::from(format!("{}: {}", e.line, e.message)))?;
         let tol = Tolerance {
             position: self.tol.max(Tolerance::default().position),
             ..Tolerance::default()
@@ -189,13 +189,13 @@ impl Job {
             return Ok((None, wo));
         }
         if !wo.target.is_gcode() {
-            return Err(JobError(
-                "a posted program is G-code: give --to with a G-code dialect".into(),
+            return Err(JobError::from(
+                "a posted program is G-code: give --to with a G-code dialect".to_string(),
             ));
         }
         let mut p = o.program.clone();
         millplan_plan::post::for_target(&mut p, wo.target)
-            .map_err(|e| JobError(format!("{}: {e}", e.line())))?;
+            .map_err(|e| JobError::from(format!("{}: {e}", e.line())))?;
         wo.auto_tcp = false;
         Ok((Some(p), wo))
     }

@@ -159,13 +159,48 @@ pub struct Setting {
     pub from: String,
 }
 
-/// Why a job cannot be built.
+/// Why a job cannot be built or run.
 #[derive(Debug, PartialEq)]
-pub struct JobError(pub String);
+pub struct JobError {
+    pub message: String,
+    /// The inputs are sound but the program cannot run on the machine (an
+    /// axis out of its travel): a finding (exit 3), not bad input.
+    pub refused: bool,
+}
+
+impl JobError {
+    /// A finding that stops the run (exit 3).
+    pub fn refused(message: String) -> JobError {
+        JobError {
+            message,
+            refused: true,
+        }
+    }
+
+    /// The message after the program's name `path`: `path:line:col: …`
+    /// where it starts at its line, else `path: …`.
+    pub fn located(&self, path: &str) -> String {
+        if self.message.starts_with(|c: char| c.is_ascii_digit()) {
+            format!("{path}:{}", self.message)
+        } else {
+            format!("{path}: {}", self.message)
+        }
+    }
+}
+
+/// Bad input (exit 2).
+impl From<String> for JobError {
+    fn from(message: String) -> JobError {
+        JobError {
+            message,
+            refused: false,
+        }
+    }
+}
 
 impl std::fmt::Display for JobError {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.write_str(&self.0)
+        f.write_str(&self.message)
     }
 }
 
@@ -339,7 +374,7 @@ impl Job {
             ..BodyOptions::default()
         };
         let d = first_diameter(&inputs.program, &body).ok_or_else(|| {
-            JobError("the program has no cutting move with a tool of known shape: give --tool ball:D, flat:D or bull:D:R".into())
+            JobError::from("the program has no cutting move with a tool of known shape: give --tool ball:D, flat:D or bull:D:R".to_string())
         })?;
         let (vc, flutes, helix) = cutting_data(&inputs, lib, &mut s);
         library_setting(lib, &mut s);
@@ -385,7 +420,7 @@ impl Job {
         job.default_spindle(d);
         lap("defaults resolved, materials and tools looked up");
         if let Some(order) = named {
-            crate::passes::check_named(&job, order).map_err(JobError)?;
+            crate::passes::check_named(&job, order).map_err(JobError::from)?;
         }
         job.stock = job.build_stock()?;
         lap("stock built");
@@ -480,7 +515,7 @@ impl Job {
         let meshes = (self.inputs.part.as_ref(), self.inputs.blank.as_ref());
         spec.build(self.resolution, &s, meshes, (memory, 2))
             .map(Some)
-            .map_err(|e| JobError(format!("--stock: {e}")))
+            .map_err(|e| JobError::from(format!("--stock: {e}")))
     }
 
     /// The input as the analyses see it: with the default spindle speed on
@@ -547,7 +582,7 @@ fn force_setup(
     let law = inputs
         .materials
         .get(name)
-        .map_err(|e| JobError(format!("--material: {e}")))?
+        .map_err(|e| JobError::from(format!("--material: {e}")))?
         .law;
     let mut s = ForceSetup::new(law, flutes);
     s.helix = helix_deg.to_radians();
@@ -566,7 +601,7 @@ fn chip_loads(inputs: &Inputs) -> Result<Option<ChipLoads>, JobError> {
     let m = inputs
         .materials
         .get(name)
-        .map_err(|e| JobError(format!("--material: {e}")))?;
+        .map_err(|e| JobError::from(format!("--material: {e}")))?;
     Ok(m.chip_loads)
 }
 

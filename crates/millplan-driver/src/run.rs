@@ -129,7 +129,7 @@ impl Job {
         let s = self.strokes(p, true);
         force::simulate_largest(p, &s, stock, setup, &|_| {})
             .map(Some)
-            .map_err(JobError)
+            .map_err(JobError::from)
     }
 
     /// The loads of every move of `p` on the job's stock, each converged
@@ -156,7 +156,7 @@ impl Job {
         let s = self.strokes(p, true);
         force::simulate(p, &s, stock.clone(), setup, u, &|_| {})
             .map(Some)
-            .map_err(JobError)
+            .map_err(JobError::from)
     }
 
     /// The share of ball-end cutting points of `p` off the cutting speed.
@@ -287,7 +287,7 @@ impl Job {
     }
 
     fn pipeline(&self, pass: &mut dyn Pass, p: &mut Program, cx: &Context) -> Result<(), JobError> {
-        pipeline::run(&mut [pass], p, cx).map_err(|e| JobError(e.to_string()))
+        pipeline::run(&mut [pass], p, cx).map_err(|e| JobError::from(e.to_string()))
     }
 
     fn speed(&self, p: &mut Program, cx: &Context) -> Result<String, JobError> {
@@ -295,7 +295,7 @@ impl Job {
         self.pipeline(&mut pass, p, cx)?;
         let s = pass
             .summary
-            .ok_or_else(|| JobError("speed: no summary".into()))?;
+            .ok_or_else(|| JobError::from("speed: no summary".to_string()))?;
         Ok(format!(
             "spindle {:.0}–{:.0} 1/min on {} points ({:.1} % off vc: clamped or rate-limited)",
             s.spindle.min,
@@ -314,7 +314,7 @@ impl Job {
         self.pipeline(&mut pass, p, cx)?;
         let o = pass
             .outcome
-            .ok_or_else(|| JobError("reorder: no outcome".into()))?;
+            .ok_or_else(|| JobError::from("reorder: no outcome".to_string()))?;
         Ok(match o.verdict {
             Some(Verdict::Improved) => (
                 format!(
@@ -345,7 +345,9 @@ impl Job {
             objective: Objective::Fxy,
             fz: d::FZ,
             n: Some(first_spindle(p).ok_or_else(|| {
-                JobError("orient: the program sets no spindle speed for its cutting moves".into())
+                JobError::from(
+                    "orient: the program sets no spindle speed for its cutting moves".to_string(),
+                )
             })?),
             flutes: self.flutes,
             helix,
@@ -367,10 +369,10 @@ impl Job {
     /// whether any operation was re-oriented.
     fn orient(&self, p: &mut Program) -> Result<(String, bool), JobError> {
         let (Some(mesh), Some(stock)) = (&self.inputs.part, &self.stock) else {
-            return Err(JobError("orient: no part or stock".into()));
+            return Err(JobError::from("orient: no part or stock".to_string()));
         };
         let req = self.orient_request(p)?;
-        let params = crate::orient::params(&req, &self.inputs.materials).map_err(JobError)?;
+        let params = crate::orient::params(&req, &self.inputs.materials).map_err(JobError::from)?;
         let st = self.strokes(p, false);
         let input = crate::orient::stock_input(stock.clone(), &st, req.samples);
         let o = choose_with(
@@ -381,10 +383,12 @@ impl Job {
             Some(input),
             &|_, _, _| {},
         )
-        .map_err(|e| JobError(format!("orient: {e}")))?;
+        .map_err(|e| JobError::from(format!("orient: {e}")))?;
         let five: Vec<bool> = p.operations.iter().map(axis_vectors).collect();
         if o.program.operations.len() != five.len() {
-            return Err(JobError("orient: the operations changed in number".into()));
+            return Err(JobError::from(
+                "orient: the operations changed in number".to_string(),
+            ));
         }
         let mut out = o.program;
         for ((new, old), five) in out.operations.iter_mut().zip(&p.operations).zip(&five) {
@@ -445,10 +449,17 @@ impl Job {
     /// posted program; the CL program and the post's report are returned.
     fn post(&self, p: &mut Program) -> Result<(String, Program, PostReport), JobError> {
         let posted = post(p, &self.inputs.machine, &self.post_options()).map_err(|e| {
-            if e.line() == 0 {
-                JobError(format!("post: {e}"))
+            let m = if e.line() == 0 {
+                format!("post: {e}")
             } else {
-                JobError(format!("{e}"))
+                format!("{e}")
+            };
+            // The machine cannot run the program (an axis out of its
+            // travel): a finding, as `millplan post` exits on it.
+            if e.is_check() {
+                JobError::refused(format!("{m}; nothing written"))
+            } else {
+                JobError::from(m)
             }
         })?;
         let r = posted.report;
@@ -478,7 +489,7 @@ impl Job {
 
     fn feed(&self, p: &mut Program, cx: &Context) -> Result<String, JobError> {
         let (Some(params), Some(stock)) = (self.feed_params(), &self.stock) else {
-            return Err(JobError("feed: no stock or material".into()));
+            return Err(JobError::from("feed: no stock or material".to_string()));
         };
         let mut pass = FeedPass::new(params, stock.clone(), self.body_fn());
         self.pipeline(&mut pass, p, cx)?;

@@ -712,8 +712,9 @@ fn no_function_of_the_binary_is_over_60_lines() {
 /// `setup` and `directions` moved there too (`run_command` in each
 /// module), with the helpers only they used (`verdict.rs`, the in-memory
 /// and file writers, `pass_error`, the output plan); 4,775 with `optimise`
-/// refusing a named pass whose input is missing (its help says so).
-const MAX_BINARY_LINES: usize = 4775;
+/// refusing a named pass whose input is missing (its help says so); 4,785
+/// with a job's finding (an axis out of travel) mapped to exit 3.
+const MAX_BINARY_LINES: usize = 4785;
 
 /// The binary's size, all files under `src` counted. Issue 31 sets 5,000
 /// lines as the goal; the bound is lowered as commands move into

@@ -1039,3 +1039,47 @@ fn a_default_spindle_speed_is_written_only_where_a_pass_needs_it() {
         "the feeds are written for the speed they assume"
     );
 }
+
+/// A tool axis the machine's rotary axes cannot reach stops `optimise` as it
+/// stops `millplan post`: exit 3 at the CL line (`file:line:col` in the
+/// text, `line` and `col` in the JSON), nothing written; it exited 2 as bad
+/// input, its location after a space where no tool reads it.
+#[test]
+fn an_axis_out_of_its_travel_is_a_finding_at_its_line() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let example = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/machine.toml");
+    let text = std::fs::read_to_string(example).expect("example machine");
+    // Linear travel wide enough that only the A axis (−120 .. 30) is short.
+    let wide = text
+        .replace("min = -300.0\nmax = 300.0", "min = -3000.0\nmax = 3000.0")
+        .replace("min = -250.0\nmax = 250.0", "min = -3000.0\nmax = 3000.0")
+        .replace("min = -400.0\nmax = 0.0", "min = -3000.0\nmax = 3000.0");
+    assert_ne!(wide, text, "the example's travel was widened");
+    let machine = dir.path().join("m.toml");
+    std::fs::write(&machine, wide).expect("write");
+    let apt = dir.path().join("a.apt");
+    std::fs::write(
+        &apt,
+        "PARTNO BADAXIS\nUNITS/MM\nCUTTER/10,5,0,5,0,0,50\nLOADTL/1\nSPINDL/6000,RPM,CLW\nRAPID\n\
+         GOTO/0,0,50,0,0,1\nFEDRAT/1000,MMPM\nGOTO/0,0,10,0,0,1\nGOTO/10,0,10,0,0.5,0.8660254\n\
+         GOTO/20,0,10,0,0.8660254,-0.5\nGOTO/30,0,10,0,0,1\nRAPID\nGOTO/30,0,50,0,0,1\nFINI\n",
+    )
+    .expect("write");
+    let out = dir.path().join("o.nc");
+    let args = ["optimise", s(&apt), "--machine", s(&machine), "-o", s(&out)];
+    let o = run(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains(&format!("{}:11:1: axis A runs out of range", s(&apt))),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let o = run(&[&args[..], &["--json"]].concat());
+    let e: serde_json::Value = serde_json::from_slice(&o.stderr).expect("one JSON error");
+    assert_eq!(e["error"]["code"], "findings", "{e}");
+    assert_eq!(
+        (e["error"]["line"].as_u64(), e["error"]["col"].as_u64()),
+        (Some(11), Some(1))
+    );
+}

@@ -171,6 +171,16 @@ fn read_inputs(a: &Args, path: &Path) -> CliResult<Inputs> {
     })
 }
 
+/// A job's error after the program's name: a finding exits 3, else 2.
+fn job_error(path: &Path, e: millplan_driver::job::JobError) -> CliError {
+    let m = e.located(&path.display().to_string());
+    if e.refused {
+        CliError::findings(m)
+    } else {
+        CliError::input(m)
+    }
+}
+
 /// Whether warnings, notes and the bar are left out (`-q`, `--json`).
 fn quiet(a: &Args) -> bool {
     a.notes.quiet || a.summary.json
@@ -217,8 +227,8 @@ pub fn run(a: Args) -> CliResult<i32> {
     let given = read_inputs(&a, &path)?;
     clock.lap("program, part, machine, materials and tools read");
     let named = a.passes.is_some().then_some(&order[..]);
-    let job = Job::for_passes(given, named, &mut |n| clock.lap(n))
-        .map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
+    let job =
+        Job::for_passes(given, named, &mut |n| clock.lap(n)).map_err(|e| job_error(&path, e))?;
     let wo = job.write_options(a.to.map(Into::into), &output, crate::limits::get());
     let wo = wo.map_err(CliError::input)?;
     let (outcome, mut w) = passes_and_checks(&a, &job, &order, wo, &path, &mut clock)?;
@@ -254,7 +264,7 @@ fn passes_and_checks(
     let bar = crate::progress::Phases::new(!quiet(a));
     let h = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
     let outcome = job.run_with(order, Some(&h)).inspect_err(|_| bar.finish());
-    let outcome = outcome.map_err(|e| CliError::input(format!("{}: {e}", path.display())))?;
+    let outcome = outcome.map_err(|e| job_error(path, e))?;
     for p in outcome.passes.iter().filter(|p| p.ran) {
         clock.part(&format!("pass {}", p.name), p.seconds);
     }
@@ -263,7 +273,7 @@ fn passes_and_checks(
     let w = job.finish_timed(&outcome, wo, &mut |n| clock.lap(n));
     bar.finish();
     say_skipped(a, &outcome);
-    let w = w.map_err(|e| CliError::input(format!("{}:{e}", path.display())))?;
+    let w = w.map_err(|e| job_error(path, e))?;
     Ok((outcome, w))
 }
 
