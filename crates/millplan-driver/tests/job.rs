@@ -246,9 +246,12 @@ fn a_program_without_s_gets_the_speed_of_vc() {
     .expect("a job");
     let n = 1000.0 * 300.0 / (std::f64::consts::PI * 10.0);
     let want = n.clamp(j.inputs.machine.spindle_min, j.inputs.machine.spindle_max);
-    for m in j.inputs.program.moves().filter(|m| m.is_cutting()) {
+    for m in j.analysed().moves().filter(|m| m.is_cutting()) {
         assert!((m.spindle - want).abs() < 1e-9, "{}", m.spindle);
     }
+    // The input itself keeps its words: the speed is written only by a pass
+    // that needs one.
+    assert!(j.inputs.program.moves().all(|m| !(m.spindle > 0.0)));
 }
 
 /// `Job::run_with` tells its hook how far the passes have come (the bar of
