@@ -7,7 +7,10 @@
 //! them ([`crate::force::sample_distances`]). Blocks whose edge meets no
 //! material run at the air feed ([`air_feed`]: the machine file's
 //! `[feed] air`, else the tool's largest feed per tooth at the block's
-//! speed, at most the machine's feed limit). Feeds then stay within the
+//! speed, at most the machine's feed limit). A flat or bull-nose end mill
+//! plunging into material (down its axis steeper than 45°) cuts with end
+//! teeth the model does not load: its feed may be lowered, never raised
+//! above the program's. Feeds then stay within the
 //! machine's feed range, and changes between neighbouring blocks are brought
 //! within the feed acceleration by lowering feeds only (a block decelerates
 //! to its successor's feed within its own length, and reaches its own feed
@@ -23,6 +26,7 @@
 use crate::force::{self, FeedLimits, ForceRun, ForceSetup, MoveForces};
 use crate::machine::Machine;
 use crate::pipeline::{Changes, Context, Need, Pass, PassError, PassInfo};
+use millplan_models::cutter::Shape;
 use millplan_nc::{FeedMode, MoveKind, Operation, Program};
 use millplan_sim::stock::path::{strokes, PathOptions};
 use millplan_sim::stock::tool::ToolBody;
@@ -68,7 +72,9 @@ pub struct FeedChanges {
     /// the machine's feed range), `power-speed` (the power over its limit
     /// even at the smallest feed per tooth: the spindle speed lowered in
     /// proportion, the feed per tooth kept), `accel` (lowered for the feed
-    /// acceleration), `air`, `kept`.
+    /// acceleration), `air`, `kept`, `plunge` (a flat or bull-nose end mill
+    /// going down into material steeper than 45°: the model loads its flank,
+    /// not its end teeth, so the feed is not raised above the program's).
     pub binding: BTreeMap<&'static str, usize>,
     /// Feeds written, mm/min.
     pub feed_min: f64,
@@ -225,8 +231,12 @@ pub fn apply(
     };
     let mut first = 0u32;
     for op in &mut p.operations {
-        let d = body(op).map_or(0.0, |b| 2.0 * b.radius());
+        let tool = body(op);
+        let d = tool.map_or(0.0, |b| 2.0 * b.radius());
         let fz_max = params.limits.fz_range(d).fz_max;
+        // The model loads a flat or bull-nose end mill's flank, not its
+        // end teeth: a plunge of one into material keeps its feed at most.
+        let end_teeth = tool.is_some_and(|b| !matches!(b.shape, Shape::Ball { .. }));
         // Chains of consecutive feed blocks: (move index, length, feed, why).
         let mut chain: Vec<(usize, f64, f64, &'static str)> = Vec::new();
         let mut chains = Vec::new();
@@ -238,7 +248,10 @@ pub fn apply(
                 matches!(mv.kind, MoveKind::Linear | MoveKind::Arc(_)) && mv.feed > 0.0;
             match (schedulable, mf, len) {
                 (true, Some(mf), Some(len)) if len > 0.0 => {
-                    let (v, why, rpm) = target(mf, m, flutes, fz_max);
+                    let (mut v, mut why, rpm) = target(mf, m, flutes, fz_max);
+                    if end_teeth && !mf.air && v > mf.feed && plunges(op, i) {
+                        (v, why) = (mf.feed, "plunge");
+                    }
                     if let Some(n) = rpm {
                         op.moves[i].spindle = n;
                     }
@@ -276,6 +289,26 @@ pub fn apply(
         ch.feed_min = 0.0;
     }
     ch
+}
+
+/// Whether move `i` of `op` goes down along the tool axis more than it goes
+/// sideways (steeper than 45°): a plunge, where a flat or bull-nose end mill
+/// cuts with its end teeth.
+fn plunges(op: &Operation, i: usize) -> bool {
+    let m = &op.moves[i];
+    let Some(start) = op.known_start(i) else {
+        return false;
+    };
+    let d = m.end - start;
+    if !d.is_finite() {
+        return false;
+    }
+    let axis = op
+        .orient(m)
+        .and_then(|o| o.axis)
+        .map_or(millplan_geom::DVec3::Z, |a| a.normalize());
+    let down = -d.dot(axis);
+    down > 0.0 && down * down > d.length_squared() - down * down
 }
 
 /// Lowers feeds (mm/min) so that neighbouring blocks differ by no more than

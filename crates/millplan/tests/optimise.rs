@@ -1083,3 +1083,46 @@ fn an_axis_out_of_its_travel_is_a_finding_at_its_line() {
         (Some(11), Some(1))
     );
 }
+
+/// A flat end mill plunging into the stock cuts with its end teeth, which
+/// the force model does not load: the feed pass keeps the plunge's feed
+/// (it raised F300 to the fz range's top, F1280 here) and names why.
+#[test]
+fn a_flat_end_plunge_into_the_stock_is_never_fed_faster() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let (_, _, machine) = demo(dir.path());
+    let nc = dir.path().join("plunge.nc");
+    std::fs::write(
+        &nc,
+        "%\nO1000\nG17 G21 G90 G94\nT1 M6\nG43 H1\nS8000 M3\nG0 X10. Y10. Z20.\nZ5.\n\
+         G1 Z-1. F300.\nX50. F800.\nY50.\nG0 Z20.\nM30\n%\n",
+    )
+    .expect("write");
+    let out = dir.path().join("o.nc");
+    let o = run(&[
+        "optimise",
+        s(&nc),
+        "--tool",
+        "flat:10",
+        "--stock",
+        "box:0,0,-10,70,70,0",
+        "--material",
+        "al7075",
+        "--machine",
+        s(&machine),
+        "--resolution",
+        "0.5",
+        "--passes",
+        "feed",
+        "-o",
+        s(&out),
+        "--json",
+    ]);
+    let j = json(&o);
+    assert_eq!(o.status.code(), Some(0), "{j}");
+    let p = read(&out);
+    // The first cutting move is the plunge to Z-1.
+    let plunge = p.moves().find(|m| m.is_cutting()).expect("the plunge");
+    assert_eq!((plunge.end.x, plunge.end.z), (10.0, -1.0));
+    assert!(plunge.feed <= 300.0, "plunge at F{}", plunge.feed);
+}
