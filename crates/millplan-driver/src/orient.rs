@@ -426,6 +426,7 @@ impl Summary {
                 .unwrap_or_default(),
             kept: self.operations.is_empty(),
             worse,
+            not_better: None,
         };
         let warnings = std::mem::take(&mut self.verdict.warnings);
         self.verdict = Verdict::of(&e, warnings);

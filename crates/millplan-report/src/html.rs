@@ -455,6 +455,9 @@ pub struct Evidence {
     /// The measures a pass exists for that got worse, each in words
     /// (`cycle time 10.0 → 10.2 s`).
     pub worse: Vec<String>,
+    /// The program written differs from the input, yet no measure got
+    /// better (and none worse): the figures in words.
+    pub not_better: Option<String>,
 }
 
 impl Level {
@@ -463,7 +466,7 @@ impl Level {
     pub fn of(e: &Evidence, warnings: usize) -> Level {
         if !e.failed.is_empty() {
             Level::Red
-        } else if e.kept || warnings > 0 || !e.worse.is_empty() {
+        } else if e.kept || warnings > 0 || !e.worse.is_empty() || e.not_better.is_some() {
             Level::Amber
         } else {
             Level::Green
@@ -499,6 +502,9 @@ pub fn headline(e: &Evidence, warnings: usize) -> String {
     }
     if !e.worse.is_empty() {
         why.push(format!("worse: {}", e.worse.join("; ")));
+    }
+    if let Some(n) = &e.not_better {
+        why.push(format!("changed, but {n}"));
     }
     if e.kept {
         why.push("the input is kept as it was".to_string());
@@ -722,6 +728,7 @@ mod verdict_tests {
             } else {
                 vec![]
             },
+            not_better: None,
         };
         assert_eq!(Level::of(&e(false, false, false), 0), Level::Green);
         assert_eq!(Level::of(&e(false, true, false), 0), Level::Amber);
@@ -735,6 +742,16 @@ mod verdict_tests {
             "Red: failed: check gouge; worse: time 1 → 2 s; 2 warnings apply."
         );
         assert!(headline(&e(false, false, false), 0).starts_with("Green: every check passed"));
+        // Changed but no better: amber, and not called worse.
+        let same = Evidence {
+            not_better: Some("nothing measured better (time 1 → 1 s)".into()),
+            ..e(false, false, false)
+        };
+        assert_eq!(Level::of(&same, 0), Level::Amber);
+        assert_eq!(
+            headline(&same, 0),
+            "Amber: changed, but nothing measured better (time 1 → 1 s)."
+        );
     }
 
     /// The page names the level and colours the verdict box by it.
