@@ -456,7 +456,20 @@ pub fn render_program(path: &str, p: &Program, j: &Value) -> String {
         }
     }
     if let Some(b) = j["bounds"].as_object() {
-        w!(o, "  bounds      {} .. {}", b["min"], b["max"]);
+        // mm, to the thousandth as the lengths are (the JSON keeps them whole).
+        let xyz = |v: &serde_json::Value| {
+            let c = v.as_array().map_or(&[][..], |a| &a[..]).iter();
+            let c: Vec<String> = c
+                .map(|x| x.as_f64().map_or("?".into(), |f| format!("{f:.3}")))
+                .collect();
+            c.join(", ")
+        };
+        w!(
+            o,
+            "  bounds      [{}] .. [{}] mm",
+            xyz(&b["min"]),
+            xyz(&b["max"])
+        );
     }
     w!(
         o,

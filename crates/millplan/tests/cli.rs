@@ -946,3 +946,25 @@ fn feed_schedules_a_generated_finishing_raster() {
         assert!((1.0..=20000.0).contains(&v), "feed {v}");
     }
 }
+
+/// `inspect` prints the bounds in mm to the thousandth, as its lengths: an
+/// inch program's came out as 60.959999999999994.
+#[test]
+fn inspect_rounds_the_bounds_of_an_inch_program() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let nc = dir.path().join("inch.nc");
+    std::fs::write(
+        &nc,
+        "%\nO2000\nG17 G20 G90 G94\nT1 M6\nS5000 M3\nG0 X0.5 Y0.5 Z1.\nG1 Z-0.04 F10.\nX2.4 Y2.4\nG0 Z1.\nM30\n%\n",
+    )
+    .expect("write");
+    let o = bin()
+        .args(["inspect", nc.to_str().expect("utf8")])
+        .output()
+        .expect("runs");
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("bounds      [12.700, 12.700, -1.016] .. [60.960, 60.960, 25.400] mm"),
+        "{text}"
+    );
+}
