@@ -519,7 +519,7 @@ impl Job {
     }
 
     /// The input as the analyses see it: with the default spindle speed on
-    /// the cutting moves that have none ([`Job::default_spindle`]).
+    /// the cutting moves that have none (`--spindle`, else the speed of vc on the tool's diameter).
     pub fn analysed(&self) -> &Program {
         self.spindled.as_ref().unwrap_or(&self.inputs.program)
     }
