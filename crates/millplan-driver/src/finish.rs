@@ -153,15 +153,18 @@ impl Job {
         // and the part are checked on the CL program it was posted from,
         // its tips through the kinematics against the input.
         let cl = o.posted.as_ref().map_or(&read, |(cl, _)| cl);
-        let forces_after = self.forces_checked(cl)?;
+        // Loads and measures at the speed the input's were taken at, where
+        // the program written has no S of its own.
+        let analysed = self.analysed_copy(cl);
+        let forces_after = self.forces_checked(&analysed)?;
         lap("the output's loads on the stock");
-        list.extend(self.checks(o, cl, forces_after.as_ref()));
+        list.extend(self.checks(o, cl, (&analysed, forces_after.as_ref())));
         if let Some((cl, _)) = &o.posted {
             self.posted_checks(cl, &read, o.oriented, &mut list);
         }
         lap("the output checked (IR, machine, tips, stock, part)");
         let cx = self.context();
-        let mut after = self.measure(cl, forces_after.as_ref(), &cx);
+        let mut after = self.measure(&analysed, forces_after.as_ref(), &cx);
         if let Some((_, r)) = &o.posted {
             // What the machine runs: the posted blocks with the rotary
             // axes' motion, not the CL program's tip path.
@@ -249,11 +252,18 @@ impl Job {
 
     /// `safety::check` on the program read back, with the job's tools,
     /// stock, part, machine and limits.
-    fn checks(&self, o: &Outcome, read: &Program, after: Option<&ForceRun>) -> Vec<Check> {
+    /// `analysed` is `read` as the loads were taken (its default spindle
+    /// speed, [`Job::analysed_copy`]), `after` its forces.
+    fn checks(
+        &self,
+        o: &Outcome,
+        read: &Program,
+        (analysed, after): (&Program, Option<&ForceRun>),
+    ) -> Vec<Check> {
         let drop = self.inputs.part.as_ref().map(DropMesh::new);
         let body = |op: &millplan_nc::Operation| self.body_of(op);
         let loads = after.map(|run| {
-            let v = checks::loads_of(read, run, &self.limits, &self.inputs.machine);
+            let v = checks::loads_of(analysed, run, &self.limits, &self.inputs.machine);
             move |_: &Program| v.clone()
         });
         let tol = Tolerances {

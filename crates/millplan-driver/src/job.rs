@@ -417,7 +417,7 @@ impl Job {
             forces_before: None,
             spindled: None,
         };
-        job.default_spindle(d);
+        job.default_spindle();
         lap("defaults resolved, materials and tools looked up");
         if let Some(order) = named {
             crate::passes::check_named(&job, order).map_err(JobError::from)?;
@@ -524,10 +524,44 @@ impl Job {
         self.spindled.as_ref().unwrap_or(&self.inputs.program)
     }
 
+    /// `p` as the analyses take it: with the default spindle speed where
+    /// its cutting moves have none, as [`Job::analysed`] is the input (the
+    /// program written keeps no S but where a pass wrote one, and its loads
+    /// and measures are taken at the speed the input's were).
+    pub fn analysed_copy<'a>(&self, p: &'a Program) -> std::borrow::Cow<'a, Program> {
+        if p.moves().any(|m| m.is_cutting() && !(m.spindle > 0.0)) {
+            std::borrow::Cow::Owned(self.fill_spindle(p.clone()))
+        } else {
+            std::borrow::Cow::Borrowed(p)
+        }
+    }
+
+    /// `p` with `--spindle`, else the speed of the cutting speed on the
+    /// tool's diameter, on its cutting moves without a spindle speed.
+    fn fill_spindle(&self, mut p: Program) -> Program {
+        let (o, vc, body) = (self.inputs.options.spindle, self.vc, self.body);
+        for op in &mut p.operations {
+            let dia =
+                ToolBody::for_operation(op, &body).map_or(self.diameter, |b| 2.0 * b.radius());
+            let n = o.unwrap_or_else(|| defaults::spindle_for(vc, dia));
+            for m in op
+                .moves
+                .iter_mut()
+                .filter(|m| m.is_cutting() && !(m.spindle > 0.0))
+            {
+                m.spindle = n.clamp(
+                    self.inputs.machine.spindle_min,
+                    self.inputs.machine.spindle_max,
+                );
+            }
+        }
+        p
+    }
+
     /// Cutting moves without a spindle speed get `--spindle`, else the
     /// speed of the cutting speed on their tool's diameter, in the copy of
     /// the input the analyses take ([`Job::analysed`]).
-    fn default_spindle(&mut self, d: f64) {
+    fn default_spindle(&mut self) {
         let missing = self
             .inputs
             .program
@@ -542,24 +576,8 @@ impl Job {
             );
             return;
         }
-        let (o, vc, body) = (self.inputs.options.spindle, self.vc, self.body);
-        let mut spindled = self.inputs.program.clone();
-        for op in &mut spindled.operations {
-            let dia = ToolBody::for_operation(op, &body).map_or(d, |b| 2.0 * b.radius());
-            let n = o.unwrap_or_else(|| defaults::spindle_for(vc, dia));
-            for m in op
-                .moves
-                .iter_mut()
-                .filter(|m| m.is_cutting() && !(m.spindle > 0.0))
-            {
-                m.spindle = n.clamp(
-                    self.inputs.machine.spindle_min,
-                    self.inputs.machine.spindle_max,
-                );
-            }
-        }
-        self.spindled = Some(spindled);
-        let (value, from) = match o {
+        self.spindled = Some(self.fill_spindle(self.inputs.program.clone()));
+        let (value, from) = match self.inputs.options.spindle {
             Some(n) => (format!("{n} 1/min where the program has no S"), "option"),
             None => (
                 "1000·vc/(π·D) where the program has no S".to_string(),

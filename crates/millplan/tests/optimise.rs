@@ -1038,6 +1038,18 @@ fn a_default_spindle_speed_is_written_only_where_a_pass_needs_it() {
         spindles(&fed) > 0,
         "the feeds are written for the speed they assume"
     );
+    // With a stock and a material but no pass that needs a speed, the
+    // program written has no S, and its loads are still checked at the
+    // speed the input's were taken at.
+    let plain = dir.path().join("plain.nc");
+    let args = [&["optimise", s(&apt)], &common[..], &stock[..]].concat();
+    let o = run(&[&args[..], &["--passes", "post", "-o", s(&plain), "--json"]].concat());
+    let j = json(&o);
+    assert_eq!(o.status.code(), Some(0), "{j}");
+    assert_eq!(spindles(&plain), 0);
+    let checks = j["checks"].as_array().expect("checks");
+    let loads = checks.iter().find(|c| c["name"] == "loads").expect("loads");
+    assert!(loads["checked"].as_u64() > Some(0), "{loads}");
 }
 
 /// A tool axis the machine's rotary axes cannot reach stops `optimise` as it
