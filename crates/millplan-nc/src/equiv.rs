@@ -489,8 +489,13 @@ mod tests {
         assert!(compare(&a, &b, &Tolerance::default())
             .expect_err("G93 against G94")
             .message
-            .contains("feed mode"));
+            .contains("feed mode inverse time (G93) against per minute (G94)"));
         let c = read("G21 G90\nT1 M6\nG0 X0 Y0 Z5 B0\nG93 G1 X10 F50\n");
         assert!(compare(&a, &c, &Tolerance::default()).is_err());
+        // An axis one program sets and the other does not, in words.
+        let d = read("G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 X10 F50\n");
+        let e = read("G21 G90\nT1 M6\nG0 X0 Y0 Z5 B0\nG1 X10 F50\n");
+        let m = compare(&d, &e, &Tolerance::default()).expect_err("B set in one only");
+        assert!(m.message.contains("B axis unset against 0.0000°"), "{m}");
     }
 }

@@ -122,9 +122,8 @@ fn request(a: &Args) -> SpeedRequest {
     }
 }
 
-/// The part, read while the program is read (and its cycle time estimated)
-/// on a thread of its own; the STL's wall time. A program that does not
-/// read is still the error reported first.
+/// `millplan speed`: the request built from the arguments, the run
+/// (`speed::run_command`: the part read beside the program), the summary.
 pub fn run(a: Args) -> CliResult<i32> {
     let watch = crate::progress::Watch::new(&a.path, a.notes.quiet, a.summary.json);
     let watch = watch.bars_under_json();
