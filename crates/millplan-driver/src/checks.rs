@@ -32,6 +32,38 @@ pub fn same_tools(back: &mut Program, out: &Program) {
     }
 }
 
+/// The program whose loads are checked as those of the program written
+/// (`back`, read from its bytes): the program the job wrote in memory
+/// (`out`) with the feed, spindle speed and feed mode of each move as read
+/// back, where the two have the same moves one for one, of the same kinds,
+/// every end within `tol` of the other (the written words round the
+/// positions, the tip check compares them). Its path is then the one the
+/// passes computed on, bit for bit, so the force run finds its engaged cells
+/// in what the job's run over the input kept; `None` where the moves do not
+/// pair (the program read back is then checked as it is).
+pub fn loads_program(back: &Program, out: &Program, tol: f64) -> Option<Program> {
+    if back.operations.len() != out.operations.len() {
+        return None;
+    }
+    let mut p = out.clone();
+    for (b, o) in back.operations.iter().zip(&mut p.operations) {
+        if b.moves.len() != o.moves.len() {
+            return None;
+        }
+        for (x, y) in b.moves.iter().zip(&mut o.moves) {
+            let same_kind = std::mem::discriminant(&x.kind) == std::mem::discriminant(&y.kind);
+            let off = (x.end - y.end).abs().max_element();
+            if !same_kind || !(off <= tol) {
+                return None;
+            }
+            y.feed = x.feed;
+            y.spindle = x.spindle;
+            y.feed_mode = x.feed_mode;
+        }
+    }
+    Some(p)
+}
+
 /// Every limited load of every modelled cutting move of `run` (forces of
 /// `p`), with its limit at the move's spindle speed (the machine's chart
 /// included; power, torque and stress divided by the factor of safety).

@@ -156,7 +156,17 @@ impl Job {
         // Loads and measures at the speed the input's were taken at, where
         // the program written has no S of its own.
         let analysed = self.analysed_copy(cl);
-        let forces_after = self.forces_checked(&analysed)?;
+        // The loads of the feeds and speeds read back, on the path the
+        // passes computed on where the written one pairs with it within the
+        // tolerance (the tip check holds it to that).
+        let paired = match o.posted {
+            Some(_) => None,
+            None => checks::loads_program(&read, program, self.tol),
+        };
+        let forces_after = match &paired {
+            Some(p) => self.forces_checked(&self.analysed_copy(p))?,
+            None => self.forces_checked(&analysed)?,
+        };
         lap("the output's loads on the stock");
         list.extend(self.checks(o, cl, (&analysed, forces_after.as_ref())));
         if let Some((cl, _)) = &o.posted {

@@ -8,7 +8,7 @@ use millplan_models::force::materials::Materials;
 use millplan_models::force::Grid;
 use millplan_nc::{Operation, Program};
 use millplan_plan::feed::machine_accel;
-use millplan_plan::force::{FeedLimits, ForceRun, ForceSetup};
+use millplan_plan::force::{EngagementMemo, FeedLimits, ForceRun, ForceSetup};
 use millplan_plan::machine::Machine;
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes};
 use millplan_sim::stock::spec::StockSpec;
@@ -229,6 +229,10 @@ pub struct Job {
     pub diameter: f64,
     /// The forces of the input on the stock (with a stock and a material).
     pub forces_before: Option<ForceRun>,
+    /// The engaged cells the input's force run found on the stock, which
+    /// the later runs over the same path use (the feed pass, the check of
+    /// the program written).
+    pub(crate) kept: Option<std::sync::Arc<EngagementMemo>>,
     /// The input with the default spindle speed on the cutting moves that
     /// have none (`None`: every one has its own), for the analyses and the
     /// passes that need a speed; the program written keeps the input's own
@@ -415,6 +419,7 @@ impl Job {
             feed_accel,
             diameter: d,
             forces_before: None,
+            kept: None,
             spindled: None,
         };
         job.default_spindle();
@@ -424,7 +429,10 @@ impl Job {
         }
         job.stock = job.build_stock()?;
         lap("stock built");
-        job.forces_before = job.forces(job.analysed())?;
+        if let Some((run, kept)) = job.forces_kept(job.analysed())? {
+            job.forces_before = Some(run);
+            job.kept = Some(std::sync::Arc::new(kept));
+        }
         job.learn_limits();
         lap("the input's loads on the stock (limits learned)");
         Ok(job)
@@ -482,6 +490,11 @@ impl Job {
             ..self.body
         };
         Box::new(move |op: &Operation| ToolBody::for_operation(op, &o))
+    }
+
+    /// The engaged cells the input's force run found, where it ran.
+    pub fn memo(&self) -> Option<&EngagementMemo> {
+        self.kept.as_deref()
     }
 
     /// The strokes of `p` through the stock at this job's resolution, of

@@ -123,11 +123,20 @@ impl Job {
     /// ([`force::simulate_largest`]), each move's own on the coarsest grid
     /// elsewhere.
     pub fn forces(&self, p: &Program) -> Result<Option<ForceRun>, JobError> {
+        Ok(self.forces_kept(p)?.map(|r| r.0))
+    }
+
+    /// [`Job::forces`], and the engaged cells its run found
+    /// ([`force::EngagementMemo`]), for later runs over the same path.
+    pub fn forces_kept(
+        &self,
+        p: &Program,
+    ) -> Result<Option<(ForceRun, force::EngagementMemo)>, JobError> {
         let (Some(stock), Some(setup)) = (&self.stock, &self.setup) else {
             return Ok(None);
         };
         let s = self.strokes(p, true);
-        force::simulate_largest(p, &s, stock, setup, &|_| {})
+        force::simulate_largest_kept(p, &s, stock, setup, &|_| {})
             .map(Some)
             .map_err(JobError::from)
     }
@@ -154,7 +163,7 @@ impl Job {
             return Ok(None);
         };
         let s = self.strokes(p, true);
-        force::simulate(p, &s, stock.clone(), setup, u, &|_| {})
+        force::simulate_with(p, &s, stock.clone(), setup, u, &|_| {}, self.memo())
             .map(Some)
             .map_err(JobError::from)
     }
@@ -492,6 +501,7 @@ impl Job {
             return Err(JobError::from("feed: no stock or material".to_string()));
         };
         let mut pass = FeedPass::new(params, stock.clone(), self.body_fn());
+        pass.memo = self.kept.clone();
         self.pipeline(&mut pass, p, cx)?;
         let c: FeedChanges = pass.changes.unwrap_or_default();
         let binding: Vec<String> = c.binding.iter().map(|(k, v)| format!("{k} {v}")).collect();

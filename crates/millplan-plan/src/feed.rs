@@ -89,6 +89,9 @@ pub struct FeedPass {
     /// The forces at the input's feeds with the feeds allowed, after the run.
     pub before: Option<ForceRun>,
     pub changes: Option<FeedChanges>,
+    /// Engaged cells an earlier force run over the same path and stock
+    /// found ([`force::simulate_with`]; used where it fits).
+    pub memo: Option<std::sync::Arc<force::EngagementMemo>>,
 }
 
 impl FeedPass {
@@ -101,6 +104,7 @@ impl FeedPass {
             body,
             before: None,
             changes: None,
+            memo: None,
         }
     }
 }
@@ -131,13 +135,14 @@ impl Pass for FeedPass {
         let total = s.strokes.len();
         let run = cx
             .time("forces and allowed feeds", || {
-                force::simulate(
+                force::simulate_with(
                     p,
                     &s,
                     stock,
                     &self.params.setup,
                     force::LimitUse::Schedule(&self.params.limits, m),
                     &|done| cx.progress("feed: forces", done, total),
+                    self.memo.as_deref(),
                 )
             })
             .map_err(input)?;

@@ -31,7 +31,8 @@ use millplan_models::force::engage::Engagement;
 use millplan_models::force::engage::SECTORS;
 use millplan_models::force::feed::{Limits, Loads};
 use millplan_models::force::materials::{fz_max_for, ChipLoads, FzSource};
-use millplan_models::force::{Cut, ForceModel, Grid, Summary};
+use millplan_models::force::quadrature::Run;
+use millplan_models::force::{Cut, Engaged, ForceModel, Grid, Summary};
 use millplan_nc::{Move, Program};
 use millplan_sim::stock::engage::tool_frame;
 use millplan_sim::stock::path::{Stroke, Strokes};
@@ -669,6 +670,214 @@ pub fn simulate(
     simulate_in_parts(program, strokes, stock, setup, schedule, progress, MIN_PART)
 }
 
+/// [`simulate`] taking each load sample's engaged cells on the coarsest
+/// grid from `memo` where it holds them for these strokes on this stock
+/// ([`EngagementMemo::fits`]; else as [`simulate`]). The run is the one
+/// [`simulate`] gives: the cells depend on the path and the stock only,
+/// not on the feeds or the spindle speeds.
+pub fn simulate_with(
+    program: &Program,
+    strokes: &Strokes,
+    stock: Stock,
+    setup: &ForceSetup,
+    schedule: LimitUse<'_>,
+    progress: &(dyn Fn(usize) + Sync),
+    memo: Option<&EngagementMemo>,
+) -> Result<ForceRun, String> {
+    let key = memo.map(|_| memo_key(strokes, &stock, setup));
+    let memo = match memo {
+        Some(m) if Some(m.key) == key => Memo::Use(m),
+        _ => Memo::Off,
+    };
+    run_parts(
+        program, strokes, stock, setup, schedule, progress, MIN_PART, memo,
+    )
+    .map(|r| r.0)
+}
+
+/// The engaged cells on the coarsest grid of every load sample of a force
+/// run (as runs of slices, [`Run`]: 8 bytes where the cells take about 60),
+/// kept so that a later run over the same strokes and stock (the
+/// program with other feeds or spindle speeds: the feed pass after the
+/// input's loads, the check of what it wrote) need not find them again:
+/// finding them is most of a run's work (the stock's columns looked up
+/// over the tool's reach at every sample). Finer grids are not kept: they
+/// are few, and where a run needs one it looks at the stock.
+#[derive(Debug, Default)]
+pub struct EngagementMemo {
+    /// The strokes' and the stock's digests and the coarsest grid.
+    key: u64,
+    /// In stroke order, each over a range of strokes.
+    parts: Vec<MemoPart>,
+}
+
+/// The memo of one part of a run.
+#[derive(Debug, Default)]
+struct MemoPart {
+    /// The first stroke.
+    first: usize,
+    /// By stroke from `first`: its samples' range in `samples`, `None`
+    /// where the stroke was not evaluated (or the memo was full).
+    strokes: Vec<Option<(u32, u32)>>,
+    /// By sample: its runs' range in `runs`.
+    samples: Vec<(u32, u32)>,
+    runs: Vec<Run>,
+}
+
+/// Runs of cells an [`EngagementMemo`] holds at most (8 bytes each: 128
+/// MB; a 100,000-move finishing program on a 0.1 mm stock needs about 6 M):
+/// beyond them a part records no more, and later runs find those strokes'
+/// cells on the stock as [`simulate`] does.
+pub const MEMO_RUNS: usize = 16 << 20;
+
+impl EngagementMemo {
+    /// Whether the memo was recorded over `strokes` on `stock` with
+    /// `setup`'s coarsest grid.
+    pub fn fits(&self, strokes: &Strokes, stock: &Stock, setup: &ForceSetup) -> bool {
+        self.key == memo_key(strokes, stock, setup)
+    }
+
+    /// Memory it holds, bytes.
+    pub fn memory_bytes(&self) -> usize {
+        self.parts
+            .iter()
+            .map(|p| p.strokes.capacity() * 12 + p.samples.capacity() * 8 + p.runs.capacity() * 8)
+            .sum()
+    }
+
+    /// The runs of sample `j` of stroke `g`, where recorded.
+    fn runs(&self, g: usize, j: usize) -> Option<&[Run]> {
+        let at = self
+            .parts
+            .partition_point(|p| p.first <= g)
+            .checked_sub(1)?;
+        let part = &self.parts[at];
+        let (a, b) = (*part.strokes.get(g - part.first)?)?;
+        let k = a as usize + j;
+        if k >= b as usize {
+            return None;
+        }
+        let (c0, c1) = part.samples[k];
+        Some(&part.runs[c0 as usize..c1 as usize])
+    }
+}
+
+/// What an [`EngagementMemo`] is valid for.
+fn memo_key(strokes: &Strokes, stock: &Stock, setup: &ForceSetup) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    strokes.fingerprint().hash(&mut h);
+    stock.fingerprint().hash(&mut h);
+    setup.grid.dz.to_bits().hash(&mut h);
+    setup.grid.dphi.to_bits().hash(&mut h);
+    setup.flutes.hash(&mut h);
+    setup.helix.to_bits().hash(&mut h);
+    h.finish()
+}
+
+/// What a run does with an [`EngagementMemo`].
+#[derive(Clone, Copy)]
+enum Memo<'a> {
+    Off,
+    /// Keep every sample's cells (at most [`MEMO_RUNS`] runs in all).
+    Record,
+    Use(&'a EngagementMemo),
+}
+
+/// A part's side of a [`Memo`] as its strokes run.
+enum PartMemo<'a> {
+    Off,
+    Record {
+        part: MemoPart,
+        /// Runs recorded by every part so far.
+        total: &'a std::sync::atomic::AtomicUsize,
+        full: bool,
+    },
+    Use(&'a EngagementMemo),
+}
+
+impl<'a> PartMemo<'a> {
+    fn new(memo: Memo<'a>, first: usize, total: &'a std::sync::atomic::AtomicUsize) -> Self {
+        match memo {
+            Memo::Off => PartMemo::Off,
+            Memo::Use(m) => PartMemo::Use(m),
+            Memo::Record => PartMemo::Record {
+                part: MemoPart {
+                    first,
+                    ..MemoPart::default()
+                },
+                total,
+                full: false,
+            },
+        }
+    }
+
+    /// The runs of sample `j` of stroke `g` where the memo used holds them.
+    fn runs(&self, g: usize, j: usize) -> Option<&'a [Run]> {
+        match *self {
+            PartMemo::Use(m) => m.runs(g, j),
+            _ => None,
+        }
+    }
+
+    fn recording(&self) -> bool {
+        matches!(self, PartMemo::Record { .. })
+    }
+
+    /// Stroke `g`'s samples follow.
+    fn start(&mut self, g: usize) {
+        if let PartMemo::Record { part, .. } = self {
+            let i = g - part.first;
+            if part.strokes.len() <= i {
+                part.strokes.resize(i + 1, None);
+            }
+            let n = part.samples.len() as u32;
+            part.strokes[i] = Some((n, n));
+        }
+    }
+
+    /// The next sample of stroke `g` engaged the cells of `runs`. A stroke
+    /// whose samples cannot all be kept (the memo full, or a sample's runs
+    /// not given) is kept not at all.
+    fn record(&mut self, g: usize, runs: Option<&[Run]>) {
+        use std::sync::atomic::Ordering;
+        let PartMemo::Record { part, total, full } = self else {
+            return;
+        };
+        let i = g - part.first;
+        let Some(runs) = runs else {
+            part.strokes[i] = None;
+            return;
+        };
+        if !*full {
+            let n = total.fetch_add(runs.len(), Ordering::Relaxed) + runs.len();
+            *full = n > MEMO_RUNS || part.samples.len() >= u32::MAX as usize - 1;
+        }
+        if *full {
+            part.strokes[i] = None;
+            return;
+        }
+        let c0 = part.runs.len() as u32;
+        part.runs.extend_from_slice(runs);
+        part.samples.push((c0, part.runs.len() as u32));
+        if let Some((_, end)) = &mut part.strokes[i] {
+            *end += 1;
+        }
+    }
+
+    fn into_part(self) -> Option<MemoPart> {
+        match self {
+            PartMemo::Record { mut part, .. } => {
+                part.strokes.shrink_to_fit();
+                part.samples.shrink_to_fit();
+                part.runs.shrink_to_fit();
+                Some(part)
+            }
+            _ => None,
+        }
+    }
+}
+
 /// A bound on F_xy (N), torque (N·mm), power (W), stress (MPa) and
 /// deflection (mm), each tool's stress and deflection from its own
 /// cantilever: from below, loads the program's (or a move's) largest
@@ -735,15 +944,45 @@ pub fn simulate_largest(
     setup: &ForceSetup,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<ForceRun, String> {
+    simulate_largest_kept(program, strokes, stock, setup, progress).map(|r| r.0)
+}
+
+/// [`simulate_largest`], and the engaged cells of its first run on the
+/// coarsest grid, which its later runs use and which a later
+/// [`simulate_with`] over the same strokes and stock may use (the feed
+/// pass, the check of the program it wrote).
+pub fn simulate_largest_kept(
+    program: &Program,
+    strokes: &Strokes,
+    stock: &Stock,
+    setup: &ForceSetup,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<(ForceRun, EngagementMemo), String> {
     let n = strokes.strokes.len();
-    let first = simulate(
+    let (first, memo) = run_parts(
         program,
         strokes,
         stock.clone(),
         setup,
         LimitUse::Coarse,
         &|d| progress(d / 2),
+        MIN_PART,
+        Memo::Record,
     )?;
+    let memo = memo.expect("recorded");
+    let with = |u: LimitUse<'_>, progress: &(dyn Fn(usize) + Sync)| {
+        run_parts(
+            program,
+            strokes,
+            stock.clone(),
+            setup,
+            u,
+            progress,
+            MIN_PART,
+            Memo::Use(&memo),
+        )
+        .map(|r| r.0)
+    };
     let floor = first.floor();
     let mut moves = vec![false; moves_by_index(program).len()];
     for m in &first.moves {
@@ -755,9 +994,7 @@ pub fn simulate_largest(
         floor,
         moves: &moves,
     };
-    let second = simulate(program, strokes, stock.clone(), setup, use_, &|d| {
-        progress(n / 2 + d / 2)
-    })?;
+    let second = with(use_, &|d| progress(n / 2 + d / 2))?;
     // The second run holds the moves it evaluated only, in program order.
     let mut run = first;
     let mut slots = run.moves.iter_mut();
@@ -777,16 +1014,10 @@ pub fn simulate_largest(
         && max.stress >= floor.stress
         && max.deflection >= floor.deflection;
     if !met {
-        return simulate(
-            program,
-            strokes,
-            stock.clone(),
-            setup,
-            LimitUse::None,
-            &|d| progress(d),
-        );
+        let all = with(LimitUse::None, &|d| progress(d))?;
+        return Ok((all, memo));
     }
-    Ok(run)
+    Ok((run, memo))
 }
 
 /// Strokes of the smallest part [`simulate`] hands to a thread: below that,
@@ -808,8 +1039,35 @@ pub fn simulate_in_parts(
     progress: &(dyn Fn(usize) + Sync),
     min_part: usize,
 ) -> Result<ForceRun, String> {
+    run_parts(
+        program,
+        strokes,
+        stock,
+        setup,
+        schedule,
+        progress,
+        min_part,
+        Memo::Off,
+    )
+    .map(|r| r.0)
+}
+
+/// [`simulate_in_parts`] with an [`EngagementMemo`] recorded or used.
+#[allow(clippy::too_many_arguments)]
+fn run_parts(
+    program: &Program,
+    strokes: &Strokes,
+    stock: Stock,
+    setup: &ForceSetup,
+    schedule: LimitUse<'_>,
+    progress: &(dyn Fn(usize) + Sync),
+    min_part: usize,
+    memo: Memo<'_>,
+) -> Result<(ForceRun, Option<EngagementMemo>), String> {
     use std::sync::atomic::AtomicUsize;
     use std::sync::Mutex;
+    let key = matches!(memo, Memo::Record).then(|| memo_key(strokes, &stock, setup));
+    let recorded = AtomicUsize::new(0);
     let tools: Vec<ToolForces> = strokes
         .tools
         .iter()
@@ -828,6 +1086,8 @@ pub fn simulate_in_parts(
         schedule,
         done: &done,
         progress,
+        memo,
+        recorded: &recorded,
     };
     let sim = Simulator::new(stock);
     if bounds.len() == 2 {
@@ -869,6 +1129,10 @@ pub fn simulate_in_parts(
         skipped_line: strokes.skipped.first_line,
         ..ForceRun::default()
     };
+    let mut kept = key.map(|key| EngagementMemo {
+        key,
+        parts: Vec::new(),
+    });
     for p in parts {
         let p = p
             .into_inner()
@@ -876,11 +1140,14 @@ pub fn simulate_in_parts(
             .expect("every part ran");
         run.evaluated += p.evaluated;
         run.moves.extend(p.moves);
+        if let (Some(k), Some(m)) = (kept.as_mut(), p.memo) {
+            k.parts.push(m);
+        }
     }
     for m in &mut run.moves {
         finish_move(m);
     }
-    Ok(run)
+    Ok((run, kept))
 }
 
 /// What every part of a force run shares.
@@ -891,12 +1158,16 @@ struct PartContext<'a> {
     schedule: LimitUse<'a>,
     done: &'a std::sync::atomic::AtomicUsize,
     progress: &'a (dyn Fn(usize) + Sync),
+    memo: Memo<'a>,
+    /// Cells recorded into the memo by every part.
+    recorded: &'a std::sync::atomic::AtomicUsize,
 }
 
 /// The moves of one part of the program.
 struct Part {
     moves: Vec<MoveForces>,
     evaluated: usize,
+    memo: Option<MemoPart>,
 }
 
 impl PartContext<'_> {
@@ -907,7 +1178,9 @@ impl PartContext<'_> {
         let mut part = Part {
             moves: Vec::new(),
             evaluated: 0,
+            memo: None,
         };
+        let mut memo = PartMemo::new(self.memo, range.start, self.recorded);
         let (all, range_start) = (&self.strokes.strokes[..], range.start);
         for (k, s) in all[range].iter().enumerate() {
             if k % 4096 == 4095 {
@@ -942,19 +1215,21 @@ impl PartContext<'_> {
             if !s.rapid {
                 let g = range_start + k;
                 let from_cut = continues(all, g) && !all[g - 1].rapid;
-                if let Some(n) = stroke_forces(
-                    &self.tools[s.tool as usize],
-                    &sim.stock,
+                let stroke = StrokeRun {
+                    tf: &self.tools[s.tool as usize],
+                    stock: &sim.stock,
                     s,
+                    index: g,
                     from_cut,
-                    m,
-                    self.schedule,
-                ) {
+                    schedule: self.schedule,
+                };
+                if let Some(n) = stroke_forces(&stroke, m, &mut memo) {
                     part.evaluated += n;
                 }
             }
             m.removed_mm3 += sim.step(s, body).removed;
         }
+        part.memo = memo.into_part();
         part
     }
 }
@@ -1018,14 +1293,21 @@ pub fn sample_distances(len: f64, step: f64, from_cut: bool) -> impl Iterator<It
 /// ([`sample_distances`]): the move's loads are the largest of its samples',
 /// its allowed feed per tooth the one that meets every sample's limits.
 /// Returns the number of evaluations.
-fn stroke_forces(
-    tf: &ToolForces,
-    stock: &Stock,
-    s: &Stroke,
+/// One cutting stroke as [`stroke_forces`] evaluates it.
+struct StrokeRun<'a> {
+    tf: &'a ToolForces,
+    /// The stock as the strokes before this one left it.
+    stock: &'a Stock,
+    s: &'a Stroke,
+    /// Its index over the run's strokes.
+    index: usize,
+    /// Whether it continues a cutting stroke ([`sample_distances`]).
     from_cut: bool,
-    m: &mut MoveForces,
-    schedule: LimitUse<'_>,
-) -> Option<usize> {
+    schedule: LimitUse<'a>,
+}
+
+fn stroke_forces(r: &StrokeRun, m: &mut MoveForces, memo: &mut PartMemo) -> Option<usize> {
+    let (tf, stock, s, schedule) = (r.tf, r.stock, r.s, r.schedule);
     let d = s.p1 - s.p0;
     let len = d.length();
     if !(len > 1e-9 && s.minutes > 0.0) {
@@ -1043,11 +1325,13 @@ fn stroke_forces(
         .limits()
         .map(|(lim, machine)| lim.at(m.rpm, 2.0 * tf.radius, machine));
     let scheduling = matches!(schedule, LimitUse::Schedule(..));
+    memo.start(r.index);
     let mut evals = 0;
-    for dist in sample_distances(len, stock.grid.res, from_cut) {
+    for (j, dist) in sample_distances(len, stock.grid.res, r.from_cut).enumerate() {
         let t = dist / len;
-        let eng = StockEngagement::new(stock, tf.radius, s.p0 + d * t, s.axis_at(t), d, tf.flute);
-        let (x, _, z) = eng.frame();
+        let (tip, axis) = (s.p0 + d * t, s.axis_at(t));
+        let eng = || StockEngagement::new(stock, tf.radius, tip, axis, d, tf.flute);
+        let (x, _, z) = tool_frame(axis, d);
         let lead = d.dot(z).atan2(d.dot(x));
         m.lead_deg = lead.to_degrees();
         let cut = Cut {
@@ -1079,9 +1363,25 @@ fn stroke_forces(
         // Every sample from the coarsest grid, so that its loads do not
         // depend on the samples before it (nor on where the program was
         // split over the threads).
-        let conv = tf
-            .model
-            .converge_from(&Cut { fz: top, ..cut }, &eng, (0, 0), below);
+        let at_top = Cut { fz: top, ..cut };
+        let base = tf.model.base();
+        let conv = match memo.runs(r.index, j) {
+            Some(runs) => {
+                let cells = Engaged::from_cells(&at_top, base.cells_of_runs(runs));
+                tf.model.converge_cells(&at_top, cells, eng, below)
+            }
+            None => {
+                let e = eng();
+                let cells = if memo.recording() {
+                    let (cells, runs) = base.engaged_runs(&at_top, &e);
+                    memo.record(r.index, runs.as_deref());
+                    cells
+                } else {
+                    base.engaged(&at_top, &e)
+                };
+                tf.model.converge_cells(&at_top, cells, move || e, below)
+            }
+        };
         evals += 1 + (conv.halvings.0 + conv.halvings.1) as usize;
         if conv.cells.is_empty() {
             m.mean.add_air();
@@ -1111,7 +1411,9 @@ fn stroke_forces(
             // not look. Converged again there, it is checked once more.
             if let Some(a) = m.fz_allowed.filter(|a| prev != Some(*a) && *a < top) {
                 let at = Cut { fz: a, ..cut };
-                let again = tf.model.converge_from(&at, &eng, (0, 0), below);
+                // The same cells on the coarsest grid (they do not depend
+                // on the feed per tooth).
+                let again = tf.model.converge_cells(&at, conv.cells.clone(), eng, below);
                 evals += 1 + (again.halvings.0 + again.halvings.1) as usize;
                 evals += tighten(&cut, &again, &tf.holding, lim, m);
             }

@@ -8,8 +8,8 @@ use millplan_nc::generate::{raster, Raster};
 use millplan_nc::Program;
 use millplan_plan::feed::{FeedParams, FeedPass};
 use millplan_plan::force::{
-    simulate, simulate_in_parts, simulate_largest, FeedLimits, ForceRun, ForceSetup, LimitUse,
-    LIMIT_TOLERANCE,
+    simulate, simulate_in_parts, simulate_largest, simulate_largest_kept, simulate_with,
+    FeedLimits, ForceRun, ForceSetup, LimitUse, LIMIT_TOLERANCE,
 };
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context};
@@ -175,6 +175,94 @@ fn the_largest_loads_come_out_as_when_every_move_is_converged() {
         .install(|| simulate_largest(&p, &s, &stock2, &setup(), &|_| {}))
         .expect("runs");
     assert_eq!(one, largest);
+}
+
+#[test]
+fn engaged_cells_kept_from_the_inputs_run_give_every_later_run_bit_for_bit() {
+    // The feed pass and the check of what it wrote run over the path the
+    // input's run walked: with the cells that run kept, each gives exactly
+    // what a run that finds them on the stock gives, at other feeds and
+    // speeds too, and with whatever limits it uses.
+    let (p, stock) = case();
+    let m = Machine::default();
+    let s = strokes_of(&p, &m);
+    let (largest, memo) = simulate_largest_kept(&p, &s, &stock, &setup(), &|_| {}).expect("runs");
+    assert_eq!(
+        largest,
+        simulate_largest(&p, &s, &stock, &setup(), &|_| {}).expect("runs")
+    );
+    assert!(memo.fits(&s, &stock, &setup()));
+    assert!(memo.memory_bytes() > 0);
+    let mut faster = p.clone();
+    for op in &mut faster.operations {
+        for mv in &mut op.moves {
+            mv.feed *= 1.7;
+            mv.spindle *= 0.9;
+        }
+    }
+    let s2 = strokes_of(&faster, &m);
+    assert!(
+        memo.fits(&s2, &stock, &setup()),
+        "feeds and speeds are not the path"
+    );
+    let limits = limits();
+    for prog in [&p, &faster] {
+        let strokes = strokes_of(prog, &m);
+        for u in [
+            LimitUse::None,
+            LimitUse::Check(&limits, &m),
+            LimitUse::Schedule(&limits, &m),
+        ] {
+            let plain =
+                simulate(prog, &strokes, stock.clone(), &setup(), u, &|_| {}).expect("runs");
+            let kept = simulate_with(
+                prog,
+                &strokes,
+                stock.clone(),
+                &setup(),
+                u,
+                &|_| {},
+                Some(&memo),
+            )
+            .expect("runs");
+            assert_eq!(kept, plain, "{u:?}");
+        }
+    }
+    // Another path or another stock: the memo does not fit and is not used.
+    let mut moved = p.clone();
+    if let Some(mv) = moved.operations[0].moves.iter_mut().find(|m| m.feed > 0.0) {
+        mv.end.z -= 0.2;
+    }
+    let sm = strokes_of(&moved, &m);
+    assert!(!memo.fits(&sm, &stock, &setup()));
+    let plain = simulate(
+        &moved,
+        &sm,
+        stock.clone(),
+        &setup(),
+        LimitUse::None,
+        &|_| {},
+    )
+    .expect("runs");
+    let with = simulate_with(
+        &moved,
+        &sm,
+        stock.clone(),
+        &setup(),
+        LimitUse::None,
+        &|_| {},
+        Some(&memo),
+    )
+    .expect("runs");
+    assert_eq!(with, plain);
+    let mut sim = millplan_sim::stock::sim::Simulator::new(stock.clone());
+    let removed: f64 = s
+        .strokes
+        .iter()
+        .map(|k| sim.step(k, &s.tools[0]).removed)
+        .sum();
+    assert!(removed > 0.0);
+    assert!(!memo.fits(&s, &sim.stock, &setup()));
 }
 
 #[test]

@@ -327,6 +327,37 @@ impl ConvergedModel {
         }
         let model = self.level(a, b).expect("the coarser grid was built");
         let cells = model.engaged(cut, eng);
+        self.converge_on::<E, &E>(model, (a, b), cut, cells, || eng, enough)
+    }
+
+    /// [`ConvergedModel::converge_from`] the coarsest grid, of an
+    /// engagement whose cells there are known already (`cells`, as
+    /// [`ForceModel::engaged`] of [`ConvergedModel::base`] gave them at this
+    /// cut's lead and tilt): the engagement itself is built (`eng`) only
+    /// where a finer grid is needed. The result is the one
+    /// [`ConvergedModel::converge_from`] `(0, 0)` gives.
+    pub fn converge_cells<E: Engagement>(
+        &self,
+        cut: &Cut,
+        cells: Engaged,
+        eng: impl FnOnce() -> E,
+        enough: impl Fn(&Evaluation) -> bool,
+    ) -> Converged<'_> {
+        self.converge_on::<E, E>(self.base(), (0, 0), cut, cells, eng, enough)
+    }
+
+    /// The evaluation of `cells` on `model` (the grid of `halvings`), then
+    /// refined on the engagement `eng` gives until `enough` or the
+    /// tolerance.
+    fn converge_on<'s, E: Engagement + ?Sized, R: std::borrow::Borrow<E>>(
+        &'s self,
+        model: &'s ForceModel,
+        halvings: (u32, u32),
+        cut: &Cut,
+        cells: Engaged,
+        eng: impl FnOnce() -> R,
+        enough: impl Fn(&Evaluation) -> bool,
+    ) -> Converged<'s> {
         let (rows, stats) = model.rows(cut, &cells);
         let evaluation = model.finish(cut, &rows, stats, cells.len());
         // Finer grids look for cells on the heights the coarsest found
@@ -336,7 +367,7 @@ impl ConvergedModel {
             model,
             cells: cells.clone(),
             evaluation,
-            halvings: (a, b),
+            halvings,
             steps: vec![Step {
                 model,
                 cells,
@@ -346,6 +377,8 @@ impl ConvergedModel {
         if c.cells.is_empty() || enough(&c.evaluation) {
             return c;
         }
+        let eng = eng();
+        let eng = eng.borrow();
         let rows = self.refine_slices(&mut c, cut, eng, band, rows, stats, &enough);
         if !enough(&c.evaluation) {
             self.refine_peaks(&mut c, cut, eng, band, rows, stats, &enough);

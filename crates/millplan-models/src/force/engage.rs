@@ -26,6 +26,20 @@ pub trait Engagement {
     }
 }
 
+/// An engagement lent: what it lends.
+impl<T: Engagement + ?Sized> Engagement for &T {
+    fn z_range(&self, tool: &Tool) -> (f64, f64) {
+        (**self).z_range(tool)
+    }
+    #[inline]
+    fn contains(&self, p: [f64; 3]) -> bool {
+        (**self).contains(p)
+    }
+    fn sectors(&self, z: f64, r: f64) -> u64 {
+        (**self).sectors(z, r)
+    }
+}
+
 /// Sectors of the full turn in [`Engagement::sectors`] (one bit each).
 pub const SECTORS: usize = 64;
 

@@ -328,6 +328,35 @@ impl ForceModel {
         band: (f64, f64),
         angles: Option<&[usize]>,
     ) -> Engaged {
+        self.engaged_listing(cut, eng, band, angles, None)
+    }
+
+    /// [`ForceModel::engaged`], and its cells as runs
+    /// ([`quadrature::Run`], from which [`ForceModel::cells_of_runs`]
+    /// rebuilds them); `None` for the runs where this model's grid does not
+    /// fit them ([`ForceModel::runs_fit`]).
+    pub fn engaged_runs<E: Engagement + ?Sized>(
+        &self,
+        cut: &Cut,
+        eng: &E,
+    ) -> (Engaged, Option<Vec<quadrature::Run>>) {
+        if !self.runs_fit() {
+            return (self.engaged(cut, eng), None);
+        }
+        let mut runs = Vec::new();
+        let all = (f64::NEG_INFINITY, f64::INFINITY);
+        let e = self.engaged_listing(cut, eng, all, None, Some(&mut runs));
+        (e, Some(runs))
+    }
+
+    fn engaged_listing<E: Engagement + ?Sized>(
+        &self,
+        cut: &Cut,
+        eng: &E,
+        band: (f64, f64),
+        angles: Option<&[usize]>,
+        runs: Option<&mut Vec<quadrature::Run>>,
+    ) -> Engaged {
         let m = self.m;
         let dir = Cut { fz: 1.0, ..*cut };
         let f = dir.feed_vector();
@@ -373,7 +402,7 @@ impl ForceModel {
         Engaged {
             lead: cut.lead,
             tilt: cut.tilt,
-            cells: self.weigh(&raw, eng, f),
+            cells: self.weigh(&raw, eng, f, runs),
         }
     }
 
@@ -507,6 +536,24 @@ impl Engaged {
 
     pub fn is_empty(&self) -> bool {
         self.cells.is_empty()
+    }
+
+    /// The engaged cells, column by column.
+    pub fn cells(&self) -> &[Cell] {
+        &self.cells
+    }
+
+    /// An engagement of `cut`'s lead and tilt from cells that
+    /// [`ForceModel::engaged`] of the same model gave at that lead and tilt
+    /// (kept from an earlier run over the same stock and path: the cells
+    /// depend on the feed direction, not on the feed per tooth or the
+    /// spindle speed).
+    pub fn from_cells(cut: &Cut, cells: Vec<Cell>) -> Engaged {
+        Engaged {
+            lead: cut.lead,
+            tilt: cut.tilt,
+            cells,
+        }
     }
 }
 

@@ -42,6 +42,15 @@ pub struct Cell {
     pub boundary: bool,
 }
 
+/// A cell of a run's interior: whole in both quadratures, no boundary.
+const PLAIN: Cell = Cell {
+    slice: 0,
+    k: 0,
+    w: 1.0,
+    half: 2.0,
+    boundary: false,
+};
+
 /// Columns of the per-angle table: Fx, Fy, Fz, T of the quadrature, then
 /// Fx, Fy, T of the odd slices' quadrature, of the even slices', and of the
 /// boundary cells counted whole.
@@ -67,15 +76,33 @@ pub(crate) fn accumulate(row: &mut [f64; COLUMNS], c: &Cell, q: [f64; 4]) {
     }
 }
 
+/// One run of consecutive engaged slices in one column, as
+/// [`ForceModel::cells_of_runs`] rebuilds its cells: angle index `k`, the
+/// slices `a` to `a + n − 1`, and where its ends meet material between
+/// slice centres as found by bisection (`lo`, `hi`: the midpoint of the last
+/// interval is (2j + 1)/2^(BISECTIONS + 1) of the way from the slice
+/// outside to the slice inside; 0 where the run ends on the flute's own
+/// end). Eight bytes stand for the run's cells (twenty each): a force run's
+/// engagements are kept this way for the runs after it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Run {
+    pub k: u16,
+    pub a: u16,
+    pub n: u16,
+    pub lo: u8,
+    pub hi: u8,
+}
+
 impl ForceModel {
     /// The weighted cells of the engaged (slice, angle index) pairs `raw`
     /// (ordered by slice), in column order; `f` is the feed direction in
-    /// the tool frame.
+    /// the tool frame. With `runs`, each run of the cells is added to it.
     pub(crate) fn weigh<E: Engagement + ?Sized>(
         &self,
         raw: &[(u32, u32)],
         eng: &E,
         f: [f64; 3],
+        mut runs: Option<&mut Vec<Run>>,
     ) -> Vec<Cell> {
         // Counting sort by angle index; slices stay ascending in a column.
         let mut start = vec![0u32; self.m + 1];
@@ -85,16 +112,7 @@ impl ForceModel {
         for i in 0..self.m {
             start[i + 1] += start[i];
         }
-        let mut cells = vec![
-            Cell {
-                slice: 0,
-                k: 0,
-                w: 1.0,
-                half: 2.0,
-                boundary: false,
-            };
-            raw.len()
-        ];
+        let mut cells = vec![PLAIN; raw.len()];
         let mut at = start.clone();
         for &(slice, k) in raw {
             let i = &mut at[k as usize];
@@ -108,27 +126,72 @@ impl ForceModel {
             while j < cells.len() && cells[j].k == k && cells[j].slice == cells[j - 1].slice + 1 {
                 j += 1;
             }
-            self.weigh_run(&mut cells[i..j], eng, f);
+            let run = &mut cells[i..j];
+            let (a, b) = (run[0].slice as usize, run[run.len() - 1].slice as usize);
+            let lo = if a > 0 {
+                self.bisect(k as usize, a - 1, a, eng, f)
+            } else {
+                0
+            };
+            let hi = if b + 1 < self.slices.len() {
+                self.bisect(k as usize, b + 1, b, eng, f)
+            } else {
+                0
+            };
+            self.weigh_run(run, lo, hi);
+            if let Some(r) = runs.as_deref_mut() {
+                r.push(Run {
+                    k: k as u16,
+                    a: a as u16,
+                    n: (j - i) as u16,
+                    lo,
+                    hi,
+                });
+            }
             i = j;
         }
         cells
     }
 
-    /// Weights of one run of consecutive slices in one column.
-    fn weigh_run<E: Engagement + ?Sized>(&self, run: &mut [Cell], eng: &E, f: [f64; 3]) {
+    /// Whether every run of this model's cells fits a [`Run`] (angle
+    /// indices and slices below 2^16).
+    pub fn runs_fit(&self) -> bool {
+        self.m <= usize::from(u16::MAX) && self.slices.len() <= usize::from(u16::MAX)
+    }
+
+    /// The cells of `runs` (as [`ForceModel::engaged_runs`] listed them), the
+    /// same as the engagement they were found in gave, bit for bit.
+    pub fn cells_of_runs(&self, runs: &[Run]) -> Vec<Cell> {
+        let mut cells = Vec::with_capacity(runs.iter().map(|r| usize::from(r.n)).sum());
+        for r in runs {
+            let at = cells.len();
+            cells.extend((0..u32::from(r.n)).map(|i| Cell {
+                slice: u32::from(r.a) + i,
+                k: u32::from(r.k),
+                ..PLAIN
+            }));
+            self.weigh_run(&mut cells[at..], r.lo, r.hi);
+        }
+        cells
+    }
+
+    /// Weights of one run of consecutive slices in one column whose ends
+    /// meet material where the bisections `lo` and `hi` found
+    /// ([`ForceModel::bisect`]; unused where the run ends on the flute's
+    /// own end).
+    fn weigh_run(&self, run: &mut [Cell], lo: u8, hi: u8) {
         let dz = self.dz;
         let (a, b) = (run[0].slice as usize, run[run.len() - 1].slice as usize);
-        let k = run[0].k as usize;
         let z = |s: usize| self.slices[s].u;
         let lo_open = a > 0;
         let hi_open = b + 1 < self.slices.len();
         let z_lo = if lo_open {
-            self.boundary(k, a - 1, a, eng, f)
+            self.boundary(a - 1, a, lo)
         } else {
             z(a) - 0.5 * dz
         };
         let z_hi = if hi_open {
-            self.boundary(k, b + 1, b, eng, f)
+            self.boundary(b + 1, b, hi)
         } else {
             z(b) + 0.5 * dz
         };
@@ -158,15 +221,16 @@ impl ForceModel {
 
     /// Where between the centres of the neighbouring slices `out` (not
     /// engaged) and `inside` (engaged) the edge of angle index `k` enters
-    /// material with a positive chip, as a meridian length.
-    fn boundary<E: Engagement + ?Sized>(
+    /// material with a positive chip: the bisection's last interval, as
+    /// its index j ([`Run`], [`ForceModel::boundary`]).
+    fn bisect<E: Engagement + ?Sized>(
         &self,
         k: usize,
         out: usize,
         inside: usize,
         eng: &E,
         f: [f64; 3],
-    ) -> f64 {
+    ) -> u8 {
         let (a, b) = (&self.slices[out], &self.slices[inside]);
         // The edge between two slice centres, linear in the share t from
         // `out` toward `inside`: its geometry is smooth there (the ball's
@@ -192,6 +256,18 @@ impl ForceModel {
                 o = mid;
             }
         }
-        a.u + 0.5 * (o + i) * (b.u - a.u)
+        // o is a multiple of 2^-BISECTIONS (exact).
+        (o * f64::from(1u32 << BISECTIONS)) as u8
+    }
+
+    /// The meridian length where bisection `j` ([`ForceModel::bisect`])
+    /// between slices `out` and `inside` places the edge's entry into
+    /// material: the midpoint of its last interval.
+    fn boundary(&self, out: usize, inside: usize, j: u8) -> f64 {
+        let (a, b) = (&self.slices[out], &self.slices[inside]);
+        // (2j + 1)/2^(BISECTIONS + 1): exact, as the bisection's own
+        // midpoint 0.5·(o + i) is.
+        let m = f64::from(2 * u32::from(j) + 1) / f64::from(2u32 << BISECTIONS);
+        a.u + m * (b.u - a.u)
     }
 }

@@ -443,6 +443,43 @@ impl Stock {
             + gaps
     }
 
+    /// A 64-bit digest of the material (grid, every column and gap, bit for
+    /// bit): two stocks with the same digest hold the same material but
+    /// for a hash collision. Work kept from a run over one stock is used
+    /// again only on a stock of the same digest.
+    pub fn fingerprint(&self) -> u64 {
+        use std::hash::Hasher;
+        let mut h = rustc_hash::FxHasher::default();
+        let g = &self.grid;
+        for v in [g.x0.to_bits(), g.y0.to_bits(), g.res.to_bits()] {
+            h.write_u64(v);
+        }
+        h.write_u64(g.nx as u64);
+        h.write_u64(g.ny as u64);
+        for col in [&self.top, &self.bot] {
+            for pair in col.chunks(2) {
+                let lo = u64::from(pair[0].to_bits());
+                let hi = pair.get(1).map_or(0, |v| u64::from(v.to_bits()));
+                h.write_u64(lo | hi << 32);
+            }
+        }
+        for (row, gaps) in self.gaps.iter().enumerate() {
+            if gaps.is_empty() {
+                continue;
+            }
+            let mut keys: Vec<&u32> = gaps.keys().collect();
+            keys.sort_unstable();
+            h.write_u64(row as u64);
+            for k in keys {
+                h.write_u64(u64::from(*k));
+                for [a, b] in &gaps[k] {
+                    h.write_u64(u64::from(a.to_bits()) | u64::from(b.to_bits()) << 32);
+                }
+            }
+        }
+        h.finish()
+    }
+
     /// Whether `p` lies in material (the cell's column holds p.z).
     #[inline]
     pub fn contains(&self, p: DVec3) -> bool {

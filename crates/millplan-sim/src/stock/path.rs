@@ -88,6 +88,30 @@ pub struct Strokes {
     pub skipped: Unsimulated,
 }
 
+impl Strokes {
+    /// A 64-bit digest of the strokes' geometry: every stroke's tool,
+    /// kind, ends and axes bit for bit, and the tool bodies (not the
+    /// durations, lines or move indices). Two lists with the same digest
+    /// cut the same material the same way but for a hash collision.
+    pub fn fingerprint(&self) -> u64 {
+        use std::hash::Hasher;
+        let mut h = rustc_hash::FxHasher::default();
+        for t in &self.tools {
+            h.write(format!("{t:?}").as_bytes());
+        }
+        h.write_u64(self.strokes.len() as u64);
+        for s in &self.strokes {
+            h.write_u64(u64::from(s.tool) << 1 | u64::from(s.rapid));
+            for v in [s.p0, s.p1, s.a0, s.a1] {
+                for c in v.to_array() {
+                    h.write_u64(c.to_bits());
+                }
+            }
+        }
+        h.finish()
+    }
+}
+
 /// Options of [`strokes`].
 #[derive(Clone, Copy, Debug)]
 pub struct PathOptions {
