@@ -36,24 +36,29 @@ pub fn same_tools(back: &mut Program, out: &Program) {
 /// (`back`, read from its bytes): the program the job wrote in memory
 /// (`out`) with the feed, spindle speed and feed mode of each move as read
 /// back, where the two have the same moves one for one, of the same kinds,
-/// every end within `tol` of the other (the written words round the
-/// positions, the tip check compares them). Its path is then the one the
-/// passes computed on, bit for bit, so the force run finds its engaged cells
-/// in what the job's run over the input kept; `None` where the moves do not
-/// pair (the program read back is then checked as it is).
+/// every end within the written words' rounding of the other
+/// ([`PAIRED_MM`], and `tol`, the tip check's, where that is finer; an
+/// unknown coordinate only with an unknown one). Its path is then the one
+/// the passes computed on, so the force run finds its engaged cells in what
+/// the job's run over the input kept. `None` where the moves do not pair,
+/// and for a program with arcs or canned cycles (their centres, depths and
+/// cycle feeds are not compared here): the program read back is then
+/// checked as it is.
 pub fn loads_program(back: &Program, out: &Program, tol: f64) -> Option<Program> {
     if back.operations.len() != out.operations.len() {
         return None;
     }
+    let near = PAIRED_MM.min(tol);
+    let same = |a: f64, b: f64| (a.is_nan() && b.is_nan()) || (a - b).abs() <= near;
     let mut p = out.clone();
     for (b, o) in back.operations.iter().zip(&mut p.operations) {
-        if b.moves.len() != o.moves.len() {
+        if b.moves.len() != o.moves.len() || !o.arcs.is_empty() || !o.cycles.is_empty() {
             return None;
         }
         for (x, y) in b.moves.iter().zip(&mut o.moves) {
-            let same_kind = std::mem::discriminant(&x.kind) == std::mem::discriminant(&y.kind);
-            let off = (x.end - y.end).abs().max_element();
-            if !same_kind || !(off <= tol) {
+            let kind = std::mem::discriminant(&x.kind) == std::mem::discriminant(&y.kind);
+            let end = (0..3).all(|i| same(x.end[i], y.end[i]));
+            if !(kind && end) {
                 return None;
             }
             y.feed = x.feed;
@@ -63,6 +68,11 @@ pub fn loads_program(back: &Program, out: &Program, tol: f64) -> Option<Program>
     }
     Some(p)
 }
+
+/// How far apart a written end and the end it was written from may lie
+/// for [`loads_program`] to pair them, mm: the rounding of three decimals
+/// (0.0005 mm), with room for the binary fractions.
+pub const PAIRED_MM: f64 = 0.001;
 
 /// Every limited load of every modelled cutting move of `run` (forces of
 /// `p`), with its limit at the move's spindle speed (the machine's chart
@@ -188,6 +198,43 @@ mod tests {
         parse_program(src, ReadOptions::default())
             .expect("reads")
             .program
+    }
+
+    /// The loads check takes the feeds and speeds read back on the path
+    /// computed on only where every end pairs within the rounding of the
+    /// written words; else (a step off, an arc, another count of moves) the
+    /// program read back is checked as it is.
+    #[test]
+    fn the_loads_checked_pair_the_written_feeds_with_the_path_within_its_rounding() {
+        let out = program(
+            "G21 G90\nT1 M6\nS6000 M3\nG0 X0 Y0 Z5\nG1 Z-1.00004 F300\nG1 X10.33333\nM30\n",
+        );
+        let back =
+            program("G21 G90\nT1 M6\nS6600 M3\nG0 X0 Y0 Z5\nG1 Z-1. F450\nG1 X10.3333\nM30\n");
+        let p = loads_program(&back, &out, 0.01).expect("pairs");
+        let moves: Vec<_> = p.operations.iter().flat_map(|o| &o.moves).collect();
+        let read: Vec<_> = back.operations.iter().flat_map(|o| &o.moves).collect();
+        let wrote: Vec<_> = out.operations.iter().flat_map(|o| &o.moves).collect();
+        assert_eq!(moves.len(), 3);
+        for ((m, r), w) in moves.iter().zip(&read).zip(&wrote) {
+            assert_eq!((m.feed, m.spindle), (r.feed, r.spindle));
+            assert_eq!(
+                m.end.to_array().map(f64::to_bits),
+                w.end.to_array().map(f64::to_bits)
+            );
+        }
+        assert_eq!(moves[1].feed, 450.0);
+        // Off by more than the rounding, or than the tip check's tolerance.
+        let off =
+            program("G21 G90\nT1 M6\nS6600 M3\nG0 X0 Y0 Z5\nG1 Z-1.002 F450\nG1 X10.3333\nM30\n");
+        assert!(loads_program(&off, &out, 0.01).is_none());
+        assert!(loads_program(&back, &out, 0.00001).is_none());
+        // Another count of moves, or an arc.
+        let fewer = program("G21 G90\nT1 M6\nS6600 M3\nG0 X0 Y0 Z5\nG1 Z-1. F450\nM30\n");
+        assert!(loads_program(&fewer, &out, 0.01).is_none());
+        let arc =
+            program("G21 G90\nT1 M6\nS6000 M3\nG0 X0 Y0 Z5\nG1 Z-1 F300\nG2 X10 Y0 I5 J0\nM30\n");
+        assert!(loads_program(&arc, &arc, 0.01).is_none());
     }
 
     #[test]

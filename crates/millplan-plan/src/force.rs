@@ -725,9 +725,10 @@ struct MemoPart {
 }
 
 /// Runs of cells an [`EngagementMemo`] holds at most (8 bytes each: 128
-/// MB; a 100,000-move finishing program on a 0.1 mm stock needs about 6 M):
-/// beyond them a part records no more, and later runs find those strokes'
-/// cells on the stock as [`simulate`] does.
+/// MB, besides 8 bytes a sample and 12 a stroke; a 100,000-move finishing
+/// program on a 0.1 mm stock needs about 15 M): beyond them a part records
+/// no more, and later runs find those strokes' cells on the stock as
+/// [`simulate`] does.
 pub const MEMO_RUNS: usize = 16 << 20;
 
 impl EngagementMemo {
@@ -768,10 +769,10 @@ fn memo_key(strokes: &Strokes, stock: &Stock, setup: &ForceSetup) -> u64 {
     let mut h = std::collections::hash_map::DefaultHasher::new();
     strokes.fingerprint().hash(&mut h);
     stock.fingerprint().hash(&mut h);
-    setup.grid.dz.to_bits().hash(&mut h);
-    setup.grid.dphi.to_bits().hash(&mut h);
-    setup.flutes.hash(&mut h);
-    setup.helix.to_bits().hash(&mut h);
+    // Every setting of the model (its grid, flutes, helix, and the flute
+    // length and stick-out each tool's model is cut to), as printed: the
+    // shortest text of a float is its value.
+    format!("{setup:?}").hash(&mut h);
     h.finish()
 }
 

@@ -255,6 +255,23 @@ fn engaged_cells_kept_from_the_inputs_run_give_every_later_run_bit_for_bit() {
     )
     .expect("runs");
     assert_eq!(with, plain);
+    // A model cut to another flute length has other slices.
+    let mut short = setup();
+    short.stickout = Some(7.3);
+    short.flute_length = Some(3.7);
+    assert!(!memo.fits(&s, &stock, &short));
+    let plain = simulate(&p, &s, stock.clone(), &short, LimitUse::None, &|_| {}).expect("runs");
+    let with = simulate_with(
+        &p,
+        &s,
+        stock.clone(),
+        &short,
+        LimitUse::None,
+        &|_| {},
+        Some(&memo),
+    )
+    .expect("runs");
+    assert_eq!(with, plain);
     let mut sim = millplan_sim::stock::sim::Simulator::new(stock.clone());
     let removed: f64 = s
         .strokes
