@@ -18,12 +18,34 @@ use serde::Serialize;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
-    /// Faster, or nearer the cutting speed, with every check passed.
+    /// Faster, or nearer the cutting speed, with neither measure worse and
+    /// every check passed.
     Improved,
-    /// Every check passed but nothing measured better.
+    /// Every check passed but nothing measured better, or what got better
+    /// came with a measure worse (a slower program nearer the cutting
+    /// speed, say): not what the user asked for, said as such.
     Kept,
     /// A check failed: nothing is written unless forced.
     Refused,
+}
+
+/// The verdict of a run whose checks `failed` or not, from its cycle
+/// times and its shares of points off the cutting speed (before, after):
+/// improved when faster or nearer the cutting speed (by more than 0.1 %)
+/// with neither worse (the time by the report's threshold,
+/// [`millplan_report::html::TIME_WORSE`]; the share by 0.1 %), else kept.
+pub fn decide(failed: bool, time: (f64, f64), vc: (Option<f64>, Option<f64>)) -> Verdict {
+    let faster = time.1 < time.0 * (1.0 - 1e-3);
+    let nearer = matches!(vc, (Some(x), Some(y)) if y < x - 1e-3);
+    let slower = time.1 > time.0 * (1.0 + millplan_report::html::TIME_WORSE);
+    let farther = matches!(vc, (Some(x), Some(y)) if y > x + 1e-3);
+    if failed {
+        Verdict::Refused
+    } else if (faster || nearer) && !(slower || farther) {
+        Verdict::Improved
+    } else {
+        Verdict::Kept
+    }
 }
 
 /// The run's summary, as JSON scripts read it (`--json`).
@@ -320,16 +342,11 @@ impl Job {
             .map_or(b.time_s, |p| p.report.time_s),
             None => b.time_s,
         };
-        let faster = after.time_s < before_time * (1.0 - 1e-3);
-        let nearer =
-            matches!((b.vc_off_share, after.vc_off_share), (Some(x), Some(y)) if y < x - 1e-3);
-        let verdict = if checks.iter().any(|c| !c.ok) {
-            Verdict::Refused
-        } else if faster || nearer {
-            Verdict::Improved
-        } else {
-            Verdict::Kept
-        };
+        let verdict = decide(
+            checks.iter().any(|c| !c.ok),
+            (before_time, after.time_s),
+            (b.vc_off_share, after.vc_off_share),
+        );
         let mut s = Summary {
             verdict,
             level: millplan_report::html::Level::Green,

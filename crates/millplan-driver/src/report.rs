@@ -87,15 +87,7 @@ pub fn verdict_line(s: &Summary) -> String {
         }
         (Verdict::Improved, _) => {
             let faster = s.time_after_s < s.time_before_s * (1.0 - 1e-3);
-            let vc = match (s.vc_off_before, s.vc_off_after) {
-                (Some(b), Some(a)) if a < b - 1e-3 => Some(format!(
-                    "points off the cutting speed {:.1} % → {:.1} %",
-                    100.0 * b,
-                    100.0 * a
-                )),
-                _ => None,
-            };
-            match (faster, vc) {
+            match (faster, nearer_words(s)) {
                 (true, Some(v)) => format!("Improved: {t}, {v}, every check passed"),
                 (false, Some(v)) => format!("Improved: {v} ({t}), every check passed"),
                 _ => format!("Improved: {t}, every check passed"),
@@ -104,9 +96,30 @@ pub fn verdict_line(s: &Summary) -> String {
         _ if s.input_unchanged => {
             format!("Kept: nothing measured better ({t}); every check passed")
         }
-        _ => format!(
-            "Kept: nothing measured better ({t}); the passes' program is written, every check passed"
+        // Better in one measure, worse in another.
+        _ if s.time_after_s < s.time_before_s * (1.0 - 1e-3) => format!(
+            "Kept: faster ({t}) but further from the cutting speed; the passes' program is written, every check passed"
         ),
+        _ => match nearer_words(s) {
+            Some(v) => format!(
+                "Kept: {v}, but {t}; the passes' program is written, every check passed"
+            ),
+            None => format!(
+                "Kept: nothing measured better ({t}); the passes' program is written, every check passed"
+            ),
+        },
+    }
+}
+
+/// The share of points off the cutting speed before → after, where it fell.
+fn nearer_words(s: &Summary) -> Option<String> {
+    match (s.vc_off_before, s.vc_off_after) {
+        (Some(b), Some(a)) if a < b - 1e-3 => Some(format!(
+            "points off the cutting speed {:.1} % → {:.1} %",
+            100.0 * b,
+            100.0 * a
+        )),
+        _ => None,
     }
 }
 
@@ -469,11 +482,43 @@ mod tests {
         assert_eq!(level(&changed), millplan_report::html::Level::Amber);
     }
 
-    /// An improvement names the measure that improved, not a cycle time
-    /// that grew.
+    /// An improvement names the measure that improved; one measure better
+    /// with the other worse is no improvement (a program nearer the cutting
+    /// speed that runs twice as long is not what a user asked for), and the
+    /// words say both.
     #[test]
-    fn improved_names_what_improved() {
-        let vc_only = summary(Verdict::Improved, (34.9, 68.0), (0.9, 0.1), false);
+    fn improved_names_what_improved_and_a_trade_is_kept() {
+        let d = crate::finish::decide;
+        assert_eq!(
+            d(false, (34.9, 34.0), (Some(0.9), Some(0.1))),
+            Verdict::Improved
+        );
+        assert_eq!(
+            d(false, (34.9, 34.9), (Some(0.9), Some(0.1))),
+            Verdict::Improved
+        );
+        assert_eq!(
+            d(false, (34.9, 20.0), (Some(0.2), Some(0.2))),
+            Verdict::Improved
+        );
+        assert_eq!(d(false, (34.9, 20.0), (None, None)), Verdict::Improved);
+        assert_eq!(
+            d(false, (34.9, 68.0), (Some(0.9), Some(0.1))),
+            Verdict::Kept
+        );
+        assert_eq!(
+            d(false, (34.9, 20.0), (Some(0.1), Some(0.5))),
+            Verdict::Kept
+        );
+        assert_eq!(
+            d(false, (34.9, 34.9), (Some(0.5), Some(0.5))),
+            Verdict::Kept
+        );
+        assert_eq!(
+            d(true, (34.9, 20.0), (Some(0.9), Some(0.1))),
+            Verdict::Refused
+        );
+        let vc_only = summary(Verdict::Improved, (34.9, 34.9), (0.9, 0.1), false);
         let line = verdict_line(&vc_only);
         assert!(
             line.starts_with("Improved: points off the cutting speed 90.0 % → 10.0 %"),
@@ -481,5 +526,14 @@ mod tests {
         );
         let both = summary(Verdict::Improved, (20.0, 10.0), (0.9, 0.1), false);
         assert!(verdict_line(&both).starts_with("Improved: cycle time 20.0 s → 10.0 s"));
+        let slower = summary(Verdict::Kept, (34.9, 68.0), (0.9, 0.1), false);
+        let line = verdict_line(&slower);
+        assert!(
+            line.starts_with("Kept: points off the cutting speed 90.0 % → 10.0 %, but cycle time 34.9 s → 68.0 s (+94.8 %)"),
+            "{line}"
+        );
+        assert_eq!(level(&slower), millplan_report::html::Level::Amber);
+        let farther = summary(Verdict::Kept, (20.0, 10.0), (0.1, 0.5), false);
+        assert!(verdict_line(&farther).starts_with("Kept: faster (cycle time 20.0 s → 10.0 s"));
     }
 }

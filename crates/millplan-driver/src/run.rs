@@ -84,6 +84,23 @@ struct State {
     posted: Option<(Program, PostReport)>,
 }
 
+/// Lead and tilt that made the posted program slower than the input.
+struct OrientLost {
+    /// The posted program's time with the turned axes, s.
+    with: f64,
+    /// The input's, posted the same way, s.
+    input: f64,
+}
+
+impl OrientLost {
+    fn why(&self) -> String {
+        format!(
+            "dropped: with the turned axes the program posts in {:.1} s against the input's {:.1} s; without them it is faster",
+            self.with, self.input
+        )
+    }
+}
+
 impl Job {
     /// The speed pass's settings: the job's vc, flutes and allowance; the
     /// feed follows the speed at the program's own chip load (its first
@@ -222,6 +239,40 @@ impl Job {
         let input = self.analysed();
         let forces_before = self.forces_before.clone();
         let before = self.measure(input, forces_before.as_ref(), &cx);
+        let (mut program, mut out, mut st) = self.run_passes(passes, &cx, None)?;
+        // Lead and tilt are kept only where they win once posted: a program
+        // the turned axes make slower than the input on the machine (their
+        // rotary motion, the points a post inserts) is run again without
+        // them, and the faster of the two is kept.
+        if let Some(slower) = self.orient_lost(&st) {
+            let (p2, out2, st2) = self.run_passes(passes, &cx, Some(&slower))?;
+            if st2
+                .posted
+                .as_ref()
+                .is_some_and(|(_, r)| r.time_s < slower.with)
+            {
+                (program, out, st) = (p2, out2, st2);
+            }
+        }
+        Ok(Outcome {
+            program,
+            passes: out,
+            before,
+            forces_before,
+            reordered: st.reordered,
+            oriented: st.oriented,
+            posted: st.posted,
+        })
+    }
+
+    /// The pass list run on the input, `without` lead and tilt where given.
+    fn run_passes(
+        &self,
+        passes: &[PassName],
+        cx: &Context,
+        without: Option<&OrientLost>,
+    ) -> Result<(Program, Vec<PassOutcome>, State), JobError> {
+        let input = self.analysed();
         // The default spindle speed is written only where a pass that needs
         // a speed runs (the speeds, the feeds, lead and tilt on the forces).
         let speeds = passes.iter().any(|&p| {
@@ -234,9 +285,15 @@ impl Job {
         for (k, &pass) in passes.iter().enumerate() {
             cx.progress(PASSES_PHASE, k, passes.len());
             let t = Instant::now();
-            let (ran, reason) = match missing(self, pass).or_else(|| after_others(pass, &st)) {
+            let dropped = without
+                .filter(|_| pass == PassName::Orient)
+                .map(|w| w.why());
+            let (ran, reason) = match dropped
+                .or_else(|| missing(self, pass))
+                .or_else(|| after_others(pass, &st))
+            {
                 Some(why) => (false, why),
-                None => (true, self.run_pass(pass, &mut p, &cx, passes, &mut st)?),
+                None => (true, self.run_pass(pass, &mut p, cx, passes, &mut st)?),
             };
             out.push(PassOutcome {
                 name: pass.name(),
@@ -246,14 +303,24 @@ impl Job {
             });
         }
         cx.progress(PASSES_PHASE, passes.len(), passes.len());
-        Ok(Outcome {
-            program: p,
-            passes: out,
-            before,
-            forces_before,
-            reordered: st.reordered,
-            oriented: st.oriented,
-            posted: st.posted,
+        Ok((p, out, st))
+    }
+
+    /// Where lead and tilt turned the axes and the program they ended in
+    /// posts slower than the input by more than the report's threshold
+    /// ([`millplan_report::html::TIME_WORSE`]): the two times.
+    fn orient_lost(&self, st: &State) -> Option<OrientLost> {
+        let (_, r) = st.posted.as_ref().filter(|_| st.oriented)?;
+        let input = post(
+            &self.inputs.program,
+            &self.inputs.machine,
+            &self.post_options(),
+        )
+        .ok()?;
+        let t0 = input.report.time_s;
+        (r.time_s > t0 * (1.0 + millplan_report::html::TIME_WORSE)).then_some(OrientLost {
+            with: r.time_s,
+            input: t0,
         })
     }
 

@@ -970,6 +970,97 @@ fn a_five_axis_ball_program_is_leaned_on_the_stock_with_its_centres_kept() {
         .any(|a| a.is_some_and(|v| v.z < 0.999_999)));
 }
 
+/// Lead and tilt are kept only where they win once posted. A D10 ball
+/// raster over the demo part, written as five-axis CL with its axis tilted
+/// 15° about y (the ball centres where the vertical raster put them), is
+/// leaned by the orient pass to a tilt whose rotary motion, posted for a
+/// table A/C machine, runs more than twice as long as the input; the run is
+/// made again without it, and the faster program written, said as such.
+#[test]
+fn lead_and_tilt_that_post_slower_than_the_input_are_dropped() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let d = dir.path();
+    let (stl, _, _) = demo(d);
+    let (raster, apt, m) = (d.join("r.apt"), d.join("r5.apt"), d.join("ac.toml"));
+    let o = run(&[
+        "raster",
+        "--stl",
+        s(&stl),
+        "--tool",
+        "ball:10",
+        "--stepover",
+        "4",
+        "--step",
+        "0.5",
+        "-o",
+        s(&raster),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (sa, ca) = 15f64.to_radians().sin_cos();
+    let text = std::fs::read_to_string(&raster).expect("written");
+    let five: String = text
+        .lines()
+        .map(|l| match l.strip_prefix("GOTO/") {
+            Some(r) if l.matches(',').count() == 2 => {
+                let v: Vec<f64> = r.split(',').map(|x| x.parse().expect("number")).collect();
+                // The same centre: tip = centre − R·axis.
+                let (x, z) = (v[0] - 5.0 * sa, v[2] + 5.0 * (1.0 - ca));
+                format!("GOTO/{x:.6},{:.6},{z:.6},{sa:.7},0,{ca:.7}\n", v[1])
+            }
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    std::fs::write(&apt, five).expect("write");
+    std::fs::write(&m, TABLE_AC_G93).expect("write");
+    let out = d.join("o.nc");
+    let o = run(&[
+        "optimise",
+        s(&apt),
+        "--stl",
+        s(&stl),
+        "--stock",
+        "offset:0.5",
+        "--machine",
+        s(&m),
+        "--material",
+        "al7075",
+        "--resolution",
+        "0.5",
+        "-o",
+        s(&out),
+        "--json",
+        "-q",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let j = json(&o);
+    let orient = pass(&j, "orient");
+    assert_eq!(orient["ran"], false, "{j}");
+    assert!(
+        orient["reason"]
+            .as_str()
+            .is_some_and(|r| r.starts_with("dropped: with the turned axes")),
+        "{orient}"
+    );
+    assert_eq!(pass(&j, "post")["ran"], true, "{j}");
+    assert_eq!(pass(&j, "feed")["ran"], true, "{j}");
+    assert_eq!(j["verdict"], "improved", "{j}");
+    let (before, after) = (
+        j["time_before_s"].as_f64().expect("t"),
+        j["time_after_s"].as_f64().expect("t"),
+    );
+    assert!(after < before, "{before} → {after}");
+    // The axes written are the input's (no lean), posted.
+    for c in j["checks"].as_array().expect("checks") {
+        assert_eq!(c["ok"], true, "{c}");
+    }
+}
+
 /// `optimise --passes orient` of `apt` into `out`, written whatever its
 /// checks say (`--force`), with the options `common` at 0.2 mm.
 fn orient_alone(apt: &Path, common: &[&str], out: &Path) {
