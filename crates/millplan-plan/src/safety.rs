@@ -770,11 +770,18 @@ struct PathIndex {
 impl PathIndex {
     /// Near within `tol` (cells of at least 4·`tol`, at most some four
     /// million samples).
+    /// A canned cycle's hole counts from its highest plane down to its
+    /// bottom along the tool axis: the tool went there.
     fn new(p: &Program, tol: f64) -> PathIndex {
         let mut segs = Vec::new();
         for op in &p.operations {
-            for i in 0..op.moves.len() {
+            for (i, m) in op.moves.iter().enumerate() {
                 move_segments(op, i, tol, &mut |a, b| segs.push((a, b)));
+                if let (Some(c), Some(at)) = (op.cycle(m), known(m.end)) {
+                    let axis = op.axis(m).unwrap_or(DVec3::Z);
+                    let top = at + axis * c.retract.max(c.clearance).max(c.bottom);
+                    segs.push((part_point(op, top), part_point(op, at + axis * c.bottom)));
+                }
             }
         }
         Self::of(segs, tol)
@@ -1061,8 +1068,10 @@ fn gouge_report(i: &Inputs, p: &Program, part: &DropMesh) -> GougeReport {
 }
 
 /// Gouges of the output into the part (rapids included). A gouge whose
-/// deepest point lies on the input's path (within [`Tolerances::tip`]) is
-/// the input's, the same tool having been there: reported `in_input`, not
+/// deepest point lies on the input's path (within [`Tolerances::tip`]; a
+/// canned cycle's hole from its highest plane to its bottom, which the
+/// input's own check skips) is the input's, the same tool having been
+/// there: reported `in_input`, not
 /// refused. A move of the output that leaves the input's path (a new link)
 /// and gouges deepest off it is new.
 pub fn gouges(i: &Inputs, part: &DropMesh) -> Check {

@@ -67,7 +67,8 @@ pub struct Skipped {
     /// The tool is not along +Z (five-axis) and not a ball end, or its axis
     /// is known only as machine angles.
     pub tilted: usize,
-    /// Canned-cycle holes.
+    /// Canned-cycle holes along an axis that is not vertical (a vertical
+    /// one is checked from the cycle's highest plane down to its bottom).
     pub cycles: usize,
     /// From or to a position the program has not set.
     pub unknown_position: usize,
@@ -250,11 +251,11 @@ fn sample_operation(
     let vertical = |a: DVec3| (a - DVec3::Z).length() <= 1e-6;
     let ball = matches!(b.shape, Shape::Ball { .. });
     for (i, m) in op.moves.iter().enumerate() {
+        if let Some(c) = op.cycle(m) {
+            sample_hole(op, (oi, i), c, g, rep, samples);
+            continue;
+        }
         if !wanted(m.kind, g) {
-            if m.cycle().is_some() {
-                rep.skipped.cycles += 1;
-                rep.skipped.at(m.line);
-            }
             continue;
         }
         let (Some(start), Some(end)) = (op.known_start(i), known(m.end)) else {
@@ -301,6 +302,44 @@ fn sample_operation(
             (oi as u32, i as u32, to_part(at(t)), axis)
         }));
     }
+}
+
+/// The samples of one hole of a canned cycle (move `i` of operation `oi`):
+/// along the tool axis from the cycle's highest plane down to its bottom,
+/// where its pecks, feeds and rapids all run. A hole at an unknown
+/// position, or whose axis is not vertical (`cycles`), is skipped.
+fn sample_hole(
+    op: &Operation,
+    (oi, i): (usize, usize),
+    c: &millplan_nc::ir::Cycle,
+    g: &GougeParams,
+    rep: &mut GougeReport,
+    samples: &mut Vec<Sample>,
+) {
+    let m = &op.moves[i];
+    let Some(at) = known(m.end) else {
+        rep.skipped.unknown_position += 1;
+        rep.skipped.at(m.line);
+        return;
+    };
+    let upright = op
+        .axis_in_part(m)
+        .is_some_and(|a| (a - DVec3::Z).length() <= 1e-6);
+    if !upright {
+        rep.skipped.cycles += 1;
+        rep.skipped.at(m.line);
+        return;
+    }
+    let axis = op.axis(m).unwrap_or(DVec3::Z);
+    let to_part = |v: DVec3| op.frame.map(|f| f.to_parent(v)).unwrap_or(v);
+    let top = at + axis * c.retract.max(c.clearance).max(c.bottom);
+    let bottom = at + axis * c.bottom;
+    rep.moves_checked += 1;
+    let n = (((top - bottom).length() / g.step).ceil() as usize).max(1);
+    samples.extend((0..=n).map(|k| {
+        let q = top.lerp(bottom, k as f64 / n as f64);
+        (oi as u32, i as u32, to_part(q), None)
+    }));
 }
 
 /// How far below the drop-cutter height of the vertical cutter `sh` the tip

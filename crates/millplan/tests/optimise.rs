@@ -1229,3 +1229,59 @@ fn a_flat_end_plunge_into_the_stock_is_never_fed_faster() {
     assert_eq!((plunge.end.x, plunge.end.z), (10.0, -1.0));
     assert!(plunge.feed <= 300.0, "plunge at F{}", plunge.feed);
 }
+
+/// The holes of a canned cycle are gouge-checked along their axis, and a
+/// cycle spelled out as lines in G-code drills where the input's cycle
+/// drilled: a hole the part (another revision, here a plain plate) does not
+/// have is the input's gouge, in G-code as in APT, not a new one refused (a ball-end pass in air follows, for the tool shape
+/// `optimise` asks for) (SOLIDWORKS CAM's Interface-glue written to G-code was
+/// refused for its own drill's holes).
+#[test]
+fn a_canned_cycle_written_as_lines_gouges_only_where_the_input_drilled() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let d = dir.path();
+    let (stl, apt) = (d.join("plate.stl"), d.join("drill.apt"));
+    plate(&stl);
+    std::fs::write(
+        &apt,
+        "PARTNO/HOLES\nUNITS/MM\nCUTTER/6.5,0,3.25,1.952797,31.,0,105.\nLOAD/TOOL,16\n\
+         SPINDL/3000,RPM,CLW\nRAPID\nGOTO/20,20,25.\nCYCLE/INIT\n\
+         CYCLE/DEEP2,FEDTO,4.,1STPECK,1.5,SUBPECK,1.,MMPM,200.,RAPTO,2.,RTRCTO,25.\n\
+         GOTO/20,20,0.\nGOTO/40,20,0.\nCYCLE/OFF\n\
+         CUTTER/10,5,0,5,0,0,0\nLOAD/TOOL,1\nSPINDL/6000,RPM,CLW\nRAPID\nGOTO/10,50,5\n\
+         FEDRAT/1000,MMPM\nGOTO/10,50,1\nGOTO/50,50,1\nFINI\n",
+    )
+    .expect("write");
+    let (nc, back) = (d.join("o.nc"), d.join("o.apt"));
+    for out in [&nc, &back] {
+        let o = run(&[
+            "optimise",
+            s(&apt),
+            "--stl",
+            s(&stl),
+            "--passes",
+            "speed",
+            "-o",
+            s(out),
+            "--json",
+            "-q",
+        ]);
+        let j = json(&o);
+        assert_eq!(o.status.code(), Some(0), "{}: {j}", out.display());
+        let gouge = j["checks"]
+            .as_array()
+            .expect("checks")
+            .iter()
+            .find(|c| c["name"] == "gouge")
+            .expect("gouge check");
+        assert_eq!(gouge["ok"], true, "{gouge}");
+        let f = gouge["findings"].as_array().expect("findings");
+        assert!(
+            !f.is_empty() && f.iter().all(|x| x["in_input"] == true),
+            "{}: {gouge}",
+            out.display()
+        );
+    }
+    let text = std::fs::read_to_string(&nc).expect("written");
+    assert!(text.contains("written as lines"), "{text}");
+}
