@@ -15,10 +15,9 @@ use std::path::PathBuf;
 /// Exit code 0 when clean, 3 when gouges were found, 2 when the program does
 /// not say its tool's shape (give --tool) or no move could be checked. Moves
 /// of other leaning tools or whose axis is known only as machine angles,
-/// canned-cycle holes along a tilted axis and moves from a position the
-/// program has not set are counted as not checked, each kind apart; a hole
-/// along a vertical axis is checked from the cycle's highest plane down to
-/// its bottom.
+/// canned-cycle holes along a leaning axis (a vertical one is checked from
+/// its highest plane down) and moves from a position the program has not
+/// set are counted as not checked, each kind apart.
 #[derive(clap::Args)]
 pub struct Args {
     /// Program (APT/CL or G-code).
