@@ -574,15 +574,28 @@ fn tip_differs(
     None
 }
 
-/// The known ends of the cutting moves of `p`, part coordinates, with lines.
+/// The known ends of the cutting moves of `p`, part coordinates, with
+/// lines; a canned cycle's hole by the ends of its feed strokes (its pecks
+/// and its bottom, as [`cycle_moves`] spells it out: the points a program
+/// that writes the cycle as lines cuts to).
 fn cutting_points(p: &Program) -> Vec<(DVec3, u32)> {
+    use millplan_nc::write::{cycle_moves, CycleStep};
     let mut v = Vec::new();
     for op in &p.operations {
         for m in &op.moves {
-            if m.kind != MoveKind::Rapid {
-                if let Some(e) = known(part_point(op, m.end)) {
-                    v.push((e, m.line));
-                }
+            if m.kind == MoveKind::Rapid {
+                continue;
+            }
+            let Some(end) = known(m.end) else { continue };
+            let steps = op
+                .cycle(m)
+                .and_then(|c| cycle_moves(c, end, op.axis(m).unwrap_or(DVec3::Z)).ok());
+            match steps {
+                Some(steps) => v.extend(steps.into_iter().filter_map(|s| match s {
+                    CycleStep::Feed(q, _) => Some((part_point(op, q), m.line)),
+                    _ => None,
+                })),
+                None => v.push((part_point(op, end), m.line)),
             }
         }
     }

@@ -1233,7 +1233,9 @@ fn a_flat_end_plunge_into_the_stock_is_never_fed_faster() {
 /// The holes of a canned cycle are gouge-checked along their axis, and a
 /// cycle spelled out as lines in G-code drills where the input's cycle
 /// drilled: a hole the part (another revision, here a plain plate) does not
-/// have is the input's gouge, in G-code as in APT, not a new one refused (a ball-end pass in air follows, for the tool shape
+/// have is the input's gouge, in G-code as in APT, not a new one refused;
+/// and a new order (the tip then checked point by point) finds the
+/// input's holes cut where the lines cut them (a ball-end pass in air follows, for the tool shape
 /// `optimise` asks for) (SOLIDWORKS CAM's Interface-glue written to G-code was
 /// refused for its own drill's holes).
 #[test]
@@ -1260,7 +1262,7 @@ fn a_canned_cycle_written_as_lines_gouges_only_where_the_input_drilled() {
             "--stl",
             s(&stl),
             "--passes",
-            "speed",
+            "speed,reorder",
             "-o",
             s(out),
             "--json",
