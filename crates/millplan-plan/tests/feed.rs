@@ -193,6 +193,14 @@ fn engaged_cells_kept_from_the_inputs_run_give_every_later_run_bit_for_bit() {
     );
     assert!(memo.fits(&s, &stock, &setup()));
     assert!(memo.memory_bytes() > 0);
+    // The run with the memo and the run without, on `stock`.
+    let same = |prog: &Program, setup: &ForceSetup, u: LimitUse<'_>| {
+        let strokes = strokes_of(prog, &m);
+        let run = |memo| {
+            simulate_with(prog, &strokes, stock.clone(), setup, u, &|_| {}, memo).expect("runs")
+        };
+        assert_eq!(run(Some(&memo)), run(None), "{u:?}");
+    };
     let mut faster = p.clone();
     for op in &mut faster.operations {
         for mv in &mut op.moves {
@@ -207,71 +215,41 @@ fn engaged_cells_kept_from_the_inputs_run_give_every_later_run_bit_for_bit() {
     );
     let limits = limits();
     for prog in [&p, &faster] {
-        let strokes = strokes_of(prog, &m);
         for u in [
             LimitUse::None,
             LimitUse::Check(&limits, &m),
             LimitUse::Schedule(&limits, &m),
         ] {
-            let plain =
-                simulate(prog, &strokes, stock.clone(), &setup(), u, &|_| {}).expect("runs");
-            let kept = simulate_with(
-                prog,
-                &strokes,
-                stock.clone(),
-                &setup(),
-                u,
-                &|_| {},
-                Some(&memo),
-            )
-            .expect("runs");
-            assert_eq!(kept, plain, "{u:?}");
+            same(prog, &setup(), u);
         }
     }
+    // Without a memo `simulate_with` is `simulate`.
+    assert_eq!(
+        simulate(&p, &s, stock.clone(), &setup(), LimitUse::None, &|_| {}).expect("runs"),
+        simulate_with(
+            &p,
+            &s,
+            stock.clone(),
+            &setup(),
+            LimitUse::None,
+            &|_| {},
+            None
+        )
+        .expect("runs")
+    );
     // Another path or another stock: the memo does not fit and is not used.
     let mut moved = p.clone();
     if let Some(mv) = moved.operations[0].moves.iter_mut().find(|m| m.feed > 0.0) {
         mv.end.z -= 0.2;
     }
-    let sm = strokes_of(&moved, &m);
-    assert!(!memo.fits(&sm, &stock, &setup()));
-    let plain = simulate(
-        &moved,
-        &sm,
-        stock.clone(),
-        &setup(),
-        LimitUse::None,
-        &|_| {},
-    )
-    .expect("runs");
-    let with = simulate_with(
-        &moved,
-        &sm,
-        stock.clone(),
-        &setup(),
-        LimitUse::None,
-        &|_| {},
-        Some(&memo),
-    )
-    .expect("runs");
-    assert_eq!(with, plain);
+    assert!(!memo.fits(&strokes_of(&moved, &m), &stock, &setup()));
+    same(&moved, &setup(), LimitUse::None);
     // A model cut to another flute length has other slices.
     let mut short = setup();
     short.stickout = Some(7.3);
     short.flute_length = Some(3.7);
     assert!(!memo.fits(&s, &stock, &short));
-    let plain = simulate(&p, &s, stock.clone(), &short, LimitUse::None, &|_| {}).expect("runs");
-    let with = simulate_with(
-        &p,
-        &s,
-        stock.clone(),
-        &short,
-        LimitUse::None,
-        &|_| {},
-        Some(&memo),
-    )
-    .expect("runs");
-    assert_eq!(with, plain);
+    same(&p, &short, LimitUse::None);
     let mut sim = millplan_sim::stock::sim::Simulator::new(stock.clone());
     let removed: f64 = s
         .strokes
