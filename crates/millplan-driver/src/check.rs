@@ -48,6 +48,12 @@ impl Range {
 pub const MAX_TOOL_D: f64 = 1000.0;
 /// Largest feed, mm/min.
 pub const MAX_FEED: f64 = 1e6;
+/// Smallest feed an argument may give, mm/min: slower than any cut, and
+/// still a feed in the words of every writer (three decimals, in inches
+/// too; `--feed=1e-300` wrote F0, which its read-back refused).
+pub const MIN_FEED: f64 = 0.1;
+/// The range of a feed argument.
+pub const FEED: Range = Range::from(MIN_FEED, MAX_FEED, "mm/min");
 /// Largest spindle speed, 1/min.
 pub const MAX_SPINDLE: f64 = 1e6;
 /// Largest cutting speed, m/min.

@@ -2,7 +2,7 @@
 //! size against the limits, the checks of the written raster, the run
 //! (`run_command`) and the typed summary.
 
-use crate::check::{arg, raster_spacing, tool_shape, Range, MAX_FEED, MAX_SPINDLE};
+use crate::check::{arg, raster_spacing, tool_shape, Range, FEED, MAX_SPINDLE};
 use millplan_geom::limits::{amount, Exceeded};
 use millplan_geom::{Aabb, TriMesh};
 use millplan_nc::equiv::Tolerance;
@@ -54,7 +54,7 @@ pub fn params(a: &RasterRequest) -> Result<RasterParams, String> {
     arg("--boundary", a.boundary, Range::from(-1e6, 1e6, "mm"))?;
     let above = Range::positive(1e4, "mm above the part");
     arg("--clearance", a.clearance, above)?;
-    arg("--feed", a.feed, Range::positive(MAX_FEED, "mm/min"))?;
+    arg("--feed", a.feed, FEED)?;
     arg(
         "--spindle",
         a.spindle,

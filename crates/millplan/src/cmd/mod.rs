@@ -31,7 +31,7 @@ use clap::ValueEnum;
 use millplan_nc::write::Target;
 use millplan_nc::{LengthUnit, ReadOptions};
 
-pub use millplan_driver::check::{Range, MAX_FEED};
+pub use millplan_driver::check::{Range, FEED};
 
 /// Checks a numeric argument: finite and in its range, else an error naming
 /// the option, the value and the range (exit 2).
@@ -148,7 +148,7 @@ pub fn read_options(units: Option<UnitArg>, feed: Option<f64>) -> CliResult<Read
     Ok(ReadOptions {
         units: units.map(Into::into),
         default_feed: match feed {
-            Some(f) => arg("--feed", f, Range::positive(MAX_FEED, "mm/min"))?,
+            Some(f) => arg("--feed", f, FEED)?,
             None => d.default_feed,
         },
         limits: crate::limits::get(),
