@@ -800,6 +800,44 @@ impl PathIndex {
         Self::of(segs, tol)
     }
 
+    /// The rapids of a program: its rapid moves, and its canned cycles'
+    /// rapid steps as [`cycle_moves`] spells them out (from the hole's
+    /// highest plane down to its feed plane, out of each peck).
+    fn rapids(p: &Program, tol: f64) -> PathIndex {
+        use millplan_nc::write::{cycle_moves, CycleStep};
+        let mut segs = Vec::new();
+        for op in &p.operations {
+            for (i, m) in op.moves.iter().enumerate() {
+                if m.kind == MoveKind::Rapid {
+                    move_segments(op, i, tol, &mut |a, b| segs.push((a, b)));
+                }
+                let (Some(c), Some(at)) = (op.cycle(m), known(m.end)) else {
+                    continue;
+                };
+                let axis = op.axis(m).unwrap_or(DVec3::Z);
+                let mut last = at + axis * c.retract.max(c.clearance).max(c.bottom);
+                // Across to the hole at the height the tool stands, as the
+                // stock simulation and the time estimate move it.
+                if let Some(from) = op.known_start(i) {
+                    let across = DVec3::new(at.x, at.y, from.z.max(last.z));
+                    segs.push((part_point(op, from), part_point(op, across)));
+                    segs.push((part_point(op, across), part_point(op, last)));
+                }
+                for step in cycle_moves(c, at, axis).unwrap_or_default() {
+                    match step {
+                        CycleStep::Rapid(q) => {
+                            segs.push((part_point(op, last), part_point(op, q)));
+                            last = q;
+                        }
+                        CycleStep::Feed(q, _) => last = q,
+                        CycleStep::Dwell(_) => {}
+                    }
+                }
+            }
+        }
+        Self::of(segs, tol)
+    }
+
     /// The path of the ball centres of a program's ball-end moves (each
     /// move from the previous move's centre to its own, arcs as their
     /// chords), under the tool bodies of `i`.
@@ -976,6 +1014,16 @@ fn move_ends(p: &Program, at: (u32, u32)) -> (DVec3, DVec3) {
     )
 }
 
+/// Whether the straight move `(a, b)` runs along `index` within `tol` all
+/// the way (sampled every millimetre, ends included).
+fn along(index: &PathIndex, (a, b): (DVec3, DVec3), tol: f64) -> bool {
+    if !(a.is_finite() && b.is_finite()) {
+        return false;
+    }
+    let n = ((b - a).length().ceil() as usize).clamp(1, 100_000);
+    (0..=n).all(|k| index.near(a.lerp(b, k as f64 / n as f64), tol))
+}
+
 fn same_ends(a: (DVec3, DVec3), b: (DVec3, DVec3), tol: f64) -> bool {
     let close = |p: DVec3, q: DVec3| {
         (0..3).all(|k| (p[k].is_nan() && q[k].is_nan()) || (p[k] - q[k]).abs() <= tol)
@@ -1044,17 +1092,29 @@ pub fn stock(i: &Inputs, stock: &Stock) -> Check {
     let (oi, ii) = (move_index(i.output), move_index(i.input));
     // The input's: a collision of the same kind at a move with the same
     // ends, or from the same source line (a pass that moves the tip, such
-    // as `orient`, keeps the lines).
-    let was = |col: &Collision, old: &[Collision]| {
+    // as `orient`, keeps the lines); a rapid's also where the whole move
+    // runs along the input's own rapids (a canned cycle written as lines
+    // rapids where the cycle did).
+    let rapids = std::cell::OnceCell::new();
+    let was = |col: &Collision, old: &[Collision], rapid: bool| {
         let e = move_ends(i.output, oi[col.mv as usize]);
-        old.iter().any(|o| {
+        let same = old.iter().any(|o| {
             (col.line != 0 && o.line == col.line)
                 || same_ends(move_ends(i.input, ii[o.mv as usize]), e, i.tol.tip)
+        });
+        same || (rapid && !old.is_empty() && {
+            let index = rapids.get_or_init(|| PathIndex::rapids(i.input, i.tol.tip));
+            along(index, e, i.tol.tip)
         })
     };
-    for (list, old, what) in [
-        (&out.rapid, &old.rapid, "rapid through material"),
-        (&out.holder, &old.holder, "shank or holder in material"),
+    for (list, old, what, rapid) in [
+        (&out.rapid, &old.rapid, "rapid through material", true),
+        (
+            &out.holder,
+            &old.holder,
+            "shank or holder in material",
+            false,
+        ),
     ] {
         for col in list {
             c.findings.push(Finding {
@@ -1063,7 +1123,7 @@ pub fn stock(i: &Inputs, stock: &Stock) -> Check {
                     "{what}, {:.3} mm deep ({:.3} mm³)",
                     col.depth, col.volume_mm3
                 ),
-                in_input: was(col, old),
+                in_input: was(col, old, rapid),
             });
         }
     }

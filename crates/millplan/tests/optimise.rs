@@ -1286,4 +1286,48 @@ fn a_canned_cycle_written_as_lines_gouges_only_where_the_input_drilled() {
     }
     let text = std::fs::read_to_string(&nc).expect("written");
     assert!(text.contains("written as lines"), "{text}");
+    // Holes whose feed plane lies 1 mm inside the stock: the cycle's rapid
+    // down to it goes through material, refused whatever the dialect, and
+    // named the input's own in G-code lines as in the cycle itself.
+    let deep = d.join("deep.apt");
+    let src = std::fs::read_to_string(&apt).expect("written");
+    std::fs::write(
+        &deep,
+        src.replace(
+            "GOTO/20,20,0.\nGOTO/40,20,0.",
+            "GOTO/20,20,-3.\nGOTO/40,20,-3.",
+        ),
+    )
+    .expect("write");
+    for out in [&nc, &back] {
+        let o = run(&[
+            "optimise",
+            s(&deep),
+            "--stl",
+            s(&stl),
+            "--stock",
+            "box:0,0,-5,60,60,0",
+            "--passes",
+            "speed",
+            "-o",
+            s(out),
+            "--json",
+            "-q",
+        ]);
+        let j = json(&o);
+        assert_eq!(o.status.code(), Some(3), "{}: {j}", out.display());
+        let stock = j["checks"]
+            .as_array()
+            .expect("checks")
+            .iter()
+            .find(|c| c["name"] == "stock")
+            .expect("stock check");
+        assert_eq!(stock["ok"], false, "{stock}");
+        let f = stock["findings"].as_array().expect("findings");
+        assert!(
+            !f.is_empty() && f.iter().all(|x| x["in_input"] == true),
+            "{}: {stock}",
+            out.display()
+        );
+    }
 }
