@@ -168,7 +168,7 @@ fn raster_arguments_are_checked_by_name() {
         ),
         (
             vec!["--feed", "inf"],
-            "--feed inf: must be a number above 0 and at most 1000000 mm/min",
+            "--feed inf: must be a number from 0.1 to 1000000 mm/min",
         ),
         (
             vec!["--stepover", "1e-9"],
@@ -225,11 +225,11 @@ fn other_arguments_are_checked_by_name() {
     let cases: [(&[&str], &str); 10] = [
         (
             &["convert", "lf.nc", "-o", "c.nc", "--feed", "nan"],
-            "--feed NaN: must be a number above 0",
+            "--feed NaN: must be a number from 0.1 to",
         ),
         (
             &["convert", "lf.nc", "-o", "c.nc", "--feed=-100"],
-            "--feed -100: must be a number above 0",
+            "--feed -100: must be a number from 0.1 to",
         ),
         (
             &[
