@@ -8,6 +8,16 @@ pub const UNIT: f64 = 1e-6;
 pub const ANGULAR: f64 = 1e-9;
 /// Millimetres per inch.
 pub const MM_PER_INCH: f64 = 25.4;
+/// A corner radius within this share of the diameter of half the diameter
+/// is a ball end's (the cutter records of a program written in inches to six
+/// decimals, `CUTTER/0.393701,0.19685`, read back as a bull-nose by 3·10⁻⁶).
+pub const BALL: f64 = 1e-5;
+
+/// Whether corner radius `r` makes a cutter of diameter `d` a ball end
+/// (within [`BALL`] of `d`/2).
+pub fn is_ball(d: f64, r: f64) -> bool {
+    (2.0 * r - d).abs() <= 2.0 * BALL * d.max(1.0)
+}
 
 /// `true` when `a` and `b` differ by at most `tol`.
 #[inline]

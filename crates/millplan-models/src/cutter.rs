@@ -29,14 +29,15 @@ impl Shape {
     /// From the ISO `CUTTER/` values (d, r, e, f, α): flat, ball, bull or cone.
     pub fn from_iso(d: f64, r: f64, alpha: f64) -> Option<Shape> {
         let radius = d / 2.0;
-        if !(radius > 0.0) || r < 0.0 || r > radius + 1e-9 {
+        let ball = millplan_geom::tol::is_ball(d, r);
+        if !(radius > 0.0) || r < 0.0 || (r > radius + 1e-9 && !ball) {
             return None;
         }
         Some(if alpha > 1e-9 && r <= 1e-9 {
             Shape::Cone { radius, alpha }
         } else if r <= 1e-9 {
             Shape::Flat { radius }
-        } else if (r - radius).abs() <= 1e-9 * radius.max(1.0) {
+        } else if ball {
             Shape::Ball { radius }
         } else {
             Shape::Bull { radius, corner: r }
@@ -221,6 +222,22 @@ impl Shape {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The corner radius of a ball end written in inches to six decimals,
+    /// read in millimetres, is within rounding of half the diameter, on
+    /// either side: a ball, not a bull-nose nor nothing.
+    #[test]
+    fn a_ball_within_rounding_of_its_radius_is_a_ball() {
+        let ball = |d: f64, r: f64| matches!(Shape::from_iso(d, r, 0.0), Some(Shape::Ball { .. }));
+        assert!(ball(0.393701 * 25.4, 0.19685 * 25.4));
+        assert!(ball(10.0, 5.000_01));
+        assert!(ball(10.0, 4.999_99));
+        assert!(matches!(
+            Shape::from_iso(10.0, 4.99, 0.0),
+            Some(Shape::Bull { .. })
+        ));
+        assert_eq!(Shape::from_iso(10.0, 5.01, 0.0), None);
+    }
 
     #[test]
     fn profiles_and_contact_radii() {

@@ -1176,3 +1176,28 @@ fn positional_cycle_numbers_are_the_depth_and_the_clearance() {
         "{e}"
     );
 }
+
+/// A ball end written in inches to six decimals (`convert --out-units
+/// inch` of the demo) is still a ball when read back, and so is a corner
+/// radius a hundred-thousandth of the diameter short of half of it; a
+/// corner radius a thousandth short is a bull-nose.
+#[test]
+fn a_ball_end_written_in_inches_reads_back_as_a_ball() {
+    use millplan_nc::ir::CutterKind;
+    let kind = |units: &str, cutter: &str| {
+        let p = parse(
+            &format!(
+                "PARTNO/T\nUNITS/{units}\nCUTTER/{cutter}\nLOAD/TOOL,1\nRAPID\nGOTO/0,0,1\nFINI\n"
+            ),
+            cutter,
+        );
+        let tool = p.operations[0].tool.as_ref().expect("a tool");
+        tool.cutter.expect("a cutter").kind
+    };
+    assert_eq!(
+        kind("INCHES", "0.393701,0.19685,0,0.19685,0,0,0"),
+        CutterKind::Ball
+    );
+    assert_eq!(kind("MM", "10,4.99999"), CutterKind::Ball);
+    assert_eq!(kind("MM", "10,4.99"), CutterKind::Bull);
+}

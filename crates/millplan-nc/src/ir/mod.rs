@@ -183,7 +183,9 @@ impl Cutter {
             CutterKind::General
         } else if r <= eps {
             CutterKind::Flat
-        } else if (2.0 * r - d).abs() <= eps && e.abs() <= eps {
+        } else if millplan_geom::tol::is_ball(d, r)
+            && e.abs() <= millplan_geom::tol::BALL * d.max(1.0)
+        {
             CutterKind::Ball
         } else {
             CutterKind::Bull
