@@ -175,11 +175,14 @@ pub fn fz_ranges(limits: &FeedLimits, tools: &[ToolBody]) -> Vec<crate::force::F
 
 /// The feed (mm/min) of a cutting block that meets no material, at spindle
 /// speed `rpm` with a tool of `flutes` whose largest feed per tooth is
-/// `fz_max`: the machine file's `[feed] air`, else fz_max·z·n (with the
-/// spindle stopped, `programmed`), within the machine's feed range.
+/// `fz_max`: the machine file's `[feed] air`, else fz_max·z·n but never
+/// below the block's own feed (`programmed`: a block in air is not slowed;
+/// a tool given far smaller than the program's, a millimetre figure for
+/// an inch tool, took a program's air feeds down to 15 mm/min), within the
+/// machine's feed range.
 pub fn air_feed(m: &Machine, fz_max: f64, flutes: f64, rpm: f64, programmed: f64) -> f64 {
     let v = m.feed_air.unwrap_or(if rpm > 0.0 {
-        fz_max * flutes * rpm
+        (fz_max * flutes * rpm).max(programmed)
     } else {
         programmed
     });
@@ -363,6 +366,19 @@ fn set_feed(op: &mut Operation, i: usize, len: f64, v: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A block in air runs at the tool's largest chip load, never slower
+    /// than it was programmed; the machine file's air feed when it gives one.
+    #[test]
+    fn a_block_in_air_is_never_slowed() {
+        let mut m = Machine::default();
+        // A 0.375 mm tool's chip load at 1000 1/min: 15 mm/min.
+        assert_eq!(air_feed(&m, 0.0075, 2.0, 1000.0, 500.0), 500.0);
+        assert_eq!(air_feed(&m, 0.08, 2.0, 10000.0, 500.0), 1600.0);
+        assert_eq!(air_feed(&m, 0.08, 2.0, 0.0, 500.0), 500.0);
+        m.feed_air = Some(2000.0);
+        assert_eq!(air_feed(&m, 0.0075, 2.0, 1000.0, 500.0), 2000.0);
+    }
 
     #[test]
     fn a_block_over_its_power_at_the_smallest_chip_runs_slower_at_that_chip() {
