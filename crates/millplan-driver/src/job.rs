@@ -55,6 +55,13 @@ impl UserLimits {
                 _ => l.deflection = v,
             }
         }
+        if let (Some(lo), Some(hi)) = (l.fz_min, l.fz_max) {
+            if lo > hi {
+                return Err(format!(
+                    "--limit fz_min={lo} is above fz_max={hi}: the feed per tooth has no range"
+                ));
+            }
+        }
         Ok(l)
     }
 }
@@ -654,12 +661,14 @@ fn limits(u: &UserLimits, chip: Option<ChipLoads>, d: f64, s: &mut Vec<Setting>)
         chip_loads: chip,
     };
     let r = l.fz_range(d);
+    let lowered = l.fz_min > r.fz_max;
     l.fz_min = l.fz_min.min(r.fz_max);
     let from = |x: Option<f64>, default: &str| {
-        if x.is_some() {
-            "option".to_string()
+        let given = if x.is_some() { "option" } else { default };
+        if lowered {
+            format!("{given}, lowered to the largest feed per tooth of a D {d} mm tool")
         } else {
-            default.to_string()
+            given.to_string()
         }
     };
     set(
@@ -721,6 +730,18 @@ mod tests {
             let e = UserLimits::parse(&[("flexion".into(), v.into())]).expect_err("unknown");
             assert!(e.starts_with("--limit flexion: not a load limit"), "{e}");
         }
+        // A feed-per-tooth range upside down is refused; a bottom above a
+        // tool's top is lowered to it, and the setting says so.
+        let pair = |n: &str, v: &str| (n.to_string(), v.to_string());
+        let e = UserLimits::parse(&[pair("fz_min", "0.2"), pair("fz_max", "0.1")])
+            .expect_err("no range");
+        assert!(e.contains("fz_min=0.2 is above fz_max=0.1"), "{e}");
+        let u = UserLimits::parse(&[pair("fz_min", "0.5")]).expect("read");
+        let mut s = Vec::new();
+        let l = limits(&u, None, 10.0, &mut s);
+        assert!(l.fz_min <= l.fz_range(10.0).fz_max);
+        let fz_min = s.iter().find(|x| x.name == "fz_min").expect("said");
+        assert!(fz_min.from.contains("lowered"), "{fz_min:?}");
     }
 
     /// `optimise`'s options: none given is no choice made; each given is
