@@ -1255,35 +1255,34 @@ fn a_canned_cycle_written_as_lines_gouges_only_where_the_input_drilled() {
     )
     .expect("write");
     let (nc, back) = (d.join("o.nc"), d.join("o.apt"));
-    for out in [&nc, &back] {
-        let o = run(&[
-            "optimise",
-            s(&apt),
-            "--stl",
-            s(&stl),
-            "--passes",
-            "speed,reorder",
-            "-o",
-            s(out),
-            "--json",
-            "-q",
-        ]);
-        let j = json(&o);
-        assert_eq!(o.status.code(), Some(0), "{}: {j}", out.display());
-        let gouge = j["checks"]
-            .as_array()
-            .expect("checks")
-            .iter()
-            .find(|c| c["name"] == "gouge")
-            .expect("gouge check");
-        assert_eq!(gouge["ok"], true, "{gouge}");
-        let f = gouge["findings"].as_array().expect("findings");
-        assert!(
-            !f.is_empty() && f.iter().all(|x| x["in_input"] == true),
-            "{}: {gouge}",
-            out.display()
-        );
-    }
+    // Runs `optimise` on `src` into both outputs with `more` options: the
+    // exit code wanted, and the check `name` must be `ok` as given with
+    // findings, every one the input's.
+    let both = |src: &Path, more: &[&str], code: i32, name: &str, ok: bool| {
+        for out in [&nc, &back] {
+            let mut args = vec!["optimise", s(src), "--stl", s(&stl)];
+            args.extend(more);
+            args.extend(["-o", s(out), "--json", "-q"]);
+            let o = run(&args);
+            let j = json(&o);
+            assert_eq!(o.status.code(), Some(code), "{}: {j}", out.display());
+            let c = j["checks"]
+                .as_array()
+                .expect("checks")
+                .iter()
+                .find(|c| c["name"] == name)
+                .expect("the check")
+                .clone();
+            assert_eq!(c["ok"], ok, "{c}");
+            let f = c["findings"].as_array().expect("findings");
+            assert!(
+                !f.is_empty() && f.iter().all(|x| x["in_input"] == true),
+                "{}: {c}",
+                out.display()
+            );
+        }
+    };
+    both(&apt, &["--passes", "speed,reorder"], 0, "gouge", true);
     let text = std::fs::read_to_string(&nc).expect("written");
     assert!(text.contains("written as lines"), "{text}");
     // Holes whose feed plane lies 1 mm inside the stock: the cycle's rapid
@@ -1299,35 +1298,6 @@ fn a_canned_cycle_written_as_lines_gouges_only_where_the_input_drilled() {
         ),
     )
     .expect("write");
-    for out in [&nc, &back] {
-        let o = run(&[
-            "optimise",
-            s(&deep),
-            "--stl",
-            s(&stl),
-            "--stock",
-            "box:0,0,-5,60,60,0",
-            "--passes",
-            "speed",
-            "-o",
-            s(out),
-            "--json",
-            "-q",
-        ]);
-        let j = json(&o);
-        assert_eq!(o.status.code(), Some(3), "{}: {j}", out.display());
-        let stock = j["checks"]
-            .as_array()
-            .expect("checks")
-            .iter()
-            .find(|c| c["name"] == "stock")
-            .expect("stock check");
-        assert_eq!(stock["ok"], false, "{stock}");
-        let f = stock["findings"].as_array().expect("findings");
-        assert!(
-            !f.is_empty() && f.iter().all(|x| x["in_input"] == true),
-            "{}: {stock}",
-            out.display()
-        );
-    }
+    let stock = ["--stock", "box:0,0,-5,60,60,0", "--passes", "speed"];
+    both(&deep, &stock, 3, "stock", false);
 }
