@@ -385,7 +385,13 @@ impl Job {
             ..BodyOptions::default()
         };
         let d = first_diameter(&inputs.program, &body).ok_or_else(|| {
-            JobError::from("the program has no cutting move with a tool of known shape: give --tool ball:D, flat:D or bull:D:R".to_string())
+            let cuts = (inputs.program.operations.iter())
+                .any(|op| op.moves.iter().any(|m| m.is_cutting()));
+            JobError::from(if cuts {
+                "the program has no cutting move with a tool of known shape: give --tool ball:D, flat:D or bull:D:R"
+            } else {
+                "the program has no cutting move (only rapids and canned cycles): no pass of optimise changes it (gouge, simulate and convert check and write it)"
+            }.to_string())
         })?;
         let (vc, flutes, helix) = cutting_data(&inputs, lib, &mut s);
         library_setting(lib, &mut s);

@@ -1300,4 +1300,22 @@ fn a_canned_cycle_written_as_lines_gouges_only_where_the_input_drilled() {
     .expect("write");
     let stock = ["--stock", "box:0,0,-5,60,60,0", "--passes", "speed"];
     both(&deep, &stock, 3, "stock", false);
+    // Canned cycles alone: nothing for the passes, said as such (not
+    // "give --tool", which the drill's CUTTER record already does).
+    let holes = d.join("holes.apt");
+    let only = src.split("CUTTER/10,5").next().expect("the drill's part");
+    std::fs::write(&holes, format!("{only}FINI\n")).expect("write");
+    let o = run(&[
+        "optimise",
+        s(&holes),
+        "--stl",
+        s(&stl),
+        "--tool",
+        "flat:8",
+        "-o",
+        s(&nc),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("only rapids and canned cycles"), "{err}");
 }
