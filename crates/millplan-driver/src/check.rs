@@ -56,6 +56,10 @@ pub const MIN_FEED: f64 = 0.1;
 pub const FEED: Range = Range::from(MIN_FEED, MAX_FEED, "mm/min");
 /// Largest spindle speed, 1/min.
 pub const MAX_SPINDLE: f64 = 1e6;
+/// The range of a spindle speed an argument writes into a program: from
+/// the smallest the readers take as plausible (`raster --spindle=0.3` wrote
+/// an S its own read-back refused).
+pub const SPINDLE: Range = Range::from(millplan_nc::plausible::MIN_SPINDLE, MAX_SPINDLE, "1/min");
 /// Largest cutting speed, m/min.
 pub const MAX_VC: f64 = 1e4;
 

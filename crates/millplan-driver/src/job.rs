@@ -107,7 +107,7 @@ impl Options {
     /// Every option given in its range (the error names the option), the
     /// tool parsed and the load limits read.
     pub fn checked(r: &OptionsRequest) -> Result<Options, String> {
-        use crate::check::{arg, tool_shape, Range, MAX_SPINDLE, MAX_VC};
+        use crate::check::{arg, tool_shape, Range, MAX_VC};
         let within =
             |flag: &str, v: Option<f64>, range: Range| v.map(|v| arg(flag, v, range)).transpose();
         let tool = r
@@ -119,11 +119,7 @@ impl Options {
         within("--flutes", flutes, Range::from(1.0, 64.0, ""))?;
         Ok(Options {
             vc: within("--vc", r.vc, Range::positive(MAX_VC, "m/min"))?,
-            spindle: within(
-                "--spindle",
-                r.spindle,
-                Range::positive(MAX_SPINDLE, "1/min"),
-            )?,
+            spindle: within("--spindle", r.spindle, crate::check::SPINDLE)?,
             tool,
             flutes: r.flutes,
             resolution: within(

@@ -2,7 +2,7 @@
 //! size against the limits, the checks of the written raster, the run
 //! (`run_command`) and the typed summary.
 
-use crate::check::{arg, raster_spacing, tool_shape, Range, FEED, MAX_SPINDLE};
+use crate::check::{arg, raster_spacing, tool_shape, Range, FEED, SPINDLE};
 use millplan_geom::limits::{amount, Exceeded};
 use millplan_geom::{Aabb, TriMesh};
 use millplan_nc::equiv::Tolerance;
@@ -55,11 +55,7 @@ pub fn params(a: &RasterRequest) -> Result<RasterParams, String> {
     let above = Range::positive(1e4, "mm above the part");
     arg("--clearance", a.clearance, above)?;
     arg("--feed", a.feed, FEED)?;
-    arg(
-        "--spindle",
-        a.spindle,
-        Range::positive(MAX_SPINDLE, "1/min"),
-    )?;
+    arg("--spindle", a.spindle, SPINDLE)?;
     let mut p = RasterParams::new(shape);
     p.angle_deg = a.angle;
     p.stepover = a.stepover;

@@ -190,7 +190,7 @@ fn raster_arguments_are_checked_by_name() {
         (vec!["--boundary=-1000"], "--boundary -1000: must be from"),
         (
             vec!["--spindle=-100"],
-            "--spindle -100: must be a number above 0",
+            "--spindle -100: must be a number from 1 to",
         ),
         (
             vec!["--tol", "1e-9"],
