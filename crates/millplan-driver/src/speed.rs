@@ -110,14 +110,21 @@ pub fn params(a: &SpeedRequest) -> SpeedParams {
     p
 }
 
-/// The speed pass on a copy of the input.
+/// The speed pass on a copy of the input: computed on the input, which it
+/// does not change, then written into the copy, made once the analysis and
+/// the part's surface (which nothing after it needs) have let their memory
+/// go, so that the three are not held at once.
 pub fn run(
     a: &SpeedRequest,
-    cx: &Context,
+    cx: &mut Context,
     input: &Program,
 ) -> Result<(Program, SpeedPass), PassError> {
-    let mut program = cx.time("copy of the input for the checks", || input.clone());
     let mut pass = SpeedPass::new(params(a));
+    cx.time("speed computed on the input", || pass.plan(input, cx))?;
+    let t = std::time::Instant::now();
+    cx.release_surface();
+    cx.record("surface freed", t.elapsed().as_secs_f64());
+    let mut program = cx.time("copy of the input for the checks", || input.clone());
     pipeline::run(&mut [&mut pass], &mut program, cx)?;
     Ok((program, pass))
 }
@@ -202,7 +209,7 @@ pub enum SpeedError {
 /// the part's findings; each phase timed in `cx`.
 pub fn command(
     a: &SpeedRequest,
-    cx: &Context,
+    cx: &mut Context,
     mesh: &millplan_geom::TriMesh,
     input: Program,
 ) -> Result<Outcome, SpeedError> {
@@ -568,8 +575,8 @@ mod tests {
         let machine = Machine::default();
         let want =
             millplan_plan::speed::apply(&prog, &mesh, &machine, &params(&req)).expect("applies");
-        let cx = Context::new(machine.clone()).with_surface(Surface::new(&mesh));
-        let Ok(out) = command(&req, &cx, &mesh, prog.clone()) else {
+        let mut cx = Context::new(machine.clone()).with_surface(Surface::new(&mesh));
+        let Ok(out) = command(&req, &mut cx, &mesh, prog.clone()) else {
             panic!("the command runs")
         };
         assert_eq!(out.program, want.program);
@@ -589,8 +596,8 @@ mod tests {
         assert!(out.table_csv().lines().count() == out.rows.len() + 1);
         let mut far = mesh.clone();
         far.map_vertices(|v| v + millplan_geom::DVec3::new(0.0, 0.0, -50.0));
-        let cx = Context::new(machine).with_surface(Surface::new(&far));
-        let Ok(off) = command(&req, &cx, &far, prog) else {
+        let mut cx = Context::new(machine).with_surface(Surface::new(&far));
+        let Ok(off) = command(&req, &mut cx, &far, prog) else {
             panic!("the command runs off the part")
         };
         assert!(off.untrusted());

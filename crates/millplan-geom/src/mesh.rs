@@ -40,9 +40,6 @@ const BLOCK: usize = 3 << 16;
 /// Marks a shard-local vertex id at the corner where the vertex first appears.
 const FIRST: u32 = 1 << 31;
 
-/// One block's corners (f32 bit patterns), by shard.
-type ShardLists = Vec<Vec<[u32; 3]>>;
-
 /// A corner's shard: middle bits of its hash. The shard's map takes its
 /// control bytes from the top bits, which would be all alike in a shard
 /// chosen by them.
@@ -59,7 +56,10 @@ struct Walk<'a> {
     shards: &'a [u8],
     /// Where each block's run starts in its shard's ids.
     offset: &'a [[usize; SHARDS]],
-    ids: &'a [Vec<u32>],
+    /// Where each shard's ids start in `ids`.
+    base: &'a [usize; SHARDS + 1],
+    /// The ids of every shard, one after the other.
+    ids: &'a [u32],
 }
 
 impl Walk<'_> {
@@ -71,7 +71,7 @@ impl Walk<'_> {
         let corners = self.corners[b * BLOCK..end].iter();
         for (j, (k, &s)) in corners.zip(&self.shards[b * BLOCK..end]).enumerate() {
             let s = s as usize;
-            each(j, k, s, self.ids[s][cursor[s]]);
+            each(j, k, s, self.ids[self.base[s] + cursor[s]]);
             cursor[s] += 1;
         }
     }
@@ -155,58 +155,96 @@ impl TriMesh {
     /// (its blocks in file order), and the blocks then number the vertices they
     /// see first from a running count.
     pub fn from_f32_corners(corners: Vec<[u32; 3]>) -> (TriMesh, WeldReport) {
-        // Each block's corners by shard, in order, and each corner's shard
-        // (the walks below read it rather than hash again).
+        // Every large array is allocated here, on the calling thread, and
+        // filled in parallel: memory a pool thread allocates and this one
+        // frees stays with the pool thread's heap, where what runs after the
+        // weld (a surface, a pass) cannot use it, and so it added to the
+        // process's peak.
+        //
+        // Each corner's shard (the walks below read it rather than hash
+        // again) and each block's count per shard.
         let mut shards = vec![0u8; corners.len()];
-        let lists: Vec<ShardLists> = corners
+        let counts: Vec<[usize; SHARDS]> = corners
             .par_chunks(BLOCK)
             .zip(shards.par_chunks_mut(BLOCK))
             .map(|(block, shards)| {
-                let mut l: ShardLists = (0..SHARDS)
-                    .map(|_| Vec::with_capacity(block.len() / SHARDS * 5 / 4 + 16))
-                    .collect();
+                let mut c = [0usize; SHARDS];
                 for (k, out) in block.iter().zip(shards) {
                     let s = shard_of(k);
                     *out = s as u8;
-                    l[s].push(*k);
+                    c[s] += 1;
                 }
-                l
+                c
             })
             .collect();
-        let blocks = lists.len();
-        // Where each block's run starts in its shard's ids.
+        let blocks = counts.len();
+        // Where each block's run starts in its shard's corners and ids.
         let mut offset = vec![[0usize; SHARDS]; blocks + 1];
         for b in 0..blocks {
             for s in 0..SHARDS {
-                offset[b + 1][s] = offset[b][s] + lists[b][s].len();
+                offset[b + 1][s] = offset[b][s] + counts[b][s];
             }
         }
-        // Weld each shard: local ids in order of appearance, marked FIRST where new.
-        let (mut ids, uniques): (Vec<Vec<u32>>, Vec<usize>) = (0..SHARDS)
-            .into_par_iter()
-            .map(|s| {
-                let n = offset[blocks][s];
-                let mut map: FxHashMap<[u32; 3], u32> = FxHashMap::default();
-                map.reserve(n / 4);
-                let mut ids = Vec::with_capacity(n);
-                for l in &lists {
-                    for k in &l[s] {
-                        let next = map.len() as u32;
-                        let id = *map.entry(*k).or_insert(next);
-                        ids.push(if id == next { id | FIRST } else { id });
-                    }
+        // Where each shard starts in the arrays by shard.
+        let mut base = [0usize; SHARDS + 1];
+        for s in 0..SHARDS {
+            base[s + 1] = base[s] + offset[blocks][s];
+        }
+        // The corners by shard, each shard's in file order: every block
+        // writes its runs, one per shard.
+        let mut by_shard = vec![[0u32; 3]; corners.len()];
+        {
+            let mut runs: Vec<Vec<&mut [[u32; 3]]>> = (0..blocks).map(|_| Vec::new()).collect();
+            let mut rest = by_shard.as_mut_slice();
+            for s in 0..SHARDS {
+                for (run, count) in runs.iter_mut().zip(&counts) {
+                    let (r, tail) = std::mem::take(&mut rest).split_at_mut(count[s]);
+                    run.push(r);
+                    rest = tail;
                 }
-                (ids, map.len())
+            }
+            runs.into_par_iter().enumerate().for_each(|(b, mut run)| {
+                let mut cursor = [0usize; SHARDS];
+                let end = ((b + 1) * BLOCK).min(corners.len());
+                for (k, &s) in corners[b * BLOCK..end].iter().zip(&shards[b * BLOCK..end]) {
+                    let s = s as usize;
+                    run[s][cursor[s]] = *k;
+                    cursor[s] += 1;
+                }
+            });
+        }
+        // Weld each shard: local ids in order of appearance, marked FIRST where new.
+        let mut ids = vec![0u32; corners.len()];
+        let mut shard_ids: Vec<&mut [u32]> = Vec::with_capacity(SHARDS);
+        let mut rest = ids.as_mut_slice();
+        for s in 0..SHARDS {
+            let (r, tail) = std::mem::take(&mut rest).split_at_mut(base[s + 1] - base[s]);
+            shard_ids.push(r);
+            rest = tail;
+        }
+        let uniques: Vec<usize> = shard_ids
+            .into_par_iter()
+            .enumerate()
+            .map(|(s, ids)| {
+                let mut map: FxHashMap<[u32; 3], u32> = FxHashMap::default();
+                map.reserve(ids.len() / 4);
+                for (k, id) in by_shard[base[s]..base[s + 1]].iter().zip(ids) {
+                    let next = map.len() as u32;
+                    let v = *map.entry(*k).or_insert(next);
+                    *id = if v == next { v | FIRST } else { v };
+                }
+                map.len()
             })
-            .unzip();
-        drop(lists);
+            .collect();
+        drop(by_shard);
+        let shard_ids = |s: usize| &ids[base[s]..base[s + 1]];
         // Vertices first seen in each block, and the global number of its first.
         let firsts: Vec<usize> = (0..blocks)
             .into_par_iter()
             .map(|b| {
                 (0..SHARDS)
                     .map(|s| {
-                        ids[s][offset[b][s]..offset[b + 1][s]]
+                        shard_ids(s)[offset[b][s]..offset[b + 1][s]]
                             .iter()
                             .filter(|&&v| v & FIRST != 0)
                             .count()
@@ -214,31 +252,34 @@ impl TriMesh {
                     .sum()
             })
             .collect();
-        let mut base = vec![0usize; blocks + 1];
+        let mut first = vec![0usize; blocks + 1];
         for b in 0..blocks {
-            base[b + 1] = base[b] + firsts[b];
+            first[b + 1] = first[b] + firsts[b];
         }
         // Each block walks its corners, numbering and placing the vertices it
-        // sees first.
-        let mut vertices = vec![DVec3::ZERO; base[blocks]];
-        let mut parts: Vec<&mut [DVec3]> = Vec::with_capacity(blocks);
-        let mut rest = vertices.as_mut_slice();
+        // sees first, and noting each one's shard and local id.
+        let mut vertices = vec![DVec3::ZERO; first[blocks]];
+        let mut news = vec![(0u32, 0u32); first[blocks]];
+        type Part<'a> = (&'a mut [DVec3], &'a mut [(u32, u32)]);
+        let mut parts: Vec<Part> = Vec::with_capacity(blocks);
+        let (mut rest, mut rest_new) = (vertices.as_mut_slice(), news.as_mut_slice());
         for f in &firsts {
             let (part, tail) = std::mem::take(&mut rest).split_at_mut(*f);
-            parts.push(part);
-            rest = tail;
+            let (new, tail_new) = std::mem::take(&mut rest_new).split_at_mut(*f);
+            parts.push((part, new));
+            (rest, rest_new) = (tail, tail_new);
         }
         let walk = Walk {
             corners: &corners,
             shards: &shards,
             offset: &offset,
+            base: &base,
             ids: &ids,
         };
-        let news: Vec<Vec<(u32, u32)>> = parts
+        parts
             .into_par_iter()
             .enumerate()
-            .map(|(b, part)| {
-                let mut new = Vec::with_capacity(part.len());
+            .for_each(|(b, (part, new))| {
                 let mut n = 0;
                 walk.block(b, |_, k, s, v| {
                     if v & FIRST != 0 {
@@ -247,32 +288,41 @@ impl TriMesh {
                             f32::from_bits(k[1]) as f64,
                             f32::from_bits(k[2]) as f64,
                         );
-                        new.push((s as u32, v & !FIRST));
+                        new[n] = (s as u32, v & !FIRST);
                         n += 1;
                     }
                 });
-                new
-            })
-            .collect();
+            });
         let mut global: Vec<Vec<u32>> = uniques.iter().map(|&n| vec![0u32; n]).collect();
-        for (b, new) in news.iter().enumerate() {
-            for (j, &(s, l)) in new.iter().enumerate() {
-                global[s as usize][l as usize] = (base[b] + j) as u32;
-            }
+        for (j, &(s, l)) in news.iter().enumerate() {
+            global[s as usize][l as usize] = j as u32;
         }
         drop(news);
         // Each shard's ids turned into vertex numbers (a shard's numbers
         // stay in cache, where the walk would look them up across all).
-        ids.par_iter_mut().zip(&global).for_each(|(ids, global)| {
-            for v in ids {
-                *v = global[(*v & !FIRST) as usize];
+        {
+            let mut shard_ids: Vec<&mut [u32]> = Vec::with_capacity(SHARDS);
+            let mut rest = ids.as_mut_slice();
+            for s in 0..SHARDS {
+                let (r, tail) = std::mem::take(&mut rest).split_at_mut(base[s + 1] - base[s]);
+                shard_ids.push(r);
+                rest = tail;
             }
-        });
+            shard_ids
+                .into_par_iter()
+                .zip(&global)
+                .for_each(|(ids, global)| {
+                    for v in ids {
+                        *v = global[(*v & !FIRST) as usize];
+                    }
+                });
+        }
         drop(global);
         let walk = Walk {
             corners: &corners,
             shards: &shards,
             offset: &offset,
+            base: &base,
             ids: &ids,
         };
         // Every corner's vertex number, block by block.

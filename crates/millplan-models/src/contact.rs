@@ -136,6 +136,22 @@ pub fn centre(p: &PathPoint, conv: Convention, r: f64) -> DVec3 {
     }
 }
 
+/// The ball centres of points under a convention, computed where asked
+/// (the same bits as [`centre`] each time).
+#[derive(Clone, Copy)]
+struct Centres<'a> {
+    pts: &'a [PathPoint],
+    conv: Convention,
+    r: f64,
+}
+
+impl Centres<'_> {
+    #[inline]
+    fn at(&self, i: usize) -> DVec3 {
+        centre(&self.pts[i], self.conv, self.r)
+    }
+}
+
 /// What the convention check found: the median |distance − R| under each reading.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct ConventionCheck {
@@ -318,12 +334,15 @@ pub fn analyse_with<T: Send>(
     p: &Params,
     wrap: impl Fn(PointResult) -> T + Sync,
 ) -> Vec<T> {
-    let centres: Vec<DVec3> = points
-        .par_iter()
-        .map(|q| centre(q, p.convention, p.d / 2.0))
-        .collect();
-    let search = stepover_search_radius(&centres, points, p.neighbour_search);
-    let grid = NeighbourGrid::new(&centres, points, search);
+    // Computed where asked rather than stored: a million points' centres
+    // are 24 MB more at the analysis's peak, for a few additions each.
+    let centres = Centres {
+        pts: points,
+        conv: p.convention,
+        r: p.d / 2.0,
+    };
+    let search = stepover_search_radius(|i| centres.at(i), points, p.neighbour_search);
+    let grid = NeighbourGrid::new(centres, search);
     let loc = Locator::new(s, p);
     // The turn between unit directions exceeds the corner angle when the
     // cosine falls below its cosine.
@@ -337,10 +356,10 @@ pub fn analyse_with<T: Send>(
         .map_init(
             || None,
             |hint, i| {
-                let (contact, n, gap, no_contact) = loc.contact(&centres[i], &points[i], hint);
+                let (contact, n, gap, no_contact) = loc.contact(&centres.at(i), &points[i], hint);
                 let k = points[i].axis;
                 let inclination = n.dot(k).clamp(-1.0, 1.0).acos();
-                let (t_in, t_out) = feed_directions(&centres, points, i);
+                let (t_in, t_out) = feed_directions(centres, i);
                 let project = |t: DVec3| (t - n * t.dot(n)).normalize_or_zero();
                 let (t_in, t_out) = (project(t_in), project(t_out));
                 let central = (t_in + t_out).normalize_or_zero();
@@ -356,8 +375,7 @@ pub fn analyse_with<T: Send>(
                 let corner =
                     t_in != DVec3::ZERO && t_out != DVec3::ZERO && t_in.dot(t_out) < cos_corner;
                 let eval = |t: DVec3| {
-                    let (af, side, neighbour) =
-                        local_case(&grid, &centres, points, i, n, k, t, search);
+                    let (af, side, neighbour) = local_case(&grid, centres, i, n, k, t, search);
                     let c = Case {
                         d: p.d,
                         ap: p.ap,
@@ -399,8 +417,8 @@ pub fn analyse_with<T: Send>(
 /// to the nearest point of the passes cut just before and after theirs (the
 /// stepover the CAM system used), at most `max`. Keeps the neighbour search cheap
 /// on fine rasters.
-pub fn stepover_search_radius(c: &[DVec3], pts: &[PathPoint], max: f64) -> f64 {
-    if c.len() < 3 {
+pub fn stepover_search_radius(c: impl Fn(usize) -> DVec3, pts: &[PathPoint], max: f64) -> f64 {
+    if pts.len() < 3 {
         return max;
     }
     // Index ranges of the passes (points of a pass are consecutive).
@@ -414,8 +432,8 @@ pub fn stepover_search_radius(c: &[DVec3], pts: &[PathPoint], max: f64) -> f64 {
     }
     let pass_of = |i: usize| ranges.partition_point(|r| r.1 <= i);
     // The nearest point of the passes cut just before and after: the stepover.
-    let step = (c.len() / 300).max(1);
-    let mut d: Vec<f64> = (0..c.len())
+    let step = (pts.len() / 300).max(1);
+    let mut d: Vec<f64> = (0..pts.len())
         .step_by(step)
         .filter_map(|i| {
             let k = pass_of(i);
@@ -429,7 +447,7 @@ pub fn stepover_search_radius(c: &[DVec3], pts: &[PathPoint], max: f64) -> f64 {
                     };
                     if b - a >= 3 {
                         for j in a..b {
-                            best = best.min((c[j] - c[i]).length());
+                            best = best.min((c(j) - c(i)).length());
                         }
                         break;
                     }
@@ -457,13 +475,14 @@ fn orient_up(n: DVec3, k: DVec3) -> DVec3 {
 
 /// Incoming and outgoing directions at point i, skipping zero-length steps and
 /// staying inside the pass.
-fn feed_directions(c: &[DVec3], pts: &[PathPoint], i: usize) -> (DVec3, DVec3) {
+fn feed_directions(c: Centres<'_>, i: usize) -> (DVec3, DVec3) {
+    let pts = c.pts;
     let pass = pts[i].pass;
     let mut t_in = DVec3::ZERO;
     let mut j = i;
     while j > 0 && pts[j - 1].pass == pass {
         j -= 1;
-        let v = c[i] - c[j];
+        let v = c.at(i) - c.at(j);
         if v.length() > 1e-6 {
             t_in = v.normalize();
             break;
@@ -473,7 +492,7 @@ fn feed_directions(c: &[DVec3], pts: &[PathPoint], i: usize) -> (DVec3, DVec3) {
     let mut j = i;
     while j + 1 < pts.len() && pts[j + 1].pass == pass {
         j += 1;
-        let v = c[j] - c[i];
+        let v = c.at(j) - c.at(i);
         if v.length() > 1e-6 {
             t_out = v.normalize();
             break;
@@ -486,18 +505,18 @@ fn feed_directions(c: &[DVec3], pts: &[PathPoint], i: usize) -> (DVec3, DVec3) {
 #[allow(clippy::too_many_arguments)]
 fn local_case(
     grid: &NeighbourGrid<'_>,
-    c: &[DVec3],
-    pts: &[PathPoint],
+    c: Centres<'_>,
     i: usize,
     n: DVec3,
     k: DVec3,
     t: DVec3,
     search: f64,
 ) -> (f64, Side, Neighbour) {
-    let mut side = SideFinder::new(c[i], n, t, search);
-    let pass = pts[i].pass;
+    let at = c.at(i);
+    let mut side = SideFinder::new(at, n, t, search);
+    let pass = c.pts[i].pass;
     // Only points machined before this one, of other passes, count.
-    grid.for_each_near(c[i], i as u32, |centre, e| {
+    grid.for_each_near(at, i as u32, |centre, e| {
         if e.pass != pass {
             side.machined(centre);
         }
@@ -583,7 +602,7 @@ impl SideFinder {
 /// Uniform grid over ball centres for the sideways neighbour search.
 struct NeighbourGrid<'a> {
     /// The ball centres, by point index.
-    c: &'a [DVec3],
+    c: Centres<'a>,
     /// Cell edge: twice the search radius, so the 2×2×2 cells on the point's side
     /// of its own cell cover the whole search sphere.
     cell: f64,
@@ -608,7 +627,8 @@ struct GridEntry {
 const GRID_BITS: u32 = 21;
 
 impl<'a> NeighbourGrid<'a> {
-    fn new(c: &'a [DVec3], pts: &[PathPoint], radius: f64) -> NeighbourGrid<'a> {
+    fn new(c: Centres<'a>, radius: f64) -> NeighbourGrid<'a> {
+        let pts = c.pts;
         let cell = 2.0 * radius.max(1e-3);
         let empty = || {
             (
@@ -623,10 +643,10 @@ impl<'a> NeighbourGrid<'a> {
                 (hi.0.max(h.0), hi.1.max(h.1), hi.2.max(h.2)),
             )
         };
-        let (lo, hi) = c
-            .par_iter()
-            .map(|p| {
-                let k = key(*p, cell);
+        let (lo, hi) = (0..pts.len())
+            .into_par_iter()
+            .map(|i| {
+                let k = key(c.at(i), cell);
                 (k, k)
             })
             .reduce(empty, join);
@@ -641,10 +661,9 @@ impl<'a> NeighbourGrid<'a> {
             entries: Vec::new(),
             cells: FxHashMap::default(),
         };
-        let mut keyed: Vec<(u64, u32)> = c
-            .par_iter()
-            .enumerate()
-            .map(|(i, p)| (grid.packed(key(*p, cell)), i as u32))
+        let mut keyed: Vec<(u64, u32)> = (0..pts.len())
+            .into_par_iter()
+            .map(|i| (grid.packed(key(c.at(i), cell)), i as u32))
             .collect();
         keyed.par_sort_unstable();
         // Where each cell's run starts, found in parallel; then the map.
@@ -701,7 +720,7 @@ impl<'a> NeighbourGrid<'a> {
                             if e.i >= before {
                                 break;
                             }
-                            let c = self.c[e.i as usize];
+                            let c = self.c.at(e.i as usize);
                             if !self.aliased || key(c, self.cell) == want {
                                 f(c, e);
                             }

@@ -201,6 +201,13 @@ impl<'a> Context<'a> {
         self.mesh
     }
 
+    /// Lets the closest-point tree and vertex normals go (the mesh stays):
+    /// for a command done with them, so that what it allocates next can use
+    /// their memory. A later [`Context::surface`] builds them again.
+    pub fn release_surface(&mut self) {
+        drop(self.surface.take());
+    }
+
     /// The part's closest-point tree and vertex normals.
     pub fn surface(&self) -> Option<&Surface<'a>> {
         let mesh = self.mesh?;

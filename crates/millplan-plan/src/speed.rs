@@ -413,6 +413,8 @@ pub struct SpeedPass {
     /// One row per cutting point when [`SpeedParams::keep_rows`].
     pub rows: Vec<PointRow>,
     pub summary: Option<Summary>,
+    /// What [`SpeedPass::plan`] computed, for the next run to write.
+    planned: Option<Planned>,
 }
 
 impl SpeedPass {
@@ -421,6 +423,7 @@ impl SpeedPass {
             params,
             rows: Vec::new(),
             summary: None,
+            planned: None,
         }
     }
 }
@@ -431,6 +434,29 @@ impl Pass for SpeedPass {
     }
 
     fn run(&mut self, program: &mut Program, cx: &Context) -> Result<(), PassError> {
+        let planned = match self.planned.take() {
+            Some(p) if p.fits(program) => p,
+            _ => self.compute(program, cx)?,
+        };
+        let (rows, summary) = cx.time("  speeds and feeds written", || planned.write(program));
+        self.rows = rows;
+        self.summary = Some(summary);
+        Ok(())
+    }
+}
+
+impl SpeedPass {
+    /// Computes the speeds and feeds on `program` without changing it; the
+    /// next [`Pass::run`] on a program of the same operations and moves (a
+    /// copy of this one) writes them. A caller that must keep the input
+    /// copies it after this, so the copy and the analysis's memory are not
+    /// held at once.
+    pub fn plan(&mut self, program: &Program, cx: &Context) -> Result<(), PassError> {
+        self.planned = Some(self.compute(program, cx)?);
+        Ok(())
+    }
+
+    fn compute(&self, program: &Program, cx: &Context) -> Result<Planned, PassError> {
         let surface = cx
             .surface()
             .ok_or(PassError::NeedsPart { pass: INFO.name })?;
@@ -443,19 +469,17 @@ impl Pass for SpeedPass {
             };
             cx.progress(&phase, done, total)
         };
-        let (rows, summary, timings) =
-            apply_in_place_with(program, surface, &cx.machine, &self.params, &tick).map_err(
-                |e| PassError::Input {
+        let planned =
+            plan_with(program, surface, &cx.machine, &self.params, &tick).map_err(|e| {
+                PassError::Input {
                     pass: INFO.name,
                     message: e.to_string(),
-                },
-            )?;
-        for (name, t) in timings {
-            cx.record(&format!("  {name}"), t);
+                }
+            })?;
+        for (name, t) in &planned.timings {
+            cx.record(&format!("  {name}"), *t);
         }
-        self.rows = rows;
-        self.summary = Some(summary);
-        Ok(())
+        Ok(planned)
     }
 }
 
@@ -485,6 +509,85 @@ pub fn apply_in_place_with(
     p: &SpeedParams,
     tick: &(dyn Fn(usize, usize, usize) + Sync),
 ) -> Result<Applied, SpeedError> {
+    let planned = plan_with(program, surface, m, p, tick)?;
+    let mut timings = planned.timings.clone();
+    let clock = std::time::Instant::now();
+    let (rows, summary) = planned.write(program);
+    timings.push(("speeds and feeds written", clock.elapsed().as_secs_f64()));
+    Ok((rows, summary, timings))
+}
+
+/// The speeds (and feeds) of one operation's cutting points, to be written.
+struct OpSpeeds {
+    op: usize,
+    /// The operation's number of moves, to match the program written into.
+    moves: usize,
+    /// The cutting points' moves.
+    idx: Vec<usize>,
+    n: Vec<f64>,
+    /// The feeds, when the feed follows the spindle.
+    feeds: Option<Vec<f64>>,
+}
+
+/// Spindle control computed on a program and not yet written into it (or
+/// into a copy of it).
+pub struct Planned {
+    ops: Vec<OpSpeeds>,
+    operations: usize,
+    rows: Vec<PointRow>,
+    summary: Summary,
+    /// The phases' wall times.
+    pub timings: Vec<(&'static str, f64)>,
+}
+
+impl Planned {
+    /// Whether `program` has the operations and moves this was computed on.
+    fn fits(&self, program: &Program) -> bool {
+        program.operations.len() == self.operations
+            && self
+                .ops
+                .iter()
+                .all(|o| program.operations[o.op].moves.len() == o.moves)
+    }
+
+    /// Writes the speeds and feeds into `program` (the one they were
+    /// computed on, or a copy): its rows and summary.
+    fn write(self, program: &mut Program) -> (Vec<PointRow>, Summary) {
+        for s in self.ops {
+            let o = &mut program.operations[s.op];
+            for (k, &i) in s.idx.iter().enumerate() {
+                let mv = &mut o.moves[i];
+                mv.spindle = s.n[k];
+                if let Some(f) = &s.feeds {
+                    mv.feed = f[k];
+                    mv.feed_mode = FeedMode::PerMinute;
+                }
+            }
+            // Non-cutting moves keep the speed of the cutting point before them (the
+            // first one's before the first cut), so the spindle does not change on rapids.
+            let mut cur = s.n[0];
+            let mut next_k = 0;
+            for (i, mv) in o.moves.iter_mut().enumerate() {
+                if next_k < s.idx.len() && s.idx[next_k] == i {
+                    cur = s.n[next_k];
+                    next_k += 1;
+                } else if mv.spindle > 0.0 || mv.is_rapid() {
+                    mv.spindle = cur;
+                }
+            }
+        }
+        (self.rows, self.summary)
+    }
+}
+
+/// Spindle control computed on `program`, which it does not change.
+fn plan_with(
+    program: &Program,
+    surface: &Surface,
+    m: &Machine,
+    p: &SpeedParams,
+    tick: &(dyn Fn(usize, usize, usize) + Sync),
+) -> Result<Planned, SpeedError> {
     if !(p.vc > 0.0 && p.fz > 0.0 && p.flutes > 0 && p.ap > 0.0)
         || p.ball_d.map(|d| !(d > 0.0)).unwrap_or(false)
     {
@@ -516,6 +619,7 @@ pub fn apply_in_place_with(
     let mut check = None;
     let mut convention = p.convention.unwrap_or(Convention::Tip);
     let mut ops = 0;
+    let mut planned = Vec::new();
     for oi in 0..out.operations.len() {
         let op = &out.operations[oi];
         let Some(d) = is_ball(op, p.ball_d) else {
@@ -650,35 +754,26 @@ pub fn apply_in_place_with(
             }
         }
         drop(geo);
-        // Write back.
-        let o = &mut out.operations[oi];
-        for (k, &i) in idx.iter().enumerate() {
-            let mv = &mut o.moves[i];
-            mv.spindle = n[k];
-            if p.feed == FeedCoupling::ChipLoad {
-                mv.feed = feeds[k];
-                mv.feed_mode = FeedMode::PerMinute;
-            }
-        }
-        // Non-cutting moves keep the speed of the cutting point before them (the
-        // first one's before the first cut), so the spindle does not change on rapids.
-        let mut cur = n[0];
-        let mut next_k = 0;
-        for (i, mv) in o.moves.iter_mut().enumerate() {
-            if next_k < idx.len() && idx[next_k] == i {
-                cur = n[next_k];
-                next_k += 1;
-            } else if mv.spindle > 0.0 || mv.is_rapid() {
-                mv.spindle = cur;
-            }
-        }
+        planned.push(OpSpeeds {
+            op: oi,
+            moves: op.moves.len(),
+            idx,
+            n,
+            feeds: (p.feed == FeedCoupling::ChipLoad).then_some(feeds),
+        });
         lap("spindle limits and feeds", &mut timings);
     }
     if ops == 0 {
         return Err(SpeedError::NoBallOperation);
     }
     let summary = acc.finish(convention, check, ops);
-    Ok((rows, summary, timings))
+    Ok(Planned {
+        ops: planned,
+        operations: out.operations.len(),
+        rows,
+        summary,
+        timings,
+    })
 }
 
 /// Moves per part of the cutting-point scan.

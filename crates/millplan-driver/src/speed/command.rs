@@ -133,11 +133,11 @@ fn control(
             w.phase(phase, done, total)
         }
     };
-    let cx = Context::new(machine)
+    let mut cx = Context::new(machine)
         .with_surface(surface)
         .with_progress(&hook);
     record_reading(&cx, times, [read.read_s, read.estimate_s]);
-    let ran = command(&c.request, &cx, mesh, parsed.program);
+    let ran = command(&c.request, &mut cx, mesh, parsed.program);
     w.phases_done();
     let out = ran.map_err(|e| match e {
         SpeedError::Pass(e) => Stop::pass(c.input, e),

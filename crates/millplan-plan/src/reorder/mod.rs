@@ -891,7 +891,7 @@ pub fn reorder_in(
             .collect();
         spacing.sort_by(f64::total_cmp);
         let spacing = spacing.get(spacing.len() / 2).copied().unwrap_or(1.0);
-        let side_search = contact::stepover_search_radius(&centres, &pts, 0.6 * c.d);
+        let side_search = contact::stepover_search_radius(|i| centres[i], &pts, 0.6 * c.d);
         // Steps longer than this retract and plunge: the spindle has time there.
         let jump = 3.0 * spacing.max(side_search / 1.6);
         let top = pts
