@@ -109,11 +109,26 @@ pub fn read_back_check(
     tol: f64,
     (output, input): (&str, &str),
 ) -> Result<(), String> {
-    let tol = Tolerance {
+    let tol = read_back_tolerance(tol);
+    let back = read_back_with(out, wo.target, posted, &tol, wo.g93_seconds);
+    read_back_verdict(back, (output, input))
+}
+
+/// The tolerance the posted program is read back within, for the post's
+/// `tol`.
+pub fn read_back_tolerance(tol: f64) -> Tolerance {
+    Tolerance {
         position: tol.max(Tolerance::default().position),
         ..Tolerance::default()
-    };
-    let back = read_back_with(out, wo.target, posted, &tol, wo.g93_seconds).map_err(|e| {
+    }
+}
+
+/// What reading the posted program back gave, as the post stops on it.
+pub fn read_back_verdict(
+    back: Result<millplan_nc::readback::ReadBack, millplan_nc::ParseError>,
+    (output, input): (&str, &str),
+) -> Result<(), String> {
+    let back = back.map_err(|e| {
         format!("{output}: the posted program does not read back ({e}); not written")
     })?;
     back.equiv.map_err(|m| {

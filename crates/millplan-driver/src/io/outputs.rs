@@ -324,6 +324,19 @@ impl Outputs {
         o: millplan_nc::write::WriteOptions,
         source: &Path,
     ) -> IoResult<Vec<millplan_nc::Diagnostic>> {
+        self.write_program_tee(path, p, o, source, &mut |_| {})
+    }
+
+    /// [`Outputs::write_program`], `tee` handed every piece of the text as
+    /// it is written (to read it back beside, say), in order.
+    pub fn write_program_tee(
+        &mut self,
+        path: &Path,
+        p: &millplan_nc::Program,
+        o: millplan_nc::write::WriteOptions,
+        source: &Path,
+        tee: &mut dyn FnMut(&[u8]),
+    ) -> IoResult<Vec<millplan_nc::Diagnostic>> {
         use millplan_nc::write::WriteError;
         let mut failed: Option<WriteError> = None;
         let mut warnings = Vec::new();
@@ -332,6 +345,7 @@ impl Outputs {
             let mut io_error = None;
             let r = {
                 let mut sink = |b: &[u8]| {
+                    tee(b);
                     f.write_all(b).map_err(|e| {
                         let message = e.to_string();
                         io_error = Some(e);
@@ -343,6 +357,7 @@ impl Outputs {
             match (r, io_error) {
                 (Ok(w), _) => {
                     warnings = w;
+                    tee(&buf);
                     f.write_all(&buf)
                 }
                 (Err(_), Some(e)) => Err(e),

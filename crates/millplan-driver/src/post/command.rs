@@ -5,6 +5,7 @@
 use super::*;
 use crate::io::outputs::Outputs;
 use crate::watch::{enforce, Stop, Watch};
+use millplan_nc::readback::ReadBackStream;
 use millplan_plan::post::{for_target, post, Posted};
 
 /// A `post` run as its caller asks for it.
@@ -75,20 +76,56 @@ pub fn command(c: &PostCommand, mut outputs: Outputs, w: &dyn Watch) -> Result<P
     w.lap("checks (IR, machine, tips through the kinematics)");
     let mut wo = write_options(&machine, target);
     wo.limits = c.read.limits;
-    let (out, warnings) = millplan_nc::write::write_program(&program, wo)
-        .map_err(|e| crate::io::outputs::write_error(c.input, &e))?;
-    w.diagnostics_written(&warnings);
-    w.lap("G-code written (in memory)");
     let names = (
         &*c.output.display().to_string(),
         &*c.input.display().to_string(),
     );
-    read_back_check(&program, &out, &wo, c.post.tol, names).map_err(Stop::Internal)?;
+    if c.output.as_os_str() == "-" {
+        // Standard output cannot be taken back: the text is read back
+        // before any of it is written.
+        let (out, warnings) = millplan_nc::write::write_program(&program, wo)
+            .map_err(|e| crate::io::outputs::write_error(c.input, &e))?;
+        w.diagnostics_written(&warnings);
+        w.lap("G-code written (in memory)");
+        read_back_check(&program, &out, &wo, c.post.tol, names).map_err(Stop::Internal)?;
+        let checked = enforce(&checks, c.input, c.force, w)?;
+        w.lap("written program read back and compared");
+        outputs.write(c.output, &out)?;
+        outputs.commit()?;
+        w.lap("program written");
+        return Ok(PostRun {
+            machine,
+            options: o,
+            target,
+            report,
+            checks,
+            checked,
+        });
+    }
+    // A file is staged as it is written, the text read back on another
+    // thread piece by piece, and renamed into place only once what it
+    // reads as is what was posted: no copy of the whole text is held.
+    let tol = read_back_tolerance(c.post.tol);
+    let mut back = ReadBackStream::new(wo.target, &program, wo.g93_seconds);
+    let mut failed = None;
+    let mut tee = |b: &[u8]| {
+        if failed.is_none() {
+            if let Err(e) = back.feed(b) {
+                failed = Some(e);
+            }
+        }
+    };
+    let written = outputs.write_program_tee(c.output, &program, wo, c.input, &mut tee);
+    let back = match failed {
+        Some(e) => Err(e),
+        None => back.finish(&tol),
+    };
+    w.diagnostics_written(&written?);
+    w.lap("G-code written, staged and synced, read back beside");
+    read_back_verdict(back, names).map_err(Stop::Internal)?;
     let checked = enforce(&checks, c.input, c.force, w)?;
-    w.lap("written program read back and compared");
-    outputs.write(c.output, &out)?;
     outputs.commit()?;
-    w.lap("program staged, synced and renamed into place");
+    w.lap("read back compared, program renamed into place");
     let (options, report) = (o, report);
     Ok(PostRun {
         machine,
