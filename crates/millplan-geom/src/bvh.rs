@@ -475,7 +475,7 @@ impl Bvh {
 
 /// The lanes set in `mask`, ordered by their `lower` bound, least first,
 /// and how many there are.
-#[inline]
+#[inline(always)]
 fn nearest_first(lower: Vec4, mut mask: u32) -> ([usize; 4], usize) {
     let lower = lower.to_array();
     let (mut lanes, mut m) = ([0usize; 4], 0);
