@@ -638,6 +638,32 @@ fn bounds_and_lengths_include_canned_cycle_depths() {
     );
 }
 
+/// A user trial: a G81 whose hole bottom Z lies above its R plane was read,
+/// and `convert` then stopped with exit 1 (its own read-back disagreed).
+/// LinuxCNC refuses such a cycle ("R less than Z"); so does the reader, at
+/// the cycle's line, in mm and in inch programs. Z level with R is a hole
+/// of no depth, still read.
+#[test]
+fn a_cycle_bottom_above_its_r_plane_is_a_located_error() {
+    for (units, z, r) in [("G21", "5.", "2."), ("G20", "0.2", "0.1")] {
+        let src = format!(
+            "%\nO0001\n{units} G17 G90 G94\nT1 M6\nS1000 M3\nG0 X0. Y0. Z10.\n\
+             G98 G81 X10. Y10. Z{z} R{r} F100.\nX20.\nG80\nM30\n%\n"
+        );
+        let e = millplan_nc::parse_program(&src, ReadOptions::default()).expect_err(units);
+        assert_eq!(e.line, 7, "{units}: {e}");
+        assert!(
+            e.message.contains(&format!("Z{}", z.trim_end_matches('.'))),
+            "{units}: {e}"
+        );
+        assert!(e.message.contains("above its R plane"), "{units}: {e}");
+    }
+    let level = "%\nO0001\nG21 G17 G90 G94\nT1 M6\nS1000 M3\nG0 X0. Y0. Z10.\n\
+                 G98 G81 X10. Y10. Z2. R2. F100.\nX20.\nG80\nM30\n%\n";
+    let p = parse(level, "G81 Z = R");
+    assert!(p.moves().any(|m| matches!(m.kind, MoveKind::Cycle(_))));
+}
+
 // ---------------------------------------------------------------------------
 // Found with the writer snapshots.
 

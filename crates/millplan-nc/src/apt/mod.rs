@@ -828,7 +828,7 @@ impl AptReader {
                     ln,
                     1,
                     format!(
-                        "cutting move before any FEDRAT: using {} mm/min (set with --feed)",
+                        "cutting move before any FEDRAT: read at {} mm/min, the readers' default (a FEDRAT before it gives the feed; `millplan convert --feed` another default)",
                         self.opts.default_feed
                     ),
                 );

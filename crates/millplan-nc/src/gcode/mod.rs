@@ -1955,6 +1955,20 @@ impl GcodeReader {
                 ),
             ));
         }
+        if cs.z > cs.r {
+            // LinuxCNC stops on it ("R less than Z in cycle"), and no control
+            // drills a hole upwards from its R plane.
+            return Err(ParseError::new(
+                ln,
+                1,
+                format!(
+                    "{} with its hole bottom Z{} above its R plane R{}: a canned cycle feeds down from R to Z",
+                    cs.name,
+                    fmt_num(cs.z / self.scale),
+                    fmt_num(cs.r / self.scale)
+                ),
+            ));
+        }
         let idx = match cs.index {
             Some(i) => i,
             None => {
@@ -2050,7 +2064,7 @@ impl GcodeReader {
                     ln,
                     1,
                     format!(
-                        "cutting move before any F word: using {} mm/min (set with --feed)",
+                        "cutting move before any F word: read at {} mm/min, the readers' default (a F word before it gives the feed; `millplan convert --feed` another default)",
                         self.opts.default_feed
                     ),
                 );
