@@ -108,16 +108,26 @@ impl Job {
     /// How the job's program is written to `output`: the dialect by the one
     /// rule of [`crate::target::output_target`] (`to`, else the machine
     /// file, else the file name, else the source), the machine's options,
-    /// and the run's resource `limits`.
+    /// and the run's resource `limits`. KRL is refused without a robot
+    /// cell (`robot`: `--robot` given).
     pub fn write_options(
         &self,
         to: Option<millplan_nc::write::Target>,
         output: &std::path::Path,
         limits: millplan_nc::Limits,
+        robot: bool,
     ) -> Result<WriteOptions, String> {
         let i = &self.inputs;
         let machine = i.machine_given.then_some(&i.machine);
         let target = crate::target::output_target(to, output, machine, i.program.source)?;
+        if target == millplan_nc::write::Target::Krl && !robot {
+            // Its frames, tool and speeds are the robot cell's: refused
+            // before any pass rather than by the checks of what it wrote.
+            return Err(format!(
+                "{}: a KRL program is written for a robot cell: give it with --robot and --pose, or name a machine tool's dialect with --to",
+                output.display()
+            ));
+        }
         Ok(WriteOptions {
             limits,
             ..i.machine.write_options(target)

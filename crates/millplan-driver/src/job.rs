@@ -232,6 +232,9 @@ pub struct Job {
     pub diameter: f64,
     /// The forces of the input on the stock (with a stock and a material).
     pub forces_before: Option<ForceRun>,
+    /// No cutting move of the input meets the stock: the loads say nothing
+    /// of it, and the passes that act on them (feed, orient) do not run.
+    pub stock_missed: bool,
     /// The engaged cells the input's force run found on the stock, which
     /// the later runs over the same path use (the feed pass, the check of
     /// the program written).
@@ -428,6 +431,7 @@ impl Job {
             feed_accel,
             diameter: d,
             forces_before: None,
+            stock_missed: false,
             kept: None,
             spindled: None,
         };
@@ -442,8 +446,13 @@ impl Job {
             job.forces_before = Some(run);
             job.kept = Some(std::sync::Arc::new(kept));
         }
+        job.stock_missed =
+            (job.forces_before.as_ref()).is_some_and(|r| !crate::feed::meets_stock(r));
         job.learn_limits();
         lap("the input's loads on the stock (limits learned)");
+        if let Some(order) = named {
+            crate::passes::check_named(&job, order).map_err(JobError::from)?;
+        }
         Ok(job)
     }
 

@@ -149,6 +149,10 @@ fn five_axis(job: &Job) -> bool {
         .any(|m| m.is_cutting() && m.orient.is_some())
 }
 
+/// Why the load passes do not run when no cutting move meets the stock:
+/// every block would read as air and take the air feed.
+pub const STOCK_MISSED: &str = "no cutting move of the program meets the stock (--stock): there is no load to act on, and every block would read as air; is it the stock this program cuts?";
+
 /// Why `pass` cannot run on this job, `None` when it can.
 pub fn missing(job: &Job, pass: PassName) -> Option<String> {
     why_not(job, pass).map(|w| w.why.to_string())
@@ -189,6 +193,7 @@ pub fn why_not(job: &Job, pass: PassName) -> Option<WhyNot> {
         PassName::Orient if job.setup.is_none() => option("no material (--material)"),
         PassName::Feed if i.stock.is_none() => option("no stock (--stock)"),
         PassName::Feed if job.setup.is_none() => option("no material (--material)"),
+        PassName::Feed | PassName::Orient if job.stock_missed => option(STOCK_MISSED),
         PassName::Post if !five_axis(job) => program("a three-axis program: nothing to post"),
         PassName::Post if !i.machine_given => option("no machine file (--machine)"),
         PassName::Post if i.machine.kinematics().is_none() => {
@@ -198,7 +203,8 @@ pub fn why_not(job: &Job, pass: PassName) -> Option<WhyNot> {
     }
 }
 
-/// The passes the user named (`--passes`) checked before any work: one
+/// The passes the user named (`--passes`) checked before any work, and
+/// again once the input's loads show whether it meets the stock: one
 /// that a missing input keeps from running is refused, naming the input
 /// (a pass the program has nothing for is skipped as in the default list).
 pub fn check_named(job: &Job, order: &[PassName]) -> Result<(), String> {
@@ -206,7 +212,7 @@ pub fn check_named(job: &Job, order: &[PassName]) -> Result<(), String> {
         if let Some(w) = why_not(job, p).filter(|w| w.option) {
             let n = p.name();
             return Err(format!(
-                "--passes names {n}, which cannot run: {}; give it, or leave {n} out of --passes",
+                "--passes names {n}, which cannot run: {}; give what it needs, or leave {n} out of --passes",
                 w.why
             ));
         }

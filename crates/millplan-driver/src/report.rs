@@ -206,7 +206,14 @@ fn rows(s: &Summary) -> Vec<(String, String)> {
 
 /// The warnings of a run: what the checks found in the input itself.
 fn warnings(s: &Summary) -> Vec<String> {
-    s.checks
+    // A stock no cut meets: the loads and the stock check say nothing.
+    let missed = s
+        .passes
+        .iter()
+        .filter(|p| !p.ran && p.reason == crate::passes::STOCK_MISSED);
+    let missed = missed.map(|p| format!("pass {} skipped: {}", p.name, p.reason));
+    let found = s
+        .checks
         .iter()
         .flat_map(|c| {
             c.findings.iter().filter(|f| f.in_input).map(move |f| {
@@ -218,8 +225,8 @@ fn warnings(s: &Summary) -> Vec<String> {
                 )
             })
         })
-        .take(20)
-        .collect()
+        .take(20);
+    missed.chain(found).collect()
 }
 
 /// The verdict as the text summary prints it: its level and why (what

@@ -293,6 +293,74 @@ fn a_pass_without_its_input_prints_the_reason() {
     }
 }
 
+/// A user trial: with a stock no cutting move meets (given in the wrong
+/// place), every block read as air and `optimise` raised the feeds to the
+/// air feed, exit 0 and Green, where `feed` warned. The load passes now do
+/// not run on such a stock: skipped with the reason in the default list
+/// (the feeds written are the input's), refused when named (exit 2,
+/// nothing written).
+#[test]
+fn a_stock_no_cut_meets_keeps_the_feeds() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let (stl, apt, machine) = demo(dir.path());
+    let out = dir.path().join("o.nc");
+    let far = "box:500,500,0,600,600,50";
+    let common = [
+        "optimise",
+        s(&apt),
+        "--stl",
+        s(&stl),
+        "--machine",
+        s(&machine),
+        "--stock",
+        far,
+        "--material",
+        "al7075",
+    ];
+    let o = run(&[&common[..], &["-o", s(&out), "--passes", "feed,speed"]].concat());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(
+            "--passes names feed, which cannot run: no cutting move of the program meets the stock"
+        ),
+        "{err}"
+    );
+    assert!(!out.exists(), "nothing is written");
+    let o = run(&[&common[..], &["-o", s(&out), "--passes", "speed,reorder"]].concat());
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let speed_only = read(&out);
+    let o = run(&[&common[..], &["-o", s(&out), "--json"]].concat());
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let j = json(&o);
+    let feed = pass(&j, "feed");
+    assert!(
+        feed.to_string()
+            .contains("no cutting move of the program meets the stock"),
+        "{feed}"
+    );
+    // No feed but the speed pass's own: the default list wrote what speed
+    // and reorder alone do, move for move.
+    let all = read(&out);
+    let feeds = |p: &millplan_nc::Program| -> Vec<u64> {
+        p.moves()
+            .filter(|m| m.is_cutting())
+            .map(|m| m.feed.to_bits())
+            .collect()
+    };
+    assert_eq!(feeds(&all), feeds(&speed_only));
+}
+
 /// A rapid through the stock is refused whether or not the input had it:
 /// exit 3 naming the check and the line, nothing written; --force writes.
 #[test]
@@ -497,6 +565,41 @@ fn swcam_interface_glue_is_faster_and_its_own_faults_are_named() {
     }
     assert!(j["time_after_s"].as_f64() < j["time_before_s"].as_f64());
     assert!(out.exists(), "written with --force");
+    // A user trial: with reorder in the list its retract links plunged
+    // beside a wall, and the run was refused for gouges the input does not
+    // have. The order is now dropped where the checks refuse more of it,
+    // reorder naming the check; what is left is the input's own fault.
+    let o = run(&[
+        "optimise",
+        s(&apt),
+        "--stl",
+        s(&stl),
+        "--stock",
+        "box:0,0,-30,135,135,0",
+        "--resolution",
+        "0.5",
+        "--material",
+        "al7075",
+        "--passes",
+        "speed,reorder,feed",
+        "-o",
+        s(&out),
+        "--json",
+        "--force",
+    ]);
+    let j = json(&o);
+    let reorder = pass(&j, "reorder");
+    let why = reorder["reason"].as_str().expect("reason");
+    assert_eq!(reorder["ran"], false, "{why}");
+    assert!(
+        why.starts_with(
+            "dropped: the checks refused the program in the new order (check gouge at line "
+        ),
+        "{why}"
+    );
+    for c in j["checks"].as_array().expect("checks") {
+        assert!(c["ok"] == true || c["name"] == "stock", "{c}");
+    }
 }
 
 /// The NX ball-end NURBS program (no STL exists for it): its part is the

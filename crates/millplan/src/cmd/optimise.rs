@@ -229,8 +229,9 @@ pub fn run(a: Args) -> CliResult<i32> {
     let named = a.passes.is_some().then_some(&order[..]);
     let job =
         Job::for_passes(given, named, &mut |n| clock.lap(n)).map_err(|e| job_error(&path, e))?;
-    let wo = job.write_options(a.to.map(Into::into), &output, crate::limits::get());
-    let wo = wo.map_err(CliError::input)?;
+    let (to, robot) = (a.to.map(Into::into), a.robot.robot.is_some());
+    let wo =
+        (job.write_options(to, &output, crate::limits::get(), robot)).map_err(CliError::input)?;
     let (outcome, mut w) = passes_and_checks(&a, &job, &order, wo, &path, &mut clock)?;
     let (force, quiet) = (a.force.force, quiet(&a));
     let files = (&inputs[..], &*output);
@@ -263,18 +264,15 @@ fn passes_and_checks(
 ) -> CliResult<(Outcome, Written)> {
     let bar = crate::progress::Phases::new(!quiet(a));
     let h = |phase: &str, done: usize, total: usize| bar.report(phase, done, total);
-    let outcome = job.run_with(order, Some(&h)).inspect_err(|_| bar.finish());
-    let outcome = outcome.map_err(|e| job_error(path, e))?;
-    for p in outcome.passes.iter().filter(|p| p.ran) {
-        clock.part(&format!("pass {}", p.name), p.seconds);
-    }
-    clock.lap("the input measured, the passes run");
-    bar.report("optimise: checks of the written program", 0, 1);
-    let w = job.finish_timed(&outcome, wo, &mut |n| clock.lap(n));
+    let mut lap = |n: &str, part: Option<f64>| match part {
+        Some(t) => clock.part(n, t),
+        None => clock.lap(n),
+    };
+    let ran = job.run_and_finish(order, Some(&h), wo, &mut lap);
     bar.finish();
-    say_skipped(a, &outcome);
-    let w = w.map_err(|e| job_error(path, e))?;
-    Ok((outcome, w))
+    let ran = ran.map_err(|e| job_error(path, e))?;
+    say_skipped(a, &ran.0);
+    Ok(ran)
 }
 
 fn say_skipped(a: &Args, o: &Outcome) {
