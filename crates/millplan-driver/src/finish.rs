@@ -105,11 +105,8 @@ impl Job {
         self.finish_timed(o, wo, &mut |_| {})
     }
 
-    /// How the job's program is written to `output`: the dialect by the one
-    /// rule of [`crate::target::output_target`] (`to`, else the machine
-    /// file, else the file name, else the source), the machine's options,
-    /// and the run's resource `limits`. KRL is refused without a robot
-    /// cell (`robot`: `--robot` given).
+    /// How the job's program is written to `output`
+    /// ([`crate::job::Inputs::write_options`] of its inputs).
     pub fn write_options(
         &self,
         to: Option<millplan_nc::write::Target>,
@@ -117,21 +114,7 @@ impl Job {
         limits: millplan_nc::Limits,
         robot: bool,
     ) -> Result<WriteOptions, String> {
-        let i = &self.inputs;
-        let machine = i.machine_given.then_some(&i.machine);
-        let target = crate::target::output_target(to, output, machine, i.program.source)?;
-        if target == millplan_nc::write::Target::Krl && !robot {
-            // Its frames, tool and speeds are the robot cell's: refused
-            // before any pass rather than by the checks of what it wrote.
-            return Err(format!(
-                "{}: a KRL program is written for a robot cell: give it with --robot and --pose, or name a machine tool's dialect with --to",
-                output.display()
-            ));
-        }
-        Ok(WriteOptions {
-            limits,
-            ..i.machine.write_options(target)
-        })
+        self.inputs.write_options(to, output, limits, robot)
     }
 
     /// [`Job::finish`] naming its phases to `lap` as each ends: writing
@@ -376,5 +359,36 @@ impl Job {
         };
         s.level = crate::report::level(&s);
         s
+    }
+}
+
+impl crate::job::Inputs {
+    /// How a job's program is written to `output`: the dialect by the one
+    /// rule of [`crate::target::output_target`] (`to`, else the machine
+    /// file, else the file name, else the source), the machine's options,
+    /// and the run's resource `limits`. KRL is refused without a robot
+    /// cell (`robot`: `--robot` given), before any work on the inputs.
+    pub fn write_options(
+        &self,
+        to: Option<millplan_nc::write::Target>,
+        output: &std::path::Path,
+        limits: millplan_nc::Limits,
+        robot: bool,
+    ) -> Result<WriteOptions, String> {
+        let i = self;
+        let machine = i.machine_given.then_some(&i.machine);
+        let target = crate::target::output_target(to, output, machine, i.program.source)?;
+        if target == millplan_nc::write::Target::Krl && !robot {
+            // Its frames, tool and speeds are the robot cell's: refused
+            // before any pass rather than by the checks of what it wrote.
+            return Err(format!(
+                "{}: a KRL program is written for a robot cell: give it with --robot and --pose, or name a machine tool's dialect with --to",
+                output.display()
+            ));
+        }
+        Ok(WriteOptions {
+            limits,
+            ..i.machine.write_options(target)
+        })
     }
 }

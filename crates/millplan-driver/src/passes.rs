@@ -150,8 +150,9 @@ fn five_axis(job: &Job) -> bool {
 }
 
 /// Why the load passes do not run when no cutting move meets the stock:
-/// every block would read as air and take the air feed.
-pub const STOCK_MISSED: &str = "no cutting move of the program meets the stock (--stock): there is no load to act on, and every block would read as air; is it the stock this program cuts?";
+/// there are no loads to lean the tool on or to schedule feeds by, and
+/// the feed pass would take every block for air.
+pub const STOCK_MISSED: &str = "no cutting move of the program meets the stock (--stock): no load to act on, every block would read as air (is it the stock this program cuts?)";
 
 /// Why `pass` cannot run on this job, `None` when it can.
 pub fn missing(job: &Job, pass: PassName) -> Option<String> {

@@ -279,10 +279,19 @@ impl Job {
         ran(&again, "the passes run again without reorder", lap);
         checking();
         let mut w2 = self.finish_timed(&again, wo, &mut |n| lap(n, None))?;
-        // Kept when fewer checks refuse it (a fault of the input's own
-        // refuses both); reorder then names what refused only its order.
-        let failed = |w: &crate::Written| w.summary.checks.iter().filter(|c| !c.ok).count();
-        if failed(&w2) >= failed(&w) {
+        // Kept when the checks that refuse it are some of those that refused
+        // the new order, not all (a fault of the input's own refuses both);
+        // reorder then names what refused only its order.
+        let failed = |w: &crate::Written| -> Vec<&'static str> {
+            w.summary
+                .checks
+                .iter()
+                .filter(|c| !c.ok)
+                .map(|c| c.name)
+                .collect()
+        };
+        let (before, after) = (failed(&w), failed(&w2));
+        if after.len() >= before.len() || !after.iter().all(|c| before.contains(c)) {
             return Ok((outcome, w));
         }
         let passed = |name: &str| w2.summary.checks.iter().any(|c| c.name == name && c.ok);

@@ -206,8 +206,15 @@ impl<'a> ReadBackStream<'a> {
             r.line(&line)?;
             return Ok(buf.len());
         }
-        // A line that has not ended yet is refused as soon as it is too long.
-        check_line_length(buf.len() - start, self.lines + 1, &self.opts.limits)?;
+        // A line that has not ended yet is refused as soon as it is too
+        // long (a CR held back for the LF that may follow is no part of it).
+        let pending = &buf[start..];
+        let cr = pending.last() == Some(&b'\r');
+        check_line_length(
+            pending.len() - cr as usize,
+            self.lines + 1,
+            &self.opts.limits,
+        )?;
         Ok(start)
     }
 
@@ -293,6 +300,37 @@ mod tests {
             let whole = said(read_back_with(&bytes, t, &p, &Tolerance::default(), false));
             prop_assert_eq!(streamed(&bytes, t, &p, &cuts), whole);
         }
+    }
+
+    /// A line exactly as long as the limit allows, its CR at the end of a
+    /// piece: the CR held back for its LF is no part of the line.
+    #[test]
+    fn a_longest_line_before_a_cr_at_a_cut_reads() {
+        let limit = crate::ReadOptions::default().limits.line_bytes as usize;
+        let comment = format!("({})", "A".repeat(limit - 2));
+        let text = format!("G21 G90\r\n{comment}\r\nT1 M6\r\nM30\r\n");
+        let p = parse_program(&text, ReadOptions::default())
+            .expect("reads")
+            .program;
+        let bytes = text.as_bytes();
+        let cut = text.find(&comment).expect("there") + comment.len() + 1;
+        let whole = said(read_back_with(
+            bytes,
+            Target::Fanuc,
+            &p,
+            &Tolerance::default(),
+            false,
+        ));
+        assert!(
+            !whole.starts_with("error"),
+            "{}",
+            &whole[..whole.len().min(300)]
+        );
+        let cuts = [(cut as f64 + 0.5) / bytes.len() as f64];
+        // The cut falls just after the CR.
+        let at = (cuts[0] * bytes.len() as f64) as usize;
+        assert_eq!(bytes[at - 1], b'\r');
+        assert_eq!(streamed(bytes, Target::Fanuc, &p, &cuts), whole);
     }
 
     /// An APT file longer than the head the dialect is chosen from reads

@@ -642,7 +642,8 @@ fn bounds_and_lengths_include_canned_cycle_depths() {
 /// and `convert` then stopped with exit 1 (its own read-back disagreed).
 /// LinuxCNC refuses such a cycle ("R less than Z"); so does the reader, at
 /// the cycle's line, in mm and in inch programs. Z level with R is a hole
-/// of no depth, still read.
+/// of no depth, still read, and so is back boring (G87), which cuts
+/// upward from its R at the bottom.
 #[test]
 fn a_cycle_bottom_above_its_r_plane_is_a_located_error() {
     for (units, z, r) in [("G21", "5.", "2."), ("G20", "0.2", "0.1")] {
@@ -661,6 +662,9 @@ fn a_cycle_bottom_above_its_r_plane_is_a_located_error() {
     let level = "%\nO0001\nG21 G17 G90 G94\nT1 M6\nS1000 M3\nG0 X0. Y0. Z10.\n\
                  G98 G81 X10. Y10. Z2. R2. F100.\nX20.\nG80\nM30\n%\n";
     let p = parse(level, "G81 Z = R");
+    assert!(p.moves().any(|m| matches!(m.kind, MoveKind::Cycle(_))));
+    let back = level.replace("G81 X10. Y10. Z2. R2.", "G87 X10. Y10. Z5. R-10. Q0.5");
+    let p = parse(&back, "G87 Z above R");
     assert!(p.moves().any(|m| matches!(m.kind, MoveKind::Cycle(_))));
 }
 

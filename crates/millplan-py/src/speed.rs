@@ -74,8 +74,8 @@ pub struct Ran {
 pub fn run(req: &SpeedRequest, input: &Program, mesh: &TriMesh, machine: Machine) -> Res<Ran> {
     guard("speed", || {
         let time_before = lib::cycle_time(input, &machine);
-        let cx = Context::new(machine).with_surface(Surface::new(mesh));
-        let out = lib::command(req, &cx, mesh, input.clone()).map_err(|e| match e {
+        let mut cx = Context::new(machine).with_surface(Surface::new(mesh));
+        let out = lib::command(req, &mut cx, mesh, input.clone()).map_err(|e| match e {
             lib::SpeedError::Pass(e) => place("speed", e.to_string()),
             lib::SpeedError::NoSummary => place("speed", "the pass left no summary"),
         })?;

@@ -102,9 +102,9 @@ pub fn command(c: &PostCommand, mut outputs: Outputs, w: &dyn Watch) -> Result<P
             checked,
         });
     }
-    // A file is staged as it is written, the text read back on another
-    // thread piece by piece, and renamed into place only once what it
-    // reads as is what was posted: no copy of the whole text is held.
+    // A file is staged as it is written, each piece of the text read back
+    // as the writer hands it over, and renamed into place only once what
+    // it reads as is what was posted: no copy of the whole text is held.
     let tol = read_back_tolerance(c.post.tol);
     let mut back = ReadBackStream::new(wo.target, &program, wo.g93_seconds);
     let mut failed = None;
@@ -116,12 +116,12 @@ pub fn command(c: &PostCommand, mut outputs: Outputs, w: &dyn Watch) -> Result<P
         }
     };
     let written = outputs.write_program_tee(c.output, &program, wo, c.input, &mut tee);
+    w.diagnostics_written(&written?);
     let back = match failed {
         Some(e) => Err(e),
         None => back.finish(&tol),
     };
-    w.diagnostics_written(&written?);
-    w.lap("G-code written, staged and synced, read back beside");
+    w.lap("G-code written, staged and synced, and read back as written");
     read_back_verdict(back, names).map_err(Stop::Internal)?;
     let checked = enforce(&checks, c.input, c.force, w)?;
     outputs.commit()?;

@@ -1955,14 +1955,15 @@ impl GcodeReader {
                 ),
             ));
         }
-        if cs.z > cs.r {
-            // LinuxCNC stops on it ("R less than Z in cycle"), and no control
-            // drills a hole upwards from its R plane.
+        if cs.z > cs.r && cs.name != "G87" {
+            // LinuxCNC stops on it ("R less than Z in cycle"): a drilling or
+            // boring cycle feeds down from R to Z. Back boring (G87) starts
+            // below and cuts upward, its R at the bottom.
             return Err(ParseError::new(
                 ln,
                 1,
                 format!(
-                    "{} with its hole bottom Z{} above its R plane R{}: a canned cycle feeds down from R to Z",
+                    "{} with its hole bottom Z{} above its R plane R{}: the cycle feeds down from R to Z",
                     cs.name,
                     fmt_num(cs.z / self.scale),
                     fmt_num(cs.r / self.scale)

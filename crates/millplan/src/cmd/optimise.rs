@@ -225,13 +225,13 @@ pub fn run(a: Args) -> CliResult<i32> {
     let mut outputs = Outputs::plan(&inputs, &outs, false)?;
     clock.lap("arguments and outputs checked");
     let given = read_inputs(&a, &path)?;
+    let (to, robot) = (a.to.map(Into::into), a.robot.robot.is_some());
+    let wo =
+        (given.write_options(to, &output, crate::limits::get(), robot)).map_err(CliError::input)?;
     clock.lap("program, part, machine, materials and tools read");
     let named = a.passes.is_some().then_some(&order[..]);
     let job =
         Job::for_passes(given, named, &mut |n| clock.lap(n)).map_err(|e| job_error(&path, e))?;
-    let (to, robot) = (a.to.map(Into::into), a.robot.robot.is_some());
-    let wo =
-        (job.write_options(to, &output, crate::limits::get(), robot)).map_err(CliError::input)?;
     let (outcome, mut w) = passes_and_checks(&a, &job, &order, wo, &path, &mut clock)?;
     let (force, quiet) = (a.force.force, quiet(&a));
     let files = (&inputs[..], &*output);
