@@ -105,18 +105,6 @@ impl Job {
         self.finish_timed(o, wo, &mut |_| {})
     }
 
-    /// How the job's program is written to `output`
-    /// ([`crate::job::Inputs::write_options`] of its inputs).
-    pub fn write_options(
-        &self,
-        to: Option<millplan_nc::write::Target>,
-        output: &std::path::Path,
-        limits: millplan_nc::Limits,
-        robot: bool,
-    ) -> Result<WriteOptions, String> {
-        self.inputs.write_options(to, output, limits, robot)
-    }
-
     /// [`Job::finish`] naming its phases to `lap` as each ends: writing
     /// and reading back, the output's loads, the checks, the measures.
     pub fn finish_timed(

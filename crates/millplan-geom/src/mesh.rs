@@ -49,6 +49,18 @@ fn shard_of(k: &[u32; 3]) -> usize {
     (rustc_hash::FxBuildHasher.hash_one(k) >> 32) as usize & (SHARDS - 1)
 }
 
+/// `v`, laid out shard after shard from `base`, as one slice per shard.
+fn by_shard_mut<'a, T>(v: &'a mut [T], base: &[usize; SHARDS + 1]) -> Vec<&'a mut [T]> {
+    let mut parts = Vec::with_capacity(SHARDS);
+    let mut rest = v;
+    for s in 0..SHARDS {
+        let (r, tail) = std::mem::take(&mut rest).split_at_mut(base[s + 1] - base[s]);
+        parts.push(r);
+        rest = tail;
+    }
+    parts
+}
+
 /// The corners of the weld with each shard's ids (in order of appearance).
 struct Walk<'a> {
     corners: &'a [[u32; 3]],
@@ -215,14 +227,7 @@ impl TriMesh {
         }
         // Weld each shard: local ids in order of appearance, marked FIRST where new.
         let mut ids = vec![0u32; corners.len()];
-        let mut shard_ids: Vec<&mut [u32]> = Vec::with_capacity(SHARDS);
-        let mut rest = ids.as_mut_slice();
-        for s in 0..SHARDS {
-            let (r, tail) = std::mem::take(&mut rest).split_at_mut(base[s + 1] - base[s]);
-            shard_ids.push(r);
-            rest = tail;
-        }
-        let uniques: Vec<usize> = shard_ids
+        let uniques: Vec<usize> = by_shard_mut(&mut ids, &base)
             .into_par_iter()
             .enumerate()
             .map(|(s, ids)| {
@@ -301,14 +306,7 @@ impl TriMesh {
         // Each shard's ids turned into vertex numbers (a shard's numbers
         // stay in cache, where the walk would look them up across all).
         {
-            let mut shard_ids: Vec<&mut [u32]> = Vec::with_capacity(SHARDS);
-            let mut rest = ids.as_mut_slice();
-            for s in 0..SHARDS {
-                let (r, tail) = std::mem::take(&mut rest).split_at_mut(base[s + 1] - base[s]);
-                shard_ids.push(r);
-                rest = tail;
-            }
-            shard_ids
+            by_shard_mut(&mut ids, &base)
                 .into_par_iter()
                 .zip(&global)
                 .for_each(|(ids, global)| {

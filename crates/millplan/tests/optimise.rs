@@ -527,24 +527,27 @@ fn swcam_interface_glue_is_faster_and_its_own_faults_are_named() {
     };
     let dir = tempfile::tempdir().expect("tmp");
     let out = dir.path().join("glue.apt");
-    let o = run(&[
-        "optimise",
-        s(&apt),
-        "--stl",
-        s(&stl),
-        "--stock",
-        "box:0,0,-30,135,135,0",
-        "--resolution",
-        "0.5",
-        "--material",
-        "al7075",
-        "--passes",
-        "speed,feed",
-        "-o",
-        s(&out),
-        "--json",
-        "--force",
-    ]);
+    let glue = |passes: &str| {
+        run(&[
+            "optimise",
+            s(&apt),
+            "--stl",
+            s(&stl),
+            "--stock",
+            "box:0,0,-30,135,135,0",
+            "--resolution",
+            "0.5",
+            "--material",
+            "al7075",
+            "--passes",
+            passes,
+            "-o",
+            s(&out),
+            "--json",
+            "--force",
+        ])
+    };
+    let o = glue("speed,feed");
     assert_eq!(
         o.status.code(),
         Some(3),
@@ -569,25 +572,7 @@ fn swcam_interface_glue_is_faster_and_its_own_faults_are_named() {
     // beside a wall, and the run was refused for gouges the input does not
     // have. The order is now dropped where the checks refuse more of it,
     // reorder naming the check; what is left is the input's own fault.
-    let o = run(&[
-        "optimise",
-        s(&apt),
-        "--stl",
-        s(&stl),
-        "--stock",
-        "box:0,0,-30,135,135,0",
-        "--resolution",
-        "0.5",
-        "--material",
-        "al7075",
-        "--passes",
-        "speed,reorder,feed",
-        "-o",
-        s(&out),
-        "--json",
-        "--force",
-    ]);
-    let j = json(&o);
+    let j = json(&glue("speed,reorder,feed"));
     let reorder = pass(&j, "reorder");
     let why = reorder["reason"].as_str().expect("reason");
     assert_eq!(reorder["ran"], false, "{why}");
