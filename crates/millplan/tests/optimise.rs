@@ -327,22 +327,15 @@ fn a_stock_no_cut_meets_keeps_the_feeds() {
         "{err}"
     );
     assert!(!out.exists(), "nothing is written");
-    let o = run(&[&common[..], &["-o", s(&out), "--passes", "speed,reorder"]].concat());
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let written = |more: &[&str]| {
+        let o = run(&[&common[..], &["-o", s(&out)], more].concat());
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert_eq!(o.status.code(), Some(0), "{err}");
+        o
+    };
+    written(&["--passes", "speed,reorder"]);
     let speed_only = read(&out);
-    let o = run(&[&common[..], &["-o", s(&out), "--json"]].concat());
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let j = json(&o);
+    let j = json(&written(&["--json"]));
     let feed = pass(&j, "feed");
     assert!(
         feed.to_string()
