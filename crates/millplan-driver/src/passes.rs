@@ -135,6 +135,14 @@ fn has_ball(job: &Job, three_axis: bool) -> bool {
     })
 }
 
+/// Whether an operation is one the reorder pass works on.
+fn reorderable(job: &Job) -> bool {
+    let ball_d = job.speed_params().ball_d;
+    let ops = job.inputs.program.operations.iter();
+    ops.filter(|op| op.moves.iter().filter(|m| m.is_cutting()).nth(1).is_some())
+        .any(|op| millplan_plan::reorder::reorderable(op, ball_d).is_some())
+}
+
 /// Whether `op` is five-axis CL: a cutting move, and a tool axis vector
 /// on every cutting move (not rotary angles alone).
 pub fn axis_vectors(op: &millplan_nc::Operation) -> bool {
@@ -182,6 +190,9 @@ pub fn why_not(job: &Job, pass: PassName) -> Option<WhyNot> {
             option("no part (--stl): the working diameter needs the surface")
         }
         PassName::Reorder if !has_ball(job, true) => program("no three-axis ball-end operation"),
+        PassName::Reorder if !reorderable(job) => program(
+            "no three-axis ball-end operation of straight moves (arcs, canned cycles and turned frames are left as they are)",
+        ),
         PassName::Reorder if !part => option("no part (--stl)"),
         PassName::Orient if !job.inputs.program.operations.iter().any(axis_vectors) => program(
             "no five-axis CL operation (tool axes as vectors on every cutting move): nothing to lean",

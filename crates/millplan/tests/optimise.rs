@@ -354,6 +354,53 @@ fn a_stock_no_cut_meets_keeps_the_feeds() {
     assert_eq!(feeds(&all), feeds(&speed_only));
 }
 
+/// A user trial: the default passes on a G-code program, its ball given
+/// with `--tool ball:10`, stopped at reorder (exit 2: "no 3-axis ball-end
+/// operation to reorder") though the list says a pass the program has
+/// nothing for is skipped. reorder now takes the ball `--tool` gives, and a
+/// program of arcs, which it leaves alone, skips it with the reason.
+#[test]
+fn reorder_takes_the_ball_of_tool_and_skips_arcs() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let (stl, _, _) = demo(dir.path());
+    let fanuc = dir.path().join("demo").join("finish_fanuc.nc");
+    let out = dir.path().join("o.nc");
+    let opt = |nc: &Path| {
+        let args = [
+            "optimise",
+            s(nc),
+            "--stl",
+            s(&stl),
+            "--tool",
+            "ball:10",
+            "--json",
+        ];
+        let o = run(&[&args[..], &["-o", s(&out)]].concat());
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        json(&o)
+    };
+    let j = opt(&fanuc);
+    assert_eq!(pass(&j, "reorder")["ran"], true, "{}", pass(&j, "reorder"));
+    let arcs = dir.path().join("arcs.nc");
+    let text = "%\nO0001\nG21 G17 G90 G94\nT1 M6\nS6000 M3\nG0 X10. Y10. Z60.\n\
+                G1 Z40. F600.\nG2 X30. Y10. I10. J0.\nG3 X50. Y10. I10. J0.\nG0 Z60.\nM30\n%\n";
+    std::fs::write(&arcs, text).expect("written");
+    let j = opt(&arcs);
+    let reorder = pass(&j, "reorder");
+    assert_eq!(reorder["ran"], false, "{reorder}");
+    assert!(
+        reorder["reason"]
+            .as_str()
+            .is_some_and(|r| r.contains("straight moves")),
+        "{reorder}"
+    );
+}
+
 /// A rapid through the stock is refused whether or not the input had it:
 /// exit 3 naming the check and the line, nothing written; --force writes.
 #[test]

@@ -819,6 +819,25 @@ pub fn reorder(
     reorder_in(program, &cx, p)
 }
 
+/// The ball diameter of an operation the pass reorders, `None` for one it
+/// leaves as it is: the program's ball, or (a tool the program gives no
+/// shape: G-code names tools by number) `ball_d`; three-axis operations
+/// of straight moves only, since a reordered path links points by straight
+/// moves, which would cut arcs short.
+pub fn reorderable(op: &millplan_nc::Operation, ball_d: Option<f64>) -> Option<f64> {
+    let d = match op.tool.as_ref().and_then(|t| t.cutter) {
+        Some(c) if c.kind == millplan_nc::CutterKind::Ball => c.d,
+        Some(_) => return None,
+        None => ball_d?,
+    };
+    let tilted = op
+        .orients
+        .iter()
+        .any(|o| o.axis.is_none_or(|v| (v - DVec3::Z).length() >= 1e-9));
+    let straight = op.frame.is_none() && op.arcs.is_empty() && op.cycles.is_empty();
+    (straight && !tilted).then_some(d)
+}
+
 /// [`reorder`] with the part's analyses from a pipeline's context.
 pub fn reorder_in(
     program: &Program,
@@ -854,33 +873,16 @@ pub fn reorder_in(
         } else {
             String::new()
         };
-        let Some(c) = op
-            .tool
-            .as_ref()
-            .and_then(|t| t.cutter)
-            .filter(|c| c.kind == millplan_nc::CutterKind::Ball)
-        else {
+        let Some(d) = reorderable(op, p.speed.ball_d) else {
             continue;
         };
-        // Only 3-axis operations of straight moves: a reordered path links
-        // points by straight moves, which would cut arcs short.
-        if op.frame.is_some()
-            || !op.arcs.is_empty()
-            || !op.cycles.is_empty()
-            || op
-                .orients
-                .iter()
-                .any(|o| o.axis.is_none_or(|v| (v - DVec3::Z).length() >= 1e-9))
-        {
-            continue;
-        }
         let (pts, idx) = crate::speed::cutting_points(op);
         if pts.len() < 2 {
             continue;
         }
         any = true;
-        let mut cp = contact::Params::new(c.d, p.ap);
-        cp.convention = contact::detect_convention(surface, &pts, c.d / 2.0).chosen;
+        let mut cp = contact::Params::new(d, p.ap);
+        cp.convention = contact::detect_convention(surface, &pts, d / 2.0).chosen;
         let (centres, located) = contact::locate(surface, &pts, &cp);
         let normals: Vec<DVec3> = located.iter().map(|l| l.1).collect();
         let mut spacing: Vec<f64> = pts
@@ -891,7 +893,7 @@ pub fn reorder_in(
             .collect();
         spacing.sort_by(f64::total_cmp);
         let spacing = spacing.get(spacing.len() / 2).copied().unwrap_or(1.0);
-        let side_search = contact::stepover_search_radius(|i| centres[i], &pts, 0.6 * c.d);
+        let side_search = contact::stepover_search_radius(|i| centres[i], &pts, 0.6 * d);
         // Steps longer than this retract and plunge: the spindle has time there.
         let jump = 3.0 * spacing.max(side_search / 1.6);
         let top = pts
@@ -906,7 +908,7 @@ pub fn reorder_in(
             pts: &pts,
             idx: &idx,
             part,
-            shape: Shape::Ball { radius: c.d / 2.0 },
+            shape: Shape::Ball { radius: d / 2.0 },
             safe: top + p.clearance,
             p,
         };
@@ -914,7 +916,7 @@ pub fn reorder_in(
         let fresh = || Evaluator {
             centres: &centres,
             normals: &normals,
-            d: c.d,
+            d,
             ap: p.ap,
             side_search,
             machined: FxHashMap::default(),
@@ -924,16 +926,10 @@ pub fn reorder_in(
             Method::Paper => {
                 let phase = format!("reorder: thesis search{label}");
                 let n = pts.len();
-                let (order, retract) = paper_search(
-                    &centres,
-                    &normals,
-                    c.d,
-                    p,
-                    side_search,
-                    spacing,
-                    jump,
-                    &|k| cx.progress(&phase, k, n),
-                );
+                let (order, retract) =
+                    paper_search(&centres, &normals, d, p, side_search, spacing, jump, &|k| {
+                        cx.progress(&phase, k, n)
+                    });
                 let phase = format!("reorder: links checked for gouges{label}");
                 let built = links.build_with(&order, &retract, LinkStyle::FromClearance, &|k| {
                     cx.progress(&phase, k, n)
