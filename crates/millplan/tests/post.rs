@@ -371,3 +371,36 @@ fn posted_samples_read_back_to_tips_and_axes() {
         }
     }
 }
+
+/// A user trial: `post -o -` printed its summary on standard output after
+/// the program, so the program piped to a file was not the one `-o FILE`
+/// writes. The summary now goes to standard error there; the two are the
+/// same bytes.
+#[test]
+fn a_program_on_standard_output_is_the_file_byte_for_byte() {
+    let Some(input) = shared_data::file("impeller-5axis-goto-fragments/yelun.txt") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().expect("tmp");
+    let m = tmp.path().join("ac.toml");
+    std::fs::write(&m, TABLE_AC).expect("write");
+    let file = tmp.path().join("y.nc");
+    let post = |out: &Path| {
+        let mut c = bin();
+        c.arg("post").arg(&input).arg("--machine").arg(&m);
+        let o = c.arg("-o").arg(out).args(["--to", "fanuc"]).output();
+        let o = o.expect("runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        o
+    };
+    post(&file);
+    let piped = post(Path::new("-"));
+    let written = std::fs::read(&file).expect("written");
+    assert_eq!(
+        piped.stdout,
+        written,
+        "{}",
+        String::from_utf8_lossy(&piped.stderr)
+    );
+    assert!(String::from_utf8_lossy(&piped.stderr).contains("verdict"));
+}

@@ -107,6 +107,8 @@ pub fn run(a: Args) -> CliResult<i32> {
     let s = r.summary(&c);
     if a.json {
         print_json(serde_json::to_value(&s).unwrap_or_default());
+    } else if a.output.as_os_str() == "-" {
+        eprintln!("{}\n{}", s.wrote(), s.render_text());
     } else {
         eprintln!("{}", s.wrote());
         out!("{}", s.render_text());
