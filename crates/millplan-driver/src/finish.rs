@@ -56,6 +56,9 @@ pub struct Summary {
     /// (`millplan_report::html::Level::of`): red when a check failed, amber
     /// when the input was kept, a warning applies or a measure got worse.
     pub level: millplan_report::html::Level,
+    /// What the level's warnings say (a load pass skipped on a stock no cut
+    /// meets, the input's own findings), as the text summary prints them.
+    pub warnings: Vec<String>,
     pub passes: Vec<PassOutcome>,
     pub time_before_s: f64,
     pub time_after_s: f64,
@@ -331,6 +334,7 @@ impl Job {
         let mut s = Summary {
             verdict,
             level: millplan_report::html::Level::Green,
+            warnings: Vec::new(),
             passes: o.passes.clone(),
             time_before_s: before_time,
             time_after_s: after.time_s,
@@ -346,6 +350,7 @@ impl Job {
             robot: None,
         };
         s.level = crate::report::level(&s);
+        s.warnings = crate::report::warnings(&s);
         s
     }
 }

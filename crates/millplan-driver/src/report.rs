@@ -205,7 +205,7 @@ fn rows(s: &Summary) -> Vec<(String, String)> {
 }
 
 /// The warnings of a run: what the checks found in the input itself.
-fn warnings(s: &Summary) -> Vec<String> {
+pub(crate) fn warnings(s: &Summary) -> Vec<String> {
     // A stock no cut meets: the loads and the stock check say nothing.
     let missed = s
         .passes
@@ -456,6 +456,7 @@ mod tests {
         Summary {
             verdict,
             level: millplan_report::html::Level::Green,
+            warnings: Vec::new(),
             passes: Vec::new(),
             time_before_s: times.0,
             time_after_s: times.1,

@@ -336,6 +336,14 @@ fn a_stock_no_cut_meets_keeps_the_feeds() {
     written(&["--passes", "speed,reorder"]);
     let speed_only = read(&out);
     let j = json(&written(&["--json"]));
+    assert_eq!(j["level"], "amber", "{j}");
+    let warned = j["warnings"].as_array().expect("warnings");
+    assert!(
+        warned.iter().any(|w| w
+            .as_str()
+            .is_some_and(|w| w.starts_with("pass feed skipped: no cutting move"))),
+        "{j}"
+    );
     let feed = pass(&j, "feed");
     assert!(
         feed.to_string()
