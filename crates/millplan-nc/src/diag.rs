@@ -28,6 +28,7 @@ pub enum Code {
     UnknownPosition,
     BlockDelete,
     PeckDepth,
+    CycleDepth,
     ZeroIncrement,
     LossyWord,
     OpenMesh,
@@ -36,7 +37,7 @@ pub enum Code {
 }
 
 impl Code {
-    pub const ALL: [Code; 19] = [
+    pub const ALL: [Code; 20] = [
         Code::UnknownWord,
         Code::UnitsAssumed,
         Code::UnitsChange,
@@ -51,6 +52,7 @@ impl Code {
         Code::UnknownPosition,
         Code::BlockDelete,
         Code::PeckDepth,
+        Code::CycleDepth,
         Code::ZeroIncrement,
         Code::LossyWord,
         Code::OpenMesh,
@@ -75,6 +77,7 @@ impl Code {
             Code::UnknownPosition => "unknown-position",
             Code::BlockDelete => "block-delete",
             Code::PeckDepth => "peck-depth",
+            Code::CycleDepth => "cycle-depth",
             Code::ZeroIncrement => "zero-increment",
             Code::LossyWord => "lossy-word",
             Code::OpenMesh => "open-mesh",
@@ -99,6 +102,7 @@ impl Code {
             Code::FrameChange => "a block changes the coordinate frame (ROT, TRANS, G52, G92, G68, G51, G10, a work offset); it is kept verbatim, and every axis is unknown after it until the program commands it again",
             Code::UnknownPosition => "a block moves the tool to a place the reader cannot know (a probing move, a macro call, an axis word given by a macro variable); it is kept verbatim, and the axes it may move are unknown after it until the program commands them again",
             Code::PeckDepth => "a pecking cycle has no peck depth, or one of zero or below: it is read as one stroke to depth, and a control may stop with an alarm instead",
+            Code::CycleDepth => "a canned cycle's hole bottom lies at its R plane: the hole has no depth and the cycle feeds nowhere; read as written, and a control may stop with an alarm instead",
             Code::BlockDelete => "a block-delete block (`/`) runs or not as the operator's switch says; it is kept as written, and the axes it names are unknown after it until the program commands them again",
             Code::ZeroIncrement => "an incremental (G91) move steps an axis whose position is unknown: a zero step moves nothing; another step is kept verbatim (with its G91) and the axis stays unknown",
             Code::LossyWord => "with --lossy, a word the target dialect cannot express was written as a comment: the output does less than the source",

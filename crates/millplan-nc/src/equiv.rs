@@ -182,9 +182,11 @@ fn move_steps(op: &Operation, m: &Move, mut cur: DVec3, out: &mut Vec<Step>) -> 
         }
         MoveKind::Cycle(_) => {
             let Some(c) = op.cycle(m) else { return cur };
-            // Across to the hole at the height the tool stands, then down.
+            // Up to the cycle's level if the tool stands below it (as a
+            // control does), across to the hole, then down.
             let axis = op.axis(m).unwrap_or(DVec3::Z);
             let top = m.end + axis * c.retract.max(c.clearance);
+            let up = (cur.z < top.z).then(|| DVec3::new(cur.x, cur.y, top.z));
             let z = if cur.z.is_nan() {
                 top.z
             } else {
@@ -202,6 +204,9 @@ fn move_steps(op: &Operation, m: &Move, mut cur: DVec3, out: &mut Vec<Step>) -> 
                 });
                 cur = end;
             };
+            if let Some(up) = up {
+                push(up, true, 0.0);
+            }
             push(across, true, 0.0);
             // A cycle that cannot be spelled out compares by its hole.
             let v = cycle_moves(c, m.end, axis).unwrap_or_else(|_| vec![CycleStep::Rapid(top)]);

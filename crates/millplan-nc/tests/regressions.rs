@@ -641,9 +641,9 @@ fn bounds_and_lengths_include_canned_cycle_depths() {
 /// A user trial: a G81 whose hole bottom Z lies above its R plane was read,
 /// and `convert` then stopped with exit 1 (its own read-back disagreed).
 /// LinuxCNC refuses such a cycle ("R less than Z"); so does the reader, at
-/// the cycle's line, in mm and in inch programs. Z level with R is a hole
-/// of no depth, still read, and so is back boring (G87), which cuts
-/// upward from its R at the bottom.
+/// the cycle's line and its Z word, in mm and in inch programs. Z level with
+/// R is a hole of no depth, still read, with a `cycle-depth` note. Back
+/// boring (G87) is read with Z on either side of R.
 #[test]
 fn a_cycle_bottom_above_its_r_plane_is_a_located_error() {
     for (units, z, r) in [("G21", "5.", "2."), ("G20", "0.2", "0.1")] {
@@ -653,6 +653,7 @@ fn a_cycle_bottom_above_its_r_plane_is_a_located_error() {
         );
         let e = millplan_nc::parse_program(&src, ReadOptions::default()).expect_err(units);
         assert_eq!(e.line, 7, "{units}: {e}");
+        assert_eq!(e.col, 19, "{units}: the Z word: {e}");
         assert!(
             e.message.contains(&format!("Z{}", z.trim_end_matches('.'))),
             "{units}: {e}"
@@ -661,11 +662,62 @@ fn a_cycle_bottom_above_its_r_plane_is_a_located_error() {
     }
     let level = "%\nO0001\nG21 G17 G90 G94\nT1 M6\nS1000 M3\nG0 X0. Y0. Z10.\n\
                  G98 G81 X10. Y10. Z2. R2. F100.\nX20.\nG80\nM30\n%\n";
-    let p = parse(level, "G81 Z = R");
-    assert!(p.moves().any(|m| matches!(m.kind, MoveKind::Cycle(_))));
+    let parsed = millplan_nc::parse_program(level, ReadOptions::default()).expect("Z = R");
+    assert!(parsed
+        .program
+        .moves()
+        .any(|m| matches!(m.kind, MoveKind::Cycle(_))));
+    let notes: Vec<_> = parsed
+        .diagnostics
+        .iter()
+        .filter(|d| d.code == millplan_nc::diag::Code::CycleDepth)
+        .collect();
+    assert_eq!(notes.len(), 1, "one note for the definition: {notes:?}");
+    assert_eq!((notes[0].line, notes[0].col), (7, 19), "{notes:?}");
     let back = level.replace("G81 X10. Y10. Z2. R2.", "G87 X10. Y10. Z5. R-10. Q0.5");
     let p = parse(&back, "G87 Z above R");
     assert!(p.moves().any(|m| matches!(m.kind, MoveKind::Cycle(_))));
+    // Back boring with R above Z is read too: an NX post writes it so for
+    // a tool turned upside down (haas_vf2tr_5axis_inch.ptp, line 1044).
+    let down = back.replace("Z5. R-10.", "Z-10. R5.");
+    let p = parse(&down, "G87 R above Z");
+    assert!(p.moves().any(|m| matches!(m.kind, MoveKind::Cycle(_))));
+}
+
+/// A user trial: G-code converted to APT wrote `CYCLE/G81`, a record no APT
+/// post knows. The G-code drilling, tapping and boring cycles are written
+/// under their APT names (G81/G82 `DRILL`, G83 `DEEP`, G73 `BRKCHP`, G84
+/// `TAP`, G85/G89 `BORE`, the dwell and peck as words), and those names
+/// come back as the control's own cycles in G-code, so the round trip
+/// G-code → APT → G-code keeps every cycle a cycle. An APT drill at the
+/// start of its file (NX's standart_drill) reaches its hole from the
+/// position the program never set, over the hole at the cycle's level.
+#[test]
+fn gcode_cycles_take_their_apt_names_and_come_back_as_cycles() {
+    let src = "%\nO0001\nG21 G17 G90 G94\nT1 M6\nS1000 M3\nG0 X0. Y0. Z25.\n\
+               G98 G81 X10. Y10. Z-5. R2. F120.\nG80\n\
+               G99 G82 X20. Y10. Z-4. R2. P500 F120.\nG80\n\
+               G99 G83 X30. Y10. Z-20. R2. Q5. F100.\nG80\n\
+               G99 G73 X40. Y10. Z-20. R2. Q4. F100.\nG80\n\
+               G99 G85 X50. Y10. Z-8. R1. F80.\nG80\nG0 Z25.\nM30\n%\n";
+    let p = parse(src, "cycles");
+    let (apt, back) = through(&p, Target::Apt, false, "cycles");
+    for name in ["DRILL", "DRILL", "DEEP", "BRKCHP", "BORE"] {
+        assert!(apt.contains(&format!("CYCLE/{name},")), "{name}: {apt}");
+    }
+    assert!(!apt.contains("CYCLE/G"), "{apt}");
+    assert!(apt.contains(",DWELL,0.5"), "{apt}");
+    let (fanuc, _) = through(&back, Target::Fanuc, false, "cycles -> apt");
+    for code in ["G81 ", "G82 ", "G83 ", "G73 ", "G85 "] {
+        assert_eq!(fanuc.matches(code).count(), 1, "{code}: {fanuc}");
+    }
+    assert!(!fanuc.contains("written as lines"), "{fanuc}");
+    compare(
+        &p,
+        &parse(&fanuc, "cycles -> apt -> fanuc"),
+        &Tolerance::default(),
+    )
+    .expect("means what the source meant");
 }
 
 // ---------------------------------------------------------------------------

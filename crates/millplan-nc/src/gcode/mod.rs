@@ -456,6 +456,10 @@ struct Words {
     /// G codes ×10 with their value and column.
     g: Vec<(i64, f64, u32)>,
     xyz: [Option<f64>; 3],
+    /// Columns of the Z and R words (0: not in the block), where a canned
+    /// cycle's depth error points.
+    z_col: u32,
+    r_col: u32,
     ijk: [Option<f64>; 3],
     vec3: [Option<f64>; 3],
     rot: [Option<f64>; 3],
@@ -764,7 +768,12 @@ impl GcodeReader {
                     match letter {
                         'N' => {}
                         'G' => w.g.push(((v * 10.0).round() as i64, v, col)),
-                        'X' | 'Y' | 'Z' => w.xyz[axis_index(*letter)] = Some(v),
+                        'X' | 'Y' | 'Z' => {
+                            if *letter == 'Z' {
+                                w.z_col = col;
+                            }
+                            w.xyz[axis_index(*letter)] = Some(v)
+                        }
                         'I' | 'J' | 'K' => w.ijk[axis_index(*letter)] = Some(v),
                         'A' | 'B' | 'C' => w.rot[(*letter as u8 - b'A') as usize] = Some(v),
                         'F' => w.f = Some((v, col)),
@@ -791,7 +800,10 @@ impl GcodeReader {
                             self.select_event(EventKind::ToolSelect(v as u32), ln);
                         }
                         'M' => w.m.push(v),
-                        'R' => w.r = Some(v),
+                        'R' => {
+                            w.r = Some(v);
+                            w.r_col = col;
+                        }
                         'Q' => w.q = Some(v),
                         'P' => w.p = Some(v),
                         'H' => w.h = Some(v),
@@ -1406,7 +1418,9 @@ impl GcodeReader {
             if !has_xyz && !motion_word {
                 return Ok(());
             }
-            return self.cycle_point(w.xyz, ln);
+            // A depth error points at this block's Z, else its R.
+            let blame = [w.z_col, w.r_col, 1].into_iter().find(|c| *c > 0);
+            return self.cycle_point(w.xyz, blame.unwrap_or(1), ln);
         }
         let has_rot = w.rot.iter().any(Option::is_some);
         let has_vec = w.vec3.iter().any(Option::is_some);
@@ -1917,7 +1931,9 @@ impl GcodeReader {
         Ok(arc)
     }
 
-    fn cycle_point(&mut self, xyz: [Option<f64>; 3], ln: u32) -> Result<(), ParseError> {
+    /// A hole of the active cycle at `xyz`; `col` is where an error in the
+    /// cycle's depth points (the block's Z or R word).
+    fn cycle_point(&mut self, xyz: [Option<f64>; 3], col: u32, ln: u32) -> Result<(), ParseError> {
         let Some(cs) = &mut self.cycle else {
             return Err(ParseError::new(
                 ln,
@@ -1957,11 +1973,13 @@ impl GcodeReader {
         }
         if cs.z > cs.r && cs.name != "G87" {
             // LinuxCNC stops on it ("R less than Z in cycle"): a drilling or
-            // boring cycle feeds down from R to Z. Back boring (G87) starts
-            // below and cuts upward, its R at the bottom.
+            // boring cycle feeds down from R to Z. Back boring (G87) is read
+            // either way: it cuts from R toward Z along the tool axis, and
+            // an NX post writes it with R above Z for a tool turned upside
+            // down (B-180, haas_vf2tr_5axis_inch.ptp).
             return Err(ParseError::new(
                 ln,
-                1,
+                col,
                 format!(
                     "{} with its hole bottom Z{} above its R plane R{}: the cycle feeds down from R to Z",
                     cs.name,
@@ -1983,6 +2001,18 @@ impl GcodeReader {
                 } else {
                     self.opts.default_feed
                 };
+                if cs.z == cs.r {
+                    self.diags.warn(
+                        Code::CycleDepth,
+                        ln,
+                        col,
+                        format!(
+                            "{} with its hole bottom Z{} at its R plane: a hole of no depth, read as such (a control may stop with an alarm)",
+                            cs.name,
+                            fmt_num(cs.z / self.scale)
+                        ),
+                    );
+                }
                 let pecking = matches!(cs.name.as_str(), "G73" | "G83");
                 match cs.q {
                     Some(q) if pecking && q <= 0.0 => self.diags.warn(

@@ -415,7 +415,8 @@ fn write_move(
                 .get(id.index())
                 .ok_or_else(|| WriteError::new(m.line, "cycle id out of range"))?;
             super::check_pecks(c)?;
-            out.extend_from_slice(format!("CYCLE/{},FEDTO,", c.name.replace(',', " ")).as_bytes());
+            let name = super::apt_cycle_name(c).replace(',', " ");
+            out.extend_from_slice(format!("CYCLE/{name},FEDTO,").as_bytes());
             num(out, COORD, -c.bottom * k);
             out.extend_from_slice(b",RAPTO,");
             num(out, COORD, c.clearance * k);

@@ -1193,7 +1193,7 @@ impl W<'_> {
     /// was copied, called again.
     fn native_cycle(&self, op: &Operation, m: &Move, c: &Cycle) -> bool {
         let along_z = op.axis(m).is_none_or(|a| (a - DVec3::Z).length() < 1e-9);
-        let code = c.name.strip_prefix('G').and_then(|n| n.parse::<u32>().ok());
+        let code = super::gcode_cycle(c);
         along_z
             && match self.target() {
                 Target::Fanuc => matches!(code, Some(73 | 74 | 76 | 81..=89)),
@@ -1246,10 +1246,25 @@ impl W<'_> {
             }
             // The control returns to the level the cycle starts from (G98).
             let start_z = self.grid(top * self.k);
-            if c.retract > 0.0 && self.st.pos[2] != Some(start_z) {
+            // From a position the program has not set (an APT cycle at the
+            // start of its file), over the hole at that level first, as the
+            // cycle spelled out goes.
+            // From above that level, across first and then down to it, as
+            // the cycle spelled out goes (the level it returns to is where
+            // it starts, G98).
+            let unknown = self.st.pos.iter().any(Option::is_none);
+            let above = self.st.pos[2].is_some_and(|z| z > start_z);
+            if !unknown && c.retract > 0.0 && above {
                 let mark = self.start_motion("");
                 self.motion(0);
-                self.coords(DVec3::new(f64::NAN, f64::NAN, top), false);
+                self.coords(DVec3::new(m.end.x, m.end.y, f64::NAN), false);
+                self.finish_motion(mark);
+            }
+            if unknown || (c.retract > 0.0 && self.st.pos[2] != Some(start_z)) {
+                let mark = self.start_motion("");
+                self.motion(0);
+                let over = if unknown { m.end } else { DVec3::NAN };
+                self.coords(DVec3::new(over.x, over.y, top), false);
                 self.finish_motion(mark);
             }
         }
@@ -1258,7 +1273,8 @@ impl W<'_> {
             self.feed_mode_word(FeedMode::PerMinute);
             let code = if c.retract > 0.0 { " G98 " } else { " G99 " };
             self.out.extend_from_slice(code.as_bytes());
-            self.out.extend_from_slice(c.name.as_bytes());
+            let code = super::gcode_cycle(c).map_or_else(|| c.name.clone(), |n| format!("G{n}"));
+            self.out.extend_from_slice(code.as_bytes());
             let f = self.coord;
             let mut xy = m.end;
             xy.z = f64::NAN;
@@ -1268,7 +1284,10 @@ impl W<'_> {
             if let Some(q) = c.peck {
                 self.word("Q", q * self.k, f);
             }
-            if let Some(t) = c.dwell {
+            // A dwell of 0 in an APT record (SOLIDWORKS CAM's `DWELL,0`)
+            // is none: G81 takes no P (LinuxCNC stops on one).
+            let named = c.name.starts_with('G');
+            if let Some(t) = c.dwell.filter(|t| named || *t > 0.0) {
                 // Fanuc counts dwell in whole milliseconds, without a
                 // decimal point (`P500.` is refused); LinuxCNC in seconds.
                 let (p, pf) = if self.target() == Target::Fanuc {
@@ -1398,13 +1417,16 @@ impl W<'_> {
                     self.line(&extra);
                 }
                 self.comment(&format!("cycle {} at this hole, written as lines", c.name));
-                // Like the control's own cycle: across at the current height, then down.
+                // Like the control's own cycle: up to its level if below
+                // it, across at the current height, then down.
                 let top = m.end + axis * c.retract.max(c.clearance);
-                let z = self.st.pos[2]
-                    .map(|z| z / self.k)
-                    .unwrap_or(top.z)
-                    .max(top.z);
+                let now = self.st.pos[2].map(|z| z / self.k);
+                let z = now.unwrap_or(top.z).max(top.z);
                 let pm = FeedMode::PerMinute;
+                if now.is_some_and(|z| z < top.z) {
+                    let up = DVec3::new(f64::NAN, f64::NAN, top.z);
+                    self.linear_block(op, m, up, true, 0.0, pm, "")?;
+                }
                 self.linear_block(op, m, DVec3::new(m.end.x, m.end.y, z), true, 0.0, pm, "")?;
                 for step in steps {
                     match step {
