@@ -157,6 +157,23 @@ fn speed_on_the_generated_free_form_case() {
     assert_eq!(r.json["gap_flagged"], 0);
     // Control evens out the cutting speed.
     assert!(r.json["vc_controlled"]["std"].as_f64() < r.json["vc_constant"]["std"].as_f64());
+    // The part is open by design: the text says so once, as the verdict's
+    // warning (a user trial saw it twice, a note on standard error as well).
+    let o = bin()
+        .arg("speed")
+        .arg(d.join("finish.apt"))
+        .arg("--stl")
+        .arg(d.join("part.stl"))
+        .args(["--vc", "63", "--fz", "0.125", "--ap", "0.3", "-o"])
+        .arg(dir.path().join("text.apt"))
+        .output()
+        .expect("runs");
+    let all = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(all.matches("open edges").count(), 1, "{all}");
 }
 
 #[test]

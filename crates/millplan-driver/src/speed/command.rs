@@ -60,7 +60,7 @@ impl SpeedRun {
     }
 }
 
-/// Runs `c`, `w` hearing the bytes read, the findings, the passes' phases
+/// Runs `c`, `w` hearing the bytes read, the passes' phases
 /// (on a long program) and the checks' refusal.
 pub fn run_command(c: &SpeedCommand, w: &dyn Watch) -> Result<SpeedRun, Stop> {
     check(&c.request).map_err(Stop::input)?;
@@ -144,7 +144,8 @@ fn control(
         SpeedError::NoSummary => Stop::Internal("the speed pass left no summary".into()),
     })?;
     let checked = enforce(&out.checks, c.input, c.force, w)?;
-    w.findings(c.part.path, &out.findings);
+    // The part's findings (open edges, points off the part) are the
+    // verdict's warnings: the summary says them, once.
     let time_after = write(c, &cx, &out.program, &mut outputs, target, w)?;
     let times = [read.time_before, time_after];
     cx.time("table and report", || -> Result<(), Stop> {
