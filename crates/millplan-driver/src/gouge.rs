@@ -4,7 +4,7 @@
 
 use crate::check::{arg, tool_shape, Range};
 use millplan_models::cutter::Shape;
-use millplan_nc::{Operation, Program};
+use millplan_nc::{MoveKind, Operation, Program};
 use millplan_sim::dropcutter::DropMesh;
 use millplan_sim::gouge::{check_with_progress, samples, Skipped};
 pub use millplan_sim::gouge::{GougeParams, GougeReport, BYTES_PER_SAMPLE};
@@ -46,7 +46,8 @@ pub fn params(a: &GougeRequest) -> Result<(GougeParams, Option<Shape>), String> 
 /// else an error at the tool's line in `path`.
 pub fn shape_is_known(path: &str, program: &Program) -> Result<(), String> {
     if let Some(op) = program.operations.iter().find(|op| {
-        op.moves.iter().any(|m| m.is_cutting()) && op.tool.as_ref().and_then(|t| t.cutter).is_none()
+        let cuts = |m: &millplan_nc::Move| m.is_cutting() || matches!(m.kind, MoveKind::Cycle(_));
+        op.moves.iter().any(cuts) && op.tool.as_ref().and_then(|t| t.cutter).is_none()
     }) {
         let line = op.tool.as_ref().map_or(0, |t| t.line);
         return Err(format!(

@@ -230,9 +230,9 @@ pub fn check_with_progress(
 /// Whether a move of kind `k` is checked.
 fn wanted(k: MoveKind, g: &GougeParams) -> bool {
     match k {
-        MoveKind::Linear | MoveKind::Arc(_) => true,
+        // A hole is sampled along its axis (`sample_hole`).
+        MoveKind::Linear | MoveKind::Arc(_) | MoveKind::Cycle(_) => true,
         MoveKind::Rapid => g.rapids,
-        MoveKind::Cycle(_) => false,
     }
 }
 

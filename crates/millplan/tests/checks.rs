@@ -240,3 +240,37 @@ fn feed_refuses_a_rapid_into_the_stock_at_its_line() {
     assert_eq!(stock["ok"], false, "{stock}");
     assert_eq!(v["verdict"]["level"], "red", "{}", v["verdict"]);
 }
+
+/// A user trial: `gouge` on a program whose only cuts are canned-cycle
+/// holes, its tool without a shape, said "no move could be checked" with
+/// every count at zero. Holes are cuts: the tool's shape is asked for at
+/// its line, and with `--tool` every hole is checked along its axis.
+#[test]
+fn gouge_asks_for_the_shape_of_a_tool_that_only_drills() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let d = demo(dir.path());
+    let nc = dir.path().join("holes.nc");
+    std::fs::write(
+        &nc,
+        "G21 G90 G17\nT1 M6\nS1000 M3\nG0 X0 Y0 Z10\nG81 X10 Y10 Z-5 R2 F100\nX20\nG80\nM30\n",
+    )
+    .expect("write");
+    let gouge = |extra: &[&str]| {
+        bin()
+            .args(["gouge", s(&nc), "--stl", s(&d.join("part.stl")), "-q"])
+            .args(extra)
+            .output()
+            .expect("runs")
+    };
+    let o = gouge(&[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("holes.nc:2:1: the program does not say the shape of its tool"),
+        "{err}"
+    );
+    let o = gouge(&["--tool", "ball:6", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(v["moves_checked"], 2, "{v}");
+    assert_eq!(v["moves_skipped"], 0, "{v}");
+}
