@@ -135,8 +135,13 @@ pub struct ProgramSummary {
 
 /// Summarises program `p` (read with `diagnostics` diagnostics) timed on `machine`.
 pub fn program(p: &Program, diagnostics: usize, machine: &Machine) -> ProgramSummary {
-    let s = summarize(p, machine.rapid);
-    let est = estimate_program_totals(p, machine);
+    // Independent walks of the program, side by side.
+    let (s, est) = std::thread::scope(|sc| {
+        let est = sc.spawn(|| estimate_program_totals(p, machine));
+        let s = summarize(p, machine.rapid);
+        let est = est.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+        (s, est)
+    });
     let tools = p
         .operations
         .iter()
