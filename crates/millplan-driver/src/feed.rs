@@ -12,7 +12,9 @@ pub use millplan_plan::feed::FeedParams;
 use millplan_plan::feed::{machine_accel, BodyFn, FeedChanges, FeedPass};
 /// The load limits of a run.
 pub use millplan_plan::force::FeedLimits;
-use millplan_plan::force::{simulate, simulate_largest, ForceSetup, FzRange, LimitUse, MoveForces};
+use millplan_plan::force::{
+    simulate, simulate_largest_within, ForceSetup, FzRange, LimitUse, MoveForces,
+};
 use millplan_plan::force::{Maxima, Steps};
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context, PassError, Progress};
@@ -185,6 +187,9 @@ pub struct Prepared {
     pub stock_name: String,
     /// The material's chip loads (the feed per tooth by tool diameter).
     pub chip_loads: Option<ChipLoads>,
+    /// The `memory` limit of the run, bytes (what is left of it once the
+    /// stock is counted bounds the force runs' engagement memo).
+    pub memory: u64,
 }
 
 impl Prepared {
@@ -205,6 +210,7 @@ impl Prepared {
             machine,
             stock_name: need(&m.stock, "--stock")?.to_string(),
             chip_loads: chip_loads(m, materials)?,
+            memory: millplan_geom::limits::Limits::default().memory,
         })
     }
 }
@@ -264,6 +270,10 @@ pub fn prepare(
     let stock = crate::simulate::build_stock(&name, req.resolution, &spec, &s, meshes, memory)
         .map_err(IoError::input)?;
     let p = Prepared::new(req, &materials, (parsed.program, s, stock), setup, machine)
+        .map(|p| Prepared {
+            memory: limits.memory,
+            ..p
+        })
         .map_err(IoError::input);
     w.lap("stock built");
     p
@@ -543,7 +553,9 @@ pub fn feed_params(
         && limits.stress.is_none()
         && limits.deflection.is_none()
     {
-        let run = simulate_largest(&p.program, &p.strokes, &p.stock, &p.setup, &|_| {})?;
+        let budget = crate::limits::memo_budget(p.memory, &p.stock);
+        let (program, strokes) = (&p.program, &p.strokes);
+        let run = simulate_largest_within(program, strokes, &p.stock, &p.setup, &|_| {}, budget)?.0;
         learn(&mut limits, &run.maxima(), chart)
             .into_iter()
             .map(|(name, _)| name)

@@ -532,16 +532,20 @@ impl Job {
         )
     }
 
+    /// The `memory` limit the job runs under, bytes.
+    pub(crate) fn memory(&self) -> u64 {
+        self.inputs
+            .options
+            .memory
+            .unwrap_or(millplan_geom::limits::Limits::default().memory)
+    }
+
     fn build_stock(&self) -> Result<Option<Stock>, JobError> {
         let Some(spec) = &self.inputs.stock else {
             return Ok(None);
         };
         let s = self.strokes(&self.inputs.program, false);
-        let memory = self
-            .inputs
-            .options
-            .memory
-            .unwrap_or(millplan_geom::limits::Limits::default().memory);
+        let memory = self.memory();
         // The job keeps its stock while each run cuts a copy of it.
         let meshes = (self.inputs.part.as_ref(), self.inputs.blank.as_ref());
         spec.build(self.resolution, &s, meshes, (memory, 2))

@@ -134,6 +134,18 @@ pub fn check_memory(limits: &Limits, what: &str, bytes: f64) -> Result<(), Strin
     Err(e.to_string())
 }
 
+/// What the `memory` limit leaves a force run's engagement memo
+/// ([`millplan_plan::force::EngagementMemo`]) once the stock and the copy
+/// each run cuts are counted (as the stock was checked against it), at most
+/// the memo's own cap. The memo is a cache: with less it holds fewer
+/// strokes, and the loads are the same.
+pub fn memo_budget(memory: u64, stock: &millplan_sim::stock::Stock) -> usize {
+    let left = memory.saturating_sub(2 * stock.memory_bytes() as u64);
+    usize::try_from(left)
+        .unwrap_or(usize::MAX)
+        .min(millplan_plan::force::MEMO_BYTES)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

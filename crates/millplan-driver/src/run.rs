@@ -159,7 +159,8 @@ impl Job {
             return Ok(None);
         };
         let s = self.strokes(p, true);
-        force::simulate_largest_kept(p, &s, stock, setup, &|_| {})
+        let budget = crate::limits::memo_budget(self.memory(), stock);
+        force::simulate_largest_within(p, &s, stock, setup, &|_| {}, budget)
             .map(Some)
             .map_err(JobError::from)
     }

@@ -731,6 +731,11 @@ struct MemoPart {
 /// [`simulate`] does.
 pub const MEMO_RUNS: usize = 16 << 20;
 
+/// The most memory an [`EngagementMemo`]'s runs take: [`MEMO_RUNS`] of 8
+/// bytes. A caller under a memory limit gives it less
+/// ([`simulate_largest_within`]).
+pub const MEMO_BYTES: usize = MEMO_RUNS * 8;
+
 impl EngagementMemo {
     /// Whether the memo was recorded over `strokes` on `stock` with
     /// `setup`'s coarsest grid.
@@ -780,8 +785,9 @@ fn memo_key(strokes: &Strokes, stock: &Stock, setup: &ForceSetup) -> u64 {
 #[derive(Clone, Copy)]
 enum Memo<'a> {
     Off,
-    /// Keep every sample's cells (at most [`MEMO_RUNS`] runs in all).
-    Record,
+    /// Keep every sample's cells (at most this many runs in all, and at
+    /// most [`MEMO_RUNS`]).
+    Record(usize),
     Use(&'a EngagementMemo),
 }
 
@@ -792,6 +798,8 @@ enum PartMemo<'a> {
         part: MemoPart,
         /// Runs recorded by every part so far.
         total: &'a std::sync::atomic::AtomicUsize,
+        /// The most runs all parts may record.
+        cap: usize,
         full: bool,
     },
     Use(&'a EngagementMemo),
@@ -802,12 +810,13 @@ impl<'a> PartMemo<'a> {
         match memo {
             Memo::Off => PartMemo::Off,
             Memo::Use(m) => PartMemo::Use(m),
-            Memo::Record => PartMemo::Record {
+            Memo::Record(cap) => PartMemo::Record {
                 part: MemoPart {
                     first,
                     ..MemoPart::default()
                 },
                 total,
+                cap: cap.min(MEMO_RUNS),
                 full: false,
             },
         }
@@ -842,7 +851,13 @@ impl<'a> PartMemo<'a> {
     /// not given) is kept not at all.
     fn record(&mut self, g: usize, runs: Option<&[Run]>) {
         use std::sync::atomic::Ordering;
-        let PartMemo::Record { part, total, full } = self else {
+        let PartMemo::Record {
+            part,
+            total,
+            cap,
+            full,
+        } = self
+        else {
             return;
         };
         let i = g - part.first;
@@ -852,7 +867,7 @@ impl<'a> PartMemo<'a> {
         };
         if !*full {
             let n = total.fetch_add(runs.len(), Ordering::Relaxed) + runs.len();
-            *full = n > MEMO_RUNS || part.samples.len() >= u32::MAX as usize - 1;
+            *full = n > *cap || part.samples.len() >= u32::MAX as usize - 1;
         }
         if *full {
             part.strokes[i] = None;
@@ -959,6 +974,21 @@ pub fn simulate_largest_kept(
     setup: &ForceSetup,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<(ForceRun, EngagementMemo), String> {
+    simulate_largest_within(program, strokes, stock, setup, progress, MEMO_BYTES)
+}
+
+/// [`simulate_largest_kept`] with a memo of at most `memo_bytes` of runs
+/// (what a memory limit leaves; 0 keeps none). The loads are the same
+/// whatever it holds: a stroke it does not hold finds its cells on the
+/// stock.
+pub fn simulate_largest_within(
+    program: &Program,
+    strokes: &Strokes,
+    stock: &Stock,
+    setup: &ForceSetup,
+    progress: &(dyn Fn(usize) + Sync),
+    memo_bytes: usize,
+) -> Result<(ForceRun, EngagementMemo), String> {
     let n = strokes.strokes.len();
     let (first, memo) = run_parts(
         program,
@@ -968,7 +998,7 @@ pub fn simulate_largest_kept(
         LimitUse::Coarse,
         &|d| progress(d / 2),
         MIN_PART,
-        Memo::Record,
+        Memo::Record(memo_bytes / 8),
     )?;
     let memo = memo.expect("recorded");
     let with = |u: LimitUse<'_>, progress: &(dyn Fn(usize) + Sync)| {
@@ -1067,7 +1097,7 @@ fn run_parts(
 ) -> Result<(ForceRun, Option<EngagementMemo>), String> {
     use std::sync::atomic::AtomicUsize;
     use std::sync::Mutex;
-    let key = matches!(memo, Memo::Record).then(|| memo_key(strokes, &stock, setup));
+    let key = matches!(memo, Memo::Record(_)).then(|| memo_key(strokes, &stock, setup));
     let recorded = AtomicUsize::new(0);
     let tools: Vec<ToolForces> = strokes
         .tools

@@ -8,8 +8,8 @@ use millplan_nc::generate::{raster, Raster};
 use millplan_nc::Program;
 use millplan_plan::feed::{FeedParams, FeedPass};
 use millplan_plan::force::{
-    simulate, simulate_in_parts, simulate_largest, simulate_largest_kept, simulate_with,
-    FeedLimits, ForceRun, ForceSetup, LimitUse, LIMIT_TOLERANCE,
+    simulate, simulate_in_parts, simulate_largest, simulate_largest_kept, simulate_largest_within,
+    simulate_with, FeedLimits, ForceRun, ForceSetup, LimitUse, LIMIT_TOLERANCE,
 };
 use millplan_plan::machine::Machine;
 use millplan_plan::pipeline::{self, Context};
@@ -193,6 +193,19 @@ fn engaged_cells_kept_from_the_inputs_run_give_every_later_run_bit_for_bit() {
     );
     assert!(memo.fits(&s, &stock, &setup()));
     assert!(memo.memory_bytes() > 0);
+    // Under a memory limit the memo holds less (nothing at 0, part of it
+    // at a quarter), and the loads are the same.
+    for budget in [0, memo.memory_bytes() / 4] {
+        let (run, small) =
+            simulate_largest_within(&p, &s, &stock, &setup(), &|_| {}, budget).expect("runs");
+        assert_eq!(run, largest, "memo of {budget} bytes");
+        assert!(
+            small.memory_bytes() < memo.memory_bytes(),
+            "{budget}: {} of {}",
+            small.memory_bytes(),
+            memo.memory_bytes()
+        );
+    }
     // The run with the memo and the run without, on `stock`.
     let same = |prog: &Program, setup: &ForceSetup, u: LimitUse<'_>| {
         let strokes = strokes_of(prog, &m);
