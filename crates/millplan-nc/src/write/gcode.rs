@@ -78,6 +78,8 @@ struct State {
     fmax_last: bool,
     /// The canned cycle the control has active (written as a cycle block).
     cycle: Option<CycleId>,
+    /// The height of the hole point that cycle block was written for, mm.
+    cycle_z: Option<f64>,
 }
 
 /// Where a motion block started in the output.
@@ -1193,7 +1195,11 @@ impl W<'_> {
     /// was copied, called again.
     fn native_cycle(&self, op: &Operation, m: &Move, c: &Cycle) -> bool {
         let along_z = op.axis(m).is_none_or(|a| (a - DVec3::Z).length() < 1e-9);
-        let code = super::gcode_cycle(c);
+        // Only a cycle its source named by its G code: an APT cycle's
+        // name says less than a G-code cycle needs (the spindle's direction
+        // and the feed's unit of a tap, a return level below R, pecks of
+        // two depths), so it is spelled out.
+        let code = c.name.strip_prefix('G').and_then(|n| n.parse::<u32>().ok());
         along_z
             && match self.target() {
                 Target::Fanuc => matches!(code, Some(73 | 74 | 76 | 81..=89)),
@@ -1240,41 +1246,39 @@ impl W<'_> {
             }
         }
         let top = m.end.z + c.retract.max(0.0);
-        if self.st.cycle != Some(id) {
+        // An APT cycle's holes may lie at other heights (its depth and
+        // levels are offsets from each point): such a hole states the
+        // cycle again, with its own Z, R and return level.
+        let fresh = self.st.cycle != Some(id) || self.st.cycle_z != Some(m.end.z);
+        if fresh {
             if self.st.cycle.is_some() {
                 self.line("G80");
             }
             // The control returns to the level the cycle starts from (G98).
             let start_z = self.grid(top * self.k);
-            // From a position the program has not set (an APT cycle at the
-            // start of its file), over the hole at that level first, as the
-            // cycle spelled out goes.
             // From above that level, across first and then down to it, as
             // the cycle spelled out goes (the level it returns to is where
             // it starts, G98).
-            let unknown = self.st.pos.iter().any(Option::is_none);
             let above = self.st.pos[2].is_some_and(|z| z > start_z);
-            if !unknown && c.retract > 0.0 && above {
+            if c.retract > 0.0 && above && self.st.pos.iter().all(Option::is_some) {
                 let mark = self.start_motion("");
                 self.motion(0);
                 self.coords(DVec3::new(m.end.x, m.end.y, f64::NAN), false);
                 self.finish_motion(mark);
             }
-            if unknown || (c.retract > 0.0 && self.st.pos[2] != Some(start_z)) {
+            if c.retract > 0.0 && self.st.pos[2] != Some(start_z) {
                 let mark = self.start_motion("");
                 self.motion(0);
-                let over = if unknown { m.end } else { DVec3::NAN };
-                self.coords(DVec3::new(over.x, over.y, top), false);
+                self.coords(DVec3::new(f64::NAN, f64::NAN, top), false);
                 self.finish_motion(mark);
             }
         }
         let mark = self.start_motion(extra);
-        if self.st.cycle != Some(id) {
+        if fresh {
             self.feed_mode_word(FeedMode::PerMinute);
             let code = if c.retract > 0.0 { " G98 " } else { " G99 " };
             self.out.extend_from_slice(code.as_bytes());
-            let code = super::gcode_cycle(c).map_or_else(|| c.name.clone(), |n| format!("G{n}"));
-            self.out.extend_from_slice(code.as_bytes());
+            self.out.extend_from_slice(c.name.as_bytes());
             let f = self.coord;
             let mut xy = m.end;
             xy.z = f64::NAN;
@@ -1284,10 +1288,7 @@ impl W<'_> {
             if let Some(q) = c.peck {
                 self.word("Q", q * self.k, f);
             }
-            // A dwell of 0 in an APT record (SOLIDWORKS CAM's `DWELL,0`)
-            // is none: G81 takes no P (LinuxCNC stops on one).
-            let named = c.name.starts_with('G');
-            if let Some(t) = c.dwell.filter(|t| named || *t > 0.0) {
+            if let Some(t) = c.dwell {
                 // Fanuc counts dwell in whole milliseconds, without a
                 // decimal point (`P500.` is refused); LinuxCNC in seconds.
                 let (p, pf) = if self.target() == Target::Fanuc {
@@ -1306,6 +1307,7 @@ impl W<'_> {
             self.word("F", c.feed * self.k, ff);
             self.st.feed = None;
             self.st.cycle = Some(id);
+            self.st.cycle_z = Some(m.end.z);
             self.st.motion = None;
         } else {
             let mut xy = m.end;
@@ -1659,6 +1661,7 @@ pub(super) fn write_all(
             offset: None,
             fmax_last: false,
             cycle: None,
+            cycle_z: None,
         },
         warnings: Vec::new(),
     };

@@ -595,29 +595,6 @@ pub fn cycle_kind(name: &str) -> CycleKind {
     }
 }
 
-/// The G-code canned cycle that does what `c` does: its own number when
-/// the source named it so (`G81`), else the one for an APT cycle name
-/// (`DRILL` G81, with a dwell G82, with pecks G83; `DEEP` G83; `BRKCHP`
-/// G73; `TAP` G84; `BORE` G85, with a dwell G89). `None` for a cycle no
-/// G code names (Heidenhain's, or an APT name without one).
-pub fn gcode_cycle(c: &Cycle) -> Option<u32> {
-    if let Some(n) = c.name.strip_prefix('G').and_then(|n| n.parse::<u32>().ok()) {
-        return Some(n);
-    }
-    let dwell = c.dwell.is_some_and(|t| t > 0.0);
-    match c.name.as_str() {
-        "DRILL" if c.pecks() > 1 => Some(83),
-        "DRILL" | "FACE" if dwell => Some(82),
-        "DRILL" => Some(81),
-        "DEEP" => Some(83),
-        "BRKCHP" => Some(73),
-        "TAP" => Some(84),
-        "BORE" if dwell => Some(89),
-        "BORE" => Some(85),
-        _ => None,
-    }
-}
-
 /// The name an APT `CYCLE/` record gives `c`: the APT name of a G-code
 /// drilling, tapping or boring cycle (G81 and G82 `DRILL`, G83 `DEEP`, G73
 /// `BRKCHP`, G84 `TAP`, G85 and G89 `BORE`; the dwell and the peck are

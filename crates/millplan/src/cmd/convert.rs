@@ -17,8 +17,8 @@ use std::path::PathBuf;
 /// the source never set is never written; words the source dialect keeps
 /// verbatim are copied into the same dialect, and a word another dialect
 /// cannot express stops the conversion at its line (--lossy: a comment and a
-/// warning instead, exit 3 when the output commands less than the source). Arcs outside the XY/ZX/YZ planes and canned cycles are
-/// written as straight lines. A KRL program (.src) is read with the
+/// warning instead, exit 3 when the output commands less than the source). Arcs outside the XY/ZX/YZ planes are written as lines; a G-code
+/// canned cycle stays a cycle where the target has it and in APT (G81 as CYCLE/DRILL ...); other holes are written as lines. A KRL program (.src) is read with the
 /// sub-programs its main calls from beside it (a missing one named with its
 /// calling line); KRL to KRL keeps the poses, external axes and speeds as
 /// read, in one file; into another dialect the orientation A, B, C becomes
