@@ -122,6 +122,13 @@ pub fn samples(p: &Program, body: impl Fn(&Operation) -> Option<ToolBody>, g: &G
             continue;
         }
         for (i, m) in op.moves.iter().enumerate() {
+            // A hole: from the cycle's highest plane down to its bottom
+            // (`sample_hole`), wherever the tool came from.
+            if let Some(c) = op.cycle(m) {
+                let depth = c.retract.max(c.clearance).max(c.bottom) - c.bottom;
+                n += (depth / g.step).ceil().max(1.0) + 1.0;
+                continue;
+            }
             let wanted = match m.kind {
                 MoveKind::Linear | MoveKind::Arc(_) => true,
                 MoveKind::Rapid => g.rapids,

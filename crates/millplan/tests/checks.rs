@@ -273,4 +273,28 @@ fn gouge_asks_for_the_shape_of_a_tool_that_only_drills() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
     assert_eq!(v["moves_checked"], 2, "{v}");
     assert_eq!(v["moves_skipped"], 0, "{v}");
+    // A review: the samples counted against the memory limit before any
+    // work left the holes out, so a hole 500 m deep at a step of 1 µm
+    // tried to take 40 GB. It is refused first.
+    let deep = dir.path().join("deep.nc");
+    std::fs::write(
+        &deep,
+        "G21 G90 G17\nT1 M6\nS1000 M3\nG0 X0 Y0 Z10\nG81 X10 Y10 Z-500000 R2 F100\nG80\nM30\n",
+    )
+    .expect("write");
+    let o = bin()
+        .args(["gouge", s(&deep), "--stl", s(&d.join("part.stl")), "-q"])
+        .args([
+            "--tool",
+            "flat:6",
+            "--step",
+            "0.001",
+            "--limit",
+            "memory=500",
+        ])
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("over the memory limit"), "{err}");
 }
