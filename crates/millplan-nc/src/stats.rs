@@ -115,8 +115,9 @@ pub fn summarize(p: &Program, rapid_rate: f64) -> Summary {
                 MoveKind::Cycle(_) => s.moves.cycle += 1,
             }
             if let MoveKind::Cycle(_) = m.kind {
-                // Across to the hole at the height the tool stands, then the
-                // cycle's own strokes.
+                // Up to the cycle's level if the tool stands below it,
+                // across to the hole, then the cycle's own strokes (as the
+                // writers spell it out).
                 let (Some(c), Some(at)) = (op.cycle(m), known(m.end)) else {
                     s.unknown_moves += 1;
                     continue;
@@ -124,8 +125,9 @@ pub fn summarize(p: &Program, rapid_rate: f64) -> Summary {
                 let axis = op.axis(m).unwrap_or(DVec3::Z);
                 let mut here = op.known_start(i);
                 if let Some(h) = here {
-                    let across = DVec3::new(at.x, at.y, h.z.max(at.z + c.retract.max(c.clearance)));
-                    let d = (across - h).length();
+                    let top = at.z + c.retract.max(c.clearance);
+                    let across = DVec3::new(at.x, at.y, h.z.max(top));
+                    let d = (top - h.z).max(0.0) + (across.truncate() - h.truncate()).length();
                     s.rapid_mm += d;
                     minutes += d / rapid_rate;
                     here = Some(across);
@@ -213,10 +215,10 @@ mod tests {
         assert_eq!(s.unknown_moves, 1);
         // 5 mm down, then 12 mm into the hole.
         assert!((s.cutting_mm - 17.0).abs() < 1e-9, "{}", s.cutting_mm);
-        // Across and up to the return plane (Z 5), down 3 to the R plane, out 15.
-        let across = (10.0f64).hypot(5.0);
+        // Up 5 to the return plane (Z 5), across 10, down 3 to the R
+        // plane, out 15.
         assert!(
-            (s.rapid_mm - (across + 3.0 + 15.0)).abs() < 1e-9,
+            (s.rapid_mm - (5.0 + 10.0 + 3.0 + 15.0)).abs() < 1e-9,
             "{}",
             s.rapid_mm
         );

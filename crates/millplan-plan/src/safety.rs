@@ -816,10 +816,16 @@ impl PathIndex {
                 };
                 let axis = op.axis(m).unwrap_or(DVec3::Z);
                 let mut last = at + axis * c.retract.max(c.clearance).max(c.bottom);
-                // Across to the hole at the height the tool stands, as the
-                // stock simulation and the time estimate move it.
-                if let Some(from) = op.known_start(i) {
-                    let across = DVec3::new(at.x, at.y, from.z.max(last.z));
+                // Up to the cycle's level if below it, across to the hole,
+                // as the writers, the stock simulation and the time
+                // estimate move it.
+                if let Some(mut from) = op.known_start(i) {
+                    if from.z < last.z {
+                        let up = DVec3::new(from.x, from.y, last.z);
+                        segs.push((part_point(op, from), part_point(op, up)));
+                        from = up;
+                    }
+                    let across = DVec3::new(at.x, at.y, from.z);
                     segs.push((part_point(op, from), part_point(op, across)));
                     segs.push((part_point(op, across), part_point(op, last)));
                 }

@@ -956,8 +956,16 @@ pub(crate) fn walk_program(p: &Program, machine: &Machine, sink: &mut dyn ChainS
                         let list = &mut cur
                             .get_or_insert_with(|| (here.unwrap_or(s6), Vec::new()))
                             .1;
-                        let across =
-                            DVec3::new(at.x, at.y, s.z.max(at.z + c.retract.max(c.clearance)));
+                        // Up to the cycle's level first if the tool stands
+                        // below it, as the writers spell it out.
+                        let top = at.z + c.retract.max(c.clearance);
+                        if s.z < top {
+                            list.push(AxisMove {
+                                target: joints(DVec3::new(s.x, s.y, top), o, &mut rot),
+                                kind: MoveKind::Rapid,
+                            });
+                        }
+                        let across = DVec3::new(at.x, at.y, s.z.max(top));
                         list.push(AxisMove {
                             target: joints(across, o, &mut rot),
                             kind: MoveKind::Rapid,
@@ -1698,11 +1706,24 @@ mod tests {
             op.moves.push(c);
         }
         let mut p = Program::new(Dialect::Fanuc);
-        p.operations.push(op);
+        p.operations.push(op.clone());
         let e = estimate_program(&p, &m);
         let s = millplan_nc::stats::summarize(&p, m.rapid);
         close(e.nominal_s, s.time_s, 1e-12);
         assert!(e.total_s > e.nominal_s, "{e:?}");
+        // From below the cycle's level (Z 230 under its return plane at
+        // 243): up 13 first, then across 66, as the writers spell it out;
+        // the nominal time is the summary's.
+        op.moves.insert(0, Move::rapid(DVec3::new(0.0, 0.0, 230.0)));
+        p.operations[0] = op;
+        let e = estimate_program(&p, &m);
+        let s = millplan_nc::stats::summarize(&p, m.rapid);
+        close(e.nominal_s, s.time_s, 1e-12);
+        let first = 13.0 + 66.0 + 3.0 + 12.0 + 15.0;
+        assert!(
+            (s.rapid_mm - (first - 12.0 + 321.0 + 3.0 + 15.0)).abs() < 1e-9,
+            "{s:?}"
+        );
     }
 
     #[test]

@@ -256,20 +256,31 @@ fn op_strokes(
             }
             MoveKind::Cycle(_) => {
                 let Some(c) = op.cycle(m) else { continue };
-                // Across to the hole at the height the tool stands (or the
-                // cycle's return level when that is higher), then the strokes.
-                let across = DVec3::new(
-                    end.x,
-                    end.y,
-                    start.z.max(end.z + c.retract.max(c.clearance)),
-                );
+                // Up to the cycle's return level if the tool stands below
+                // it, across to the hole at that height (or the tool's, when
+                // higher), then the strokes: as the writers spell it out.
+                let top = end.z + c.retract.max(c.clearance);
+                let mut from = start;
+                if start.z < top {
+                    let up = DVec3::new(start.x, start.y, top);
+                    push(
+                        start,
+                        up,
+                        a0,
+                        a0,
+                        true,
+                        (up - start).length() / o.rapid_rate,
+                    );
+                    from = up;
+                }
+                let across = DVec3::new(end.x, end.y, from.z);
                 push(
-                    start,
+                    from,
                     across,
                     a0,
                     a1,
                     true,
-                    (across - start).length() / o.rapid_rate,
+                    (across - from).length() / o.rapid_rate,
                 );
                 let steps = cycle_moves(c, end, a1).unwrap_or_else(|_| {
                     // Tapping and boring: down at feed and back out at feed.
