@@ -314,10 +314,23 @@ fn heidenhain_cycles_keep_their_lines_and_end_at_the_second_set_up_clearance() {
     assert!(matches!(write(&p, Target::Fanuc, false), Out::Refused(_)));
 }
 
+/// At its Q word (a user trial saw column 1), and a missing Q at the
+/// block's Z.
 #[test]
 fn a_peck_of_zero_is_reported() {
     let src = "G21 G90 G17\nT1 M6\nG0 X0 Y0 Z10.\nG99 G83 X0 Y0 Z-3. R3. Q0 F250.\nG80\nM30\n";
     assert!(codes(src).contains(&Code::PeckDepth), "{:?}", codes(src));
+    let at = |src: &str| {
+        let d = parse_program(src, ReadOptions::default()).expect("reads");
+        let p = d
+            .diagnostics
+            .iter()
+            .find(|d| d.code == Code::PeckDepth)
+            .expect("peck");
+        (p.line, p.col)
+    };
+    assert_eq!(at(src), (4, 24));
+    assert_eq!(at(&src.replace(" Q0", "")), (4, 15));
 }
 
 #[test]

@@ -456,10 +456,11 @@ struct Words {
     /// G codes ×10 with their value and column.
     g: Vec<(i64, f64, u32)>,
     xyz: [Option<f64>; 3],
-    /// Columns of the Z and R words (0: not in the block), where a canned
-    /// cycle's depth error points.
+    /// Columns of the Z, R and Q words (0: not in the block), where a
+    /// canned cycle's depth and peck findings point.
     z_col: u32,
     r_col: u32,
+    q_col: u32,
     ijk: [Option<f64>; 3],
     vec3: [Option<f64>; 3],
     rot: [Option<f64>; 3],
@@ -804,7 +805,10 @@ impl GcodeReader {
                             w.r = Some(v);
                             w.r_col = col;
                         }
-                        'Q' => w.q = Some(v),
+                        'Q' => {
+                            w.q = Some(v);
+                            w.q_col = col;
+                        }
                         'P' => w.p = Some(v),
                         'H' => w.h = Some(v),
                         'D' => w.d = Some(v),
@@ -1418,9 +1422,11 @@ impl GcodeReader {
             if !has_xyz && !motion_word {
                 return Ok(());
             }
-            // A depth error points at this block's Z, else its R.
-            let blame = [w.z_col, w.r_col, 1].into_iter().find(|c| *c > 0);
-            return self.cycle_point(w.xyz, blame.unwrap_or(1), ln);
+            // A depth error points at this block's Z, else its R; a peck
+            // finding at its Q, else there.
+            let depth = [w.z_col, w.r_col].into_iter().find(|c| *c > 0).unwrap_or(1);
+            let peck = if w.q_col > 0 { w.q_col } else { depth };
+            return self.cycle_point(w.xyz, (depth, peck), ln);
         }
         let has_rot = w.rot.iter().any(Option::is_some);
         let has_vec = w.vec3.iter().any(Option::is_some);
@@ -1932,8 +1938,14 @@ impl GcodeReader {
     }
 
     /// A hole of the active cycle at `xyz`; `col` is where an error in the
-    /// cycle's depth points (the block's Z or R word).
-    fn cycle_point(&mut self, xyz: [Option<f64>; 3], col: u32, ln: u32) -> Result<(), ParseError> {
+    /// cycle's depth points (the block's Z or R word), `peck_col` a finding
+    /// on its peck (its Q word, else `col`).
+    fn cycle_point(
+        &mut self,
+        xyz: [Option<f64>; 3],
+        (col, peck_col): (u32, u32),
+        ln: u32,
+    ) -> Result<(), ParseError> {
         let Some(cs) = &mut self.cycle else {
             return Err(ParseError::new(
                 ln,
@@ -2018,7 +2030,7 @@ impl GcodeReader {
                     Some(q) if pecking && q <= 0.0 => self.diags.warn(
                         Code::PeckDepth,
                         ln,
-                        1,
+                        peck_col,
                         format!(
                             "{} with peck depth Q{}: read as one stroke to depth (a control may stop with an alarm)",
                             cs.name,
@@ -2028,7 +2040,7 @@ impl GcodeReader {
                     None if pecking => self.diags.warn(
                         Code::PeckDepth,
                         ln,
-                        1,
+                        peck_col,
                         format!("{} without a peck depth Q: read as one stroke to depth", cs.name),
                     ),
                     _ => {}
