@@ -16,7 +16,8 @@
 //!
 //! The numbers an NC program gives are bounded apart, by [`NC_EXTENT`]
 //! (coordinates, mm, and rotary positions, degrees: 1,000,000) and
-//! [`NC_RATE`] (feeds and spindle speeds: 1,000,000).
+//! [`NC_RATE`] (feeds and spindle speeds: 1,000,000), and a dwell by
+//! [`NC_DWELL`] (86,400 s).
 //!
 //! The pecks of one canned-cycle hole are bounded apart, by
 //! `millplan_nc::MAX_PECKS` (1,000): a peck that small is below what any
@@ -37,6 +38,11 @@ pub const TOOL_DIAMETER: (f64, f64) = (1e-3, NC_EXTENT);
 /// The plausibility limit on a feed (mm/min, mm/rev or the inverse time's
 /// 1/min) and a spindle speed (1/min) an NC program gives.
 pub const NC_RATE: f64 = 1e6;
+
+/// The plausibility limit on a dwell an NC program gives (s): a day. A
+/// longer wait is a unit slip (`G82 … P` in milliseconds read as seconds,
+/// or a runaway number), and would turn a cycle time into years.
+pub const NC_DWELL: f64 = 86_400.0;
 
 /// The highest `expression-depth` that `--limit` accepts: the expression
 /// parser recurses once per level, and 1,000 levels take well under the

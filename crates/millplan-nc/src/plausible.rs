@@ -9,7 +9,7 @@
 
 use crate::diag::{Code, Diagnostic, ParseError, Severity};
 use crate::ir::{EventKind, MoveKind, Operation, Program, SpindleDir};
-use millplan_geom::limits::{NC_EXTENT, NC_RATE};
+use millplan_geom::limits::{NC_DWELL, NC_EXTENT, NC_RATE};
 
 /// The smallest feed a feed move may ask for, mm/min or mm/rev (a block
 /// time of a million minutes under inverse time, 1e-6 1/min): a positive
@@ -63,8 +63,29 @@ pub fn check(p: &Program) -> Result<(), ParseError> {
     p.operations.iter().try_for_each(check_op)
 }
 
+/// Refuses a dwell (an event's, or a cycle's at the bottom) beyond
+/// [`NC_DWELL`] at `line`.
+fn dwell(line: u32, what: &str, t: f64) -> Result<(), ParseError> {
+    if over(t, NC_DWELL) {
+        return Err(ParseError::new(
+            line,
+            1,
+            format!("{what} {t:e} s, is beyond the plausibility limit of {NC_DWELL} s (a day): a unit slip, or a runaway number"),
+        ));
+    }
+    Ok(())
+}
+
 fn check_op(op: &Operation) -> Result<(), ParseError> {
+    for e in &op.events {
+        if let EventKind::Dwell(t) = e.kind {
+            dwell(e.line, "this dwell,", t)?;
+        }
+    }
     for c in &op.cycles {
+        if let Some(t) = c.dwell {
+            dwell(c.line, "the dwell of this cycle,", t)?;
+        }
         for v in [c.bottom, c.clearance, c.retract] {
             if over(v, NC_EXTENT) {
                 return Err(refuse(
@@ -215,6 +236,26 @@ mod tests {
             .into_iter()
             .filter(|d| d.code == Code::SpindleStopped)
             .collect()
+    }
+
+    /// A user trial: `G82 … P` with 40 digits was read, and `inspect`
+    /// printed a cycle time of 1e37 s. A dwell beyond a day is refused at
+    /// its line, in a G4 block and in a cycle.
+    #[test]
+    fn an_absurd_dwell_is_refused_at_its_line() {
+        let big = "1".repeat(40);
+        let g4 = format!("G21 G90\nG0 X0 Y0 Z5\nG4 P{big}.\nM30\n");
+        let cycle = format!("G21 G90\nG0 X0 Y0 Z5\nG98 G82 X1 Y1 Z-2 R2 P{big}. F100\nG80\nM30\n");
+        for src in [g4, cycle] {
+            let e = crate::parse_program(&src, crate::ReadOptions::default()).expect_err("refused");
+            assert_eq!(e.line, 3, "{e}");
+            assert!(
+                e.to_string().contains("plausibility limit of 86400 s"),
+                "{e}"
+            );
+        }
+        let ok = "G21 G90\nG0 X0 Y0 Z5\nG4 P3600.\nM30\n";
+        crate::parse_program(ok, crate::ReadOptions::default()).expect("an hour's dwell reads");
     }
 
     /// Issue 34's fuzz campaign: `feed` on an APT with `FEDRAT/1e-300`
