@@ -715,6 +715,24 @@ fn gcode_cycles_take_their_apt_names() {
     .expect("means what the source meant");
 }
 
+/// An APT cycle named by its G code (as millplan wrote APT before the APT
+/// names) whose holes lie at two heights: its depth and levels are offsets
+/// from each point, so the second hole states the cycle again with its own
+/// Z, R and return level (the control's G81 kept them modal from the first).
+#[test]
+fn a_gcode_named_cycle_at_a_new_height_states_itself_again() {
+    let src = "PARTNO VZ\nUNITS/MM\nCUTTER/6,0,0,0,0,0,50\nLOADTL/1\nSPINDL/2000,RPM,CLW\n\
+               RAPID\nGOTO/0,0,50\nCYCLE/G81,FEDTO,10,RAPTO,2,RTRCTO,5,MMPM,150\n\
+               GOTO/10,10,0\nGOTO/20,10,-5\nCYCLE/OFF\nRAPID\nGOTO/20,10,50\nFINI\n";
+    let p = parse(src, "two heights");
+    for t in [Target::Fanuc, Target::LinuxCnc] {
+        let (text, back) = through(&p, t, false, "two heights");
+        assert_eq!(text.matches(" G81 ").count(), 2, "{text}");
+        assert!(text.contains("Z-15") && text.contains("R-3"), "{text}");
+        compare(&p, &back, &Tolerance::default()).expect("means what the source meant");
+    }
+}
+
 // ---------------------------------------------------------------------------
 // Found with the writer snapshots.
 
