@@ -171,6 +171,21 @@ pub fn detect(head: &str) -> Dialect {
     }
 }
 
+/// [`detect`], with the file's extension (without its dot) as a hint where
+/// the text has none of a dialect's own words: such a G-code program reads
+/// as Fanuc-style, unless its name ends `.ngc`, LinuxCNC's own extension
+/// (there `G4 P2` dwells two seconds, where a Fanuc dwells two
+/// milliseconds). Words in the text still decide over the name.
+pub fn detect_named(head: &str, extension: Option<&str>) -> Dialect {
+    let d = detect(head);
+    let ngc = extension.is_some_and(|e| e.eq_ignore_ascii_case("ngc"));
+    if d == Dialect::Fanuc && ngc {
+        Dialect::LinuxCnc
+    } else {
+        d
+    }
+}
+
 /// A G-code line without its `( )` and `;` comments.
 fn strip_comments(line: &str) -> String {
     let mut out = String::with_capacity(line.len());
@@ -260,6 +275,19 @@ mod tests {
     }
 
     /// Issue 18: a KUKA `.SRC` got "1:1: unexpected `&ACCESS`".
+    #[test]
+    fn an_ngc_file_without_a_dialect_s_words_is_linuxcnc() {
+        let plain = "G21 G90\nG0 X0 Y0 Z5\nG4 P2\nM30\n";
+        assert_eq!(detect_named(plain, None), Dialect::Fanuc);
+        assert_eq!(detect_named(plain, Some("nc")), Dialect::Fanuc);
+        assert_eq!(detect_named(plain, Some("NGC")), Dialect::LinuxCnc);
+        // The text's own words decide over the name.
+        let siemens = "G710\nTRAORI\nG0 X0 Y0 Z5\nM30\n";
+        assert_eq!(detect_named(siemens, Some("ngc")), Dialect::Sinumerik);
+        let apt = "PARTNO P\nGOTO/0,0,5\nFINI\n";
+        assert_eq!(detect_named(apt, Some("ngc")), Dialect::AptIso);
+    }
+
     #[test]
     fn krl_is_told_by_its_head() {
         let krl = "&ACCESS RVP\n&REL 2\nDEF f1_Kuka()\nPTP $AXIS_ACT\nEND\n";

@@ -8,7 +8,7 @@ use super::{IoError, IoResult};
 use millplan_geom::limits::Limits;
 use millplan_geom::stl::{read_stl_from_limited, StlError, StlLocation, StlReport};
 use millplan_geom::TriMesh;
-use millplan_nc::detect::{detect, Reader};
+use millplan_nc::detect::{detect_named, Reader};
 use millplan_nc::krl::{KrlError, KrlProgram};
 use millplan_nc::{LengthUnit, ParseError, Parsed, ReadOptions};
 use std::fs::File;
@@ -201,8 +201,9 @@ fn read_line(r: &mut impl BufRead, buf: &mut Vec<u8>, max: usize) -> std::io::Re
     }
 }
 
-/// The dialect of a program from its first bytes; an empty file, binary
-/// data and an HTML or XML page are refused at 1:1.
+/// The dialect of a program from its first bytes (and its name's extension,
+/// where they have no dialect's words); an empty file, binary data and an
+/// HTML or XML page are refused at 1:1.
 fn dialect_of(path: &Path, head: &[u8]) -> IoResult<millplan_nc::Dialect> {
     let refuse = |what: &str| {
         let at = format!("{}:1:1: {what}", path.display());
@@ -218,7 +219,8 @@ fn dialect_of(path: &Path, head: &[u8]) -> IoResult<millplan_nc::Dialect> {
     if head.trim_start().starts_with('<') {
         return refuse("an HTML or XML document (it starts `<`), not an APT/CL or G-code program");
     }
-    Ok(detect(&head))
+    let extension = path.extension().and_then(|e| e.to_str());
+    Ok(detect_named(&head, extension))
 }
 
 /// Reads an APT/CL or G-code program line by line (the file is never held
@@ -419,6 +421,33 @@ pub fn read_blank(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A G-code program without a dialect's own words is LinuxCNC's when
+    /// its name ends `.ngc`: its `G4 P2` dwells two seconds, where the same
+    /// text in a `.nc` (Fanuc-style) dwells two milliseconds.
+    #[test]
+    fn an_ngc_name_makes_a_plain_program_linuxcnc() {
+        let dir = tempfile::tempdir().expect("tmp");
+        for (name, dialect, seconds) in [
+            ("p.ngc", millplan_nc::Dialect::LinuxCnc, 2.0),
+            ("p.nc", millplan_nc::Dialect::Fanuc, 0.002),
+        ] {
+            let path = dir.path().join(name);
+            std::fs::write(&path, "G21 G90\nG0 X0 Y0 Z5\nG4 P2\nM30\n").expect("writes");
+            let (parsed, _) =
+                read_source(&path, ReadOptions::default(), &mut |_, _| {}).expect("reads");
+            assert_eq!(parsed.program.source, dialect, "{name}");
+            let dwell: Vec<f64> = parsed.program.operations[0]
+                .events
+                .iter()
+                .filter_map(|e| match e.kind {
+                    millplan_nc::ir::EventKind::Dwell(s) => Some(s),
+                    _ => None,
+                })
+                .collect();
+            assert_eq!(dwell, [seconds], "{name}");
+        }
+    }
 
     #[test]
     fn lines_end_at_lf_crlf_and_cr_across_reads() {
