@@ -410,9 +410,18 @@ pub fn report_inputs(
         ap: cut.ap,
         time_before_s: Some(time_before_s),
         time_after_s: Some(time_after_s),
-        warnings: findings.iter().map(|d| d.message.clone()).collect(),
+        warnings: verdict_warnings(findings),
         failed: Vec::new(),
     }
+}
+
+/// The part's findings as the verdict's warnings, each with its code (as
+/// the other commands name it: `open-mesh`, `off-surface`).
+fn verdict_warnings(findings: &[Diagnostic]) -> Vec<String> {
+    findings
+        .iter()
+        .map(|d| format!("{} [{}]", d.message, d.code))
+        .collect()
 }
 
 /// What `speed --json` prints: the pass's summary and the run around it.
@@ -450,7 +459,7 @@ impl<'a> Report<'a> {
                 &millplan_report::html::failed_checks(checks),
                 [Some(time_before_s), Some(time_after_s)],
             ),
-            findings.iter().map(|d| d.message.clone()).collect(),
+            verdict_warnings(findings),
         );
         Report {
             summary,

@@ -174,6 +174,8 @@ fn speed_on_the_generated_free_form_case() {
         String::from_utf8_lossy(&o.stderr)
     );
     assert_eq!(all.matches("open edges").count(), 1, "{all}");
+    // With its code, as the other commands name it.
+    assert!(all.contains("[open-mesh]"), "{all}");
 }
 
 #[test]
