@@ -21,7 +21,7 @@
 //!
 //! The pecks of one canned-cycle hole are bounded apart, by
 //! `millplan_nc::MAX_PECKS` (1,000): a peck that small is below what any
-//! target can write.
+//! target can write, and the readers refuse it at the cycle's line.
 
 use std::fmt;
 

@@ -86,6 +86,9 @@ fn check_op(op: &Operation) -> Result<(), ParseError> {
         if let Some(t) = c.dwell {
             dwell(c.line, "the dwell of this cycle,", t)?;
         }
+        // More pecks a hole than any target writes: every model would take
+        // the hole as one stroke, where the control pecks on for hours.
+        crate::write::check_pecks(c).map_err(|e| ParseError::new(e.line, 1, e.message))?;
         for v in [c.bottom, c.clearance, c.retract] {
             if over(v, NC_EXTENT) {
                 return Err(refuse(
@@ -256,6 +259,26 @@ mod tests {
         }
         let ok = "G21 G90\nG0 X0 Y0 Z5\nG4 P3600.\nM30\n";
         crate::parse_program(ok, crate::ReadOptions::default()).expect("an hour's dwell reads");
+    }
+
+    /// A user trial: a hole of more pecks than any writer writes was
+    /// refused by `convert` but read by `inspect`, `simulate` and `gouge`,
+    /// each taking it as one stroke. It is refused where it is read, at the
+    /// cycle's line, in every reader; a thousand pecks still read.
+    #[test]
+    fn more_pecks_a_hole_than_any_target_writes_are_refused_at_the_cycle() {
+        let g = "G21 G90\nG0 X0 Y0 Z5\nG98 G83 X1 Y1 Z-20 R2 Q0.0001 F100\nG80\nM30\n";
+        let apt = "UNITS/MM\nCUTTER/10\nFEDRAT/100\nGOTO/0,0,10\nCYCLE/DEEP,FEDTO,20,STEP,0.0001,RAPTO,2,MMPM,100\nGOTO/10,10,0\nCYCLE/OFF\nFINI\n";
+        let h = "0 BEGIN PGM P MM\n1 TOOL CALL 1 Z S1000\n2 L Z+50 R0 FMAX\n3 CYCL DEF 1.0 PECKING\n4 CYCL DEF 1.1 SET UP 2\n5 CYCL DEF 1.2 DEPTH -20\n6 CYCL DEF 1.3 PECKG 0.0001\n7 CYCL DEF 1.4 DWELL 0\n8 CYCL DEF 1.5 F150\n9 L X+10 Y+10 R0 FMAX M99\n10 END PGM P MM\n";
+        for (src, line) in [(g, 3), (apt, 5), (h, 4)] {
+            let e = crate::parse_program(src, crate::ReadOptions::default()).expect_err("refused");
+            assert_eq!(e.line, line, "{e}");
+            assert!(e.to_string().contains("at most 1000 are accepted"), "{e}");
+        }
+        // 22 mm in pecks of 0.0221 mm: 996 pecks, within the limit.
+        let ok = g.replace("Q0.0001", "Q0.0221");
+        let p = crate::parse_program(&ok, crate::ReadOptions::default()).expect("reads");
+        assert_eq!(p.program.operations[0].cycles[0].pecks(), 996);
     }
 
     /// Issue 34's fuzz campaign: `feed` on an APT with `FEDRAT/1e-300`

@@ -159,8 +159,9 @@ fn a_line_without_end_is_a_located_error() {
 }
 
 /// Issue 17: pecks of `Q0.000001` in G83, APT `CYCLE/DEEP` and Heidenhain
-/// cycles 200 and 1 are read as cycles (nothing is expanded on reading) and
-/// refused by every writer at the cycle's line (`MAX_PECKS`).
+/// cycles 200 and 1 are never expanded: every reader refuses them at the
+/// cycle's line (`MAX_PECKS`), and every writer refuses such a cycle made
+/// by other means (a pass, a generator).
 #[test]
 fn tiny_pecks_are_refused_in_every_dialect() {
     let cases = [
@@ -170,9 +171,22 @@ fn tiny_pecks_are_refused_in_every_dialect() {
         ("0 BEGIN PGM P MM\n1 TOOL CALL 1 Z S1000\n2 L Z+50 R0 FMAX\n3 CYCL DEF 1.0 PECKING\n4 CYCL DEF 1.1 SET UP 2\n5 CYCL DEF 1.2 DEPTH -20\n6 CYCL DEF 1.3 PECKG 0.000001\n7 CYCL DEF 1.4 DWELL 0\n8 CYCL DEF 1.5 F150\n9 L X+10 Y+10 R0 FMAX M99\n10 END PGM P MM\n", 4),
     ];
     for (src, line) in cases {
-        let p = parse_program(src, ReadOptions::default()).expect("reads");
-        // Every target refuses it; the G-code targets for its pecks (APT
-        // may stop earlier, at a move from a position not yet known).
+        let e = parse_program(src, ReadOptions::default()).expect_err("refused");
+        assert_eq!(e.line, line, "{e}");
+        assert!(e.message.contains("at most 1000 are accepted"), "{e}");
+        // The same cycle with a sane peck reads; made absurd afterwards,
+        // every target refuses it. The G-code targets at its line, for its
+        // pecks (APT may stop earlier, at a move from a position not yet
+        // known).
+        let sane = src.replace("0.000001", "2");
+        let mut p = parse_program(&sane, ReadOptions::default()).expect("reads");
+        let c = p
+            .program
+            .operations
+            .iter_mut()
+            .flat_map(|o| o.cycles.iter_mut())
+            .next();
+        c.expect("a cycle").peck = Some(0.000001);
         for t in millplan_nc::write::Target::ALL {
             let o = millplan_nc::write::WriteOptions::new(t);
             let e = millplan_nc::write::write_program(&p.program, o).expect_err("refused");

@@ -736,16 +736,20 @@ fn a_gcode_named_cycle_at_a_new_height_states_itself_again() {
 // ---------------------------------------------------------------------------
 // Found with the writer snapshots.
 
-/// Issue 15: "a 7-line `G83 … Q0.00001` became 3.6 M lines, 89 MB." Every
-/// target refuses it with an error at the cycle's line (7), `lossy` or not:
-/// spelled out it is millions of pecks, and in the control's own cycle the
-/// peck is below what the target's decimals can say (it was written `Q0.`).
+/// Issue 15: "a 7-line `G83 … Q0.00001` became 3.6 M lines, 89 MB." The
+/// reader refuses it at the cycle's line (7), and so does every target,
+/// `lossy` or not, for such a cycle made otherwise: spelled out it is
+/// millions of pecks, and in the control's own cycle the peck is below
+/// what the target's decimals can say (it was written `Q0.`).
 #[test]
 fn absurd_peck_is_a_located_error_in_every_target() {
     let src = "%\nO0020\nG21 G17 G90 G94\nT2 M6\nG43 H2 S1500 M3\nG0 X10. Y10. Z5.\n\
                G98 G83 X10. Y10. Z-20. R2. Q0.00001 F100.\nX30.\nG80\nM30\n%\n";
-    let p = parse(src, "G83");
-    let c = &p.operations[0].cycles[0];
+    let e = millplan_nc::parse_program(src, ReadOptions::default()).expect_err("refused");
+    assert_eq!(e.line, 7, "{e}");
+    let mut p = parse(&src.replace("Q0.00001", "Q2.5"), "G83");
+    let c = &mut p.operations[0].cycles[0];
+    c.peck = Some(0.00001);
     assert_eq!(c.line, 7);
     assert!(c.pecks() > millplan_nc::MAX_PECKS);
     for t in Target::ALL {
