@@ -261,6 +261,30 @@ mod tests {
         crate::parse_program(ok, crate::ReadOptions::default()).expect("an hour's dwell reads");
     }
 
+    /// A user trial: an R of 30 digits in a cycle was refused at the
+    /// line's first column. The G-code readers refuse it at the R word.
+    #[test]
+    fn an_absurd_r_word_is_refused_at_its_column() {
+        let r = format!("R{}", "9".repeat(30));
+        for (src, col) in [
+            (
+                format!("G21 G90\nG0 X0 Y0 Z5\nG98 G81 X1 Y1 Z-2 {r} F100\nG80\nM30\n"),
+                19,
+            ),
+            (
+                format!("G21 G90\nG0 X0 Y0 Z5\nG1 Z0 F100\nG2 X1 {r}\nM30\n"),
+                7,
+            ),
+        ] {
+            let e = crate::parse_program(&src, crate::ReadOptions::default()).expect_err("refused");
+            assert_eq!(
+                (e.col, e.to_string().contains("plausibility limit")),
+                (col, true),
+                "{e}"
+            );
+        }
+    }
+
     /// A user trial: a hole of more pecks than any writer writes was
     /// refused by `convert` but read by `inspect`, `simulate` and `gouge`,
     /// each taking it as one stroke. It is refused where it is read, at the

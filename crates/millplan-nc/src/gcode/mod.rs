@@ -802,6 +802,17 @@ impl GcodeReader {
                         }
                         'M' => w.m.push(v),
                         'R' => {
+                            // An arc's radius or a cycle's height: refused
+                            // here, at its column, rather than when the
+                            // reader finishes (at the line's start).
+                            let limit = millplan_geom::limits::NC_EXTENT;
+                            if v.abs() > limit {
+                                return Err(ParseError::new(
+                                    ln,
+                                    col,
+                                    format!("R{v:e} is beyond the plausibility limit of {limit:e} mm (an arc radius or a cycle height): no machine moves there"),
+                                ));
+                            }
                             w.r = Some(v);
                             w.r_col = col;
                         }
