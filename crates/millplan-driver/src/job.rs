@@ -169,6 +169,9 @@ pub struct JobError {
     /// The inputs are sound but the program cannot run on the machine (an
     /// axis out of its travel): a finding (exit 3), not bad input.
     pub refused: bool,
+    /// What the run had to say before it stopped (the passes it skipped,
+    /// and why), to be said before the error.
+    pub notes: Vec<String>,
 }
 
 impl JobError {
@@ -177,6 +180,7 @@ impl JobError {
         JobError {
             message,
             refused: true,
+            notes: Vec::new(),
         }
     }
 
@@ -197,6 +201,7 @@ impl From<String> for JobError {
         JobError {
             message,
             refused: false,
+            notes: Vec::new(),
         }
     }
 }

@@ -51,6 +51,17 @@ pub fn skipped_notes(o: &crate::Outcome) -> Vec<String> {
         .collect()
 }
 
+/// The skipped passes' notes of a run that finished, or of one an error
+/// stopped after its passes.
+pub fn notes_of(
+    ran: &Result<(crate::Outcome, crate::Written), crate::job::JobError>,
+) -> Vec<String> {
+    match ran {
+        Ok((o, _)) => skipped_notes(o),
+        Err(e) => e.notes.clone(),
+    }
+}
+
 /// The line naming the check that refused the written program of `path`.
 pub fn refusal_line(s: &Summary, path: &std::path::Path) -> Option<String> {
     s.refusal()

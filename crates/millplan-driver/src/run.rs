@@ -271,7 +271,13 @@ impl Job {
         let outcome = self.run_with(passes, progress)?;
         ran(&outcome, "the input measured, the passes run", lap);
         checking();
-        let w = self.finish_timed(&outcome, wo, &mut |n| lap(n, None))?;
+        // The skipped passes are said before an error that stops the checks.
+        let noted = |mut e: JobError, o: &Outcome| {
+            e.notes = crate::report::skipped_notes(o);
+            e
+        };
+        let w = (self.finish_timed(&outcome, wo, &mut |n| lap(n, None)))
+            .map_err(|e| noted(e, &outcome))?;
         if !outcome.reordered || w.summary.refusal().is_none() {
             return Ok((outcome, w));
         }
@@ -279,7 +285,8 @@ impl Job {
         let mut again = self.run_dropping(passes, progress, Some(dropped))?;
         ran(&again, "the passes run again without reorder", lap);
         checking();
-        let mut w2 = self.finish_timed(&again, wo, &mut |n| lap(n, None))?;
+        let mut w2 =
+            (self.finish_timed(&again, wo, &mut |n| lap(n, None))).map_err(|e| noted(e, &again))?;
         // Kept when the checks that refuse it are some of those that refused
         // the new order, not all (a fault of the input's own refuses both);
         // reorder then names what refused only its order.

@@ -293,6 +293,23 @@ fn a_pass_without_its_input_prints_the_reason() {
     }
 }
 
+/// When the written program cannot be made at all (an error, not a check's
+/// refusal), the passes skipped are still said, before the error.
+#[test]
+fn skipped_passes_are_said_before_an_error_in_writing() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let src = dir.path().join("r.nc");
+    let text = "G21 G90 G94\nT1 M6\nS6000 M3\nG0 X0 Y0 Z5\nG1 Z0 F300\nG1 X10 A10.\nM30\n";
+    std::fs::write(&src, text).expect("writes");
+    let out = dir.path().join("o.apt");
+    let o = run(&["optimise", s(&src), "--tool", "ball:10", "-o", s(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    let (note, error) = (err.find("pass speed skipped"), err.find("r.nc:6:"));
+    assert!(note.is_some() && note < error, "{err}");
+    assert!(!out.exists(), "nothing is written");
+}
+
 /// A user trial: with a stock no cutting move meets (given in the wrong
 /// place), every block read as air and `optimise` raised the feeds to the
 /// air feed, exit 0 and Green, where `feed` warned. The load passes now do

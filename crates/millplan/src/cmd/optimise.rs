@@ -270,16 +270,13 @@ fn passes_and_checks(
     };
     let ran = job.run_and_finish(order, Some(&h), wo, &mut lap);
     bar.finish();
-    let ran = ran.map_err(|e| job_error(path, e))?;
-    say_skipped(a, &ran.0);
-    Ok(ran)
+    say_skipped(a, report::notes_of(&ran));
+    ran.map_err(|e| job_error(path, e))
 }
 
-fn say_skipped(a: &Args, o: &Outcome) {
-    if quiet(a) {
-        return;
-    }
-    for n in report::skipped_notes(o) {
+/// The skipped passes' notes (also before an error that stopped the checks).
+fn say_skipped(a: &Args, notes: Vec<String>) {
+    for n in notes.into_iter().filter(|_| !quiet(a)) {
         eprintln!("{n}");
     }
 }
