@@ -715,6 +715,38 @@ fn gcode_cycles_take_their_apt_names() {
     .expect("means what the source meant");
 }
 
+/// A user trial: a Fanuc tapping cycle could not be converted to LinuxCNC,
+/// which has G84 and G74 (its `rs274` runs them: feed in, spindle reversed,
+/// feed out). They stay the control's own when the spindle turns the tap's
+/// way, as LinuxCNC insists (it refuses G84 with M4); otherwise a tap is
+/// refused, as before (it cannot be spelled out as moves).
+#[test]
+fn fanuc_taps_stay_taps_in_linuxcnc() {
+    let tap = |dir: &str, g: &str| {
+        format!(
+            "%\nO0002\nG21 G17 G90 G94\nT1 M6\nS500 {dir}\nG0 X0. Y0. Z5.\n\
+             G98 {g} X10. Y10. Z-10. R2. P300 F625.\nX20.\nG80\nM30\n%\n"
+        )
+    };
+    for (dir, g) in [("M3", "G84"), ("M4", "G74")] {
+        let p = parse(&tap(dir, g), g);
+        let (text, back) = through(&p, Target::LinuxCnc, false, g);
+        assert!(
+            text.contains(&format!("G98 {g} X10 Y10 Z-10 R2 P0.3 F625")),
+            "{text}"
+        );
+        compare(&p, &back, &Tolerance::default()).expect("means what the source meant");
+    }
+    for (dir, g) in [("M4", "G84"), ("M3", "G74")] {
+        let p = parse(&tap(dir, g), g);
+        let Out::Refused(e) = write(&p, Target::LinuxCnc, false) else {
+            panic!("{g} with {dir} was written");
+        };
+        assert_eq!(e.line, 7, "{e}");
+        assert!(e.message.contains("tapping"), "{e}");
+    }
+}
+
 /// An APT cycle named by its G code (as millplan wrote APT before the APT
 /// names) whose holes lie at two heights: its depth and levels are offsets
 /// from each point, so the second hole states the cycle again with its own

@@ -64,6 +64,8 @@ struct State {
     feed: Option<f64>,
     spindle: Option<f64>,
     spindle_running: bool,
+    /// The direction the program last started the spindle in.
+    spindle_dir: Option<SpindleDir>,
     cutcom: CutCom,
     heidenhain_rl: &'static str,
     tool_number: Option<u32>,
@@ -421,6 +423,7 @@ impl W<'_> {
                     SpindleDir::Off => "M5",
                 };
                 self.st.spindle_running = *dir != SpindleDir::Off;
+                self.st.spindle_dir = Some(*dir);
                 if *dir == SpindleDir::Off {
                     return Ok(if hh {
                         Words::Lines(vec!["M5".into()])
@@ -1192,7 +1195,9 @@ impl W<'_> {
     /// Whether the control's own canned cycle can say what `c` says: a G-code
     /// cycle (G73, G81…) into Fanuc or LinuxCNC along the program's Z (rotary
     /// tables may stand anywhere), or a Heidenhain cycle, whose definition
-    /// was copied, called again.
+    /// was copied, called again. LinuxCNC taps (G84 right-hand, G74
+    /// left-hand) only with the spindle turning the tap's way, as it insists
+    /// when it runs them.
     fn native_cycle(&self, op: &Operation, m: &Move, c: &Cycle) -> bool {
         let along_z = op.axis(m).is_none_or(|a| (a - DVec3::Z).length() < 1e-9);
         // Only a cycle its source named by its G code: an APT cycle's
@@ -1203,7 +1208,10 @@ impl W<'_> {
         along_z
             && match self.target() {
                 Target::Fanuc => matches!(code, Some(73 | 74 | 76 | 81..=89)),
-                Target::LinuxCnc => matches!(code, Some(73 | 81 | 82 | 83 | 85 | 89)),
+                Target::LinuxCnc => match (code, self.st.spindle_dir) {
+                    (Some(84), Some(SpindleDir::Cw)) | (Some(74), Some(SpindleDir::Ccw)) => true,
+                    (code, _) => matches!(code, Some(73 | 81 | 82 | 83 | 85 | 89)),
+                },
                 // Calls the source's own definition, copied only in its unit.
                 Target::Heidenhain => {
                     self.source == Dialect::Heidenhain && self.o.unit() == self.source_unit
@@ -1652,6 +1660,7 @@ pub(super) fn write_all(
             feed: None,
             spindle: None,
             spindle_running: false,
+            spindle_dir: None,
             cutcom: CutCom::Off,
             heidenhain_rl: "",
             tool_number: None,
