@@ -715,6 +715,31 @@ fn gcode_cycles_take_their_apt_names() {
     .expect("means what the source meant");
 }
 
+/// A user trial: `G0 Z20` then `G43 H1 Z20` was written `G43 H1`, the Z
+/// left out as already there; but under the new length the same Z is
+/// another machine position, and LinuxCNC's `rs274` showed the XY moves
+/// that followed a tool length lower than the source's. A change of length
+/// compensation (or of TCP) states the next Z again.
+#[test]
+fn a_z_on_the_length_compensation_block_is_kept() {
+    let src = "%\nO0003\nG21 G17 G90 G94\nT1 M6\nS2000 M3\nG0 X0. Y0. Z20.\nG43 H1 Z20.\n\
+               G0 X10. Y10.\nG1 Z-1. F100.\nG0 Z20.\nG49\nM30\n%\n";
+    let p = parse(src, "G43 Z");
+    for (t, block) in [
+        (Target::Fanuc, "G43 H1 Z20."),
+        (Target::LinuxCnc, "G43 H1 Z20"),
+        (Target::Sinumerik, "D1 Z20"),
+    ] {
+        let (text, back) = through(&p, t, false, "G43 Z");
+        assert!(
+            text.lines().any(|l| l.ends_with(block)),
+            "{}: {text}",
+            t.name()
+        );
+        compare(&p, &back, &Tolerance::default()).expect("means what the source meant");
+    }
+}
+
 /// A user trial: a Fanuc tapping cycle could not be converted to LinuxCNC,
 /// which has G84 and G74 (its `rs274` runs them: feed in, spindle reversed,
 /// feed out). They stay the control's own when the spindle turns the tap's

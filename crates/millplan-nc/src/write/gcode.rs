@@ -496,6 +496,12 @@ impl W<'_> {
                 };
                 let was = self.st.tlc;
                 self.st.tlc = new;
+                if matches!(target, Target::Fanuc | Target::LinuxCnc | Target::Sinumerik) {
+                    // The same Z is another machine position under another
+                    // length: the next Z is written even where it stands
+                    // (`G0 Z20` then `G43 H1 Z20` moves the axis).
+                    self.st.pos[2] = None;
+                }
                 match target {
                     Target::Fanuc | Target::LinuxCnc => {
                         if new.is_none() {
@@ -537,6 +543,12 @@ impl W<'_> {
                 self.st.tcp = *on;
                 if was == *on && std::mem::replace(&mut self.st.tcp_said, true) {
                     return Ok(Words::Nothing);
+                }
+                if was != *on {
+                    // Positions are the tool tip's with TCP, the machine's
+                    // without: X, Y and Z are stated again (the rotary
+                    // angles mean the same either way).
+                    self.st.pos = [None; 3];
                 }
                 // `G49` ends both: TCP off with length compensation off in
                 // the same source block is that one word, not `G49 G43 Hn G49`.
