@@ -715,6 +715,33 @@ fn gcode_cycles_take_their_apt_names() {
     .expect("means what the source meant");
 }
 
+/// A user trial: in a series of cycles without G80 between, a G98 hole
+/// after a G99 one returned to R (where the tool stood) rather than to the
+/// level the series began at, and LinuxCNC's `rs274` showed the output
+/// traversing 18 mm lower than the source. The initial level holds for the
+/// whole series, and G98/G99 alone switch it for the holes that follow.
+#[test]
+fn a_cycle_series_keeps_its_initial_level() {
+    let src = "%\nO0004\nG21 G17 G90 G94\nT1 M6\nS2000 M3\nG0 X0. Y0. Z20.\n\
+               G98 G81 X10. Y10. Z-5. R2. F100.\nG99 G82 X20. Z-5. R2. P500\n\
+               G98 G83 X30. Z-10. R2. Q3.\nG99 X40.\nG98 X50.\nG80\nG0 Z50.\nM30\n%\n";
+    let p = parse(src, "series");
+    let op = &p.operations[0];
+    let retract: Vec<f64> = op
+        .moves
+        .iter()
+        .filter_map(|m| op.cycle(m))
+        .map(|c| c.retract)
+        .collect();
+    // Holes at X10 … X50: back to Z20 (18 above R), to R, 18, to R, 18.
+    assert_eq!(retract, [18.0, 0.0, 18.0, 0.0, 18.0], "{retract:?}");
+    for t in [Target::Fanuc, Target::LinuxCnc, Target::Sinumerik] {
+        let (text, back) = through(&p, t, false, "series");
+        compare(&p, &back, &Tolerance::default())
+            .unwrap_or_else(|e| panic!("{}: {e}\n{text}", t.name()));
+    }
+}
+
 /// A user trial: `G0 Z20` then `G43 H1 Z20` was written `G43 H1`, the Z
 /// left out as already there; but under the new length the same Z is
 /// another machine position, and LinuxCNC's `rs274` showed the XY moves

@@ -1355,6 +1355,13 @@ impl GcodeReader {
             self.op.push_event(ln, EventKind::Dwell(secs));
         }
         if let Some(name) = new_cycle {
+            // The initial level is where the series of cycles began: a
+            // G98 G83 after a G99 G82 (no G80 between) returns to it, not
+            // to the R the tool stands at (Fanuc, LinuxCNC's `old_z`).
+            let initial_z = match (&self.cycle, self.motion) {
+                (Some(cs), Motion::Cycle) => cs.initial_z,
+                _ => self.pos.z,
+            };
             self.motion = Motion::Cycle;
             self.cycle = Some(CycleState {
                 name,
@@ -1362,7 +1369,7 @@ impl GcodeReader {
                 z: f64::NAN,
                 q: None,
                 p: None,
-                initial_z: self.pos.z,
+                initial_z,
                 return_initial: self.return_initial,
                 index: None,
             });
@@ -1372,6 +1379,11 @@ impl GcodeReader {
         if in_cycle {
             if let Some(cs) = &mut self.cycle {
                 let s = self.scale;
+                // G98/G99 alone switch the level the next holes return to.
+                if cs.return_initial != self.return_initial {
+                    cs.return_initial = self.return_initial;
+                    cs.index = None;
+                }
                 if let Some(r) = w.r.take() {
                     cs.r = r * s;
                     cs.index = None;
