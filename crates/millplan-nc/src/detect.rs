@@ -175,14 +175,16 @@ pub fn detect(head: &str) -> Dialect {
 /// the text has none of a dialect's own words: such a G-code program reads
 /// as Fanuc-style, unless its name ends `.ngc`, LinuxCNC's own extension
 /// (there `G4 P2` dwells two seconds, where a Fanuc dwells two
-/// milliseconds). Words in the text still decide over the name.
+/// milliseconds), or `.mpf` or `.spf`, Sinumerik's main and sub programs
+/// (there `G4 S10` dwells ten spindle revolutions). Words in the text still
+/// decide over the name.
 pub fn detect_named(head: &str, extension: Option<&str>) -> Dialect {
     let d = detect(head);
-    let ngc = extension.is_some_and(|e| e.eq_ignore_ascii_case("ngc"));
-    if d == Dialect::Fanuc && ngc {
-        Dialect::LinuxCnc
-    } else {
-        d
+    let is = |x: &str| extension.is_some_and(|e| e.eq_ignore_ascii_case(x));
+    match d {
+        Dialect::Fanuc if is("ngc") => Dialect::LinuxCnc,
+        Dialect::Fanuc if is("mpf") || is("spf") => Dialect::Sinumerik,
+        d => d,
     }
 }
 
@@ -281,6 +283,8 @@ mod tests {
         assert_eq!(detect_named(plain, None), Dialect::Fanuc);
         assert_eq!(detect_named(plain, Some("nc")), Dialect::Fanuc);
         assert_eq!(detect_named(plain, Some("NGC")), Dialect::LinuxCnc);
+        assert_eq!(detect_named(plain, Some("MPF")), Dialect::Sinumerik);
+        assert_eq!(detect_named(plain, Some("spf")), Dialect::Sinumerik);
         // The text's own words decide over the name.
         let siemens = "G710\nTRAORI\nG0 X0 Y0 Z5\nM30\n";
         assert_eq!(detect_named(siemens, Some("ngc")), Dialect::Sinumerik);

@@ -715,6 +715,34 @@ fn gcode_cycles_take_their_apt_names() {
     .expect("means what the source meant");
 }
 
+/// A user trial: Sinumerik's `G4 S10` (a dwell of ten spindle revolutions)
+/// set the spindle to 10 1/min for the cuts that followed. It dwells 0.6 s
+/// at 1000 1/min, and the speed stays; without a speed it is refused at
+/// the S word.
+#[test]
+fn a_sinumerik_dwell_in_revolutions_keeps_the_speed() {
+    let src = "G71 G90 G17 G642\nT1 M6\nS1000 M3\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG4 S10\nG1 X10\nM30\n";
+    let p = read(src, ReadOptions::default(), "G4 S");
+    assert_eq!(p.source, Dialect::Sinumerik);
+    let op = &p.operations[0];
+    let dwell: Vec<f64> = (op.events.iter())
+        .filter_map(|e| match e.kind {
+            EventKind::Dwell(t) => Some(t),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(dwell.len(), 1);
+    assert!((dwell[0] - 0.6).abs() < 1e-12, "{dwell:?}");
+    assert!(
+        op.moves.iter().all(|m| m.spindle == 1000.0),
+        "{:?}",
+        op.moves
+    );
+    let none = "G71 G90 G17 G642\nT1 M6\nG0 X0 Y0 Z5\nG4 S10\nM30\n";
+    let e = millplan_nc::parse_program(none, ReadOptions::default()).expect_err("refused");
+    assert_eq!((e.line, e.col), (4, 4), "{e}");
+}
+
 /// A user trial: in a series of cycles without G80 between, a G98 hole
 /// after a G99 one returned to R (where the tool stood) rather than to the
 /// level the series began at, and LinuxCNC's `rs274` showed the output

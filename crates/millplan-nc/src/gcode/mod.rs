@@ -455,6 +455,9 @@ const ARGUMENT_G: &[i64] = &[100, 650, 660, 661];
 struct Words {
     /// G codes ×10 with their value and column.
     g: Vec<(i64, f64, u32)>,
+    /// The S word and its column: the spindle speed, or on Sinumerik in a
+    /// G4 block the dwell in spindle revolutions.
+    s: Option<(f64, u32)>,
     xyz: [Option<f64>; 3],
     /// Columns of the Z, R and Q words (0: not in the block), where a
     /// canned cycle's depth and peck findings point.
@@ -782,7 +785,7 @@ impl GcodeReader {
                             if v < 0.0 {
                                 return Err(ParseError::new(ln, col, "negative spindle speed"));
                             }
-                            self.spindle = v;
+                            w.s = Some((v, col));
                         }
                         'T' => {
                             if v < 0.0 || v.fract() != 0.0 || v > f64::from(u32::MAX) {
@@ -1212,6 +1215,23 @@ impl GcodeReader {
                 }
             }
         }
+        // Sinumerik `G4 S10` dwells ten revolutions of the spindle, which
+        // keeps its speed; elsewhere S is the speed.
+        let mut dwell_s = None;
+        if let Some((v, col)) = w.s.take() {
+            if dwell && self.sinumerik() {
+                if !(self.spindle > 0.0) {
+                    return Err(ParseError::new(
+                        ln,
+                        col,
+                        "a dwell in spindle revolutions (G4 S) with no spindle speed set",
+                    ));
+                }
+                dwell_s = Some(v * 60.0 / self.spindle);
+            } else {
+                self.spindle = v;
+            }
+        }
         // F after the block's feed mode; Sinumerik `G4 F1.5` is a dwell of
         // 1.5 s for that block, not a feed.
         let mut dwell_f = None;
@@ -1348,6 +1368,7 @@ impl GcodeReader {
             // writes it, seconds), LinuxCNC P seconds; X/U seconds; Sinumerik F
             // seconds.
             let secs = dwell_f
+                .or(dwell_s)
                 .or(w.p.take().map(|p| self.dwell_p(p)))
                 .or(w.xyz[0].take())
                 .or(w.u.take())
