@@ -227,6 +227,12 @@ impl Simulated {
         !(self.run.rapid_collisions.is_empty() && self.run.holder_collisions.is_empty())
     }
 
+    /// Whether a check failed (exit 3): a collision, or with the part the
+    /// tool cut into it (the report's verdict is then red).
+    pub fn failed(&self) -> bool {
+        self.collided() || self.remaining.as_ref().is_some_and(|r| r.gouged > 0)
+    }
+
     /// What `simulate --json` prints.
     pub fn report<'a>(&'a self, stock: &'a str) -> Report<'a> {
         Report::new(&self.run, stock, self.remaining.as_ref())
@@ -318,6 +324,9 @@ pub struct Report<'a> {
     pub stock: &'a str,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub remaining: Option<RemainingJson<'a>>,
+    /// The report's verdict: red when a rapid, shank or holder met
+    /// material or the tool cut into the part.
+    pub verdict: millplan_report::html::Verdict,
 }
 
 impl<'a> Report<'a> {
@@ -325,6 +334,7 @@ impl<'a> Report<'a> {
         Report {
             run,
             stock,
+            verdict: millplan_report::sim::sim_verdict(run, rem),
             remaining: rem.map(|r| RemainingJson {
                 min: r.min,
                 max: r.max,
@@ -381,6 +391,7 @@ impl<'a> Report<'a> {
         } else {
             let _ = writeln!(o, "{hits} collisions");
         }
+        let _ = writeln!(o, "verdict: {}", self.verdict.summary);
         o
     }
 }

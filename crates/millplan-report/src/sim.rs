@@ -1,6 +1,6 @@
 //! The stock simulation's table and report.
 
-use crate::html::{report_page, Evidence, Notes};
+use crate::html::{report_page, Evidence, Notes, Verdict};
 use crate::svg::{self, Series};
 use millplan_geom::TriMesh;
 use millplan_sim::stock::remaining::Remaining;
@@ -9,9 +9,15 @@ use millplan_sim::stock::sim::MoveCut;
 use millplan_sim::stock::Stock;
 use std::fmt::Write;
 
+/// The verdict of a run by the one rule, as its report gives it: red when
+/// a rapid, shank or holder met material or the tool cut into the part.
+pub fn sim_verdict(rep: &SimReport, part: Option<&Remaining>) -> Verdict {
+    Verdict::of(&sim_evidence(rep, part), sim_warnings(rep, part))
+}
+
 /// What the simulation's verdict is decided from: a rapid, shank or holder
 /// in material, or a cut into the part, is a failed check.
-pub fn sim_evidence(rep: &SimReport, part: Option<(&Remaining, &TriMesh)>) -> Evidence {
+pub fn sim_evidence(rep: &SimReport, part: Option<&Remaining>) -> Evidence {
     let mut e = Evidence::default();
     if !rep.rapid_collisions.is_empty() {
         e.failed
@@ -23,7 +29,7 @@ pub fn sim_evidence(rep: &SimReport, part: Option<(&Remaining, &TriMesh)>) -> Ev
             rep.holder_collisions.len()
         ));
     }
-    if let Some((r, _)) = part {
+    if let Some(r) = part {
         if r.gouged > 0 {
             e.failed.push(format!(
                 "{} facets cut into the part, down to {:.3} mm",
@@ -32,6 +38,48 @@ pub fn sim_evidence(rep: &SimReport, part: Option<(&Remaining, &TriMesh)>) -> Ev
         }
     }
     e
+}
+
+/// The warnings of a run: its collisions (the first 20), the moves it
+/// could not simulate and the cuts into the part.
+fn sim_warnings(rep: &SimReport, part: Option<&Remaining>) -> Vec<String> {
+    let hits = rep.rapid_collisions.len() + rep.holder_collisions.len();
+    let mut warnings: Vec<String> = rep
+        .rapid_collisions
+        .iter()
+        .map(|c| {
+            format!(
+                "COLLISION line {}: rapid {:.3} mm into material",
+                c.line, c.depth
+            )
+        })
+        .chain(rep.holder_collisions.iter().map(|c| {
+            format!(
+                "COLLISION line {}: shank or holder {:.3} mm into material",
+                c.line, c.depth
+            )
+        }))
+        .take(20)
+        .collect();
+    if hits > 20 {
+        warnings.push(format!("and {} more collisions", hits - 20));
+    }
+    let skipped = rep.skipped.total();
+    if skipped > 0 {
+        warnings.push(format!(
+            "{skipped} moves not simulated ({} from or to an unknown position, {} with the axis known only as machine angles, {} without a tool{}): the stock does not show them",
+            rep.skipped.unknown_position, rep.skipped.unknown_axis, rep.skipped.no_tool, rep.skipped.first()
+        ));
+    }
+    if let Some(r) = part {
+        if r.gouged > 0 {
+            warnings.push(format!(
+                "the program cuts into the part on {} facets, down to {:.3} mm below its surface",
+                r.gouged, -r.min
+            ));
+        }
+    }
+    warnings
 }
 
 /// One row per simulated move. Lengths in mm to the µm, volumes in mm³ to
@@ -89,41 +137,7 @@ pub fn report(
         "The program run over the stock {stock_spec} at {} mm: what every move removed, where anything but the cutting edge met material, and the stock left.",
         rep.resolution_mm
     );
-    let mut warnings: Vec<String> = rep
-        .rapid_collisions
-        .iter()
-        .map(|c| {
-            format!(
-                "COLLISION line {}: rapid {:.3} mm into material",
-                c.line, c.depth
-            )
-        })
-        .chain(rep.holder_collisions.iter().map(|c| {
-            format!(
-                "COLLISION line {}: shank or holder {:.3} mm into material",
-                c.line, c.depth
-            )
-        }))
-        .take(20)
-        .collect();
-    if hits > 20 {
-        warnings.push(format!("and {} more collisions", hits - 20));
-    }
-    let skipped = rep.skipped.total();
-    if skipped > 0 {
-        warnings.push(format!(
-            "{skipped} moves not simulated ({} from or to an unknown position, {} with the axis known only as machine angles, {} without a tool{}): the stock does not show them",
-            rep.skipped.unknown_position, rep.skipped.unknown_axis, rep.skipped.no_tool, rep.skipped.first()
-        ));
-    }
-    if let Some((r, _)) = part {
-        if r.gouged > 0 {
-            warnings.push(format!(
-                "the program cuts into the part on {} facets, down to {:.3} mm below its surface",
-                r.gouged, -r.min
-            ));
-        }
-    }
+    let warnings = sim_warnings(rep, part.map(|p| p.0));
     let mut verdict = vec![format!(
         "{} {:.1} mm³ removed of {:.1} mm³ ({:.1} %) in {:.2} min; the highest removal rate {:.0} mm³/min at line {}; {} of {} cutting moves cut only air.",
         if hits == 0 {
@@ -261,7 +275,12 @@ pub fn report(
     report_page(
         title,
         &intro,
-        &Notes::judged(inputs, warnings, &sim_evidence(rep, part), verdict),
+        &Notes::judged(
+            inputs,
+            warnings,
+            &sim_evidence(rep, part.map(|p| p.0)),
+            verdict,
+        ),
         &rows,
         &figures,
     )

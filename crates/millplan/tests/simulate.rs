@@ -197,6 +197,9 @@ fn the_demo_finish_over_its_part_with_an_allowance_leaves_no_more_than_the_allow
         &p("part.stl"),
         "--resolution",
         "0.2",
+        // Dexels of 0.2 mm see a slope up to 0.1 mm off: no gouge below it.
+        "--tol",
+        "0.1",
         "--json",
     ]);
     assert_eq!(
@@ -214,6 +217,42 @@ fn the_demo_finish_over_its_part_with_an_allowance_leaves_no_more_than_the_allow
     assert!(r["mean"].as_f64().expect("mean") < 0.25, "{r}");
     assert!(r["min"].as_f64().expect("min") > -0.1, "{r}");
     assert!(j["removed_mm3"].as_f64().expect("v") > 100.0);
+    assert_ne!(j["verdict"]["level"], "red", "{}", j["verdict"]);
+    // A user trial: a hole drilled 10 mm into the part made the report red
+    // and exited 0, the text and JSON without a verdict. Exit 3, and the
+    // verdict said in both.
+    let drill = write(
+        dir.path(),
+        "drill.nc",
+        "G21 G90 G17\nT1 M6\nS2000 M3\nG0 X30 Y30 Z30\nG98 G81 X30 Y30 Z-10 R10 F100\nG80\nG0 Z50\nM30\n",
+    );
+    let args = [
+        "simulate",
+        &drill,
+        "--tool",
+        "flat:10",
+        "--stock",
+        "offset:0.5",
+    ];
+    let o = run(&[&args[..], &["--stl", &p("part.stl"), "--json"]].concat());
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v = &json(&o)["verdict"];
+    assert_eq!(v["level"], "red", "{v}");
+    assert!(
+        v["failed"][0]
+            .as_str()
+            .unwrap_or("")
+            .contains("cut into the part"),
+        "{v}"
+    );
+    let o = run(&[&args[..], &["--stl", &p("part.stl")]].concat());
+    assert_eq!(o.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("verdict: Red"));
 }
 
 /// The CAMotics bear relief (its project file: stock 80 × 80 × 20 mm, a

@@ -24,7 +24,7 @@ use std::path::PathBuf;
 /// stl:FILE (a closed mesh, e.g. a casting), offset:MM (the --stl part grown
 /// by MM, down to its bottom: what a finishing program meets after roughing).
 ///
-/// Exit codes: 0 done; 2 bad input; 3 a rapid, shank or holder hit material.
+/// Exit codes: 0 done; 2 bad input; 3 a rapid, shank or holder hit material, or the tool cut into the --stl part.
 #[derive(clap::Args)]
 pub struct Args {
     /// Program (APT/CL or G-code).
@@ -115,5 +115,5 @@ pub fn run(a: Args) -> CliResult<i32> {
         .print(&sim.report(&a.stock), |r| r.render_text(&path, a.tol));
     watch.lap("summary printed");
     watch.print_timings(a.timings.on);
-    Ok(exit(sim.collided()))
+    Ok(exit(sim.failed()))
 }
