@@ -21,10 +21,14 @@ pub enum Verdict {
     /// Faster, or nearer the cutting speed, with neither measure worse and
     /// every check passed.
     Improved,
-    /// Every check passed but nothing measured better, or what got better
-    /// came with a measure worse (a slower program nearer the cutting
-    /// speed, say): not what the user asked for, said as such.
+    /// Every check passed, the passes left the program as it was, and
+    /// nothing measured better: the input is what is written.
     Kept,
+    /// Every check passed and the passes' program is written, but nothing
+    /// measured better, or what got better came with a measure worse (a
+    /// slower program nearer the cutting speed, or feeds lowered into a
+    /// limit the input exceeded): not what the user asked for, said as such.
+    NotImproved,
     /// A check failed: nothing is written unless forced.
     Refused,
 }
@@ -331,6 +335,11 @@ impl Job {
             (before_time, after.time_s),
             (b.vc_off_share, after.vc_off_share),
         );
+        let input_unchanged = o.program == self.inputs.program;
+        let verdict = match verdict {
+            Verdict::Kept if !input_unchanged => Verdict::NotImproved,
+            v => v,
+        };
         let mut s = Summary {
             verdict,
             level: millplan_report::html::Level::Green,
@@ -346,7 +355,7 @@ impl Job {
             settings: self.settings.clone(),
             dialect: wo.target.name().to_string(),
             moves: o.program.move_count(),
-            input_unchanged: o.program == self.inputs.program,
+            input_unchanged,
             robot: None,
         };
         s.level = crate::report::level(&s);

@@ -104,19 +104,19 @@ pub fn verdict_line(s: &Summary) -> String {
                 _ => format!("Improved: {t}, every check passed"),
             }
         }
-        _ if s.input_unchanged => {
+        (Verdict::Kept, _) => {
             format!("Kept: nothing measured better ({t}); every check passed")
         }
         // Better in one measure, worse in another.
         _ if s.time_after_s < s.time_before_s * (1.0 - 1e-3) => format!(
-            "Kept: faster ({t}) but further from the cutting speed; the passes' program is written, every check passed"
+            "Not improved: faster ({t}) but further from the cutting speed; the passes' program is written, every check passed"
         ),
         _ => match nearer_words(s) {
             Some(v) => format!(
-                "Kept: {v}, but {t}; the passes' program is written, every check passed"
+                "Not improved: {v}, but {t}; the passes' program is written, every check passed"
             ),
             None => format!(
-                "Kept: nothing measured better ({t}); the passes' program is written, every check passed"
+                "Not improved: nothing measured better ({t}); the passes' program is written (the passes' table says what bound each), every check passed"
             ),
         },
     }
@@ -338,7 +338,7 @@ pub fn evidence(s: &Summary) -> Evidence {
     // Not better, yet changed: the program written is the passes', so the
     // input is not what is kept; say what did not get better instead.
     let kept = s.verdict == Verdict::Kept;
-    let not_better = (kept && !s.input_unchanged && worse.is_empty()).then(|| {
+    let not_better = (s.verdict == Verdict::NotImproved && worse.is_empty()).then(|| {
         format!(
             "nothing measured better than the input (cycle time {:.1} → {:.1} s)",
             s.time_before_s, s.time_after_s
@@ -346,7 +346,7 @@ pub fn evidence(s: &Summary) -> Evidence {
     });
     Evidence {
         failed,
-        kept: kept && s.input_unchanged,
+        kept,
         worse,
         not_better,
     }
@@ -464,6 +464,11 @@ mod tests {
     use super::*;
 
     fn summary(verdict: Verdict, times: (f64, f64), vc: (f64, f64), unchanged: bool) -> Summary {
+        // As the job's summary: not improved when the passes changed it.
+        let verdict = match verdict {
+            Verdict::Kept if !unchanged => Verdict::NotImproved,
+            v => v,
+        };
         Summary {
             verdict,
             level: millplan_report::html::Level::Green,
@@ -548,11 +553,13 @@ mod tests {
         let slower = summary(Verdict::Kept, (34.9, 68.0), (0.9, 0.1), false);
         let line = verdict_line(&slower);
         assert!(
-            line.starts_with("Kept: points off the cutting speed 90.0 % → 10.0 %, but cycle time 34.9 s → 68.0 s (+94.8 %)"),
+            line.starts_with("Not improved: points off the cutting speed 90.0 % → 10.0 %, but cycle time 34.9 s → 68.0 s (+94.8 %)"),
             "{line}"
         );
         assert_eq!(level(&slower), millplan_report::html::Level::Amber);
         let farther = summary(Verdict::Kept, (20.0, 10.0), (0.1, 0.5), false);
-        assert!(verdict_line(&farther).starts_with("Kept: faster (cycle time 20.0 s → 10.0 s"));
+        assert!(
+            verdict_line(&farther).starts_with("Not improved: faster (cycle time 20.0 s → 10.0 s")
+        );
     }
 }
