@@ -715,6 +715,17 @@ fn gcode_cycles_take_their_apt_names() {
     .expect("means what the source meant");
 }
 
+/// A user trial: a bare `F` (`G2 X20 I5 J0 F`) was kept verbatim with a
+/// warning and written into the Fanuc output as `F G2 X20. …`, which no
+/// control reads. It is refused at its column.
+#[test]
+fn an_address_letter_without_its_number_is_refused_at_its_column() {
+    let src = "G21 G90\nG0 X0 Y0 Z5\nG1 Z0 F100\nG2 X20 I5 J0 F\nM30\n";
+    let e = millplan_nc::parse_program(src, ReadOptions::default()).expect_err("refused");
+    assert_eq!((e.line, e.col), (4, 14), "{e}");
+    assert!(e.message.contains("`F` without a number"), "{e}");
+}
+
 /// A user trial: Sinumerik's `G4 S10` (a dwell of ten spindle revolutions)
 /// set the spindle to 10 1/min for the cuts that followed. It dwells 0.6 s
 /// at 1000 1/min, and the speed stays; without a speed it is refused at

@@ -764,8 +764,23 @@ impl GcodeReader {
     /// Sorts the tokens of a block into words; assignments and calls are
     /// evaluated or kept here.
     fn gather(&mut self, toks: &[(Tok, u32)], ln: u32, w: &mut Words) -> Result<(), ParseError> {
-        for (tok, col) in toks {
+        for (k, (tok, col)) in toks.iter().enumerate() {
             let col = *col;
+            // An address letter alone (`G2 X20 I5 F`): no control reads it,
+            // and kept verbatim it would be written into the output as is.
+            // A letter before a variable or an expression (`F#1`) is kept.
+            if let Tok::Keyword(name) = tok {
+                let value_follows = toks.get(k + 1).is_some_and(
+                    |(t, _)| matches!(t, Tok::Keyword(v) if v.starts_with(['#', '['])),
+                );
+                if name.len() == 1 && name.as_bytes()[0].is_ascii_alphabetic() && !value_follows {
+                    return Err(ParseError::new(
+                        ln,
+                        col,
+                        format!("`{name}` without a number: an address letter needs its value"),
+                    ));
+                }
+            }
             match tok {
                 Tok::Word(letter, v) => {
                     let v = *v;
