@@ -101,7 +101,7 @@ impl Code {
             Code::ConstantSurfaceSpeed => "SPINDL gives a constant surface speed (SFM/SMM); its number is kept as a spindle speed",
             Code::FrameChange => "a block changes the coordinate frame (ROT, TRANS, G52, G92, G68, G51, G10, a work offset); it is kept verbatim, and every axis is unknown after it until the program commands it again",
             Code::UnknownPosition => "a block moves the tool to a place the reader cannot know (a probing move, a macro call, an axis word given by a macro variable); it is kept verbatim, and the axes it may move are unknown after it until the program commands them again",
-            Code::PeckDepth => "a pecking cycle has no peck depth, or one of zero or below: it is read as one stroke to depth, and a control may stop with an alarm instead",
+            Code::PeckDepth => "a pecking cycle has no peck depth, or one of zero or below: it is read as one stroke to depth, and a control may stop with an alarm instead; it is written only as the control's own cycle, as the source gave it (never as lines that drill in one stroke, nor into LinuxCNC, which refuses it)",
             Code::CycleDepth => "a canned cycle's hole bottom lies at its R plane: the hole has no depth and the cycle feeds nowhere; read as written, and a control may stop with an alarm instead",
             Code::BlockDelete => "a block-delete block (`/`) runs or not as the operator's switch says; it is kept as written, and the axes it names are unknown after it until the program commands them again",
             Code::ZeroIncrement => "an incremental (G91) move steps an axis whose position is unknown: a zero step moves nothing; another step is kept verbatim (with its G91) and the axis stays unknown",

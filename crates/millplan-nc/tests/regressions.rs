@@ -715,6 +715,29 @@ fn gcode_cycles_take_their_apt_names() {
     .expect("means what the source meant");
 }
 
+/// A user trial: `G83 … Q-2` is read as one stroke to depth (with a
+/// `peck-depth` warning) and was written as lines that drill the whole
+/// depth at once. Spelled out, and into LinuxCNC (whose `rs274` refuses a
+/// peck of zero or below), it is refused; the Fanuc cycle keeps its Q.
+#[test]
+fn a_pecking_cycle_without_a_positive_peck_is_not_drilled_in_one_stroke() {
+    let src = "%\nO0005\nG21 G17 G90 G94\nT1 M6\nS1000 M3\nG0 X0. Y0. Z10.\n\
+               G98 G83 X10. Y10. Z-10. R2. Q-2. F100.\nG80\nM30\n%\n";
+    let p = read(src, ReadOptions::default(), "Q-2");
+    for t in [Target::Sinumerik, Target::Heidenhain, Target::LinuxCnc] {
+        let Out::Refused(e) = write(&p, t, false) else {
+            panic!("{} wrote it", t.name());
+        };
+        assert_eq!(e.line, 7, "{}: {e}", t.name());
+        assert!(e.message.contains("without a peck depth above 0"), "{e}");
+    }
+    let fanuc = written(&p, Target::Fanuc, "Q-2");
+    assert!(
+        fanuc.contains("G98 G83 X10. Y10. Z-10. R2. Q-2. F100."),
+        "{fanuc}"
+    );
+}
+
 /// A user trial: a bare `F` (`G2 X20 I5 J0 F`) was kept verbatim with a
 /// warning and written into the Fanuc output as `F G2 X20. …`, which no
 /// control reads. It is refused at its column.

@@ -1222,7 +1222,9 @@ impl W<'_> {
                 Target::Fanuc => matches!(code, Some(73 | 74 | 76 | 81..=89)),
                 Target::LinuxCnc => match (code, self.st.spindle_dir) {
                     (Some(84), Some(SpindleDir::Cw)) | (Some(74), Some(SpindleDir::Ccw)) => true,
-                    (code, _) => matches!(code, Some(73 | 81 | 82 | 83 | 85 | 89)),
+                    // LinuxCNC refuses a peck of zero or below.
+                    (Some(73 | 83), _) => c.peck.is_some_and(|q| q > 0.0),
+                    (code, _) => matches!(code, Some(81 | 82 | 85 | 89)),
                 },
                 // Calls the source's own definition, copied only in its unit.
                 Target::Heidenhain => {
@@ -1434,6 +1436,7 @@ impl W<'_> {
                     return self.cycle_block(m, id, c, &extra);
                 }
                 let axis = op.axis(m).unwrap_or(DVec3::Z);
+                super::check_pecking(c)?;
                 let steps = cycle_moves(c, m.end, axis)?;
                 if !extra.is_empty() {
                     self.line(&extra);

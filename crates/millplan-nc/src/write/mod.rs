@@ -610,6 +610,25 @@ pub fn apt_cycle_name(c: &Cycle) -> &str {
     }
 }
 
+/// Refuses to spell out a G73 or G83 without a peck depth above 0: read
+/// as one stroke (with a `peck-depth` warning), its control stops with an
+/// alarm (LinuxCNC: "negative or zero q value") or pecks as the program
+/// does not say, and written as lines it would drill the whole depth at
+/// once. The control's own cycle, written as its source gave it, stays.
+pub fn check_pecking(c: &Cycle) -> Result<(), WriteError> {
+    let name = c.name.to_ascii_uppercase();
+    if matches!(name.as_str(), "G73" | "G83") && !c.peck.is_some_and(|q| q > 0.0) {
+        return Err(WriteError::new(
+            c.line,
+            format!(
+                "{}: a pecking cycle without a peck depth above 0 (Q) cannot be written as lines (it would drill in one stroke); give its Q",
+                c.name
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Refuses a cycle of more than [`MAX_PECKS`] pecks a hole, at its
 /// definition's line, whether a writer spells it out or leaves it to the
 /// control's own cycle: `G83 … Q0.00001` is millions of strokes either way
