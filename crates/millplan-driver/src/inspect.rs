@@ -281,16 +281,23 @@ macro_rules! w {
     };
 }
 
-/// Seconds as `123 s (0:02:03)`.
+/// Seconds as `123 s (0:02:03)`, both forms of the same whole second.
 pub fn hms(t: f64) -> String {
-    let t = t.max(0.0);
-    format!(
-        "{:.0} s ({}:{:02}:{:02})",
-        t,
-        (t / 3600.0) as u64,
-        ((t / 60.0) as u64) % 60,
-        (t as u64) % 60
-    )
+    let s = t.max(0.0).round() as u64;
+    format!("{s} s ({}:{:02}:{:02})", s / 3600, (s / 60) % 60, s % 60)
+}
+
+#[cfg(test)]
+mod hms_tests {
+    /// A user trial: `4 s (0:00:03)`, `149 s (0:02:28)`: the seconds were
+    /// rounded and the clock cut.
+    #[test]
+    fn both_forms_say_the_same_second() {
+        assert_eq!(super::hms(3.6), "4 s (0:00:04)");
+        assert_eq!(super::hms(148.5), "149 s (0:02:29)");
+        assert_eq!(super::hms(3599.7), "3600 s (1:00:00)");
+        assert_eq!(super::hms(-1.0), "0 s (0:00:00)");
+    }
 }
 
 /// [`program`] as JSON, for the text rendering and `--json`.
