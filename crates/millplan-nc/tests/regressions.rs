@@ -738,6 +738,28 @@ fn a_pecking_cycle_without_a_positive_peck_is_not_drilled_in_one_stroke() {
     );
 }
 
+/// A user trial: the Heidenhain dwell millplan writes (`CYCL DEF 9.0
+/// DWELL TIME` / `9.1 DWELL 2.000`) was read back as words kept verbatim:
+/// its time lost, and the program not convertible onwards. Cycle 9 reads
+/// as the dwell it is.
+#[test]
+fn the_heidenhain_dwell_reads_back() {
+    let src = "%\nO0006\nG21 G17 G90 G94\nT1 M6\nS1000 M3\nG0 X0. Y0. Z5.\nG1 Z-1. F100.\nG4 X2.\nG0 Z5.\nM30\n%\n";
+    let p = parse(src, "G4");
+    let (text, back) = through(&p, Target::Heidenhain, false, "G4");
+    assert!(text.contains("CYCL DEF 9.1 DWELL 2.000"), "{text}");
+    let dwell: Vec<f64> = (back.operations.iter().flat_map(|o| o.events.iter()))
+        .filter_map(|e| match e.kind {
+            EventKind::Dwell(t) => Some(t),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(dwell, [2.0], "{text}");
+    compare(&p, &back, &Tolerance::default()).expect("means what the source meant");
+    let (fanuc, _) = through(&back, Target::Fanuc, false, "G4 -> heidenhain");
+    assert!(fanuc.contains("G4 P2000"), "{fanuc}");
+}
+
 /// A user trial: a bare `F` (`G2 X20 I5 J0 F`) was kept verbatim with a
 /// warning and written into the Fanuc output as `F G2 X20. …`, which no
 /// control reads. It is refused at its column.

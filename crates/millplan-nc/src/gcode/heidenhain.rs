@@ -749,6 +749,29 @@ impl HeidenhainReader {
         if number == Some(32) && self.tolerance_cycle(words, body, ln)? {
             return Ok(());
         }
+        // Cycle 9, DWELL TIME, acts where it is defined: `9.0` opens it,
+        // `9.1 DWELL 1.5` (`V.ZEIT` in German) dwells that many seconds.
+        if number == Some(9) {
+            match words.get(2).copied() {
+                Some("9.0") => {}
+                Some("9.1") => {
+                    let last = words.last().copied().unwrap_or("");
+                    let Some(t) = parse_num(last).filter(|t| *t >= 0.0) else {
+                        return Err(ParseError::new(
+                            ln,
+                            1,
+                            format!("`{last}` in `{}` is not a dwell in seconds", body.trim()),
+                        ));
+                    };
+                    self.op.push_event(ln, EventKind::Dwell(t));
+                }
+                _ => {
+                    let text = self.raw_block.take().unwrap_or_else(|| body.to_string());
+                    self.passthrough("CYCL", &text, PassClass::Machine, false, ln);
+                }
+            }
+            return Ok(());
+        }
         if !matches!(number, Some(1 | 200..=209 | 240 | 241)) {
             let text = self.raw_block.take().unwrap_or_else(|| body.to_string());
             self.passthrough("CYCL", &text, PassClass::Machine, false, ln);
