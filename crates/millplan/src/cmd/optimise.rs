@@ -274,7 +274,7 @@ fn passes_and_checks(
     ran.map_err(|e| job_error(path, e))
 }
 
-/// The skipped passes' notes (also before an error that stopped the checks).
+/// The skipped passes' notes before an error that stopped the checks.
 fn say_skipped(a: &Args, notes: Vec<String>) {
     for n in notes.into_iter().filter(|_| !quiet(a)) {
         eprintln!("{n}");
