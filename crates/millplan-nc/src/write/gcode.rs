@@ -1364,6 +1364,7 @@ impl W<'_> {
             }
             self.st.spindle = Some(m.spindle);
             self.st.spindle_running = true;
+            self.st.spindle_dir = Some(SpindleDir::Cw);
         }
         match m.kind {
             MoveKind::Rapid => self.linear_block(op, m, m.end, true, 0.0, m.feed_mode, &extra)?,
