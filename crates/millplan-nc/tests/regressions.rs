@@ -760,6 +760,29 @@ fn the_heidenhain_dwell_reads_back() {
     assert!(fanuc.contains("G4 P2000"), "{fanuc}");
 }
 
+/// A user trial: G73 spelled out as lines went back to R after every peck,
+/// as G83 does. A chip-breaking cycle backs off 0.254 mm and feeds on, the
+/// canonical moves of LinuxCNC's own G73 (its `rs274`: Z0, 0.254, −2,
+/// −1.746, −4, −3.746, −6).
+#[test]
+fn a_spelled_out_g73_breaks_the_chip_without_leaving_the_hole() {
+    let src = "%\nO0007\nG21 G17 G90 G94\nT1 M6\nS1000 M3\nG0 X0. Y0. Z10.\n\
+               G98 G73 X10. Y10. Z-6. R2. Q2. F100.\nG80\nM30\n%\n";
+    let p = parse(src, "G73");
+    let (text, back) = through(&p, Target::Sinumerik, false, "G73");
+    let zs: Vec<&str> = text
+        .lines()
+        .skip_while(|l| !l.contains("cycle G73"))
+        .filter_map(|l| l.split_whitespace().find(|w| w.starts_with('Z')))
+        .collect();
+    assert_eq!(
+        zs,
+        ["Z2", "Z0", "Z0.254", "Z-2", "Z-1.746", "Z-4", "Z-3.746", "Z-6", "Z10"],
+        "{text}"
+    );
+    compare(&p, &back, &Tolerance::default()).expect("means what the source meant");
+}
+
 /// A user trial: a bare `F` (`G2 X20 I5 J0 F`) was kept verbatim with a
 /// warning and written into the Fanuc output as `F G2 X20. …`, which no
 /// control reads. It is refused at its column.

@@ -650,6 +650,11 @@ pub fn check_pecks(c: &Cycle) -> Result<(), WriteError> {
     ))
 }
 
+/// How far a chip-breaking cycle (G73) backs off after each peck, mm:
+/// LinuxCNC's 0.010 in (its `rs274` shows it); on a Fanuc it is a machine
+/// parameter (5114) the program does not say.
+pub const CHIP_BREAK: f64 = 0.254;
+
 /// Explicit steps (rapid to the feed plane, feed down with pecks, dwell, rapid
 /// or, for boring and reaming, feed out) for one hole of a cycle, along the tool axis `axis` from the cycle
 /// point `p`. A cycle needing more than [`MAX_PECKS`] pecks is an error at
@@ -671,6 +676,11 @@ pub fn cycle_moves(c: &Cycle, p: DVec3, axis: DVec3) -> Result<Vec<CycleStep>, W
     let at = |h: f64| p + axis * h;
     let mut v = Vec::with_capacity(3 * pecks + 3);
     v.push(CycleStep::Rapid(at(c.clearance.max(c.bottom))));
+    // A chip-breaking cycle (G73, APT `BRKCHP`) backs off a little after
+    // each peck and feeds on; a deep-hole one (G83, `DEEP`) goes back out
+    // to R and rapids down to just above where it stopped.
+    let n = c.name.to_ascii_uppercase();
+    let chip_break = n == "G73" || n.starts_with("BRKCHP");
     if let (true, Some(first)) = (pecks > 1, c.peck) {
         let next = c.peck_next.filter(|q| *q > 0.0).unwrap_or(first);
         let mut depth = c.clearance;
@@ -678,8 +688,12 @@ pub fn cycle_moves(c: &Cycle, p: DVec3, axis: DVec3) -> Result<Vec<CycleStep>, W
         while depth - q > c.bottom + 1e-9 {
             depth -= q;
             v.push(CycleStep::Feed(at(depth), c.feed));
-            v.push(CycleStep::Rapid(at(c.clearance)));
-            v.push(CycleStep::Rapid(at(depth + 0.5_f64.min(next / 2.0))));
+            if chip_break {
+                v.push(CycleStep::Rapid(at(depth + CHIP_BREAK.min(next / 2.0))));
+            } else {
+                v.push(CycleStep::Rapid(at(c.clearance)));
+                v.push(CycleStep::Rapid(at(depth + 0.5_f64.min(next / 2.0))));
+            }
             q = next;
         }
     }
