@@ -1,5 +1,6 @@
-//! Format and dialect detection from the content (never from the file name), and
-//! one reader front that dispatches to the right front end.
+//! Format and dialect detection from the content (the file name only where
+//! the content has no dialect's words: [`detect_named`]), and one reader
+//! front that dispatches to the right front end.
 
 use crate::apt::AptReader;
 use crate::diag::{ParseError, Parsed};
@@ -183,7 +184,9 @@ pub fn detect_named(head: &str, extension: Option<&str>) -> Dialect {
     let is = |x: &str| extension.is_some_and(|e| e.eq_ignore_ascii_case(x));
     match d {
         Dialect::Fanuc if is("ngc") => Dialect::LinuxCnc,
-        Dialect::Fanuc if is("mpf") || is("spf") => Dialect::Sinumerik,
+        // `;` comments count for both Sinumerik and LinuxCNC: the name
+        // breaks that tie too.
+        Dialect::Fanuc | Dialect::LinuxCnc if is("mpf") || is("spf") => Dialect::Sinumerik,
         d => d,
     }
 }
@@ -285,6 +288,9 @@ mod tests {
         assert_eq!(detect_named(plain, Some("NGC")), Dialect::LinuxCnc);
         assert_eq!(detect_named(plain, Some("MPF")), Dialect::Sinumerik);
         assert_eq!(detect_named(plain, Some("spf")), Dialect::Sinumerik);
+        let commented = "; part A\n; op 1\nG90 G0 X0 Y0 Z5\nG4 S10\nM30\n";
+        assert_eq!(detect_named(commented, None), Dialect::LinuxCnc);
+        assert_eq!(detect_named(commented, Some("mpf")), Dialect::Sinumerik);
         // The text's own words decide over the name.
         let siemens = "G710\nTRAORI\nG0 X0 Y0 Z5\nM30\n";
         assert_eq!(detect_named(siemens, Some("ngc")), Dialect::Sinumerik);

@@ -119,8 +119,9 @@ fn check_program(src: &str) {
 fn write_every_target(p: &millplan_nc::Program, src: &str) {
     // A line without its block number (`12 L X+1`, `N20 G1`): a verbatim
     // block is renumbered by the writer.
+    // (and without a `;` comment, which a writer may leave out).
     let body = |l: &str| -> String {
-        let l = l.trim();
+        let l = l.split(';').next().unwrap_or("").trim();
         let l = l.strip_prefix('N').unwrap_or(l);
         l.trim_start_matches(|c: char| c.is_ascii_digit())
             .trim()

@@ -758,6 +758,16 @@ fn the_heidenhain_dwell_reads_back() {
     compare(&p, &back, &Tolerance::default()).expect("means what the source meant");
     let (fanuc, _) = through(&back, Target::Fanuc, false, "G4 -> heidenhain");
     assert!(fanuc.contains("G4 P2000"), "{fanuc}");
+    // A dwell given by a Q parameter is known only at the control: both
+    // lines kept as written (the review found it refused).
+    let q = "0 BEGIN PGM P MM\n1 FN 0: Q5 = +1.5\n2 TOOL CALL 1 Z S1000\n3 L Z+5 R0 FMAX\n\
+             4 CYCL DEF 9.0 DWELL TIME\n5 CYCL DEF 9.1 DWELL Q5\n6 L Z+10 FMAX\n7 END PGM P MM\n";
+    let p = read(q, ReadOptions::default(), "cycle 9 Q");
+    let text = written(&p, Target::Heidenhain, "cycle 9 Q");
+    assert!(
+        text.contains("CYCL DEF 9.0 DWELL TIME") && text.contains("CYCL DEF 9.1 DWELL Q5"),
+        "{text}"
+    );
 }
 
 /// A user trial: G73 spelled out as lines went back to R after every peck,
@@ -822,6 +832,37 @@ fn a_sinumerik_dwell_in_revolutions_keeps_the_speed() {
     assert_eq!((e.line, e.col), (4, 4), "{e}");
 }
 
+/// The review: the peck limit took the Q of a fine-boring G76 (the bar's
+/// shift) for a peck depth and refused the program on reading. Only G73
+/// and G83 peck among the G-code cycles.
+#[test]
+fn the_q_of_a_cycle_that_does_not_peck_is_no_peck() {
+    let src = "%\nO0009\nG21 G17 G90 G94\nT1 M6\nS1000 M3\nG0 X0. Y0. Z10.\n\
+               G98 G76 X10. Y10. Z-60. R2. Q0.05 F80.\nG80\nM30\n%\n";
+    let p = parse(src, "G76 Q");
+    assert_eq!(p.operations[0].cycles[0].pecks(), 1);
+    let g81 = src.replace("G76", "G81");
+    assert_eq!(parse(&g81, "G81 Q").operations[0].cycles[0].pecks(), 1);
+}
+
+/// The review: Sinumerik's `G4 S=10` (the assignment form) still set the
+/// spindle speed.
+#[test]
+fn a_sinumerik_dwell_in_revolutions_by_assignment_keeps_the_speed() {
+    let src = "G71 G90 G17 G642\nT1 M6\nS1000 M3\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG4 S=10\nG1 X10\nM30\n";
+    let p = read(src, ReadOptions::default(), "G4 S=");
+    let op = &p.operations[0];
+    assert!(
+        op.moves.iter().all(|m| m.spindle == 1000.0),
+        "{:?}",
+        op.moves
+    );
+    assert!(op
+        .events
+        .iter()
+        .any(|e| matches!(e.kind, EventKind::Dwell(t) if (t - 0.6).abs() < 1e-12)));
+}
+
 /// A user trial: in a series of cycles without G80 between, a G98 hole
 /// after a G99 one returned to R (where the tool stood) rather than to the
 /// level the series began at, and LinuxCNC's `rs274` showed the output
@@ -872,6 +913,21 @@ fn a_z_on_the_length_compensation_block_is_kept() {
         );
         compare(&p, &back, &Tolerance::default()).expect("means what the source meant");
     }
+    // The review: a compensation block without Z moves nothing, and the
+    // next move without Z keeps the machine's height; writing the program's
+    // old Z there dropped the tool a length during a rapid (rs274).
+    let src = "%\nO0008\nG21 G17 G90 G94\nT1 M6\nG43 H1\nG0 X0. Y0. Z20.\nG1 Z-5. F100.\n\
+               G0 Z20.\nG49\nG0 X100. Y0.\nM30\n%\n";
+    let p = parse(src, "G49 alone");
+    for t in [Target::Fanuc, Target::LinuxCnc] {
+        let text = written(&p, t, "G49 alone");
+        let after: Vec<&str> = text.lines().skip_while(|l| !l.starts_with("G49")).collect();
+        assert!(
+            after.iter().skip(1).all(|l| !l.contains('Z')),
+            "{}: {text}",
+            t.name()
+        );
+    }
 }
 
 /// A user trial: a Fanuc tapping cycle could not be converted to LinuxCNC,
@@ -895,6 +951,17 @@ fn fanuc_taps_stay_taps_in_linuxcnc() {
             "{text}"
         );
         compare(&p, &back, &Tolerance::default()).expect("means what the source meant");
+    }
+    // The review: LinuxCNC refuses a tap with Q (peck tapping), and a tap
+    // after an M6 (which stops its spindle) before the spindle is started.
+    let pecked = tap("M3", "G84").replace("P300", "Q3. P300");
+    let after_m6 = tap("M3", "G84").replace("T1 M6\nS500 M3\n", "S500 M3\nT1 M6\n");
+    for src in [pecked, after_m6] {
+        let p = parse(&src, "G84");
+        let Out::Refused(e) = write(&p, Target::LinuxCnc, false) else {
+            panic!("written: {src}");
+        };
+        assert!(e.message.contains("tapping"), "{e}");
     }
     for (dir, g) in [("M4", "G84"), ("M3", "G74")] {
         let p = parse(&tap(dir, g), g);

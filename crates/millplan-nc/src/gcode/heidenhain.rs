@@ -20,6 +20,9 @@ pub struct HeidenhainReader {
     cont: Option<(String, u32, String)>,
     /// The lines of the block being read when it was continued, as written.
     raw_block: Option<String>,
+    /// A `CYCL DEF 9.0 DWELL TIME` line waiting for its `9.1`: kept as
+    /// written with it when that dwell is a parameter.
+    dwell_head: Option<(String, u32)>,
     /// M89: the cycle is called after every positioning block until M99.
     modal_call: bool,
     saw_content: bool,
@@ -59,6 +62,7 @@ impl HeidenhainReader {
             line_no: 0,
             cont: None,
             raw_block: None,
+            dwell_head: None,
             modal_call: false,
             saw_content: false,
             scale: unit.map(|(u, _)| u.mm()).unwrap_or(1.0),
@@ -753,17 +757,29 @@ impl HeidenhainReader {
         // `9.1 DWELL 1.5` (`V.ZEIT` in German) dwells that many seconds.
         if number == Some(9) {
             match words.get(2).copied() {
-                Some("9.0") => {}
+                Some("9.0") => self.dwell_head = Some((body.to_string(), ln)),
                 Some("9.1") => {
                     let last = words.last().copied().unwrap_or("");
-                    let Some(t) = parse_num(last).filter(|t| *t >= 0.0) else {
-                        return Err(ParseError::new(
-                            ln,
-                            1,
-                            format!("`{last}` in `{}` is not a dwell in seconds", body.trim()),
-                        ));
-                    };
-                    self.op.push_event(ln, EventKind::Dwell(t));
+                    let head = self.dwell_head.take();
+                    match parse_num(last) {
+                        Some(t) if t >= 0.0 => self.op.push_event(ln, EventKind::Dwell(t)),
+                        Some(_) => {
+                            return Err(ParseError::new(
+                                ln,
+                                1,
+                                format!("`{last}` in `{}` is a negative dwell", body.trim()),
+                            ))
+                        }
+                        // A Q parameter (`DWELL Q5`): known only when the
+                        // control runs it; kept as written.
+                        None => {
+                            if let Some((h, hl)) = head {
+                                self.passthrough("CYCL", &h, PassClass::Machine, false, hl);
+                            }
+                            let text = self.raw_block.take().unwrap_or_else(|| body.to_string());
+                            self.passthrough("CYCL", &text, PassClass::Machine, false, ln);
+                        }
+                    }
                 }
                 _ => {
                     let text = self.raw_block.take().unwrap_or_else(|| body.to_string());

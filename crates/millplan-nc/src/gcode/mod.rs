@@ -883,7 +883,7 @@ impl GcodeReader {
                         if v < 0.0 {
                             return Err(ParseError::new(ln, col, "negative spindle speed"));
                         }
-                        self.spindle = v;
+                        w.s = Some((v, col));
                     }
                     "ADIS" | "CTOL" if self.sinumerik() => {
                         let v = self.value(val, ln, col)?;

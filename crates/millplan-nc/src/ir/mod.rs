@@ -628,9 +628,16 @@ pub struct Cycle {
 pub const MAX_PECKS: usize = 1000;
 
 impl Cycle {
-    /// Feed strokes per hole when the cycle is spelled out as moves.
+    /// Feed strokes per hole when the cycle is spelled out as moves. A
+    /// G-code cycle pecks only as G73 or G83: the Q of another (the shift
+    /// of a G76 or G87 boring bar, a Q a G81 ignores) is no peck.
     pub fn pecks(&self) -> usize {
         let total = self.clearance - self.bottom;
+        let g = self.name.to_ascii_uppercase();
+        let gcode = g.starts_with('G') && g[1..].chars().all(|c| c.is_ascii_digit());
+        if gcode && !matches!(g.as_str(), "G73" | "G83") {
+            return 1;
+        }
         match self.peck {
             Some(q) if q > 0.0 && q < total => {
                 let next = self.peck_next.filter(|q| *q > 0.0).unwrap_or(q);

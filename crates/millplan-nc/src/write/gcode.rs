@@ -305,6 +305,9 @@ impl W<'_> {
 
     fn tool_change(&mut self, op: &Operation) -> Result<(), WriteError> {
         let Some(t) = &op.tool else { return Ok(()) };
+        // LinuxCNC's M6 stops the spindle: its direction is known again
+        // only when the program starts it.
+        self.st.spindle_dir = None;
         let five = op.is_five_axis();
         let vectors = op
             .orients
@@ -496,10 +499,14 @@ impl W<'_> {
                 };
                 let was = self.st.tlc;
                 self.st.tlc = new;
-                if matches!(target, Target::Fanuc | Target::LinuxCnc | Target::Sinumerik) {
-                    // The same Z is another machine position under another
-                    // length: the next Z is written even where it stands
-                    // (`G0 Z20` then `G43 H1 Z20` moves the axis).
+                // A compensation block that moves (`G43 H1 Z20`) moves to
+                // that Z under the new length even where the program stood
+                // at Z20: its Z is written. One without Z moves nothing (the
+                // next move without Z keeps the machine's height).
+                let moves_here = e.line != 0 && next.is_some_and(|m| m.line == e.line);
+                if moves_here
+                    && matches!(target, Target::Fanuc | Target::LinuxCnc | Target::Sinumerik)
+                {
                     self.st.pos[2] = None;
                 }
                 match target {
@@ -544,10 +551,10 @@ impl W<'_> {
                 if was == *on && std::mem::replace(&mut self.st.tcp_said, true) {
                     return Ok(Words::Nothing);
                 }
-                if was != *on {
+                if was != *on && e.line != 0 && next.is_some_and(|m| m.line == e.line) {
                     // Positions are the tool tip's with TCP, the machine's
-                    // without: X, Y and Z are stated again (the rotary
-                    // angles mean the same either way).
+                    // without: a block that switches it and moves states
+                    // X, Y and Z (the rotary angles mean the same either way).
                     self.st.pos = [None; 3];
                 }
                 // `G49` ends both: TCP off with length compensation off in
@@ -1221,7 +1228,10 @@ impl W<'_> {
             && match self.target() {
                 Target::Fanuc => matches!(code, Some(73 | 74 | 76 | 81..=89)),
                 Target::LinuxCnc => match (code, self.st.spindle_dir) {
-                    (Some(84), Some(SpindleDir::Cw)) | (Some(74), Some(SpindleDir::Ccw)) => true,
+                    // Without a peck (LinuxCNC taps take no Q).
+                    (Some(84), Some(SpindleDir::Cw)) | (Some(74), Some(SpindleDir::Ccw)) => {
+                        c.peck.is_none()
+                    }
                     // LinuxCNC refuses a peck of zero or below.
                     (Some(73 | 83), _) => c.peck.is_some_and(|q| q > 0.0),
                     (code, _) => matches!(code, Some(81 | 82 | 85 | 89)),

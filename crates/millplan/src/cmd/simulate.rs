@@ -54,7 +54,8 @@ pub struct Args {
     #[arg(long, default_value_t = millplan_driver::command_defaults::simulate::RESOLUTION, value_name = "MM")]
     pub resolution: f64,
     /// Material deeper than this (mm) met by a rapid, shank or holder is a
-    /// collision; on the part, cut deeper than this is a gouge.
+    /// collision; on the part, cut deeper than this (and than half the
+    /// dexel size, the grid's own error) is a gouge.
     #[arg(long, default_value_t = millplan_driver::command_defaults::simulate::TOL, value_name = "MM")]
     pub tol: f64,
     #[command(flatten)]
