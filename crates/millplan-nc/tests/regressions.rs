@@ -830,6 +830,11 @@ fn a_sinumerik_dwell_in_revolutions_keeps_the_speed() {
     let none = "G71 G90 G17 G642\nT1 M6\nG0 X0 Y0 Z5\nG4 S10\nM30\n";
     let e = millplan_nc::parse_program(none, ReadOptions::default()).expect_err("refused");
     assert_eq!((e.line, e.col), (4, 4), "{e}");
+    // Nor with the spindle stopped (M5): the control would wait for turns
+    // that never come (the review saw 0.15 s from the last speed).
+    let stopped = src.replace("G4 S10", "M5\nG4 S10");
+    let e = millplan_nc::parse_program(&stopped, ReadOptions::default()).expect_err("refused");
+    assert_eq!((e.line, e.col), (7, 4), "{e}");
 }
 
 /// The review: the peck limit took the Q of a fine-boring G76 (the bar's

@@ -1235,11 +1235,11 @@ impl GcodeReader {
         let mut dwell_s = None;
         if let Some((v, col)) = w.s.take() {
             if dwell && self.sinumerik() {
-                if !(self.spindle > 0.0) {
+                if !(self.spindle > 0.0) || self.spindle_dir == SpindleDir::Off {
                     return Err(ParseError::new(
                         ln,
                         col,
-                        "a dwell in spindle revolutions (G4 S) with no spindle speed set",
+                        "a dwell in spindle revolutions (G4 S) with the spindle stopped or its speed not set",
                     ));
                 }
                 dwell_s = Some(v * 60.0 / self.spindle);
