@@ -147,14 +147,23 @@ impl AptReader {
         let ln = self.line_no;
         let raw = raw.strip_suffix('\r').unwrap_or(raw);
         // Fast path for the overwhelmingly common record.
-        if self.cont.is_none()
-            && self.nurbs.is_none()
-            && raw.starts_with("GOTO/")
-            && !raw.contains('$')
-        {
-            self.saw_content = true;
-            self.stats.records += 1;
-            return self.goto(&raw[5..], 6, ln);
+        if self.cont.is_none() && self.nurbs.is_none() {
+            if let Some(args) = raw.strip_prefix("GOTO/") {
+                // Plain numbers (no `$` among them) first, without a search
+                // for a `$` through the line.
+                let mut v = [0.0f64; 6];
+                let plain = plain_fields(args.as_bytes(), &mut v);
+                if plain.is_some() || !args.contains('$') {
+                    self.saw_content = true;
+                    self.stats.records += 1;
+                    self.stats.goto += 1;
+                    let n = match plain {
+                        Some(n) => n,
+                        None => self.goto_fields(args, 6, ln, &mut v)?,
+                    };
+                    return self.goto_values(&v, n, 6, ln);
+                }
+            }
         }
         let (content, comment) = match raw.find("$$") {
             Some(i) => (&raw[..i], Some(raw[i + 2..].trim())),
@@ -718,22 +727,21 @@ impl AptReader {
     fn goto(&mut self, args: &str, col0: u32, ln: u32) -> Result<(), ParseError> {
         self.stats.goto += 1;
         let mut v = [0.0f64; 6];
-        let mut n = 0;
-        let mut col = col0;
-        for piece in args.split(',') {
-            let t = piece.trim();
-            let c = col + (piece.len() - piece.trim_start().len()) as u32;
-            col += piece.len() as u32 + 1;
-            if t.is_empty() {
-                continue;
-            }
-            let x = parse_num(t)
-                .ok_or_else(|| ParseError::new(ln, c, format!("GOTO: `{t}` is not a number")))?;
-            if n < 6 {
-                v[n] = x;
-            }
-            n += 1;
-        }
+        let n = match plain_fields(args.as_bytes(), &mut v) {
+            Some(n) => n,
+            None => self.goto_fields(args, col0, ln, &mut v)?,
+        };
+        self.goto_values(&v, n, col0, ln)
+    }
+
+    /// The move of a GOTO whose `n` numbers are read (the first six in `v`).
+    fn goto_values(
+        &mut self,
+        v: &[f64; 6],
+        n: usize,
+        col0: u32,
+        ln: u32,
+    ) -> Result<(), ParseError> {
         match n {
             3 => {}
             6.. => {
@@ -752,6 +760,35 @@ impl AptReader {
             }
         }
         self.emit_move(DVec3::new(v[0], v[1], v[2]), ln)
+    }
+
+    /// The numbers of a GOTO's fields, any that [`plain_fields`] does not
+    /// take (spaces, exponents, long digits, empty fields): into `v`, the
+    /// count returned; a field that is no number is an error at its column.
+    fn goto_fields(
+        &self,
+        args: &str,
+        col0: u32,
+        ln: u32,
+        v: &mut [f64; 6],
+    ) -> Result<usize, ParseError> {
+        let mut n = 0;
+        let mut col = col0;
+        for piece in args.split(',') {
+            let t = piece.trim();
+            let c = col + (piece.len() - piece.trim_start().len()) as u32;
+            col += piece.len() as u32 + 1;
+            if t.is_empty() {
+                continue;
+            }
+            let x = parse_num(t)
+                .ok_or_else(|| ParseError::new(ln, c, format!("GOTO: `{t}` is not a number")))?;
+            if n < 6 {
+                v[n] = x;
+            }
+            n += 1;
+        }
+        Ok(n)
     }
 
     fn emit_move(&mut self, end: DVec3, ln: u32) -> Result<(), ParseError> {
@@ -1295,4 +1332,62 @@ pub fn parse_apt(
     }
     let stats = r.stats;
     Ok((r.finish()?, stats))
+}
+
+/// The numbers of a GOTO's fields when every field is a plain decimal
+/// (`diag::plain_decimal`, after an optional `+`): into `v` (the first six),
+/// their count returned; `None` sends the line to the general path.
+#[inline]
+fn plain_fields(b: &[u8], v: &mut [f64; 6]) -> Option<usize> {
+    let mut n = 0;
+    let mut i = 0;
+    loop {
+        i += usize::from(b.get(i) == Some(&b'+'));
+        let (x, len) = crate::diag::plain_decimal(&b[i..])?;
+        if let Some(slot) = v.get_mut(n) {
+            *slot = x;
+        }
+        n += 1;
+        i += len;
+        if i == b.len() {
+            return Some(n);
+        }
+        i += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    proptest::proptest! {
+        /// Whatever the quick scan of a GOTO's fields takes, the general path
+        /// reads to the same count and the same bits.
+        #[test]
+        fn plain_fields_agree_with_the_general_path(args in "[-+ .0-9,e]{0,40}") {
+            let r = AptReader::new(Dialect::AptIso, ReadOptions::default());
+            let mut quick = [0.0f64; 6];
+            if let Some(n) = plain_fields(args.as_bytes(), &mut quick) {
+                let mut general = [0.0f64; 6];
+                let m = r.goto_fields(&args, 6, 1, &mut general);
+                proptest::prop_assert_eq!(m, Ok(n), "{:?}", args);
+                for k in 0..n.min(6) {
+                    proptest::prop_assert_eq!(quick[k].to_bits(), general[k].to_bits(), "{:?}", args);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn plain_fields_take_only_plain_decimals() {
+        let mut v = [0.0f64; 6];
+        assert_eq!(plain_fields(b"1.5,-2,+.25", &mut v), Some(3));
+        assert_eq!(v[..3], [1.5, -2.0, 0.25]);
+        assert_eq!(plain_fields(b"1,2,3,0,0,1,9", &mut v), Some(7));
+        for not in [
+            "1, 2,3", "1,,3", "1,2,", "1e3,2,3", "1,2,3 $", "", "-+1,2,3",
+        ] {
+            assert_eq!(plain_fields(not.as_bytes(), &mut v), None, "{not}");
+        }
+    }
 }
