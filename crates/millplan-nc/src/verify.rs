@@ -149,13 +149,17 @@ fn verify_op(oi: usize, op: &Operation, v: &mut Vec<Violation>) {
         }
     }
     // Moves before which the machine may have moved out of the program's view,
-    // or the program changed the frame positions are given in.
+    // or the program changed the frame positions are given in (work offset,
+    // tool length, TCP).
     let moved: Vec<u32> = op
         .events
         .iter()
         .filter(|e| {
             matches!(&e.kind, EventKind::Passthrough(p) if p.moves)
-                || matches!(e.kind, EventKind::WorkOffset(_))
+                || matches!(
+                    e.kind,
+                    EventKind::WorkOffset(_) | EventKind::ToolLength(_) | EventKind::Tcp(_)
+                )
         })
         .map(|e| e.at)
         .collect();

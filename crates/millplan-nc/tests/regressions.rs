@@ -935,6 +935,37 @@ fn a_z_on_the_length_compensation_block_is_kept() {
     }
 }
 
+/// A change of length compensation without a Z leaves the tool where it
+/// stands, which is another program Z: the reader held the old Z as known,
+/// so the checks saw the moves after it a tool length off, and the writer
+/// restated that Z on the next compensation block (NX's Mori Seiki post:
+/// `G49` after `Z50.2`, then `G43 G00 X-6.715 Y19.92` was written with
+/// `Z50.2`, a move the source never made). Z is unknown until commanded.
+#[test]
+fn a_length_change_without_z_leaves_z_unknown() {
+    let src = "%\nO0009\nG21 G17 G90 G94\nT1 M6\nG43 H1 Z50.\nG0 X0. Y0.\nG1 Z-1. F100.\n\
+               G0 Z50.2\nG49\nG43 H2 G0 X10. Y10.\nG0 Z5.\nG43 H2\nG0 X20.\nM30\n%\n";
+    let p = parse(src, "G43 without Z");
+    let moves: Vec<_> = p.moves().collect();
+    let at = |line: u32| moves.iter().find(|m| m.line == line).expect("a move").end;
+    assert_eq!(at(8).z, 50.2);
+    // After G49 and G43 H2 without Z: X and Y as commanded, Z unknown.
+    let e = at(10);
+    assert_eq!((e.x, e.y), (10.0, 10.0));
+    assert!(e.z.is_nan(), "{e:?}");
+    // A compensation already in force changes nothing.
+    assert_eq!(at(13).z, 5.0);
+    for t in [Target::Fanuc, Target::LinuxCnc] {
+        let (text, back) = through(&p, t, false, "G43 without Z");
+        let line = text
+            .lines()
+            .find(|l| l.contains("X10"))
+            .expect("the move to X10");
+        assert!(!line.contains('Z'), "{}: {text}", t.name());
+        compare(&p, &back, &Tolerance::default()).expect("means what the source meant");
+    }
+}
+
 /// A user trial: a Fanuc tapping cycle could not be converted to LinuxCNC,
 /// which has G84 and G74 (its `rs274` runs them: feed in, spindle reversed,
 /// feed out). They stay the control's own when the spindle turns the tap's

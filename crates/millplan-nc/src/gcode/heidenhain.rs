@@ -428,6 +428,11 @@ impl HeidenhainReader {
                 0 => self.op.push_event(ln, EventKind::Stop { optional: false }),
                 1 => self.op.push_event(ln, EventKind::Stop { optional: true }),
                 128 | 129 => {
+                    if self.tcp != (m == 128) && super::tilted(&self.rotary) {
+                        // Tip or pivot: with a rotary axis turned, X, Y and
+                        // Z name another point; the program must command them.
+                        self.pos = UNKNOWN;
+                    }
                     self.tcp = m == 128;
                     self.op.push_event(ln, EventKind::Tcp(m == 128));
                 }

@@ -324,12 +324,15 @@ pub struct GcodeReader {
     spindle: f64,
     spindle_dir: SpindleDir,
     /// Tool-tip position; NaN on an axis the program has not commanded since
-    /// the start, a tool change or a machine move.
+    /// the start, a tool change, a machine move, or a change of work offset,
+    /// tool length or TCP (each puts the tool at other program numbers).
     pos: DVec3,
     rotary: [Option<f64>; 3],
     vector: Option<DVec3>,
     /// The work offset last selected (`None`: none yet).
     offset: Option<WorkOffset>,
+    /// The tool-length compensation last selected (`None`: none yet).
+    length: Option<ToolLength>,
     /// A frame change (G52, G68, ...) was read: its cancel reframes positions.
     frame_changed: bool,
     /// A G98 canned cycle from an unknown height is active (kept verbatim).
@@ -518,6 +521,7 @@ impl GcodeReader {
             rotary: [None; 3],
             vector: None,
             offset: None,
+            length: None,
             frame_changed: false,
             blind_cycle: false,
             tcp: false,
@@ -1091,8 +1095,25 @@ impl GcodeReader {
     }
 
     fn tcp_event(&mut self, on: bool, ln: u32) {
+        if self.tcp != on && tilted(&self.rotary) {
+            // Tip or pivot: with a rotary axis turned, X, Y and Z name
+            // another point; the program must command them.
+            self.pos = UNKNOWN;
+        }
         self.tcp = on;
         self.op.push_event(ln, EventKind::Tcp(on));
+    }
+
+    /// A tool-length event. A change of length leaves the tool where it
+    /// stands, which is then another program Z (LinuxCNC, Fanuc; Sinumerik
+    /// applies it with Z's next move): Z is unknown until the program
+    /// commands it, as after a change of work offset.
+    fn length_event(&mut self, t: ToolLength, ln: u32) {
+        if self.length != Some(t) {
+            self.length = Some(t);
+            self.pos.z = f64::NAN;
+        }
+        self.op.push_event(ln, EventKind::ToolLength(t));
     }
 
     fn block(&mut self, raw: &str, toks: &[(Tok, u32)], ln: u32) -> Result<(), ParseError> {
@@ -1280,8 +1301,7 @@ impl GcodeReader {
                     if self.tcp {
                         self.tcp_event(false, ln);
                     }
-                    self.op
-                        .push_event(ln, EventKind::ToolLength(ToolLength::Off));
+                    self.length_event(ToolLength::Off, ln);
                     self.tcp_vectors = false;
                 }
                 _ => {
@@ -1292,8 +1312,7 @@ impl GcodeReader {
                         self.tcp_event(false, ln);
                     }
                     self.tcp_vectors = code == 435;
-                    self.op
-                        .push_event(ln, EventKind::ToolLength(ToolLength::On { register }));
+                    self.length_event(ToolLength::On { register }, ln);
                 }
             }
         }
@@ -1312,7 +1331,7 @@ impl GcodeReader {
                         ))
                     }
                 };
-                self.op.push_event(ln, EventKind::ToolLength(t));
+                self.length_event(t, ln);
             }
         }
         if let Some(side) = cutcom {
@@ -1693,7 +1712,7 @@ impl GcodeReader {
                         register: Some(d as u32),
                     }
                 };
-                self.op.push_event(ln, EventKind::ToolLength(t));
+                self.length_event(t, ln);
             }
         }
         let text: Vec<String> = toks
@@ -2262,6 +2281,12 @@ impl GcodeReader {
             diagnostics: self.diags.finish(),
         })
     }
+}
+
+/// Whether a rotary axis is known to stand away from 0: TCP on or off then
+/// changes what X, Y and Z mean.
+pub(crate) fn tilted(rotary: &[Option<f64>; 3]) -> bool {
+    rotary.iter().any(|r| r.is_some_and(|a| a != 0.0))
 }
 
 fn axis_index(c: char) -> usize {
