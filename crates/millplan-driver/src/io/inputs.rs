@@ -278,20 +278,46 @@ fn read_lines(
     let mut buf = Vec::with_capacity(256);
     let mut line_no: usize = 0;
     let mut done: u64 = 0;
-    while let Some(n) = read_line(r, &mut buf, max).map_err(|e| in_file(path, e))? {
-        line_no += 1;
+    let mut feed = |line: &[u8], line_no: usize| -> IoResult<()> {
+        let located = |e: ParseError| parse_error(path, &e);
+        millplan_nc::check_line_length(line.len(), line_no, limits).map_err(located)?;
+        let text = match std::str::from_utf8(line) {
+            Ok(t) => std::borrow::Cow::Borrowed(t),
+            // Old posts write Latin-1 comments; keep them readable rather than fail.
+            Err(_) => std::borrow::Cow::Owned(line.iter().map(|&b| b as char).collect::<String>()),
+        };
+        reader.line(&text).map_err(located)
+    };
+    loop {
+        // A line whole in the buffer is read where it lies: most are, and
+        // copying each out cost more than finding its end.
+        let avail = r.fill_buf().map_err(|e| in_file(path, e))?;
+        let whole = memchr::memchr2(b'\n', b'\r', avail)
+            .filter(|&i| i <= max && (avail[i] == b'\n' || i + 1 < avail.len()));
+        let n = match whole {
+            Some(i) => {
+                let crlf = avail[i] == b'\r' && avail[i + 1] == b'\n';
+                line_no += 1;
+                feed(&avail[..i], line_no)?;
+                let used = i + 1 + usize::from(crlf);
+                r.consume(used);
+                used as u64
+            }
+            // Across the buffer's end, too long, a CR last in the buffer,
+            // or the end of the file.
+            None => match read_line(r, &mut buf, max).map_err(|e| in_file(path, e))? {
+                Some(n) => {
+                    line_no += 1;
+                    feed(&buf, line_no)?;
+                    n
+                }
+                None => break,
+            },
+        };
         done += n;
         if line_no.is_multiple_of(65536) {
             progress(done);
         }
-        let located = |e: ParseError| parse_error(path, &e);
-        millplan_nc::check_line_length(buf.len(), line_no, limits).map_err(located)?;
-        let text = match std::str::from_utf8(&buf) {
-            Ok(t) => std::borrow::Cow::Borrowed(t),
-            // Old posts write Latin-1 comments; keep them readable rather than fail.
-            Err(_) => std::borrow::Cow::Owned(buf.iter().map(|&b| b as char).collect::<String>()),
-        };
-        reader.line(&text).map_err(located)?;
     }
     Ok(())
 }
@@ -480,6 +506,48 @@ mod tests {
         let mut buf = Vec::new();
         assert!(read_line(&mut r, &mut buf, 100).expect("reads").is_some());
         assert_eq!(buf.len(), 101);
+    }
+
+    /// Lines read where they lie in the buffer and lines copied out across
+    /// its end make the same program, whatever the buffer's size and the
+    /// sizes of the reads behind it; an error is at the same line.
+    #[test]
+    fn a_program_reads_the_same_through_any_buffer() {
+        struct Chunks<'a>(&'a [u8], usize);
+        impl Read for Chunks<'_> {
+            fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+                let n = self.0.len().min(self.1).min(buf.len());
+                buf[..n].copy_from_slice(&self.0[..n]);
+                self.0 = &self.0[n..];
+                Ok(n)
+            }
+        }
+        let mut src = b"G21 G90\r\nG0 X0 Y0 Z5\rG1 X1.5 F100 (caf\xe9)\n\r\n".to_vec();
+        for k in 0..40 {
+            src.extend_from_slice(format!("G1 X{k}.25 Y-{k}\r\n").as_bytes());
+        }
+        src.extend_from_slice(b"M30");
+        let run = |src: &[u8], cap: usize, chunk: usize| {
+            let mut r = BufReader::with_capacity(cap, Chunks(src, chunk));
+            let mut reader = Reader::new(millplan_nc::Dialect::Fanuc, ReadOptions::default());
+            let path = Path::new("p.nc");
+            let limits = Limits::default();
+            read_lines(path, &mut r, &mut reader, &limits, &mut |_| {})
+                .map(|()| millplan_nc::text::print(&reader.finish().expect("ends").program))
+                .map_err(|e| e.message)
+        };
+        let want = run(&src, 1 << 16, usize::MAX).expect("reads");
+        assert!(want.contains("1.5") && want.contains("39.25"), "{want}");
+        let mut bad = src.clone();
+        bad.extend_from_slice(b"\nG1 X1..5\n");
+        let err = run(&bad, 1 << 16, usize::MAX).expect_err("bad number");
+        assert!(err.starts_with("p.nc:46:"), "{err}");
+        for cap in [1, 2, 3, 5, 8, 13, 64] {
+            for chunk in [1, 2, 7, usize::MAX] {
+                assert_eq!(run(&src, cap, chunk).as_ref(), Ok(&want), "{cap} {chunk}");
+                assert_eq!(run(&bad, cap, chunk), Err(err.clone()), "{cap} {chunk}");
+            }
+        }
     }
 
     /// The errors carry their place: a program's at its line and column,
