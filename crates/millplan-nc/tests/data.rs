@@ -199,6 +199,54 @@ fn nx_modal_axis_and_mirrored_msys() {
     assert_eq!(count(&p, "rapid"), 459);
 }
 
+/// A user trial: NX arcs ran the long way round (270° where the part has
+/// 90° corners), the cutter looping through the part. An arc must leave
+/// its start along the move into it (CAM arcs are tangent to their lead
+/// lines); every file with CIRCLE records, by NX (MSYS Z turned over, the
+/// axis in the absolute frame) and by SOLIDWORKS.
+#[test]
+fn circle_records_continue_the_moves_into_them() {
+    for rel in [
+        "nx-clsf-circle-cutcom/cutcom.clsf",
+        "nx-clsf-circle-cutcom/_3_PAZ_125_N2.cls",
+        "swcam-apt-stl-pairs/RotateThin.apt",
+        "swcam-apt-stl-pairs/Interface-glue.apt",
+        "swcam-apt-stl-pairs/boss.apt",
+    ] {
+        let Some(p) = read(rel) else {
+            continue;
+        };
+        let (mut arcs, mut tangent, mut reversed) = (0, 0, 0);
+        for op in &p.operations {
+            for (i, m) in op.moves.iter().enumerate() {
+                let Some(a) = op.arc(m) else { continue };
+                if i < 2 || op.arc(&op.moves[i - 1]).is_some() || op.moves[i - 1].is_rapid() {
+                    continue;
+                }
+                let (s, before) = (op.move_start(i), op.move_start(i - 1));
+                let into = s - before;
+                if into.length() < 0.01 || (s - a.centre).length() < 1e-6 {
+                    continue;
+                }
+                // Counter-clockwise about the arc's axis.
+                let leaves = a.normal.cross(s - a.centre).normalize();
+                arcs += 1;
+                let cos = into.normalize().dot(leaves);
+                tangent += usize::from(cos > 0.98);
+                reversed += usize::from(cos < -0.98);
+            }
+        }
+        // Some arcs follow a line at an angle (a lead-in), a few turn back
+        // from a retract (short arcs in SOLIDWORKS's boss.apt); read the
+        // wrong way round, the tangent ones would all turn back.
+        assert!(arcs > 0, "{rel}: no arc after a line");
+        assert!(
+            tangent * 2 >= arcs && tangent >= 10 * reversed,
+            "{rel}: of {arcs} arcs {tangent} continue the line into them, {reversed} turn back"
+        );
+    }
+}
+
 #[test]
 fn solidworks_cutters_circles_and_csys() {
     let Some(p) = read("swcam-apt-stl-pairs/Interface-glue.apt") else {

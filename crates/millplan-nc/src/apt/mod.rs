@@ -58,6 +58,9 @@ pub struct AptReader {
     units: Option<(LengthUnit, UnitsOrigin, u32)>,
     feed: f64,
     feed_mode: FeedMode,
+    /// The frame in force was set by NX's `MSYS` (not SOLIDWORKS's `CSYS`):
+    /// CIRCLE axes are then in the absolute frame.
+    msys: bool,
     feed_seen: bool,
     feed_missing_reported: bool,
     spindle: f64,
@@ -125,6 +128,7 @@ impl AptReader {
             units,
             feed: 0.0,
             feed_mode: FeedMode::PerMinute,
+            msys: false,
             feed_seen: false,
             feed_missing_reported: false,
             spindle: 0.0,
@@ -442,7 +446,18 @@ impl AptReader {
                         format!("CIRCLE needs centre and axis (6 values), found {}", v.len()),
                     ));
                 }
-                let axis = self.unit_axis(v[3], v[4], v[5], ln, s.args_col)?;
+                let mut axis = self.unit_axis(v[3], v[4], v[5], ln, s.args_col)?;
+                // Under NX's MSYS a CIRCLE's centre is in the frame, as
+                // every position, but its axis in the absolute frame: in
+                // each NX file with arcs (MSYS Z turned over) the arcs are
+                // tangent to the moves into them only so, and the posts
+                // written for those files cut them that way round.
+                // SOLIDWORKS's CSYS frames give the axis in the frame.
+                if self.msys {
+                    if let Some(f) = self.op.frame {
+                        axis = f.rot.transpose() * axis;
+                    }
+                }
                 let layout = if v.len() >= 7 {
                     if v[6] <= 0.0 {
                         return Err(ParseError::new(
@@ -527,6 +542,7 @@ impl AptReader {
                     DVec3::new(v[6], v[7], v[8]),
                 )
                 .ok_or_else(|| ParseError::new(ln, s.args_col, "MSYS axes are not orthonormal"))?;
+                self.msys = true;
                 self.set_frame(f);
                 Ok(())
             }
@@ -544,6 +560,7 @@ impl AptReader {
                 let f = Frame::from_rows_3x4(&m).ok_or_else(|| {
                     ParseError::new(ln, s.args_col, "CSYS rotation is not orthonormal")
                 })?;
+                self.msys = false;
                 self.set_frame(f);
                 Ok(())
             }

@@ -476,6 +476,9 @@ fn write_move(
                     .arcs
                     .get(id.index())
                     .ok_or_else(|| WriteError::new(m.line, "arc id out of range"))?;
+                // Under an `MSYS` the axis in the absolute frame, as NX
+                // writes it (and the reader reads it); the centre local.
+                let normal = op.frame.map_or(a.normal, |f| f.rot * a.normal);
                 list(
                     out,
                     "CIRCLE",
@@ -483,9 +486,9 @@ fn write_move(
                         (a.centre.x * k, COORD),
                         (a.centre.y * k, COORD),
                         (a.centre.z * k, COORD),
-                        (a.normal.x, VECT),
-                        (a.normal.y, VECT),
-                        (a.normal.z, VECT),
+                        (normal.x, VECT),
+                        (normal.y, VECT),
+                        (normal.z, VECT),
                         (a.radius * k, COORD),
                     ],
                 );
