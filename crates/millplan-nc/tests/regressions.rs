@@ -966,6 +966,40 @@ fn a_length_change_without_z_leaves_z_unknown() {
     }
 }
 
+/// The review of the rule above: the length changes it missed. `G49` kept
+/// in a machine block, `G43` without H after a tool change (the new tool's
+/// length), a G98 cycle on the block that changes the length (its initial
+/// level is then unknown: kept verbatim, not refused), and TCP switched on
+/// a Heidenhain positioning block with B turned.
+#[test]
+fn every_length_change_leaves_z_unknown() {
+    let z_at = |src: &str, x: f64| -> f64 {
+        let p = parse(src, "length change");
+        let z = p
+            .moves()
+            .find(|m| m.end.x == x)
+            .unwrap_or_else(|| panic!("a move to X{x}: {src}"))
+            .end
+            .z;
+        z
+    };
+    let g49_machine = "%\nO0010\nG21 G17 G90\nT1 M6\nG43 H1 G0 Z50.\nG0 X0. Y0.\nG1 Z-1. F100.\n\
+                       G49 G53 G0 Z0.\nG0 Z100.\nG43 H1 G0 X10. Y10.\nG1 X20.\nM30\n%\n";
+    assert!(z_at(g49_machine, 10.0).is_nan());
+    let new_tool = "%\nO0011\nG21 G17 G90\nT1 M6\nG43 G0 Z50.\nG0 X0. Y0.\nT2 M6\n\
+                    G0 X0. Y0. Z100.\nG43 G0 X10. Y10.\nM30\n%\n";
+    assert!(z_at(new_tool, 10.0).is_nan());
+    let cycle = "%\nO0012\nG21 G17 G90\nT1 M6\nG43 H1 G0 Z50.\nG0 X0. Y0.\n\
+                 G43 H2 G98 G81 X10. Y10. Z-5. R2. F100.\nG80\nM30\n%\n";
+    let p = parse(cycle, "G98 cycle with G43");
+    assert!(p.moves().all(|m| m.cycle().is_none()), "kept verbatim");
+    let tcp = "0 BEGIN PGM T MM\n1 TOOL CALL 1 Z S1000\n2 L X+0 Y+0 Z+50 B+30 C+0 R0 FMAX M3\n\
+               3 L X+10 R0 FMAX M128\n4 END PGM T MM\n";
+    let p = parse(tcp, "M128 on a move");
+    let e = p.moves().find(|m| m.end.x == 10.0).expect("the move").end;
+    assert!(e.y.is_nan() && e.z.is_nan(), "{e:?}");
+}
+
 /// A user trial: a Fanuc tapping cycle could not be converted to LinuxCNC,
 /// which has G84 and G74 (its `rs274` runs them: feed in, spindle reversed,
 /// feed out). They stay the control's own when the spindle turns the tap's

@@ -563,6 +563,12 @@ impl HeidenhainReader {
             );
         }
         self.m_words(words, ln, Phase::Start);
+        // M128/M129 on this block may have made the unnamed axes unknown.
+        for (k, named) in named.iter().enumerate() {
+            if !named {
+                end[k] = self.pos[k];
+            }
+        }
         if machine {
             // Machine-datum coordinates: kept verbatim; its axes are unknown after.
             for (k, named) in named.iter().enumerate() {

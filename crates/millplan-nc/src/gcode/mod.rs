@@ -1095,7 +1095,8 @@ impl GcodeReader {
     }
 
     fn tcp_event(&mut self, on: bool, ln: u32) {
-        if self.tcp != on && tilted(&self.rotary) {
+        let vector_tilted = self.vector.is_some_and(|v| v.x != 0.0 || v.y != 0.0);
+        if self.tcp != on && (tilted(&self.rotary) || vector_tilted) {
             // Tip or pivot: with a rotary axis turned, X, Y and Z name
             // another point; the program must command them.
             self.pos = UNKNOWN;
@@ -1104,10 +1105,11 @@ impl GcodeReader {
         self.op.push_event(ln, EventKind::Tcp(on));
     }
 
-    /// A tool-length event. A change of length leaves the tool where it
-    /// stands, which is then another program Z (LinuxCNC, Fanuc; Sinumerik
-    /// applies it with Z's next move): Z is unknown until the program
-    /// commands it, as after a change of work offset.
+    /// A tool-length event. After a change of length the program Z of the
+    /// tool is another (LinuxCNC leaves the tool standing; some Fanuc-style
+    /// controls move Z by the offset; Sinumerik applies it with Z's next
+    /// move): Z is unknown until the program commands it, as after a change
+    /// of work offset.
     fn length_event(&mut self, t: ToolLength, ln: u32) {
         if self.length != Some(t) {
             self.length = Some(t);
@@ -1550,7 +1552,9 @@ impl GcodeReader {
             )
         });
         let blind = if starts {
-            initial && self.pos.z.is_nan()
+            // A length change on the block puts Z at another number first.
+            let reframed = length_code(toks).is_some_and(|t| self.length != Some(t));
+            initial && (self.pos.z.is_nan() || reframed)
         } else {
             self.blind_cycle && !ends && hole
         };
@@ -1686,6 +1690,11 @@ impl GcodeReader {
         ln: u32,
         _col: u32,
     ) -> Result<(), ParseError> {
+        // A length code kept in the block (`G49 G53 Z0`): the length in
+        // force is no longer known.
+        if length_code(toks).is_some() {
+            self.length = None;
+        }
         // Its spindle, coolant and tool words are events of the same block.
         for &v in &w.m {
             let e = match v as i64 {
@@ -2233,6 +2242,8 @@ impl GcodeReader {
             }
         }
         let (number, name, tl) = self.selected_tool.clone().unwrap_or((None, None, ln));
+        // `G43` without H takes the tool in the spindle: another length.
+        self.length = None;
         if !self.op.moves.is_empty() {
             let prev = std::mem::take(&mut self.op);
             self.ops.push(prev);
@@ -2281,6 +2292,28 @@ impl GcodeReader {
             diagnostics: self.diags.finish(),
         })
     }
+}
+
+/// The tool length a block's G43/G43.4/G43.5/G44 (with its H) or G49
+/// selects, if it has one.
+fn length_code(toks: &[(Tok, u32)]) -> Option<ToolLength> {
+    let code = toks.iter().find_map(|(t, _)| match t {
+        Tok::Word('G', v) => {
+            let c = (v * 10.0).round() as i64;
+            matches!(c, 430 | 434 | 435 | 440 | 490).then_some(c)
+        }
+        _ => None,
+    })?;
+    if code == 490 {
+        return Some(ToolLength::Off);
+    }
+    let register = toks.iter().find_map(|(t, _)| match t {
+        Tok::Word('H', h) if *h >= 0.0 && h.fract() == 0.0 && *h <= f64::from(u32::MAX) => {
+            Some(*h as u32)
+        }
+        _ => None,
+    });
+    Some(ToolLength::On { register })
 }
 
 /// Whether a rotary axis is known to stand away from 0: TCP on or off then
