@@ -1000,6 +1000,38 @@ fn every_length_change_leaves_z_unknown() {
     assert!(e.y.is_nan() && e.z.is_nan(), "{e:?}");
 }
 
+/// A user trial: a Heidenhain program converted to Fanuc, LinuxCNC or
+/// Sinumerik ran without tool-length compensation (`G49` in the header, no
+/// `G43`): TOOL CALL applies the tool's length on the Heidenhain, so every Z
+/// was a tool length off. Each tool change now selects its length.
+#[test]
+fn a_heidenhain_tool_call_keeps_its_length() {
+    let src = "0 BEGIN PGM H1 MM\n1 TOOL CALL 1 Z S8000\n2 L X+0 Y+0 Z+50 R0 FMAX M3\n\
+               3 L Z-1 R0 F500\n4 TOOL CALL 2 Z S6000\n5 L Z+50 R0 FMAX\n6 L Z-2 F300\n\
+               7 END PGM H1 MM\n";
+    let p = parse(src, "TOOL CALL");
+    for (t, after) in [
+        (Target::Fanuc, ["G43 H1", "G43 H2"]),
+        (Target::LinuxCnc, ["G43 H1", "G43 H2"]),
+        (Target::Sinumerik, ["D1", "D1"]),
+    ] {
+        let (text, back) = through(&p, t, false, "TOOL CALL");
+        let lines: Vec<&str> = text.lines().collect();
+        let changes: Vec<usize> = (0..lines.len())
+            .filter(|&i| lines[i].contains("M6"))
+            .collect();
+        assert_eq!(changes.len(), 2, "{}: {text}", t.name());
+        for (i, want) in changes.iter().zip(after) {
+            assert!(
+                lines[i + 1..].iter().take(2).any(|l| l.contains(want)),
+                "{}: {want} after line {i}: {text}",
+                t.name()
+            );
+        }
+        compare(&p, &back, &Tolerance::default()).expect("means what the source meant");
+    }
+}
+
 /// A user trial: a Fanuc tapping cycle could not be converted to LinuxCNC,
 /// which has G84 and G74 (its `rs274` runs them: feed in, spindle reversed,
 /// feed out). They stay the control's own when the spindle turns the tap's

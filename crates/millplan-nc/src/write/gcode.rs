@@ -1670,9 +1670,11 @@ pub(super) fn write_all(
         source: p.source,
         source_unit: p.units.source,
         unit_silent,
-        // CL data are tool-tip positions and leave compensation to the post;
-        // a G-code program says what it wants, and nothing is added to it.
-        auto_tlc: cl_data && !has(|k| matches!(k, EventKind::ToolLength(_))),
+        // CL data are tool-tip positions and leave compensation to the post,
+        // and a Heidenhain TOOL CALL applies the tool's length itself; any
+        // other G-code program says what it wants, and nothing is added.
+        auto_tlc: (cl_data || p.source == Dialect::Heidenhain)
+            && !has(|k| matches!(k, EventKind::ToolLength(_))),
         auto_tcp: o.auto_tcp && cl_data && !has(|k| matches!(k, EventKind::Tcp(_))),
         st: State {
             block_no: 0,
