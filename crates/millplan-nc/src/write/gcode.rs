@@ -497,6 +497,51 @@ impl W<'_> {
                     ToolLength::Off => None,
                     ToolLength::On { register } => Some(*register),
                 };
+                // Registers mean different things: Sinumerik's D counts the
+                // edges of the tool in the spindle, a Fanuc or LinuxCNC H
+                // names a row of the length table (by the usual convention
+                // the tool's number), and a Heidenhain TOOL CALL applies the
+                // called tool's own length.
+                let tool = op.tool.as_ref().and_then(|t| t.number);
+                let new = match (new, target) {
+                    (Some(d), Target::Fanuc | Target::LinuxCnc)
+                        if self.source == Dialect::Sinumerik =>
+                    {
+                        match (d, tool) {
+                            (Some(1) | None, Some(t)) => Some(Some(t)),
+                            _ => {
+                                let what = format!(
+                                    "Sinumerik D{} of {}: no H register of {} is known to hold it",
+                                    d.unwrap_or(1),
+                                    tool.map_or("a tool without a number".into(), |t| {
+                                        format!("tool {t}")
+                                    }),
+                                    target.name()
+                                );
+                                lossy(self.o.lossy, &mut self.warnings, e.line, what)?;
+                                return Ok(Words::Comment(format!(
+                                    "tool length D{}",
+                                    d.unwrap_or(1)
+                                )));
+                            }
+                        }
+                    }
+                    (Some(Some(h)), Target::Sinumerik | Target::Heidenhain)
+                        if matches!(self.source, Dialect::Fanuc | Dialect::LinuxCnc) =>
+                    {
+                        if tool != Some(h) {
+                            let what = format!(
+                                "H{h} with {}: {} applies the tool's own length",
+                                tool.map_or("no tool number".into(), |t| format!("tool {t}")),
+                                target.name()
+                            );
+                            lossy(self.o.lossy, &mut self.warnings, e.line, what)?;
+                            return Ok(Words::Comment(format!("tool length H{h}")));
+                        }
+                        Some(Some(1))
+                    }
+                    _ => new,
+                };
                 let was = self.st.tlc;
                 self.st.tlc = new;
                 // A compensation block that moves (`G43 H1 Z20`) moves to

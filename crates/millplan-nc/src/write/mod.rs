@@ -877,7 +877,9 @@ mod tests {
                             side: [CutCom::Left, CutCom::Off][rnd(2) as usize],
                             register: Some(7),
                         },
-                        5 => EventKind::ToolLength(ToolLength::On { register: Some(3) }),
+                        5 => EventKind::ToolLength(ToolLength::On {
+                            register: Some(3 + k as u32),
+                        }),
                         6 => EventKind::WorkOffset(WorkOffset(1 + rnd(6) as u16)),
                         7 => EventKind::ToolSelect(9),
                         8 => EventKind::Dwell(0.5),
