@@ -1032,6 +1032,64 @@ fn a_heidenhain_tool_call_keeps_its_length() {
     }
 }
 
+/// A user trial: Sinumerik's `D1` (edge 1 of the tool in the spindle)
+/// became `G43 H1` for every tool, and Fanuc's `H12` on tool 2 became
+/// Sinumerik's `D12` (edge 12 of tool 2): lengths of other tools. A
+/// register is translated only where its meaning is known, else refused.
+#[test]
+fn length_registers_keep_their_meaning_across_dialects() {
+    let sin =
+        "; S\nG71 G90 G17\nT=\"BALL_D10\"\nM6\nD1\nS8000 M3\nG0 X0 Y0 Z50\nG1 Z-1 F500\nM30\n";
+    let p = parse(sin, "named tool D1");
+    for t in [Target::Fanuc, Target::LinuxCnc] {
+        match write(&p, t, false) {
+            Out::Refused(e) => assert!(e.message.contains("D1"), "{}: {e}", t.name()),
+            Out::Text(s, _) => panic!("{}: written: {s}", t.name()),
+        }
+    }
+    let sin = "; S\nG71 G90 G17\nT5\nM6\nD1\nS8000 M3\nG0 X0 Y0 Z50\nG1 Z-1 F500\nM30\n";
+    let p = parse(sin, "T5 D1");
+    let (text, _) = through(&p, Target::Fanuc, false, "T5 D1");
+    assert!(text.contains("G43 H5"), "{text}");
+    let fanuc = |h: u32| {
+        format!("%\nO0013\nG21 G17 G90\nT2 M6\nG43 H{h} G0 X0. Y0. Z40.\nG1 Z-1. F100.\nM30\n%\n")
+    };
+    let p = parse(&fanuc(2), "H2 on T2");
+    let (text, _) = through(&p, Target::Sinumerik, false, "H2 on T2");
+    assert!(text.lines().any(|l| l.starts_with("D1")), "{text}");
+    let p = parse(&fanuc(12), "H12 on T2");
+    for t in [Target::Sinumerik, Target::Heidenhain] {
+        match write(&p, t, false) {
+            Out::Refused(e) => assert!(e.message.contains("H12"), "{}: {e}", t.name()),
+            Out::Text(s, _) => panic!("{}: written: {s}", t.name()),
+        }
+    }
+}
+
+/// A user trial: after `CYCL DEF 2.0 TAPPING` (no model covers it) the
+/// `M99` calls ran the pecking cycle defined before it: the tap fed and
+/// pecked like a drill at the drill's depth. A call of a cycle no model
+/// covers is kept as the control's own, not simulated; another dialect
+/// refuses it.
+#[test]
+fn a_call_of_an_unmodelled_cycle_does_not_run_the_previous_one() {
+    let src = "0 BEGIN PGM T MM\n1 TOOL CALL 1 Z S1000\n2 L Z+50 R0 FMAX M3\n\
+               3 CYCL DEF 1.0 PECKING\n4 CYCL DEF 1.1 SET UP 2\n5 CYCL DEF 1.2 DEPTH -10\n\
+               6 CYCL DEF 1.3 PECKG 3\n7 CYCL DEF 1.4 DWELL 0\n8 CYCL DEF 1.5 F100\n\
+               9 L X+10 Y+10 R0 FMAX M99\n10 CYCL DEF 2.0 TAPPING\n11 CYCL DEF 2.1 SET UP 2\n\
+               12 CYCL DEF 2.2 DEPTH -8\n13 CYCL DEF 2.3 DWELL 0\n14 CYCL DEF 2.4 F125\n\
+               15 L X+20 Y+10 R0 FMAX M99\n16 END PGM T MM\n";
+    let p = parse(src, "tapping");
+    let cycles = p.moves().filter(|m| m.cycle().is_some()).count();
+    assert_eq!(cycles, 1, "only the pecking hole is a cycle of the IR");
+    let (_, back) = through(&p, Target::Heidenhain, false, "tapping");
+    compare(&p, &back, &Tolerance::default()).expect("means what the source meant");
+    match write(&p, Target::LinuxCnc, false) {
+        Out::Refused(e) => assert!(e.message.contains("CYCL"), "{e}"),
+        Out::Text(s, _) => panic!("written: {s}"),
+    }
+}
+
 /// A user trial: a Fanuc tapping cycle could not be converted to LinuxCNC,
 /// which has G84 and G74 (its `rs274` runs them: feed in, spindle reversed,
 /// feed out). They stay the control's own when the spindle turns the tap's

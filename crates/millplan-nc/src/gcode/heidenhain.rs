@@ -25,6 +25,9 @@ pub struct HeidenhainReader {
     dwell_head: Option<(String, u32)>,
     /// M89: the cycle is called after every positioning block until M99.
     modal_call: bool,
+    /// The cycle a call would run is one no model covers (`CYCL DEF 2.0
+    /// TAPPING`): its number.
+    foreign_cycle: Option<u32>,
     saw_content: bool,
     scale: f64,
     unit: Option<(LengthUnit, UnitsOrigin)>,
@@ -64,6 +67,7 @@ impl HeidenhainReader {
             raw_block: None,
             dwell_head: None,
             modal_call: false,
+            foreign_cycle: None,
             saw_content: false,
             scale: unit.map(|(u, _)| u.mm()).unwrap_or(1.0),
             unit,
@@ -800,10 +804,21 @@ impl HeidenhainReader {
             return Ok(());
         }
         if !matches!(number, Some(1 | 200..=209 | 240 | 241)) {
+            // Datum shift, mirror, rotation, scaling, program call, spindle
+            // orientation, working plane, datum setting act where they are
+            // defined; any other cycle is run by the next call, and a call
+            // must not run the drilling cycle defined before it.
+            if !matches!(
+                number,
+                Some(7 | 8 | 10 | 11 | 12 | 13 | 19 | 26 | 247 | 248)
+            ) {
+                self.foreign_cycle = Some(number.unwrap_or(0));
+            }
             let text = self.raw_block.take().unwrap_or_else(|| body.to_string());
             self.passthrough("CYCL", &text, PassClass::Machine, false, ln);
             return Ok(());
         }
+        self.foreign_cycle = None;
         if let Some(n) = words
             .get(2)
             .and_then(|w| w.parse::<u32>().ok())
@@ -948,6 +963,21 @@ impl HeidenhainReader {
     }
 
     fn cycle_call(&mut self, ln: u32, col0: u32) -> Result<(), ParseError> {
+        if let Some(n) = self.foreign_cycle {
+            // Run where the tool stands, kept as the control's own call; Z
+            // after it is the cycle's.
+            self.diags.warn(
+                Code::UnknownWord,
+                ln,
+                col0,
+                format!(
+                    "a call of CYCL DEF {n}, which no model covers: kept verbatim, not simulated"
+                ),
+            );
+            self.passthrough("CYCL CALL", "CYCL CALL", PassClass::Machine, true, ln);
+            self.pos.z = f64::NAN;
+            return Ok(());
+        }
         if self.cycle.line == 0 {
             return Err(ParseError::new(ln, col0, "M99 without a CYCL DEF"));
         }
