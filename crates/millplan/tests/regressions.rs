@@ -414,3 +414,40 @@ fn convert_lossy_that_commands_less_exits_3() {
     assert!(stderr(&o).contains("rot.nc:4:"), "{}", stderr(&o));
     assert!(!out.exists());
 }
+
+/// A user trial: `convert --lossy --json` said `"equivalent": true` with no
+/// warnings where the text run listed the words written as comments: only
+/// the reader's findings reached the JSON. A word written as a comment is
+/// one the output does not command: exit 3, `equivalent: false`, and the
+/// writer's warnings in the list.
+#[test]
+fn a_lossy_conversion_says_so_in_json() {
+    let dir = tempfile::tempdir().expect("temporary folder");
+    let src = dir.path().join("s.mpf");
+    std::fs::write(
+        &src,
+        "; S\nG71 G90 G17\nT1\nM6\nD1\nFNORM\nS8000 M3\nG0 X0 Y0 Z50\nG1 Z-1 F500\nM30\n",
+    )
+    .expect("writes");
+    let out = dir.path().join("o.nc");
+    let o = run(&[
+        "convert",
+        s(&src),
+        "--to",
+        "fanuc",
+        "--lossy",
+        "--json",
+        "-o",
+        s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(j["equivalent"], false, "{j}");
+    let warnings = j["warnings"].as_array().expect("a list");
+    assert!(
+        warnings.iter().any(|w| w
+            .as_str()
+            .is_some_and(|w| w.contains("lossy-word") && w.contains("FNORM"))),
+        "{j}"
+    );
+}

@@ -44,6 +44,7 @@ pub fn command(
     resolve(&mut p, &machine).map_err(|e| Stop::pass(c.input, e))?;
     let mut o = write_options(req, &machine, target);
     o.limits = c.read.limits;
+    let mut written = Vec::new();
     let out = match krl.as_ref().map(|k| krl::from_krl(k, target, req.lossy)) {
         Some(Ok(Some(text))) => text.into_bytes(),
         Some(Err(e)) => return Err(crate::io::inputs::krl_error(c.input, e).into()),
@@ -51,6 +52,7 @@ pub fn command(
             let (out, warnings) = millplan_nc::write::write_program(&p, o)
                 .map_err(|e| crate::io::outputs::write_error(c.input, &e))?;
             w.diagnostics_written(&warnings);
+            written = warnings;
             out
         }
     };
@@ -67,9 +69,19 @@ pub fn command(
     }
     write_out(c, inputs, outputs, target, &out)?;
     w.lap("outputs written and renamed into place");
-    let found = (input.as_str(), parsed.diagnostics.as_slice());
-    let summary = ConvertSummary::new(found, &p, (&output, target), lossy.is_none());
-    let equivalent = lossy.is_none();
+    // A word written as a comment (--lossy) is one the output does not
+    // command: not equivalent, whatever the read-back compares.
+    let dropped = written
+        .iter()
+        .any(|d| d.code == millplan_nc::diag::Code::LossyWord);
+    let equivalent = lossy.is_none() && !dropped;
+    let mut found = parsed.diagnostics;
+    found.extend(written);
+    let mut summary =
+        ConvertSummary::new((input.as_str(), &found), &p, (&output, target), equivalent);
+    if let Some(l) = lossy {
+        summary.warnings.push(l);
+    }
     Ok(Converted {
         summary,
         equivalent,
