@@ -401,6 +401,11 @@ impl<'a> Report<'a> {
         } else {
             let _ = writeln!(o, "{hits} collisions");
         }
+        // What the verdict weighs, so an amber run says why; the verdict
+        // last, as every command's.
+        for w in &self.verdict.warnings {
+            let _ = writeln!(o, "warning: {w}");
+        }
         let _ = writeln!(o, "verdict: {}", self.verdict.summary);
         o
     }

@@ -383,3 +383,33 @@ fn the_move_after_a_drilling_cycle_starts_at_the_cycles_return_level() {
         "the holes and the slot cut"
     );
 }
+
+/// A user trial: `verdict: Amber: a warning applies.` without the warning.
+/// The text names each warning the verdict weighs, before the verdict line
+/// (still the last line, as every command's).
+#[test]
+fn an_amber_verdict_names_its_warnings() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let o = run(&["demo", "-q", "-o", dir.path().to_str().expect("utf-8")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let d = dir.path();
+    let (apt, stl) = (d.join("finish.apt"), d.join("part.stl"));
+    let o = run(&[
+        "simulate",
+        apt.to_str().expect("utf-8"),
+        "--stl",
+        stl.to_str().expect("utf-8"),
+        "--stock",
+        "offset:0.3",
+        "-q",
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    let lines: Vec<&str> = text.lines().collect();
+    let last = lines.last().copied().unwrap_or("");
+    assert!(last.starts_with("verdict: Amber"), "{text}");
+    let before = lines[lines.len() - 2];
+    assert!(
+        before.starts_with("warning: ") && before.contains("not simulated"),
+        "{text}"
+    );
+}
