@@ -1185,7 +1185,7 @@ fn estimate_program_with(p: &Program, machine: &Machine, per_move: bool) -> Time
 /// saves.
 const PIPE_MOVES: usize = 1 << 16;
 /// Blocks handed from the walk to the planner at a time.
-const PIPE_BATCH: usize = 1 << 10;
+const PIPE_BATCH: usize = 1 << 8;
 
 /// One call of a [`ChainSink`], to be made on the planner's thread.
 enum Piece {
