@@ -1051,6 +1051,13 @@ fn length_registers_keep_their_meaning_across_dialects() {
     let p = parse(sin, "T5 D1");
     let (text, _) = through(&p, Target::Fanuc, false, "T5 D1");
     assert!(text.contains("G43 H5"), "{text}");
+    let p = parse(&sin.replace("D1", "D2"), "T5 D2");
+    for t in [Target::Fanuc, Target::LinuxCnc, Target::Heidenhain] {
+        match write(&p, t, false) {
+            Out::Refused(e) => assert!(e.message.contains("D2"), "{}: {e}", t.name()),
+            Out::Text(s, _) => panic!("{}: written: {s}", t.name()),
+        }
+    }
     let fanuc = |h: u32| {
         format!("%\nO0013\nG21 G17 G90\nT2 M6\nG43 H{h} G0 X0. Y0. Z40.\nG1 Z-1. F100.\nM30\n%\n")
     };

@@ -540,6 +540,17 @@ impl W<'_> {
                         }
                         Some(Some(1))
                     }
+                    // Heidenhain's TOOL CALL applies edge 1's length only.
+                    (Some(Some(d)), Target::Heidenhain)
+                        if self.source == Dialect::Sinumerik && d != 1 =>
+                    {
+                        let what = format!(
+                            "Sinumerik D{d}: {} applies the tool's own length",
+                            target.name()
+                        );
+                        lossy(self.o.lossy, &mut self.warnings, e.line, what)?;
+                        return Ok(Words::Comment(format!("tool length D{d}")));
+                    }
                     _ => new,
                 };
                 let was = self.st.tlc;
