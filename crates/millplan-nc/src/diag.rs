@@ -34,10 +34,11 @@ pub enum Code {
     OpenMesh,
     OffSurface,
     SpindleStopped,
+    ProgramEnd,
 }
 
 impl Code {
-    pub const ALL: [Code; 20] = [
+    pub const ALL: [Code; 21] = [
         Code::UnknownWord,
         Code::UnitsAssumed,
         Code::UnitsChange,
@@ -58,6 +59,7 @@ impl Code {
         Code::OpenMesh,
         Code::OffSurface,
         Code::SpindleStopped,
+        Code::ProgramEnd,
     ];
 
     /// The code as printed: `unknown-word`.
@@ -83,6 +85,7 @@ impl Code {
             Code::OpenMesh => "open-mesh",
             Code::OffSurface => "off-surface",
             Code::SpindleStopped => "spindle-stopped",
+            Code::ProgramEnd => "program-end",
         }
     }
 
@@ -108,6 +111,7 @@ impl Code {
             Code::LossyWord => "with --lossy, a word the target dialect cannot express was written as a comment: the output does less than the source",
             Code::OpenMesh => "the part mesh has open or non-manifold edges; checks against it can miss material at holes and seams",
             Code::OffSurface => "tool positions do not touch the part surface within tolerance; the part may not match the program",
+            Code::ProgramEnd => "the program has no end of program (M30 or M2, M17 or M99, a closing `%`; END PGM in Heidenhain; FINI in APT): a file cut short in its transfer looks the same. Its last block is read as written: make sure it is the last block the CAM system wrote. A block after the end is never run by a control, and is refused: a second program or subprogram in the same file is not read (split the file)",
             Code::SpindleStopped => "the spindle is started at speed 0 (S0 M03, as some posts write) and the program cuts before it gets a speed: copied as written; a pass that needs the spindle speed (feed, force) refuses such a move at its line",
         }
     }

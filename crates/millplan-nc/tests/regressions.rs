@@ -1725,3 +1725,104 @@ fn a_ball_end_written_in_inches_reads_back_as_a_ball() {
     assert_eq!(kind("MM", "10,4.99999"), CutterKind::Ball);
     assert_eq!(kind("MM", "10,4.99"), CutterKind::Bull);
 }
+
+/// The line of each `program-end` warning of `src`.
+fn end_warnings(src: &str) -> Vec<u32> {
+    let parsed = millplan_nc::parse_program(src, ReadOptions::default()).expect("reads");
+    let code = millplan_nc::diag::Code::ProgramEnd;
+    (parsed.diagnostics.iter())
+        .filter(|d| d.code == code)
+        .map(|d| d.line)
+        .collect()
+}
+
+/// A user trial: a program cut short in its transfer (no M30, its last
+/// line missing its Z) read without a word, and a move after M30 read as
+/// if the control ran it, so that a conversion, whose writer ends the
+/// program after everything it read, would have run it. A program without
+/// an end is warned of at its last block; a block after the end is refused
+/// at its line, in G-code, Heidenhain and APT alike.
+#[test]
+fn a_program_without_its_end_is_warned_of_and_a_block_after_it_refused() {
+    let head = "%\nO1000\nG21 G90 G17\nT1 M6\nG43 H1 Z50\nS5000 M3\nG0 X0 Y0\nG1 Z-1 F500\nX10\n";
+    // Cut short: no M30, no closing %, the last line without its Z.
+    assert_eq!(end_warnings(&format!("{head}X53.9 Y8.7 ")), [10]);
+    // Ended by M30, by M2, by a closing % alone, by a subprogram's M99 or
+    // M17: no warning; comments after the end are let be.
+    for end in [
+        "M30\n%\n",
+        "M2\n",
+        "%\n",
+        "M99\n",
+        "M17\n",
+        "M30\n(END)\n%\n",
+    ] {
+        assert_eq!(
+            end_warnings(&format!("{head}{end}")),
+            [] as [u32; 0],
+            "{end}"
+        );
+    }
+    // A block after M30 (or after the closing %) is never run: refused there.
+    for (tail, line) in [("M30\nG1 X100 Y100\n%\n", 11), ("%\nG1 X100\n", 11)] {
+        let e = millplan_nc::parse_program(&format!("{head}{tail}"), ReadOptions::default())
+            .expect_err(tail);
+        assert_eq!((e.line, e.col), (line, 1), "{tail}: {e}");
+        assert!(e.message.contains("after the end of the program"), "{e}");
+    }
+    // Heidenhain: END PGM.
+    let h = "0 BEGIN PGM T MM\n1 TOOL CALL 1 Z S5000\n2 L X+0 Y+0 Z+50 R0 FMAX M3\n3 L Z-1 F500\n";
+    assert_eq!(end_warnings(h), [4]);
+    assert_eq!(
+        end_warnings(&format!("{h}4 END PGM T MM\n")),
+        [] as [u32; 0]
+    );
+    let e = millplan_nc::parse_program(
+        &format!("{h}4 END PGM T MM\n5 L X+100 F500\n"),
+        ReadOptions::default(),
+    )
+    .expect_err("after END PGM");
+    assert_eq!(e.line, 6, "{e}");
+    // APT: FINI, or NX's END-OF-PATH last.
+    let a = "PARTNO T\nUNITS/MM\nCUTTER/10,5,0,5,0,0,0\nLOADTL/1\nFEDRAT/500,MMPM\nGOTO/0,0,1\nGOTO/10,0,1\n";
+    assert_eq!(end_warnings(a), [7]);
+    assert_eq!(end_warnings(&format!("{a}FINI\n")), [] as [u32; 0]);
+    assert_eq!(
+        end_warnings(&format!("{a}END-OF-PATH\nPPRINT DONE\n")),
+        [] as [u32; 0]
+    );
+    let e = millplan_nc::parse_program(&format!("{a}FINI\nGOTO/20,0,1\n"), ReadOptions::default())
+        .expect_err("after FINI");
+    assert_eq!((e.line, e.col), (9, 1), "{e}");
+}
+
+/// The real samples that end as their CAM system wrote them read without
+/// a `program-end` warning; the Roeders fragment (bare G-code, no end) and
+/// the impeller's GOTO lists are warned of.
+#[test]
+fn the_samples_say_whether_they_end() {
+    let cases = [
+        (MORI, false),
+        (DMU, false),
+        (ACHSKREUZ, false),
+        (BOTTLE, false),
+        (BEAR, false),
+        (BOSS, false),
+        (DMC100, false),
+        ("nx-clsf-ballend-nurbs/nurbs.clsf", false),
+        (
+            "nx-posted-gcode-samples/roeders_rfm600_finish_profile_mm.ptp",
+            true,
+        ),
+        ("impeller-5axis-goto-fragments/yelun.txt", true),
+    ];
+    for (rel, warned) in cases {
+        let Some(text) = sample(rel) else {
+            continue;
+        };
+        let parsed = millplan_nc::parse_program(&text, common::options_for(rel)).expect(rel);
+        let code = millplan_nc::diag::Code::ProgramEnd;
+        let got = parsed.diagnostics.iter().any(|d| d.code == code);
+        assert_eq!(got, warned, "{rel}");
+    }
+}

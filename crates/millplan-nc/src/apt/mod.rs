@@ -75,6 +75,13 @@ pub struct AptReader {
     cont: Option<(String, u32)>,
     line_no: u32,
     saw_content: bool,
+    /// The line of FINI: a control runs nothing after it.
+    ended: Option<u32>,
+    /// The last record (comments aside) ended the program or a path: FINI,
+    /// END or NX's END-OF-PATH.
+    closed: bool,
+    /// The line of the last record, comments aside.
+    last_record: u32,
 }
 
 /// A tokenized statement: the major word and the raw argument text.
@@ -142,6 +149,9 @@ impl AptReader {
             cont: None,
             line_no: 0,
             saw_content: false,
+            ended: None,
+            closed: false,
+            last_record: 0,
         }
     }
 
@@ -151,7 +161,7 @@ impl AptReader {
         let ln = self.line_no;
         let raw = raw.strip_suffix('\r').unwrap_or(raw);
         // Fast path for the overwhelmingly common record.
-        if self.cont.is_none() && self.nurbs.is_none() {
+        if self.cont.is_none() && self.nurbs.is_none() && self.ended.is_none() {
             if let Some(args) = raw.strip_prefix("GOTO/") {
                 // Plain numbers (no `$` among them) first, without a search
                 // for a `$` through the line.
@@ -159,6 +169,7 @@ impl AptReader {
                 let plain = plain_fields(args.as_bytes(), &mut v);
                 if plain.is_some() || !args.contains('$') {
                     self.saw_content = true;
+                    (self.closed, self.last_record) = (false, ln);
                     self.stats.records += 1;
                     self.stats.goto += 1;
                     let n = match plain {
@@ -278,6 +289,14 @@ impl AptReader {
     }
 
     fn statement(&mut self, text: &str, ln: u32) -> Result<(), ParseError> {
+        if let Some(end) = self.ended {
+            let col = (text.len() - text.trim_start().len() + 1) as u32;
+            return Err(ParseError::new(
+                ln,
+                col,
+                format!("a record after the end of the program (FINI at line {end}): a control never runs it, and a second program in the same file is not read (split the file, or remove what follows the end)"),
+            ));
+        }
         self.saw_content = true;
         self.stats.records += 1;
         let s = split_stmt(text);
@@ -310,6 +329,7 @@ impl AptReader {
                 return Ok(());
             }
         }
+        (self.closed, self.last_record) = (false, ln);
         match major {
             "GOTO" => self.goto(s.args, s.args_col, ln),
             "FROM" => {
@@ -627,7 +647,13 @@ impl AptReader {
                     .push_event(ln, EventKind::Dwell(v.first().copied().unwrap_or(0.0)));
                 Ok(())
             }
-            "END" | "FINI" | "END-OF-PATH" => Ok(()),
+            "END" | "FINI" | "END-OF-PATH" => {
+                self.closed = true;
+                if major == "FINI" {
+                    self.ended = Some(ln);
+                }
+                Ok(())
+            }
             // Known post and display words, kept verbatim without a diagnostic.
             "SELECT" | "SELCTL" => {
                 let args = self.args(&s, ln)?;
@@ -1305,6 +1331,15 @@ impl AptReader {
         }
         if !self.saw_content {
             return Err(ParseError::new(1, 1, "empty file: no APT records"));
+        }
+        if !self.closed {
+            let last = self.last_record;
+            self.diags.warn(
+                Code::ProgramEnd,
+                last,
+                1,
+                format!("the program has no end (FINI, or NX's END-OF-PATH last): a file cut short ends like this; its last record, line {last}, is read as written"),
+            );
         }
         let prev = std::mem::take(&mut self.op);
         self.ops.push(prev);

@@ -29,6 +29,10 @@ pub struct HeidenhainReader {
     /// TAPPING`): its number.
     foreign_cycle: Option<u32>,
     saw_content: bool,
+    /// The line of END PGM: a control runs nothing after it.
+    ended: Option<u32>,
+    /// The line of the last block read.
+    last_block: u32,
     scale: f64,
     unit: Option<(LengthUnit, UnitsOrigin)>,
     /// Tool-tip position; NaN on an axis the program has not set.
@@ -69,6 +73,8 @@ impl HeidenhainReader {
             modal_call: false,
             foreign_cycle: None,
             saw_content: false,
+            ended: None,
+            last_block: 0,
             scale: unit.map(|(u, _)| u.mm()).unwrap_or(1.0),
             unit,
             pos: UNKNOWN,
@@ -168,6 +174,14 @@ impl HeidenhainReader {
         if body.is_empty() {
             return Ok(());
         }
+        if let Some(end) = self.ended {
+            return Err(ParseError::new(
+                first,
+                col0,
+                format!("a block after the end of the program (END PGM at line {end}): a control never runs it, and a second program in the same file is not read (split the file, or remove what follows the end)"),
+            ));
+        }
+        self.last_block = first;
         self.block(body, first, col0)
     }
 
@@ -176,6 +190,9 @@ impl HeidenhainReader {
         let words: Vec<&str> = up.split_whitespace().collect();
         match words[0] {
             "BEGIN" | "END" if words.get(1) == Some(&"PGM") => {
+                if words[0] == "END" {
+                    self.ended = Some(ln);
+                }
                 if words[0] == "BEGIN" {
                     if let Some(name) = words.get(2) {
                         self.program.name =
@@ -1156,6 +1173,15 @@ impl HeidenhainReader {
         }
         if !self.saw_content {
             return Err(ParseError::new(1, 1, "empty file: no Heidenhain blocks"));
+        }
+        if self.ended.is_none() {
+            let last = self.last_block;
+            self.diags.warn(
+                Code::ProgramEnd,
+                last,
+                1,
+                format!("the program has no END PGM: a file cut short ends like this; its last block, line {last}, is read as written"),
+            );
         }
         self.ops.push(std::mem::take(&mut self.op));
         self.ops

@@ -311,6 +311,14 @@ pub struct GcodeReader {
     vars: BTreeMap<String, f64>,
     line_no: u32,
     saw_content: bool,
+    /// The line of the program's end (M2, M30 or a closing `%`): a control
+    /// runs nothing after it.
+    ended: Option<u32>,
+    /// An M17 or M99 (a subprogram's end) was read: a program end for the
+    /// warning of a program without one.
+    returned: bool,
+    /// The line of the last block read.
+    last_block: u32,
     /// mm per program unit right now.
     scale: f64,
     unit: Option<(LengthUnit, UnitsOrigin)>,
@@ -506,6 +514,9 @@ impl GcodeReader {
             vars: BTreeMap::new(),
             line_no: 0,
             saw_content: false,
+            ended: None,
+            returned: false,
+            last_block: 0,
             scale: unit.map(|(u, _)| u.mm()).unwrap_or(1.0),
             unit,
             motion: Motion::Rapid,
@@ -573,8 +584,19 @@ impl GcodeReader {
         if raw.trim().is_empty() {
             return Ok(());
         }
-        // Fanuc program number line `O0001` or Haas' `O ENTER ...` prompt.
         let t = raw.trim_start();
+        // The tape's marks: the `%` before the program starts it, the one
+        // after it ends it.
+        if t.trim_end() == "%" {
+            if self.saw_content {
+                self.ended.get_or_insert(ln);
+            }
+            return Ok(());
+        }
+        if let Some(end) = self.ended {
+            return self.after_end(raw, ln, end);
+        }
+        // Fanuc program number line `O0001` or Haas' `O ENTER ...` prompt.
         if (t.starts_with('O') || t.starts_with('o'))
             && t.as_bytes()
                 .get(1)
@@ -613,10 +635,26 @@ impl GcodeReader {
             return Ok(());
         }
         self.blocks += 1;
+        self.last_block = ln;
         if lexed.block_delete {
             return self.optional_block(&lexed.toks, ln);
         }
         self.block(raw, &lexed.toks, ln)
+    }
+
+    /// A line after the program's end (at line `end`): comments are let
+    /// be; a block is refused, as a control never runs it and a program or
+    /// subprogram after it is not read.
+    fn after_end(&mut self, raw: &str, ln: u32, end: u32) -> Result<(), ParseError> {
+        if lex(raw, ln)?.toks.is_empty() {
+            return Ok(());
+        }
+        let col = (raw.len() - raw.trim_start().len() + 1) as u32;
+        Err(ParseError::new(
+            ln,
+            col,
+            format!("a block after the end of the program (line {end}): a control never runs it, and a second program or a subprogram in the same file is not read (split the file, or remove what follows the end)"),
+        ))
     }
 
     /// A block-delete block: it may run or not, so it is kept as written and
@@ -1362,6 +1400,8 @@ impl GcodeReader {
         }
         let mut tool_change = false;
         for &v in &w.m {
+            // M99 (kept as written) returns from a subprogram.
+            self.returned |= v == 99.0;
             let e = match (v as i64, v.fract() == 0.0) {
                 (3, true) => {
                     self.spindle_dir = SpindleDir::Cw;
@@ -1385,7 +1425,14 @@ impl GcodeReader {
                 (0, true) => Some(EventKind::Stop { optional: false }),
                 (1, true) => Some(EventKind::Stop { optional: true }),
                 // Program ends: the writer ends its own program.
-                (2, true) | (30, true) | (17, true) => None,
+                (2, true) | (30, true) => {
+                    self.ended.get_or_insert(ln);
+                    None
+                }
+                (17, true) => {
+                    self.returned = true;
+                    None
+                }
                 _ => {
                     w.keep.push(fmt_word('M', v));
                     w.keep_machine = true;
@@ -2274,6 +2321,15 @@ impl GcodeReader {
     pub fn finish(mut self) -> Result<Parsed, ParseError> {
         if !self.saw_content {
             return Err(ParseError::new(1, 1, "empty file: no G-code blocks"));
+        }
+        if self.ended.is_none() && !self.returned {
+            let last = self.last_block;
+            self.diags.warn(
+                Code::ProgramEnd,
+                last,
+                1,
+                format!("the program has no end (M30 or M2, M17 or M99, or a closing %): a file cut short ends like this; its last block, line {last}, is read as written"),
+            );
         }
         self.ops.push(std::mem::take(&mut self.op));
         self.ops
