@@ -100,8 +100,14 @@ pub struct Written {
 impl Summary {
     /// The first check that refuses the output: its name, line and words.
     pub fn refusal(&self) -> Option<(&'static str, u32, String)> {
-        safety::first_refusal(&self.checks)
-            .map(|(c, f)| (c.name, f.line.unwrap_or(0), f.message.clone()))
+        safety::first_refusal(&self.checks).map(|(c, f)| {
+            let own = if f.in_input {
+                " (the input's own fault)"
+            } else {
+                ""
+            };
+            (c.name, f.line.unwrap_or(0), format!("{}{own}", f.message))
+        })
     }
 }
 
@@ -142,6 +148,7 @@ impl Job {
                         line: None,
                         message: format!("the program written does not read back at its line {e}"),
                         in_input: false,
+                        refuses: true,
                     }],
                 };
                 let after = self.measure(program, None, &self.context());

@@ -122,13 +122,40 @@ pub struct Report<'a> {
     pub tol: f64,
 }
 
+fn mostly_off_part(rep: &GougeReport) -> bool {
+    rep.mostly_off_part()
+}
+
+/// The finding on the program at `path` when most of its cutting points
+/// had no part under the tool.
+pub fn off_part_finding(rep: &GougeReport) -> Option<millplan_nc::Diagnostic> {
+    mostly_off_part(rep).then(|| millplan_nc::Diagnostic {
+        severity: millplan_nc::Severity::Warning,
+        code: millplan_nc::diag::Code::OffSurface,
+        line: 0,
+        col: 0,
+        message: format!(
+            "{}, and the check proves nothing where it is not",
+            rep.off_part_words()
+        ),
+    })
+}
+
 impl<'a> Report<'a> {
+    /// `clean` when the check looked at some move, found no gouge, and
+    /// had the part under the tool at most of the cutting points.
     pub fn new(check: &'a GougeReport, tol: f64) -> Self {
         Report {
             check,
-            clean: check.gouges.is_empty() && check.moves_checked > 0,
+            clean: check.gouges.is_empty() && check.moves_checked > 0 && !mostly_off_part(check),
             tol,
         }
+    }
+
+    /// Whether the run found a problem: a gouge, or a part that is not under
+    /// most of the path.
+    pub fn found(&self) -> bool {
+        !self.check.gouges.is_empty() || mostly_off_part(self.check)
     }
 
     /// Each gouge at its line in `path`, then the counts.
@@ -150,6 +177,12 @@ impl<'a> Report<'a> {
         }
         let verdict = if rep.moves_checked == 0 {
             "nothing checked".to_string()
+        } else if rep.gouges.is_empty() && mostly_off_part(rep) {
+            format!(
+                "no gouge, but the part lies under the tool at only {} of {} cutting points: not checked against the part the program was made for",
+                rep.cutting_points - rep.off_part_points,
+                rep.cutting_points
+            )
         } else if rep.gouges.is_empty() {
             "clean".to_string()
         } else {

@@ -227,14 +227,16 @@ pub(crate) fn warnings(s: &Summary) -> Vec<String> {
         .checks
         .iter()
         .flat_map(|c| {
-            c.findings.iter().filter(|f| f.in_input).map(move |f| {
-                format!(
-                    "the input already has this ({}): line {}: {}",
-                    c.name,
-                    f.line.unwrap_or(0),
-                    f.message
-                )
-            })
+            c.findings
+                .iter()
+                .filter(|f| f.in_input)
+                .map(move |f| match f.line {
+                    Some(l) => format!(
+                        "the input already has this ({}): line {l}: {}",
+                        c.name, f.message
+                    ),
+                    None => format!("the input already has this ({}): {}", c.name, f.message),
+                })
         })
         .take(20);
     missed.chain(found).collect()

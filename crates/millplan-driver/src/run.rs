@@ -278,7 +278,8 @@ impl Job {
         };
         let w = (self.finish_timed(&outcome, wo, &mut |n| lap(n, None)))
             .map_err(|e| noted(e, &outcome))?;
-        if !outcome.reordered || w.summary.refusal().is_none() {
+        // Only a fault of the passes' own can be the new order's.
+        if !outcome.reordered || !w.summary.checks.iter().any(|c| c.fails_anew()) {
             return Ok((outcome, w));
         }
         let dropped = "dropped: the checks refused the program in the new order".to_string();
@@ -287,14 +288,15 @@ impl Job {
         checking();
         let mut w2 =
             (self.finish_timed(&again, wo, &mut |n| lap(n, None))).map_err(|e| noted(e, &again))?;
-        // Kept when the checks that refuse it are some of those that refused
-        // the new order, not all (a fault of the input's own refuses both);
-        // reorder then names what refused only its order.
+        // Kept when the checks that refuse it for faults of the passes' own
+        // are some of those that refused the new order so, not all (a fault
+        // of the input's own refuses both); reorder then names what refused
+        // only its order.
         let failed = |w: &crate::Written| -> Vec<&'static str> {
             w.summary
                 .checks
                 .iter()
-                .filter(|c| !c.ok)
+                .filter(|c| c.fails_anew())
                 .map(|c| c.name)
                 .collect()
         };
@@ -302,10 +304,11 @@ impl Job {
         if after.len() >= before.len() || !after.iter().all(|c| before.contains(c)) {
             return Ok((outcome, w));
         }
-        let passed = |name: &str| w2.summary.checks.iter().any(|c| c.name == name && c.ok);
+        let passed =
+            |name: &str| (w2.summary.checks.iter()).any(|c| c.name == name && !c.fails_anew());
         let only: Vec<String> = (w.summary.checks.iter())
-            .filter(|c| !c.ok && passed(c.name))
-            .map(|c| match c.refusal() {
+            .filter(|c| c.fails_anew() && passed(c.name))
+            .map(|c| match c.refusing().find(|f| !f.in_input) {
                 Some(f) => format!("{} at line {}: {}", c.name, f.line.unwrap_or(0), f.message),
                 None => c.name.to_string(),
             })

@@ -10,16 +10,22 @@
 //! | `machine` | an S outside the machine's spindle range; a cutting feed ≤ 0 or above its maximum | a machine |
 //! | `tip` | a tool tip away from where the input put it (per [`TipRule`]) | — |
 //! | `stock` | a rapid through material, the shank or holder in material, on the initial stock — also when the input did it (marked `in_input`) | a stock |
-//! | `gouge` | a gouge into the part the input did not have | a part |
+//! | `gouge` | a gouge into the part — also when the input had it (marked `in_input`) deeper than [`Tolerances::input_gouge`]; a part under less than half of the cutting points | a part |
 //! | `loads` | a per-move peak load over its limit by more than [`Tolerances::load`] | a [`LoadCheck`] |
 //!
 //! A check whose inputs are missing says so (`skipped`) and passes; every
 //! check says how much it looked at (`checked`, in `unit`). A finding names
 //! the output's source line; a finding the input already had carries
-//! `in_input`. Collisions on the stock are refused whether or not the input
-//! had them (one is the input's where an input move with the same ends or
-//! the same source line had it); a gouge whose deepest point lies on the input's path is reported as
-//! the input's but does not refuse.
+//! `in_input`. Collisions on the stock and gouges are refused whether or
+//! not the input had them: a program that cuts into the part or drives
+//! through material is not safe to run because its source was not either.
+//! Only a gouge of the input's no deeper than [`Tolerances::input_gouge`]
+//! (the part's tessellation error) is reported without refusing
+//! ([`Finding::refuses`]).
+//! A collision is the input's where an input move with the same ends or the
+//! same source line had it; a gouge where its deepest point lies on the
+//! input's path. [`Check::fails_anew`] tells a check that refuses for a
+//! fault of the passes' own from one that refuses only what the input did.
 //!
 //! The read-back of the written bytes ([`millplan_nc::readback`]) is the
 //! check that ties the bytes to the IR these checks run on;
@@ -72,6 +78,11 @@ pub struct Tolerances {
     pub collision: f64,
     /// A tip lower than the drop-cutter height by more than this is a gouge.
     pub gouge: f64,
+    /// A gouge the input already had refuses when deeper than this: a part's
+    /// tessellation stands off the surface its program was cut on by its
+    /// chord error (0.01–0.05 mm as CAM systems export), which is reported,
+    /// not refused; deeper, the part or the program is wrong.
+    pub input_gouge: f64,
     /// Sampling step of the gouge check along each move.
     pub gouge_step: f64,
     /// Relative: a load may exceed its limit by this share (the resolution
@@ -88,6 +99,7 @@ impl Default for Tolerances {
             tip: 0.001,
             collision: 0.01,
             gouge: 0.005,
+            input_gouge: 0.05,
             gouge_step: 0.1,
             load: 0.005,
             feed: 1e-6,
@@ -156,6 +168,10 @@ pub struct Finding {
     pub message: String,
     /// The input has the same fault at the same move.
     pub in_input: bool,
+    /// The finding refuses the output. All do but a gouge the input already
+    /// had no deeper than [`Tolerances::input_gouge`]: the error of a part's
+    /// tessellation against the surface the CAM system cut, reported only.
+    pub refuses: bool,
 }
 
 /// The outcome of one check.
@@ -193,18 +209,23 @@ impl Check {
         }
     }
 
-    /// The findings that refuse the output: none of a check that passed;
-    /// of one that failed, all but the gouges the input had.
+    /// The findings that refuse the output: none of a check that passed,
+    /// all of one that failed.
     pub fn refusing(&self) -> impl Iterator<Item = &Finding> {
-        // A gouge the input had is reported, not refused.
-        let kept = move |f: &&Finding| !(self.name == "gouge" && f.in_input);
         let all = if self.ok { &[][..] } else { &self.findings[..] };
-        all.iter().filter(kept)
+        all.iter().filter(|f| f.refuses)
     }
 
-    /// The first finding that refuses the output.
+    /// Whether the check failed for a fault the input did not have (a
+    /// failed check without findings counts as one).
+    pub fn fails_anew(&self) -> bool {
+        !self.ok && (self.findings.is_empty() || self.refusing().any(|f| !f.in_input))
+    }
+
+    /// The finding that refuses the output: the first that the input did
+    /// not have, else the first.
     pub fn refusal(&self) -> Option<&Finding> {
-        self.refusing().next()
+        (self.refusing().find(|f| !f.in_input)).or_else(|| self.refusing().next())
     }
 }
 
@@ -279,9 +300,13 @@ pub fn passed(checks: &[Check]) -> bool {
     checks.iter().all(|c| c.ok)
 }
 
-/// The first refusing finding of the first failed check.
+/// The refusing finding of the first check that failed for a fault the
+/// input did not have, else of the first failed check.
 pub fn first_refusal(checks: &[Check]) -> Option<(&Check, &Finding)> {
-    checks.iter().find_map(|c| c.refusal().map(|f| (c, f)))
+    fn of(c: &Check) -> Option<(&Check, &Finding)> {
+        c.refusal().map(|f| (c, f))
+    }
+    (checks.iter().filter(|c| c.fails_anew()).find_map(of)).or_else(|| checks.iter().find_map(of))
 }
 
 fn line_of(l: u32) -> Option<u32> {
@@ -303,6 +328,7 @@ pub fn read_back_check(r: &ReadBack) -> Check {
                     m.line_a, m.message
                 ),
                 in_input: false,
+                refuses: true,
             });
         }
     }
@@ -323,6 +349,7 @@ pub fn ir(p: &Program) -> Check {
                 line,
                 message: format!("IR invariant {:?} broken: {v}", v.rule),
                 in_input: false,
+                refuses: true,
             });
         }
     }
@@ -346,6 +373,7 @@ pub fn machine(p: &Program, m: &Machine, tol: &Tolerances) -> Check {
                     line: line_of(mv.line),
                     message,
                     in_input: false,
+                    refuses: true,
                 })
             };
             if mv.spindle > 0.0 && !(lo..=hi).contains(&mv.spindle) {
@@ -426,6 +454,7 @@ fn tip_kept(
         line: line_of(line),
         message,
         in_input: false,
+        refuses: true,
     };
     if input.operations.len() != output.operations.len() {
         c.ok = false;
@@ -631,6 +660,7 @@ fn tip_same_points(input: &Program, output: &Program, tol: f64) -> Check {
                     p.x, p.y, p.z
                 ),
                 in_input: false,
+                refuses: true,
             });
         }
     }
@@ -975,6 +1005,7 @@ fn tip_moved_by(input: &Program, output: &Program, k: &Kinematics, tol: f64) -> 
                         "the tip inside the block, by forward kinematics with the axes moving in straight lines, is {inner:.4} mm from the input's move (tolerance {tol} mm)"
                     ),
                     in_input: false,
+                    refuses: true,
                 });
                 continue;
             }
@@ -988,6 +1019,7 @@ fn tip_moved_by(input: &Program, output: &Program, k: &Kinematics, tol: f64) -> 
                         if last { "point" } else { "move" }
                     ),
                     in_input: false,
+                    refuses: true,
                 });
             }
         }
@@ -1130,6 +1162,7 @@ pub fn stock(i: &Inputs, stock: &Stock) -> Check {
                     col.depth, col.volume_mm3
                 ),
                 in_input: was(col, old, rapid),
+                refuses: true,
             });
         }
     }
@@ -1150,9 +1183,9 @@ fn gouge_report(i: &Inputs, p: &Program, part: &DropMesh) -> GougeReport {
 /// deepest point lies on the input's path (within [`Tolerances::tip`]; a
 /// canned cycle's hole from its highest plane to its bottom, which the
 /// input's own check skips) is the input's, the same tool having been
-/// there: reported `in_input`, not
-/// refused. A move of the output that leaves the input's path (a new link)
-/// and gouges deepest off it is new.
+/// there: reported `in_input`, and refused all the same. A move of the
+/// output that leaves the input's path (a new link) and gouges deepest off
+/// it is new.
 pub fn gouges(i: &Inputs, part: &DropMesh) -> Check {
     gouges_with_report(i, part).0
 }
@@ -1168,6 +1201,18 @@ fn gouges_with_report(i: &Inputs, part: &DropMesh) -> (Check, GougeReport) {
             "{} moves not checked: {} with no tool body, {} with a tilted tool, {} canned cycles, {} from or to an unknown position{}",
             s.total(), s.no_tool, s.tilted, s.cycles, s.unknown_position, s.first()
         ));
+    }
+    // A part under less than half of the path is not the program's part:
+    // no gouge found there proves nothing. Refused, as the input's (it
+    // has the same path over the same part).
+    if out.mostly_off_part() {
+        c.ok = false;
+        c.findings.push(Finding {
+            line: None,
+            message: out.off_part_words(),
+            in_input: true,
+            refuses: true,
+        });
     }
     if out.gouges.is_empty() {
         return (c, out);
@@ -1186,18 +1231,18 @@ fn gouges_with_report(i: &Inputs, part: &DropMesh) -> (Check, GougeReport) {
         };
         let in_input =
             old.near(DVec3::from_array(g.at), i.tol.tip) || g.ball_centre.is_some_and(by_centre);
-        c.ok &= in_input;
+        // The input's own gouge within the part's tessellation error is
+        // reported only.
+        let refuses = !in_input || g.depth > i.tol.input_gouge;
+        c.ok &= !refuses;
         c.findings.push(Finding {
             line: line_of(g.line),
             message: format!(
-                "gouge {:.4} mm deep into the part at ({:.3}, {:.3}, {:.3}){}",
-                g.depth,
-                g.at[0],
-                g.at[1],
-                g.at[2],
-                if in_input { ", as in the input" } else { "" }
+                "gouge {:.4} mm deep into the part at ({:.3}, {:.3}, {:.3})",
+                g.depth, g.at[0], g.at[1], g.at[2],
             ),
             in_input,
+            refuses,
         });
     }
     (c, out)
@@ -1227,6 +1272,7 @@ pub fn loads(output: &Program, l: &dyn LoadCheck, tol: f64) -> Check {
                     tol * 100.0
                 ),
                 in_input: false,
+                refuses: true,
             });
         }
     }

@@ -570,17 +570,27 @@ impl Verdict {
 
 /// The failed checks of a written program in words, for a verdict: the
 /// check's name and its first finding that is not the input's own, at its
-/// line.
+/// line; of a check that failed only for the input's own faults, the first
+/// of those, marked so.
 pub fn failed_checks(checks: &[millplan_plan::safety::Check]) -> Vec<String> {
     checks
         .iter()
         .filter(|c| !c.ok)
-        .map(|c| match c.findings.iter().find(|f| !f.in_input) {
-            Some(f) => match f.line {
-                Some(line) => format!("check {} at line {line}: {}", c.name, f.message),
-                None => format!("check {}: {}", c.name, f.message),
-            },
-            None => format!("check {}", c.name),
+        .map(|c| {
+            let new = c.refusing().find(|f| !f.in_input);
+            let (f, own) = match new {
+                Some(f) => (Some(f), ""),
+                None => (c.refusing().next(), " (the input's own fault)"),
+            };
+            match f {
+                Some(f) => match f.line {
+                    Some(line) => {
+                        format!("check {} at line {line}: {}{own}", c.name, f.message)
+                    }
+                    None => format!("check {}: {}{own}", c.name, f.message),
+                },
+                None => format!("check {}", c.name),
+            }
         })
         .collect()
 }

@@ -97,11 +97,44 @@ impl Skipped {
 pub struct GougeReport {
     pub moves_checked: usize,
     pub points_checked: usize,
+    /// The sample points of cutting moves and holes (rapids aside).
+    pub cutting_points: usize,
+    /// Of those, the points with no part under the tool (for a leaning
+    /// ball end: its centre beyond the part's box grown by its radius): no
+    /// check there could find a gouge, and most of a path there says the
+    /// part does not match the program (its units, its placement).
+    pub off_part_points: usize,
     /// Moves left out, all reasons.
     pub moves_skipped: usize,
     pub skipped: Skipped,
     pub gouges: Vec<Gouge>,
     pub max_depth: f64,
+}
+
+/// The largest share of cutting points with no part under the tool that a
+/// check still calls clean: beyond it the part does not match the program
+/// (a part in the wrong unit, or placed elsewhere), and no gouge found says
+/// little.
+pub const OFF_PART_SHARE: f64 = 0.5;
+
+impl GougeReport {
+    /// Whether more than [`OFF_PART_SHARE`] of the cutting points had no
+    /// part under the tool.
+    pub fn mostly_off_part(&self) -> bool {
+        self.cutting_points > 0
+            && self.off_part_points as f64 > OFF_PART_SHARE * self.cutting_points as f64
+    }
+
+    /// `the part lies under the tool at only K of N cutting points (P %): it
+    /// does not match the program (its unit? its placement?)`.
+    pub fn off_part_words(&self) -> String {
+        let under = self.cutting_points - self.off_part_points;
+        format!(
+            "the part lies under the tool at only {under} of {} cutting points ({:.1} %): it does not match the program (its unit? its placement?)",
+            self.cutting_points,
+            100.0 * under as f64 / self.cutting_points.max(1) as f64
+        )
+    }
 }
 
 /// One sample of a check: operation, move, tool tip (part coordinates) and,
@@ -191,8 +224,10 @@ pub fn check_with_progress(
     rep.points_checked = samples.len();
     let total = samples.len();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    // The depth of each sample, and whether a tilted ball alone reaches it.
-    let depths: Vec<(f64, bool)> = samples
+    let bounds = part.solid().bounds();
+    // The depth of each sample, whether a tilted ball alone reaches it, and
+    // whether the part lies under the tool.
+    let depths: Vec<(f64, bool, bool)> = samples
         .par_iter()
         .map(|(oi, _, q, axis)| {
             let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
@@ -201,12 +236,27 @@ pub fn check_with_progress(
             }
             let b = bodies[*oi as usize].expect("sampled with a body");
             match axis {
-                None => (vertical_depth(part, &b.shape, *q, g.tol), false),
-                Some(a) => tilted_depth(part, &b, *q, *a, g.tol),
+                None => {
+                    let (d, over) = vertical_depth(part, &b.shape, *q, g.tol);
+                    (d, false, over)
+                }
+                Some(a) => {
+                    let (d, ball) = tilted_depth(part, &b, *q, *a, g.tol);
+                    let c = *q + *a * b.radius();
+                    let (lo, hi) = (bounds.min - b.radius(), bounds.max + b.radius());
+                    (d, ball, c.cmpge(lo).all() && c.cmple(hi).all())
+                }
             }
         })
         .collect();
-    for ((oi, mi, q, axis), &(d, ball)) in samples.iter().zip(&depths) {
+    for ((oi, mi, _, _), &(_, _, over)) in samples.iter().zip(&depths) {
+        let kind = p.operations[*oi as usize].moves[*mi as usize].kind;
+        if kind != MoveKind::Rapid {
+            rep.cutting_points += 1;
+            rep.off_part_points += usize::from(!over);
+        }
+    }
+    for ((oi, mi, q, axis), &(d, ball, _)) in samples.iter().zip(&depths) {
         if d > g.tol {
             let (oi, mi) = (*oi as usize, *mi as usize);
             let line = p.operations[oi].moves[mi].line;
@@ -352,14 +402,14 @@ fn sample_hole(
 /// How far below the drop-cutter height of the vertical cutter `sh` the tip
 /// `q` is (−∞ where the cutter meets no part, or meets it only by the
 /// tolerance at a wall).
-fn vertical_depth(part: &DropMesh, sh: &Shape, q: DVec3, tol: f64) -> f64 {
+fn vertical_depth(part: &DropMesh, sh: &Shape, q: DVec3, tol: f64) -> (f64, bool) {
     let c = DVec2::new(q.x, q.y);
-    let depth = part
-        .drop(sh, c)
-        .map(|d| d.z - q.z)
-        .unwrap_or(f64::NEG_INFINITY);
+    let Some(rest) = part.drop(sh, c) else {
+        return (f64::NEG_INFINITY, false);
+    };
+    let depth = rest.z - q.z;
     if depth <= tol {
-        return depth;
+        return (depth, true);
     }
     // Deeper than the tolerance below where the tool would rest, but is it
     // into the part by more than the tolerance in any direction? A tool
@@ -368,9 +418,9 @@ fn vertical_depth(part: &DropMesh, sh: &Shape, q: DVec3, tol: f64) -> f64 {
     let (inner, rise) = sh.inset(tol);
     let into = part.drop(&inner, c).is_some_and(|d| d.z > q.z + rise);
     if into {
-        depth
+        (depth, true)
     } else {
-        f64::NEG_INFINITY
+        (f64::NEG_INFINITY, true)
     }
 }
 

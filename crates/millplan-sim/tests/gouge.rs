@@ -378,3 +378,53 @@ fn moves_left_out_name_the_line_of_the_first() {
         ""
     );
 }
+
+/// A user trial: a part read in the wrong unit lay under a corner of the
+/// path, and `gouge` called the program clean. The check counts the cutting
+/// points with no part under the tool (a brute count of where the tool's
+/// disc meets the box's square agrees), and says when that is most of them.
+#[test]
+fn the_points_with_no_part_under_the_tool_are_counted() {
+    let part = box_mesh();
+    let g = GougeParams::default();
+    let ball = |_: &millplan_nc::Operation| Some(ToolBody::new(Shape::Ball { radius: 3.0 }));
+    // Above the top face (z = -1), from x = -20 to x = 150 at y = 50: the
+    // ball of radius 3 has the box under it for x in [7, 113].
+    let src = "PARTNO OVER\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nRAPID\nGOTO/-20,50,20\nGOTO/-20,50,5\nGOTO/150,50,5\nFINI\n";
+    let p = parse_program(src, ReadOptions::default())
+        .expect("reads")
+        .program;
+    let rep = check(&p, &part, ball, &g);
+    assert!(rep.gouges.is_empty());
+    // The rapid is not a cutting point; the plunge from z = 20 to 5 at
+    // x = -20 and the pass are.
+    let moves = &p.operations[0].moves;
+    let cutting = rep.cutting_points;
+    assert!(cutting > 0 && cutting <= rep.points_checked, "{rep:?}");
+    let xs: Vec<f64> = {
+        // The pass's samples: every g.step from -20 to 150, ends included.
+        let n = (170.0 / g.step).ceil() as usize;
+        (0..=n)
+            .map(|k| -20.0 + 170.0 * k as f64 / n as f64)
+            .collect()
+    };
+    let under = xs.iter().filter(|&&x| (7.0..=113.0).contains(&x)).count();
+    let off = rep.off_part_points;
+    assert!(
+        (cutting - off).abs_diff(under) <= 2,
+        "{} under the tool, {under} by brute count ({} moves)",
+        cutting - off,
+        moves.len()
+    );
+    // 106 of the 185 mm cut over the box: not most of the path off it.
+    assert!(!rep.mostly_off_part(), "{rep:?}");
+    // The same path 25.4 times as long (a part read in inches as mm, the
+    // other way round): mostly off the part, and said so.
+    let far = "PARTNO FAR\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nRAPID\nGOTO/-50,50,20\nGOTO/-50,50,5\nGOTO/2000,50,5\nFINI\n";
+    let p = parse_program(far, ReadOptions::default())
+        .expect("reads")
+        .program;
+    let rep = check(&p, &part, ball, &g);
+    assert!(rep.gouges.is_empty() && rep.mostly_off_part(), "{rep:?}");
+    assert!(rep.off_part_words().contains("does not match the program"));
+}

@@ -42,6 +42,10 @@ pub fn run_command(c: &GougeCommand, w: &dyn Watch) -> Result<GougeReport, Stop>
         }
     });
     w.counted();
+    w.findings(
+        c.input,
+        &off_part_finding(&rep).into_iter().collect::<Vec<_>>(),
+    );
     w.lap("points checked against the part");
     Ok(rep)
 }

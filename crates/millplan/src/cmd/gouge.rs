@@ -12,8 +12,9 @@ use std::path::PathBuf;
 /// axis leans (five-axis CL) is checked by the distance of its ball and
 /// flutes (the CUTTER record's height, else the whole tool) to the part.
 ///
-/// Exit code 0 when clean, 3 when gouges were found, 2 when the program does
-/// not say its tool's shape (give --tool) or no move could be checked. Moves
+/// A part under fewer than half of the cutting points (`off_part_points` of
+/// `cutting_points` in the JSON) does not match the program: not clean. Exit code 0 when clean, 3 when gouges were found or the part is not the program's, 2
+/// when the program does not say its tool's shape (give --tool) or no move could be checked. Moves
 /// of other leaning tools or whose axis is known only as machine angles,
 /// canned-cycle holes along a leaning axis (a vertical one is checked from
 /// its highest plane down) and moves from a position the program has not
@@ -62,12 +63,12 @@ pub fn run(a: Args) -> CliResult<i32> {
     };
     let rep = lib::run_command(&c, &watch)?;
     let path = a.path.display().to_string();
-    a.summary
-        .print(&lib::Report::new(&rep, a.tol), |r| r.render_text(&path));
+    let report = lib::Report::new(&rep, a.tol);
+    a.summary.print(&report, |r| r.render_text(&path));
     watch.lap("summary printed");
     watch.print_timings(a.timings.on);
     if let Some(m) = lib::nothing_checked(&path, &rep) {
         return Err(CliError::input(m));
     }
-    Ok(exit(!rep.gouges.is_empty()))
+    Ok(exit(report.found()))
 }

@@ -43,7 +43,7 @@ use std::path::{Path, PathBuf};
 /// read-back (parses, commands what the optimised program does, IR verifier), machine (S and F
 /// within the machine), tip (the tool tip where the input put it; the ball centre after orient),
 /// rapids-and-holder (on the stock: refused even when the input had it), loads (under every limit
-/// within 0.5 %), gouge (no gouge the input did not have).
+/// within 0.5 %), gouge (none, the input's own refused too unless within 0.05 mm).
 ///
 /// Exit codes: 0 written; 2 bad input; 3 a check failed (the check and line
 /// are named; nothing written unless --force).

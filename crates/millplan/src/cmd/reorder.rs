@@ -49,7 +49,7 @@ pub enum StartArg {
 ///
 /// Before it is written the program is read back from its bytes and checked:
 /// the IR verifier, every cutting point of the input cut, S and F within the
-/// machine, and no gouge into the part the input did not have (rapids and
+/// machine, and no gouge into the part, the input's own refused too (rapids and
 /// links too). A check that fails names its line and exits 3 with nothing
 /// written, unless --force.
 #[derive(clap::Args)]
