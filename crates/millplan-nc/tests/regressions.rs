@@ -1826,3 +1826,28 @@ fn the_samples_say_whether_they_end() {
         assert_eq!(got, warned, "{rel}");
     }
 }
+
+/// A trial finding: G44, G43.1, G43.2 and an H without G43 change the tool
+/// length in use, but were kept verbatim with Z read as before them; a move
+/// after them then ran at a height the program never set. Z is now unknown
+/// after them until the program commands it, and G43.1/G43.2 with axis
+/// words (offsets, not a position) are refused at their word.
+#[test]
+fn length_changes_not_modelled_leave_z_unknown() {
+    let head = "%\nO1\nG21 G90 G17\nT1 M6\nG43 H1 Z50\nS5000 M3\nG0 X0 Y0\nG1 Z5 F500\n";
+    for change in ["G44 H2", "H3", "G43.1", "G43.2 H4"] {
+        let src = format!("{head}{change}\nG1 X10\nZ4\nX20\nM30\n%\n");
+        let p = parse(&src, change);
+        let m = &p.operations[0].moves;
+        let at = |x: f64| m.iter().find(|mv| mv.end.x == x).expect("the move");
+        assert!(at(10.0).end.z.is_nan(), "{change}: {:?}", at(10.0).end);
+        assert_eq!(at(20.0).end.z, 4.0, "{change}");
+        let kept = p.operations[0].events.iter().any(|e| {
+            matches!(&e.kind, EventKind::Passthrough(t) if t.moves && t.text.contains(change.split(' ').next().unwrap_or("")))
+        });
+        assert!(kept, "{change}: kept verbatim as a block that may move");
+    }
+    let e = millplan_nc::parse_program(&format!("{head}G43.1 Z1.5\nM30\n"), ReadOptions::default())
+        .expect_err("G43.1 Z");
+    assert_eq!((e.line, e.col), (9, 1), "{e}");
+}

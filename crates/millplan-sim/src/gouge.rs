@@ -249,17 +249,15 @@ pub fn check_with_progress(
             }
         })
         .collect();
-    for ((oi, mi, _, _), &(_, _, over)) in samples.iter().zip(&depths) {
-        let kind = p.operations[*oi as usize].moves[*mi as usize].kind;
-        if kind != MoveKind::Rapid {
+    for ((oi, mi, q, axis), &(d, ball, over)) in samples.iter().zip(&depths) {
+        let (oi, mi) = (*oi as usize, *mi as usize);
+        let mv = &p.operations[oi].moves[mi];
+        if mv.kind != MoveKind::Rapid {
             rep.cutting_points += 1;
             rep.off_part_points += usize::from(!over);
         }
-    }
-    for ((oi, mi, q, axis), &(d, ball, _)) in samples.iter().zip(&depths) {
         if d > g.tol {
-            let (oi, mi) = (*oi as usize, *mi as usize);
-            let line = p.operations[oi].moves[mi].line;
+            let line = mv.line;
             let r = bodies[oi].map_or(0.0, |b| b.radius());
             let ball_centre = axis.filter(|_| ball).map(|a| (*q + a * r).to_array());
             let here = Gouge {

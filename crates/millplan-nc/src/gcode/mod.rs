@@ -1193,6 +1193,9 @@ impl GcodeReader {
             .map(|(_, c)| *c);
         let mut cutcom = None;
         let mut tlc: Option<(i64, u32)> = None;
+        // A length change the reader does not model (G43.1, G43.2, G44, an
+        // H without G43): kept verbatim, and Z unknown after it.
+        let mut length_kept = false;
         let mut offset: Option<WorkOffset> = None;
         let mut path: Vec<PathControl> = Vec::new();
         for &(code, v, col) in &w.g.clone() {
@@ -1228,6 +1231,19 @@ impl GcodeReader {
                 410 => cutcom = Some(CutCom::Left),
                 420 => cutcom = Some(CutCom::Right),
                 430 | 434 | 435 | 490 => tlc = Some((code, col)),
+                431 | 432 if w.xyz.iter().any(Option::is_some) => {
+                    return Err(ParseError::new(
+                        ln,
+                        col,
+                        format!("G{} sets a tool-length offset from its axis words, which are not a position: not read (write the offset into the tool table)", fmt_num(v)),
+                    ));
+                }
+                431 | 432 | 440 => {
+                    length_kept = true;
+                    w.keep.push(fmt_word('G', v));
+                    w.keep_modal = true;
+                    w.keep_machine = true;
+                }
                 800 => {
                     self.cycle = None;
                     if self.motion == Motion::Cycle {
@@ -1274,8 +1290,8 @@ impl GcodeReader {
                     // Modal codes every control has (offsets, path modes, planes
                     // for TCP); kept verbatim without a note.
                     const KNOWN: &[i64] = &[
-                        50, 51, 90, 150, 160, 431, 531, 541, 610, 611, 640, 641, 642, 680, 682,
-                        690, 600, 6010, 6020, 6420, 6450, 1530, 5000, 1000, 580, 590,
+                        50, 51, 90, 150, 160, 531, 541, 610, 611, 640, 641, 642, 680, 682, 690,
+                        600, 6010, 6020, 6420, 6450, 1530, 5000, 1000, 580, 590,
                     ];
                     if !(KNOWN.contains(&code) || (5050..=5990).contains(&code)) {
                         self.diags.note(
@@ -1513,6 +1529,8 @@ impl GcodeReader {
                 ));
             }
         }
+        // An H left over changes the length register in use.
+        length_kept |= w.h.is_some();
         // Whatever no model took is kept verbatim.
         for (letter, v) in [
             ('R', w.r),
@@ -1539,7 +1557,17 @@ impl GcodeReader {
             } else {
                 PassClass::Info
             };
-            self.passthrough(&word, &text, class, modal, false, ln);
+            self.passthrough(&word, &text, class, modal, length_kept, ln);
+        }
+        if length_kept {
+            self.diags.warn(
+                Code::UnknownPosition,
+                ln,
+                1,
+                "a tool-length change the reader does not model (G43.1, G43.2, G44, or an H without G43): kept verbatim, and Z is unknown after it until the program commands it",
+            );
+            self.length = None;
+            self.pos.z = f64::NAN;
         }
         if dwell {
             return Ok(());
