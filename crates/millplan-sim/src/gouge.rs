@@ -224,7 +224,9 @@ pub fn check_with_progress(
     rep.points_checked = samples.len();
     let total = samples.len();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let bounds = part.solid().bounds();
+    // The box of the part, for leaning tools only (it needs the part's
+    // closest-point tree, which a vertical tool's check never builds).
+    let bounds = (samples.iter().any(|s| s.3.is_some())).then(|| part.solid().bounds());
     // The depth of each sample, whether a tilted ball alone reaches it, and
     // whether the part lies under the tool.
     let depths: Vec<(f64, bool, bool)> = samples
@@ -243,8 +245,11 @@ pub fn check_with_progress(
                 Some(a) => {
                     let (d, ball) = tilted_depth(part, &b, *q, *a, g.tol);
                     let c = *q + *a * b.radius();
-                    let (lo, hi) = (bounds.min - b.radius(), bounds.max + b.radius());
-                    (d, ball, c.cmpge(lo).all() && c.cmple(hi).all())
+                    let over = bounds.is_some_and(|bx| {
+                        let (lo, hi) = (bx.min - b.radius(), bx.max + b.radius());
+                        c.cmpge(lo).all() && c.cmple(hi).all()
+                    });
+                    (d, ball, over)
                 }
             }
         })
