@@ -1851,3 +1851,36 @@ fn length_changes_not_modelled_leave_z_unknown() {
         .expect_err("G43.1 Z");
     assert_eq!((e.line, e.col), (9, 1), "{e}");
 }
+
+/// Trial findings on Heidenhain: `FUNCTION TCPM` with a rotary axis turned
+/// makes X, Y and Z name another point (as M128 does), and a `TOOL CALL`
+/// of the tool in use with a length delta moves its tip along the axis;
+/// both were kept verbatim with the positions read as before them. Now
+/// the positions are unknown until the program commands them.
+#[test]
+fn heidenhain_tcpm_and_a_length_delta_leave_the_positions_unknown() {
+    let head = "0 BEGIN PGM T MM\n1 TOOL CALL 1 Z S5000\n2 L X+0 Y+0 Z+50 R0 FMAX M3\n";
+    let cases = [
+        (
+            "3 L B+30 FMAX\n4 FUNCTION TCPM F TCP AXIS POS PATHCTRL AXIS\n",
+            true,
+        ),
+        ("3 L B+30 FMAX\n4 FUNCTION RESET TCPM\n", true),
+        // With the rotary axes at 0 the tip and the pivot are one point.
+        (
+            "3 L B+0 FMAX\n4 FUNCTION TCPM F TCP AXIS POS PATHCTRL AXIS\n",
+            false,
+        ),
+        ("3 L Z+40 FMAX\n4 TOOL CALL Z S6000 DL+0.5\n", true),
+        ("3 L Z+40 FMAX\n4 TOOL CALL Z S6000\n", false),
+    ];
+    for (mid, unknown) in cases {
+        let src = format!("{head}{mid}5 L X+10 F500\n6 L Z+30\n7 END PGM T MM\n");
+        let p = parse(&src, mid);
+        let m = &p.operations[0].moves;
+        let at = |line: u32| m.iter().find(|mv| mv.line == line).expect("the move");
+        // Blocks 5 and 6 are the file's lines 6 and 7.
+        assert_eq!(at(6).end.z.is_nan(), unknown, "{mid}: {:?}", at(6).end);
+        assert_eq!(at(7).end.z, 30.0, "{mid}");
+    }
+}

@@ -274,8 +274,16 @@ impl HeidenhainReader {
                     }
                 }
                 if !calls_tool {
+                    // A length delta on the tool in use moves its tip along
+                    // the axis: the positions are another's until commanded.
+                    let dl = deltas
+                        .iter()
+                        .any(|w| w.to_ascii_uppercase().starts_with("DL"));
+                    if dl {
+                        self.pos = UNKNOWN;
+                    }
                     if !deltas.is_empty() {
-                        self.passthrough("TOOL CALL", body, PassClass::Machine, false, ln);
+                        self.passthrough("TOOL CALL", body, PassClass::Machine, dl, ln);
                     }
                     return Ok(());
                 }
@@ -352,7 +360,15 @@ impl HeidenhainReader {
                 Ok(())
             }
             "LBL" | "CALL" | "PLANE" | "STOP" | "FUNCTION" | "FN" | "TCH" | "PGM" => {
-                let moves = words[0] == "PLANE";
+                // FUNCTION TCPM / FUNCTION RESET TCPM switch the tool centre
+                // point on and off (kept as written): with a rotary axis
+                // turned, X, Y and Z name another point, as after M128/M129.
+                let tcpm = words[0] == "FUNCTION" && words.contains(&"TCPM");
+                let reframes = tcpm && super::tilted(&self.rotary);
+                if reframes {
+                    self.pos = UNKNOWN;
+                }
+                let moves = words[0] == "PLANE" || reframes;
                 self.passthrough(words[0], body, PassClass::Machine, moves, ln);
                 Ok(())
             }
