@@ -293,9 +293,12 @@ impl Job {
             let v = checks::loads_of(analysed, run, &self.limits, &self.inputs.machine);
             move |_: &Program| v.clone()
         });
+        // The input's own gouges are allowed up to `--tol` where it is wider
+        // than the default (a part exported with a coarse chord).
         let tol = Tolerances {
             collision: self.tol,
             gouge: self.tol.min(Tolerances::default().gouge),
+            input_gouge: self.tol.max(Tolerances::default().input_gouge),
             ..Tolerances::default()
         };
         safety::check(&Inputs {

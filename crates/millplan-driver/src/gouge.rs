@@ -126,8 +126,8 @@ fn mostly_off_part(rep: &GougeReport) -> bool {
     rep.mostly_off_part()
 }
 
-/// The finding on the program at `path` when most of its cutting points
-/// had no part under the tool.
+/// The finding on the program when most of its cutting points stood away
+/// from the part.
 pub fn off_part_finding(rep: &GougeReport) -> Option<millplan_nc::Diagnostic> {
     mostly_off_part(rep).then(|| millplan_nc::Diagnostic {
         severity: millplan_nc::Severity::Warning,
@@ -143,7 +143,7 @@ pub fn off_part_finding(rep: &GougeReport) -> Option<millplan_nc::Diagnostic> {
 
 impl<'a> Report<'a> {
     /// `clean` when the check looked at some move, found no gouge, and
-    /// had the part under the tool at most of the cutting points.
+    /// had the tool by the part at most of the cutting points.
     pub fn new(check: &'a GougeReport, tol: f64) -> Self {
         Report {
             check,
@@ -152,8 +152,8 @@ impl<'a> Report<'a> {
         }
     }
 
-    /// Whether the run found a problem: a gouge, or a part that is not under
-    /// most of the path.
+    /// Whether the run found a problem: a gouge, or a part away from most
+    /// of the path.
     pub fn found(&self) -> bool {
         !self.check.gouges.is_empty() || mostly_off_part(self.check)
     }
@@ -179,7 +179,7 @@ impl<'a> Report<'a> {
             "nothing checked".to_string()
         } else if rep.gouges.is_empty() && mostly_off_part(rep) {
             format!(
-                "no gouge, but the part lies under the tool at only {} of {} cutting points: not checked against the part the program was made for",
+                "no gouge, but the tool stands by the part at only {} of {} cutting points: not checked against the part the program was made for",
                 rep.cutting_points - rep.off_part_points,
                 rep.cutting_points
             )

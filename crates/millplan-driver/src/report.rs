@@ -64,8 +64,11 @@ pub fn notes_of(
 
 /// The line naming the check that refused the written program of `path`.
 pub fn refusal_line(s: &Summary, path: &std::path::Path) -> Option<String> {
-    s.refusal()
-        .map(|(check, line, m)| format!("{}:{line}: check {check} failed: {m}", path.display()))
+    s.refusal().map(|(check, line, m)| match line {
+        // A finding on the program as a whole.
+        0 => format!("{}: check {check} failed: {m}", path.display()),
+        _ => format!("{}:{line}: check {check} failed: {m}", path.display()),
+    })
 }
 
 /// What the report draws: both programs and their forces.

@@ -10,7 +10,7 @@
 //! | `machine` | an S outside the machine's spindle range; a cutting feed ≤ 0 or above its maximum | a machine |
 //! | `tip` | a tool tip away from where the input put it (per [`TipRule`]) | — |
 //! | `stock` | a rapid through material, the shank or holder in material, on the initial stock — also when the input did it (marked `in_input`) | a stock |
-//! | `gouge` | a gouge into the part — also when the input had it (marked `in_input`) deeper than [`Tolerances::input_gouge`]; a part under less than half of the cutting points | a part |
+//! | `gouge` | a gouge into the part — also when the input had it (marked `in_input`) deeper than [`Tolerances::input_gouge`]; a part the tool stands by at less than half of the cutting points | a part |
 //! | `loads` | a per-move peak load over its limit by more than [`Tolerances::load`] | a [`LoadCheck`] |
 //!
 //! A check whose inputs are missing says so (`skipped`) and passes; every
@@ -1202,9 +1202,10 @@ fn gouges_with_report(i: &Inputs, part: &DropMesh) -> (Check, GougeReport) {
             s.total(), s.no_tool, s.tilted, s.cycles, s.unknown_position, s.first()
         ));
     }
-    // A part under less than half of the path is not the program's part:
-    // no gouge found there proves nothing. Refused, as the input's (it
-    // has the same path over the same part).
+    // A part the tool stands by at less than half of the path is not the
+    // program's part: no gouge found there proves anything. Refused, as the
+    // input's: every pass keeps the tool's positions (or its ball centres),
+    // so the input stands as far from the part.
     if out.mostly_off_part() {
         c.ok = false;
         c.findings.push(Finding {
@@ -1235,10 +1236,18 @@ fn gouges_with_report(i: &Inputs, part: &DropMesh) -> (Check, GougeReport) {
         // reported only.
         let refuses = !in_input || g.depth > i.tol.input_gouge;
         c.ok &= !refuses;
+        let allowed = if in_input && refuses {
+            format!(
+                ", beyond the {:.3} mm the input's own may be",
+                i.tol.input_gouge
+            )
+        } else {
+            String::new()
+        };
         c.findings.push(Finding {
             line: line_of(g.line),
             message: format!(
-                "gouge {:.4} mm deep into the part at ({:.3}, {:.3}, {:.3})",
+                "gouge {:.4} mm deep into the part at ({:.3}, {:.3}, {:.3}){allowed}",
                 g.depth, g.at[0], g.at[1], g.at[2],
             ),
             in_input,

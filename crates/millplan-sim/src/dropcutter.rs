@@ -375,6 +375,11 @@ impl DropMesh {
         }
     }
 
+    /// The box of the part's xy footprint (`None` for an empty mesh).
+    pub fn xy_bounds(&self) -> Option<(DVec2, DVec2)> {
+        self.nodes.first().map(|n| (n.min, n.max))
+    }
+
     /// The part's triangles in a 3-D tree, for the distance of a tilted tool
     /// (capsule tests); built on the first call, from the same triangles the
     /// drop-cutter uses.

@@ -99,10 +99,11 @@ pub struct GougeReport {
     pub points_checked: usize,
     /// The sample points of cutting moves and holes (rapids aside).
     pub cutting_points: usize,
-    /// Of those, the points with no part under the tool (for a leaning
-    /// ball end: its centre beyond the part's box grown by its radius): no
-    /// check there could find a gouge, and most of a path there says the
-    /// part does not match the program (its units, its placement).
+    /// Of those, the points whose tool tip stands away from the part's
+    /// footprint (its xy box grown by the tool's radius and [`NEAR_PART`]):
+    /// most of a path there says the part does not match the program (its
+    /// unit, its placement), and no gouge found there proves anything. A
+    /// profile beside the part or a hole through it stands by it.
     pub off_part_points: usize,
     /// Moves left out, all reasons.
     pub moves_skipped: usize,
@@ -111,26 +112,29 @@ pub struct GougeReport {
     pub max_depth: f64,
 }
 
-/// The largest share of cutting points with no part under the tool that a
-/// check still calls clean: beyond it the part does not match the program
-/// (a part in the wrong unit, or placed elsewhere), and no gouge found says
-/// little.
+/// The largest share of cutting points away from the part that a check
+/// still calls clean: beyond it the part does not match the program (a part
+/// in the wrong unit, or placed elsewhere), and no gouge found says little.
 pub const OFF_PART_SHARE: f64 = 0.5;
 
+/// How far beyond its radius a tool may stand from the part's xy box and
+/// still be by the part, mm (the stock a roughing profile leaves).
+pub const NEAR_PART: f64 = 2.0;
+
 impl GougeReport {
-    /// Whether more than [`OFF_PART_SHARE`] of the cutting points had no
-    /// part under the tool.
+    /// Whether more than [`OFF_PART_SHARE`] of the cutting points stood
+    /// away from the part.
     pub fn mostly_off_part(&self) -> bool {
         self.cutting_points > 0
             && self.off_part_points as f64 > OFF_PART_SHARE * self.cutting_points as f64
     }
 
-    /// `the part lies under the tool at only K of N cutting points (P %): it
+    /// `the tool stands by the part at only K of N cutting points (P %): it
     /// does not match the program (its unit? its placement?)`.
     pub fn off_part_words(&self) -> String {
         let under = self.cutting_points - self.off_part_points;
         format!(
-            "the part lies under the tool at only {under} of {} cutting points ({:.1} %): it does not match the program (its unit? its placement?)",
+            "the tool stands by the part at only {under} of {} cutting points ({:.1} %): the part does not match the program (its unit? its placement?)",
             self.cutting_points,
             100.0 * under as f64 / self.cutting_points.max(1) as f64
         )
@@ -224,12 +228,8 @@ pub fn check_with_progress(
     rep.points_checked = samples.len();
     let total = samples.len();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    // The box of the part, for leaning tools only (it needs the part's
-    // closest-point tree, which a vertical tool's check never builds).
-    let bounds = (samples.iter().any(|s| s.3.is_some())).then(|| part.solid().bounds());
-    // The depth of each sample, whether a tilted ball alone reaches it, and
-    // whether the part lies under the tool.
-    let depths: Vec<(f64, bool, bool)> = samples
+    // The depth of each sample, and whether a tilted ball alone reaches it.
+    let depths: Vec<(f64, bool)> = samples
         .par_iter()
         .map(|(oi, _, q, axis)| {
             let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
@@ -238,28 +238,23 @@ pub fn check_with_progress(
             }
             let b = bodies[*oi as usize].expect("sampled with a body");
             match axis {
-                None => {
-                    let (d, over) = vertical_depth(part, &b.shape, *q, g.tol);
-                    (d, false, over)
-                }
-                Some(a) => {
-                    let (d, ball) = tilted_depth(part, &b, *q, *a, g.tol);
-                    let c = *q + *a * b.radius();
-                    let over = bounds.is_some_and(|bx| {
-                        let (lo, hi) = (bx.min - b.radius(), bx.max + b.radius());
-                        c.cmpge(lo).all() && c.cmple(hi).all()
-                    });
-                    (d, ball, over)
-                }
+                None => (vertical_depth(part, &b.shape, *q, g.tol), false),
+                Some(a) => tilted_depth(part, &b, *q, *a, g.tol),
             }
         })
         .collect();
-    for ((oi, mi, q, axis), &(d, ball, over)) in samples.iter().zip(&depths) {
+    let footprint = part.xy_bounds();
+    for ((oi, mi, q, axis), &(d, ball)) in samples.iter().zip(&depths) {
         let (oi, mi) = (*oi as usize, *mi as usize);
         let mv = &p.operations[oi].moves[mi];
         if mv.kind != MoveKind::Rapid {
+            let reach = bodies[oi].map_or(0.0, |b| b.radius()) + NEAR_PART;
+            let by = footprint.is_some_and(|(lo, hi)| {
+                (lo.x - reach..=hi.x + reach).contains(&q.x)
+                    && (lo.y - reach..=hi.y + reach).contains(&q.y)
+            });
             rep.cutting_points += 1;
-            rep.off_part_points += usize::from(!over);
+            rep.off_part_points += usize::from(!by);
         }
         if d > g.tol {
             let line = mv.line;
@@ -405,14 +400,14 @@ fn sample_hole(
 /// How far below the drop-cutter height of the vertical cutter `sh` the tip
 /// `q` is (−∞ where the cutter meets no part, or meets it only by the
 /// tolerance at a wall).
-fn vertical_depth(part: &DropMesh, sh: &Shape, q: DVec3, tol: f64) -> (f64, bool) {
+fn vertical_depth(part: &DropMesh, sh: &Shape, q: DVec3, tol: f64) -> f64 {
     let c = DVec2::new(q.x, q.y);
-    let Some(rest) = part.drop(sh, c) else {
-        return (f64::NEG_INFINITY, false);
-    };
-    let depth = rest.z - q.z;
+    let depth = part
+        .drop(sh, c)
+        .map(|d| d.z - q.z)
+        .unwrap_or(f64::NEG_INFINITY);
     if depth <= tol {
-        return (depth, true);
+        return depth;
     }
     // Deeper than the tolerance below where the tool would rest, but is it
     // into the part by more than the tolerance in any direction? A tool
@@ -421,9 +416,9 @@ fn vertical_depth(part: &DropMesh, sh: &Shape, q: DVec3, tol: f64) -> (f64, bool
     let (inner, rise) = sh.inset(tol);
     let into = part.drop(&inner, c).is_some_and(|d| d.z > q.z + rise);
     if into {
-        (depth, true)
+        depth
     } else {
-        (f64::NEG_INFINITY, true)
+        f64::NEG_INFINITY
     }
 }
 

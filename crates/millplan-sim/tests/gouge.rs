@@ -381,49 +381,52 @@ fn moves_left_out_name_the_line_of_the_first() {
 
 /// A user trial: a part read in the wrong unit lay under a corner of the
 /// path, and `gouge` called the program clean. The check counts the cutting
-/// points with no part under the tool (a brute count of where the tool's
-/// disc meets the box's square agrees), and says when that is most of them.
+/// points whose tool stands away from the part's footprint (its xy box grown
+/// by the radius and `NEAR_PART`; a brute count along the pass agrees), and
+/// says when that is most of them. A profile beside the part, leaving stock,
+/// and a plunge through a hole stand by the part (a review: counting only
+/// points with material under the tool refused exact contours and drilling).
 #[test]
-fn the_points_with_no_part_under_the_tool_are_counted() {
+fn the_points_away_from_the_part_are_counted() {
+    use millplan_sim::gouge::NEAR_PART;
     let part = box_mesh();
     let g = GougeParams::default();
     let ball = |_: &millplan_nc::Operation| Some(ToolBody::new(Shape::Ball { radius: 3.0 }));
+    let read = |src: &str| {
+        parse_program(src, ReadOptions::default())
+            .expect("reads")
+            .program
+    };
     // Above the top face (z = -1), from x = -20 to x = 150 at y = 50: the
-    // ball of radius 3 has the box under it for x in [7, 113].
-    let src = "PARTNO OVER\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nRAPID\nGOTO/-20,50,20\nGOTO/-20,50,5\nGOTO/150,50,5\nFINI\n";
-    let p = parse_program(src, ReadOptions::default())
-        .expect("reads")
-        .program;
+    // tool stands by the box [10, 110] for x in [10 - 3 - NEAR, 110 + 3 + NEAR].
+    let p = read("PARTNO OVER\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nRAPID\nGOTO/-20,50,20\nGOTO/-20,50,5\nGOTO/150,50,5\nFINI\n");
     let rep = check(&p, &part, ball, &g);
     assert!(rep.gouges.is_empty());
-    // The rapid is not a cutting point; the plunge from z = 20 to 5 at
-    // x = -20 and the pass are.
-    let moves = &p.operations[0].moves;
+    // The rapid is not a cutting point; the plunge at x = -20 and the pass are.
     let cutting = rep.cutting_points;
     assert!(cutting > 0 && cutting <= rep.points_checked, "{rep:?}");
-    let xs: Vec<f64> = {
-        // The pass's samples: every g.step from -20 to 150, ends included.
-        let n = (170.0 / g.step).ceil() as usize;
-        (0..=n)
-            .map(|k| -20.0 + 170.0 * k as f64 / n as f64)
-            .collect()
-    };
-    let under = xs.iter().filter(|&&x| (7.0..=113.0).contains(&x)).count();
-    let off = rep.off_part_points;
+    let n = (170.0 / g.step).ceil() as usize;
+    let reach = 3.0 + NEAR_PART;
+    let by = (0..=n)
+        .map(|k| -20.0 + 170.0 * k as f64 / n as f64)
+        .filter(|x| (10.0 - reach..=110.0 + reach).contains(x))
+        .count();
+    let counted = cutting - rep.off_part_points;
     assert!(
-        (cutting - off).abs_diff(under) <= 2,
-        "{} under the tool, {under} by brute count ({} moves)",
-        cutting - off,
-        moves.len()
+        counted.abs_diff(by) <= 2,
+        "{counted} by the part, {by} by brute count"
     );
-    // 106 of the 185 mm cut over the box: not most of the path off it.
     assert!(!rep.mostly_off_part(), "{rep:?}");
-    // The same path 25.4 times as long (a part read in inches as mm, the
-    // other way round): mostly off the part, and said so.
-    let far = "PARTNO FAR\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nRAPID\nGOTO/-50,50,20\nGOTO/-50,50,5\nGOTO/2000,50,5\nFINI\n";
-    let p = parse_program(far, ReadOptions::default())
-        .expect("reads")
-        .program;
+    // A profile 0.5 mm outside the wall x = 110 (the tool's axis at 113.5)
+    // and a plunge in the middle (a hole, had the box one): by the part all
+    // along.
+    let profile = read("PARTNO PROFILE\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nRAPID\nGOTO/113.5,10,5\nGOTO/113.5,10,-10\nGOTO/113.5,110,-10\nRAPID\nGOTO/60,60,5\nGOTO/60,60,-40\nFINI\n");
+    let rep = check(&profile, &part, ball, &g);
+    assert!(rep.cutting_points > 1000, "{rep:?}");
+    assert_eq!(rep.off_part_points, 0, "{rep:?}");
+    // The same pass 25.4 times as long (a part read in inches as mm, the
+    // other way round): mostly away from the part, and said so.
+    let p = read("PARTNO FAR\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nRAPID\nGOTO/-50,50,20\nGOTO/-50,50,5\nGOTO/2000,50,5\nFINI\n");
     let rep = check(&p, &part, ball, &g);
     assert!(rep.gouges.is_empty() && rep.mostly_off_part(), "{rep:?}");
     assert!(rep.off_part_words().contains("does not match the program"));

@@ -91,8 +91,8 @@ pub struct Args {
     /// Dexel size of the stock, mm (default 0.1).
     #[arg(long)]
     pub resolution: Option<f64>,
-    /// Tolerance of the checks, mm (default 0.01); also how far the post
-    /// lets the tool tip stray from the CL path while the rotaries move.
+    /// Tolerance of the checks, mm (default 0.01; the input's own gouges are reported only to
+    /// max(0.05, tol)); also how far the post lets the tool tip stray while the rotaries move.
     #[arg(long)]
     pub tol: Option<f64>,
     /// Post five-axis programs with inverse-time feed (G93) whatever the
