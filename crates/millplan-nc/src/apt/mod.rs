@@ -289,6 +289,14 @@ impl AptReader {
     }
 
     fn statement(&mut self, text: &str, ln: u32) -> Result<(), ParseError> {
+        // After FINI: a PPRINT or a Ctrl-Z is let be.
+        let after = text.trim_matches(|c: char| c.is_whitespace() || c == '\x1a');
+        let comment = after
+            .get(..6)
+            .is_some_and(|w| w.eq_ignore_ascii_case("PPRINT"));
+        if self.ended.is_some() && (after.is_empty() || comment) {
+            return Ok(());
+        }
         if let Some(end) = self.ended {
             let col = (text.len() - text.trim_start().len() + 1) as u32;
             return Err(ParseError::new(
@@ -1332,7 +1340,7 @@ impl AptReader {
         if !self.saw_content {
             return Err(ParseError::new(1, 1, "empty file: no APT records"));
         }
-        if !self.closed {
+        if !self.closed && self.last_record > 0 {
             let last = self.last_record;
             self.diags.warn(
                 Code::ProgramEnd,

@@ -174,6 +174,11 @@ impl HeidenhainReader {
         if body.is_empty() {
             return Ok(());
         }
+        // After END PGM: a `*` comment block or a Ctrl-Z is let be.
+        let after = body.trim_matches(|c: char| c.is_whitespace() || c == '\x1a');
+        if self.ended.is_some() && (after.is_empty() || after.starts_with('*')) {
+            return Ok(());
+        }
         if let Some(end) = self.ended {
             return Err(ParseError::new(
                 first,
@@ -1190,7 +1195,7 @@ impl HeidenhainReader {
         if !self.saw_content {
             return Err(ParseError::new(1, 1, "empty file: no Heidenhain blocks"));
         }
-        if self.ended.is_none() {
+        if self.ended.is_none() && self.last_block > 0 {
             let last = self.last_block;
             self.diags.warn(
                 Code::ProgramEnd,

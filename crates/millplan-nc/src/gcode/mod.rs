@@ -588,7 +588,7 @@ impl GcodeReader {
         // The tape's marks: the `%` before the program starts it, the one
         // after it ends it.
         if t.trim_end() == "%" {
-            if self.saw_content {
+            if self.blocks > 0 {
                 self.ended.get_or_insert(ln);
             }
             return Ok(());
@@ -646,16 +646,24 @@ impl GcodeReader {
     /// be; a block is refused, as a control never runs it and a program or
     /// subprogram after it is not read.
     fn after_end(&mut self, raw: &str, ln: u32, end: u32) -> Result<(), ParseError> {
-        // Comments only (not lexed: one call site keeps `lex` inlined
-        // into `line`, some 0.5 % of a read).
+        // Comments only, perhaps numbered (`N110 (END)`), or a Ctrl-Z; not
+        // lexed: one call site keeps `lex` inlined into `line`, some 0.5 %
+        // of a read.
+        let t = raw.trim_start();
+        let t = match t.strip_prefix(['N', 'n']) {
+            Some(r) if r.starts_with(|c: char| c.is_ascii_digit()) => {
+                r.trim_start_matches(|c: char| c.is_ascii_digit())
+            }
+            _ => t,
+        };
         let mut depth = 0u32;
         let mut words = false;
-        for c in raw.chars() {
+        for c in t.chars() {
             match c {
                 '(' => depth += 1,
                 ')' => depth = depth.saturating_sub(1),
                 ';' if depth == 0 => break,
-                c if depth == 0 && !c.is_whitespace() && c != '%' => {
+                c if depth == 0 && !c.is_whitespace() && c != '%' && c != '\x1a' => {
                     words = true;
                     break;
                 }
@@ -669,7 +677,7 @@ impl GcodeReader {
         Err(ParseError::new(
             ln,
             col,
-            format!("a block after the end of the program (line {end}): a control never runs it, and a second program or a subprogram in the same file is not read (split the file, or remove what follows the end)"),
+            format!("a block after the end of the program (line {end}): a control never runs it, and a second program or a subprogram in the same file (M98, Haas M97) is not read: split the file, or remove what follows the end"),
         ))
     }
 
@@ -1018,6 +1026,12 @@ impl GcodeReader {
                     "SOFT" | "BRISK" if self.sinumerik() => self
                         .op
                         .push_event(ln, EventKind::PathControl(PathControl::Soft(k == "SOFT"))),
+                    // A Sinumerik subprogram's end (kept as written).
+                    "RET" | "M17" => {
+                        self.returned = true;
+                        w.keep.push(k.clone());
+                        w.keep_machine = true;
+                    }
                     _ => {
                         if !KNOWN_KEYWORDS.contains(&k.as_str()) {
                             self.diags.warn(
@@ -1209,8 +1223,8 @@ impl GcodeReader {
             .map(|(_, c)| *c);
         let mut cutcom = None;
         let mut tlc: Option<(i64, u32)> = None;
-        // A length change the reader does not model (G43.1, G43.2, G44, an
-        // H without G43): kept verbatim, and Z unknown after it.
+        // A length change the reader does not model (G43.1, G43.2, an H
+        // without G43): kept verbatim, and Z unknown after it.
         let mut length_kept = false;
         let mut offset: Option<WorkOffset> = None;
         let mut path: Vec<PathControl> = Vec::new();
@@ -1254,7 +1268,14 @@ impl GcodeReader {
                         format!("G{} sets a tool-length offset from its axis words, which are not a position: not read (write the offset into the tool table)", fmt_num(v)),
                     ));
                 }
-                431 | 432 | 440 => {
+                440 => {
+                    return Err(ParseError::new(
+                        ln,
+                        col,
+                        "G44 (tool length subtracted) is not read: under it a Z word names the tool tip only if the tool table holds negative lengths, which the program does not say",
+                    ));
+                }
+                431 | 432 => {
                     length_kept = true;
                     w.keep.push(fmt_word('G', v));
                     w.keep_modal = true;
@@ -1580,7 +1601,7 @@ impl GcodeReader {
                 Code::UnknownPosition,
                 ln,
                 1,
-                "a tool-length change the reader does not model (G43.1, G43.2, G44, or an H without G43): kept verbatim, and Z is unknown after it until the program commands it",
+                "a tool-length change the reader does not model (G43.1, G43.2, or an H without G43): kept verbatim, and Z is unknown after it until the program commands it",
             );
             self.length = None;
             self.pos.z = f64::NAN;
@@ -2366,7 +2387,7 @@ impl GcodeReader {
         if !self.saw_content {
             return Err(ParseError::new(1, 1, "empty file: no G-code blocks"));
         }
-        if self.ended.is_none() && !self.returned {
+        if self.ended.is_none() && !self.returned && self.last_block > 0 {
             let last = self.last_block;
             self.diags.warn(
                 Code::ProgramEnd,
