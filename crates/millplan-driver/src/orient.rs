@@ -12,6 +12,7 @@ use millplan_plan::leadtilt::{
 use millplan_plan::machine::Machine;
 use millplan_plan::safety::{self, Check, Inputs, TipRule, Tolerances};
 use millplan_report::html::{failed_checks, worse_words, Evidence, Verdict};
+use millplan_sim::dropcutter::DropMesh;
 use millplan_sim::stock::path::{strokes, PathOptions, Strokes, Unsimulated};
 use millplan_sim::stock::spec::StockSpec;
 use millplan_sim::stock::tool::{BodyOptions, ToolBody};
@@ -187,20 +188,21 @@ pub fn first_spindle(p: &Program) -> Option<f64> {
 
 /// The re-oriented program against the input: the IR verifier, S and F
 /// within the machine, every ball centre where the input put it, rapids and
-/// shanks on the initial stock (with a stock). No gouge check against the
-/// part: with every ball centre kept (checked) the ball meets the part
-/// exactly where the input's did, and the three-axis gouge check cannot
-/// see a tilted shank.
+/// shanks on the initial stock (with a stock), and the gouges into `part`
+/// (a leaned ball by its distance to the part; the input's own refused too,
+/// as `optimise` does: a user trial saw a program gouging 2 mm written as
+/// Green because the ball centres were kept).
 pub fn check(
     input: &Program,
     output: &Program,
-    stock: Option<&Stock>,
+    (stock, part): (Option<&Stock>, &millplan_geom::TriMesh),
     machine: &Machine,
 ) -> Vec<Check> {
+    let part = DropMesh::new(part);
     safety::check(&Inputs {
         input,
         output,
-        part: None,
+        part: Some(&part),
         stock,
         tool_body: &tool_body,
         machine: Some(machine),
@@ -286,7 +288,7 @@ pub fn command(
     let summary = Summary::new(a, &o, g.output, &unsimulated);
     let chosen = !o.chosen.is_empty();
     let checks = if chosen {
-        check(g.program, &o.program, initial.as_ref(), g.machine)
+        check(g.program, &o.program, (initial.as_ref(), g.mesh), g.machine)
     } else {
         Vec::new()
     };

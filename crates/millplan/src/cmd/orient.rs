@@ -42,7 +42,7 @@ use std::path::PathBuf;
 /// within the machine, every ball centre where the input put it, with
 /// --stock no rapid through material and no shank in it (refused also when
 /// the input did it, named as the input's), and no gouge into the part, the
-/// input's own refused too (three-axis moves). A check that fails names its line
+/// input's own refused too (a leaned ball by its distance). A check that fails names its line
 /// and exits 3 with nothing written, unless --force.
 #[derive(clap::Args)]
 pub struct Args {
