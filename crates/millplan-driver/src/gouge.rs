@@ -126,7 +126,7 @@ fn mostly_off_part(rep: &GougeReport) -> bool {
     rep.mostly_off_part()
 }
 
-/// The finding on the program when most of its cutting points stood away
+/// The finding on the program when most of its cutting moves stood away
 /// from the part.
 pub fn off_part_finding(rep: &GougeReport) -> Option<millplan_nc::Diagnostic> {
     mostly_off_part(rep).then(|| millplan_nc::Diagnostic {
@@ -143,7 +143,7 @@ pub fn off_part_finding(rep: &GougeReport) -> Option<millplan_nc::Diagnostic> {
 
 impl<'a> Report<'a> {
     /// `clean` when the check looked at some move, found no gouge, and
-    /// had the tool by the part at most of the cutting points.
+    /// had the tool by the part in most of the cutting moves.
     pub fn new(check: &'a GougeReport, tol: f64) -> Self {
         Report {
             check,
@@ -179,9 +179,9 @@ impl<'a> Report<'a> {
             "nothing checked".to_string()
         } else if rep.gouges.is_empty() && mostly_off_part(rep) {
             format!(
-                "no gouge, but the tool stands by the part at only {} of {} cutting points: not checked against the part the program was made for",
-                rep.cutting_points - rep.off_part_points,
-                rep.cutting_points
+                "no gouge, but the tool stands by the part in only {} of {} cutting moves: not checked against the part the program was made for",
+                rep.cutting_moves - rep.off_part_moves,
+                rep.cutting_moves
             )
         } else if rep.gouges.is_empty() {
             "clean".to_string()

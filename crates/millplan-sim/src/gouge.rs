@@ -97,14 +97,16 @@ impl Skipped {
 pub struct GougeReport {
     pub moves_checked: usize,
     pub points_checked: usize,
-    /// The sample points of cutting moves and holes (rapids aside).
-    pub cutting_points: usize,
-    /// Of those, the points whose tool tip stands away from the part's
-    /// footprint (its xy box grown by the tool's radius and [`NEAR_PART`]):
-    /// most of a path there says the part does not match the program (its
-    /// unit, its placement), and no gouge found there proves anything. A
-    /// profile beside the part or a hole through it stands by it.
-    pub off_part_points: usize,
+    /// The cutting moves and holes checked (rapids aside).
+    pub cutting_moves: usize,
+    /// Of those, the moves whose tool tip stands away from the part's
+    /// footprint (its xy box grown by the tool's radius and [`NEAR_PART`])
+    /// at every sample: most of a path there says the part does not match
+    /// the program (its unit, its placement), and no gouge found there
+    /// proves anything. A profile beside the part or a hole through it
+    /// stands by it; counted by moves, a long link to a park position
+    /// weighs one move, not its length.
+    pub off_part_moves: usize,
     /// Moves left out, all reasons.
     pub moves_skipped: usize,
     pub skipped: Skipped,
@@ -122,21 +124,21 @@ pub const OFF_PART_SHARE: f64 = 0.5;
 pub const NEAR_PART: f64 = 2.0;
 
 impl GougeReport {
-    /// Whether more than [`OFF_PART_SHARE`] of the cutting points stood
+    /// Whether more than [`OFF_PART_SHARE`] of the cutting moves stood
     /// away from the part.
     pub fn mostly_off_part(&self) -> bool {
-        self.cutting_points > 0
-            && self.off_part_points as f64 > OFF_PART_SHARE * self.cutting_points as f64
+        self.cutting_moves > 0
+            && self.off_part_moves as f64 > OFF_PART_SHARE * self.cutting_moves as f64
     }
 
-    /// `the tool stands by the part at only K of N cutting points (P %): it
-    /// does not match the program (its unit? its placement?)`.
+    /// `the tool stands by the part in only K of N cutting moves (P %): the
+    /// part does not match the program (its unit? its placement?)`.
     pub fn off_part_words(&self) -> String {
-        let under = self.cutting_points - self.off_part_points;
+        let by = self.cutting_moves - self.off_part_moves;
         format!(
-            "the tool stands by the part at only {under} of {} cutting points ({:.1} %): the part does not match the program (its unit? its placement?)",
-            self.cutting_points,
-            100.0 * under as f64 / self.cutting_points.max(1) as f64
+            "the tool stands by the part in only {by} of {} cutting moves ({:.1} %): the part does not match the program (its unit? its placement?)",
+            self.cutting_moves,
+            100.0 * by as f64 / self.cutting_moves.max(1) as f64
         )
     }
 }
@@ -244,6 +246,14 @@ pub fn check_with_progress(
         })
         .collect();
     let footprint = part.xy_bounds();
+    // The cutting move the samples are of, and whether one stood by the part.
+    let mut current: Option<((usize, usize), bool)> = None;
+    let close = |rep: &mut GougeReport, m: Option<((usize, usize), bool)>| {
+        if let Some((_, by)) = m {
+            rep.cutting_moves += 1;
+            rep.off_part_moves += usize::from(!by);
+        }
+    };
     for ((oi, mi, q, axis), &(d, ball)) in samples.iter().zip(&depths) {
         let (oi, mi) = (*oi as usize, *mi as usize);
         let mv = &p.operations[oi].moves[mi];
@@ -253,8 +263,13 @@ pub fn check_with_progress(
                 (lo.x - reach..=hi.x + reach).contains(&q.x)
                     && (lo.y - reach..=hi.y + reach).contains(&q.y)
             });
-            rep.cutting_points += 1;
-            rep.off_part_points += usize::from(!by);
+            match &mut current {
+                Some((at, any)) if *at == (oi, mi) => *any |= by,
+                _ => {
+                    close(&mut rep, current.take());
+                    current = Some(((oi, mi), by));
+                }
+            }
         }
         if d > g.tol {
             let line = mv.line;
@@ -279,6 +294,7 @@ pub fn check_with_progress(
             rep.max_depth = rep.max_depth.max(d);
         }
     }
+    close(&mut rep, current);
     rep
 }
 

@@ -381,13 +381,15 @@ fn moves_left_out_name_the_line_of_the_first() {
 
 /// A user trial: a part read in the wrong unit lay under a corner of the
 /// path, and `gouge` called the program clean. The check counts the cutting
-/// points whose tool stands away from the part's footprint (its xy box grown
-/// by the radius and `NEAR_PART`; a brute count along the pass agrees), and
-/// says when that is most of them. A profile beside the part, leaving stock,
-/// and a plunge through a hole stand by the part (a review: counting only
-/// points with material under the tool refused exact contours and drilling).
+/// moves whose tool stands away from the part's footprint (its xy box grown
+/// by the radius and `NEAR_PART`) at every sample, and says when that is
+/// most of them. A profile beside the part, leaving stock, a plunge through
+/// a hole, and a pass that runs off the part stand by it (a review:
+/// counting points with material under the tool refused exact contours and
+/// drilling; a trial: counting points let one long link to a park position
+/// outweigh a whole profile).
 #[test]
-fn the_points_away_from_the_part_are_counted() {
+fn the_moves_away_from_the_part_are_counted() {
     use millplan_sim::gouge::NEAR_PART;
     let part = box_mesh();
     let g = GougeParams::default();
@@ -397,37 +399,31 @@ fn the_points_away_from_the_part_are_counted() {
             .expect("reads")
             .program
     };
-    // Above the top face (z = -1), from x = -20 to x = 150 at y = 50: the
-    // tool stands by the box [10, 110] for x in [10 - 3 - NEAR, 110 + 3 + NEAR].
-    let p = read("PARTNO OVER\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nRAPID\nGOTO/-20,50,20\nGOTO/-20,50,5\nGOTO/150,50,5\nFINI\n");
-    let rep = check(&p, &part, ball, &g);
-    assert!(rep.gouges.is_empty());
-    // The rapid is not a cutting point; the plunge at x = -20 and the pass are.
-    let cutting = rep.cutting_points;
-    assert!(cutting > 0 && cutting <= rep.points_checked, "{rep:?}");
-    let n = (170.0 / g.step).ceil() as usize;
+    let apt = |moves: &str| {
+        read(&format!(
+            "PARTNO T\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nRAPID\nGOTO/60,60,20\n{moves}FINI\n"
+        ))
+    };
+    // Cutting moves whose tip passes within 3 + NEAR_PART of the box
+    // [10, 110]² at some sample: the plunge, a pass leaving the box, a
+    // profile 0.5 mm outside the wall x = 110; the link out to x = 200
+    // starts by the part. One move far off: the pass at y = 130.
     let reach = 3.0 + NEAR_PART;
-    let by = (0..=n)
-        .map(|k| -20.0 + 170.0 * k as f64 / n as f64)
-        .filter(|x| (10.0 - reach..=110.0 + reach).contains(x))
-        .count();
-    let counted = cutting - rep.off_part_points;
-    assert!(
-        counted.abs_diff(by) <= 2,
-        "{counted} by the part, {by} by brute count"
-    );
-    assert!(!rep.mostly_off_part(), "{rep:?}");
-    // A profile 0.5 mm outside the wall x = 110 (the tool's axis at 113.5)
-    // and a plunge in the middle (a hole, had the box one): by the part all
-    // along.
-    let profile = read("PARTNO PROFILE\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nRAPID\nGOTO/113.5,10,5\nGOTO/113.5,10,-10\nGOTO/113.5,110,-10\nRAPID\nGOTO/60,60,5\nGOTO/60,60,-40\nFINI\n");
-    let rep = check(&profile, &part, ball, &g);
-    assert!(rep.cutting_points > 1000, "{rep:?}");
-    assert_eq!(rep.off_part_points, 0, "{rep:?}");
-    // The same pass 25.4 times as long (a part read in inches as mm, the
-    // other way round): mostly away from the part, and said so.
-    let p = read("PARTNO FAR\nUNITS/MM\nLOADTL/1\nFEDRAT/500,MMPM\nRAPID\nGOTO/-50,50,20\nGOTO/-50,50,5\nGOTO/2000,50,5\nFINI\n");
+    let p = apt(&format!(
+        "GOTO/60,60,-10\nGOTO/150,60,-10\nGOTO/113.5,10,-10\nGOTO/113.5,110,-10\nGOTO/200,200,-10\nGOTO/0,{},-10\n",
+        110.0 + reach + 1.0
+    ));
     let rep = check(&p, &part, ball, &g);
+    assert_eq!((rep.cutting_moves, rep.off_part_moves), (6, 1), "{rep:?}");
+    assert!(!rep.mostly_off_part(), "{rep:?}");
+    // The part read in inches as mm the other way round: a raster 25.4
+    // times as large, most of its moves away from the box.
+    let mut raster = String::new();
+    for k in 0..20 {
+        let y = -500.0 + 150.0 * k as f64;
+        raster.push_str(&format!("GOTO/-500,{y},5\nGOTO/2500,{y},5\n"));
+    }
+    let rep = check(&apt(&raster), &part, ball, &g);
     assert!(rep.gouges.is_empty() && rep.mostly_off_part(), "{rep:?}");
     assert!(rep.off_part_words().contains("does not match the program"));
 }

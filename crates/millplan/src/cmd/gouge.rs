@@ -12,8 +12,8 @@ use std::path::PathBuf;
 /// axis leans (five-axis CL) is checked by the distance of its ball and
 /// flutes (the CUTTER record's height, else the whole tool) to the part.
 ///
-/// A part the tool stands by (within radius + 2 mm of its xy box) at fewer than half of the
-/// cutting points (`off_part_points` of `cutting_points`) does not match the program. Exit code 0 when clean, 3 when gouges were found or the part is not the program's, 2
+/// A part the tool stands by (within radius + 2 mm of its xy box) in fewer than half of the
+/// cutting moves (`off_part_moves` of `cutting_moves`) does not match the program. Exit code 0 when clean, 3 when gouges were found or the part is not the program's, 2
 /// when the program does not say its tool's shape (give --tool) or no move could be checked. Moves
 /// of other leaning tools or whose axis is known only as machine angles,
 /// canned-cycle holes along a leaning axis (a vertical one is checked from
