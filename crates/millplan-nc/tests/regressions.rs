@@ -1929,3 +1929,37 @@ fn the_program_end_lets_comments_and_marks_be() {
             .all(|d| d.line > 0 || d.code != millplan_nc::diag::Code::ProgramEnd));
     }
 }
+
+/// A program that began as a whole one (a tape's %, a program number, a
+/// tool change; a header record in APT; BEGIN PGM) and has no end was cut
+/// short: `Program::unterminated` names its last block, and the checks of
+/// what a pass writes refuse it. Bare blocks or a bare list of GOTOs (the
+/// impeller fragments, the Roeders profile) are fragments by nature:
+/// warned of only.
+#[test]
+fn a_program_cut_short_is_told_from_a_fragment() {
+    let read = |src: &str| {
+        millplan_nc::parse_program(src, ReadOptions::default())
+            .expect("reads")
+            .program
+            .unterminated
+    };
+    let body = "G21 G90\nG0 X0 Y0 Z5\nG1 Z-1 F500\nX10\n";
+    assert_eq!(read(&format!("%\nO1\n{body}")), Some(6));
+    assert_eq!(read(&format!("T1 M6\n{body}")), Some(5));
+    assert_eq!(read(body), None);
+    assert_eq!(read(&format!("%\nO1\n{body}M30\n%\n")), None);
+    let gotos = "GOTO/0,0,1\nGOTO/10,0,1\n";
+    assert_eq!(read(&format!("PARTNO T\nUNITS/MM\n{gotos}")), Some(4));
+    assert_eq!(read(gotos), None);
+    let h = "0 BEGIN PGM T MM\n1 TOOL CALL 1 Z S5000\n2 L Z+50 R0 FMAX\n";
+    assert_eq!(read(h), Some(3));
+    for rel in [
+        "impeller-5axis-goto-fragments/yelun.txt",
+        "nx-posted-gcode-samples/roeders_rfm600_finish_profile_mm.ptp",
+    ] {
+        if let Some(p) = read_sample(rel) {
+            assert_eq!(p.unterminated, None, "{rel}");
+        }
+    }
+}

@@ -6,11 +6,11 @@
 //!
 //! | check | refuses | needs |
 //! |---|---|---|
-//! | `ir` | a broken IR invariant ([`millplan_nc::verify`]) in the output | — |
+//! | `ir` | a broken IR invariant ([`millplan_nc::verify`]) in the output; an input without an end of program (`Program::unterminated`) | — |
 //! | `machine` | an S outside the machine's spindle range; a cutting feed ≤ 0 or above its maximum | a machine |
 //! | `tip` | a tool tip away from where the input put it (per [`TipRule`]) | — |
 //! | `stock` | a rapid through material, the shank or holder in material, on the initial stock — also when the input did it (marked `in_input`) | a stock |
-//! | `gouge` | a gouge into the part — also when the input had it (marked `in_input`) deeper than [`Tolerances::input_gouge`]; a part the tool stands by at less than half of the cutting points | a part |
+//! | `gouge` | a gouge into the part — also when the input had it (marked `in_input`) deeper than [`Tolerances::input_gouge`]; a part the tool stands by in less than half of the cutting moves | a part |
 //! | `loads` | a per-move peak load over its limit by more than [`Tolerances::load`] | a [`LoadCheck`] |
 //!
 //! A check whose inputs are missing says so (`skipped`) and passes; every
@@ -246,7 +246,7 @@ pub fn check_with_gouges(inputs: &Inputs) -> (Vec<Check>, Option<GougeReport>) {
         None => (Check::skip("gouge", "samples", "no part given"), None),
     };
     let checks = vec![
-        ir(inputs.output),
+        ir_with_end(inputs),
         machine_check(inputs),
         tip(inputs),
         match inputs.stock {
@@ -272,7 +272,7 @@ pub fn check_feeds_only(inputs: &Inputs) -> Vec<Check> {
     let why =
         "positions kept (tip check): what the input cut, where it cut it; not simulated again";
     vec![
-        ir(inputs.output),
+        ir_with_end(inputs),
         machine_check(inputs),
         t,
         Check::skip("stock", "strokes", why),
@@ -331,6 +331,26 @@ pub fn read_back_check(r: &ReadBack) -> Check {
                 refuses: true,
             });
         }
+    }
+    c
+}
+
+/// The IR verifier on the output, and the input's end: a program read
+/// without an end of program may have been cut short in its transfer, and
+/// a pass's output, ended by its writer, would make it look whole (a user
+/// trial: the first half of a finishing program written as Green, the
+/// spindle stopped with the ball on the surface). Refused as the input's
+/// own, at its last block.
+fn ir_with_end(i: &Inputs) -> Check {
+    let mut c = ir(i.output);
+    if let Some(last) = i.input.unterminated {
+        c.ok = false;
+        c.findings.push(Finding {
+            line: line_of(last),
+            message: "the program has no end of program (M30, END PGM, FINI): it may have been cut short after this block, and the output, ended by its writer, would look whole".into(),
+            in_input: true,
+            refuses: true,
+        });
     }
     c
 }

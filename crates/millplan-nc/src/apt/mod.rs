@@ -1348,6 +1348,11 @@ impl AptReader {
                 1,
                 format!("the program has no end (FINI, or NX's END-OF-PATH last): a file cut short ends like this; its last record, line {last}, is read as written"),
             );
+            // A bare list of GOTOs is a fragment by nature (warned of,
+            // not taken for a program cut short).
+            if self.stats.records > self.stats.goto {
+                self.program.unterminated = Some(last);
+            }
         }
         let prev = std::mem::take(&mut self.op);
         self.ops.push(prev);

@@ -1203,6 +1203,7 @@ impl HeidenhainReader {
                 1,
                 format!("the program has no END PGM: a file cut short ends like this; its last block, line {last}, is read as written"),
             );
+            self.program.unterminated = Some(last);
         }
         self.ops.push(std::mem::take(&mut self.op));
         self.ops

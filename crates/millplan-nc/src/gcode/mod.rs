@@ -319,6 +319,9 @@ pub struct GcodeReader {
     returned: bool,
     /// The line of the last block read.
     last_block: u32,
+    /// The program began as a whole one: a tape's opening %, a program
+    /// number or a tool change.
+    framed: bool,
     /// mm per program unit right now.
     scale: f64,
     unit: Option<(LengthUnit, UnitsOrigin)>,
@@ -517,6 +520,7 @@ impl GcodeReader {
             ended: None,
             returned: false,
             last_block: 0,
+            framed: false,
             scale: unit.map(|(u, _)| u.mm()).unwrap_or(1.0),
             unit,
             motion: Motion::Rapid,
@@ -591,6 +595,7 @@ impl GcodeReader {
             if self.blocks > 0 {
                 self.ended.get_or_insert(ln);
             }
+            self.framed = true;
             return Ok(());
         }
         if let Some(end) = self.ended {
@@ -606,6 +611,7 @@ impl GcodeReader {
             && self.ops.is_empty()
         {
             let name = t[1..].trim();
+            self.framed = true;
             if self.program.name.is_none() && !name.is_empty() {
                 self.program.name = Some(name.to_string());
             }
@@ -2344,6 +2350,7 @@ impl GcodeReader {
 
     /// An M6 in a block whose first event is `ev_start` of the operation.
     fn tool_change(&mut self, ln: u32, mut ev_start: usize) {
+        self.framed = true;
         // A selection right before the change is the tool it takes in.
         if let Some((ev, moves)) = self.pending_select.take() {
             if moves == self.op.moves.len() && ev < self.op.events.len() {
@@ -2395,6 +2402,12 @@ impl GcodeReader {
                 1,
                 format!("the program has no end (M30 or M2, M17 or M99, or a closing %): a file cut short ends like this; its last block, line {last}, is read as written"),
             );
+            // A program that began as one (a tape's %, a program number, a
+            // tool change) was cut short; bare blocks are a fragment by
+            // nature (warned of only).
+            if self.framed {
+                self.program.unterminated = Some(last);
+            }
         }
         self.ops.push(std::mem::take(&mut self.op));
         self.ops

@@ -937,6 +937,11 @@ pub struct Program {
     pub source: Dialect,
     pub units: Units,
     pub operations: Vec<Operation>,
+    /// The line of the last block of a program read without an end of
+    /// program (M30, END PGM, FINI, …): a file that may have been cut short
+    /// (the reader's `program-end` warning). `None` when it ends, or when it
+    /// was not read from a file.
+    pub unterminated: Option<u32>,
 }
 
 impl Program {
@@ -946,6 +951,7 @@ impl Program {
             source,
             units: Units::default(),
             operations: Vec::new(),
+            unterminated: None,
         }
     }
 

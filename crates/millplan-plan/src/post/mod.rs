@@ -399,6 +399,7 @@ impl Header for Program {
             source: self.source,
             units: self.units,
             operations: Vec::new(),
+            unterminated: self.unterminated,
         }
     }
 }

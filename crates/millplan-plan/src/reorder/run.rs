@@ -598,6 +598,7 @@ pub(super) fn search(
         source: program.source,
         units: program.units,
         operations: vec![op],
+        unterminated: None,
     };
     let units = units(links.pts, jump);
     let fixed = fixed_candidates(links.pts, &units);
