@@ -114,7 +114,7 @@ pub struct GougeReport {
     pub max_depth: f64,
 }
 
-/// The largest share of cutting points away from the part that a check
+/// The largest share of cutting moves away from the part that a check
 /// still calls clean: beyond it the part does not match the program (a part
 /// in the wrong unit, or placed elsewhere), and no gouge found says little.
 pub const OFF_PART_SHARE: f64 = 0.5;
